@@ -1,0 +1,361 @@
+//! The `gi-lab` command line: the app (default), `render`, `buffers`, `bench`,
+//! `settings` and `gen-assets`. Bad arguments or input exit with code 2 and a message that
+//! says what is wrong; a missing GPU exits with code 1 and says how to install lavapipe.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{Args, Parser, Subcommand};
+use gi_render::scene::{self, LoadOptions, Scene};
+use gi_render::{GpuContext, LabSettings, Renderer};
+
+#[derive(Parser, Debug)]
+#[command(name = "gi-lab", version, about = "GI Lab: a laboratory for real-time global illumination")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+    #[command(flatten)]
+    pub app: AppArgs,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render headless and write final.png plus the named buffers (PNG, and EXR for float data).
+    Render(RenderArgs),
+    /// List the names of the inspectable buffers.
+    Buffers(SceneArgs),
+    /// Render frames and print per-pass times (GPU timestamps where available).
+    Bench(BenchArgs),
+    /// List every setting with its unit, range and default.
+    Settings,
+    /// Regenerate the embedded default scene (assets/cornell_box.glb).
+    GenAssets {
+        /// Where to write the .glb.
+        #[arg(long, default_value = "assets/cornell_box.glb")]
+        out: PathBuf,
+    },
+}
+
+/// Options of the windowed app (the default command).
+#[derive(Args, Debug, Clone, Default)]
+pub struct AppArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Save a screenshot of the window to this PNG after --frames frames, then exit.
+    #[arg(long)]
+    pub screenshot: Option<PathBuf>,
+    /// Frames to render before the screenshot.
+    #[arg(long, default_value_t = 30)]
+    pub screenshot_frames: u64,
+}
+
+#[derive(Args, Debug, Clone, Default)]
+pub struct SceneArgs {
+    /// glTF 2.0 scene (.gltf or .glb); the embedded Cornell box when omitted.
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// Multiply the scene's coordinates by this (e.g. 0.001 for millimetres).
+    #[arg(long, default_value_t = 1.0)]
+    pub unit_scale: f32,
+    /// RON preset; the defaults when omitted.
+    #[arg(long)]
+    pub preset: Option<PathBuf>,
+    /// Override a setting, e.g. --set direct.pcf_radius=2 (repeatable).
+    #[arg(long = "set", value_name = "GROUP.FIELD=VALUE")]
+    pub overrides: Vec<String>,
+}
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Image size.
+    #[arg(long, default_value = "512x512", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Frames to render (animation advances by the fixed time step).
+    #[arg(long, default_value_t = 1)]
+    pub frames: u32,
+    /// A buffer to write besides final.png (repeatable; see `gi-lab buffers`).
+    #[arg(long = "buffer")]
+    pub buffers: Vec<String>,
+    /// Output folder (created).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Measured frames (after 3 warm-up frames).
+    #[arg(long, default_value_t = 30)]
+    pub frames: u32,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Parses `WIDTHxHEIGHT`.
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT (e.g. 640x480)"))?;
+    let w: u32 = w.trim().parse().map_err(|_| format!("width '{w}' is not a positive whole number"))?;
+    let h: u32 = h.trim().parse().map_err(|_| format!("height '{h}' is not a positive whole number"))?;
+    if w == 0 || h == 0 {
+        return Err(format!("'{s}': width and height must be at least 1"));
+    }
+    Ok((w, h))
+}
+
+/// An error of the CLI with its exit code.
+#[derive(Debug)]
+pub struct CliError {
+    pub code: u8,
+    pub message: String,
+}
+
+impl CliError {
+    /// Bad arguments or input (exit 2).
+    pub fn input(message: impl Into<String>) -> Self {
+        Self { code: 2, message: message.into() }
+    }
+    /// Environment or internal failure (exit 1).
+    pub fn failure(message: impl Into<String>) -> Self {
+        Self { code: 1, message: message.into() }
+    }
+}
+
+/// Loads the scene named by the arguments (or the embedded default).
+pub fn load_scene(args: &SceneArgs) -> Result<Scene, CliError> {
+    if !(args.unit_scale.is_finite() && args.unit_scale > 0.0) {
+        return Err(CliError::input(format!("--unit-scale {} must be a positive number", args.unit_scale)));
+    }
+    let opts = LoadOptions { unit_scale: args.unit_scale, ..LoadOptions::default() };
+    let scene = match &args.scene {
+        None => scene::cornell::default_scene().map_err(|e| CliError::failure(format!("embedded scene: {e}")))?,
+        Some(p) => scene::load_gltf_file(p, &opts).map_err(|e| CliError::input(e.to_string()))?,
+    };
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(scene)
+}
+
+/// Loads the preset and applies the `--set` overrides.
+pub fn load_settings(args: &SceneArgs) -> Result<LabSettings, CliError> {
+    let mut s = match &args.preset {
+        None => LabSettings::default(),
+        Some(p) => LabSettings::load(p).map_err(|e| CliError::input(e.to_string()))?,
+    };
+    for o in &args.overrides {
+        s.apply_override(o).map_err(|e| CliError::input(format!("--set {o}: {e}")))?;
+    }
+    Ok(s)
+}
+
+fn renderer(args: &SceneArgs, size: (u32, u32)) -> Result<Renderer, CliError> {
+    let scene = load_scene(args)?;
+    let settings = load_settings(args)?;
+    let ctx = GpuContext::headless().map_err(|e| CliError::failure(e.to_string()))?;
+    Renderer::new(ctx, scene, settings, size.0, size.1).map_err(|e| CliError::input(e.to_string()))
+}
+
+/// Writes a buffer as PNG (and EXR for float formats) into `dir`; returns the files.
+pub fn write_buffer(r: &Renderer, name: &str, dir: &Path) -> Result<Vec<PathBuf>, CliError> {
+    let entry = r.buffers().get(name).map_err(|e| CliError::input(e.to_string()))?;
+    let img = r.readback(name).map_err(|e| CliError::failure(e.to_string()))?;
+    let mut files = Vec::new();
+    let png = dir.join(format!("{name}.png"));
+    gi_render::image_io::save_png(&png, &img, entry.kind)
+        .map_err(|e| CliError::failure(format!("{}: {e}", png.display())))?;
+    files.push(png);
+    let is_float =
+        !matches!(entry.texture.format(), wgpu::TextureFormat::Rgba8Unorm | wgpu::TextureFormat::Rgba8UnormSrgb);
+    if is_float {
+        let exr = dir.join(format!("{name}.exr"));
+        gi_render::image_io::save_exr(&exr, &img).map_err(|e| CliError::failure(format!("{}: {e}", exr.display())))?;
+        files.push(exr);
+    }
+    Ok(files)
+}
+
+fn render(args: &RenderArgs) -> Result<(), CliError> {
+    if args.frames == 0 {
+        return Err(CliError::input("--frames must be at least 1"));
+    }
+    let mut r = renderer(&args.scene, args.size)?;
+    // Check buffer names before spending time rendering.
+    for b in &args.buffers {
+        r.buffers().get(b).map_err(|e| CliError::input(e.to_string()))?;
+    }
+    std::fs::create_dir_all(&args.out).map_err(|e| CliError::input(format!("--out {}: {e}", args.out.display())))?;
+    for _ in 0..args.frames {
+        r.render_frame();
+    }
+    let img = r.readback("final.ldr").map_err(|e| CliError::failure(e.to_string()))?;
+    let final_png = args.out.join("final.png");
+    gi_render::image_io::save_png(&final_png, &img, gi_render::BufferKind::Ldr)
+        .map_err(|e| CliError::failure(format!("{}: {e}", final_png.display())))?;
+    println!("wrote {}", final_png.display());
+    for b in &args.buffers {
+        for f in write_buffer(&r, b, &args.out)? {
+            println!("wrote {}", f.display());
+        }
+    }
+    Ok(())
+}
+
+/// Per-pass statistics of a benchmark run.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct PassStats {
+    pub pass: String,
+    pub mean_ms: f64,
+    pub min_ms: f64,
+    pub max_ms: f64,
+}
+
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct BenchReport {
+    pub adapter: String,
+    pub timing_source: String,
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub frames: u32,
+    pub passes: Vec<PassStats>,
+    pub total_mean_ms: f64,
+}
+
+/// Renders warm-up and measured frames and aggregates the per-pass times.
+pub fn bench_run(r: &mut Renderer, frames: u32, scene_name: &str) -> BenchReport {
+    for _ in 0..3 {
+        r.render_frame();
+    }
+    let mut names: Vec<String> = Vec::new();
+    let mut samples: Vec<Vec<f64>> = Vec::new();
+    for _ in 0..frames {
+        for t in r.render_frame() {
+            let i = match names.iter().position(|n| *n == t.name) {
+                Some(i) => i,
+                None => {
+                    names.push(t.name.clone());
+                    samples.push(Vec::new());
+                    names.len() - 1
+                }
+            };
+            samples[i].push(t.ms);
+        }
+    }
+    let passes: Vec<PassStats> = names
+        .into_iter()
+        .zip(samples)
+        .map(|(pass, s)| PassStats {
+            pass,
+            mean_ms: s.iter().sum::<f64>() / s.len().max(1) as f64,
+            min_ms: s.iter().copied().fold(f64::INFINITY, f64::min),
+            max_ms: s.iter().copied().fold(0.0, f64::max),
+        })
+        .collect();
+    let (width, height) = r.size();
+    BenchReport {
+        adapter: r.ctx.adapter_summary(),
+        timing_source: format!("{:?}", r.timing_source()),
+        scene: scene_name.to_string(),
+        width,
+        height,
+        frames,
+        total_mean_ms: passes.iter().map(|p| p.mean_ms).sum(),
+        passes,
+    }
+}
+
+pub fn format_bench_table(b: &BenchReport) -> String {
+    let mut s = format!(
+        "GI Lab bench — {} at {}×{}, {} frames, {} ({})\n",
+        b.scene, b.width, b.height, b.frames, b.adapter, b.timing_source
+    );
+    s += &format!("{:<16} {:>10} {:>10} {:>10}\n", "pass", "mean ms", "min ms", "max ms");
+    for p in &b.passes {
+        s += &format!("{:<16} {:>10.3} {:>10.3} {:>10.3}\n", p.pass, p.mean_ms, p.min_ms, p.max_ms);
+    }
+    s += &format!("{:<16} {:>10.3}\n", "total", b.total_mean_ms);
+    s
+}
+
+fn bench(args: &BenchArgs) -> Result<(), CliError> {
+    if args.frames == 0 {
+        return Err(CliError::input("--frames must be at least 1"));
+    }
+    let mut r = renderer(&args.scene, args.size)?;
+    let name =
+        args.scene.scene.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| "default Cornell box".into());
+    let report = bench_run(&mut r, args.frames, &name);
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report).map_err(|e| CliError::failure(e.to_string()))?);
+    } else {
+        print!("{}", format_bench_table(&report));
+    }
+    Ok(())
+}
+
+fn buffers(args: &SceneArgs) -> Result<(), CliError> {
+    let r = renderer(args, (16, 16))?;
+    for e in r.buffers().entries() {
+        println!("{:<22} {:<14} {}", e.name, format!("{:?}", e.texture.format()), e.description);
+    }
+    Ok(())
+}
+
+fn settings() {
+    for (group, fields) in LabSettings::groups() {
+        println!("[{group}]");
+        let d = LabSettings::default();
+        for m in fields {
+            let path = format!("{group}.{}", m.name);
+            let default = d.get(&path).map(|v| v.to_string()).unwrap_or_default();
+            let range = match m.kind {
+                gi_render::settings::FieldKind::F32 | gi_render::settings::FieldKind::U32 => {
+                    format!("[{}, {}] {}", m.min, m.max, m.unit)
+                }
+                gi_render::settings::FieldKind::Bool => "on/off".into(),
+                gi_render::settings::FieldKind::Choice(c) => c.join(" | "),
+            };
+            let doc = m.doc.lines().next().unwrap_or("");
+            println!("  {:<26} default {:<10} {:<24} {}", path, default, range, doc);
+        }
+    }
+}
+
+/// Runs the command line; returns the process exit code.
+pub fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            // clap prints help/version with exit 0 and usage errors with exit 2.
+            let _ = e.print();
+            return ExitCode::from(e.exit_code().clamp(0, 255) as u8);
+        }
+    };
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
+    let result = match &cli.command {
+        None => crate::app::run(cli.app.clone()).map_err(CliError::failure),
+        Some(Command::Render(a)) => render(a),
+        Some(Command::Buffers(a)) => buffers(a),
+        Some(Command::Bench(a)) => bench(a),
+        Some(Command::Settings) => {
+            settings();
+            Ok(())
+        }
+        Some(Command::GenAssets { out }) => std::fs::write(out, scene::cornell::build_glb())
+            .map(|_| println!("wrote {}", out.display()))
+            .map_err(|e| CliError::input(format!("{}: {e}", out.display()))),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("gi-lab: error: {}", e.message);
+            ExitCode::from(e.code)
+        }
+    }
+}

@@ -1,0 +1,125 @@
+//! Settings panels: one function per pass (DESIGN.md principle 4). Each starts by
+//! destructuring its `Settings` so that a new field breaks the build until it has a
+//! widget; the widgets themselves are driven by the field's metadata (range, unit,
+//! symbol, documentation), never by ranges repeated here.
+
+use egui::Ui;
+use gi_render::passes::compose::TonemapSettings;
+use gi_render::passes::direct::DirectSettings;
+use gi_render::settings::{FieldKind, FieldMeta, SettingsGroup};
+
+fn meta<S: SettingsGroup>(name: &str) -> &'static FieldMeta {
+    S::fields().iter().find(|m| m.name == name).unwrap_or_else(|| {
+        panic!("{}.{name} has no metadata: the settings_group! declaration is out of sync", S::GROUP)
+    })
+}
+
+fn tooltip(m: &FieldMeta) -> String {
+    let mut t = m.doc.trim().to_string();
+    if !m.symbol.is_empty() {
+        t += &format!("\nPaper symbol: {}", m.symbol);
+    }
+    if !m.unit.is_empty() {
+        t += &format!("\nUnit: {}", m.unit);
+    }
+    if matches!(m.kind, FieldKind::F32 | FieldKind::U32) {
+        t += &format!("\nRange: {} … {}", m.min, m.max);
+    }
+    t += &format!("\nCost: {}", m.cost);
+    t
+}
+
+fn label(ui: &mut Ui, m: &FieldMeta) {
+    let text = if m.symbol.is_empty() {
+        m.name.replace('_', " ")
+    } else {
+        format!("{} ({})", m.name.replace('_', " "), m.symbol)
+    };
+    ui.label(text).on_hover_text(tooltip(m));
+}
+
+/// A slider for an f32 field with its range and unit, plus a reset button.
+pub fn f32_field(ui: &mut Ui, m: &FieldMeta, value: &mut f32, default: f32) -> bool {
+    let mut changed = false;
+    label(ui, m);
+    ui.horizontal(|ui| {
+        let log = m.min > 0.0 && m.max / m.min > 100.0;
+        let r = ui
+            .add(egui::Slider::new(value, m.min as f32..=m.max as f32).logarithmic(log).suffix(format!(" {}", m.unit)))
+            .on_hover_text(tooltip(m));
+        changed |= r.changed();
+        if ui.add_enabled(*value != default, egui::Button::new("⟲").small()).on_hover_text("reset to default").clicked()
+        {
+            *value = default;
+            changed = true;
+        }
+    });
+    ui.end_row();
+    changed
+}
+
+pub fn u32_field(ui: &mut Ui, m: &FieldMeta, value: &mut u32, default: u32) -> bool {
+    let mut changed = false;
+    label(ui, m);
+    ui.horizontal(|ui| {
+        let log = m.min > 0.0 && m.max / m.min > 100.0;
+        let r = ui
+            .add(egui::Slider::new(value, m.min as u32..=m.max as u32).logarithmic(log).suffix(format!(" {}", m.unit)))
+            .on_hover_text(tooltip(m));
+        changed |= r.changed();
+        if ui.add_enabled(*value != default, egui::Button::new("⟲").small()).on_hover_text("reset to default").clicked()
+        {
+            *value = default;
+            changed = true;
+        }
+    });
+    ui.end_row();
+    changed
+}
+
+pub fn bool_field(ui: &mut Ui, m: &FieldMeta, value: &mut bool, default: bool) -> bool {
+    let mut changed = false;
+    label(ui, m);
+    ui.horizontal(|ui| {
+        changed |= ui.checkbox(value, "").on_hover_text(tooltip(m)).changed();
+        if ui.add_enabled(*value != default, egui::Button::new("⟲").small()).on_hover_text("reset to default").clicked()
+        {
+            *value = default;
+            changed = true;
+        }
+    });
+    ui.end_row();
+    changed
+}
+
+/// Direct light and shadow maps (stage 2).
+pub fn direct_settings_ui(s: &mut DirectSettings, ui: &mut Ui) -> bool {
+    let d = DirectSettings::default();
+    let DirectSettings { intensity_scale, shadows, shadow_map_size, pcf_radius, depth_bias, normal_offset } = s;
+    type S = DirectSettings;
+    let mut c = false;
+    egui::Grid::new("direct_settings").num_columns(2).striped(true).show(ui, |ui| {
+        c |= f32_field(ui, meta::<S>("intensity_scale"), intensity_scale, d.intensity_scale);
+        c |= bool_field(ui, meta::<S>("shadows"), shadows, d.shadows);
+        c |= u32_field(ui, meta::<S>("shadow_map_size"), shadow_map_size, d.shadow_map_size);
+        c |= u32_field(ui, meta::<S>("pcf_radius"), pcf_radius, d.pcf_radius);
+        c |= f32_field(ui, meta::<S>("depth_bias"), depth_bias, d.depth_bias);
+        c |= f32_field(ui, meta::<S>("normal_offset"), normal_offset, d.normal_offset);
+    });
+    c
+}
+
+/// Tone mapping (stage 7).
+pub fn tonemap_settings_ui(s: &mut TonemapSettings, ui: &mut Ui) -> bool {
+    let d = TonemapSettings::default();
+    let TonemapSettings { exposure_ev, auto_exposure, key, white_point } = s;
+    type S = TonemapSettings;
+    let mut c = false;
+    egui::Grid::new("tonemap_settings").num_columns(2).striped(true).show(ui, |ui| {
+        c |= f32_field(ui, meta::<S>("exposure_ev"), exposure_ev, d.exposure_ev);
+        c |= bool_field(ui, meta::<S>("auto_exposure"), auto_exposure, d.auto_exposure);
+        c |= f32_field(ui, meta::<S>("key"), key, d.key);
+        c |= f32_field(ui, meta::<S>("white_point"), white_point, d.white_point);
+    });
+    c
+}

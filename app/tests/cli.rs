@@ -1,0 +1,75 @@
+//! The `gi-lab` binary as a user runs it. These tests live in the app package (not in
+//! tests/) because Cargo builds a package's binary only for that package's own integration
+//! tests (`CARGO_BIN_EXE_gi-lab`).
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn gi_lab() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_gi-lab"));
+    c.env("WGPU_BACKEND", std::env::var("WGPU_BACKEND").unwrap_or_else(|_| "vulkan".into()));
+    c
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("gi-lab-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("temp dir");
+    d
+}
+
+#[test]
+fn render_writes_final_png_and_buffers() {
+    let out = temp_dir("render");
+    let o = gi_lab()
+        .args(["render", "--size", "64x48", "--frames", "2", "--buffer", "gbuffer.normal", "--buffer", "final.hdr"])
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "render failed: {}", String::from_utf8_lossy(&o.stderr));
+    let img = image::open(out.join("final.png")).expect("final.png is a PNG").to_rgba8();
+    assert_eq!(img.dimensions(), (64, 48));
+    assert!(img.pixels().any(|p| p.0[0] > 20), "final.png is black");
+    assert!(out.join("gbuffer.normal.png").exists());
+    assert!(out.join("gbuffer.normal.exr").exists(), "float buffers are also written as EXR");
+    let hdr = image::open(out.join("final.hdr.exr")).expect("EXR reads back").to_rgba32f();
+    assert_eq!(hdr.dimensions(), (64, 48));
+    assert!(hdr.pixels().any(|p| p.0[0] > 0.0));
+}
+
+#[test]
+fn bad_arguments_exit_2_with_a_message() {
+    let cases: &[(&[&str], &str)] = &[
+        (&["render", "--size", "0x10", "--out", "x"], "at least 1"),
+        (&["render", "--size", "banana", "--out", "x"], "WIDTHxHEIGHT"),
+        (&["render", "--out", "x", "--scene", "/nonexistent/scene.gltf"], "nonexistent"),
+        (&["render", "--out", "x", "--buffer", "no.such"], "no buffer named 'no.such'"),
+        (&["render", "--out", "x", "--set", "direct.pcf_radius=99"], "direct.pcf_radius"),
+        (&["render", "--out", "x", "--preset", "/nonexistent.ron"], "nonexistent.ron"),
+        (&["bench", "--frames", "0"], "--frames"),
+        (&["frobnicate"], "frobnicate"),
+        (&["render"], "--out"),
+    ];
+    for (args, needle) in cases {
+        let o = gi_lab().args(*args).output().expect("runs");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?} should exit 2; stderr: {err}");
+        assert!(err.contains(needle), "{args:?}: stderr does not mention '{needle}': {err}");
+    }
+}
+
+#[test]
+fn buffers_lists_registered_names_and_bench_prints_every_pass() {
+    let o = gi_lab().arg("buffers").output().expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    for name in ["gbuffer.motion", "direct.shadow_map", "final.ldr"] {
+        assert!(text.contains(name), "buffers output lacks {name}: {text}");
+    }
+    let o = gi_lab().args(["bench", "--size", "64x64", "--frames", "2", "--json"]).output().expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("bench --json prints JSON");
+    let passes: Vec<&str> = v["passes"].as_array().expect("passes").iter().filter_map(|p| p["pass"].as_str()).collect();
+    assert_eq!(passes, ["gbuffer", "direct.shadow", "direct", "compose"]);
+}

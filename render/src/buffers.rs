@@ -1,0 +1,253 @@
+//! The registry of named intermediate buffers (DESIGN.md principle 6).
+//!
+//! Every texture a pass writes is registered under a dotted name (`gbuffer.normal`,
+//! `direct.shadow_map`, `final.ldr`). The same names feed the buffer viewer, the pixel
+//! probe, captures, the CLI (`gi-lab render --buffer NAME`) and the tests, which read any
+//! of them back to the CPU as f32 RGBA whatever its format.
+
+use std::collections::BTreeMap;
+
+use crate::gpu::GpuContext;
+
+/// How a buffer's values should be shown when turned into an 8-bit image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BufferKind {
+    /// Display-ready colour (sRGB-encoded 8-bit).
+    Ldr,
+    /// Linear radiance: exposure and tone mapping apply.
+    Hdr,
+    /// A unit vector in xyz (normals): shown as 0.5 + 0.5·n.
+    Direction,
+    /// Colour-like data in [0, 1] (albedo): shown as is.
+    Albedo,
+    /// Scalar or vector data with arbitrary range: normalised per channel.
+    Data,
+    /// Depth buffer values in [0, 1].
+    Depth,
+    /// Screen-space offsets in pixels (the movement buffer).
+    Motion,
+}
+
+/// One registered buffer.
+#[derive(Clone, Debug)]
+pub struct BufferEntry {
+    pub name: String,
+    pub description: String,
+    pub kind: BufferKind,
+    pub texture: wgpu::Texture,
+}
+
+/// An image read back from the GPU, as f32 RGBA rows from the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageF32 {
+    pub width: u32,
+    pub height: u32,
+    pub data: Vec<[f32; 4]>,
+}
+
+impl ImageF32 {
+    pub fn new(width: u32, height: u32) -> Self {
+        Self { width, height, data: vec![[0.0; 4]; (width * height) as usize] }
+    }
+    /// Texel at (x, y); panics when out of range (callers index their own images).
+    pub fn at(&self, x: u32, y: u32) -> [f32; 4] {
+        self.data[(y * self.width + x) as usize]
+    }
+    /// Per-channel minimum and maximum over finite values.
+    pub fn channel_range(&self) -> ([f32; 4], [f32; 4]) {
+        let mut lo = [f32::INFINITY; 4];
+        let mut hi = [f32::NEG_INFINITY; 4];
+        for p in &self.data {
+            for c in 0..4 {
+                if p[c].is_finite() {
+                    lo[c] = lo[c].min(p[c]);
+                    hi[c] = hi[c].max(p[c]);
+                }
+            }
+        }
+        (lo, hi)
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum BufferError {
+    #[error("no buffer named '{name}'; known buffers: {known}")]
+    Unknown { name: String, known: String },
+    #[error("buffer '{name}' has format {format:?}, which cannot be read back")]
+    Format { name: String, format: wgpu::TextureFormat },
+    #[error("buffer '{name}' has {have} layers/levels; {what} {want} does not exist")]
+    Range { name: String, what: &'static str, have: u32, want: u32 },
+    #[error("reading back '{name}' failed: {message}")]
+    Map { name: String, message: String },
+}
+
+/// Named textures of the current frame.
+#[derive(Default, Debug)]
+pub struct BufferRegistry {
+    entries: BTreeMap<String, BufferEntry>,
+}
+
+impl BufferRegistry {
+    /// Registers (or replaces, after a resize) a buffer.
+    pub fn register(&mut self, name: &str, kind: BufferKind, description: &str, texture: &wgpu::Texture) {
+        self.entries.insert(
+            name.to_string(),
+            BufferEntry { name: name.into(), description: description.into(), kind, texture: texture.clone() },
+        );
+    }
+
+    pub fn get(&self, name: &str) -> Result<&BufferEntry, BufferError> {
+        self.entries.get(name).ok_or_else(|| BufferError::Unknown {
+            name: name.into(),
+            known: self.entries.keys().cloned().collect::<Vec<_>>().join(", "),
+        })
+    }
+
+    /// All names in sorted (tree) order.
+    pub fn names(&self) -> Vec<String> {
+        self.entries.keys().cloned().collect()
+    }
+
+    pub fn entries(&self) -> impl Iterator<Item = &BufferEntry> {
+        self.entries.values()
+    }
+
+    /// Reads `layer` (array layer) at `mip` of a buffer back as f32 RGBA. Blocks.
+    pub fn readback(&self, ctx: &GpuContext, name: &str, layer: u32, mip: u32) -> Result<ImageF32, BufferError> {
+        let e = self.get(name)?;
+        read_texture(ctx, name, &e.texture, layer, mip)
+    }
+}
+
+/// Bytes per texel and a decoder to f32 RGBA for the formats the passes use.
+fn decoder(format: wgpu::TextureFormat) -> Option<(u32, fn(&[u8]) -> [f32; 4])> {
+    use wgpu::TextureFormat as F;
+    fn f32_at(b: &[u8], i: usize) -> f32 {
+        f32::from_le_bytes([b[4 * i], b[4 * i + 1], b[4 * i + 2], b[4 * i + 3]])
+    }
+    fn f16_at(b: &[u8], i: usize) -> f32 {
+        half_to_f32(u16::from_le_bytes([b[2 * i], b[2 * i + 1]]))
+    }
+    Some(match format {
+        F::Rgba32Float => (16, |b| [f32_at(b, 0), f32_at(b, 1), f32_at(b, 2), f32_at(b, 3)]),
+        F::Rg32Float => (8, |b| [f32_at(b, 0), f32_at(b, 1), 0.0, 1.0]),
+        F::R32Float | F::Depth32Float => (4, |b| [f32_at(b, 0), 0.0, 0.0, 1.0]),
+        F::R32Uint => (4, |b| [u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32, 0.0, 0.0, 1.0]),
+        F::Rgba16Float => (8, |b| [f16_at(b, 0), f16_at(b, 1), f16_at(b, 2), f16_at(b, 3)]),
+        F::Rg16Float => (4, |b| [f16_at(b, 0), f16_at(b, 1), 0.0, 1.0]),
+        F::Rgba8Unorm | F::Rgba8UnormSrgb => {
+            (4, |b| [b[0] as f32 / 255.0, b[1] as f32 / 255.0, b[2] as f32 / 255.0, b[3] as f32 / 255.0])
+        }
+        _ => return None,
+    })
+}
+
+/// IEEE 754 half → f32.
+pub fn half_to_f32(h: u16) -> f32 {
+    let sign = if h & 0x8000 != 0 { -1.0 } else { 1.0 };
+    let exp = ((h >> 10) & 0x1f) as i32;
+    let man = (h & 0x3ff) as f32;
+    match exp {
+        0 => sign * man * 2f32.powi(-24),
+        31 => {
+            if man == 0.0 {
+                sign * f32::INFINITY
+            } else {
+                f32::NAN
+            }
+        }
+        _ => sign * (1.0 + man / 1024.0) * 2f32.powi(exp - 15),
+    }
+}
+
+/// Copies one layer / mip of a texture to the CPU and decodes it.
+pub fn read_texture(
+    ctx: &GpuContext,
+    name: &str,
+    texture: &wgpu::Texture,
+    layer: u32,
+    mip: u32,
+) -> Result<ImageF32, BufferError> {
+    let format = texture.format();
+    let (bpp, decode) = decoder(format).ok_or(BufferError::Format { name: name.into(), format })?;
+    if layer >= texture.depth_or_array_layers() {
+        return Err(BufferError::Range {
+            name: name.into(),
+            what: "layer",
+            have: texture.depth_or_array_layers(),
+            want: layer,
+        });
+    }
+    if mip >= texture.mip_level_count() {
+        return Err(BufferError::Range {
+            name: name.into(),
+            what: "level",
+            have: texture.mip_level_count(),
+            want: mip,
+        });
+    }
+    let width = (texture.width() >> mip).max(1);
+    let height = (texture.height() >> mip).max(1);
+    let row = width * bpp;
+    let padded = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("buffers.readback"),
+        size: (padded * height) as u64,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut enc =
+        ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("buffers.readback") });
+    let aspect =
+        if format.is_depth_stencil_format() { wgpu::TextureAspect::DepthOnly } else { wgpu::TextureAspect::All };
+    enc.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo { texture, mip_level: mip, origin: wgpu::Origin3d { x: 0, y: 0, z: layer }, aspect },
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded),
+                rows_per_image: Some(height),
+            },
+        },
+        wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+    );
+    ctx.queue.submit([enc.finish()]);
+    let bytes = map_read(ctx, &buffer).map_err(|message| BufferError::Map { name: name.into(), message })?;
+    let mut img = ImageF32::new(width, height);
+    for y in 0..height {
+        for x in 0..width {
+            let o = (y * padded + x * bpp) as usize;
+            img.data[(y * width + x) as usize] = decode(&bytes[o..o + bpp as usize]);
+        }
+    }
+    Ok(img)
+}
+
+/// Maps a MAP_READ buffer, waits, and copies its contents out.
+pub fn map_read(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, String> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    buffer.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    ctx.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| e.to_string())?;
+    rx.recv().map_err(|e| e.to_string())?.map_err(|e| e.to_string())?;
+    let data = buffer.slice(..).get_mapped_range().map_err(|e| e.to_string())?.to_vec();
+    buffer.unmap();
+    Ok(data)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::half_to_f32;
+
+    #[test]
+    fn half_conversion() {
+        assert_eq!(half_to_f32(0x3c00), 1.0);
+        assert_eq!(half_to_f32(0xc000), -2.0);
+        assert_eq!(half_to_f32(0x0000), 0.0);
+        assert!((half_to_f32(0x3555) - 0.333_251_95).abs() < 1e-6);
+        assert!(half_to_f32(0x7c00).is_infinite());
+        assert!(half_to_f32(0x7e00).is_nan());
+    }
+}

@@ -1,0 +1,109 @@
+//! The viewing camera: a position with yaw and pitch, for orbit and fly navigation.
+//! Camera motion between frames is what the movement buffer (Knecht 002 §3.5.1)
+//! reprojects, so the renderer keeps last frame's matrices.
+
+use glam::{Mat4, Vec3};
+
+use crate::scene::{Aabb, CameraDef, Projection};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    pub position: Vec3,
+    /// Rotation about +Y in radians; 0 looks toward −Z.
+    pub yaw: f32,
+    /// Rotation above the horizon in radians.
+    pub pitch: f32,
+    /// Vertical field of view in radians.
+    pub yfov: f32,
+    pub znear: f32,
+    pub zfar: f32,
+    /// Distance to the point orbiting turns around.
+    pub orbit_distance: f32,
+}
+
+impl Camera {
+    /// Unit view direction.
+    pub fn forward(&self) -> Vec3 {
+        let (sy, cy) = self.yaw.sin_cos();
+        let (sp, cp) = self.pitch.sin_cos();
+        Vec3::new(-sy * cp, sp, -cy * cp)
+    }
+
+    pub fn right(&self) -> Vec3 {
+        self.forward().cross(Vec3::Y).normalize_or(Vec3::X)
+    }
+
+    pub fn view(&self) -> Mat4 {
+        Mat4::look_to_rh(self.position, self.forward(), Vec3::Y)
+    }
+
+    /// Perspective projection with depth in [0, 1] (WebGPU convention).
+    pub fn projection(&self, aspect: f32) -> Mat4 {
+        Mat4::perspective_rh(self.yfov, aspect.max(1e-4), self.znear, self.zfar)
+    }
+
+    pub fn view_proj(&self, aspect: f32) -> Mat4 {
+        self.projection(aspect) * self.view()
+    }
+
+    /// Looks at `target` from `position`.
+    pub fn look_at(position: Vec3, target: Vec3, yfov: f32, bounds: Aabb) -> Self {
+        let d = target - position;
+        let len = d.length().max(1e-4);
+        let f = d / len;
+        let r = bounds.radius().max(1e-3);
+        Self {
+            position,
+            yaw: (-f.x).atan2(-f.z),
+            pitch: f.y.clamp(-1.0, 1.0).asin(),
+            yfov,
+            znear: (r * 0.005).max(1e-3),
+            zfar: (position.distance(bounds.center()) + 2.0 * r) * 1.5,
+            orbit_distance: len,
+        }
+    }
+
+    /// A camera in front of the bounds (+Z side), slightly above their centre and looking
+    /// at it, at the distance where the box's front face fills the view.
+    pub fn frame_bounds(bounds: Aabb, aspect: f32) -> Self {
+        let yfov = 0.8f32;
+        let half = bounds.extent() * 0.5;
+        let t = (yfov * 0.5).tan();
+        let fit = (half.y / t).max(half.x / (t * aspect.max(1e-3))).max(1e-3);
+        let dist = fit * 1.1 + half.z;
+        let c = bounds.center();
+        Self::look_at(c + Vec3::new(0.0, 0.25 * half.y, dist), c, yfov, bounds)
+    }
+
+    /// The camera of a glTF camera node.
+    pub fn from_node(world: Mat4, def: &CameraDef, bounds: Aabb) -> Self {
+        let position = world.transform_point3(Vec3::ZERO);
+        let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or(Vec3::NEG_Z);
+        let dist = (bounds.center() - position).dot(forward).max(bounds.radius() * 0.5).max(1e-3);
+        let yfov = match def.projection {
+            Projection::Perspective { yfov, .. } => yfov,
+            Projection::Orthographic { .. } => 0.8,
+        };
+        let mut cam = Self::look_at(position, position + forward * dist, yfov, bounds);
+        if let Projection::Perspective { znear, zfar, .. } = def.projection {
+            cam.znear = znear.max(1e-4);
+            if let Some(f) = zfar {
+                cam.zfar = f.max(cam.znear * 2.0);
+            }
+        }
+        cam
+    }
+
+    /// Turns around the orbit point by the given angles (radians).
+    pub fn orbit(&mut self, dyaw: f32, dpitch: f32) {
+        let target = self.position + self.forward() * self.orbit_distance;
+        self.yaw += dyaw;
+        self.pitch = (self.pitch + dpitch).clamp(-1.5, 1.5);
+        self.position = target - self.forward() * self.orbit_distance;
+    }
+
+    /// Moves in camera space: x right, y up, z forward.
+    pub fn fly(&mut self, local: Vec3) {
+        self.position += self.right() * local.x + Vec3::Y * local.y + self.forward() * local.z;
+    }
+}

@@ -1,0 +1,5 @@
+//! CPU reference implementations of the GPU kernels (DESIGN.md principle 9): tests compare
+//! the passes' outputs with these on small inputs.
+
+pub mod brdf;
+pub mod raycast;

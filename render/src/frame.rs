@@ -1,0 +1,331 @@
+//! The whole frame, stage by stage, in the order of DESIGN.md's pipeline table.
+//!
+//! | stage | pass | here |
+//! |---|---|---|
+//! | 1. G-buffer | `passes::gbuffer` | position, normal, albedo, material, depth, movement buffer |
+//! | 2. Direct light | `passes::shadow`, `passes::direct` | shadow maps, direct radiance |
+//! | 3–6 | VPLs, visibility, shading points, gather | later issues (#5, #6); the compose pass takes their indirect light |
+//! | 7. Temporal + compose | `passes::compose` | final.hdr, Reinhard tone mapping to final.ldr |
+
+use glam::{Mat4, Vec4};
+
+use crate::buffers::{BufferError, BufferRegistry, ImageF32};
+use crate::camera::Camera;
+use crate::clock::Clock;
+use crate::gpu::GpuContext;
+use crate::passes::compose::ComposePass;
+use crate::passes::direct::DirectPass;
+use crate::passes::gbuffer::GBufferPass;
+use crate::passes::shadow::{ShadowPass, setup_lights};
+use crate::passes::{CameraUniform, bgl};
+use crate::scene::upload::GpuScene;
+use crate::scene::{Aabb, Scene};
+use crate::settings::{FieldError, LabSettings};
+use crate::timing::{GpuTimer, PassTiming};
+
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error("cannot render at {width}×{height}: both sides must be at least 1 pixel")]
+    ZeroSize { width: u32, height: u32 },
+    #[error("cannot render at {width}×{height}: the device allows at most {max}×{max}")]
+    TooLarge { width: u32, height: u32, max: u32 },
+    #[error("invalid settings:\n{}", .0.iter().map(|e| format!("  - {e}")).collect::<Vec<_>>().join("\n"))]
+    Settings(Vec<FieldError>),
+    #[error(
+        "a shadow map of {size}×{size} with {layers} layers exceeds this device (max {max_dim}² texels, {max_layers} layers); the largest valid size is {largest}"
+    )]
+    ShadowMapTooLarge { size: u32, layers: u32, max_dim: u32, max_layers: u32, largest: u32 },
+}
+
+/// What the previous frame used, for the movement buffer (Knecht 002 §3.5.1).
+struct PrevFrame {
+    view_proj: Mat4,
+    models: Vec<Mat4>,
+}
+
+/// The renderer: scene, settings, camera, clock, passes and their buffers.
+pub struct Renderer {
+    pub ctx: GpuContext,
+    scene: Scene,
+    gpu_scene: GpuScene,
+    bounds: Aabb,
+    settings: LabSettings,
+    pub camera: Camera,
+    pub clock: Clock,
+    width: u32,
+    height: u32,
+    camera_buffer: wgpu::Buffer,
+    camera_group: wgpu::BindGroup,
+    gbuffer: GBufferPass,
+    shadow: ShadowPass,
+    direct: DirectPass,
+    compose: ComposePass,
+    registry: BufferRegistry,
+    timer: GpuTimer,
+    prev: Option<PrevFrame>,
+}
+
+impl Renderer {
+    /// Creates the renderer for `scene` at `width`×`height`; the camera is the scene's
+    /// first camera, else one that frames its bounds.
+    pub fn new(
+        ctx: GpuContext,
+        scene: Scene,
+        settings: LabSettings,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, RenderError> {
+        check_size(&ctx, width, height)?;
+        let errors = settings.validate();
+        if !errors.is_empty() {
+            return Err(RenderError::Settings(errors));
+        }
+        let bounds = scene.bounds(0.0);
+        let camera = default_camera(&scene, bounds, width as f32 / height as f32);
+        let gpu_scene = GpuScene::new(&ctx, &scene);
+        let gbuffer = GBufferPass::new(&ctx, &gpu_scene, width, height);
+        let camera_buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame.camera"),
+            size: std::mem::size_of::<CameraUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let camera_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("frame.camera"),
+            layout: &gbuffer.camera_layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: camera_buffer.as_entire_binding() }],
+        });
+        let shadow = ShadowPass::new(&ctx, &gpu_scene);
+        let direct = DirectPass::new(&ctx, bgl::uniform(0, wgpu::ShaderStages::COMPUTE), width, height);
+        let compose = ComposePass::new(&ctx, width, height);
+        let timer = GpuTimer::new(&ctx);
+        let clock = Clock::new(settings.animation.time_step_s as f64);
+        let mut r = Self {
+            ctx,
+            scene,
+            gpu_scene,
+            bounds,
+            settings,
+            camera,
+            clock,
+            width,
+            height,
+            camera_buffer,
+            camera_group,
+            gbuffer,
+            shadow,
+            direct,
+            compose,
+            registry: BufferRegistry::default(),
+            timer,
+            prev: None,
+        };
+        r.register_all();
+        Ok(r)
+    }
+
+    fn register_all(&mut self) {
+        self.gbuffer.register(&mut self.registry);
+        self.shadow.register(&mut self.registry);
+        self.direct.register(&mut self.registry);
+        self.compose.register(&mut self.registry);
+    }
+
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// Mutable scene access for interactive edits of lights and materials' parameters that
+    /// live in node transforms and light records (geometry changes need a new renderer).
+    pub fn scene_mut(&mut self) -> &mut Scene {
+        &mut self.scene
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    pub fn settings(&self) -> &LabSettings {
+        &self.settings
+    }
+
+    /// Replaces the settings after validating them; invalid settings change nothing.
+    /// Returns whether temporal history was reset.
+    pub fn set_settings(&mut self, settings: LabSettings) -> Result<bool, RenderError> {
+        let errors = settings.validate();
+        if !errors.is_empty() {
+            return Err(RenderError::Settings(errors));
+        }
+        self.check_shadow_map(&settings)?;
+        let reset = self.settings.history_invalidated_by(&settings);
+        self.clock.time_step_s = settings.animation.time_step_s as f64;
+        self.settings = settings;
+        if reset {
+            self.reset_history();
+        }
+        Ok(reset)
+    }
+
+    /// Forgets everything temporal (the movement buffer's previous frame today; the
+    /// temporal techniques' history later).
+    pub fn reset_history(&mut self) {
+        self.prev = None;
+    }
+
+    /// Resizes every screen-sized target. Zero or too large sizes are refused and change
+    /// nothing.
+    pub fn resize(&mut self, width: u32, height: u32) -> Result<(), RenderError> {
+        check_size(&self.ctx, width, height)?;
+        if (width, height) == (self.width, self.height) {
+            return Ok(());
+        }
+        self.width = width;
+        self.height = height;
+        self.gbuffer.resize(&self.ctx, width, height);
+        self.direct.resize(&self.ctx, width, height);
+        self.compose.resize(&self.ctx, width, height);
+        self.register_all();
+        Ok(())
+    }
+
+    fn shadow_layers(&self) -> u32 {
+        let state = self.scene.evaluate(self.clock.time_s());
+        state
+            .lights
+            .iter()
+            .map(|l| match l.light.kind {
+                crate::scene::LightKind::Point => 6,
+                _ => 1,
+            })
+            .sum()
+    }
+
+    fn check_shadow_map(&self, settings: &LabSettings) -> Result<(), RenderError> {
+        let size = settings.direct.shadow_map_size;
+        let layers = if settings.direct.shadows { self.shadow_layers().max(1) } else { 1 };
+        let max_dim = self.ctx.limits.max_texture_dimension_2d;
+        let max_layers = self.ctx.limits.max_texture_array_layers;
+        if size > max_dim || layers > max_layers {
+            return Err(RenderError::ShadowMapTooLarge { size, layers, max_dim, max_layers, largest: max_dim });
+        }
+        Ok(())
+    }
+
+    /// Renders one frame and advances the clock. Returns the per-pass timings.
+    pub fn render_frame(&mut self) -> Vec<PassTiming> {
+        let ctx = self.ctx.clone();
+        let aspect = self.width as f32 / self.height as f32;
+
+        // The scene at this instant.
+        let state = self.scene.evaluate(self.clock.time_s());
+        let view_proj = self.camera.view_proj(aspect);
+        let prev_view_proj = self.prev.as_ref().map(|p| p.view_proj).unwrap_or(view_proj);
+        let cam = CameraUniform {
+            view_proj,
+            prev_view_proj,
+            inv_view_proj: view_proj.inverse(),
+            view: self.camera.view(),
+            position: self.camera.position.extend(1.0),
+            viewport: Vec4::new(
+                self.width as f32,
+                self.height as f32,
+                1.0 / self.width as f32,
+                1.0 / self.height as f32,
+            ),
+            params: Vec4::new(self.camera.znear, self.camera.zfar, self.clock.frame as f32, self.clock.time_s()),
+        };
+        ctx.queue.write_buffer(&self.camera_buffer, 0, bytemuck::bytes_of(&cam));
+        self.gpu_scene.update_instances(&ctx, &state, self.prev.as_ref().map(|p| p.models.as_slice()));
+
+        let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+
+        // Stage 1: G-buffer and movement buffer.
+        let (gbuffer, camera_group, gpu_scene) = (&self.gbuffer, &self.camera_group, &self.gpu_scene);
+        self.timer.scope(&ctx, &mut enc, "gbuffer", |e, slot| gbuffer.run(e, slot, camera_group, gpu_scene, &state));
+
+        // Stage 2: shadow maps and direct light.
+        let ds = self.settings.direct.clone();
+        let lights = setup_lights(&state.lights, self.bounds, ds.shadow_map_size, ds.shadows);
+        let size = ds.shadow_map_size.min(ctx.limits.max_texture_dimension_2d);
+        let layers = (lights.views.len() as u32).clamp(1, ctx.limits.max_texture_array_layers);
+        if self.shadow.ensure(&ctx, size, layers) {
+            self.shadow.register(&mut self.registry);
+        }
+        let shadow = &self.shadow;
+        self.timer.scope(&ctx, &mut enc, "direct.shadow", |e, slot| {
+            shadow.run(&ctx, e, slot, gpu_scene, &state, &lights.views)
+        });
+        let (direct, camera_buffer, gviews) = (&mut self.direct, &self.camera_buffer, &self.gbuffer.targets.views);
+        let shadow_view = &self.shadow.array_view;
+        self.timer.scope(&ctx, &mut enc, "direct", |e, slot| {
+            direct.run(&ctx, e, slot, &ds, camera_buffer, gviews, &lights, shadow_view)
+        });
+
+        // Stages 3–6 (VPLs, visibility, shading points, gather) arrive with #5 and #6.
+
+        // Stage 7: compose and tone map.
+        let radiance_view = crate::passes::view(&self.direct.radiance, "direct.radiance");
+        let (compose, ts) = (&self.compose, &self.settings.tonemap);
+        self.timer.scope(&ctx, &mut enc, "compose", |e, slot| compose.run(&ctx, e, slot, ts, &radiance_view, None));
+
+        self.timer.resolve(&mut enc);
+        ctx.queue.submit([enc.finish()]);
+        let timings = self.timer.collect(&ctx).to_vec();
+
+        self.prev = Some(PrevFrame { view_proj, models: state.draws.iter().map(|d| d.world).collect() });
+        self.clock.tick();
+        timings
+    }
+
+    /// Timings of the last frame.
+    pub fn timings(&self) -> &[PassTiming] {
+        self.timer.last()
+    }
+
+    pub fn timing_source(&self) -> crate::timing::TimingSource {
+        self.timer.source()
+    }
+
+    pub fn buffers(&self) -> &BufferRegistry {
+        &self.registry
+    }
+
+    /// Reads a registered buffer back (layer 0, level 0).
+    pub fn readback(&self, name: &str) -> Result<ImageF32, BufferError> {
+        self.registry.readback(&self.ctx, name, 0, 0)
+    }
+
+    /// The tone-mapped image (Rgba8Unorm with an Rgba8UnormSrgb view format).
+    pub fn final_ldr(&self) -> &wgpu::Texture {
+        &self.compose.ldr
+    }
+
+    /// The camera uniform's view-projection for the current size (for CPU references).
+    pub fn view_proj(&self) -> Mat4 {
+        self.camera.view_proj(self.width as f32 / self.height as f32)
+    }
+}
+
+fn check_size(ctx: &GpuContext, width: u32, height: u32) -> Result<(), RenderError> {
+    if width == 0 || height == 0 {
+        return Err(RenderError::ZeroSize { width, height });
+    }
+    let max = ctx.limits.max_texture_dimension_2d;
+    if width > max || height > max {
+        return Err(RenderError::TooLarge { width, height, max });
+    }
+    Ok(())
+}
+
+/// The scene's first camera, else one that frames the bounds.
+pub fn default_camera(scene: &Scene, bounds: Aabb, aspect: f32) -> Camera {
+    let state = scene.evaluate(0.0);
+    match state.cameras.first() {
+        Some(c) => Camera::from_node(c.world, &c.camera, bounds),
+        None => Camera::frame_bounds(bounds, aspect),
+    }
+}

@@ -1,0 +1,183 @@
+//! The GPU context: one device and queue, opened headless or adopted from eframe.
+//!
+//! Headless opening honours `WGPU_BACKEND` (e.g. `vulkan`), prefers a real GPU and
+//! falls back to any adapter (lavapipe on machines without a GPU). The pipeline needs
+//! float32 blending and filtering (additive splatting of Nguyen Eq. 11 and Gautron's
+//! weights into `Rgba32Float`, filtered lookups into float pyramids); timestamp queries
+//! are used when the adapter has them.
+
+use std::sync::Arc;
+
+/// Features without which the pipeline cannot run.
+pub const REQUIRED_FEATURES: wgpu::Features =
+    wgpu::Features::FLOAT32_BLENDABLE.union(wgpu::Features::FLOAT32_FILTERABLE);
+
+/// Features used when present: GPU timestamps per pass and read-write storage textures
+/// of more formats.
+pub const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
+    .union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS)
+    .union(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
+
+/// Colour attachment bytes per sample the G-buffer needs (position 16 + normal 8 +
+/// albedo 4 + material 8 + motion 8).
+pub const REQUIRED_COLOR_BYTES_PER_SAMPLE: u32 = 44;
+
+/// How to install a software Vulkan driver when no adapter is found.
+pub const INSTALL_HINT: &str = "no usable GPU adapter. On Debian/Ubuntu install Mesa's software Vulkan driver \
+(lavapipe) with `sudo apt-get install -y mesa-vulkan-drivers libvulkan1` and run with WGPU_BACKEND=vulkan, \
+or run `bash scripts/test.sh`, which installs it";
+
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    #[error("{INSTALL_HINT} (wgpu: {0})")]
+    NoAdapter(String),
+    #[error(
+        "the adapter '{adapter}' lacks features the pipeline needs: {missing:?}. \
+         Mesa's lavapipe (`apt-get install mesa-vulkan-drivers`, WGPU_BACKEND=vulkan) has them"
+    )]
+    MissingFeatures { adapter: String, missing: wgpu::Features },
+    #[error("the adapter '{adapter}' allows {have} colour-attachment bytes per sample; the G-buffer needs {need}")]
+    Limits { adapter: String, have: u32, need: u32 },
+    #[error("could not open the device on '{adapter}': {source}")]
+    Device { adapter: String, source: wgpu::RequestDeviceError },
+}
+
+/// The device the renderer runs on.
+#[derive(Clone)]
+pub struct GpuContext {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub adapter_info: wgpu::AdapterInfo,
+    /// Features enabled on the device.
+    pub features: wgpu::Features,
+    pub limits: wgpu::Limits,
+    /// Keeps the instance alive for headless contexts.
+    _instance: Option<Arc<wgpu::Instance>>,
+}
+
+impl std::fmt::Debug for GpuContext {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GpuContext")
+            .field("adapter", &self.adapter_info.name)
+            .field("backend", &self.adapter_info.backend)
+            .field("features", &self.features)
+            .finish()
+    }
+}
+
+impl GpuContext {
+    /// Opens a device without a window.
+    pub fn headless() -> Result<Self, GpuError> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapter = pick_adapter(&instance)?;
+        let desc = device_descriptor(&adapter)?;
+        let info = adapter.get_info();
+        let (device, queue) = pollster::block_on(adapter.request_device(&desc))
+            .map_err(|source| GpuError::Device { adapter: info.name.clone(), source })?;
+        log::info!("GPU: {} ({:?}, {:?})", info.name, info.backend, info.device_type);
+        Ok(Self {
+            features: device.features(),
+            limits: device.limits(),
+            device,
+            queue,
+            adapter_info: info,
+            _instance: Some(Arc::new(instance)),
+        })
+    }
+
+    /// Adopts a device someone else opened (eframe's), checking that it has what we need.
+    pub fn adopt(device: wgpu::Device, queue: wgpu::Queue, adapter_info: wgpu::AdapterInfo) -> Result<Self, GpuError> {
+        let features = device.features();
+        let missing = REQUIRED_FEATURES - features;
+        if !missing.is_empty() {
+            return Err(GpuError::MissingFeatures { adapter: adapter_info.name, missing });
+        }
+        let limits = device.limits();
+        if limits.max_color_attachment_bytes_per_sample < REQUIRED_COLOR_BYTES_PER_SAMPLE {
+            return Err(GpuError::Limits {
+                adapter: adapter_info.name,
+                have: limits.max_color_attachment_bytes_per_sample,
+                need: REQUIRED_COLOR_BYTES_PER_SAMPLE,
+            });
+        }
+        Ok(Self { device, queue, adapter_info, features, limits, _instance: None })
+    }
+
+    /// Whether per-pass GPU timestamps are available.
+    pub fn has_timestamps(&self) -> bool {
+        self.features.contains(wgpu::Features::TIMESTAMP_QUERY)
+    }
+
+    /// One line naming the adapter, for status bars and reports.
+    pub fn adapter_summary(&self) -> String {
+        format!("{} ({:?})", self.adapter_info.name, self.adapter_info.backend)
+    }
+
+    /// Blocks until the GPU has finished all submitted work.
+    pub fn wait_idle(&self) {
+        if let Err(e) = self.device.poll(wgpu::PollType::wait_indefinitely()) {
+            log::warn!("device poll failed: {e}");
+        }
+    }
+}
+
+/// Picks an adapter: `WGPU_ADAPTER_NAME` (substring, case-insensitive) when set, else
+/// the best by type (discrete > integrated > virtual > CPU), among those that have the
+/// required features; an adapter without them is used only to report what is missing.
+fn pick_adapter(instance: &wgpu::Instance) -> Result<wgpu::Adapter, GpuError> {
+    let backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::all());
+    let mut adapters = pollster::block_on(instance.enumerate_adapters(backends));
+    if adapters.is_empty() {
+        return Err(GpuError::NoAdapter(format!("no adapter for backends {backends:?}")));
+    }
+    if let Ok(name) = std::env::var("WGPU_ADAPTER_NAME") {
+        let want = name.to_lowercase();
+        adapters.retain(|a| a.get_info().name.to_lowercase().contains(&want));
+        if adapters.is_empty() {
+            return Err(GpuError::NoAdapter(format!("no adapter matches WGPU_ADAPTER_NAME='{name}'")));
+        }
+    }
+    let rank = |a: &wgpu::Adapter| {
+        let complete = a.features().contains(REQUIRED_FEATURES) as u32;
+        let ty = match a.get_info().device_type {
+            wgpu::DeviceType::DiscreteGpu => 4,
+            wgpu::DeviceType::IntegratedGpu => 3,
+            wgpu::DeviceType::VirtualGpu => 2,
+            wgpu::DeviceType::Cpu => 1,
+            wgpu::DeviceType::Other => 0,
+        };
+        // Vulkan first among equals: the GL backend of llvmpipe lacks float32 blending.
+        let backend = (a.get_info().backend == wgpu::Backend::Vulkan) as u32;
+        (complete, ty, backend)
+    };
+    adapters.sort_by_key(|a| std::cmp::Reverse(rank(a)));
+    Ok(adapters.swap_remove(0))
+}
+
+/// The device descriptor GI Lab asks for on `adapter`: the required features, the
+/// optional ones it has, and the adapter's own limits (the G-buffer needs more colour
+/// attachment bytes than WebGPU's default 32). Used headless and by the app for eframe.
+pub fn device_descriptor(adapter: &wgpu::Adapter) -> Result<wgpu::DeviceDescriptor<'static>, GpuError> {
+    let have = adapter.features();
+    let info = adapter.get_info();
+    let missing = REQUIRED_FEATURES - have;
+    if !missing.is_empty() {
+        return Err(GpuError::MissingFeatures { adapter: info.name, missing });
+    }
+    let limits = adapter.limits();
+    if limits.max_color_attachment_bytes_per_sample < REQUIRED_COLOR_BYTES_PER_SAMPLE {
+        return Err(GpuError::Limits {
+            adapter: info.name,
+            have: limits.max_color_attachment_bytes_per_sample,
+            need: REQUIRED_COLOR_BYTES_PER_SAMPLE,
+        });
+    }
+    Ok(wgpu::DeviceDescriptor {
+        label: Some("gi-lab.device"),
+        required_features: REQUIRED_FEATURES | (OPTIONAL_FEATURES & have),
+        required_limits: limits,
+        experimental_features: wgpu::ExperimentalFeatures::disabled(),
+        memory_hints: wgpu::MemoryHints::Performance,
+        trace: wgpu::Trace::Off,
+    })
+}

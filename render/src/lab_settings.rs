@@ -1,0 +1,271 @@
+//! `LabSettings`: every pass's settings in one aggregate, saved as a RON preset
+//! (DESIGN.md principle 3). Unknown fields, wrong types and out-of-range values are
+//! reported by name; out-of-range values can be clamped on load.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::passes::compose::TonemapSettings;
+use crate::passes::direct::DirectSettings;
+use crate::settings::{FieldError, FieldMeta, PRESET_VERSION, PresetError, SettingsGroup, Value};
+use crate::settings_group;
+
+settings_group! {
+    /// The deterministic clock (see `clock.rs`).
+    pub struct AnimationSettings: "animation" {
+        /// Fixed time step of one frame; animation time = animated frames × step.
+        time_step_s: f32 = 1.0 / 60.0,
+        unit "s", symbol "Δt", range 0.001..=1.0, cost "free", history true;
+    }
+}
+
+/// All settings of the lab. A preset file is this struct in RON.
+#[derive(Clone, PartialEq, Debug, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LabSettings {
+    /// Preset format version; older versions are migrated on load.
+    pub version: u32,
+    pub animation: AnimationSettings,
+    pub direct: DirectSettings,
+    pub tonemap: TonemapSettings,
+}
+
+impl Default for LabSettings {
+    fn default() -> Self {
+        Self {
+            version: PRESET_VERSION,
+            animation: Default::default(),
+            direct: Default::default(),
+            tonemap: Default::default(),
+        }
+    }
+}
+
+/// Calls `$m!(field, Type)` for every group, so that adding a group is one line here.
+macro_rules! for_each_group {
+    ($m:ident) => {
+        $m!(animation, AnimationSettings);
+        $m!(direct, DirectSettings);
+        $m!(tonemap, TonemapSettings);
+    };
+}
+
+impl LabSettings {
+    /// Every group name with its field table, in pipeline order.
+    pub fn groups() -> Vec<(&'static str, &'static [FieldMeta])> {
+        let mut v = Vec::new();
+        macro_rules! push {
+            ($f:ident, $t:ty) => {
+                v.push((<$t>::GROUP, <$t>::fields()));
+            };
+        }
+        for_each_group!(push);
+        v
+    }
+
+    /// Value at a dotted path (`direct.pcf_radius`).
+    pub fn get(&self, path: &str) -> Option<Value> {
+        let (group, field) = path.split_once('.')?;
+        macro_rules! get {
+            ($f:ident, $t:ty) => {
+                if group == <$t>::GROUP {
+                    return self.$f.get(field);
+                }
+            };
+        }
+        for_each_group!(get);
+        None
+    }
+
+    /// Sets the value at a dotted path after checking its range.
+    pub fn set(&mut self, path: &str, value: &Value) -> Result<(), String> {
+        let meta = Self::field(path).ok_or_else(|| format!("no setting named '{path}'"))?;
+        crate::settings::check_range(meta, value).map_err(|e| format!("{path}: {e}"))?;
+        let (group, field) = path.split_once('.').ok_or_else(|| format!("no setting named '{path}'"))?;
+        macro_rules! set {
+            ($f:ident, $t:ty) => {
+                if group == <$t>::GROUP {
+                    return self.$f.set(field, value);
+                }
+            };
+        }
+        for_each_group!(set);
+        Err(format!("no setting named '{path}'"))
+    }
+
+    /// Parses `path=value` (CLI `--set`) and applies it.
+    pub fn apply_override(&mut self, assignment: &str) -> Result<(), String> {
+        let (path, text) =
+            assignment.split_once('=').ok_or_else(|| format!("'{assignment}' is not of the form group.field=value"))?;
+        let meta = Self::field(path.trim())
+            .ok_or_else(|| format!("no setting named '{}'; known: {}", path.trim(), Self::all_paths().join(", ")))?;
+        let v = crate::settings::parse_value(meta.kind, text).map_err(|e| format!("{}: {e}", path.trim()))?;
+        self.set(path.trim(), &v)
+    }
+
+    /// The metadata of a dotted path.
+    pub fn field(path: &str) -> Option<&'static FieldMeta> {
+        let (group, field) = path.split_once('.')?;
+        Self::groups().into_iter().find(|(g, _)| *g == group)?.1.iter().find(|m| m.name == field)
+    }
+
+    pub fn all_paths() -> Vec<String> {
+        Self::groups()
+            .into_iter()
+            .flat_map(|(g, fields)| fields.iter().map(move |m| format!("{g}.{}", m.name)))
+            .collect()
+    }
+
+    /// Every invalid field.
+    pub fn validate(&self) -> Vec<FieldError> {
+        let mut errors = Vec::new();
+        if self.version > PRESET_VERSION {
+            errors.push(FieldError {
+                field: "version".into(),
+                message: format!("{} is newer than this GI Lab understands ({PRESET_VERSION})", self.version),
+            });
+        }
+        macro_rules! validate {
+            ($f:ident, $t:ty) => {
+                errors.extend(self.$f.validate());
+            };
+        }
+        for_each_group!(validate);
+        errors
+    }
+
+    /// Clamps every out-of-range field; returns what was changed.
+    pub fn clamp_all(&mut self) -> Vec<FieldError> {
+        let mut changed = Vec::new();
+        macro_rules! clamp {
+            ($f:ident, $t:ty) => {
+                changed.extend(self.$f.clamp_all());
+            };
+        }
+        for_each_group!(clamp);
+        changed
+    }
+
+    /// Whether switching from `self` to `other` invalidates temporal history.
+    pub fn history_invalidated_by(&self, other: &Self) -> bool {
+        let mut any = false;
+        macro_rules! hist {
+            ($f:ident, $t:ty) => {
+                any |= self.$f.history_invalidated_by(&other.$f);
+            };
+        }
+        for_each_group!(hist);
+        any
+    }
+
+    /// Parses a preset; the value is returned only when every field is valid.
+    pub fn from_ron(text: &str, origin: &str) -> Result<Self, PresetError> {
+        let s: Self =
+            ron::from_str(text).map_err(|e| PresetError::Parse { path: origin.into(), message: e.to_string() })?;
+        let s = s.migrate();
+        let errors = s.validate();
+        if errors.is_empty() { Ok(s) } else { Err(PresetError::Invalid { path: origin.into(), errors }) }
+    }
+
+    /// Upgrades an older preset version (version 0 = files written before versioning).
+    fn migrate(mut self) -> Self {
+        if self.version == 0 {
+            self.version = PRESET_VERSION;
+        }
+        self
+    }
+
+    pub fn load(path: &Path) -> Result<Self, PresetError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| PresetError::Io { path: path.display().to_string(), source })?;
+        Self::from_ron(&text, &path.display().to_string())
+    }
+
+    pub fn to_ron(&self) -> String {
+        let cfg = ron::ser::PrettyConfig::new().depth_limit(3).struct_names(false);
+        ron::ser::to_string_pretty(self, cfg).unwrap_or_else(|e| format!("// serialisation failed: {e}"))
+    }
+
+    /// Writes the preset atomically: a temporary file in the same folder, then a rename;
+    /// the replaced file is kept as `<name>.bak`.
+    pub fn save(&self, path: &Path) -> Result<(), PresetError> {
+        let io = |source| PresetError::Io { path: path.display().to_string(), source };
+        let tmp = path.with_extension("ron.tmp");
+        std::fs::write(&tmp, self.to_ron()).map_err(io)?;
+        if path.exists() {
+            std::fs::copy(path, path.with_extension("ron.bak")).map_err(io)?;
+        }
+        std::fs::rename(&tmp, path).map_err(io)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_preset_round_trips_and_is_valid() {
+        let s = LabSettings::default();
+        assert!(s.validate().is_empty());
+        let back = LabSettings::from_ron(&s.to_ron(), "test").expect("round trip");
+        assert_eq!(back, s);
+    }
+
+    #[test]
+    fn checked_in_default_preset_matches_defaults() {
+        let text = include_str!("../../presets/default.ron");
+        let s = LabSettings::from_ron(text, "presets/default.ron").expect("presets/default.ron loads");
+        assert_eq!(s, LabSettings::default(), "presets/default.ron differs from LabSettings::default()");
+    }
+
+    #[test]
+    fn validation_names_every_bad_field() {
+        let mut s = LabSettings::default();
+        s.direct.pcf_radius = 99;
+        s.tonemap.key = -1.0;
+        s.animation.time_step_s = f32::NAN;
+        let errors = s.validate();
+        let fields: Vec<_> = errors.iter().map(|e| e.field.as_str()).collect();
+        assert_eq!(fields, ["animation.time_step_s", "direct.pcf_radius", "tonemap.key"], "{errors:?}");
+        let changed = s.clamp_all();
+        assert_eq!(changed.len(), 3);
+        assert_eq!(s.direct.pcf_radius, 4);
+        assert!(s.validate().is_empty());
+    }
+
+    #[test]
+    fn unknown_fields_and_wrong_types_are_errors() {
+        let unknown = "(direct: (pcf_radiuss: 2))";
+        let e = LabSettings::from_ron(unknown, "x").unwrap_err().to_string();
+        assert!(e.contains("pcf_radiuss"), "{e}");
+        let wrong = "(direct: (pcf_radius: \"two\"))";
+        assert!(LabSettings::from_ron(wrong, "x").is_err());
+        let range = "(direct: (pcf_radius: 9))";
+        let e = LabSettings::from_ron(range, "x").unwrap_err().to_string();
+        assert!(e.contains("direct.pcf_radius"), "{e}");
+    }
+
+    #[test]
+    fn overrides_parse_and_check_ranges() {
+        let mut s = LabSettings::default();
+        s.apply_override("direct.pcf_radius=3").expect("valid");
+        assert_eq!(s.direct.pcf_radius, 3);
+        s.apply_override("tonemap.auto_exposure=on").expect("valid");
+        assert!(s.tonemap.auto_exposure);
+        assert!(s.apply_override("direct.pcf_radius=30").is_err());
+        assert!(s.apply_override("direct.nope=1").is_err());
+        assert!(s.apply_override("garbage").is_err());
+        assert_eq!(s.get("direct.pcf_radius"), Some(Value::U32(3)));
+    }
+
+    #[test]
+    fn history_reset_follows_field_flags() {
+        let a = LabSettings::default();
+        let mut b = a.clone();
+        b.tonemap.exposure_ev = 2.0;
+        assert!(!a.history_invalidated_by(&b), "exposure does not touch history");
+        b.direct.intensity_scale = 2.0;
+        assert!(a.history_invalidated_by(&b));
+    }
+}

@@ -1,0 +1,22 @@
+//! GI Lab's renderer: a deferred wgpu pipeline for real-time global illumination that
+//! runs with or without a window. See `../shared/DESIGN.md` for the seven-stage pipeline;
+//! `frame.rs` reads top to bottom as its table.
+
+pub mod buffers;
+pub mod camera;
+pub mod clock;
+pub mod cpu;
+pub mod frame;
+pub mod gpu;
+pub mod image_io;
+mod lab_settings;
+pub mod passes;
+pub mod scene;
+pub mod settings;
+pub mod shaders;
+pub mod timing;
+
+pub use buffers::{BufferKind, BufferRegistry, ImageF32};
+pub use frame::{RenderError, Renderer};
+pub use gpu::GpuContext;
+pub use settings::LabSettings;

@@ -1,0 +1,222 @@
+//! Stage 7, composition and tone mapping (Knecht 002 §4.6 with Reinhard et al. [RSSF02]).
+//! Shaders: `shaders/compose/compose.wgsl`, `shaders/compose/tonemap.wgsl` and
+//! `shaders/compose/luminance.wgsl` (log-average luminance L̄w, Reinhard Eq. 1).
+//! Writes `final.hdr` (linear radiance) and `final.ldr` (tone-mapped, sRGB-encoded 8-bit).
+
+use glam::Vec4;
+
+use crate::buffers::{BufferKind, BufferRegistry};
+use crate::gpu::GpuContext;
+use crate::settings_group;
+
+settings_group! {
+    /// Tone mapping (stage 7): Reinhard's global photographic operator.
+    pub struct TonemapSettings: "tonemap" {
+        /// Exposure in stops: the HDR image is scaled by 2^EV before the operator.
+        exposure_ev: f32 = 0.0,
+        unit "EV", symbol "", range -16.0..=16.0, cost "free", history false;
+        /// Scale by the key a over the log-average luminance L̄w (Reinhard Eq. 2) instead of
+        /// using the exposure alone.
+        auto_exposure: bool = true,
+        unit "", symbol "", range 0..=1, cost "one reduction over the image", history false;
+        /// Key value a of the automatic exposure (Reinhard Eq. 2): 0.18 is "middle grey".
+        key: f32 = 0.18,
+        unit "", symbol "a", range 0.01..=1.0, cost "free", history false;
+        /// Smallest luminance mapped to pure white (Reinhard Eq. 4).
+        white_point: f32 = 4.0,
+        unit "", symbol "L_white", range 0.1..=1000.0, cost "free", history false;
+    }
+}
+
+/// Uniform of the tone mapper; WGSL twin: `Params` in `shaders/compose/compose.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ToneParams {
+    pub tone: Vec4,
+}
+
+pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+pub const LDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+
+pub struct ComposePass {
+    compose: wgpu::ComputePipeline,
+    tonemap: wgpu::ComputePipeline,
+    luminance: wgpu::ComputePipeline,
+    layout0: wgpu::BindGroupLayout,
+    layout1: wgpu::BindGroupLayout,
+    lum_layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    log_average: wgpu::Buffer,
+    black: wgpu::TextureView,
+    pub hdr: wgpu::Texture,
+    pub ldr: wgpu::Texture,
+}
+
+impl ComposePass {
+    pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let module = crate::shaders::create_module(device, "compose/compose.wgsl");
+        let tone_module = crate::shaders::create_module(device, "compose/tonemap.wgsl");
+        let lum_module = crate::shaders::create_module(device, "compose/luminance.wgsl");
+        let layout0 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("compose.inputs"),
+            entries: &[
+                super::bgl::texture(1, cs, false),
+                super::bgl::texture(2, cs, false),
+                super::bgl::storage_texture(3, HDR_FORMAT),
+            ],
+        });
+        let layout1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("compose.tonemap"),
+            entries: &[
+                super::bgl::uniform(0, cs),
+                super::bgl::texture(1, cs, false),
+                super::bgl::storage(2, cs, true),
+                super::bgl::storage_texture(3, LDR_FORMAT),
+            ],
+        });
+        let lum_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("compose.luminance"),
+            entries: &[super::bgl::texture(0, cs, false), super::bgl::storage(1, cs, false)],
+        });
+        let compose = super::compute_pipeline(device, "compose.compose", &module, "cs_compose", &[&layout0]);
+        let tonemap = super::compute_pipeline(device, "compose.tonemap", &tone_module, "cs_tonemap", &[&layout1]);
+        let luminance = super::compute_pipeline(device, "compose.luminance", &lum_module, "cs_main", &[&lum_layout]);
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("compose.params"),
+            size: std::mem::size_of::<ToneParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let log_average = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("compose.log_average"),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let black_tex =
+            super::create_target(device, "compose.no_indirect", 1, 1, HDR_FORMAT, wgpu::TextureUsages::COPY_DST);
+        ctx.queue.write_texture(
+            black_tex.as_image_copy(),
+            &[0u8; 16],
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(16), rows_per_image: Some(1) },
+            wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+        );
+        let black = super::view(&black_tex, "compose.no_indirect");
+        let (hdr, ldr) = Self::targets(ctx, width, height);
+        Self { compose, tonemap, luminance, layout0, layout1, lum_layout, params, log_average, black, hdr, ldr }
+    }
+
+    fn targets(ctx: &GpuContext, width: u32, height: u32) -> (wgpu::Texture, wgpu::Texture) {
+        let st = wgpu::TextureUsages::STORAGE_BINDING;
+        let hdr = super::create_target(&ctx.device, "final.hdr", width, height, HDR_FORMAT, st);
+        let ldr = ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("final.ldr"),
+            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: LDR_FORMAT,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC | st,
+            // The app samples final.ldr through an sRGB view so that egui gets linear values.
+            view_formats: &[wgpu::TextureFormat::Rgba8UnormSrgb],
+        });
+        (hdr, ldr)
+    }
+
+    pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) {
+        (self.hdr, self.ldr) = Self::targets(ctx, width, height);
+    }
+
+    pub fn register(&self, reg: &mut BufferRegistry) {
+        reg.register(
+            "final.hdr",
+            BufferKind::Hdr,
+            "direct + indirect radiance before tone mapping (W/(m²·sr))",
+            &self.hdr,
+        );
+        reg.register("final.ldr", BufferKind::Ldr, "tone-mapped image (Reinhard), sRGB-encoded", &self.ldr);
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        settings: &TonemapSettings,
+        direct: &wgpu::TextureView,
+        indirect: Option<&wgpu::TextureView>,
+    ) {
+        let device = &ctx.device;
+        let p = ToneParams {
+            tone: Vec4::new(
+                settings.exposure_ev.exp2(),
+                settings.key,
+                settings.white_point,
+                settings.auto_exposure as u32 as f32,
+            ),
+        };
+        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        let hdr_view = super::view(&self.hdr, "final.hdr");
+        let ldr_view = super::view(&self.ldr, "final.ldr");
+        let tv = wgpu::BindingResource::TextureView;
+        let group0 = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("compose.inputs"),
+            layout: &self.layout0,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 1, resource: tv(direct) },
+                wgpu::BindGroupEntry { binding: 2, resource: tv(indirect.unwrap_or(&self.black)) },
+                wgpu::BindGroupEntry { binding: 3, resource: tv(&hdr_view) },
+            ],
+        });
+        let lum_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("compose.luminance"),
+            layout: &self.lum_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: tv(&hdr_view) },
+                wgpu::BindGroupEntry { binding: 1, resource: self.log_average.as_entire_binding() },
+            ],
+        });
+        let group1 = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("compose.tonemap"),
+            layout: &self.layout1,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: self.params.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: tv(&hdr_view) },
+                wgpu::BindGroupEntry { binding: 2, resource: self.log_average.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: tv(&ldr_view) },
+            ],
+        });
+        let (w, h) = (self.hdr.width(), self.hdr.height());
+        let groups = (w.div_ceil(super::TILE), h.div_ceil(super::TILE));
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("compose.compose"),
+                timestamp_writes: slot.map(|s| s.compute(true, false)),
+            });
+            pass.set_pipeline(&self.compose);
+            pass.set_bind_group(0, &group0, &[]);
+            pass.dispatch_workgroups(groups.0, groups.1, 1);
+        }
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("compose.luminance"),
+                timestamp_writes: None,
+            });
+            if settings.auto_exposure {
+                pass.set_pipeline(&self.luminance);
+                pass.set_bind_group(0, &lum_group, &[]);
+                pass.dispatch_workgroups(1, 1, 1);
+            }
+        }
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("compose.tonemap"),
+            timestamp_writes: slot.map(|s| s.compute(false, true)),
+        });
+        pass.set_pipeline(&self.tonemap);
+        pass.set_bind_group(0, &group1, &[]);
+        pass.dispatch_workgroups(groups.0, groups.1, 1);
+    }
+}

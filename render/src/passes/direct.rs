@@ -1,0 +1,243 @@
+//! Stage 2, direct light from the scene's punctual lights with PCF shadow maps.
+//! Shader: `shaders/direct/direct.wgsl`; BRDF: `shaders/common/brdf.wgsl` (CPU twin
+//! `cpu::brdf`). Radiance L = f(l, v) · I · falloff / d² · max(0, n·l) · visibility for
+//! point and spot lights (KHR_lights_punctual units), L = f · E · max(0, n·l) · visibility
+//! for directional lights.
+
+use glam::Vec4;
+
+use super::gbuffer::GBufferViews;
+use super::shadow::LightSetup;
+use crate::buffers::{BufferKind, BufferRegistry};
+use crate::gpu::GpuContext;
+use crate::settings_group;
+
+settings_group! {
+    /// Direct light and its shadow maps (stage 2).
+    pub struct DirectSettings: "direct" {
+        /// Scales the intensity of every primary light (the scene's own values are in
+        /// KHR_lights_punctual units: candela for spot and point, lux for directional).
+        intensity_scale: f32 = 1.0,
+        unit "×", symbol "", range 0.0..=1000.0, cost "free", history true;
+        /// Render shadow maps and test visibility; off lights everything the cone reaches.
+        shadows: bool = true,
+        unit "", symbol "", range 0..=1, cost "one depth pass per light view", history true;
+        /// Resolution of each shadow map layer (spot and directional: one layer, point: six).
+        shadow_map_size: u32 = 1024,
+        unit "px", symbol "", range 64..=8192, cost "memory 4 B/texel per layer; raster time grows with it", history true;
+        /// Percentage-closer filtering radius: (2r+1)² depth comparisons per pixel and light.
+        pcf_radius: u32 = 1,
+        unit "texels", symbol "r", range 0..=4, cost "(2r+1)² comparisons per pixel and light", history true;
+        /// Constant bias subtracted from the receiver's light-space depth (NDC units).
+        depth_bias: f32 = 0.0005,
+        unit "NDC", symbol "", range 0.0..=0.05, cost "free", history true;
+        /// Receiver offset along its normal, in shadow-map texels at the receiver's distance.
+        normal_offset: f32 = 1.5,
+        unit "texels", symbol "", range 0.0..=8.0, cost "free", history true;
+    }
+}
+
+/// Uniform of the direct pass; WGSL twin: `Params` in `shaders/direct/direct.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct DirectParams {
+    pub shadow: Vec4,
+    pub light: Vec4,
+}
+
+pub const RADIANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+pub struct DirectPass {
+    pipeline: wgpu::ComputePipeline,
+    layout0: wgpu::BindGroupLayout,
+    layout1: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    lights: wgpu::Buffer,
+    light_capacity: usize,
+    matrices: wgpu::Buffer,
+    matrix_capacity: usize,
+    sampler: wgpu::Sampler,
+    pub radiance: wgpu::Texture,
+    radiance_view: wgpu::TextureView,
+}
+
+impl DirectPass {
+    pub fn new(ctx: &GpuContext, camera_layout_entry: wgpu::BindGroupLayoutEntry, width: u32, height: u32) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let module = crate::shaders::create_module(device, "direct/direct.wgsl");
+        let layout0 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("direct.inputs"),
+            entries: &[
+                camera_layout_entry,
+                super::bgl::uniform(1, cs),
+                super::bgl::storage(2, cs, true),
+                super::bgl::storage(3, cs, true),
+                super::bgl::depth_array(4, cs),
+                super::bgl::sampler(5, cs, wgpu::SamplerBindingType::Comparison),
+            ],
+        });
+        let layout1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("direct.gbuffer"),
+            entries: &[
+                super::bgl::texture(0, cs, false),
+                super::bgl::texture(1, cs, false),
+                super::bgl::texture(2, cs, false),
+                super::bgl::texture(3, cs, false),
+                super::bgl::storage_texture(4, RADIANCE_FORMAT),
+            ],
+        });
+        let pipeline = super::compute_pipeline(device, "direct.pipeline", &module, "cs_main", &[&layout0, &layout1]);
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("direct.params"),
+            size: std::mem::size_of::<DirectParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let storage = |label, size| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let lights = storage("direct.lights", 8 * std::mem::size_of::<super::shadow::GpuLight>() as u64);
+        let matrices = storage("direct.light_view_proj", 8 * 64);
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("direct.shadow_sampler"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            compare: Some(wgpu::CompareFunction::LessEqual),
+            ..Default::default()
+        });
+        let (radiance, radiance_view) = Self::target(ctx, width, height);
+        Self {
+            pipeline,
+            layout0,
+            layout1,
+            params,
+            lights,
+            light_capacity: 8,
+            matrices,
+            matrix_capacity: 8,
+            sampler,
+            radiance,
+            radiance_view,
+        }
+    }
+
+    fn target(ctx: &GpuContext, width: u32, height: u32) -> (wgpu::Texture, wgpu::TextureView) {
+        let t = super::create_target(
+            &ctx.device,
+            "direct.radiance",
+            width,
+            height,
+            RADIANCE_FORMAT,
+            wgpu::TextureUsages::STORAGE_BINDING,
+        );
+        let v = super::view(&t, "direct.radiance");
+        (t, v)
+    }
+
+    pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) {
+        (self.radiance, self.radiance_view) = Self::target(ctx, width, height);
+    }
+
+    pub fn register(&self, reg: &mut BufferRegistry) {
+        reg.register(
+            "direct.radiance",
+            BufferKind::Hdr,
+            "outgoing radiance from the primary lights (W/(m²·sr))",
+            &self.radiance,
+        );
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        settings: &DirectSettings,
+        camera: &wgpu::Buffer,
+        gbuffer: &GBufferViews,
+        lights: &LightSetup,
+        shadow_map: &wgpu::TextureView,
+    ) {
+        let device = &ctx.device;
+        let p = DirectParams {
+            shadow: Vec4::new(
+                settings.pcf_radius as f32,
+                settings.shadow_map_size as f32,
+                settings.depth_bias,
+                settings.normal_offset,
+            ),
+            light: Vec4::new(settings.intensity_scale, settings.shadows as u32 as f32, 0.0, 0.0),
+        };
+        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        let light_size = std::mem::size_of::<super::shadow::GpuLight>() as u64;
+        if lights.lights.len() > self.light_capacity {
+            self.light_capacity = lights.lights.len().next_power_of_two();
+            self.lights = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("direct.lights"),
+                size: self.light_capacity as u64 * light_size,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+        }
+        if lights.views.len() > self.matrix_capacity {
+            self.matrix_capacity = lights.views.len().next_power_of_two();
+            self.matrices = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("direct.light_view_proj"),
+                size: self.matrix_capacity as u64 * 64,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+        }
+        ctx.queue.write_buffer(&self.lights, 0, bytemuck::cast_slice(&lights.lights));
+        if !lights.views.is_empty() {
+            ctx.queue.write_buffer(&self.matrices, 0, bytemuck::cast_slice(&lights.views));
+        }
+        let group0 = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("direct.inputs"),
+            layout: &self.layout0,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: camera.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: self.params.as_entire_binding() },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &self.lights,
+                        offset: 0,
+                        size: std::num::NonZeroU64::new(lights.lights.len() as u64 * light_size),
+                    }),
+                },
+                wgpu::BindGroupEntry { binding: 3, resource: self.matrices.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(shadow_map) },
+                wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::Sampler(&self.sampler) },
+            ],
+        });
+        let tv = wgpu::BindingResource::TextureView;
+        let group1 = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("direct.gbuffer"),
+            layout: &self.layout1,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: tv(&gbuffer.position) },
+                wgpu::BindGroupEntry { binding: 1, resource: tv(&gbuffer.normal) },
+                wgpu::BindGroupEntry { binding: 2, resource: tv(&gbuffer.albedo) },
+                wgpu::BindGroupEntry { binding: 3, resource: tv(&gbuffer.material) },
+                wgpu::BindGroupEntry { binding: 4, resource: tv(&self.radiance_view) },
+            ],
+        });
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("direct.pass"),
+            timestamp_writes: slot.map(|s| s.compute(true, true)),
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &group0, &[]);
+        pass.set_bind_group(1, &group1, &[]);
+        let (w, h) = (self.radiance.width(), self.radiance.height());
+        pass.dispatch_workgroups(w.div_ceil(super::TILE), h.div_ceil(super::TILE), 1);
+    }
+}

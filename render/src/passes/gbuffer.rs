@@ -1,0 +1,222 @@
+//! Stage 1, the camera G-buffer (Knecht 002 §4.2, movement buffer §3.5.1).
+//! Shader: `shaders/gbuffer/gbuffer.wgsl`.
+//!
+//! Departure from the thesis' four 32-bit targets: we keep full precision (world position
+//! in `Rgba32Float`, normals in `Rgba16Float`) instead of packing normal.z into the sign of
+//! SI (Eq. 4.1), because a lab must show exact values; the linear depth of Eq. 4.2 is kept
+//! unnormalised in `gbuffer.position.w` (view-space distance in scene units).
+
+use crate::buffers::{BufferKind, BufferRegistry};
+use crate::gpu::GpuContext;
+use crate::scene::SceneState;
+use crate::scene::upload::GpuScene;
+
+pub const POSITION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+pub const MATERIAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+pub const MOTION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// The G-buffer textures of one frame.
+pub struct GBuffer {
+    pub position: wgpu::Texture,
+    pub normal: wgpu::Texture,
+    pub albedo: wgpu::Texture,
+    pub material: wgpu::Texture,
+    pub motion: wgpu::Texture,
+    pub depth: wgpu::Texture,
+    pub views: GBufferViews,
+}
+
+pub struct GBufferViews {
+    pub position: wgpu::TextureView,
+    pub normal: wgpu::TextureView,
+    pub albedo: wgpu::TextureView,
+    pub material: wgpu::TextureView,
+    pub motion: wgpu::TextureView,
+    pub depth: wgpu::TextureView,
+}
+
+pub struct GBufferPass {
+    single_sided: wgpu::RenderPipeline,
+    double_sided: wgpu::RenderPipeline,
+    pub camera_layout: wgpu::BindGroupLayout,
+    pub targets: GBuffer,
+}
+
+impl GBufferPass {
+    pub fn new(ctx: &GpuContext, scene: &GpuScene, width: u32, height: u32) -> Self {
+        let device = &ctx.device;
+        let module = crate::shaders::create_module(device, "gbuffer/gbuffer.wgsl");
+        let camera_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gbuffer.camera"),
+            entries: &[super::bgl::uniform(0, wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE)],
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("gbuffer.layout"),
+            bind_group_layouts: &[Some(&camera_layout), Some(&scene.instance_layout), Some(&scene.material_layout)],
+            immediate_size: 0,
+        });
+        let pipelines =
+            [Some(wgpu::Face::Back), None].map(|cull_mode| Self::pipeline(device, &layout, &module, cull_mode));
+        let [single_sided, double_sided] = pipelines;
+        Self { single_sided, double_sided, camera_layout, targets: create_targets(ctx, width, height) }
+    }
+
+    fn pipeline(
+        device: &wgpu::Device,
+        layout: &wgpu::PipelineLayout,
+        module: &wgpu::ShaderModule,
+        cull_mode: Option<wgpu::Face>,
+    ) -> wgpu::RenderPipeline {
+        let target = |format| Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL });
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(if cull_mode.is_some() {
+                "gbuffer.pipeline_single_sided"
+            } else {
+                "gbuffer.pipeline_double_sided"
+            }),
+            layout: Some(layout),
+            vertex: wgpu::VertexState {
+                module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(crate::scene::upload::vertex_layout())],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                // glTF: single-sided materials cull back faces; double-sided ones keep them
+                // and the shader flips the normal toward the viewer.
+                cull_mode,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[
+                    target(POSITION_FORMAT),
+                    target(NORMAL_FORMAT),
+                    target(ALBEDO_FORMAT),
+                    target(MATERIAL_FORMAT),
+                    target(MOTION_FORMAT),
+                ],
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    }
+
+    /// Recreates the targets for a new size.
+    pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) {
+        self.targets = create_targets(ctx, width, height);
+    }
+
+    pub fn register(&self, reg: &mut BufferRegistry) {
+        let t = &self.targets;
+        reg.register(
+            "gbuffer.position",
+            BufferKind::Data,
+            "world-space position (xyz) and linear view depth (w), scene units",
+            &t.position,
+        );
+        reg.register(
+            "gbuffer.normal",
+            BufferKind::Direction,
+            "world-space unit normal (xyz), w = 1 where geometry covers the pixel",
+            &t.normal,
+        );
+        reg.register(
+            "gbuffer.albedo",
+            BufferKind::Albedo,
+            "linear surface colour c (rgb) and diffuse intensity DI (a), Knecht §4.2",
+            &t.albedo,
+        );
+        reg.register(
+            "gbuffer.material",
+            BufferKind::Data,
+            "specular intensity SI (r), specular power SP (g), metallic (b), roughness (a)",
+            &t.material,
+        );
+        reg.register(
+            "gbuffer.motion",
+            BufferKind::Motion,
+            "movement buffer: offset in pixels from each pixel to its position in the previous frame (Knecht §3.5.1)",
+            &t.motion,
+        );
+        reg.register("gbuffer.depth", BufferKind::Depth, "hardware depth in [0, 1]", &t.depth);
+    }
+
+    pub fn run(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        camera_group: &wgpu::BindGroup,
+        scene: &GpuScene,
+        state: &SceneState,
+    ) {
+        let v = &self.targets.views;
+        let clear = |view| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        };
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("gbuffer.pass"),
+            color_attachments: &[
+                clear(&v.position),
+                clear(&v.normal),
+                clear(&v.albedo),
+                clear(&v.material),
+                clear(&v.motion),
+            ],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &v.depth,
+                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: slot.map(|s| s.render(true, true)),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.double_sided);
+        pass.set_bind_group(0, camera_group, &[]);
+        pass.set_bind_group(1, &scene.instance_group, &[]);
+        scene.draw(&mut pass, state, Some(2), Some((&self.single_sided, &self.double_sided)));
+    }
+}
+
+fn create_targets(ctx: &GpuContext, width: u32, height: u32) -> GBuffer {
+    let d = &ctx.device;
+    let att = wgpu::TextureUsages::RENDER_ATTACHMENT;
+    let position = super::create_target(d, "gbuffer.position", width, height, POSITION_FORMAT, att);
+    let normal = super::create_target(d, "gbuffer.normal", width, height, NORMAL_FORMAT, att);
+    let albedo = super::create_target(d, "gbuffer.albedo", width, height, ALBEDO_FORMAT, att);
+    let material = super::create_target(d, "gbuffer.material", width, height, MATERIAL_FORMAT, att);
+    let motion = super::create_target(d, "gbuffer.motion", width, height, MOTION_FORMAT, att);
+    let depth = super::create_target(d, "gbuffer.depth", width, height, DEPTH_FORMAT, att);
+    let views = GBufferViews {
+        position: super::view(&position, "gbuffer.position"),
+        normal: super::view(&normal, "gbuffer.normal"),
+        albedo: super::view(&albedo, "gbuffer.albedo"),
+        material: super::view(&material, "gbuffer.material"),
+        motion: super::view(&motion, "gbuffer.motion"),
+        depth: super::view(&depth, "gbuffer.depth"),
+    };
+    GBuffer { position, normal, albedo, material, motion, depth, views }
+}

@@ -1,0 +1,288 @@
+//! Stage 2, shadow maps of the primary lights, rendered from the real triangles:
+//! spot → one perspective view over the outer cone, point → six 90° cube-face views,
+//! directional → one orthographic view over the scene bounds. All views are layers of one
+//! `Depth32Float` array texture, registered as `direct.shadow_map`.
+//! Shader: `shaders/shadow/shadow.wgsl`.
+
+use glam::{Mat4, Vec3, Vec4};
+
+use crate::buffers::{BufferKind, BufferRegistry};
+use crate::gpu::GpuContext;
+use crate::scene::upload::GpuScene;
+use crate::scene::{Aabb, LightKind, SceneState, WorldLight};
+
+/// Light record; WGSL twin: `Light` in `shaders/common/lights.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuLight {
+    pub position: Vec4,
+    pub direction: Vec4,
+    pub color: Vec4,
+    pub cone: Vec4,
+    pub shadow: Vec4,
+}
+
+/// Uniform stride of the per-view matrices (dynamic offsets need 256-byte alignment).
+const VIEW_STRIDE: u64 = 256;
+
+/// Cube-face view directions and up vectors, in the order the direct shader expects
+/// (+X, −X, +Y, −Y, +Z, −Z).
+pub const CUBE_FACES: [(Vec3, Vec3); 6] = [
+    (Vec3::X, Vec3::NEG_Y),
+    (Vec3::NEG_X, Vec3::NEG_Y),
+    (Vec3::Y, Vec3::Z),
+    (Vec3::NEG_Y, Vec3::NEG_Z),
+    (Vec3::Z, Vec3::NEG_Y),
+    (Vec3::NEG_Z, Vec3::NEG_Y),
+];
+
+/// The lights of a frame, packed for the GPU, and the view-projection of every shadow layer.
+#[derive(Clone, Debug, Default)]
+pub struct LightSetup {
+    pub lights: Vec<GpuLight>,
+    pub views: Vec<Mat4>,
+}
+
+/// Builds the GPU light records and shadow views; `intensity_scale` is applied by the shader.
+pub fn setup_lights(lights: &[WorldLight], bounds: Aabb, shadow_map_size: u32, shadows: bool) -> LightSetup {
+    let mut out = LightSetup::default();
+    let r = bounds.radius().max(1e-3);
+    let c = bounds.center();
+    for wl in lights {
+        let l = &wl.light;
+        let dir = wl.direction.normalize_or(Vec3::NEG_Y);
+        let first = out.views.len() as f32;
+        let dist_far = wl.position.distance(c) + r * 1.05;
+        let near = (r * 0.002).max(1e-3);
+        let (kind, cone, texel, views): (f32, Vec4, f32, Vec<Mat4>) = match l.kind {
+            LightKind::Point => {
+                let proj = Mat4::perspective_rh(std::f32::consts::FRAC_PI_2, 1.0, near, dist_far.max(near * 2.0));
+                let views = CUBE_FACES.iter().map(|(f, up)| proj * Mat4::look_to_rh(wl.position, *f, *up)).collect();
+                (0.0, Vec4::new(-1.0, 1.0, first, 6.0), 2.0 / shadow_map_size as f32, views)
+            }
+            LightKind::Spot { inner_cone, outer_cone } => {
+                let outer = outer_cone.clamp(1e-3, std::f32::consts::FRAC_PI_2 - 1e-3);
+                let inner = inner_cone.clamp(0.0, outer);
+                let (co, ci) = (outer.cos(), inner.cos());
+                let fov = (2.0 * outer * 1.05).min(3.0);
+                let up = if dir.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+                let proj = Mat4::perspective_rh(fov, 1.0, near, dist_far.max(near * 2.0));
+                let view = proj * Mat4::look_to_rh(wl.position, dir, up);
+                let texel = 2.0 * (fov * 0.5).tan() / shadow_map_size as f32;
+                (1.0, Vec4::new(co, 1.0 / (ci - co).max(1e-4), first, 1.0), texel, vec![view])
+            }
+            LightKind::Directional => {
+                let up = if dir.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+                let eye = c - dir * (2.0 * r);
+                let proj = Mat4::orthographic_rh(-r, r, -r, r, 0.0, 4.0 * r);
+                let view = proj * Mat4::look_to_rh(eye, dir, up);
+                (2.0, Vec4::new(-1.0, 1.0, first, 1.0), 2.0 * r / shadow_map_size as f32, vec![view])
+            }
+        };
+        let cone = if shadows { cone } else { Vec4::new(cone.x, cone.y, 0.0, 0.0) };
+        if shadows {
+            out.views.extend(views);
+        }
+        out.lights.push(GpuLight {
+            position: wl.position.extend(kind),
+            direction: dir.extend(l.range.unwrap_or(0.0)),
+            color: (l.color * l.intensity).extend(0.0),
+            cone,
+            shadow: Vec4::new(texel, 0.0, 0.0, 0.0),
+        });
+    }
+    if out.lights.is_empty() {
+        out.lights.push(GpuLight { position: Vec4::W, ..bytemuck::Zeroable::zeroed() });
+    }
+    out
+}
+
+pub struct ShadowPass {
+    pipeline: wgpu::RenderPipeline,
+    view_layout: wgpu::BindGroupLayout,
+    view_buffer: wgpu::Buffer,
+    view_capacity: usize,
+    view_group: wgpu::BindGroup,
+    pub texture: wgpu::Texture,
+    /// D2Array view for sampling.
+    pub array_view: wgpu::TextureView,
+    size: u32,
+    layers: u32,
+}
+
+impl ShadowPass {
+    pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
+        let device = &ctx.device;
+        let module = crate::shaders::create_module(device, "shadow/shadow.wgsl");
+        let view_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("direct.shadow.view"),
+            entries: &[super::bgl::uniform_dynamic(0, wgpu::ShaderStages::VERTEX)],
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("direct.shadow.layout"),
+            bind_group_layouts: &[Some(&view_layout), Some(&scene.instance_layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("direct.shadow.pipeline"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(crate::scene::upload::vertex_layout())],
+            },
+            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: wgpu::TextureFormat::Depth32Float,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: None,
+            multiview_mask: None,
+            cache: None,
+        });
+        let (view_buffer, view_group) = Self::view_resources(device, &view_layout, 8);
+        let (texture, array_view) = Self::create_texture(device, 16, 1);
+        Self {
+            pipeline,
+            view_layout,
+            view_buffer,
+            view_capacity: 8,
+            view_group,
+            texture,
+            array_view,
+            size: 16,
+            layers: 1,
+        }
+    }
+
+    fn view_resources(
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+        capacity: usize,
+    ) -> (wgpu::Buffer, wgpu::BindGroup) {
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("direct.shadow.views"),
+            size: VIEW_STRIDE * capacity as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("direct.shadow.views"),
+            layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &buffer,
+                    offset: 0,
+                    size: std::num::NonZeroU64::new(64),
+                }),
+            }],
+        });
+        (buffer, group)
+    }
+
+    fn create_texture(device: &wgpu::Device, size: u32, layers: u32) -> (wgpu::Texture, wgpu::TextureView) {
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("direct.shadow_map"),
+            size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: layers },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Depth32Float,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&wgpu::TextureViewDescriptor {
+            label: Some("direct.shadow_map.array"),
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            array_layer_count: Some(layers),
+            ..Default::default()
+        });
+        (texture, view)
+    }
+
+    /// Makes sure the atlas has `size`² texels and `layers` layers. Returns whether the
+    /// texture was recreated (the registry entry must then be refreshed).
+    pub fn ensure(&mut self, ctx: &GpuContext, size: u32, layers: u32) -> bool {
+        let layers = layers.max(1);
+        let mut changed = false;
+        if size != self.size || layers != self.layers {
+            let (t, v) = Self::create_texture(&ctx.device, size, layers);
+            self.texture = t;
+            self.array_view = v;
+            self.size = size;
+            self.layers = layers;
+            changed = true;
+        }
+        if layers as usize > self.view_capacity {
+            let cap = (layers as usize).next_power_of_two();
+            let (b, g) = Self::view_resources(&ctx.device, &self.view_layout, cap);
+            self.view_buffer = b;
+            self.view_group = g;
+            self.view_capacity = cap;
+        }
+        changed
+    }
+
+    pub fn register(&self, reg: &mut BufferRegistry) {
+        reg.register(
+            "direct.shadow_map",
+            BufferKind::Depth,
+            "shadow maps of the primary lights: one layer per spot / directional light, six per point light",
+            &self.texture,
+        );
+    }
+
+    /// Renders every shadow layer.
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        scene: &GpuScene,
+        state: &SceneState,
+        views: &[Mat4],
+    ) {
+        let mut data = vec![0u8; VIEW_STRIDE as usize * views.len().max(1)];
+        for (i, m) in views.iter().enumerate() {
+            let o = i * VIEW_STRIDE as usize;
+            data[o..o + 64].copy_from_slice(bytemuck::bytes_of(m));
+        }
+        ctx.queue.write_buffer(&self.view_buffer, 0, &data);
+        let count = views.len().max(1);
+        for layer in 0..count {
+            let view = self.texture.create_view(&wgpu::TextureViewDescriptor {
+                label: Some("direct.shadow_map.layer"),
+                dimension: Some(wgpu::TextureViewDimension::D2),
+                base_array_layer: layer as u32,
+                array_layer_count: Some(1),
+                ..Default::default()
+            });
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("direct.shadow.pass"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &view,
+                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: slot.map(|s| s.render(layer == 0, layer + 1 == count)),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            if layer < views.len() {
+                pass.set_pipeline(&self.pipeline);
+                pass.set_bind_group(0, &self.view_group, &[(layer as u64 * VIEW_STRIDE) as u32]);
+                pass.set_bind_group(1, &scene.instance_group, &[]);
+                scene.draw(&mut pass, state, None, None);
+            }
+        }
+    }
+}

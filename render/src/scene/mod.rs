@@ -1,0 +1,380 @@
+//! Scenes: the CPU-side description the renderer draws (meshes, materials, node
+//! hierarchy, lights, cameras, animations), glTF 2.0 loading, and the embedded
+//! default Cornell box.
+//!
+//! The scene is kept as glTF structures it: a node hierarchy with local TRS transforms that
+//! animations drive, meshes of triangle primitives referenced by nodes, and lights and
+//! cameras attached to nodes. [`Scene::evaluate`] turns it into world-space draw items
+//! and lights for one instant of the deterministic clock.
+
+mod animation;
+pub mod cornell;
+mod gltf_load;
+pub mod upload;
+
+pub use animation::{Animation, Channel, ChannelTarget, Interpolation};
+pub use gltf_load::{LoadOptions, SceneError, load_gltf_bytes, load_gltf_file};
+
+use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
+
+/// One vertex as the G-buffer pass consumes it (object space).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Vertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    pub uv: [f32; 2],
+}
+
+/// A triangle mesh primitive with one material.
+#[derive(Clone, Debug)]
+pub struct Primitive {
+    pub vertices: Vec<Vertex>,
+    /// Triangle list, three indices per triangle, all `< vertices.len()`.
+    pub indices: Vec<u32>,
+    /// Index into [`Scene::materials`].
+    pub material: usize,
+}
+
+#[derive(Clone, Debug)]
+pub struct Mesh {
+    pub name: String,
+    pub primitives: Vec<Primitive>,
+}
+
+/// An RGBA8 texture in sRGB encoding (base colour textures are sRGB in glTF).
+#[derive(Clone, Debug)]
+pub struct TextureImage {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    /// `width * height * 4` bytes, sRGB-encoded RGBA.
+    pub rgba8: Vec<u8>,
+}
+
+/// Surface description in the terms of Knecht's G-buffer (002 §4.2): colour `c`,
+/// diffuse intensity DI, specular intensity SI and specular power SP.
+///
+/// Mapping from glTF metallic/roughness (chosen here; the thesis predates PBR materials):
+/// - `c` = base colour (factor × texture, linear);
+/// - DI = 1 − metallic: metals have no diffuse lobe;
+/// - SI = 0.04 · (1 − metallic) + luminance(base colour factor) · metallic: the normal-incidence
+///   Fresnel reflectance of a dielectric (4 %) blended toward the metal's colour;
+/// - SP = 2 / α² − 2 with α = roughness², the Blinn-Phong exponent whose lobe matches a
+///   Beckmann distribution of roughness α (Walter et al. 2007), clamped to [1, 4096].
+///
+/// The BRDF that uses these values is documented once in [`crate::cpu::brdf`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub name: String,
+    /// Linear base colour factor (RGBA).
+    pub base_color: Vec4,
+    /// Index into [`Scene::textures`] of the base colour texture, if any.
+    pub base_color_texture: Option<usize>,
+    pub metallic: f32,
+    pub roughness: f32,
+    /// Linear emitted radiance (emissive factor × strength).
+    pub emissive: Vec3,
+    /// Per-object weight an artist gives to point-cloud sampling (Knecht §5.1); 1 by default.
+    pub sample_weight: f32,
+    /// glTF `doubleSided`: when false, back faces are culled in the camera G-buffer (a
+    /// closed room seen from outside shows its inside, as in every glTF viewer).
+    pub double_sided: bool,
+}
+
+impl Material {
+    /// Diffuse intensity DI (002 §4.2).
+    pub fn diffuse_intensity(&self) -> f32 {
+        1.0 - self.metallic.clamp(0.0, 1.0)
+    }
+    /// Specular intensity SI (002 §4.2), see the type's documentation for the mapping.
+    pub fn specular_intensity(&self) -> f32 {
+        let m = self.metallic.clamp(0.0, 1.0);
+        let c = self.base_color;
+        let lum = 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+        0.04 * (1.0 - m) + lum * m
+    }
+    /// Specular power SP (002 §4.2), see the type's documentation for the mapping.
+    pub fn specular_power(&self) -> f32 {
+        let a = self.roughness.clamp(0.0, 1.0).powi(2).max(1e-3);
+        (2.0 / (a * a) - 2.0).clamp(1.0, 4096.0)
+    }
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Self {
+            name: "default".into(),
+            base_color: Vec4::ONE,
+            base_color_texture: None,
+            metallic: 0.0,
+            roughness: 1.0,
+            emissive: Vec3::ZERO,
+            sample_weight: 1.0,
+            double_sided: false,
+        }
+    }
+}
+
+/// Local transform of a node (glTF TRS).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transform {
+    pub translation: Vec3,
+    pub rotation: Quat,
+    pub scale: Vec3,
+}
+
+impl Default for Transform {
+    fn default() -> Self {
+        Self { translation: Vec3::ZERO, rotation: Quat::IDENTITY, scale: Vec3::ONE }
+    }
+}
+
+impl Transform {
+    pub fn matrix(&self) -> Mat4 {
+        Mat4::from_scale_rotation_translation(self.scale, self.rotation, self.translation)
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Node {
+    pub name: String,
+    pub transform: Transform,
+    pub children: Vec<usize>,
+    pub mesh: Option<usize>,
+    pub light: Option<usize>,
+    pub camera: Option<usize>,
+}
+
+/// KHR_lights_punctual light types.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightKind {
+    /// Radiant intensity in W/sr (glTF: candela).
+    Point,
+    /// Cone angles in radians around the light's −Z axis.
+    Spot { inner_cone: f32, outer_cone: f32 },
+    /// Irradiance in W/m² (glTF: lux), shining along the node's −Z axis.
+    Directional,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Light {
+    pub name: String,
+    pub kind: LightKind,
+    /// Linear colour.
+    pub color: Vec3,
+    /// Candela for point and spot lights, lux for directional lights (glTF units).
+    pub intensity: f32,
+    /// Distance beyond which the light has no effect (None: infinite).
+    pub range: Option<f32>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    Perspective { yfov: f32, znear: f32, zfar: Option<f32> },
+    Orthographic { xmag: f32, ymag: f32, znear: f32, zfar: f32 },
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct CameraDef {
+    pub name: String,
+    pub projection: Projection,
+}
+
+/// A loaded scene. Node indices, mesh indices etc. are into the vectors here.
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    pub name: String,
+    pub meshes: Vec<Mesh>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<TextureImage>,
+    pub nodes: Vec<Node>,
+    /// Root nodes of the active glTF scene.
+    pub roots: Vec<usize>,
+    pub lights: Vec<Light>,
+    pub cameras: Vec<CameraDef>,
+    pub animations: Vec<Animation>,
+    /// Non-fatal problems found while loading (unsupported extensions, …).
+    pub warnings: Vec<String>,
+}
+
+/// A primitive to draw with its world transform, as of one instant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DrawItem {
+    pub node: usize,
+    pub mesh: usize,
+    pub primitive: usize,
+    pub world: Mat4,
+}
+
+/// A light placed in the world, as of one instant.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorldLight {
+    pub light: Light,
+    pub position: Vec3,
+    /// Unit direction the light points to (−Z of its node).
+    pub direction: Vec3,
+}
+
+/// A camera placed in the world, as of one instant.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorldCamera {
+    pub camera: CameraDef,
+    pub world: Mat4,
+}
+
+/// The scene evaluated at one instant: world transforms of everything.
+#[derive(Clone, Debug, Default)]
+pub struct SceneState {
+    /// World matrix of every node.
+    pub node_world: Vec<Mat4>,
+    pub draws: Vec<DrawItem>,
+    pub lights: Vec<WorldLight>,
+    pub cameras: Vec<WorldCamera>,
+}
+
+/// Axis-aligned bounding box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Aabb {
+    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
+    pub fn grow(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+    pub fn is_empty(&self) -> bool {
+        self.min.x > self.max.x
+    }
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+    pub fn extent(&self) -> Vec3 {
+        self.max - self.min
+    }
+    /// Radius of the bounding sphere around the centre.
+    pub fn radius(&self) -> f32 {
+        self.extent().length() * 0.5
+    }
+}
+
+impl Scene {
+    /// Number of triangles of all primitives referenced by nodes (instanced meshes
+    /// count once per node that uses them).
+    pub fn triangle_count(&self) -> usize {
+        let state = self.evaluate(0.0);
+        state.draws.iter().map(|d| self.meshes[d.mesh].primitives[d.primitive].indices.len() / 3).sum()
+    }
+
+    /// Evaluates animations at `time_s` and the hierarchy into world space.
+    pub fn evaluate(&self, time_s: f32) -> SceneState {
+        let mut locals: Vec<Transform> = self.nodes.iter().map(|n| n.transform).collect();
+        for anim in &self.animations {
+            anim.apply(time_s, &mut locals);
+        }
+        let mut node_world = vec![Mat4::IDENTITY; self.nodes.len()];
+        let mut visited = vec![false; self.nodes.len()];
+        let mut stack: Vec<(usize, Mat4)> = self.roots.iter().rev().map(|&r| (r, Mat4::IDENTITY)).collect();
+        let mut order = Vec::new();
+        while let Some((n, parent)) = stack.pop() {
+            if n >= self.nodes.len() || visited[n] {
+                continue; // the loader rejects cycles; this keeps evaluation total anyway
+            }
+            visited[n] = true;
+            let w = parent * locals[n].matrix();
+            node_world[n] = w;
+            order.push(n);
+            for &c in self.nodes[n].children.iter().rev() {
+                stack.push((c, w));
+            }
+        }
+        let mut state = SceneState { node_world, ..Default::default() };
+        for &n in &order {
+            let node = &self.nodes[n];
+            let w = state.node_world[n];
+            if let Some(m) = node.mesh {
+                for p in 0..self.meshes[m].primitives.len() {
+                    state.draws.push(DrawItem { node: n, mesh: m, primitive: p, world: w });
+                }
+            }
+            if let Some(l) = node.light {
+                let position = w.transform_point3(Vec3::ZERO);
+                let direction = w.transform_vector3(Vec3::NEG_Z).normalize_or(Vec3::NEG_Y);
+                state.lights.push(WorldLight { light: self.lights[l].clone(), position, direction });
+            }
+            if let Some(c) = node.camera {
+                state.cameras.push(WorldCamera { camera: self.cameras[c].clone(), world: w });
+            }
+        }
+        state
+    }
+
+    /// World-space bounds of the geometry at `time_s`.
+    pub fn bounds(&self, time_s: f32) -> Aabb {
+        let state = self.evaluate(time_s);
+        let mut b = Aabb::EMPTY;
+        for d in &state.draws {
+            for v in &self.meshes[d.mesh].primitives[d.primitive].vertices {
+                b.grow(d.world.transform_point3(Vec3::from(v.position)));
+            }
+        }
+        if b.is_empty() {
+            b = Aabb { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) };
+        }
+        b
+    }
+
+    /// Duration of the longest animation in seconds (0 without animations).
+    pub fn animation_duration(&self) -> f32 {
+        self.animations.iter().map(|a| a.duration()).fold(0.0, f32::max)
+    }
+
+    /// Adds the default light when the scene has none: a spot light at 85 % of the bounds'
+    /// height above their centre (below typical ceiling fixtures of interiors), pointing
+    /// down, with a cone wide enough to reach the walls.
+    pub fn ensure_light(&mut self) {
+        if !self.lights.is_empty() {
+            return;
+        }
+        let b = self.bounds(0.0);
+        let ext = b.extent();
+        let c = b.center();
+        let pos = Vec3::new(c.x, b.min.y + 0.85 * ext.y.max(1e-3), c.z);
+        let height = (pos.y - b.min.y).max(1e-3);
+        let half_width = 0.5 * ext.x.max(ext.z);
+        let outer = (1.5 * half_width / height).atan().clamp(0.5, 1.35);
+        // Intensity such that the floor under the light receives about π W/m² (a white
+        // floor then shows radiance ≈ 1 before exposure).
+        let intensity = std::f32::consts::PI * height * height;
+        self.lights.push(Light {
+            name: "default spot".into(),
+            kind: LightKind::Spot { inner_cone: outer * 0.6, outer_cone: outer },
+            color: Vec3::ONE,
+            intensity,
+            range: None,
+        });
+        self.nodes.push(Node {
+            name: "default spot".into(),
+            transform: Transform {
+                translation: pos,
+                // −Z rotated to −Y: the light looks straight down.
+                rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
+                scale: Vec3::ONE,
+            },
+            children: vec![],
+            mesh: None,
+            light: Some(self.lights.len() - 1),
+            camera: None,
+        });
+        self.roots.push(self.nodes.len() - 1);
+        self.warnings.push("the scene has no lights: added a default spot light under the top of its bounds".into());
+    }
+}
+
+/// Used by loaders and generators: a flat-shaded vertex.
+pub fn vertex(p: Vec3, n: Vec3, uv: Vec2) -> Vertex {
+    Vertex { position: p.into(), normal: n.into(), uv: uv.into() }
+}

@@ -1,0 +1,302 @@
+//! GPU upload of a scene: one vertex and one index buffer for all primitives, a uniform
+//! and bind group per material (base colour texture with a CPU-built mip chain), and a
+//! storage buffer of per-draw transforms rewritten every frame.
+
+use glam::Mat4;
+
+use super::{Scene, SceneState, Vertex};
+use crate::gpu::GpuContext;
+use crate::passes::InstanceUniform;
+
+/// Material uniform; WGSL twin: `Material` in `shaders/gbuffer/gbuffer.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct MaterialUniform {
+    pub base_color: [f32; 4],
+    /// DI, SI, SP, has texture.
+    pub params: [f32; 4],
+    /// metallic, roughness, 0, 0.
+    pub extra: [f32; 4],
+}
+
+/// Where one primitive lives in the shared buffers.
+#[derive(Clone, Copy, Debug)]
+pub struct GpuPrimitive {
+    pub first_index: u32,
+    pub index_count: u32,
+    pub base_vertex: i32,
+    pub material: usize,
+}
+
+pub struct GpuScene {
+    pub vertices: wgpu::Buffer,
+    pub indices: wgpu::Buffer,
+    /// `[mesh][primitive]`.
+    pub primitives: Vec<Vec<GpuPrimitive>>,
+    pub instances: wgpu::Buffer,
+    pub instance_capacity: usize,
+    pub instance_layout: wgpu::BindGroupLayout,
+    pub instance_group: wgpu::BindGroup,
+    pub material_layout: wgpu::BindGroupLayout,
+    pub material_groups: Vec<wgpu::BindGroup>,
+    /// glTF `doubleSided` per material (single-sided ones are drawn with back-face culling).
+    pub double_sided: Vec<bool>,
+    _material_buffers: Vec<wgpu::Buffer>,
+    _textures: Vec<wgpu::Texture>,
+}
+
+/// Vertex buffer layout of [`Vertex`].
+pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 3] =
+    wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2];
+
+pub fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
+    wgpu::VertexBufferLayout {
+        array_stride: std::mem::size_of::<Vertex>() as u64,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &VERTEX_ATTRIBUTES,
+    }
+}
+
+impl GpuScene {
+    pub fn new(ctx: &GpuContext, scene: &Scene) -> Self {
+        use wgpu::util::DeviceExt;
+        let device = &ctx.device;
+        let mut vertices: Vec<Vertex> = Vec::new();
+        let mut indices: Vec<u32> = Vec::new();
+        let mut primitives = Vec::new();
+        for mesh in &scene.meshes {
+            let mut list = Vec::new();
+            for p in &mesh.primitives {
+                list.push(GpuPrimitive {
+                    first_index: indices.len() as u32,
+                    index_count: p.indices.len() as u32,
+                    base_vertex: vertices.len() as i32,
+                    material: p.material.min(scene.materials.len().saturating_sub(1)),
+                });
+                vertices.extend_from_slice(&p.vertices);
+                indices.extend_from_slice(&p.indices);
+            }
+            primitives.push(list);
+        }
+        if vertices.is_empty() {
+            vertices.push(bytemuck::Zeroable::zeroed());
+        }
+        if indices.is_empty() {
+            indices.extend_from_slice(&[0, 0, 0]);
+        }
+        let vertex_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("scene.vertices"),
+            contents: bytemuck::cast_slice(&vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let index_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("scene.indices"),
+            contents: bytemuck::cast_slice(&indices),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+
+        let draw_count = scene.evaluate(0.0).draws.len().max(1);
+        let instances = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("scene.instances"),
+            size: (draw_count * std::mem::size_of::<InstanceUniform>()) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let instance_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("scene.instances"),
+            entries: &[crate::passes::bgl::storage(0, wgpu::ShaderStages::VERTEX, true)],
+        });
+        let instance_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("scene.instances"),
+            layout: &instance_layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: instances.as_entire_binding() }],
+        });
+
+        let fs = wgpu::ShaderStages::FRAGMENT;
+        let material_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("scene.material"),
+            entries: &[
+                crate::passes::bgl::uniform(0, fs),
+                crate::passes::bgl::texture(1, fs, true),
+                crate::passes::bgl::sampler(2, fs, wgpu::SamplerBindingType::Filtering),
+            ],
+        });
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("scene.material_sampler"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
+            anisotropy_clamp: 1,
+            ..Default::default()
+        });
+        let white = upload_texture(
+            ctx,
+            &super::TextureImage { name: "white".into(), width: 1, height: 1, rgba8: vec![255; 4] },
+        );
+        let mut textures: Vec<wgpu::Texture> = scene.textures.iter().map(|t| upload_texture(ctx, t)).collect();
+        let mut material_buffers = Vec::new();
+        let mut material_groups = Vec::new();
+        let default_material = [super::Material::default()];
+        let materials: &[super::Material] =
+            if scene.materials.is_empty() { &default_material } else { &scene.materials };
+        for (i, m) in materials.iter().enumerate() {
+            let tex = m.base_color_texture.filter(|&t| t < textures.len());
+            let u = MaterialUniform {
+                base_color: m.base_color.to_array(),
+                params: [
+                    m.diffuse_intensity(),
+                    m.specular_intensity(),
+                    m.specular_power(),
+                    tex.is_some() as u32 as f32,
+                ],
+                extra: [m.metallic, m.roughness, 0.0, 0.0],
+            };
+            let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(&format!("scene.material[{i}]")),
+                contents: bytemuck::bytes_of(&u),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let view = tex.map(|t| &textures[t]).unwrap_or(&white).create_view(&wgpu::TextureViewDescriptor {
+                label: Some("scene.material_texture"),
+                ..Default::default()
+            });
+            material_groups.push(device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(&format!("scene.material[{i}]")),
+                layout: &material_layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&view) },
+                    wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&sampler) },
+                ],
+            }));
+            material_buffers.push(buffer);
+        }
+        textures.push(white);
+        let double_sided = materials.iter().map(|m| m.double_sided).collect();
+        Self {
+            double_sided,
+            vertices: vertex_buffer,
+            indices: index_buffer,
+            primitives,
+            instances,
+            instance_capacity: draw_count,
+            instance_layout,
+            instance_group,
+            material_layout,
+            material_groups,
+            _material_buffers: material_buffers,
+            _textures: textures,
+        }
+    }
+
+    /// Writes this frame's transforms; `prev` holds last frame's world matrices in the same
+    /// draw order (None on the first frame: no motion).
+    pub fn update_instances(&self, ctx: &GpuContext, state: &SceneState, prev: Option<&[Mat4]>) {
+        let data: Vec<InstanceUniform> = state
+            .draws
+            .iter()
+            .take(self.instance_capacity)
+            .enumerate()
+            .map(|(i, d)| InstanceUniform {
+                model: d.world,
+                prev_model: prev.and_then(|p| p.get(i)).copied().unwrap_or(d.world),
+                normal_matrix: d.world.inverse().transpose(),
+            })
+            .collect();
+        if !data.is_empty() {
+            ctx.queue.write_buffer(&self.instances, 0, bytemuck::cast_slice(&data));
+        }
+    }
+
+    /// Issues the draws of `state`. The caller binds the instance group; materials are
+    /// bound at `material_group` when given, and `pipelines` = (single-sided,
+    /// double-sided) switches the pipeline by the material's culling mode when given.
+    pub fn draw(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        state: &SceneState,
+        material_group: Option<u32>,
+        pipelines: Option<(&wgpu::RenderPipeline, &wgpu::RenderPipeline)>,
+    ) {
+        pass.set_vertex_buffer(0, self.vertices.slice(..));
+        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+        for (i, d) in state.draws.iter().take(self.instance_capacity).enumerate() {
+            let Some(p) = self.primitives.get(d.mesh).and_then(|m| m.get(d.primitive)) else { continue };
+            if p.index_count == 0 {
+                continue;
+            }
+            if let Some((single, double)) = pipelines {
+                let ds = self.double_sided.get(p.material).copied().unwrap_or(true);
+                pass.set_pipeline(if ds { double } else { single });
+            }
+            if let Some(g) = material_group {
+                pass.set_bind_group(g, &self.material_groups[p.material.min(self.material_groups.len() - 1)], &[]);
+            }
+            let inst = i as u32;
+            pass.draw_indexed(p.first_index..p.first_index + p.index_count, p.base_vertex, inst..inst + 1);
+        }
+    }
+}
+
+/// Uploads an sRGB RGBA8 image with a box-filtered mip chain; levels larger than the
+/// device allows are dropped (the texture starts at the first level that fits).
+fn upload_texture(ctx: &GpuContext, img: &super::TextureImage) -> wgpu::Texture {
+    let (w, h) = (img.width.max(1), img.height.max(1));
+    let max_dim = ctx.limits.max_texture_dimension_2d;
+    let mut level = if img.rgba8.len() == (w as usize * h as usize * 4) {
+        img.rgba8.clone()
+    } else {
+        vec![255; (w * h * 4) as usize]
+    };
+    let mut chain = vec![(w, h, level.clone())];
+    let (mut lw, mut lh) = (w, h);
+    while lw > 1 || lh > 1 {
+        let (nw, nh) = ((lw / 2).max(1), (lh / 2).max(1));
+        let mut next = vec![0u8; (nw * nh * 4) as usize];
+        for y in 0..nh {
+            for x in 0..nw {
+                for c in 0..4 {
+                    let mut s = 0u32;
+                    for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                        let sx = (2 * x + dx).min(lw - 1);
+                        let sy = (2 * y + dy).min(lh - 1);
+                        s += level[((sy * lw + sx) * 4 + c) as usize] as u32;
+                    }
+                    next[((y * nw + x) * 4 + c) as usize] = (s / 4) as u8;
+                }
+            }
+        }
+        level = next;
+        lw = nw;
+        lh = nh;
+        chain.push((lw, lh, level.clone()));
+    }
+    chain.retain(|(cw, ch, _)| *cw <= max_dim && *ch <= max_dim);
+    let (bw, bh, _) = chain[0];
+    let tex = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(&format!("scene.texture.{}", img.name)),
+        size: wgpu::Extent3d { width: bw, height: bh, depth_or_array_layers: 1 },
+        mip_level_count: chain.len() as u32,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8UnormSrgb,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    for (mip, (cw, ch, data)) in chain.iter().enumerate() {
+        ctx.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &tex,
+                mip_level: mip as u32,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            data,
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(cw * 4), rows_per_image: Some(*ch) },
+            wgpu::Extent3d { width: *cw, height: *ch, depth_or_array_layers: 1 },
+        );
+    }
+    tex
+}

@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Runs GI Lab's whole test suite. On a machine without a GPU it installs Mesa's software
+# Vulkan driver (lavapipe) and Xvfb when it may (root with apt-get), otherwise it says how.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+export WGPU_BACKEND="${WGPU_BACKEND:-vulkan}"
+if [ -z "${XDG_RUNTIME_DIR:-}" ]; then
+  export XDG_RUNTIME_DIR="$(mktemp -d /tmp/gi-lab-runtime.XXXXXX)"
+  chmod 700 "$XDG_RUNTIME_DIR"
+fi
+
+need=()
+# A Vulkan loader and an ICD (a real GPU driver or lavapipe).
+if ! ls /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json >/dev/null 2>&1 \
+   || ! ldconfig -p 2>/dev/null | grep -q 'libvulkan.so.1'; then
+  need+=(mesa-vulkan-drivers libvulkan1)
+fi
+command -v xvfb-run >/dev/null 2>&1 || need+=(xvfb xauth)
+
+if [ ${#need[@]} -gt 0 ]; then
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+    echo "scripts/test.sh: installing ${need[*]}"
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -qq
+    apt-get install -y -qq --no-install-recommends "${need[@]}"
+  else
+    echo "scripts/test.sh: missing ${need[*]}." >&2
+    echo "Install them with: sudo apt-get install -y --no-install-recommends ${need[*]}" >&2
+    exit 1
+  fi
+fi
+
+cargo test --workspace "$@"

@@ -1,0 +1,123 @@
+// Stage 2, direct light: every punctual light evaluated with the BRDF of
+// common/brdf.wgsl at each G-buffer pixel, visibility from the shadow map with
+// percentage-closer filtering over (2r+1)² comparisons.
+#import common/camera.wgsl
+#import common/brdf.wgsl
+#import common/lights.wgsl
+#import common/fullscreen.wgsl
+
+struct Params {
+    // x: PCF radius in texels, y: shadow map size, z: depth bias, w: normal offset in texels
+    shadow: vec4<f32>,
+    // x: intensity scale, y: shadows enabled
+    light: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> camera: Camera;
+@group(0) @binding(1) var<uniform> params: Params;
+@group(0) @binding(2) var<storage, read> lights: array<Light>;
+@group(0) @binding(3) var<storage, read> light_view_proj: array<mat4x4<f32>>;
+@group(0) @binding(4) var shadow_map: texture_depth_2d_array;
+@group(0) @binding(5) var shadow_sampler: sampler_comparison;
+@group(1) @binding(0) var g_position: texture_2d<f32>;
+@group(1) @binding(1) var g_normal: texture_2d<f32>;
+@group(1) @binding(2) var g_albedo: texture_2d<f32>;
+@group(1) @binding(3) var g_material: texture_2d<f32>;
+@group(1) @binding(4) var out_radiance: texture_storage_2d<rgba32float, write>;
+
+// Picks the cube face of a point light from the major axis of the light-to-surface vector
+// (faces ordered +X, −X, +Y, −Y, +Z, −Z as in passes/shadow.rs).
+fn cube_face(d: vec3<f32>) -> u32 {
+    let a = abs(d);
+    if (a.x >= a.y && a.x >= a.z) {
+        return select(1u, 0u, d.x > 0.0);
+    }
+    if (a.y >= a.z) {
+        return select(3u, 2u, d.y > 0.0);
+    }
+    return select(5u, 4u, d.z > 0.0);
+}
+
+fn shadow_visibility(light: Light, p: vec3<f32>, n: vec3<f32>) -> f32 {
+    if (light.cone.w < 0.5 || params.light.y < 0.5) {
+        return 1.0;
+    }
+    // Normal offset proportional to the texel footprint at p.
+    var texel = light.shadow.x;
+    if (light.position.w != LIGHT_DIRECTIONAL) {
+        texel = texel * distance(p, light.position.xyz);
+    }
+    let pn = p + n * texel * params.shadow.w;
+    var layer = u32(light.cone.z);
+    if (light.position.w == LIGHT_POINT) {
+        layer = layer + cube_face(pn - light.position.xyz);
+    }
+    let clip = light_view_proj[layer] * vec4<f32>(pn, 1.0);
+    if (clip.w <= 0.0) {
+        return 0.0;
+    }
+    let ndc = clip.xyz / clip.w;
+    let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+    if (ndc.z > 1.0) {
+        return 1.0;
+    }
+    let depth_ref = ndc.z - params.shadow.z;
+    let r = i32(params.shadow.x);
+    let inv_size = 1.0 / params.shadow.y;
+    var sum = 0.0;
+    var count = 0.0;
+    for (var y = -r; y <= r; y = y + 1) {
+        for (var x = -r; x <= r; x = x + 1) {
+            let o = vec2<f32>(f32(x), f32(y)) * inv_size;
+            sum = sum + textureSampleCompareLevel(shadow_map, shadow_sampler, uv + o, i32(layer), depth_ref);
+            count = count + 1.0;
+        }
+    }
+    return sum / count;
+}
+
+@compute @workgroup_size(TILE, TILE, 1)
+fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let size = textureDimensions(out_radiance);
+    if (gid.x >= size.x || gid.y >= size.y) {
+        return;
+    }
+    let px = vec2<i32>(gid.xy);
+    let nrm = textureLoad(g_normal, px, 0);
+    if (nrm.w < 0.5) {
+        textureStore(out_radiance, px, vec4<f32>(0.0));
+        return;
+    }
+    let p = textureLoad(g_position, px, 0).xyz;
+    let n = normalize(nrm.xyz);
+    let alb = textureLoad(g_albedo, px, 0);
+    let mat = textureLoad(g_material, px, 0);
+    let v = normalize(camera.position.xyz - p);
+    var radiance = vec3<f32>(0.0);
+    let count = arrayLength(&lights);
+    for (var i = 0u; i < count; i = i + 1u) {
+        let light = lights[i];
+        var l: vec3<f32>;
+        var irradiance_scale: f32;
+        if (light.position.w == LIGHT_DIRECTIONAL) {
+            l = -light.direction.xyz;
+            irradiance_scale = 1.0;
+        } else {
+            let to_p = p - light.position.xyz;
+            let d = length(to_p);
+            l = -to_p / d;
+            irradiance_scale = range_window(light.direction.w, d) / (d * d);
+            if (light.position.w == LIGHT_SPOT) {
+                irradiance_scale = irradiance_scale * spot_falloff(light, -l);
+            }
+        }
+        let ndl = dot(n, l);
+        if (ndl <= 0.0 || irradiance_scale <= 0.0) {
+            continue;
+        }
+        let vis = shadow_visibility(light, p, n);
+        let e = light.color.rgb * params.light.x * irradiance_scale * ndl * vis;
+        radiance = radiance + brdf_eval(n, l, v, alb.rgb, alb.a, mat.x, mat.y) * e;
+    }
+    textureStore(out_radiance, px, vec4<f32>(radiance, 1.0));
+}

@@ -1,0 +1,330 @@
+//! GPU passes against CPU references on the default scene (lavapipe in CI).
+
+use gi_lab_tests::{default_renderer, default_scene, gpu, shared_scene};
+use gi_render::cpu::brdf;
+use gi_render::cpu::raycast::{Hit, TriangleSoup, primary_ray};
+use gi_render::scene::{LightKind, LoadOptions, Scene, SceneState};
+use gi_render::{LabSettings, Renderer};
+use glam::{Vec3, Vec4Swizzles};
+
+const N: u32 = 128;
+
+fn cast(r: &Renderer, soup: &TriangleSoup, x: u32, y: u32) -> Option<Hit> {
+    let (o, d) = primary_ray(r.view_proj().inverse(), x, y, N, N);
+    soup.intersect_camera(o, d)
+}
+
+/// A pixel is "interior" when the rays through its four neighbours hit the same draw with
+/// the same normal: no silhouette or crease where rasterisation and ray casting may
+/// legitimately pick different triangles.
+fn interior(r: &Renderer, soup: &TriangleSoup, x: u32, y: u32, h: &Hit) -> bool {
+    if x == 0 || y == 0 || x + 1 >= N || y + 1 >= N {
+        return false;
+    }
+    [(x - 1, y), (x + 1, y), (x, y - 1), (x, y + 1)]
+        .iter()
+        .all(|&(a, b)| cast(r, soup, a, b).is_some_and(|n| n.draw == h.draw && n.normal.dot(h.normal) > 0.98))
+}
+
+fn node_name(scene: &Scene, state: &SceneState, draw: usize) -> String {
+    scene.nodes[state.draws[draw].node].name.to_lowercase()
+}
+
+#[test]
+fn gbuffer_matches_cpu_ray_cast() {
+    let mut r = default_renderer(N, N);
+    r.render_frame();
+    let pos = r.readback("gbuffer.position").expect("position");
+    let nrm = r.readback("gbuffer.normal").expect("normal");
+    let alb = r.readback("gbuffer.albedo").expect("albedo");
+    let mat = r.readback("gbuffer.material").expect("material");
+    let state = r.scene().evaluate(0.0);
+    let soup = TriangleSoup::new(r.scene(), &state);
+    let mut compared = 0;
+    let mut background = 0;
+    for y in (2..N - 2).step_by(5) {
+        for x in (2..N - 2).step_by(5) {
+            let gp = pos.at(x, y);
+            let gn = nrm.at(x, y);
+            match cast(&r, &soup, x, y) {
+                None => {
+                    assert_eq!(gn[3], 0.0, "pixel ({x},{y}): CPU ray misses, G-buffer has geometry");
+                    background += 1;
+                }
+                Some(h) if interior(&r, &soup, x, y, &h) => {
+                    assert_eq!(gn[3], 1.0, "pixel ({x},{y}): CPU ray hits, G-buffer is empty");
+                    let dp = Vec3::new(gp[0], gp[1], gp[2]).distance(h.position);
+                    assert!(dp < 2e-3, "pixel ({x},{y}): position off by {dp} m ({gp:?} vs {})", h.position);
+                    let n = Vec3::new(gn[0], gn[1], gn[2]);
+                    assert!(n.dot(h.normal) > 0.999, "pixel ({x},{y}): normal {n} vs {}", h.normal);
+                    let m = &r.scene().materials[h.material];
+                    let a = alb.at(x, y);
+                    for c in 0..3 {
+                        assert!(
+                            (a[c] - m.base_color[c]).abs() < 3.0 / 255.0,
+                            "pixel ({x},{y}): albedo {a:?} vs {}",
+                            m.base_color
+                        );
+                    }
+                    assert!((a[3] - m.diffuse_intensity()).abs() < 3.0 / 255.0);
+                    let g = mat.at(x, y);
+                    assert!((g[0] - m.specular_intensity()).abs() < 1e-3, "SI {} vs {}", g[0], m.specular_intensity());
+                    assert!(
+                        (g[1] - m.specular_power()).abs() / m.specular_power() < 1e-3,
+                        "SP {} vs {}",
+                        g[1],
+                        m.specular_power()
+                    );
+                    compared += 1;
+                }
+                Some(_) => {}
+            }
+        }
+    }
+    assert!(compared >= 50, "only {compared} interior pixels compared");
+    println!("G-buffer: {compared} pixels match the CPU ray cast, {background} background pixels agree");
+}
+
+#[test]
+fn movement_buffer_reprojects_static_pixels_and_flags_moving_ones() {
+    // Part 1: camera move, scene frozen. Offsets must equal the CPU reprojection.
+    let mut r = default_renderer(N, N);
+    r.render_frame();
+    let prev_vp = r.view_proj();
+    r.camera.orbit(0.06, 0.03);
+    r.render_frame();
+    let motion = r.readback("gbuffer.motion").expect("motion");
+    let state = r.scene().evaluate(0.0);
+    let soup = TriangleSoup::new(r.scene(), &state);
+    let mut compared = 0;
+    let mut max_motion = 0.0f32;
+    for y in (2..N - 2).step_by(5) {
+        for x in (2..N - 2).step_by(5) {
+            let Some(h) = cast(&r, &soup, x, y) else { continue };
+            if !interior(&r, &soup, x, y, &h) {
+                continue;
+            }
+            let clip = prev_vp * h.position.extend(1.0);
+            let ndc = clip.xy() / clip.w;
+            let prev_px = glam::Vec2::new((ndc.x * 0.5 + 0.5) * N as f32, (0.5 - ndc.y * 0.5) * N as f32);
+            let expect = prev_px - glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            let m = motion.at(x, y);
+            let got = glam::Vec2::new(m[0], m[1]);
+            assert!((got - expect).length() < 0.02, "pixel ({x},{y}): motion {got} vs CPU {expect}");
+            max_motion = max_motion.max(expect.length());
+            compared += 1;
+        }
+    }
+    assert!(compared >= 50, "only {compared} pixels compared");
+    assert!(max_motion > 1.0, "the camera move should displace pixels (max {max_motion} px)");
+
+    // Part 2: camera still, animation playing with a large step: the moving sphere's pixels
+    // differ from the static prediction (zero), static pixels do not move.
+    let mut settings = LabSettings::default();
+    settings.animation.time_step_s = 0.1;
+    let mut r = Renderer::new(gpu(), default_scene(), settings, N, N).expect("renderer");
+    r.clock.playing = true;
+    r.render_frame();
+    let t = r.clock.time_s();
+    r.render_frame();
+    let motion = r.readback("gbuffer.motion").expect("motion");
+    let state = r.scene().evaluate(t);
+    let soup = TriangleSoup::new(r.scene(), &state);
+    let (mut moving, mut moving_ok, mut still) = (0, 0, 0);
+    for y in 1..N - 1 {
+        for x in 1..N - 1 {
+            let Some(h) = cast(&r, &soup, x, y) else { continue };
+            if !interior(&r, &soup, x, y, &h) {
+                continue;
+            }
+            let m = motion.at(x, y);
+            let len = glam::Vec2::new(m[0], m[1]).length();
+            let name = node_name(r.scene(), &state, h.draw);
+            if name.contains("sphere") {
+                moving += 1;
+                if len > 0.5 {
+                    moving_ok += 1;
+                }
+            } else if !name.contains("short") {
+                assert!(len < 1e-3, "static pixel ({x},{y}) on '{name}' moved by {len} px");
+                still += 1;
+            }
+        }
+    }
+    assert!(moving >= 10, "the sphere covers only {moving} interior pixels");
+    assert_eq!(moving_ok, moving, "{moving_ok} of {moving} sphere pixels have motion > 0.5 px");
+    assert!(still >= 100);
+}
+
+/// The default scene's spot light and its cone.
+fn spot(state: &SceneState) -> (Vec3, Vec3, Vec3, f32, f32) {
+    let l = state.lights.iter().find(|l| matches!(l.light.kind, LightKind::Spot { .. })).expect("a spot light");
+    let LightKind::Spot { inner_cone, outer_cone } = l.light.kind else { unreachable!() };
+    (l.position, l.direction, l.light.color * l.light.intensity, inner_cone, outer_cone)
+}
+
+#[test]
+fn direct_light_matches_analytic_spot_radiance_and_shadows() {
+    let mut r = default_renderer(N, N);
+    r.render_frame();
+    let radiance = r.readback("direct.radiance").expect("radiance");
+    let state = r.scene().evaluate(0.0);
+    let soup = TriangleSoup::new(r.scene(), &state);
+    let (lp, ldir, li, inner, outer) = spot(&state);
+    let eye = r.camera.position;
+    let (mut lit, mut shadowed) = (0, 0);
+    let mut worst = 0.0f32;
+    for y in 1..N - 1 {
+        for x in 1..N - 1 {
+            let Some(h) = cast(&r, &soup, x, y) else { continue };
+            if h.normal.y < 0.999 || h.position.y.abs() > 1e-3 || !interior(&r, &soup, x, y, &h) {
+                continue; // floor pixels only
+            }
+            let m = &r.scene().materials[h.material];
+            let to_l = lp - h.position;
+            let d = to_l.length();
+            let l = to_l / d;
+            let falloff = brdf::spot_falloff(ldir.dot(-l), inner, outer);
+            let f = brdf::eval(
+                h.normal,
+                l,
+                (eye - h.position).normalize(),
+                m.base_color.xyz(),
+                m.diffuse_intensity(),
+                m.specular_intensity(),
+                m.specular_power(),
+            );
+            let analytic = f * li * falloff / (d * d) * h.normal.dot(l).max(0.0);
+            if falloff < 0.05 {
+                continue; // outside the cone: nothing to compare
+            }
+            let g = radiance.at(x, y);
+            let got = Vec3::new(g[0], g[1], g[2]);
+            // Visibility from the CPU at the point and around it (away from penumbrae).
+            let around = [Vec3::ZERO, Vec3::X * 0.04, Vec3::NEG_X * 0.04, Vec3::Z * 0.04, Vec3::NEG_Z * 0.04];
+            let occluded: Vec<bool> =
+                around.iter().map(|o| soup.occluded(h.position + *o + Vec3::Y * 1e-3, lp, 1e-3)).collect();
+            if occluded.iter().all(|o| !o) {
+                let rel = ((got - analytic).length() / analytic.length()).abs();
+                worst = worst.max(rel);
+                assert!(
+                    rel < 0.02,
+                    "lit floor pixel ({x},{y}) at {}: GPU {got} vs analytic {analytic} ({:.2} %)",
+                    h.position,
+                    rel * 100.0
+                );
+                lit += 1;
+            } else if occluded.iter().all(|o| *o) {
+                let blocker = soup.intersect(h.position + Vec3::Y * 1e-3, l, 1e-3, d).expect("occluded");
+                if node_name(r.scene(), &state, blocker.draw).contains("tall") {
+                    assert!(
+                        got.length() < 0.02 * analytic.length(),
+                        "pixel ({x},{y}) behind the tall box is lit: {got} (unshadowed {analytic})"
+                    );
+                    shadowed += 1;
+                }
+            }
+        }
+    }
+    println!("direct: {lit} lit floor pixels within {:.3} %, {shadowed} shadowed by the tall box", worst * 100.0);
+    assert!(lit >= 50, "only {lit} lit floor pixels compared");
+    assert!(shadowed >= 5, "only {shadowed} floor pixels behind the tall box");
+}
+
+#[test]
+fn ten_frames_are_bit_identical() {
+    let run = || {
+        let mut r = Renderer::new(gpu(), default_scene(), LabSettings::default(), 96, 96).expect("renderer");
+        for _ in 0..10 {
+            r.render_frame();
+        }
+        r.readback("final.hdr").expect("final.hdr")
+    };
+    let a = run();
+    let b = run();
+    let bits = |i: &gi_render::ImageF32| i.data.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert!(a.data.iter().flatten().any(|x| *x > 0.0), "the image is black");
+    assert!(bits(&a) == bits(&b), "two runs of 10 frames differ");
+}
+
+#[test]
+fn every_registered_buffer_reads_back() {
+    let mut r = default_renderer(64, 48);
+    let timings = r.render_frame();
+    let names: Vec<_> = timings.iter().map(|t| t.name.as_str()).collect();
+    assert_eq!(names, ["gbuffer", "direct.shadow", "direct", "compose"]);
+    for t in &timings {
+        assert!(t.ms.is_finite() && t.ms >= 0.0, "{}: {} ms", t.name, t.ms);
+    }
+    for name in r.buffers().names() {
+        let img = r.readback(&name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(img.width > 0 && img.height > 0);
+        assert!(img.data.iter().flatten().all(|x| !x.is_nan()), "{name} has NaN");
+    }
+    for name in [
+        "gbuffer.position",
+        "gbuffer.normal",
+        "gbuffer.albedo",
+        "gbuffer.material",
+        "gbuffer.motion",
+        "gbuffer.depth",
+        "direct.shadow_map",
+        "direct.radiance",
+        "final.hdr",
+        "final.ldr",
+    ] {
+        r.buffers().get(name).unwrap_or_else(|e| panic!("{e}"));
+    }
+    let depth = r.readback("gbuffer.depth").expect("depth");
+    assert!(depth.data.iter().all(|p| (0.0..=1.0).contains(&p[0])));
+    assert!(r.readback("no.such.buffer").unwrap_err().to_string().contains("gbuffer.normal"));
+}
+
+#[test]
+fn bad_sizes_and_settings_are_refused_without_change() {
+    let mut r = default_renderer(32, 32);
+    assert!(r.resize(0, 10).is_err());
+    assert!(r.resize(10, 0).is_err());
+    assert!(r.resize(1 << 20, 8).is_err());
+    assert_eq!(r.size(), (32, 32));
+    let mut bad = LabSettings::default();
+    bad.direct.pcf_radius = 100;
+    let e = r.set_settings(bad).unwrap_err().to_string();
+    assert!(e.contains("direct.pcf_radius"), "{e}");
+    assert_eq!(r.settings(), &LabSettings::default());
+    let mut huge = LabSettings::default();
+    huge.direct.shadow_map_size = 8192;
+    huge.direct.shadow_map_size = r.ctx.limits.max_texture_dimension_2d + 1;
+    assert!(r.set_settings(huge).is_err());
+    r.resize(40, 20).expect("valid resize");
+    r.render_frame();
+    assert_eq!(r.readback("final.ldr").expect("ldr").width, 40);
+}
+
+fn render_shared(rel: &str, unit_scale: f32, tris: usize) {
+    let opts = LoadOptions { unit_scale, ..LoadOptions::default() };
+    let scene = gi_render::scene::load_gltf_file(&shared_scene(rel), &opts).unwrap_or_else(|e| panic!("{rel}: {e}"));
+    assert_eq!(scene.triangle_count(), tris, "{rel}");
+    let mut r = Renderer::new(gpu(), scene, LabSettings::default(), 96, 96).expect("renderer");
+    r.render_frame();
+    let img = r.readback("final.ldr").expect("ldr");
+    let lit = img.data.iter().filter(|p| p[0] + p[1] + p[2] > 0.05).count();
+    let first = img.data[0];
+    assert!(lit > img.data.len() / 20, "{rel}: only {lit} lit pixels");
+    assert!(img.data.iter().any(|p| *p != first), "{rel}: uniform image");
+}
+
+#[test]
+fn shared_cornell_box_renders() {
+    render_shared("cornell-box/CornellBox-Original.gltf", 1.0, 32);
+}
+
+#[test]
+fn shared_chair_on_floor_renders() {
+    render_shared("chair-on-floor/MixedLightingExample.gltf", 1.0, 40_898);
+}
+
+#[test]
+fn shared_hotel_room_renders() {
+    render_shared("hotel-room/hotel-room.glb", 0.001, 99_029);
+}

@@ -1,0 +1,82 @@
+//! Every WGSL file resolves its imports and validates with naga; the Rust uniform structs
+//! have the sizes of their WGSL twins (DESIGN.md principle 8).
+
+use gi_render::shaders::{ENTRY_MODULES, SOURCES, resolve};
+
+fn parse(path: &str) -> naga::Module {
+    let src = resolve(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+    let module = naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{path}: {}", e.emit_to_string(&src)));
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{path}: {}", e.emit_to_string(&src)));
+    module
+}
+
+fn struct_size(module: &naga::Module, name: &str) -> u32 {
+    module
+        .types
+        .iter()
+        .find_map(|(_, t)| match (&t.name, &t.inner) {
+            (Some(n), naga::TypeInner::Struct { span, .. }) if n == name => Some(*span),
+            _ => None,
+        })
+        .unwrap_or_else(|| panic!("struct {name} not found"))
+}
+
+#[test]
+fn every_entry_module_validates() {
+    for path in ENTRY_MODULES {
+        parse(path);
+    }
+}
+
+#[test]
+fn every_shader_file_is_used_and_every_entry_is_listed() {
+    // Each file in shaders/ on disk is in the embedded table (a new file cannot be forgotten).
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
+    let mut on_disk = Vec::new();
+    for dir in std::fs::read_dir(&root).expect("shaders/ exists") {
+        let dir = dir.expect("entry").path();
+        for f in std::fs::read_dir(&dir).expect("folder") {
+            let f = f.expect("file").path();
+            if f.extension().is_some_and(|e| e == "wgsl") {
+                let rel = f.strip_prefix(&root).expect("prefix").to_string_lossy().replace('\\', "/");
+                on_disk.push(rel);
+            }
+        }
+    }
+    for f in &on_disk {
+        assert!(SOURCES.iter().any(|(p, _)| p == f), "shaders/{f} is not in render/src/shaders.rs SOURCES");
+    }
+    for (p, src) in SOURCES {
+        let text = std::fs::read_to_string(root.join(p)).expect("listed file exists on disk");
+        assert_eq!(&text, src, "{p}: embedded copy differs from disk");
+    }
+}
+
+#[test]
+fn imports_are_resolved_once_and_bad_names_fail() {
+    let direct = resolve("direct/direct.wgsl").expect("resolves");
+    assert_eq!(direct.matches("struct Camera").count(), 1);
+    assert!(!direct.contains("#import"));
+    assert!(resolve("nope/nope.wgsl").is_err());
+}
+
+#[test]
+fn uniform_sizes_match_wgsl() {
+    use gi_render::passes::{
+        CameraUniform, InstanceUniform, compose::ToneParams, direct::DirectParams, shadow::GpuLight,
+    };
+    use gi_render::scene::upload::MaterialUniform;
+    let g = parse("gbuffer/gbuffer.wgsl");
+    assert_eq!(struct_size(&g, "Camera") as usize, std::mem::size_of::<CameraUniform>());
+    assert_eq!(struct_size(&g, "Instance") as usize, std::mem::size_of::<InstanceUniform>());
+    assert_eq!(struct_size(&g, "Material") as usize, std::mem::size_of::<MaterialUniform>());
+    let d = parse("direct/direct.wgsl");
+    assert_eq!(struct_size(&d, "Light") as usize, std::mem::size_of::<GpuLight>());
+    assert_eq!(struct_size(&d, "Params") as usize, std::mem::size_of::<DirectParams>());
+    let t = parse("compose/tonemap.wgsl");
+    assert_eq!(struct_size(&t, "Params") as usize, std::mem::size_of::<ToneParams>());
+    let s = parse("shadow/shadow.wgsl");
+    assert_eq!(struct_size(&s, "Instance") as usize, std::mem::size_of::<InstanceUniform>());
+}
