@@ -231,7 +231,7 @@ mod tests {
         let changed = s.clamp_all();
         assert_eq!(changed.len(), 3);
         assert_eq!(s.direct.pcf_radius, 4);
-        assert!(s.validate().is_empty());
+        assert!(s.validate().is_empty(), "{:?}", s.validate());
     }
 
     #[test]

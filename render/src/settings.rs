@@ -141,19 +141,20 @@ pub fn parse_value(kind: FieldKind, text: &str) -> Result<Value, String> {
 
 /// Checks a value against the field's declared range.
 pub fn check_range(meta: &FieldMeta, v: &Value) -> Result<(), String> {
-    let x = match v {
+    // Compared in the field's own precision: the f64 range 0.01 is not below the f32 0.01.
+    let (x, lo, hi) = match v {
         Value::F32(x) => {
             if !x.is_finite() {
                 return Err(format!("{x} is not a finite number"));
             }
-            *x as f64
+            (*x as f64, meta.min as f32 as f64, meta.max as f32 as f64)
         }
-        Value::U32(x) => *x as f64,
+        Value::U32(x) => (*x as f64, meta.min, meta.max),
         Value::Bool(_) | Value::Choice(_) => return Ok(()),
     };
-    if x < meta.min || x > meta.max {
+    if x < lo || x > hi {
         let unit = if meta.unit.is_empty() { String::new() } else { format!(" {}", meta.unit) };
-        return Err(format!("{x}{unit} is outside [{}, {}]{unit}", meta.min, meta.max));
+        return Err(format!("{} is outside [{}, {}]{unit}", v, meta.min, meta.max));
     }
     Ok(())
 }

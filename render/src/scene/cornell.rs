@@ -58,7 +58,7 @@ const TALL_BOX_ANGLE_DEG: f64 = 17.0;
 /// Rest rotation of the short box about +Y (degrees); its animation starts here.
 const SHORT_BOX_ANGLE_DEG: f64 = -17.0;
 const TALL_BOX_CENTER: [f64; 3] = [-0.35, 0.6, -0.3];
-const SHORT_BOX_CENTER: [f64; 3] = [0.4, 0.3, 0.3];
+const SHORT_BOX_CENTER: [f64; 3] = [0.45, 0.3, -0.15];
 const SPHERE_RADIUS: f64 = 0.25;
 /// Sphere path: x from −0.6 to 0.6 and back at this height and depth.
 const SPHERE_Y: f64 = 0.25;
@@ -526,7 +526,7 @@ mod tests {
         // 1.5 s of an 8 s turn: 67.5°.
         assert!((r0.angle_between(r1) - 67.5f32.to_radians()).abs() < 1e-3, "{r0} {r1}");
         let c1 = s1.node_world[short_box].transform_point3(Vec3::ZERO);
-        assert!((c1 - Vec3::new(0.4, 0.3, 0.3)).length() < 1e-5, "the short box turns in place");
+        assert!((c1 - Vec3::from(SHORT_BOX_CENTER.map(|x| x as f32))).length() < 1e-5, "the short box turns in place");
         assert_eq!(s0.node_world[tall_box], s1.node_world[tall_box], "the tall box is static");
     }
 
