@@ -154,6 +154,8 @@ impl Viewer {
         let view = self.renderer.final_ldr().create_view(&wgpu::TextureViewDescriptor {
             label: Some("app.final_ldr"),
             format: Some(wgpu::TextureFormat::Rgba8UnormSrgb),
+            // The texture is also a storage target; this sRGB view is for sampling only.
+            usage: Some(wgpu::TextureUsages::TEXTURE_BINDING),
             ..Default::default()
         });
         let mut egui_renderer = self.render_state.renderer.write();
@@ -258,11 +260,11 @@ impl Viewer {
         ui.heading("Animation");
         let clock = &mut self.renderer.clock;
         ui.horizontal(|ui| {
-            let label = if clock.playing { "⏸ Pause" } else { "▶ Play" };
+            let label = if clock.playing { "Pause" } else { "▶ Play" };
             if ui.button(label).clicked() {
                 clock.playing = !clock.playing;
             }
-            if ui.add_enabled(!clock.playing, egui::Button::new("⏭ Step")).clicked() {
+            if ui.add_enabled(!clock.playing, egui::Button::new("Step")).clicked() {
                 clock.step();
             }
             ui.monospace(format!("t = {:.3} s  frame {}", clock.time_s(), clock.anim_frame));

@@ -38,58 +38,59 @@ fn label(ui: &mut Ui, m: &FieldMeta) {
     ui.label(text).on_hover_text(tooltip(m));
 }
 
-/// A slider for an f32 field with its range and unit, plus a reset button.
+/// One row of a settings grid: the label with its tooltip, the widget, and a reset
+/// button enabled when the value differs from the default.
+fn row<T: PartialEq + Copy>(
+    ui: &mut Ui,
+    m: &FieldMeta,
+    value: &mut T,
+    default: T,
+    widget: impl FnOnce(&mut Ui, &mut T) -> egui::Response,
+) -> bool {
+    let mut changed = false;
+    label(ui, m);
+    ui.horizontal(|ui| {
+        changed |= widget(ui, value).on_hover_text(tooltip(m)).changed();
+        let reset = ui.add_enabled(*value != default, egui::Button::new("reset").small());
+        if reset.on_hover_text("reset to default").clicked() {
+            *value = default;
+            changed = true;
+        }
+    });
+    ui.end_row();
+    changed
+}
+
+/// Whether a slider over the field's range should be logarithmic (ranges over 2 decades).
+fn logarithmic(m: &FieldMeta) -> bool {
+    m.min > 0.0 && m.max / m.min > 100.0
+}
+
+/// A slider for an f32 field with its range and unit.
 pub fn f32_field(ui: &mut Ui, m: &FieldMeta, value: &mut f32, default: f32) -> bool {
-    let mut changed = false;
-    label(ui, m);
-    ui.horizontal(|ui| {
-        let log = m.min > 0.0 && m.max / m.min > 100.0;
-        let r = ui
-            .add(egui::Slider::new(value, m.min as f32..=m.max as f32).logarithmic(log).suffix(format!(" {}", m.unit)))
-            .on_hover_text(tooltip(m));
-        changed |= r.changed();
-        if ui.add_enabled(*value != default, egui::Button::new("⟲").small()).on_hover_text("reset to default").clicked()
-        {
-            *value = default;
-            changed = true;
-        }
-    });
-    ui.end_row();
-    changed
+    row(ui, m, value, default, |ui, v| {
+        ui.add(
+            egui::Slider::new(v, m.min as f32..=m.max as f32)
+                .logarithmic(logarithmic(m))
+                .suffix(format!(" {}", m.unit)),
+        )
+    })
 }
 
+/// A slider for a u32 field with its range and unit.
 pub fn u32_field(ui: &mut Ui, m: &FieldMeta, value: &mut u32, default: u32) -> bool {
-    let mut changed = false;
-    label(ui, m);
-    ui.horizontal(|ui| {
-        let log = m.min > 0.0 && m.max / m.min > 100.0;
-        let r = ui
-            .add(egui::Slider::new(value, m.min as u32..=m.max as u32).logarithmic(log).suffix(format!(" {}", m.unit)))
-            .on_hover_text(tooltip(m));
-        changed |= r.changed();
-        if ui.add_enabled(*value != default, egui::Button::new("⟲").small()).on_hover_text("reset to default").clicked()
-        {
-            *value = default;
-            changed = true;
-        }
-    });
-    ui.end_row();
-    changed
+    row(ui, m, value, default, |ui, v| {
+        ui.add(
+            egui::Slider::new(v, m.min as u32..=m.max as u32)
+                .logarithmic(logarithmic(m))
+                .suffix(format!(" {}", m.unit)),
+        )
+    })
 }
 
+/// A checkbox for a bool field.
 pub fn bool_field(ui: &mut Ui, m: &FieldMeta, value: &mut bool, default: bool) -> bool {
-    let mut changed = false;
-    label(ui, m);
-    ui.horizontal(|ui| {
-        changed |= ui.checkbox(value, "").on_hover_text(tooltip(m)).changed();
-        if ui.add_enabled(*value != default, egui::Button::new("⟲").small()).on_hover_text("reset to default").clicked()
-        {
-            *value = default;
-            changed = true;
-        }
-    });
-    ui.end_row();
-    changed
+    row(ui, m, value, default, |ui, v| ui.checkbox(v, ""))
 }
 
 /// Direct light and shadow maps (stage 2).

@@ -119,8 +119,11 @@ impl BufferRegistry {
     }
 }
 
+/// Decodes one texel's bytes to f32 RGBA.
+type TexelDecoder = fn(&[u8]) -> [f32; 4];
+
 /// Bytes per texel and a decoder to f32 RGBA for the formats the passes use.
-fn decoder(format: wgpu::TextureFormat) -> Option<(u32, fn(&[u8]) -> [f32; 4])> {
+fn decoder(format: wgpu::TextureFormat) -> Option<(u32, TexelDecoder)> {
     use wgpu::TextureFormat as F;
     fn f32_at(b: &[u8], i: usize) -> f32 {
         f32::from_le_bytes([b[4 * i], b[4 * i + 1], b[4 * i + 2], b[4 * i + 3]])
