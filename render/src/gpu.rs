@@ -87,19 +87,8 @@ impl GpuContext {
 
     /// Adopts a device someone else opened (eframe's), checking that it has what we need.
     pub fn adopt(device: wgpu::Device, queue: wgpu::Queue, adapter_info: wgpu::AdapterInfo) -> Result<Self, GpuError> {
-        let features = device.features();
-        let missing = REQUIRED_FEATURES - features;
-        if !missing.is_empty() {
-            return Err(GpuError::MissingFeatures { adapter: adapter_info.name, missing });
-        }
-        let limits = device.limits();
-        if limits.max_color_attachment_bytes_per_sample < REQUIRED_COLOR_BYTES_PER_SAMPLE {
-            return Err(GpuError::Limits {
-                adapter: adapter_info.name,
-                have: limits.max_color_attachment_bytes_per_sample,
-                need: REQUIRED_COLOR_BYTES_PER_SAMPLE,
-            });
-        }
+        let (features, limits) = (device.features(), device.limits());
+        check_capabilities(&adapter_info.name, features, &limits)?;
         Ok(Self { device, queue, adapter_info, features, limits, _instance: None })
     }
 
@@ -158,20 +147,8 @@ fn pick_adapter(instance: &wgpu::Instance) -> Result<wgpu::Adapter, GpuError> {
 /// optional ones it has, and the adapter's own limits (the G-buffer needs more colour
 /// attachment bytes than WebGPU's default 32). Used headless and by the app for eframe.
 pub fn device_descriptor(adapter: &wgpu::Adapter) -> Result<wgpu::DeviceDescriptor<'static>, GpuError> {
-    let have = adapter.features();
-    let info = adapter.get_info();
-    let missing = REQUIRED_FEATURES - have;
-    if !missing.is_empty() {
-        return Err(GpuError::MissingFeatures { adapter: info.name, missing });
-    }
-    let limits = adapter.limits();
-    if limits.max_color_attachment_bytes_per_sample < REQUIRED_COLOR_BYTES_PER_SAMPLE {
-        return Err(GpuError::Limits {
-            adapter: info.name,
-            have: limits.max_color_attachment_bytes_per_sample,
-            need: REQUIRED_COLOR_BYTES_PER_SAMPLE,
-        });
-    }
+    let (have, limits) = (adapter.features(), adapter.limits());
+    check_capabilities(&adapter.get_info().name, have, &limits)?;
     Ok(wgpu::DeviceDescriptor {
         label: Some("gi-lab.device"),
         required_features: REQUIRED_FEATURES | (OPTIONAL_FEATURES & have),
@@ -180,4 +157,20 @@ pub fn device_descriptor(adapter: &wgpu::Adapter) -> Result<wgpu::DeviceDescript
         memory_hints: wgpu::MemoryHints::Performance,
         trace: wgpu::Trace::Off,
     })
+}
+
+/// Checks that a device or adapter has the features and limits the pipeline needs.
+fn check_capabilities(adapter: &str, features: wgpu::Features, limits: &wgpu::Limits) -> Result<(), GpuError> {
+    let missing = REQUIRED_FEATURES - features;
+    if !missing.is_empty() {
+        return Err(GpuError::MissingFeatures { adapter: adapter.into(), missing });
+    }
+    if limits.max_color_attachment_bytes_per_sample < REQUIRED_COLOR_BYTES_PER_SAMPLE {
+        return Err(GpuError::Limits {
+            adapter: adapter.into(),
+            have: limits.max_color_attachment_bytes_per_sample,
+            need: REQUIRED_COLOR_BYTES_PER_SAMPLE,
+        });
+    }
+    Ok(())
 }

@@ -251,7 +251,7 @@ macro_rules! settings_enum {
 
 /// Declares a pass's settings struct with its field metadata (see the module docs).
 ///
-/// ```ignore
+/// ```text
 /// settings_group! {
 ///     /// Direct light (stage 2).
 ///     pub struct DirectSettings: "direct" {

@@ -34,19 +34,21 @@ pub struct Slot<'a> {
 impl<'a> Slot<'a> {
     /// Timestamp writes for a render pass; `first`/`last` say whether this pass opens
     /// and/or closes the scope (a scope may span several passes, e.g. shadow map layers).
-    pub fn render(&self, first: bool, last: bool) -> wgpu::RenderPassTimestampWrites<'a> {
-        wgpu::RenderPassTimestampWrites {
+    /// A pass in the middle of a scope writes none.
+    pub fn render(&self, first: bool, last: bool) -> Option<wgpu::RenderPassTimestampWrites<'a>> {
+        (first || last).then(|| wgpu::RenderPassTimestampWrites {
             query_set: self.query_set,
             beginning_of_pass_write_index: first.then_some(self.begin),
             end_of_pass_write_index: last.then_some(self.begin + 1),
-        }
+        })
     }
-    pub fn compute(&self, first: bool, last: bool) -> wgpu::ComputePassTimestampWrites<'a> {
-        wgpu::ComputePassTimestampWrites {
+    /// Timestamp writes for a compute pass, as [`Self::render`].
+    pub fn compute(&self, first: bool, last: bool) -> Option<wgpu::ComputePassTimestampWrites<'a>> {
+        (first || last).then(|| wgpu::ComputePassTimestampWrites {
             query_set: self.query_set,
             beginning_of_pass_write_index: first.then_some(self.begin),
             end_of_pass_write_index: last.then_some(self.begin + 1),
-        }
+        })
     }
 }
 

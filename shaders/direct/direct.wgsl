@@ -7,7 +7,8 @@
 #import common/fullscreen.wgsl
 
 struct Params {
-    // x: PCF radius in texels, y: shadow map size, z: depth bias, w: normal offset in texels
+    // x: PCF radius in texels, y: shadow map size, z: depth bias in texels (toward the
+    // light), w: normal offset in texels
     shadow: vec4<f32>,
     // x: intensity scale, y: shadows enabled
     light: vec4<f32>,
@@ -38,7 +39,10 @@ fn cube_face(d: vec3<f32>) -> u32 {
     return select(5u, 4u, d.z > 0.0);
 }
 
-fn shadow_visibility(light: Light, p: vec3<f32>, n: vec3<f32>) -> f32 {
+// Both biases are world-space offsets of the receiver, measured in shadow-map texels at the
+// receiver's distance, so they mean the same in every scene and at every distance (a
+// constant NDC bias would be metres wide far from a close near plane).
+fn shadow_visibility(light: Light, p: vec3<f32>, n: vec3<f32>, l: vec3<f32>) -> f32 {
     if (light.cone.w < 0.5 || params.light.y < 0.5) {
         return 1.0;
     }
@@ -47,7 +51,7 @@ fn shadow_visibility(light: Light, p: vec3<f32>, n: vec3<f32>) -> f32 {
     if (light.position.w != LIGHT_DIRECTIONAL) {
         texel = texel * distance(p, light.position.xyz);
     }
-    let pn = p + n * texel * params.shadow.w;
+    let pn = p + n * texel * params.shadow.w + l * texel * params.shadow.z;
     var layer = u32(light.cone.z);
     if (light.position.w == LIGHT_POINT) {
         layer = layer + cube_face(pn - light.position.xyz);
@@ -61,7 +65,7 @@ fn shadow_visibility(light: Light, p: vec3<f32>, n: vec3<f32>) -> f32 {
     if (ndc.z > 1.0) {
         return 1.0;
     }
-    let depth_ref = ndc.z - params.shadow.z;
+    let depth_ref = ndc.z;
     let r = i32(params.shadow.x);
     let inv_size = 1.0 / params.shadow.y;
     var sum = 0.0;
@@ -115,7 +119,7 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         if (ndl <= 0.0 || irradiance_scale <= 0.0) {
             continue;
         }
-        let vis = shadow_visibility(light, p, n);
+        let vis = shadow_visibility(light, p, n, l);
         let e = light.color.rgb * params.light.x * irradiance_scale * ndl * vis;
         radiance = radiance + brdf_eval(n, l, v, alb.rgb, alb.a, mat.x, mat.y) * e;
     }

@@ -3,9 +3,9 @@
 use gi_lab_tests::{default_renderer, default_scene, gpu, shared_scene};
 use gi_render::cpu::brdf;
 use gi_render::cpu::raycast::{Hit, TriangleSoup, primary_ray};
-use gi_render::scene::{LightKind, LoadOptions, Scene, SceneState};
+use gi_render::scene::{Light, LightKind, LoadOptions, Material, Node, Scene, SceneState, Transform, WorldLight};
 use gi_render::{LabSettings, Renderer};
-use glam::{Vec3, Vec4Swizzles};
+use glam::{Quat, Vec3, Vec4Swizzles};
 
 const N: u32 = 128;
 
@@ -156,24 +156,51 @@ fn movement_buffer_reprojects_static_pixels_and_flags_moving_ones() {
     assert!(still >= 100);
 }
 
-/// The default scene's spot light and its cone.
-fn spot(state: &SceneState) -> (Vec3, Vec3, Vec3, f32, f32) {
-    let l = state.lights.iter().find(|l| matches!(l.light.kind, LightKind::Spot { .. })).expect("a spot light");
-    let LightKind::Spot { inner_cone, outer_cone } = l.light.kind else { unreachable!() };
-    (l.position, l.direction, l.light.color * l.light.intensity, inner_cone, outer_cone)
+/// Radiance a punctual light sends to the camera from `p` (the BRDF of `cpu::brdf`,
+/// KHR_lights_punctual units), and the point toward which visibility is tested.
+fn analytic(wl: &WorldLight, p: Vec3, n: Vec3, v: Vec3, m: &Material, far: f32) -> (Vec3, Vec3) {
+    let (l, e, target) = match wl.light.kind {
+        LightKind::Directional => {
+            let l = -wl.direction;
+            (l, wl.light.intensity, p + l * far)
+        }
+        LightKind::Point | LightKind::Spot { .. } => {
+            let to_l = wl.position - p;
+            let d = to_l.length();
+            let l = to_l / d;
+            let falloff = match wl.light.kind {
+                LightKind::Spot { inner_cone, outer_cone } => {
+                    brdf::spot_falloff(wl.direction.dot(-l), inner_cone, outer_cone)
+                }
+                _ => 1.0,
+            };
+            (l, wl.light.intensity * falloff / (d * d), wl.position)
+        }
+    };
+    let f = brdf::eval(n, l, v, m.base_color.xyz(), m.diffuse_intensity(), m.specular_intensity(), m.specular_power());
+    (f * wl.light.color * e * n.dot(l).max(0.0), target)
 }
 
-#[test]
-fn direct_light_matches_analytic_spot_radiance_and_shadows() {
-    let mut r = default_renderer(N, N);
+/// What [`check_direct`] compared.
+struct DirectCheck {
+    lit: usize,
+    shadowed: usize,
+    shadowed_by_tall_box: usize,
+    worst_rel: f32,
+}
+
+/// Renders one frame and compares `direct.radiance` with the analytic sum over the scene's
+/// lights: floor pixels that every light reaches unoccluded (also 4 cm around, away from
+/// penumbrae) within 2 %, and pixels that no light reaches (robustly occluded, though
+/// unshadowed they would be bright) below 2 % of their unshadowed value.
+fn check_direct(mut r: Renderer) -> DirectCheck {
     r.render_frame();
     let radiance = r.readback("direct.radiance").expect("radiance");
     let state = r.scene().evaluate(0.0);
     let soup = TriangleSoup::new(r.scene(), &state);
-    let (lp, ldir, li, inner, outer) = spot(&state);
+    let far = r.bounds().radius() * 10.0;
     let eye = r.camera.position;
-    let (mut lit, mut shadowed) = (0, 0);
-    let mut worst = 0.0f32;
+    let mut c = DirectCheck { lit: 0, shadowed: 0, shadowed_by_tall_box: 0, worst_rel: 0.0 };
     for y in 1..N - 1 {
         for x in 1..N - 1 {
             let Some(h) = cast(&r, &soup, x, y) else { continue };
@@ -182,59 +209,117 @@ fn direct_light_matches_analytic_spot_radiance_and_shadows() {
             }
             let floor = h.normal.y > 0.999 && h.position.y.abs() < 1e-3;
             let m = &r.scene().materials[h.material];
-            let to_l = lp - h.position;
-            let d = to_l.length();
-            let l = to_l / d;
-            let falloff = brdf::spot_falloff(ldir.dot(-l), inner, outer);
-            let f = brdf::eval(
-                h.normal,
-                l,
-                (eye - h.position).normalize(),
-                m.base_color.xyz(),
-                m.diffuse_intensity(),
-                m.specular_intensity(),
-                m.specular_power(),
-            );
-            let analytic = f * li * falloff / (d * d) * h.normal.dot(l).max(0.0);
-            if falloff < 0.05 || h.normal.dot(l) < 0.1 {
-                continue; // outside the cone or grazing: nothing to compare
-            }
-            let g = radiance.at(x, y);
-            let got = Vec3::new(g[0], g[1], g[2]);
-            // Visibility from the CPU at the point and around it (away from penumbrae).
             let t1 = h.normal.any_orthonormal_vector() * 0.04;
             let t2 = h.normal.cross(t1);
             let around = [Vec3::ZERO, t1, -t1, t2, -t2];
-            let occluded: Vec<bool> =
-                around.iter().map(|o| soup.occluded(h.position + *o + h.normal * 1e-3, lp, 1e-3)).collect();
-            if floor && occluded.iter().all(|o| !o) {
-                let rel = ((got - analytic).length() / analytic.length()).abs();
-                worst = worst.max(rel);
+            let (mut visible_sum, mut unshadowed_sum) = (Vec3::ZERO, Vec3::ZERO);
+            let (mut all_clear, mut all_blocked, mut tall) = (true, true, true);
+            for wl in &state.lights {
+                let (rad, target) = analytic(wl, h.position, h.normal, (eye - h.position).normalize(), m, far);
+                if rad.length() < 1e-6 {
+                    continue; // this light does not reach the pixel at all
+                }
+                let occluded: Vec<bool> =
+                    around.iter().map(|o| soup.occluded(h.position + *o + h.normal * 1e-3, target, 1e-3)).collect();
+                unshadowed_sum += rad;
+                if occluded.iter().all(|o| !o) {
+                    visible_sum += rad;
+                    all_blocked = false;
+                } else if occluded.iter().all(|o| *o) {
+                    all_clear = false;
+                    let d = target - h.position;
+                    let blocker = soup.intersect(h.position + h.normal * 1e-3, d.normalize(), 1e-3, d.length());
+                    tall &= blocker.is_some_and(|b| node_name(r.scene(), &state, b.draw).contains("tall"));
+                } else {
+                    (all_clear, all_blocked) = (false, false); // penumbra
+                }
+            }
+            let g = radiance.at(x, y);
+            let got = Vec3::new(g[0], g[1], g[2]);
+            if unshadowed_sum.length() < 0.05 * 0.3 {
+                continue; // too dark to compare meaningfully
+            }
+            if floor && all_clear {
+                let rel = (got - visible_sum).length() / visible_sum.length();
+                c.worst_rel = c.worst_rel.max(rel);
                 assert!(
                     rel < 0.02,
-                    "lit floor pixel ({x},{y}) at {}: GPU {got} vs analytic {analytic} ({:.2} %)",
+                    "lit floor pixel ({x},{y}) at {}: GPU {got} vs analytic {visible_sum} ({:.2} %)",
                     h.position,
                     rel * 100.0
                 );
-                lit += 1;
-            } else if occluded.iter().all(|o| *o) {
-                let blocker = soup.intersect(h.position + h.normal * 1e-3, l, 1e-3, d).expect("occluded");
-                if node_name(r.scene(), &state, blocker.draw).contains("tall") {
-                    assert!(
-                        got.length() < 0.02 * analytic.length(),
-                        "pixel ({x},{y}) behind the tall box is lit: {got} (unshadowed {analytic})"
-                    );
-                    shadowed += 1;
+                c.lit += 1;
+            } else if all_blocked {
+                assert!(
+                    got.length() < 0.02 * unshadowed_sum.length(),
+                    "pixel ({x},{y}) at {} is occluded from every light but lit: {got} (unshadowed {unshadowed_sum})",
+                    h.position
+                );
+                c.shadowed += 1;
+                if tall {
+                    c.shadowed_by_tall_box += 1;
                 }
             }
         }
     }
+    c
+}
+
+#[test]
+fn direct_light_matches_analytic_spot_radiance_and_shadows() {
+    let c = check_direct(default_renderer(N, N));
     println!(
-        "direct: {lit} lit floor pixels within {:.3} %, {shadowed} pixels shadowed by the tall box",
-        worst * 100.0
+        "spot: {} lit floor pixels within {:.3} %, {} shadowed pixels ({} behind the tall box)",
+        c.lit,
+        c.worst_rel * 100.0,
+        c.shadowed,
+        c.shadowed_by_tall_box
     );
-    assert!(lit >= 50, "only {lit} lit floor pixels compared");
-    assert!(shadowed >= 5, "only {shadowed} pixels behind the tall box");
+    assert!(c.lit >= 50, "only {} lit floor pixels compared", c.lit);
+    assert!(c.shadowed_by_tall_box >= 5, "only {} pixels behind the tall box", c.shadowed_by_tall_box);
+}
+
+#[test]
+fn point_light_with_cube_shadow_map_matches_analytic_radiance() {
+    let mut scene = default_scene();
+    for l in &mut scene.lights {
+        l.kind = LightKind::Point;
+    }
+    let mut r = Renderer::new(gpu(), scene, LabSettings::default(), N, N).expect("renderer");
+    r.clock.playing = false;
+    let c = check_direct(r);
+    println!("point: {} lit floor pixels within {:.3} %, {} shadowed", c.lit, c.worst_rel * 100.0, c.shadowed);
+    assert!(c.lit >= 50, "only {} lit floor pixels compared", c.lit);
+    assert!(c.shadowed >= 5, "only {} shadowed pixels", c.shadowed);
+}
+
+#[test]
+fn directional_and_spot_lights_add_up() {
+    let mut scene = default_scene();
+    scene.lights.push(Light {
+        name: "sun".into(),
+        kind: LightKind::Directional,
+        color: Vec3::new(1.0, 0.9, 0.8),
+        intensity: 1.5,
+        range: None,
+    });
+    // Shining down and toward −Z, a little from the left, through the open front.
+    let dir = Vec3::new(0.3, -0.8, -0.5).normalize();
+    scene.nodes.push(Node {
+        name: "sun".into(),
+        transform: Transform { rotation: Quat::from_rotation_arc(Vec3::NEG_Z, dir), ..Transform::default() },
+        children: vec![],
+        mesh: None,
+        light: Some(scene.lights.len() - 1),
+        camera: None,
+    });
+    scene.roots.push(scene.nodes.len() - 1);
+    let mut r = Renderer::new(gpu(), scene, LabSettings::default(), N, N).expect("renderer");
+    r.clock.playing = false;
+    let c = check_direct(r);
+    println!("spot + sun: {} lit floor pixels within {:.3} %, {} shadowed", c.lit, c.worst_rel * 100.0, c.shadowed);
+    assert!(c.lit >= 50, "only {} lit floor pixels compared", c.lit);
+    assert!(c.shadowed >= 5, "only {} pixels shadowed from both lights", c.shadowed);
 }
 
 #[test]

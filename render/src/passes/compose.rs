@@ -194,7 +194,7 @@ impl ComposePass {
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("compose.compose"),
-                timestamp_writes: slot.map(|s| s.compute(true, false)),
+                timestamp_writes: slot.and_then(|s| s.compute(true, false)),
             });
             pass.set_pipeline(&self.compose);
             pass.set_bind_group(0, &group0, &[]);
@@ -213,7 +213,7 @@ impl ComposePass {
         }
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("compose.tonemap"),
-            timestamp_writes: slot.map(|s| s.compute(false, true)),
+            timestamp_writes: slot.and_then(|s| s.compute(false, true)),
         });
         pass.set_pipeline(&self.tonemap);
         pass.set_bind_group(0, &group1, &[]);

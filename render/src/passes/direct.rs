@@ -28,9 +28,10 @@ settings_group! {
         /// Percentage-closer filtering radius: (2r+1)² depth comparisons per pixel and light.
         pcf_radius: u32 = 1,
         unit "texels", symbol "r", range 0..=4, cost "(2r+1)² comparisons per pixel and light", history true;
-        /// Constant bias subtracted from the receiver's light-space depth (NDC units).
-        depth_bias: f32 = 0.0005,
-        unit "NDC", symbol "", range 0.0..=0.05, cost "free", history true;
+        /// Receiver offset toward the light, in shadow-map texels at the receiver's distance
+        /// (a world-space depth bias: the same in every scene and at every distance).
+        depth_bias: f32 = 1.0,
+        unit "texels", symbol "", range 0.0..=8.0, cost "free", history true;
         /// Receiver offset along its normal, in shadow-map texels at the receiver's distance.
         normal_offset: f32 = 1.5,
         unit "texels", symbol "", range 0.0..=8.0, cost "free", history true;
@@ -232,7 +233,7 @@ impl DirectPass {
         });
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("direct.pass"),
-            timestamp_writes: slot.map(|s| s.compute(true, true)),
+            timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &group0, &[]);

@@ -190,7 +190,7 @@ impl GBufferPass {
                 depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
                 stencil_ops: None,
             }),
-            timestamp_writes: slot.map(|s| s.render(true, true)),
+            timestamp_writes: slot.and_then(|s| s.render(true, true)),
             occlusion_query_set: None,
             multiview_mask: None,
         });

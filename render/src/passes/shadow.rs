@@ -273,7 +273,7 @@ impl ShadowPass {
                     depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
                     stencil_ops: None,
                 }),
-                timestamp_writes: slot.map(|s| s.render(layer == 0, layer + 1 == count)),
+                timestamp_writes: slot.and_then(|s| s.render(layer == 0, layer + 1 == count)),
                 occlusion_query_set: None,
                 multiview_mask: None,
             });

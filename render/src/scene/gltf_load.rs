@@ -188,7 +188,7 @@ fn load(bytes: &[u8], base_dir: Option<&Path>, opts: &LoadOptions, file: &str) -
         scene.ensure_light();
     }
     for w in &scene.warnings {
-        log::warn!("{file}: {w}");
+        log::debug!("{file}: {w}");
     }
     log::info!(
         "loaded {file}: {triangles} triangles, {} meshes, {} materials, {} textures, {} lights, {} cameras, {} animations",
