@@ -45,6 +45,9 @@ pub fn wgpu_configuration() -> egui_wgpu::WgpuConfiguration {
 /// The running lab: a renderer when it could be created, else the reason it could not.
 pub struct GiLabApp {
     args: AppArgs,
+    /// Path typed in Scene → Open.
+    scene_path: String,
+    unit_scale: f32,
     viewer: Result<Viewer, String>,
     frames: u64,
     screenshot: Arc<Mutex<Option<Arc<egui::ColorImage>>>>,
@@ -58,6 +61,7 @@ struct Viewer {
     settings: LabSettings,
     preset_name: String,
     settings_error: Option<String>,
+    scene_error: Option<String>,
     frame_ms: f32,
     last_frame: Instant,
     scene_name: String,
@@ -69,7 +73,17 @@ impl GiLabApp {
         if let Err(e) = &viewer {
             log::error!("{e}");
         }
-        Self { args, viewer, frames: 0, screenshot: Arc::new(Mutex::new(None)), screenshot_requested: false }
+        let scene_path = args.scene.scene.as_ref().map(|p| p.display().to_string()).unwrap_or_default();
+        let unit_scale = args.scene.unit_scale;
+        Self {
+            args,
+            scene_path,
+            unit_scale,
+            viewer,
+            frames: 0,
+            screenshot: Arc::new(Mutex::new(None)),
+            screenshot_requested: false,
+        }
     }
 
     /// Whether a renderer is running (false when the GPU or scene failed).
@@ -132,10 +146,25 @@ impl Viewer {
             settings,
             preset_name,
             settings_error: None,
+            scene_error: None,
             frame_ms: 0.0,
             last_frame: Instant::now(),
             scene_name,
         })
+    }
+
+    /// Replaces the scene (None: the embedded default) keeping device, settings and size.
+    /// On failure the current scene stays and the error is returned for display.
+    fn open_scene(&mut self, path: Option<PathBuf>, unit_scale: f32) -> Result<(), String> {
+        let args = crate::cli::SceneArgs { scene: path.clone(), unit_scale, ..Default::default() };
+        let scene = crate::cli::load_scene(&args).map_err(|e| e.message)?;
+        let (w, h) = self.renderer.size();
+        let name = path.map(|p| p.display().to_string()).unwrap_or_else(|| scene.name.clone());
+        let renderer =
+            Renderer::new(self.renderer.ctx.clone(), scene, self.settings.clone(), w, h).map_err(|e| e.to_string())?;
+        self.renderer = renderer;
+        self.scene_name = name;
+        Ok(())
     }
 
     /// Renders a frame at `size` pixels and makes the result available to egui.
@@ -183,6 +212,9 @@ impl Viewer {
     fn side_panel(&mut self, ui: &mut egui::Ui) {
         ui.heading("Scene");
         ui.label(&self.scene_name);
+        for w in &self.renderer.scene().warnings {
+            ui.small(format!("warning: {w}"));
+        }
         self.light_controls(ui);
         ui.separator();
         self.animation_controls(ui);
@@ -233,19 +265,40 @@ impl Viewer {
             let scene = self.renderer.scene_mut();
             let Some(li) = scene.nodes[ni].light else { continue };
             let name = scene.lights[li].name.clone();
+            let directional = matches!(scene.lights[li].kind, gi_render::scene::LightKind::Directional);
             egui::CollapsingHeader::new(format!("Light {k}: {name}")).default_open(k == 0).show(ui, |ui| {
-                let t = &mut scene.nodes[ni].transform.translation;
-                ui.horizontal(|ui| {
-                    ui.label("position");
-                    for c in [&mut t.x, &mut t.y, &mut t.z] {
-                        changed |= ui.add(egui::DragValue::new(c).speed(r * 0.005).max_decimals(3)).changed();
-                    }
-                });
+                let tr = &mut scene.nodes[ni].transform;
+                if directional {
+                    // A directional light has no position: edit where it shines from.
+                    let dir = tr.rotation * glam::Vec3::NEG_Z;
+                    let mut elevation = (-dir.y).clamp(-1.0, 1.0).asin().to_degrees();
+                    let mut azimuth = (-dir.x).atan2(-dir.z).to_degrees();
+                    ui.horizontal(|ui| {
+                        ui.label("elevation");
+                        let a = ui.add(egui::DragValue::new(&mut elevation).range(-90.0..=90.0).suffix("°"));
+                        ui.label("azimuth");
+                        let b = ui.add(egui::DragValue::new(&mut azimuth).suffix("°"));
+                        if a.changed() || b.changed() {
+                            let (e, z) = (elevation.to_radians(), azimuth.to_radians());
+                            let d = glam::Vec3::new(-z.sin() * e.cos(), -e.sin(), -z.cos() * e.cos());
+                            tr.rotation = glam::Quat::from_rotation_arc(glam::Vec3::NEG_Z, d.normalize());
+                            changed = true;
+                        }
+                    });
+                } else {
+                    let t = &mut tr.translation;
+                    ui.horizontal(|ui| {
+                        ui.label("position");
+                        for c in [&mut t.x, &mut t.y, &mut t.z] {
+                            changed |= ui.add(egui::DragValue::new(c).speed(r * 0.005).max_decimals(3)).changed();
+                        }
+                    });
+                }
                 let l = &mut scene.lights[li];
                 ui.horizontal(|ui| {
                     ui.label("intensity");
                     changed |= ui
-                        .add(egui::Slider::new(&mut l.intensity, 0.0..=10_000.0).logarithmic(true))
+                        .add(egui::Slider::new(&mut l.intensity, 0.0..=100_000.0).logarithmic(true))
                         .on_hover_text("candela for point and spot lights, lux for directional lights")
                         .changed();
                 });
@@ -327,7 +380,29 @@ impl eframe::App for GiLabApp {
                     }
                 });
                 ui.menu_button("Scene", |ui| {
-                    ui.label("Open a scene with: gi-lab --scene PATH.gltf");
+                    let Ok(v) = &mut self.viewer else {
+                        ui.label("no renderer");
+                        return;
+                    };
+                    ui.label("glTF 2.0 file (.gltf / .glb):");
+                    ui.text_edit_singleline(&mut self.scene_path);
+                    ui.horizontal(|ui| {
+                        ui.label("unit scale");
+                        ui.add(egui::DragValue::new(&mut self.unit_scale).range(1e-6..=1e6).speed(0.001))
+                            .on_hover_text("multiplies the scene's coordinates (0.001 for millimetres)");
+                    });
+                    ui.horizontal(|ui| {
+                        let path = self.scene_path.trim();
+                        if ui.add_enabled(!path.is_empty(), egui::Button::new("Open")).clicked() {
+                            v.scene_error = v.open_scene(Some(PathBuf::from(path)), self.unit_scale).err();
+                        }
+                        if ui.button("Default scene").clicked() {
+                            v.scene_error = v.open_scene(None, 1.0).err();
+                        }
+                    });
+                    if let Some(e) = &v.scene_error {
+                        ui.colored_label(egui::Color32::from_rgb(255, 120, 80), e);
+                    }
                 });
                 ui.menu_button("Help", |ui| {
                     ui.label("Drag: orbit · WASD/QE: fly · scroll: forward/back");

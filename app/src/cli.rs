@@ -75,7 +75,8 @@ pub struct RenderArgs {
     /// Frames to render (animation advances by the fixed time step).
     #[arg(long, default_value_t = 1)]
     pub frames: u32,
-    /// A buffer to write besides final.png (repeatable; see `gi-lab buffers`).
+    /// A buffer to write besides final.png (repeatable; see `gi-lab buffers`); `NAME@K`
+    /// picks array layer K (e.g. `direct.shadow_map@2`).
     #[arg(long = "buffer")]
     pub buffers: Vec<String>,
     /// Output folder (created).
@@ -161,19 +162,33 @@ fn renderer(args: &SceneArgs, size: (u32, u32)) -> Result<Renderer, CliError> {
     Renderer::new(ctx, scene, settings, size.0, size.1).map_err(|e| CliError::input(e.to_string()))
 }
 
-/// Writes a buffer as PNG (and EXR for float formats) into `dir`; returns the files.
-pub fn write_buffer(r: &Renderer, name: &str, dir: &Path) -> Result<Vec<PathBuf>, CliError> {
+/// Splits `NAME@LAYER` into the buffer name and the array layer (0 without `@`).
+pub fn parse_buffer_spec(spec: &str) -> Result<(&str, u32), CliError> {
+    match spec.rsplit_once('@') {
+        None => Ok((spec, 0)),
+        Some((name, layer)) => layer
+            .parse()
+            .map(|l| (name, l))
+            .map_err(|_| CliError::input(format!("--buffer {spec}: '{layer}' is not a layer number"))),
+    }
+}
+
+/// Writes a buffer (`NAME` or `NAME@LAYER`) as PNG, and as EXR for float formats, into
+/// `dir`; returns the files.
+pub fn write_buffer(r: &Renderer, spec: &str, dir: &Path) -> Result<Vec<PathBuf>, CliError> {
+    let (name, layer) = parse_buffer_spec(spec)?;
     let entry = r.buffers().get(name).map_err(|e| CliError::input(e.to_string()))?;
-    let img = r.readback(name).map_err(|e| CliError::failure(e.to_string()))?;
+    let img = r.buffers().readback(&r.ctx, name, layer, 0).map_err(|e| CliError::input(e.to_string()))?;
+    let stem = if layer == 0 { name.to_string() } else { format!("{name}.layer{layer}") };
     let mut files = Vec::new();
-    let png = dir.join(format!("{name}.png"));
+    let png = dir.join(format!("{stem}.png"));
     gi_render::image_io::save_png(&png, &img, entry.kind)
         .map_err(|e| CliError::failure(format!("{}: {e}", png.display())))?;
     files.push(png);
     let is_float =
         !matches!(entry.texture.format(), wgpu::TextureFormat::Rgba8Unorm | wgpu::TextureFormat::Rgba8UnormSrgb);
     if is_float {
-        let exr = dir.join(format!("{name}.exr"));
+        let exr = dir.join(format!("{stem}.exr"));
         gi_render::image_io::save_exr(&exr, &img).map_err(|e| CliError::failure(format!("{}: {e}", exr.display())))?;
         files.push(exr);
     }
@@ -187,7 +202,8 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
     let mut r = renderer(&args.scene, args.size)?;
     // Check buffer names before spending time rendering.
     for b in &args.buffers {
-        r.buffers().get(b).map_err(|e| CliError::input(e.to_string()))?;
+        let (name, _) = parse_buffer_spec(b)?;
+        r.buffers().get(name).map_err(|e| CliError::input(e.to_string()))?;
     }
     std::fs::create_dir_all(&args.out).map_err(|e| CliError::input(format!("--out {}: {e}", args.out.display())))?;
     for _ in 0..args.frames {

@@ -41,18 +41,23 @@ fn render_writes_final_png_and_buffers() {
 #[test]
 fn bad_arguments_exit_2_with_a_message() {
     let cases: &[(&[&str], &str)] = &[
-        (&["render", "--size", "0x10", "--out", "x"], "at least 1"),
-        (&["render", "--size", "banana", "--out", "x"], "WIDTHxHEIGHT"),
-        (&["render", "--out", "x", "--scene", "/nonexistent/scene.gltf"], "nonexistent"),
-        (&["render", "--out", "x", "--buffer", "no.such"], "no buffer named 'no.such'"),
-        (&["render", "--out", "x", "--set", "direct.pcf_radius=99"], "direct.pcf_radius"),
-        (&["render", "--out", "x", "--preset", "/nonexistent.ron"], "nonexistent.ron"),
+        (&["render", "--size", "0x10", "--out", "OUT"], "at least 1"),
+        (&["render", "--size", "banana", "--out", "OUT"], "WIDTHxHEIGHT"),
+        (&["render", "--out", "OUT", "--scene", "/nonexistent/scene.gltf"], "nonexistent"),
+        (&["render", "--out", "OUT", "--buffer", "no.such"], "no buffer named 'no.such'"),
+        (&["render", "--out", "OUT", "--buffer", "direct.shadow_map@x"], "not a layer number"),
+        (&["render", "--out", "OUT", "--size", "8x8", "--buffer", "direct.shadow_map@7"], "layer"),
+        (&["render", "--out", "OUT", "--set", "direct.pcf_radius=99"], "direct.pcf_radius"),
+        (&["render", "--out", "OUT", "--preset", "/nonexistent.ron"], "nonexistent.ron"),
         (&["bench", "--frames", "0"], "--frames"),
         (&["frobnicate"], "frobnicate"),
         (&["render"], "--out"),
     ];
+    let out = temp_dir("bad-args");
+    let out = out.to_string_lossy();
     for (args, needle) in cases {
-        let o = gi_lab().args(*args).output().expect("runs");
+        let args: Vec<&str> = args.iter().map(|a| if *a == "OUT" { &*out } else { *a }).collect();
+        let o = gi_lab().args(&args).output().expect("runs");
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{args:?} should exit 2; stderr: {err}");
         assert!(err.contains(needle), "{args:?}: stderr does not mention '{needle}': {err}");

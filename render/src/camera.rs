@@ -63,16 +63,14 @@ impl Camera {
         }
     }
 
-    /// A camera in front of the bounds (+Z side), slightly above their centre and looking
-    /// at it, at the distance where the box's front face fills the view.
+    /// A camera in front of the bounds (+Z side), raised about 20° above their centre and
+    /// looking at it, at the distance where the bounding sphere fills the view.
     pub fn frame_bounds(bounds: Aabb, aspect: f32) -> Self {
         let yfov = 0.8f32;
-        let half = bounds.extent() * 0.5;
-        let t = (yfov * 0.5).tan();
-        let fit = (half.y / t).max(half.x / (t * aspect.max(1e-3))).max(1e-3);
-        let dist = fit * 1.1 + half.z;
+        let half_fov = (yfov * 0.5).tan().min((yfov * 0.5).tan() * aspect.max(1e-3)).atan();
+        let dist = bounds.radius().max(1e-3) / half_fov.sin();
         let c = bounds.center();
-        Self::look_at(c + Vec3::new(0.0, 0.25 * half.y, dist), c, yfov, bounds)
+        Self::look_at(c + Vec3::new(0.0, 0.35, 1.0).normalize() * dist, c, yfov, bounds)
     }
 
     /// The camera of a glTF camera node.
