@@ -28,6 +28,9 @@ pub fn run(args: AppArgs) -> Result<(), String> {
 /// used so that the window can open and explain the problem.
 pub fn wgpu_configuration() -> egui_wgpu::WgpuConfiguration {
     let mut setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();
+    setup.native_adapter_selector = Some(Arc::new(|adapters, surface| {
+        gi_render::gpu::best_adapter(adapters, surface).ok_or_else(|| gi_render::gpu::INSTALL_HINT.to_string())
+    }));
     let fallback = setup.device_descriptor.clone();
     setup.device_descriptor = Arc::new(move |adapter| match gi_render::gpu::device_descriptor(adapter) {
         Ok(mut d) => {

@@ -115,7 +115,7 @@ impl GpuContext {
 /// required features; an adapter without them is used only to report what is missing.
 fn pick_adapter(instance: &wgpu::Instance) -> Result<wgpu::Adapter, GpuError> {
     let backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::all());
-    let mut adapters = pollster::block_on(instance.enumerate_adapters(backends));
+    let mut adapters: Vec<wgpu::Adapter> = pollster::block_on(instance.enumerate_adapters(backends));
     if adapters.is_empty() {
         return Err(GpuError::NoAdapter(format!("no adapter for backends {backends:?}")));
     }
@@ -126,6 +126,14 @@ fn pick_adapter(instance: &wgpu::Instance) -> Result<wgpu::Adapter, GpuError> {
             return Err(GpuError::NoAdapter(format!("no adapter matches WGPU_ADAPTER_NAME='{name}'")));
         }
     }
+    best_adapter(&adapters, None).ok_or_else(|| GpuError::NoAdapter("no adapter".into()))
+}
+
+/// The best of `adapters` for GI Lab: complete (has the required features) first, then by
+/// type (discrete > integrated > virtual > CPU), Vulkan first among equals (the GL backend
+/// of llvmpipe lacks float32 blending); with a surface, only adapters that can present to it.
+/// Also used as eframe's adapter selector.
+pub fn best_adapter(adapters: &[wgpu::Adapter], surface: Option<&wgpu::Surface<'_>>) -> Option<wgpu::Adapter> {
     let rank = |a: &wgpu::Adapter| {
         let complete = a.features().contains(REQUIRED_FEATURES) as u32;
         let ty = match a.get_info().device_type {
@@ -135,12 +143,10 @@ fn pick_adapter(instance: &wgpu::Instance) -> Result<wgpu::Adapter, GpuError> {
             wgpu::DeviceType::Cpu => 1,
             wgpu::DeviceType::Other => 0,
         };
-        // Vulkan first among equals: the GL backend of llvmpipe lacks float32 blending.
         let backend = (a.get_info().backend == wgpu::Backend::Vulkan) as u32;
         (complete, ty, backend)
     };
-    adapters.sort_by_key(|a| std::cmp::Reverse(rank(a)));
-    Ok(adapters.swap_remove(0))
+    adapters.iter().filter(|a| surface.is_none_or(|s| a.is_surface_supported(s))).max_by_key(|a| rank(a)).cloned()
 }
 
 /// The device descriptor GI Lab asks for on `adapter`: the required features, the
