@@ -27,6 +27,11 @@ pub fn run(args: AppArgs) -> Result<(), String> {
 /// timestamps, the adapter's limits). If the adapter lacks them, egui's defaults are
 /// used so that the window can open and explain the problem.
 pub fn wgpu_configuration() -> egui_wgpu::WgpuConfiguration {
+    egui_wgpu::WgpuConfiguration { wgpu_setup: wgpu_setup(), ..Default::default() }
+}
+
+/// The wgpu setup of [`wgpu_configuration`] (also used by the UI tests' harness).
+pub fn wgpu_setup() -> egui_wgpu::WgpuSetup {
     let mut setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();
     setup.native_adapter_selector = Some(Arc::new(|adapters, surface| {
         gi_render::gpu::best_adapter(adapters, surface).ok_or_else(|| gi_render::gpu::INSTALL_HINT.to_string())
@@ -42,7 +47,7 @@ pub fn wgpu_configuration() -> egui_wgpu::WgpuConfiguration {
             fallback(adapter)
         }
     });
-    egui_wgpu::WgpuConfiguration { wgpu_setup: egui_wgpu::WgpuSetup::CreateNew(setup), ..Default::default() }
+    egui_wgpu::WgpuSetup::CreateNew(setup)
 }
 
 /// The running lab: a renderer when it could be created, else the reason it could not.
@@ -92,6 +97,16 @@ impl GiLabApp {
     /// Whether a renderer is running (false when the GPU or scene failed).
     pub fn is_rendering(&self) -> bool {
         self.viewer.is_ok()
+    }
+
+    /// Why the renderer could not start, if it could not.
+    pub fn error(&self) -> Option<&str> {
+        self.viewer.as_ref().err().map(|e| e.as_str())
+    }
+
+    /// The running renderer, if any.
+    pub fn renderer(&self) -> Option<&Renderer> {
+        self.viewer.as_ref().ok().map(|v| &v.renderer)
     }
 
     fn screenshot_step(&mut self, ctx: &egui::Context) {
@@ -316,7 +331,7 @@ impl Viewer {
         ui.heading("Animation");
         let clock = &mut self.renderer.clock;
         ui.horizontal(|ui| {
-            let label = if clock.playing { "Pause" } else { "▶ Play" };
+            let label = if clock.playing { "Pause" } else { "Play" };
             if ui.button(label).clicked() {
                 clock.playing = !clock.playing;
             }

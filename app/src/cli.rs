@@ -37,7 +37,7 @@ pub enum Command {
 }
 
 /// Options of the windowed app (the default command).
-#[derive(Args, Debug, Clone, Default)]
+#[derive(Args, Debug, Clone)]
 pub struct AppArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
@@ -49,7 +49,7 @@ pub struct AppArgs {
     pub screenshot_frames: u64,
 }
 
-#[derive(Args, Debug, Clone, Default)]
+#[derive(Args, Debug, Clone)]
 pub struct SceneArgs {
     /// glTF 2.0 scene (.gltf or .glb); the embedded Cornell box when omitted.
     #[arg(long)]
@@ -63,6 +63,19 @@ pub struct SceneArgs {
     /// Override a setting, e.g. --set direct.pcf_radius=2 (repeatable).
     #[arg(long = "set", value_name = "GROUP.FIELD=VALUE")]
     pub overrides: Vec<String>,
+}
+
+impl Default for AppArgs {
+    fn default() -> Self {
+        Self { scene: SceneArgs::default(), screenshot: None, screenshot_frames: 30 }
+    }
+}
+
+impl Default for SceneArgs {
+    /// The embedded scene at unit scale with the default preset (as the CLI's defaults).
+    fn default() -> Self {
+        Self { scene: None, unit_scale: 1.0, preset: None, overrides: Vec::new() }
+    }
 }
 
 #[derive(Args, Debug)]
