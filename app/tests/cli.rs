@@ -76,5 +76,5 @@ fn buffers_lists_registered_names_and_bench_prints_every_pass() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("bench --json prints JSON");
     let passes: Vec<&str> = v["passes"].as_array().expect("passes").iter().filter_map(|p| p["pass"].as_str()).collect();
-    assert_eq!(passes, ["gbuffer", "direct.shadow", "direct", "compose"]);
+    assert_eq!(passes, ["gbuffer", "direct.shadow", "direct", "compose", "compose.luminance", "compose.tonemap"]);
 }

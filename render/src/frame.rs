@@ -5,7 +5,7 @@
 //! | 1. G-buffer | `passes::gbuffer` | position, normal, albedo, material, depth, movement buffer |
 //! | 2. Direct light | `passes::shadow`, `passes::direct` | shadow maps, direct radiance |
 //! | 3–6 | VPLs, visibility, shading points, gather | later issues (#5, #6); the compose pass takes their indirect light |
-//! | 7. Temporal + compose | `passes::compose` | final.hdr, Reinhard tone mapping to final.ldr |
+//! | 7. Temporal + compose | `passes::compose` | final.hdr, log-average luminance, Reinhard tone mapping to final.ldr |
 
 use glam::{Mat4, Vec4};
 
@@ -270,7 +270,9 @@ impl Renderer {
         // Stage 7: compose and tone map.
         let radiance_view = crate::passes::view(&self.direct.radiance, "direct.radiance");
         let (compose, ts) = (&self.compose, &self.settings.tonemap);
-        self.timer.scope(&ctx, &mut enc, "compose", |e, slot| compose.run(&ctx, e, slot, ts, &radiance_view, None));
+        self.timer.scope(&ctx, &mut enc, "compose", |e, slot| compose.compose(&ctx, e, slot, &radiance_view, None));
+        self.timer.scope(&ctx, &mut enc, "compose.luminance", |e, slot| compose.luminance(&ctx, e, slot, ts));
+        self.timer.scope(&ctx, &mut enc, "compose.tonemap", |e, slot| compose.tonemap(&ctx, e, slot, ts));
 
         self.timer.resolve(&mut enc);
         ctx.queue.submit([enc.finish()]);

@@ -68,8 +68,11 @@ struct GpuQueries {
 }
 
 impl GpuTimer {
+    /// GPU timestamps when the device has them, unless `GI_LAB_CPU_TIMING=1` asks for the
+    /// CPU wall-clock mode (to cross-check a driver's timestamps).
     pub fn new(ctx: &GpuContext) -> Self {
-        let gpu = ctx.has_timestamps().then(|| {
+        let force_cpu = std::env::var("GI_LAB_CPU_TIMING").is_ok_and(|v| v == "1");
+        let gpu = (ctx.has_timestamps() && !force_cpu).then(|| {
             let count = MAX_SCOPES * 2;
             GpuQueries {
                 set: ctx.device.create_query_set(&wgpu::QuerySetDescriptor {

@@ -343,7 +343,7 @@ fn every_registered_buffer_reads_back() {
     let mut r = default_renderer(64, 48);
     let timings = r.render_frame();
     let names: Vec<_> = timings.iter().map(|t| t.name.as_str()).collect();
-    assert_eq!(names, ["gbuffer", "direct.shadow", "direct", "compose"]);
+    assert_eq!(names, ["gbuffer", "direct.shadow", "direct", "compose", "compose.luminance", "compose.tonemap"]);
     for t in &timings {
         assert!(t.ms.is_finite() && t.ms >= 0.0, "{}: {} ms", t.name, t.ms);
     }

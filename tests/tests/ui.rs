@@ -33,7 +33,7 @@ fn app_renders_and_shows_a_section_per_stage() {
     assert!(w > 300 && h_px > 300, "the viewport is {w}×{h_px}: it should fill the central panel");
     assert!(r.clock.frame >= 3, "frames rendered: {}", r.clock.frame);
     let names: Vec<_> = r.timings().iter().map(|t| t.name.clone()).collect();
-    assert_eq!(names, ["gbuffer", "direct.shadow", "direct", "compose"]);
+    assert_eq!(names, ["gbuffer", "direct.shadow", "direct", "compose", "compose.luminance", "compose.tonemap"]);
 }
 
 #[test]

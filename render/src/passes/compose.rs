@@ -139,17 +139,59 @@ impl ComposePass {
         reg.register("final.ldr", BufferKind::Ldr, "tone-mapped image (Reinhard), sRGB-encoded", &self.ldr);
     }
 
-    #[allow(clippy::too_many_arguments)]
-    pub fn run(
+    /// final.hdr = direct + indirect.
+    pub fn compose(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        direct: &wgpu::TextureView,
+        indirect: Option<&wgpu::TextureView>,
+    ) {
+        let hdr_view = super::view(&self.hdr, "final.hdr");
+        let tv = wgpu::BindingResource::TextureView;
+        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("compose.inputs"),
+            layout: &self.layout0,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 1, resource: tv(direct) },
+                wgpu::BindGroupEntry { binding: 2, resource: tv(indirect.unwrap_or(&self.black)) },
+                wgpu::BindGroupEntry { binding: 3, resource: tv(&hdr_view) },
+            ],
+        });
+        self.dispatch(encoder, slot, "compose.compose", &self.compose, &group, self.screen_groups());
+    }
+
+    /// The log-average luminance of final.hdr, when automatic exposure is on (the pass is
+    /// empty otherwise, so that its timing row stays).
+    pub fn luminance(
         &self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         slot: Option<crate::timing::Slot<'_>>,
         settings: &TonemapSettings,
-        direct: &wgpu::TextureView,
-        indirect: Option<&wgpu::TextureView>,
     ) {
-        let device = &ctx.device;
+        let hdr_view = super::view(&self.hdr, "final.hdr");
+        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("compose.luminance"),
+            layout: &self.lum_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&hdr_view) },
+                wgpu::BindGroupEntry { binding: 1, resource: self.log_average.as_entire_binding() },
+            ],
+        });
+        let groups = if settings.auto_exposure { (1, 1) } else { (0, 0) };
+        self.dispatch(encoder, slot, "compose.luminance", &self.luminance, &group, groups);
+    }
+
+    /// Reinhard tone mapping of final.hdr into final.ldr.
+    pub fn tonemap(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        settings: &TonemapSettings,
+    ) {
         let p = ToneParams {
             tone: Vec4::new(
                 settings.exposure_ev.exp2(),
@@ -162,24 +204,7 @@ impl ComposePass {
         let hdr_view = super::view(&self.hdr, "final.hdr");
         let ldr_view = super::view(&self.ldr, "final.ldr");
         let tv = wgpu::BindingResource::TextureView;
-        let group0 = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("compose.inputs"),
-            layout: &self.layout0,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 1, resource: tv(direct) },
-                wgpu::BindGroupEntry { binding: 2, resource: tv(indirect.unwrap_or(&self.black)) },
-                wgpu::BindGroupEntry { binding: 3, resource: tv(&hdr_view) },
-            ],
-        });
-        let lum_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("compose.luminance"),
-            layout: &self.lum_layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: tv(&hdr_view) },
-                wgpu::BindGroupEntry { binding: 1, resource: self.log_average.as_entire_binding() },
-            ],
-        });
-        let group1 = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("compose.tonemap"),
             layout: &self.layout1,
             entries: &[
@@ -189,34 +214,33 @@ impl ComposePass {
                 wgpu::BindGroupEntry { binding: 3, resource: tv(&ldr_view) },
             ],
         });
-        let (w, h) = (self.hdr.width(), self.hdr.height());
-        let groups = (w.div_ceil(super::TILE), h.div_ceil(super::TILE));
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("compose.compose"),
-                timestamp_writes: slot.and_then(|s| s.compute(true, false)),
-            });
-            pass.set_pipeline(&self.compose);
-            pass.set_bind_group(0, &group0, &[]);
+        self.dispatch(encoder, slot, "compose.tonemap", &self.tonemap, &group, self.screen_groups());
+    }
+
+    fn screen_groups(&self) -> (u32, u32) {
+        (self.hdr.width().div_ceil(super::TILE), self.hdr.height().div_ceil(super::TILE))
+    }
+
+    /// One compute pass with its own timestamps (a scope per pass: on lavapipe, timestamps
+    /// of a scope spanning several compute passes were measured wrong).
+    #[allow(clippy::too_many_arguments)]
+    fn dispatch(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        label: &str,
+        pipeline: &wgpu::ComputePipeline,
+        group: &wgpu::BindGroup,
+        groups: (u32, u32),
+    ) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(label),
+            timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+        });
+        if groups.0 > 0 && groups.1 > 0 {
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, group, &[]);
             pass.dispatch_workgroups(groups.0, groups.1, 1);
         }
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("compose.luminance"),
-                timestamp_writes: None,
-            });
-            if settings.auto_exposure {
-                pass.set_pipeline(&self.luminance);
-                pass.set_bind_group(0, &lum_group, &[]);
-                pass.dispatch_workgroups(1, 1, 1);
-            }
-        }
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("compose.tonemap"),
-            timestamp_writes: slot.and_then(|s| s.compute(false, true)),
-        });
-        pass.set_pipeline(&self.tonemap);
-        pass.set_bind_group(0, &group1, &[]);
-        pass.dispatch_workgroups(groups.0, groups.1, 1);
     }
 }
