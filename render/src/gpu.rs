@@ -19,8 +19,8 @@ pub const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
     .union(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
 
 /// Colour attachment bytes per sample the G-buffer needs (position 16 + normal 8 +
-/// albedo 4 + material 8 + motion 8).
-pub const REQUIRED_COLOR_BYTES_PER_SAMPLE: u32 = 44;
+/// albedo 4 + material 8 + motion 8 + emission 8).
+pub const REQUIRED_COLOR_BYTES_PER_SAMPLE: u32 = 52;
 
 /// How to install a software Vulkan driver when no adapter is found.
 pub const INSTALL_HINT: &str = "no usable GPU adapter. On Debian/Ubuntu install Mesa's software Vulkan driver \

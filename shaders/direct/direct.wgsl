@@ -25,6 +25,7 @@ struct Params {
 @group(1) @binding(2) var g_albedo: texture_2d<f32>;
 @group(1) @binding(3) var g_material: texture_2d<f32>;
 @group(1) @binding(4) var out_radiance: texture_storage_2d<rgba32float, write>;
+@group(1) @binding(5) var g_emission: texture_2d<f32>;
 
 // Picks the cube face of a point light from the major axis of the light-to-surface vector
 // (faces ordered +X, −X, +Y, −Y, +Z, −Z as in passes/shadow.rs).
@@ -97,7 +98,8 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let alb = textureLoad(g_albedo, px, 0);
     let mat = textureLoad(g_material, px, 0);
     let v = normalize(camera.position.xyz - p);
-    var radiance = vec3<f32>(0.0);
+    // The surface's own emission reaches the eye directly.
+    var radiance = textureLoad(g_emission, px, 0).rgb;
     let count = arrayLength(&lights);
     for (var i = 0u; i < count; i = i + 1u) {
         let light = lights[i];

@@ -16,8 +16,10 @@ struct Material {
     base_color: vec4<f32>,
     // DI, SI, SP, has_texture
     params: vec4<f32>,
-    // metallic, roughness, flip back faces, 0
+    // metallic, roughness, 0, 0
     extra: vec4<f32>,
+    // rgb: emitted radiance L_e (glTF emissive factor × strength)
+    emissive: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> camera: Camera;
@@ -62,6 +64,7 @@ struct FsOut {
     @location(2) albedo: vec4<f32>,
     @location(3) material: vec4<f32>,
     @location(4) motion: vec2<f32>,
+    @location(5) emission: vec4<f32>,
 }
 
 @fragment
@@ -83,5 +86,6 @@ fn fs_main(i: VsOut, @builtin(front_facing) front: bool) -> FsOut {
     o.albedo = vec4<f32>(color.rgb, material.params.x);
     o.material = vec4<f32>(material.params.y, material.params.z, material.extra.x, material.extra.y);
     o.motion = clip_to_pixel(i.prev_clip, camera.viewport) - clip_to_pixel(i.cur_clip, camera.viewport);
+    o.emission = vec4<f32>(material.emissive.rgb, 1.0);
     return o;
 }

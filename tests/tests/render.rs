@@ -38,6 +38,7 @@ fn gbuffer_matches_cpu_ray_cast() {
     let nrm = r.readback("gbuffer.normal").expect("normal");
     let alb = r.readback("gbuffer.albedo").expect("albedo");
     let mat = r.readback("gbuffer.material").expect("material");
+    let emi = r.readback("gbuffer.emission").expect("emission");
     let state = r.scene().evaluate(0.0);
     let soup = TriangleSoup::new(r.scene(), &state);
     let mut compared = 0;
@@ -67,6 +68,12 @@ fn gbuffer_matches_cpu_ray_cast() {
                         );
                     }
                     assert!((a[3] - m.diffuse_intensity()).abs() < 3.0 / 255.0);
+                    let e = emi.at(x, y);
+                    assert!(
+                        Vec3::new(e[0], e[1], e[2]).distance(m.emissive) < 1e-3,
+                        "emission {e:?} vs {}",
+                        m.emissive
+                    );
                     let g = mat.at(x, y);
                     assert!((g[0] - m.specular_intensity()).abs() < 1e-3, "SI {} vs {}", g[0], m.specular_intensity());
                     assert!(
@@ -412,6 +419,29 @@ fn render_shared(rel: &str, unit_scale: f32, tris: usize) {
 #[test]
 fn shared_cornell_box_renders() {
     render_shared("cornell-box/CornellBox-Original.gltf", 1.0, 32);
+}
+
+#[test]
+fn emissive_surfaces_show_their_emission() {
+    // The classic Cornell box's light is an emissive quad (factor 1) under the ceiling.
+    let scene = gi_render::scene::load_gltf_file(
+        &shared_scene("cornell-box/CornellBox-Original.gltf"),
+        &LoadOptions::default(),
+    )
+    .expect("loads");
+    let mut r = Renderer::new(gpu(), scene, LabSettings::default(), 96, 96).expect("renderer");
+    r.camera.orbit(0.0, 0.3); // look a little upward so that the ceiling light is in view
+    r.render_frame();
+    let emission = r.readback("gbuffer.emission").expect("emission");
+    let radiance = r.readback("direct.radiance").expect("radiance");
+    let mut emitting = 0;
+    for (e, l) in emission.data.iter().zip(&radiance.data) {
+        if e[0] > 0.5 {
+            assert!((0..3).all(|c| l[c] >= e[c] - 1e-3), "radiance {l:?} below emission {e:?}");
+            emitting += 1;
+        }
+    }
+    assert!(emitting >= 10, "only {emitting} pixels of the light quad are visible");
 }
 
 #[test]

@@ -1,8 +1,8 @@
 //! Stage 2, direct light from the scene's punctual lights with PCF shadow maps.
 //! Shader: `shaders/direct/direct.wgsl`; BRDF: `shaders/common/brdf.wgsl` (CPU twin
-//! `cpu::brdf`). Radiance L = f(l, v) · I · falloff / d² · max(0, n·l) · visibility for
-//! point and spot lights (KHR_lights_punctual units), L = f · E · max(0, n·l) · visibility
-//! for directional lights.
+//! `cpu::brdf`). Radiance L = L_e + Σ f(l, v) · I · falloff / d² · max(0, n·l) · visibility
+//! over point and spot lights (KHR_lights_punctual units), with f · E · max(0, n·l) ·
+//! visibility for directional lights; L_e is the surface's emission (`gbuffer.emission`).
 
 use glam::Vec4;
 
@@ -86,6 +86,7 @@ impl DirectPass {
                 super::bgl::texture(2, cs, false),
                 super::bgl::texture(3, cs, false),
                 super::bgl::storage_texture(4, RADIANCE_FORMAT),
+                super::bgl::texture(5, cs, false),
             ],
         });
         let pipeline = super::compute_pipeline(device, "direct.pipeline", &module, "cs_main", &[&layout0, &layout1]);
@@ -149,7 +150,7 @@ impl DirectPass {
         reg.register(
             "direct.radiance",
             BufferKind::Hdr,
-            "outgoing radiance from the primary lights (W/(m²·sr))",
+            "outgoing radiance from the primary lights plus the surface's emission (W/(m²·sr))",
             &self.radiance,
         );
     }
@@ -229,6 +230,7 @@ impl DirectPass {
                 wgpu::BindGroupEntry { binding: 2, resource: tv(&gbuffer.albedo) },
                 wgpu::BindGroupEntry { binding: 3, resource: tv(&gbuffer.material) },
                 wgpu::BindGroupEntry { binding: 4, resource: tv(&self.radiance_view) },
+                wgpu::BindGroupEntry { binding: 5, resource: tv(&gbuffer.emission) },
             ],
         });
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {

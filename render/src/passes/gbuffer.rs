@@ -4,7 +4,9 @@
 //! Departure from the thesis' four 32-bit targets: we keep full precision (world position
 //! in `Rgba32Float`, normals in `Rgba16Float`) instead of packing normal.z into the sign of
 //! SI (Eq. 4.1), because a lab must show exact values; the linear depth of Eq. 4.2 is kept
-//! unnormalised in `gbuffer.position.w` (view-space distance in scene units).
+//! unnormalised in `gbuffer.position.w` (view-space distance in scene units). The thesis
+//! has no emitters; `gbuffer.emission` carries glTF emission so that emissive surfaces
+//! (the classic Cornell box's light quad) show in the direct light.
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
@@ -16,6 +18,7 @@ pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 pub const MATERIAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const MOTION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
+pub const EMISSION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 /// The G-buffer textures of one frame.
@@ -25,6 +28,7 @@ pub struct GBuffer {
     pub albedo: wgpu::Texture,
     pub material: wgpu::Texture,
     pub motion: wgpu::Texture,
+    pub emission: wgpu::Texture,
     pub depth: wgpu::Texture,
     pub views: GBufferViews,
 }
@@ -35,6 +39,7 @@ pub struct GBufferViews {
     pub albedo: wgpu::TextureView,
     pub material: wgpu::TextureView,
     pub motion: wgpu::TextureView,
+    pub emission: wgpu::TextureView,
     pub depth: wgpu::TextureView,
 }
 
@@ -109,6 +114,7 @@ impl GBufferPass {
                     target(ALBEDO_FORMAT),
                     target(MATERIAL_FORMAT),
                     target(MOTION_FORMAT),
+                    target(EMISSION_FORMAT),
                 ],
             }),
             multiview_mask: None,
@@ -153,6 +159,12 @@ impl GBufferPass {
             "movement buffer: offset in pixels from each pixel to its position in the previous frame (Knecht §3.5.1)",
             &t.motion,
         );
+        reg.register(
+            "gbuffer.emission",
+            BufferKind::Hdr,
+            "emitted radiance L_e of the surface (glTF emissive factor × strength)",
+            &t.emission,
+        );
         reg.register("gbuffer.depth", BufferKind::Depth, "hardware depth in [0, 1]", &t.depth);
     }
 
@@ -184,6 +196,7 @@ impl GBufferPass {
                 clear(&v.albedo),
                 clear(&v.material),
                 clear(&v.motion),
+                clear(&v.emission),
             ],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &v.depth,
@@ -209,6 +222,7 @@ fn create_targets(ctx: &GpuContext, width: u32, height: u32) -> GBuffer {
     let albedo = super::create_target(d, "gbuffer.albedo", width, height, ALBEDO_FORMAT, att);
     let material = super::create_target(d, "gbuffer.material", width, height, MATERIAL_FORMAT, att);
     let motion = super::create_target(d, "gbuffer.motion", width, height, MOTION_FORMAT, att);
+    let emission = super::create_target(d, "gbuffer.emission", width, height, EMISSION_FORMAT, att);
     let depth = super::create_target(d, "gbuffer.depth", width, height, DEPTH_FORMAT, att);
     let views = GBufferViews {
         position: super::view(&position, "gbuffer.position"),
@@ -216,7 +230,8 @@ fn create_targets(ctx: &GpuContext, width: u32, height: u32) -> GBuffer {
         albedo: super::view(&albedo, "gbuffer.albedo"),
         material: super::view(&material, "gbuffer.material"),
         motion: super::view(&motion, "gbuffer.motion"),
+        emission: super::view(&emission, "gbuffer.emission"),
         depth: super::view(&depth, "gbuffer.depth"),
     };
-    GBuffer { position, normal, albedo, material, motion, depth, views }
+    GBuffer { position, normal, albedo, material, motion, emission, depth, views }
 }

@@ -17,6 +17,8 @@ pub struct MaterialUniform {
     pub params: [f32; 4],
     /// metallic, roughness, 0, 0.
     pub extra: [f32; 4],
+    /// Emitted radiance (rgb), 0.
+    pub emissive: [f32; 4],
 }
 
 /// Where one primitive lives in the shared buffers.
@@ -152,6 +154,7 @@ impl GpuScene {
                     tex.is_some() as u32 as f32,
                 ],
                 extra: [m.metallic, m.roughness, 0.0, 0.0],
+                emissive: m.emissive.extend(0.0).to_array(),
             };
             let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(&format!("scene.material[{i}]")),
