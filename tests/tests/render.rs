@@ -453,3 +453,26 @@ fn shared_chair_on_floor_renders() {
 fn shared_hotel_room_renders() {
     render_shared("hotel-room/hotel-room.glb", 0.001, 99_029);
 }
+
+#[test]
+fn tone_mapping_matches_the_cpu_reference() {
+    for auto_exposure in [true, false] {
+        let mut settings = LabSettings::default();
+        settings.tonemap.auto_exposure = auto_exposure;
+        settings.tonemap.exposure_ev = if auto_exposure { 0.5 } else { 1.5 };
+        let mut r = Renderer::new(gpu(), default_scene(), settings.clone(), 100, 70).expect("renderer");
+        r.render_frame();
+        let hdr = r.readback("final.hdr").expect("hdr");
+        let ldr = r.readback("final.ldr").expect("ldr");
+        let avg = gi_render::cpu::tonemap::log_average(&hdr);
+        let mut max_err = 0.0f32;
+        for (h, l) in hdr.data.iter().zip(&ldr.data) {
+            let want = gi_render::cpu::tonemap::reinhard([h[0], h[1], h[2]], &settings.tonemap, avg);
+            for c in 0..3 {
+                max_err = max_err.max((want[c] - l[c]).abs());
+            }
+        }
+        // 8-bit output: half a step of rounding plus float noise in L̄w.
+        assert!(max_err <= 1.5 / 255.0, "auto {auto_exposure}: final.ldr differs from the CPU reference by {max_err}");
+    }
+}

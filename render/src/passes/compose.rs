@@ -35,13 +35,20 @@ pub struct ToneParams {
     pub tone: Vec4,
 }
 
+/// Pixels per workgroup of the log-average's first pass (`TILE_W`, `TILE_H` in
+/// `shaders/compose/luminance.wgsl`).
+pub const LUMINANCE_TILE: (u32, u32) = (64, 16);
+
 pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub const LDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
 pub struct ComposePass {
     compose: wgpu::ComputePipeline,
     tonemap: wgpu::ComputePipeline,
+    luminance_tiles: wgpu::ComputePipeline,
     luminance: wgpu::ComputePipeline,
+    /// (Σ log(δ + Lw), count) per 16×16 tile.
+    tiles: wgpu::Buffer,
     layout0: wgpu::BindGroupLayout,
     layout1: wgpu::BindGroupLayout,
     lum_layout: wgpu::BindGroupLayout,
@@ -78,11 +85,17 @@ impl ComposePass {
         });
         let lum_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("compose.luminance"),
-            entries: &[super::bgl::texture(0, cs, false), super::bgl::storage(1, cs, false)],
+            entries: &[
+                super::bgl::texture(0, cs, false),
+                super::bgl::storage(1, cs, false),
+                super::bgl::storage(2, cs, false),
+            ],
         });
         let compose = super::compute_pipeline(device, "compose.compose", &module, "cs_compose", &[&layout0]);
         let tonemap = super::compute_pipeline(device, "compose.tonemap", &tone_module, "cs_tonemap", &[&layout1]);
-        let luminance = super::compute_pipeline(device, "compose.luminance", &lum_module, "cs_main", &[&lum_layout]);
+        let luminance_tiles =
+            super::compute_pipeline(device, "compose.luminance_tiles", &lum_module, "cs_partial", &[&lum_layout]);
+        let luminance = super::compute_pipeline(device, "compose.luminance", &lum_module, "cs_final", &[&lum_layout]);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("compose.params"),
             size: std::mem::size_of::<ToneParams>() as u64,
@@ -105,7 +118,32 @@ impl ComposePass {
         );
         let black = super::view(&black_tex, "compose.no_indirect");
         let (hdr, ldr) = Self::targets(ctx, width, height);
-        Self { compose, tonemap, luminance, layout0, layout1, lum_layout, params, log_average, black, hdr, ldr }
+        let tiles = Self::tile_buffer(ctx, width, height);
+        Self {
+            compose,
+            tonemap,
+            luminance_tiles,
+            luminance,
+            tiles,
+            layout0,
+            layout1,
+            lum_layout,
+            params,
+            log_average,
+            black,
+            hdr,
+            ldr,
+        }
+    }
+
+    fn tile_buffer(ctx: &GpuContext, width: u32, height: u32) -> wgpu::Buffer {
+        let tiles = width.div_ceil(LUMINANCE_TILE.0) as u64 * height.div_ceil(LUMINANCE_TILE.1) as u64;
+        ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("compose.luminance_tiles"),
+            size: tiles * 8,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        })
     }
 
     fn targets(ctx: &GpuContext, width: u32, height: u32) -> (wgpu::Texture, wgpu::Texture) {
@@ -127,6 +165,7 @@ impl ComposePass {
 
     pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) {
         (self.hdr, self.ldr) = Self::targets(ctx, width, height);
+        self.tiles = Self::tile_buffer(ctx, width, height);
     }
 
     pub fn register(&self, reg: &mut BufferRegistry) {
@@ -178,10 +217,21 @@ impl ComposePass {
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&hdr_view) },
                 wgpu::BindGroupEntry { binding: 1, resource: self.log_average.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: self.tiles.as_entire_binding() },
             ],
         });
-        let groups = if settings.auto_exposure { (1, 1) } else { (0, 0) };
-        self.dispatch(encoder, slot, "compose.luminance", &self.luminance, &group, groups);
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("compose.luminance"),
+            timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+        });
+        if settings.auto_exposure {
+            pass.set_bind_group(0, &group, &[]);
+            pass.set_pipeline(&self.luminance_tiles);
+            let (tw, th) = LUMINANCE_TILE;
+            pass.dispatch_workgroups(self.hdr.width().div_ceil(tw), self.hdr.height().div_ceil(th), 1);
+            pass.set_pipeline(&self.luminance);
+            pass.dispatch_workgroups(1, 1, 1);
+        }
     }
 
     /// Reinhard tone mapping of final.hdr into final.ldr.
