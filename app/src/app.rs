@@ -104,6 +104,15 @@ impl GiLabApp {
         self.viewer.as_ref().err().map(|e| e.as_str())
     }
 
+    /// Opens a scene as Scene → Open does; on failure the current scene stays, and the
+    /// error is returned and shown in the Scene menu.
+    pub fn open_scene(&mut self, path: &str, unit_scale: f32) -> Result<(), String> {
+        let v = self.viewer.as_mut().map_err(|e| e.clone())?;
+        let r = v.open_scene(Some(PathBuf::from(path)), unit_scale);
+        v.scene_error = r.clone().err();
+        r
+    }
+
     /// The running renderer, if any.
     pub fn renderer(&self) -> Option<&Renderer> {
         self.viewer.as_ref().ok().map(|v| &v.renderer)
@@ -182,6 +191,8 @@ impl Viewer {
             Renderer::new(self.renderer.ctx.clone(), scene, self.settings.clone(), w, h).map_err(|e| e.to_string())?;
         self.renderer = renderer;
         self.scene_name = name;
+        // The new renderer has new textures: make the next frame re-point egui's texture.
+        self.texture = self.texture.map(|(id, _)| (id, (0, 0)));
         Ok(())
     }
 

@@ -52,3 +52,23 @@ fn pause_and_step_drive_the_clock() {
     h.run_steps(3);
     assert!(h.state().renderer().expect("renderer").clock.anim_frame > t0 + 1, "playing again");
 }
+
+#[test]
+fn opening_a_bad_scene_keeps_the_current_one_and_says_why() {
+    let mut h = harness();
+    h.run_steps(2);
+    let before = h.state().renderer().expect("renderer").scene().triangle_count();
+    let err = h.state_mut().open_scene("/nonexistent/scene.gltf", 1.0).expect_err("a missing file is refused");
+    assert!(err.contains("nonexistent"), "{err}");
+    h.run_steps(2);
+    assert_eq!(h.state().renderer().expect("renderer").scene().triangle_count(), before);
+    let ok = h.state_mut().open_scene_for_test(&format!(
+        "{}/../../shared/scenes/cornell-box/CornellBox-Original.gltf",
+        env!("CARGO_MANIFEST_DIR")
+    ));
+    assert!(ok.is_ok(), "{ok:?}");
+    h.run_steps(2);
+    let r = h.state().renderer().expect("renderer");
+    assert_eq!(r.scene().triangle_count(), 32);
+    assert!(r.clock.frame >= 2, "the new scene renders");
+}
