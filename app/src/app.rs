@@ -158,7 +158,8 @@ impl Viewer {
         let settings = crate::cli::load_settings(&args.scene).map_err(|e| e.message)?;
         let scene_name =
             args.scene.scene.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| scene.name.clone());
-        let renderer = Renderer::new(ctx, scene, settings.clone(), 640, 480).map_err(|e| e.to_string())?;
+        let mut renderer = Renderer::new(ctx, scene, settings.clone(), 640, 480).map_err(|e| e.to_string())?;
+        renderer.set_interactive(true);
         let preset_name = args
             .scene
             .preset
@@ -190,6 +191,7 @@ impl Viewer {
         let renderer =
             Renderer::new(self.renderer.ctx.clone(), scene, self.settings.clone(), w, h).map_err(|e| e.to_string())?;
         self.renderer = renderer;
+        self.renderer.set_interactive(true);
         self.scene_name = name;
         // The new renderer has new textures: make the next frame re-point egui's texture.
         self.texture = self.texture.map(|(id, _)| (id, (0, 0)));

@@ -63,6 +63,8 @@ pub struct Renderer {
     registry: BufferRegistry,
     timer: GpuTimer,
     prev: Option<PrevFrame>,
+    /// Interactive mode (the app): timings are collected without waiting for the GPU.
+    interactive: bool,
 }
 
 impl Renderer {
@@ -119,6 +121,7 @@ impl Renderer {
             registry: BufferRegistry::default(),
             timer,
             prev: None,
+            interactive: false,
         };
         r.register_all();
         Ok(r)
@@ -215,7 +218,15 @@ impl Renderer {
         Ok(())
     }
 
-    /// Renders one frame and advances the clock. Returns the per-pass timings.
+    /// Interactive mode: `render_frame` does not wait for the GPU; its timings are those of
+    /// the newest finished frame (one or two frames late). Off by default, where every
+    /// frame's own timings are returned.
+    pub fn set_interactive(&mut self, interactive: bool) {
+        self.interactive = interactive;
+    }
+
+    /// Renders one frame and advances the clock. Returns the per-pass timings (this frame's,
+    /// or in interactive mode the newest available).
     pub fn render_frame(&mut self) -> Vec<PassTiming> {
         let ctx = self.ctx.clone();
         let aspect = self.width as f32 / self.height as f32;
@@ -274,9 +285,9 @@ impl Renderer {
         self.timer.scope(&ctx, &mut enc, "compose.luminance", |e, slot| compose.luminance(&ctx, e, slot, ts));
         self.timer.scope(&ctx, &mut enc, "compose.tonemap", |e, slot| compose.tonemap(&ctx, e, slot, ts));
 
-        self.timer.resolve(&mut enc);
+        self.timer.resolve(&ctx, &mut enc);
         ctx.queue.submit([enc.finish()]);
-        let timings = self.timer.collect(&ctx).to_vec();
+        let timings = self.timer.collect(&ctx, !self.interactive).to_vec();
 
         self.prev = Some(PrevFrame { view_proj, models: state.draws.iter().map(|d| d.world).collect() });
         self.clock.tick();

@@ -60,11 +60,24 @@ pub struct GpuTimer {
     last: Vec<PassTiming>,
 }
 
+/// Frames whose timestamps may be in flight at once in the non-blocking mode.
+const RING: usize = 3;
+
 struct GpuQueries {
     set: wgpu::QuerySet,
     resolve: wgpu::Buffer,
-    readback: wgpu::Buffer,
+    /// Readback buffers, each with the scope names of the frame it holds and whether its
+    /// mapping has completed (None: free).
+    ring: Vec<RingSlot>,
+    /// Ring slot of the frame being recorded.
+    current: usize,
     period_ns: f32,
+}
+
+struct RingSlot {
+    buffer: wgpu::Buffer,
+    names: Vec<String>,
+    mapped: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
 }
 
 impl GpuTimer {
@@ -86,12 +99,19 @@ impl GpuTimer {
                     usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
                     mapped_at_creation: false,
                 }),
-                readback: ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("timing.readback"),
-                    size: count as u64 * 8,
-                    usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                    mapped_at_creation: false,
-                }),
+                ring: (0..RING)
+                    .map(|_| RingSlot {
+                        buffer: ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                            label: Some("timing.readback"),
+                            size: count as u64 * 8,
+                            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                            mapped_at_creation: false,
+                        }),
+                        names: Vec::new(),
+                        mapped: None,
+                    })
+                    .collect(),
+                current: 0,
                 period_ns: ctx.queue.get_timestamp_period(),
             }
         });
@@ -140,43 +160,97 @@ impl GpuTimer {
         }
     }
 
-    /// Adds the query resolve to the frame's encoder (call once after the last scope).
-    pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
-        if let Some(q) = &self.gpu {
-            let n = (self.names.len() as u32).min(MAX_SCOPES) * 2;
-            if n > 0 {
-                encoder.resolve_query_set(&q.set, 0..n, &q.resolve, 0);
-                encoder.copy_buffer_to_buffer(&q.resolve, 0, &q.readback, 0, n as u64 * 8);
+    /// Adds the query resolve to the frame's encoder (call once after the last scope). In
+    /// the non-blocking mode, when every readback buffer is still in flight, this waits for
+    /// the oldest.
+    pub fn resolve(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder) {
+        let Some(q) = &mut self.gpu else { return };
+        let free = (0..RING).map(|k| (q.current + k) % RING).find(|&i| q.ring[i].mapped.is_none());
+        let slot = match free {
+            Some(i) => i,
+            None => {
+                // All in flight: wait for the GPU and take the oldest (slots are mapped in
+                // ring order, so the oldest is the one after the newest, i.e. `current`).
+                ctx.wait_idle();
+                let oldest = q.current;
+                if let Some(t) = read_slot(q, oldest) {
+                    self.last = t;
+                }
+                oldest
             }
+        };
+        q.current = slot;
+        let n = (self.names.len() as u32).min(MAX_SCOPES) * 2;
+        if n > 0 {
+            encoder.resolve_query_set(&q.set, 0..n, &q.resolve, 0);
+            encoder.copy_buffer_to_buffer(&q.resolve, 0, &q.ring[slot].buffer, 0, n as u64 * 8);
         }
     }
 
-    /// Reads the frame's timings back (blocks until the GPU finished the frame) and starts
-    /// the next frame.
-    pub fn collect(&mut self, ctx: &GpuContext) -> &[PassTiming] {
+    /// After the frame's submission: starts reading its timings back. With `block`, waits
+    /// for them (headless rendering, benchmarks, tests: the timings are this frame's);
+    /// without, returns the newest frame whose timings have arrived (the app: no CPU–GPU
+    /// synchronisation, timings one or two frames late).
+    pub fn collect(&mut self, ctx: &GpuContext, block: bool) -> &[PassTiming] {
         let names = std::mem::take(&mut self.names);
         let cpu = std::mem::take(&mut self.cpu_ms);
-        self.last = match &self.gpu {
-            None => names.into_iter().zip(cpu).map(|(name, ms)| PassTiming { name, ms }).collect(),
-            Some(q) => match crate::buffers::map_read(ctx, &q.readback) {
-                Ok(bytes) => names
-                    .into_iter()
-                    .take(MAX_SCOPES as usize)
-                    .enumerate()
-                    .map(|(i, name)| {
-                        let t = |k: usize| u64::from_le_bytes(bytes[8 * k..8 * k + 8].try_into().unwrap_or([0; 8]));
-                        let ticks = t(2 * i + 1).saturating_sub(t(2 * i));
-                        PassTiming { name, ms: ticks as f64 * q.period_ns as f64 * 1e-6 }
-                    })
-                    .collect(),
-                Err(e) => {
-                    log::warn!("timestamp readback failed: {e}");
-                    Vec::new()
-                }
-            },
+        let Some(q) = &mut self.gpu else {
+            self.last = names.into_iter().zip(cpu).map(|(name, ms)| PassTiming { name, ms }).collect();
+            return &self.last;
         };
+        let slot = q.current;
+        let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let f = flag.clone();
+        q.ring[slot].names = names;
+        q.ring[slot].buffer.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+            if let Err(e) = r {
+                log::warn!("timestamp readback failed: {e}");
+            }
+            f.store(true, std::sync::atomic::Ordering::Release);
+        });
+        q.ring[slot].mapped = Some(flag);
+        q.current = (slot + 1) % RING;
+        let poll = if block { wgpu::PollType::wait_indefinitely() } else { wgpu::PollType::Poll };
+        if let Err(e) = ctx.device.poll(poll) {
+            log::warn!("device poll failed: {e}");
+        }
+        // Oldest first, so that the newest arrived frame wins.
+        for k in 1..=RING {
+            let i = (slot + k) % RING;
+            let done = q.ring[i].mapped.as_ref().is_some_and(|m| m.load(std::sync::atomic::Ordering::Acquire));
+            if done && let Some(t) = read_slot(q, i) {
+                self.last = t;
+            }
+        }
         &self.last
     }
+}
+
+/// Reads and frees ring slot `i` (its mapping must have been requested); waits when it has
+/// not completed yet.
+fn read_slot(q: &mut GpuQueries, i: usize) -> Option<Vec<PassTiming>> {
+    q.ring[i].mapped.take()?;
+    let slot = &mut q.ring[i];
+    let timings = match slot.buffer.slice(..).get_mapped_range() {
+        Ok(bytes) => {
+            let t = |k: usize| u64::from_le_bytes(bytes[8 * k..8 * k + 8].try_into().unwrap_or([0; 8]));
+            std::mem::take(&mut slot.names)
+                .into_iter()
+                .take(MAX_SCOPES as usize)
+                .enumerate()
+                .map(|(j, name)| {
+                    let ticks = t(2 * j + 1).saturating_sub(t(2 * j));
+                    PassTiming { name, ms: ticks as f64 * q.period_ns as f64 * 1e-6 }
+                })
+                .collect()
+        }
+        Err(e) => {
+            log::warn!("timestamp readback failed: {e}");
+            Vec::new()
+        }
+    };
+    slot.buffer.unmap();
+    Some(timings)
 }
 
 fn new_encoder(ctx: &GpuContext) -> wgpu::CommandEncoder {

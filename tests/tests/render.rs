@@ -476,3 +476,24 @@ fn tone_mapping_matches_the_cpu_reference() {
         assert!(max_err <= 1.5 / 255.0, "auto {auto_exposure}: final.ldr differs from the CPU reference by {max_err}");
     }
 }
+
+#[test]
+fn interactive_mode_reports_timings_without_waiting_for_each_frame() {
+    let mut r = default_renderer(48, 32);
+    r.set_interactive(true);
+    let mut seen = 0;
+    for _ in 0..12 {
+        let t = r.render_frame();
+        if !t.is_empty() {
+            let names: Vec<_> = t.iter().map(|p| p.name.as_str()).collect();
+            assert_eq!(
+                names,
+                ["gbuffer", "direct.shadow", "direct", "compose", "compose.luminance", "compose.tonemap"]
+            );
+            seen += 1;
+        }
+    }
+    assert!(seen >= 8, "timings arrived for only {seen} of 12 frames");
+    r.set_interactive(false);
+    assert_eq!(r.render_frame().len(), 6, "blocking mode returns this frame's timings");
+}
