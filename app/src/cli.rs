@@ -28,6 +28,8 @@ pub enum Command {
     Bench(BenchArgs),
     /// List every setting with its unit, range and default.
     Settings,
+    /// Compare two images (PNG or EXR): RMSE, relative MSE and mean FLIP.
+    Compare(CompareArgs),
     /// Regenerate the embedded default scene (assets/cornell_box.glb).
     GenAssets {
         /// Where to write the .glb.
@@ -95,6 +97,20 @@ pub struct RenderArgs {
     /// Output folder (created).
     #[arg(long)]
     pub out: PathBuf,
+}
+
+#[derive(Args, Debug)]
+pub struct CompareArgs {
+    /// The test image.
+    pub test: PathBuf,
+    /// The reference image (same size).
+    pub reference: PathBuf,
+    /// Write the FLIP error map here (PNG, turbo false colour).
+    #[arg(long)]
+    pub flip_map: Option<PathBuf>,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Args, Debug)]
@@ -328,6 +344,74 @@ fn bench(args: &BenchArgs) -> Result<(), CliError> {
     Ok(())
 }
 
+/// Metrics of one image pair.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct CompareReport {
+    /// Whether the inputs were float (HDR) images; FLIP then runs on their tone-mapped
+    /// versions (x / (1 + x), sRGB).
+    pub hdr: bool,
+    pub rmse: f64,
+    pub rel_mse: f64,
+    pub flip: f64,
+}
+
+/// Loads an image as f32 RGBA: EXR and other float formats as linear values, 8-bit images
+/// as their display values in [0, 1]. Returns whether it was a float image.
+fn load_image(path: &Path) -> Result<(gi_render::ImageF32, bool), CliError> {
+    let img = image::open(path).map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
+    let float = matches!(img.color(), image::ColorType::Rgb32F | image::ColorType::Rgba32F);
+    let rgba = img.into_rgba32f();
+    Ok((
+        gi_render::ImageF32 { width: rgba.width(), height: rgba.height(), data: rgba.pixels().map(|p| p.0).collect() },
+        float,
+    ))
+}
+
+/// Compares two image files.
+pub fn compare_files(test: &Path, reference: &Path, flip_map: Option<&Path>) -> Result<CompareReport, CliError> {
+    use gi_render::metrics;
+    let (t, t_float) = load_image(test)?;
+    let (r, r_float) = load_image(reference)?;
+    let hdr = t_float && r_float;
+    let err = |e: metrics::MetricError| CliError::input(format!("{} vs {}: {e}", test.display(), reference.display()));
+    let rmse = metrics::rmse(&t, &r).map_err(err)?;
+    let rel_mse = metrics::rel_mse(&t, &r).map_err(err)?;
+    let display = |i: &gi_render::ImageF32| {
+        if hdr {
+            let ldr = gi_render::image_io::to_rgba8(i, gi_render::BufferKind::Hdr);
+            gi_render::ImageF32 {
+                width: i.width,
+                height: i.height,
+                data: ldr.pixels().map(|p| p.0.map(|x| x as f32 / 255.0)).collect(),
+            }
+        } else {
+            i.clone()
+        }
+    };
+    let (flip, map) = metrics::flip(&display(&t), &display(&r)).map_err(err)?;
+    if let Some(path) = flip_map {
+        let mut png = image::RgbaImage::new(map.width, map.height);
+        for (px, e) in png.pixels_mut().zip(&map.data) {
+            let [r, g, b] = gi_render::image_io::turbo(e[0]);
+            *px = image::Rgba([r, g, b, 1.0].map(|x| (x * 255.0).round() as u8));
+        }
+        png.save(path).map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
+    }
+    Ok(CompareReport { hdr, rmse, rel_mse, flip })
+}
+
+fn compare(args: &CompareArgs) -> Result<(), CliError> {
+    let r = compare_files(&args.test, &args.reference, args.flip_map.as_deref())?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&r).map_err(|e| CliError::failure(e.to_string()))?);
+    } else {
+        println!("RMSE     {:.6}{}", r.rmse, if r.hdr { " (linear HDR)" } else { " (display values)" });
+        println!("relMSE   {:.6}", r.rel_mse);
+        println!("FLIP     {:.6} (mean{})", r.flip, if r.hdr { ", on tone-mapped images" } else { "" });
+    }
+    Ok(())
+}
+
 fn buffers(args: &SceneArgs) -> Result<(), CliError> {
     let r = renderer(args, (16, 16))?;
     for e in r.buffers().entries() {
@@ -372,6 +456,7 @@ pub fn main() -> ExitCode {
         Some(Command::Render(a)) => render(a),
         Some(Command::Buffers(a)) => buffers(a),
         Some(Command::Bench(a)) => bench(a),
+        Some(Command::Compare(a)) => compare(a),
         Some(Command::Settings) => {
             settings();
             Ok(())

@@ -39,6 +39,40 @@ fn render_writes_final_png_and_buffers() {
 }
 
 #[test]
+fn compare_reports_metrics_and_writes_the_flip_map() {
+    let out = temp_dir("compare");
+    let render = |name: &str, ev: &str| {
+        let o = gi_lab()
+            .args(["render", "--size", "48x48", "--buffer", "final.hdr", "--set"])
+            .arg(format!("tonemap.exposure_ev={ev}"))
+            .arg("--out")
+            .arg(out.join(name))
+            .output()
+            .expect("runs");
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    render("a", "0");
+    render("b", "2");
+    let compare = |t: &str, r: &str, extra: &[&str]| {
+        let o =
+            gi_lab().arg("compare").arg(out.join(t)).arg(out.join(r)).args(extra).arg("--json").output().expect("runs");
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_slice::<serde_json::Value>(&o.stdout).expect("JSON")
+    };
+    let same = compare("a/final.png", "a/final.png", &[]);
+    assert_eq!(same["rmse"], 0.0);
+    assert_eq!(same["flip"], 0.0);
+    let map = out.join("flip.png");
+    let diff = compare("b/final.png", "a/final.png", &["--flip-map", &map.to_string_lossy()]);
+    assert!(diff["flip"].as_f64().expect("flip") > 0.0 && diff["rmse"].as_f64().expect("rmse") > 0.0);
+    assert_eq!(image::open(&map).expect("FLIP map PNG").width(), 48);
+    // The HDR buffers do not depend on the exposure: identical radiance.
+    let hdr = compare("b/final.hdr.exr", "a/final.hdr.exr", &[]);
+    assert_eq!(hdr["hdr"], true);
+    assert_eq!(hdr["rmse"], 0.0);
+}
+
+#[test]
 fn bad_arguments_exit_2_with_a_message() {
     let cases: &[(&[&str], &str)] = &[
         (&["render", "--size", "0x10", "--out", "OUT"], "at least 1"),
@@ -51,6 +85,7 @@ fn bad_arguments_exit_2_with_a_message() {
         (&["render", "--out", "OUT", "--preset", "/nonexistent.ron"], "nonexistent.ron"),
         (&["bench", "--frames", "0"], "--frames"),
         (&["frobnicate"], "frobnicate"),
+        (&["compare", "/nonexistent/a.png", "/nonexistent/b.png"], "a.png"),
         (&["render"], "--out"),
     ];
     let out = temp_dir("bad-args");

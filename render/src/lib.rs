@@ -10,6 +10,7 @@ pub mod frame;
 pub mod gpu;
 pub mod image_io;
 mod lab_settings;
+pub mod metrics;
 pub mod passes;
 pub mod scene;
 pub mod settings;
