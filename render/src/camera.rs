@@ -34,12 +34,12 @@ impl Camera {
     }
 
     pub fn view(&self) -> Mat4 {
-        Mat4::look_to_rh(self.position, self.forward(), Vec3::Y)
+        glam::camera::rh::view::look_to_mat4(self.position, self.forward(), Vec3::Y)
     }
 
     /// Perspective projection with depth in [0, 1] (WebGPU convention).
     pub fn projection(&self, aspect: f32) -> Mat4 {
-        Mat4::perspective_rh(self.yfov, aspect.max(1e-4), self.znear, self.zfar)
+        glam::camera::rh::proj::directx::perspective(self.yfov, aspect.max(1e-4), self.znear, self.zfar)
     }
 
     pub fn view_proj(&self, aspect: f32) -> Mat4 {

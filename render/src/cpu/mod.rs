@@ -2,5 +2,6 @@
 //! the passes' outputs with these on small inputs.
 
 pub mod brdf;
+pub mod pathtrace;
 pub mod raycast;
 pub mod tonemap;

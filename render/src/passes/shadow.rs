@@ -56,8 +56,16 @@ pub fn setup_lights(lights: &[WorldLight], bounds: Aabb, shadow_map_size: u32, s
         let near = (r * 0.002).max(1e-3);
         let (kind, cone, texel, views): (f32, Vec4, f32, Vec<Mat4>) = match l.kind {
             LightKind::Point => {
-                let proj = Mat4::perspective_rh(std::f32::consts::FRAC_PI_2, 1.0, near, dist_far.max(near * 2.0));
-                let views = CUBE_FACES.iter().map(|(f, up)| proj * Mat4::look_to_rh(wl.position, *f, *up)).collect();
+                let proj = glam::camera::rh::proj::directx::perspective(
+                    std::f32::consts::FRAC_PI_2,
+                    1.0,
+                    near,
+                    dist_far.max(near * 2.0),
+                );
+                let views = CUBE_FACES
+                    .iter()
+                    .map(|(f, up)| proj * glam::camera::rh::view::look_to_mat4(wl.position, *f, *up))
+                    .collect();
                 (0.0, Vec4::new(-1.0, 1.0, first, 6.0), 2.0 / shadow_map_size as f32, views)
             }
             LightKind::Spot { inner_cone, outer_cone } => {
@@ -66,16 +74,16 @@ pub fn setup_lights(lights: &[WorldLight], bounds: Aabb, shadow_map_size: u32, s
                 let (co, ci) = (outer.cos(), inner.cos());
                 let fov = (2.0 * outer * 1.05).min(3.0);
                 let up = if dir.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
-                let proj = Mat4::perspective_rh(fov, 1.0, near, dist_far.max(near * 2.0));
-                let view = proj * Mat4::look_to_rh(wl.position, dir, up);
+                let proj = glam::camera::rh::proj::directx::perspective(fov, 1.0, near, dist_far.max(near * 2.0));
+                let view = proj * glam::camera::rh::view::look_to_mat4(wl.position, dir, up);
                 let texel = 2.0 * (fov * 0.5).tan() / shadow_map_size as f32;
                 (1.0, Vec4::new(co, 1.0 / (ci - co).max(1e-4), first, 1.0), texel, vec![view])
             }
             LightKind::Directional => {
                 let up = if dir.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
                 let eye = c - dir * (2.0 * r);
-                let proj = Mat4::orthographic_rh(-r, r, -r, r, 0.0, 4.0 * r);
-                let view = proj * Mat4::look_to_rh(eye, dir, up);
+                let proj = glam::camera::rh::proj::directx::orthographic(-r, r, -r, r, 0.0, 4.0 * r);
+                let view = proj * glam::camera::rh::view::look_to_mat4(eye, dir, up);
                 (2.0, Vec4::new(-1.0, 1.0, first, 1.0), 2.0 * r / shadow_map_size as f32, vec![view])
             }
         };

@@ -1108,6 +1108,7 @@ impl<'a> Loader<'a> {
                     emissive: (Vec3::from(m.emissive_factor.0) * strength).max(Vec3::ZERO),
                     sample_weight: 1.0,
                     double_sided: m.double_sided,
+                    specular_override: None,
                 };
                 (material, uv)
             }

@@ -80,6 +80,9 @@ pub struct Material {
     /// glTF `doubleSided`: when false, back faces are culled in the camera G-buffer (a
     /// closed room seen from outside shows its inside, as in every glTF viewer).
     pub double_sided: bool,
+    /// Specular intensity SI set explicitly instead of derived from metallic (test scenes
+    /// such as the white furnace need a purely Lambertian surface: Some(0)).
+    pub specular_override: Option<f32>,
 }
 
 impl Material {
@@ -89,6 +92,9 @@ impl Material {
     }
     /// Specular intensity SI (002 §4.2), see the type's documentation for the mapping.
     pub fn specular_intensity(&self) -> f32 {
+        if let Some(si) = self.specular_override {
+            return si;
+        }
         let m = self.metallic.clamp(0.0, 1.0);
         let c = self.base_color;
         let lum = 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
@@ -112,6 +118,7 @@ impl Default for Material {
             emissive: Vec3::ZERO,
             sample_weight: 1.0,
             double_sided: false,
+            specular_override: None,
         }
     }
 }

@@ -1,0 +1,336 @@
+//! Path-traced ground truth on the CPU (issue #3, part 1).
+//!
+//! The same camera, punctual lights, materials and BRDF (`cpu::brdf`) as the renderer, over
+//! the scene's world-space triangles in a BVH (the `obvhs` crate's CWBVH). Paths start with
+//! a ray through the pixel centre (the rasteriser has no anti-aliasing either), punctual
+//! lights are reached by next-event estimation (they cannot be hit), emissive surfaces add
+//! their emission where a path hits them, and each bounce samples the BRDF: a cosine lobe
+//! for c·DI/π and the normalised Blinn-Phong lobe (SP) for the specular term, mixed by
+//! their weights. Every pixel and sample has its own seeded random stream, so results do
+//! not depend on thread scheduling: identical seeds give identical images. Rendering is
+//! progressive: [`Accumulator`] adds samples per pass.
+//!
+//! Output: `direct` (emission + direct light at the first hit), `indirect` (everything
+//! after the first bounce, up to `bounces`), and `full` = direct + indirect.
+
+use glam::{Mat4, Vec3, Vec3A, Vec4Swizzles};
+use obvhs::cwbvh::CwBvh;
+use obvhs::ray::{Ray, RayHit};
+use rayon::prelude::*;
+
+use crate::buffers::ImageF32;
+use crate::cpu::brdf;
+use crate::cpu::raycast::{moller_trumbore, primary_ray};
+use crate::scene::{LightKind, Material, Scene, WorldLight};
+
+/// Settings of a path-traced render.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PtSettings {
+    /// Indirect bounces: 0 = direct light only, 1 = one indirect bounce, N.
+    pub bounces: u32,
+    /// Samples per pixel of one pass.
+    pub spp: u32,
+    pub seed: u64,
+}
+
+struct Tri {
+    v: [Vec3; 3],
+    n: [Vec3; 3],
+    material: usize,
+}
+
+/// The scene prepared for ray tracing at one instant.
+pub struct PathTracer {
+    tris: Vec<Tri>,
+    bvh: CwBvh,
+    materials: Vec<Material>,
+    lights: Vec<WorldLight>,
+    /// Offset for secondary rays, relative to the scene size.
+    eps: f32,
+}
+
+struct Hit {
+    p: Vec3,
+    n: Vec3,
+    material: usize,
+}
+
+/// Small, fast, seedable generator (PCG32, O'Neill 2014).
+struct Pcg(u64);
+
+impl Pcg {
+    fn new(seed: u64, stream: u64) -> Self {
+        let mut p = Pcg(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ stream.wrapping_mul(0xD1B5_4A32_D192_ED03));
+        p.next();
+        p.next();
+        p
+    }
+    fn next(&mut self) -> u32 {
+        let old = self.0;
+        self.0 = old.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+        let x = (((old >> 18) ^ old) >> 27) as u32;
+        x.rotate_right((old >> 59) as u32)
+    }
+    /// Uniform in [0, 1).
+    fn f(&mut self) -> f32 {
+        (self.next() >> 8) as f32 / (1u32 << 24) as f32
+    }
+}
+
+fn onb(n: Vec3) -> (Vec3, Vec3) {
+    let t = n.any_orthonormal_vector();
+    (t, n.cross(t))
+}
+
+impl PathTracer {
+    /// Prepares the scene as evaluated at `time_s`.
+    pub fn new(scene: &Scene, time_s: f32) -> Self {
+        let state = scene.evaluate(time_s);
+        let mut tris = Vec::new();
+        for d in &state.draws {
+            let p = &scene.meshes[d.mesh].primitives[d.primitive];
+            let nm: Mat4 = d.world.inverse().transpose();
+            for t in p.indices.chunks_exact(3) {
+                let vert = |k: usize| &p.vertices[t[k] as usize];
+                tris.push(Tri {
+                    v: [0, 1, 2].map(|k| d.world.transform_point3(Vec3::from(vert(k).position))),
+                    n: [0, 1, 2].map(|k| (nm * Vec3::from(vert(k).normal).extend(0.0)).xyz().normalize_or_zero()),
+                    material: p.material,
+                });
+            }
+        }
+        let bvh_tris: Vec<obvhs::triangle::Triangle> = tris
+            .iter()
+            .map(|t| obvhs::triangle::Triangle { v0: t.v[0].into(), v1: t.v[1].into(), v2: t.v[2].into() })
+            .collect();
+        let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(
+            &bvh_tris,
+            obvhs::BvhBuildParams::medium_build(),
+            &mut std::time::Duration::default(),
+        );
+        let eps = scene.bounds(time_s).radius().max(1e-3) * 1e-4;
+        let materials = if scene.materials.is_empty() { vec![Material::default()] } else { scene.materials.clone() };
+        Self { tris, bvh, materials, lights: state.lights, eps }
+    }
+
+    /// Closest hit in (tmin, tmax); the normal is the interpolated one, facing the ray.
+    fn intersect(&self, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
+        let ray = Ray::new(Vec3A::from(o), Vec3A::from(d), tmin, tmax);
+        let mut hit = RayHit::none();
+        let tris = &self.tris;
+        let found = self.bvh.ray_traverse(ray, &mut hit, |r, id| {
+            let tri = &tris[self.bvh.primitive_indices[id] as usize];
+            match moller_trumbore(Vec3::from(r.origin), Vec3::from(r.direction), tri.v) {
+                Some((t, _, _)) if t > r.tmin && t < r.tmax => t,
+                _ => f32::INFINITY,
+            }
+        });
+        if !found {
+            return None;
+        }
+        let tri = &self.tris[self.bvh.primitive_indices[hit.primitive_id as usize] as usize];
+        let (_, u, v) = moller_trumbore(o, d, tri.v)?;
+        let mut n = (tri.n[0] * (1.0 - u - v) + tri.n[1] * u + tri.n[2] * v).normalize_or_zero();
+        if n == Vec3::ZERO {
+            n = (tri.v[1] - tri.v[0]).cross(tri.v[2] - tri.v[0]).normalize_or(Vec3::Y);
+        }
+        if n.dot(d) > 0.0 {
+            n = -n;
+        }
+        Some(Hit { p: o + d * hit.t, n, material: tri.material })
+    }
+
+    fn occluded(&self, a: Vec3, b: Vec3) -> bool {
+        let d = b - a;
+        let len = d.length();
+        len > 2.0 * self.eps && self.intersect(a, d / len, self.eps, len - self.eps).is_some()
+    }
+
+    /// Direct light from every punctual light at a hit (next-event estimation; exact for
+    /// punctual lights, so no noise).
+    fn direct(&self, h: &Hit, v: Vec3) -> Vec3 {
+        let m = &self.materials[h.material.min(self.materials.len() - 1)];
+        let origin = h.p + h.n * self.eps;
+        let mut sum = Vec3::ZERO;
+        for wl in &self.lights {
+            let (l, e, target) = match wl.light.kind {
+                LightKind::Directional => {
+                    let l = -wl.direction;
+                    (l, wl.light.intensity, origin + l * 1e6)
+                }
+                LightKind::Point | LightKind::Spot { .. } => {
+                    let to_l = wl.position - h.p;
+                    let d2 = to_l.length_squared().max(1e-12);
+                    let l = to_l / d2.sqrt();
+                    let falloff = match wl.light.kind {
+                        LightKind::Spot { inner_cone, outer_cone } => {
+                            brdf::spot_falloff(wl.direction.dot(-l), inner_cone, outer_cone)
+                        }
+                        _ => 1.0,
+                    };
+                    let window = wl.light.range.map_or(1.0, |r| (1.0 - (d2.sqrt() / r).powi(4)).clamp(0.0, 1.0));
+                    (l, wl.light.intensity * falloff * window / d2, wl.position)
+                }
+            };
+            let ndl = h.n.dot(l);
+            if ndl <= 0.0 || e <= 0.0 || self.occluded(origin, target) {
+                continue;
+            }
+            let f = brdf::eval(
+                h.n,
+                l,
+                v,
+                m.base_color.xyz(),
+                m.diffuse_intensity(),
+                m.specular_intensity(),
+                m.specular_power(),
+            );
+            sum += f * wl.light.color * e * ndl;
+        }
+        sum
+    }
+
+    /// Samples a direction from the BRDF mixture at a hit; returns (l, f·cos/pdf).
+    fn sample_brdf(&self, h: &Hit, v: Vec3, rng: &mut Pcg) -> Option<(Vec3, Vec3)> {
+        let m = &self.materials[h.material.min(self.materials.len() - 1)];
+        let c = m.base_color.xyz();
+        let (di, si, sp) = (m.diffuse_intensity(), m.specular_intensity(), m.specular_power());
+        let wd = di * (0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z);
+        let ws = si.max(0.0);
+        if wd + ws <= 0.0 {
+            return None;
+        }
+        let pd = wd / (wd + ws);
+        let (t, b) = onb(h.n);
+        let (u1, u2) = (rng.f(), rng.f());
+        let l = if rng.f() < pd {
+            // Cosine-weighted hemisphere.
+            let r = u1.sqrt();
+            let phi = std::f32::consts::TAU * u2;
+            (t * (r * phi.cos()) + b * (r * phi.sin()) + h.n * (1.0 - u1).max(0.0).sqrt()).normalize()
+        } else {
+            // Half vector from the normalised Blinn-Phong distribution, cos θh = u^(1/(SP+1)).
+            let ct = u1.powf(1.0 / (sp + 1.0));
+            let st = (1.0 - ct * ct).max(0.0).sqrt();
+            let phi = std::f32::consts::TAU * u2;
+            let hv = (t * (st * phi.cos()) + b * (st * phi.sin()) + h.n * ct).normalize();
+            -v.reflect(hv) // l = 2(v·h)h − v
+        };
+        let ndl = h.n.dot(l);
+        if ndl <= 0.0 {
+            return None;
+        }
+        let hv = (l + v).normalize_or_zero();
+        let ndh = h.n.dot(hv).max(0.0);
+        let vdh = v.dot(hv).abs().max(1e-6);
+        let pdf_d = ndl / std::f32::consts::PI;
+        let pdf_s = (sp + 1.0) / std::f32::consts::TAU * ndh.powf(sp) / (4.0 * vdh);
+        let pdf = pd * pdf_d + (1.0 - pd) * pdf_s;
+        if pdf <= 0.0 {
+            return None;
+        }
+        let f = brdf::eval(h.n, l, v, c, di, si, sp);
+        Some((l, f * ndl / pdf))
+    }
+
+    /// One path through pixel (x, y): (direct, indirect).
+    fn trace(&self, origin: Vec3, dir: Vec3, bounces: u32, rng: &mut Pcg) -> (Vec3, Vec3) {
+        let Some(mut h) = self.intersect(origin, dir, 0.0, f32::INFINITY) else { return (Vec3::ZERO, Vec3::ZERO) };
+        let mut v = -dir;
+        let emission = |h: &Hit| self.materials[h.material.min(self.materials.len() - 1)].emissive;
+        let direct = emission(&h) + self.direct(&h, v);
+        let mut indirect = Vec3::ZERO;
+        let mut throughput = Vec3::ONE;
+        for _ in 0..bounces {
+            let Some((l, weight)) = self.sample_brdf(&h, v, rng) else { break };
+            throughput *= weight;
+            let Some(next) = self.intersect(h.p + h.n * self.eps, l, 0.0, f32::INFINITY) else { break };
+            v = -l;
+            indirect += throughput * (emission(&next) + self.direct(&next, v));
+            h = next;
+            if throughput.max_element() <= 0.0 {
+                break;
+            }
+        }
+        (direct, indirect)
+    }
+
+    /// Renders `settings.spp` samples per pixel for a camera (view-projection and eye).
+    pub fn render(&self, view_proj: Mat4, eye: Vec3, width: u32, height: u32, settings: PtSettings) -> PtImages {
+        let mut acc = Accumulator::new(width, height);
+        acc.add_pass(self, view_proj, eye, settings);
+        acc.images()
+    }
+}
+
+/// The path tracer's images (averages over all samples so far).
+#[derive(Clone, Debug)]
+pub struct PtImages {
+    pub direct: ImageF32,
+    pub indirect: ImageF32,
+    pub full: ImageF32,
+    pub spp: u32,
+}
+
+/// Progressive accumulation: each pass adds samples with a pass-specific seed.
+pub struct Accumulator {
+    width: u32,
+    height: u32,
+    direct: Vec<Vec3>,
+    indirect: Vec<Vec3>,
+    spp: u32,
+}
+
+impl Accumulator {
+    pub fn new(width: u32, height: u32) -> Self {
+        let n = (width * height) as usize;
+        Self { width, height, direct: vec![Vec3::ZERO; n], indirect: vec![Vec3::ZERO; n], spp: 0 }
+    }
+
+    /// Adds `settings.spp` samples per pixel (multithreaded over rows; deterministic).
+    pub fn add_pass(&mut self, pt: &PathTracer, view_proj: Mat4, eye: Vec3, settings: PtSettings) {
+        let inv = view_proj.inverse();
+        let (w, h) = (self.width, self.height);
+        let first = self.spp;
+        let rows: Vec<Vec<(Vec3, Vec3)>> = (0..h)
+            .into_par_iter()
+            .map(|y| {
+                (0..w)
+                    .map(|x| {
+                        let (o, d) = primary_ray(inv, x, y, w, h);
+                        let o = if o.is_finite() { o } else { eye };
+                        let mut sum = (Vec3::ZERO, Vec3::ZERO);
+                        for s in 0..settings.spp {
+                            let stream = ((y as u64 * w as u64 + x as u64) << 20) ^ (first + s) as u64;
+                            let mut rng = Pcg::new(settings.seed, stream);
+                            let (dl, il) = pt.trace(o, d, settings.bounces, &mut rng);
+                            sum.0 += dl;
+                            sum.1 += il;
+                        }
+                        sum
+                    })
+                    .collect()
+            })
+            .collect();
+        for (i, (dl, il)) in rows.into_iter().flatten().enumerate() {
+            self.direct[i] += dl;
+            self.indirect[i] += il;
+        }
+        self.spp += settings.spp;
+    }
+
+    pub fn images(&self) -> PtImages {
+        let k = 1.0 / self.spp.max(1) as f32;
+        let img = |f: &dyn Fn(usize) -> Vec3| ImageF32 {
+            width: self.width,
+            height: self.height,
+            data: (0..self.direct.len()).map(|i| f(i).extend(1.0).to_array()).collect(),
+        };
+        PtImages {
+            direct: img(&|i| self.direct[i] * k),
+            indirect: img(&|i| self.indirect[i] * k),
+            full: img(&|i| (self.direct[i] + self.indirect[i]) * k),
+            spp: self.spp,
+        }
+    }
+}

@@ -1,0 +1,123 @@
+//! The CPU path tracer (ground truth): the white furnace, agreement with the GPU direct
+//! pass, determinism.
+
+use gi_lab_tests::{default_renderer, default_scene};
+use gi_render::cpu::pathtrace::{Accumulator, PathTracer, PtSettings};
+use gi_render::scene::{Material, Mesh, Node, Primitive, Scene, Transform, vertex};
+use gi_render::{BufferKind, ImageF32};
+use glam::{Vec2, Vec3, Vec4};
+
+/// A closed cube [−1, 1]³ whose faces look inward, all of one material.
+fn furnace(albedo: f32, emission: f32) -> Scene {
+    let mut vertices = Vec::new();
+    let mut indices = Vec::new();
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let n = -Vec3::from_array({
+                let mut a = [0.0; 3];
+                a[axis] = sign;
+                a
+            });
+            let (u, v) = {
+                let t = n.any_orthonormal_vector();
+                (t, n.cross(t))
+            };
+            let c = -n; // face centre
+            let base = vertices.len() as u32;
+            for (du, dv) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                vertices.push(vertex(c + u * du + v * dv, n, Vec2::ZERO));
+            }
+            // Counter-clockwise seen from inside (around n).
+            indices.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+        }
+    }
+    let material = Material {
+        name: "furnace".into(),
+        base_color: Vec4::new(albedo, albedo, albedo, 1.0),
+        emissive: Vec3::splat(emission),
+        specular_override: Some(0.0),
+        double_sided: true,
+        ..Material::default()
+    };
+    Scene {
+        name: "furnace".into(),
+        meshes: vec![Mesh { name: "cube".into(), primitives: vec![Primitive { vertices, indices, material: 0 }] }],
+        materials: vec![material],
+        nodes: vec![Node {
+            name: "cube".into(),
+            transform: Transform::default(),
+            children: vec![],
+            mesh: Some(0),
+            light: None,
+            camera: None,
+        }],
+        roots: vec![0],
+        ..Scene::default()
+    }
+}
+
+#[test]
+fn white_furnace_converges_to_le_over_one_minus_rho() {
+    let (rho, le) = (0.6f32, 1.0f32);
+    let pt = PathTracer::new(&furnace(rho, le), 0.0);
+    let view_proj = glam::camera::rh::proj::directx::perspective(1.2, 1.0, 0.01, 10.0)
+        * glam::camera::rh::view::look_to_mat4(Vec3::ZERO, Vec3::new(0.3, -0.2, -1.0).normalize(), Vec3::Y);
+    let img = pt.render(view_proj, Vec3::ZERO, 16, 16, PtSettings { bounces: 60, spp: 2, seed: 7 });
+    let want = le / (1.0 - rho);
+    for v in img.full.data.iter().flat_map(|p| &p[..3]) {
+        assert!((v - want).abs() / want < 0.01, "furnace radiance {v} vs analytic {want}");
+    }
+    // Direct = emission + no lights; every bounce adds ρ^k Le.
+    assert!(img.direct.data.iter().all(|p| (p[0] - le).abs() < 1e-6));
+}
+
+/// A display image (x / (1 + x), sRGB) of HDR radiance, as the FLIP comparisons use.
+fn display(img: &ImageF32) -> ImageF32 {
+    let ldr = gi_render::image_io::to_rgba8(img, BufferKind::Hdr);
+    ImageF32 {
+        width: img.width,
+        height: img.height,
+        data: ldr.pixels().map(|p| p.0.map(|x| x as f32 / 255.0)).collect(),
+    }
+}
+
+#[test]
+fn path_traced_direct_light_agrees_with_the_gpu_direct_pass() {
+    let mut r = default_renderer(128, 128);
+    r.render_frame();
+    let gpu = r.readback("direct.radiance").expect("radiance");
+    let pt = PathTracer::new(r.scene(), 0.0);
+    let img = pt.render(r.view_proj(), r.camera.position, 128, 128, PtSettings { bounces: 0, spp: 1, seed: 1 });
+    let (flip, _) = gi_render::metrics::flip(&display(&gpu), &display(&img.direct)).expect("flip");
+    println!("mean FLIP, GPU direct vs path-traced direct at 128×128: {flip:.4}");
+    assert!(flip <= 0.02, "mean FLIP {flip} > 0.02");
+}
+
+#[test]
+fn identical_seeds_give_identical_images_and_progressive_passes_accumulate() {
+    let scene = default_scene();
+    let r = default_renderer(24, 24);
+    let pt = PathTracer::new(&scene, 0.0);
+    let s = PtSettings { bounces: 2, spp: 2, seed: 42 };
+    let a = pt.render(r.view_proj(), r.camera.position, 24, 24, s);
+    let b = pt.render(r.view_proj(), r.camera.position, 24, 24, s);
+    assert!(a.full == b.full, "same seed, same image");
+    let c = pt.render(r.view_proj(), r.camera.position, 24, 24, PtSettings { seed: 43, ..s });
+    assert!(a.indirect != c.indirect, "another seed draws other paths");
+    assert!(a.indirect.data.iter().any(|p| p[0] > 0.0), "one bounce of indirect light reaches the camera");
+    let mut acc = Accumulator::new(24, 24);
+    acc.add_pass(&pt, r.view_proj(), r.camera.position, s);
+    acc.add_pass(&pt, r.view_proj(), r.camera.position, s);
+    let two = acc.images();
+    assert_eq!(two.spp, 4);
+    let four = pt.render(r.view_proj(), r.camera.position, 24, 24, PtSettings { spp: 4, ..s });
+    // The same samples, summed in another order: equal up to float rounding.
+    let worst = two
+        .full
+        .data
+        .iter()
+        .zip(&four.full.data)
+        .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs() / b[c].abs().max(1e-3)))
+        .fold(0.0f32, f32::max);
+    assert!(worst < 1e-5, "two passes of 2 spp differ from one pass of 4 spp by {worst}");
+}
