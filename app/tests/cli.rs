@@ -73,6 +73,23 @@ fn compare_reports_metrics_and_writes_the_flip_map() {
 }
 
 #[test]
+fn reference_path_traces_three_exr_files() {
+    let out = temp_dir("reference");
+    let full = out.join("ref.exr");
+    let o = gi_lab()
+        .args(["reference", "--size", "24x16", "--spp", "2", "--bounces", "1", "--out"])
+        .arg(&full)
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in ["ref.exr", "ref.direct.exr", "ref.indirect.exr"] {
+        let img = image::open(out.join(f)).unwrap_or_else(|e| panic!("{f}: {e}")).to_rgba32f();
+        assert_eq!(img.dimensions(), (24, 16));
+        assert!(img.pixels().any(|p| p.0[0] > 0.0), "{f} is black");
+    }
+}
+
+#[test]
 fn bad_arguments_exit_2_with_a_message() {
     let cases: &[(&[&str], &str)] = &[
         (&["render", "--size", "0x10", "--out", "OUT"], "at least 1"),
@@ -86,6 +103,7 @@ fn bad_arguments_exit_2_with_a_message() {
         (&["bench", "--frames", "0"], "--frames"),
         (&["frobnicate"], "frobnicate"),
         (&["compare", "/nonexistent/a.png", "/nonexistent/b.png"], "a.png"),
+        (&["reference", "--spp", "0", "--out", "OUT/r.exr"], "--spp"),
         (&["render"], "--out"),
     ];
     let out = temp_dir("bad-args");
