@@ -30,7 +30,8 @@ pub enum Command {
     Settings,
     /// Compare two images (PNG or EXR): RMSE, relative MSE and mean FLIP.
     Compare(CompareArgs),
-    /// Path-trace a ground-truth image on the CPU (writes F, F.direct.exr, F.indirect.exr).
+    /// Path-trace a ground-truth image on the CPU (writes F, F.direct.exr, F.indirect.exr
+    /// and a PNG preview).
     Reference(ReferenceArgs),
     /// Regenerate the embedded default scene (assets/cornell_box.glb).
     GenAssets {
@@ -453,6 +454,9 @@ fn reference(args: &ReferenceArgs) -> Result<(), CliError> {
         PtSettings { bounces: args.bounces, spp: args.spp, seed: args.seed },
     );
     let total_s = start.elapsed().as_secs_f64();
+    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| CliError::input(format!("--out {}: {e}", args.out.display())))?;
+    }
     let stem = args.out.with_extension("");
     for (path, image) in [
         (args.out.clone(), &img.full),
@@ -462,6 +466,10 @@ fn reference(args: &ReferenceArgs) -> Result<(), CliError> {
         gi_render::image_io::save_exr(&path, image).map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
         println!("wrote {}", path.display());
     }
+    let preview = stem.with_extension("png");
+    gi_render::image_io::save_png(&preview, &img.full, gi_render::BufferKind::Hdr)
+        .map_err(|e| CliError::input(format!("{}: {e}", preview.display())))?;
+    println!("wrote {} (preview: x/(1+x), sRGB)", preview.display());
     println!(
         "path traced {w}×{h}, {} spp, {} bounces in {total_s:.2} s (BVH {build_s:.2} s, {} threads)",
         args.spp,
