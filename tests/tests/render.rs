@@ -3,7 +3,7 @@
 use gi_lab_tests::{default_renderer, default_scene, gpu, shared_scene};
 use gi_render::cpu::brdf;
 use gi_render::cpu::raycast::{Hit, TriangleSoup, primary_ray};
-use gi_render::scene::{Light, LightKind, LoadOptions, Material, Node, Scene, SceneState, Transform, WorldLight};
+use gi_render::scene::{Light, LightKind, LoadOptions, Node, Scene, SceneState, Transform};
 use gi_render::{LabSettings, Renderer};
 use glam::{Quat, Vec3, Vec4Swizzles};
 
@@ -163,31 +163,6 @@ fn movement_buffer_reprojects_static_pixels_and_flags_moving_ones() {
     assert!(still >= 100);
 }
 
-/// Radiance a punctual light sends to the camera from `p` (the BRDF of `cpu::brdf`,
-/// KHR_lights_punctual units), and the point toward which visibility is tested.
-fn analytic(wl: &WorldLight, p: Vec3, n: Vec3, v: Vec3, m: &Material, far: f32) -> (Vec3, Vec3) {
-    let (l, e, target) = match wl.light.kind {
-        LightKind::Directional => {
-            let l = -wl.direction;
-            (l, wl.light.intensity, p + l * far)
-        }
-        LightKind::Point | LightKind::Spot { .. } => {
-            let to_l = wl.position - p;
-            let d = to_l.length();
-            let l = to_l / d;
-            let falloff = match wl.light.kind {
-                LightKind::Spot { inner_cone, outer_cone } => {
-                    brdf::spot_falloff(wl.direction.dot(-l), inner_cone, outer_cone)
-                }
-                _ => 1.0,
-            };
-            (l, wl.light.intensity * falloff / (d * d), wl.position)
-        }
-    };
-    let f = brdf::eval(n, l, v, m.base_color.xyz(), m.diffuse_intensity(), m.specular_intensity(), m.specular_power());
-    (f * wl.light.color * e * n.dot(l).max(0.0), target)
-}
-
 /// What [`check_direct`] compared.
 struct DirectCheck {
     lit: usize,
@@ -222,7 +197,8 @@ fn check_direct(mut r: Renderer) -> DirectCheck {
             let (mut visible_sum, mut unshadowed_sum) = (Vec3::ZERO, Vec3::ZERO);
             let (mut all_clear, mut all_blocked, mut tall) = (true, true, true);
             for wl in &state.lights {
-                let (rad, target) = analytic(wl, h.position, h.normal, (eye - h.position).normalize(), m, far);
+                let (rad, target) =
+                    brdf::punctual_radiance(wl, h.position, h.normal, (eye - h.position).normalize(), m, far);
                 if rad.length() < 1e-6 {
                     continue; // this light does not reach the pixel at all
                 }

@@ -33,6 +33,48 @@ pub fn spot_falloff(cos_theta: f32, inner: f32, outer: f32) -> f32 {
     t * t
 }
 
+/// Unshadowed radiance that a punctual light sends from surface point `p` (normal `n`)
+/// toward `v`, and the point toward which its visibility is to be tested (the light, or far
+/// along the direction of a directional light). KHR_lights_punctual units and falloffs:
+/// I·falloff·window/d² for point and spot lights, E for directional lights.
+pub fn punctual_radiance(
+    wl: &crate::scene::WorldLight,
+    p: Vec3,
+    n: Vec3,
+    v: Vec3,
+    m: &crate::scene::Material,
+    far: f32,
+) -> (Vec3, Vec3) {
+    use crate::scene::LightKind;
+    let (l, e, target) = match wl.light.kind {
+        LightKind::Directional => {
+            let l = -wl.direction;
+            (l, wl.light.intensity, p + l * far)
+        }
+        LightKind::Point | LightKind::Spot { .. } => {
+            let to_l = wl.position - p;
+            let d2 = to_l.length_squared().max(1e-12);
+            let d = d2.sqrt();
+            let l = to_l / d;
+            let falloff = match wl.light.kind {
+                LightKind::Spot { inner_cone, outer_cone } => {
+                    spot_falloff(wl.direction.dot(-l), inner_cone, outer_cone)
+                }
+                _ => 1.0,
+            };
+            let window = wl.light.range.map_or(1.0, |r| (1.0 - (d / r).powi(4)).clamp(0.0, 1.0));
+            (l, wl.light.intensity * falloff * window / d2, wl.position)
+        }
+    };
+    let ndl = n.dot(l);
+    if ndl <= 0.0 || e <= 0.0 {
+        return (Vec3::ZERO, target);
+    }
+    let c = glam::Vec3::new(m.base_color.x, m.base_color.y, m.base_color.z);
+    let f = eval(n, l, v, c, m.diffuse_intensity(), m.specular_intensity(), m.specular_power());
+    (f * wl.light.color * e * ndl, target)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -21,7 +21,7 @@ use rayon::prelude::*;
 use crate::buffers::ImageF32;
 use crate::cpu::brdf;
 use crate::cpu::raycast::{moller_trumbore, primary_ray};
-use crate::scene::{LightKind, Material, Scene, WorldLight};
+use crate::scene::{Material, Scene, WorldLight};
 
 /// Settings of a path-traced render.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -153,39 +153,10 @@ impl PathTracer {
         let origin = h.p + h.n * self.eps;
         let mut sum = Vec3::ZERO;
         for wl in &self.lights {
-            let (l, e, target) = match wl.light.kind {
-                LightKind::Directional => {
-                    let l = -wl.direction;
-                    (l, wl.light.intensity, origin + l * 1e6)
-                }
-                LightKind::Point | LightKind::Spot { .. } => {
-                    let to_l = wl.position - h.p;
-                    let d2 = to_l.length_squared().max(1e-12);
-                    let l = to_l / d2.sqrt();
-                    let falloff = match wl.light.kind {
-                        LightKind::Spot { inner_cone, outer_cone } => {
-                            brdf::spot_falloff(wl.direction.dot(-l), inner_cone, outer_cone)
-                        }
-                        _ => 1.0,
-                    };
-                    let window = wl.light.range.map_or(1.0, |r| (1.0 - (d2.sqrt() / r).powi(4)).clamp(0.0, 1.0));
-                    (l, wl.light.intensity * falloff * window / d2, wl.position)
-                }
-            };
-            let ndl = h.n.dot(l);
-            if ndl <= 0.0 || e <= 0.0 || self.occluded(origin, target) {
-                continue;
+            let (radiance, target) = brdf::punctual_radiance(wl, h.p, h.n, v, m, 1e6);
+            if radiance != Vec3::ZERO && !self.occluded(origin, target) {
+                sum += radiance;
             }
-            let f = brdf::eval(
-                h.n,
-                l,
-                v,
-                m.base_color.xyz(),
-                m.diffuse_intensity(),
-                m.specular_intensity(),
-                m.specular_power(),
-            );
-            sum += f * wl.light.color * e * ndl;
         }
         sum
     }
