@@ -144,6 +144,13 @@ pub struct BenchArgs {
     /// Measured frames (after 3 warm-up frames).
     #[arg(long, default_value_t = 30)]
     pub frames: u32,
+    /// Frames of the paused scene over which temporal flicker is measured (0: skip).
+    #[arg(long, default_value_t = 8)]
+    pub flicker_frames: u32,
+    /// A ground-truth EXR of the same scene, camera and size (`gi-lab reference`): adds
+    /// FLIP and RMSE of final.hdr against it.
+    #[arg(long)]
+    pub reference: Option<PathBuf>,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -292,6 +299,12 @@ pub struct BenchReport {
     pub frames: u32,
     pub passes: Vec<PassStats>,
     pub total_mean_ms: f64,
+    /// Temporal flicker of final.hdr with the animation paused and the camera still
+    /// (`metrics::flicker`); None when not measured.
+    pub flicker: Option<f64>,
+    /// Quality against `--reference`: mean FLIP (tone-mapped x/(1+x)) and RMSE (linear).
+    pub flip: Option<f64>,
+    pub rmse: Option<f64>,
 }
 
 /// Renders warm-up and measured frames and aggregates the per-pass times.
@@ -334,6 +347,9 @@ pub fn bench_run(r: &mut Renderer, frames: u32, scene_name: &str) -> BenchReport
         frames,
         total_mean_ms: passes.iter().map(|p| p.mean_ms).sum(),
         passes,
+        flicker: None,
+        flip: None,
+        rmse: None,
     }
 }
 
@@ -347,7 +363,46 @@ pub fn format_bench_table(b: &BenchReport) -> String {
         s += &format!("{:<16} {:>10.3} {:>10.3} {:>10.3}\n", p.pass, p.mean_ms, p.min_ms, p.max_ms);
     }
     s += &format!("{:<16} {:>10.3}\n", "total", b.total_mean_ms);
+    if let Some(f) = b.flicker {
+        s += &format!("flicker (static scene) {f:.6}\n");
+    }
+    if let (Some(flip), Some(rmse)) = (b.flip, b.rmse) {
+        s += &format!("quality vs reference: FLIP {flip:.4}, RMSE {rmse:.5}\n");
+    }
     s
+}
+
+/// Temporal flicker over `frames` frames with the animation paused (the clock restored).
+pub fn measure_flicker(r: &mut Renderer, frames: u32) -> Result<f64, CliError> {
+    let playing = r.clock.playing;
+    r.clock.playing = false;
+    let mut images = Vec::new();
+    for _ in 0..frames {
+        r.render_frame();
+        images.push(r.readback("final.hdr").map_err(|e| CliError::failure(e.to_string()))?);
+    }
+    r.clock.playing = playing;
+    gi_render::metrics::flicker(&images).map_err(|e| CliError::input(format!("--flicker-frames: {e}")))
+}
+
+/// FLIP (tone-mapped) and RMSE (linear) of the renderer's final.hdr against a reference.
+pub fn quality_against(r: &Renderer, reference: &Path) -> Result<(f64, f64), CliError> {
+    let (reference_img, _) = load_image(reference)?;
+    let hdr = r.readback("final.hdr").map_err(|e| CliError::failure(e.to_string()))?;
+    let err = |e: gi_render::metrics::MetricError| CliError::input(format!("--reference {}: {e}", reference.display()));
+    let rmse = gi_render::metrics::rmse(&hdr, &reference_img).map_err(err)?;
+    let (flip, _) = gi_render::metrics::flip(&hdr_display(&hdr), &hdr_display(&reference_img)).map_err(err)?;
+    Ok((flip, rmse))
+}
+
+/// The display image (x / (1 + x), sRGB) on which FLIP compares HDR images.
+fn hdr_display(i: &gi_render::ImageF32) -> gi_render::ImageF32 {
+    let ldr = gi_render::image_io::to_rgba8(i, gi_render::BufferKind::Hdr);
+    gi_render::ImageF32 {
+        width: i.width,
+        height: i.height,
+        data: ldr.pixels().map(|p| p.0.map(|x| x as f32 / 255.0)).collect(),
+    }
 }
 
 fn bench(args: &BenchArgs) -> Result<(), CliError> {
@@ -357,7 +412,18 @@ fn bench(args: &BenchArgs) -> Result<(), CliError> {
     let mut r = renderer(&args.scene, args.size)?;
     let name =
         args.scene.scene.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| "default Cornell box".into());
-    let report = bench_run(&mut r, args.frames, &name);
+    let mut report = bench_run(&mut r, args.frames, &name);
+    if args.flicker_frames == 1 {
+        return Err(CliError::input("--flicker-frames must be 0 or at least 2"));
+    }
+    if args.flicker_frames >= 2 {
+        report.flicker = Some(measure_flicker(&mut r, args.flicker_frames)?);
+    }
+    if let Some(reference) = &args.reference {
+        let (flip, rmse) = quality_against(&r, reference)?;
+        report.flip = Some(flip);
+        report.rmse = Some(rmse);
+    }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report).map_err(|e| CliError::failure(e.to_string()))?);
     } else {
@@ -398,18 +464,7 @@ pub fn compare_files(test: &Path, reference: &Path, flip_map: Option<&Path>) -> 
     let err = |e: metrics::MetricError| CliError::input(format!("{} vs {}: {e}", test.display(), reference.display()));
     let rmse = metrics::rmse(&t, &r).map_err(err)?;
     let rel_mse = metrics::rel_mse(&t, &r).map_err(err)?;
-    let display = |i: &gi_render::ImageF32| {
-        if hdr {
-            let ldr = gi_render::image_io::to_rgba8(i, gi_render::BufferKind::Hdr);
-            gi_render::ImageF32 {
-                width: i.width,
-                height: i.height,
-                data: ldr.pixels().map(|p| p.0.map(|x| x as f32 / 255.0)).collect(),
-            }
-        } else {
-            i.clone()
-        }
-    };
+    let display = |i: &gi_render::ImageF32| if hdr { hdr_display(i) } else { i.clone() };
     let (flip, map) = metrics::flip(&display(&t), &display(&r)).map_err(err)?;
     if let Some(path) = flip_map {
         let mut png = image::RgbaImage::new(map.width, map.height);

@@ -87,6 +87,19 @@ fn reference_path_traces_three_exr_files() {
         assert_eq!(img.dimensions(), (24, 16));
         assert!(img.pixels().any(|p| p.0[0] > 0.0), "{f} is black");
     }
+    // bench measures the renderer against it (same scene, camera and size).
+    let o = gi_lab()
+        .args(["bench", "--size", "24x16", "--frames", "1", "--json", "--reference"])
+        .arg(out.join("ref.direct.exr"))
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    let (flip, rmse) = (v["flip"].as_f64().expect("flip"), v["rmse"].as_f64().expect("rmse"));
+    // The GPU direct pass against path-traced direct light: close, but PCF and
+    // rasterisation are not exact.
+    assert!(flip > 0.0 && flip < 0.1, "FLIP vs path-traced direct light {flip}");
+    assert!(rmse > 0.0 && rmse < 0.1, "RMSE vs path-traced direct light {rmse}");
 }
 
 #[test]
@@ -128,6 +141,8 @@ fn buffers_lists_registered_names_and_bench_prints_every_pass() {
     let o = gi_lab().args(["bench", "--size", "64x64", "--frames", "2", "--json"]).output().expect("runs");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("bench --json prints JSON");
+    // The renderer has nothing stochastic yet: a paused scene does not flicker at all.
+    assert_eq!(v["flicker"], 0.0, "flicker of a static scene");
     let passes: Vec<&str> = v["passes"].as_array().expect("passes").iter().filter_map(|p| p["pass"].as_str()).collect();
     assert_eq!(passes, ["gbuffer", "direct.shadow", "direct", "compose", "compose.luminance", "compose.tonemap"]);
 }
