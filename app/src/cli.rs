@@ -147,8 +147,8 @@ pub struct BenchArgs {
     /// Frames of the paused scene over which temporal flicker is measured (0: skip).
     #[arg(long, default_value_t = 8)]
     pub flicker_frames: u32,
-    /// A ground-truth EXR of the same scene, camera and size (`gi-lab reference`): adds
-    /// FLIP and RMSE of final.hdr against it.
+    /// A ground-truth EXR of the same scene, camera and size at animation time 0 (`gi-lab
+    /// reference`): adds FLIP and RMSE of final.hdr at time 0 against it.
     #[arg(long)]
     pub reference: Option<PathBuf>,
     /// Print JSON instead of a table.
@@ -385,9 +385,16 @@ pub fn measure_flicker(r: &mut Renderer, frames: u32) -> Result<f64, CliError> {
     gi_render::metrics::flicker(&images).map_err(|e| CliError::input(format!("--flicker-frames: {e}")))
 }
 
-/// FLIP (tone-mapped) and RMSE (linear) of the renderer's final.hdr against a reference.
-pub fn quality_against(r: &Renderer, reference: &Path) -> Result<(f64, f64), CliError> {
+/// FLIP (tone-mapped) and RMSE (linear) of the renderer's final.hdr against a reference of
+/// the scene at animation time 0 (as `gi-lab reference` renders it): the clock is set back
+/// to 0 and paused for that frame.
+pub fn quality_against(r: &mut Renderer, reference: &Path) -> Result<(f64, f64), CliError> {
     let (reference_img, _) = load_image(reference)?;
+    let clock = r.clock;
+    r.clock.anim_frame = 0;
+    r.clock.playing = false;
+    r.render_frame();
+    r.clock = clock;
     let hdr = r.readback("final.hdr").map_err(|e| CliError::failure(e.to_string()))?;
     let err = |e: gi_render::metrics::MetricError| CliError::input(format!("--reference {}: {e}", reference.display()));
     let rmse = gi_render::metrics::rmse(&hdr, &reference_img).map_err(err)?;
@@ -420,7 +427,7 @@ fn bench(args: &BenchArgs) -> Result<(), CliError> {
         report.flicker = Some(measure_flicker(&mut r, args.flicker_frames)?);
     }
     if let Some(reference) = &args.reference {
-        let (flip, rmse) = quality_against(&r, reference)?;
+        let (flip, rmse) = quality_against(&mut r, reference)?;
         report.flip = Some(flip);
         report.rmse = Some(rmse);
     }

@@ -98,8 +98,8 @@ fn reference_path_traces_three_exr_files() {
     let (flip, rmse) = (v["flip"].as_f64().expect("flip"), v["rmse"].as_f64().expect("rmse"));
     // The GPU direct pass against path-traced direct light: close, but PCF and
     // rasterisation are not exact.
-    assert!(flip > 0.0 && flip < 0.1, "FLIP vs path-traced direct light {flip}");
-    assert!(rmse > 0.0 && rmse < 0.1, "RMSE vs path-traced direct light {rmse}");
+    assert!(flip > 0.0 && flip < 0.05, "FLIP vs path-traced direct light {flip}");
+    assert!(rmse > 0.0 && rmse < 0.05, "RMSE vs path-traced direct light {rmse}");
 }
 
 #[test]
