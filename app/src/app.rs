@@ -64,6 +64,8 @@ pub struct GiLabApp {
 
 struct Viewer {
     renderer: Renderer,
+    /// The last uncaptured GPU error, if any.
+    gpu_error: Arc<Mutex<Option<String>>>,
     render_state: egui_wgpu::RenderState,
     texture: Option<(egui::TextureId, (u32, u32))>,
     settings: LabSettings,
@@ -152,6 +154,17 @@ fn save_color_image(path: &PathBuf, img: &egui::ColorImage) {
 impl Viewer {
     fn new(cc: &eframe::CreationContext<'_>, args: &AppArgs) -> Result<Self, String> {
         let rs = cc.wgpu_render_state.clone().ok_or("eframe did not start its wgpu renderer")?;
+        // A GPU error caused by a setting (say, out of memory for a huge shadow map) must not
+        // take the lab down with it: it is logged and shown in the status bar instead of
+        // wgpu's default panic. Headless runs and tests keep the panic.
+        let gpu_error = Arc::new(Mutex::new(None::<String>));
+        let sink = gpu_error.clone();
+        rs.device.on_uncaptured_error(Arc::new(move |e| {
+            log::error!("GPU error: {e}");
+            if let Ok(mut s) = sink.lock() {
+                *s = Some(e.to_string());
+            }
+        }));
         let ctx =
             GpuContext::adopt(rs.device.clone(), rs.queue.clone(), rs.adapter.get_info()).map_err(|e| e.to_string())?;
         let scene = crate::cli::load_scene(&args.scene).map_err(|e| e.message)?;
@@ -169,6 +182,7 @@ impl Viewer {
             .unwrap_or_else(|| "default".into());
         Ok(Self {
             renderer,
+            gpu_error,
             render_state: rs,
             texture: None,
             settings,
@@ -457,6 +471,10 @@ impl eframe::App for GiLabApp {
                     ));
                     ui.separator();
                     ui.label(format!("preset: {}", v.preset_name));
+                    if let Some(e) = v.gpu_error.lock().ok().and_then(|e| e.clone()) {
+                        ui.separator();
+                        ui.colored_label(egui::Color32::from_rgb(255, 120, 80), "GPU error").on_hover_text(e);
+                    }
                 }
                 Err(e) => {
                     ui.colored_label(egui::Color32::from_rgb(255, 120, 80), "renderer unavailable");

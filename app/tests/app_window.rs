@@ -23,6 +23,8 @@ fn app_under_xvfb_renders_a_non_uniform_screenshot() {
         .expect("xvfb-run starts");
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "the app failed: {err}");
+    // The window logs GPU errors instead of panicking on them; none may occur.
+    assert!(!err.contains("GPU error"), "the app hit a GPU error: {err}");
     let img = image::open(&shot)
         .unwrap_or_else(|e| panic!("no screenshot at {}: {e}; stderr: {err}", shot.display()))
         .to_rgba8();
