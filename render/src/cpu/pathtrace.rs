@@ -23,6 +23,10 @@ use crate::cpu::brdf;
 use crate::cpu::raycast::{moller_trumbore, primary_ray};
 use crate::scene::{Material, Scene, WorldLight};
 
+/// Version of the estimator: bump it whenever a change alters the images (references
+/// stored under `tests/data/` record the version they were made with).
+pub const PATH_TRACER_VERSION: u32 = 1;
+
 /// Settings of a path-traced render.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PtSettings {
