@@ -398,18 +398,12 @@ pub fn quality_against(r: &mut Renderer, reference: &Path) -> Result<(f64, f64),
     let hdr = r.readback("final.hdr").map_err(|e| CliError::failure(e.to_string()))?;
     let err = |e: gi_render::metrics::MetricError| CliError::input(format!("--reference {}: {e}", reference.display()));
     let rmse = gi_render::metrics::rmse(&hdr, &reference_img).map_err(err)?;
-    let (flip, _) = gi_render::metrics::flip(&hdr_display(&hdr), &hdr_display(&reference_img)).map_err(err)?;
+    let (flip, _) = gi_render::metrics::flip(
+        &gi_render::image_io::hdr_display(&hdr),
+        &gi_render::image_io::hdr_display(&reference_img),
+    )
+    .map_err(err)?;
     Ok((flip, rmse))
-}
-
-/// The display image (x / (1 + x), sRGB) on which FLIP compares HDR images.
-fn hdr_display(i: &gi_render::ImageF32) -> gi_render::ImageF32 {
-    let ldr = gi_render::image_io::to_rgba8(i, gi_render::BufferKind::Hdr);
-    gi_render::ImageF32 {
-        width: i.width,
-        height: i.height,
-        data: ldr.pixels().map(|p| p.0.map(|x| x as f32 / 255.0)).collect(),
-    }
 }
 
 fn bench(args: &BenchArgs) -> Result<(), CliError> {
@@ -471,7 +465,7 @@ pub fn compare_files(test: &Path, reference: &Path, flip_map: Option<&Path>) -> 
     let err = |e: metrics::MetricError| CliError::input(format!("{} vs {}: {e}", test.display(), reference.display()));
     let rmse = metrics::rmse(&t, &r).map_err(err)?;
     let rel_mse = metrics::rel_mse(&t, &r).map_err(err)?;
-    let display = |i: &gi_render::ImageF32| if hdr { hdr_display(i) } else { i.clone() };
+    let display = |i: &gi_render::ImageF32| if hdr { gi_render::image_io::hdr_display(i) } else { i.clone() };
     let (flip, map) = metrics::flip(&display(&t), &display(&r)).map_err(err)?;
     if let Some(path) = flip_map {
         let mut png = image::RgbaImage::new(map.width, map.height);

@@ -78,6 +78,18 @@ pub fn to_rgba8(img: &ImageF32, kind: BufferKind) -> image::RgbaImage {
     out
 }
 
+/// The display image on which HDR images are compared (FLIP, the CLI, the tests): each
+/// channel tone-mapped by x / (1 + x), sRGB-encoded and quantised to 8 bits, as values in
+/// [0, 1] — the same mapping as the PNG of an HDR buffer.
+pub fn hdr_display(img: &ImageF32) -> ImageF32 {
+    let ldr = to_rgba8(img, BufferKind::Hdr);
+    ImageF32 {
+        width: img.width,
+        height: img.height,
+        data: ldr.pixels().map(|p| p.0.map(|x| x as f32 / 255.0)).collect(),
+    }
+}
+
 pub fn save_png(path: &Path, img: &ImageF32, kind: BufferKind) -> Result<(), image::ImageError> {
     to_rgba8(img, kind).save_with_format(path, image::ImageFormat::Png)
 }

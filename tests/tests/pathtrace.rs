@@ -3,8 +3,8 @@
 
 use gi_lab_tests::{default_renderer, default_scene};
 use gi_render::cpu::pathtrace::{Accumulator, PathTracer, PtSettings};
+use gi_render::image_io::hdr_display;
 use gi_render::scene::{Material, Mesh, Node, Primitive, Scene, Transform, vertex};
-use gi_render::{BufferKind, ImageF32};
 use glam::{Vec2, Vec3, Vec4};
 
 /// A closed cube [−1, 1]³ whose faces look inward, all of one material.
@@ -71,16 +71,6 @@ fn white_furnace_converges_to_le_over_one_minus_rho() {
     assert!(img.direct.data.iter().all(|p| (p[0] - le).abs() < 1e-6));
 }
 
-/// A display image (x / (1 + x), sRGB) of HDR radiance, as the FLIP comparisons use.
-fn display(img: &ImageF32) -> ImageF32 {
-    let ldr = gi_render::image_io::to_rgba8(img, BufferKind::Hdr);
-    ImageF32 {
-        width: img.width,
-        height: img.height,
-        data: ldr.pixels().map(|p| p.0.map(|x| x as f32 / 255.0)).collect(),
-    }
-}
-
 #[test]
 fn path_traced_direct_light_agrees_with_the_gpu_direct_pass() {
     let mut r = default_renderer(128, 128);
@@ -88,7 +78,7 @@ fn path_traced_direct_light_agrees_with_the_gpu_direct_pass() {
     let gpu = r.readback("direct.radiance").expect("radiance");
     let pt = PathTracer::new(r.scene(), 0.0);
     let img = pt.render(r.view_proj(), r.camera.position, 128, 128, PtSettings { bounces: 0, spp: 1, seed: 1 });
-    let (flip, _) = gi_render::metrics::flip(&display(&gpu), &display(&img.direct)).expect("flip");
+    let (flip, _) = gi_render::metrics::flip(&hdr_display(&gpu), &hdr_display(&img.direct)).expect("flip");
     println!("mean FLIP, GPU direct vs path-traced direct at 128×128: {flip:.4}");
     assert!(flip <= 0.02, "mean FLIP {flip} > 0.02");
 }

@@ -6,8 +6,9 @@
 use std::path::{Path, PathBuf};
 
 use gi_lab_tests::default_renderer;
+use gi_render::ImageF32;
 use gi_render::cpu::pathtrace::{PATH_TRACER_VERSION, PathTracer, PtSettings};
-use gi_render::{BufferKind, ImageF32};
+use gi_render::image_io::hdr_display;
 
 /// One stored reference: what was rendered, and from what.
 struct Reference {
@@ -76,21 +77,13 @@ fn load(file: &str) -> ImageF32 {
     gi_render::image_io::load_float_image(&data_dir().join(file)).unwrap_or_else(|e| panic!("tests/data/{file}: {e}"))
 }
 
-fn display(img: &ImageF32) -> ImageF32 {
-    let ldr = gi_render::image_io::to_rgba8(img, BufferKind::Hdr);
-    ImageF32 {
-        width: img.width,
-        height: img.height,
-        data: ldr.pixels().map(|p| p.0.map(|x| x as f32 / 255.0)).collect(),
-    }
-}
-
 #[test]
 fn gpu_direct_light_matches_the_stored_direct_reference() {
     let mut r = default_renderer(64, 64);
     r.render_frame();
     let gpu = r.readback("direct.radiance").expect("radiance");
-    let (flip, _) = gi_render::metrics::flip(&display(&gpu), &display(&load("cornell_direct_64.exr"))).expect("flip");
+    let (flip, _) =
+        gi_render::metrics::flip(&hdr_display(&gpu), &hdr_display(&load("cornell_direct_64.exr"))).expect("flip");
     println!("FLIP GPU direct vs stored path-traced direct (64×64): {flip:.4}");
     assert!(flip <= 0.02, "mean FLIP {flip} > 0.02");
 }
@@ -105,6 +98,6 @@ fn the_one_bounce_reference_has_indirect_light_the_gpu_lacks_today() {
     let reference = load("cornell_1bounce_64.exr");
     let lum = |i: &ImageF32| i.data.iter().map(|p| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]).sum::<f32>();
     assert!(lum(&reference) > 1.2 * lum(&gpu), "one bounce adds light: {} vs {}", lum(&reference), lum(&gpu));
-    let (flip, _) = gi_render::metrics::flip(&display(&gpu), &display(&reference)).expect("flip");
+    let (flip, _) = gi_render::metrics::flip(&hdr_display(&gpu), &hdr_display(&reference)).expect("flip");
     println!("FLIP GPU (direct only) vs stored one-bounce reference (64×64): {flip:.4}");
 }
