@@ -269,6 +269,18 @@ impl Viewer {
         egui::CollapsingHeader::new("2 · Direct light").default_open(true).show(ui, |ui| {
             crate::settings_ui::direct_settings_ui(&mut self.settings.direct, ui);
         });
+        egui::CollapsingHeader::new("3–6 · Indirect light").default_open(true).show(ui, |ui| {
+            crate::settings_ui::indirect_settings_ui(&mut self.settings.indirect, ui);
+            if let Some((done, target)) = self.renderer.reference_progress() {
+                ui.add(
+                    egui::ProgressBar::new(done as f32 / target.max(1) as f32)
+                        .text(format!("{done} / {target} VPLs accumulated")),
+                );
+            }
+        });
+        egui::CollapsingHeader::new("Exact-VPL reference").default_open(false).show(ui, |ui| {
+            crate::settings_ui::reference_settings_ui(&mut self.settings.reference, ui);
+        });
         egui::CollapsingHeader::new("7 · Tone mapping").default_open(true).show(ui, |ui| {
             crate::settings_ui::tonemap_settings_ui(&mut self.settings.tonemap, ui);
         });

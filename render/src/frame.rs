@@ -4,7 +4,10 @@
 //! |---|---|---|
 //! | 1. G-buffer | `passes::gbuffer` | position, normal, albedo, material, depth, movement buffer |
 //! | 2. Direct light | `passes::shadow`, `passes::direct` | shadow maps, direct radiance |
-//! | 3–6 | VPLs, visibility, shading points, gather | later issues (#5, #6); the compose pass takes their indirect light |
+//! | 3. VPLs | `passes::vpl` | exact-VPL reference: light G-buffer of one light view per frame, VPLs by uniform sampling (importance warping: #5) |
+//! | 4. VPL visibility | `passes::vpl_visibility` | exact-VPL reference: five exact depth faces per VPL (ISMs: #5) |
+//! | 5. Shading points | — | every pixel (interleaving and HCB samples: #5, #6) |
+//! | 6. Gather | `passes::vpl_gather` | exact-VPL reference: full-BRDF gather, progressive average over frames |
 //! | 7. Temporal + compose | `passes::compose` | final.hdr, log-average luminance, Reinhard tone mapping to final.ldr |
 
 use glam::{Mat4, Vec4};
@@ -13,10 +16,14 @@ use crate::buffers::{BufferError, BufferRegistry, ImageF32};
 use crate::camera::Camera;
 use crate::clock::Clock;
 use crate::gpu::GpuContext;
+use crate::lab_settings::IndirectTechnique;
 use crate::passes::compose::ComposePass;
 use crate::passes::direct::DirectPass;
 use crate::passes::gbuffer::GBufferPass;
-use crate::passes::shadow::{ShadowPass, setup_lights};
+use crate::passes::shadow::{ShadowPass, gpu_light, light_views, setup_lights};
+use crate::passes::vpl::{BatchView, VplSamplePass, halton};
+use crate::passes::vpl_gather::{GatherParams, VplGatherPass};
+use crate::passes::vpl_visibility::{AtlasLayout, VisibilityParams, VplVisibilityPass};
 use crate::passes::{CameraUniform, bgl};
 use crate::scene::upload::GpuScene;
 use crate::scene::{Aabb, Scene};
@@ -35,6 +42,22 @@ pub enum RenderError {
         "a shadow map of {size}×{size} with {layers} layers exceeds this device (max {max_dim}² texels, {max_layers} layers); the largest valid size is {largest}"
     )]
     ShadowMapTooLarge { size: u32, layers: u32, max_dim: u32, max_layers: u32, largest: u32 },
+    #[error(
+        "the exact-VPL visibility atlas for {vpls} VPLs per frame with {size}² faces needs {width}×{height} texels; this device allows {max_dim}²: at {size}² at most {largest} VPLs per frame fit"
+    )]
+    VplAtlasTooLarge { vpls: u32, size: u32, width: u64, height: u64, max_dim: u32, largest: u32 },
+}
+
+/// The exact-VPL reference's passes and its progress (created when first selected).
+struct ExactVpl {
+    sample: VplSamplePass,
+    visibility: VplVisibilityPass,
+    gather: VplGatherPass,
+    /// Batches accumulated since the last reset.
+    batches: u32,
+    /// What the accumulated image depends on (camera, lights, transforms, size); a change
+    /// restarts the accumulation.
+    fingerprint: Vec<f32>,
 }
 
 /// What the previous frame used, for the movement buffer (Knecht 002 §3.5.1).
@@ -63,6 +86,7 @@ pub struct Renderer {
     registry: BufferRegistry,
     timer: GpuTimer,
     prev: Option<PrevFrame>,
+    exact_vpl: Option<ExactVpl>,
     /// Interactive mode (the app): timings are collected without waiting for the GPU.
     interactive: bool,
 }
@@ -82,6 +106,7 @@ impl Renderer {
         if !errors.is_empty() {
             return Err(RenderError::Settings(errors));
         }
+        check_vpl_atlas(&ctx, &settings)?;
         let bounds = scene.bounds(0.0);
         let camera = default_camera(&scene, bounds, width as f32 / height as f32);
         let gpu_scene = GpuScene::new(&ctx, &scene);
@@ -121,6 +146,7 @@ impl Renderer {
             registry: BufferRegistry::default(),
             timer,
             prev: None,
+            exact_vpl: None,
             interactive: false,
         };
         r.register_all();
@@ -132,6 +158,11 @@ impl Renderer {
         self.shadow.register(&mut self.registry);
         self.direct.register(&mut self.registry);
         self.compose.register(&mut self.registry);
+        if let Some(x) = &self.exact_vpl {
+            x.sample.light_gbuffer.register(&mut self.registry);
+            x.visibility.register(&mut self.registry);
+            x.gather.register(&mut self.registry);
+        }
     }
 
     pub fn size(&self) -> (u32, u32) {
@@ -164,6 +195,7 @@ impl Renderer {
             return Err(RenderError::Settings(errors));
         }
         self.check_shadow_map(&settings)?;
+        check_vpl_atlas(&self.ctx, &settings)?;
         let reset = self.settings.history_invalidated_by(&settings);
         self.clock.time_step_s = settings.animation.time_step_s as f64;
         self.settings = settings;
@@ -177,6 +209,20 @@ impl Renderer {
     /// temporal techniques' history later).
     pub fn reset_history(&mut self) {
         self.prev = None;
+        if let Some(x) = &mut self.exact_vpl {
+            x.batches = 0;
+        }
+    }
+
+    /// The exact-VPL reference's progress: (VPLs accumulated, VPLs at which it stops), when
+    /// it is the indirect technique.
+    pub fn reference_progress(&self) -> Option<(u32, u32)> {
+        if self.settings.indirect.technique != IndirectTechnique::ExactVpl {
+            return None;
+        }
+        let rs = &self.settings.reference;
+        let done = self.exact_vpl.as_ref().map_or(0, |x| x.batches.saturating_mul(rs.vpls_per_frame));
+        Some((done.min(rs.total_vpls), rs.total_vpls))
     }
 
     /// Resizes every screen-sized target. Zero or too large sizes are refused and change
@@ -191,6 +237,10 @@ impl Renderer {
         self.gbuffer.resize(&self.ctx, width, height);
         self.direct.resize(&self.ctx, width, height);
         self.compose.resize(&self.ctx, width, height);
+        if let Some(x) = &mut self.exact_vpl {
+            x.gather.resize(&self.ctx, width, height);
+            x.batches = 0;
+        }
         self.register_all();
         Ok(())
     }
@@ -276,12 +326,18 @@ impl Renderer {
             direct.run(&ctx, e, slot, &ds, camera_buffer, gviews, &lights, shadow_view)
         });
 
-        // Stages 3–6 (VPLs, visibility, shading points, gather) arrive with #5 and #6.
+        // Stages 3–6: indirect light.
+        let indirect = match self.settings.indirect.technique {
+            IndirectTechnique::None => None,
+            IndirectTechnique::ExactVpl => Some(self.exact_vpl_frame(&mut enc, &state, view_proj)),
+        };
 
         // Stage 7: compose and tone map.
         let radiance_view = crate::passes::view(&self.direct.radiance, "direct.radiance");
         let (compose, ts) = (&self.compose, &self.settings.tonemap);
-        self.timer.scope(&ctx, &mut enc, "compose", |e, slot| compose.compose(&ctx, e, slot, &radiance_view, None));
+        self.timer.scope(&ctx, &mut enc, "compose", |e, slot| {
+            compose.compose(&ctx, e, slot, &radiance_view, indirect.as_ref())
+        });
         self.timer.scope(&ctx, &mut enc, "compose.luminance", |e, slot| compose.luminance(&ctx, e, slot, ts));
         self.timer.scope(&ctx, &mut enc, "compose.tonemap", |e, slot| compose.tonemap(&ctx, e, slot, ts));
 
@@ -292,6 +348,94 @@ impl Renderer {
         self.prev = Some(PrevFrame { view_proj, models: state.draws.iter().map(|d| d.world).collect() });
         self.clock.tick();
         timings
+    }
+
+    /// Stages 3, 4 and 6 of the exact-VPL reference: one batch of VPLs from one light view,
+    /// their exact visibility, and the gather folded into the running average. Returns the
+    /// averaged indirect light. Once `total_vpls` are in, the average is kept as it is.
+    fn exact_vpl_frame(
+        &mut self,
+        enc: &mut wgpu::CommandEncoder,
+        state: &crate::scene::SceneState,
+        view_proj: Mat4,
+    ) -> wgpu::TextureView {
+        let ctx = self.ctx.clone();
+        let rs = self.settings.reference.clone();
+        let n = rs.vpls_per_frame;
+        let x = self.exact_vpl.get_or_insert_with(|| ExactVpl {
+            sample: VplSamplePass::new(&ctx, &self.gpu_scene, rs.light_gbuffer_size, n),
+            visibility: VplVisibilityPass::new(&ctx, &self.gpu_scene),
+            gather: VplGatherPass::new(&ctx, bgl::uniform(0, wgpu::ShaderStages::COMPUTE), self.width, self.height),
+            batches: 0,
+            fingerprint: Vec::new(),
+        });
+        let mut fresh = x.sample.ensure(&ctx, rs.light_gbuffer_size, n);
+        fresh |= x.visibility.ensure(&ctx, n, rs.shadow_map_size);
+        if fresh || self.registry.get("indirect.accum").is_err() {
+            self.register_all();
+        }
+        let Some(x) = self.exact_vpl.as_mut() else { unreachable!("inserted above") };
+
+        // Restart when anything the image depends on changed.
+        let lights: Vec<_> = state.lights.iter().map(gpu_light).collect();
+        let mut fingerprint: Vec<f32> = view_proj.to_cols_array().to_vec();
+        fingerprint.extend(lights.iter().flat_map(|l| bytemuck::cast::<_, [f32; 20]>(*l)));
+        fingerprint.extend(state.draws.iter().flat_map(|d| d.world.to_cols_array()));
+        if fingerprint != x.fingerprint {
+            x.fingerprint = fingerprint;
+            x.batches = 0;
+        }
+        let accum = crate::passes::view(&x.gather.accum, "indirect.accum");
+        let target = rs.total_vpls.div_ceil(n);
+        if x.batches >= target || lights.is_empty() {
+            return accum;
+        }
+
+        // The views of all lights, taken in turn; each batch stands for all V of them.
+        let views: Vec<BatchView> = state
+            .lights
+            .iter()
+            .enumerate()
+            .flat_map(|(i, wl)| light_views(wl, self.bounds).into_iter().map(move |v| (i, v)))
+            .map(|(i, view)| BatchView { light_index: i as u32, view, view_count: 0 })
+            .collect();
+        let v_count = views.len() as u32;
+        let batch = BatchView { view_count: v_count, ..views[(x.batches % v_count) as usize] };
+        let k = x.batches;
+        let jitter = (halton(k / v_count + 1, 2) - 0.5, halton(k / v_count + 1, 3) - 0.5);
+        let size = rs.light_gbuffer_size as f32;
+        let flux_scale = size * size * v_count as f32 / n as f32 * self.settings.direct.intensity_scale;
+        let r = self.bounds.radius().max(1e-3);
+        let (near, far) = ((r * 1e-3).max(1e-5), 2.2 * r);
+        let clip = glam::Vec4::new(near, far, 2.0 * near, rs.min_distance_m);
+
+        let (gpu_scene, timer) = (&self.gpu_scene, &mut self.timer);
+        let sample = &mut x.sample;
+        timer.scope(&ctx, enc, "vpl.light_gbuffer", |e, slot| {
+            sample.render_view(&ctx, e, slot, gpu_scene, state, &batch.view, jitter)
+        });
+        timer.scope(&ctx, enc, "vpl.sample", |e, slot| {
+            sample.sample(&ctx, e, slot, &lights, batch, n, flux_scale, [rs.seed, k])
+        });
+        let (visibility, vpl_list) = (&x.visibility, &x.sample.vpls);
+        if rs.visibility {
+            timer.scope(&ctx, enc, "vpl.shadow", |e, slot| {
+                visibility.run(&ctx, e, slot, gpu_scene, state, vpl_list, n, VisibilityParams { clip })
+            });
+        }
+        let l = visibility.layout_info;
+        let params = GatherParams {
+            batch: glam::Vec4::new(n as f32, l.cols as f32, l.size as f32, 1.0 / (k + 1) as f32),
+            clip,
+            bias: glam::Vec4::new(rs.depth_bias, rs.normal_offset, if rs.visibility { 1.0 } else { 0.0 }, 0.0),
+        };
+        let (gather, camera, gviews, atlas) =
+            (&x.gather, &self.camera_buffer, &self.gbuffer.targets.views, &visibility.atlas_view);
+        timer.scope(&ctx, enc, "indirect.gather", |e, slot| {
+            gather.run(&ctx, e, slot, camera, gviews, vpl_list, atlas, params)
+        });
+        x.batches += 1;
+        accum
     }
 
     /// Timings of the last frame.
@@ -321,6 +465,27 @@ impl Renderer {
     pub fn view_proj(&self) -> Mat4 {
         self.camera.view_proj(self.width as f32 / self.height as f32)
     }
+}
+
+/// Refuses an exact-VPL atlas larger than the device allows, naming the largest batch that fits.
+fn check_vpl_atlas(ctx: &GpuContext, settings: &LabSettings) -> Result<(), RenderError> {
+    if settings.indirect.technique != IndirectTechnique::ExactVpl {
+        return Ok(());
+    }
+    let rs = &settings.reference;
+    let l = AtlasLayout::new(rs.vpls_per_frame, rs.shadow_map_size);
+    let max_dim = ctx.limits.max_texture_dimension_2d;
+    if l.fits(max_dim) {
+        return Ok(());
+    }
+    Err(RenderError::VplAtlasTooLarge {
+        vpls: rs.vpls_per_frame,
+        size: rs.shadow_map_size,
+        width: l.width(),
+        height: l.height(),
+        max_dim,
+        largest: AtlasLayout::largest_batch(rs.shadow_map_size, max_dim),
+    })
 }
 
 fn check_size(ctx: &GpuContext, width: u32, height: u32) -> Result<(), RenderError> {

@@ -8,8 +8,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::passes::compose::TonemapSettings;
 use crate::passes::direct::DirectSettings;
+use crate::passes::vpl::ReferenceSettings;
 use crate::settings::{FieldError, FieldMeta, PRESET_VERSION, PresetError, SettingsGroup, Value};
-use crate::settings_group;
+use crate::{settings_enum, settings_group};
 
 settings_group! {
     /// The deterministic clock (see `clock.rs`).
@@ -17,6 +18,28 @@ settings_group! {
         /// Fixed time step of one frame; animation time = animated frames × step.
         time_step_s: f32 = 1.0 / 60.0,
         unit "s", symbol "Δt", range 0.001..=1.0, cost "free", history true;
+    }
+}
+
+settings_enum! {
+    /// How stages 3–6 compute indirect light (DESIGN.md's pipeline table). The techniques of
+    /// issues #5 and #6 add their choices here.
+    pub enum IndirectTechnique {
+        /// No indirect light: the image is the direct light.
+        None = "none (direct light only)",
+        /// Many VPLs with exact visibility maps, accumulated over frames: the reference the
+        /// techniques are measured against (Knecht 002 §5.2).
+        ExactVpl = "exact-VPL reference",
+    }
+    default None
+}
+
+settings_group! {
+    /// Indirect light (stages 3–6): which technique computes it.
+    pub struct IndirectSettings: "indirect" {
+        /// The technique of stages 3–6.
+        technique: IndirectTechnique = IndirectTechnique::None,
+        unit "", symbol "", range 0..=1, cost "see the technique's own settings", history true;
     }
 }
 
@@ -28,6 +51,8 @@ pub struct LabSettings {
     pub version: u32,
     pub animation: AnimationSettings,
     pub direct: DirectSettings,
+    pub indirect: IndirectSettings,
+    pub reference: ReferenceSettings,
     pub tonemap: TonemapSettings,
 }
 
@@ -37,6 +62,8 @@ impl Default for LabSettings {
             version: PRESET_VERSION,
             animation: Default::default(),
             direct: Default::default(),
+            indirect: Default::default(),
+            reference: Default::default(),
             tonemap: Default::default(),
         }
     }
@@ -47,6 +74,8 @@ macro_rules! for_each_group {
     ($m:ident) => {
         $m!(animation, AnimationSettings);
         $m!(direct, DirectSettings);
+        $m!(indirect, IndirectSettings);
+        $m!(reference, ReferenceSettings);
         $m!(tonemap, TonemapSettings);
     };
 }

@@ -9,7 +9,7 @@ pub mod cpu;
 pub mod frame;
 pub mod gpu;
 pub mod image_io;
-mod lab_settings;
+pub mod lab_settings;
 pub mod metrics;
 pub mod passes;
 pub mod scene;

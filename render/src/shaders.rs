@@ -18,6 +18,10 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("compose/luminance.wgsl", include_str!("../../shaders/compose/luminance.wgsl")),
     ("compose/compose.wgsl", include_str!("../../shaders/compose/compose.wgsl")),
     ("compose/tonemap.wgsl", include_str!("../../shaders/compose/tonemap.wgsl")),
+    ("common/vpl.wgsl", include_str!("../../shaders/common/vpl.wgsl")),
+    ("vpl/sample.wgsl", include_str!("../../shaders/vpl/sample.wgsl")),
+    ("vpl/shadow.wgsl", include_str!("../../shaders/vpl/shadow.wgsl")),
+    ("vpl/gather.wgsl", include_str!("../../shaders/vpl/gather.wgsl")),
 ];
 
 /// Files that are entry modules (not only imported).
@@ -28,6 +32,9 @@ pub const ENTRY_MODULES: &[&str] = &[
     "compose/luminance.wgsl",
     "compose/compose.wgsl",
     "compose/tonemap.wgsl",
+    "vpl/sample.wgsl",
+    "vpl/shadow.wgsl",
+    "vpl/gather.wgsl",
 ];
 
 #[derive(Debug, thiserror::Error, PartialEq)]

@@ -79,4 +79,14 @@ fn uniform_sizes_match_wgsl() {
     assert_eq!(struct_size(&t, "Params") as usize, std::mem::size_of::<ToneParams>());
     let s = parse("shadow/shadow.wgsl");
     assert_eq!(struct_size(&s, "Instance") as usize, std::mem::size_of::<InstanceUniform>());
+    use gi_render::passes::{vpl, vpl_gather, vpl_visibility};
+    let vs = parse("vpl/sample.wgsl");
+    assert_eq!(struct_size(&vs, "Vpl") as usize, std::mem::size_of::<vpl::GpuVpl>());
+    assert_eq!(struct_size(&vs, "Params") as usize, std::mem::size_of::<vpl::SampleParams>());
+    let vv = parse("vpl/shadow.wgsl");
+    assert_eq!(struct_size(&vv, "Params") as usize, std::mem::size_of::<vpl_visibility::VisibilityParams>());
+    assert_eq!(struct_size(&vv, "Instance") as usize, std::mem::size_of::<InstanceUniform>());
+    let vg = parse("vpl/gather.wgsl");
+    assert_eq!(struct_size(&vg, "Params") as usize, std::mem::size_of::<vpl_gather::GatherParams>());
+    assert_eq!(struct_size(&vg, "Camera") as usize, std::mem::size_of::<CameraUniform>());
 }

@@ -44,6 +44,9 @@ pub struct GBufferViews {
 }
 
 pub struct GBufferPass {
+    /// Name prefix of every label and registered buffer: `gbuffer` for the camera,
+    /// `vpl.light_gbuffer` for the light's view (Knecht 002 §4.3).
+    name: &'static str,
     single_sided: wgpu::RenderPipeline,
     double_sided: wgpu::RenderPipeline,
     pub camera_layout: wgpu::BindGroupLayout,
@@ -52,21 +55,27 @@ pub struct GBufferPass {
 
 impl GBufferPass {
     pub fn new(ctx: &GpuContext, scene: &GpuScene, width: u32, height: u32) -> Self {
+        Self::named(ctx, scene, width, height, "gbuffer")
+    }
+
+    /// The same pass under another name: the light G-buffer of stage 3 is this G-buffer
+    /// rendered from a light's view (Knecht 002 §4.3 renders the same attributes).
+    pub fn named(ctx: &GpuContext, scene: &GpuScene, width: u32, height: u32, name: &'static str) -> Self {
         let device = &ctx.device;
         let module = crate::shaders::create_module(device, "gbuffer/gbuffer.wgsl");
         let camera_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("gbuffer.camera"),
+            label: Some(&format!("{name}.camera")),
             entries: &[super::bgl::uniform(0, wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE)],
         });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("gbuffer.layout"),
+            label: Some(&format!("{name}.layout")),
             bind_group_layouts: &[Some(&camera_layout), Some(&scene.instance_layout), Some(&scene.material_layout)],
             immediate_size: 0,
         });
         let pipelines =
-            [Some(wgpu::Face::Back), None].map(|cull_mode| Self::pipeline(device, &layout, &module, cull_mode));
+            [Some(wgpu::Face::Back), None].map(|cull_mode| Self::pipeline(device, &layout, &module, cull_mode, name));
         let [single_sided, double_sided] = pipelines;
-        Self { single_sided, double_sided, camera_layout, targets: create_targets(ctx, width, height) }
+        Self { name, single_sided, double_sided, camera_layout, targets: create_targets(ctx, width, height, name) }
     }
 
     fn pipeline(
@@ -74,13 +83,14 @@ impl GBufferPass {
         layout: &wgpu::PipelineLayout,
         module: &wgpu::ShaderModule,
         cull_mode: Option<wgpu::Face>,
+        name: &str,
     ) -> wgpu::RenderPipeline {
         let target = |format| Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL });
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(if cull_mode.is_some() {
-                "gbuffer.pipeline_single_sided"
+            label: Some(&if cull_mode.is_some() {
+                format!("{name}.pipeline_single_sided")
             } else {
-                "gbuffer.pipeline_double_sided"
+                format!("{name}.pipeline_double_sided")
             }),
             layout: Some(layout),
             vertex: wgpu::VertexState {
@@ -124,35 +134,42 @@ impl GBufferPass {
 
     /// Recreates the targets for a new size.
     pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) {
-        self.targets = create_targets(ctx, width, height);
+        self.targets = create_targets(ctx, width, height, self.name);
     }
 
     pub fn register(&self, reg: &mut BufferRegistry) {
         let t = &self.targets;
+        let name = self.name;
+        let camera = name == "gbuffer";
         reg.register(
-            "gbuffer.position",
+            &format!("{name}.position"),
             BufferKind::Data,
             "world-space position (xyz) and linear view depth (w), scene units",
             &t.position,
         );
         reg.register(
-            "gbuffer.normal",
+            &format!("{name}.normal"),
             BufferKind::Direction,
             "world-space unit normal (xyz), w = 1 where geometry covers the pixel",
             &t.normal,
         );
         reg.register(
-            "gbuffer.albedo",
+            &format!("{name}.albedo"),
             BufferKind::Albedo,
             "linear surface colour c (rgb) and diffuse intensity DI (a), Knecht §4.2",
             &t.albedo,
         );
         reg.register(
-            "gbuffer.material",
+            &format!("{name}.material"),
             BufferKind::Data,
             "specular intensity SI (r), specular power SP (g), metallic (b), roughness (a)",
             &t.material,
         );
+        if !camera {
+            // The light's view has no previous frame and no viewer for emission.
+            reg.register(&format!("{name}.depth"), BufferKind::Depth, "hardware depth in [0, 1]", &t.depth);
+            return;
+        }
         reg.register(
             "gbuffer.motion",
             BufferKind::Motion,
@@ -189,7 +206,7 @@ impl GBufferPass {
             })
         };
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("gbuffer.pass"),
+            label: Some(&format!("{}.pass", self.name)),
             color_attachments: &[
                 clear(&v.position),
                 clear(&v.normal),
@@ -214,24 +231,24 @@ impl GBufferPass {
     }
 }
 
-fn create_targets(ctx: &GpuContext, width: u32, height: u32) -> GBuffer {
+fn create_targets(ctx: &GpuContext, width: u32, height: u32, name: &str) -> GBuffer {
     let d = &ctx.device;
     let att = wgpu::TextureUsages::RENDER_ATTACHMENT;
-    let position = super::create_target(d, "gbuffer.position", width, height, POSITION_FORMAT, att);
-    let normal = super::create_target(d, "gbuffer.normal", width, height, NORMAL_FORMAT, att);
-    let albedo = super::create_target(d, "gbuffer.albedo", width, height, ALBEDO_FORMAT, att);
-    let material = super::create_target(d, "gbuffer.material", width, height, MATERIAL_FORMAT, att);
-    let motion = super::create_target(d, "gbuffer.motion", width, height, MOTION_FORMAT, att);
-    let emission = super::create_target(d, "gbuffer.emission", width, height, EMISSION_FORMAT, att);
-    let depth = super::create_target(d, "gbuffer.depth", width, height, DEPTH_FORMAT, att);
+    let position = super::create_target(d, &format!("{name}.position"), width, height, POSITION_FORMAT, att);
+    let normal = super::create_target(d, &format!("{name}.normal"), width, height, NORMAL_FORMAT, att);
+    let albedo = super::create_target(d, &format!("{name}.albedo"), width, height, ALBEDO_FORMAT, att);
+    let material = super::create_target(d, &format!("{name}.material"), width, height, MATERIAL_FORMAT, att);
+    let motion = super::create_target(d, &format!("{name}.motion"), width, height, MOTION_FORMAT, att);
+    let emission = super::create_target(d, &format!("{name}.emission"), width, height, EMISSION_FORMAT, att);
+    let depth = super::create_target(d, &format!("{name}.depth"), width, height, DEPTH_FORMAT, att);
     let views = GBufferViews {
-        position: super::view(&position, "gbuffer.position"),
-        normal: super::view(&normal, "gbuffer.normal"),
-        albedo: super::view(&albedo, "gbuffer.albedo"),
-        material: super::view(&material, "gbuffer.material"),
-        motion: super::view(&motion, "gbuffer.motion"),
-        emission: super::view(&emission, "gbuffer.emission"),
-        depth: super::view(&depth, "gbuffer.depth"),
+        position: super::view(&position, &format!("{name}.position")),
+        normal: super::view(&normal, &format!("{name}.normal")),
+        albedo: super::view(&albedo, &format!("{name}.albedo")),
+        material: super::view(&material, &format!("{name}.material")),
+        motion: super::view(&motion, &format!("{name}.motion")),
+        emission: super::view(&emission, &format!("{name}.emission")),
+        depth: super::view(&depth, &format!("{name}.depth")),
     };
     GBuffer { position, normal, albedo, material, motion, emission, depth, views }
 }

@@ -6,6 +6,9 @@ pub mod compose;
 pub mod direct;
 pub mod gbuffer;
 pub mod shadow;
+pub mod vpl;
+pub mod vpl_gather;
+pub mod vpl_visibility;
 
 use glam::{Mat4, Vec4};
 
@@ -142,6 +145,18 @@ pub mod bgl {
             ty: wgpu::BindingType::Texture {
                 sample_type: wgpu::TextureSampleType::Depth,
                 view_dimension: wgpu::TextureViewDimension::D2Array,
+                multisampled: false,
+            },
+            count: None,
+        }
+    }
+    pub fn depth(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+        wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Depth,
+                view_dimension: wgpu::TextureViewDimension::D2,
                 multisampled: false,
             },
             count: None,

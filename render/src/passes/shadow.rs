@@ -43,61 +43,115 @@ pub struct LightSetup {
     pub views: Vec<Mat4>,
 }
 
+/// One view of a light: what the shadow maps and the light G-buffer of stage 3 render.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightView {
+    pub view: Mat4,
+    pub proj: Mat4,
+    pub eye: Vec3,
+    /// Unit view axis.
+    pub forward: Vec3,
+    /// Perspective: side of one texel of a `size`² map on the image plane at unit distance
+    /// is `pixel_extent / size`; orthographic: the world side of one texel is `pixel_extent / size`.
+    pub pixel_extent: f32,
+    pub orthographic: bool,
+}
+
+impl LightView {
+    pub fn view_proj(&self) -> Mat4 {
+        self.proj * self.view
+    }
+}
+
+/// The views of one light over the scene bounds: spot → one perspective view over the outer
+/// cone (5 % margin), point → six 90° cube faces (order of [`CUBE_FACES`]), directional → one
+/// orthographic view over the bounds.
+pub fn light_views(wl: &WorldLight, bounds: Aabb) -> Vec<LightView> {
+    let r = bounds.radius().max(1e-3);
+    let c = bounds.center();
+    let dir = wl.direction.normalize_or(Vec3::NEG_Y);
+    let dist_far = wl.position.distance(c) + r * 1.05;
+    let near = (r * 0.002).max(1e-3);
+    let far = dist_far.max(near * 2.0);
+    let up_for = |d: Vec3| if d.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+    match wl.light.kind {
+        LightKind::Point => {
+            let proj = glam::camera::rh::proj::directx::perspective(std::f32::consts::FRAC_PI_2, 1.0, near, far);
+            CUBE_FACES
+                .iter()
+                .map(|(f, up)| LightView {
+                    view: glam::camera::rh::view::look_to_mat4(wl.position, *f, *up),
+                    proj,
+                    eye: wl.position,
+                    forward: *f,
+                    pixel_extent: 2.0,
+                    orthographic: false,
+                })
+                .collect()
+        }
+        LightKind::Spot { outer_cone, .. } => {
+            let outer = outer_cone.clamp(1e-3, std::f32::consts::FRAC_PI_2 - 1e-3);
+            let fov = (2.0 * outer * 1.05).min(3.0);
+            vec![LightView {
+                view: glam::camera::rh::view::look_to_mat4(wl.position, dir, up_for(dir)),
+                proj: glam::camera::rh::proj::directx::perspective(fov, 1.0, near, far),
+                eye: wl.position,
+                forward: dir,
+                pixel_extent: 2.0 * (fov * 0.5).tan(),
+                orthographic: false,
+            }]
+        }
+        LightKind::Directional => {
+            let eye = c - dir * (2.0 * r);
+            vec![LightView {
+                view: glam::camera::rh::view::look_to_mat4(eye, dir, up_for(dir)),
+                proj: glam::camera::rh::proj::directx::orthographic(-r, r, -r, r, 0.0, 4.0 * r),
+                eye,
+                forward: dir,
+                pixel_extent: 2.0 * r,
+                orthographic: true,
+            }]
+        }
+    }
+}
+
+/// The GPU record of one light (shadow fields left empty).
+pub fn gpu_light(wl: &WorldLight) -> GpuLight {
+    let l = &wl.light;
+    let dir = wl.direction.normalize_or(Vec3::NEG_Y);
+    let (kind, cone) = match l.kind {
+        LightKind::Point => (0.0, Vec4::new(-1.0, 1.0, 0.0, 0.0)),
+        LightKind::Spot { inner_cone, outer_cone } => {
+            let outer = outer_cone.clamp(1e-3, std::f32::consts::FRAC_PI_2 - 1e-3);
+            let inner = inner_cone.clamp(0.0, outer);
+            let (co, ci) = (outer.cos(), inner.cos());
+            (1.0, Vec4::new(co, 1.0 / (ci - co).max(1e-4), 0.0, 0.0))
+        }
+        LightKind::Directional => (2.0, Vec4::new(-1.0, 1.0, 0.0, 0.0)),
+    };
+    GpuLight {
+        position: wl.position.extend(kind),
+        direction: dir.extend(l.range.unwrap_or(0.0)),
+        color: (l.color * l.intensity).extend(0.0),
+        cone,
+        shadow: Vec4::ZERO,
+    }
+}
+
 /// Builds the GPU light records and shadow views; `intensity_scale` is applied by the shader.
 pub fn setup_lights(lights: &[WorldLight], bounds: Aabb, shadow_map_size: u32, shadows: bool) -> LightSetup {
     let mut out = LightSetup::default();
-    let r = bounds.radius().max(1e-3);
-    let c = bounds.center();
     for wl in lights {
-        let l = &wl.light;
-        let dir = wl.direction.normalize_or(Vec3::NEG_Y);
-        let first = out.views.len() as f32;
-        let dist_far = wl.position.distance(c) + r * 1.05;
-        let near = (r * 0.002).max(1e-3);
-        let (kind, cone, texel, views): (f32, Vec4, f32, Vec<Mat4>) = match l.kind {
-            LightKind::Point => {
-                let proj = glam::camera::rh::proj::directx::perspective(
-                    std::f32::consts::FRAC_PI_2,
-                    1.0,
-                    near,
-                    dist_far.max(near * 2.0),
-                );
-                let views = CUBE_FACES
-                    .iter()
-                    .map(|(f, up)| proj * glam::camera::rh::view::look_to_mat4(wl.position, *f, *up))
-                    .collect();
-                (0.0, Vec4::new(-1.0, 1.0, first, 6.0), 2.0 / shadow_map_size as f32, views)
-            }
-            LightKind::Spot { inner_cone, outer_cone } => {
-                let outer = outer_cone.clamp(1e-3, std::f32::consts::FRAC_PI_2 - 1e-3);
-                let inner = inner_cone.clamp(0.0, outer);
-                let (co, ci) = (outer.cos(), inner.cos());
-                let fov = (2.0 * outer * 1.05).min(3.0);
-                let up = if dir.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
-                let proj = glam::camera::rh::proj::directx::perspective(fov, 1.0, near, dist_far.max(near * 2.0));
-                let view = proj * glam::camera::rh::view::look_to_mat4(wl.position, dir, up);
-                let texel = 2.0 * (fov * 0.5).tan() / shadow_map_size as f32;
-                (1.0, Vec4::new(co, 1.0 / (ci - co).max(1e-4), first, 1.0), texel, vec![view])
-            }
-            LightKind::Directional => {
-                let up = if dir.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
-                let eye = c - dir * (2.0 * r);
-                let proj = glam::camera::rh::proj::directx::orthographic(-r, r, -r, r, 0.0, 4.0 * r);
-                let view = proj * glam::camera::rh::view::look_to_mat4(eye, dir, up);
-                (2.0, Vec4::new(-1.0, 1.0, first, 1.0), 2.0 * r / shadow_map_size as f32, vec![view])
-            }
-        };
-        let cone = if shadows { cone } else { Vec4::new(cone.x, cone.y, 0.0, 0.0) };
+        let mut gl = gpu_light(wl);
+        let views = light_views(wl, bounds);
         if shadows {
-            out.views.extend(views);
+            gl.cone.z = out.views.len() as f32;
+            gl.cone.w = views.len() as f32;
+            out.views.extend(views.iter().map(LightView::view_proj));
         }
-        out.lights.push(GpuLight {
-            position: wl.position.extend(kind),
-            direction: dir.extend(l.range.unwrap_or(0.0)),
-            color: (l.color * l.intensity).extend(0.0),
-            cone,
-            shadow: Vec4::new(texel, 0.0, 0.0, 0.0),
-        });
+        // World size of one shadow texel: at unit distance (perspective) or absolute (ortho).
+        gl.shadow.x = views[0].pixel_extent / shadow_map_size as f32;
+        out.lights.push(gl);
     }
     if out.lights.is_empty() {
         out.lights.push(GpuLight { position: Vec4::W, ..bytemuck::Zeroable::zeroed() });

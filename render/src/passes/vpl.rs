@@ -1,0 +1,279 @@
+//! Stage 3 for the exact-VPL reference (issue #3): the light G-buffer of Knecht 002 §4.3
+//! (`vpl.light_gbuffer.*`, this crate's G-buffer pass rendered from one light view) and VPLs
+//! placed by uniform sampling of its texels (`shaders/vpl/sample.wgsl`).
+//!
+//! The reference renders many VPLs progressively: each frame is one *batch* of
+//! [`ReferenceSettings::vpls_per_frame`] VPLs from one light view (the views of all lights
+//! are taken in turn), each VPL's flux divided by its sampling density so that every batch
+//! is an unbiased estimate of one-bounce light; `passes::vpl_gather` averages the batches.
+//! The light G-buffer's projection is jittered by a Halton (2, 3) sub-texel offset per
+//! batch, so that VPL positions cover the surfaces continuously. Importance-driven VPL
+//! placement (hierarchical warping, Knecht §3.3 and §4.4) replaces the uniform sampling
+//! with the Knecht issue (#5).
+
+use glam::{Mat4, Vec3, Vec4};
+
+use super::gbuffer::GBufferPass;
+use super::shadow::{GpuLight, LightView};
+use super::{CameraUniform, bgl};
+use crate::gpu::GpuContext;
+use crate::scene::SceneState;
+use crate::scene::upload::GpuScene;
+use crate::settings_group;
+
+settings_group! {
+    /// Exact-VPL reference (issue #3): many VPLs, each with an exact visibility map rendered
+    /// from the real triangles, accumulated over frames (Knecht 002 §5.2's reference).
+    pub struct ReferenceSettings: "reference" {
+        /// VPLs rendered per frame (one batch); each has five depth maps rendered per frame.
+        vpls_per_frame: u32 = 64,
+        unit "VPLs", symbol "", range 1..=1024, cost "five depth renders of the scene and one gather term per pixel per VPL", history true;
+        /// Total VPLs after which accumulation stops (the image is then final).
+        total_vpls: u32 = 4096,
+        unit "VPLs", symbol "N", range 1..=1048576, cost "frames = total / per frame", history false;
+        /// Side of the light G-buffer the VPLs are sampled from.
+        light_gbuffer_size: u32 = 512,
+        unit "px", symbol "", range 64..=4096, cost "one G-buffer render of this size per frame", history true;
+        /// Side of each of the five cube faces of a VPL's visibility map.
+        shadow_map_size: u32 = 128,
+        unit "px", symbol "", range 16..=1024, cost "memory 20 B/texel² per VPL of a batch; raster time", history true;
+        /// Exact visibility of every VPL; off shows the unshadowed VPL light.
+        visibility: bool = true,
+        unit "", symbol "V", range 0..=1, cost "the depth maps and one lookup per VPL and pixel", history true;
+        /// Distance clamp of the geometry term (1/max(d², d_min²), Knecht 002 Eq. 4.7);
+        /// 0 keeps the reference unbiased.
+        min_distance_m: f32 = 0.0,
+        unit "m", symbol "d_min", range 0.0..=10.0, cost "free", history true;
+        /// Receiver offset toward the VPL, in texels of its depth map at the receiver's distance.
+        depth_bias: f32 = 1.0,
+        unit "texels", symbol "", range 0.0..=8.0, cost "free", history true;
+        /// Receiver offset along its normal, in texels of the VPL's depth map.
+        normal_offset: f32 = 1.0,
+        unit "texels", symbol "", range 0.0..=8.0, cost "free", history true;
+        /// Seed of the VPL sampling (identical seeds give identical images).
+        seed: u32 = 1,
+        unit "", symbol "", range 0..=4294967295u32, cost "free", history true;
+    }
+}
+
+/// One VPL; WGSL twin: `Vpl` in `shaders/common/vpl.wgsl` (size checked by a test).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuVpl {
+    pub position: Vec4,
+    pub normal: Vec4,
+    pub flux: Vec4,
+    pub incident: Vec4,
+    pub albedo: Vec4,
+}
+
+/// Uniform of the sampling pass; WGSL twin: `Params` in `shaders/vpl/sample.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SampleParams {
+    pub eye: Vec4,
+    pub forward: Vec4,
+    pub scale: Vec4,
+    pub seed: [u32; 4],
+}
+
+/// Element `index` of the Halton sequence in base `base`, in [0, 1).
+pub fn halton(mut index: u32, base: u32) -> f32 {
+    let (mut f, mut r) = (1.0f32, 0.0f32);
+    while index > 0 {
+        f /= base as f32;
+        r += f * (index % base) as f32;
+        index /= base;
+    }
+    r
+}
+
+/// One batch's view: which light, which of its views, and how many views there are in all.
+#[derive(Clone, Copy, Debug)]
+pub struct BatchView {
+    pub light_index: u32,
+    pub view: LightView,
+    pub view_count: u32,
+}
+
+pub struct VplSamplePass {
+    pub light_gbuffer: GBufferPass,
+    camera_buffer: wgpu::Buffer,
+    camera_group: wgpu::BindGroup,
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    lights: wgpu::Buffer,
+    light_capacity: usize,
+    pub vpls: wgpu::Buffer,
+    pub capacity: u32,
+    size: u32,
+}
+
+impl VplSamplePass {
+    pub fn new(ctx: &GpuContext, scene: &GpuScene, size: u32, capacity: u32) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let light_gbuffer = GBufferPass::named(ctx, scene, size, size, "vpl.light_gbuffer");
+        let camera_buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("vpl.light_gbuffer.camera"),
+            size: std::mem::size_of::<CameraUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let camera_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("vpl.light_gbuffer.camera"),
+            layout: &light_gbuffer.camera_layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: camera_buffer.as_entire_binding() }],
+        });
+        let module = crate::shaders::create_module(device, "vpl/sample.wgsl");
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("vpl.sample.inputs"),
+            entries: &[
+                bgl::uniform(0, cs),
+                bgl::storage(1, cs, true),
+                bgl::texture(2, cs, false),
+                bgl::texture(3, cs, false),
+                bgl::texture(4, cs, false),
+                bgl::texture(5, cs, false),
+                bgl::storage(6, cs, false),
+            ],
+        });
+        let pipeline = super::compute_pipeline(device, "vpl.sample", &module, "cs_main", &[&layout]);
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("vpl.sample.params"),
+            size: std::mem::size_of::<SampleParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let (lights, light_capacity) = Self::light_buffer(device, 4);
+        let vpls = Self::vpl_buffer(device, capacity);
+        Self {
+            light_gbuffer,
+            camera_buffer,
+            camera_group,
+            pipeline,
+            layout,
+            params,
+            lights,
+            light_capacity,
+            vpls,
+            capacity,
+            size,
+        }
+    }
+
+    fn light_buffer(device: &wgpu::Device, capacity: usize) -> (wgpu::Buffer, usize) {
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("vpl.sample.lights"),
+            size: (std::mem::size_of::<GpuLight>() * capacity) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        (buffer, capacity)
+    }
+
+    fn vpl_buffer(device: &wgpu::Device, capacity: u32) -> wgpu::Buffer {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("vpl.list"),
+            size: (std::mem::size_of::<GpuVpl>() as u64) * capacity.max(1) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// Makes the light G-buffer `size`² and the VPL list hold `capacity` VPLs. Returns whether
+    /// the light G-buffer was recreated (its registry entries must be refreshed).
+    pub fn ensure(&mut self, ctx: &GpuContext, size: u32, capacity: u32) -> bool {
+        if capacity > self.capacity {
+            self.vpls = Self::vpl_buffer(&ctx.device, capacity);
+            self.capacity = capacity;
+        }
+        if size != self.size {
+            self.light_gbuffer.resize(ctx, size, size);
+            self.size = size;
+            return true;
+        }
+        false
+    }
+
+    /// Renders the light G-buffer of `view`, its projection shifted by `jitter` texels.
+    #[allow(clippy::too_many_arguments)]
+    pub fn render_view(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        scene: &GpuScene,
+        state: &SceneState,
+        view: &LightView,
+        jitter: (f32, f32),
+    ) {
+        let size = self.size as f32;
+        let v = view;
+        let jitter_m = Mat4::from_translation(Vec3::new(2.0 * jitter.0 / size, -2.0 * jitter.1 / size, 0.0));
+        let view_proj = jitter_m * v.proj * v.view;
+        let cam = CameraUniform {
+            view_proj,
+            prev_view_proj: view_proj,
+            inv_view_proj: view_proj.inverse(),
+            view: v.view,
+            position: v.eye.extend(1.0),
+            viewport: Vec4::new(size, size, 1.0 / size, 1.0 / size),
+            params: Vec4::ZERO,
+        };
+        ctx.queue.write_buffer(&self.camera_buffer, 0, bytemuck::bytes_of(&cam));
+        self.light_gbuffer.run(encoder, slot, &self.camera_group, scene, state);
+    }
+
+    /// Samples `count` VPLs uniformly from the light G-buffer of `batch.view`; their flux is
+    /// multiplied by `flux_scale` (R² · V / N × intensity scale).
+    #[allow(clippy::too_many_arguments)]
+    pub fn sample(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        lights: &[GpuLight],
+        batch: BatchView,
+        count: u32,
+        flux_scale: f32,
+        seed: [u32; 2],
+    ) {
+        let size = self.size as f32;
+        let v = batch.view;
+        if lights.len() > self.light_capacity {
+            (self.lights, self.light_capacity) = Self::light_buffer(&ctx.device, lights.len().next_power_of_two());
+        }
+        ctx.queue.write_buffer(&self.lights, 0, bytemuck::cast_slice(lights));
+        let params = SampleParams {
+            eye: v.eye.extend(if v.orthographic { 1.0 } else { 0.0 }),
+            forward: v.forward.extend(v.pixel_extent / size),
+            scale: Vec4::new(flux_scale, count as f32, 0.0, 0.0),
+            seed: [seed[0], seed[1], batch.light_index, 0],
+        };
+        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        let t = &self.light_gbuffer.targets.views;
+        let tv = wgpu::BindingResource::TextureView;
+        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("vpl.sample.inputs"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: self.params.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: self.lights.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: tv(&t.position) },
+                wgpu::BindGroupEntry { binding: 3, resource: tv(&t.normal) },
+                wgpu::BindGroupEntry { binding: 4, resource: tv(&t.albedo) },
+                wgpu::BindGroupEntry { binding: 5, resource: tv(&t.material) },
+                wgpu::BindGroupEntry { binding: 6, resource: self.vpls.as_entire_binding() },
+            ],
+        });
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("vpl.sample"),
+            timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(count.div_ceil(64), 1, 1);
+    }
+}

@@ -1,0 +1,160 @@
+//! Stage 6 for the exact-VPL reference: every pixel gathers the batch's VPLs with exact
+//! visibility and the full BRDF at both ends (`shaders/vpl/gather.wgsl`, the VPL shading of
+//! Knecht 002 Eq. 4.7–4.9 without its approximations), writes the batch to `indirect.raw`
+//! and averages the batches into `indirect.accum` (batch k has weight 1/(k+1)), which the
+//! compose pass adds to the direct light.
+
+use glam::Vec4;
+
+use super::gbuffer::GBufferViews;
+use crate::buffers::{BufferKind, BufferRegistry};
+use crate::gpu::GpuContext;
+
+pub const INDIRECT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+/// Uniform of the gather; WGSL twin: `Params` in `shaders/vpl/gather.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GatherParams {
+    /// x: VPL count, y: atlas columns, z: face size, w: weight of this batch 1/(k+1).
+    pub batch: Vec4,
+    /// x: near, y: far, z: eye offset along the VPL normal, w: d_min.
+    pub clip: Vec4,
+    /// x: depth bias (texels), y: normal offset (texels), z: visibility on.
+    pub bias: Vec4,
+}
+
+pub struct VplGatherPass {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    pub raw: wgpu::Texture,
+    pub accum: wgpu::Texture,
+    /// Last frame's `accum` (the pass reads it and writes `accum`).
+    accum_prev: wgpu::Texture,
+    width: u32,
+    height: u32,
+}
+
+impl VplGatherPass {
+    pub fn new(ctx: &GpuContext, camera_layout_entry: wgpu::BindGroupLayoutEntry, width: u32, height: u32) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let module = crate::shaders::create_module(device, "vpl/gather.wgsl");
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("indirect.gather.inputs"),
+            entries: &[
+                camera_layout_entry,
+                super::bgl::uniform(1, cs),
+                super::bgl::storage(2, cs, true),
+                super::bgl::depth(3, cs),
+                super::bgl::texture(4, cs, false),
+                super::bgl::texture(5, cs, false),
+                super::bgl::texture(6, cs, false),
+                super::bgl::texture(7, cs, false),
+                super::bgl::texture(8, cs, false),
+                super::bgl::storage_texture(9, INDIRECT_FORMAT),
+                super::bgl::storage_texture(10, INDIRECT_FORMAT),
+            ],
+        });
+        let pipeline = super::compute_pipeline(device, "indirect.gather", &module, "cs_main", &[&layout]);
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("indirect.gather.params"),
+            size: std::mem::size_of::<GatherParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let (raw, accum, accum_prev) = Self::targets(device, width, height);
+        Self { pipeline, layout, params, raw, accum, accum_prev, width, height }
+    }
+
+    fn targets(device: &wgpu::Device, width: u32, height: u32) -> (wgpu::Texture, wgpu::Texture, wgpu::Texture) {
+        let storage = wgpu::TextureUsages::STORAGE_BINDING;
+        let raw = super::create_target(device, "indirect.raw", width, height, INDIRECT_FORMAT, storage);
+        let accum = super::create_target(device, "indirect.accum", width, height, INDIRECT_FORMAT, storage);
+        let prev = super::create_target(
+            device,
+            "indirect.accum_prev",
+            width,
+            height,
+            INDIRECT_FORMAT,
+            wgpu::TextureUsages::COPY_DST,
+        );
+        (raw, accum, prev)
+    }
+
+    /// Recreates the targets for a new size (the accumulation restarts).
+    pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) {
+        if (width, height) != (self.width, self.height) {
+            (self.raw, self.accum, self.accum_prev) = Self::targets(&ctx.device, width, height);
+            self.width = width;
+            self.height = height;
+        }
+    }
+
+    pub fn register(&self, reg: &mut BufferRegistry) {
+        reg.register(
+            "indirect.raw",
+            BufferKind::Hdr,
+            "indirect radiance of this frame's VPL batch alone (exact-VPL reference)",
+            &self.raw,
+        );
+        reg.register(
+            "indirect.accum",
+            BufferKind::Hdr,
+            "indirect radiance averaged over the batches so far (exact-VPL reference)",
+            &self.accum,
+        );
+    }
+
+    /// Gathers one batch and folds it into the average with weight `params.batch.w`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        camera: &wgpu::Buffer,
+        gbuffer: &GBufferViews,
+        vpl_list: &wgpu::Buffer,
+        atlas: &wgpu::TextureView,
+        params: GatherParams,
+    ) {
+        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        let raw = super::view(&self.raw, "indirect.raw");
+        let accum = super::view(&self.accum, "indirect.accum");
+        let prev = super::view(&self.accum_prev, "indirect.accum_prev");
+        let tv = wgpu::BindingResource::TextureView;
+        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("indirect.gather.inputs"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: camera.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: self.params.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: vpl_list.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: tv(atlas) },
+                wgpu::BindGroupEntry { binding: 4, resource: tv(&gbuffer.position) },
+                wgpu::BindGroupEntry { binding: 5, resource: tv(&gbuffer.normal) },
+                wgpu::BindGroupEntry { binding: 6, resource: tv(&gbuffer.albedo) },
+                wgpu::BindGroupEntry { binding: 7, resource: tv(&gbuffer.material) },
+                wgpu::BindGroupEntry { binding: 8, resource: tv(&prev) },
+                wgpu::BindGroupEntry { binding: 9, resource: tv(&raw) },
+                wgpu::BindGroupEntry { binding: 10, resource: tv(&accum) },
+            ],
+        });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("indirect.gather"),
+                timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(self.width.div_ceil(super::TILE), self.height.div_ceil(super::TILE), 1);
+        }
+        encoder.copy_texture_to_texture(
+            self.accum.as_image_copy(),
+            self.accum_prev.as_image_copy(),
+            wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 },
+        );
+    }
+}

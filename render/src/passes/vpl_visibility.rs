@@ -1,0 +1,240 @@
+//! Stage 4, exact visibility of the VPLs (DESIGN.md "exact shadow maps (reference)"): every
+//! VPL of a batch gets five 90° depth maps — the faces of a cube oriented on its normal that
+//! cover its hemisphere — rendered from the real triangles into one `Depth32Float` atlas
+//! (`vpl.shadow_atlas`). The reference Knecht 002 §5.2 measures imperfect shadow maps against.
+//! Shaders: `shaders/vpl/shadow.wgsl`; the face geometry is in `shaders/common/vpl.wgsl`.
+//!
+//! Departure from a paraboloid map per VPL (the form ISMs take): a paraboloid projection
+//! bends straight triangle edges, so large triangles render wrong; cube faces are exact.
+
+use crate::buffers::{BufferKind, BufferRegistry};
+use crate::gpu::GpuContext;
+use crate::scene::SceneState;
+use crate::scene::upload::GpuScene;
+
+/// Faces per VPL (`VPL_FACES` in `shaders/common/vpl.wgsl`).
+pub const FACES: u32 = 5;
+
+/// Uniform stride of the per-face index (dynamic offsets need 256-byte alignment).
+const FACE_STRIDE: u64 = 256;
+
+/// Uniform of the depth render and of the gather's lookups; WGSL twin: `Params` in
+/// `shaders/vpl/shadow.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct VisibilityParams {
+    /// x: near, y: far, z: eye offset along the VPL normal (scene units).
+    pub clip: glam::Vec4,
+}
+
+/// Layout of the atlas: `cols` × `rows` tiles of `size`² texels, tile = VPL × 5 + face.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AtlasLayout {
+    pub size: u32,
+    pub cols: u32,
+    pub rows: u32,
+}
+
+impl AtlasLayout {
+    /// A near-square grid for `vpls` VPLs of five `size`² faces each.
+    pub fn new(vpls: u32, size: u32) -> Self {
+        let tiles = vpls.max(1) * FACES;
+        let cols = (tiles as f64).sqrt().ceil() as u32;
+        Self { size, cols, rows: tiles.div_ceil(cols) }
+    }
+    pub fn width(&self) -> u64 {
+        self.cols as u64 * self.size as u64
+    }
+    pub fn height(&self) -> u64 {
+        self.rows as u64 * self.size as u64
+    }
+    /// Whether the atlas fits a device whose textures have at most `max_dim` texels a side.
+    pub fn fits(&self, max_dim: u32) -> bool {
+        self.width() <= max_dim as u64 && self.height() <= max_dim as u64
+    }
+    /// The most VPLs per batch whose atlas of `size`² faces fits `max_dim`.
+    pub fn largest_batch(size: u32, max_dim: u32) -> u32 {
+        let per_side = (max_dim / size.max(1)) as u64;
+        let tiles = per_side * per_side;
+        let mut n = (tiles / FACES as u64) as u32;
+        while n > 0 && !Self::new(n, size).fits(max_dim) {
+            n -= 1;
+        }
+        n
+    }
+}
+
+pub struct VplVisibilityPass {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    faces: wgpu::Buffer,
+    face_capacity: u32,
+    pub params: wgpu::Buffer,
+    pub atlas: wgpu::Texture,
+    pub atlas_view: wgpu::TextureView,
+    pub layout_info: AtlasLayout,
+}
+
+impl VplVisibilityPass {
+    pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
+        let device = &ctx.device;
+        let vs = wgpu::ShaderStages::VERTEX;
+        let module = crate::shaders::create_module(device, "vpl/shadow.wgsl");
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("vpl.shadow.inputs"),
+            entries: &[
+                super::bgl::uniform_dynamic(0, vs),
+                super::bgl::uniform(1, vs),
+                super::bgl::storage(2, vs, true),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("vpl.shadow.layout"),
+            bind_group_layouts: &[Some(&layout), Some(&scene.instance_layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("vpl.shadow.pipeline"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(crate::scene::upload::vertex_layout())],
+            },
+            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: wgpu::TextureFormat::Depth32Float,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: None,
+            multiview_mask: None,
+            cache: None,
+        });
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("vpl.shadow.params"),
+            size: std::mem::size_of::<VisibilityParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let layout_info = AtlasLayout::new(1, 16);
+        let (atlas, atlas_view) = Self::create_atlas(device, layout_info);
+        let faces = Self::face_buffer(ctx, FACES);
+        Self { pipeline, layout, faces, face_capacity: FACES, params, atlas, atlas_view, layout_info }
+    }
+
+    fn create_atlas(device: &wgpu::Device, l: AtlasLayout) -> (wgpu::Texture, wgpu::TextureView) {
+        let atlas = super::create_target(
+            device,
+            "vpl.shadow_atlas",
+            l.width() as u32,
+            l.height() as u32,
+            wgpu::TextureFormat::Depth32Float,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        );
+        let view = super::view(&atlas, "vpl.shadow_atlas");
+        (atlas, view)
+    }
+
+    /// One 256-byte uniform slot per face: (VPL, face, tile, 0).
+    fn face_buffer(ctx: &GpuContext, tiles: u32) -> wgpu::Buffer {
+        let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("vpl.shadow.faces"),
+            size: FACE_STRIDE * tiles as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut data = vec![0u8; (FACE_STRIDE * tiles as u64) as usize];
+        for tile in 0..tiles {
+            let o = (tile as u64 * FACE_STRIDE) as usize;
+            let idx = [tile / FACES, tile % FACES, tile, 0];
+            data[o..o + 16].copy_from_slice(bytemuck::cast_slice(&idx));
+        }
+        ctx.queue.write_buffer(&buffer, 0, &data);
+        buffer
+    }
+
+    /// Sizes the atlas for `vpls` VPLs of `size`² faces (the caller checked that it fits).
+    /// Returns whether it was recreated (the registry entry must be refreshed).
+    pub fn ensure(&mut self, ctx: &GpuContext, vpls: u32, size: u32) -> bool {
+        let l = AtlasLayout::new(vpls, size);
+        let tiles = vpls * FACES;
+        if tiles > self.face_capacity {
+            self.faces = Self::face_buffer(ctx, tiles);
+            self.face_capacity = tiles;
+        }
+        if l == self.layout_info {
+            return false;
+        }
+        (self.atlas, self.atlas_view) = Self::create_atlas(&ctx.device, l);
+        self.layout_info = l;
+        true
+    }
+
+    pub fn register(&self, reg: &mut BufferRegistry) {
+        reg.register(
+            "vpl.shadow_atlas",
+            BufferKind::Depth,
+            "exact visibility of this batch's VPLs: five 90° cube faces on each VPL's normal, tile = VPL × 5 + face",
+            &self.atlas,
+        );
+    }
+
+    /// Renders the five faces of each of the first `vpls` VPLs of `vpl_list`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        scene: &GpuScene,
+        state: &SceneState,
+        vpl_list: &wgpu::Buffer,
+        vpls: u32,
+        params: VisibilityParams,
+    ) {
+        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("vpl.shadow.inputs"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &self.faces,
+                        offset: 0,
+                        size: std::num::NonZeroU64::new(16),
+                    }),
+                },
+                wgpu::BindGroupEntry { binding: 1, resource: self.params.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: vpl_list.as_entire_binding() },
+            ],
+        });
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("vpl.shadow.pass"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &self.atlas_view,
+                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: slot.and_then(|s| s.render(true, true)),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(1, &scene.instance_group, &[]);
+        let l = self.layout_info;
+        for tile in 0..vpls.min(self.face_capacity / FACES) * FACES {
+            let (x, y) = ((tile % l.cols) * l.size, (tile / l.cols) * l.size);
+            pass.set_viewport(x as f32, y as f32, l.size as f32, l.size as f32, 0.0, 1.0);
+            pass.set_scissor_rect(x, y, l.size, l.size);
+            pass.set_bind_group(0, &group, &[(tile as u64 * FACE_STRIDE) as u32]);
+            scene.draw(&mut pass, state, None, None);
+        }
+    }
+}

@@ -1,0 +1,76 @@
+// Virtual point lights (stage 3) and their exact visibility maps (stage 4).
+// Rust twin: passes::vpl::GpuVpl (size checked by the shader test).
+//
+// A VPL stands for the light that reached a small patch of surface y: it carries the
+// incident flux Φ (W) and the direction ω_in toward the light it came from, so that its
+// radiant intensity toward x is I(y→x) = Φ · f(y; ω_in, y→x) · max(0, n_y·(y→x)), with the one
+// BRDF f of common/brdf.wgsl (the glossy VPL of Knecht 002 Eq. 4.8 is this with the
+// specular lobe of f; a diffuse VPL is f = c·DI/π).
+struct Vpl {
+    // xyz: position on the surface; w: 1 for a VPL, 0 for an empty slot.
+    position: vec4<f32>,
+    // xyz: unit surface normal; w: diffuse intensity DI.
+    normal: vec4<f32>,
+    // rgb: incident flux Φ in W; a: specular intensity SI.
+    flux: vec4<f32>,
+    // xyz: unit direction from the surface toward the light; w: specular power SP.
+    incident: vec4<f32>,
+    // rgb: surface colour c; a: unused.
+    albedo: vec4<f32>,
+}
+
+// Faces of a VPL's visibility map: the hemisphere around n is covered by five 90° faces
+// of a cube oriented on the normal: +n, +t, −t, +b, −b (the −n face sees nothing a VPL lights).
+const VPL_FACES: u32 = 5u;
+
+// Orthonormal basis (t, b, n) around a unit n (Duff et al., JCGT 2017, "Building an
+// orthonormal basis, revisited").
+fn vpl_basis(n: vec3<f32>) -> mat3x3<f32> {
+    let s = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (s + n.z);
+    let b = n.x * n.y * a;
+    let t = vec3<f32>(1.0 + s * n.x * n.x * a, s * b, -s * n.x);
+    let bt = vec3<f32>(b, s + n.y * n.y * a, -n.y);
+    return mat3x3<f32>(t, bt, n);
+}
+
+// (right, up, forward) of face `face` of the cube on basis `tbn`.
+fn vpl_face_axes(tbn: mat3x3<f32>, face: u32) -> mat3x3<f32> {
+    let t = tbn[0];
+    let b = tbn[1];
+    let n = tbn[2];
+    switch face {
+        case 0u: { return mat3x3<f32>(t, b, n); }
+        case 1u: { return mat3x3<f32>(-n, b, t); }
+        case 2u: { return mat3x3<f32>(n, b, -t); }
+        case 3u: { return mat3x3<f32>(t, -n, b); }
+        default: { return mat3x3<f32>(t, n, -b); }
+    }
+}
+
+// The face that sees direction q (in world space) from the VPL, for q in the upper hemisphere.
+fn vpl_face_of(tbn: mat3x3<f32>, q: vec3<f32>) -> u32 {
+    let l = vec3<f32>(dot(q, tbn[0]), dot(q, tbn[1]), dot(q, tbn[2]));
+    let a = abs(l);
+    if (l.z >= a.x && l.z >= a.y) {
+        return 0u;
+    }
+    if (a.x >= a.y) {
+        return select(2u, 1u, l.x > 0.0);
+    }
+    return select(4u, 3u, l.y > 0.0);
+}
+
+// Clip coordinates of p in a 90° perspective face (depth in [0, 1] from near to far, as the
+// D3D-style projection of the primary shadow maps).
+fn vpl_face_clip(eye: vec3<f32>, axes: mat3x3<f32>, p: vec3<f32>, near: f32, far: f32) -> vec4<f32> {
+    let q = p - eye;
+    let z = dot(q, axes[2]);
+    let a = far / (far - near);
+    return vec4<f32>(dot(q, axes[0]), dot(q, axes[1]), a * z - a * near, z);
+}
+
+// Top-left texel of tile `tile` in an atlas of `cols` columns of `size`² tiles.
+fn vpl_tile_origin(tile: u32, cols: u32, size: u32) -> vec2<u32> {
+    return vec2<u32>(tile % cols, tile / cols) * size;
+}
