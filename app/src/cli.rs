@@ -33,6 +33,9 @@ pub enum Command {
     /// Path-trace a ground-truth image on the CPU (writes F, F.direct.exr, F.indirect.exr
     /// and a PNG preview).
     Reference(ReferenceArgs),
+    /// Render every combination of swept settings; write sweep.csv (settings, per-pass ms,
+    /// FLIP, RMSE, flicker) and pareto.png (quality against time).
+    Sweep(crate::sweep::SweepArgs),
     /// Regenerate the embedded default scene (assets/cornell_box.glb).
     GenAssets {
         /// Where to write the .glb.
@@ -213,7 +216,7 @@ pub fn load_settings(args: &SceneArgs) -> Result<LabSettings, CliError> {
     Ok(s)
 }
 
-fn renderer(args: &SceneArgs, size: (u32, u32)) -> Result<Renderer, CliError> {
+pub fn renderer(args: &SceneArgs, size: (u32, u32)) -> Result<Renderer, CliError> {
     let scene = load_scene(args)?;
     let settings = load_settings(args)?;
     let ctx = GpuContext::headless().map_err(|e| CliError::failure(e.to_string()))?;
@@ -398,11 +401,12 @@ pub fn quality_against(r: &mut Renderer, reference: &Path) -> Result<(f64, f64),
     let hdr = r.readback("final.hdr").map_err(|e| CliError::failure(e.to_string()))?;
     let err = |e: gi_render::metrics::MetricError| CliError::input(format!("--reference {}: {e}", reference.display()));
     let rmse = gi_render::metrics::rmse(&hdr, &reference_img).map_err(err)?;
-    let (flip, _) = gi_render::metrics::flip(
+    let (flip, map) = gi_render::metrics::flip(
         &gi_render::image_io::hdr_display(&hdr),
         &gi_render::image_io::hdr_display(&reference_img),
     )
     .map_err(err)?;
+    r.set_flip_map(&map);
     Ok((flip, rmse))
 }
 
@@ -446,7 +450,7 @@ pub struct CompareReport {
 
 /// Loads an image as f32 RGBA: EXR and other float formats as linear values, 8-bit images
 /// as their display values in [0, 1]. Returns whether it was a float image.
-fn load_image(path: &Path) -> Result<(gi_render::ImageF32, bool), CliError> {
+pub fn load_image(path: &Path) -> Result<(gi_render::ImageF32, bool), CliError> {
     let img = image::open(path).map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
     let float = matches!(img.color(), image::ColorType::Rgb32F | image::ColorType::Rgba32F);
     let rgba = img.into_rgba32f();
@@ -585,6 +589,7 @@ pub fn main() -> ExitCode {
         Some(Command::Bench(a)) => bench(a),
         Some(Command::Compare(a)) => compare(a),
         Some(Command::Reference(a)) => reference(a),
+        Some(Command::Sweep(a)) => crate::sweep::sweep(a),
         Some(Command::Settings) => {
             settings();
             Ok(())

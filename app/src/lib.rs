@@ -2,4 +2,6 @@
 
 pub mod app;
 pub mod cli;
+pub mod plot;
 pub mod settings_ui;
+pub mod sweep;

@@ -103,6 +103,52 @@ fn reference_path_traces_three_exr_files() {
 }
 
 #[test]
+fn a_2x2_sweep_writes_its_csv_and_pareto_plot() {
+    let out = temp_dir("sweep");
+    let o = gi_lab()
+        .args(["sweep", "--size", "32x24", "--frames", "1", "--flicker-frames", "2", "--reference-spp", "2"])
+        .args(["--param", "direct.shadow_map_size=64..256:2", "--param", "direct.shadows=true,false", "--out"])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("sweep.csv")).expect("sweep.csv");
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines.len(), 5, "a header and four points:\n{csv}");
+    let header: Vec<&str> = lines[0].split(',').collect();
+    for col in [
+        "direct.shadow_map_size",
+        "direct.shadows",
+        "gbuffer_ms",
+        "direct_ms",
+        "total_ms",
+        "flip",
+        "rmse",
+        "flicker",
+        "pareto",
+    ] {
+        assert!(header.contains(&col), "column {col} missing: {}", lines[0]);
+    }
+    let col = |name: &str| header.iter().position(|h| *h == name).expect("column");
+    let rows: Vec<Vec<&str>> = lines[1..].iter().map(|l| l.split(',').collect()).collect();
+    let settings: Vec<(&str, &str)> =
+        rows.iter().map(|r| (r[col("direct.shadow_map_size")], r[col("direct.shadows")])).collect();
+    assert_eq!(settings, [("64", "true"), ("64", "false"), ("256", "true"), ("256", "false")]);
+    for r in &rows {
+        let flip: f64 = r[col("flip")].parse().expect("flip is a number");
+        assert!((0.0..1.0).contains(&flip) && flip > 0.0, "FLIP {flip}");
+        assert!(r[col("total_ms")].parse::<f64>().expect("ms") > 0.0);
+    }
+    assert!(rows.iter().any(|r| r[col("pareto")] == "true"), "some point is on the Pareto front");
+    // Without shadows the image is further from the path-traced direct light.
+    let flip_of = |i: usize| rows[i][col("flip")].parse::<f64>().expect("flip");
+    assert!(flip_of(1) > flip_of(0) && flip_of(3) > flip_of(2), "shadows off must score worse: {csv}");
+    let plot = image::open(out.join("pareto.png")).expect("pareto.png").to_rgb8();
+    assert!(plot.width() >= 800 && plot.height() >= 600);
+    assert!(out.join("reference.exr").exists(), "the path-traced reference is kept");
+}
+
+#[test]
 fn bad_arguments_exit_2_with_a_message() {
     let cases: &[(&[&str], &str)] = &[
         (&["render", "--size", "0x10", "--out", "OUT"], "at least 1"),
@@ -118,6 +164,11 @@ fn bad_arguments_exit_2_with_a_message() {
         (&["compare", "/nonexistent/a.png", "/nonexistent/b.png"], "a.png"),
         (&["reference", "--spp", "0", "--out", "OUT/r.exr"], "--spp"),
         (&["render"], "--out"),
+        (&["sweep", "--out", "OUT", "--param", "direct.nope=1..2:2"], "no setting named 'direct.nope'"),
+        (&["sweep", "--out", "OUT", "--param", "direct.pcf_radius=0..9:2"], "direct.pcf_radius"),
+        (&["sweep", "--out", "OUT", "--param", "direct.pcf_radius=0..2:zero"], "STEPS"),
+        (&["sweep", "--out", "OUT", "--param", "direct.shadows=0..1:2"], "list its values"),
+        (&["sweep", "--out", "OUT"], "--param"),
     ];
     let out = temp_dir("bad-args");
     let out = out.to_string_lossy();

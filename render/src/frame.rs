@@ -87,6 +87,8 @@ pub struct Renderer {
     timer: GpuTimer,
     prev: Option<PrevFrame>,
     exact_vpl: Option<ExactVpl>,
+    /// `metrics.flip`: the FLIP error map of the last comparison with a reference.
+    flip_map: Option<wgpu::Texture>,
     /// Interactive mode (the app): timings are collected without waiting for the GPU.
     interactive: bool,
 }
@@ -147,6 +149,7 @@ impl Renderer {
             timer,
             prev: None,
             exact_vpl: None,
+            flip_map: None,
             interactive: false,
         };
         r.register_all();
@@ -162,6 +165,43 @@ impl Renderer {
             x.sample.light_gbuffer.register(&mut self.registry);
             x.visibility.register(&mut self.registry);
             x.gather.register(&mut self.registry);
+        }
+        if let Some(t) = &self.flip_map {
+            self.registry.register(
+                "metrics.flip",
+                crate::buffers::BufferKind::Data,
+                "per-pixel FLIP error (r = g = b, 0 … 1) of final.ldr against the last reference compared",
+                t,
+            );
+        }
+    }
+
+    /// Publishes a FLIP error map (as `metrics::flip` returns it) as the buffer
+    /// `metrics.flip`, so that viewers, the probe and `readback` can show it.
+    pub fn set_flip_map(&mut self, map: &ImageF32) {
+        if map.width == 0 || map.height == 0 {
+            return;
+        }
+        let fits = self.flip_map.as_ref().is_some_and(|t| (t.width(), t.height()) == (map.width, map.height));
+        if !fits {
+            self.flip_map = Some(crate::passes::create_target(
+                &self.ctx.device,
+                "metrics.flip",
+                map.width,
+                map.height,
+                wgpu::TextureFormat::Rgba32Float,
+                wgpu::TextureUsages::COPY_DST,
+            ));
+        }
+        let Some(t) = &self.flip_map else { return };
+        self.ctx.queue.write_texture(
+            t.as_image_copy(),
+            bytemuck::cast_slice(&map.data),
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(16 * map.width), rows_per_image: None },
+            wgpu::Extent3d { width: map.width, height: map.height, depth_or_array_layers: 1 },
+        );
+        if !fits {
+            self.register_all();
         }
     }
 

@@ -473,3 +473,23 @@ fn interactive_mode_reports_timings_without_waiting_for_each_frame() {
     r.set_interactive(false);
     assert_eq!(r.render_frame().len(), 6, "blocking mode returns this frame's timings");
 }
+
+#[test]
+fn a_flip_map_is_published_as_the_metrics_flip_buffer() {
+    let mut r = default_renderer(16, 8);
+    r.render_frame();
+    assert!(r.readback("metrics.flip").is_err(), "no comparison yet");
+    let hdr = r.readback("final.hdr").expect("hdr");
+    let mut other = hdr.clone();
+    for p in other.data.iter_mut().take(40) {
+        *p = [1.0, 0.0, 1.0, 1.0];
+    }
+    let (mean, map) =
+        gi_render::metrics::flip(&gi_render::image_io::hdr_display(&hdr), &gi_render::image_io::hdr_display(&other))
+            .expect("flip");
+    assert!(mean > 0.0);
+    r.set_flip_map(&map);
+    let back = r.readback("metrics.flip").expect("metrics.flip is registered");
+    assert_eq!((back.width, back.height), (16, 8));
+    assert_eq!(back.data, map.data, "the buffer holds the error map exactly");
+}
