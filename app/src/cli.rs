@@ -150,6 +150,9 @@ pub struct BenchArgs {
     /// Frames of the paused scene over which temporal flicker is measured (0: skip).
     #[arg(long, default_value_t = 8)]
     pub flicker_frames: u32,
+    /// Frames over which the afterglow of a sudden light change is measured (0: skip).
+    #[arg(long, default_value_t = 12)]
+    pub afterglow_frames: u32,
     /// A ground-truth EXR of the same scene, camera and size at animation time 0 (`gi-lab
     /// reference`): adds FLIP and RMSE of final.hdr at time 0 against it.
     #[arg(long)]
@@ -308,6 +311,10 @@ pub struct BenchReport {
     /// Quality against `--reference`: mean FLIP (tone-mapped x/(1+x)) and RMSE (linear).
     pub flip: Option<f64>,
     pub rmse: Option<f64>,
+    /// Frames until the error against the settled image returns within 2× its steady state
+    /// after the first light's intensity is halved (`metrics::afterglow`); None when not
+    /// measured or when it did not settle.
+    pub afterglow_frames: Option<usize>,
 }
 
 /// Renders warm-up and measured frames and aggregates the per-pass times.
@@ -353,6 +360,7 @@ pub fn bench_run(r: &mut Renderer, frames: u32, scene_name: &str) -> BenchReport
         flicker: None,
         flip: None,
         rmse: None,
+        afterglow_frames: None,
     }
 }
 
@@ -368,6 +376,9 @@ pub fn format_bench_table(b: &BenchReport) -> String {
     s += &format!("{:<16} {:>10.3}\n", "total", b.total_mean_ms);
     if let Some(f) = b.flicker {
         s += &format!("flicker (static scene) {f:.6}\n");
+    }
+    if let Some(a) = b.afterglow_frames {
+        s += &format!("afterglow (first light halved) {a} frames\n");
     }
     if let (Some(flip), Some(rmse)) = (b.flip, b.rmse) {
         s += &format!("quality vs reference: FLIP {flip:.4}, RMSE {rmse:.5}\n");
@@ -386,6 +397,45 @@ pub fn measure_flicker(r: &mut Renderer, frames: u32) -> Result<f64, CliError> {
     }
     r.clock.playing = playing;
     gi_render::metrics::flicker(&images).map_err(|e| CliError::input(format!("--flicker-frames: {e}")))
+}
+
+/// Afterglow of a sudden light change: the first light's intensity is halved and the RMSE of
+/// each of the next `frames` frames is taken against the image the renderer settles on when
+/// it starts with the halved light (`frames` frames after a history reset). The scene is
+/// paused; the light and the clock are restored afterwards. None when the scene has no light
+/// or the error does not settle.
+pub fn measure_afterglow(r: &mut Renderer, frames: u32) -> Result<Option<usize>, CliError> {
+    let Some(li) = r.scene().lights.iter().position(|_| true) else { return Ok(None) };
+    let clock = r.clock;
+    r.clock.playing = false;
+    let original = r.scene().lights[li].intensity;
+    let read = |r: &Renderer| r.readback("final.hdr").map_err(|e| CliError::failure(e.to_string()));
+    let run = |r: &mut Renderer, intensity: f32, reset: bool| {
+        r.scene_mut().lights[li].intensity = intensity;
+        if reset {
+            r.reset_history();
+        }
+    };
+    run(r, original * 0.5, true);
+    for _ in 0..frames {
+        r.render_frame();
+    }
+    let settled = read(r)?;
+    run(r, original, true);
+    for _ in 0..frames {
+        r.render_frame();
+    }
+    // The sudden change: no reset, the renderer must notice by itself.
+    run(r, original * 0.5, false);
+    let mut errors = Vec::with_capacity(frames as usize);
+    for _ in 0..frames {
+        r.render_frame();
+        let e = gi_render::metrics::rmse(&read(r)?, &settled).map_err(|e| CliError::failure(e.to_string()))?;
+        errors.push(e);
+    }
+    run(r, original, true);
+    r.clock = clock;
+    Ok(gi_render::metrics::afterglow(&errors, 0))
 }
 
 /// FLIP (tone-mapped) and RMSE (linear) of the renderer's final.hdr against a reference of
@@ -423,6 +473,12 @@ fn bench(args: &BenchArgs) -> Result<(), CliError> {
     }
     if args.flicker_frames >= 2 {
         report.flicker = Some(measure_flicker(&mut r, args.flicker_frames)?);
+    }
+    if args.afterglow_frames > 0 && args.afterglow_frames < 4 {
+        return Err(CliError::input("--afterglow-frames must be 0 or at least 4"));
+    }
+    if args.afterglow_frames >= 4 {
+        report.afterglow_frames = measure_afterglow(&mut r, args.afterglow_frames)?;
     }
     if let Some(reference) = &args.reference {
         let (flip, rmse) = quality_against(&mut r, reference)?;

@@ -196,4 +196,23 @@ fn buffers_lists_registered_names_and_bench_prints_every_pass() {
     assert_eq!(v["flicker"], 0.0, "flicker of a static scene");
     let passes: Vec<&str> = v["passes"].as_array().expect("passes").iter().filter_map(|p| p["pass"].as_str()).collect();
     assert_eq!(passes, ["gbuffer", "direct.shadow", "direct", "compose", "compose.luminance", "compose.tonemap"]);
+    // Without temporal history, a light change shows at once.
+    assert_eq!(v["afterglow_frames"], 0, "afterglow without history");
+
+    // The exact-VPL reference accumulates over frames: its passes are timed, it changes from
+    // frame to frame while it converges, and after a light change it needs frames to settle.
+    let o = gi_lab()
+        .args(["bench", "--size", "32x32", "--frames", "2", "--afterglow-frames", "8", "--json"])
+        .args(["--set", "indirect.technique=ExactVpl", "--set", "reference.vpls_per_frame=16"])
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("bench --json prints JSON");
+    let passes: Vec<&str> = v["passes"].as_array().expect("passes").iter().filter_map(|p| p["pass"].as_str()).collect();
+    for p in ["vpl.light_gbuffer", "vpl.sample", "vpl.shadow", "indirect.gather"] {
+        assert!(passes.contains(&p), "pass {p} missing from {passes:?}");
+    }
+    assert!(v["flicker"].as_f64().expect("flicker") > 0.0, "a converging accumulation changes between frames");
+    let afterglow = v["afterglow_frames"].as_u64().expect("afterglow settles");
+    assert!((1..8).contains(&afterglow), "afterglow of the progressive reference: {afterglow}");
 }
