@@ -276,6 +276,9 @@ impl Viewer {
                     egui::ProgressBar::new(done as f32 / target.max(1) as f32)
                         .text(format!("{done} / {target} VPLs accumulated")),
                 );
+                if self.renderer.clock.playing {
+                    ui.small("The accumulation restarts whenever the camera, a light or an animated object moves: pause the animation to let it converge.");
+                }
             }
         });
         egui::CollapsingHeader::new("Exact-VPL reference").default_open(false).show(ui, |ui| {

@@ -96,6 +96,10 @@ pub struct RenderArgs {
     /// Frames to render (animation advances by the fixed time step).
     #[arg(long, default_value_t = 1)]
     pub frames: u32,
+    /// Keep the animation at time 0 for every frame (e.g. to let the exact-VPL reference
+    /// accumulate: `--paused --frames 64 --set indirect.technique=ExactVpl`).
+    #[arg(long)]
+    pub paused: bool,
     /// A buffer to write besides final.png (repeatable; see `gi-lab buffers`); `NAME@K`
     /// picks array layer K (e.g. `direct.shadow_map@2`).
     #[arg(long = "buffer")]
@@ -264,6 +268,7 @@ fn render(args: &RenderArgs) -> Result<(), CliError> {
         return Err(CliError::input("--frames must be at least 1"));
     }
     let mut r = renderer(&args.scene, args.size)?;
+    r.clock.playing = !args.paused;
     // Check buffer names before spending time rendering.
     for b in &args.buffers {
         let (name, _) = parse_buffer_spec(b)?;

@@ -153,6 +153,7 @@ impl Renderer {
             interactive: false,
         };
         r.register_all();
+        r.ensure_exact_vpl();
         Ok(r)
     }
 
@@ -242,6 +243,7 @@ impl Renderer {
         if reset {
             self.reset_history();
         }
+        self.ensure_exact_vpl();
         Ok(reset)
     }
 
@@ -369,7 +371,7 @@ impl Renderer {
         // Stages 3–6: indirect light.
         let indirect = match self.settings.indirect.technique {
             IndirectTechnique::None => None,
-            IndirectTechnique::ExactVpl => Some(self.exact_vpl_frame(&mut enc, &state, view_proj)),
+            IndirectTechnique::ExactVpl => self.exact_vpl_frame(&mut enc, &state, view_proj),
         };
 
         // Stage 7: compose and tone map.
@@ -390,15 +392,12 @@ impl Renderer {
         timings
     }
 
-    /// Stages 3, 4 and 6 of the exact-VPL reference: one batch of VPLs from one light view,
-    /// their exact visibility, and the gather folded into the running average. Returns the
-    /// averaged indirect light. Once `total_vpls` are in, the average is kept as it is.
-    fn exact_vpl_frame(
-        &mut self,
-        enc: &mut wgpu::CommandEncoder,
-        state: &crate::scene::SceneState,
-        view_proj: Mat4,
-    ) -> wgpu::TextureView {
+    /// Creates or resizes the exact-VPL reference's passes for the current settings (when it is
+    /// the indirect technique), so that its buffers are registered before the first frame.
+    fn ensure_exact_vpl(&mut self) {
+        if self.settings.indirect.technique != IndirectTechnique::ExactVpl {
+            return;
+        }
         let ctx = self.ctx.clone();
         let rs = self.settings.reference.clone();
         let n = rs.vpls_per_frame;
@@ -414,7 +413,23 @@ impl Renderer {
         if fresh || self.registry.get("indirect.accum").is_err() {
             self.register_all();
         }
-        let Some(x) = self.exact_vpl.as_mut() else { unreachable!("inserted above") };
+    }
+
+    /// Stages 3, 4 and 6 of the exact-VPL reference: one batch of VPLs from one light view,
+    /// their exact visibility, and the gather folded into the running average. Returns the
+    /// averaged indirect light (None only if the passes could not be created). Once
+    /// `total_vpls` are in, the average is kept as it is.
+    fn exact_vpl_frame(
+        &mut self,
+        enc: &mut wgpu::CommandEncoder,
+        state: &crate::scene::SceneState,
+        view_proj: Mat4,
+    ) -> Option<wgpu::TextureView> {
+        self.ensure_exact_vpl();
+        let ctx = self.ctx.clone();
+        let rs = self.settings.reference.clone();
+        let n = rs.vpls_per_frame;
+        let x = self.exact_vpl.as_mut()?;
 
         // Restart when anything the image depends on changed.
         let lights: Vec<_> = state.lights.iter().map(gpu_light).collect();
@@ -428,7 +443,7 @@ impl Renderer {
         let accum = crate::passes::view(&x.gather.accum, "indirect.accum");
         let target = rs.total_vpls.div_ceil(n);
         if x.batches >= target || lights.is_empty() {
-            return accum;
+            return Some(accum);
         }
 
         // The views of all lights, taken in turn; each batch stands for all V of them.
@@ -475,7 +490,7 @@ impl Renderer {
             gather.run(&ctx, e, slot, camera, gviews, vpl_list, atlas, params)
         });
         x.batches += 1;
-        accum
+        Some(accum)
     }
 
     /// Timings of the last frame.
