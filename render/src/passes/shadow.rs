@@ -185,28 +185,7 @@ impl ShadowPass {
             bind_group_layouts: &[Some(&view_layout), Some(&scene.instance_layout)],
             immediate_size: 0,
         });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("direct.shadow.pipeline"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(crate::scene::upload::vertex_layout())],
-            },
-            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: wgpu::TextureFormat::Depth32Float,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: None,
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipeline = super::depth_only_pipeline(device, "direct.shadow.pipeline", &layout, &module);
         let (view_buffer, view_group) = Self::view_resources(device, &view_layout, 8);
         let (texture, array_view) = Self::create_texture(device, 16, 1);
         Self {

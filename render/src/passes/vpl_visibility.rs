@@ -93,28 +93,7 @@ impl VplVisibilityPass {
             bind_group_layouts: &[Some(&layout), Some(&scene.instance_layout)],
             immediate_size: 0,
         });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("vpl.shadow.pipeline"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(crate::scene::upload::vertex_layout())],
-            },
-            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: wgpu::TextureFormat::Depth32Float,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: None,
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipeline = super::depth_only_pipeline(device, "vpl.shadow.pipeline", &pipeline_layout, &module);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("vpl.shadow.params"),
             size: std::mem::size_of::<VisibilityParams>() as u64,
