@@ -1,0 +1,81 @@
+//! The exact-VPL reference for every kind of light: its indirect light (`indirect.accum`)
+//! carries the same energy as the path tracer's one-bounce indirect light. This checks the
+//! flux of the VPL sampling per light kind (spot: perspective texels, point: six cube
+//! faces, directional: orthographic texels) independently of the direct light.
+
+use gi_lab_tests::{default_scene, gpu};
+use gi_render::cpu::pathtrace::{PathTracer, PtSettings};
+use gi_render::lab_settings::IndirectTechnique;
+use gi_render::scene::{LightKind, Scene};
+use gi_render::{ImageF32, LabSettings, Renderer};
+
+const SIZE: u32 = 32;
+
+fn luminance_sum(img: &ImageF32) -> f64 {
+    img.data.iter().map(|p| (0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]) as f64).sum()
+}
+
+/// (exact-VPL indirect, path-traced indirect) total luminance for `scene` at time 0.
+fn indirect_energy(scene: Scene) -> (f64, f64) {
+    let mut s = LabSettings::default();
+    s.indirect.technique = IndirectTechnique::ExactVpl;
+    s.reference.vpls_per_frame = 128;
+    s.reference.total_vpls = 2048;
+    s.reference.light_gbuffer_size = 256;
+    let mut r = Renderer::new(gpu(), scene.clone(), s, SIZE, SIZE).expect("renderer");
+    r.clock.playing = false;
+    for _ in 0..16 {
+        r.render_frame();
+    }
+    assert_eq!(r.reference_progress(), Some((2048, 2048)));
+    let vpl = r.readback("indirect.accum").expect("indirect.accum");
+    let pt = PathTracer::new(&scene, 0.0);
+    let img = pt.render(r.view_proj(), r.camera.position, SIZE, SIZE, PtSettings { bounces: 1, spp: 64, seed: 3 });
+    (luminance_sum(&vpl), luminance_sum(&img.indirect))
+}
+
+fn light_node(scene: &Scene) -> usize {
+    scene.nodes.iter().position(|n| n.light.is_some()).expect("the default scene has a light")
+}
+
+fn check(name: &str, scene: Scene) {
+    let (vpl, pt) = indirect_energy(scene);
+    let ratio = vpl / pt;
+    println!("{name}: exact-VPL / path-traced indirect energy = {ratio:.4} ({vpl:.3} / {pt:.3})");
+    assert!(pt > 0.0, "{name}: the path tracer finds indirect light");
+    // Both are unbiased estimates of the same integral; the bound covers their noise at
+    // these sample counts (2048 VPLs, 64 spp at 32×32).
+    assert!((0.9..=1.1).contains(&ratio), "{name}: indirect energy ratio {ratio}");
+}
+
+#[test]
+fn spot_light_vpls_carry_the_path_traced_indirect_energy() {
+    check("spot", default_scene());
+}
+
+#[test]
+fn point_light_vpls_carry_the_path_traced_indirect_energy() {
+    let mut scene = default_scene();
+    let ni = light_node(&scene);
+    let li = scene.nodes[ni].light.expect("light");
+    scene.lights[li].kind = LightKind::Point;
+    // In the middle of the room: right under the ceiling, the lit spot above the light is so
+    // bright and so small that the path tracer's BRDF sampling converges to it only slowly
+    // (measured there: exact-VPL / path tracer 1.09 at 64 spp, 1.07 at 512 spp, the VPL side
+    // stable within 2 %).
+    scene.nodes[ni].transform.translation.y = 1.2;
+    check("point", scene);
+}
+
+#[test]
+fn directional_light_vpls_carry_the_path_traced_indirect_energy() {
+    // A directional light shining into the open box along the camera's view direction.
+    let mut scene = default_scene();
+    let ni = light_node(&scene);
+    let li = scene.nodes[ni].light.expect("light");
+    let cam = scene.nodes.iter().position(|n| n.camera.is_some()).expect("the default scene has a camera");
+    scene.nodes[ni].transform.rotation = scene.nodes[cam].transform.rotation;
+    scene.lights[li].kind = LightKind::Directional;
+    scene.lights[li].intensity = 2.0;
+    check("directional", scene);
+}
