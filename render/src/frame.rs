@@ -452,10 +452,10 @@ impl Renderer {
             .iter()
             .enumerate()
             .flat_map(|(i, wl)| light_views(wl, self.bounds).into_iter().map(move |v| (i, v)))
-            .map(|(i, view)| BatchView { light_index: i as u32, view, view_count: 0 })
+            .map(|(i, view)| BatchView { light_index: i as u32, view })
             .collect();
         let v_count = views.len() as u32;
-        let batch = BatchView { view_count: v_count, ..views[(x.batches % v_count) as usize] };
+        let batch = views[(x.batches % v_count) as usize];
         let k = x.batches;
         let jitter = (halton(k / v_count + 1, 2) - 0.5, halton(k / v_count + 1, 3) - 0.5);
         let size = rs.light_gbuffer_size as f32;

@@ -88,12 +88,11 @@ pub fn halton(mut index: u32, base: u32) -> f32 {
     r
 }
 
-/// One batch's view: which light, which of its views, and how many views there are in all.
+/// One batch's view: which light and which of its views.
 #[derive(Clone, Copy, Debug)]
 pub struct BatchView {
     pub light_index: u32,
     pub view: LightView,
-    pub view_count: u32,
 }
 
 pub struct VplSamplePass {
