@@ -36,12 +36,30 @@ pub enum Command {
     /// Render every combination of swept settings; write sweep.csv (settings, per-pass ms,
     /// FLIP, RMSE, flicker) and pareto.png (quality against time).
     Sweep(crate::sweep::SweepArgs),
+    /// Export a preset for engines: JSON or RON with schema id and provenance (GI Lab
+    /// version, scene, camera, date); see docs/preset-schema.md.
+    Export(ExportArgs),
     /// Regenerate the embedded default scene (assets/cornell_box.glb).
     GenAssets {
         /// Where to write the .glb.
         #[arg(long, default_value = "assets/cornell_box.glb")]
         out: PathBuf,
     },
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct ExportArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// json or ron.
+    #[arg(long, default_value = "json")]
+    pub format: String,
+    /// Output file; standard output when omitted.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Instead of exporting, write the schema documentation (docs/preset-schema.md) here.
+    #[arg(long)]
+    pub schema_doc: Option<PathBuf>,
 }
 
 /// Options of the windowed app (the default command).
@@ -632,6 +650,32 @@ fn settings() {
     }
 }
 
+/// `gi-lab export`: the preset (with overrides) as an engine export.
+fn export(a: &ExportArgs) -> Result<(), CliError> {
+    use gi_render::preset::{Export, ExportFormat, Provenance, schema_markdown, write_atomic};
+    if let Some(path) = &a.schema_doc {
+        return write_atomic(path, &schema_markdown())
+            .map(|_| println!("wrote {}", path.display()))
+            .map_err(|e| CliError::input(format!("{}: {e}", path.display())));
+    }
+    let format = ExportFormat::parse(&a.format)
+        .ok_or_else(|| CliError::input(format!("--format {}: expected json or ron", a.format)))?;
+    let settings = load_settings(&a.scene)?;
+    let scene = load_scene(&a.scene)?;
+    let camera = gi_render::frame::default_camera(&scene, scene.bounds(0.0), 16.0 / 9.0);
+    let name = a.scene.scene.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| scene.name.clone());
+    let text = Export::new(settings, Provenance::now(&name, camera)).to_text(format);
+    match &a.out {
+        None => {
+            println!("{text}");
+            Ok(())
+        }
+        Some(path) => write_atomic(path, &text)
+            .map(|_| println!("wrote {}", path.display()))
+            .map_err(|e| CliError::input(format!("{}: {e}", path.display()))),
+    }
+}
+
 /// Runs the command line; returns the process exit code.
 pub fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
@@ -655,6 +699,7 @@ pub fn main() -> ExitCode {
             settings();
             Ok(())
         }
+        Some(Command::Export(a)) => export(a),
         Some(Command::GenAssets { out }) => std::fs::write(out, scene::cornell::build_glb())
             .map(|_| println!("wrote {}", out.display()))
             .map_err(|e| CliError::input(format!("{}: {e}", out.display()))),

@@ -119,6 +119,130 @@ impl BufferRegistry {
     }
 }
 
+/// One buffer's raw value at a probed pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ProbeValue {
+    pub name: String,
+    /// The texel read: the probed pixel scaled to this buffer's size (layer 0, level 0).
+    pub texel: (u32, u32),
+    pub value: [f32; 4],
+}
+
+impl BufferRegistry {
+    /// The raw value of every registered buffer at each of `pixels` (coordinates in a
+    /// `frame_size` image; buffers of another size are read at the same relative position).
+    /// One copy per buffer and point, one map: cheap enough to run every frame.
+    pub fn probe(
+        &self,
+        ctx: &GpuContext,
+        depth_probe: &crate::passes::view::DepthProbe,
+        frame_size: (u32, u32),
+        pixels: &[(u32, u32)],
+    ) -> Result<Vec<Vec<ProbeValue>>, BufferError> {
+        const STRIDE: u64 = 256;
+        let max = crate::passes::view::PROBE_MAX_POINTS;
+        if pixels.len() > max {
+            return Err(BufferError::Range {
+                name: "probe".into(),
+                what: "point",
+                have: max as u32,
+                want: pixels.len() as u32,
+            });
+        }
+        let readable: Vec<(&BufferEntry, u32, TexelDecoder)> =
+            self.entries.values().filter_map(|e| decoder(e.texture.format()).map(|(bpp, d)| (e, bpp, d))).collect();
+        let count = (readable.len() * pixels.len()) as u64;
+        if count == 0 {
+            return Ok(vec![Vec::new(); pixels.len()]);
+        }
+        let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("buffers.probe"),
+            size: count * STRIDE,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        // Depth values land here first (one f32 per depth buffer and point).
+        let depth_values = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("buffers.probe_depth"),
+            size: count * 4,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let mut enc =
+            ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("buffers.probe") });
+        let (fw, fh) = (frame_size.0.max(1), frame_size.1.max(1));
+        let n = readable.len();
+        // texels[pi * n + bi]
+        let mut texels = Vec::with_capacity(count as usize);
+        for &(px, py) in pixels {
+            for (e, _, _) in &readable {
+                let t = &e.texture;
+                let x = ((px.min(fw - 1) as u64 * t.width() as u64) / fw as u64) as u32;
+                let y = ((py.min(fh - 1) as u64 * t.height() as u64) / fh as u64) as u32;
+                texels.push((x, y));
+            }
+        }
+        for (bi, (e, _, _)) in readable.iter().enumerate() {
+            let t = &e.texture;
+            let slot = |pi: usize| (pi * n + bi) as u64;
+            if t.format().is_depth_stencil_format() {
+                let mine: Vec<(u32, u32)> = (0..pixels.len()).map(|pi| texels[slot(pi) as usize]).collect();
+                let first = (bi * pixels.len()) as u32;
+                depth_probe.record(ctx, &mut enc, t, &mine, &depth_values, first);
+                for pi in 0..pixels.len() {
+                    enc.copy_buffer_to_buffer(
+                        &depth_values,
+                        (first as u64 + pi as u64) * 4,
+                        &buffer,
+                        slot(pi) * STRIDE,
+                        4,
+                    );
+                }
+                continue;
+            }
+            for pi in 0..pixels.len() {
+                let (x, y) = texels[slot(pi) as usize];
+                enc.copy_texture_to_buffer(
+                    wgpu::TexelCopyTextureInfo {
+                        texture: t,
+                        mip_level: 0,
+                        origin: wgpu::Origin3d { x, y, z: 0 },
+                        aspect: wgpu::TextureAspect::All,
+                    },
+                    wgpu::TexelCopyBufferInfo {
+                        buffer: &buffer,
+                        layout: wgpu::TexelCopyBufferLayout {
+                            offset: slot(pi) * STRIDE,
+                            bytes_per_row: None,
+                            rows_per_image: None,
+                        },
+                    },
+                    wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+                );
+            }
+        }
+        ctx.queue.submit([enc.finish()]);
+        let bytes = map_read(ctx, &buffer).map_err(|message| BufferError::Map { name: "probe".into(), message })?;
+        Ok((0..pixels.len())
+            .map(|pi| {
+                readable
+                    .iter()
+                    .enumerate()
+                    .map(|(bi, (e, bpp, decode))| {
+                        let k = pi * n + bi;
+                        let o = k * STRIDE as usize;
+                        ProbeValue {
+                            name: e.name.clone(),
+                            texel: texels[k],
+                            value: decode(&bytes[o..o + *bpp as usize]),
+                        }
+                    })
+                    .collect()
+            })
+            .collect())
+    }
+}
+
 /// Decodes one texel's bytes to f32 RGBA.
 type TexelDecoder = fn(&[u8]) -> [f32; 4];
 

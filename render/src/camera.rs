@@ -6,7 +6,7 @@ use glam::{Mat4, Vec3};
 
 use crate::scene::{Aabb, CameraDef, Projection};
 
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Camera {
     pub position: Vec3,
     /// Rotation about +Y in radians; 0 looks toward −Z.

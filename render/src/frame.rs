@@ -91,6 +91,8 @@ pub struct Renderer {
     flip_map: Option<wgpu::Texture>,
     /// Interactive mode (the app): timings are collected without waiting for the GPU.
     interactive: bool,
+    /// The pixel probe's depth reader, created on first use.
+    depth_probe: std::sync::OnceLock<crate::passes::view::DepthProbe>,
 }
 
 impl Renderer {
@@ -151,6 +153,7 @@ impl Renderer {
             exact_vpl: None,
             flip_map: None,
             interactive: false,
+            depth_probe: std::sync::OnceLock::new(),
         };
         r.register_all();
         r.ensure_exact_vpl();
@@ -512,6 +515,13 @@ impl Renderer {
     }
 
     /// The tone-mapped image (Rgba8Unorm with an Rgba8UnormSrgb view format).
+    /// The raw value of every registered buffer at each pixel (see
+    /// [`BufferRegistry::probe`]); blocks until the values are on the CPU.
+    pub fn probe(&self, pixels: &[(u32, u32)]) -> Result<Vec<Vec<crate::buffers::ProbeValue>>, BufferError> {
+        let probe = self.depth_probe.get_or_init(|| crate::passes::view::DepthProbe::new(&self.ctx));
+        self.registry.probe(&self.ctx, probe, self.size(), pixels)
+    }
+
     pub fn final_ldr(&self) -> &wgpu::Texture {
         &self.compose.ldr
     }

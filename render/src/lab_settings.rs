@@ -216,16 +216,11 @@ impl LabSettings {
         ron::ser::to_string_pretty(self, cfg).unwrap_or_else(|e| format!("// serialisation failed: {e}"))
     }
 
-    /// Writes the preset atomically: a temporary file in the same folder, then a rename;
-    /// the replaced file is kept as `<name>.bak`.
+    /// Writes the preset atomically (`crate::preset::write_atomic`): a temporary file, then
+    /// a rename; the replaced file is kept as `<name>.bak`.
     pub fn save(&self, path: &Path) -> Result<(), PresetError> {
-        let io = |source| PresetError::Io { path: path.display().to_string(), source };
-        let tmp = path.with_extension("ron.tmp");
-        std::fs::write(&tmp, self.to_ron()).map_err(io)?;
-        if path.exists() {
-            std::fs::copy(path, path.with_extension("ron.bak")).map_err(io)?;
-        }
-        std::fs::rename(&tmp, path).map_err(io)
+        crate::preset::write_atomic(path, &self.to_ron())
+            .map_err(|source| PresetError::Io { path: path.display().to_string(), source })
     }
 }
 

@@ -12,6 +12,7 @@ pub mod image_io;
 pub mod lab_settings;
 pub mod metrics;
 pub mod passes;
+pub mod preset;
 pub mod scene;
 pub mod settings;
 pub mod shaders;

@@ -22,6 +22,8 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("vpl/sample.wgsl", include_str!("../../shaders/vpl/sample.wgsl")),
     ("vpl/shadow.wgsl", include_str!("../../shaders/vpl/shadow.wgsl")),
     ("vpl/gather.wgsl", include_str!("../../shaders/vpl/gather.wgsl")),
+    ("view/view.wgsl", include_str!("../../shaders/view/view.wgsl")),
+    ("view/probe.wgsl", include_str!("../../shaders/view/probe.wgsl")),
 ];
 
 /// Files that are entry modules (not only imported).
@@ -35,6 +37,8 @@ pub const ENTRY_MODULES: &[&str] = &[
     "vpl/sample.wgsl",
     "vpl/shadow.wgsl",
     "vpl/gather.wgsl",
+    "view/view.wgsl",
+    "view/probe.wgsl",
 ];
 
 #[derive(Debug, thiserror::Error, PartialEq)]

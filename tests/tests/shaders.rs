@@ -89,4 +89,8 @@ fn uniform_sizes_match_wgsl() {
     let vg = parse("vpl/gather.wgsl");
     assert_eq!(struct_size(&vg, "Params") as usize, std::mem::size_of::<vpl_gather::GatherParams>());
     assert_eq!(struct_size(&vg, "Camera") as usize, std::mem::size_of::<CameraUniform>());
+    let v = parse("view/view.wgsl");
+    assert_eq!(struct_size(&v, "ViewParams") as usize, std::mem::size_of::<gi_render::passes::view::ViewParams>());
+    let p = parse("view/probe.wgsl");
+    assert_eq!(struct_size(&p, "Jobs") as usize, std::mem::size_of::<gi_render::passes::view::ProbeJobs>());
 }

@@ -5,3 +5,4 @@ pub mod brdf;
 pub mod pathtrace;
 pub mod raycast;
 pub mod tonemap;
+pub mod view;

@@ -6,6 +6,7 @@ pub mod compose;
 pub mod direct;
 pub mod gbuffer;
 pub mod shadow;
+pub mod view;
 pub mod vpl;
 pub mod vpl_gather;
 pub mod vpl_visibility;

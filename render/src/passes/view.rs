@@ -1,0 +1,510 @@
+//! The buffer viewer's colour mapping (DESIGN.md principle 6; RenderDoc's texture viewer):
+//! one pass that turns any registered buffer — float, uint or depth, 2D or array, any mip
+//! level — into a display-encoded RGBA8 image. Raw texels are fetched, never filtered, so
+//! every format shows safely (egui only ever samples the RGBA8 result). Shader:
+//! `shaders/view/view.wgsl`; CPU twin: `crate::cpu::view`.
+//!
+//! The pass is not part of the frame: each viewer owns a [`BufferView`] (its own uniform
+//! and output) and runs it after the frame on the buffer it shows.
+
+use std::sync::Arc;
+
+use glam::{UVec4, Vec4};
+use serde::{Deserialize, Serialize};
+
+use crate::buffers::{BufferEntry, BufferError, BufferKind};
+use crate::gpu::GpuContext;
+
+/// Which values are shown.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum ViewMode {
+    /// The xyz channels as red, green and blue.
+    #[default]
+    Rgb,
+    /// One channel through a colour map.
+    Channel,
+    /// The length of xyz (speed of a motion vector, norm of a normal) through a colour map.
+    Length,
+}
+
+/// False-colour maps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum Colormap {
+    #[default]
+    Grey,
+    Viridis,
+    Turbo,
+    Inferno,
+}
+
+impl Colormap {
+    pub const ALL: [Colormap; 4] = [Colormap::Grey, Colormap::Viridis, Colormap::Turbo, Colormap::Inferno];
+}
+
+/// How one buffer is mapped to colour.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ViewSettings {
+    pub mode: ViewMode,
+    /// Channel index 0–3 (r, g, b, a) for [`ViewMode::Channel`].
+    pub channel: u32,
+    pub colormap: Colormap,
+    /// Values in [range.0, range.1] (after the exposure scale) map to [0, 1].
+    pub range: [f32; 2],
+    /// Scale by 2^exposure_ev before the range (HDR buffers).
+    pub exposure_ev: f32,
+    /// Logarithmic mapping of the range (needs range.0 > 0; smaller values clamp).
+    pub log: bool,
+    /// Apply the sRGB transfer to RGB output (linear data such as radiance and albedo).
+    pub srgb: bool,
+    /// Paint NaN magenta and ±Inf green.
+    pub flag_nan_inf: bool,
+    /// Paint negative values cyan.
+    pub flag_negative: bool,
+    /// Array layer (shadow-map faces, atlases).
+    pub layer: u32,
+    /// Mip level (pyramids: HCB levels, pull-push levels, SSIL mips).
+    pub level: u32,
+}
+
+impl Default for ViewSettings {
+    fn default() -> Self {
+        Self {
+            mode: ViewMode::Rgb,
+            channel: 0,
+            colormap: Colormap::Viridis,
+            range: [0.0, 1.0],
+            exposure_ev: 0.0,
+            log: false,
+            srgb: true,
+            flag_nan_inf: true,
+            flag_negative: true,
+            layer: 0,
+            level: 0,
+        }
+    }
+}
+
+impl ViewSettings {
+    /// A sensible first view of a buffer of this kind.
+    pub fn for_kind(kind: BufferKind) -> Self {
+        let d = Self::default();
+        match kind {
+            BufferKind::Ldr => Self { srgb: false, ..d },
+            BufferKind::Hdr | BufferKind::Albedo => d,
+            BufferKind::Direction => Self { range: [-1.0, 1.0], srgb: false, flag_negative: false, ..d },
+            BufferKind::Data => Self { srgb: false, flag_negative: false, ..d },
+            BufferKind::Depth => {
+                Self { mode: ViewMode::Channel, colormap: Colormap::Grey, range: [0.9, 1.0], srgb: false, ..d }
+            }
+            BufferKind::Motion => Self {
+                mode: ViewMode::Length,
+                colormap: Colormap::Turbo,
+                range: [0.0, 4.0],
+                srgb: false,
+                flag_negative: false,
+                ..d
+            },
+        }
+    }
+}
+
+/// Uniform of the view pass; WGSL twin: `ViewParams` in `shaders/view/view.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ViewParams {
+    pub range: Vec4,
+    pub modes: UVec4,
+    pub source: UVec4,
+}
+
+/// How the shader must read a texture (`params.modes.w >> 8`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SourceKind {
+    Float = 0,
+    FloatArray = 1,
+    Uint = 2,
+    UintArray = 3,
+    Depth = 4,
+    DepthArray = 5,
+}
+
+impl SourceKind {
+    /// The kind for a texture, or None for formats the viewer cannot read (signed ints).
+    pub fn of(texture: &wgpu::Texture) -> Option<Self> {
+        let array = texture.depth_or_array_layers() > 1;
+        let aspect = texture.format().is_depth_stencil_format().then_some(wgpu::TextureAspect::DepthOnly);
+        Some(match (texture.format().sample_type(aspect, None)?, array) {
+            (wgpu::TextureSampleType::Float { .. }, false) => Self::Float,
+            (wgpu::TextureSampleType::Float { .. }, true) => Self::FloatArray,
+            (wgpu::TextureSampleType::Uint, false) => Self::Uint,
+            (wgpu::TextureSampleType::Uint, true) => Self::UintArray,
+            (wgpu::TextureSampleType::Depth, false) => Self::Depth,
+            (wgpu::TextureSampleType::Depth, true) => Self::DepthArray,
+            _ => return None,
+        })
+    }
+
+    fn binding(self) -> u32 {
+        self as u32 + 1
+    }
+
+    fn dimension(self) -> wgpu::TextureViewDimension {
+        match self {
+            Self::FloatArray | Self::UintArray | Self::DepthArray => wgpu::TextureViewDimension::D2Array,
+            _ => wgpu::TextureViewDimension::D2,
+        }
+    }
+}
+
+impl ViewParams {
+    pub fn new(s: &ViewSettings, source: SourceKind) -> Self {
+        let flags = s.log as u32 | (s.srgb as u32) << 1 | (s.flag_nan_inf as u32) << 2 | (s.flag_negative as u32) << 3;
+        let mode = match s.mode {
+            ViewMode::Rgb => 0,
+            ViewMode::Channel => 1,
+            ViewMode::Length => 2,
+        };
+        Self {
+            range: Vec4::new(s.range[0], s.range[1], s.exposure_ev.exp2(), 0.0),
+            modes: UVec4::new(mode, s.channel.min(3), s.colormap as u32, flags | (source as u32) << 8),
+            source: UVec4::new(s.layer, s.level, 0, 0),
+        }
+    }
+}
+
+/// Output format of the view: display-encoded values; sample it through an
+/// `Rgba8UnormSrgb` view (listed in its view formats) to get linear colour.
+pub const VIEW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+
+/// Pipeline, layout and the 1×1 stand-ins for the bindings a source does not use; shared
+/// by every viewer.
+pub struct ViewPipeline {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    dummies: Vec<wgpu::TextureView>,
+    colormaps: wgpu::Buffer,
+}
+
+impl ViewPipeline {
+    pub fn new(ctx: &GpuContext) -> Arc<Self> {
+        let device = &ctx.device;
+        let fs = wgpu::ShaderStages::FRAGMENT;
+        let tex = |binding, sample_type, view_dimension| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: fs,
+            ty: wgpu::BindingType::Texture { sample_type, view_dimension, multisampled: false },
+            count: None,
+        };
+        let float = wgpu::TextureSampleType::Float { filterable: false };
+        let (d2, arr) = (wgpu::TextureViewDimension::D2, wgpu::TextureViewDimension::D2Array);
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("view.inputs"),
+            entries: &[
+                super::bgl::uniform(0, fs),
+                tex(1, float, d2),
+                tex(2, float, arr),
+                tex(3, wgpu::TextureSampleType::Uint, d2),
+                tex(4, wgpu::TextureSampleType::Uint, arr),
+                tex(5, wgpu::TextureSampleType::Depth, d2),
+                tex(6, wgpu::TextureSampleType::Depth, arr),
+                super::bgl::storage(7, fs, true),
+            ],
+        });
+        let module = crate::shaders::create_module(device, "view/view.wgsl");
+        let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("view.pipeline_layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("view.pipeline"),
+            layout: Some(&pl),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(VIEW_FORMAT.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let dummy = |label: &str, format, layers| {
+            let t = device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: layers },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            });
+            let dimension = if layers > 1 { arr } else { d2 };
+            t.create_view(&wgpu::TextureViewDescriptor {
+                label: Some(label),
+                dimension: Some(dimension),
+                ..Default::default()
+            })
+        };
+        use wgpu::TextureFormat as F;
+        let dummies = vec![
+            dummy("view.dummy_float", F::Rgba32Float, 1),
+            dummy("view.dummy_float_array", F::Rgba32Float, 2),
+            dummy("view.dummy_uint", F::R32Uint, 1),
+            dummy("view.dummy_uint_array", F::R32Uint, 2),
+            dummy("view.dummy_depth", F::Depth32Float, 1),
+            dummy("view.dummy_depth_array", F::Depth32Float, 2),
+        ];
+        let table: Vec<[f32; 4]> =
+            crate::cpu::view::COLORMAP_TABLES.iter().flat_map(|t| t.iter().map(|c| [c[0], c[1], c[2], 1.0])).collect();
+        let colormaps = wgpu::util::DeviceExt::create_buffer_init(
+            device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("view.colormaps"),
+                contents: bytemuck::cast_slice(&table),
+                usage: wgpu::BufferUsages::STORAGE,
+            },
+        );
+        Arc::new(Self { pipeline, layout, dummies, colormaps })
+    }
+}
+
+/// One viewer's state on the GPU: its uniform and its output image.
+pub struct BufferView {
+    shared: Arc<ViewPipeline>,
+    params: wgpu::Buffer,
+    output: Option<wgpu::Texture>,
+}
+
+impl BufferView {
+    pub fn new(ctx: &GpuContext, shared: Arc<ViewPipeline>) -> Self {
+        let params = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("view.params"),
+            size: std::mem::size_of::<ViewParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Self { shared, params, output: None }
+    }
+
+    /// The last output (None before the first [`BufferView::render`]).
+    pub fn output(&self) -> Option<&wgpu::Texture> {
+        self.output.as_ref()
+    }
+
+    /// Maps `entry` (its `settings.layer` and `settings.level`) to colour; the output has
+    /// the size of that level. Returns whether the output texture was (re)created, so that
+    /// a UI can re-point its texture handle.
+    pub fn render(
+        &mut self,
+        ctx: &GpuContext,
+        entry: &BufferEntry,
+        settings: &ViewSettings,
+    ) -> Result<bool, BufferError> {
+        let t = &entry.texture;
+        let name = entry.name.clone();
+        let source = SourceKind::of(t).ok_or(BufferError::Format { name: name.clone(), format: t.format() })?;
+        if settings.level >= t.mip_level_count() {
+            return Err(BufferError::Range { name, what: "level", have: t.mip_level_count(), want: settings.level });
+        }
+        if settings.layer >= t.depth_or_array_layers() {
+            return Err(BufferError::Range {
+                name,
+                what: "layer",
+                have: t.depth_or_array_layers(),
+                want: settings.layer,
+            });
+        }
+        let (w, h) = ((t.width() >> settings.level).max(1), (t.height() >> settings.level).max(1));
+        let recreated = self.output.as_ref().is_none_or(|o| o.width() != w || o.height() != h);
+        if recreated {
+            self.output = Some(ctx.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("view.output"),
+                size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: VIEW_FORMAT,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[wgpu::TextureFormat::Rgba8UnormSrgb],
+            }));
+        }
+        let Some(output) = &self.output else { return Ok(recreated) };
+        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&ViewParams::new(settings, source)));
+        let aspect = if t.format().is_depth_stencil_format() {
+            wgpu::TextureAspect::DepthOnly
+        } else {
+            wgpu::TextureAspect::All
+        };
+        let src_view = t.create_view(&wgpu::TextureViewDescriptor {
+            label: Some("view.source"),
+            dimension: Some(source.dimension()),
+            aspect,
+            ..Default::default()
+        });
+        let mut entries = vec![wgpu::BindGroupEntry { binding: 0, resource: self.params.as_entire_binding() }];
+        for (i, dummy) in self.shared.dummies.iter().enumerate() {
+            let binding = i as u32 + 1;
+            let view = if binding == source.binding() { &src_view } else { dummy };
+            entries.push(wgpu::BindGroupEntry { binding, resource: wgpu::BindingResource::TextureView(view) });
+        }
+        entries.push(wgpu::BindGroupEntry { binding: 7, resource: self.shared.colormaps.as_entire_binding() });
+        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("view.inputs"),
+            layout: &self.shared.layout,
+            entries: &entries,
+        });
+        let out_view =
+            output.create_view(&wgpu::TextureViewDescriptor { label: Some("view.output"), ..Default::default() });
+        let mut enc =
+            ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("view.encoder") });
+        {
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("view.pass"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &out_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.shared.pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.draw(0..3, 0..1);
+        }
+        ctx.queue.submit([enc.finish()]);
+        Ok(recreated)
+    }
+}
+
+/// Most texels one probe dispatch reads (`texels` in `shaders/view/probe.wgsl`).
+pub const PROBE_MAX_POINTS: usize = 64;
+
+/// Uniform of the depth probe; WGSL twin: `Jobs` in `shaders/view/probe.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ProbeJobs {
+    pub header: UVec4,
+    pub texels: [UVec4; PROBE_MAX_POINTS],
+}
+
+/// Reads single texels of depth textures (which WebGPU cannot copy partially) into a
+/// buffer, for the pixel probe.
+pub struct DepthProbe {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    dummy_2d: wgpu::TextureView,
+    dummy_array: wgpu::TextureView,
+}
+
+impl DepthProbe {
+    pub fn new(ctx: &GpuContext) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("probe.inputs"),
+            entries: &[
+                super::bgl::uniform(0, cs),
+                super::bgl::depth(1, cs),
+                super::bgl::depth_array(2, cs),
+                super::bgl::storage(3, cs, false),
+            ],
+        });
+        let module = crate::shaders::create_module(device, "view/probe.wgsl");
+        let pipeline = super::compute_pipeline(device, "probe.depth", &module, "probe_depth", &[&layout]);
+        let dummy = |label: &str, layers: u32, dimension| {
+            device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: layers },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: wgpu::TextureFormat::Depth32Float,
+                    usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
+                })
+                .create_view(&wgpu::TextureViewDescriptor {
+                    label: Some(label),
+                    dimension: Some(dimension),
+                    ..Default::default()
+                })
+        };
+        Self {
+            pipeline,
+            layout,
+            dummy_2d: dummy("probe.dummy_2d", 1, wgpu::TextureViewDimension::D2),
+            dummy_array: dummy("probe.dummy_array", 2, wgpu::TextureViewDimension::D2Array),
+        }
+    }
+
+    /// Records reads of `texels` (layer 0) of the depth texture `t` into `values`, starting at
+    /// float index `first`. At most [`PROBE_MAX_POINTS`] texels.
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        t: &wgpu::Texture,
+        texels: &[(u32, u32)],
+        values: &wgpu::Buffer,
+        first: u32,
+    ) {
+        let n = texels.len().min(PROBE_MAX_POINTS);
+        let array = t.depth_or_array_layers() > 1;
+        let mut jobs =
+            ProbeJobs { header: UVec4::new(n as u32, first, 0, array as u32), texels: [UVec4::ZERO; PROBE_MAX_POINTS] };
+        for (j, &(x, y)) in jobs.texels.iter_mut().zip(texels) {
+            *j = UVec4::new(x, y, 0, 0);
+        }
+        let uniform = wgpu::util::DeviceExt::create_buffer_init(
+            &ctx.device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("probe.jobs"),
+                contents: bytemuck::bytes_of(&jobs),
+                usage: wgpu::BufferUsages::UNIFORM,
+            },
+        );
+        let dimension = if array { wgpu::TextureViewDimension::D2Array } else { wgpu::TextureViewDimension::D2 };
+        let view = t.create_view(&wgpu::TextureViewDescriptor {
+            label: Some("probe.source"),
+            dimension: Some(dimension),
+            aspect: wgpu::TextureAspect::DepthOnly,
+            ..Default::default()
+        });
+        let (v2, va) = if array { (&self.dummy_2d, &view) } else { (&view, &self.dummy_array) };
+        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("probe.inputs"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(v2) },
+                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(va) },
+                wgpu::BindGroupEntry { binding: 3, resource: values.as_entire_binding() },
+            ],
+        });
+        let mut pass = encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("probe.depth"), timestamp_writes: None });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(1, 1, 1);
+    }
+}
