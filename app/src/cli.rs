@@ -73,6 +73,16 @@ pub struct AppArgs {
     /// Frames to render before the screenshot.
     #[arg(long, default_value_t = 30)]
     pub screenshot_frames: u64,
+    /// Folder of the session file (default: $GI_LAB_CONFIG_DIR, else the platform config
+    /// directory, e.g. ~/.config/gi-lab).
+    #[arg(long)]
+    pub config_dir: Option<PathBuf>,
+    /// Start from defaults instead of restoring the last session (it is still autosaved).
+    #[arg(long)]
+    pub fresh: bool,
+    /// Folder the preset browser lists (default: ./presets).
+    #[arg(long, default_value = "presets")]
+    pub presets_dir: PathBuf,
 }
 
 #[derive(Args, Debug, Clone)]
@@ -93,7 +103,14 @@ pub struct SceneArgs {
 
 impl Default for AppArgs {
     fn default() -> Self {
-        Self { scene: SceneArgs::default(), screenshot: None, screenshot_frames: 30 }
+        Self {
+            scene: SceneArgs::default(),
+            screenshot: None,
+            screenshot_frames: 30,
+            config_dir: None,
+            fresh: false,
+            presets_dir: PathBuf::from("presets"),
+        }
     }
 }
 

@@ -2,6 +2,9 @@
 
 pub mod app;
 pub mod cli;
+pub mod panes;
 pub mod plot;
+pub mod session;
 pub mod settings_ui;
 pub mod sweep;
+pub mod viewer;

@@ -1,23 +1,21 @@
-//! Settings panels: one function per pass (DESIGN.md principle 4). Each starts by
-//! destructuring its `Settings` so that a new field breaks the build until it has a
-//! widget; the widgets themselves are driven by the field's metadata (range, unit,
-//! symbol, documentation), never by ranges repeated here.
+//! Settings panels, generated from `LabSettings` (DESIGN.md principle 4): one collapsible
+//! section per stage with a widget per field chosen from the field's metadata — slider or
+//! drag value with unit and range, checkbox, combo — a tooltip (meaning, paper symbol,
+//! unit, range, cost), a reset-to-default button and a marker on fields that differ from
+//! the loaded preset. Ranges and labels come from `settings_group!`, never from here, so a
+//! new field of any pass appears without UI code. Each widget's accessible name is the
+//! field's dotted path (`direct.pcf_radius`), which the UI tests use to find it.
 
 use egui::Ui;
-use gi_render::lab_settings::{IndirectSettings, IndirectTechnique};
-use gi_render::passes::compose::TonemapSettings;
-use gi_render::passes::direct::DirectSettings;
-use gi_render::passes::vpl::ReferenceSettings;
-use gi_render::settings::{FieldKind, FieldMeta, SettingsGroup};
+use gi_render::LabSettings;
+use gi_render::lab_settings::{GroupVisitor, IndirectTechnique};
+use gi_render::settings::{FieldKind, FieldMeta, SettingsGroup, Value};
 
-fn meta<S: SettingsGroup>(name: &str) -> &'static FieldMeta {
-    S::fields().iter().find(|m| m.name == name).unwrap_or_else(|| {
-        panic!("{}.{name} has no metadata: the settings_group! declaration is out of sync", S::GROUP)
-    })
-}
+/// Colour of the "differs from the preset" marker.
+pub const CHANGED: egui::Color32 = egui::Color32::from_rgb(255, 176, 64);
 
-fn tooltip(m: &FieldMeta) -> String {
-    let mut t = m.doc.trim().to_string();
+pub fn tooltip(m: &FieldMeta) -> String {
+    let mut t = m.doc.split('\n').map(str::trim).collect::<Vec<_>>().join(" ").trim().to_string();
     if !m.symbol.is_empty() {
         t += &format!("\nPaper symbol: {}", m.symbol);
     }
@@ -28,39 +26,10 @@ fn tooltip(m: &FieldMeta) -> String {
         t += &format!("\nRange: {} … {}", m.min, m.max);
     }
     t += &format!("\nCost: {}", m.cost);
+    if m.resets_history {
+        t += "\nChanging it restarts temporal accumulation.";
+    }
     t
-}
-
-fn label(ui: &mut Ui, m: &FieldMeta) {
-    let text = if m.symbol.is_empty() {
-        m.name.replace('_', " ")
-    } else {
-        format!("{} ({})", m.name.replace('_', " "), m.symbol)
-    };
-    ui.label(text).on_hover_text(tooltip(m));
-}
-
-/// One row of a settings grid: the label with its tooltip, the widget, and a reset
-/// button enabled when the value differs from the default.
-fn row<T: PartialEq + Copy>(
-    ui: &mut Ui,
-    m: &FieldMeta,
-    value: &mut T,
-    default: T,
-    widget: impl FnOnce(&mut Ui, &mut T) -> egui::Response,
-) -> bool {
-    let mut changed = false;
-    label(ui, m);
-    ui.horizontal(|ui| {
-        changed |= widget(ui, value).on_hover_text(tooltip(m)).changed();
-        let reset = ui.add_enabled(*value != default, egui::Button::new("reset").small());
-        if reset.on_hover_text("reset to default").clicked() {
-            *value = default;
-            changed = true;
-        }
-    });
-    ui.end_row();
-    changed
 }
 
 /// Whether a slider over the field's range should be logarithmic (ranges over 2 decades).
@@ -68,137 +37,186 @@ fn logarithmic(m: &FieldMeta) -> bool {
     m.min > 0.0 && m.max / m.min > 100.0
 }
 
-/// A slider for an f32 field with its range and unit.
-pub fn f32_field(ui: &mut Ui, m: &FieldMeta, value: &mut f32, default: f32) -> bool {
-    row(ui, m, value, default, |ui, v| {
-        ui.add(
-            egui::Slider::new(v, m.min as f32..=m.max as f32)
-                .logarithmic(logarithmic(m))
-                .suffix(format!(" {}", m.unit)),
-        )
-    })
+fn unit_suffix(m: &FieldMeta) -> String {
+    if m.unit.is_empty() { String::new() } else { format!(" {}", m.unit) }
 }
 
-/// A slider for a u32 field with its range and unit (a drag value for ranges too wide to
-/// slide over, such as seeds).
-pub fn u32_field(ui: &mut Ui, m: &FieldMeta, value: &mut u32, default: u32) -> bool {
-    if m.min == 0.0 && m.max > 1e6 {
-        return row(ui, m, value, default, |ui, v| {
-            ui.add(egui::DragValue::new(v).range(m.min as u32..=m.max as u32).suffix(format!(" {}", m.unit)))
-        });
-    }
-    row(ui, m, value, default, |ui, v| {
-        ui.add(
-            egui::Slider::new(v, m.min as u32..=m.max as u32)
-                .logarithmic(logarithmic(m))
-                .suffix(format!(" {}", m.unit)),
-        )
-    })
-}
-
-/// A checkbox for a bool field.
-pub fn bool_field(ui: &mut Ui, m: &FieldMeta, value: &mut bool, default: bool) -> bool {
-    row(ui, m, value, default, |ui, v| ui.checkbox(v, ""))
-}
-
-/// A combo box over the choices of an enum field; `labels` in the order of `values`.
-pub fn choice_field<T: PartialEq + Copy>(
-    ui: &mut Ui,
-    m: &FieldMeta,
-    value: &mut T,
-    default: T,
-    values: &[T],
-    labels: &[&str],
-) -> bool {
-    row(ui, m, value, default, |ui, v| {
-        let current = values.iter().position(|x| x == v).and_then(|i| labels.get(i)).copied().unwrap_or("?");
-        let mut changed = false;
-        let mut r = egui::ComboBox::from_id_salt(m.name)
-            .selected_text(current)
-            .show_ui(ui, |ui| {
-                for (x, l) in values.iter().zip(labels) {
-                    changed |= ui.selectable_value(v, *x, *l).changed();
-                }
-            })
-            .response;
-        if changed {
-            r.mark_changed();
+/// The widget of one value; returns its response (changed when the value changed).
+fn value_widget(ui: &mut Ui, path: &str, m: &FieldMeta, v: &mut Value) -> egui::Response {
+    match v {
+        Value::F32(x) => ui.add(
+            egui::Slider::new(x, m.min as f32..=m.max as f32).logarithmic(logarithmic(m)).suffix(unit_suffix(m)),
+        ),
+        Value::U32(x) if m.min == 0.0 && m.max > 1e6 => {
+            ui.add(egui::DragValue::new(x).range(m.min as u32..=m.max as u32).suffix(unit_suffix(m)))
         }
-        r
-    })
+        Value::U32(x) => ui.add(
+            egui::Slider::new(x, m.min as u32..=m.max as u32).logarithmic(logarithmic(m)).suffix(unit_suffix(m)),
+        ),
+        Value::Bool(b) => ui.checkbox(b, ""),
+        Value::Choice(c) => {
+            let FieldKind::Choice(names) = m.kind else { return ui.label("?") };
+            let label_of = |n: &str| {
+                names.iter().position(|x| *x == n).and_then(|i| m.labels.get(i)).copied().unwrap_or(n).to_string()
+            };
+            let mut changed = false;
+            let mut r = egui::ComboBox::from_id_salt(path)
+                .selected_text(label_of(c))
+                .show_ui(ui, |ui| {
+                    for n in names.iter() {
+                        changed |= ui.selectable_value(c, *n, label_of(n)).changed();
+                    }
+                })
+                .response;
+            if changed {
+                r.mark_changed();
+            }
+            r
+        }
+    }
 }
 
-/// Indirect light: the technique of stages 3–6.
-pub fn indirect_settings_ui(s: &mut IndirectSettings, ui: &mut Ui) -> bool {
-    let d = IndirectSettings::default();
-    let IndirectSettings { technique } = s;
-    type S = IndirectSettings;
-    let mut c = false;
-    egui::Grid::new("indirect_settings").num_columns(2).striped(true).show(ui, |ui| {
-        let values = [IndirectTechnique::None, IndirectTechnique::ExactVpl];
-        c |= choice_field(ui, meta::<S>("technique"), technique, d.technique, &values, IndirectTechnique::LABELS);
-    });
-    c
+/// A small filled dot (drawn, so it needs no glyph from the font).
+fn dot(ui: &mut Ui, colour: Option<egui::Color32>, hover: &str) {
+    let (rect, response) = ui.allocate_exact_size(egui::vec2(10.0, 10.0), egui::Sense::hover());
+    if let Some(c) = colour {
+        ui.painter().circle_filled(rect.center(), 3.5, c);
+        response.on_hover_text(hover);
+    }
 }
 
-/// The exact-VPL reference (stages 3, 4 and 6 of the reference).
-pub fn reference_settings_ui(s: &mut ReferenceSettings, ui: &mut Ui) -> bool {
-    let d = ReferenceSettings::default();
-    let ReferenceSettings {
-        vpls_per_frame,
-        total_vpls,
-        light_gbuffer_size,
-        shadow_map_size,
-        visibility,
-        min_distance_m,
-        depth_bias,
-        normal_offset,
-        seed,
-    } = s;
-    type S = ReferenceSettings;
-    let mut c = false;
-    egui::Grid::new("reference_settings").num_columns(2).striped(true).show(ui, |ui| {
-        c |= u32_field(ui, meta::<S>("vpls_per_frame"), vpls_per_frame, d.vpls_per_frame);
-        c |= u32_field(ui, meta::<S>("total_vpls"), total_vpls, d.total_vpls);
-        c |= u32_field(ui, meta::<S>("light_gbuffer_size"), light_gbuffer_size, d.light_gbuffer_size);
-        c |= u32_field(ui, meta::<S>("shadow_map_size"), shadow_map_size, d.shadow_map_size);
-        c |= bool_field(ui, meta::<S>("visibility"), visibility, d.visibility);
-        c |= f32_field(ui, meta::<S>("min_distance_m"), min_distance_m, d.min_distance_m);
-        c |= f32_field(ui, meta::<S>("depth_bias"), depth_bias, d.depth_bias);
-        c |= f32_field(ui, meta::<S>("normal_offset"), normal_offset, d.normal_offset);
-        c |= u32_field(ui, meta::<S>("seed"), seed, d.seed);
+/// One row of a settings grid. Returns whether the value changed.
+fn field_row(ui: &mut Ui, path: &str, m: &FieldMeta, value: &mut Value, default: &Value, preset: &Value) -> bool {
+    let tip = tooltip(m);
+    let differs = value != preset;
+    ui.horizontal(|ui| {
+        dot(
+            ui,
+            differs.then_some(CHANGED),
+            &format!("differs from the loaded preset (preset: {preset}{})", unit_suffix(m)),
+        );
+        let name = m.name.replace('_', " ");
+        let text = if m.symbol.is_empty() { name } else { format!("{name} ({})", m.symbol) };
+        ui.label(text).on_hover_text(&tip);
     });
-    c
+    let mut changed = false;
+    ui.horizontal(|ui| {
+        changed |= value_widget(ui, path, m, value).accessible_name(path).on_hover_text(&tip).changed();
+        let reset = ui
+            .add_enabled(value != default, egui::Button::new("reset").small())
+            .accessible_name(format!("reset {path}"))
+            .on_hover_text(format!("reset to the default {default}{}", unit_suffix(m)));
+        if reset.clicked() {
+            *value = default.clone();
+            changed = true;
+        }
+    });
+    ui.end_row();
+    changed
 }
 
-/// Direct light and shadow maps (stage 2).
-pub fn direct_settings_ui(s: &mut DirectSettings, ui: &mut Ui) -> bool {
-    let d = DirectSettings::default();
-    let DirectSettings { intensity_scale, shadows, shadow_map_size, pcf_radius, depth_bias, normal_offset } = s;
-    type S = DirectSettings;
-    let mut c = false;
-    egui::Grid::new("direct_settings").num_columns(2).striped(true).show(ui, |ui| {
-        c |= f32_field(ui, meta::<S>("intensity_scale"), intensity_scale, d.intensity_scale);
-        c |= bool_field(ui, meta::<S>("shadows"), shadows, d.shadows);
-        c |= u32_field(ui, meta::<S>("shadow_map_size"), shadow_map_size, d.shadow_map_size);
-        c |= u32_field(ui, meta::<S>("pcf_radius"), pcf_radius, d.pcf_radius);
-        c |= f32_field(ui, meta::<S>("depth_bias"), depth_bias, d.depth_bias);
-        c |= f32_field(ui, meta::<S>("normal_offset"), normal_offset, d.normal_offset);
+/// The generic panel of one settings group: every field of `S`, from its metadata.
+pub fn group_ui<S: SettingsGroup>(ui: &mut Ui, s: &mut S, preset: &S) -> bool {
+    let d = S::default();
+    let mut changed = false;
+    egui::Grid::new(("settings", S::GROUP)).num_columns(2).striped(true).show(ui, |ui| {
+        for m in S::fields() {
+            let path = format!("{}.{}", S::GROUP, m.name);
+            let (Some(mut v), Some(dv), Some(pv)) = (s.get(m.name), d.get(m.name), preset.get(m.name)) else {
+                continue;
+            };
+            if field_row(ui, &path, m, &mut v, &dv, &pv) {
+                // Widgets keep values in range; a failure here would be a metadata bug.
+                if let Err(e) = s.set(m.name, &v) {
+                    log::error!("{path}: {e}");
+                }
+                changed = true;
+            }
+        }
     });
-    c
+    changed
 }
 
-/// Tone mapping (stage 7).
-pub fn tonemap_settings_ui(s: &mut TonemapSettings, ui: &mut Ui) -> bool {
-    let d = TonemapSettings::default();
-    let TonemapSettings { exposure_ev, auto_exposure, key, white_point } = s;
-    type S = TonemapSettings;
-    let mut c = false;
-    egui::Grid::new("tonemap_settings").num_columns(2).striped(true).show(ui, |ui| {
-        c |= f32_field(ui, meta::<S>("exposure_ev"), exposure_ev, d.exposure_ev);
-        c |= bool_field(ui, meta::<S>("auto_exposure"), auto_exposure, d.auto_exposure);
-        c |= f32_field(ui, meta::<S>("key"), key, d.key);
-        c |= f32_field(ui, meta::<S>("white_point"), white_point, d.white_point);
+/// Section titles of the groups, in pipeline order (DESIGN.md's stage numbers).
+pub fn section_title(group: &str) -> String {
+    match group {
+        "animation" => "Animation clock".into(),
+        "direct" => "2 · Direct light".into(),
+        "indirect" => "3–6 · Indirect light".into(),
+        "reference" => "Exact-VPL reference (stages 3, 4, 6)".into(),
+        "tonemap" => "7 · Tone mapping".into(),
+        other => other.to_string(),
+    }
+}
+
+/// A technique: a named set of stage choices (DESIGN.md's pipeline table).
+pub struct Technique {
+    pub name: &'static str,
+    pub source: &'static str,
+    pub apply: fn(&mut LabSettings),
+    pub is: fn(&LabSettings) -> bool,
+}
+
+/// The techniques the lab implements so far; the issues of Knecht (#5), Nguyen (#6),
+/// Gautron and Soler add theirs here.
+pub const TECHNIQUES: &[Technique] = &[
+    Technique {
+        name: "Direct light only",
+        source: "stages 1, 2, 7",
+        apply: |s| s.indirect.technique = IndirectTechnique::None,
+        is: |s| s.indirect.technique == IndirectTechnique::None,
+    },
+    Technique {
+        name: "Exact-VPL reference",
+        source: "Knecht 002 §5.2: many VPLs, exact visibility, accumulated",
+        apply: |s| s.indirect.technique = IndirectTechnique::ExactVpl,
+        is: |s| s.indirect.technique == IndirectTechnique::ExactVpl,
+    },
+];
+
+/// The technique picker: sets the stage choices of one technique at once.
+pub fn technique_picker(ui: &mut Ui, s: &mut LabSettings) -> bool {
+    let current = TECHNIQUES.iter().find(|t| (t.is)(s)).map(|t| t.name).unwrap_or("custom combination");
+    let mut changed = false;
+    ui.horizontal(|ui| {
+        ui.label("Technique");
+        egui::ComboBox::from_id_salt("technique_picker").selected_text(current).show_ui(ui, |ui| {
+            for t in TECHNIQUES {
+                if ui.selectable_label((t.is)(s), t.name).on_hover_text(t.source).clicked() {
+                    (t.apply)(s);
+                    changed = true;
+                }
+            }
+        });
     });
-    c
+    changed
+}
+
+/// The whole settings panel: technique picker, then one section per group. `preset` is
+/// the loaded preset (for the markers). Returns whether anything changed.
+pub fn lab_settings_ui(ui: &mut Ui, s: &mut LabSettings, preset: &LabSettings) -> bool {
+    ui.spacing_mut().slider_width = 110.0;
+    struct Sections<'a> {
+        ui: &'a mut Ui,
+        changed: bool,
+    }
+    impl GroupVisitor for Sections<'_> {
+        fn visit<S: SettingsGroup>(&mut self, s: &mut S, preset: &S) {
+            let group = S::GROUP;
+            let mut title = egui::RichText::new(section_title(group));
+            if s != preset {
+                title = title.color(CHANGED);
+            }
+            let open = !matches!(group, "animation" | "reference");
+            let changed = &mut self.changed;
+            egui::CollapsingHeader::new(title).id_salt(group).default_open(open).show(self.ui, |ui| {
+                *changed |= group_ui(ui, s, preset);
+            });
+        }
+    }
+    let changed = technique_picker(ui, s);
+    ui.separator();
+    let mut v = Sections { ui, changed: false };
+    s.visit_groups(preset, &mut v);
+    changed | v.changed
 }

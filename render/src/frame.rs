@@ -565,6 +565,23 @@ fn check_size(ctx: &GpuContext, width: u32, height: u32) -> Result<(), RenderErr
 }
 
 /// The scene's first camera, else one that frames the bounds.
+/// The buffer that shows what a timing scope produced (the lab's "hover a pass to see its
+/// output"). Every scope of `render_frame` is listed; a test checks it.
+pub fn scope_output(scope: &str) -> Option<&'static str> {
+    Some(match scope {
+        "gbuffer" => "gbuffer.albedo",
+        "direct.shadow" => "direct.shadow_map",
+        "direct" => "direct.radiance",
+        "compose" | "compose.luminance" => "final.hdr",
+        "compose.tonemap" => "final.ldr",
+        "vpl.light_gbuffer" => "vpl.light_gbuffer.albedo",
+        "vpl.sample" => "vpl.light_gbuffer.position",
+        "vpl.shadow" => "vpl.shadow_atlas",
+        "indirect.gather" => "indirect.raw",
+        _ => return None,
+    })
+}
+
 pub fn default_camera(scene: &Scene, bounds: Aabb, aspect: f32) -> Camera {
     let state = scene.evaluate(0.0);
     match state.cameras.first() {

@@ -80,7 +80,23 @@ macro_rules! for_each_group {
     };
 }
 
+/// Visits every settings group of a [`LabSettings`] with its counterpart in another one
+/// (the UI: the live settings and the loaded preset).
+pub trait GroupVisitor {
+    fn visit<S: SettingsGroup>(&mut self, settings: &mut S, other: &S);
+}
+
 impl LabSettings {
+    /// Calls `v` for every group in declaration order, with the same group of `other`.
+    pub fn visit_groups<V: GroupVisitor>(&mut self, other: &Self, v: &mut V) {
+        macro_rules! visit {
+            ($f:ident, $t:ty) => {
+                v.visit(&mut self.$f, &other.$f);
+            };
+        }
+        for_each_group!(visit);
+    }
+
     /// Every group name with its field table, in pipeline order.
     pub fn groups() -> Vec<(&'static str, &'static [FieldMeta])> {
         let mut v = Vec::new();

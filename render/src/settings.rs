@@ -51,6 +51,8 @@ pub struct FieldMeta {
     /// What raising the value costs.
     pub cost: &'static str,
     pub kind: FieldKind,
+    /// Human-readable labels of a choice's names (same order), empty for other kinds.
+    pub labels: &'static [&'static str],
     /// Inclusive range for numbers (ignored for bool and choices).
     pub min: f64,
     pub max: f64,
@@ -75,6 +77,8 @@ impl std::fmt::Display for FieldError {
 /// A type a setting field may have.
 pub trait SettingType: Sized {
     const KIND: FieldKind;
+    /// Labels of a choice's names for the UI.
+    const LABELS: &'static [&'static str] = &[];
     fn to_value(&self) -> Value;
     fn from_value(v: &Value) -> Option<Self>;
 }
@@ -236,6 +240,7 @@ macro_rules! settings_enum {
         }
         impl $crate::settings::SettingType for $name {
             const KIND: $crate::settings::FieldKind = $crate::settings::FieldKind::Choice(Self::NAMES);
+            const LABELS: &'static [&'static str] = $name::LABELS;
             fn to_value(&self) -> $crate::settings::Value {
                 match self { $( Self::$variant => $crate::settings::Value::Choice(stringify!($variant)) ),+ }
             }
@@ -293,6 +298,7 @@ macro_rules! settings_group {
                         symbol: $symbol,
                         cost: $cost,
                         kind: <$ty as $crate::settings::SettingType>::KIND,
+                        labels: <$ty as $crate::settings::SettingType>::LABELS,
                         min: $min as f64,
                         max: $max as f64,
                         resets_history: $hist,
