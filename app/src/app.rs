@@ -102,7 +102,11 @@ pub struct Lab {
 }
 
 impl Lab {
-    fn new(cc: &eframe::CreationContext<'_>, scene: &crate::cli::SceneArgs, settings: LabSettings) -> Result<Self, String> {
+    fn new(
+        cc: &eframe::CreationContext<'_>,
+        scene: &crate::cli::SceneArgs,
+        settings: LabSettings,
+    ) -> Result<Self, String> {
         let rs = cc.wgpu_render_state.clone().ok_or("eframe did not start its wgpu renderer")?;
         // A GPU error caused by a setting (say, out of memory for a huge shadow map) must not
         // take the lab down with it: it is logged and shown in the status bar instead of
@@ -199,7 +203,8 @@ impl Lab {
                 id
             }
             None => {
-                let id = egui_renderer.register_native_texture(&self.render_state.device, &view, wgpu::FilterMode::Nearest);
+                let id =
+                    egui_renderer.register_native_texture(&self.render_state.device, &view, wgpu::FilterMode::Nearest);
                 self.texture = Some((id, size));
                 id
             }
@@ -599,7 +604,8 @@ impl State {
 
     /// Asks for a glTF file with the platform's file dialog and opens it.
     pub fn open_scene_dialog(&mut self) {
-        let picked = rfd::FileDialog::new().add_filter("glTF 2.0", &["gltf", "glb"]).set_title("Open scene").pick_file();
+        let picked =
+            rfd::FileDialog::new().add_filter("glTF 2.0", &["gltf", "glb"]).set_title("Open scene").pick_file();
         if let Some(p) = picked {
             let scale = self.lab.as_ref().map(|l| l.unit_scale).unwrap_or(1.0);
             if let Err(e) = self.open_scene(Some(p), scale) {
@@ -643,7 +649,10 @@ impl State {
                     path: None,
                     loaded: Loaded {
                         settings: LabSettings::default(),
-                        problems: vec![gi_render::preset::Problem { field: path.display().to_string(), message: e.to_string() }],
+                        problems: vec![gi_render::preset::Problem {
+                            field: path.display().to_string(),
+                            message: e.to_string(),
+                        }],
                         migrations: Vec::new(),
                     },
                 });
@@ -801,11 +810,9 @@ impl State {
     fn record_step(&mut self) {
         let (Some(rec), Ok(l)) = (&mut self.recording, &self.lab) else { return };
         let path = rec.dir.join(format!("frame-{:05}.png", rec.index));
-        let r = l
-            .renderer
-            .readback("final.ldr")
-            .map_err(|e| e.to_string())
-            .and_then(|img| gi_render::image_io::save_png(&path, &img, gi_render::BufferKind::Ldr).map_err(|e| e.to_string()));
+        let r = l.renderer.readback("final.ldr").map_err(|e| e.to_string()).and_then(|img| {
+            gi_render::image_io::save_png(&path, &img, gi_render::BufferKind::Ldr).map_err(|e| e.to_string())
+        });
         rec.index += 1;
         rec.remaining = rec.remaining.saturating_sub(1);
         let done = rec.remaining == 0;
@@ -881,7 +888,14 @@ impl State {
             if v.state.buffer != buffer {
                 v.show_buffer(&l.renderer, buffer);
                 if v.state.view.mode != gi_render::passes::view::ViewMode::Rgb
-                    || matches!(buffer, "gbuffer.position" | "vpl.light_gbuffer.position" | "final.hdr" | "direct.radiance" | "indirect.raw")
+                    || matches!(
+                        buffer,
+                        "gbuffer.position"
+                            | "vpl.light_gbuffer.position"
+                            | "final.hdr"
+                            | "direct.radiance"
+                            | "indirect.raw"
+                    )
                 {
                     v.state.range_mode = crate::viewer::RangeMode::Percentile;
                 }
@@ -902,7 +916,8 @@ impl State {
             return Some((id, size, Some(format!("{pass} → {}", v.state.buffer))));
         }
         let out = l.renderer.final_ldr().clone();
-        let force = l.texture.is_some_and(|(_, s)| s == (0, 0)) || self.pass_view.is_some() && self.hovered_pass.is_none();
+        let force =
+            l.texture.is_some_and(|(_, s)| s == (0, 0)) || self.pass_view.is_some() && self.hovered_pass.is_none();
         if self.hovered_pass.is_none() {
             self.pass_view = None;
         }
@@ -932,7 +947,9 @@ impl State {
     }
 
     fn handle_dropped_files(&mut self, ctx: &egui::Context) {
-        let dropped: Vec<PathBuf> = ctx.input(|i| i.raw.dropped_files.iter().map(|f| f.path().to_path_buf()).filter(|p| !p.as_os_str().is_empty()).collect());
+        let dropped: Vec<PathBuf> = ctx.input(|i| {
+            i.raw.dropped_files.iter().map(|f| f.path().to_path_buf()).filter(|p| !p.as_os_str().is_empty()).collect()
+        });
         for p in dropped {
             let ext = p.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
             match ext.as_str() {
@@ -1074,8 +1091,11 @@ impl State {
                     && ui.button("Reset camera").clicked()
                 {
                     let (w, h) = l.renderer.size();
-                    l.renderer.camera =
-                        gi_render::frame::default_camera(l.renderer.scene(), l.renderer.bounds(), w as f32 / h.max(1) as f32);
+                    l.renderer.camera = gi_render::frame::default_camera(
+                        l.renderer.scene(),
+                        l.renderer.bounds(),
+                        w as f32 / h.max(1) as f32,
+                    );
                 }
             });
             ui.menu_button("Scene", |ui| {
@@ -1137,7 +1157,8 @@ impl State {
                 ui.label(format!("frame {:.1} ms · GPU {:.2} ms ({:?})", l.frame_ms, gpu, l.renderer.timing_source()));
                 ui.separator();
                 let unsaved = l.settings != self.preset.baseline;
-                let label = format!("preset: {}{}", self.preset_label(), if unsaved { " (unsaved changes)" } else { "" });
+                let label =
+                    format!("preset: {}{}", self.preset_label(), if unsaved { " (unsaved changes)" } else { "" });
                 if unsaved {
                     ui.colored_label(crate::settings_ui::CHANGED, label);
                 } else {

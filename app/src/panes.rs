@@ -21,7 +21,7 @@ impl egui_tiles::Behavior<Pane> for Behavior<'_> {
         match pane {
             Pane::Viewport => "Viewport".into(),
             Pane::Settings => "Settings".into(),
-            Pane::Scene => "Scene".into(),
+            Pane::Scene => "Scene & timeline".into(),
             Pane::Presets => "Presets".into(),
             Pane::Timings => "GPU timings".into(),
             Pane::Probe => "Probes".into(),
@@ -93,8 +93,10 @@ fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
     // The hovered pixel of the render (for the probe); a click pins it.
     if let Some(p) = response.hover_pos() {
         let uv = (p - rect.min) / rect.size();
-        st.hover =
-            Some(((uv.x * w as f32).clamp(0.0, w as f32 - 1.0) as u32, (uv.y * h as f32).clamp(0.0, h as f32 - 1.0) as u32));
+        st.hover = Some((
+            (uv.x * w as f32).clamp(0.0, w as f32 - 1.0) as u32,
+            (uv.y * h as f32).clamp(0.0, h as f32 - 1.0) as u32,
+        ));
     }
     if response.clicked()
         && let Some(p) = st.hover
@@ -103,7 +105,8 @@ fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
     }
     // Pinned probes as numbered rings.
     for (k, p) in st.pinned.iter().enumerate() {
-        let pos = rect.min + egui::vec2((p.pixel.0 as f32 + 0.5) / w as f32, (p.pixel.1 as f32 + 0.5) / h as f32) * rect.size();
+        let pos = rect.min
+            + egui::vec2((p.pixel.0 as f32 + 0.5) / w as f32, (p.pixel.1 as f32 + 0.5) / h as f32) * rect.size();
         ui.painter().circle_stroke(pos, 6.0, egui::Stroke::new(2.0, egui::Color32::YELLOW));
         ui.painter().text(
             pos + egui::vec2(8.0, -8.0),
@@ -157,7 +160,10 @@ fn settings_ui(st: &mut State, ui: &mut egui::Ui) {
         l.apply_settings();
     }
     if let Some((done, target)) = l.renderer.reference_progress() {
-        ui.add(egui::ProgressBar::new(done as f32 / target.max(1) as f32).text(format!("{done} / {target} VPLs accumulated")));
+        ui.add(
+            egui::ProgressBar::new(done as f32 / target.max(1) as f32)
+                .text(format!("{done} / {target} VPLs accumulated")),
+        );
         if l.renderer.clock.playing {
             ui.small("The accumulation restarts whenever the camera, a light or an animated object moves: pause the animation (Space) to let it converge.");
         }
@@ -325,7 +331,13 @@ fn timeline(l: &mut crate::app::Lab, ui: &mut egui::Ui) {
             ui.add(egui::DragValue::new(&mut clock.loop_s).range(0.01..=3600.0).speed(0.05).suffix(" s"));
         }
     });
-    let end = if clock.loop_s > 0.0 { clock.loop_s } else if duration > 0.0 { duration } else { 10.0 };
+    let end = if clock.loop_s > 0.0 {
+        clock.loop_s
+    } else if duration > 0.0 {
+        duration
+    } else {
+        10.0
+    };
     let mut t = clock.time_s() as f64;
     let scrub = ui.add(egui::Slider::new(&mut t, 0.0..=end).text("time").suffix(" s"));
     if scrub.changed() {
@@ -381,10 +393,7 @@ fn presets_ui(st: &mut State, ui: &mut egui::Ui) {
             .accessible_name("preset name");
         let name = st.preset.save_as_name.trim().trim_end_matches(".ron").to_string();
         let valid = !name.is_empty() && !name.contains(['/', '\\']) && name != "." && name != "..";
-        if ui
-            .add_enabled(valid, egui::Button::new(format!("Save to {}/", st.args.presets_dir.display())))
-            .clicked()
-        {
+        if ui.add_enabled(valid, egui::Button::new(format!("Save to {}/", st.args.presets_dir.display()))).clicked() {
             let path = st.args.presets_dir.join(format!("{name}.ron"));
             if let Err(e) = st.save_preset_to(&path) {
                 st.set_status(format!("save failed: {e}"));
@@ -498,17 +507,20 @@ fn timings_ui(st: &mut State, ui: &mut egui::Ui) {
             ui.small("hover a pass to see its output in the viewport");
         });
         let names: Vec<String> = l.renderer.timings().iter().map(|t| t.name.clone()).collect();
-        Plot::new("timing_history").legend(Legend::default()).y_axis_label("ms").x_axis_label("frame").show(ui, |plot| {
-            for name in names {
-                let points: PlotPoints = st
-                    .timing_history
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(i, ts)| ts.iter().find(|t| t.name == name).map(|t| [i as f64, t.ms]))
-                    .collect();
-                plot.line(Line::new(name.clone(), points));
-            }
-        });
+        Plot::new("timing_history").legend(Legend::default()).y_axis_label("ms").x_axis_label("frame").show(
+            ui,
+            |plot| {
+                for name in names {
+                    let points: PlotPoints = st
+                        .timing_history
+                        .iter()
+                        .enumerate()
+                        .filter_map(|(i, ts)| ts.iter().find(|t| t.name == name).map(|t| [i as f64, t.ms]))
+                        .collect();
+                    plot.line(Line::new(name.clone(), points));
+                }
+            },
+        );
     });
     st.hovered_pass = hovered;
 }
@@ -555,8 +567,12 @@ fn probe_ui(st: &mut State, ui: &mut egui::Ui) {
                 ui.monospace(format!("{} = {}", p.buffer, format_value(*last)));
             }
             let ch = p.channel.min(3);
-            let points: PlotPoints =
-                h.iter().enumerate().filter(|(_, v)| v[ch].is_finite()).map(|(i, v)| [i as f64, v[ch] as f64]).collect();
+            let points: PlotPoints = h
+                .iter()
+                .enumerate()
+                .filter(|(_, v)| v[ch].is_finite())
+                .map(|(i, v)| [i as f64, v[ch] as f64])
+                .collect();
             Plot::new(("probe_plot", k)).height(120.0).x_axis_label("frame").show(ui, |plot| {
                 plot.line(Line::new(format!("{} {}", p.buffer, ["r", "g", "b", "a"][ch]), points));
             });

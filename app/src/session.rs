@@ -169,11 +169,8 @@ impl Session {
 /// timings and probes under it in the middle; one buffer viewer on the right.
 pub fn default_layout() -> egui_tiles::Tree<Pane> {
     let mut tiles = egui_tiles::Tiles::default();
-    let left = vec![
-        tiles.insert_pane(Pane::Settings),
-        tiles.insert_pane(Pane::Scene),
-        tiles.insert_pane(Pane::Presets),
-    ];
+    let left =
+        vec![tiles.insert_pane(Pane::Settings), tiles.insert_pane(Pane::Scene), tiles.insert_pane(Pane::Presets)];
     let left = tiles.insert_tab_tile(left);
     let viewport = tiles.insert_pane(Pane::Viewport);
     let bottom = vec![tiles.insert_pane(Pane::Timings), tiles.insert_pane(Pane::Probe)];

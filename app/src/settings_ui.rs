@@ -44,14 +44,20 @@ fn unit_suffix(m: &FieldMeta) -> String {
 /// The widget of one value; returns its response (changed when the value changed).
 fn value_widget(ui: &mut Ui, path: &str, m: &FieldMeta, v: &mut Value) -> egui::Response {
     match v {
-        Value::F32(x) => ui.add(
-            egui::Slider::new(x, m.min as f32..=m.max as f32).logarithmic(logarithmic(m)).suffix(unit_suffix(m)),
-        ),
+        Value::F32(x) => {
+            ui.add(egui::Slider::new(x, m.min as f32..=m.max as f32).logarithmic(logarithmic(m)).suffix(unit_suffix(m)))
+        }
         Value::U32(x) if m.min == 0.0 && m.max > 1e6 => {
             ui.add(egui::DragValue::new(x).range(m.min as u32..=m.max as u32).suffix(unit_suffix(m)))
         }
+        // One keyboard / accessibility step is one unit (a point along the rail would round
+        // back to the same integer on short ranges).
         Value::U32(x) => ui.add(
-            egui::Slider::new(x, m.min as u32..=m.max as u32).logarithmic(logarithmic(m)).suffix(unit_suffix(m)),
+            egui::Slider::new(x, m.min as u32..=m.max as u32)
+                .logarithmic(logarithmic(m))
+                .step_by(1.0)
+                .drag_value_speed(1.0)
+                .suffix(unit_suffix(m)),
         ),
         Value::Bool(b) => ui.checkbox(b, ""),
         Value::Choice(c) => {
@@ -101,15 +107,17 @@ fn field_row(ui: &mut Ui, path: &str, m: &FieldMeta, value: &mut Value, default:
     });
     let mut changed = false;
     ui.horizontal(|ui| {
-        changed |= value_widget(ui, path, m, value).accessible_name(path).on_hover_text(&tip).changed();
+        // The reset button comes first so that a narrow panel never hides it.
         let reset = ui
             .add_enabled(value != default, egui::Button::new("reset").small())
             .accessible_name(format!("reset {path}"))
-            .on_hover_text(format!("reset to the default {default}{}", unit_suffix(m)));
+            .on_hover_text(format!("reset to the default {default}{}", unit_suffix(m)))
+            .on_disabled_hover_text("at its default");
         if reset.clicked() {
             *value = default.clone();
             changed = true;
         }
+        changed |= value_widget(ui, path, m, value).accessible_name(path).on_hover_text(&tip).changed();
     });
     ui.end_row();
     changed

@@ -291,7 +291,13 @@ impl Viewer {
         }
         let v = &mut self.state.view;
         if self.state.range_mode == RangeMode::Percentile {
-            ui.add(egui::DragValue::new(&mut self.state.percentile).range(0.01..=49.0).speed(0.1).prefix("p ").suffix(" %"));
+            ui.add(
+                egui::DragValue::new(&mut self.state.percentile)
+                    .range(0.01..=49.0)
+                    .speed(0.1)
+                    .prefix("p ")
+                    .suffix(" %"),
+            );
         }
         let manual = self.state.range_mode == RangeMode::Manual;
         let speed = ((v.range[1] - v.range[0]).abs() * 0.005).max(1e-5);
@@ -341,7 +347,8 @@ impl Viewer {
             image_io::save_exr(&exr, &raw).map_err(|e| e.to_string())?;
             let png = base.with_extension("png");
             if let Some(out) = self.gpu.as_ref().and_then(|g| g.output()) {
-                let shown = gi_render::buffers::read_texture(&renderer.ctx, "view", out, 0, 0).map_err(|e| e.to_string())?;
+                let shown =
+                    gi_render::buffers::read_texture(&renderer.ctx, "view", out, 0, 0).map_err(|e| e.to_string())?;
                 image_io::save_png(&png, &shown, gi_render::BufferKind::Ldr).map_err(|e| e.to_string())?;
             }
             Ok(format!("saved {} and {}", png.display(), exr.display()))
@@ -354,10 +361,9 @@ impl Viewer {
 /// selection changed. Each entry's accessible name is the full dotted name.
 pub fn buffer_picker(ui: &mut egui::Ui, id: u32, names: &[String], selected: &mut String) -> bool {
     let mut changed = false;
-    egui::ComboBox::from_id_salt(("buffer_picker", id))
-        .selected_text(selected.as_str())
-        .height(600.0)
-        .show_ui(ui, |ui| {
+    let r = egui::ComboBox::from_id_salt(("buffer_picker", id)).selected_text(selected.as_str()).height(600.0).show_ui(
+        ui,
+        |ui| {
             let mut shown_groups: Vec<String> = Vec::new();
             for name in names {
                 let parts: Vec<&str> = name.split('.').collect();
@@ -382,6 +388,8 @@ pub fn buffer_picker(ui: &mut egui::Ui, id: u32, names: &[String], selected: &mu
                     }
                 });
             }
-        });
+        },
+    );
+    let _ = r.response.accessible_name(format!("viewer {id} buffer"));
     changed
 }

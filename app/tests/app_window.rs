@@ -1,5 +1,6 @@
-//! The app in a real window under Xvfb: it starts, renders frames and saves a screenshot
-//! that is not uniform (the Cornell box is visible).
+//! The app in a real window under Xvfb: it starts, renders frames and saves a screenshot of
+//! the whole window — kept as a test artefact in `target/test-artifacts/app-window.png` —
+//! in which the viewport shows the Cornell box and the panels surround it.
 
 use std::process::Command;
 
@@ -10,14 +11,19 @@ fn app_under_xvfb_renders_a_non_uniform_screenshot() {
         have_xvfb,
         "xvfb-run is missing: install it with `sudo apt-get install -y xvfb xauth` (scripts/test.sh does this)"
     );
-    let shot = std::env::temp_dir().join(format!("gi-lab-screenshot-{}.png", std::process::id()));
+    let artefacts = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("../test-artifacts");
+    std::fs::create_dir_all(&artefacts).expect("artefact folder");
+    let shot = artefacts.join("app-window.png");
     let _ = std::fs::remove_file(&shot);
+    let config = std::env::temp_dir().join(format!("gi-lab-xvfb-config-{}", std::process::id()));
     let o = Command::new("xvfb-run")
         .args(["-a", "-s", "-screen 0 1280x800x24"])
         .arg(env!("CARGO_BIN_EXE_gi-lab"))
         .arg("--screenshot")
         .arg(&shot)
-        .args(["--screenshot-frames", "5"])
+        .args(["--screenshot-frames", "5", "--fresh"])
+        .arg("--config-dir")
+        .arg(&config)
         .env("WGPU_BACKEND", std::env::var("WGPU_BACKEND").unwrap_or_else(|_| "vulkan".into()))
         .output()
         .expect("xvfb-run starts");
@@ -36,4 +42,26 @@ fn app_under_xvfb_renders_a_non_uniform_screenshot() {
     let reddish = img.pixels().filter(|p| p.0[0] > 80 && p.0[1] < 40 && p.0[2] < 40).count();
     let greenish = img.pixels().filter(|p| p.0[1] > 60 && p.0[0] < 50 && p.0[2] < 50).count();
     assert!(reddish > 500 && greenish > 500, "red {reddish} / green {greenish} wall pixels in the screenshot");
+    // The walls are in the viewport, which sits between the panels: no wall pixel in the
+    // left fifth (settings) or the right fifth (buffer viewer) of the window is red.
+    let (w, h) = (img.width(), img.height());
+    let red_in = |x0: u32, x1: u32| {
+        (x0..x1)
+            .flat_map(|x| (0..h).map(move |y| (x, y)))
+            .filter(|&(x, y)| {
+                let p = img.get_pixel(x, y).0;
+                p[0] > 80 && p[1] < 40 && p[2] < 40
+            })
+            .count()
+    };
+    assert!(red_in(w / 5, 4 * w / 5) > 500, "the viewport is in the middle of the window");
+    assert_eq!(red_in(0, w / 6), 0, "the settings panel is on the left, not the image");
+    // The panels carry text: light pixels on the dark panel background, left and right.
+    let light_in = |x0: u32, x1: u32| {
+        (x0..x1).flat_map(|x| (0..h).map(move |y| (x, y))).filter(|&(x, y)| img.get_pixel(x, y).0[0] > 160).count()
+    };
+    assert!(light_in(0, w / 6) > 200, "no text in the settings panel");
+    // The session was written where it was told to.
+    assert!(config.join("session.ron").exists(), "the session was not autosaved to {}", config.display());
+    let _ = std::fs::remove_dir_all(&config);
 }

@@ -1,16 +1,38 @@
-//! The app's window with egui_kittest (no display needed): it renders the default scene on
-//! the harness's wgpu device, the panels drive the renderer, and the play controls work.
+//! The lab window with egui_kittest (no display needed): it renders the default scene on
+//! the harness's wgpu device; every setting has a widget that drives the renderer; the
+//! buffer viewer lists and shows every buffer; the probe shows the buffers' values; presets
+//! save, open and report problems through the UI.
+
+use std::path::PathBuf;
 
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use gi_lab::app::GiLabApp;
 use gi_lab::cli::AppArgs;
+use gi_render::LabSettings;
+use gi_render::settings::{FieldKind, Value};
 
-fn harness() -> Harness<'static, GiLabApp> {
+/// A fresh temporary folder for one test.
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("gi-lab-ui-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("temp dir");
+    d
+}
+
+/// The app in a harness with its own config and presets folders (never the user's).
+fn harness_in(dir: &std::path::Path, size: egui::Vec2) -> Harness<'static, GiLabApp> {
+    let args = AppArgs {
+        config_dir: Some(dir.join("config")),
+        presets_dir: dir.join("presets"),
+        fresh: true,
+        ..AppArgs::default()
+    };
+    let _ = std::fs::create_dir_all(dir.join("presets"));
     let h = Harness::builder()
-        .with_size(egui::vec2(1000.0, 700.0))
+        .with_size(size)
         .wgpu_setup(gi_lab::app::wgpu_setup())
-        .build_eframe(|cc| GiLabApp::new(cc, AppArgs::default()));
+        .build_eframe(move |cc| GiLabApp::new(cc, args));
     if let Some(e) = h.state().error() {
         panic!(
             "the app could not start its renderer: {e}\n\
@@ -21,24 +43,50 @@ fn harness() -> Harness<'static, GiLabApp> {
     h
 }
 
+fn harness(name: &str) -> (Harness<'static, GiLabApp>, PathBuf) {
+    let dir = temp_dir(name);
+    (harness_in(&dir, egui::vec2(1400.0, 1000.0)), dir)
+}
+
+/// Pauses the animation at t = 0 so that frames repeat exactly.
+fn pause(h: &mut Harness<'static, GiLabApp>) {
+    if let Ok(l) = &mut h.state_mut().state.lab {
+        l.renderer.clock.playing = false;
+        l.renderer.clock.seek(0.0);
+    }
+}
+
 #[test]
-fn app_renders_and_shows_a_section_per_stage() {
-    let mut h = harness();
+fn app_renders_into_a_viewport_the_panels_do_not_cover() {
+    let (mut h, _dir) = harness("layout");
     h.run_steps(3);
     assert!(h.state().is_rendering());
     h.get_by_label("2 · Direct light");
     h.get_by_label("7 · Tone mapping");
+    for tab in ["Viewport", "Settings", "Scene & timeline", "Presets", "GPU timings", "Probes"] {
+        h.get_by_label(tab);
+    }
+    let st = &h.state().state;
+    let (vw, vh) = st.viewport_px;
+    assert!(vw > 300 && vh > 300, "the viewport is {vw}×{vh}");
     let r = h.state().renderer().expect("renderer");
     let (w, h_px) = r.size();
-    assert!(w > 300 && h_px > 300, "the viewport is {w}×{h_px}: it should fill the central panel");
+    let scale = st.session.render_scale;
+    assert_eq!((w, h_px), ((vw as f32 * scale).round() as u32, (vh as f32 * scale).round() as u32));
     assert!(r.clock.frame >= 3, "frames rendered: {}", r.clock.frame);
     let names: Vec<_> = r.timings().iter().map(|t| t.name.clone()).collect();
     assert_eq!(names, ["gbuffer", "direct.shadow", "direct", "compose", "compose.luminance", "compose.tonemap"]);
+    for n in &names {
+        let out = gi_render::frame::scope_output(n).unwrap_or_else(|| panic!("pass {n} has no output buffer"));
+        assert!(r.buffers().get(out).is_ok(), "{n} → {out} is not registered");
+    }
 }
 
 #[test]
 fn pause_and_step_drive_the_clock() {
-    let mut h = harness();
+    let (mut h, _dir) = harness("clock");
+    h.run_steps(2);
+    h.get_by_label("Scene & timeline").click();
     h.run_steps(2);
     h.get_by_label("Pause").click();
     h.run_steps(2);
@@ -55,7 +103,7 @@ fn pause_and_step_drive_the_clock() {
 
 #[test]
 fn opening_a_bad_scene_keeps_the_current_one_and_says_why() {
-    let mut h = harness();
+    let (mut h, _dir) = harness("scene");
     h.run_steps(2);
     let before = h.state().renderer().expect("renderer").scene().triangle_count();
     let err = h.state_mut().open_scene("/nonexistent/scene.gltf", 1.0).expect_err("a missing file is refused");
@@ -69,4 +117,239 @@ fn opening_a_bad_scene_keeps_the_current_one_and_says_why() {
     let r = h.state().renderer().expect("renderer");
     assert_eq!(r.scene().triangle_count(), 32);
     assert!(r.clock.frame >= 2, "the new scene renders");
+}
+
+/// Every field of `LabSettings` (enumerated from the settings' own metadata) has a widget
+/// named by its dotted path, and operating that widget changes the renderer's settings.
+#[test]
+fn every_setting_has_a_widget_that_changes_the_renderer() {
+    let dir = temp_dir("fields");
+    let mut h = harness_in(&dir, egui::vec2(1400.0, 2200.0));
+    h.run_steps(2);
+    for (group, fields) in LabSettings::groups() {
+        let first = format!("{group}.{}", fields[0].name);
+        if h.query_by_label(&first).is_none() {
+            // A section that starts collapsed: open it.
+            h.get_by_label(&gi_lab::settings_ui::section_title(group)).click();
+            h.run_steps(2);
+        }
+        for m in fields {
+            let path = format!("{group}.{}", m.name);
+            let before = h.state().renderer().expect("renderer").settings().get(&path);
+            assert!(before.is_some(), "{path}: no value");
+            let node = h.query_by_label(&path);
+            assert!(node.is_some(), "{path} has no widget in the settings panel");
+            match m.kind {
+                FieldKind::Bool => h.get_by_label(&path).click(),
+                FieldKind::Choice(names) => {
+                    h.get_by_label(&path).click();
+                    h.run_steps(2);
+                    let Some(Value::Choice(current)) = before.clone() else { panic!("{path}: not a choice") };
+                    let other = names.iter().position(|n| *n != current).expect("a second choice");
+                    h.get_by_label(m.labels[other]).click();
+                }
+                FieldKind::F32 | FieldKind::U32 => {
+                    // A valid value next to the current one, set through the widget's
+                    // accessibility action (what a screen reader or a typed value does).
+                    let x = match before.clone() {
+                        Some(Value::F32(x)) => x as f64,
+                        Some(Value::U32(x)) => x as f64,
+                        _ => panic!("{path}: not a number"),
+                    };
+                    let target = match m.kind {
+                        FieldKind::U32 if x < m.max => x + 1.0,
+                        FieldKind::U32 => x - 1.0,
+                        _ if x < m.max => x + (m.max - x).min(1.0) * 0.5,
+                        _ => x - (x - m.min).min(1.0) * 0.5,
+                    };
+                    h.get_by_label(&path).set_value_accesskit(target);
+                }
+            }
+            h.run_steps(2);
+            let after = h.state().renderer().expect("renderer").settings().get(&path);
+            assert_ne!(after, before, "{path}: operating its widget did not change the renderer's settings");
+            let err = h.state().state.lab.as_ref().ok().and_then(|l| l.settings_error.clone());
+            assert!(err.is_none(), "{path}: {err:?}");
+            // Back to the default with the field's reset button, so that one field's change
+            // does not make another's refused (e.g. the technique).
+            h.get_by_label(&format!("reset {path}")).click();
+            h.run_steps(2);
+            let reset = h.state().renderer().expect("renderer").settings().get(&path);
+            assert_eq!(reset, LabSettings::default().get(&path), "{path}: reset restores the default");
+        }
+    }
+}
+
+#[test]
+fn buffer_viewer_lists_every_buffer_and_shows_the_chosen_one() {
+    let (mut h, _dir) = harness("viewer");
+    pause(&mut h);
+    h.run_steps(3);
+    let names = h.state().renderer().expect("renderer").buffers().names();
+    assert!(names.len() >= 10, "{names:?}");
+    // The viewer's picker (its text is the shown buffer) opens a tree of every name.
+    h.get_by_label("viewer 1 buffer").click();
+    h.run_steps(2);
+    for n in &names {
+        assert!(h.query_by_label(n).is_some(), "buffer {n} is not listed in the viewer's picker");
+    }
+    h.get_by_label("direct.radiance").click();
+    pause(&mut h);
+    h.run_steps(4);
+    let st = &h.state().state;
+    let v = st.viewers.values().next().expect("a viewer");
+    assert_eq!(v.state.buffer, "direct.radiance");
+    assert!(v.error.is_none(), "{:?}", v.error);
+    // What the viewer shows: its view output, read back, against a stored snapshot.
+    let l = st.lab.as_ref().expect("lab");
+    let out = v.output_texture().expect("the viewer rendered");
+    let img = gi_render::buffers::read_texture(&l.renderer.ctx, "viewer", &out, 0, 0).expect("readback");
+    let bytes: Vec<u8> = img.data.iter().flat_map(|p| p.map(|c| (c * 255.0).round().clamp(0.0, 255.0) as u8)).collect();
+    let rgba = image::RgbaImage::from_raw(img.width, img.height, bytes).expect("image");
+    egui_kittest::image_snapshot_options(
+        &rgba,
+        "viewer_direct_radiance",
+        &egui_kittest::SnapshotOptions::new().threshold(2.0).max_failed_pixels(40),
+    );
+}
+
+#[test]
+fn probe_shows_the_values_of_a_cpu_readback() {
+    let (mut h, _dir) = harness("probe");
+    pause(&mut h);
+    h.run_steps(3);
+    let vp = h.get_by_label("Viewport").rect();
+    // Hover the middle of the viewport (below its tab bar).
+    let pos = egui::pos2(vp.center().x + 20.0, vp.max.y + 250.0);
+    h.hover_at(pos);
+    h.run_steps(3);
+    h.get_by_label("Probes").click();
+    h.hover_at(pos);
+    h.run_steps(3);
+    let st = &h.state().state;
+    let l = st.lab.as_ref().expect("lab");
+    assert!(!st.hover_values.is_empty(), "the probe read nothing at {pos:?}");
+    let names = l.renderer.buffers().names();
+    assert_eq!(st.hover_values.len(), names.len(), "every buffer is probed");
+    for v in &st.hover_values {
+        let img = l.renderer.readback(&v.name).expect("readback");
+        let want = img.at(v.texel.0, v.texel.1);
+        let same = v.value.iter().zip(want).all(|(a, b)| *a == b || (a.is_nan() && b.is_nan()));
+        assert!(same, "{} at {:?}: probe {:?}, readback {want:?}", v.name, v.texel, v.value);
+    }
+    // The Probes panel prints them.
+    let hdr = st.hover_values.iter().find(|v| v.name == "final.hdr").expect("final.hdr probed");
+    let text = gi_lab::panes::format_value(hdr.value);
+    assert!(h.query_all_by_label(&text).next().is_some(), "the Probes panel does not show final.hdr = {text}");
+    // A click pins a probe there.
+    h.get_by_label("Viewport");
+    h.drag_at(pos);
+    h.drop_at(pos);
+    h.run_steps(3);
+    assert_eq!(h.state().state.pinned.len(), 1, "a click in the viewport pins a probe");
+}
+
+#[test]
+fn preset_save_and_open_round_trip_through_the_ui() {
+    let (mut h, dir) = harness("presets");
+    h.run_steps(2);
+    h.get_by_label("tonemap.auto_exposure").click();
+    h.get_by_label("direct.pcf_radius").increment_accesskit();
+    h.run_steps(2);
+    let edited = h.state().settings().expect("settings").clone();
+    assert_ne!(edited, LabSettings::default());
+    h.get_by_label("Presets").click();
+    h.run_steps(2);
+    h.get_by_label("preset name").click();
+    h.run_steps(1);
+    h.get_by_label("preset name").type_text("roundtrip");
+    h.run_steps(2);
+    let save = format!("Save to {}/", dir.join("presets").display());
+    h.get_by_label(&save).click();
+    h.run_steps(2);
+    let file = dir.join("presets/roundtrip.ron");
+    let saved = LabSettings::load(&file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+    assert_eq!(saved, edited, "the file holds the live settings");
+    assert!(!h.state().state.unsaved());
+    // Change something, then open the saved preset from the browser.
+    h.get_by_label("Settings").click();
+    h.run_steps(2);
+    h.get_by_label("tonemap.auto_exposure").click();
+    h.run_steps(2);
+    assert_ne!(h.state().settings(), Some(&edited), "the checkbox changed the settings");
+    assert!(h.state().state.unsaved(), "an edit marks the preset unsaved");
+    h.get_by_label("Presets").click();
+    h.run_steps(2);
+    h.get_by_label("roundtrip.ron").click();
+    h.run_steps(2);
+    assert_eq!(h.state().settings(), Some(&edited), "opening the preset restores it");
+    assert_eq!(h.state().renderer().expect("renderer").settings(), &edited);
+}
+
+#[test]
+fn a_bad_preset_lists_its_problems_and_changes_nothing_until_accepted() {
+    let (mut h, dir) = harness("badpreset");
+    h.run_steps(2);
+    std::fs::write(
+        dir.join("presets/bad.ron"),
+        "(version: 1, direct: (pcf_radius: 40, shadowz: true), tonemap: (key: \"bright\", exposure_ev: 1.5))",
+    )
+    .expect("write");
+    let before = h.state().settings().expect("settings").clone();
+    h.get_by_label("Presets").click();
+    h.run_steps(2);
+    h.get_by_label("bad.ron").click();
+    h.run_steps(2);
+    for field in ["direct.pcf_radius", "direct.shadowz", "tonemap.key"] {
+        assert!(h.query_by_label(field).is_some(), "the problem dialog does not list {field}");
+    }
+    assert_eq!(h.state().settings(), Some(&before), "nothing changes while the dialog is open");
+    h.get_by_label("Cancel (keep current settings)").click();
+    h.run_steps(2);
+    assert_eq!(h.state().settings(), Some(&before), "cancel keeps the previous settings");
+    h.get_by_label("bad.ron").click();
+    h.run_steps(2);
+    h.get_by_label("Load with these fixes").click();
+    h.run_steps(2);
+    let s = h.state().settings().expect("settings");
+    assert_eq!(s.direct.pcf_radius, 4, "clamped");
+    assert_eq!(s.tonemap.exposure_ev, 1.5, "valid values are kept");
+    assert_eq!(s.tonemap.key, LabSettings::default().tonemap.key, "a wrong type falls back to the default");
+}
+
+#[test]
+fn the_session_restores_layout_settings_viewers_and_probes() {
+    let dir = temp_dir("session");
+    let args = |fresh| AppArgs {
+        config_dir: Some(dir.join("config")),
+        presets_dir: dir.join("presets"),
+        fresh,
+        ..AppArgs::default()
+    };
+    let first = args(true);
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(1400.0, 1000.0))
+        .wgpu_setup(gi_lab::app::wgpu_setup())
+        .build_eframe(move |cc| GiLabApp::new(cc, first));
+    h.run_steps(2);
+    h.get_by_label("tonemap.auto_exposure").click();
+    h.run_steps(2);
+    h.state_mut().add_viewer();
+    h.state_mut().state.pin_probe((10, 12));
+    h.run_steps(2);
+    let settings = h.state().settings().expect("settings").clone();
+    let viewers: Vec<String> = h.state().state.viewers.values().map(|v| v.state.buffer.clone()).collect();
+    h.state_mut().save_session().expect("session saved");
+    drop(h);
+    let second = args(false);
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(1400.0, 1000.0))
+        .wgpu_setup(gi_lab::app::wgpu_setup())
+        .build_eframe(move |cc| GiLabApp::new(cc, second));
+    h.run_steps(2);
+    assert_eq!(h.state().settings(), Some(&settings), "unsaved settings come back");
+    let again: Vec<String> = h.state().state.viewers.values().map(|v| v.state.buffer.clone()).collect();
+    assert_eq!(again, viewers, "the viewers come back");
+    assert_eq!(h.state().state.pinned.len(), 1, "the pinned probe comes back");
+    assert!(h.state().state.unsaved(), "and they are still marked unsaved against the defaults");
 }
