@@ -260,6 +260,8 @@ pub struct State {
     pub hovered_pass: Option<String>,
     /// Viewport size in physical pixels (the render size is this × the render scale).
     pub viewport_px: (u32, u32),
+    /// Where the viewport was drawn last frame (points).
+    pub viewport_rect: egui::Rect,
     pub status: Option<(String, Instant)>,
     pub frames: u64,
     pub recording: Option<Recording>,
@@ -268,6 +270,8 @@ pub struct State {
     /// Panels the tree drew last frame (viewers not shown are not updated).
     pub visible_viewers: Vec<u32>,
     pub show_help: bool,
+    /// The A/B comparison, when one runs.
+    pub ab: Option<crate::ab::Ab>,
     pub request_new_viewer: bool,
     pub request_reset_layout: bool,
     screenshot: Arc<Mutex<Option<Arc<egui::ColorImage>>>>,
@@ -387,6 +391,7 @@ impl GiLabApp {
             timing_history: VecDeque::new(),
             hovered_pass: None,
             viewport_px: (640, 480),
+            viewport_rect: egui::Rect::NOTHING,
             status,
             frames: 0,
             recording: None,
@@ -394,6 +399,7 @@ impl GiLabApp {
             record_frames: 60,
             visible_viewers: Vec::new(),
             show_help: false,
+            ab: None,
             request_new_viewer: false,
             request_reset_layout: false,
             screenshot: Arc::new(Mutex::new(None)),
@@ -593,6 +599,8 @@ impl State {
         let r = lab.open_scene(path.clone(), unit_scale);
         lab.scene_error = r.clone().err();
         if r.is_ok() {
+            // B renders the old scene: the comparison ends with it.
+            self.stop_ab();
             self.session.lights.clear();
             if let Some(p) = &path {
                 Session::remember(&mut self.session.recent_scenes, p);
@@ -617,6 +625,11 @@ impl State {
     /// Whether the live settings differ from the loaded preset (the unsaved marker).
     pub fn unsaved(&self) -> bool {
         self.lab.as_ref().is_ok_and(|l| l.settings != self.preset.baseline)
+    }
+
+    /// The preset's label with the unsaved marker (the A side of an A/B comparison).
+    pub fn preset_label_text(&self) -> String {
+        format!("{}{}", self.preset_label(), if self.unsaved() { " (unsaved)" } else { "" })
     }
 
     pub fn preset_label(&self) -> String {
@@ -837,6 +850,10 @@ impl State {
             if let Err(e) = l.renderer.resize(target.0, target.1) {
                 l.settings_error = Some(e.to_string());
             }
+            if let Some(ab) = &mut self.ab {
+                // B first: it takes A's clock before A's frame advances it.
+                ab.render(&l.renderer);
+            }
             l.renderer.render_frame();
             let now = Instant::now();
             l.frame_ms = (now - l.last_frame).as_secs_f32() * 1e3;
@@ -923,6 +940,22 @@ impl State {
         }
         let id = l.show_texture(&out, force);
         Some((id, (out.width(), out.height()), None))
+    }
+
+    /// Starts an A/B comparison of the live settings with `source`.
+    pub fn start_ab(&mut self, source: crate::ab::AbSource) {
+        self.stop_ab();
+        let Ok(l) = &self.lab else { return };
+        match crate::ab::Ab::start(&l.renderer, &l.settings, source) {
+            Ok(ab) => self.ab = Some(ab),
+            Err(e) => self.set_status(format!("A/B not started: {e}")),
+        }
+    }
+
+    pub fn stop_ab(&mut self) {
+        if let (Some(mut ab), Ok(l)) = (self.ab.take(), &self.lab) {
+            ab.release(&l.render_state);
+        }
     }
 
     pub fn pin_probe(&mut self, pixel: (u32, u32)) {
@@ -1086,6 +1119,25 @@ impl State {
                     ui.label("render scale");
                     ui.add(egui::Slider::new(&mut self.session.render_scale, 0.1..=2.0).step_by(0.05))
                         .on_hover_text("render resolution relative to the viewport's pixels");
+                });
+                ui.menu_button("A/B compare", |ui| {
+                    if ui.button("with the exact-VPL reference").clicked() {
+                        self.start_ab(crate::ab::AbSource::Reference);
+                    }
+                    if ui.button("with the current settings (frozen)").clicked() {
+                        self.start_ab(crate::ab::AbSource::Frozen);
+                    }
+                    if ui.button("with a preset file…").clicked()
+                        && let Some(p) = rfd::FileDialog::new()
+                            .add_filter("GI Lab preset", &["ron"])
+                            .set_directory(&self.args.presets_dir)
+                            .pick_file()
+                    {
+                        self.start_ab(crate::ab::AbSource::Preset(p));
+                    }
+                    if ui.add_enabled(self.ab.is_some(), egui::Button::new("Stop")).clicked() {
+                        self.stop_ab();
+                    }
                 });
                 if let Ok(l) = &mut self.lab
                     && ui.button("Reset camera").clicked()

@@ -1,5 +1,6 @@
 //! GI Lab application: the eframe window and the `gi-lab` command line.
 
+pub mod ab;
 pub mod app;
 pub mod cli;
 pub mod panes;

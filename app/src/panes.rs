@@ -71,6 +71,7 @@ fn scrolled(ui: &mut egui::Ui, id: &str, f: impl FnOnce(&mut egui::Ui)) {
 
 fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
     let rect = ui.available_rect_before_wrap();
+    st.viewport_rect = rect;
     let ppp = ui.ctx().pixels_per_point();
     st.viewport_px = ((rect.width() * ppp).round().max(0.0) as u32, (rect.height() * ppp).round().max(0.0) as u32);
     let Some((id, (w, h), label)) = st.viewport_texture() else { return };
@@ -81,6 +82,7 @@ fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
         egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
         egui::Color32::WHITE,
     );
+    ab_overlay(st, ui, rect);
     if let Some(text) = label {
         ui.painter().text(
             rect.left_top() + egui::vec2(8.0, 8.0),
@@ -118,6 +120,70 @@ fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
     }
     if let Ok(l) = &mut st.lab {
         navigate(l, ui, &response);
+    }
+}
+
+/// The A/B comparison drawn over the viewport: B right of a draggable divider, or the
+/// difference / FLIP image, with the two sources named and a mode switch.
+fn ab_overlay(st: &mut State, ui: &mut egui::Ui, rect: egui::Rect) {
+    use crate::ab::AbView;
+    let a_label = st.preset_label_text();
+    let (Some(ab), Ok(l)) = (&mut st.ab, &st.lab) else { return };
+    let full = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
+    let painter = ui.painter_at(rect);
+    match ab.view {
+        AbView::Split => {
+            let (id, _) = ab.texture_b(&l.render_state);
+            let x = rect.min.x + ab.split * rect.width();
+            let right = egui::Rect::from_min_max(egui::pos2(x, rect.min.y), rect.max);
+            let uv = egui::Rect::from_min_max(egui::pos2(ab.split, 0.0), egui::pos2(1.0, 1.0));
+            painter.image(id, right, uv, egui::Color32::WHITE);
+            let handle = egui::Rect::from_center_size(egui::pos2(x, rect.center().y), egui::vec2(12.0, rect.height()));
+            let r = ui.interact(handle, ui.scope_id().with("ab_divider"), egui::Sense::drag());
+            if r.dragged() {
+                ab.split = ((x + r.drag_delta().x - rect.min.x) / rect.width()).clamp(0.0, 1.0);
+            }
+            let stroke = if r.hovered() || r.dragged() { 3.0 } else { 1.5 };
+            painter
+                .line_segment([egui::pos2(x, rect.min.y), egui::pos2(x, rect.max.y)], (stroke, egui::Color32::WHITE));
+            r.on_hover_cursor(egui::CursorIcon::ResizeHorizontal);
+        }
+        AbView::Difference | AbView::Flip => {
+            if let Some(id) = ab.compared(ui.ctx(), &l.renderer) {
+                painter.image(id, rect, full, egui::Color32::WHITE);
+            }
+        }
+    }
+    let text = |pos: egui::Pos2, align, s: String| {
+        painter.text(pos, align, s, egui::FontId::proportional(14.0), egui::Color32::WHITE);
+    };
+    text(rect.left_top() + egui::vec2(8.0, 28.0), egui::Align2::LEFT_TOP, format!("A: {a_label}"));
+    text(rect.right_top() + egui::vec2(-8.0, 8.0), egui::Align2::RIGHT_TOP, format!("B: {}", ab.source.label()));
+    if let Some((flip, rmse)) = ab.metrics {
+        text(
+            rect.right_top() + egui::vec2(-8.0, 28.0),
+            egui::Align2::RIGHT_TOP,
+            format!("FLIP {flip:.4} · RMSE {rmse:.4}"),
+        );
+    }
+    if let Some(e) = &ab.error {
+        text(rect.left_bottom() + egui::vec2(8.0, -40.0), egui::Align2::LEFT_BOTTOM, e.clone());
+    }
+    let bar = egui::Rect::from_min_size(rect.left_bottom() + egui::vec2(8.0, -30.0), egui::vec2(420.0, 24.0));
+    let mut stop = false;
+    ui.scope_builder(egui::UiBuilder::new().max_rect(bar), |ui| {
+        ui.horizontal(|ui| {
+            ui.selectable_value(&mut ab.view, AbView::Split, "A|B split");
+            ui.selectable_value(&mut ab.view, AbView::Difference, "|A−B|");
+            ui.selectable_value(&mut ab.view, AbView::Flip, "FLIP");
+            if ab.view == AbView::Difference {
+                ui.add(egui::DragValue::new(&mut ab.gain).range(0.1..=1000.0).speed(0.1).prefix("gain ×"));
+            }
+            stop = ui.button("stop A/B").clicked();
+        });
+    });
+    if stop {
+        st.stop_ab();
     }
 }
 

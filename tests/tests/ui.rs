@@ -353,3 +353,44 @@ fn the_session_restores_layout_settings_viewers_and_probes() {
     assert_eq!(h.state().state.pinned.len(), 1, "the pinned probe comes back");
     assert!(h.state().state.unsaved(), "and they are still marked unsaved against the defaults");
 }
+
+#[test]
+fn the_ab_split_renders_both_sides() {
+    let (mut h, _dir) = harness("ab");
+    pause(&mut h);
+    h.run_steps(2);
+    // B: the current (lit) settings, frozen. A: then switched to no light at all.
+    h.state_mut().state.start_ab(gi_lab::ab::AbSource::Frozen);
+    if let Ok(l) = &mut h.state_mut().state.lab {
+        l.settings.direct.intensity_scale = 0.0;
+        l.apply_settings();
+    }
+    h.run_steps(4);
+    let st = &h.state().state;
+    let ab = st.ab.as_ref().expect("A/B runs");
+    assert!(ab.b.clock.frame >= 3, "B renders: {} frames", ab.b.clock.frame);
+    assert_eq!(ab.b.size(), st.lab.as_ref().expect("lab").renderer.size(), "B renders at A's size");
+    let rect = st.viewport_rect;
+    let image = h.render().expect("the harness renders");
+    let ppp = 1.0;
+    let mean = |x0: f32, x1: f32| {
+        let (mut sum, mut n) = (0.0f64, 0u64);
+        for y in (rect.min.y + 40.0) as u32..(rect.max.y - 40.0) as u32 {
+            for x in (x0 * ppp) as u32..(x1 * ppp) as u32 {
+                let p = image.get_pixel(x, y).0;
+                sum += (p[0] as f64 + p[1] as f64 + p[2] as f64) / 3.0;
+                n += 1;
+            }
+        }
+        sum / n.max(1) as f64
+    };
+    let mid = rect.center().x;
+    let (left, right) = (mean(rect.min.x + 10.0, mid - 10.0), mean(mid + 10.0, rect.max.x - 10.0));
+    // Measured: the unlit A side is black (mean 0.1 of 255), the lit B side 17.4.
+    assert!(left < 2.0 && right > 8.0, "A (unlit) left {left:.1} should be black, B (lit) right {right:.1} lit");
+    // The FLIP view measures the two.
+    h.state_mut().state.ab.as_mut().expect("ab").view = gi_lab::ab::AbView::Flip;
+    h.run_steps(2);
+    let (flip, rmse) = h.state().state.ab.as_ref().and_then(|a| a.metrics).expect("FLIP and RMSE computed");
+    assert!(flip > 0.1 && rmse > 0.0, "FLIP {flip}, RMSE {rmse}");
+}

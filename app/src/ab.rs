@@ -1,0 +1,204 @@
+//! A/B comparison (issue #4 item 6): a second renderer (B) draws the same scene, camera,
+//! lights and animation time with other settings — a preset file, the live settings frozen
+//! at the moment the comparison started, or the exact-VPL reference — and the viewport is
+//! split by a draggable divider, or shows the absolute difference or the FLIP error map of
+//! the two images (with mean FLIP and RMSE). Difference and FLIP are computed on the CPU
+//! from read-back images, a few times a second.
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use gi_render::lab_settings::IndirectTechnique;
+use gi_render::{LabSettings, Renderer};
+
+/// What B renders with.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AbSource {
+    /// A preset file.
+    Preset(PathBuf),
+    /// The live settings as they were when the comparison started.
+    Frozen,
+    /// The live settings with the exact-VPL reference as indirect technique.
+    Reference,
+}
+
+impl AbSource {
+    pub fn label(&self) -> String {
+        match self {
+            Self::Preset(p) => p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
+            Self::Frozen => "frozen settings".into(),
+            Self::Reference => "exact-VPL reference".into(),
+        }
+    }
+}
+
+/// How the two images are shown.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AbView {
+    Split,
+    Difference,
+    Flip,
+}
+
+pub struct Ab {
+    pub b: Renderer,
+    pub source: AbSource,
+    /// Divider position as a fraction of the viewport width (A left, B right).
+    pub split: f32,
+    pub view: AbView,
+    /// Gain of the difference view.
+    pub gain: f32,
+    texture_b: Option<(egui::TextureId, (u32, u32))>,
+    compared: Option<egui::TextureHandle>,
+    last_compare: Option<Instant>,
+    /// Mean FLIP and RMSE (of final.hdr) of the last comparison.
+    pub metrics: Option<(f64, f64)>,
+    pub error: Option<String>,
+}
+
+impl Ab {
+    /// Starts a comparison of `a` with `source`.
+    pub fn start(a: &Renderer, live: &LabSettings, source: AbSource) -> Result<Self, String> {
+        let settings = match &source {
+            AbSource::Preset(p) => gi_render::preset::load_file(p).map_err(|e| e.to_string())?.settings,
+            AbSource::Frozen => live.clone(),
+            AbSource::Reference => {
+                let mut s = live.clone();
+                s.indirect.technique = IndirectTechnique::ExactVpl;
+                s
+            }
+        };
+        let (w, h) = a.size();
+        let mut b = Renderer::new(a.ctx.clone(), a.scene().clone(), settings, w, h).map_err(|e| e.to_string())?;
+        b.set_interactive(true);
+        Ok(Self {
+            b,
+            source,
+            split: 0.5,
+            view: AbView::Split,
+            gain: 4.0,
+            texture_b: None,
+            compared: None,
+            last_compare: None,
+            metrics: None,
+            error: None,
+        })
+    }
+
+    /// Renders B in step with A: same size, camera, light edits and animation time. Call
+    /// before A renders (the clock is copied before it ticks).
+    pub fn render(&mut self, a: &Renderer) {
+        let (w, h) = a.size();
+        if let Err(e) = self.b.resize(w, h) {
+            self.error = Some(e.to_string());
+            return;
+        }
+        self.b.camera = a.camera;
+        self.b.clock = a.clock;
+        let (src, dst) = (a.scene(), self.b.scene_mut());
+        let mut lights_moved = false;
+        for (i, n) in src.nodes.iter().enumerate() {
+            if let (Some(li), Some(d)) = (n.light, dst.nodes.get_mut(i)) {
+                if d.transform != n.transform {
+                    d.transform = n.transform;
+                    lights_moved = true;
+                }
+                if let (Some(sl), Some(dl)) = (src.lights.get(li), dst.lights.get_mut(li))
+                    && dl.intensity != sl.intensity
+                {
+                    dl.intensity = sl.intensity;
+                    lights_moved = true;
+                }
+            }
+        }
+        if lights_moved {
+            self.b.reset_history();
+        }
+        self.b.render_frame();
+    }
+
+    /// B's final image as an egui texture.
+    pub fn texture_b(&mut self, rs: &egui_wgpu::RenderState) -> (egui::TextureId, (u32, u32)) {
+        let t = self.b.final_ldr();
+        let size = (t.width(), t.height());
+        let view = t.create_view(&wgpu::TextureViewDescriptor {
+            label: Some("app.ab_b"),
+            format: Some(wgpu::TextureFormat::Rgba8UnormSrgb),
+            usage: Some(wgpu::TextureUsages::TEXTURE_BINDING),
+            ..Default::default()
+        });
+        let mut r = rs.renderer.write();
+        let id = match self.texture_b {
+            Some((id, s)) if s == size => id,
+            Some((id, _)) => {
+                r.update_egui_texture_from_wgpu_texture(&rs.device, &view, wgpu::FilterMode::Nearest, id);
+                id
+            }
+            None => r.register_native_texture(&rs.device, &view, wgpu::FilterMode::Nearest),
+        };
+        self.texture_b = Some((id, size));
+        (id, size)
+    }
+
+    /// The difference or FLIP image of A and B (refreshed at most every 400 ms).
+    pub fn compared(&mut self, ctx: &egui::Context, a: &Renderer) -> Option<egui::TextureId> {
+        let due = self.last_compare.is_none_or(|t| t.elapsed() > Duration::from_millis(400));
+        if due {
+            self.last_compare = Some(Instant::now());
+            match self.compare(a) {
+                Ok(img) => {
+                    let opts = egui::TextureOptions::NEAREST;
+                    match &mut self.compared {
+                        Some(h) => h.set(img, opts),
+                        None => self.compared = Some(ctx.load_texture("ab.compare", img, opts)),
+                    }
+                    self.error = None;
+                }
+                Err(e) => self.error = Some(e),
+            }
+        }
+        self.compared.as_ref().map(|h| h.id())
+    }
+
+    fn compare(&mut self, a: &Renderer) -> Result<egui::ColorImage, String> {
+        let (ah, bh) = (
+            a.readback("final.hdr").map_err(|e| e.to_string())?,
+            self.b.readback("final.hdr").map_err(|e| e.to_string())?,
+        );
+        let (al, bl) = (
+            a.readback("final.ldr").map_err(|e| e.to_string())?,
+            self.b.readback("final.ldr").map_err(|e| e.to_string())?,
+        );
+        let rmse = gi_render::metrics::rmse(&ah, &bh).map_err(|e| e.to_string())?;
+        let (mean, map) = gi_render::metrics::flip(&al, &bl).map_err(|e| e.to_string())?;
+        self.metrics = Some((mean, rmse));
+        let (w, h) = (al.width as usize, al.height as usize);
+        let pixels: Vec<egui::Color32> = match self.view {
+            AbView::Flip => map
+                .data
+                .iter()
+                .map(|p| {
+                    let c = gi_render::cpu::view::colormap(gi_render::passes::view::Colormap::Inferno, p[0]);
+                    egui::Color32::from_rgb((c[0] * 255.0) as u8, (c[1] * 255.0) as u8, (c[2] * 255.0) as u8)
+                })
+                .collect(),
+            _ => al
+                .data
+                .iter()
+                .zip(&bl.data)
+                .map(|(x, y)| {
+                    let d = |i: usize| ((x[i] - y[i]).abs() * self.gain).clamp(0.0, 1.0);
+                    egui::Color32::from_rgb((d(0) * 255.0) as u8, (d(1) * 255.0) as u8, (d(2) * 255.0) as u8)
+                })
+                .collect(),
+        };
+        Ok(egui::ColorImage::new([w, h], pixels))
+    }
+
+    /// Frees B's texture.
+    pub fn release(&mut self, rs: &egui_wgpu::RenderState) {
+        if let Some((id, _)) = self.texture_b.take() {
+            rs.renderer.write().free_texture(&id);
+        }
+    }
+}
