@@ -272,6 +272,7 @@ pub struct State {
     pub show_help: bool,
     /// The A/B comparison, when one runs.
     pub ab: Option<crate::ab::Ab>,
+    pub hot: crate::hot_reload::HotReload,
     pub request_new_viewer: bool,
     pub request_reset_layout: bool,
     screenshot: Arc<Mutex<Option<Arc<egui::ColorImage>>>>,
@@ -369,7 +370,14 @@ impl GiLabApp {
         for m in &messages {
             log::warn!("{m}");
         }
+        let mut hot = crate::hot_reload::HotReload::new(args.shaders_dir.clone());
+        if args.hot_reload.unwrap_or(cfg!(debug_assertions))
+            && let Err(e) = hot.set_enabled(true)
+        {
+            log::info!("shader hot reload off: {e}");
+        }
         let state = State {
+            hot,
             args,
             config_dir,
             lab,
@@ -840,8 +848,42 @@ impl State {
         }
     }
 
+    /// Installs changed shaders and rebuilds the passes (and viewers) that use them.
+    fn hot_reload(&mut self) {
+        let changes = self.hot.poll();
+        if changes.entries.is_empty() {
+            return;
+        }
+        let Ok(l) = &mut self.lab else { return };
+        match l.renderer.reload_shaders(&changes.entries) {
+            Ok(passes) => {
+                let mut rebuilt: Vec<String> = passes.iter().map(|p| p.to_string()).collect();
+                if changes.entries.iter().any(|e| e.starts_with("view/")) {
+                    // The viewers' pipeline: new views from the new source.
+                    self.view_pipeline = None;
+                    for v in self.viewers.values_mut() {
+                        v.reset_gpu();
+                    }
+                    self.pass_view = None;
+                    rebuilt.push("buffer viewers".into());
+                }
+                let m = format!("reloaded {}, rebuilt {}", changes.files.join(", "), rebuilt.join(", "));
+                self.hot.last_reload = Some(m.clone());
+                self.set_status(m);
+            }
+            Err(e) => {
+                // naga accepted it but the device did not: undo, keep the old pipelines.
+                for f in &changes.files {
+                    gi_render::shaders::clear_override(f);
+                    self.hot.errors.insert(f.clone(), format!("pipeline creation failed: {e}"));
+                }
+            }
+        }
+    }
+
     /// Renders this frame, probes, and updates the viewers.
     fn frame(&mut self) {
+        self.hot_reload();
         let scale = self.session.render_scale.clamp(0.1, 2.0);
         let (vw, vh) = self.viewport_px;
         let target = (((vw as f32) * scale).round() as u32, ((vh as f32) * scale).round() as u32);
@@ -930,7 +972,7 @@ impl State {
         {
             let size = (out.width(), out.height());
             let id = l.show_texture(&out, true);
-            return Some((id, size, Some(format!("{pass} → {}", v.state.buffer))));
+            return Some((id, size, Some(format!("{pass}: {}", v.state.buffer))));
         }
         let out = l.renderer.final_ldr().clone();
         let force =
@@ -1115,6 +1157,18 @@ impl State {
                 if ui.button("Reset panel layout").clicked() {
                     self.request_reset_layout = true;
                 }
+                let mut hot = self.hot.enabled();
+                if ui
+                    .checkbox(&mut hot, "Shader hot reload")
+                    .on_hover_text(format!(
+                        "watch {} and rebuild the passes whose shaders change",
+                        self.hot.dir().display()
+                    ))
+                    .changed()
+                    && let Err(e) = self.hot.set_enabled(hot)
+                {
+                    self.set_status(e);
+                }
                 ui.horizontal(|ui| {
                     ui.label("render scale");
                     ui.add(egui::Slider::new(&mut self.session.render_scale, 0.1..=2.0).step_by(0.05))
@@ -1204,7 +1258,7 @@ impl State {
                     "render {w}×{h} (viewport {}×{} × {:.2})",
                     self.viewport_px.0, self.viewport_px.1, self.session.render_scale
                 ))
-                .on_hover_text("View → render scale changes the render resolution");
+                .on_hover_text("View > render scale changes the render resolution");
                 ui.separator();
                 ui.label(format!("frame {:.1} ms · GPU {:.2} ms ({:?})", l.frame_ms, gpu, l.renderer.timing_source()));
                 ui.separator();
@@ -1220,9 +1274,18 @@ impl State {
                     ui.separator();
                     ui.colored_label(ERROR, "GPU error").on_hover_text(e);
                 }
+                if !self.hot.errors.is_empty() {
+                    ui.separator();
+                    let all: Vec<String> = self.hot.errors.values().cloned().collect();
+                    ui.colored_label(
+                        ERROR,
+                        format!("shader error in {}", self.hot.errors.keys().cloned().collect::<Vec<_>>().join(", ")),
+                    )
+                    .on_hover_text(all.join("\n\n"));
+                }
                 if let Some(r) = &self.recording {
                     ui.separator();
-                    ui.colored_label(ERROR, format!("● recording, {} frames left", r.remaining));
+                    ui.colored_label(ERROR, format!("recording, {} frames left", r.remaining));
                 }
                 if let Some((m, at)) = &self.status
                     && at.elapsed().as_secs() < 20

@@ -83,6 +83,12 @@ pub struct AppArgs {
     /// Folder the preset browser lists (default: ./presets).
     #[arg(long, default_value = "presets")]
     pub presets_dir: PathBuf,
+    /// Folder of WGSL sources watched by the shader hot reload.
+    #[arg(long, default_value = "shaders")]
+    pub shaders_dir: PathBuf,
+    /// Shader hot reload on or off (default: on in debug builds).
+    #[arg(long)]
+    pub hot_reload: Option<bool>,
 }
 
 #[derive(Args, Debug, Clone)]
@@ -110,6 +116,8 @@ impl Default for AppArgs {
             config_dir: None,
             fresh: false,
             presets_dir: PathBuf::from("presets"),
+            shaders_dir: PathBuf::from("shaders"),
+            hot_reload: None,
         }
     }
 }

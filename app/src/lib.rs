@@ -3,6 +3,7 @@
 pub mod ab;
 pub mod app;
 pub mod cli;
+pub mod hot_reload;
 pub mod panes;
 pub mod plot;
 pub mod session;

@@ -83,6 +83,22 @@ fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
         egui::Color32::WHITE,
     );
     ab_overlay(st, ui, rect);
+    if !st.hot.errors.is_empty() {
+        // The compile error stays on screen until the file is fixed.
+        let text: Vec<String> = st.hot.errors.iter().map(|(f, e)| format!("{f}: {e}")).collect();
+        let area = egui::Rect::from_min_max(
+            rect.left_top() + egui::vec2(8.0, 8.0),
+            rect.right_bottom() - egui::vec2(8.0, 40.0),
+        );
+        ui.scope_builder(egui::UiBuilder::new().max_rect(area), |ui| {
+            egui::Frame::new().fill(egui::Color32::from_black_alpha(200)).inner_margin(8.0).show(ui, |ui| {
+                ui.colored_label(ERROR, "Shader error — the last good pipelines keep running:");
+                for t in &text {
+                    ui.label(egui::RichText::new(t).monospace().color(egui::Color32::WHITE));
+                }
+            });
+        });
+    }
     if let Some(text) = label {
         ui.painter().text(
             rect.left_top() + egui::vec2(8.0, 8.0),
@@ -174,7 +190,7 @@ fn ab_overlay(st: &mut State, ui: &mut egui::Ui, rect: egui::Rect) {
     ui.scope_builder(egui::UiBuilder::new().max_rect(bar), |ui| {
         ui.horizontal(|ui| {
             ui.selectable_value(&mut ab.view, AbView::Split, "A|B split");
-            ui.selectable_value(&mut ab.view, AbView::Difference, "|A−B|");
+            ui.selectable_value(&mut ab.view, AbView::Difference, "|A-B|");
             ui.selectable_value(&mut ab.view, AbView::Flip, "FLIP");
             if ab.view == AbView::Difference {
                 ui.add(egui::DragValue::new(&mut ab.gain).range(0.1..=1000.0).speed(0.1).prefix("gain ×"));

@@ -150,6 +150,11 @@ impl Viewer {
         }
     }
 
+    /// Drops the GPU view (after a shader reload it is rebuilt with the new pipeline).
+    pub fn reset_gpu(&mut self) {
+        self.gpu = None;
+    }
+
     /// The view pass's output texture (for the viewport's pass preview).
     pub fn output_texture(&self) -> Option<wgpu::Texture> {
         self.gpu.as_ref().and_then(|g| g.output()).cloned()
@@ -305,11 +310,11 @@ impl Viewer {
         ui.add_enabled(manual, egui::DragValue::new(&mut v.range[1]).speed(speed).prefix("max "));
         ui.add(egui::DragValue::new(&mut v.exposure_ev).range(-24.0..=24.0).speed(0.05).prefix("EV "))
             .on_hover_text("values are scaled by 2^EV before the range");
-        ui.checkbox(&mut v.log, "log").on_hover_text("logarithmic range (values ≤ min clamp to min)");
+        ui.checkbox(&mut v.log, "log").on_hover_text("logarithmic range (values at or below min clamp to min)");
         if v.mode == ViewMode::Rgb {
             ui.checkbox(&mut v.srgb, "sRGB").on_hover_text("apply the sRGB transfer (linear colour data)");
         }
-        ui.checkbox(&mut v.flag_nan_inf, "NaN/Inf").on_hover_text("NaN magenta, ±Inf green");
+        ui.checkbox(&mut v.flag_nan_inf, "NaN/Inf").on_hover_text("NaN magenta, +-Inf green");
         ui.checkbox(&mut v.flag_negative, "neg").on_hover_text("negative values cyan");
         if let Ok(e) = renderer.buffers().get(&self.state.buffer) {
             let (layers, levels) = (e.texture.depth_or_array_layers(), e.texture.mip_level_count());

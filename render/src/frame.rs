@@ -395,6 +395,63 @@ impl Renderer {
         timings
     }
 
+    /// Rebuilds the passes whose shaders are among `entries` (entry modules, as listed in
+    /// `shaders::ENTRY_MODULES`) from the current shader sources — the shader hot reload.
+    /// Only those passes are recreated; their history restarts. If any new pipeline fails
+    /// to build, every old pass is kept and the error is returned. Returns the passes
+    /// rebuilt.
+    pub fn reload_shaders(&mut self, entries: &[&str]) -> Result<Vec<&'static str>, String> {
+        let mut passes: Vec<&'static str> = entries.iter().filter_map(|e| pass_of_shader(e)).collect();
+        passes.sort();
+        passes.dedup();
+        // The exact-VPL passes exist only while that technique is on.
+        passes.retain(|p| *p != "exact_vpl" || self.exact_vpl.is_some());
+        if passes.is_empty() {
+            return Ok(passes);
+        }
+        let ctx = self.ctx.clone();
+        let (w, h) = (self.width, self.height);
+        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let gbuffer = passes.contains(&"gbuffer").then(|| GBufferPass::new(&ctx, &self.gpu_scene, w, h));
+        let shadow = passes.contains(&"direct.shadow").then(|| ShadowPass::new(&ctx, &self.gpu_scene));
+        let direct = passes
+            .contains(&"direct")
+            .then(|| DirectPass::new(&ctx, bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h));
+        let compose = passes.contains(&"compose").then(|| ComposePass::new(&ctx, w, h));
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(e.to_string());
+        }
+        if let Some(g) = gbuffer {
+            self.gbuffer = g;
+            self.camera_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("frame.camera"),
+                layout: &self.gbuffer.camera_layout,
+                entries: &[wgpu::BindGroupEntry { binding: 0, resource: self.camera_buffer.as_entire_binding() }],
+            });
+        }
+        if let Some(p) = shadow {
+            self.shadow = p;
+        }
+        if let Some(p) = direct {
+            self.direct = p;
+        }
+        if let Some(p) = compose {
+            self.compose = p;
+        }
+        if passes.contains(&"exact_vpl") {
+            let old = self.exact_vpl.take();
+            let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+            self.ensure_exact_vpl();
+            if let Some(e) = pollster::block_on(scope.pop()) {
+                self.exact_vpl = old;
+                return Err(e.to_string());
+            }
+        }
+        self.register_all();
+        self.reset_history();
+        Ok(passes)
+    }
+
     /// Creates or resizes the exact-VPL reference's passes for the current settings (when it is
     /// the indirect technique), so that its buffers are registered before the first frame.
     fn ensure_exact_vpl(&mut self) {
@@ -565,6 +622,19 @@ fn check_size(ctx: &GpuContext, width: u32, height: u32) -> Result<(), RenderErr
 }
 
 /// The scene's first camera, else one that frames the bounds.
+/// The pass (as `Renderer::reload_shaders` names it) that an entry module's pipelines
+/// belong to; None for shaders outside the frame (the viewer's).
+pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
+    Some(match entry {
+        "gbuffer/gbuffer.wgsl" => "gbuffer",
+        "shadow/shadow.wgsl" => "direct.shadow",
+        "direct/direct.wgsl" => "direct",
+        "compose/compose.wgsl" | "compose/tonemap.wgsl" | "compose/luminance.wgsl" => "compose",
+        "vpl/sample.wgsl" | "vpl/shadow.wgsl" | "vpl/gather.wgsl" => "exact_vpl",
+        _ => return None,
+    })
+}
+
 /// The buffer that shows what a timing scope produced (the lab's "hover a pass to see its
 /// output"). Every scope of `render_frame` is listed; a test checks it.
 pub fn scope_output(scope: &str) -> Option<&'static str> {

@@ -49,24 +49,97 @@ pub enum ShaderError {
     BadImport { file: String, line: usize, text: String },
 }
 
-fn source(path: &str) -> Result<&'static str, ShaderError> {
-    SOURCES.iter().find(|(p, _)| *p == path).map(|(_, s)| *s).ok_or_else(|| ShaderError::Missing(path.to_string()))
+/// Sources that replace the embedded ones (the app's shader hot reload sets them from the
+/// files on disk; everything else uses the embedded table).
+static OVERRIDES: std::sync::RwLock<Vec<(String, String)>> = std::sync::RwLock::new(Vec::new());
+
+/// Replaces the source of `path` (a file of [`SOURCES`]) for every module created from now on.
+pub fn set_override(path: &str, source: &str) -> Result<(), ShaderError> {
+    if !SOURCES.iter().any(|(p, _)| *p == path) {
+        return Err(ShaderError::Missing(path.to_string()));
+    }
+    let mut o = OVERRIDES.write().unwrap_or_else(|e| e.into_inner());
+    o.retain(|(p, _)| p != path);
+    o.push((path.to_string(), source.to_string()));
+    Ok(())
+}
+
+/// Drops the override of `path` (back to the embedded source).
+pub fn clear_override(path: &str) {
+    OVERRIDES.write().unwrap_or_else(|e| e.into_inner()).retain(|(p, _)| p != path);
+}
+
+/// The override of `path`, if any.
+pub fn override_of(path: &str) -> Option<String> {
+    OVERRIDES.read().unwrap_or_else(|e| e.into_inner()).iter().find(|(p, _)| p == path).map(|(_, s)| s.clone())
+}
+
+fn source(path: &str) -> Result<String, ShaderError> {
+    if let Some(s) = override_of(path) {
+        return Ok(s);
+    }
+    SOURCES
+        .iter()
+        .find(|(p, _)| *p == path)
+        .map(|(_, s)| s.to_string())
+        .ok_or_else(|| ShaderError::Missing(path.to_string()))
+}
+
+/// Every file `path` includes, itself first (its `#import` closure).
+pub fn closure(path: &str) -> Result<Vec<String>, ShaderError> {
+    let mut seen = Vec::new();
+    let mut out = String::new();
+    resolve_into(path, &mut out, &mut seen, None)?;
+    Ok(seen)
+}
+
+/// The entry modules that include `file` (directly or through imports): what a change of
+/// `file` affects.
+pub fn dependents(file: &str) -> Vec<&'static str> {
+    ENTRY_MODULES.iter().copied().filter(|e| closure(e).is_ok_and(|c| c.iter().any(|f| f == file))).collect()
+}
+
+/// Resolves and validates an entry module with naga (WGSL front end + validator), as the
+/// hot reload does before it touches any pipeline. The error names the file and line.
+pub fn validate(path: &str) -> Result<(), String> {
+    validate_candidate(path, None)
+}
+
+/// [`validate`] as if `candidate` = (file, source) replaced that file, without installing
+/// it (other threads keep creating modules from the current sources meanwhile).
+pub fn validate_candidate(path: &str, candidate: Option<(&str, &str)>) -> Result<(), String> {
+    let mut code = String::new();
+    let mut seen = Vec::new();
+    resolve_into(path, &mut code, &mut seen, candidate).map_err(|e| e.to_string())?;
+    let module = naga::front::wgsl::parse_str(&code).map_err(|e| format!("{path}: {}", e.emit_to_string(&code)))?;
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
+        .validate(&module)
+        .map_err(|e| format!("{path}: {}", e.emit_to_string(&code)))?;
+    Ok(())
 }
 
 /// Resolves `#import` lines of the module at `path` into one WGSL source.
 pub fn resolve(path: &str) -> Result<String, ShaderError> {
     let mut out = String::new();
     let mut seen = Vec::new();
-    resolve_into(path, &mut out, &mut seen)?;
+    resolve_into(path, &mut out, &mut seen, None)?;
     Ok(out)
 }
 
-fn resolve_into(path: &str, out: &mut String, seen: &mut Vec<String>) -> Result<(), ShaderError> {
+fn resolve_into(
+    path: &str,
+    out: &mut String,
+    seen: &mut Vec<String>,
+    candidate: Option<(&str, &str)>,
+) -> Result<(), ShaderError> {
     if seen.iter().any(|s| s == path) {
         return Ok(());
     }
     seen.push(path.to_string());
-    let src = source(path)?;
+    let src = match candidate {
+        Some((file, text)) if file == path => text.to_string(),
+        _ => source(path)?,
+    };
     for (i, line) in src.lines().enumerate() {
         let t = line.trim_start();
         if let Some(rest) = t.strip_prefix("#import") {
@@ -74,7 +147,7 @@ fn resolve_into(path: &str, out: &mut String, seen: &mut Vec<String>) -> Result<
             if name.is_empty() || name.contains(char::is_whitespace) {
                 return Err(ShaderError::BadImport { file: path.into(), line: i + 1, text: line.into() });
             }
-            resolve_into(name, out, seen)?;
+            resolve_into(name, out, seen, candidate)?;
         } else {
             out.push_str(line);
             out.push('\n');

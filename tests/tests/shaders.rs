@@ -94,3 +94,37 @@ fn uniform_sizes_match_wgsl() {
     let p = parse("view/probe.wgsl");
     assert_eq!(struct_size(&p, "Jobs") as usize, std::mem::size_of::<gi_render::passes::view::ProbeJobs>());
 }
+
+/// The hot reload's building blocks: what a file affects, validation of a candidate text
+/// without installing it, and a rebuild that touches only the passes of the named modules.
+#[test]
+fn shader_reload_rebuilds_only_the_affected_passes() {
+    use gi_render::shaders::{dependents, validate_candidate};
+    let lights = dependents("common/lights.wgsl");
+    assert!(lights.contains(&"direct/direct.wgsl"), "{lights:?}");
+    assert!(!lights.contains(&"compose/tonemap.wgsl"), "{lights:?}");
+    assert_eq!(dependents("direct/direct.wgsl"), ["direct/direct.wgsl"]);
+    let good = gi_render::shaders::SOURCES.iter().find(|(p, _)| *p == "direct/direct.wgsl").expect("listed").1;
+    assert!(validate_candidate("direct/direct.wgsl", Some(("direct/direct.wgsl", good))).is_ok());
+    let err = validate_candidate("direct/direct.wgsl", Some(("direct/direct.wgsl", "fn broken( {")))
+        .expect_err("a syntax error is caught before anything is installed");
+    assert!(err.contains("direct/direct.wgsl"), "{err}");
+
+    let mut r = gi_lab_tests::default_renderer(48, 32);
+    r.render_frame();
+    r.render_frame();
+    let before = r.readback("final.hdr").expect("readback");
+    let gbuffer_before = r.buffers().get("gbuffer.normal").expect("registered").texture.clone();
+    let rebuilt = r.reload_shaders(&["direct/direct.wgsl"]).expect("rebuilds");
+    assert_eq!(rebuilt, ["direct"]);
+    assert_eq!(
+        r.buffers().get("gbuffer.normal").expect("registered").texture,
+        gbuffer_before,
+        "the G-buffer pass was not rebuilt"
+    );
+    r.render_frame();
+    r.render_frame();
+    assert_eq!(r.readback("final.hdr").expect("readback"), before, "same source, same image");
+    let all = r.reload_shaders(gi_render::shaders::ENTRY_MODULES).expect("rebuilds all");
+    assert_eq!(all, ["compose", "direct", "direct.shadow", "gbuffer"], "exact_vpl is off, the viewer is not a pass");
+}

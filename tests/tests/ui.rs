@@ -394,3 +394,89 @@ fn the_ab_split_renders_both_sides() {
     let (flip, rmse) = h.state().state.ab.as_ref().and_then(|a| a.metrics).expect("FLIP and RMSE computed");
     assert!(flip > 0.1 && rmse > 0.0, "FLIP {flip}, RMSE {rmse}");
 }
+
+/// Copies `shaders/` into `dir` (the hot reload test edits the copy).
+fn copy_shaders(dir: &std::path::Path) {
+    for (path, source) in gi_render::shaders::SOURCES {
+        let p = dir.join(path);
+        std::fs::create_dir_all(p.parent().expect("folder")).expect("mkdir");
+        std::fs::write(p, source).expect("write shader");
+    }
+}
+
+#[test]
+fn shader_hot_reload_keeps_the_last_good_pipeline_and_shows_the_error() {
+    let dir = temp_dir("hot");
+    let shaders = dir.join("shaders");
+    copy_shaders(&shaders);
+    let args = AppArgs {
+        config_dir: Some(dir.join("config")),
+        presets_dir: dir.join("presets"),
+        shaders_dir: shaders.clone(),
+        hot_reload: Some(true),
+        fresh: true,
+        ..AppArgs::default()
+    };
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(1400.0, 1000.0))
+        .wgpu_setup(gi_lab::app::wgpu_setup())
+        .build_eframe(move |cc| GiLabApp::new(cc, args));
+    h.run_steps(2);
+    assert!(h.state().state.hot.enabled(), "hot reload is on");
+    let file = shaders.join("direct/direct.wgsl");
+    let good = std::fs::read_to_string(&file).expect("read");
+    std::fs::write(&file, format!("{good}\nfn broken( {{\n")).expect("write");
+    let mut waited = 0;
+    while h.state().state.hot.errors.is_empty() && waited < 100 {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        h.run_steps(1);
+        waited += 1;
+    }
+    let err = h.state().state.hot.errors.get("direct/direct.wgsl").cloned().expect("the error is reported");
+    assert!(err.contains("direct/direct.wgsl"), "{err}");
+    let frames = h.state().renderer().expect("renderer").clock.frame;
+    h.run_steps(3);
+    assert!(
+        h.state().renderer().expect("renderer").clock.frame >= frames + 3,
+        "the last good pipelines keep rendering"
+    );
+    assert!(
+        h.query_by_label("Shader error — the last good pipelines keep running:").is_some(),
+        "the error is shown over the viewport"
+    );
+    // Fixed (with a harmless edit): the error goes and only the direct pass is rebuilt.
+    std::fs::write(&file, format!("{good}\n// edited\n")).expect("write");
+    let mut waited = 0;
+    while !h.state().state.hot.errors.is_empty() && waited < 100 {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        h.run_steps(1);
+        waited += 1;
+    }
+    assert!(h.state().state.hot.errors.is_empty(), "{:?}", h.state().state.hot.errors);
+    let m = h.state().state.hot.last_reload.clone().expect("reloaded");
+    assert!(m.ends_with("rebuilt direct"), "{m}");
+}
+
+/// Every text the panels can show from the settings' metadata (labels, tooltips with the
+/// documentation, symbols, units, choice labels) and the shortcut list draws with the
+/// app's fonts: the harness panics on a missing glyph, a real window would show a box.
+#[test]
+fn every_settings_text_has_glyphs() {
+    let mut texts: Vec<String> = Vec::new();
+    for (group, fields) in LabSettings::groups() {
+        texts.push(gi_lab::settings_ui::section_title(group));
+        for m in fields {
+            texts.push(gi_lab::settings_ui::tooltip(m));
+            texts.push(m.labels.join(" "));
+        }
+    }
+    for (k, what) in gi_lab::app::SHORTCUTS {
+        texts.push(format!("{k} {what}"));
+    }
+    let mut h = Harness::new_ui(move |ui| {
+        for t in &texts {
+            ui.label(t);
+        }
+    });
+    h.run_steps(1);
+}
