@@ -180,8 +180,8 @@ pub fn default_layout() -> egui_tiles::Tree<Pane> {
     let right = tiles.insert_tab_tile(vec![viewer]);
     let root = tiles.insert_horizontal_tile(vec![left, middle, right]);
     if let Some(egui_tiles::Tile::Container(egui_tiles::Container::Linear(l))) = tiles.get_mut(root) {
-        l.shares.set_share(left, 1.3);
-        l.shares.set_share(middle, 2.5);
+        l.shares.set_share(left, 1.45);
+        l.shares.set_share(middle, 2.4);
         l.shares.set_share(right, 1.3);
     }
     if let Some(egui_tiles::Tile::Container(egui_tiles::Container::Linear(l))) = tiles.get_mut(middle) {

@@ -203,7 +203,7 @@ pub fn technique_picker(ui: &mut Ui, s: &mut LabSettings) -> bool {
 /// The whole settings panel: technique picker, then one section per group. `preset` is
 /// the loaded preset (for the markers). Returns whether anything changed.
 pub fn lab_settings_ui(ui: &mut Ui, s: &mut LabSettings, preset: &LabSettings) -> bool {
-    ui.spacing_mut().slider_width = 110.0;
+    ui.spacing_mut().slider_width = 95.0;
     struct Sections<'a> {
         ui: &'a mut Ui,
         changed: bool,
