@@ -119,25 +119,9 @@ impl Ab {
 
     /// B's final image as an egui texture.
     pub fn texture_b(&mut self, rs: &egui_wgpu::RenderState) -> (egui::TextureId, (u32, u32)) {
-        let t = self.b.final_ldr();
-        let size = (t.width(), t.height());
-        let view = t.create_view(&wgpu::TextureViewDescriptor {
-            label: Some("app.ab_b"),
-            format: Some(wgpu::TextureFormat::Rgba8UnormSrgb),
-            usage: Some(wgpu::TextureUsages::TEXTURE_BINDING),
-            ..Default::default()
-        });
-        let mut r = rs.renderer.write();
-        let id = match self.texture_b {
-            Some((id, s)) if s == size => id,
-            Some((id, _)) => {
-                r.update_egui_texture_from_wgpu_texture(&rs.device, &view, wgpu::FilterMode::Nearest, id);
-                id
-            }
-            None => r.register_native_texture(&rs.device, &view, wgpu::FilterMode::Nearest),
-        };
-        self.texture_b = Some((id, size));
-        (id, size)
+        let t = self.b.final_ldr().clone();
+        let id = crate::app::native_texture(rs, &mut self.texture_b, &t, false);
+        (id, (t.width(), t.height()))
     }
 
     /// The difference or FLIP image of A and B (refreshed at most every 400 ms).

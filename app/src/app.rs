@@ -182,34 +182,42 @@ impl Lab {
     /// Points egui's texture at `texture` (through an sRGB view), re-registering only
     /// when the texture changed size or identity.
     fn show_texture(&mut self, texture: &wgpu::Texture, force: bool) -> egui::TextureId {
-        let size = (texture.width(), texture.height());
-        let view = texture.create_view(&wgpu::TextureViewDescriptor {
-            label: Some("app.viewport"),
-            format: Some(wgpu::TextureFormat::Rgba8UnormSrgb),
-            usage: Some(wgpu::TextureUsages::TEXTURE_BINDING),
-            ..Default::default()
-        });
-        let mut egui_renderer = self.render_state.renderer.write();
-        match self.texture {
-            Some((id, s)) if s == size && !force => id,
-            Some((id, _)) => {
-                egui_renderer.update_egui_texture_from_wgpu_texture(
-                    &self.render_state.device,
-                    &view,
-                    wgpu::FilterMode::Nearest,
-                    id,
-                );
-                self.texture = Some((id, size));
-                id
-            }
-            None => {
-                let id =
-                    egui_renderer.register_native_texture(&self.render_state.device, &view, wgpu::FilterMode::Nearest);
-                self.texture = Some((id, size));
-                id
-            }
-        }
+        native_texture(&self.render_state, &mut self.texture, texture, force)
     }
+}
+
+/// Registers `texture` with egui through an sRGB view into `slot`, or re-points the slot's
+/// id at it when its size changed or `force` is set; returns the id. Every image the lab
+/// shows from the GPU (viewport, viewers, A/B) goes through here.
+pub fn native_texture(
+    rs: &egui_wgpu::RenderState,
+    slot: &mut Option<(egui::TextureId, (u32, u32))>,
+    texture: &wgpu::Texture,
+    force: bool,
+) -> egui::TextureId {
+    let size = (texture.width(), texture.height());
+    if let Some((id, s)) = *slot
+        && s == size
+        && !force
+    {
+        return id;
+    }
+    let view = texture.create_view(&wgpu::TextureViewDescriptor {
+        label: Some("app.egui_texture"),
+        format: Some(wgpu::TextureFormat::Rgba8UnormSrgb),
+        usage: Some(wgpu::TextureUsages::TEXTURE_BINDING),
+        ..Default::default()
+    });
+    let mut r = rs.renderer.write();
+    let id = match *slot {
+        Some((id, _)) => {
+            r.update_egui_texture_from_wgpu_texture(&rs.device, &view, wgpu::FilterMode::Nearest, id);
+            id
+        }
+        None => r.register_native_texture(&rs.device, &view, wgpu::FilterMode::Nearest),
+    };
+    *slot = Some((id, size));
+    id
 }
 
 /// A preset load that has problems, waiting for the user's decision.

@@ -68,6 +68,7 @@ pub struct Viewer {
     pub state: ViewerState,
     gpu: Option<BufferView>,
     texture: Option<egui::TextureId>,
+    slot: Option<(egui::TextureId, (u32, u32))>,
     pub error: Option<String>,
     last_auto: Option<Instant>,
     /// Buffer size of the last render (texels of the shown level).
@@ -76,7 +77,7 @@ pub struct Viewer {
 
 impl Viewer {
     pub fn new(state: ViewerState) -> Self {
-        Self { state, gpu: None, texture: None, error: None, last_auto: None, size: (0, 0) }
+        Self { state, gpu: None, texture: None, slot: None, error: None, last_auto: None, size: (0, 0) }
     }
 
     /// Switches to another buffer with the first view that suits its kind.
@@ -125,26 +126,7 @@ impl Viewer {
                 self.error = None;
                 let Some(out) = gpu.output() else { return };
                 self.size = (out.width(), out.height());
-                if recreated || self.texture.is_none() {
-                    let view = out.create_view(&wgpu::TextureViewDescriptor {
-                        label: Some("app.viewer"),
-                        format: Some(wgpu::TextureFormat::Rgba8UnormSrgb),
-                        ..Default::default()
-                    });
-                    let mut r = render_state.renderer.write();
-                    match self.texture {
-                        Some(id) => r.update_egui_texture_from_wgpu_texture(
-                            &render_state.device,
-                            &view,
-                            wgpu::FilterMode::Nearest,
-                            id,
-                        ),
-                        None => {
-                            self.texture =
-                                Some(r.register_native_texture(&render_state.device, &view, wgpu::FilterMode::Nearest))
-                        }
-                    }
-                }
+                self.texture = Some(crate::app::native_texture(render_state, &mut self.slot, out, recreated));
             }
             Err(e) => self.error = Some(e.to_string()),
         }
@@ -162,7 +144,8 @@ impl Viewer {
 
     /// Frees the egui texture (the viewer's panel was closed).
     pub fn release(&mut self, render_state: &egui_wgpu::RenderState) {
-        if let Some(id) = self.texture.take() {
+        self.texture = None;
+        if let Some((id, _)) = self.slot.take() {
             render_state.renderer.write().free_texture(&id);
         }
     }

@@ -216,3 +216,34 @@ fn buffers_lists_registered_names_and_bench_prints_every_pass() {
     let afterglow = v["afterglow_frames"].as_u64().expect("afterglow settles");
     assert!((1..8).contains(&afterglow), "afterglow of the progressive reference: {afterglow}");
 }
+
+#[test]
+fn export_writes_json_and_ron_that_import_to_the_preset() {
+    let out = temp_dir("export");
+    let preset = out.join("p.ron");
+    let mut s = gi_render::LabSettings::default();
+    s.direct.pcf_radius = 3;
+    s.tonemap.exposure_ev = 0.1 + 0.2;
+    s.save(&preset).expect("preset written");
+    for format in ["json", "ron"] {
+        let file = out.join(format!("p.{format}"));
+        let o = gi_lab()
+            .args(["export", "--format", format, "--set", "tonemap.key=0.3", "--preset"])
+            .arg(&preset)
+            .arg("--out")
+            .arg(&file)
+            .output()
+            .expect("runs");
+        assert!(o.status.success(), "export {format} failed: {}", String::from_utf8_lossy(&o.stderr));
+        let text = std::fs::read_to_string(&file).expect("export written");
+        let e = gi_render::preset::Export::parse(&text, "export").unwrap_or_else(|e| panic!("{format}: {e}"));
+        let mut want = s.clone();
+        want.tonemap.key = 0.3;
+        assert_eq!(e.settings, want, "{format}: the export carries the preset with its overrides exactly");
+        assert_eq!(e.schema, "gi-lab-preset");
+        assert_eq!(e.provenance.gi_lab_version, env!("CARGO_PKG_VERSION"));
+        assert!(e.provenance.date.ends_with('Z') && e.provenance.date.starts_with("20"), "{}", e.provenance.date);
+    }
+    let o = gi_lab().args(["export", "--format", "xml"]).output().expect("runs");
+    assert_eq!(o.status.code(), Some(2), "an unknown format is a usage error");
+}

@@ -11,19 +11,9 @@ use crate::LabSettings;
 use crate::camera::Camera;
 use crate::settings::{FieldKind, PRESET_VERSION, PresetError, Value, check_range, clamp_value};
 
-/// One thing wrong with a loaded preset, and what was done about it.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Problem {
-    /// Dotted path (`direct.pcf_radius`), a group name, or `version`.
-    pub field: String,
-    pub message: String,
-}
-
-impl std::fmt::Display for Problem {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}: {}", self.field, self.message)
-    }
-}
+/// One thing wrong with a loaded preset, and what was done about it: the field's dotted
+/// path (or a group name, or `version`) and the message.
+pub use crate::settings::FieldError as Problem;
 
 /// A preset as loaded: the settings with every fix applied, and the list of problems
 /// (empty for a clean file). Migrations are listed too, so that nothing changes silently.

@@ -20,19 +20,23 @@ fn temp_dir(name: &str) -> PathBuf {
     d
 }
 
-/// The app in a harness with its own config and presets folders (never the user's).
-fn harness_in(dir: &std::path::Path, size: egui::Vec2) -> Harness<'static, GiLabApp> {
-    let args = AppArgs {
-        config_dir: Some(dir.join("config")),
-        presets_dir: dir.join("presets"),
-        fresh: true,
-        ..AppArgs::default()
-    };
+/// Arguments that keep the app's session and presets in `dir` (never the user's).
+fn args_in(dir: &std::path::Path, fresh: bool) -> AppArgs {
     let _ = std::fs::create_dir_all(dir.join("presets"));
-    let h = Harness::builder()
+    AppArgs { config_dir: Some(dir.join("config")), presets_dir: dir.join("presets"), fresh, ..AppArgs::default() }
+}
+
+/// The app with `args` in a harness of `size` points.
+fn harness_with(args: AppArgs, size: egui::Vec2) -> Harness<'static, GiLabApp> {
+    Harness::builder()
         .with_size(size)
         .wgpu_setup(gi_lab::app::wgpu_setup())
-        .build_eframe(move |cc| GiLabApp::new(cc, args));
+        .build_eframe(move |cc| GiLabApp::new(cc, args))
+}
+
+/// The app in a harness with its own config and presets folders.
+fn harness_in(dir: &std::path::Path, size: egui::Vec2) -> Harness<'static, GiLabApp> {
+    let h = harness_with(args_in(dir, true), size);
     if let Some(e) = h.state().error() {
         panic!(
             "the app could not start its renderer: {e}\n\
@@ -320,17 +324,7 @@ fn a_bad_preset_lists_its_problems_and_changes_nothing_until_accepted() {
 #[test]
 fn the_session_restores_layout_settings_viewers_and_probes() {
     let dir = temp_dir("session");
-    let args = |fresh| AppArgs {
-        config_dir: Some(dir.join("config")),
-        presets_dir: dir.join("presets"),
-        fresh,
-        ..AppArgs::default()
-    };
-    let first = args(true);
-    let mut h = Harness::builder()
-        .with_size(egui::vec2(1400.0, 1000.0))
-        .wgpu_setup(gi_lab::app::wgpu_setup())
-        .build_eframe(move |cc| GiLabApp::new(cc, first));
+    let mut h = harness_with(args_in(&dir, true), egui::vec2(1400.0, 1000.0));
     h.run_steps(2);
     h.get_by_label("tonemap.auto_exposure").click();
     h.run_steps(2);
@@ -341,11 +335,7 @@ fn the_session_restores_layout_settings_viewers_and_probes() {
     let viewers: Vec<String> = h.state().state.viewers.values().map(|v| v.state.buffer.clone()).collect();
     h.state_mut().save_session().expect("session saved");
     drop(h);
-    let second = args(false);
-    let mut h = Harness::builder()
-        .with_size(egui::vec2(1400.0, 1000.0))
-        .wgpu_setup(gi_lab::app::wgpu_setup())
-        .build_eframe(move |cc| GiLabApp::new(cc, second));
+    let mut h = harness_with(args_in(&dir, false), egui::vec2(1400.0, 1000.0));
     h.run_steps(2);
     assert_eq!(h.state().settings(), Some(&settings), "unsaved settings come back");
     let again: Vec<String> = h.state().state.viewers.values().map(|v| v.state.buffer.clone()).collect();
@@ -409,18 +399,8 @@ fn shader_hot_reload_keeps_the_last_good_pipeline_and_shows_the_error() {
     let dir = temp_dir("hot");
     let shaders = dir.join("shaders");
     copy_shaders(&shaders);
-    let args = AppArgs {
-        config_dir: Some(dir.join("config")),
-        presets_dir: dir.join("presets"),
-        shaders_dir: shaders.clone(),
-        hot_reload: Some(true),
-        fresh: true,
-        ..AppArgs::default()
-    };
-    let mut h = Harness::builder()
-        .with_size(egui::vec2(1400.0, 1000.0))
-        .wgpu_setup(gi_lab::app::wgpu_setup())
-        .build_eframe(move |cc| GiLabApp::new(cc, args));
+    let args = AppArgs { shaders_dir: shaders.clone(), hot_reload: Some(true), ..args_in(&dir, true) };
+    let mut h = harness_with(args, egui::vec2(1400.0, 1000.0));
     h.run_steps(2);
     assert!(h.state().state.hot.enabled(), "hot reload is on");
     let file = shaders.join("direct/direct.wgsl");
