@@ -270,10 +270,14 @@ pub struct State {
     pub viewport_px: (u32, u32),
     /// Where the viewport was drawn last frame (points).
     pub viewport_rect: egui::Rect,
+    /// Render at exactly this size whatever the viewport's (tests and scripted captures).
+    pub render_size_override: Option<(u32, u32)>,
     pub status: Option<(String, Instant)>,
     pub frames: u64,
     pub recording: Option<Recording>,
     pub bookmark_name: String,
+    /// Path typed in the scene panel (when no file dialog is available).
+    pub scene_path_text: String,
     pub record_frames: u32,
     /// Panels the tree drew last frame (viewers not shown are not updated).
     pub visible_viewers: Vec<u32>,
@@ -408,10 +412,12 @@ impl GiLabApp {
             hovered_pass: None,
             viewport_px: (640, 480),
             viewport_rect: egui::Rect::NOTHING,
+            render_size_override: None,
             status,
             frames: 0,
             recording: None,
             bookmark_name: String::new(),
+            scene_path_text: String::new(),
             record_frames: 60,
             visible_viewers: Vec::new(),
             show_help: false,
@@ -894,7 +900,9 @@ impl State {
         self.hot_reload();
         let scale = self.session.render_scale.clamp(0.1, 2.0);
         let (vw, vh) = self.viewport_px;
-        let target = (((vw as f32) * scale).round() as u32, ((vh as f32) * scale).round() as u32);
+        let target = self
+            .render_size_override
+            .unwrap_or((((vw as f32) * scale).round() as u32, ((vh as f32) * scale).round() as u32));
         let Ok(l) = &mut self.lab else { return };
         if target.0 > 0 && target.1 > 0 {
             if let Err(e) = l.renderer.resize(target.0, target.1) {
@@ -1042,8 +1050,10 @@ impl State {
                         self.set_status(format!("scene not opened: {e}"));
                     }
                 }
-                "ron" => self.open_preset(&p),
-                "json" => {
+                "ron" if !std::fs::read_to_string(&p).is_ok_and(|t| t.contains("gi-lab-preset")) => {
+                    self.open_preset(&p)
+                }
+                "ron" | "json" => {
                     if let Err(e) = self.import_export(&p) {
                         self.set_status(format!("import failed: {e}"));
                     }

@@ -272,6 +272,18 @@ fn scene_ui(st: &mut State, ui: &mut egui::Ui) {
         ui.add(egui::DragValue::new(&mut l.unit_scale).range(1e-6..=1e6).speed(0.001))
             .on_hover_text("multiplies the scene's coordinates (0.001 for millimetres); applies on the next open");
     });
+    let mut open_typed = false;
+    ui.horizontal(|ui| {
+        let r = ui.add(
+            egui::TextEdit::singleline(&mut st.scene_path_text)
+                .hint_text("or type a .gltf / .glb path")
+                .desired_width(220.0),
+        );
+        let enter = r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+        open_typed = (ui.add_enabled(!st.scene_path_text.trim().is_empty(), egui::Button::new("Open")).clicked()
+            || enter)
+            && !st.scene_path_text.trim().is_empty();
+    });
     if let Some(e) = &l.scene_error {
         ui.colored_label(ERROR, e);
     }
@@ -322,6 +334,13 @@ fn scene_ui(st: &mut State, ui: &mut egui::Ui) {
     }
     if open_dialog {
         st.open_scene_dialog();
+    }
+    if open_typed {
+        let path = std::path::PathBuf::from(st.scene_path_text.trim());
+        let scale = st.lab.as_ref().map(|l| l.unit_scale).unwrap_or(1.0);
+        if let Err(e) = st.open_scene(Some(path), scale) {
+            st.set_status(format!("scene not opened: {e}"));
+        }
     }
     if open_default && let Err(e) = st.open_scene(None, 1.0) {
         st.set_status(format!("scene not opened: {e}"));
@@ -434,7 +453,11 @@ fn timeline(l: &mut crate::app::Lab, ui: &mut egui::Ui) {
 fn preset_files(dir: &std::path::Path) -> Vec<PathBuf> {
     let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
         .map(|rd| {
-            rd.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|x| x == "ron")).collect()
+            rd.filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|x| x == "ron"))
+                // Engine exports written next to the presets are not presets.
+                .filter(|p| !p.to_string_lossy().ends_with(".export.ron"))
+                .collect()
         })
         .unwrap_or_default();
     v.sort();
@@ -470,10 +493,10 @@ fn presets_ui(st: &mut State, ui: &mut egui::Ui) {
             st.revert_preset();
         }
     });
+    let name = st.preset.save_as_name.trim().trim_end_matches(".ron").to_string();
     ui.horizontal(|ui| {
         ui.add(egui::TextEdit::singleline(&mut st.preset.save_as_name).hint_text("name").desired_width(160.0))
             .accessible_name("preset name");
-        let name = st.preset.save_as_name.trim().trim_end_matches(".ron").to_string();
         let valid = !name.is_empty() && !name.contains(['/', '\\']) && name != "." && name != "..";
         if ui.add_enabled(valid, egui::Button::new(format!("Save to {}/", st.args.presets_dir.display()))).clicked() {
             let path = st.args.presets_dir.join(format!("{name}.ron"));
@@ -488,6 +511,18 @@ fn presets_ui(st: &mut State, ui: &mut egui::Ui) {
         }
         if ui.button("Export RON…").clicked() {
             st.export_dialog(gi_render::preset::ExportFormat::Ron);
+        }
+    });
+    // Without a file dialog (or to skip it): the export lands next to the presets.
+    let stem = if name.is_empty() { st.preset_label().trim_end_matches(".ron").to_string() } else { name.clone() };
+    ui.horizontal(|ui| {
+        for format in [gi_render::preset::ExportFormat::Json, gi_render::preset::ExportFormat::Ron] {
+            let file = st.args.presets_dir.join(format!("{stem}.export.{}", format.extension()));
+            if ui.button(format!("Export to {}", file.display())).clicked()
+                && let Err(e) = st.export_to(&file, format)
+            {
+                st.set_status(format!("export failed: {e}"));
+            }
         }
     });
     ui.separator();

@@ -187,6 +187,8 @@ fn every_setting_has_a_widget_that_changes_the_renderer() {
 #[test]
 fn buffer_viewer_lists_every_buffer_and_shows_the_chosen_one() {
     let (mut h, _dir) = harness("viewer");
+    // A fixed render size keeps the snapshot independent of the panel layout.
+    h.state_mut().state.render_size_override = Some((320, 240));
     pause(&mut h);
     h.run_steps(3);
     let names = h.state().renderer().expect("renderer").buffers().names();
