@@ -90,6 +90,8 @@ pub struct Lab {
     pub gpu_error: Arc<Mutex<Option<String>>>,
     pub render_state: egui_wgpu::RenderState,
     texture: Option<(egui::TextureId, (u32, u32))>,
+    /// The texture egui's viewport texture points at.
+    shown: Option<wgpu::Texture>,
     /// The live settings (the panels edit these).
     pub settings: LabSettings,
     pub settings_error: Option<String>,
@@ -130,6 +132,7 @@ impl Lab {
             gpu_error,
             render_state: rs,
             texture: None,
+            shown: None,
             settings,
             settings_error: None,
             scene_error: None,
@@ -182,7 +185,10 @@ impl Lab {
     /// Points egui's texture at `texture` (through an sRGB view), re-registering only
     /// when the texture changed size or identity.
     fn show_texture(&mut self, texture: &wgpu::Texture, force: bool) -> egui::TextureId {
-        native_texture(&self.render_state, &mut self.texture, texture, force)
+        // Re-point only when another texture is shown (final image ↔ a pass's output).
+        let other = self.shown.as_ref() != Some(texture);
+        self.shown = Some(texture.clone());
+        native_texture(&self.render_state, &mut self.texture, texture, force || other)
     }
 }
 
@@ -237,6 +243,8 @@ pub struct PresetState {
     pub save_as_name: String,
     /// The diff view compares with the default (None) or this preset file.
     pub diff_with: Option<PathBuf>,
+    /// The compared file's settings, with the path and modification time they were read at.
+    pub diff_cache: Option<(PathBuf, Option<std::time::SystemTime>, Result<LabSettings, String>)>,
 }
 
 /// A recording of N frames to a folder (File → Record).
@@ -403,6 +411,7 @@ impl GiLabApp {
                 pending: None,
                 save_as_name: String::new(),
                 diff_with: None,
+                diff_cache: None,
             },
             hover: None,
             hover_values: Vec::new(),
@@ -987,7 +996,7 @@ impl State {
             && let Some(out) = v.output_texture()
         {
             let size = (out.width(), out.height());
-            let id = l.show_texture(&out, true);
+            let id = l.show_texture(&out, false);
             return Some((id, size, Some(format!("{pass}: {}", v.state.buffer))));
         }
         let out = l.renderer.final_ldr().clone();

@@ -565,9 +565,20 @@ fn diff_ui(st: &mut State, ui: &mut egui::Ui) {
             }
         });
     });
+    // The compared file is read again only when it changed on disk (not every frame).
     let other = match &st.preset.diff_with {
         None => Ok(LabSettings::default()),
-        Some(p) => gi_render::preset::load_file(p).map(|l| l.settings).map_err(|e| e.to_string()),
+        Some(p) => {
+            let stamp = std::fs::metadata(p).and_then(|m| m.modified()).ok();
+            match &st.preset.diff_cache {
+                Some((cp, cs, cached)) if cp == p && *cs == stamp => cached.clone(),
+                _ => {
+                    let loaded = gi_render::preset::load_file(p).map(|l| l.settings).map_err(|e| e.to_string());
+                    st.preset.diff_cache = Some((p.clone(), stamp, loaded.clone()));
+                    loaded
+                }
+            }
+        }
     };
     let other = match other {
         Ok(o) => o,
