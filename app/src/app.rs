@@ -606,6 +606,11 @@ fn restore_scene_state(l: &mut Lab, s: &Session) {
     l.renderer.reset_history();
 }
 
+/// A file-name-safe UTC time stamp for captures (`2026-11-22T17-03-46Z`).
+pub fn capture_stamp() -> String {
+    gi_render::preset::utc_now().replace(':', "-")
+}
+
 fn save_color_image(path: &Path, img: &egui::ColorImage) {
     let [w, h] = img.size;
     let bytes: Vec<u8> = img.pixels.iter().flat_map(|c| c.to_array()).collect();
@@ -823,7 +828,7 @@ impl State {
     /// Saves the viewport's image (final.ldr as PNG, final.hdr as EXR) into `captures/`.
     pub fn capture_viewport(&mut self) {
         let Ok(l) = &self.lab else { return };
-        let stamp = gi_render::preset::utc_now().replace(':', "-");
+        let stamp = crate::app::capture_stamp();
         let dir = PathBuf::from("captures");
         let r = (|| -> Result<String, String> {
             std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -840,7 +845,7 @@ impl State {
 
     /// File → Record: the next `frames` frames as numbered PNGs in a new folder.
     pub fn start_recording(&mut self, frames: u32) {
-        let stamp = gi_render::preset::utc_now().replace(':', "-");
+        let stamp = crate::app::capture_stamp();
         let dir = PathBuf::from("captures").join(format!("sequence-{stamp}"));
         match std::fs::create_dir_all(&dir) {
             Ok(()) => {

@@ -323,7 +323,7 @@ impl Viewer {
     /// Saves the view as PNG and the raw buffer as EXR into `captures/`.
     pub fn capture(&self, renderer: &Renderer) -> String {
         let dir = std::path::PathBuf::from("captures");
-        let stamp = gi_render::preset::utc_now().replace(':', "-");
+        let stamp = crate::app::capture_stamp();
         let base = dir.join(format!("{}-{stamp}", self.state.buffer));
         let result = (|| -> Result<String, String> {
             std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
