@@ -4,11 +4,11 @@
 //! |---|---|---|
 //! | 1. G-buffer | `passes::gbuffer` | position, normal, albedo, material, depth, movement buffer |
 //! | 2. Direct light | `passes::shadow`, `passes::direct` | shadow maps, direct radiance |
-//! | 3. VPLs | `passes::vpl` | exact-VPL reference: light G-buffer of one light view per frame, VPLs by uniform sampling (importance warping: #5) |
-//! | 4. VPL visibility | `passes::vpl_visibility` | exact-VPL reference: five exact depth faces per VPL (ISMs: #5) |
-//! | 5. Shading points | — | every pixel (interleaving and HCB samples: #5, #6) |
-//! | 6. Gather | `passes::vpl_gather` | exact-VPL reference: full-BRDF gather, progressive average over frames |
-//! | 7. Temporal + compose | `passes::compose` | final.hdr, log-average luminance, Reinhard tone mapping to final.ldr |
+//! | 3. VPLs | `passes::vpl` / `passes::vpl_importance` | exact-VPL reference: light G-buffer of one light view per frame, uniform sampling; instant radiosity: light G-buffers of every view, importance (Eq. 4.3), hierarchical warping |
+//! | 4. VPL visibility | `passes::vpl_visibility` / `passes::ism` | exact cube-face depth maps per VPL; imperfect shadow maps with pull-push |
+//! | 5. Shading points | `passes::interleave` | every pixel (reference); interleaved n×n tiles (instant radiosity; HCB samples: #6) |
+//! | 6. Gather | `passes::vpl_gather` / `passes::interleave` | reference: full-BRDF gather averaged over frames; instant radiosity: tiled gather, merge, geometry-aware filter |
+//! | 7. Temporal + compose | `passes::temporal`, `passes::compose` | confidence merge (Eq. 3.6); final.hdr, log-average luminance, Reinhard tone mapping to final.ldr |
 
 use glam::{Mat4, Vec4};
 
@@ -20,9 +20,13 @@ use crate::lab_settings::IndirectTechnique;
 use crate::passes::compose::ComposePass;
 use crate::passes::direct::DirectPass;
 use crate::passes::gbuffer::GBufferPass;
+use crate::passes::interleave::{GatherVisibility, InterleavePass};
+use crate::passes::ism::{IsmFrame, IsmLayout, IsmPass, VplVisibility};
 use crate::passes::shadow::{ShadowPass, gpu_light, light_views, setup_lights};
+use crate::passes::temporal::TemporalPass;
 use crate::passes::vpl::{BatchView, VplSamplePass, halton};
 use crate::passes::vpl_gather::{GatherParams, VplGatherPass};
+use crate::passes::vpl_importance::{ViewJob, VplImportancePass, view_powers};
 use crate::passes::vpl_visibility::{AtlasLayout, VisibilityParams, VplVisibilityPass};
 use crate::passes::{CameraUniform, bgl};
 use crate::scene::upload::GpuScene;
@@ -46,6 +50,32 @@ pub enum RenderError {
         "the exact-VPL visibility atlas for {vpls} VPLs per frame with {size}² faces needs {width}×{height} texels; this device allows {max_dim}²: at {size}² at most {largest} VPLs per frame fit"
     )]
     VplAtlasTooLarge { vpls: u32, size: u32, width: u64, height: u64, max_dim: u32, largest: u32 },
+    #[error(
+        "the imperfect shadow map atlas for {vpls} VPLs of {size}² needs {width}×{height} texels ({bytes} bytes to splat into); this device allows {max_dim}² texels and {max_buffer} bytes: at {size}² at most {largest_vpls} VPLs fit{}",
+        match .largest_size { Some(s) => format!(", and {vpls} VPLs fit at map size {s}²"), None => String::new() }
+    )]
+    IsmAtlasTooLarge {
+        vpls: u32,
+        size: u32,
+        width: u64,
+        height: u64,
+        bytes: u64,
+        max_dim: u32,
+        max_buffer: u64,
+        largest_vpls: u32,
+        largest_size: Option<u32>,
+    },
+}
+
+/// The passes of instant radiosity (Knecht 002), created when the technique is selected.
+struct Knecht {
+    vpl: VplImportancePass,
+    ism: IsmPass,
+    exact: Option<VplVisibilityPass>,
+    interleave: InterleavePass,
+    temporal: TemporalPass,
+    /// Frames rendered (the Halton offset of a new VPL set per frame).
+    frames: u32,
 }
 
 /// The exact-VPL reference's passes and its progress (created when first selected).
@@ -87,6 +117,7 @@ pub struct Renderer {
     timer: GpuTimer,
     prev: Option<PrevFrame>,
     exact_vpl: Option<ExactVpl>,
+    knecht: Option<Knecht>,
     /// `metrics.flip`: the FLIP error map of the last comparison with a reference.
     flip_map: Option<wgpu::Texture>,
     /// Interactive mode (the app): timings are collected without waiting for the GPU.
@@ -111,6 +142,7 @@ impl Renderer {
             return Err(RenderError::Settings(errors));
         }
         check_vpl_atlas(&ctx, &settings)?;
+        check_ism_atlas(&ctx, &settings)?;
         let bounds = scene.bounds(0.0);
         let camera = default_camera(&scene, bounds, width as f32 / height as f32);
         let gpu_scene = GpuScene::new(&ctx, &scene);
@@ -151,16 +183,19 @@ impl Renderer {
             timer,
             prev: None,
             exact_vpl: None,
+            knecht: None,
             flip_map: None,
             interactive: false,
             depth_probe: std::sync::OnceLock::new(),
         };
         r.register_all();
         r.ensure_exact_vpl();
+        r.ensure_knecht();
         Ok(r)
     }
 
     fn register_all(&mut self) {
+        self.registry = BufferRegistry::default();
         self.gbuffer.register(&mut self.registry);
         self.shadow.register(&mut self.registry);
         self.direct.register(&mut self.registry);
@@ -169,6 +204,18 @@ impl Renderer {
             x.sample.light_gbuffer.register(&mut self.registry);
             x.visibility.register(&mut self.registry);
             x.gather.register(&mut self.registry);
+        }
+        if let Some(k) = &self.knecht {
+            k.vpl.register(&mut self.registry);
+            if self.settings.ism.visibility == VplVisibility::Exact {
+                if let Some(e) = &k.exact {
+                    e.register(&mut self.registry);
+                }
+            } else if self.settings.ism.visibility == VplVisibility::Imperfect {
+                k.ism.register(&mut self.registry);
+            }
+            k.interleave.register(&mut self.registry);
+            k.temporal.register(&mut self.registry);
         }
         if let Some(t) = &self.flip_map {
             self.registry.register(
@@ -240,13 +287,19 @@ impl Renderer {
         }
         self.check_shadow_map(&settings)?;
         check_vpl_atlas(&self.ctx, &settings)?;
+        check_ism_atlas(&self.ctx, &settings)?;
         let reset = self.settings.history_invalidated_by(&settings);
+        let visibility_changed = self.settings.ism.visibility != settings.ism.visibility;
         self.clock.time_step_s = settings.animation.time_step_s as f64;
         self.settings = settings;
         if reset {
             self.reset_history();
         }
         self.ensure_exact_vpl();
+        self.ensure_knecht();
+        if visibility_changed {
+            self.register_all();
+        }
         Ok(reset)
     }
 
@@ -256,6 +309,9 @@ impl Renderer {
         self.prev = None;
         if let Some(x) = &mut self.exact_vpl {
             x.batches = 0;
+        }
+        if let Some(k) = &mut self.knecht {
+            k.temporal.reset();
         }
     }
 
@@ -285,6 +341,10 @@ impl Renderer {
         if let Some(x) = &mut self.exact_vpl {
             x.gather.resize(&self.ctx, width, height);
             x.batches = 0;
+        }
+        if let Some(k) = &mut self.knecht {
+            k.interleave.ensure(&self.ctx, width, height, self.settings.interleave.n);
+            k.temporal.resize(&self.ctx, width, height);
         }
         self.register_all();
         Ok(())
@@ -375,6 +435,7 @@ impl Renderer {
         let indirect = match self.settings.indirect.technique {
             IndirectTechnique::None => None,
             IndirectTechnique::ExactVpl => self.exact_vpl_frame(&mut enc, &state, view_proj),
+            IndirectTechnique::InstantRadiosity => self.knecht_frame(&mut enc, &state),
         };
 
         // Stage 7: compose and tone map.
@@ -402,10 +463,15 @@ impl Renderer {
     /// rebuilt.
     pub fn reload_shaders(&mut self, entries: &[&str]) -> Result<Vec<&'static str>, String> {
         let mut passes: Vec<&'static str> = entries.iter().filter_map(|e| pass_of_shader(e)).collect();
+        if let Some(i) = passes.iter().position(|p| *p == "vpl_shadow") {
+            passes.swap_remove(i);
+            passes.extend(["exact_vpl", "instant_radiosity"]);
+        }
         passes.sort();
         passes.dedup();
         // The exact-VPL passes exist only while that technique is on.
         passes.retain(|p| *p != "exact_vpl" || self.exact_vpl.is_some());
+        passes.retain(|p| *p != "instant_radiosity" || self.knecht.is_some());
         if passes.is_empty() {
             return Ok(passes);
         }
@@ -447,6 +513,15 @@ impl Renderer {
                 return Err(e.to_string());
             }
         }
+        if passes.contains(&"instant_radiosity") {
+            let old = self.knecht.take();
+            let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+            self.ensure_knecht();
+            if let Some(e) = pollster::block_on(scope.pop()) {
+                self.knecht = old;
+                return Err(e.to_string());
+            }
+        }
         self.register_all();
         self.reset_history();
         Ok(passes)
@@ -456,6 +531,9 @@ impl Renderer {
     /// the indirect technique), so that its buffers are registered before the first frame.
     fn ensure_exact_vpl(&mut self) {
         if self.settings.indirect.technique != IndirectTechnique::ExactVpl {
+            if self.exact_vpl.take().is_some() {
+                self.register_all();
+            }
             return;
         }
         let ctx = self.ctx.clone();
@@ -473,6 +551,146 @@ impl Renderer {
         if fresh || self.registry.get("indirect.accum").is_err() {
             self.register_all();
         }
+    }
+
+    /// The light views of `state`, each with its light's index.
+    fn light_view_list(&self, state: &crate::scene::SceneState) -> Vec<(u32, crate::passes::shadow::LightView)> {
+        state
+            .lights
+            .iter()
+            .enumerate()
+            .flat_map(|(i, wl)| light_views(wl, self.bounds).into_iter().map(move |v| (i as u32, v)))
+            .collect()
+    }
+
+    /// Creates or resizes the passes of instant radiosity for the current settings (when it is
+    /// the indirect technique); drops them otherwise.
+    fn ensure_knecht(&mut self) {
+        if self.settings.indirect.technique != IndirectTechnique::InstantRadiosity {
+            if self.knecht.take().is_some() {
+                self.register_all();
+            }
+            return;
+        }
+        let ctx = self.ctx.clone();
+        let s = self.settings.clone();
+        let state = self.scene.evaluate(self.clock.time_s());
+        let views = self.light_view_list(&state).len();
+        let (w, h) = (self.width, self.height);
+        let camera_entry = bgl::uniform(0, wgpu::ShaderStages::COMPUTE);
+        let created = self.knecht.is_none();
+        let k = self.knecht.get_or_insert_with(|| Knecht {
+            vpl: VplImportancePass::new(&ctx, s.vpl.light_gbuffer_size),
+            ism: IsmPass::new(&ctx),
+            exact: None,
+            interleave: InterleavePass::new(&ctx, camera_entry, w, h, s.interleave.n),
+            temporal: TemporalPass::new(&ctx, w, h),
+            frames: 0,
+        });
+        let mut fresh = created;
+        fresh |= k.vpl.ensure(&ctx, &self.gpu_scene, s.vpl.light_gbuffer_size, views, s.vpl.count);
+        if s.ism.visibility == VplVisibility::Imperfect {
+            fresh |= k.ism.ensure(&ctx, &self.scene, &state, &s.ism, s.vpl.count, false);
+        }
+        if s.ism.visibility == VplVisibility::Exact {
+            let e = k.exact.get_or_insert_with(|| VplVisibilityPass::new(&ctx, &self.gpu_scene));
+            fresh |= e.ensure(&ctx, s.vpl.count, s.ism.map_size);
+        }
+        fresh |= k.interleave.ensure(&ctx, w, h, s.interleave.n);
+        fresh |= k.temporal.resize(&ctx, w, h);
+        if fresh {
+            self.register_all();
+        }
+    }
+
+    /// Stages 3–7 of instant radiosity (Knecht 002): VPLs by importance warping from every
+    /// light view, their visibility (ISMs, exact maps or none), the interleaved gather and
+    /// merge, the confidence merge with the previous frame and the geometry-aware filter.
+    /// Returns the filtered indirect light.
+    fn knecht_frame(
+        &mut self,
+        enc: &mut wgpu::CommandEncoder,
+        state: &crate::scene::SceneState,
+    ) -> Option<wgpu::TextureView> {
+        self.ensure_knecht();
+        let ctx = self.ctx.clone();
+        let s = self.settings.clone();
+        let views = self.light_view_list(state);
+        let r = self.bounds.radius().max(1e-3);
+        let powers = view_powers(&state.lights, r, s.vpl.split_by_power);
+        let counts = crate::cpu::knecht::split_budget(&powers, s.vpl.count);
+        let mut first = 0;
+        let jobs: Vec<ViewJob> = views
+            .iter()
+            .zip(&counts)
+            .map(|(&(light_index, view), &count)| {
+                let job = ViewJob { light_index, view, first, count };
+                first += count;
+                job
+            })
+            .collect();
+        let lights: Vec<_> = state.lights.iter().map(gpu_light).collect();
+        let k = self.knecht.as_mut()?;
+        let (gpu_scene, timer) = (&self.gpu_scene, &mut self.timer);
+        let halton_first = 1 + if s.vpl.new_set_each_frame { k.frames.wrapping_mul(s.vpl.count) } else { 0 };
+        if lights.is_empty() {
+            // No light: no VPL slot is written, so the list is cleared.
+            enc.clear_buffer(&k.vpl.vpls, 0, None);
+        } else {
+            k.vpl.run(&ctx, enc, timer, gpu_scene, state, &lights, &jobs, halton_first, s.direct.intensity_scale);
+        }
+        let n_vpls = s.vpl.count.min(k.vpl.capacity);
+
+        // Stage 4: visibility.
+        let eye_offset = 0.005 * r;
+        let ism_view = k.ism.shading_view();
+        let exact_view;
+        let vis = match s.ism.visibility {
+            VplVisibility::None => GatherVisibility::None,
+            VplVisibility::Imperfect => {
+                let f = IsmFrame { vpls: n_vpls, eye_offset, extent: 2.0 * r };
+                k.ism.run(&ctx, enc, timer, &gpu_scene.instances, &k.vpl.vpls, &s.ism, f);
+                let l = k.ism.layout_info;
+                GatherVisibility::Ism {
+                    atlas: &ism_view,
+                    cols: l.cols,
+                    size: l.size,
+                    eye_offset,
+                    bias: s.ism.depth_bias,
+                }
+            }
+            VplVisibility::Exact => {
+                let e = k.exact.as_ref()?;
+                let (near, far) = ((r * 1e-3).max(1e-5), 2.2 * r);
+                let clip = glam::Vec4::new(near, far, 2.0 * near, 0.0);
+                let vpls = &k.vpl.vpls;
+                timer.scope(&ctx, enc, "vpl.shadow", |e2, slot| {
+                    e.run(&ctx, e2, slot, gpu_scene, state, vpls, n_vpls, VisibilityParams { clip })
+                });
+                exact_view = e.atlas_view.clone();
+                let l = e.layout_info;
+                GatherVisibility::Exact { atlas: &exact_view, cols: l.cols, size: l.size, clip: clip.truncate() }
+            }
+        };
+
+        // Stages 5–6: interleaved gather and merge.
+        let g = &self.gbuffer.targets.views;
+        k.interleave.shade(&ctx, enc, timer, &self.camera_buffer, g, &k.vpl.vpls, n_vpls, s.vpl.min_distance_m, vis);
+
+        // Stage 7: confidence merge, then the geometry-aware filter.
+        let merged = crate::passes::view(&k.interleave.merged, "indirect.merged");
+        let (temporal, normal) = (&mut k.temporal, &self.gbuffer.targets.normal);
+        let depth_range = self.camera.zfar - self.camera.znear;
+        timer.scope(&ctx, enc, "temporal", |e, slot| {
+            temporal.run(&ctx, e, slot, &s.temporal, depth_range, &merged, g, normal)
+        });
+        let history = crate::passes::view(&k.temporal.history, "temporal.history");
+        let interleave = &k.interleave;
+        timer.scope(&ctx, enc, "interleave.filter", |e, slot| {
+            interleave.filter(&ctx, e, slot, &s.interleave, depth_range, &history, g)
+        });
+        k.frames = k.frames.wrapping_add(1);
+        Some(crate::passes::view(&k.interleave.filtered, "indirect.filtered"))
     }
 
     /// Stages 3, 4 and 6 of the exact-VPL reference: one batch of VPLs from one light view,
@@ -610,6 +828,51 @@ fn check_vpl_atlas(ctx: &GpuContext, settings: &LabSettings) -> Result<(), Rende
     })
 }
 
+/// Refuses an ISM (or exact-map) atlas of instant radiosity larger than the device allows,
+/// naming the largest VPL count at this map size and the largest map size for this count.
+fn check_ism_atlas(ctx: &GpuContext, settings: &LabSettings) -> Result<(), RenderError> {
+    if settings.indirect.technique != IndirectTechnique::InstantRadiosity {
+        return Ok(());
+    }
+    let (vpls, size) = (settings.vpl.count, settings.ism.map_size);
+    let max_dim = ctx.limits.max_texture_dimension_2d;
+    match settings.ism.visibility {
+        VplVisibility::None => Ok(()),
+        VplVisibility::Imperfect => {
+            let max_buffer = ctx.limits.max_storage_buffer_binding_size.min(ctx.limits.max_buffer_size);
+            let l = IsmLayout::new(vpls, size);
+            if l.fits(max_dim, max_buffer) {
+                return Ok(());
+            }
+            Err(RenderError::IsmAtlasTooLarge {
+                vpls,
+                size,
+                width: l.width(),
+                height: l.height(),
+                bytes: l.width() * l.height() * 4,
+                max_dim,
+                max_buffer,
+                largest_vpls: IsmLayout::largest_count(size, max_dim, max_buffer),
+                largest_size: IsmLayout::largest_size(vpls, max_dim, max_buffer),
+            })
+        }
+        VplVisibility::Exact => {
+            let l = AtlasLayout::new(vpls, size);
+            if l.fits(max_dim) {
+                return Ok(());
+            }
+            Err(RenderError::VplAtlasTooLarge {
+                vpls,
+                size,
+                width: l.width(),
+                height: l.height(),
+                max_dim,
+                largest: AtlasLayout::largest_batch(size, max_dim),
+            })
+        }
+    }
+}
+
 fn check_size(ctx: &GpuContext, width: u32, height: u32) -> Result<(), RenderError> {
     if width == 0 || height == 0 {
         return Err(RenderError::ZeroSize { width, height });
@@ -630,7 +893,20 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         "shadow/shadow.wgsl" => "direct.shadow",
         "direct/direct.wgsl" => "direct",
         "compose/compose.wgsl" | "compose/tonemap.wgsl" | "compose/luminance.wgsl" => "compose",
-        "vpl/sample.wgsl" | "vpl/shadow.wgsl" | "vpl/gather.wgsl" => "exact_vpl",
+        "vpl/sample.wgsl" | "vpl/gather.wgsl" => "exact_vpl",
+        // The exact cube-face maps serve both VPL techniques.
+        "vpl/shadow.wgsl" => "vpl_shadow",
+        "vpl/importance.wgsl"
+        | "vpl/reduce.wgsl"
+        | "vpl/warp.wgsl"
+        | "ism/splat.wgsl"
+        | "ism/resolve.wgsl"
+        | "ism/pull_push.wgsl"
+        | "interleave/split.wgsl"
+        | "interleave/gather.wgsl"
+        | "interleave/merge.wgsl"
+        | "interleave/filter.wgsl"
+        | "temporal/confidence.wgsl" => "instant_radiosity",
         _ => return None,
     })
 }
@@ -648,6 +924,14 @@ pub fn scope_output(scope: &str) -> Option<&'static str> {
         "vpl.sample" => "vpl.light_gbuffer.position",
         "vpl.shadow" => "vpl.shadow_atlas",
         "indirect.gather" => "indirect.raw",
+        "vpl.importance" => "vpl.importance",
+        "ism.splat" => "ism.atlas",
+        "ism.pull_push" => "ism.atlas_pulled",
+        "interleave.split" => "interleave.split.albedo",
+        "interleave.gather" => "indirect.accum",
+        "interleave.merge" => "indirect.merged",
+        "temporal" => "temporal.confidence",
+        "interleave.filter" => "indirect.filtered",
         _ => return None,
     })
 }

@@ -8,7 +8,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::passes::compose::TonemapSettings;
 use crate::passes::direct::DirectSettings;
+use crate::passes::interleave::InterleaveSettings;
+use crate::passes::ism::{IsmSettings, VplVisibility};
+use crate::passes::temporal::TemporalSettings;
 use crate::passes::vpl::ReferenceSettings;
+use crate::passes::vpl_importance::VplSettings;
 use crate::settings::{FieldError, FieldMeta, PRESET_VERSION, PresetError, SettingsGroup, Value};
 use crate::{settings_enum, settings_group};
 
@@ -30,6 +34,10 @@ settings_enum! {
         /// Many VPLs with exact visibility maps, accumulated over frames: the reference the
         /// techniques are measured against (Knecht 002 §5.2).
         ExactVpl = "exact-VPL reference",
+        /// Instant radiosity with imperfect shadow maps, interleaved sampling and temporal
+        /// coherence (Knecht 002): stages 3–7 as the `vpl`, `ism`, `interleave` and
+        /// `temporal` settings choose.
+        InstantRadiosity = "instant radiosity (Knecht)",
     }
     default None
 }
@@ -39,7 +47,7 @@ settings_group! {
     pub struct IndirectSettings: "indirect" {
         /// The technique of stages 3–6.
         technique: IndirectTechnique = IndirectTechnique::None,
-        unit "", symbol "", range 0..=1, cost "see the technique's own settings", history true;
+        unit "", symbol "", range 0..=2, cost "see the technique's own settings", history true;
     }
 }
 
@@ -52,6 +60,10 @@ pub struct LabSettings {
     pub animation: AnimationSettings,
     pub direct: DirectSettings,
     pub indirect: IndirectSettings,
+    pub vpl: VplSettings,
+    pub ism: IsmSettings,
+    pub interleave: InterleaveSettings,
+    pub temporal: TemporalSettings,
     pub reference: ReferenceSettings,
     pub tonemap: TonemapSettings,
 }
@@ -63,6 +75,10 @@ impl Default for LabSettings {
             animation: Default::default(),
             direct: Default::default(),
             indirect: Default::default(),
+            vpl: Default::default(),
+            ism: Default::default(),
+            interleave: Default::default(),
+            temporal: Default::default(),
             reference: Default::default(),
             tonemap: Default::default(),
         }
@@ -75,6 +91,10 @@ macro_rules! for_each_group {
         $m!(animation, AnimationSettings);
         $m!(direct, DirectSettings);
         $m!(indirect, IndirectSettings);
+        $m!(vpl, VplSettings);
+        $m!(ism, IsmSettings);
+        $m!(interleave, InterleaveSettings);
+        $m!(temporal, TemporalSettings);
         $m!(reference, ReferenceSettings);
         $m!(tonemap, TonemapSettings);
     };
@@ -177,6 +197,48 @@ impl LabSettings {
             };
         }
         for_each_group!(validate);
+        errors.extend(self.combination_errors());
+        errors
+    }
+
+    /// Settings that are valid one by one but not together, or not for the GPU's layouts
+    /// (DESIGN.md: combinations are refused with a reason, never by a crash).
+    fn combination_errors(&self) -> Vec<FieldError> {
+        let mut errors = Vec::new();
+        let mut err = |field: &str, message: String| errors.push(FieldError { field: field.into(), message });
+        for (field, v) in [("vpl.light_gbuffer_size", self.vpl.light_gbuffer_size), ("ism.map_size", self.ism.map_size)]
+        {
+            if !v.is_power_of_two() {
+                let (lo, hi) = (1u32 << v.ilog2(), 1u32 << (v.ilog2() + 1));
+                err(
+                    field,
+                    format!("{v} is not a power of two (the pyramid halves it down to 1 texel); use {lo} or {hi}"),
+                );
+            }
+        }
+        if self.indirect.technique == IndirectTechnique::InstantRadiosity {
+            let n = self.interleave.n;
+            if self.vpl.count < n * n {
+                err(
+                    "vpl.count",
+                    format!(
+                        "{} VPLs cannot cover {n}×{n} interleaved tiles (each tile needs at least one VPL): use at least {} VPLs or interleave.n ≤ {}",
+                        self.vpl.count,
+                        n * n,
+                        (self.vpl.count as f64).sqrt().floor() as u32
+                    ),
+                );
+            }
+            if self.ism.visibility == VplVisibility::Imperfect && self.ism.points < self.vpl.count {
+                err(
+                    "ism.points",
+                    format!(
+                        "{} points cannot give each of {} ISMs a point: use at least as many points as VPLs",
+                        self.ism.points, self.vpl.count
+                    ),
+                );
+            }
+        }
         errors
     }
 

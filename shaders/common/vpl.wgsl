@@ -6,6 +6,7 @@
 // radiant intensity toward x is I(y→x) = Φ · f(y; ω_in, y→x) · max(0, n_y·(y→x)), with the one
 // BRDF f of common/brdf.wgsl (the glossy VPL of Knecht 002 Eq. 4.8 is this with the
 // specular lobe of f; a diffuse VPL is f = c·DI/π).
+#import common/brdf.wgsl
 struct Vpl {
     // xyz: position on the surface; w: 1 for a VPL, 0 for an empty slot.
     position: vec4<f32>,
@@ -73,4 +74,46 @@ fn vpl_face_clip(eye: vec3<f32>, axes: mat3x3<f32>, p: vec3<f32>, near: f32, far
 // Top-left texel of tile `tile` in an atlas of `cols` columns of `size`² tiles.
 fn vpl_tile_origin(tile: u32, cols: u32, size: u32) -> vec2<u32> {
     return vec2<u32>(tile % cols, tile / cols) * size;
+}
+
+// Radiance toward the eye at `eye` that one VPL sends to x (normal nx, colour c, DI, SI, SP),
+// visibility not included: Knecht 002 Eq. 4.7–4.9 with the one BRDF at both ends (CPU twin:
+// cpu::knecht::vpl_radiance, where the reading is documented). dmin2 = d_min².
+fn vpl_radiance(vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, eye: vec3<f32>, c: vec3<f32>, mat: vec3<f32>, dmin2: f32) -> vec3<f32> {
+    let w = vpl.position.xyz - x;
+    let d2 = dot(w, w);
+    let l = w * inverseSqrt(max(d2, 1e-12));
+    let cos_x = dot(nx, l);
+    let cos_y = -dot(vpl.normal.xyz, l);
+    if (cos_x <= 0.0 || cos_y <= 0.0) {
+        return vec3<f32>(0.0);
+    }
+    let v = normalize(eye - x);
+    let f_y = brdf_eval(vpl.normal.xyz, vpl.incident.xyz, -l, vpl.albedo.rgb, vpl.normal.w, vpl.flux.a, vpl.incident.w);
+    let f_x = brdf_eval(nx, l, v, c, mat.x, mat.y, mat.z);
+    return vpl.flux.rgb * f_y * cos_y * f_x * cos_x / max(d2, dmin2);
+}
+
+// Exact visibility of x (receiver normal nx) from VPL i in a cube-face atlas (stage 4's
+// exact maps): one depth comparison in the face that sees x. Biases are world offsets of the
+// receiver in texels of that face at the receiver's distance. clip = (near, far, eye offset).
+fn vpl_exact_visibility(atlas: texture_depth_2d, i: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, clip: vec3<f32>, cols: u32, size: u32, depth_bias: f32, normal_offset: f32) -> f32 {
+    let n = vpl.normal.xyz;
+    let eye = vpl.position.xyz + n * clip.z;
+    let d = distance(x, eye);
+    let texel = 2.0 * d / f32(size);
+    let to_eye = (eye - x) / max(d, 1e-6);
+    let p = x + nx * texel * normal_offset + to_eye * texel * depth_bias;
+    let tbn = vpl_basis(n);
+    let face = vpl_face_of(tbn, p - eye);
+    let c = vpl_face_clip(eye, vpl_face_axes(tbn, face), p, clip.x, clip.y);
+    if (c.w <= 0.0) {
+        return 0.0;
+    }
+    let ndc = c.xyz / c.w;
+    let origin = vpl_tile_origin(i * VPL_FACES + face, cols, size);
+    let uv = clamp(vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5), vec2<f32>(0.0), vec2<f32>(1.0));
+    let t = min(vec2<u32>(uv * f32(size)), vec2<u32>(size - 1u));
+    let stored = textureLoad(atlas, origin + t, 0);
+    return select(0.0, 1.0, ndc.z <= stored);
 }

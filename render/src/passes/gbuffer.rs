@@ -46,7 +46,7 @@ pub struct GBufferViews {
 pub struct GBufferPass {
     /// Name prefix of every label and registered buffer: `gbuffer` for the camera,
     /// `vpl.light_gbuffer` for the light's view (Knecht 002 §4.3).
-    name: &'static str,
+    name: String,
     single_sided: wgpu::RenderPipeline,
     double_sided: wgpu::RenderPipeline,
     pub camera_layout: wgpu::BindGroupLayout,
@@ -60,7 +60,8 @@ impl GBufferPass {
 
     /// The same pass under another name: the light G-buffer of stage 3 is this G-buffer
     /// rendered from a light's view (Knecht 002 §4.3 renders the same attributes).
-    pub fn named(ctx: &GpuContext, scene: &GpuScene, width: u32, height: u32, name: &'static str) -> Self {
+    pub fn named(ctx: &GpuContext, scene: &GpuScene, width: u32, height: u32, name: impl Into<String>) -> Self {
+        let name: String = name.into();
         let device = &ctx.device;
         let module = crate::shaders::create_module(device, "gbuffer/gbuffer.wgsl");
         let camera_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -73,9 +74,10 @@ impl GBufferPass {
             immediate_size: 0,
         });
         let pipelines =
-            [Some(wgpu::Face::Back), None].map(|cull_mode| Self::pipeline(device, &layout, &module, cull_mode, name));
+            [Some(wgpu::Face::Back), None].map(|cull_mode| Self::pipeline(device, &layout, &module, cull_mode, &name));
         let [single_sided, double_sided] = pipelines;
-        Self { name, single_sided, double_sided, camera_layout, targets: create_targets(ctx, width, height, name) }
+        let targets = create_targets(ctx, width, height, &name);
+        Self { name, single_sided, double_sided, camera_layout, targets }
     }
 
     fn pipeline(
@@ -134,12 +136,12 @@ impl GBufferPass {
 
     /// Recreates the targets for a new size.
     pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) {
-        self.targets = create_targets(ctx, width, height, self.name);
+        self.targets = create_targets(ctx, width, height, &self.name);
     }
 
     pub fn register(&self, reg: &mut BufferRegistry) {
         let t = &self.targets;
-        let name = self.name;
+        let name = &self.name;
         let camera = name == "gbuffer";
         reg.register(
             &format!("{name}.position"),
@@ -193,6 +195,22 @@ impl GBufferPass {
         scene: &GpuScene,
         state: &SceneState,
     ) {
+        self.run_with(encoder, slot, true, true, camera_group, scene, state);
+    }
+
+    /// [`Self::run`] as one of several passes of a timing scope (`first` / `last` open and
+    /// close it).
+    #[allow(clippy::too_many_arguments)]
+    pub fn run_with(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        first: bool,
+        last: bool,
+        camera_group: &wgpu::BindGroup,
+        scene: &GpuScene,
+        state: &SceneState,
+    ) {
         let v = &self.targets.views;
         let clear = |view| {
             Some(wgpu::RenderPassColorAttachment {
@@ -220,7 +238,7 @@ impl GBufferPass {
                 depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
                 stencil_ops: None,
             }),
-            timestamp_writes: slot.and_then(|s| s.render(true, true)),
+            timestamp_writes: slot.and_then(|s| s.render(first, last)),
             occlusion_query_set: None,
             multiview_mask: None,
         });

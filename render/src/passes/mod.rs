@@ -5,10 +5,14 @@
 pub mod compose;
 pub mod direct;
 pub mod gbuffer;
+pub mod interleave;
+pub mod ism;
 pub mod shadow;
+pub mod temporal;
 pub mod view;
 pub mod vpl;
 pub mod vpl_gather;
+pub mod vpl_importance;
 pub mod vpl_visibility;
 
 use glam::{Mat4, Vec4};

@@ -77,16 +77,7 @@ pub struct SampleParams {
     pub seed: [u32; 4],
 }
 
-/// Element `index` of the Halton sequence in base `base`, in [0, 1).
-pub fn halton(mut index: u32, base: u32) -> f32 {
-    let (mut f, mut r) = (1.0f32, 0.0f32);
-    while index > 0 {
-        f /= base as f32;
-        r += f * (index % base) as f32;
-        index /= base;
-    }
-    r
-}
+pub use crate::cpu::knecht::halton;
 
 /// One batch's view: which light and which of its views.
 #[derive(Clone, Copy, Debug)]

@@ -1,0 +1,535 @@
+//! CPU references of the kernels of instant radiosity with imperfect shadow maps and
+//! temporal coherence (Knecht 002, chapters 2.6.5, 3 and 4). Each function is the twin of a
+//! shader; tests run both on small synthetic inputs and compare.
+//!
+//! | kernel | here | shader |
+//! |---|---|---|
+//! | Halton sequence (§3.3) | [`halton`] | `vpl/warp.wgsl` `halton` |
+//! | importance pyramid + hierarchical warping (§3.3, Clarberg et al. 2005) | [`Pyramid`], [`Pyramid::warp`] | `vpl/importance.wgsl`, `vpl/warp.wgsl` |
+//! | VPL budget split over lights by power (§4.4) | [`split_budget`] | — (CPU) |
+//! | paraboloid projection of a VPL's hemisphere (§2.6.5, Brabec et al. 2002) | [`paraboloid_project`], [`paraboloid_unproject`] | `common/ism.wgsl` |
+//! | pull-push hole filling (§2.6.5) | [`pull_push`] | `ism/pull_push.wgsl` |
+//! | one VPL's light at a pixel, Eq. 4.7–4.9 | [`vpl_radiance`] | `common/vpl.wgsl` `vpl_radiance` |
+//! | geometry-aware n×n box filter (§3.4.1) | [`geometry_aware_filter`] | `interleave/filter.wgsl` |
+//! | confidence, Eq. 3.1–3.4, and the merge Eq. 3.6 | [`confidence`] | `temporal/confidence.wgsl` |
+//! | bounce selection, §3.6 | [`select_bounce`] | `vpl/bounce.wgsl` |
+
+use glam::{UVec2, Vec2, Vec3};
+
+/// Element `index` of the Halton sequence in base `base`, in [0, 1) (Halton 1964; Knecht §3.3
+/// uses it as the low-discrepancy set that hierarchical warping redistributes).
+pub fn halton(mut index: u32, base: u32) -> f32 {
+    let (mut f, mut r) = (1.0f32, 0.0f32);
+    while index > 0 {
+        f /= base as f32;
+        r += f * (index % base) as f32;
+        index /= base;
+    }
+    r
+}
+
+/// A mip pyramid of an importance map: `levels[0]` is the finest (`size`² texels, `size` a
+/// power of two), each coarser level the average of its 2×2 children, the last one 1×1
+/// (the GPU keeps it as the mip chain of `vpl.importance`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pyramid {
+    pub size: u32,
+    pub levels: Vec<Vec<f32>>,
+}
+
+/// Chooses between two halves with probability `p` of the first and rescales `u` to [0, 1)
+/// within the chosen half (one step of Clarberg et al.'s warping).
+fn split(u: f32, p: f32) -> (bool, f32) {
+    if p <= 0.0 {
+        return (true, u);
+    }
+    if p >= 1.0 {
+        return (false, u);
+    }
+    if u < p { (false, u / p) } else { (true, ((u - p) / (1.0 - p)).min(0.99999994)) }
+}
+
+impl Pyramid {
+    /// Builds the pyramid of a `size`² map (row-major, row 0 at the top).
+    pub fn new(size: u32, finest: Vec<f32>) -> Self {
+        assert!(size.is_power_of_two() && finest.len() == (size * size) as usize);
+        let mut levels = vec![finest];
+        let mut s = size;
+        while s > 1 {
+            let prev = levels.last().map(Vec::as_slice).unwrap_or(&[]);
+            let h = s / 2;
+            let mut next = vec![0.0; (h * h) as usize];
+            for y in 0..h {
+                for x in 0..h {
+                    let at = |dx: u32, dy: u32| prev[((2 * y + dy) * s + 2 * x + dx) as usize];
+                    next[(y * h + x) as usize] = (at(0, 0) + at(1, 0) + at(0, 1) + at(1, 1)) * 0.25;
+                }
+            }
+            levels.push(next);
+            s = h;
+        }
+        Self { size, levels }
+    }
+
+    fn at(&self, level: usize, x: u32, y: u32) -> f32 {
+        let s = self.size >> level;
+        self.levels[level][(y * s + x) as usize]
+    }
+
+    /// Hierarchical warping (Clarberg et al. 2005, as Knecht §3.3 performs it per sample):
+    /// from the 2×2 level down to the finest, a vertical split by the summed importance of
+    /// the upper and lower children, then a horizontal split within the chosen row; the
+    /// sample is rescaled into the chosen child each time. Returns the texel, the warped
+    /// position in [0, 1)² and the density over that square (importance / mean), or None
+    /// when the map is zero everywhere.
+    pub fn warp(&self, u: Vec2) -> Option<(UVec2, Vec2, f32)> {
+        let top = self.levels.len() - 1;
+        let mean = self.at(top, 0, 0);
+        if mean <= 0.0 {
+            return None;
+        }
+        let (mut u, mut cell) = (u, UVec2::ZERO);
+        for level in (0..top).rev() {
+            let (x, y) = (2 * cell.x, 2 * cell.y);
+            let (a00, a10, a01, a11) = (
+                self.at(level, x, y),
+                self.at(level, x + 1, y),
+                self.at(level, x, y + 1),
+                self.at(level, x + 1, y + 1),
+            );
+            let (upper, lower) = (a00 + a10, a01 + a11);
+            let (down, v) = split(u.y, if upper + lower > 0.0 { upper / (upper + lower) } else { 0.5 });
+            let (l, r) = if down { (a01, a11) } else { (a00, a10) };
+            let (right, w) = split(u.x, if l + r > 0.0 { l / (l + r) } else { 0.5 });
+            u = Vec2::new(w, v);
+            cell = UVec2::new(x + right as u32, y + down as u32);
+        }
+        let pdf = self.at(0, cell.x, cell.y) / mean;
+        Some((cell, (cell.as_vec2() + u) / self.size as f32, pdf))
+    }
+}
+
+/// Splits `total` VPLs over views in proportion to their power (Knecht §4.4 samples each
+/// light's G-buffer; the split by power is ours): every view with power gets at least one
+/// VPL while `total` allows, the remainder goes by largest fractional share.
+pub fn split_budget(powers: &[f32], total: u32) -> Vec<u32> {
+    let sum: f64 = powers.iter().map(|p| p.max(0.0) as f64).sum();
+    if sum <= 0.0 || powers.is_empty() {
+        return vec![0; powers.len()];
+    }
+    let shares: Vec<f64> = powers.iter().map(|p| p.max(0.0) as f64 / sum * total as f64).collect();
+    let mut counts: Vec<u32> = shares.iter().map(|s| s.floor() as u32).collect();
+    let mut left = total - counts.iter().sum::<u32>();
+    for (c, p) in counts.iter_mut().zip(powers) {
+        if *c == 0 && *p > 0.0 && left > 0 {
+            *c = 1;
+            left -= 1;
+        }
+    }
+    let mut order: Vec<usize> = (0..powers.len()).collect();
+    order.sort_by(|&a, &b| (shares[b] - shares[b].floor()).total_cmp(&(shares[a] - shares[a].floor())));
+    for i in order.into_iter().cycle().take(left as usize) {
+        counts[i] += 1;
+    }
+    counts
+}
+
+/// Orthonormal basis (t, b, n) around a unit n (Duff et al. 2017); twin of `vpl_basis`.
+pub fn basis(n: Vec3) -> (Vec3, Vec3, Vec3) {
+    let s = if n.z >= 0.0 { 1.0 } else { -1.0 };
+    let a = -1.0 / (s + n.z);
+    let b = n.x * n.y * a;
+    (Vec3::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x), Vec3::new(b, s + n.y * n.y * a, -n.y), n)
+}
+
+/// Paraboloid projection of a VPL's upper hemisphere (Brabec et al. 2002, the map form of
+/// ISMs, Knecht §2.6.5): a direction q (VPL-local, z along the normal) maps to
+/// (q.x, q.y) / (1 + q.z) in the unit disk, then to texture coordinates in [0, 1]² with v
+/// downward. Directions below the horizon return None.
+pub fn paraboloid_project(q: Vec3) -> Option<Vec2> {
+    let q = q.normalize_or_zero();
+    if q.z < 0.0 || q == Vec3::ZERO {
+        return None;
+    }
+    let p = Vec2::new(q.x, q.y) / (1.0 + q.z);
+    Some(Vec2::new(p.x * 0.5 + 0.5, 0.5 - p.y * 0.5))
+}
+
+/// Inverse of [`paraboloid_project`]: the unit direction of texture coordinates `uv`.
+pub fn paraboloid_unproject(uv: Vec2) -> Vec3 {
+    let p = Vec2::new(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
+    let r2 = p.length_squared();
+    let z = (1.0 - r2) / (1.0 + r2);
+    Vec3::new(p.x * (1.0 + z), p.y * (1.0 + z), z)
+}
+
+/// Depth of an empty ISM texel (a hole): any value at or above it is invalid.
+pub const ISM_EMPTY: f32 = 1.0e30;
+
+/// Pull-push hole filling of an ISM atlas (Knecht §2.6.5 after Marroquim et al. 2008 and
+/// Grossman and Dally 1998). `atlas` is `width`×`height` distances (holes ≥ [`ISM_EMPTY`])
+/// made of `tile`² maps; `tile` is a multiple of 2^`levels`, so no 2×2 block straddles two
+/// maps. Returns every level after the push (index 0 the finest; the last one is the
+/// coarsest pull result).
+///
+/// - Pull (level l → l+1): the average of the valid children within `t_pull`·2^l of the
+///   nearest valid child (outliers behind are rejected); no valid child leaves a hole.
+/// - Push (level l+1 → l, from coarse to fine): the coarse value at a fine texel is the
+///   bilinear interpolation of the valid coarse texels around it within the same map; it
+///   replaces the fine value if that is a hole or lies farther than `t_push`·2^l behind it.
+pub fn pull_push(
+    atlas: &[f32],
+    width: u32,
+    height: u32,
+    tile: u32,
+    levels: u32,
+    t_pull: f32,
+    t_push: f32,
+) -> Vec<Vec<f32>> {
+    let mut pyr = vec![atlas.to_vec()];
+    for l in 0..levels {
+        let (w, h) = (width >> l, height >> l);
+        let (cw, ch) = (w / 2, h / 2);
+        let fine = &pyr[l as usize];
+        let mut coarse = vec![ISM_EMPTY; (cw * ch) as usize];
+        let threshold = t_pull * (1u32 << l) as f32;
+        for y in 0..ch {
+            for x in 0..cw {
+                let c = [(0, 0), (1, 0), (0, 1), (1, 1)].map(|(dx, dy)| fine[((2 * y + dy) * w + 2 * x + dx) as usize]);
+                let nearest = c.iter().copied().fold(ISM_EMPTY, f32::min);
+                if nearest >= ISM_EMPTY {
+                    continue;
+                }
+                let (mut sum, mut n) = (0.0f32, 0.0f32);
+                for v in c {
+                    if v < ISM_EMPTY && v - nearest <= threshold {
+                        sum += v;
+                        n += 1.0;
+                    }
+                }
+                coarse[(y * cw + x) as usize] = sum / n;
+            }
+        }
+        pyr.push(coarse);
+    }
+    for l in (0..levels).rev() {
+        let (w, h) = (width >> l, height >> l);
+        let cw = w / 2;
+        let ct = (tile >> (l + 1)).max(1);
+        let threshold = t_push * (1u32 << l) as f32;
+        let coarse = pyr[l as usize + 1].clone();
+        let fine = &mut pyr[l as usize];
+        for y in 0..h {
+            for x in 0..w {
+                let c = coarse_at(&coarse, cw, ct, x, y);
+                let f = &mut fine[(y * w + x) as usize];
+                if c < ISM_EMPTY && (*f >= ISM_EMPTY || *f - c > threshold) {
+                    *f = c;
+                }
+            }
+        }
+    }
+    pyr
+}
+
+/// Bilinear interpolation of the valid coarse texels around fine texel (x, y), within the
+/// coarse map (`ct`² texels) that contains it; twin of `coarse_at` in `ism/pull_push.wgsl`.
+fn coarse_at(coarse: &[f32], cw: u32, ct: u32, x: u32, y: u32) -> f32 {
+    let (px, py) = ((x as f32 + 0.5) * 0.5 - 0.5, (y as f32 + 0.5) * 0.5 - 0.5);
+    let (x0, y0) = (px.floor(), py.floor());
+    let (fx, fy) = (px - x0, py - y0);
+    let (tx, ty) = ((x / 2) / ct * ct, (y / 2) / ct * ct);
+    let (mut sum, mut wsum) = (0.0f32, 0.0f32);
+    for (dx, dy, w) in
+        [(0, 0, (1.0 - fx) * (1.0 - fy)), (1, 0, fx * (1.0 - fy)), (0, 1, (1.0 - fx) * fy), (1, 1, fx * fy)]
+    {
+        let cx = (x0 as i32 + dx).clamp(tx as i32, (tx + ct - 1) as i32) as u32;
+        let cy = (y0 as i32 + dy).clamp(ty as i32, (ty + ct - 1) as i32) as u32;
+        let v = coarse[(cy * cw + cx) as usize];
+        if v < ISM_EMPTY && w > 0.0 {
+            sum += w * v;
+            wsum += w;
+        }
+    }
+    if wsum > 0.0 { sum / wsum } else { ISM_EMPTY }
+}
+
+/// A VPL as the shading kernel sees it (twin of `Vpl` in `shaders/common/vpl.wgsl`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Vpl {
+    pub position: Vec3,
+    pub normal: Vec3,
+    /// Incident flux Φ.
+    pub flux: Vec3,
+    /// Unit direction toward the light (or previous-bounce VPL) it came from.
+    pub incident: Vec3,
+    pub albedo: Vec3,
+    pub di: f32,
+    pub si: f32,
+    pub sp: f32,
+}
+
+/// A surface point to shade.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Receiver {
+    pub position: Vec3,
+    pub normal: Vec3,
+    pub albedo: Vec3,
+    pub di: f32,
+    pub si: f32,
+    pub sp: f32,
+}
+
+/// Radiance toward the eye at `eye` that one VPL sends to `x` (visibility not included),
+/// Knecht 002 Eq. 4.7–4.9 with the one BRDF of [`crate::cpu::brdf`] at both ends:
+///
+/// - Eq. 4.7, geometry term η = max(0, cos θ_s)·max(0, cos θ_r) / max(d_min², d²); the
+///   thesis clamps with 1 (its scene units); d_min is a setting here.
+/// - Eq. 4.8, the VPL's emission toward x: Φ · f(y; ω_in, y→x), whose glossy lobe depends
+///   on ω_in, the direction to the light or to the previous-bounce VPL (the thesis'
+///   reflection vector `ref`); its diffuse part is I_VPL·DI_VPL.
+/// - Eq. 4.9, the light leaving x toward the eye: f(x; x→y, v).
+pub fn vpl_radiance(vpl: &Vpl, x: &Receiver, eye: Vec3, d_min: f32) -> Vec3 {
+    let w = vpl.position - x.position;
+    let d2 = w.length_squared();
+    let l = w / d2.max(1e-12).sqrt();
+    let (cos_x, cos_y) = (x.normal.dot(l), -vpl.normal.dot(l));
+    if cos_x <= 0.0 || cos_y <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let v = (eye - x.position).normalize_or_zero();
+    let f_y = crate::cpu::brdf::eval(vpl.normal, vpl.incident, -l, vpl.albedo, vpl.di, vpl.si, vpl.sp);
+    let f_x = crate::cpu::brdf::eval(x.normal, l, v, x.albedo, x.di, x.si, x.sp);
+    vpl.flux * f_y * cos_y * f_x * cos_x / d2.max(d_min * d_min)
+}
+
+/// One pixel of the geometry-aware box filter's inputs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilterTexel {
+    pub value: Vec3,
+    /// Linear view depth (0: background).
+    pub depth: f32,
+    pub normal: Vec3,
+}
+
+/// The window of the n×n box filter around a pixel: offsets −⌊n/2⌋ … n−1−⌊n/2⌋, one pixel
+/// of every interleaving tile.
+pub fn filter_window(n: u32) -> std::ops::RangeInclusive<i32> {
+    let lo = -((n / 2) as i32);
+    lo..=lo + n as i32 - 1
+}
+
+/// Geometry-aware n×n box filter (Knecht §3.4.1 after Laine et al. 2007): the average over
+/// the window of the pixels on the same surface as the centre — depth difference at most
+/// α in the thesis' linear depth (Eq. 4.2: view depth / (z_far − z_near), so the threshold
+/// is α · `depth_range`) and normals with a dot product of at least β. Background pixels
+/// stay 0.
+pub fn geometry_aware_filter(
+    img: &[FilterTexel],
+    width: u32,
+    height: u32,
+    n: u32,
+    alpha: f32,
+    beta: f32,
+    depth_range: f32,
+) -> Vec<Vec3> {
+    let mut out = vec![Vec3::ZERO; img.len()];
+    for y in 0..height as i32 {
+        for x in 0..width as i32 {
+            let c = img[(y as u32 * width + x as u32) as usize];
+            if c.depth <= 0.0 {
+                continue;
+            }
+            let (mut sum, mut count) = (Vec3::ZERO, 0.0f32);
+            for dy in filter_window(n) {
+                for dx in filter_window(n) {
+                    let (qx, qy) = (x + dx, y + dy);
+                    if qx < 0 || qy < 0 || qx >= width as i32 || qy >= height as i32 {
+                        continue;
+                    }
+                    let q = img[(qy as u32 * width + qx as u32) as usize];
+                    if q.depth <= 0.0
+                        || (q.depth - c.depth).abs() > alpha * depth_range
+                        || q.normal.dot(c.normal) < beta
+                    {
+                        continue;
+                    }
+                    sum += q.value;
+                    count += 1.0;
+                }
+            }
+            out[(y as u32 * width + x as u32) as usize] = sum / count.max(1.0);
+        }
+    }
+    out
+}
+
+/// The weights of the confidence (Knecht §3.5.2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ConfidenceWeights {
+    pub c_base: f32,
+    pub w_pos: f32,
+    pub w_normal: f32,
+    pub w_illumination: f32,
+}
+
+/// What one pixel knows of itself and of its reprojected previous value.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ConfidenceInput {
+    /// Movement buffer value (previous − current position) in pixels.
+    pub motion_px: Vec2,
+    pub size: Vec2,
+    /// View depth and the previous one (scene units) and z_far − z_near of the camera.
+    pub depth: f32,
+    pub depth_prev: f32,
+    pub depth_range: f32,
+    pub normal: Vec3,
+    pub normal_prev: Vec3,
+    pub illumination: Vec3,
+    pub illumination_prev: Vec3,
+}
+
+/// Confidence in the previous frame's indirect light, Knecht 002 Eq. 3.1–3.4:
+///
+/// - Eq. 3.1, Δpos = ‖(Δx, Δy, Δd) · w_pos‖ with the screen movement in fractions of the
+///   image (Δx/width, Δy/height) and the depth in the thesis' linear depth (Eq. 4.2, view
+///   depth / (z_far − z_near)) — our reading of its screen and depth units, so that w_pos
+///   does not depend on the resolution;
+/// - Eq. 3.2, Δnormal = (1 − n·n_prev) · w_normal;
+/// - Eq. 3.3, Δillumination = saturate(‖I_new − I_prev‖³) · w_illumination with the
+///   difference relative to the larger of the two magnitudes (the thesis' light values
+///   were display-referred; ours are radiance in any unit);
+/// - Eq. 3.4, confidence = c_base · saturate(1 − max(Δpos, Δnormal, Δillumination)).
+pub fn confidence(i: &ConfidenceInput, w: &ConfidenceWeights) -> f32 {
+    let rel_depth = (i.depth - i.depth_prev) / i.depth_range.max(1e-6);
+    let d_pos = Vec3::new(i.motion_px.x / i.size.x, i.motion_px.y / i.size.y, rel_depth).length() * w.w_pos;
+    let d_normal = (1.0 - i.normal.dot(i.normal_prev)) * w.w_normal;
+    let scale = i.illumination.length().max(i.illumination_prev.length()).max(1e-6);
+    let diff = (i.illumination - i.illumination_prev).length() / scale;
+    let d_illum = (diff * diff * diff).clamp(0.0, 1.0) * w.w_illumination;
+    w.c_base * (1.0 - d_pos.max(d_normal).max(d_illum)).clamp(0.0, 1.0)
+}
+
+/// The merge of Eq. 3.6: I = I_prev · confidence + (1 − confidence) · I_new.
+pub fn merge(i_new: Vec3, i_prev: Vec3, confidence: f32) -> Vec3 {
+    i_prev * confidence + (1.0 - confidence) * i_new
+}
+
+/// The packed key of the bounce selection (§3.6; `atomicMax` replaces the thesis' depth
+/// test): the contribution's f32 bits with the low 12 bits replaced by the sample's index
+/// modulo 4096 — positive floats order like their bits, so the largest key is the largest
+/// contribution (to 2⁻¹¹ relative) and names its sample.
+pub fn bounce_key(contribution: f32, sample: u32) -> u32 {
+    (contribution.max(0.0).to_bits() & !0xFFF) | (sample & 0xFFF)
+}
+
+/// For each VPL, the sample among those assigned to it whose key is the largest, or None
+/// when none has a positive contribution (twin of the `atomicMax` selection).
+pub fn select_bounce(contributions: &[f32], assigned_vpl: &[u32], vpls: usize) -> Vec<Option<u32>> {
+    let mut best = vec![0u32; vpls];
+    for (s, (&c, &v)) in contributions.iter().zip(assigned_vpl).enumerate() {
+        if c > 0.0 && (v as usize) < vpls {
+            best[v as usize] = best[v as usize].max(bounce_key(c, s as u32));
+        }
+    }
+    best.into_iter().map(|k| (k != 0).then_some(k & 0xFFF)).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn halton_is_the_radical_inverse() {
+        assert_eq!([1, 2, 3, 4].map(|i| halton(i, 2)), [0.5, 0.25, 0.75, 0.125]);
+        assert!((halton(5, 3) - 7.0 / 9.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn warping_a_uniform_map_is_the_identity() {
+        let p = Pyramid::new(8, vec![1.0; 64]);
+        for i in 0..100 {
+            let u = Vec2::new(halton(i, 2), halton(i, 3));
+            let (_, uv, pdf) = p.warp(u).expect("non-zero map");
+            assert!((uv - u).length() < 1e-5, "{u} → {uv}");
+            assert!((pdf - 1.0).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn warping_never_lands_on_zero_importance() {
+        let mut map = vec![0.0; 16 * 16];
+        map[5 * 16 + 9] = 3.0;
+        map[12 * 16 + 2] = 1.0;
+        let p = Pyramid::new(16, map);
+        let mut hits = [0u32; 2];
+        for i in 0..400 {
+            let (t, _, pdf) = p.warp(Vec2::new(halton(i, 2), halton(i, 3))).expect("non-zero");
+            match (t.x, t.y) {
+                (9, 5) => hits[0] += 1,
+                (2, 12) => hits[1] += 1,
+                other => panic!("landed on {other:?}"),
+            }
+            assert!(pdf > 0.0);
+        }
+        // 3 : 1 by importance, to the discrepancy of 400 Halton points.
+        assert!(hits[0].abs_diff(300) <= 4 && hits[0] + hits[1] == 400, "{hits:?}");
+    }
+
+    #[test]
+    fn budget_split_follows_power_and_gives_every_light_one() {
+        assert_eq!(split_budget(&[3.0, 1.0], 256), vec![192, 64]);
+        assert_eq!(split_budget(&[1000.0, 1.0], 10), vec![9, 1]);
+        assert_eq!(split_budget(&[1.0, 0.0, 1.0], 5).iter().sum::<u32>(), 5);
+        assert_eq!(split_budget(&[0.0], 5), vec![0]);
+    }
+
+    #[test]
+    fn paraboloid_round_trips() {
+        for i in 0..200 {
+            let (a, b) = (halton(i, 2) * std::f32::consts::TAU, halton(i, 3));
+            let z = b;
+            let r = (1.0 - z * z).sqrt();
+            let q = Vec3::new(r * a.cos(), r * a.sin(), z);
+            let uv = paraboloid_project(q).expect("upper hemisphere");
+            assert!((paraboloid_unproject(uv) - q).length() < 1e-5);
+        }
+        assert!(paraboloid_project(Vec3::new(0.0, 0.0, -1.0)).is_none());
+    }
+
+    #[test]
+    fn pull_push_fills_a_hole_with_its_neighbours() {
+        let mut a = vec![2.0; 16];
+        a[5] = ISM_EMPTY;
+        let out = pull_push(&a, 4, 4, 4, 2, 0.1, 0.1);
+        assert!((out[0][5] - 2.0).abs() < 1e-6);
+        assert!(out[0].iter().all(|&v| v < ISM_EMPTY));
+    }
+
+    #[test]
+    fn confidence_is_c_base_for_a_still_pixel_and_zero_for_a_new_surface() {
+        let w = ConfidenceWeights { c_base: 0.9, w_pos: 10.0, w_normal: 2.0, w_illumination: 1.0 };
+        let still = ConfidenceInput {
+            motion_px: Vec2::ZERO,
+            size: Vec2::new(100.0, 100.0),
+            depth: 2.0,
+            depth_prev: 2.0,
+            depth_range: 10.0,
+            normal: Vec3::Z,
+            normal_prev: Vec3::Z,
+            illumination: Vec3::ONE,
+            illumination_prev: Vec3::ONE,
+        };
+        assert_eq!(confidence(&still, &w), 0.9);
+        let new = ConfidenceInput { depth_prev: 4.0, ..still };
+        // Δpos = 0.2 · 10 ≥ 1.
+        assert_eq!(confidence(&new, &w), 0.0);
+    }
+
+    #[test]
+    fn bounce_selection_takes_the_largest_contribution_per_vpl() {
+        let c = [0.1, 0.5, 0.3, 0.0, 0.2];
+        let v = [0, 0, 1, 1, 1];
+        assert_eq!(select_bounce(&c, &v, 3), vec![Some(1), Some(2), None]);
+    }
+}

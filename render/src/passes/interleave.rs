@@ -1,0 +1,461 @@
+//! Stages 5–6 of instant radiosity (Knecht 002 §3.4): interleaved sampling. The camera
+//! G-buffer is split into n×n tiles (`interleave.split.*`), every VPL is assigned to one
+//! tile and all VPLs are shaded in one dispatch (`indirect.accum`, split layout), the tiles
+//! are merged back (`indirect.merged`), and — after the temporal merge of stage 7 — the
+//! geometry-aware n×n box filter smooths the tiles away (`indirect.filtered`).
+//! Shaders: `shaders/interleave/{split,gather,merge,filter}.wgsl`.
+//!
+//! The thesis draws one quad per VPL over its tile ("tiled mesh geometry", §3.4.2) so that
+//! one draw call shades all VPLs; here one compute dispatch over the split G-buffer does
+//! the same, each thread looping over its tile's VPLs.
+
+use glam::Vec4;
+
+use super::bgl;
+use super::gbuffer::{ALBEDO_FORMAT, GBufferViews, MATERIAL_FORMAT, NORMAL_FORMAT, POSITION_FORMAT};
+use crate::buffers::{BufferKind, BufferRegistry};
+use crate::gpu::GpuContext;
+use crate::settings_group;
+
+settings_group! {
+    /// Interleaved sampling and the geometry-aware filter (stages 5–6; Knecht 002 §3.4.1).
+    pub struct InterleaveSettings: "interleave" {
+        /// Tiles per side: each VPL shades one pixel in n×n (1: every pixel gets every VPL).
+        n: u32 = 4,
+        unit "tiles", symbol "n", range 1..=8, cost "shading ∝ 1/n²; the filter reads n² pixels", history false;
+        /// Apply the geometry-aware n×n box filter after the merge.
+        filter: bool = true,
+        unit "", symbol "", range 0..=1, cost "n² texel reads per pixel", history false;
+        /// Depth threshold: neighbours whose depth differs by more than α in the thesis' linear
+        /// depth (view depth / (z_far − z_near), Eq. 4.2) are not averaged.
+        alpha: f32 = 0.01,
+        unit "× (z_far − z_near)", symbol "α", range 0.0..=1.0, cost "free", history false;
+        /// Normal threshold: neighbours whose normal's dot product with the centre's is below β are not averaged.
+        beta: f32 = 0.8,
+        unit "", symbol "β", range -1.0..=1.0, cost "free", history false;
+    }
+}
+
+/// Uniform of split and merge; WGSL twin: `SplitParams`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SplitParams {
+    pub n: [u32; 4],
+}
+
+/// Uniform of the gather; WGSL twin: `GatherParams` in `shaders/interleave/gather.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GatherParams {
+    pub split: [u32; 4],
+    pub vis: [u32; 4],
+    pub shade: Vec4,
+}
+
+/// Uniform of the filter; WGSL twin: `FilterParams`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct FilterParams {
+    pub n: [u32; 4],
+    pub thresholds: Vec4,
+}
+
+/// The visibility the gather reads.
+pub enum GatherVisibility<'a> {
+    None,
+    /// The ISM atlas (level 0 after pull-push), with columns, map size, eye offset and bias.
+    Ism {
+        atlas: &'a wgpu::TextureView,
+        cols: u32,
+        size: u32,
+        eye_offset: f32,
+        bias: f32,
+    },
+    /// The exact cube-face atlas, with columns, face size and (near, far, eye offset).
+    Exact {
+        atlas: &'a wgpu::TextureView,
+        cols: u32,
+        size: u32,
+        clip: glam::Vec3,
+    },
+}
+
+struct Split {
+    position: wgpu::Texture,
+    normal: wgpu::Texture,
+    albedo: wgpu::Texture,
+    material: wgpu::Texture,
+    accum: wgpu::Texture,
+}
+
+pub struct InterleavePass {
+    n: u32,
+    width: u32,
+    height: u32,
+    split: Split,
+    pub merged: wgpu::Texture,
+    pub filtered: wgpu::Texture,
+    split_layout: wgpu::BindGroupLayout,
+    gather_layout: wgpu::BindGroupLayout,
+    merge_layout: wgpu::BindGroupLayout,
+    filter_layout: wgpu::BindGroupLayout,
+    split_pipeline: wgpu::ComputePipeline,
+    gather_pipeline: wgpu::ComputePipeline,
+    merge_pipeline: wgpu::ComputePipeline,
+    filter_pipeline: wgpu::ComputePipeline,
+    split_params: wgpu::Buffer,
+    gather_params: wgpu::Buffer,
+    filter_params: wgpu::Buffer,
+    dummy_ism: wgpu::TextureView,
+    dummy_exact: wgpu::TextureView,
+}
+
+impl InterleavePass {
+    pub fn new(ctx: &GpuContext, camera: wgpu::BindGroupLayoutEntry, width: u32, height: u32, n: u32) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let t = |b| bgl::texture(b, cs, false);
+        let split_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("interleave.split.inputs"),
+            entries: &[
+                bgl::uniform(0, cs),
+                t(1),
+                t(2),
+                t(3),
+                t(4),
+                bgl::storage_texture(5, POSITION_FORMAT),
+                bgl::storage_texture(6, NORMAL_FORMAT),
+                bgl::storage_texture(7, ALBEDO_FORMAT),
+                bgl::storage_texture(8, MATERIAL_FORMAT),
+            ],
+        });
+        let gather_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("interleave.gather.inputs"),
+            entries: &[
+                camera,
+                bgl::uniform(1, cs),
+                bgl::storage(2, cs, true),
+                t(3),
+                bgl::depth(4, cs),
+                t(5),
+                t(6),
+                t(7),
+                t(8),
+                bgl::storage_texture(9, wgpu::TextureFormat::Rgba32Float),
+            ],
+        });
+        let merge_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("interleave.merge.inputs"),
+            entries: &[bgl::uniform(0, cs), t(1), bgl::storage_texture(2, wgpu::TextureFormat::Rgba32Float)],
+        });
+        let filter_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("interleave.filter.inputs"),
+            entries: &[
+                bgl::uniform(0, cs),
+                t(1),
+                t(2),
+                t(3),
+                bgl::storage_texture(4, wgpu::TextureFormat::Rgba32Float),
+            ],
+        });
+        let module = |p| crate::shaders::create_module(device, p);
+        let split_pipeline = super::compute_pipeline(
+            device,
+            "interleave.split",
+            &module("interleave/split.wgsl"),
+            "cs_split",
+            &[&split_layout],
+        );
+        let gather_pipeline = super::compute_pipeline(
+            device,
+            "interleave.gather",
+            &module("interleave/gather.wgsl"),
+            "cs_gather",
+            &[&gather_layout],
+        );
+        let merge_pipeline = super::compute_pipeline(
+            device,
+            "interleave.merge",
+            &module("interleave/merge.wgsl"),
+            "cs_merge",
+            &[&merge_layout],
+        );
+        let filter_pipeline = super::compute_pipeline(
+            device,
+            "interleave.filter",
+            &module("interleave/filter.wgsl"),
+            "cs_filter",
+            &[&filter_layout],
+        );
+        let uniform = |label, size| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let split_params = uniform("interleave.split.params", std::mem::size_of::<SplitParams>() as u64);
+        let gather_params = uniform("interleave.gather.params", std::mem::size_of::<GatherParams>() as u64);
+        let filter_params = uniform("interleave.filter.params", std::mem::size_of::<FilterParams>() as u64);
+        let dummy_ism = super::view(
+            &super::create_target(
+                device,
+                "interleave.no_ism",
+                1,
+                1,
+                wgpu::TextureFormat::R32Float,
+                wgpu::TextureUsages::empty(),
+            ),
+            "interleave.no_ism",
+        );
+        let dummy_exact = super::view(
+            &super::create_target(
+                device,
+                "interleave.no_exact",
+                1,
+                1,
+                wgpu::TextureFormat::Depth32Float,
+                wgpu::TextureUsages::empty(),
+            ),
+            "interleave.no_exact",
+        );
+        let (split, merged, filtered) = Self::targets(device, width, height, n);
+        Self {
+            n,
+            width,
+            height,
+            split,
+            merged,
+            filtered,
+            split_layout,
+            gather_layout,
+            merge_layout,
+            filter_layout,
+            split_pipeline,
+            gather_pipeline,
+            merge_pipeline,
+            filter_pipeline,
+            split_params,
+            gather_params,
+            filter_params,
+            dummy_ism,
+            dummy_exact,
+        }
+    }
+
+    /// Tile size of an n×n split of `width`×`height`.
+    pub fn tile(width: u32, height: u32, n: u32) -> (u32, u32) {
+        (width.div_ceil(n.max(1)), height.div_ceil(n.max(1)))
+    }
+
+    fn targets(device: &wgpu::Device, width: u32, height: u32, n: u32) -> (Split, wgpu::Texture, wgpu::Texture) {
+        let (tw, th) = Self::tile(width, height, n);
+        let (sw, sh) = (tw * n.max(1), th * n.max(1));
+        let st = wgpu::TextureUsages::STORAGE_BINDING;
+        let t = |label, w, h, f| super::create_target(device, label, w, h, f, st);
+        let split = Split {
+            position: t("interleave.split.position", sw, sh, POSITION_FORMAT),
+            normal: t("interleave.split.normal", sw, sh, NORMAL_FORMAT),
+            albedo: t("interleave.split.albedo", sw, sh, ALBEDO_FORMAT),
+            material: t("interleave.split.material", sw, sh, MATERIAL_FORMAT),
+            accum: t("indirect.accum", sw, sh, wgpu::TextureFormat::Rgba32Float),
+        };
+        let merged = t("indirect.merged", width, height, wgpu::TextureFormat::Rgba32Float);
+        let filtered = t("indirect.filtered", width, height, wgpu::TextureFormat::Rgba32Float);
+        (split, merged, filtered)
+    }
+
+    /// Resizes for `width`×`height` and n; returns whether textures were recreated.
+    pub fn ensure(&mut self, ctx: &GpuContext, width: u32, height: u32, n: u32) -> bool {
+        if (width, height, n) == (self.width, self.height, self.n) {
+            return false;
+        }
+        (self.split, self.merged, self.filtered) = Self::targets(&ctx.device, width, height, n);
+        (self.width, self.height, self.n) = (width, height, n);
+        true
+    }
+
+    pub fn register(&self, reg: &mut BufferRegistry) {
+        let s = &self.split;
+        let n = self.n;
+        reg.register(
+            "interleave.split.albedo",
+            BufferKind::Albedo,
+            &format!("the camera G-buffer's colour split into {n}×{n} tiles (Knecht §3.4.1, Fig. 3.2)"),
+            &s.albedo,
+        );
+        reg.register("interleave.split.normal", BufferKind::Direction, "split G-buffer: normals", &s.normal);
+        reg.register("interleave.split.position", BufferKind::Data, "split G-buffer: position and depth", &s.position);
+        reg.register("interleave.split.material", BufferKind::Data, "split G-buffer: SI, SP", &s.material);
+        reg.register(
+            "indirect.accum",
+            BufferKind::Hdr,
+            "indirect light of each tile's VPLs in the split layout, scaled to all VPLs (Knecht Fig. 3.4)",
+            &s.accum,
+        );
+        reg.register(
+            "indirect.merged",
+            BufferKind::Hdr,
+            "the accumulation buffer merged back to image layout (each pixel lit by one tile's VPLs)",
+            &self.merged,
+        );
+        reg.register(
+            "indirect.filtered",
+            BufferKind::Hdr,
+            "indirect light after the temporal merge and the geometry-aware n×n filter: what compose adds",
+            &self.filtered,
+        );
+    }
+
+    /// Splits the G-buffer, gathers `vpl_count` VPLs into the split accumulation buffer and
+    /// merges it back into `indirect.merged`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn shade(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &mut crate::timing::GpuTimer,
+        camera: &wgpu::Buffer,
+        g: &GBufferViews,
+        vpls: &wgpu::Buffer,
+        vpl_count: u32,
+        d_min: f32,
+        vis: GatherVisibility<'_>,
+    ) {
+        let n = self.n.max(1);
+        let (tw, th) = Self::tile(self.width, self.height, n);
+        let sp = SplitParams { n: [n, tw, th, 0] };
+        ctx.queue.write_buffer(&self.split_params, 0, bytemuck::bytes_of(&sp));
+        let (code, atlas_ism, atlas_exact, cols, size, shade) = match vis {
+            GatherVisibility::None => (0, &self.dummy_ism, &self.dummy_exact, 1, 1, Vec4::ZERO),
+            GatherVisibility::Ism { atlas, cols, size, eye_offset, bias } => {
+                (1, atlas, &self.dummy_exact, cols, size, Vec4::new(0.0, eye_offset, bias, 0.0))
+            }
+            GatherVisibility::Exact { atlas, cols, size, clip } => {
+                (2, &self.dummy_ism, atlas, cols, size, Vec4::new(0.0, clip.x, clip.y, clip.z))
+            }
+        };
+        let gp = GatherParams {
+            split: [n, tw, th, vpl_count],
+            vis: [code, cols, size, 0],
+            shade: Vec4::new(d_min * d_min, shade.y, shade.z, shade.w),
+        };
+        ctx.queue.write_buffer(&self.gather_params, 0, bytemuck::bytes_of(&gp));
+        let s = &self.split;
+        let v = |t: &wgpu::Texture, l: &str| super::view(t, l);
+        let (sp_v, sn_v, sa_v, sm_v, acc_v) = (
+            v(&s.position, "interleave.split.position"),
+            v(&s.normal, "interleave.split.normal"),
+            v(&s.albedo, "interleave.split.albedo"),
+            v(&s.material, "interleave.split.material"),
+            v(&s.accum, "indirect.accum"),
+        );
+        let merged_v = v(&self.merged, "indirect.merged");
+        let tv = wgpu::BindingResource::TextureView;
+        let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
+        let split_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("interleave.split.inputs"),
+            layout: &self.split_layout,
+            entries: &[
+                entry(0, self.split_params.as_entire_binding()),
+                entry(1, tv(&g.position)),
+                entry(2, tv(&g.normal)),
+                entry(3, tv(&g.albedo)),
+                entry(4, tv(&g.material)),
+                entry(5, tv(&sp_v)),
+                entry(6, tv(&sn_v)),
+                entry(7, tv(&sa_v)),
+                entry(8, tv(&sm_v)),
+            ],
+        });
+        let gather_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("interleave.gather.inputs"),
+            layout: &self.gather_layout,
+            entries: &[
+                entry(0, camera.as_entire_binding()),
+                entry(1, self.gather_params.as_entire_binding()),
+                entry(2, vpls.as_entire_binding()),
+                entry(3, tv(atlas_ism)),
+                entry(4, tv(atlas_exact)),
+                entry(5, tv(&sp_v)),
+                entry(6, tv(&sn_v)),
+                entry(7, tv(&sa_v)),
+                entry(8, tv(&sm_v)),
+                entry(9, tv(&acc_v)),
+            ],
+        });
+        let merge_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("interleave.merge.inputs"),
+            layout: &self.merge_layout,
+            entries: &[entry(0, self.split_params.as_entire_binding()), entry(1, tv(&acc_v)), entry(2, tv(&merged_v))],
+        });
+        let (sw, sh) = (tw * n, th * n);
+        let tile = super::TILE;
+        timer.scope(ctx, encoder, "interleave.split", |e, slot| {
+            let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("interleave.split"),
+                timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+            });
+            pass.set_pipeline(&self.split_pipeline);
+            pass.set_bind_group(0, &split_group, &[]);
+            pass.dispatch_workgroups(sw.div_ceil(tile), sh.div_ceil(tile), 1);
+        });
+        timer.scope(ctx, encoder, "interleave.gather", |e, slot| {
+            let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("interleave.gather"),
+                timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+            });
+            pass.set_pipeline(&self.gather_pipeline);
+            pass.set_bind_group(0, &gather_group, &[]);
+            pass.dispatch_workgroups(sw.div_ceil(tile), sh.div_ceil(tile), 1);
+        });
+        timer.scope(ctx, encoder, "interleave.merge", |e, slot| {
+            let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("interleave.merge"),
+                timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+            });
+            pass.set_pipeline(&self.merge_pipeline);
+            pass.set_bind_group(0, &merge_group, &[]);
+            pass.dispatch_workgroups(self.width.div_ceil(tile), self.height.div_ceil(tile), 1);
+        });
+    }
+
+    /// The geometry-aware filter of `src` into `indirect.filtered` (n = 1 or `filter` off:
+    /// a copy).
+    #[allow(clippy::too_many_arguments)]
+    pub fn filter(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        s: &InterleaveSettings,
+        depth_range: f32,
+        src: &wgpu::TextureView,
+        g: &GBufferViews,
+    ) {
+        let n = if s.filter { self.n.max(1) } else { 1 };
+        let fp = FilterParams { n: [n, 0, 0, 0], thresholds: Vec4::new(s.alpha * depth_range, s.beta, 0.0, 0.0) };
+        ctx.queue.write_buffer(&self.filter_params, 0, bytemuck::bytes_of(&fp));
+        let dst = super::view(&self.filtered, "indirect.filtered");
+        let tv = wgpu::BindingResource::TextureView;
+        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("interleave.filter.inputs"),
+            layout: &self.filter_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: self.filter_params.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: tv(src) },
+                wgpu::BindGroupEntry { binding: 2, resource: tv(&g.position) },
+                wgpu::BindGroupEntry { binding: 3, resource: tv(&g.normal) },
+                wgpu::BindGroupEntry { binding: 4, resource: tv(&dst) },
+            ],
+        });
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("interleave.filter"),
+            timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+        });
+        pass.set_pipeline(&self.filter_pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(self.width.div_ceil(super::TILE), self.height.div_ceil(super::TILE), 1);
+    }
+}

@@ -1,0 +1,625 @@
+//! Stage 4, imperfect shadow maps (Knecht 002 §2.6.5 after Ritschel et al. 2008): a point
+//! cloud on the scene's triangles, splatted into one paraboloid map per VPL in one atlas
+//! (`ism.atlas`), then pull-push fills the holes (`ism.atlas_pulled`, one mip per level).
+//! Shaders: `shaders/ism/{splat,resolve,pull_push}.wgsl`, `shaders/common/ism.wgsl`; CPU
+//! twins in `cpu::knecht`.
+//!
+//! Point cloud (§2.6.5, §5.1): triangles are chosen with probability ∝ area × the object's
+//! sample weight (`Material::sample_weight`), a point inside by uniform barycentrics; random
+//! or low-discrepancy (Halton; the thesis' future work asks for quasi-random placement).
+//! Each point keeps its triangle and barycentrics ([`CloudPoint`]); the GPU gets its
+//! object-space position and normal with the draw it belongs to, so that it follows the
+//! object's animation (our scenes animate rigidly, where the two are the same).
+
+use glam::{Vec3, Vec4};
+
+use super::bgl;
+use crate::buffers::{BufferKind, BufferRegistry};
+use crate::cpu::knecht::halton;
+use crate::gpu::GpuContext;
+use crate::scene::{Scene, SceneState};
+use crate::{settings_enum, settings_group};
+
+settings_enum! {
+    /// Stage 4: how VPL visibility is computed for instant radiosity.
+    pub enum VplVisibility {
+        /// No visibility: every VPL lights everything in front of it.
+        None = "none (unshadowed)",
+        /// Imperfect shadow maps from the point cloud (Knecht §2.6.5).
+        Imperfect = "imperfect shadow maps",
+        /// Exact cube-face depth maps from the triangles (the baseline).
+        Exact = "exact shadow maps",
+    }
+    default Imperfect
+}
+
+settings_enum! {
+    /// How the point cloud places its samples.
+    pub enum PointPlacement {
+        /// Independent random samples (Ritschel et al.).
+        Random = "random",
+        /// Halton low-discrepancy samples (Knecht §6.1's future work).
+        Halton = "Halton (quasi-random)",
+    }
+    default Halton
+}
+
+settings_group! {
+    /// VPL visibility (stage 4): imperfect shadow maps (Knecht 002 §2.6.5) or a baseline.
+    pub struct IsmSettings: "ism" {
+        /// How the VPLs' visibility is computed.
+        visibility: VplVisibility = VplVisibility::Imperfect,
+        unit "", symbol "V", range 0..=2, cost "ISM: one splat per point; exact: five depth renders of the scene per VPL", history false;
+        /// Points of the point cloud; each ISM gets points / N of them.
+        points: u32 = 32768,
+        unit "points", symbol "", range 1024..=262144, cost "one splat of a few texels per point", history false;
+        /// Placement of the points on the triangles.
+        placement: PointPlacement = PointPlacement::Halton,
+        unit "", symbol "", range 0..=1, cost "free (built once)", history false;
+        /// Side of each VPL's paraboloid map (a power of two).
+        map_size: u32 = 128,
+        unit "px", symbol "", range 32..=512, cost "atlas memory 4 B/texel² per VPL; pull-push time", history false;
+        /// Pull-push levels (0: none; Ritschel et al. compute two).
+        pull_push_levels: u32 = 2,
+        unit "levels", symbol "", range 0..=5, cost "one pull and one push pass over the atlas per level", history false;
+        /// Pull threshold: children farther than this behind the nearest one are not
+        /// averaged, scaled by 2^level (fraction of the scene extent).
+        pull_threshold: f32 = 0.05,
+        unit "× extent", symbol "t_pull", range 0.0..=1.0, cost "free", history false;
+        /// Push threshold: a texel farther than this behind the coarser level's value is
+        /// replaced, scaled by 2^level (fraction of the scene extent).
+        push_threshold: f32 = 0.05,
+        unit "× extent", symbol "t_push", range 0.0..=1.0, cost "free", history false;
+        /// Shadow test bias: the receiver counts as lit if its distance less this fraction of
+        /// it is at most the stored distance.
+        depth_bias: f32 = 0.03,
+        unit "× distance", symbol "", range 0.0..=0.5, cost "free", history false;
+        /// Scale of each point's splat (1: the disc of the point's area share).
+        splat_scale: f32 = 1.0,
+        unit "×", symbol "", range 0.1..=4.0, cost "splat texels grow with its square", history false;
+        /// Largest splat half-size in texels (a near point covers a (2k+1)² box).
+        max_splat_radius: u32 = 4,
+        unit "texels", symbol "", range 0..=16, cost "up to (2k+1)² atomics per point", history false;
+    }
+}
+
+/// One point of the cloud on the GPU; WGSL twin: `IsmPoint` in `shaders/ism/splat.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuPoint {
+    /// Object-space position.
+    pub position: [f32; 3],
+    /// Index into the frame's instances (`SceneState::draws`).
+    pub draw: u32,
+    /// Object-space normal.
+    pub normal: [f32; 3],
+    /// Material index.
+    pub material: u32,
+}
+
+/// One point of the cloud: where it lies as the thesis stores it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CloudPoint {
+    /// Index into `SceneState::draws` (the instance the GPU transforms it with).
+    pub draw: u32,
+    /// Triangle index within the draw's primitive.
+    pub triangle: u32,
+    /// Barycentric coordinates (w0, w1, w2).
+    pub barycentrics: Vec3,
+}
+
+/// The point cloud of a scene (built once per scene, count and placement).
+#[derive(Clone, Debug)]
+pub struct PointCloud {
+    pub points: Vec<CloudPoint>,
+    pub gpu: Vec<GpuPoint>,
+    /// Total surface area of the scene at time 0 (unweighted).
+    pub area: f32,
+}
+
+/// Small deterministic generator for random placement (SplitMix64).
+struct SplitMix(u64);
+impl SplitMix {
+    fn next_f32(&mut self) -> f32 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
+impl PointCloud {
+    /// `count` points on the triangles of `state`'s draws, ∝ area × sample weight.
+    pub fn build(scene: &Scene, state: &SceneState, count: u32, placement: PointPlacement) -> Self {
+        struct Tri {
+            draw: u32,
+            prim: (usize, usize),
+            triangle: u32,
+            material: u32,
+        }
+        let mut tris = Vec::new();
+        let mut cdf = Vec::new();
+        let (mut total, mut area) = (0.0f64, 0.0f64);
+        for (d, item) in state.draws.iter().enumerate() {
+            let Some(prim) = scene.meshes.get(item.mesh).and_then(|m| m.primitives.get(item.primitive)) else {
+                continue;
+            };
+            let weight = scene.materials.get(prim.material).map_or(1.0, |m| m.sample_weight.max(0.0));
+            for (t, idx) in prim.indices.chunks_exact(3).enumerate() {
+                let p = [idx[0], idx[1], idx[2]]
+                    .map(|i| item.world.transform_point3(Vec3::from(prim.vertices[i as usize].position)));
+                let a: f64 = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length() as f64;
+                if !a.is_finite() || a <= 0.0 {
+                    continue;
+                }
+                area += a;
+                total += a * weight as f64;
+                tris.push(Tri {
+                    draw: d as u32,
+                    prim: (item.mesh, item.primitive),
+                    triangle: t as u32,
+                    material: prim.material as u32,
+                });
+                cdf.push(total);
+            }
+        }
+        let mut cloud = Self { points: Vec::new(), gpu: Vec::new(), area: area as f32 };
+        if total <= 0.0 {
+            return cloud;
+        }
+        let mut rng = SplitMix(0x5EED);
+        for i in 0..count {
+            let (u, s, t) = match placement {
+                PointPlacement::Halton => (halton(i + 1, 2), halton(i + 1, 3), halton(i + 1, 5)),
+                PointPlacement::Random => (rng.next_f32(), rng.next_f32(), rng.next_f32()),
+            };
+            let target = u as f64 * total;
+            let k = cdf.partition_point(|&c| c <= target).min(tris.len() - 1);
+            let tri = &tris[k];
+            // Uniform barycentrics: (1 − √s, √s(1 − t), √s·t).
+            let r = s.sqrt();
+            let b = Vec3::new(1.0 - r, r * (1.0 - t), r * t);
+            let prim = &scene.meshes[tri.prim.0].primitives[tri.prim.1];
+            let idx = &prim.indices[tri.triangle as usize * 3..tri.triangle as usize * 3 + 3];
+            let v = idx.iter().map(|&i| prim.vertices[i as usize]).collect::<Vec<_>>();
+            let pos =
+                Vec3::from(v[0].position) * b.x + Vec3::from(v[1].position) * b.y + Vec3::from(v[2].position) * b.z;
+            let nrm = (Vec3::from(v[0].normal) * b.x + Vec3::from(v[1].normal) * b.y + Vec3::from(v[2].normal) * b.z)
+                .normalize_or(Vec3::Z);
+            cloud.points.push(CloudPoint { draw: tri.draw, triangle: tri.triangle, barycentrics: b });
+            cloud.gpu.push(GpuPoint {
+                position: pos.into(),
+                draw: tri.draw,
+                normal: nrm.into(),
+                material: tri.material,
+            });
+        }
+        // Point j goes to ISM j mod N. Halton points whose indices share a residue modulo a
+        // power of two share their leading digits in base 2, i.e. lie on the same few
+        // triangles; a fixed shuffle makes every ISM's share a spread-out subset.
+        let mut shuffle = SplitMix(0xC10D);
+        for i in (1..cloud.points.len()).rev() {
+            let k = ((shuffle.next_f32() * (i + 1) as f32) as usize).min(i);
+            cloud.points.swap(i, k);
+            cloud.gpu.swap(i, k);
+        }
+        cloud
+    }
+}
+
+/// Layout of the ISM atlas: `cols` × `rows` maps of `size`², map = VPL index.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct IsmLayout {
+    pub size: u32,
+    pub cols: u32,
+    pub rows: u32,
+}
+
+impl IsmLayout {
+    pub fn new(vpls: u32, size: u32) -> Self {
+        let n = vpls.max(1);
+        let cols = (n as f64).sqrt().ceil() as u32;
+        Self { size, cols, rows: n.div_ceil(cols) }
+    }
+    pub fn width(&self) -> u64 {
+        self.cols as u64 * self.size as u64
+    }
+    pub fn height(&self) -> u64 {
+        self.rows as u64 * self.size as u64
+    }
+    /// Whether the atlas fits textures of `max_dim` texels a side and a splat buffer of
+    /// `max_buffer` bytes (4 bytes per texel).
+    pub fn fits(&self, max_dim: u32, max_buffer: u64) -> bool {
+        self.width() <= max_dim as u64
+            && self.height() <= max_dim as u64
+            && self.width() * self.height() * 4 <= max_buffer
+    }
+    /// The most VPLs whose atlas of `size`² maps fits.
+    pub fn largest_count(size: u32, max_dim: u32, max_buffer: u64) -> u32 {
+        let (mut lo, mut hi) = (0u32, 1 << 20);
+        while lo < hi {
+            let mid = (lo + hi).div_ceil(2);
+            if Self::new(mid, size).fits(max_dim, max_buffer) { lo = mid } else { hi = mid - 1 }
+        }
+        lo
+    }
+    /// The largest power-of-two map size (≥ 32) at which `vpls` maps fit, if any.
+    pub fn largest_size(vpls: u32, max_dim: u32, max_buffer: u64) -> Option<u32> {
+        (5..=12).rev().map(|k| 1u32 << k).find(|&s| Self::new(vpls, s).fits(max_dim, max_buffer))
+    }
+}
+
+/// Uniform of the splat pass; WGSL twin: `SplatParams` in `shaders/ism/splat.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SplatParams {
+    pub counts: [u32; 4],
+    pub geom: Vec4,
+}
+
+/// Uniform of one pull-push level; WGSL twin: `LevelParams` in `shaders/ism/pull_push.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct LevelParams {
+    pub threshold: Vec4,
+    pub tile: [u32; 4],
+}
+
+const LEVEL_STRIDE: u64 = 256;
+
+/// What a frame's ISMs are made from.
+#[derive(Clone, Copy, Debug)]
+pub struct IsmFrame {
+    pub vpls: u32,
+    /// Eye offset along the VPL normal (scene units).
+    pub eye_offset: f32,
+    /// Scene extent (thresholds are fractions of it).
+    pub extent: f32,
+}
+
+pub struct IsmPass {
+    cloud_key: Option<(u32, PointPlacement)>,
+    pub cloud: PointCloud,
+    points: wgpu::Buffer,
+    depth: wgpu::Buffer,
+    pub atlas: wgpu::Texture,
+    pub pulled: wgpu::Texture,
+    pub layout_info: IsmLayout,
+    levels: u32,
+    splat_layout: wgpu::BindGroupLayout,
+    resolve_layout: wgpu::BindGroupLayout,
+    pull_layout: wgpu::BindGroupLayout,
+    push_layout: wgpu::BindGroupLayout,
+    splat_pipeline: wgpu::ComputePipeline,
+    resolve_pipeline: wgpu::ComputePipeline,
+    pull_pipeline: wgpu::ComputePipeline,
+    push_pipeline: wgpu::ComputePipeline,
+    splat_params: wgpu::Buffer,
+    level_params: wgpu::Buffer,
+}
+
+impl IsmPass {
+    pub fn new(ctx: &GpuContext) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let r32 = wgpu::TextureFormat::R32Float;
+        let splat_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("ism.splat.inputs"),
+            entries: &[
+                bgl::uniform(0, cs),
+                bgl::storage(1, cs, true),
+                bgl::storage(2, cs, true),
+                bgl::storage(3, cs, true),
+                bgl::storage(4, cs, false),
+            ],
+        });
+        let resolve_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("ism.resolve.inputs"),
+            entries: &[bgl::storage(0, cs, true), bgl::storage_texture(1, r32)],
+        });
+        let pull_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("ism.pull.inputs"),
+            entries: &[bgl::uniform_dynamic(0, cs), bgl::texture(1, cs, false), bgl::storage_texture(2, r32)],
+        });
+        let push_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("ism.push.inputs"),
+            entries: &[
+                bgl::uniform_dynamic(0, cs),
+                bgl::texture(1, cs, false),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 3,
+                    visibility: cs,
+                    ty: wgpu::BindingType::StorageTexture {
+                        access: wgpu::StorageTextureAccess::ReadWrite,
+                        format: r32,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let m_splat = crate::shaders::create_module(device, "ism/splat.wgsl");
+        let m_resolve = crate::shaders::create_module(device, "ism/resolve.wgsl");
+        let m_pp = crate::shaders::create_module(device, "ism/pull_push.wgsl");
+        let splat_pipeline = super::compute_pipeline(device, "ism.splat", &m_splat, "cs_splat", &[&splat_layout]);
+        let resolve_pipeline =
+            super::compute_pipeline(device, "ism.resolve", &m_resolve, "cs_resolve", &[&resolve_layout]);
+        let pull_pipeline = super::compute_pipeline(device, "ism.pull", &m_pp, "cs_pull", &[&pull_layout]);
+        let push_pipeline = super::compute_pipeline(device, "ism.push", &m_pp, "cs_push", &[&push_layout]);
+        let splat_params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("ism.splat.params"),
+            size: std::mem::size_of::<SplatParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let level_params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("ism.pull_push.params"),
+            size: LEVEL_STRIDE * 16,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let layout_info = IsmLayout::new(1, 32);
+        let (depth, atlas, pulled) = Self::targets(device, layout_info, 0);
+        let points = Self::point_buffer(device, &[]);
+        Self {
+            cloud_key: None,
+            cloud: PointCloud { points: Vec::new(), gpu: Vec::new(), area: 0.0 },
+            points,
+            depth,
+            atlas,
+            pulled,
+            layout_info,
+            levels: 0,
+            splat_layout,
+            resolve_layout,
+            pull_layout,
+            push_layout,
+            splat_pipeline,
+            resolve_pipeline,
+            pull_pipeline,
+            push_pipeline,
+            splat_params,
+            level_params,
+        }
+    }
+
+    fn point_buffer(device: &wgpu::Device, points: &[GpuPoint]) -> wgpu::Buffer {
+        use wgpu::util::DeviceExt;
+        let zero = [GpuPoint { position: [0.0; 3], draw: 0, normal: [0.0; 3], material: 0 }];
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("ism.points"),
+            contents: bytemuck::cast_slice(if points.is_empty() { &zero } else { points }),
+            usage: wgpu::BufferUsages::STORAGE,
+        })
+    }
+
+    fn targets(device: &wgpu::Device, l: IsmLayout, levels: u32) -> (wgpu::Buffer, wgpu::Texture, wgpu::Texture) {
+        let (w, h) = (l.width() as u32, l.height() as u32);
+        let depth = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("ism.splat_depth"),
+            size: 4 * w as u64 * h as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let atlas = super::create_target(
+            device,
+            "ism.atlas",
+            w,
+            h,
+            wgpu::TextureFormat::R32Float,
+            wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST,
+        );
+        let pulled = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("ism.atlas_pulled"),
+            size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+            mip_level_count: levels + 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::R32Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::COPY_SRC
+                | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        (depth, atlas, pulled)
+    }
+
+    /// Builds the point cloud when its settings or the scene changed and sizes the atlas for
+    /// `vpls` maps (the caller checked that it fits). Returns whether textures were recreated.
+    pub fn ensure(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        state: &SceneState,
+        s: &IsmSettings,
+        vpls: u32,
+        rebuild_cloud: bool,
+    ) -> bool {
+        let key = (s.points, s.placement);
+        if rebuild_cloud || self.cloud_key != Some(key) {
+            self.cloud = PointCloud::build(scene, state, s.points, s.placement);
+            self.points = Self::point_buffer(&ctx.device, &self.cloud.gpu);
+            self.cloud_key = Some(key);
+        }
+        let l = IsmLayout::new(vpls, s.map_size);
+        let levels = s.pull_push_levels.min(s.map_size.ilog2());
+        if l == self.layout_info && levels == self.levels {
+            return false;
+        }
+        (self.depth, self.atlas, self.pulled) = Self::targets(&ctx.device, l, levels);
+        self.layout_info = l;
+        self.levels = levels;
+        true
+    }
+
+    pub fn register(&self, reg: &mut BufferRegistry) {
+        reg.register(
+            "ism.atlas",
+            BufferKind::Data,
+            "imperfect shadow maps as splatted: one paraboloid map per VPL (map = VPL index), distance from the VPL in scene units, 1e30 in holes",
+            &self.atlas,
+        );
+        reg.register(
+            "ism.atlas_pulled",
+            BufferKind::Data,
+            "the ISM atlas after pull-push: mip 0 is what the shading reads, mip k the level-k result",
+            &self.pulled,
+        );
+    }
+
+    /// Splats the point cloud into the maps of the first `f.vpls` VPLs of `vpls`, resolves the
+    /// atlas and runs pull-push.
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &mut crate::timing::GpuTimer,
+        instances: &wgpu::Buffer,
+        vpls: &wgpu::Buffer,
+        s: &IsmSettings,
+        f: IsmFrame,
+    ) {
+        let l = self.layout_info;
+        let n_points = self.cloud.gpu.len() as u32;
+        let per_ism = (n_points as f32 / f.vpls.max(1) as f32).max(1.0);
+        let r_s = (self.cloud.area / (std::f32::consts::PI * per_ism)).sqrt();
+        let sp = SplatParams {
+            counts: [n_points, f.vpls, l.cols, l.size],
+            geom: Vec4::new(f.eye_offset, r_s, s.max_splat_radius as f32, s.splat_scale),
+        };
+        ctx.queue.write_buffer(&self.splat_params, 0, bytemuck::bytes_of(&sp));
+        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("ism.splat.inputs"),
+            layout: &self.splat_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: self.splat_params.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: self.points.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: instances.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: vpls.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: self.depth.as_entire_binding() },
+            ],
+        });
+        let atlas_view = super::view(&self.atlas, "ism.atlas");
+        let resolve_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("ism.resolve.inputs"),
+            layout: &self.resolve_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: self.depth.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&atlas_view) },
+            ],
+        });
+        let (w, h) = (l.width() as u32, l.height() as u32);
+        let depth = &self.depth;
+        timer.scope(ctx, encoder, "ism.splat", |e, slot| {
+            e.clear_buffer(depth, 0, None);
+            let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("ism.splat"),
+                timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+            });
+            pass.set_pipeline(&self.splat_pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            let groups = n_points.div_ceil(64);
+            pass.dispatch_workgroups(groups.min(65535), groups.div_ceil(65535), 1);
+            pass.set_pipeline(&self.resolve_pipeline);
+            pass.set_bind_group(0, &resolve_group, &[]);
+            pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+        });
+        timer.scope(ctx, encoder, "ism.pull_push", |e, slot| self.pull_push(ctx, e, slot, s, f.extent));
+    }
+
+    fn level_view(&self, level: u32) -> wgpu::TextureView {
+        self.pulled.create_view(&wgpu::TextureViewDescriptor {
+            label: Some("ism.atlas_pulled.level"),
+            base_mip_level: level,
+            mip_level_count: Some(1),
+            ..Default::default()
+        })
+    }
+
+    /// Copies `ism.atlas` into level 0 of `ism.atlas_pulled` and runs pull-push on it
+    /// (thresholds are fractions of `extent`).
+    pub fn pull_push(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        s: &IsmSettings,
+        extent: f32,
+    ) {
+        let l = self.layout_info;
+        let (w, h) = (l.width() as u32, l.height() as u32);
+        encoder.copy_texture_to_texture(
+            self.atlas.as_image_copy(),
+            self.pulled.as_image_copy(),
+            wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+        );
+        let mut data = vec![0u8; (LEVEL_STRIDE * 16) as usize];
+        let mut pulls = Vec::new();
+        let mut pushes = Vec::new();
+        let dynamic = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &self.level_params,
+            offset: 0,
+            size: std::num::NonZeroU64::new(std::mem::size_of::<LevelParams>() as u64),
+        });
+        for level in 0..self.levels {
+            let scale = (1u32 << level) as f32 * extent;
+            // Slot 2·level: pull threshold; slot 2·level + 1: push threshold.
+            for (k, t) in [(0, s.pull_threshold), (1, s.push_threshold)] {
+                let p = LevelParams {
+                    threshold: Vec4::new(t * scale, 0.0, 0.0, 0.0),
+                    tile: [(l.size >> (level + 1)).max(1), 0, 0, 0],
+                };
+                let o = ((2 * level + k) as u64 * LEVEL_STRIDE) as usize;
+                data[o..o + std::mem::size_of::<LevelParams>()].copy_from_slice(bytemuck::bytes_of(&p));
+            }
+            let (fine, coarse) = (self.level_view(level), self.level_view(level + 1));
+            pulls.push(ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("ism.pull.inputs"),
+                layout: &self.pull_layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: dynamic.clone() },
+                    wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&fine) },
+                    wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&coarse) },
+                ],
+            }));
+            pushes.push(ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("ism.push.inputs"),
+                layout: &self.push_layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: dynamic.clone() },
+                    wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&coarse) },
+                    wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&fine) },
+                ],
+            }));
+        }
+        ctx.queue.write_buffer(&self.level_params, 0, &data);
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("ism.pull_push"),
+            timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+        });
+        pass.set_pipeline(&self.pull_pipeline);
+        for (level, g) in pulls.iter().enumerate() {
+            let (cw, ch) = ((w >> (level + 1)).max(1), (h >> (level + 1)).max(1));
+            pass.set_bind_group(0, g, &[(2 * level as u64 * LEVEL_STRIDE) as u32]);
+            pass.dispatch_workgroups(cw.div_ceil(8), ch.div_ceil(8), 1);
+        }
+        pass.set_pipeline(&self.push_pipeline);
+        for (level, g) in pushes.iter().enumerate().rev() {
+            let (fw, fh) = ((w >> level).max(1), (h >> level).max(1));
+            pass.set_bind_group(0, g, &[((2 * level as u64 + 1) * LEVEL_STRIDE) as u32]);
+            pass.dispatch_workgroups(fw.div_ceil(8), fh.div_ceil(8), 1);
+        }
+    }
+
+    /// The pull-pushed atlas the shading reads (level 0).
+    pub fn shading_view(&self) -> wgpu::TextureView {
+        self.level_view(0)
+    }
+
+    pub fn levels(&self) -> u32 {
+        self.levels
+    }
+}

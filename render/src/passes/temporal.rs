@@ -1,0 +1,204 @@
+//! Stage 7, temporal coherence of instant radiosity (Knecht 002 §3.5): the previous frame's
+//! indirect light, depth and normals, reprojected through the movement buffer, are blended
+//! with this frame's by the confidence of Eq. 3.1–3.4 (`temporal.confidence`) and the merge
+//! of Eq. 3.6 (`temporal.history`, rgb = light, a = depth). Shader:
+//! `shaders/temporal/confidence.wgsl`; CPU twin: `cpu::knecht::confidence`.
+//!
+//! History is double-buffered by copy: the pass writes `temporal.history`, which is then
+//! copied to the texture the next frame reads, and the G-buffer normals are copied to
+//! `temporal.prev_normal` (the thesis double-buffers the normals in the G-buffer).
+
+use glam::Vec4;
+
+use super::bgl;
+use super::gbuffer::{GBufferViews, NORMAL_FORMAT};
+use crate::buffers::{BufferKind, BufferRegistry};
+use crate::gpu::GpuContext;
+use crate::settings_group;
+
+settings_group! {
+    /// Temporal coherence (stage 7; Knecht 002 §3.5): the confidence merge.
+    pub struct TemporalSettings: "temporal" {
+        /// Blend with the previous frame by the confidence (off: Ritschel et al.'s ISMs, a new
+        /// image every frame).
+        enabled: bool = true,
+        unit "", symbol "", range 0..=1, cost "one pass over the image and two copies", history true;
+        /// Base confidence: the largest weight the previous frame gets (Eq. 3.4).
+        c_base: f32 = 0.9,
+        unit "", symbol "c_base", range 0.0..=1.0, cost "free", history false;
+        /// Weight of the position change (Eq. 3.1; screen movement as a fraction of the image,
+        /// depth change in units of z_far − z_near as the thesis' linear depth, Eq. 4.2).
+        w_pos: f32 = 25.0,
+        unit "", symbol "w_pos", range 0.0..=1000.0, cost "free", history false;
+        /// Weight of the normal change (Eq. 3.2).
+        w_normal: f32 = 2.0,
+        unit "", symbol "w_normal", range 0.0..=100.0, cost "free", history false;
+        /// Weight of the illumination change (Eq. 3.3; relative difference, cubed).
+        w_illumination: f32 = 1.0,
+        unit "", symbol "w_illumination", range 0.0..=100.0, cost "free", history false;
+    }
+}
+
+/// Uniform of the confidence pass; WGSL twin: `ConfidenceParams`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ConfidenceParams {
+    pub weights: Vec4,
+    pub state: [u32; 4],
+    /// x: z_far − z_near.
+    pub range: Vec4,
+}
+
+pub struct TemporalPass {
+    width: u32,
+    height: u32,
+    pub confidence: wgpu::Texture,
+    pub history: wgpu::Texture,
+    history_prev: wgpu::Texture,
+    prev_normal: wgpu::Texture,
+    /// Whether the previous-frame textures hold a frame.
+    valid: bool,
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::ComputePipeline,
+    params: wgpu::Buffer,
+}
+
+impl TemporalPass {
+    pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let t = |b| bgl::texture(b, cs, false);
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("temporal.confidence.inputs"),
+            entries: &[
+                bgl::uniform(0, cs),
+                t(1),
+                t(2),
+                t(3),
+                t(4),
+                t(5),
+                t(6),
+                bgl::storage_texture(7, wgpu::TextureFormat::R32Float),
+                bgl::storage_texture(8, wgpu::TextureFormat::Rgba32Float),
+            ],
+        });
+        let module = crate::shaders::create_module(device, "temporal/confidence.wgsl");
+        let pipeline = super::compute_pipeline(device, "temporal.confidence", &module, "cs_confidence", &[&layout]);
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("temporal.params"),
+            size: std::mem::size_of::<ConfidenceParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let (confidence, history, history_prev, prev_normal) = Self::targets(device, width, height);
+        Self { width, height, confidence, history, history_prev, prev_normal, valid: false, layout, pipeline, params }
+    }
+
+    fn targets(device: &wgpu::Device, w: u32, h: u32) -> (wgpu::Texture, wgpu::Texture, wgpu::Texture, wgpu::Texture) {
+        let st = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST;
+        let t = |label, f| super::create_target(device, label, w, h, f, st);
+        (
+            t("temporal.confidence", wgpu::TextureFormat::R32Float),
+            t("temporal.history", wgpu::TextureFormat::Rgba32Float),
+            t("temporal.history_prev", wgpu::TextureFormat::Rgba32Float),
+            t("temporal.prev_normal", NORMAL_FORMAT),
+        )
+    }
+
+    pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) -> bool {
+        if (width, height) == (self.width, self.height) {
+            return false;
+        }
+        (self.confidence, self.history, self.history_prev, self.prev_normal) =
+            Self::targets(&ctx.device, width, height);
+        (self.width, self.height) = (width, height);
+        self.valid = false;
+        true
+    }
+
+    /// Forgets the previous frame.
+    pub fn reset(&mut self) {
+        self.valid = false;
+    }
+
+    pub fn register(&self, reg: &mut BufferRegistry) {
+        reg.register(
+            "temporal.confidence",
+            BufferKind::Data,
+            "confidence in the previous frame's indirect light (Knecht Eq. 3.4), 0 … c_base; the thesis computes it on the fly",
+            &self.confidence,
+        );
+        reg.register(
+            "temporal.history",
+            BufferKind::Hdr,
+            "indirect light after the confidence merge (Eq. 3.6) in rgb, linear depth in a: next frame's I_prev",
+            &self.history,
+        );
+        reg.register(
+            "temporal.prev_normal",
+            BufferKind::Direction,
+            "the previous frame's G-buffer normals (n_prev of Eq. 3.2)",
+            &self.prev_normal,
+        );
+    }
+
+    /// Merges `current` (this frame's indirect light) with the reprojected history; the
+    /// result is `temporal.history`. With `enabled` off the result is `current` and the
+    /// confidence 0.
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        s: &TemporalSettings,
+        depth_range: f32,
+        current: &wgpu::TextureView,
+        g: &GBufferViews,
+        normal: &wgpu::Texture,
+    ) {
+        let p = ConfidenceParams {
+            weights: Vec4::new(s.c_base, s.w_pos, s.w_normal, s.w_illumination),
+            state: [(s.enabled && self.valid) as u32, 0, 0, 0],
+            range: Vec4::new(depth_range, 0.0, 0.0, 0.0),
+        };
+        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        let v = |t: &wgpu::Texture, l: &str| super::view(t, l);
+        let (prev_n, hist_prev, conf, hist) = (
+            v(&self.prev_normal, "temporal.prev_normal"),
+            v(&self.history_prev, "temporal.history_prev"),
+            v(&self.confidence, "temporal.confidence"),
+            v(&self.history, "temporal.history"),
+        );
+        let tv = wgpu::BindingResource::TextureView;
+        let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
+        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("temporal.confidence.inputs"),
+            layout: &self.layout,
+            entries: &[
+                entry(0, self.params.as_entire_binding()),
+                entry(1, tv(current)),
+                entry(2, tv(&g.position)),
+                entry(3, tv(&g.normal)),
+                entry(4, tv(&g.motion)),
+                entry(5, tv(&prev_n)),
+                entry(6, tv(&hist_prev)),
+                entry(7, tv(&conf)),
+                entry(8, tv(&hist)),
+            ],
+        });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("temporal.confidence"),
+                timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(self.width.div_ceil(super::TILE), self.height.div_ceil(super::TILE), 1);
+        }
+        let size = wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 };
+        encoder.copy_texture_to_texture(self.history.as_image_copy(), self.history_prev.as_image_copy(), size);
+        encoder.copy_texture_to_texture(normal.as_image_copy(), self.prev_normal.as_image_copy(), size);
+        self.valid = true;
+    }
+}

@@ -1,0 +1,548 @@
+//! Stage 3 of instant radiosity (Knecht 002 §3.3, §4.3–4.4): every view of every light
+//! renders a light G-buffer (`vpl.light_gbuffer.*`; view k > 0 as `vpl.light_gbuffer.k.*`),
+//! its texels get the importance of Eq. 4.3 (`vpl.importance`, one layer per view with its
+//! mip pyramid), and one pass per view warps a Halton set down the pyramid (hierarchical
+//! warping, Clarberg et al. 2005) and creates the VPLs (`vpl.list`).
+//! Shaders: `shaders/vpl/{importance,reduce,warp}.wgsl`; CPU twins in `cpu::knecht`.
+//!
+//! The VPL budget N is split over the views by the lights' power ([`view_powers`]): the
+//! thesis samples one spot light; point lights' cube maps were not importance-sampled there
+//! (§4.4.3) — here every face is, and gets its share of the light's budget by solid angle.
+
+use glam::Vec4;
+
+use super::gbuffer::GBufferPass;
+use super::shadow::{GpuLight, LightView};
+use super::vpl::GpuVpl;
+use super::{CameraUniform, bgl};
+use crate::buffers::{BufferKind, BufferRegistry};
+use crate::gpu::GpuContext;
+use crate::scene::upload::GpuScene;
+use crate::scene::{LightKind, SceneState, WorldLight};
+use crate::settings_group;
+
+settings_group! {
+    /// VPL generation of instant radiosity (stage 3; Knecht 002 §3.3, §4.3–4.4).
+    pub struct VplSettings: "vpl" {
+        /// Number of VPLs created per frame, over all lights.
+        count: u32 = 256,
+        unit "VPLs", symbol "N", range 1..=4096, cost "one ISM and one shading term per pixel per n² tiles per VPL", history false;
+        /// Draw a new Halton set every frame (§5.2: the thesis changes every VPL each frame
+        /// and lets temporal coherence smooth the result); off keeps the same set.
+        new_set_each_frame: bool = true,
+        unit "", symbol "", range 0..=1, cost "free", history false;
+        /// Side of each light view's G-buffer and importance map (a power of two).
+        light_gbuffer_size: u32 = 256,
+        unit "px", symbol "", range 16..=2048, cost "one G-buffer render and one pyramid per light view", history false;
+        /// Split the VPL budget over lights by their power; off splits it equally.
+        split_by_power: bool = true,
+        unit "", symbol "", range 0..=1, cost "free", history false;
+        /// Distance clamp of the geometry term, 1 / max(d², d_min²) (Eq. 4.7; the thesis
+        /// clamps at 1 scene unit). Larger values remove the bright spots near VPLs and bias.
+        min_distance_m: f32 = 0.1,
+        unit "m", symbol "d_min", range 0.0..=10.0, cost "free", history false;
+    }
+}
+
+/// Uniform of one view's importance and warp passes; WGSL twin: `ViewParams` in
+/// `shaders/vpl/importance.wgsl` and `shaders/vpl/warp.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ViewParams {
+    pub eye: Vec4,
+    pub forward: Vec4,
+    /// First VPL slot, VPL count of the view, light index, importance layer.
+    pub range: [u32; 4],
+    /// Halton index of this frame's first sample.
+    pub seq: [u32; 4],
+    /// Flux scale, finest side.
+    pub scale: Vec4,
+}
+
+/// Dynamic-offset stride of the per-view uniforms.
+const STRIDE: u64 = 256;
+
+/// One view of one light that receives `count` VPLs starting at slot `first`.
+#[derive(Clone, Copy, Debug)]
+pub struct ViewJob {
+    pub light_index: u32,
+    pub view: LightView,
+    pub first: u32,
+    pub count: u32,
+}
+
+/// The power each view stands for, for the VPL budget split: spot I·2π(1 − cos θ_outer),
+/// point 4πI over six faces, directional E·πr² over the scene bounds (luminance of the
+/// colour; the split only decides how many VPLs a view gets, each view's set is unbiased).
+pub fn view_powers(lights: &[WorldLight], bounds_radius: f32, by_power: bool) -> Vec<f32> {
+    let mut powers = Vec::new();
+    for wl in lights {
+        let l = &wl.light;
+        let lum = (0.2126 * l.color.x + 0.7152 * l.color.y + 0.0722 * l.color.z) * l.intensity;
+        let (views, total) = match l.kind {
+            LightKind::Point => (6, 4.0 * std::f32::consts::PI * lum),
+            LightKind::Spot { outer_cone, .. } => (1, std::f32::consts::TAU * (1.0 - outer_cone.cos()) * lum),
+            LightKind::Directional => (1, std::f32::consts::PI * bounds_radius * bounds_radius * lum),
+        };
+        for _ in 0..views {
+            powers.push(if by_power { total.max(0.0) / views as f32 } else { 1.0 / views as f32 });
+        }
+    }
+    powers
+}
+
+/// A light view's G-buffer with its own camera uniform (all views render in one submit).
+struct LightGBuffer {
+    gbuffer: GBufferPass,
+    camera: wgpu::Buffer,
+    group: wgpu::BindGroup,
+}
+
+pub struct VplImportancePass {
+    views: Vec<LightGBuffer>,
+    size: u32,
+    pub importance: wgpu::Texture,
+    importance_layout: wgpu::BindGroupLayout,
+    reduce_layout: wgpu::BindGroupLayout,
+    warp_layout: wgpu::BindGroupLayout,
+    importance_pipeline: wgpu::ComputePipeline,
+    reduce_pipeline: wgpu::ComputePipeline,
+    warp_pipeline: wgpu::ComputePipeline,
+    params: wgpu::Buffer,
+    params_capacity: usize,
+    lights: wgpu::Buffer,
+    light_capacity: usize,
+    /// `vpl.list`: the VPLs of this frame.
+    pub vpls: wgpu::Buffer,
+    /// Warped sample of each slot: uv, pdf, texel index (−1: empty map).
+    pub warped: wgpu::Buffer,
+    pub capacity: u32,
+}
+
+impl VplImportancePass {
+    pub fn new(ctx: &GpuContext, size: u32) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let array_storage = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: cs,
+            ty: wgpu::BindingType::StorageTexture {
+                access: wgpu::StorageTextureAccess::WriteOnly,
+                format: wgpu::TextureFormat::R32Float,
+                view_dimension: wgpu::TextureViewDimension::D2Array,
+            },
+            count: None,
+        };
+        let array_texture = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: cs,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2Array,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let lg = |b| bgl::texture(b, cs, false);
+        let importance_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("vpl.importance.inputs"),
+            entries: &[
+                bgl::uniform_dynamic(0, cs),
+                bgl::storage(1, cs, true),
+                lg(2),
+                lg(3),
+                lg(4),
+                lg(5),
+                array_storage(6),
+            ],
+        });
+        let reduce_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("vpl.importance.reduce"),
+            entries: &[array_texture(0), array_storage(1)],
+        });
+        let warp_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("vpl.warp.inputs"),
+            entries: &[
+                bgl::uniform_dynamic(0, cs),
+                bgl::storage(1, cs, true),
+                lg(2),
+                lg(3),
+                lg(4),
+                lg(5),
+                array_texture(6),
+                bgl::storage(7, cs, false),
+                bgl::storage(8, cs, false),
+            ],
+        });
+        let m_imp = crate::shaders::create_module(device, "vpl/importance.wgsl");
+        let m_red = crate::shaders::create_module(device, "vpl/reduce.wgsl");
+        let m_warp = crate::shaders::create_module(device, "vpl/warp.wgsl");
+        let importance_pipeline =
+            super::compute_pipeline(device, "vpl.importance", &m_imp, "cs_importance", &[&importance_layout]);
+        let reduce_pipeline =
+            super::compute_pipeline(device, "vpl.importance.reduce", &m_red, "cs_reduce", &[&reduce_layout]);
+        let warp_pipeline = super::compute_pipeline(device, "vpl.warp", &m_warp, "cs_warp", &[&warp_layout]);
+        let (params, params_capacity) = Self::params_buffer(device, 6);
+        let (lights, light_capacity) = Self::light_buffer(device, 4);
+        let (vpls, warped) = Self::vpl_buffers(device, 256);
+        let importance = Self::importance_texture(device, size, 1);
+        Self {
+            views: Vec::new(),
+            size,
+            importance,
+            importance_layout,
+            reduce_layout,
+            warp_layout,
+            importance_pipeline,
+            reduce_pipeline,
+            warp_pipeline,
+            params,
+            params_capacity,
+            lights,
+            light_capacity,
+            vpls,
+            warped,
+            capacity: 256,
+        }
+    }
+
+    fn params_buffer(device: &wgpu::Device, views: usize) -> (wgpu::Buffer, usize) {
+        let b = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("vpl.importance.params"),
+            size: STRIDE * views as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        (b, views)
+    }
+
+    fn light_buffer(device: &wgpu::Device, n: usize) -> (wgpu::Buffer, usize) {
+        let b = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("vpl.importance.lights"),
+            size: (std::mem::size_of::<GpuLight>() * n) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        (b, n)
+    }
+
+    fn vpl_buffers(device: &wgpu::Device, n: u32) -> (wgpu::Buffer, wgpu::Buffer) {
+        let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+        let vpls = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("vpl.list"),
+            size: std::mem::size_of::<GpuVpl>() as u64 * n as u64,
+            usage,
+            mapped_at_creation: false,
+        });
+        let warped = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("vpl.warped"),
+            size: 16 * n as u64,
+            usage,
+            mapped_at_creation: false,
+        });
+        (vpls, warped)
+    }
+
+    /// Levels of a `size`² pyramid down to 1×1.
+    pub fn levels(size: u32) -> u32 {
+        size.max(1).ilog2() + 1
+    }
+
+    fn importance_texture(device: &wgpu::Device, size: u32, layers: u32) -> wgpu::Texture {
+        device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("vpl.importance"),
+            size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: layers },
+            mip_level_count: Self::levels(size),
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::R32Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::COPY_SRC
+                | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        })
+    }
+
+    /// Sizes everything for `views` light views of `size`² and `capacity` VPLs. Returns
+    /// whether textures were recreated (the registry must be refreshed).
+    pub fn ensure(&mut self, ctx: &GpuContext, scene: &GpuScene, size: u32, views: usize, capacity: u32) -> bool {
+        let device = &ctx.device;
+        let mut fresh = false;
+        if capacity > self.capacity {
+            (self.vpls, self.warped) = Self::vpl_buffers(device, capacity);
+            self.capacity = capacity;
+        }
+        if views > self.params_capacity {
+            (self.params, self.params_capacity) = Self::params_buffer(device, views);
+        }
+        if size != self.size {
+            self.views.clear();
+            self.size = size;
+        }
+        while self.views.len() < views {
+            let k = self.views.len();
+            let name = if k == 0 { "vpl.light_gbuffer".to_string() } else { format!("vpl.light_gbuffer.{k}") };
+            let gbuffer = GBufferPass::named(ctx, scene, size, size, name.clone());
+            let camera = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(&format!("{name}.camera")),
+                size: std::mem::size_of::<CameraUniform>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(&format!("{name}.camera")),
+                layout: &gbuffer.camera_layout,
+                entries: &[wgpu::BindGroupEntry { binding: 0, resource: camera.as_entire_binding() }],
+            });
+            self.views.push(LightGBuffer { gbuffer, camera, group });
+            fresh = true;
+        }
+        if self.views.len() > views {
+            self.views.truncate(views);
+            fresh = true;
+        }
+        let layers = views.max(1) as u32;
+        if self.importance.width() != size || self.importance.depth_or_array_layers() != layers {
+            self.importance = Self::importance_texture(device, size, layers);
+            fresh = true;
+        }
+        fresh
+    }
+
+    pub fn register(&self, reg: &mut BufferRegistry) {
+        for v in &self.views {
+            v.gbuffer.register(reg);
+        }
+        reg.register(
+            "vpl.importance",
+            BufferKind::Data,
+            "importance of each light G-buffer texel (Knecht Eq. 4.3), one layer per light view; mip k is the pyramid level hierarchical warping descends",
+            &self.importance,
+        );
+    }
+
+    /// The light G-buffers, importance pyramids and VPLs of `jobs` (one per light view).
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &mut crate::timing::GpuTimer,
+        scene: &GpuScene,
+        state: &SceneState,
+        lights: &[GpuLight],
+        jobs: &[ViewJob],
+        halton_first: u32,
+        flux_scale: f32,
+    ) {
+        if jobs.is_empty() || jobs.len() > self.views.len() {
+            return;
+        }
+        self.write_params(ctx, lights, jobs, halton_first, flux_scale);
+        let views = &self.views;
+        timer.scope(ctx, encoder, "vpl.light_gbuffer", |e, slot| {
+            for (k, v) in views.iter().take(jobs.len()).enumerate() {
+                v.gbuffer.run_with(e, slot, k == 0, k + 1 == jobs.len(), &v.group, scene, state);
+            }
+        });
+        timer.scope(ctx, encoder, "vpl.importance", |e, slot| self.pyramid(ctx, e, slot, jobs.len(), true));
+        timer.scope(ctx, encoder, "vpl.sample", |e, slot| self.warp(ctx, e, slot, jobs));
+    }
+
+    /// Writes the per-view uniforms and light cameras of `jobs`.
+    pub fn write_params(
+        &mut self,
+        ctx: &GpuContext,
+        lights: &[GpuLight],
+        jobs: &[ViewJob],
+        halton_first: u32,
+        flux_scale: f32,
+    ) {
+        let fs = self.size as f32;
+        if lights.len() > self.light_capacity {
+            (self.lights, self.light_capacity) = Self::light_buffer(&ctx.device, lights.len().next_power_of_two());
+        }
+        if !lights.is_empty() {
+            ctx.queue.write_buffer(&self.lights, 0, bytemuck::cast_slice(lights));
+        }
+        let mut params = vec![0u8; STRIDE as usize * jobs.len()];
+        for (k, job) in jobs.iter().enumerate() {
+            let v = &job.view;
+            let p = ViewParams {
+                eye: v.eye.extend(if v.orthographic { 1.0 } else { 0.0 }),
+                forward: v.forward.extend(v.pixel_extent),
+                range: [job.first, job.count, job.light_index, k as u32],
+                seq: [halton_first.wrapping_add(job.first), 0, 0, 0],
+                scale: Vec4::new(flux_scale, fs, 0.0, 0.0),
+            };
+            params[k * STRIDE as usize..k * STRIDE as usize + std::mem::size_of::<ViewParams>()]
+                .copy_from_slice(bytemuck::bytes_of(&p));
+            if let Some(lg) = self.views.get(k) {
+                let cam = CameraUniform {
+                    view_proj: v.proj * v.view,
+                    prev_view_proj: v.proj * v.view,
+                    inv_view_proj: (v.proj * v.view).inverse(),
+                    view: v.view,
+                    position: v.eye.extend(1.0),
+                    viewport: Vec4::new(fs, fs, 1.0 / fs, 1.0 / fs),
+                    params: Vec4::ZERO,
+                };
+                ctx.queue.write_buffer(&lg.camera, 0, bytemuck::bytes_of(&cam));
+            }
+        }
+        ctx.queue.write_buffer(&self.params, 0, &params);
+    }
+
+    fn mip_view(&self, level: u32, label: &str) -> wgpu::TextureView {
+        self.importance.create_view(&wgpu::TextureViewDescriptor {
+            label: Some(label),
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            base_mip_level: level,
+            mip_level_count: Some(1),
+            ..Default::default()
+        })
+    }
+
+    /// Eq. 4.3 into level 0 of the first `views` layers (when `importance` is set; tests
+    /// upload level 0 instead), then every coarser level of the pyramid.
+    pub fn pyramid(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        views: usize,
+        importance: bool,
+    ) {
+        let size = self.size;
+        let tv = wgpu::BindingResource::TextureView;
+        let levels = Self::levels(size);
+        let level0 = self.mip_view(0, "vpl.importance.level0");
+        let imp_groups: Vec<wgpu::BindGroup> = self
+            .views
+            .iter()
+            .take(if importance { views } else { 0 })
+            .map(|v| {
+                let t = &v.gbuffer.targets.views;
+                ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("vpl.importance.inputs"),
+                    layout: &self.importance_layout,
+                    entries: &[
+                        wgpu::BindGroupEntry { binding: 0, resource: dynamic(&self.params) },
+                        wgpu::BindGroupEntry { binding: 1, resource: self.lights.as_entire_binding() },
+                        wgpu::BindGroupEntry { binding: 2, resource: tv(&t.position) },
+                        wgpu::BindGroupEntry { binding: 3, resource: tv(&t.normal) },
+                        wgpu::BindGroupEntry { binding: 4, resource: tv(&t.albedo) },
+                        wgpu::BindGroupEntry { binding: 5, resource: tv(&t.material) },
+                        wgpu::BindGroupEntry { binding: 6, resource: tv(&level0) },
+                    ],
+                })
+            })
+            .collect();
+        let reduce_groups: Vec<wgpu::BindGroup> = (1..levels)
+            .map(|l| {
+                let finer = self.mip_view(l - 1, "vpl.importance.finer");
+                let coarser = self.mip_view(l, "vpl.importance.coarser");
+                ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("vpl.importance.reduce"),
+                    layout: &self.reduce_layout,
+                    entries: &[
+                        wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&finer) },
+                        wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&coarser) },
+                    ],
+                })
+            })
+            .collect();
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("vpl.importance"),
+            timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+        });
+        pass.set_pipeline(&self.importance_pipeline);
+        for (k, g) in imp_groups.iter().enumerate() {
+            pass.set_bind_group(0, g, &[(k as u64 * STRIDE) as u32]);
+            pass.dispatch_workgroups(size.div_ceil(8), size.div_ceil(8), 1);
+        }
+        pass.set_pipeline(&self.reduce_pipeline);
+        for (l, g) in reduce_groups.iter().enumerate() {
+            let s = (size >> (l + 1)).max(1);
+            pass.set_bind_group(0, g, &[]);
+            pass.dispatch_workgroups(s.div_ceil(8), s.div_ceil(8), views.max(1) as u32);
+        }
+    }
+
+    /// Hierarchical warping and VPL creation for every job (the uniforms written by
+    /// [`Self::write_params`]).
+    pub fn warp(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        jobs: &[ViewJob],
+    ) {
+        let tv = wgpu::BindingResource::TextureView;
+        let full = self.importance.create_view(&wgpu::TextureViewDescriptor {
+            label: Some("vpl.importance.pyramid"),
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+        let groups: Vec<wgpu::BindGroup> = self
+            .views
+            .iter()
+            .take(jobs.len())
+            .map(|v| {
+                let t = &v.gbuffer.targets.views;
+                ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("vpl.warp.inputs"),
+                    layout: &self.warp_layout,
+                    entries: &[
+                        wgpu::BindGroupEntry { binding: 0, resource: dynamic(&self.params) },
+                        wgpu::BindGroupEntry { binding: 1, resource: self.lights.as_entire_binding() },
+                        wgpu::BindGroupEntry { binding: 2, resource: tv(&t.position) },
+                        wgpu::BindGroupEntry { binding: 3, resource: tv(&t.normal) },
+                        wgpu::BindGroupEntry { binding: 4, resource: tv(&t.albedo) },
+                        wgpu::BindGroupEntry { binding: 5, resource: tv(&t.material) },
+                        wgpu::BindGroupEntry { binding: 6, resource: tv(&full) },
+                        wgpu::BindGroupEntry { binding: 7, resource: self.vpls.as_entire_binding() },
+                        wgpu::BindGroupEntry { binding: 8, resource: self.warped.as_entire_binding() },
+                    ],
+                })
+            })
+            .collect();
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("vpl.warp"),
+            timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+        });
+        pass.set_pipeline(&self.warp_pipeline);
+        for (k, (g, job)) in groups.iter().zip(jobs).enumerate() {
+            if job.count == 0 {
+                continue;
+            }
+            pass.set_bind_group(0, g, &[(k as u64 * STRIDE) as u32]);
+            pass.dispatch_workgroups(job.count.div_ceil(64), 1, 1);
+        }
+    }
+
+    /// Writes an importance map into layer `layer` level 0 (tests feed synthetic maps).
+    pub fn upload_importance(&self, ctx: &GpuContext, layer: u32, values: &[f32]) {
+        ctx.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &self.importance,
+                mip_level: 0,
+                origin: wgpu::Origin3d { x: 0, y: 0, z: layer },
+                aspect: wgpu::TextureAspect::All,
+            },
+            bytemuck::cast_slice(values),
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * self.size), rows_per_image: None },
+            wgpu::Extent3d { width: self.size, height: self.size, depth_or_array_layers: 1 },
+        );
+    }
+}
+
+/// The binding of one view's uniform (dynamic offset).
+fn dynamic(buffer: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
+    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+        buffer,
+        offset: 0,
+        size: std::num::NonZeroU64::new(std::mem::size_of::<ViewParams>() as u64),
+    })
+}

@@ -1,0 +1,37 @@
+// Imperfect shadow maps (Knecht 002 §2.6.5, after Ritschel et al. 2008): one paraboloid map
+// of each VPL's upper hemisphere (Brabec et al. 2002) in an atlas of `size`² tiles, tile =
+// VPL index. Texels hold the distance from the VPL's eye (scene units); ISM_EMPTY marks a hole.
+// CPU twins: cpu::knecht::{paraboloid_project, paraboloid_unproject, ISM_EMPTY}.
+#import common/vpl.wgsl
+
+const ISM_EMPTY: f32 = 1.0e30;
+
+// Paraboloid coordinates in [0, 1]² (v downward) of a VPL-local direction q (z along the
+// normal, |q| = 1, q.z ≥ 0): (q.x, q.y) / (1 + q.z) mapped from the unit disk.
+fn paraboloid_project(q: vec3<f32>) -> vec2<f32> {
+    let p = q.xy / (1.0 + q.z);
+    return vec2<f32>(p.x * 0.5 + 0.5, 0.5 - p.y * 0.5);
+}
+
+// The eye of a VPL's ISM: its position lifted along the normal by `offset` (scene units), so
+// that the surface it sits on does not shadow it.
+fn ism_eye(vpl: Vpl, offset: f32) -> vec3<f32> {
+    return vpl.position.xyz + vpl.normal.xyz * offset;
+}
+
+// Visibility of x from VPL i in the ISM atlas: the receiver's distance from the VPL's eye,
+// less `bias` × that distance, against the stored distance at its paraboloid texel.
+fn ism_visibility(atlas: texture_2d<f32>, i: u32, vpl: Vpl, x: vec3<f32>, offset: f32, cols: u32, size: u32, bias: f32) -> f32 {
+    let eye = ism_eye(vpl, offset);
+    let w = x - eye;
+    let d = length(w);
+    let tbn = vpl_basis(vpl.normal.xyz);
+    let q = vec3<f32>(dot(w, tbn[0]), dot(w, tbn[1]), dot(w, tbn[2])) / max(d, 1e-9);
+    if (q.z < 0.0) {
+        return 0.0;
+    }
+    let uv = paraboloid_project(q);
+    let t = min(vec2<u32>(uv * f32(size)), vec2<u32>(size - 1u));
+    let stored = textureLoad(atlas, vpl_tile_origin(i, cols, size) + t, 0).r;
+    return select(0.0, 1.0, d * (1.0 - bias) <= stored);
+}

@@ -1,0 +1,72 @@
+// Stages 5–6 (Knecht 002 §3.4.1–3.4.2, §4.5): all VPLs shaded in one dispatch over the split
+// G-buffer. VPL k belongs to tile k mod n² (tile t = i + j·n), so each split pixel gathers the
+// N_t = ⌈(N − t) / n²⌉ VPLs of its tile, scaled by N / N_t so that each tile is an unbiased
+// estimate of all N (the n×n filter after the merge averages the tiles). Each VPL: Eq. 4.7–4.9
+// (common/vpl.wgsl) times its visibility — the ISM (common/ism.wgsl), the exact cube-face
+// maps, or none.
+#import common/camera.wgsl
+#import common/ism.wgsl
+#import common/fullscreen.wgsl
+
+struct GatherParams {
+    // x: n, y: tile width, z: tile height, w: VPL count N
+    split: vec4<u32>,
+    // x: visibility (0 none, 1 ISM, 2 exact), y: atlas columns, z: map size
+    vis: vec4<u32>,
+    // x: d_min², y: ISM eye offset / exact near, z: ISM bias / exact far, w: exact eye offset
+    shade: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> camera: Camera;
+@group(0) @binding(1) var<uniform> params: GatherParams;
+@group(0) @binding(2) var<storage, read> vpls: array<Vpl>;
+@group(0) @binding(3) var ism_atlas: texture_2d<f32>;
+@group(0) @binding(4) var exact_atlas: texture_depth_2d;
+@group(0) @binding(5) var s_position: texture_2d<f32>;
+@group(0) @binding(6) var s_normal: texture_2d<f32>;
+@group(0) @binding(7) var s_albedo: texture_2d<f32>;
+@group(0) @binding(8) var s_material: texture_2d<f32>;
+@group(0) @binding(9) var out_accum: texture_storage_2d<rgba32float, write>;
+
+@compute @workgroup_size(TILE, TILE, 1)
+fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let size = textureDimensions(out_accum);
+    if (gid.x >= size.x || gid.y >= size.y) {
+        return;
+    }
+    let px = vec2<i32>(gid.xy);
+    var sum = vec3<f32>(0.0);
+    let nrm = textureLoad(s_normal, px, 0);
+    let n = params.split.x;
+    let count = params.split.w;
+    let t2 = gid.xy / params.split.yz;
+    let tile = t2.x + t2.y * n;
+    let stride = n * n;
+    if (nrm.w > 0.5 && tile < count) {
+        let x = textureLoad(s_position, px, 0).xyz;
+        let nx = normalize(nrm.xyz);
+        let alb = textureLoad(s_albedo, px, 0);
+        let mat = textureLoad(s_material, px, 0);
+        let m = vec3<f32>(alb.a, mat.x, mat.y);
+        for (var k = tile; k < count; k = k + stride) {
+            let vpl = vpls[k];
+            if (vpl.position.w < 0.5) {
+                continue;
+            }
+            let l = vpl_radiance(vpl, x, nx, camera.position.xyz, alb.rgb, m, params.shade.x);
+            if (max(l.r, max(l.g, l.b)) <= 0.0) {
+                continue;
+            }
+            var vis = 1.0;
+            if (params.vis.x == 1u) {
+                vis = ism_visibility(ism_atlas, k, vpl, x, params.shade.y, params.vis.y, params.vis.z, params.shade.z);
+            } else if (params.vis.x == 2u) {
+                vis = vpl_exact_visibility(exact_atlas, k, vpl, x, nx, params.shade.yzw, params.vis.y, params.vis.z, 1.0, 1.0);
+            }
+            sum = sum + l * vis;
+        }
+        let per_tile = (count - tile + stride - 1u) / stride;
+        sum = sum * (f32(count) / f32(per_tile));
+    }
+    textureStore(out_accum, px, vec4<f32>(sum, 1.0));
+}

@@ -1,0 +1,90 @@
+// Stage 4: pull-push hole filling of the ISM atlas (Knecht 002 §2.6.5 after Marroquim et al.
+// 2008): pull averages the valid children within t_pull · 2^l of the nearest one into level
+// l+1; push fills level l from the bilinear interpolation of the valid coarse texels of the
+// same map where the fine texel is a hole or lies more than t_push · 2^l behind it.
+// CPU twin: cpu::knecht::pull_push (the readings are documented there).
+const ISM_EMPTY: f32 = 1.0e30;
+
+struct LevelParams {
+    // x: threshold of this level (t · 2^l, scene units)
+    threshold: vec4<f32>,
+    // x: side of one map at the coarse level (texels)
+    tile: vec4<u32>,
+}
+
+@group(0) @binding(0) var<uniform> lp: LevelParams;
+@group(0) @binding(1) var src: texture_2d<f32>;
+@group(0) @binding(2) var dst: texture_storage_2d<r32float, write>;
+
+@compute @workgroup_size(8, 8, 1)
+fn cs_pull(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let size = textureDimensions(dst);
+    if (gid.x >= size.x || gid.y >= size.y) {
+        return;
+    }
+    let c = vec2<i32>(gid.xy) * 2;
+    let v = array<f32, 4>(
+        textureLoad(src, c, 0).r,
+        textureLoad(src, c + vec2<i32>(1, 0), 0).r,
+        textureLoad(src, c + vec2<i32>(0, 1), 0).r,
+        textureLoad(src, c + vec2<i32>(1, 1), 0).r,
+    );
+    let nearest = min(min(v[0], v[1]), min(v[2], v[3]));
+    var out = ISM_EMPTY;
+    if (nearest < ISM_EMPTY) {
+        var sum = 0.0;
+        var n = 0.0;
+        for (var k = 0; k < 4; k = k + 1) {
+            if (v[k] < ISM_EMPTY && v[k] - nearest <= lp.threshold.x) {
+                sum = sum + v[k];
+                n = n + 1.0;
+            }
+        }
+        out = sum / n;
+    }
+    textureStore(dst, gid.xy, vec4<f32>(out, 0.0, 0.0, 0.0));
+}
+
+@group(0) @binding(3) var fine: texture_storage_2d<r32float, read_write>;
+
+fn coarse_at(x: u32, y: u32) -> f32 {
+    let ct = lp.tile.x;
+    let px = (f32(x) + 0.5) * 0.5 - 0.5;
+    let py = (f32(y) + 0.5) * 0.5 - 0.5;
+    let x0 = floor(px);
+    let y0 = floor(py);
+    let fx = px - x0;
+    let fy = py - y0;
+    let tx = i32((x / 2u) / ct * ct);
+    let ty = i32((y / 2u) / ct * ct);
+    let offsets = array<vec2<i32>, 4>(vec2<i32>(0, 0), vec2<i32>(1, 0), vec2<i32>(0, 1), vec2<i32>(1, 1));
+    let weights = array<f32, 4>((1.0 - fx) * (1.0 - fy), fx * (1.0 - fy), (1.0 - fx) * fy, fx * fy);
+    var sum = 0.0;
+    var wsum = 0.0;
+    for (var k = 0; k < 4; k = k + 1) {
+        let cx = clamp(i32(x0) + offsets[k].x, tx, tx + i32(ct) - 1);
+        let cy = clamp(i32(y0) + offsets[k].y, ty, ty + i32(ct) - 1);
+        let v = textureLoad(src, vec2<i32>(cx, cy), 0).r;
+        if (v < ISM_EMPTY && weights[k] > 0.0) {
+            sum = sum + weights[k] * v;
+            wsum = wsum + weights[k];
+        }
+    }
+    if (wsum > 0.0) {
+        return sum / wsum;
+    }
+    return ISM_EMPTY;
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn cs_push(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let size = textureDimensions(fine);
+    if (gid.x >= size.x || gid.y >= size.y) {
+        return;
+    }
+    let c = coarse_at(gid.x, gid.y);
+    let f = textureLoad(fine, gid.xy).r;
+    if (c < ISM_EMPTY && (f >= ISM_EMPTY || f - c > lp.threshold.x)) {
+        textureStore(fine, gid.xy, vec4<f32>(c, 0.0, 0.0, 0.0));
+    }
+}

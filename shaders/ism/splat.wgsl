@@ -1,0 +1,85 @@
+// Stage 4, imperfect shadow maps (Knecht 002 §2.6.5, Ritschel et al. 2008): every point of
+// the point cloud is splatted into the paraboloid map of one VPL (point j → VPL j mod N, so
+// each ISM sees a different N-th of the cloud) as a box of texels whose size falls with the
+// distance: a disc of radius r_s (the point's share of the surface area, √(A / (π · points
+// per ISM))) at distance d covers r_s · size / (2 (1 + cos θ) d) texels of a paraboloid map
+// (its texel spans 4 cos²(θ/2) / size radians at angle θ from the normal). WebGPU draws only
+// 1-pixel points, so the splat is a compute kernel; the nearest distance wins by atomicMax
+// on the inverted f32 bits (positive floats order like their bits; 0 = empty after a clear).
+#import common/ism.wgsl
+
+struct Instance {
+    model: mat4x4<f32>,
+    prev_model: mat4x4<f32>,
+    normal_matrix: mat4x4<f32>,
+}
+
+// Rust twin: passes::ism::GpuPoint.
+struct IsmPoint {
+    // object-space position
+    position: vec3<f32>,
+    // index of the draw (instance) it belongs to
+    draw: u32,
+    // object-space normal
+    normal: vec3<f32>,
+    // material index
+    material: u32,
+}
+
+struct SplatParams {
+    // x: points, y: ISMs (VPLs), z: atlas columns, w: map size
+    counts: vec4<u32>,
+    // x: eye offset along the VPL normal, y: point radius r_s, z: largest splat half-size
+    // (texels), w: splat scale
+    geom: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> sp: SplatParams;
+@group(0) @binding(1) var<storage, read> points: array<IsmPoint>;
+@group(0) @binding(2) var<storage, read> instances: array<Instance>;
+@group(0) @binding(3) var<storage, read> vpls: array<Vpl>;
+@group(0) @binding(4) var<storage, read_write> depth: array<atomic<u32>>;
+
+@compute @workgroup_size(64, 1, 1)
+fn cs_splat(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let j = gid.x + gid.y * 65535u * 64u;
+    if (j >= sp.counts.x || sp.counts.y == 0u) {
+        return;
+    }
+    let i = j % sp.counts.y;
+    let vpl = vpls[i];
+    if (vpl.position.w < 0.5) {
+        return;
+    }
+    let pt = points[j];
+    let world = (instances[pt.draw].model * vec4<f32>(pt.position, 1.0)).xyz;
+    let eye = ism_eye(vpl, sp.geom.x);
+    let w = world - eye;
+    let d = length(w);
+    if (d <= 0.0) {
+        return;
+    }
+    let tbn = vpl_basis(vpl.normal.xyz);
+    let q = vec3<f32>(dot(w, tbn[0]), dot(w, tbn[1]), dot(w, tbn[2])) / d;
+    if (q.z < 0.0) {
+        return;
+    }
+    let size = sp.counts.w;
+    let c = paraboloid_project(q) * f32(size);
+    let r = min(sp.geom.w * sp.geom.y * f32(size) / (2.0 * (1.0 + q.z) * d), sp.geom.z);
+    let k = i32(floor(r));
+    let origin = vpl_tile_origin(i, sp.counts.z, size);
+    let width = sp.counts.z * size;
+    let key = ~bitcast<u32>(d);
+    let centre = vec2<i32>(floor(c));
+    for (var dy = -k; dy <= k; dy = dy + 1) {
+        for (var dx = -k; dx <= k; dx = dx + 1) {
+            let t = centre + vec2<i32>(dx, dy);
+            if (t.x < 0 || t.y < 0 || t.x >= i32(size) || t.y >= i32(size)) {
+                continue;
+            }
+            let a = origin + vec2<u32>(t);
+            atomicMax(&depth[a.y * width + a.x], key);
+        }
+    }
+}

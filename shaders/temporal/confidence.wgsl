@@ -1,0 +1,71 @@
+// Stage 7, temporal coherence (Knecht 002 §3.5): the previous frame's indirect light, depth
+// and normal are fetched through the movement buffer (§3.5.1: the previous position of pixel
+// p is p + m_buf(p)); the confidence of Eq. 3.1–3.4 weighs them against this frame's light
+// by the merge of Eq. 3.6, I = I_prev · confidence + (1 − confidence) · I_new. The thesis
+// computes the confidence on the fly; we also store it (`temporal.confidence`). Pixels whose
+// previous position is off screen or was background get confidence 0. The history keeps the
+// merged light in rgb and the linear depth in a, as the thesis stores depth in the fourth
+// channel of the old illumination. CPU twin: cpu::knecht::confidence (readings there).
+#import common/fullscreen.wgsl
+
+struct ConfidenceParams {
+    // x: c_base, y: w_pos, z: w_normal, w: w_illumination
+    weights: vec4<f32>,
+    // x: 1 when the history is valid and temporal coherence is on
+    state: vec4<u32>,
+    // x: z_far − z_near of the camera (the thesis' linear depth unit, Eq. 4.2)
+    range: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> params: ConfidenceParams;
+@group(0) @binding(1) var current: texture_2d<f32>;
+@group(0) @binding(2) var g_position: texture_2d<f32>;
+@group(0) @binding(3) var g_normal: texture_2d<f32>;
+@group(0) @binding(4) var g_motion: texture_2d<f32>;
+@group(0) @binding(5) var prev_normal: texture_2d<f32>;
+@group(0) @binding(6) var history_prev: texture_2d<f32>;
+@group(0) @binding(7) var confidence_out: texture_storage_2d<r32float, write>;
+@group(0) @binding(8) var history_out: texture_storage_2d<rgba32float, write>;
+
+fn confidence(motion: vec2<f32>, size: vec2<f32>, d: f32, d_prev: f32, n: vec3<f32>, n_prev: vec3<f32>, i_new: vec3<f32>, i_prev: vec3<f32>) -> f32 {
+    let w = params.weights;
+    let rel_depth = (d - d_prev) / max(params.range.x, 1e-6);
+    let d_pos = length(vec3<f32>(motion.x / size.x, motion.y / size.y, rel_depth)) * w.y;
+    let d_normal = (1.0 - dot(n, n_prev)) * w.z;
+    let scale = max(max(length(i_new), length(i_prev)), 1e-6);
+    let diff = length(i_new - i_prev) / scale;
+    let d_illum = clamp(diff * diff * diff, 0.0, 1.0) * w.w;
+    return w.x * clamp(1.0 - max(d_pos, max(d_normal, d_illum)), 0.0, 1.0);
+}
+
+@compute @workgroup_size(TILE, TILE, 1)
+fn cs_confidence(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let size = textureDimensions(current);
+    if (gid.x >= size.x || gid.y >= size.y) {
+        return;
+    }
+    let p = vec2<i32>(gid.xy);
+    let i_new = textureLoad(current, p, 0).rgb;
+    let nrm = textureLoad(g_normal, p, 0);
+    let d = textureLoad(g_position, p, 0).w;
+    var c = 0.0;
+    var merged = i_new;
+    if (params.state.x == 1u && nrm.w > 0.5) {
+        let motion = textureLoad(g_motion, p, 0).xy;
+        let q = vec2<i32>(floor(vec2<f32>(p) + 0.5 + motion));
+        if (q.x >= 0 && q.y >= 0 && q.x < i32(size.x) && q.y < i32(size.y)) {
+            let pn = textureLoad(prev_normal, q, 0);
+            let h = textureLoad(history_prev, q, 0);
+            if (pn.w > 0.5 && h.a > 0.0) {
+                c = confidence(motion, vec2<f32>(size), d, h.a, nrm.xyz, pn.xyz, i_new, h.rgb);
+                merged = h.rgb * c + (1.0 - c) * i_new;
+            }
+        }
+    }
+    textureStore(confidence_out, p, vec4<f32>(c, 0.0, 0.0, 0.0));
+    var depth = 0.0;
+    if (nrm.w > 0.5) {
+        depth = d;
+    }
+    textureStore(history_out, p, vec4<f32>(merged, depth));
+}
