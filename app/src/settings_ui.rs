@@ -9,6 +9,7 @@
 use egui::Ui;
 use gi_render::LabSettings;
 use gi_render::lab_settings::{GroupVisitor, IndirectTechnique};
+use gi_render::passes::ism::VplVisibility;
 use gi_render::settings::{FieldKind, FieldMeta, SettingsGroup, Value};
 
 /// Colour of the "differs from the preset" marker.
@@ -46,6 +47,21 @@ fn value_widget(ui: &mut Ui, path: &str, m: &FieldMeta, v: &mut Value) -> egui::
     match v {
         Value::F32(x) => {
             ui.add(egui::Slider::new(x, m.min as f32..=m.max as f32).logarithmic(logarithmic(m)).suffix(unit_suffix(m)))
+        }
+        Value::U32(x) if gi_render::lab_settings::POWER_OF_TWO_FIELDS.contains(&path) => {
+            // Powers of two only: the slider moves the exponent, one step is one doubling.
+            let (lo, hi) = ((m.min as u32).max(1).next_power_of_two().ilog2(), (m.max as u32).max(1).ilog2());
+            let mut e = (*x).max(1).next_power_of_two().ilog2().clamp(lo, hi);
+            let r = ui.add(
+                egui::Slider::new(&mut e, lo..=hi)
+                    .step_by(1.0)
+                    .drag_value_speed(1.0)
+                    .custom_formatter(|v, _| format!("{}", 1u64 << (v as u32).min(31)))
+                    .custom_parser(|t| t.trim().parse::<f64>().ok().filter(|v| *v >= 1.0).map(|v| v.log2().round()))
+                    .suffix(unit_suffix(m)),
+            );
+            *x = 1 << e;
+            r
         }
         Value::U32(x) if m.min == 0.0 && m.max > 1e6 => {
             ui.add(egui::DragValue::new(x).range(m.min as u32..=m.max as u32).suffix(unit_suffix(m)))
@@ -180,6 +196,34 @@ pub const TECHNIQUES: &[Technique] = &[
         apply: |s| s.indirect.technique = IndirectTechnique::ExactVpl,
         is: |s| s.indirect.technique == IndirectTechnique::ExactVpl,
     },
+    Technique {
+        name: "Instant radiosity + ISM + temporal coherence (Knecht)",
+        source: "Knecht 002 ch. 3–4: importance-warped VPLs, imperfect shadow maps, interleaved sampling, confidence merge",
+        apply: |s| {
+            s.indirect.technique = IndirectTechnique::InstantRadiosity;
+            s.ism.visibility = VplVisibility::Imperfect;
+            s.temporal.enabled = true;
+        },
+        is: |s| {
+            s.indirect.technique == IndirectTechnique::InstantRadiosity
+                && s.ism.visibility == VplVisibility::Imperfect
+                && s.temporal.enabled
+        },
+    },
+    Technique {
+        name: "Imperfect shadow maps without temporal coherence (Ritschel)",
+        source: "Knecht 002 §5.2's baseline: Ritschel et al. 2008, a new image every frame",
+        apply: |s| {
+            s.indirect.technique = IndirectTechnique::InstantRadiosity;
+            s.ism.visibility = VplVisibility::Imperfect;
+            s.temporal.enabled = false;
+        },
+        is: |s| {
+            s.indirect.technique == IndirectTechnique::InstantRadiosity
+                && s.ism.visibility == VplVisibility::Imperfect
+                && !s.temporal.enabled
+        },
+    },
 ];
 
 /// The technique picker: sets the stage choices of one technique at once.
@@ -215,7 +259,7 @@ pub fn lab_settings_ui(ui: &mut Ui, s: &mut LabSettings, preset: &LabSettings) -
             if s != preset {
                 title = title.color(CHANGED);
             }
-            let open = !matches!(group, "animation" | "reference");
+            let open = !matches!(group, "animation" | "reference" | "vpl" | "ism" | "interleave" | "temporal");
             let changed = &mut self.changed;
             egui::CollapsingHeader::new(title).id_salt(group).default_open(open).show(self.ui, |ui| {
                 *changed |= group_ui(ui, s, preset);

@@ -51,6 +51,10 @@ settings_group! {
     }
 }
 
+/// Fields that must be powers of two (mip pyramids and pull-push halve them down to one
+/// texel); the UI steps them by doublings.
+pub const POWER_OF_TWO_FIELDS: &[&str] = &["vpl.light_gbuffer_size", "ism.map_size"];
+
 /// All settings of the lab. A preset file is this struct in RON.
 #[derive(Clone, PartialEq, Debug, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -206,8 +210,8 @@ impl LabSettings {
     fn combination_errors(&self) -> Vec<FieldError> {
         let mut errors = Vec::new();
         let mut err = |field: &str, message: String| errors.push(FieldError { field: field.into(), message });
-        for (field, v) in [("vpl.light_gbuffer_size", self.vpl.light_gbuffer_size), ("ism.map_size", self.ism.map_size)]
-        {
+        for field in POWER_OF_TWO_FIELDS {
+            let Some(Value::U32(v)) = self.get(field) else { continue };
             if !v.is_power_of_two() {
                 let (lo, hi) = (1u32 << v.ilog2(), 1u32 << (v.ilog2() + 1));
                 err(

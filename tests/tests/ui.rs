@@ -259,6 +259,9 @@ fn probe_shows_the_values_of_a_cpu_readback() {
 fn preset_save_and_open_round_trip_through_the_ui() {
     let (mut h, dir) = harness("presets");
     h.run_steps(2);
+    // The tone mapping section is below the technique sections: scroll it into view.
+    h.get_by_label("tonemap.auto_exposure").scroll_to_me();
+    h.run_steps(2);
     h.get_by_label("tonemap.auto_exposure").click();
     h.get_by_label("direct.pcf_radius").increment_accesskit();
     h.run_steps(2);
@@ -279,6 +282,9 @@ fn preset_save_and_open_round_trip_through_the_ui() {
     assert!(!h.state().state.unsaved());
     // Change something, then open the saved preset from the browser.
     h.get_by_label("Settings").click();
+    h.run_steps(2);
+    // The tone mapping section is below the technique sections: scroll it into view.
+    h.get_by_label("tonemap.auto_exposure").scroll_to_me();
     h.run_steps(2);
     h.get_by_label("tonemap.auto_exposure").click();
     h.run_steps(2);
@@ -327,6 +333,9 @@ fn a_bad_preset_lists_its_problems_and_changes_nothing_until_accepted() {
 fn the_session_restores_layout_settings_viewers_and_probes() {
     let dir = temp_dir("session");
     let mut h = harness_with(args_in(&dir, true), egui::vec2(1400.0, 1000.0));
+    h.run_steps(2);
+    // The tone mapping section is below the technique sections: scroll it into view.
+    h.get_by_label("tonemap.auto_exposure").scroll_to_me();
     h.run_steps(2);
     h.get_by_label("tonemap.auto_exposure").click();
     h.run_steps(2);

@@ -22,7 +22,7 @@ settings_group! {
     pub struct InterleaveSettings: "interleave" {
         /// Tiles per side: each VPL shades one pixel in n×n (1: every pixel gets every VPL).
         n: u32 = 4,
-        unit "tiles", symbol "n", range 1..=8, cost "shading ∝ 1/n²; the filter reads n² pixels", history false;
+        unit "tiles", symbol "n", range 1..=8, cost "shading time falls as 1/n²; the filter reads n² pixels", history false;
         /// Apply the geometry-aware n×n box filter after the merge.
         filter: bool = true,
         unit "", symbol "", range 0..=1, cost "n² texel reads per pixel", history false;

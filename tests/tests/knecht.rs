@@ -1,0 +1,296 @@
+//! Instant radiosity with imperfect shadow maps and temporal coherence (Knecht 002, issue
+//! #5): GPU kernels against their CPU twins in `gi_render::cpu::knecht`, and the whole
+//! technique on the default scene.
+
+use gi_lab_tests::{default_scene, gpu};
+use gi_render::cpu::knecht::{self, ISM_EMPTY, Pyramid, halton};
+use gi_render::lab_settings::IndirectTechnique;
+use gi_render::passes::ism::{IsmPass, IsmSettings, VplVisibility};
+use gi_render::passes::shadow::LightView;
+use gi_render::passes::vpl_importance::{ViewJob, VplImportancePass};
+use gi_render::scene::upload::GpuScene;
+use gi_render::{GpuContext, LabSettings, RenderError, Renderer};
+use glam::{Mat4, Vec2, Vec3};
+
+fn read_buffer(ctx: &GpuContext, src: &wgpu::Buffer, bytes: u64) -> Vec<u8> {
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("test.staging"),
+        size: bytes,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.copy") });
+    enc.copy_buffer_to_buffer(src, 0, &staging, 0, bytes);
+    ctx.queue.submit([enc.finish()]);
+    gi_render::buffers::map_read(ctx, &staging).expect("map")
+}
+
+fn dummy_view() -> LightView {
+    LightView {
+        view: Mat4::IDENTITY,
+        proj: Mat4::IDENTITY,
+        eye: Vec3::ZERO,
+        forward: Vec3::NEG_Z,
+        pixel_extent: 2.0,
+        orthographic: false,
+    }
+}
+
+/// Warps `count` Halton samples from index `first` over a synthetic `size`² importance map
+/// on the GPU; returns (uv, pdf, texel index) per sample.
+fn gpu_warp(ctx: &GpuContext, map: &[f32], size: u32, first: u32, count: u32) -> Vec<[f32; 4]> {
+    let scene = default_scene();
+    let gs = GpuScene::new(ctx, &scene);
+    let mut pass = VplImportancePass::new(ctx, size);
+    pass.ensure(ctx, &gs, size, 1, count);
+    pass.upload_importance(ctx, 0, map);
+    let jobs = [ViewJob { light_index: 0, view: dummy_view(), first: 0, count }];
+    pass.write_params(ctx, &[], &jobs, first, 1.0);
+    let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.warp") });
+    pass.pyramid(ctx, &mut enc, None, 1, false);
+    pass.warp(ctx, &mut enc, None, &jobs);
+    ctx.queue.submit([enc.finish()]);
+    let bytes = read_buffer(ctx, &pass.warped, 16 * count as u64);
+    bytemuck::cast_slice::<u8, [f32; 4]>(&bytes).to_vec()
+}
+
+#[test]
+fn halton_and_warping_of_a_uniform_map_are_the_identity_on_the_gpu() {
+    let ctx = gpu();
+    let out = gpu_warp(&ctx, &vec![1.0; 16 * 16], 16, 1, 256);
+    for (i, w) in out.iter().enumerate() {
+        let k = 1 + i as u32;
+        let u = Vec2::new(halton(k, 2), halton(k, 3));
+        assert!((Vec2::new(w[0], w[1]) - u).length() < 1e-5, "sample {i}: GPU {w:?}, Halton {u}");
+        assert!((w[2] - 1.0).abs() < 1e-5);
+    }
+}
+
+#[test]
+fn hierarchical_warping_matches_the_cpu_and_follows_the_importance_map() {
+    let ctx = gpu();
+    let size = 64u32;
+    // A smooth gradient, a bright square and a region of zero importance.
+    let map: Vec<f32> = (0..size * size)
+        .map(|i| {
+            let (x, y) = ((i % size) as f32, (i / size) as f32);
+            if x < 8.0 {
+                0.0
+            } else if (40.0..48.0).contains(&x) && (10.0..18.0).contains(&y) {
+                20.0
+            } else {
+                0.2 + x / 64.0 + 0.5 * (y / 64.0)
+            }
+        })
+        .collect();
+    let n = 4096u32;
+    let out = gpu_warp(&ctx, &map, size, 1, n);
+    let pyr = Pyramid::new(size, map.clone());
+    let mut same = 0;
+    let mut hist = vec![0u32; 64];
+    for (i, w) in out.iter().enumerate() {
+        let k = 1 + i as u32;
+        let (texel, uv, pdf) = pyr.warp(Vec2::new(halton(k, 2), halton(k, 3))).expect("non-zero map");
+        let t = w[3] as u32;
+        assert!(map[t as usize] > 0.0, "sample {i} landed on zero importance");
+        if t == texel.y * size + texel.x {
+            same += 1;
+            assert!((Vec2::new(w[0], w[1]) - uv).length() < 1e-4, "sample {i}: GPU {w:?}, CPU {uv}");
+            assert!((w[2] - pdf).abs() <= 1e-4 * pdf, "sample {i}: pdf GPU {} CPU {pdf}", w[2]);
+        }
+        let (bx, by) = ((t % size) / 8, (t / size) / 8);
+        hist[(by * 8 + bx) as usize] += 1;
+    }
+    // Rounding may move a sample that sits on a split across it; nearly all must agree.
+    assert!(same as f32 >= 0.995 * n as f32, "only {same} of {n} samples in the CPU's texel");
+    // χ² of the 8×8 block histogram against the map: 63 degrees of freedom (minus the empty
+    // blocks), critical value 103.4 at p = 0.001. Halton samples are far more even than
+    // random ones, so the statistic is well below it.
+    let total: f32 = map.iter().sum();
+    let mut chi2 = 0.0f32;
+    for by in 0..8 {
+        for bx in 0..8 {
+            let mut e = 0.0;
+            for y in by * 8..by * 8 + 8 {
+                for x in bx * 8..bx * 8 + 8 {
+                    e += map[(y * size + x) as usize];
+                }
+            }
+            let expected = e / total * n as f32;
+            let observed = hist[(by * 8 + bx) as usize] as f32;
+            if expected > 0.0 {
+                chi2 += (observed - expected).powi(2) / expected;
+            } else {
+                assert_eq!(observed, 0.0, "samples in a block of zero importance");
+            }
+        }
+    }
+    assert!(chi2 < 103.4, "χ² = {chi2}");
+}
+
+#[test]
+fn pull_push_on_the_gpu_equals_the_cpu_reference() {
+    let ctx = gpu();
+    let scene = default_scene();
+    let state = scene.evaluate(0.0);
+    let s = IsmSettings { points: 1024, map_size: 32, pull_push_levels: 3, ..Default::default() };
+    let mut pass = IsmPass::new(&ctx);
+    pass.ensure(&ctx, &scene, &state, &s, 6, false);
+    let l = pass.layout_info;
+    let (w, h) = (l.width() as u32, l.height() as u32);
+    assert_eq!((l.cols, l.rows), (3, 2));
+    // Two depth layers (a near occluder over a far wall) with holes of every size.
+    let atlas: Vec<f32> = (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let hash = (x.wrapping_mul(73_856_093) ^ y.wrapping_mul(19_349_663)) % 100;
+            if hash < 35 || ((x % 32) > 20 && (y % 32) < 6) {
+                ISM_EMPTY
+            } else if (x % 32) < 12 {
+                1.0 + 0.01 * (y % 32) as f32
+            } else {
+                3.0 + 0.02 * (x % 7) as f32
+            }
+        })
+        .collect();
+    ctx.queue.write_texture(
+        pass.atlas.as_image_copy(),
+        bytemuck::cast_slice(&atlas),
+        wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * w), rows_per_image: None },
+        wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+    );
+    let extent = 4.0;
+    let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.pull_push") });
+    pass.pull_push(&ctx, &mut enc, None, &s, extent);
+    ctx.queue.submit([enc.finish()]);
+    let cpu = knecht::pull_push(&atlas, w, h, 32, 3, s.pull_threshold * extent, s.push_threshold * extent);
+    for (level, expected) in cpu.iter().enumerate() {
+        let got =
+            gi_render::buffers::read_texture(&ctx, "ism.atlas_pulled", &pass.pulled, 0, level as u32).expect("read");
+        let mut bad = 0;
+        for (i, e) in expected.iter().enumerate() {
+            let g = got.data[i][0];
+            let ok = if *e >= ISM_EMPTY { g >= ISM_EMPTY } else { (g - e).abs() <= 1e-5 * e.abs().max(1.0) };
+            if !ok {
+                bad += 1;
+            }
+        }
+        assert_eq!(bad, 0, "level {level}: {bad} texels differ from the CPU reference");
+    }
+    // Pull-push filled holes: fewer holes at level 0 than splatted.
+    let holes = |v: &[f32]| v.iter().filter(|&&d| d >= ISM_EMPTY).count();
+    assert!(holes(&cpu[0]) * 4 < holes(&atlas), "{} holes left of {}", holes(&cpu[0]), holes(&atlas));
+}
+
+fn knecht_settings() -> LabSettings {
+    let mut s = LabSettings::default();
+    s.indirect.technique = IndirectTechnique::InstantRadiosity;
+    s
+}
+
+/// Mean indirect light (rgb) of the left and right thirds of `indirect.filtered`.
+fn thirds(r: &Renderer) -> (Vec3, Vec3) {
+    let img = r.readback("indirect.filtered").expect("indirect.filtered");
+    let (mut left, mut right) = (Vec3::ZERO, Vec3::ZERO);
+    for y in 0..img.height {
+        for x in 0..img.width {
+            let p = img.at(x, y);
+            let v = Vec3::new(p[0], p[1], p[2]);
+            assert!(v.is_finite() && v.min_element() >= 0.0, "indirect light {v} at ({x}, {y})");
+            if x < img.width / 3 {
+                left += v;
+            } else if x >= 2 * img.width / 3 {
+                right += v;
+            }
+        }
+    }
+    (left, right)
+}
+
+#[test]
+fn instant_radiosity_bleeds_the_walls_colours() {
+    let mut r = Renderer::new(gpu(), default_scene(), knecht_settings(), 128, 128).expect("renderer");
+    r.clock.playing = false;
+    for _ in 0..4 {
+        r.render_frame();
+    }
+    let (left, right) = thirds(&r);
+    // The red wall is on the left, the green one on the right (Knecht's Cornell box).
+    assert!(left.x > 1.2 * left.y, "left third: {left}");
+    assert!(right.y > 1.2 * right.x, "right third: {right}");
+    for name in [
+        "vpl.importance",
+        "vpl.light_gbuffer.albedo",
+        "ism.atlas",
+        "ism.atlas_pulled",
+        "interleave.split.albedo",
+        "indirect.accum",
+        "indirect.merged",
+        "indirect.filtered",
+        "temporal.confidence",
+        "temporal.history",
+    ] {
+        r.readback(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+    }
+}
+
+#[test]
+fn an_ism_atlas_larger_than_the_device_is_refused_with_the_largest_valid_combination() {
+    let mut r = Renderer::new(gpu(), default_scene(), LabSettings::default(), 64, 64).expect("renderer");
+    let before = r.settings().clone();
+    let mut s = knecht_settings();
+    s.vpl.count = 4096;
+    s.ism.map_size = 512;
+    s.ism.points = 262144;
+    match r.set_settings(s) {
+        Err(e @ RenderError::IsmAtlasTooLarge { .. }) => {
+            let msg = e.to_string();
+            assert!(msg.contains("at most") && msg.contains("VPLs fit"), "{msg}");
+        }
+        other => panic!("expected IsmAtlasTooLarge, got {other:?}"),
+    }
+    assert_eq!(r.settings(), &before, "a refused change must change nothing");
+}
+
+#[test]
+fn combinations_that_cannot_work_are_refused_with_a_reason() {
+    let mut s = knecht_settings();
+    s.vpl.count = 8;
+    s.interleave.n = 4;
+    s.ism.map_size = 100;
+    let errors = s.validate();
+    let fields: Vec<&str> = errors.iter().map(|e| e.field.as_str()).collect();
+    assert!(fields.contains(&"vpl.count"), "{errors:?}");
+    assert!(fields.contains(&"ism.map_size"), "{errors:?}");
+    assert!(errors.iter().any(|e| e.message.contains("64 or 128")), "{errors:?}");
+    s.ism.map_size = 128;
+    s.vpl.count = 16;
+    assert!(s.validate().is_empty(), "{:?}", s.validate());
+    s.ism.visibility = VplVisibility::None;
+    assert!(s.validate().is_empty());
+}
+
+#[test]
+fn every_shipped_preset_loads_cleanly_and_validates() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../presets");
+    let mut names = Vec::new();
+    for entry in std::fs::read_dir(&dir).expect("presets/ exists") {
+        let path = entry.expect("entry").path();
+        if path.extension().is_none_or(|e| e != "ron") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).expect("readable");
+        let l = gi_render::preset::load_lenient(&text, &path.display().to_string()).expect("parses");
+        assert!(l.problems.is_empty(), "{}: {:?}", path.display(), l.problems);
+        assert!(l.settings.validate().is_empty(), "{}: {:?}", path.display(), l.settings.validate());
+        names.push(path.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default());
+    }
+    for want in ["default", "knecht-cornell-256", "ritschel-ism", "exact-vpl-reference"] {
+        assert!(names.iter().any(|n| n == want), "presets/{want}.ron is missing");
+    }
+    let k = gi_render::preset::load_lenient(include_str!("../../presets/knecht-cornell-256.ron"), "k").expect("loads");
+    let s = &k.settings;
+    assert_eq!(s.indirect.technique, IndirectTechnique::InstantRadiosity);
+    assert_eq!((s.vpl.count, s.ism.map_size, s.interleave.n), (256, 128, 4));
+    assert_eq!((s.temporal.c_base, s.interleave.alpha, s.interleave.beta), (0.9, 0.01, 0.8));
+}
