@@ -12,6 +12,18 @@ struct LightView {
     forward: vec4<f32>,
 }
 
+// Uniform of one light view's importance and warp passes (Rust twin:
+// passes::vpl_importance::ViewParams).
+struct ViewParams {
+    view: LightView,
+    // x: first VPL slot, y: VPL count N_v of this view, z: light index, w: importance layer
+    range: vec4<u32>,
+    // x: Halton index of this frame's first sample
+    seq: vec4<u32>,
+    // x: flux scale (the direct light's intensity scale), y: finest level's side
+    scale: vec4<f32>,
+}
+
 // Flux per unit uv area (W) that `light` sends through the view toward surface point p.
 fn flux_per_uv(light: Light, view: LightView, p: vec3<f32>) -> vec3<f32> {
     let e2 = view.forward.w * view.forward.w;

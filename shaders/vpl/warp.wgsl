@@ -10,16 +10,6 @@
 #import common/light_view.wgsl
 #import common/vpl.wgsl
 
-struct ViewParams {
-    view: LightView,
-    // x: first VPL slot, y: VPL count N_v of this view, z: light index, w: importance layer
-    range: vec4<u32>,
-    // x: Halton index of this frame's first sample
-    seq: vec4<u32>,
-    // x: flux scale (the direct light's intensity scale), y: finest level's side
-    scale: vec4<f32>,
-}
-
 @group(0) @binding(0) var<uniform> vp: ViewParams;
 @group(0) @binding(1) var<storage, read> lights: array<Light>;
 @group(0) @binding(2) var lg_position: texture_2d<f32>;

@@ -93,6 +93,25 @@ fn uniform_sizes_match_wgsl() {
     assert_eq!(struct_size(&v, "ViewParams") as usize, std::mem::size_of::<gi_render::passes::view::ViewParams>());
     let p = parse("view/probe.wgsl");
     assert_eq!(struct_size(&p, "Jobs") as usize, std::mem::size_of::<gi_render::passes::view::ProbeJobs>());
+    // Instant radiosity (issue #5).
+    use gi_render::passes::{interleave, ism, temporal, vpl_importance};
+    let w = parse("vpl/warp.wgsl");
+    assert_eq!(struct_size(&w, "ViewParams") as usize, std::mem::size_of::<vpl_importance::ViewParams>());
+    assert_eq!(struct_size(&w, "Vpl") as usize, std::mem::size_of::<vpl::GpuVpl>());
+    let sp = parse("ism/splat.wgsl");
+    assert_eq!(struct_size(&sp, "IsmPoint") as usize, std::mem::size_of::<ism::GpuPoint>());
+    assert_eq!(struct_size(&sp, "SplatParams") as usize, std::mem::size_of::<ism::SplatParams>());
+    assert_eq!(struct_size(&sp, "Instance") as usize, std::mem::size_of::<InstanceUniform>());
+    let pp = parse("ism/pull_push.wgsl");
+    assert_eq!(struct_size(&pp, "LevelParams") as usize, std::mem::size_of::<ism::LevelParams>());
+    let sl = parse("interleave/split.wgsl");
+    assert_eq!(struct_size(&sl, "SplitParams") as usize, std::mem::size_of::<interleave::SplitParams>());
+    let ig = parse("interleave/gather.wgsl");
+    assert_eq!(struct_size(&ig, "GatherParams") as usize, std::mem::size_of::<interleave::GatherParams>());
+    let f = parse("interleave/filter.wgsl");
+    assert_eq!(struct_size(&f, "FilterParams") as usize, std::mem::size_of::<interleave::FilterParams>());
+    let c = parse("temporal/confidence.wgsl");
+    assert_eq!(struct_size(&c, "ConfidenceParams") as usize, std::mem::size_of::<temporal::ConfidenceParams>());
 }
 
 /// The hot reload's building blocks: what a file affects, validation of a candidate text
