@@ -394,6 +394,20 @@ impl VplImportancePass {
         ctx.queue.write_buffer(&self.params, 0, &params);
     }
 
+    /// Bindings 0–5 shared by the importance and warp passes: the view uniform, the lights
+    /// and the view's light G-buffer.
+    fn view_entries<'a>(&'a self, t: &'a super::gbuffer::GBufferViews) -> [wgpu::BindGroupEntry<'a>; 6] {
+        let tv = wgpu::BindingResource::TextureView;
+        [
+            wgpu::BindGroupEntry { binding: 0, resource: dynamic(&self.params) },
+            wgpu::BindGroupEntry { binding: 1, resource: self.lights.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 2, resource: tv(&t.position) },
+            wgpu::BindGroupEntry { binding: 3, resource: tv(&t.normal) },
+            wgpu::BindGroupEntry { binding: 4, resource: tv(&t.albedo) },
+            wgpu::BindGroupEntry { binding: 5, resource: tv(&t.material) },
+        ]
+    }
+
     fn mip_view(&self, level: u32, label: &str) -> wgpu::TextureView {
         self.importance.create_view(&wgpu::TextureViewDescriptor {
             label: Some(label),
@@ -427,15 +441,11 @@ impl VplImportancePass {
                 ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("vpl.importance.inputs"),
                     layout: &self.importance_layout,
-                    entries: &[
-                        wgpu::BindGroupEntry { binding: 0, resource: dynamic(&self.params) },
-                        wgpu::BindGroupEntry { binding: 1, resource: self.lights.as_entire_binding() },
-                        wgpu::BindGroupEntry { binding: 2, resource: tv(&t.position) },
-                        wgpu::BindGroupEntry { binding: 3, resource: tv(&t.normal) },
-                        wgpu::BindGroupEntry { binding: 4, resource: tv(&t.albedo) },
-                        wgpu::BindGroupEntry { binding: 5, resource: tv(&t.material) },
-                        wgpu::BindGroupEntry { binding: 6, resource: tv(&level0) },
-                    ],
+                    entries: &self
+                        .view_entries(t)
+                        .into_iter()
+                        .chain([wgpu::BindGroupEntry { binding: 6, resource: tv(&level0) }])
+                        .collect::<Vec<_>>(),
                 })
             })
             .collect();
@@ -494,17 +504,15 @@ impl VplImportancePass {
                 ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("vpl.warp.inputs"),
                     layout: &self.warp_layout,
-                    entries: &[
-                        wgpu::BindGroupEntry { binding: 0, resource: dynamic(&self.params) },
-                        wgpu::BindGroupEntry { binding: 1, resource: self.lights.as_entire_binding() },
-                        wgpu::BindGroupEntry { binding: 2, resource: tv(&t.position) },
-                        wgpu::BindGroupEntry { binding: 3, resource: tv(&t.normal) },
-                        wgpu::BindGroupEntry { binding: 4, resource: tv(&t.albedo) },
-                        wgpu::BindGroupEntry { binding: 5, resource: tv(&t.material) },
-                        wgpu::BindGroupEntry { binding: 6, resource: tv(&full) },
-                        wgpu::BindGroupEntry { binding: 7, resource: self.vpls.as_entire_binding() },
-                        wgpu::BindGroupEntry { binding: 8, resource: self.warped.as_entire_binding() },
-                    ],
+                    entries: &self
+                        .view_entries(t)
+                        .into_iter()
+                        .chain([
+                            wgpu::BindGroupEntry { binding: 6, resource: tv(&full) },
+                            wgpu::BindGroupEntry { binding: 7, resource: self.vpls.as_entire_binding() },
+                            wgpu::BindGroupEntry { binding: 8, resource: self.warped.as_entire_binding() },
+                        ])
+                        .collect::<Vec<_>>(),
                 })
             })
             .collect();
