@@ -657,6 +657,7 @@ impl Renderer {
                     size: l.size,
                     eye_offset,
                     bias: s.ism.depth_bias,
+                    normal_offset: s.ism.normal_offset,
                 }
             }
             VplVisibility::Exact => {
@@ -677,20 +678,25 @@ impl Renderer {
         let g = &self.gbuffer.targets.views;
         k.interleave.shade(&ctx, enc, timer, &self.camera_buffer, g, &k.vpl.vpls, n_vpls, s.vpl.min_distance_m, vis);
 
-        // Stage 7: confidence merge, then the geometry-aware filter.
+        // Stage 6's geometry-aware filter, then stage 7's confidence merge. The thesis merges
+        // first and filters after (§4, steps 11–12); we keep DESIGN.md's stage order because
+        // the confidence's illumination term (Eq. 3.3) then compares the filtered light, an
+        // estimate from all N VPLs, with the history instead of one pixel's N/n² VPLs, whose
+        // noise alone drove the confidence down and kept flicker high (measured in
+        // tests/knecht_quality.rs).
         let merged = crate::passes::view(&k.interleave.merged, "indirect.merged");
-        let (temporal, normal) = (&mut k.temporal, &self.gbuffer.targets.normal);
         let depth_range = self.camera.zfar - self.camera.znear;
-        timer.scope(&ctx, enc, "temporal", |e, slot| {
-            temporal.run(&ctx, e, slot, &s.temporal, depth_range, &merged, g, normal)
-        });
-        let history = crate::passes::view(&k.temporal.history, "temporal.history");
         let interleave = &k.interleave;
         timer.scope(&ctx, enc, "interleave.filter", |e, slot| {
-            interleave.filter(&ctx, e, slot, &s.interleave, depth_range, &history, g)
+            interleave.filter(&ctx, e, slot, &s.interleave, depth_range, &merged, g)
+        });
+        let filtered = crate::passes::view(&k.interleave.filtered, "indirect.filtered");
+        let (temporal, normal) = (&mut k.temporal, &self.gbuffer.targets.normal);
+        timer.scope(&ctx, enc, "temporal", |e, slot| {
+            temporal.run(&ctx, e, slot, &s.temporal, depth_range, &filtered, g, normal)
         });
         k.frames = k.frames.wrapping_add(1);
-        Some(crate::passes::view(&k.interleave.filtered, "indirect.filtered"))
+        Some(crate::passes::view(&k.temporal.history, "temporal.history"))
     }
 
     /// Stages 3, 4 and 6 of the exact-VPL reference: one batch of VPLs from one light view,

@@ -19,11 +19,23 @@ fn ism_eye(vpl: Vpl, offset: f32) -> vec3<f32> {
     return vpl.position.xyz + vpl.normal.xyz * offset;
 }
 
-// Visibility of x from VPL i in the ISM atlas: the receiver's distance from the VPL's eye,
-// less `bias` × that distance, against the stored distance at its paraboloid texel.
-fn ism_visibility(atlas: texture_2d<f32>, i: u32, vpl: Vpl, x: vec3<f32>, offset: f32, cols: u32, size: u32, bias: f32) -> f32 {
+// Angular size (radians) of a paraboloid texel at cos θ from the map's axis: the map's
+// radius 1 spans tan(θ/2), so a texel of 2/size spans 2 (1 + cos θ) / size.
+fn ism_texel_angle(cos_theta: f32, size: u32) -> f32 {
+    return 2.0 * (1.0 + max(cos_theta, 0.0)) / f32(size);
+}
+
+// Visibility of x (normal nx) from VPL i in the ISM atlas: x is first moved along its normal
+// by `normal_offset` texels of the map at its distance (a slope-aware bias: the receiving
+// surface's own splats reach around each point and lie nearer on grazing surfaces), then its
+// distance from the VPL's eye, less `bias` × that distance, is tested against the stored
+// distance at its paraboloid texel.
+fn ism_visibility(atlas: texture_2d<f32>, i: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, offset: f32, cols: u32, size: u32, bias: f32, normal_offset: f32) -> f32 {
     let eye = ism_eye(vpl, offset);
-    let w = x - eye;
+    let w0 = x - eye;
+    let d0 = length(w0);
+    let cos0 = dot(w0, vpl.normal.xyz) / max(d0, 1e-9);
+    let w = w0 + nx * (normal_offset * d0 * ism_texel_angle(cos0, size));
     let d = length(w);
     let tbn = vpl_basis(vpl.normal.xyz);
     let q = vec3<f32>(dot(w, tbn[0]), dot(w, tbn[1]), dot(w, tbn[2])) / max(d, 1e-9);

@@ -13,7 +13,8 @@ struct GatherParams {
     split: vec4<u32>,
     // x: visibility (0 none, 1 ISM, 2 exact), y: atlas columns, z: map size
     vis: vec4<u32>,
-    // x: d_min², y: ISM eye offset / exact near, z: ISM bias / exact far, w: exact eye offset
+    // x: d_min², y: ISM eye offset / exact near, z: ISM bias / exact far,
+    // w: ISM receiver normal offset (texels) / exact eye offset
     shade: vec4<f32>,
 }
 
@@ -59,7 +60,7 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
             var vis = 1.0;
             if (params.vis.x == 1u) {
-                vis = ism_visibility(ism_atlas, k, vpl, x, params.shade.y, params.vis.y, params.vis.z, params.shade.z);
+                vis = ism_visibility(ism_atlas, k, vpl, x, nx, params.shade.y, params.vis.y, params.vis.z, params.shade.z, params.shade.w);
             } else if (params.vis.x == 2u) {
                 vis = vpl_exact_visibility(exact_atlas, k, vpl, x, nx, params.shade.yzw, params.vis.y, params.vis.z, 1.0, 1.0);
             }

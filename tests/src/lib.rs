@@ -38,3 +38,9 @@ pub fn shared_scene(rel: &str) -> std::path::PathBuf {
     );
     p
 }
+
+/// A path-traced reference stored in `tests/data/` (see `tests/references.rs`).
+pub fn stored_reference(file: &str) -> gi_render::ImageF32 {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data").join(file);
+    gi_render::image_io::load_float_image(&path).unwrap_or_else(|e| panic!("tests/data/{file}: {e}"))
+}

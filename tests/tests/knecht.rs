@@ -188,9 +188,9 @@ fn knecht_settings() -> LabSettings {
     s
 }
 
-/// Mean indirect light (rgb) of the left and right thirds of `indirect.filtered`.
+/// Mean indirect light (rgb) of the left and right thirds of `temporal.history`.
 fn thirds(r: &Renderer) -> (Vec3, Vec3) {
-    let img = r.readback("indirect.filtered").expect("indirect.filtered");
+    let img = r.readback("temporal.history").expect("temporal.history");
     let (mut left, mut right) = (Vec3::ZERO, Vec3::ZERO);
     for y in 0..img.height {
         for x in 0..img.width {

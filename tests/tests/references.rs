@@ -23,6 +23,7 @@ struct Reference {
 const REFERENCES: &[Reference] = &[
     Reference { file: "cornell_direct_64.exr", size: 64, spp: 1, bounces: 0, image: "direct" },
     Reference { file: "cornell_1bounce_64.exr", size: 64, spp: 256, bounces: 1, image: "full" },
+    Reference { file: "cornell_1bounce_256.exr", size: 256, spp: 256, bounces: 1, image: "full" },
 ];
 
 fn data_dir() -> PathBuf {
@@ -74,7 +75,7 @@ fn references_are_current() {
 }
 
 fn load(file: &str) -> ImageF32 {
-    gi_render::image_io::load_float_image(&data_dir().join(file)).unwrap_or_else(|e| panic!("tests/data/{file}: {e}"))
+    gi_lab_tests::stored_reference(file)
 }
 
 #[test]

@@ -63,13 +63,15 @@ pub struct FilterParams {
 /// The visibility the gather reads.
 pub enum GatherVisibility<'a> {
     None,
-    /// The ISM atlas (level 0 after pull-push), with columns, map size, eye offset and bias.
+    /// The ISM atlas (level 0 after pull-push), with columns, map size, eye offset, depth bias
+    /// and receiver normal offset (texels).
     Ism {
         atlas: &'a wgpu::TextureView,
         cols: u32,
         size: u32,
         eye_offset: f32,
         bias: f32,
+        normal_offset: f32,
     },
     /// The exact cube-face atlas, with columns, face size and (near, far, eye offset).
     Exact {
@@ -303,7 +305,7 @@ impl InterleavePass {
         reg.register(
             "indirect.filtered",
             BufferKind::Hdr,
-            "indirect light after the temporal merge and the geometry-aware n×n filter: what compose adds",
+            "indirect light after the geometry-aware n×n filter (Knecht §3.4.1); the confidence merge follows",
             &self.filtered,
         );
     }
@@ -329,8 +331,8 @@ impl InterleavePass {
         ctx.queue.write_buffer(&self.split_params, 0, bytemuck::bytes_of(&sp));
         let (code, atlas_ism, atlas_exact, cols, size, shade) = match vis {
             GatherVisibility::None => (0, &self.dummy_ism, &self.dummy_exact, 1, 1, Vec4::ZERO),
-            GatherVisibility::Ism { atlas, cols, size, eye_offset, bias } => {
-                (1, atlas, &self.dummy_exact, cols, size, Vec4::new(0.0, eye_offset, bias, 0.0))
+            GatherVisibility::Ism { atlas, cols, size, eye_offset, bias, normal_offset } => {
+                (1, atlas, &self.dummy_exact, cols, size, Vec4::new(0.0, eye_offset, bias, normal_offset))
             }
             GatherVisibility::Exact { atlas, cols, size, clip } => {
                 (2, &self.dummy_ism, atlas, cols, size, Vec4::new(0.0, clip.x, clip.y, clip.z))

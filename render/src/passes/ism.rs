@@ -74,6 +74,12 @@ settings_group! {
         /// it is at most the stored distance.
         depth_bias: f32 = 0.03,
         unit "× distance", symbol "", range 0.0..=0.5, cost "free", history false;
+        /// Receiver offset along its normal before the shadow test, in texels of the map at
+        /// the receiver's distance: a slope-aware bias against the receiving surface's own
+        /// splats, which reach k texels around each point and on grazing surfaces are nearer
+        /// the VPL than the receiver (our addition; the thesis names only the depth bias).
+        normal_offset: f32 = 6.0,
+        unit "texels", symbol "", range 0.0..=8.0, cost "free", history false;
         /// Scale of each point's splat (1: the disc of the point's area share).
         splat_scale: f32 = 1.0,
         unit "×", symbol "", range 0.1..=4.0, cost "splat texels grow with its square", history false;

@@ -27,8 +27,11 @@ settings_group! {
         c_base: f32 = 0.9,
         unit "", symbol "c_base", range 0.0..=1.0, cost "free", history false;
         /// Weight of the position change (Eq. 3.1; screen movement as a fraction of the image,
-        /// depth change in units of z_far − z_near as the thesis' linear depth, Eq. 4.2).
-        w_pos: f32 = 25.0,
+        /// depth change in units of z_far − z_near as the thesis' linear depth, Eq. 4.2). The
+        /// thesis gives no value; 300 drops the confidence to 0 for a surface that moves 1/300
+        /// of the image per frame, and was tuned on the default scene's sliding sphere
+        /// (tests/knecht_quality.rs: low on the sphere, high elsewhere).
+        w_pos: f32 = 300.0,
         unit "", symbol "w_pos", range 0.0..=1000.0, cost "free", history false;
         /// Weight of the normal change (Eq. 3.2).
         w_normal: f32 = 2.0,
@@ -131,7 +134,7 @@ impl TemporalPass {
         reg.register(
             "temporal.history",
             BufferKind::Hdr,
-            "indirect light after the confidence merge (Eq. 3.6) in rgb, linear depth in a: next frame's I_prev",
+            "indirect light after the confidence merge (Eq. 3.6) in rgb, view depth in a: what compose adds, and next frame's I_prev",
             &self.history,
         );
         reg.register(
