@@ -207,6 +207,17 @@ pub struct BenchArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Run a suite of rows instead of one configuration: `knecht` reproduces the shape of
+    /// Knecht's Tables 5.1–5.2 (frame time against VPL count and ISM size) and the temporal
+    /// coherence overhead, starting from --preset.
+    #[arg(long, value_enum)]
+    pub suite: Option<BenchSuite>,
+}
+
+/// Benchmark suites of `gi-lab bench --suite`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BenchSuite {
+    Knecht,
 }
 
 /// Parses `WIDTHxHEIGHT`.
@@ -515,6 +526,15 @@ fn bench(args: &BenchArgs) -> Result<(), CliError> {
     let mut r = renderer(&args.scene, args.size)?;
     let name =
         args.scene.scene.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| "default Cornell box".into());
+    if let Some(BenchSuite::Knecht) = args.suite {
+        let report = crate::bench_suites::knecht(&mut r, args.frames, &name)?;
+        if args.json {
+            println!("{}", serde_json::to_string_pretty(&report).map_err(|e| CliError::failure(e.to_string()))?);
+        } else {
+            print!("{}", crate::bench_suites::format(&report));
+        }
+        return Ok(());
+    }
     let mut report = bench_run(&mut r, args.frames, &name);
     if args.flicker_frames == 1 {
         return Err(CliError::input("--flicker-frames must be 0 or at least 2"));

@@ -2,6 +2,7 @@
 
 pub mod ab;
 pub mod app;
+pub mod bench_suites;
 pub mod cli;
 pub mod hot_reload;
 pub mod panes;

@@ -247,3 +247,23 @@ fn export_writes_json_and_ron_that_import_to_the_preset() {
     let o = gi_lab().args(["export", "--format", "xml"]).output().expect("runs");
     assert_eq!(o.status.code(), Some(2), "an unknown format is a usage error");
 }
+
+#[test]
+fn the_knecht_bench_suite_prints_every_table_as_json() {
+    let o = gi_lab()
+        .args(["bench", "--suite", "knecht", "--size", "48x32", "--frames", "1", "--json", "--preset"])
+        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/../presets/knecht-cornell-256.ron"))
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "bench --suite failed: {}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let v: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    let rows = v["rows"].as_array().expect("rows");
+    let in_table = |t: &str| rows.iter().filter(|r| r["table"] == t).count();
+    assert_eq!((in_table("VPL count"), in_table("ISM size"), in_table("temporal coherence")), (5, 4, 2), "{text}");
+    for r in rows {
+        // Every row is measured or refused with a reason, never silently empty.
+        assert!(r["total_ms"].as_f64().is_some_and(|t| t > 0.0) || r["refused"].is_string(), "{r}");
+    }
+    assert!(v["temporal_overhead"].is_number(), "{text}");
+}
