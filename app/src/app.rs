@@ -290,6 +290,8 @@ pub struct State {
     /// Panels the tree drew last frame (viewers not shown are not updated).
     pub visible_viewers: Vec<u32>,
     pub show_help: bool,
+    /// View → VPL overlay: instant radiosity's VPLs (`vpl.list`) as dots over the viewport.
+    pub show_vpls: bool,
     /// The A/B comparison, when one runs.
     pub ab: Option<crate::ab::Ab>,
     pub hot: crate::hot_reload::HotReload,
@@ -430,6 +432,7 @@ impl GiLabApp {
             record_frames: 60,
             visible_viewers: Vec::new(),
             show_help: false,
+            show_vpls: false,
             ab: None,
             request_new_viewer: false,
             request_reset_layout: false,
@@ -1201,6 +1204,10 @@ impl State {
                 {
                     self.set_status(e);
                 }
+                ui.checkbox(&mut self.show_vpls, "VPL overlay (vpl.list)").on_hover_text(
+                    "instant radiosity's VPLs as dots over the viewport, coloured by their reflected flux \
+                     (the brightest at full colour); reads the list back every frame",
+                );
                 ui.horizontal(|ui| {
                     ui.label("render scale");
                     ui.add(egui::Slider::new(&mut self.session.render_scale, 0.1..=2.0).step_by(0.05))

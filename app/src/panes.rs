@@ -83,6 +83,9 @@ fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
         egui::Color32::WHITE,
     );
     ab_overlay(st, ui, rect);
+    if st.show_vpls {
+        vpl_overlay(st, ui, rect);
+    }
     if !st.hot.errors.is_empty() {
         // The compile error stays on screen until the file is fixed.
         let text: Vec<String> = st.hot.errors.iter().map(|(f, e)| format!("{f}: {e}")).collect();
@@ -137,6 +140,44 @@ fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
     if let Ok(l) = &mut st.lab {
         navigate(l, ui, &response);
     }
+}
+
+/// `vpl.list` over the viewport (Knecht §3.3): each VPL projected with the camera as a dot
+/// coloured by the flux it reflects diffusely, Φ·c (so a VPL on the red wall is red),
+/// normalised so that the brightest VPL has its full colour; VPLs behind the camera are left
+/// out. A line names the count and the brightest flux.
+fn vpl_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
+    let Ok(l) = &st.lab else { return };
+    let painter = ui.painter_at(rect);
+    let note = |s: String| {
+        painter.text(
+            rect.left_bottom() + egui::vec2(8.0, -8.0),
+            egui::Align2::LEFT_BOTTOM,
+            s,
+            egui::FontId::proportional(14.0),
+            egui::Color32::WHITE,
+        )
+    };
+    let Some(vpls) = l.renderer.vpl_list() else {
+        note("VPL overlay: pick instant radiosity (Knecht) to see its VPLs".into());
+        return;
+    };
+    let lum = |f: glam::Vec4| 0.2126 * f.x + 0.7152 * f.y + 0.0722 * f.z;
+    let reflected = |v: &gi_render::passes::vpl::GpuVpl| v.flux * v.albedo;
+    let brightest = vpls.iter().map(|v| lum(reflected(v))).fold(0.0f32, f32::max).max(1e-12);
+    let vp = l.renderer.view_proj();
+    for v in &vpls {
+        let clip = vp * v.position.truncate().extend(1.0);
+        if clip.w <= 0.0 {
+            continue;
+        }
+        let ndc = clip.truncate() / clip.w;
+        let pos = rect.min + egui::vec2((ndc.x * 0.5 + 0.5) * rect.width(), (0.5 - ndc.y * 0.5) * rect.height());
+        let c = (reflected(v).truncate() / brightest).clamp(glam::Vec3::ZERO, glam::Vec3::ONE);
+        let colour = egui::Color32::from(egui::Rgba::from_rgb(c.x, c.y, c.z));
+        painter.circle(pos, 3.0, colour, egui::Stroke::new(1.0, egui::Color32::BLACK));
+    }
+    note(format!("{} VPLs coloured by reflected flux Φ·c; brightest {brightest:.3e} W (full colour)", vpls.len()));
 }
 
 /// The A/B comparison drawn over the viewport: B right of a draggable divider, or the

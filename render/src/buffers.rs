@@ -364,6 +364,24 @@ pub fn map_read(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, Stri
     Ok(data)
 }
 
+/// Copies the first `bytes` of a GPU buffer (which needs COPY_SRC) to the CPU; blocks.
+pub fn read_storage(ctx: &GpuContext, src: &wgpu::Buffer, bytes: u64) -> Result<Vec<u8>, String> {
+    let bytes = bytes.min(src.size());
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback.storage"),
+        size: bytes.max(4),
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc =
+        ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("readback.storage.copy") });
+    enc.copy_buffer_to_buffer(src, 0, &staging, 0, bytes & !3);
+    ctx.queue.submit([enc.finish()]);
+    let mut data = map_read(ctx, &staging)?;
+    data.truncate(bytes as usize);
+    Ok(data)
+}
+
 #[cfg(test)]
 mod tests {
     use super::half_to_f32;

@@ -791,6 +791,28 @@ impl Renderer {
     }
 
     /// Reads a registered buffer back (layer 0, level 0).
+    /// The VPLs of instant radiosity's last frame (`vpl.list`, Knecht §3.3): position and
+    /// incident flux of every filled slot; None when the technique is not instant radiosity
+    /// or no frame was rendered with it. Blocks until the list is on the CPU.
+    pub fn vpl_list(&self) -> Option<Vec<crate::passes::vpl::GpuVpl>> {
+        if self.settings.indirect.technique != crate::lab_settings::IndirectTechnique::InstantRadiosity {
+            return None;
+        }
+        let k = self.knecht.as_ref()?;
+        if k.frames == 0 {
+            return None;
+        }
+        let count = self.settings.vpl.count.min(k.vpl.capacity) as u64;
+        let size = std::mem::size_of::<crate::passes::vpl::GpuVpl>() as u64;
+        let bytes = crate::buffers::read_storage(&self.ctx, &k.vpl.vpls, count * size).ok()?;
+        Some(
+            bytemuck::pod_collect_to_vec::<u8, crate::passes::vpl::GpuVpl>(&bytes)
+                .into_iter()
+                .filter(|v| v.position.w > 0.5)
+                .collect(),
+        )
+    }
+
     pub fn readback(&self, name: &str) -> Result<ImageF32, BufferError> {
         self.registry.readback(&self.ctx, name, 0, 0)
     }

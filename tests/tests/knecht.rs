@@ -13,16 +13,7 @@ use gi_render::{GpuContext, LabSettings, RenderError, Renderer};
 use glam::{Mat4, Vec2, Vec3};
 
 fn read_buffer(ctx: &GpuContext, src: &wgpu::Buffer, bytes: u64) -> Vec<u8> {
-    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("test.staging"),
-        size: bytes,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.copy") });
-    enc.copy_buffer_to_buffer(src, 0, &staging, 0, bytes);
-    ctx.queue.submit([enc.finish()]);
-    gi_render::buffers::map_read(ctx, &staging).expect("map")
+    gi_render::buffers::read_storage(ctx, src, bytes).expect("map")
 }
 
 fn dummy_view() -> LightView {
@@ -742,4 +733,29 @@ fn confidence_and_merge_on_the_gpu_equal_eq_3_1_to_3_6_on_the_cpu() {
     }
     // Every branch is exercised: rejected, partial and merged pixels.
     assert!(merged > len / 2 && zero > len / 20 && middle > len / 10, "{merged} merged, {zero} zero, {middle} between");
+}
+
+#[test]
+fn the_vpl_list_holds_every_vpl_on_the_scene_surfaces() {
+    let mut r = Renderer::new(gpu(), default_scene(), knecht_settings(), 64, 64).expect("renderer");
+    r.clock.playing = false;
+    assert!(r.vpl_list().is_none(), "no list before a frame");
+    r.render_frame();
+    let vpls = r.vpl_list().expect("instant radiosity has a VPL list");
+    assert_eq!(vpls.len(), r.settings().vpl.count as usize);
+    let b = r.bounds();
+    let slack = 1e-3 * b.radius();
+    for v in &vpls {
+        let p = v.position.truncate();
+        assert!(p.cmpge(b.min - slack).all() && p.cmple(b.max + slack).all(), "VPL at {p} outside the scene");
+        assert!((v.normal.truncate().length() - 1.0).abs() < 1e-3, "normal {:?}", v.normal);
+        assert!(v.flux.truncate().is_finite() && v.flux.truncate().min_element() >= 0.0, "flux {:?}", v.flux);
+    }
+    // The red and green walls hold VPLs whose reflected flux is red and green.
+    let reflected: Vec<Vec3> = vpls.iter().map(|v| (v.flux * v.albedo).truncate()).collect();
+    assert!(reflected.iter().any(|c| c.x > 2.0 * c.y) && reflected.iter().any(|c| c.y > 2.0 * c.x));
+    let mut s = r.settings().clone();
+    s.indirect.technique = IndirectTechnique::None;
+    r.set_settings(s).expect("valid");
+    assert!(r.vpl_list().is_none(), "no list without instant radiosity");
 }
