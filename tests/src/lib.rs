@@ -44,3 +44,34 @@ pub fn stored_reference(file: &str) -> gi_render::ImageF32 {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data").join(file);
     gi_render::image_io::load_float_image(&path).unwrap_or_else(|e| panic!("tests/data/{file}: {e}"))
 }
+
+/// A sampled, copyable 2D texture of `format` filled with `bytes` (tightly packed rows).
+pub fn texture_from_bytes(
+    ctx: &GpuContext,
+    label: &str,
+    format: wgpu::TextureFormat,
+    (width, height): (u32, u32),
+    bytes: &[u8],
+) -> wgpu::Texture {
+    let t = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    ctx.queue.write_texture(
+        t.as_image_copy(),
+        bytes,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(bytes.len() as u32 / height),
+            rows_per_image: None,
+        },
+        wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+    );
+    t
+}

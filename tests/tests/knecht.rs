@@ -341,29 +341,12 @@ fn f16(x: f32) -> f32 {
 /// when `half` (the G-buffer's normal format, which the temporal pass copies).
 fn texture(ctx: &GpuContext, label: &str, w: u32, h: u32, data: &[[f32; 4]], half: bool) -> wgpu::Texture {
     let format = if half { wgpu::TextureFormat::Rgba16Float } else { wgpu::TextureFormat::Rgba32Float };
-    let t = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
     let bytes: Vec<u8> = if half {
         data.iter().flatten().flat_map(|&v| f16_bits(v).to_le_bytes()).collect()
     } else {
         bytemuck::cast_slice(data).to_vec()
     };
-    let bpp = if half { 8 } else { 16 };
-    ctx.queue.write_texture(
-        t.as_image_copy(),
-        &bytes,
-        wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(bpp * w), rows_per_image: None },
-        wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
-    );
-    t
+    gi_lab_tests::texture_from_bytes(ctx, label, format, (w, h), &bytes)
 }
 
 /// Views of a synthetic G-buffer (emission and depth are not read by the passes tested).

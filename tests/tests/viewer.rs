@@ -72,23 +72,7 @@ fn view_of_every_kind_of_buffer_matches_the_cpu_twin() {
 
 /// A texture of the given format filled with `texels` (one row).
 fn texture_with(ctx: &GpuContext, format: wgpu::TextureFormat, bytes: &[u8], width: u32) -> wgpu::Texture {
-    let t = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("tests.view_source"),
-        size: wgpu::Extent3d { width, height: 1, depth_or_array_layers: 1 },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
-    ctx.queue.write_texture(
-        t.as_image_copy(),
-        bytes,
-        wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(bytes.len() as u32), rows_per_image: None },
-        wgpu::Extent3d { width, height: 1, depth_or_array_layers: 1 },
-    );
-    t
+    gi_lab_tests::texture_from_bytes(ctx, "tests.view_source", format, (width, 1), bytes)
 }
 
 #[test]
