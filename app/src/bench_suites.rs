@@ -1,12 +1,16 @@
 //! `gi-lab bench --suite knecht`: the shape of Knecht's Tables 5.1–5.3 (002 §5) on one
 //! scene — frame time against the VPL count (4…1024, expected linear), against the ISM
 //! resolution (64…512), and the share of the frame that temporal coherence costs (thesis
-//! ≈ 11 %, our goal ≤ 10 %). Each row is a `bench_run` of the preset with one setting
+//! ≈ 11 %, our goal ≤ 10 %), and the time of multi-bounce VPL generation by the point cloud
+//! (§3.6.1) against imperfect reflective shadow maps for 2…6 bounces (Table 5.3: thesis ≈ 11×
+//! faster, goal ≥ 10×; as there, only the bounce passes count, not the ISMs or the shading).
+//! Each row is a `bench_run` of the preset with one setting
 //! changed; ratios are to the first row of its table, so that they compare within one run.
 //! Rows that the device cannot hold (an ISM atlas too large) print the refusal instead.
 
 use gi_render::Renderer;
 use gi_render::lab_settings::IndirectTechnique;
+use gi_render::passes::vpl_bounce::BounceMethod;
 
 use crate::cli::{BenchReport, CliError, bench_run};
 
@@ -32,6 +36,8 @@ pub struct SuiteReport {
     pub rows: Vec<SuiteRow>,
     /// (frame with − frame without temporal coherence) / frame with, at the preset's VPLs.
     pub temporal_overhead: Option<f64>,
+    /// Per bounce count B: (IRSM bounce time, point-cloud bounce time, speed-up).
+    pub bounce_speedup: Vec<(u32, f64, f64, f64)>,
 }
 
 fn focus(report: &BenchReport, prefixes: &[&str]) -> f64 {
@@ -57,7 +63,7 @@ pub fn knecht(r: &mut Renderer, frames: u32, scene: &str) -> Result<SuiteReport,
                 focus_ms: Some(focus(&b, f)),
                 refused: None,
             });
-            Some(b.total_mean_ms)
+            Some((b.total_mean_ms, focus(&b, f)))
         }
         Err(e) => {
             rows.push(SuiteRow {
@@ -93,17 +99,37 @@ pub fn knecht(r: &mut Renderer, frames: u32, scene: &str) -> Result<SuiteReport,
     on.temporal.enabled = true;
     let mut off = base.clone();
     off.temporal.enabled = false;
-    let t_on = run(r, "temporal coherence", "on".into(), on, &["temporal"]);
-    let t_off = run(r, "temporal coherence", "off".into(), off, &["temporal"]);
+    let t_on = run(r, "temporal coherence", "on".into(), on, &["temporal"]).map(|t| t.0);
+    let t_off = run(r, "temporal coherence", "off".into(), off, &["temporal"]).map(|t| t.0);
     let temporal_overhead = match (t_on, t_off) {
         (Some(a), Some(b)) if a > 0.0 => Some((a - b) / a),
         _ => None,
     };
+    // Table 5.3: multi-bounce VPL generation, point cloud (§3.6.1) against IRSM.
+    let mut bounce_speedup = Vec::new();
+    for bounces in 2u32..=6 {
+        let mut times = Vec::new();
+        for method in [BounceMethod::PointCloud, BounceMethod::Irsm] {
+            let mut s = base.clone();
+            s.vpl.bounces = bounces;
+            s.vpl.bounce_method = method;
+            let label = match method {
+                BounceMethod::PointCloud => format!("B = {bounces}, point cloud"),
+                BounceMethod::Irsm => format!("B = {bounces}, IRSM {}²", gi_render::passes::irsm::irsm_size(s.vpl.irsm_size)),
+            };
+            times.push(run(r, "bounces (focus: bounce passes only)", label, s, &["vpl.bounce."]).map(|t| t.1));
+        }
+        if let [Some(pc), Some(irsm)] = times[..]
+            && pc > 0.0
+        {
+            bounce_speedup.push((bounces, irsm, pc, irsm / pc));
+        }
+    }
     let (width, height) = r.size();
     let adapter = r.ctx.adapter_summary();
     let timing_source = format!("{:?}", r.timing_source());
     r.set_settings(original).map_err(|e| CliError::failure(e.to_string()))?;
-    Ok(SuiteReport { adapter, timing_source, width, height, frames, rows, temporal_overhead })
+    Ok(SuiteReport { adapter, timing_source, width, height, frames, rows, temporal_overhead, bounce_speedup })
 }
 
 /// The suite as text tables, with each row's ratio to its table's first measured row.
@@ -131,6 +157,14 @@ pub fn format(report: &SuiteReport) -> String {
     if let Some(o) = report.temporal_overhead {
         s += &format!("\ntemporal coherence overhead: {:.1} % of the frame (thesis ≈ 11 %, goal ≤ 10 %)\n", 100.0 * o);
     }
-    s += "\nmulti-bounce VPL generation against IRSM (Table 5.3): not implemented yet (issue #5)\n";
+    if !report.bounce_speedup.is_empty() {
+        s += "\nmulti-bounce VPL generation (Table 5.3), bounce passes only\n";
+        s += &format!("{:<10} {:>12} {:>16} {:>10}\n", "bounces", "IRSM ms", "point cloud ms", "speed-up");
+        for (b, irsm, pc, x) in &report.bounce_speedup {
+            s += &format!("{b:<10} {irsm:>12.3} {pc:>16.3} {x:>9.1}×\n");
+        }
+        let mean = report.bounce_speedup.iter().map(|r| r.3).sum::<f64>() / report.bounce_speedup.len() as f64;
+        s += &format!("mean speed-up {mean:.1}× (thesis ≈ 11×, goal ≥ 10×)\n");
+    }
     s
 }

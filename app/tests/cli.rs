@@ -261,9 +261,17 @@ fn the_knecht_bench_suite_prints_every_table_as_json() {
     let rows = v["rows"].as_array().expect("rows");
     let in_table = |t: &str| rows.iter().filter(|r| r["table"] == t).count();
     assert_eq!((in_table("VPL count"), in_table("ISM size"), in_table("temporal coherence")), (5, 4, 2), "{text}");
+    assert_eq!(in_table("bounces (focus: bounce passes only)"), 10, "{text}");
     for r in rows {
         // Every row is measured or refused with a reason, never silently empty.
         assert!(r["total_ms"].as_f64().is_some_and(|t| t > 0.0) || r["refused"].is_string(), "{r}");
     }
     assert!(v["temporal_overhead"].is_number(), "{text}");
+    // Table 5.3: IRSM and point-cloud bounce times and their ratio for 2…6 bounces.
+    let speedup = v["bounce_speedup"].as_array().expect("bounce_speedup");
+    assert_eq!(speedup.len(), 5, "{text}");
+    for row in speedup {
+        let r = row.as_array().expect("a row");
+        assert!(r[1].as_f64().is_some_and(|t| t > 0.0) && r[2].as_f64().is_some_and(|t| t > 0.0), "{row}");
+    }
 }

@@ -21,10 +21,12 @@ use crate::passes::compose::ComposePass;
 use crate::passes::direct::DirectPass;
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::interleave::{GatherVisibility, InterleavePass};
-use crate::passes::ism::{IsmFrame, IsmLayout, IsmPass, VplVisibility};
+use crate::passes::irsm::{IrsmFrame, IrsmPass};
+use crate::passes::ism::{IsmFrame, IsmLayout, IsmPass, MAX_BOUNCES, VplVisibility};
 use crate::passes::shadow::{ShadowPass, gpu_light, light_views, setup_lights};
 use crate::passes::temporal::TemporalPass;
 use crate::passes::vpl::{BatchView, VplSamplePass, halton};
+use crate::passes::vpl_bounce::{BounceFrame, BounceMethod, VplBouncePass};
 use crate::passes::vpl_gather::{GatherParams, VplGatherPass};
 use crate::passes::vpl_importance::{ViewJob, VplImportancePass, view_powers};
 use crate::passes::vpl_visibility::{AtlasLayout, VisibilityParams, VplVisibilityPass};
@@ -47,15 +49,16 @@ pub enum RenderError {
     )]
     ShadowMapTooLarge { size: u32, layers: u32, max_dim: u32, max_layers: u32, largest: u32 },
     #[error(
-        "the exact-VPL visibility atlas for {vpls} VPLs per frame with {size}² faces needs {width}×{height} texels; this device allows {max_dim}²: at {size}² at most {largest} VPLs per frame fit"
+        "the exact-VPL visibility atlas for {vpls} VPLs per frame (all bounces) with {size}² faces needs {width}×{height} texels; this device allows {max_dim}²: at {size}² at most {largest} VPLs per frame fit"
     )]
     VplAtlasTooLarge { vpls: u32, size: u32, width: u64, height: u64, max_dim: u32, largest: u32 },
     #[error(
-        "the imperfect shadow map atlas for {vpls} VPLs of {size}² needs {width}×{height} texels ({bytes} bytes to splat into); this device allows {max_dim}² texels and {max_buffer} bytes: at {size}² at most {largest_vpls} VPLs fit{}",
+        "the imperfect shadow map atlas for {vpls} VPLs × {bounces} bounce(s) of {size}² needs {width}×{height} texels ({bytes} bytes to splat into); this device allows {max_dim}² texels and {max_buffer} bytes: at {size}² and {bounces} bounce(s) at most {largest_vpls} VPLs fit{}",
         match .largest_size { Some(s) => format!(", and {vpls} VPLs fit at map size {s}²"), None => String::new() }
     )]
     IsmAtlasTooLarge {
         vpls: u32,
+        bounces: u32,
         size: u32,
         width: u64,
         height: u64,
@@ -65,12 +68,27 @@ pub enum RenderError {
         largest_vpls: u32,
         largest_size: Option<u32>,
     },
+    #[error(
+        "the IRSM atlas for {vpls} VPLs of {size}² needs {width}×{height} texels; this device allows {max_dim}² texels and {max_buffer} bytes per buffer: at {size}² at most {largest_vpls} VPLs fit"
+    )]
+    IrsmAtlasTooLarge {
+        vpls: u32,
+        size: u32,
+        width: u64,
+        height: u64,
+        max_dim: u32,
+        max_buffer: u64,
+        largest_vpls: u32,
+    },
 }
 
 /// The passes of instant radiosity (Knecht 002), created when the technique is selected.
 struct Knecht {
     vpl: VplImportancePass,
     ism: IsmPass,
+    bounce: VplBouncePass,
+    /// The IRSM multi-bounce baseline, created when selected.
+    irsm: Option<IrsmPass>,
     exact: Option<VplVisibilityPass>,
     interleave: InterleavePass,
     temporal: TemporalPass,
@@ -582,19 +600,29 @@ impl Renderer {
         let k = self.knecht.get_or_insert_with(|| Knecht {
             vpl: VplImportancePass::new(&ctx, s.vpl.light_gbuffer_size),
             ism: IsmPass::new(&ctx),
+            bounce: VplBouncePass::new(&ctx),
+            irsm: None,
             exact: None,
             interleave: InterleavePass::new(&ctx, camera_entry, w, h, s.interleave.n),
             temporal: TemporalPass::new(&ctx, w, h),
             frames: 0,
         });
         let mut fresh = created;
-        fresh |= k.vpl.ensure(&ctx, &self.gpu_scene, s.vpl.light_gbuffer_size, views, s.vpl.count);
-        if s.ism.visibility == VplVisibility::Imperfect {
-            fresh |= k.ism.ensure(&ctx, &self.scene, &state, &s.ism, s.vpl.count, false);
+        let total = s.vpl.count * s.vpl.bounces.clamp(1, MAX_BOUNCES);
+        fresh |= k.vpl.ensure(&ctx, &self.gpu_scene, s.vpl.light_gbuffer_size, views, total);
+        // The point cloud serves the ISMs and the bounces; the splatted maps the ISM
+        // visibility and the bounces' visibility test.
+        if s.ism.visibility == VplVisibility::Imperfect || s.vpl.bounces > 1 {
+            let maps = if ism_splats(&s) { total } else { 1 };
+            fresh |= k.ism.ensure(&ctx, &self.scene, &state, &s.ism, maps, false);
+        }
+        if s.vpl.bounces > 1 && s.vpl.bounce_method == BounceMethod::Irsm {
+            let points = k.ism.cloud.gpu.len();
+            k.irsm.get_or_insert_with(|| IrsmPass::new(&ctx)).ensure(&ctx, s.vpl.count, s.vpl.irsm_size, points);
         }
         if s.ism.visibility == VplVisibility::Exact {
             let e = k.exact.get_or_insert_with(|| VplVisibilityPass::new(&ctx, &self.gpu_scene));
-            fresh |= e.ensure(&ctx, s.vpl.count, s.ism.map_size);
+            fresh |= e.ensure(&ctx, total, s.ism.map_size);
         }
         fresh |= k.interleave.ensure(&ctx, w, h, s.interleave.n);
         fresh |= k.temporal.resize(&ctx, w, h);
@@ -639,17 +667,68 @@ impl Renderer {
         } else {
             k.vpl.run(&ctx, enc, timer, gpu_scene, state, &lights, &jobs, halton_first, s.direct.intensity_scale);
         }
-        let n_vpls = s.vpl.count.min(k.vpl.capacity);
+        let bounces = s.vpl.bounces.clamp(1, MAX_BOUNCES);
+        let n_vpls = s.vpl.count.min(k.vpl.capacity / bounces);
+        let total = n_vpls * bounces;
 
-        // Stage 4: visibility.
+        // Stage 4 and the further bounces (§3.6): bounce b's ISMs are splatted, then bounce
+        // b + 1's VPLs are chosen from the cloud with them, and so on.
         let eye_offset = 0.005 * r;
+        let splats = ism_splats(&s);
+        let job = (splats || bounces > 1).then(|| {
+            let f = IsmFrame { vpls: n_vpls, bounces, eye_offset, extent: 2.0 * r };
+            k.ism.begin(&ctx, &gpu_scene.instances, &k.vpl.vpls, &s.ism, f)
+        });
+        if let Some(job) = &job {
+            let ism = &k.ism;
+            if splats {
+                timer.scope(&ctx, enc, "ism.splat", |e, slot| ism.splat(e, slot, job, 0));
+            }
+            if bounces > 1 {
+                let seed = if s.vpl.new_set_each_frame { k.frames } else { 0 };
+                let make = match (s.vpl.bounce_method, k.irsm.as_ref()) {
+                    (BounceMethod::Irsm, Some(irsm)) => {
+                        let f =
+                            IrsmFrame { vpls: n_vpls, bounces, eye_offset, min_distance: s.vpl.min_distance_m, seed };
+                        Bounces::Irsm(irsm, irsm.begin(&ctx, ism, &s.ism, &gpu_scene.instances, &k.vpl.vpls, f))
+                    }
+                    _ => {
+                        let f = BounceFrame {
+                            vpls: n_vpls,
+                            selection: s.vpl.bounce_selection,
+                            visibility: splats,
+                            eye_offset,
+                            depth_bias: s.ism.depth_bias,
+                            min_distance: s.vpl.min_distance_m,
+                            seed,
+                        };
+                        Bounces::PointCloud(
+                            &k.bounce,
+                            k.bounce.begin(&ctx, ism, &gpu_scene.instances, &k.vpl.vpls, bounces, f),
+                        )
+                    }
+                };
+                let points = ism.cloud.gpu.len() as u32;
+                for b in 1..bounces {
+                    timer.scope(&ctx, enc, &format!("vpl.bounce.{b}"), |e, slot| match &make {
+                        Bounces::PointCloud(pass, group) => pass.run(e, slot, group, b, n_vpls),
+                        Bounces::Irsm(pass, job) => pass.run(e, slot, job, b, n_vpls, points),
+                    });
+                    // The last bounce's maps are needed only when the ISMs are the shading's
+                    // visibility.
+                    if splats && (b + 1 < bounces || s.ism.visibility == VplVisibility::Imperfect) {
+                        timer.scope(&ctx, enc, &format!("ism.splat.{b}"), |e, slot| ism.splat(e, slot, job, b));
+                    }
+                }
+            }
+        }
         let ism_view = k.ism.shading_view();
         let exact_view;
         let vis = match s.ism.visibility {
             VplVisibility::None => GatherVisibility::None,
             VplVisibility::Imperfect => {
-                let f = IsmFrame { vpls: n_vpls, eye_offset, extent: 2.0 * r };
-                k.ism.run(&ctx, enc, timer, &gpu_scene.instances, &k.vpl.vpls, &s.ism, f);
+                let (ism, job) = (&k.ism, job.as_ref()?);
+                timer.scope(&ctx, enc, "ism.pull_push", |e, slot| ism.finish(&ctx, e, slot, job, &s.ism, 2.0 * r));
                 let l = k.ism.layout_info;
                 GatherVisibility::Ism {
                     atlas: &ism_view,
@@ -666,7 +745,7 @@ impl Renderer {
                 let clip = glam::Vec4::new(near, far, 2.0 * near, 0.0);
                 let vpls = &k.vpl.vpls;
                 timer.scope(&ctx, enc, "vpl.shadow", |e2, slot| {
-                    e.run(&ctx, e2, slot, gpu_scene, state, vpls, n_vpls, VisibilityParams { clip })
+                    e.run(&ctx, e2, slot, gpu_scene, state, vpls, total, VisibilityParams { clip })
                 });
                 exact_view = e.atlas_view.clone();
                 let l = e.layout_info;
@@ -676,7 +755,7 @@ impl Renderer {
 
         // Stages 5–6: interleaved gather and merge.
         let g = &self.gbuffer.targets.views;
-        k.interleave.shade(&ctx, enc, timer, &self.camera_buffer, g, &k.vpl.vpls, n_vpls, s.vpl.min_distance_m, vis);
+        k.interleave.shade(&ctx, enc, timer, &self.camera_buffer, g, &k.vpl.vpls, total, s.vpl.min_distance_m, vis);
 
         // Stage 6's geometry-aware filter, then stage 7's confidence merge. The thesis merges
         // first and filters after (§4, steps 11–12); we keep DESIGN.md's stage order because
@@ -802,7 +881,8 @@ impl Renderer {
         if k.frames == 0 {
             return None;
         }
-        let count = self.settings.vpl.count.min(k.vpl.capacity) as u64;
+        let count =
+            (self.settings.vpl.count * self.settings.vpl.bounces.clamp(1, MAX_BOUNCES)).min(k.vpl.capacity) as u64;
         let size = std::mem::size_of::<crate::passes::vpl::GpuVpl>() as u64;
         let bytes = crate::buffers::read_storage(&self.ctx, &k.vpl.vpls, count * size).ok()?;
         Some(
@@ -856,6 +936,22 @@ fn check_vpl_atlas(ctx: &GpuContext, settings: &LabSettings) -> Result<(), Rende
     })
 }
 
+/// The pass that makes a frame's further bounces, with its bind groups.
+enum Bounces<'a> {
+    PointCloud(&'a VplBouncePass, wgpu::BindGroup),
+    Irsm(&'a IrsmPass, crate::passes::irsm::IrsmJob),
+}
+
+/// Whether instant radiosity splats the point cloud into ISMs this frame: for the ISM
+/// visibility, and for the further bounces' visibility test unless visibility is off.
+fn ism_splats(s: &LabSettings) -> bool {
+    match s.ism.visibility {
+        VplVisibility::None => false,
+        VplVisibility::Imperfect => true,
+        VplVisibility::Exact => s.vpl.bounces > 1 && s.vpl.bounce_method == BounceMethod::PointCloud,
+    }
+}
+
 /// Refuses an ISM (or exact-map) atlas of instant radiosity larger than the device allows,
 /// naming the largest VPL count at this map size and the largest map size for this count.
 fn check_ism_atlas(ctx: &GpuContext, settings: &LabSettings) -> Result<(), RenderError> {
@@ -863,42 +959,56 @@ fn check_ism_atlas(ctx: &GpuContext, settings: &LabSettings) -> Result<(), Rende
         return Ok(());
     }
     let (vpls, size) = (settings.vpl.count, settings.ism.map_size);
+    let bounces = settings.vpl.bounces.clamp(1, MAX_BOUNCES);
     let max_dim = ctx.limits.max_texture_dimension_2d;
-    match settings.ism.visibility {
-        VplVisibility::None => Ok(()),
-        VplVisibility::Imperfect => {
-            let max_buffer = ctx.limits.max_storage_buffer_binding_size.min(ctx.limits.max_buffer_size);
-            let l = IsmLayout::new(vpls, size);
-            if l.fits(max_dim, max_buffer) {
-                return Ok(());
-            }
-            Err(RenderError::IsmAtlasTooLarge {
+    if ism_splats(settings) {
+        let max_buffer = ctx.limits.max_storage_buffer_binding_size.min(ctx.limits.max_buffer_size);
+        let l = IsmLayout::new(vpls * bounces, size);
+        if !l.fits(max_dim, max_buffer) {
+            return Err(RenderError::IsmAtlasTooLarge {
                 vpls,
+                bounces,
                 size,
                 width: l.width(),
                 height: l.height(),
                 bytes: l.width() * l.height() * 4,
                 max_dim,
                 max_buffer,
-                largest_vpls: IsmLayout::largest_count(size, max_dim, max_buffer),
-                largest_size: IsmLayout::largest_size(vpls, max_dim, max_buffer),
-            })
+                largest_vpls: IsmLayout::largest_count(size, max_dim, max_buffer) / bounces,
+                largest_size: IsmLayout::largest_size(vpls * bounces, max_dim, max_buffer),
+            });
         }
-        VplVisibility::Exact => {
-            let l = AtlasLayout::new(vpls, size);
-            if l.fits(max_dim) {
-                return Ok(());
-            }
-            Err(RenderError::VplAtlasTooLarge {
+    }
+    if bounces > 1 && settings.vpl.bounce_method == BounceMethod::Irsm {
+        let max_buffer = ctx.limits.max_storage_buffer_binding_size.min(ctx.limits.max_buffer_size);
+        let size = crate::passes::irsm::irsm_size(settings.vpl.irsm_size);
+        let l = IsmLayout::new(vpls, size);
+        if !l.fits(max_dim, max_buffer) {
+            return Err(RenderError::IrsmAtlasTooLarge {
                 vpls,
                 size,
                 width: l.width(),
                 height: l.height(),
                 max_dim,
-                largest: AtlasLayout::largest_batch(size, max_dim),
-            })
+                max_buffer,
+                largest_vpls: IsmLayout::largest_count(size, max_dim, max_buffer),
+            });
         }
     }
+    if settings.ism.visibility == VplVisibility::Exact {
+        let l = AtlasLayout::new(vpls * bounces, size);
+        if !l.fits(max_dim) {
+            return Err(RenderError::VplAtlasTooLarge {
+                vpls: vpls * bounces,
+                size,
+                width: l.width(),
+                height: l.height(),
+                max_dim,
+                largest: AtlasLayout::largest_batch(size, max_dim),
+            });
+        }
+    }
+    Ok(())
 }
 
 fn check_size(ctx: &GpuContext, width: u32, height: u32) -> Result<(), RenderError> {
@@ -927,6 +1037,8 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         "vpl/importance.wgsl"
         | "vpl/reduce.wgsl"
         | "vpl/warp.wgsl"
+        | "vpl/bounce.wgsl"
+        | "vpl/irsm.wgsl"
         | "ism/splat.wgsl"
         | "ism/resolve.wgsl"
         | "ism/pull_push.wgsl"
@@ -954,6 +1066,7 @@ pub fn scope_output(scope: &str) -> Option<&'static str> {
         "indirect.gather" => "indirect.raw",
         "vpl.importance" => "vpl.importance",
         "ism.splat" => "ism.atlas",
+        s if s.starts_with("ism.splat.") || s.starts_with("vpl.bounce.") => "ism.atlas",
         "ism.pull_push" => "ism.atlas_pulled",
         "interleave.split" => "interleave.split.albedo",
         "interleave.gather" => "indirect.accum",

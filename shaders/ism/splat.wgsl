@@ -1,6 +1,7 @@
 // Stage 4, imperfect shadow maps (Knecht 002 §2.6.5, Ritschel et al. 2008): every point of
-// the point cloud is splatted into the paraboloid map of one VPL (point j → VPL j mod N, so
-// each ISM sees a different N-th of the cloud) as a box of texels whose size falls with the
+// the point cloud is splatted into the paraboloid map of one VPL of a bounce (point j → VPL
+// first + j mod N, so each ISM sees a different N-th of the cloud; bounce b's VPLs start at
+// slot first = b·N, §3.6) as a box of texels whose size falls with the
 // distance: a disc of radius r_s (the point's share of the surface area, √(A / (π · points
 // per ISM))) at distance d covers r_s · size / (2 (1 + cos θ) d) texels of a paraboloid map
 // (its texel spans 4 cos²(θ/2) / size radians at angle θ from the normal). WebGPU draws only
@@ -32,6 +33,8 @@ struct SplatParams {
     // x: eye offset along the VPL normal, y: point radius r_s, z: largest splat half-size
     // (texels), w: splat scale
     geom: vec4<f32>,
+    // x: first VPL slot of the bounce, y: first map (tile) of the bounce
+    slots: vec4<u32>,
 }
 
 @group(0) @binding(0) var<uniform> sp: SplatParams;
@@ -39,17 +42,28 @@ struct SplatParams {
 @group(0) @binding(2) var<storage, read> instances: array<Instance>;
 @group(0) @binding(3) var<storage, read> vpls: array<Vpl>;
 @group(0) @binding(4) var<storage, read_write> depth: array<atomic<u32>>;
+// The IRSM baseline's texel owners (point index + 1, 0 = none); a dummy for the ISMs.
+@group(0) @binding(5) var<storage, read_write> owner: array<atomic<u32>>;
 
-@compute @workgroup_size(64, 1, 1)
-fn cs_splat(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let j = gid.x + gid.y * 65535u * 64u;
+// Where point j lands: the box of texels (centre ± k) in map `tile`, and its key.
+struct Footprint {
+    valid: bool,
+    centre: vec2<i32>,
+    k: i32,
+    origin: vec2<u32>,
+    key: u32,
+}
+
+fn footprint(j: u32) -> Footprint {
+    var f: Footprint;
+    f.valid = false;
     if (j >= sp.counts.x || sp.counts.y == 0u) {
-        return;
+        return f;
     }
-    let i = j % sp.counts.y;
-    let vpl = vpls[i];
+    let local = j % sp.counts.y;
+    let vpl = vpls[sp.slots.x + local];
     if (vpl.position.w < 0.5) {
-        return;
+        return f;
     }
     let pt = points[j];
     let world = (instances[pt.draw].model * vec4<f32>(pt.position, 1.0)).xyz;
@@ -57,29 +71,66 @@ fn cs_splat(@builtin(global_invocation_id) gid: vec3<u32>) {
     let w = world - eye;
     let d = length(w);
     if (d <= 0.0) {
-        return;
+        return f;
     }
     let tbn = vpl_basis(vpl.normal.xyz);
     let q = vec3<f32>(dot(w, tbn[0]), dot(w, tbn[1]), dot(w, tbn[2])) / d;
     if (q.z < 0.0) {
-        return;
+        return f;
     }
     let size = sp.counts.w;
     let c = paraboloid_project(q) * f32(size);
     let r = min(sp.geom.w * sp.geom.y * f32(size) / (2.0 * (1.0 + q.z) * d), sp.geom.z);
-    let k = i32(floor(r));
-    let origin = vpl_tile_origin(i, sp.counts.z, size);
-    let width = sp.counts.z * size;
-    let key = ~bitcast<u32>(d);
-    let centre = vec2<i32>(floor(c));
-    for (var dy = -k; dy <= k; dy = dy + 1) {
-        for (var dx = -k; dx <= k; dx = dx + 1) {
-            let t = centre + vec2<i32>(dx, dy);
-            if (t.x < 0 || t.y < 0 || t.x >= i32(size) || t.y >= i32(size)) {
+    f.valid = true;
+    f.k = i32(floor(r));
+    f.origin = vpl_tile_origin(sp.slots.y + local, sp.counts.z, size);
+    f.key = ~bitcast<u32>(d);
+    f.centre = vec2<i32>(floor(c));
+    return f;
+}
+
+@compute @workgroup_size(64, 1, 1)
+fn cs_splat(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let j = gid.x + gid.y * 65535u * 64u;
+    let f = footprint(j);
+    if (!f.valid) {
+        return;
+    }
+    let size = i32(sp.counts.w);
+    let width = sp.counts.z * sp.counts.w;
+    for (var dy = -f.k; dy <= f.k; dy = dy + 1) {
+        for (var dx = -f.k; dx <= f.k; dx = dx + 1) {
+            let t = f.centre + vec2<i32>(dx, dy);
+            if (t.x < 0 || t.y < 0 || t.x >= size || t.y >= size) {
                 continue;
             }
-            let a = origin + vec2<u32>(t);
-            atomicMax(&depth[a.y * width + a.x], key);
+            let a = f.origin + vec2<u32>(t);
+            atomicMax(&depth[a.y * width + a.x], f.key);
+        }
+    }
+}
+
+// IRSM baseline (Ritschel et al. 2008, Knecht 002 §3.6): after cs_splat, each texel learns
+// which point won it (the nearest; the largest index among equal distances).
+@compute @workgroup_size(64, 1, 1)
+fn cs_owner(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let j = gid.x + gid.y * 65535u * 64u;
+    let f = footprint(j);
+    if (!f.valid) {
+        return;
+    }
+    let size = i32(sp.counts.w);
+    let width = sp.counts.z * sp.counts.w;
+    for (var dy = -f.k; dy <= f.k; dy = dy + 1) {
+        for (var dx = -f.k; dx <= f.k; dx = dx + 1) {
+            let t = f.centre + vec2<i32>(dx, dy);
+            if (t.x < 0 || t.y < 0 || t.x >= size || t.y >= size) {
+                continue;
+            }
+            let a = f.origin + vec2<u32>(t);
+            if (atomicLoad(&depth[a.y * width + a.x]) == f.key) {
+                atomicMax(&owner[a.y * width + a.x], j + 1u);
+            }
         }
     }
 }

@@ -24,6 +24,7 @@ const REFERENCES: &[Reference] = &[
     Reference { file: "cornell_direct_64.exr", size: 64, spp: 1, bounces: 0, image: "direct" },
     Reference { file: "cornell_1bounce_64.exr", size: 64, spp: 256, bounces: 1, image: "full" },
     Reference { file: "cornell_1bounce_256.exr", size: 256, spp: 256, bounces: 1, image: "full" },
+    Reference { file: "cornell_3bounce_128.exr", size: 128, spp: 256, bounces: 3, image: "full" },
 ];
 
 fn data_dir() -> PathBuf {

@@ -12,7 +12,7 @@
 //! | one VPL's light at a pixel, Eq. 4.7–4.9 | [`vpl_radiance`] | `common/vpl.wgsl` `vpl_radiance` |
 //! | geometry-aware n×n box filter (§3.4.1) | [`geometry_aware_filter`] | `interleave/filter.wgsl` |
 //! | confidence, Eq. 3.1–3.4, and the merge Eq. 3.6 | [`confidence`] | `temporal/confidence.wgsl` |
-//! | bounce selection, §3.6 | [`select_bounce`] | `vpl/bounce.wgsl` |
+//! | bounce selection, §3.6.1 | [`bounce_incident`], [`select_bounce`], [`bounce_vpl`] | `vpl/bounce.wgsl` |
 
 use glam::{UVec2, Vec2, Vec3};
 
@@ -415,24 +415,133 @@ pub fn merge(i_new: Vec3, i_prev: Vec3, confidence: f32) -> Vec3 {
     i_prev * confidence + (1.0 - confidence) * i_new
 }
 
-/// The packed key of the bounce selection (§3.6; `atomicMax` replaces the thesis' depth
-/// test): the contribution's f32 bits with the low 12 bits replaced by the sample's index
-/// modulo 4096 — positive floats order like their bits, so the largest key is the largest
-/// contribution (to 2⁻¹¹ relative) and names its sample.
-pub fn bounce_key(contribution: f32, sample: u32) -> u32 {
-    (contribution.max(0.0).to_bits() & !0xFFF) | (sample & 0xFFF)
+/// PCG hash (Jarzynski & Olano, JCGT 2020), the GPU's random source for the bounce selection.
+pub fn pcg_hash(v: u32) -> u32 {
+    let state = v.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
+    (word >> 22) ^ word
 }
 
-/// For each VPL, the sample among those assigned to it whose key is the largest, or None
-/// when none has a positive contribution (twin of the `atomicMax` selection).
-pub fn select_bounce(contributions: &[f32], assigned_vpl: &[u32], vpls: usize) -> Vec<Option<u32>> {
-    let mut best = vec![0u32; vpls];
-    for (s, (&c, &v)) in contributions.iter().zip(assigned_vpl).enumerate() {
-        if c > 0.0 && (v as usize) < vpls {
-            best[v as usize] = best[v as usize].max(bounce_key(c, s as u32));
+/// Uniform number in (0, 1) of sample `j` for the proportional bounce selection.
+pub fn bounce_uniform(seed: u32, j: u32) -> f32 {
+    let h = pcg_hash(j ^ pcg_hash(seed));
+    ((h >> 8) as f32 + 0.5) / 16_777_216.0
+}
+
+/// A point-cloud sample as the bounce selection sees it (world space).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BounceSample {
+    pub position: Vec3,
+    pub normal: Vec3,
+    pub albedo: Vec3,
+    pub di: f32,
+    pub si: f32,
+    pub sp: f32,
+    /// W / w_s: the cloud's weighted area over the sample's object weight.
+    pub weighted_area: f32,
+}
+
+/// Flux arriving at sample `s` from `vpl` and the sample's contribution (Knecht 002
+/// §3.6.1, twin of `incident` in `shaders/vpl/bounce.wgsl`):
+///
+/// - Φ_s = Φ_v · f_v(ω_in, v→s) · cos θ_v · cos θ_s / max(d², d_min²) · A_s with the glossy
+///   VPL emission of Eq. 4.8 (the one BRDF, [`crate::cpu::brdf`]) and the geometry term of
+///   Eq. 4.7; A_s = W / (w_s · P_v) is the area the sample stands for among the P_v samples
+///   assigned to the VPL;
+/// - C_s = lum(Φ_s ⊙ (c_s·DI_s + SI_s·SI_v)), the light the sample would send on.
+///
+/// `visible` is the ISM test's result. Returns (Φ_s, C_s); zero when facing away or hidden.
+pub fn bounce_incident(vpl: &Vpl, s: &BounceSample, per_vpl: u32, d_min: f32, visible: bool) -> (Vec3, f32) {
+    let w = s.position - vpl.position;
+    let d2 = w.length_squared();
+    let l = w / d2.max(1e-12).sqrt();
+    let (cos_v, cos_s) = (vpl.normal.dot(l), -s.normal.dot(l));
+    if cos_v <= 0.0 || cos_s <= 0.0 || !visible {
+        return (Vec3::ZERO, 0.0);
+    }
+    let f_v = crate::cpu::brdf::eval(vpl.normal, vpl.incident, l, vpl.albedo, vpl.di, vpl.si, vpl.sp);
+    let area = s.weighted_area / per_vpl as f32;
+    let flux = vpl.flux * f_v * cos_v * cos_s / d2.max(d_min * d_min) * area;
+    let reflect = s.albedo * s.di + Vec3::splat(s.si * vpl.si);
+    (flux, luminance(flux * reflect))
+}
+
+/// Rec. 709 luminance.
+pub fn luminance(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+}
+
+/// How the next bounce's VPL is chosen (twin of `BounceSelection`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Selection {
+    /// Largest C_s (Knecht §3.6.1's depth test).
+    Strongest,
+    /// Exponential race with this seed: the largest C_s / (−ln u_s) wins, i.e. sample s with
+    /// probability C_s / ΣC (Knecht §6.1's future work).
+    Proportional { seed: u32 },
+}
+
+/// Bounce selection for one VPL (twin of the reduction in `shaders/vpl/bounce.wgsl`):
+/// among `samples` (index j, contribution C_j) the one with the largest key — C_j, or
+/// C_j / (−ln u_j) — ties to the lowest index, and ΣC. None when no C_j > 0.
+pub fn select_bounce(samples: &[(u32, f32)], selection: Selection) -> Option<(u32, f32)> {
+    let mut best: Option<(u32, f32)> = None;
+    let mut sum = 0.0f32;
+    for &(j, c) in samples {
+        if c <= 0.0 {
+            continue;
+        }
+        sum += c;
+        let key = match selection {
+            Selection::Strongest => c,
+            Selection::Proportional { seed } => c / -bounce_uniform(seed, j).ln(),
+        };
+        if best.is_none_or(|(bj, bk)| key > bk || (key == bk && j < bj)) {
+            best = Some((j, key));
         }
     }
-    best.into_iter().map(|k| (k != 0).then_some(k & 0xFFF)).collect()
+    best.map(|(j, _)| (j, sum))
+}
+
+/// The next bounce's VPL from sample `s` with incident flux `flux` and contribution `c`
+/// out of `sum` (Knecht §3.6.1): Φ = Φ_s · ΣC / C_s, SI = SI_s · SI_v, ω_in toward the
+/// source VPL.
+pub fn bounce_vpl(source: &Vpl, s: &BounceSample, flux: Vec3, c: f32, sum: f32) -> Vpl {
+    Vpl {
+        position: s.position,
+        normal: s.normal,
+        flux: flux * (sum / c),
+        incident: (source.position - s.position).normalize_or_zero(),
+        albedo: s.albedo,
+        di: s.di,
+        si: s.si * source.si,
+        sp: s.sp,
+    }
+}
+
+/// IRSM importance sampling (the baseline of §3.6 after Ritschel et al.; twin of `cs_sample`
+/// in `shaders/vpl/irsm.wgsl`): new VPL `k` of `n` picks an IRSM with the stratified
+/// u₁ = (k + ξ)/n over the running sum of `totals`, then a texel with u₂ = ξ' inside that
+/// IRSM's inclusive prefix sums `cdf[i]` (the first entry above u). Returns (IRSM, texel), or
+/// None when every total is 0.
+pub fn irsm_pick(totals: &[f32], cdf: &[Vec<f32>], k: u32, seed: u32) -> Option<(usize, usize)> {
+    let n = totals.len();
+    let running: Vec<f32> = totals
+        .iter()
+        .scan(0.0f32, |acc, t| {
+            *acc += t;
+            Some(*acc)
+        })
+        .collect();
+    let grand = *running.last()?;
+    if grand.is_nan() || grand <= 0.0 {
+        return None;
+    }
+    let first_above = |v: &[f32], u: f32| v.partition_point(|&c| c <= u).min(v.len() - 1);
+    let u1 = (k as f32 + bounce_uniform(seed, 2 * k)) / n as f32 * grand;
+    let i = first_above(&running, u1);
+    let u2 = bounce_uniform(seed, 2 * k + 1) * totals[i];
+    Some((i, first_above(&cdf[i], u2)))
 }
 
 #[cfg(test)]
@@ -527,9 +636,25 @@ mod tests {
     }
 
     #[test]
-    fn bounce_selection_takes_the_largest_contribution_per_vpl() {
-        let c = [0.1, 0.5, 0.3, 0.0, 0.2];
-        let v = [0, 0, 1, 1, 1];
-        assert_eq!(select_bounce(&c, &v, 3), vec![Some(1), Some(2), None]);
+    fn bounce_selection_takes_the_largest_contribution_and_sums() {
+        let samples = [(4, 0.5), (9, 2.0), (13, 0.0), (21, 2.0), (30, 1.0)];
+        assert_eq!(select_bounce(&samples, Selection::Strongest), Some((9, 5.5)));
+        assert_eq!(select_bounce(&[(1, 0.0)], Selection::Strongest), None);
+    }
+
+    #[test]
+    fn proportional_selection_follows_the_contributions() {
+        // Exponential race: sample k wins with probability C_k / ΣC.
+        let samples = [(0, 1.0), (1, 3.0), (2, 0.0), (3, 4.0)];
+        let mut wins = [0u32; 4];
+        let trials = 20000;
+        for seed in 0..trials {
+            let (j, _) = select_bounce(&samples, Selection::Proportional { seed }).expect("a winner");
+            wins[j as usize] += 1;
+        }
+        for (k, expect) in [(0, 1.0 / 8.0), (1, 3.0 / 8.0), (2, 0.0), (3, 4.0 / 8.0)] {
+            let p = wins[k] as f64 / trials as f64;
+            assert!((p - expect).abs() < 0.015, "sample {k}: {p} vs {expect}");
+        }
     }
 }

@@ -18,6 +18,7 @@ use crate::buffers::{BufferKind, BufferRegistry};
 use crate::cpu::knecht::halton;
 use crate::gpu::GpuContext;
 use crate::scene::{Scene, SceneState};
+use crate::timing::Slot;
 use crate::{settings_enum, settings_group};
 
 settings_enum! {
@@ -103,6 +104,19 @@ pub struct GpuPoint {
     pub material: u32,
 }
 
+/// What a point's surface reflects, for the bounce selection (Knecht 002 §3.6.1); WGSL twin:
+/// `PointSurface` in `shaders/vpl/bounce.wgsl`. The base colour factor only (textures are
+/// not looked up, as in the path tracer of `cpu::pathtrace`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuPointSurface {
+    /// rgb: base colour c; a: W / w_s, the cloud's weighted area over the point's object
+    /// weight (a point stands for W / (w_s · P_v) of surface among P_v points of one VPL).
+    pub albedo: [f32; 4],
+    /// DI, SI, SP, 0.
+    pub material: [f32; 4],
+}
+
 /// One point of the cloud: where it lies as the thesis stores it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CloudPoint {
@@ -114,11 +128,19 @@ pub struct CloudPoint {
     pub barycentrics: Vec3,
 }
 
+/// Bind groups of one frame's splats and resolve ([`IsmPass::begin`]).
+pub struct IsmJob {
+    splat: wgpu::BindGroup,
+    resolve: wgpu::BindGroup,
+}
+
 /// The point cloud of a scene (built once per scene, count and placement).
 #[derive(Clone, Debug)]
 pub struct PointCloud {
     pub points: Vec<CloudPoint>,
     pub gpu: Vec<GpuPoint>,
+    /// Reflectance and area share of each point (same order as `gpu`).
+    pub surfaces: Vec<GpuPointSurface>,
     /// Total surface area of the scene at time 0 (unweighted).
     pub area: f32,
 }
@@ -136,6 +158,10 @@ impl SplitMix {
 }
 
 impl PointCloud {
+    pub fn empty() -> Self {
+        Self { points: Vec::new(), gpu: Vec::new(), surfaces: Vec::new(), area: 0.0 }
+    }
+
     /// `count` points on the triangles of `state`'s draws, ∝ area × sample weight.
     pub fn build(scene: &Scene, state: &SceneState, count: u32, placement: PointPlacement) -> Self {
         struct Tri {
@@ -170,7 +196,7 @@ impl PointCloud {
                 cdf.push(total);
             }
         }
-        let mut cloud = Self { points: Vec::new(), gpu: Vec::new(), area: area as f32 };
+        let mut cloud = Self { points: Vec::new(), gpu: Vec::new(), surfaces: Vec::new(), area: area as f32 };
         if total <= 0.0 {
             return cloud;
         }
@@ -200,6 +226,12 @@ impl PointCloud {
                 normal: nrm.into(),
                 material: tri.material,
             });
+            let m = scene.materials.get(tri.material as usize).cloned().unwrap_or_default();
+            let weight = m.sample_weight.max(1e-6) as f64;
+            cloud.surfaces.push(GpuPointSurface {
+                albedo: m.base_color.truncate().extend((total / weight) as f32).to_array(),
+                material: [m.diffuse_intensity(), m.specular_intensity(), m.specular_power(), 0.0],
+            });
         }
         // Point j goes to ISM j mod N. Halton points whose indices share a residue modulo a
         // power of two share their leading digits in base 2, i.e. lie on the same few
@@ -209,6 +241,7 @@ impl PointCloud {
             let k = ((shuffle.next_f32() * (i + 1) as f32) as usize).min(i);
             cloud.points.swap(i, k);
             cloud.gpu.swap(i, k);
+            cloud.surfaces.swap(i, k);
         }
         cloud
     }
@@ -260,9 +293,16 @@ impl IsmLayout {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct SplatParams {
+    /// Points, VPLs of the bounce, atlas columns, map size.
     pub counts: [u32; 4],
+    /// Eye offset, point radius r_s, largest splat half-size, splat scale.
     pub geom: Vec4,
+    /// x: the bounce's first VPL slot, y: its first map (tile) in the atlas.
+    pub slots: [u32; 4],
 }
+
+/// Most light bounces (`vpl.bounces`); one splat uniform slot each.
+pub const MAX_BOUNCES: u32 = 6;
 
 /// Uniform of one pull-push level; WGSL twin: `LevelParams` in `shaders/ism/pull_push.wgsl`.
 #[repr(C)]
@@ -277,7 +317,11 @@ const LEVEL_STRIDE: u64 = 256;
 /// What a frame's ISMs are made from.
 #[derive(Clone, Copy, Debug)]
 pub struct IsmFrame {
+    /// VPLs of one bounce (N).
     pub vpls: u32,
+    /// Light bounces B: the VPL list holds B sets of N, bounce b in slots b·N … b·N + N − 1,
+    /// and the atlas one map per slot.
+    pub bounces: u32,
     /// Eye offset along the VPL normal (scene units).
     pub eye_offset: f32,
     /// Scene extent (thresholds are fractions of it).
@@ -287,8 +331,12 @@ pub struct IsmFrame {
 pub struct IsmPass {
     cloud_key: Option<(u32, PointPlacement)>,
     pub cloud: PointCloud,
-    points: wgpu::Buffer,
-    depth: wgpu::Buffer,
+    /// `ism.points`: the cloud's [`GpuPoint`]s.
+    pub points: wgpu::Buffer,
+    /// `ism.point_surfaces`: the cloud's [`GpuPointSurface`]s.
+    pub surfaces: wgpu::Buffer,
+    /// Splatted distances of the atlas (inverted f32 bits, 0 = empty), read by the bounce pass.
+    pub depth: wgpu::Buffer,
     pub atlas: wgpu::Texture,
     pub pulled: wgpu::Texture,
     pub layout_info: IsmLayout,
@@ -303,6 +351,8 @@ pub struct IsmPass {
     push_pipeline: wgpu::ComputePipeline,
     splat_params: wgpu::Buffer,
     level_params: wgpu::Buffer,
+    /// The splat shader's IRSM owner binding, unused by the ISMs.
+    no_owner: wgpu::Buffer,
 }
 
 impl IsmPass {
@@ -313,11 +363,12 @@ impl IsmPass {
         let splat_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("ism.splat.inputs"),
             entries: &[
-                bgl::uniform(0, cs),
+                bgl::uniform_dynamic(0, cs),
                 bgl::storage(1, cs, true),
                 bgl::storage(2, cs, true),
                 bgl::storage(3, cs, true),
                 bgl::storage(4, cs, false),
+                bgl::storage(5, cs, false),
             ],
         });
         let resolve_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -355,7 +406,7 @@ impl IsmPass {
         let push_pipeline = super::compute_pipeline(device, "ism.push", &m_pp, "cs_push", &[&push_layout]);
         let splat_params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("ism.splat.params"),
-            size: std::mem::size_of::<SplatParams>() as u64,
+            size: LEVEL_STRIDE * MAX_BOUNCES as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -365,13 +416,20 @@ impl IsmPass {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let no_owner = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("ism.no_owner"),
+            size: 4,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
         let layout_info = IsmLayout::new(1, 32);
         let (depth, atlas, pulled) = Self::targets(device, layout_info, 0);
-        let points = Self::point_buffer(device, &[]);
+        let (points, surfaces) = Self::point_buffers(device, &PointCloud::empty());
         Self {
             cloud_key: None,
-            cloud: PointCloud { points: Vec::new(), gpu: Vec::new(), area: 0.0 },
+            cloud: PointCloud::empty(),
             points,
+            surfaces,
             depth,
             atlas,
             pulled,
@@ -387,17 +445,25 @@ impl IsmPass {
             push_pipeline,
             splat_params,
             level_params,
+            no_owner,
         }
     }
 
-    fn point_buffer(device: &wgpu::Device, points: &[GpuPoint]) -> wgpu::Buffer {
+    fn point_buffers(device: &wgpu::Device, cloud: &PointCloud) -> (wgpu::Buffer, wgpu::Buffer) {
         use wgpu::util::DeviceExt;
         let zero = [GpuPoint { position: [0.0; 3], draw: 0, normal: [0.0; 3], material: 0 }];
-        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        let points = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("ism.points"),
-            contents: bytemuck::cast_slice(if points.is_empty() { &zero } else { points }),
+            contents: bytemuck::cast_slice(if cloud.gpu.is_empty() { &zero } else { &cloud.gpu }),
             usage: wgpu::BufferUsages::STORAGE,
-        })
+        });
+        let zero = [GpuPointSurface { albedo: [0.0; 4], material: [0.0; 4] }];
+        let surfaces = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("ism.point_surfaces"),
+            contents: bytemuck::cast_slice(if cloud.surfaces.is_empty() { &zero } else { &cloud.surfaces }),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        (points, surfaces)
     }
 
     fn targets(device: &wgpu::Device, l: IsmLayout, levels: u32) -> (wgpu::Buffer, wgpu::Texture, wgpu::Texture) {
@@ -405,7 +471,7 @@ impl IsmPass {
         let depth = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("ism.splat_depth"),
             size: 4 * w as u64 * h as u64,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
         let atlas = super::create_target(
@@ -433,7 +499,8 @@ impl IsmPass {
     }
 
     /// Builds the point cloud when its settings or the scene changed and sizes the atlas for
-    /// `vpls` maps (the caller checked that it fits). Returns whether textures were recreated.
+    /// `vpls` maps (all bounces; the caller checked that it fits). Returns whether textures
+    /// were recreated.
     pub fn ensure(
         &mut self,
         ctx: &GpuContext,
@@ -446,7 +513,7 @@ impl IsmPass {
         let key = (s.points, s.placement);
         if rebuild_cloud || self.cloud_key != Some(key) {
             self.cloud = PointCloud::build(scene, state, s.points, s.placement);
-            self.points = Self::point_buffer(&ctx.device, &self.cloud.gpu);
+            (self.points, self.surfaces) = Self::point_buffers(&ctx.device, &self.cloud);
             self.cloud_key = Some(key);
         }
         let l = IsmLayout::new(vpls, s.map_size);
@@ -475,8 +542,108 @@ impl IsmPass {
         );
     }
 
-    /// Splats the point cloud into the maps of the first `f.vpls` VPLs of `vpls`, resolves the
-    /// atlas and runs pull-push.
+    /// Radius r_s of a point's splat disc when each of `vpls` maps gets 1/`vpls` of the cloud:
+    /// √(A / (π · points per map)).
+    pub fn point_radius(&self, vpls: u32) -> f32 {
+        let per_ism = (self.cloud.gpu.len() as f32 / vpls.max(1) as f32).max(1.0);
+        (self.cloud.area / (std::f32::consts::PI * per_ism)).sqrt()
+    }
+
+    /// Writes the splat uniforms of every bounce of `f` and returns the bind groups of the
+    /// frame's splats and resolve.
+    pub fn begin(
+        &self,
+        ctx: &GpuContext,
+        instances: &wgpu::Buffer,
+        vpls: &wgpu::Buffer,
+        s: &IsmSettings,
+        f: IsmFrame,
+    ) -> IsmJob {
+        let l = self.layout_info;
+        let n_points = self.cloud.gpu.len() as u32;
+        let r_s = self.point_radius(f.vpls);
+        let mut data = vec![0u8; (LEVEL_STRIDE * MAX_BOUNCES as u64) as usize];
+        for b in 0..f.bounces.clamp(1, MAX_BOUNCES) {
+            let sp = SplatParams {
+                counts: [n_points, f.vpls, l.cols, l.size],
+                geom: Vec4::new(f.eye_offset, r_s, s.max_splat_radius as f32, s.splat_scale),
+                slots: [b * f.vpls, b * f.vpls, 0, 0],
+            };
+            let o = (b as u64 * LEVEL_STRIDE) as usize;
+            data[o..o + std::mem::size_of::<SplatParams>()].copy_from_slice(bytemuck::bytes_of(&sp));
+        }
+        ctx.queue.write_buffer(&self.splat_params, 0, &data);
+        let params = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &self.splat_params,
+            offset: 0,
+            size: std::num::NonZeroU64::new(std::mem::size_of::<SplatParams>() as u64),
+        });
+        let splat = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("ism.splat.inputs"),
+            layout: &self.splat_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: params },
+                wgpu::BindGroupEntry { binding: 1, resource: self.points.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: instances.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: vpls.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: self.depth.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 5, resource: self.no_owner.as_entire_binding() },
+            ],
+        });
+        let atlas_view = super::view(&self.atlas, "ism.atlas");
+        let resolve = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("ism.resolve.inputs"),
+            layout: &self.resolve_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: self.depth.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&atlas_view) },
+            ],
+        });
+        IsmJob { splat, resolve }
+    }
+
+    /// Splats the point cloud into the maps of bounce `bounce` (point j → slot b·N + j mod N);
+    /// bounce 0 first clears the whole atlas.
+    pub fn splat(&self, encoder: &mut wgpu::CommandEncoder, slot: Option<Slot<'_>>, job: &IsmJob, bounce: u32) {
+        if bounce == 0 {
+            encoder.clear_buffer(&self.depth, 0, None);
+        }
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("ism.splat"),
+            timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+        });
+        pass.set_pipeline(&self.splat_pipeline);
+        pass.set_bind_group(0, &job.splat, &[(bounce.min(MAX_BOUNCES - 1) as u64 * LEVEL_STRIDE) as u32]);
+        let groups = (self.cloud.gpu.len() as u32).div_ceil(64);
+        pass.dispatch_workgroups(groups.min(65535), groups.div_ceil(65535), 1);
+    }
+
+    /// Resolves the splatted distances into `ism.atlas` and runs pull-push.
+    pub fn finish(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<Slot<'_>>,
+        job: &IsmJob,
+        s: &IsmSettings,
+        extent: f32,
+    ) {
+        let l = self.layout_info;
+        let (w, h) = (l.width() as u32, l.height() as u32);
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("ism.resolve"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.resolve_pipeline);
+            pass.set_bind_group(0, &job.resolve, &[]);
+            pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+        }
+        self.pull_push(ctx, encoder, slot, s, extent);
+    }
+
+    /// One bounce's ISMs end to end: splat (scope `ism.splat`), resolve and pull-push (scope
+    /// `ism.pull_push`).
     #[allow(clippy::too_many_arguments)]
     pub fn run(
         &self,
@@ -488,52 +655,9 @@ impl IsmPass {
         s: &IsmSettings,
         f: IsmFrame,
     ) {
-        let l = self.layout_info;
-        let n_points = self.cloud.gpu.len() as u32;
-        let per_ism = (n_points as f32 / f.vpls.max(1) as f32).max(1.0);
-        let r_s = (self.cloud.area / (std::f32::consts::PI * per_ism)).sqrt();
-        let sp = SplatParams {
-            counts: [n_points, f.vpls, l.cols, l.size],
-            geom: Vec4::new(f.eye_offset, r_s, s.max_splat_radius as f32, s.splat_scale),
-        };
-        ctx.queue.write_buffer(&self.splat_params, 0, bytemuck::bytes_of(&sp));
-        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("ism.splat.inputs"),
-            layout: &self.splat_layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: self.splat_params.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: self.points.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: instances.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: vpls.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 4, resource: self.depth.as_entire_binding() },
-            ],
-        });
-        let atlas_view = super::view(&self.atlas, "ism.atlas");
-        let resolve_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("ism.resolve.inputs"),
-            layout: &self.resolve_layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: self.depth.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&atlas_view) },
-            ],
-        });
-        let (w, h) = (l.width() as u32, l.height() as u32);
-        let depth = &self.depth;
-        timer.scope(ctx, encoder, "ism.splat", |e, slot| {
-            e.clear_buffer(depth, 0, None);
-            let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("ism.splat"),
-                timestamp_writes: slot.and_then(|s| s.compute(true, true)),
-            });
-            pass.set_pipeline(&self.splat_pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            let groups = n_points.div_ceil(64);
-            pass.dispatch_workgroups(groups.min(65535), groups.div_ceil(65535), 1);
-            pass.set_pipeline(&self.resolve_pipeline);
-            pass.set_bind_group(0, &resolve_group, &[]);
-            pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
-        });
-        timer.scope(ctx, encoder, "ism.pull_push", |e, slot| self.pull_push(ctx, e, slot, s, f.extent));
+        let job = self.begin(ctx, instances, vpls, s, IsmFrame { bounces: 1, ..f });
+        timer.scope(ctx, encoder, "ism.splat", |e, slot| self.splat(e, slot, &job, 0));
+        timer.scope(ctx, encoder, "ism.pull_push", |e, slot| self.finish(ctx, e, slot, &job, s, f.extent));
     }
 
     fn level_view(&self, level: u32) -> wgpu::TextureView {
@@ -551,7 +675,7 @@ impl IsmPass {
         &self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
-        slot: Option<crate::timing::Slot<'_>>,
+        slot: Option<Slot<'_>>,
         s: &IsmSettings,
         extent: f32,
     ) {

@@ -41,6 +41,21 @@ settings_group! {
         /// clamps at 1 scene unit). Larger values remove the bright spots near VPLs and bias.
         min_distance_m: f32 = 0.1,
         unit "m", symbol "d_min", range 0.0..=10.0, cost "free", history false;
+        /// Light bounces (§3.6): 1 is the VPLs on the lit surfaces; each further bounce turns
+        /// one point-cloud sample per VPL into a VPL of the next bounce, with its own ISM, and
+        /// the gather adds all bounces.
+        bounces: u32 = 1,
+        unit "bounces", symbol "B", range 1..=6, cost "per extra bounce: N more ISMs (atlas × B), one splat of the cloud, one pass over the cloud, N more shading terms", history false;
+        /// Which sample becomes the next bounce's VPL (§3.6.1; proportional is §6.1's future work).
+        bounce_selection: super::vpl_bounce::BounceSelection = super::vpl_bounce::BounceSelection::Strongest,
+        unit "", symbol "", range 0..=1, cost "free", history false;
+        /// How further bounces are made: the thesis' one pass over the point cloud (§3.6.1)
+        /// or the imperfect reflective shadow maps of Ritschel et al. it is measured against.
+        bounce_method: super::vpl_bounce::BounceMethod = super::vpl_bounce::BounceMethod::PointCloud,
+        unit "", symbol "", range 0..=1, cost "IRSM: a splat, an owner pass and a CDF over N IRSMs per bounce", history false;
+        /// Side of each VPL's imperfect reflective shadow map (IRSM baseline; a power of two).
+        irsm_size: u32 = 32,
+        unit "px", symbol "", range 16..=128, cost "N IRSMs of this size² per bounce: splat fill, 16 B/texel", history false;
     }
 }
 

@@ -1,0 +1,287 @@
+//! The multi-bounce baseline of Knecht 002 §3.6 (Ritschel et al. 2008): imperfect reflective
+//! shadow maps. Per bounce, every source VPL's IRSM is splatted from its N-th of the point
+//! cloud (`shaders/ism/splat.wgsl` `cs_splat`, `cs_owner`), its texels weighted by the
+//! illumination of the point that owns them, and the next bounce's N VPLs importance-sampled
+//! from all IRSMs together (`shaders/vpl/irsm.wgsl`, documented there; CPU twin
+//! `cpu::knecht::irsm_pick`). Table 5.3 of the thesis compares its time with §3.6.1's
+//! ([`super::vpl_bounce`]); `gi-lab bench --suite knecht` reproduces it.
+
+use glam::Vec4;
+
+use super::bgl;
+use super::ism::{IsmLayout, IsmPass, MAX_BOUNCES, SplatParams};
+use crate::gpu::GpuContext;
+use crate::timing::Slot;
+
+/// Uniform of one IRSM bounce; WGSL twin: `IrsmParams` in `shaders/vpl/irsm.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct IrsmParams {
+    /// Points P, VPLs per bounce N, atlas columns, IRSM size.
+    pub counts: [u32; 4],
+    /// First slot of the source bounce, first slot of the new bounce.
+    pub slots: [u32; 4],
+    /// 0, 0, d_min², 0.
+    pub geom: Vec4,
+    /// Random seed of this frame and bounce.
+    pub seed: [u32; 4],
+}
+
+const STRIDE: u64 = 256;
+
+/// What one frame's IRSM bounces need.
+#[derive(Clone, Copy, Debug)]
+pub struct IrsmFrame {
+    /// VPLs per bounce N.
+    pub vpls: u32,
+    pub bounces: u32,
+    pub eye_offset: f32,
+    pub min_distance: f32,
+    pub seed: u32,
+}
+
+/// The bind groups of one frame ([`IrsmPass::begin`]).
+pub struct IrsmJob {
+    splat: wgpu::BindGroup,
+    sample: wgpu::BindGroup,
+}
+
+pub struct IrsmPass {
+    key: (u32, u32, usize),
+    pub layout_info: IsmLayout,
+    /// Splatted distances (inverted f32 bits) of the N IRSMs.
+    pub depth: wgpu::Buffer,
+    /// Owner of each IRSM texel: point index + 1, 0 = none.
+    pub owner: wgpu::Buffer,
+    /// Per-IRSM inclusive prefix sums of the texel weights.
+    pub cdf: wgpu::Buffer,
+    /// IRSM totals, then their running sum.
+    pub totals: wgpu::Buffer,
+    /// Texels each point owns.
+    pub coverage: wgpu::Buffer,
+    splat_layout: wgpu::BindGroupLayout,
+    sample_layout: wgpu::BindGroupLayout,
+    splat_pipeline: wgpu::ComputePipeline,
+    owner_pipeline: wgpu::ComputePipeline,
+    cdf_pipeline: wgpu::ComputePipeline,
+    sample_pipeline: wgpu::ComputePipeline,
+    splat_params: wgpu::Buffer,
+    params: wgpu::Buffer,
+}
+
+fn dynamic(buffer: &wgpu::Buffer, size: usize) -> wgpu::BindingResource<'_> {
+    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+        buffer,
+        offset: 0,
+        size: std::num::NonZeroU64::new(size as u64),
+    })
+}
+
+fn entries<'a>(resources: Vec<wgpu::BindingResource<'a>>) -> Vec<wgpu::BindGroupEntry<'a>> {
+    resources
+        .into_iter()
+        .enumerate()
+        .map(|(i, resource)| wgpu::BindGroupEntry { binding: i as u32, resource })
+        .collect()
+}
+
+/// The IRSM side actually used: a power of two in 16 … 128 (the CDF pass gives each of its
+/// 256 threads size²/256 texels).
+pub fn irsm_size(setting: u32) -> u32 {
+    1 << setting.clamp(16, 128).ilog2()
+}
+
+impl IrsmPass {
+    pub fn new(ctx: &GpuContext) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let splat_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("irsm.splat.inputs"),
+            entries: &[
+                bgl::uniform_dynamic(0, cs),
+                bgl::storage(1, cs, true),
+                bgl::storage(2, cs, true),
+                bgl::storage(3, cs, true),
+                bgl::storage(4, cs, false),
+                bgl::storage(5, cs, false),
+            ],
+        });
+        let sample_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("irsm.sample.inputs"),
+            entries: &[
+                bgl::uniform_dynamic(0, cs),
+                bgl::storage(1, cs, true),
+                bgl::storage(2, cs, true),
+                bgl::storage(3, cs, true),
+                bgl::storage(4, cs, true),
+                bgl::storage(5, cs, false),
+                bgl::storage(6, cs, false),
+                bgl::storage(7, cs, false),
+                bgl::storage(8, cs, false),
+            ],
+        });
+        let m_splat = crate::shaders::create_module(device, "ism/splat.wgsl");
+        let m_irsm = crate::shaders::create_module(device, "vpl/irsm.wgsl");
+        let splat_pipeline = super::compute_pipeline(device, "irsm.splat", &m_splat, "cs_splat", &[&splat_layout]);
+        let owner_pipeline = super::compute_pipeline(device, "irsm.owner", &m_splat, "cs_owner", &[&splat_layout]);
+        let cdf_pipeline = super::compute_pipeline(device, "irsm.cdf", &m_irsm, "cs_cdf", &[&sample_layout]);
+        let sample_pipeline = super::compute_pipeline(device, "irsm.sample", &m_irsm, "cs_sample", &[&sample_layout]);
+        let uniform = |label| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: STRIDE * MAX_BOUNCES as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let layout_info = IsmLayout::new(1, 16);
+        let (depth, owner, cdf, totals, coverage) = Self::buffers(device, layout_info, 1, 1);
+        Self {
+            key: (1, 16, 1),
+            layout_info,
+            depth,
+            owner,
+            cdf,
+            totals,
+            coverage,
+            splat_layout,
+            sample_layout,
+            splat_pipeline,
+            owner_pipeline,
+            cdf_pipeline,
+            sample_pipeline,
+            splat_params: uniform("irsm.splat.params"),
+            params: uniform("irsm.params"),
+        }
+    }
+
+    fn buffers(
+        device: &wgpu::Device,
+        l: IsmLayout,
+        vpls: u32,
+        points: usize,
+    ) -> (wgpu::Buffer, wgpu::Buffer, wgpu::Buffer, wgpu::Buffer, wgpu::Buffer) {
+        let make = |label, bytes: u64| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes.max(4),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            })
+        };
+        let texels = l.width() * l.height();
+        (
+            make("irsm.depth", 4 * texels),
+            make("irsm.owner", 4 * texels),
+            make("irsm.cdf", 4 * texels),
+            make("irsm.totals", 8 * vpls as u64),
+            make("irsm.coverage", 4 * points as u64),
+        )
+    }
+
+    /// Sizes the IRSMs for `vpls` source VPLs of `size`² (see [`irsm_size`]) and `points`
+    /// cloud points (the caller checked that the atlas fits).
+    pub fn ensure(&mut self, ctx: &GpuContext, vpls: u32, size: u32, points: usize) {
+        let size = irsm_size(size);
+        if self.key == (vpls, size, points) {
+            return;
+        }
+        self.layout_info = IsmLayout::new(vpls, size);
+        (self.depth, self.owner, self.cdf, self.totals, self.coverage) =
+            Self::buffers(&ctx.device, self.layout_info, vpls, points);
+        self.key = (vpls, size, points);
+    }
+
+    /// Writes the uniforms of bounces 1 … B − 1 and returns the frame's bind groups.
+    pub fn begin(
+        &self,
+        ctx: &GpuContext,
+        ism: &IsmPass,
+        s: &super::ism::IsmSettings,
+        instances: &wgpu::Buffer,
+        vpls: &wgpu::Buffer,
+        f: IrsmFrame,
+    ) -> IrsmJob {
+        let l = self.layout_info;
+        let n_points = ism.cloud.gpu.len() as u32;
+        let mut splat = vec![0u8; (STRIDE * MAX_BOUNCES as u64) as usize];
+        let mut irsm = splat.clone();
+        for b in 1..f.bounces.clamp(1, MAX_BOUNCES) {
+            let o = ((b - 1) as u64 * STRIDE) as usize;
+            let sp = SplatParams {
+                counts: [n_points, f.vpls, l.cols, l.size],
+                geom: Vec4::new(f.eye_offset, ism.point_radius(f.vpls), s.max_splat_radius as f32, s.splat_scale),
+                slots: [(b - 1) * f.vpls, 0, 0, 0],
+            };
+            splat[o..o + std::mem::size_of::<SplatParams>()].copy_from_slice(bytemuck::bytes_of(&sp));
+            let p = IrsmParams {
+                counts: [n_points, f.vpls, l.cols, l.size],
+                slots: [(b - 1) * f.vpls, b * f.vpls, 0, 0],
+                geom: Vec4::new(0.0, 0.0, f.min_distance * f.min_distance, 0.0),
+                seed: [crate::cpu::knecht::pcg_hash(f.seed.wrapping_mul(MAX_BOUNCES).wrapping_add(b)), 0, 0, 0],
+            };
+            irsm[o..o + std::mem::size_of::<IrsmParams>()].copy_from_slice(bytemuck::bytes_of(&p));
+        }
+        ctx.queue.write_buffer(&self.splat_params, 0, &splat);
+        ctx.queue.write_buffer(&self.params, 0, &irsm);
+        let splat = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("irsm.splat.inputs"),
+            layout: &self.splat_layout,
+            entries: &entries(vec![
+                dynamic(&self.splat_params, std::mem::size_of::<SplatParams>()),
+                ism.points.as_entire_binding(),
+                instances.as_entire_binding(),
+                vpls.as_entire_binding(),
+                self.depth.as_entire_binding(),
+                self.owner.as_entire_binding(),
+            ]),
+        });
+        let sample = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("irsm.sample.inputs"),
+            layout: &self.sample_layout,
+            entries: &entries(vec![
+                dynamic(&self.params, std::mem::size_of::<IrsmParams>()),
+                ism.points.as_entire_binding(),
+                ism.surfaces.as_entire_binding(),
+                instances.as_entire_binding(),
+                self.owner.as_entire_binding(),
+                self.cdf.as_entire_binding(),
+                self.totals.as_entire_binding(),
+                self.coverage.as_entire_binding(),
+                vpls.as_entire_binding(),
+            ]),
+        });
+        IrsmJob { splat, sample }
+    }
+
+    /// Creates bounce `bounce`'s N VPLs from bounce b − 1's through their IRSMs.
+    pub fn run(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<Slot<'_>>,
+        job: &IrsmJob,
+        bounce: u32,
+        vpls: u32,
+        points: u32,
+    ) {
+        for b in [&self.depth, &self.owner, &self.coverage] {
+            encoder.clear_buffer(b, 0, None);
+        }
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("irsm"),
+            timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+        });
+        let offset = [((bounce.clamp(1, MAX_BOUNCES - 1) - 1) as u64 * STRIDE) as u32];
+        let groups = points.div_ceil(64);
+        pass.set_bind_group(0, &job.splat, &offset);
+        pass.set_pipeline(&self.splat_pipeline);
+        pass.dispatch_workgroups(groups.min(65535), groups.div_ceil(65535), 1);
+        pass.set_pipeline(&self.owner_pipeline);
+        pass.dispatch_workgroups(groups.min(65535), groups.div_ceil(65535), 1);
+        pass.set_bind_group(0, &job.sample, &offset);
+        pass.set_pipeline(&self.cdf_pipeline);
+        pass.dispatch_workgroups(vpls, 1, 1);
+        pass.set_pipeline(&self.sample_pipeline);
+        pass.dispatch_workgroups(1, 1, 1);
+    }
+}

@@ -1,0 +1,174 @@
+//! Stage 3, further light bounces of instant radiosity (Knecht 002 §3.6.1): per VPL of a
+//! bounce, one point of the point cloud among those assigned to it becomes a VPL of the next
+//! bounce; `shaders/vpl/bounce.wgsl` (documented there), CPU twins
+//! `cpu::knecht::{bounce_incident, select_bounce}`.
+//!
+//! The VPL list (`vpl.list`) holds the bounces one after another: bounce b in slots
+//! b·N … b·N + N − 1 (bounce 0 from the light G-buffers), and the ISM atlas one map per slot,
+//! so the gather shades all B·N VPLs (each bounce's set estimates that bounce's light, and
+//! the bounces add up).
+
+use glam::Vec4;
+
+use super::bgl;
+use super::ism::{IsmPass, MAX_BOUNCES};
+use crate::gpu::GpuContext;
+use crate::settings_enum;
+use crate::timing::Slot;
+
+settings_enum! {
+    /// Which point-cloud sample becomes the next bounce's VPL (Knecht 002 §3.6.1, §6.1).
+    pub enum BounceSelection {
+        /// The sample with the largest contribution (the thesis' depth-test selection).
+        Strongest = "strongest (thesis)",
+        /// A sample drawn with probability proportional to its contribution (the thesis'
+        /// future work, §6.1): unbiased, weaker regions get VPLs too.
+        Proportional = "proportional to contribution",
+    }
+    default Strongest
+}
+
+settings_enum! {
+    /// How the VPLs of further bounces are made (Knecht 002 §3.6).
+    pub enum BounceMethod {
+        /// One sample per VPL chosen from the point cloud in one pass (§3.6.1).
+        PointCloud = "point cloud, one pass (Knecht)",
+        /// Imperfect reflective shadow maps, importance-sampled (Ritschel et al. 2008).
+        Irsm = "IRSM, importance-sampled (Ritschel)",
+    }
+    default PointCloud
+}
+
+/// Uniform of one bounce; WGSL twin: `BounceParams` in `shaders/vpl/bounce.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct BounceParams {
+    /// Points P, VPLs per bounce N, atlas columns, map size.
+    pub counts: [u32; 4],
+    /// First slot of the source bounce, first slot of the new one, selection (0 strongest,
+    /// 1 proportional), ISM visibility (1) or none (0).
+    pub slots: [u32; 4],
+    /// ISM eye offset, depth bias, d_min², 0.
+    pub geom: Vec4,
+    /// Random seed of this frame and bounce.
+    pub seed: [u32; 4],
+}
+
+const STRIDE: u64 = 256;
+
+/// What one frame's bounces need besides the ISM pass.
+#[derive(Clone, Copy, Debug)]
+pub struct BounceFrame {
+    /// VPLs per bounce N.
+    pub vpls: u32,
+    pub selection: BounceSelection,
+    /// Test the samples against the source VPL's splatted ISM (false: no visibility).
+    pub visibility: bool,
+    pub eye_offset: f32,
+    pub depth_bias: f32,
+    pub min_distance: f32,
+    /// Seed of the frame (each bounce derives its own).
+    pub seed: u32,
+}
+
+pub struct VplBouncePass {
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::ComputePipeline,
+    params: wgpu::Buffer,
+}
+
+impl VplBouncePass {
+    pub fn new(ctx: &GpuContext) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("vpl.bounce.inputs"),
+            entries: &[
+                bgl::uniform_dynamic(0, cs),
+                bgl::storage(1, cs, true),
+                bgl::storage(2, cs, true),
+                bgl::storage(3, cs, true),
+                bgl::storage(4, cs, true),
+                bgl::storage(5, cs, false),
+            ],
+        });
+        let module = crate::shaders::create_module(device, "vpl/bounce.wgsl");
+        let pipeline = super::compute_pipeline(device, "vpl.bounce", &module, "cs_bounce", &[&layout]);
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("vpl.bounce.params"),
+            size: STRIDE * MAX_BOUNCES as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Self { layout, pipeline, params }
+    }
+
+    /// Writes the uniforms of bounces 1 … `bounces` − 1 and returns the frame's bind group.
+    pub fn begin(
+        &self,
+        ctx: &GpuContext,
+        ism: &IsmPass,
+        instances: &wgpu::Buffer,
+        vpls: &wgpu::Buffer,
+        bounces: u32,
+        f: BounceFrame,
+    ) -> wgpu::BindGroup {
+        let l = ism.layout_info;
+        let mut data = vec![0u8; (STRIDE * MAX_BOUNCES as u64) as usize];
+        for b in 1..bounces.clamp(1, MAX_BOUNCES) {
+            let p = BounceParams {
+                counts: [ism.cloud.gpu.len() as u32, f.vpls, l.cols, l.size],
+                slots: [
+                    (b - 1) * f.vpls,
+                    b * f.vpls,
+                    (f.selection == BounceSelection::Proportional) as u32,
+                    f.visibility as u32,
+                ],
+                geom: Vec4::new(f.eye_offset, f.depth_bias, f.min_distance * f.min_distance, 0.0),
+                seed: [crate::cpu::knecht::pcg_hash(f.seed.wrapping_mul(MAX_BOUNCES).wrapping_add(b)), 0, 0, 0],
+            };
+            let o = ((b - 1) as u64 * STRIDE) as usize;
+            data[o..o + std::mem::size_of::<BounceParams>()].copy_from_slice(bytemuck::bytes_of(&p));
+        }
+        ctx.queue.write_buffer(&self.params, 0, &data);
+        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("vpl.bounce.inputs"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &self.params,
+                        offset: 0,
+                        size: std::num::NonZeroU64::new(std::mem::size_of::<BounceParams>() as u64),
+                    }),
+                },
+                wgpu::BindGroupEntry { binding: 1, resource: ism.points.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: ism.surfaces.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: instances.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: ism.depth.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 5, resource: vpls.as_entire_binding() },
+            ],
+        })
+    }
+
+    /// Creates bounce `bounce`'s N VPLs (slots b·N …) from bounce b − 1's, whose ISMs must
+    /// have been splatted (when visibility is on).
+    pub fn run(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<Slot<'_>>,
+        group: &wgpu::BindGroup,
+        bounce: u32,
+        vpls: u32,
+    ) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("vpl.bounce"),
+            timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+        });
+        pass.set_pipeline(&self.pipeline);
+        let b = bounce.clamp(1, MAX_BOUNCES - 1);
+        pass.set_bind_group(0, group, &[((b - 1) as u64 * STRIDE) as u32]);
+        pass.dispatch_workgroups(vpls, 1, 1);
+    }
+}
