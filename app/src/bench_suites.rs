@@ -115,7 +115,9 @@ pub fn knecht(r: &mut Renderer, frames: u32, scene: &str) -> Result<SuiteReport,
             s.vpl.bounce_method = method;
             let label = match method {
                 BounceMethod::PointCloud => format!("B = {bounces}, point cloud"),
-                BounceMethod::Irsm => format!("B = {bounces}, IRSM {}²", gi_render::passes::irsm::irsm_size(s.vpl.irsm_size)),
+                BounceMethod::Irsm => {
+                    format!("B = {bounces}, IRSM {}²", gi_render::passes::irsm::irsm_size(s.vpl.irsm_size))
+                }
             };
             times.push(run(r, "bounces (focus: bounce passes only)", label, s, &["vpl.bounce."]).map(|t| t.1));
         }
