@@ -30,7 +30,8 @@ pub struct SweepArgs {
     pub flicker_frames: u32,
     /// Ground truth (EXR of the same scene, camera and size at time 0, e.g. from `gi-lab
     /// reference`). When omitted, one is path-traced first: direct light only when the
-    /// preset has no indirect technique, else one bounce.
+    /// preset has no indirect technique, else as many bounces as the preset's `vpl.bounces`
+    /// for instant radiosity and one for the others.
     #[arg(long)]
     pub reference: Option<PathBuf>,
     /// Samples per pixel of the path-traced reference when --reference is omitted.
@@ -290,7 +291,12 @@ pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
     let reference = match &args.reference {
         Some(path) => crate::cli::load_image(path)?.0,
         None => {
-            let bounces = u32::from(base.indirect.technique != gi_render::lab_settings::IndirectTechnique::None);
+            use gi_render::lab_settings::IndirectTechnique;
+            let bounces = match base.indirect.technique {
+                IndirectTechnique::None => 0,
+                IndirectTechnique::InstantRadiosity => base.vpl.bounces,
+                _ => 1,
+            };
             eprintln!(
                 "path-tracing the ground truth: {}×{}, {} spp, {bounces} bounce(s) …",
                 args.size.0, args.size.1, args.reference_spp

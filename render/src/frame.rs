@@ -421,6 +421,7 @@ impl Renderer {
                 1.0 / self.height as f32,
             ),
             params: Vec4::new(self.camera.znear, self.camera.zfar, self.clock.frame as f32, self.clock.time_s()),
+            lod: Vec4::new(-1.0, 0.0, 0.0, 0.0),
         };
         ctx.queue.write_buffer(&self.camera_buffer, 0, bytemuck::bytes_of(&cam));
         self.gpu_scene.update_instances(&ctx, &state, self.prev.as_ref().map(|p| p.models.as_slice()));
@@ -665,6 +666,7 @@ impl Renderer {
             // No light: no VPL slot is written, so the list is cleared.
             enc.clear_buffer(&k.vpl.vpls, 0, None);
         } else {
+            k.vpl.albedo_mip = s.vpl.albedo_mip;
             k.vpl.run(&ctx, enc, timer, gpu_scene, state, &lights, &jobs, halton_first, s.direct.intensity_scale);
         }
         let bounces = s.vpl.bounces.clamp(1, MAX_BOUNCES);

@@ -12,6 +12,9 @@ struct Camera {
     viewport: vec4<f32>,
     // near, far, frame index, time in seconds.
     params: vec4<f32>,
+    // x: mip level of the base colour texture in the G-buffer (< 0: chosen by the hardware);
+    // the light G-buffer blurs its VPLs' colour with it (Knecht 002 §4.3, render target 0).
+    lod: vec4<f32>,
 }
 
 // Clip-space position to pixel coordinates (origin top left, pixel centres at +0.5).

@@ -75,7 +75,11 @@ fn fs_main(i: VsOut, @builtin(front_facing) front: bool) -> FsOut {
     }
     var color = material.base_color;
     if (material.params.w > 0.5) {
-        color = color * textureSample(base_tex, base_sampler, i.uv);
+        if (camera.lod.x >= 0.0) {
+            color = color * textureSampleLevel(base_tex, base_sampler, i.uv, camera.lod.x);
+        } else {
+            color = color * textureSample(base_tex, base_sampler, i.uv);
+        }
     }
     let view_pos = camera.view * vec4<f32>(i.world, 1.0);
     var o: FsOut;

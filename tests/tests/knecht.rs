@@ -468,6 +468,7 @@ fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
         position: eye.extend(1.0),
         viewport: glam::Vec4::new(w as f32, h as f32, 1.0 / w as f32, 1.0 / h as f32),
         params: glam::Vec4::new(0.1, 10.0, 0.0, 0.0),
+        lod: glam::Vec4::new(-1.0, 0.0, 0.0, 0.0),
     };
     let buffer = |label, bytes: &[u8], usage| {
         let b = ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -1048,4 +1049,48 @@ fn irsm_bounce_on_the_gpu_samples_the_texels_the_cpu_picks() {
         assert_vpl_eq(&got, &want, &format!("new VPL {k} (IRSM {i}, texel {t}, sample {j})"));
     }
     assert!(!sources.contains(&4), "the empty VPL's IRSM was sampled");
+}
+
+/// Knecht 002 §4.3, render target 0: the light G-buffer reads the surfaces' colour texture at
+/// the `vpl.albedo_mip` level, so that VPLs carry a blurred colour. A one-texel checker on
+/// every surface varies from pixel to pixel of the light G-buffer at level 0 and is a flat
+/// average at level 6 (the 1×1 mip of the 64² texture); only the walls' edges remain.
+#[test]
+fn the_light_gbuffer_blurs_the_surface_colour_by_the_albedo_mip_level() {
+    let mut scene = default_scene();
+    let rgba8 = (0..64 * 64)
+        .flat_map(|i| {
+            let v = if (i % 64 + i / 64) % 2 == 0 { 255 } else { 0 };
+            [v, v, v, 255]
+        })
+        .collect();
+    scene.textures.push(gi_render::scene::TextureImage { name: "checker".into(), width: 64, height: 64, rgba8 });
+    let t = scene.textures.len() - 1;
+    for m in &mut scene.materials {
+        m.base_color_texture = Some(t);
+    }
+    let variation = |mip: f32| {
+        let mut s = knecht_settings();
+        s.vpl.albedo_mip = mip;
+        let mut r = Renderer::new(gpu(), scene.clone(), s, 64, 64).expect("renderer");
+        r.clock.playing = false;
+        r.render_frame();
+        let a = r.readback("vpl.light_gbuffer.albedo").expect("light G-buffer albedo");
+        let (mut sum, mut n) = (0.0f64, 0usize);
+        for y in 0..a.height as usize {
+            for x in 1..a.width as usize {
+                let (p, q) = (a.data[y * a.width as usize + x - 1], a.data[y * a.width as usize + x]);
+                if p[3] > 0.0 && q[3] > 0.0 {
+                    sum += (0..3).map(|c| (p[c] - q[c]).abs() as f64).sum::<f64>();
+                    n += 1;
+                }
+            }
+        }
+        assert!(n > 1000, "the light G-buffer sees only {n} surface pixel pairs");
+        sum / n as f64
+    };
+    let (sharp, blurred) = (variation(0.0), variation(6.0));
+    println!("mean neighbour difference in vpl.light_gbuffer.albedo: mip 0 {sharp:.4}, mip 6 {blurred:.4}");
+    assert!(sharp > 0.1, "the checker must show at mip 0: {sharp}");
+    assert!(blurred < 0.2 * sharp, "mip 6 must average the checker away: {blurred} vs {sharp}");
 }

@@ -30,6 +30,9 @@ pub struct CameraUniform {
     pub position: Vec4,
     pub viewport: Vec4,
     pub params: Vec4,
+    /// x: mip level of the base colour texture in the G-buffer (< 0: chosen by the
+    /// hardware); the light G-buffer blurs the colour of its VPLs with it (Knecht 002 §4.3).
+    pub lod: Vec4,
 }
 
 /// Per-draw transforms; WGSL twin: `Instance` in `shaders/gbuffer/gbuffer.wgsl`.

@@ -211,6 +211,8 @@ impl VplSamplePass {
             position: v.eye.extend(1.0),
             viewport: Vec4::new(size, size, 1.0 / size, 1.0 / size),
             params: Vec4::ZERO,
+            // The reference keeps the surfaces' own colour (no §4.3 blur).
+            lod: Vec4::new(-1.0, 0.0, 0.0, 0.0),
         };
         ctx.queue.write_buffer(&self.camera_buffer, 0, bytemuck::bytes_of(&cam));
         self.light_gbuffer.run(encoder, slot, &self.camera_group, scene, state);

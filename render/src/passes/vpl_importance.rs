@@ -41,6 +41,11 @@ settings_group! {
         /// clamps at 1 scene unit). Larger values remove the bright spots near VPLs and bias.
         min_distance_m: f32 = 0.1,
         unit "m", symbol "d_min", range 0.0..=10.0, cost "free", history false;
+        /// Mip level of the surfaces' colour texture in the light G-buffer (§4.3, render
+        /// target 0: the thesis blurs the colour VPLs carry by a predefined mip level and
+        /// gives no value; 4 averages 16×16 texels). Untextured surfaces are unaffected.
+        albedo_mip: f32 = 4.0,
+        unit "mip level", symbol "", range 0.0..=12.0, cost "free", history false;
         /// Light bounces (§3.6): 1 is the VPLs on the lit surfaces; each further bounce turns
         /// one point-cloud sample per VPL into a VPL of the next bounce, with its own ISM, and
         /// the gather adds all bounces.
@@ -132,6 +137,8 @@ pub struct VplImportancePass {
     /// Warped sample of each slot: uv, pdf, texel index (−1: empty map).
     pub warped: wgpu::Buffer,
     pub capacity: u32,
+    /// Mip level of the surface colour in the light G-buffers (`vpl.albedo_mip`).
+    pub albedo_mip: f32,
 }
 
 impl VplImportancePass {
@@ -218,6 +225,7 @@ impl VplImportancePass {
             vpls,
             warped,
             capacity: 256,
+            albedo_mip: VplSettings::default().albedo_mip,
         }
     }
 
@@ -402,6 +410,7 @@ impl VplImportancePass {
                     position: v.eye.extend(1.0),
                     viewport: Vec4::new(fs, fs, 1.0 / fs, 1.0 / fs),
                     params: Vec4::ZERO,
+                    lod: Vec4::new(self.albedo_mip, 0.0, 0.0, 0.0),
                 };
                 ctx.queue.write_buffer(&lg.camera, 0, bytemuck::bytes_of(&cam));
             }
