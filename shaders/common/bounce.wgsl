@@ -24,6 +24,20 @@ struct PointSurface {
     material: vec4<f32>,
 }
 
+// Rust twin: passes::vpl_bounce::BounceParams.
+struct BounceParams {
+    // x: points P, y: VPLs per bounce N, z: atlas columns, w: map size
+    counts: vec4<u32>,
+    // x: first slot of the source bounce, y: first slot of the new bounce,
+    // z: selection (0 strongest, 1 proportional), w: ISM visibility (1) or none (0); the IRSM
+    // baseline uses x and y only
+    slots: vec4<u32>,
+    // x: ISM eye offset, y: depth bias (point cloud only), z: d_min²
+    geom: vec4<f32>,
+    // x: random seed of this frame and bounce
+    seed: vec4<u32>,
+}
+
 struct BouncePoint {
     x: vec3<f32>,
     n: vec3<f32>,

@@ -7,25 +7,7 @@
 // (its texel spans 4 cos²(θ/2) / size radians at angle θ from the normal). WebGPU draws only
 // 1-pixel points, so the splat is a compute kernel; the nearest distance wins by atomicMax
 // on the inverted f32 bits (positive floats order like their bits; 0 = empty after a clear).
-#import common/ism.wgsl
-
-struct Instance {
-    model: mat4x4<f32>,
-    prev_model: mat4x4<f32>,
-    normal_matrix: mat4x4<f32>,
-}
-
-// Rust twin: passes::ism::GpuPoint.
-struct IsmPoint {
-    // object-space position
-    position: vec3<f32>,
-    // index of the draw (instance) it belongs to
-    draw: u32,
-    // object-space normal
-    normal: vec3<f32>,
-    // material index
-    material: u32,
-}
+#import common/bounce.wgsl
 
 struct SplatParams {
     // x: points, y: ISMs (VPLs), z: atlas columns, w: map size
@@ -89,9 +71,9 @@ fn footprint(j: u32) -> Footprint {
     return f;
 }
 
-@compute @workgroup_size(64, 1, 1)
-fn cs_splat(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let j = gid.x + gid.y * 65535u * 64u;
+// Visits the texels of point j's box: the splat keeps the nearest distance; the owner pass
+// (after the splat) marks the texels whose nearest distance is j's.
+fn cover(j: u32, owner_pass: bool) {
     let f = footprint(j);
     if (!f.valid) {
         return;
@@ -105,32 +87,24 @@ fn cs_splat(@builtin(global_invocation_id) gid: vec3<u32>) {
                 continue;
             }
             let a = f.origin + vec2<u32>(t);
-            atomicMax(&depth[a.y * width + a.x], f.key);
+            let i = a.y * width + a.x;
+            if (!owner_pass) {
+                atomicMax(&depth[i], f.key);
+            } else if (atomicLoad(&depth[i]) == f.key) {
+                atomicMax(&owner[i], j + 1u);
+            }
         }
     }
+}
+
+@compute @workgroup_size(64, 1, 1)
+fn cs_splat(@builtin(global_invocation_id) gid: vec3<u32>) {
+    cover(gid.x + gid.y * 65535u * 64u, false);
 }
 
 // IRSM baseline (Ritschel et al. 2008, Knecht 002 §3.6): after cs_splat, each texel learns
 // which point won it (the nearest; the largest index among equal distances).
 @compute @workgroup_size(64, 1, 1)
 fn cs_owner(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let j = gid.x + gid.y * 65535u * 64u;
-    let f = footprint(j);
-    if (!f.valid) {
-        return;
-    }
-    let size = i32(sp.counts.w);
-    let width = sp.counts.z * sp.counts.w;
-    for (var dy = -f.k; dy <= f.k; dy = dy + 1) {
-        for (var dx = -f.k; dx <= f.k; dx = dx + 1) {
-            let t = f.centre + vec2<i32>(dx, dy);
-            if (t.x < 0 || t.y < 0 || t.x >= size || t.y >= size) {
-                continue;
-            }
-            let a = f.origin + vec2<u32>(t);
-            if (atomicLoad(&depth[a.y * width + a.x]) == f.key) {
-                atomicMax(&owner[a.y * width + a.x], j + 1u);
-            }
-        }
-    }
+    cover(gid.x + gid.y * 65535u * 64u, true);
 }

@@ -22,19 +22,6 @@
 
 const WG: u32 = 64u;
 
-// Rust twin: passes::vpl_bounce::BounceParams.
-struct BounceParams {
-    // x: points P, y: VPLs per bounce N, z: atlas columns, w: map size
-    counts: vec4<u32>,
-    // x: first slot of the source bounce, y: first slot of the new bounce,
-    // z: selection (0 strongest, 1 proportional), w: ISM visibility (1) or none (0)
-    slots: vec4<u32>,
-    // x: ISM eye offset, y: depth bias, z: d_min²
-    geom: vec4<f32>,
-    // x: random seed of this frame and bounce
-    seed: vec4<u32>,
-}
-
 @group(0) @binding(0) var<uniform> bp: BounceParams;
 @group(0) @binding(1) var<storage, read> points: array<IsmPoint>;
 @group(0) @binding(2) var<storage, read> surfaces: array<PointSurface>;

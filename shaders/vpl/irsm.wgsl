@@ -19,19 +19,7 @@
 
 const WG: u32 = 256u;
 
-// Rust twin: passes::irsm::IrsmParams.
-struct IrsmParams {
-    // x: points P, y: VPLs per bounce N, z: atlas columns, w: IRSM size
-    counts: vec4<u32>,
-    // x: first slot of the source bounce, y: first slot of the new bounce
-    slots: vec4<u32>,
-    // z: d_min²
-    geom: vec4<f32>,
-    // x: random seed of this frame and bounce
-    seed: vec4<u32>,
-}
-
-@group(0) @binding(0) var<uniform> ip: IrsmParams;
+@group(0) @binding(0) var<uniform> ip: BounceParams;
 @group(0) @binding(1) var<storage, read> points: array<IsmPoint>;
 @group(0) @binding(2) var<storage, read> surfaces: array<PointSurface>;
 @group(0) @binding(3) var<storage, read> instances: array<Instance>;

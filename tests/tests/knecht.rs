@@ -816,12 +816,14 @@ impl BounceFixture {
         let (position, normal) = self.world(j);
         let surf = self.ism.cloud.surfaces[j];
         knecht::BounceSample {
-            position,
-            normal,
-            albedo: glam::Vec4::from(surf.albedo).truncate(),
-            di: surf.material[0],
-            si: surf.material[1],
-            sp: surf.material[2],
+            surface: knecht::Receiver {
+                position,
+                normal,
+                albedo: glam::Vec4::from(surf.albedo).truncate(),
+                di: surf.material[0],
+                si: surf.material[1],
+                sp: surf.material[2],
+            },
             weighted_area: surf.albedo[3],
         }
     }
@@ -898,7 +900,7 @@ fn bounce_selection_on_the_gpu_picks_the_cpu_arg_max() {
         ctx.queue.submit([enc.finish()]);
         let out: Vec<GpuVpl> = fx.read_vpls();
         let depth: Vec<u32> = bytemuck::pod_collect_to_vec(&read_buffer(ctx, &ism.depth, l.width() * l.height() * 4));
-        let seed_gpu = knecht::pcg_hash(seed.wrapping_mul(gi_render::passes::ism::MAX_BOUNCES).wrapping_add(1));
+        let seed_gpu = gi_render::passes::vpl_bounce::bounce_seed(seed, 1);
         let sel = match selection {
             BounceSelection::Strongest => Selection::Strongest,
             BounceSelection::Proportional => Selection::Proportional { seed: seed_gpu },
@@ -913,7 +915,7 @@ fn bounce_selection_on_the_gpu_picks_the_cpu_arg_max() {
                 let j = i as u32 + m * n;
                 let bs = fx.sample(j as usize);
                 // The splat test of `splat_visible`.
-                let w = bs.position - (src.position + src.normal * eye_offset);
+                let w = bs.surface.position - (src.position + src.normal * eye_offset);
                 let d = w.length();
                 let (t, b, nn) = knecht::basis(src.normal);
                 let visible =
@@ -1035,7 +1037,7 @@ fn irsm_bounce_on_the_gpu_samples_the_texels_the_cpu_picks() {
     assert!(covered > texels, "the IRSMs hold only {covered} lit texels");
     assert_eq!(coverage, owned, "texels owned per sample");
     // The picks.
-    let seed_gpu = knecht::pcg_hash(seed.wrapping_mul(gi_render::passes::ism::MAX_BOUNCES).wrapping_add(1));
+    let seed_gpu = gi_render::passes::vpl_bounce::bounce_seed(seed, 1);
     let grand: f32 = totals.iter().sum();
     let mut sources = std::collections::BTreeSet::new();
     for k in 0..n {

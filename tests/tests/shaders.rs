@@ -102,6 +102,14 @@ fn uniform_sizes_match_wgsl() {
     assert_eq!(struct_size(&sp, "IsmPoint") as usize, std::mem::size_of::<ism::GpuPoint>());
     assert_eq!(struct_size(&sp, "SplatParams") as usize, std::mem::size_of::<ism::SplatParams>());
     assert_eq!(struct_size(&sp, "Instance") as usize, std::mem::size_of::<InstanceUniform>());
+    use gi_render::passes::vpl_bounce::BounceParams;
+    for file in ["vpl/bounce.wgsl", "vpl/irsm.wgsl"] {
+        let m = parse(file);
+        assert_eq!(struct_size(&m, "BounceParams") as usize, std::mem::size_of::<BounceParams>(), "{file}");
+        assert_eq!(struct_size(&m, "PointSurface") as usize, std::mem::size_of::<ism::GpuPointSurface>(), "{file}");
+        assert_eq!(struct_size(&m, "IsmPoint") as usize, std::mem::size_of::<ism::GpuPoint>(), "{file}");
+        assert_eq!(struct_size(&m, "Vpl") as usize, std::mem::size_of::<vpl::GpuVpl>(), "{file}");
+    }
     let pp = parse("ism/pull_push.wgsl");
     assert_eq!(struct_size(&pp, "LevelParams") as usize, std::mem::size_of::<ism::LevelParams>());
     let sl = parse("interleave/split.wgsl");

@@ -431,12 +431,7 @@ pub fn bounce_uniform(seed: u32, j: u32) -> f32 {
 /// A point-cloud sample as the bounce selection sees it (world space).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BounceSample {
-    pub position: Vec3,
-    pub normal: Vec3,
-    pub albedo: Vec3,
-    pub di: f32,
-    pub si: f32,
-    pub sp: f32,
+    pub surface: Receiver,
     /// W / w_s: the cloud's weighted area over the sample's object weight.
     pub weighted_area: f32,
 }
@@ -451,7 +446,8 @@ pub struct BounceSample {
 /// - C_s = lum(Φ_s ⊙ (c_s·DI_s + SI_s·SI_v)), the light the sample would send on.
 ///
 /// `visible` is the ISM test's result. Returns (Φ_s, C_s); zero when facing away or hidden.
-pub fn bounce_incident(vpl: &Vpl, s: &BounceSample, per_vpl: u32, d_min: f32, visible: bool) -> (Vec3, f32) {
+pub fn bounce_incident(vpl: &Vpl, sample: &BounceSample, per_vpl: u32, d_min: f32, visible: bool) -> (Vec3, f32) {
+    let s = &sample.surface;
     let w = s.position - vpl.position;
     let d2 = w.length_squared();
     let l = w / d2.max(1e-12).sqrt();
@@ -460,7 +456,7 @@ pub fn bounce_incident(vpl: &Vpl, s: &BounceSample, per_vpl: u32, d_min: f32, vi
         return (Vec3::ZERO, 0.0);
     }
     let f_v = crate::cpu::brdf::eval(vpl.normal, vpl.incident, l, vpl.albedo, vpl.di, vpl.si, vpl.sp);
-    let area = s.weighted_area / per_vpl as f32;
+    let area = sample.weighted_area / per_vpl as f32;
     let flux = vpl.flux * f_v * cos_v * cos_s / d2.max(d_min * d_min) * area;
     let reflect = s.albedo * s.di + Vec3::splat(s.si * vpl.si);
     (flux, luminance(flux * reflect))
@@ -506,7 +502,8 @@ pub fn select_bounce(samples: &[(u32, f32)], selection: Selection) -> Option<(u3
 /// The next bounce's VPL from sample `s` with incident flux `flux` and contribution `c`
 /// out of `sum` (Knecht §3.6.1): Φ = Φ_s · ΣC / C_s, SI = SI_s · SI_v, ω_in toward the
 /// source VPL.
-pub fn bounce_vpl(source: &Vpl, s: &BounceSample, flux: Vec3, c: f32, sum: f32) -> Vpl {
+pub fn bounce_vpl(source: &Vpl, sample: &BounceSample, flux: Vec3, c: f32, sum: f32) -> Vpl {
+    let s = &sample.surface;
     Vpl {
         position: s.position,
         normal: s.normal,

@@ -8,24 +8,10 @@
 
 use glam::Vec4;
 
-use super::bgl;
 use super::ism::{IsmLayout, IsmPass, MAX_BOUNCES, SplatParams};
+use super::vpl_bounce::{BounceParams, bounce_seed};
 use crate::gpu::GpuContext;
 use crate::timing::Slot;
-
-/// Uniform of one IRSM bounce; WGSL twin: `IrsmParams` in `shaders/vpl/irsm.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct IrsmParams {
-    /// Points P, VPLs per bounce N, atlas columns, IRSM size.
-    pub counts: [u32; 4],
-    /// First slot of the source bounce, first slot of the new bounce.
-    pub slots: [u32; 4],
-    /// 0, 0, d_min², 0.
-    pub geom: Vec4,
-    /// Random seed of this frame and bounce.
-    pub seed: [u32; 4],
-}
 
 const STRIDE: u64 = 256;
 
@@ -94,32 +80,12 @@ pub fn irsm_size(setting: u32) -> u32 {
 impl IrsmPass {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let splat_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("irsm.splat.inputs"),
-            entries: &[
-                bgl::uniform_dynamic(0, cs),
-                bgl::storage(1, cs, true),
-                bgl::storage(2, cs, true),
-                bgl::storage(3, cs, true),
-                bgl::storage(4, cs, false),
-                bgl::storage(5, cs, false),
-            ],
-        });
-        let sample_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("irsm.sample.inputs"),
-            entries: &[
-                bgl::uniform_dynamic(0, cs),
-                bgl::storage(1, cs, true),
-                bgl::storage(2, cs, true),
-                bgl::storage(3, cs, true),
-                bgl::storage(4, cs, true),
-                bgl::storage(5, cs, false),
-                bgl::storage(6, cs, false),
-                bgl::storage(7, cs, false),
-                bgl::storage(8, cs, false),
-            ],
-        });
+        let splat_layout = super::ism::splat_layout(device, "irsm.splat.inputs");
+        let sample_layout = super::uniform_and_storage_layout(
+            device,
+            "irsm.sample.inputs",
+            &[true, true, true, true, false, false, false, false],
+        );
         let m_splat = crate::shaders::create_module(device, "ism/splat.wgsl");
         let m_irsm = crate::shaders::create_module(device, "vpl/irsm.wgsl");
         let splat_pipeline = super::compute_pipeline(device, "irsm.splat", &m_splat, "cs_splat", &[&splat_layout]);
@@ -204,24 +170,27 @@ impl IrsmPass {
     ) -> IrsmJob {
         let l = self.layout_info;
         let n_points = ism.cloud.gpu.len() as u32;
-        let mut splat = vec![0u8; (STRIDE * MAX_BOUNCES as u64) as usize];
-        let mut irsm = splat.clone();
-        for b in 1..f.bounces.clamp(1, MAX_BOUNCES) {
-            let o = ((b - 1) as u64 * STRIDE) as usize;
-            let sp = SplatParams {
+        let bounces = 1..f.bounces.clamp(1, MAX_BOUNCES);
+        let splat: Vec<SplatParams> = bounces
+            .clone()
+            .map(|b| SplatParams {
                 counts: [n_points, f.vpls, l.cols, l.size],
                 geom: Vec4::new(f.eye_offset, ism.point_radius(f.vpls), s.max_splat_radius as f32, s.splat_scale),
                 slots: [(b - 1) * f.vpls, 0, 0, 0],
-            };
-            splat[o..o + std::mem::size_of::<SplatParams>()].copy_from_slice(bytemuck::bytes_of(&sp));
-            let p = IrsmParams {
+            })
+            .collect();
+        let irsm: Vec<BounceParams> = bounces
+            .map(|b| BounceParams {
                 counts: [n_points, f.vpls, l.cols, l.size],
                 slots: [(b - 1) * f.vpls, b * f.vpls, 0, 0],
                 geom: Vec4::new(0.0, 0.0, f.min_distance * f.min_distance, 0.0),
-                seed: [crate::cpu::knecht::pcg_hash(f.seed.wrapping_mul(MAX_BOUNCES).wrapping_add(b)), 0, 0, 0],
-            };
-            irsm[o..o + std::mem::size_of::<IrsmParams>()].copy_from_slice(bytemuck::bytes_of(&p));
-        }
+                seed: [bounce_seed(f.seed, b), 0, 0, 0],
+            })
+            .collect();
+        let (splat, irsm) = (
+            super::strided_bytes(STRIDE, MAX_BOUNCES as usize, &splat),
+            super::strided_bytes(STRIDE, MAX_BOUNCES as usize, &irsm),
+        );
         ctx.queue.write_buffer(&self.splat_params, 0, &splat);
         ctx.queue.write_buffer(&self.params, 0, &irsm);
         let splat = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -240,7 +209,7 @@ impl IrsmPass {
             label: Some("irsm.sample.inputs"),
             layout: &self.sample_layout,
             entries: &entries(vec![
-                dynamic(&self.params, std::mem::size_of::<IrsmParams>()),
+                dynamic(&self.params, std::mem::size_of::<BounceParams>()),
                 ism.points.as_entire_binding(),
                 ism.surfaces.as_entire_binding(),
                 instances.as_entire_binding(),

@@ -247,6 +247,12 @@ impl PointCloud {
     }
 }
 
+/// Bind group layout of `shaders/ism/splat.wgsl` (the ISMs' and the IRSM baseline's splats):
+/// params (dynamic), points, instances, VPLs, distances, IRSM owners.
+pub fn splat_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
+    super::uniform_and_storage_layout(device, label, &[true, true, true, false, false])
+}
+
 /// Layout of the ISM atlas: `cols` × `rows` maps of `size`², map = VPL index.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct IsmLayout {
@@ -360,17 +366,7 @@ impl IsmPass {
         let device = &ctx.device;
         let cs = wgpu::ShaderStages::COMPUTE;
         let r32 = wgpu::TextureFormat::R32Float;
-        let splat_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("ism.splat.inputs"),
-            entries: &[
-                bgl::uniform_dynamic(0, cs),
-                bgl::storage(1, cs, true),
-                bgl::storage(2, cs, true),
-                bgl::storage(3, cs, true),
-                bgl::storage(4, cs, false),
-                bgl::storage(5, cs, false),
-            ],
-        });
+        let splat_layout = splat_layout(device, "ism.splat.inputs");
         let resolve_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("ism.resolve.inputs"),
             entries: &[bgl::storage(0, cs, true), bgl::storage_texture(1, r32)],
@@ -562,16 +558,14 @@ impl IsmPass {
         let l = self.layout_info;
         let n_points = self.cloud.gpu.len() as u32;
         let r_s = self.point_radius(f.vpls);
-        let mut data = vec![0u8; (LEVEL_STRIDE * MAX_BOUNCES as u64) as usize];
-        for b in 0..f.bounces.clamp(1, MAX_BOUNCES) {
-            let sp = SplatParams {
+        let params: Vec<SplatParams> = (0..f.bounces.clamp(1, MAX_BOUNCES))
+            .map(|b| SplatParams {
                 counts: [n_points, f.vpls, l.cols, l.size],
                 geom: Vec4::new(f.eye_offset, r_s, s.max_splat_radius as f32, s.splat_scale),
                 slots: [b * f.vpls, b * f.vpls, 0, 0],
-            };
-            let o = (b as u64 * LEVEL_STRIDE) as usize;
-            data[o..o + std::mem::size_of::<SplatParams>()].copy_from_slice(bytemuck::bytes_of(&sp));
-        }
+            })
+            .collect();
+        let data = super::strided_bytes(LEVEL_STRIDE, MAX_BOUNCES as usize, &params);
         ctx.queue.write_buffer(&self.splat_params, 0, &data);
         let params = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
             buffer: &self.splat_params,

@@ -44,6 +44,27 @@ pub struct InstanceUniform {
     pub normal_matrix: Mat4,
 }
 
+/// A compute bind group layout of a dynamic-offset uniform at binding 0 and storage buffers
+/// at bindings 1… with `read_only[k]` for binding k + 1 (the bounce and splat kernels).
+pub fn uniform_and_storage_layout(device: &wgpu::Device, label: &str, read_only: &[bool]) -> wgpu::BindGroupLayout {
+    let cs = wgpu::ShaderStages::COMPUTE;
+    let entries: Vec<_> = std::iter::once(bgl::uniform_dynamic(0, cs))
+        .chain(read_only.iter().enumerate().map(|(k, &ro)| bgl::storage(k as u32 + 1, cs, ro)))
+        .collect();
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &entries })
+}
+
+/// Uniforms for dynamic offsets: `items` laid out every `stride` bytes in a buffer of
+/// `slots` × `stride` bytes (the rest zero).
+pub fn strided_bytes<T: bytemuck::Pod>(stride: u64, slots: usize, items: &[T]) -> Vec<u8> {
+    let mut data = vec![0u8; stride as usize * slots.max(items.len())];
+    for (k, item) in items.iter().enumerate() {
+        let o = k * stride as usize;
+        data[o..o + std::mem::size_of::<T>()].copy_from_slice(bytemuck::bytes_of(item));
+    }
+    data
+}
+
 /// Size of the screen-space compute tiles (`TILE` in `shaders/common/fullscreen.wgsl`).
 pub const TILE: u32 = 8;
 

@@ -10,7 +10,6 @@
 
 use glam::Vec4;
 
-use super::bgl;
 use super::ism::{IsmPass, MAX_BOUNCES};
 use crate::gpu::GpuContext;
 use crate::settings_enum;
@@ -39,11 +38,12 @@ settings_enum! {
     default PointCloud
 }
 
-/// Uniform of one bounce; WGSL twin: `BounceParams` in `shaders/vpl/bounce.wgsl`.
+/// Uniform of one bounce; WGSL twin: `BounceParams` in `shaders/common/bounce.wgsl` (the
+/// IRSM baseline, `passes::irsm`, uses it too: counts, the two first slots, d_min², seed).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct BounceParams {
-    /// Points P, VPLs per bounce N, atlas columns, map size.
+    /// Points P, VPLs per bounce N, atlas columns, map (ISM or IRSM) size.
     pub counts: [u32; 4],
     /// First slot of the source bounce, first slot of the new one, selection (0 strongest,
     /// 1 proportional), ISM visibility (1) or none (0).
@@ -55,6 +55,11 @@ pub struct BounceParams {
 }
 
 const STRIDE: u64 = 256;
+
+/// The random seed of bounce `b` in the frame with seed `frame_seed`.
+pub fn bounce_seed(frame_seed: u32, b: u32) -> u32 {
+    crate::cpu::knecht::pcg_hash(frame_seed.wrapping_mul(MAX_BOUNCES).wrapping_add(b))
+}
 
 /// What one frame's bounces need besides the ISM pass.
 #[derive(Clone, Copy, Debug)]
@@ -80,18 +85,7 @@ pub struct VplBouncePass {
 impl VplBouncePass {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("vpl.bounce.inputs"),
-            entries: &[
-                bgl::uniform_dynamic(0, cs),
-                bgl::storage(1, cs, true),
-                bgl::storage(2, cs, true),
-                bgl::storage(3, cs, true),
-                bgl::storage(4, cs, true),
-                bgl::storage(5, cs, false),
-            ],
-        });
+        let layout = super::uniform_and_storage_layout(device, "vpl.bounce.inputs", &[true, true, true, true, false]);
         let module = crate::shaders::create_module(device, "vpl/bounce.wgsl");
         let pipeline = super::compute_pipeline(device, "vpl.bounce", &module, "cs_bounce", &[&layout]);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
@@ -114,9 +108,8 @@ impl VplBouncePass {
         f: BounceFrame,
     ) -> wgpu::BindGroup {
         let l = ism.layout_info;
-        let mut data = vec![0u8; (STRIDE * MAX_BOUNCES as u64) as usize];
-        for b in 1..bounces.clamp(1, MAX_BOUNCES) {
-            let p = BounceParams {
+        let params: Vec<BounceParams> = (1..bounces.clamp(1, MAX_BOUNCES))
+            .map(|b| BounceParams {
                 counts: [ism.cloud.gpu.len() as u32, f.vpls, l.cols, l.size],
                 slots: [
                     (b - 1) * f.vpls,
@@ -125,11 +118,10 @@ impl VplBouncePass {
                     f.visibility as u32,
                 ],
                 geom: Vec4::new(f.eye_offset, f.depth_bias, f.min_distance * f.min_distance, 0.0),
-                seed: [crate::cpu::knecht::pcg_hash(f.seed.wrapping_mul(MAX_BOUNCES).wrapping_add(b)), 0, 0, 0],
-            };
-            let o = ((b - 1) as u64 * STRIDE) as usize;
-            data[o..o + std::mem::size_of::<BounceParams>()].copy_from_slice(bytemuck::bytes_of(&p));
-        }
+                seed: [bounce_seed(f.seed, b), 0, 0, 0],
+            })
+            .collect();
+        let data = super::strided_bytes(STRIDE, MAX_BOUNCES as usize, &params);
         ctx.queue.write_buffer(&self.params, 0, &data);
         ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("vpl.bounce.inputs"),
