@@ -19,8 +19,9 @@ use crate::cli::{BenchReport, CliError, bench_run};
 pub struct SuiteRow {
     pub table: String,
     pub setting: String,
+    /// Sum of every pass's fastest frame.
     pub total_ms: Option<f64>,
-    /// Mean time of the passes whose names start with the table's focus (e.g. `ism.` for the
+    /// Sum of the fastest frame of the passes whose names start with the table's focus (e.g. `ism.` for the
     /// ISM table), so that the part the setting drives is visible beside the frame.
     pub focus_ms: Option<f64>,
     pub refused: Option<String>,
@@ -34,14 +35,18 @@ pub struct SuiteReport {
     pub height: u32,
     pub frames: u32,
     pub rows: Vec<SuiteRow>,
-    /// (frame with − frame without temporal coherence) / frame with, at the preset's VPLs.
+    /// Share of the frame the temporal pass (confidence and merge) takes with coherence on,
+    /// at the preset's VPLs.
     pub temporal_overhead: Option<f64>,
     /// Per bounce count B: (IRSM bounce time, point-cloud bounce time, speed-up).
     pub bounce_speedup: Vec<(u32, f64, f64, f64)>,
 }
 
+/// Sum over the passes whose names start with one of `prefixes` of each pass's fastest frame:
+/// the least disturbed measurement (a CPU device's per-pass wall clock varies several-fold
+/// between frames with the machine's other work).
 fn focus(report: &BenchReport, prefixes: &[&str]) -> f64 {
-    report.passes.iter().filter(|p| prefixes.iter().any(|f| p.pass.starts_with(f))).map(|p| p.mean_ms).sum()
+    report.passes.iter().filter(|p| prefixes.iter().any(|f| p.pass.starts_with(f))).map(|p| p.min_ms).sum()
 }
 
 /// Runs the Knecht suite on `r`, whose settings are the base (switched to instant radiosity
@@ -59,11 +64,11 @@ pub fn knecht(r: &mut Renderer, frames: u32, scene: &str) -> Result<SuiteReport,
             rows.push(SuiteRow {
                 table: table.into(),
                 setting,
-                total_ms: Some(b.total_mean_ms),
+                total_ms: Some(focus(&b, &[""])),
                 focus_ms: Some(focus(&b, f)),
                 refused: None,
             });
-            Some((b.total_mean_ms, focus(&b, f)))
+            Some((focus(&b, &[""]), focus(&b, f)))
         }
         Err(e) => {
             rows.push(SuiteRow {
@@ -99,12 +104,12 @@ pub fn knecht(r: &mut Renderer, frames: u32, scene: &str) -> Result<SuiteReport,
     on.temporal.enabled = true;
     let mut off = base.clone();
     off.temporal.enabled = false;
-    let t_on = run(r, "temporal coherence", "on".into(), on, &["temporal"]).map(|t| t.0);
-    let t_off = run(r, "temporal coherence", "off".into(), off, &["temporal"]).map(|t| t.0);
-    let temporal_overhead = match (t_on, t_off) {
-        (Some(a), Some(b)) if a > 0.0 => Some((a - b) / a),
-        _ => None,
-    };
+    // The temporal pass runs either way (off, it passes the new light through); its share of
+    // the frame with coherence on bounds what coherence costs. The difference of the two
+    // frames is kept in the table but is within a CPU device's frame-to-frame noise.
+    let t_on = run(r, "temporal coherence", "on".into(), on, &["temporal"]);
+    run(r, "temporal coherence", "off".into(), off, &["temporal"]);
+    let temporal_overhead = t_on.filter(|t| t.0 > 0.0).map(|(frame, pass)| pass / frame);
     // Table 5.3: multi-bounce VPL generation, point cloud (§3.6.1) against IRSM.
     let mut bounce_speedup = Vec::new();
     for bounces in 2u32..=6 {
@@ -146,7 +151,7 @@ pub fn format(report: &SuiteReport) -> String {
         if row.table != table {
             table = row.table.clone();
             first = row.total_ms;
-            s += &format!("\n{table}\n{:<24} {:>10} {:>8} {:>10}\n", "setting", "frame ms", "ratio", "focus ms");
+            s += &format!("\n{table}\n{:<24} {:>10} {:>8} {:>10}\n", "setting", "frame ms*", "ratio", "focus ms*");
         }
         match (row.total_ms, &row.refused) {
             (Some(t), _) => {
@@ -156,8 +161,12 @@ pub fn format(report: &SuiteReport) -> String {
             (None, reason) => s += &format!("{:<24} refused: {}\n", row.setting, reason.as_deref().unwrap_or("")),
         }
     }
+    s += "\n* per pass the fastest of the frames, summed\n";
     if let Some(o) = report.temporal_overhead {
-        s += &format!("\ntemporal coherence overhead: {:.1} % of the frame (thesis ≈ 11 %, goal ≤ 10 %)\n", 100.0 * o);
+        s += &format!(
+            "\ntemporal coherence overhead: the temporal pass is {:.1} % of the frame (thesis ≈ 11 %, goal ≤ 10 %)\n",
+            100.0 * o
+        );
     }
     if !report.bounce_speedup.is_empty() {
         s += "\nmulti-bounce VPL generation (Table 5.3), bounce passes only\n";

@@ -524,6 +524,11 @@ fn bench(args: &BenchArgs) -> Result<(), CliError> {
         return Err(CliError::input("--frames must be at least 1"));
     }
     let mut r = renderer(&args.scene, args.size)?;
+    if !gi_render::timing::GpuTimer::timestamps_reliable(&r.ctx) {
+        // A software device's timestamps land in the wrong passes: time each pass by the
+        // wall clock instead (each scope is submitted and awaited on its own).
+        r.set_timing_source(gi_render::timing::TimingSource::CpuWallClock);
+    }
     let name =
         args.scene.scene.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| "default Cornell box".into());
     if let Some(BenchSuite::Knecht) = args.suite {

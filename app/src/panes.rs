@@ -659,6 +659,12 @@ fn timings_ui(st: &mut State, ui: &mut egui::Ui) {
     ui.horizontal_top(|ui| {
         ui.vertical(|ui| {
             ui.set_width(230.0);
+            if l.renderer.timing_source() == gi_render::timing::TimingSource::GpuTimestamps
+                && !gi_render::timing::GpuTimer::timestamps_reliable(&l.renderer.ctx)
+            {
+                ui.colored_label(ui.visuals().warn_fg_color, "software device: its timestamps land in later passes, so per-pass times are unreliable here; `gi-lab bench` times each pass by the wall clock")
+                    .on_hover_text("lavapipe writes a timestamp where the pass is recorded, not where its work runs");
+            }
             egui::Grid::new("timings").num_columns(2).striped(true).show(ui, |ui| {
                 let mut total = 0.0;
                 for t in l.renderer.timings() {

@@ -867,6 +867,12 @@ impl Renderer {
         self.timer.source()
     }
 
+    /// Measures the passes with `source` from the next frame on (GPU timestamps fall back to
+    /// the wall clock where the device has none).
+    pub fn set_timing_source(&mut self, source: crate::timing::TimingSource) {
+        self.timer = GpuTimer::with_source(&self.ctx, source);
+    }
+
     pub fn buffers(&self) -> &BufferRegistry {
         &self.registry
     }

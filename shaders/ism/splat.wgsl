@@ -3,8 +3,10 @@
 // first + j mod N, so each ISM sees a different N-th of the cloud; bounce b's VPLs start at
 // slot first = b·N, §3.6) as a box of texels whose size falls with the
 // distance: a disc of radius r_s (the point's share of the surface area, √(A / (π · points
-// per ISM))) at distance d covers r_s · size / (2 (1 + cos θ) d) texels of a paraboloid map
-// (its texel spans 4 cos²(θ/2) / size radians at angle θ from the normal). WebGPU draws only
+// per ISM))) at distance d has a radius of r = r_s · size / (2 (1 + cos θ) d) texels of a
+// paraboloid map (its texel spans 4 cos²(θ/2) / size radians at angle θ from the normal) and
+// is splatted as the square of the same area, side round(√π · r) ≥ 1 (even sides too, so
+// that coverage does not jump between point counts), at most 2·k_max + 1. WebGPU draws only
 // 1-pixel points, so the splat is a compute kernel; the nearest distance wins by atomicMax
 // on the inverted f32 bits (positive floats order like their bits; 0 = empty after a clear).
 #import common/bounce.wgsl
@@ -30,8 +32,9 @@ struct SplatParams {
 // Where point j lands: the box of texels (centre ± k) in map `tile`, and its key.
 struct Footprint {
     valid: bool,
-    centre: vec2<i32>,
-    k: i32,
+    // first texel of the box and its side
+    start: vec2<i32>,
+    side: i32,
     origin: vec2<u32>,
     key: u32,
 }
@@ -62,12 +65,13 @@ fn footprint(j: u32) -> Footprint {
     }
     let size = sp.counts.w;
     let c = paraboloid_project(q) * f32(size);
-    let r = min(sp.geom.w * sp.geom.y * f32(size) / (2.0 * (1.0 + q.z) * d), sp.geom.z);
+    let r = sp.geom.w * sp.geom.y * f32(size) / (2.0 * (1.0 + q.z) * d);
     f.valid = true;
-    f.k = i32(floor(r));
+    // The square of the disc's area, side √π·r rounded (even sides too), at most 2k + 1.
+    f.side = clamp(i32(round(1.7724539 * r)), 1, 2 * i32(sp.geom.z) + 1);
     f.origin = vpl_tile_origin(sp.slots.y + local, sp.counts.z, size);
     f.key = ~bitcast<u32>(d);
-    f.centre = vec2<i32>(floor(c));
+    f.start = vec2<i32>(ceil(c - vec2<f32>(0.5 * f32(f.side) + 0.5)));
     return f;
 }
 
@@ -80,9 +84,9 @@ fn cover(j: u32, owner_pass: bool) {
     }
     let size = i32(sp.counts.w);
     let width = sp.counts.z * sp.counts.w;
-    for (var dy = -f.k; dy <= f.k; dy = dy + 1) {
-        for (var dx = -f.k; dx <= f.k; dx = dx + 1) {
-            let t = f.centre + vec2<i32>(dx, dy);
+    for (var dy = 0; dy < f.side; dy = dy + 1) {
+        for (var dx = 0; dx < f.side; dx = dx + 1) {
+            let t = f.start + vec2<i32>(dx, dy);
             if (t.x < 0 || t.y < 0 || t.x >= size || t.y >= size) {
                 continue;
             }

@@ -84,7 +84,7 @@ settings_group! {
         /// Scale of each point's splat (1: the disc of the point's area share).
         splat_scale: f32 = 1.0,
         unit "×", symbol "", range 0.1..=4.0, cost "splat texels grow with its square", history false;
-        /// Largest splat half-size in texels (a near point covers a (2k+1)² box).
+        /// Largest splat half-size in texels (a near point covers at most a (2k+1)² box).
         max_splat_radius: u32 = 4,
         unit "texels", symbol "", range 0..=16, cost "up to (2k+1)² atomics per point", history false;
     }
@@ -634,24 +634,6 @@ impl IsmPass {
             pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
         }
         self.pull_push(ctx, encoder, slot, s, extent);
-    }
-
-    /// One bounce's ISMs end to end: splat (scope `ism.splat`), resolve and pull-push (scope
-    /// `ism.pull_push`).
-    #[allow(clippy::too_many_arguments)]
-    pub fn run(
-        &self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        timer: &mut crate::timing::GpuTimer,
-        instances: &wgpu::Buffer,
-        vpls: &wgpu::Buffer,
-        s: &IsmSettings,
-        f: IsmFrame,
-    ) {
-        let job = self.begin(ctx, instances, vpls, s, IsmFrame { bounces: 1, ..f });
-        timer.scope(ctx, encoder, "ism.splat", |e, slot| self.splat(e, slot, &job, 0));
-        timer.scope(ctx, encoder, "ism.pull_push", |e, slot| self.finish(ctx, e, slot, &job, s, f.extent));
     }
 
     fn level_view(&self, level: u32) -> wgpu::TextureView {
