@@ -232,6 +232,9 @@ impl Renderer {
             } else if self.settings.ism.visibility == VplVisibility::Imperfect {
                 k.ism.register(&mut self.registry);
             }
+            if let Some(irsm) = &k.irsm {
+                irsm.register(&mut self.registry);
+            }
             k.interleave.register(&mut self.registry);
             k.temporal.register(&mut self.registry);
         }
@@ -619,7 +622,11 @@ impl Renderer {
         }
         if s.vpl.bounces > 1 && s.vpl.bounce_method == BounceMethod::Irsm {
             let points = k.ism.cloud.gpu.len();
-            k.irsm.get_or_insert_with(|| IrsmPass::new(&ctx)).ensure(&ctx, s.vpl.count, s.vpl.irsm_size, points);
+            let created = k.irsm.is_none();
+            let irsm = k.irsm.get_or_insert_with(|| IrsmPass::new(&ctx));
+            fresh |= irsm.ensure(&ctx, s.vpl.count, s.vpl.irsm_size, points) || created;
+        } else if k.irsm.take().is_some() {
+            fresh = true;
         }
         if s.ism.visibility == VplVisibility::Exact {
             let e = k.exact.get_or_insert_with(|| VplVisibilityPass::new(&ctx, &self.gpu_scene));

@@ -29,6 +29,8 @@ const WG: u32 = 256u;
 @group(0) @binding(6) var<storage, read_write> totals: array<f32>;
 @group(0) @binding(7) var<storage, read_write> coverage: array<atomic<u32>>;
 @group(0) @binding(8) var<storage, read_write> vpls: array<Vpl>;
+// `irsm.illumination`: each texel's weight (Fig. 3.6)
+@group(0) @binding(9) var illumination: texture_storage_2d<r32float, write>;
 
 var<workgroup> partial: array<f32, WG>;
 
@@ -39,11 +41,16 @@ fn per_vpl(i: u32) -> u32 {
     return (ip.counts.x - i + ip.counts.y - 1u) / ip.counts.y;
 }
 
-// Owner (point index + 1) of texel t (row-major in the tile) of IRSM i.
-fn texel_owner(i: u32, t: u32) -> u32 {
+// Atlas texel of texel t (row-major in the tile) of IRSM i.
+fn texel_of(i: u32, t: u32) -> vec2<u32> {
     let size = ip.counts.w;
-    let a = vpl_tile_origin(i, ip.counts.z, size) + vec2<u32>(t % size, t / size);
-    return owner[a.y * ip.counts.z * size + a.x];
+    return vpl_tile_origin(i, ip.counts.z, size) + vec2<u32>(t % size, t / size);
+}
+
+// Owner (point index + 1) of texel t of IRSM i.
+fn texel_owner(i: u32, t: u32) -> u32 {
+    let a = texel_of(i, t);
+    return owner[a.y * ip.counts.z * ip.counts.w + a.x];
 }
 
 fn sample_light(i: u32, j: u32) -> vec4<f32> {
@@ -62,13 +69,15 @@ fn cs_cdf(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index
     var run = 0.0;
     for (var t = first; t < first + per_thread; t = t + 1u) {
         let o = texel_owner(i, t);
+        var c = 0.0;
         if (valid && o != 0u) {
-            let c = sample_light(i, o - 1u).w;
+            c = sample_light(i, o - 1u).w;
             run = run + c;
             if (c > 0.0) {
                 atomicAdd(&coverage[o - 1u], 1u);
             }
         }
+        textureStore(illumination, texel_of(i, t), vec4<f32>(c, 0.0, 0.0, 0.0));
         cdf[i * texels + t] = run;
     }
     partial[lid] = run;

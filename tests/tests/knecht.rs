@@ -1000,12 +1000,15 @@ fn irsm_bounce_on_the_gpu_samples_the_texels_the_cpu_picks() {
     let coverage = u32s(&irsm.coverage, ism.cloud.gpu.len() as u64);
     let cdf_all: Vec<f32> = bytemuck::pod_collect_to_vec(&read_buffer(ctx, &irsm.cdf, 4 * (n as u64 * texels as u64)));
     let totals: Vec<f32> = bytemuck::pod_collect_to_vec(&read_buffer(ctx, &irsm.totals, 4 * n as u64));
-    let owner_of = |i: usize, t: usize| {
+    let atlas_index = |i: usize, t: usize| {
         let (x, y) =
             ((i as u32 % l.cols) * l.size + t as u32 % l.size, (i as u32 / l.cols) * l.size + t as u32 / l.size);
-        owner[(y * l.cols * l.size + x) as usize]
+        (y * l.cols * l.size + x) as usize
     };
-    // CDF steps and coverage.
+    let owner_of = |i: usize, t: usize| owner[atlas_index(i, t)];
+    let illumination =
+        gi_render::buffers::read_texture(ctx, "irsm.illumination", &irsm.illumination, 0, 0).expect("read");
+    // CDF steps, the illumination map and coverage.
     let mut owned = vec![0u32; ism.cloud.gpu.len()];
     let mut cdfs = Vec::new();
     let mut covered = 0;
@@ -1024,6 +1027,11 @@ fn irsm_bounce_on_the_gpu_samples_the_texels_the_cpu_picks() {
                 owned[o as usize - 1] += 1;
                 covered += 1;
             }
+            let shown = illumination.data[atlas_index(i, t)][0];
+            assert!(
+                (shown - want).abs() <= 1e-5 * want.abs().max(1e-9),
+                "irsm.illumination of IRSM {i} texel {t}: {shown} vs {want}"
+            );
             assert!(
                 ((c_gpu - prev) - want).abs() <= 1e-4 * totals[i].max(1e-6),
                 "IRSM {i} texel {t}: CDF step {} vs contribution {want}",

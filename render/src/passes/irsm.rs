@@ -45,6 +45,9 @@ pub struct IrsmPass {
     pub totals: wgpu::Buffer,
     /// Texels each point owns.
     pub coverage: wgpu::Buffer,
+    /// `irsm.illumination`: each texel's weight C (the owner's contribution) in the last
+    /// bounce's IRSMs (the illumination map of Knecht 002 Fig. 3.6).
+    pub illumination: wgpu::Texture,
     splat_layout: wgpu::BindGroupLayout,
     sample_layout: wgpu::BindGroupLayout,
     splat_pipeline: wgpu::ComputePipeline,
@@ -81,11 +84,12 @@ impl IrsmPass {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
         let splat_layout = super::ism::splat_layout(device, "irsm.splat.inputs");
-        let sample_layout = super::uniform_and_storage_layout(
-            device,
-            "irsm.sample.inputs",
-            &[true, true, true, true, false, false, false, false],
-        );
+        let mut entries = super::uniform_and_storage_entries(&[true, true, true, true, false, false, false, false]);
+        entries.push(super::bgl::storage_texture(9, wgpu::TextureFormat::R32Float));
+        let sample_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("irsm.sample.inputs"),
+            entries: &entries,
+        });
         let m_splat = crate::shaders::create_module(device, "ism/splat.wgsl");
         let m_irsm = crate::shaders::create_module(device, "vpl/irsm.wgsl");
         let splat_pipeline = super::compute_pipeline(device, "irsm.splat", &m_splat, "cs_splat", &[&splat_layout]);
@@ -102,7 +106,9 @@ impl IrsmPass {
         };
         let layout_info = IsmLayout::new(1, 16);
         let (depth, owner, cdf, totals, coverage) = Self::buffers(device, layout_info, 1, 1);
+        let illumination = Self::illumination_texture(device, layout_info);
         Self {
+            illumination,
             key: (1, 16, 1),
             layout_info,
             depth,
@@ -145,17 +151,40 @@ impl IrsmPass {
         )
     }
 
+    fn illumination_texture(device: &wgpu::Device, l: IsmLayout) -> wgpu::Texture {
+        super::create_target(
+            device,
+            "irsm.illumination",
+            l.width() as u32,
+            l.height() as u32,
+            wgpu::TextureFormat::R32Float,
+            wgpu::TextureUsages::STORAGE_BINDING,
+        )
+    }
+
+    pub fn register(&self, reg: &mut crate::buffers::BufferRegistry) {
+        reg.register(
+            "irsm.illumination",
+            crate::buffers::BufferKind::Data,
+            "IRSM baseline (Ritschel et al., Knecht Fig. 3.6): one map per source VPL of the last bounce, each texel the light its nearest cloud point would send on (the weight new VPLs are importance-sampled by), 0 where no point lies",
+            &self.illumination,
+        );
+    }
+
     /// Sizes the IRSMs for `vpls` source VPLs of `size`² (see [`irsm_size`]) and `points`
-    /// cloud points (the caller checked that the atlas fits).
-    pub fn ensure(&mut self, ctx: &GpuContext, vpls: u32, size: u32, points: usize) {
+    /// cloud points (the caller checked that the atlas fits). Returns whether the
+    /// illumination texture was recreated.
+    pub fn ensure(&mut self, ctx: &GpuContext, vpls: u32, size: u32, points: usize) -> bool {
         let size = irsm_size(size);
         if self.key == (vpls, size, points) {
-            return;
+            return false;
         }
         self.layout_info = IsmLayout::new(vpls, size);
         (self.depth, self.owner, self.cdf, self.totals, self.coverage) =
             Self::buffers(&ctx.device, self.layout_info, vpls, points);
+        self.illumination = Self::illumination_texture(&ctx.device, self.layout_info);
         self.key = (vpls, size, points);
+        true
     }
 
     /// Writes the uniforms of bounces 1 … B − 1 and returns the frame's bind groups.
@@ -205,6 +234,7 @@ impl IrsmPass {
                 self.owner.as_entire_binding(),
             ]),
         });
+        let illumination = super::view(&self.illumination, "irsm.illumination");
         let sample = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("irsm.sample.inputs"),
             layout: &self.sample_layout,
@@ -218,6 +248,7 @@ impl IrsmPass {
                 self.totals.as_entire_binding(),
                 self.coverage.as_entire_binding(),
                 vpls.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&illumination),
             ]),
         });
         IrsmJob { splat, sample }

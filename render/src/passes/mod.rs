@@ -47,11 +47,16 @@ pub struct InstanceUniform {
 /// A compute bind group layout of a dynamic-offset uniform at binding 0 and storage buffers
 /// at bindings 1… with `read_only[k]` for binding k + 1 (the bounce and splat kernels).
 pub fn uniform_and_storage_layout(device: &wgpu::Device, label: &str, read_only: &[bool]) -> wgpu::BindGroupLayout {
-    let cs = wgpu::ShaderStages::COMPUTE;
-    let entries: Vec<_> = std::iter::once(bgl::uniform_dynamic(0, cs))
-        .chain(read_only.iter().enumerate().map(|(k, &ro)| bgl::storage(k as u32 + 1, cs, ro)))
-        .collect();
+    let entries = uniform_and_storage_entries(read_only);
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &entries })
+}
+
+/// The entries of [`uniform_and_storage_layout`], for layouts that add more.
+pub fn uniform_and_storage_entries(read_only: &[bool]) -> Vec<wgpu::BindGroupLayoutEntry> {
+    let cs = wgpu::ShaderStages::COMPUTE;
+    std::iter::once(bgl::uniform_dynamic(0, cs))
+        .chain(read_only.iter().enumerate().map(|(k, &ro)| bgl::storage(k as u32 + 1, cs, ro)))
+        .collect()
 }
 
 /// Uniforms for dynamic offsets: `items` laid out every `stride` bytes in a buffer of
