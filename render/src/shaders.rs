@@ -38,6 +38,10 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("interleave/merge.wgsl", include_str!("../../shaders/interleave/merge.wgsl")),
     ("interleave/filter.wgsl", include_str!("../../shaders/interleave/filter.wgsl")),
     ("temporal/confidence.wgsl", include_str!("../../shaders/temporal/confidence.wgsl")),
+    ("hcb/common.wgsl", include_str!("../../shaders/hcb/common.wgsl")),
+    ("hcb/base.wgsl", include_str!("../../shaders/hcb/base.wgsl")),
+    ("hcb/build.wgsl", include_str!("../../shaders/hcb/build.wgsl")),
+    ("hcb/samples.wgsl", include_str!("../../shaders/hcb/samples.wgsl")),
     ("view/view.wgsl", include_str!("../../shaders/view/view.wgsl")),
     ("view/probe.wgsl", include_str!("../../shaders/view/probe.wgsl")),
 ];
@@ -66,6 +70,9 @@ pub const ENTRY_MODULES: &[&str] = &[
     "interleave/merge.wgsl",
     "interleave/filter.wgsl",
     "temporal/confidence.wgsl",
+    "hcb/base.wgsl",
+    "hcb/build.wgsl",
+    "hcb/samples.wgsl",
     "view/view.wgsl",
     "view/probe.wgsl",
 ];

@@ -110,6 +110,14 @@ fn uniform_sizes_match_wgsl() {
         assert_eq!(struct_size(&m, "IsmPoint") as usize, std::mem::size_of::<ism::GpuPoint>(), "{file}");
         assert_eq!(struct_size(&m, "Vpl") as usize, std::mem::size_of::<vpl::GpuVpl>(), "{file}");
     }
+    for file in ["hcb/base.wgsl", "hcb/build.wgsl", "hcb/samples.wgsl"] {
+        let m = parse(file);
+        assert_eq!(
+            struct_size(&m, "HcbParams") as usize,
+            std::mem::size_of::<gi_render::passes::hcb::HcbParams>(),
+            "{file}"
+        );
+    }
     let pp = parse("ism/pull_push.wgsl");
     assert_eq!(struct_size(&pp, "LevelParams") as usize, std::mem::size_of::<ism::LevelParams>());
     let sl = parse("interleave/split.wgsl");

@@ -2,6 +2,7 @@
 //! the passes' outputs with these on small inputs.
 
 pub mod brdf;
+pub mod hcb;
 pub mod knecht;
 pub mod pathtrace;
 pub mod raycast;

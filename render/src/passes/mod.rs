@@ -5,6 +5,7 @@
 pub mod compose;
 pub mod direct;
 pub mod gbuffer;
+pub mod hcb;
 pub mod interleave;
 pub mod irsm;
 pub mod ism;

@@ -1,0 +1,358 @@
+//! Stage 5 of the hierarchical coherence buffer (Nguyen et al., 000 §3): the HCB levels
+//! (`hcb.level.k.position`: xyz + the sphere radius a^w; `hcb.level.k.normal`: xyz + the
+//! group coherence n^w), the mask buffer (`hcb.mask.k`), the sample buffer (`hcb.samples`,
+//! level + 1 at each sample's pixel) and the compact sample list. Shaders
+//! `shaders/hcb/{base,build,samples}.wgsl`; CPU twin `cpu::hcb` (the paper's readings are
+//! documented there).
+//!
+//! Not yet part of the frame: gathering at the samples, the coherence-weighted splatting and
+//! the cache (issue #6) come next; this pass is built and tested on its own.
+
+use glam::Vec4;
+
+use super::bgl;
+use crate::buffers::{BufferKind, BufferRegistry};
+use crate::cpu::hcb::Thresholds;
+use crate::gpu::GpuContext;
+use crate::timing::Slot;
+
+/// Uniform of the HCB passes; WGSL twin: `HcbParams` in `shaders/hcb/common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct HcbParams {
+    /// cos θ_max, cos γ_max, d_max, pixel scale 2 tan(fov_y / 2) / height.
+    pub thresholds: Vec4,
+    /// Eye position.
+    pub eye: Vec4,
+    /// 1 for the top level, level index.
+    pub level: [u32; 4],
+}
+
+const STRIDE: u64 = 256;
+/// Most levels (the base and 11 above: a 4096² G-buffer reaches 2²).
+pub const MAX_LEVELS: u32 = 12;
+
+/// One level's textures.
+pub struct HcbLevel {
+    pub width: u32,
+    pub height: u32,
+    pub position: wgpu::Texture,
+    pub normal: wgpu::Texture,
+    /// Inside (1) or outside (0) the splats of the level above (all 0 at the top).
+    pub mask: wgpu::Texture,
+}
+
+/// What the HCB of one frame is built with.
+#[derive(Clone, Copy, Debug)]
+pub struct HcbFrame {
+    pub thresholds: Thresholds,
+    pub eye: glam::Vec3,
+    /// 2 tan(fov_y / 2) / height.
+    pub pixel_scale: f32,
+}
+
+pub struct HcbPass {
+    pub levels: Vec<HcbLevel>,
+    /// `hcb.samples`: level + 1 at each sample's pixel, 0 elsewhere (G-buffer resolution).
+    pub samples: wgpu::Texture,
+    /// Count, then (x, y, level, 0) per sample.
+    pub list: wgpu::Buffer,
+    pub list_capacity: u32,
+    io_layout: wgpu::BindGroupLayout,
+    sample_layout: wgpu::BindGroupLayout,
+    base_pipeline: wgpu::ComputePipeline,
+    build_pipeline: wgpu::ComputePipeline,
+    mask_pipeline: wgpu::ComputePipeline,
+    clear_pipeline: wgpu::ComputePipeline,
+    samples_pipeline: wgpu::ComputePipeline,
+    params: wgpu::Buffer,
+    dummy_storage: wgpu::Texture,
+    dummy_sampled: wgpu::Texture,
+    width: u32,
+    height: u32,
+}
+
+/// Sizes of levels 0 … `levels` − 1 of a `width` × `height` G-buffer (each ⌈half⌉ of the
+/// one below).
+pub fn level_sizes(width: u32, height: u32, levels: u32) -> Vec<(u32, u32)> {
+    let mut out = vec![(width.max(1), height.max(1))];
+    for _ in 1..levels.clamp(1, MAX_LEVELS) {
+        let (w, h) = *out.last().expect("level 0");
+        out.push((w.div_ceil(2), h.div_ceil(2)));
+    }
+    out
+}
+
+impl HcbPass {
+    pub fn new(ctx: &GpuContext, width: u32, height: u32, levels: u32) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let rgba = wgpu::TextureFormat::Rgba32Float;
+        let r32 = wgpu::TextureFormat::R32Float;
+        let io_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("hcb.level.inputs"),
+            entries: &[
+                bgl::uniform_dynamic(0, cs),
+                bgl::texture(1, cs, false),
+                bgl::texture(2, cs, false),
+                bgl::storage_texture(3, rgba),
+                bgl::storage_texture(4, rgba),
+            ],
+        });
+        let sample_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("hcb.samples.inputs"),
+            entries: &[
+                bgl::uniform_dynamic(0, cs),
+                bgl::texture(1, cs, false),
+                bgl::storage_texture(2, r32),
+                bgl::texture(3, cs, false),
+                bgl::storage_texture(4, r32),
+                bgl::storage(5, cs, false),
+            ],
+        });
+        let m_base = crate::shaders::create_module(device, "hcb/base.wgsl");
+        let m_build = crate::shaders::create_module(device, "hcb/build.wgsl");
+        let m_samples = crate::shaders::create_module(device, "hcb/samples.wgsl");
+        let pipeline = |label, m, entry, layout| super::compute_pipeline(device, label, m, entry, &[layout]);
+        let base_pipeline = pipeline("hcb.base", &m_base, "cs_base", &io_layout);
+        let build_pipeline = pipeline("hcb.build", &m_build, "cs_build", &io_layout);
+        let mask_pipeline = pipeline("hcb.mask", &m_samples, "cs_mask", &sample_layout);
+        let clear_pipeline = pipeline("hcb.samples.clear", &m_samples, "cs_clear", &sample_layout);
+        let samples_pipeline = pipeline("hcb.samples", &m_samples, "cs_samples", &sample_layout);
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("hcb.params"),
+            size: STRIDE * (2 * MAX_LEVELS as u64 + 1),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let storage = wgpu::TextureUsages::STORAGE_BINDING;
+        let dummy_storage = super::create_target(device, "hcb.dummy_mask_out", 1, 1, r32, storage);
+        let dummy_sampled = super::create_target(device, "hcb.dummy_mask_in", 1, 1, r32, storage);
+        let (levels_v, samples, list, list_capacity) = Self::targets(device, width, height, levels);
+        Self {
+            levels: levels_v,
+            samples,
+            list,
+            list_capacity,
+            io_layout,
+            sample_layout,
+            base_pipeline,
+            build_pipeline,
+            mask_pipeline,
+            clear_pipeline,
+            samples_pipeline,
+            params,
+            dummy_storage,
+            dummy_sampled,
+            width,
+            height,
+        }
+    }
+
+    fn targets(
+        device: &wgpu::Device,
+        width: u32,
+        height: u32,
+        levels: u32,
+    ) -> (Vec<HcbLevel>, wgpu::Texture, wgpu::Buffer, u32) {
+        let storage = wgpu::TextureUsages::STORAGE_BINDING;
+        let levels_v = level_sizes(width, height, levels)
+            .into_iter()
+            .enumerate()
+            .map(|(k, (w, h))| HcbLevel {
+                width: w,
+                height: h,
+                position: super::create_target(
+                    device,
+                    &format!("hcb.level.{k}.position"),
+                    w,
+                    h,
+                    wgpu::TextureFormat::Rgba32Float,
+                    storage,
+                ),
+                normal: super::create_target(
+                    device,
+                    &format!("hcb.level.{k}.normal"),
+                    w,
+                    h,
+                    wgpu::TextureFormat::Rgba32Float,
+                    storage,
+                ),
+                mask: super::create_target(
+                    device,
+                    &format!("hcb.mask.{k}"),
+                    w,
+                    h,
+                    wgpu::TextureFormat::R32Float,
+                    storage,
+                ),
+            })
+            .collect();
+        let samples = super::create_target(
+            device,
+            "hcb.samples",
+            width.max(1),
+            height.max(1),
+            wgpu::TextureFormat::R32Float,
+            storage,
+        );
+        // Every pixel could be a level-0 sample.
+        let capacity = width.max(1) * height.max(1);
+        let list = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("hcb.sample_list"),
+            size: 16 * (capacity as u64 + 1),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        (levels_v, samples, list, capacity)
+    }
+
+    /// Resizes for a `width` × `height` G-buffer and `levels` levels. Returns whether the
+    /// textures were recreated.
+    pub fn ensure(&mut self, ctx: &GpuContext, width: u32, height: u32, levels: u32) -> bool {
+        let want = level_sizes(width, height, levels);
+        let have: Vec<(u32, u32)> = self.levels.iter().map(|l| (l.width, l.height)).collect();
+        if want == have && (self.width, self.height) == (width, height) {
+            return false;
+        }
+        (self.levels, self.samples, self.list, self.list_capacity) = Self::targets(&ctx.device, width, height, levels);
+        (self.width, self.height) = (width, height);
+        true
+    }
+
+    pub fn register(&self, reg: &mut BufferRegistry) {
+        for (k, l) in self.levels.iter().enumerate() {
+            reg.register(
+                &format!("hcb.level.{k}.position"),
+                BufferKind::Data,
+                "HCB level (Nguyen §3.2, §3.5): world position of the block's centre texel; w: a^w, the radius of the sphere around every pixel the texel stands for",
+                &l.position,
+            );
+            reg.register(
+                &format!("hcb.level.{k}.normal"),
+                BufferKind::Data,
+                "HCB level (Nguyen §3.2–3.4): normal of the block's centre texel; w: n^w, the group coherence of Algorithm 1 (0: incoherent or background, 1 at level 0)",
+                &l.normal,
+            );
+            reg.register(
+                &format!("hcb.mask.{k}"),
+                BufferKind::Data,
+                "HCB mask buffer (Nguyen §3.6): 1 inside the 3×3 splat of a coherent texel of the level above, 0 outside",
+                &l.mask,
+            );
+        }
+        reg.register(
+            "hcb.samples",
+            BufferKind::Data,
+            "HCB samples (Nguyen §3.6) at G-buffer resolution: level + 1 at the pixel of each sample, 0 elsewhere",
+            &self.samples,
+        );
+    }
+
+    /// Builds every level from the G-buffer's position and normal, the masks and the samples.
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<Slot<'_>>,
+        g_position: &wgpu::TextureView,
+        g_normal: &wgpu::TextureView,
+        f: HcbFrame,
+    ) {
+        let n = self.levels.len() as u32;
+        let t = f.thresholds;
+        let params: Vec<HcbParams> = (0..n)
+            .map(|k| HcbParams {
+                thresholds: Vec4::new(t.cos_theta_max, t.cos_gamma_max, t.d_max, f.pixel_scale),
+                eye: f.eye.extend(1.0),
+                level: [(k + 1 == n) as u32, k, 0, 0],
+            })
+            .collect();
+        ctx.queue.write_buffer(&self.params, 0, &super::strided_bytes(STRIDE, params.len(), &params));
+        let uniform = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &self.params,
+            offset: 0,
+            size: std::num::NonZeroU64::new(std::mem::size_of::<HcbParams>() as u64),
+        });
+        let view = |t: &wgpu::Texture| super::view(t, "hcb.view");
+        fn tv(v: &wgpu::TextureView) -> wgpu::BindingResource<'_> {
+            wgpu::BindingResource::TextureView(v)
+        }
+        let io_group = |a: &wgpu::TextureView, b: &wgpu::TextureView, c: &wgpu::TextureView, d: &wgpu::TextureView| {
+            ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("hcb.level.inputs"),
+                layout: &self.io_layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: uniform.clone() },
+                    wgpu::BindGroupEntry { binding: 1, resource: tv(a) },
+                    wgpu::BindGroupEntry { binding: 2, resource: tv(b) },
+                    wgpu::BindGroupEntry { binding: 3, resource: tv(c) },
+                    wgpu::BindGroupEntry { binding: 4, resource: tv(d) },
+                ],
+            })
+        };
+        let views: Vec<(wgpu::TextureView, wgpu::TextureView, wgpu::TextureView)> =
+            self.levels.iter().map(|l| (view(&l.position), view(&l.normal), view(&l.mask))).collect();
+        let mut io_groups = vec![io_group(g_position, g_normal, &views[0].0, &views[0].1)];
+        for k in 1..n as usize {
+            io_groups.push(io_group(&views[k - 1].0, &views[k - 1].1, &views[k].0, &views[k].1));
+        }
+        let (samples_view, dummy_out, dummy_in) =
+            (view(&self.samples), view(&self.dummy_storage), view(&self.dummy_sampled));
+        let sample_group = |normal: &wgpu::TextureView, mask_out: &wgpu::TextureView, mask_in: &wgpu::TextureView| {
+            ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("hcb.samples.inputs"),
+                layout: &self.sample_layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: uniform.clone() },
+                    wgpu::BindGroupEntry { binding: 1, resource: tv(normal) },
+                    wgpu::BindGroupEntry { binding: 2, resource: tv(mask_out) },
+                    wgpu::BindGroupEntry { binding: 3, resource: tv(mask_in) },
+                    wgpu::BindGroupEntry { binding: 4, resource: tv(&samples_view) },
+                    wgpu::BindGroupEntry { binding: 5, resource: self.list.as_entire_binding() },
+                ],
+            })
+        };
+        // Mask k − 1 from level k's coherence; the top's mask stays all outside.
+        let mask_groups: Vec<wgpu::BindGroup> =
+            (1..n as usize).map(|k| sample_group(&views[k].1, &views[k - 1].2, &dummy_in)).collect();
+        let level_groups: Vec<wgpu::BindGroup> = (0..n as usize)
+            .map(|k| {
+                if k + 1 == n as usize {
+                    sample_group(&views[k].1, &dummy_out, &dummy_in)
+                } else {
+                    sample_group(&views[k].1, &dummy_out, &views[k].2)
+                }
+            })
+            .collect();
+        encoder.clear_buffer(&self.list, 0, Some(16));
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("hcb"),
+            timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+        });
+        let groups = |w: u32, h: u32| (w.div_ceil(8), h.div_ceil(8));
+        let offset = |k: usize| [(k as u64 * STRIDE) as u32];
+        for (k, l) in self.levels.iter().enumerate() {
+            pass.set_pipeline(if k == 0 { &self.base_pipeline } else { &self.build_pipeline });
+            pass.set_bind_group(0, &io_groups[k], &offset(k));
+            let (gx, gy) = groups(l.width, l.height);
+            pass.dispatch_workgroups(gx, gy, 1);
+        }
+        pass.set_pipeline(&self.mask_pipeline);
+        for k in (1..n as usize).rev() {
+            pass.set_bind_group(0, &mask_groups[k - 1], &offset(k));
+            let (gx, gy) = groups(self.levels[k - 1].width, self.levels[k - 1].height);
+            pass.dispatch_workgroups(gx, gy, 1);
+        }
+        pass.set_pipeline(&self.clear_pipeline);
+        pass.set_bind_group(0, &level_groups[0], &offset(0));
+        let (gx, gy) = groups(self.width, self.height);
+        pass.dispatch_workgroups(gx, gy, 1);
+        pass.set_pipeline(&self.samples_pipeline);
+        for (k, l) in self.levels.iter().enumerate() {
+            pass.set_bind_group(0, &level_groups[k], &offset(k));
+            let (gx, gy) = groups(l.width, l.height);
+            pass.dispatch_workgroups(gx, gy, 1);
+        }
+    }
+}

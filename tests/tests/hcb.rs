@@ -1,0 +1,245 @@
+//! The hierarchical coherence buffer (Nguyen et al., issue #6): the GPU levels, masks and
+//! samples against the CPU reference `gi_render::cpu::hcb` on synthetic G-buffers — a plane
+//! facing the camera, a 90° corner, a step between parallel planes (the pose test), random
+//! normals — and on the default scene's G-buffer at 128².
+
+use gi_lab_tests::{default_renderer, gpu, texture_from_bytes};
+use gi_render::GpuContext;
+use gi_render::cpu::hcb::{self, Level, Sample, Thresholds};
+use gi_render::passes::hcb::{HcbFrame, HcbPass};
+use glam::Vec3;
+
+const EYE: Vec3 = Vec3::ZERO;
+const PIXEL_SCALE: f32 = 0.01;
+
+fn upload(ctx: &GpuContext, label: &str, w: u32, h: u32, data: &[[f32; 4]]) -> wgpu::Texture {
+    texture_from_bytes(ctx, label, wgpu::TextureFormat::Rgba32Float, (w, h), bytemuck::cast_slice(data))
+}
+
+/// One G-buffer to build an HCB from.
+struct Case<'a> {
+    w: u32,
+    h: u32,
+    pos: &'a [[f32; 4]],
+    nrm: &'a [[f32; 4]],
+    levels: u32,
+    frame: HcbFrame,
+}
+
+/// Runs the GPU HCB on a G-buffer; returns its levels, masks, sample list (sorted) and the
+/// sample buffer.
+fn gpu_hcb(ctx: &GpuContext, c: &Case) -> (Vec<Level>, Vec<Vec<bool>>, Vec<Sample>, Vec<f32>) {
+    let (w, h) = (c.w, c.h);
+    let (p, n) = (upload(ctx, "test.position", w, h, c.pos), upload(ctx, "test.normal", w, h, c.nrm));
+    let pass = HcbPass::new(ctx, w, h, c.levels);
+    let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.hcb") });
+    let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
+    pass.run(ctx, &mut enc, None, &view(&p), &view(&n), c.frame);
+    ctx.queue.submit([enc.finish()]);
+    let read = |t: &wgpu::Texture| gi_render::buffers::read_texture(ctx, "hcb", t, 0, 0).expect("read");
+    let mut out = Vec::new();
+    let mut masks = Vec::new();
+    for l in &pass.levels {
+        let (pp, nn, mm) = (read(&l.position), read(&l.normal), read(&l.mask));
+        let texels = pp
+            .data
+            .iter()
+            .zip(&nn.data)
+            .map(|(p, n)| hcb::HcbTexel {
+                position: Vec3::new(p[0], p[1], p[2]),
+                distance: p[3],
+                normal: Vec3::new(n[0], n[1], n[2]),
+                coherence: n[3],
+            })
+            .collect();
+        out.push(Level { width: l.width, height: l.height, texels });
+        masks.push(mm.data.iter().map(|m| m[0] > 0.5).collect());
+    }
+    let bytes = gi_render::buffers::read_storage(ctx, &pass.list, 16 * (pass.list_capacity as u64 + 1)).expect("list");
+    let list: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
+    let mut samples: Vec<Sample> = (0..list[0] as usize)
+        .map(|i| Sample { level: list[4 + 4 * i + 2], x: list[4 + 4 * i], y: list[4 + 4 * i + 1] })
+        .collect();
+    samples.sort();
+    let buffer = read(&pass.samples).data.iter().map(|v| v[0]).collect();
+    (out, masks, samples, buffer)
+}
+
+/// GPU against CPU for one G-buffer; returns the CPU's levels and samples for further checks.
+fn check(name: &str, c: Case) -> (Vec<Level>, Vec<Sample>) {
+    let (w, h, f) = (c.w, c.h, c.frame);
+    let ctx = gpu();
+    let base = hcb::base_level(c.pos, c.nrm, w, h, f.eye, f.pixel_scale);
+    let cpu = hcb::build(base, c.levels, f.thresholds);
+    let cpu_masks = hcb::masks(&cpu);
+    let mut cpu_samples = hcb::samples(&cpu, &cpu_masks);
+    cpu_samples.sort();
+    let (got, got_masks, got_samples, buffer) = gpu_hcb(&ctx, &c);
+    for (k, (g, c)) in got.iter().zip(&cpu).enumerate() {
+        assert_eq!((g.width, g.height), (c.width, c.height), "{name}: level {k} size");
+        for (i, (a, b)) in g.texels.iter().zip(&c.texels).enumerate() {
+            let at = (i as u32 % c.width, i as u32 / c.width);
+            assert!(
+                (a.coherence - b.coherence).abs() <= 1e-5,
+                "{name}: level {k} {at:?} n^w GPU {} CPU {}",
+                a.coherence,
+                b.coherence
+            );
+            assert!(
+                (a.distance - b.distance).abs() <= 1e-5 * b.distance.abs().max(1.0),
+                "{name}: level {k} {at:?} a^w GPU {} CPU {}",
+                a.distance,
+                b.distance
+            );
+            if b.coherence > 0.0 {
+                assert!(
+                    (a.position - b.position).length() <= 1e-5 && (a.normal - b.normal).length() <= 1e-5,
+                    "{name}: level {k} {at:?}"
+                );
+            }
+        }
+    }
+    assert_eq!(got_masks[..cpu.len() - 1], cpu_masks[..cpu.len() - 1], "{name}: masks");
+    assert_eq!(got_samples, cpu_samples, "{name}: samples");
+    // The sample buffer marks exactly the samples' pixels with their level + 1.
+    let mut expect = vec![0.0f32; (w * h) as usize];
+    for s in &cpu_samples {
+        expect[((s.y << s.level) * w + (s.x << s.level)) as usize] = (s.level + 1) as f32;
+    }
+    assert_eq!(buffer, expect, "{name}: sample buffer");
+    (cpu, cpu_samples)
+}
+
+const T: Thresholds = Thresholds { cos_theta_max: 0.9, cos_gamma_max: 0.3, d_max: 10.0 };
+
+/// A synthetic case seen from the origin with thresholds `T`.
+fn case<'a>(w: u32, h: u32, pos: &'a [[f32; 4]], nrm: &'a [[f32; 4]], levels: u32) -> Case<'a> {
+    Case { w, h, pos, nrm, levels, frame: HcbFrame { thresholds: T, eye: EYE, pixel_scale: PIXEL_SCALE } }
+}
+
+/// A G-buffer of `w`×`h` from a function of the pixel: (position, view depth, normal), None
+/// for the background.
+fn gbuffer(w: u32, h: u32, f: impl Fn(u32, u32) -> Option<(Vec3, Vec3)>) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
+    (0..w * h)
+        .map(|i| match f(i % w, i / w) {
+            Some((p, n)) => ([p.x, p.y, p.z, -p.z], [n.x, n.y, n.z, 1.0]),
+            None => ([0.0; 4], [0.0; 4]),
+        })
+        .unzip()
+}
+
+/// The point the pixel's ray (pinhole at the origin looking down −z) hits on the plane
+/// through `q` with normal `n`.
+fn on_plane(x: u32, y: u32, w: u32, h: u32, q: Vec3, n: Vec3) -> Vec3 {
+    let d = Vec3::new(
+        (x as f32 + 0.5 - w as f32 / 2.0) * PIXEL_SCALE,
+        (h as f32 / 2.0 - y as f32 - 0.5) * PIXEL_SCALE,
+        -1.0,
+    );
+    d * (q.dot(n) / d.dot(n))
+}
+
+#[test]
+fn a_plane_facing_the_camera_is_coherent_up_to_the_top() {
+    let (w, h) = (37, 29);
+    let (pos, nrm) = gbuffer(w, h, |x, y| Some((on_plane(x, y, w, h, Vec3::new(0.0, 0.0, -3.0), Vec3::Z), Vec3::Z)));
+    let (levels, samples) = check("plane", case(w, h, &pos, &nrm, 4));
+    let top = levels.last().expect("top");
+    assert!(top.texels.iter().any(|t| t.coherence == 1.0), "the top level has coherent texels");
+    // Only the one-pixel ring at the image border (whose blocks reach outside) needs level-0
+    // samples; a few samples of levels 2–3 stand for the whole inside.
+    for s in samples.iter().filter(|s| s.level == 0) {
+        assert!(s.x == 0 || s.y == 0 || s.x == w - 1 || s.y == h - 1, "level-0 sample inside the plane: {s:?}");
+    }
+    let above = samples.iter().filter(|s| s.level > 0).count();
+    assert!(above > 0 && above <= 20, "{above} samples above level 0: {samples:?}");
+}
+
+#[test]
+fn a_90_degree_corner_is_incoherent_across_the_crease() {
+    let (w, h) = (37, 29);
+    // A side wall (x = −0.015, normal +x) meets the back wall (z = −3, normal +z) at the
+    // line that projects between columns 17 and 18.
+    let crease = 18;
+    let corner = Vec3::new(-0.015, 0.0, -3.0);
+    let (pos, nrm) = gbuffer(w, h, |x, y| {
+        Some(if x < crease {
+            (on_plane(x, y, w, h, corner, Vec3::X), Vec3::X)
+        } else {
+            (on_plane(x, y, w, h, corner, Vec3::Z), Vec3::Z)
+        })
+    });
+    let (levels, _) = check("corner", case(w, h, &pos, &nrm, 4));
+    // No level-1 block straddling the crease is coherent.
+    let l1 = &levels[1];
+    for y in 0..l1.height {
+        for x in 0..l1.width {
+            let straddles = (2 * x).saturating_sub(1) < crease && 2 * x + 1 >= crease;
+            if straddles {
+                assert_eq!(l1.at(x as i64, y as i64).expect("t").coherence, 0.0, "({x}, {y})");
+            }
+        }
+    }
+}
+
+#[test]
+fn a_step_between_parallel_planes_is_rejected_by_the_pose_test() {
+    let (w, h) = (37, 29);
+    let step = 19;
+    let (pos, nrm) = gbuffer(w, h, |x, y| {
+        let z = if x < step { -3.0 } else { -3.6 };
+        Some((on_plane(x, y, w, h, Vec3::new(0.0, 0.0, z), Vec3::Z), Vec3::Z))
+    });
+    let (levels, _) = check("step", case(w, h, &pos, &nrm, 4));
+    let l1 = &levels[1];
+    let (mut across, mut beside) = (0, 0);
+    for y in 1..l1.height - 1 {
+        for x in 1..l1.width - 1 {
+            let c = l1.at(x as i64, y as i64).expect("t").coherence;
+            if 2 * x - 1 < step && 2 * x + 1 >= step {
+                assert_eq!(c, 0.0, "a block across the step at ({x}, {y}) is coherent");
+                across += 1;
+            } else if c > 0.0 {
+                beside += 1;
+            }
+        }
+    }
+    assert!(across > 0 && beside > 0, "across {across}, coherent beside {beside}");
+}
+
+#[test]
+fn random_normals_are_not_coherent() {
+    let (w, h) = (33, 33);
+    let mut s = 12345u32;
+    let mut next = move || {
+        s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        (s >> 8) as f32 / (1u32 << 24) as f32 * 2.0 - 1.0
+    };
+    let normals: Vec<Vec3> = (0..w * h).map(|_| Vec3::new(next(), next(), next().abs() + 0.2).normalize()).collect();
+    let (pos, nrm) = gbuffer(w, h, |x, y| {
+        Some((on_plane(x, y, w, h, Vec3::new(0.0, 0.0, -3.0), Vec3::Z), normals[(y * w + x) as usize]))
+    });
+    let (levels, samples) = check("random normals", case(w, h, &pos, &nrm, 3));
+    assert!(levels[1].texels.iter().all(|t| t.coherence == 0.0));
+    assert_eq!(samples.len(), (w * h) as usize, "every pixel is its own sample");
+}
+
+#[test]
+fn the_default_scene_at_128_matches_the_cpu() {
+    let mut r = default_renderer(128, 128);
+    r.render_frame();
+    let pos = r.readback("gbuffer.position").expect("position").data;
+    let nrm = r.readback("gbuffer.normal").expect("normal").data;
+    let pixel_scale = 2.0 * (r.camera.yfov * 0.5).tan() / 128.0;
+    let t = Thresholds { cos_theta_max: 20f32.to_radians().cos(), cos_gamma_max: 70f32.to_radians().cos(), d_max: 0.5 };
+    let frame = HcbFrame { thresholds: t, eye: r.camera.position, pixel_scale };
+    let (levels, samples) = check("default scene", Case { w: 128, h: 128, pos: &pos, nrm: &nrm, levels: 6, frame });
+    let per_level: Vec<usize> =
+        (0..levels.len()).map(|k| samples.iter().filter(|s| s.level == k as u32).count()).collect();
+    println!(
+        "default scene 128², θmax 20°, γmax 70°, dmax 0.5: samples per level {per_level:?}, {} of {} pixels",
+        samples.len(),
+        128 * 128
+    );
+    assert!(per_level[1..].iter().sum::<usize>() > 0, "samples above level 0: {per_level:?}");
+}
