@@ -13,3 +13,15 @@ struct HcbParams {
     // x: 1 when this is the top level (sample pass), y: level index
     level: vec4<u32>,
 }
+
+// One sample of the compact list (Rust twin: passes::hcb::GpuHcbSample).
+struct HcbSample {
+    // xyz: world position (the level texel's), w: a^w, the radius of the sphere it stands for
+    position: vec4<f32>,
+    // xyz: normal, w: n^w
+    normal: vec4<f32>,
+    // x, y: texel at its level, z: level, w: 0
+    texel: vec4<u32>,
+    // rgb: the light gathered at the sample (irradiance), a: 1 once gathered
+    light: vec4<f32>,
+}

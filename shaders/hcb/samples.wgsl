@@ -14,8 +14,10 @@
 @group(0) @binding(2) var mask_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(3) var mask_in: texture_2d<f32>;
 @group(0) @binding(4) var samples_out: texture_storage_2d<r32float, write>;
-// x: count, then (x, y, level, 0) per sample
-@group(0) @binding(5) var<storage, read_write> list: array<atomic<u32>>;
+// the number of samples
+@group(0) @binding(5) var<storage, read_write> counter: array<atomic<u32>>;
+@group(0) @binding(6) var level_position: texture_2d<f32>;
+@group(0) @binding(7) var<storage, read_write> list: array<HcbSample>;
 
 @compute @workgroup_size(8, 8, 1)
 fn cs_mask(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -55,7 +57,8 @@ fn cs_samples(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (gid.x >= size.x || gid.y >= size.y) {
         return;
     }
-    let is_coherent = textureLoad(level_normal, gid.xy, 0).w > 0.0;
+    let nrm = textureLoad(level_normal, gid.xy, 0);
+    let is_coherent = nrm.w > 0.0;
     let outside = hp.level.x == 1u || textureLoad(mask_in, gid.xy, 0).r < 0.5;
     if (!(is_coherent && outside)) {
         return;
@@ -63,11 +66,8 @@ fn cs_samples(@builtin(global_invocation_id) gid: vec3<u32>) {
     let k = hp.level.y;
     let pixel = gid.xy << vec2<u32>(k);
     textureStore(samples_out, pixel, vec4<f32>(f32(k + 1u), 0.0, 0.0, 0.0));
-    let slot = atomicAdd(&list[0], 1u);
-    let o = 4u + 4u * slot;
-    if (o + 3u < arrayLength(&list)) {
-        atomicStore(&list[o], gid.x);
-        atomicStore(&list[o + 1u], gid.y);
-        atomicStore(&list[o + 2u], k);
+    let slot = atomicAdd(&counter[0], 1u);
+    if (slot < arrayLength(&list)) {
+        list[slot] = HcbSample(textureLoad(level_position, gid.xy, 0), nrm, vec4<u32>(gid.xy, k, 0u), vec4<f32>(0.0));
     }
 }

@@ -6,7 +6,7 @@
 use gi_lab_tests::{default_renderer, gpu, texture_from_bytes};
 use gi_render::GpuContext;
 use gi_render::cpu::hcb::{self, Level, Sample, Thresholds};
-use gi_render::passes::hcb::{HcbFrame, HcbPass};
+use gi_render::passes::hcb::{GpuHcbSample, HcbFrame, HcbPass};
 use glam::Vec3;
 
 const EYE: Vec3 = Vec3::ZERO;
@@ -55,11 +55,21 @@ fn gpu_hcb(ctx: &GpuContext, c: &Case) -> (Vec<Level>, Vec<Vec<bool>>, Vec<Sampl
         out.push(Level { width: l.width, height: l.height, texels });
         masks.push(mm.data.iter().map(|m| m[0] > 0.5).collect());
     }
-    let bytes = gi_render::buffers::read_storage(ctx, &pass.list, 16 * (pass.list_capacity as u64 + 1)).expect("list");
-    let list: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
-    let mut samples: Vec<Sample> = (0..list[0] as usize)
-        .map(|i| Sample { level: list[4 + 4 * i + 2], x: list[4 + 4 * i], y: list[4 + 4 * i + 1] })
-        .collect();
+    let count: Vec<u32> =
+        bytemuck::pod_collect_to_vec(&gi_render::buffers::read_storage(ctx, &pass.counter, 16).expect("count"));
+    let size = std::mem::size_of::<GpuHcbSample>() as u64;
+    let list: Vec<GpuHcbSample> = bytemuck::pod_collect_to_vec(
+        &gi_render::buffers::read_storage(ctx, &pass.list, size * count[0] as u64).expect("list"),
+    );
+    // Each listed sample carries its level texel's position, radius and normal.
+    for s in &list {
+        let l = &out[s.texel[2] as usize];
+        let t = l.at(s.texel[0] as i64, s.texel[1] as i64).expect("the sample's texel");
+        let got = (s.position.truncate(), s.position.w, s.normal.truncate(), s.normal.w);
+        assert_eq!(got, (t.position, t.distance, t.normal, t.coherence), "{s:?}");
+    }
+    let mut samples: Vec<Sample> =
+        list.iter().map(|s| Sample { level: s.texel[2], x: s.texel[0], y: s.texel[1] }).collect();
     samples.sort();
     let buffer = read(&pass.samples).data.iter().map(|v| v[0]).collect();
     (out, masks, samples, buffer)

@@ -28,6 +28,20 @@ pub struct HcbParams {
     pub level: [u32; 4],
 }
 
+/// One sample of the compact list; WGSL twin: `HcbSample` in `shaders/hcb/common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuHcbSample {
+    /// World position, a^w.
+    pub position: Vec4,
+    /// Normal, n^w.
+    pub normal: Vec4,
+    /// Texel x, y at its level, the level, 0.
+    pub texel: [u32; 4],
+    /// Gathered light (rgb), 1 once gathered.
+    pub light: Vec4,
+}
+
 const STRIDE: u64 = 256;
 /// Most levels (the base and 11 above: a 4096² G-buffer reaches 2²).
 pub const MAX_LEVELS: u32 = 12;
@@ -55,7 +69,9 @@ pub struct HcbPass {
     pub levels: Vec<HcbLevel>,
     /// `hcb.samples`: level + 1 at each sample's pixel, 0 elsewhere (G-buffer resolution).
     pub samples: wgpu::Texture,
-    /// Count, then (x, y, level, 0) per sample.
+    /// The number of samples (one u32).
+    pub counter: wgpu::Buffer,
+    /// The compact sample list ([`GpuHcbSample`]s).
     pub list: wgpu::Buffer,
     pub list_capacity: u32,
     io_layout: wgpu::BindGroupLayout,
@@ -108,6 +124,8 @@ impl HcbPass {
                 bgl::texture(3, cs, false),
                 bgl::storage_texture(4, r32),
                 bgl::storage(5, cs, false),
+                bgl::texture(6, cs, false),
+                bgl::storage(7, cs, false),
             ],
         });
         let m_base = crate::shaders::create_module(device, "hcb/base.wgsl");
@@ -129,9 +147,16 @@ impl HcbPass {
         let dummy_storage = super::create_target(device, "hcb.dummy_mask_out", 1, 1, r32, storage);
         let dummy_sampled = super::create_target(device, "hcb.dummy_mask_in", 1, 1, r32, storage);
         let (levels_v, samples, list, list_capacity) = Self::targets(device, width, height, levels);
+        let counter = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("hcb.sample_count"),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
         Self {
             levels: levels_v,
             samples,
+            counter,
             list,
             list_capacity,
             io_layout,
@@ -200,7 +225,7 @@ impl HcbPass {
         let capacity = width.max(1) * height.max(1);
         let list = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("hcb.sample_list"),
-            size: 16 * (capacity as u64 + 1),
+            size: std::mem::size_of::<GpuHcbSample>() as u64 * capacity as u64,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
@@ -299,7 +324,10 @@ impl HcbPass {
         }
         let (samples_view, dummy_out, dummy_in) =
             (view(&self.samples), view(&self.dummy_storage), view(&self.dummy_sampled));
-        let sample_group = |normal: &wgpu::TextureView, mask_out: &wgpu::TextureView, mask_in: &wgpu::TextureView| {
+        let sample_group = |position: &wgpu::TextureView,
+                            normal: &wgpu::TextureView,
+                            mask_out: &wgpu::TextureView,
+                            mask_in: &wgpu::TextureView| {
             ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("hcb.samples.inputs"),
                 layout: &self.sample_layout,
@@ -309,23 +337,22 @@ impl HcbPass {
                     wgpu::BindGroupEntry { binding: 2, resource: tv(mask_out) },
                     wgpu::BindGroupEntry { binding: 3, resource: tv(mask_in) },
                     wgpu::BindGroupEntry { binding: 4, resource: tv(&samples_view) },
-                    wgpu::BindGroupEntry { binding: 5, resource: self.list.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 5, resource: self.counter.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 6, resource: tv(position) },
+                    wgpu::BindGroupEntry { binding: 7, resource: self.list.as_entire_binding() },
                 ],
             })
         };
         // Mask k − 1 from level k's coherence; the top's mask stays all outside.
         let mask_groups: Vec<wgpu::BindGroup> =
-            (1..n as usize).map(|k| sample_group(&views[k].1, &views[k - 1].2, &dummy_in)).collect();
+            (1..n as usize).map(|k| sample_group(&views[k].0, &views[k].1, &views[k - 1].2, &dummy_in)).collect();
         let level_groups: Vec<wgpu::BindGroup> = (0..n as usize)
             .map(|k| {
-                if k + 1 == n as usize {
-                    sample_group(&views[k].1, &dummy_out, &dummy_in)
-                } else {
-                    sample_group(&views[k].1, &dummy_out, &views[k].2)
-                }
+                let mask_in = if k + 1 == n as usize { &dummy_in } else { &views[k].2 };
+                sample_group(&views[k].0, &views[k].1, &dummy_out, mask_in)
             })
             .collect();
-        encoder.clear_buffer(&self.list, 0, Some(16));
+        encoder.clear_buffer(&self.counter, 0, None);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("hcb"),
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
