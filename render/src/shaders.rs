@@ -42,6 +42,8 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("hcb/base.wgsl", include_str!("../../shaders/hcb/base.wgsl")),
     ("hcb/build.wgsl", include_str!("../../shaders/hcb/build.wgsl")),
     ("hcb/samples.wgsl", include_str!("../../shaders/hcb/samples.wgsl")),
+    ("hcb/splat.wgsl", include_str!("../../shaders/hcb/splat.wgsl")),
+    ("hcb/normalize.wgsl", include_str!("../../shaders/hcb/normalize.wgsl")),
     ("view/view.wgsl", include_str!("../../shaders/view/view.wgsl")),
     ("view/probe.wgsl", include_str!("../../shaders/view/probe.wgsl")),
 ];
@@ -73,6 +75,8 @@ pub const ENTRY_MODULES: &[&str] = &[
     "hcb/base.wgsl",
     "hcb/build.wgsl",
     "hcb/samples.wgsl",
+    "hcb/splat.wgsl",
+    "hcb/normalize.wgsl",
     "view/view.wgsl",
     "view/probe.wgsl",
 ];

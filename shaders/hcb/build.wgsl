@@ -12,7 +12,7 @@
 @group(0) @binding(3) var out_position: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(4) var out_normal: texture_storage_2d<rgba32float, write>;
 
-// Eq. 3: not facing each other, and |âb · n_a| ≤ cos γ_max.
+// Eq. 3: with backward lighting (the two not facing each other), |âb · n_a| ≤ cos γ_max.
 fn pose_coherent(a: vec3<f32>, na: vec3<f32>, b: vec3<f32>, nb: vec3<f32>) -> bool {
     let d = b - a;
     let len = length(d);
@@ -20,7 +20,8 @@ fn pose_coherent(a: vec3<f32>, na: vec3<f32>, b: vec3<f32>, nb: vec3<f32>) -> bo
         return true;
     }
     let ab = d / len;
-    return (dot(ab, na) <= 0.0 || dot(-ab, nb) <= 0.0) && abs(dot(ab, na)) <= hp.thresholds.y;
+    let backward = dot(ab, na) <= 0.0 || dot(-ab, nb) <= 0.0;
+    return !backward || abs(dot(ab, na)) <= hp.thresholds.y;
 }
 
 @compute @workgroup_size(8, 8, 1)

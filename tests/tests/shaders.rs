@@ -110,7 +110,12 @@ fn uniform_sizes_match_wgsl() {
         assert_eq!(struct_size(&m, "IsmPoint") as usize, std::mem::size_of::<ism::GpuPoint>(), "{file}");
         assert_eq!(struct_size(&m, "Vpl") as usize, std::mem::size_of::<vpl::GpuVpl>(), "{file}");
     }
-    for file in ["hcb/base.wgsl", "hcb/build.wgsl", "hcb/samples.wgsl"] {
+    for file in ["hcb/samples.wgsl", "hcb/splat.wgsl"] {
+        let m = parse(file);
+        let want = std::mem::size_of::<gi_render::passes::hcb::GpuHcbSample>();
+        assert_eq!(struct_size(&m, "HcbSample") as usize, want, "{file}");
+    }
+    for file in ["hcb/base.wgsl", "hcb/build.wgsl", "hcb/samples.wgsl", "hcb/splat.wgsl"] {
         let m = parse(file);
         assert_eq!(
             struct_size(&m, "HcbParams") as usize,

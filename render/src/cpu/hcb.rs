@@ -4,10 +4,12 @@
 //! tested against these on synthetic G-buffers.
 //!
 //! Readings of the paper, where it leaves room:
-//! - Pose coherence, Eq. 3, is the conjunction of its two lines with the connecting vector
-//!   normalised: b is pose-coherent to a when (âb·n_a ≤ 0 or b̂a·n_b ≤ 0) — not the two
-//!   facing each other — and |âb·n_a| ≤ cos γ_max. On a plane the two dot products are
-//!   opposite, so the first line holds whatever the rounding.
+//! - Pose coherence, Eq. 3: its first line detects backward lighting (âb·n_a ≤ 0 or
+//!   b̂a·n_b ≤ 0, the two not facing each other), and only then does the second restrict the
+//!   angle, |âb·n_a| ≤ cos γ_max (âb normalised). This is how Eq. 8 uses the same terms — the
+//!   pose error is ρ √|âb·n_a| / √cos γ_max with ρ = 1 exactly when the first line holds — so
+//!   Algorithm 1 and the splat weights agree: two points facing each other are pose-coherent
+//!   (the normal test judges them), a step between parallel planes is not.
 //! - Distance coherence, Eq. 1, is tested on the accumulated distance R'_c = ‖a − c‖ + R_c
 //!   (§3.5) — the conservative bound of a's distance to every texel that c stands for, as
 //!   Eq. 6 is for the normals: c is coherent to a only if R'_c ≤ d_max.
@@ -103,7 +105,8 @@ pub fn pose_coherent(a: Vec3, n_a: Vec3, b: Vec3, n_b: Vec3, cos_gamma_max: f32)
     if ab == Vec3::ZERO {
         return true;
     }
-    (ab.dot(n_a) <= 0.0 || (-ab).dot(n_b) <= 0.0) && ab.dot(n_a).abs() <= cos_gamma_max
+    let backward = ab.dot(n_a) <= 0.0 || (-ab).dot(n_b) <= 0.0;
+    !backward || ab.dot(n_a).abs() <= cos_gamma_max
 }
 
 /// Algorithm 1 with §3.5 for texel (x, y) of the level above `prev`.
@@ -205,6 +208,33 @@ pub fn samples(levels: &[Level], masks: &[Vec<bool>]) -> Vec<Sample> {
     out
 }
 
+/// The coherence error of point b (normal n_b) toward sample a (§4.2, Eq. 8): the largest
+/// of the distance error ‖a − b‖ / a^w, the normal error √(1 − n_a·n_b) / √(1 − cos θ_max)
+/// and the pose error ρ √|âb·n_a| / √cos γ_max, with ρ = 1 when the two do not face each
+/// other (the first line of Eq. 3) and 0 otherwise. b is coherent to a when it is ≤ 1 (Eq. 9).
+pub fn coherence_errors(a: &HcbTexel, b: Vec3, n_b: Vec3, t: Thresholds) -> [f32; 3] {
+    let d = b - a.position;
+    let len = d.length();
+    let e1 = len / a.distance.max(1e-12);
+    // 1 − n_a·n_b = ½‖n_a − n_b‖² for unit normals: exact 0 for equal ones, where the square
+    // root would magnify the rounding of the dot product.
+    let e2 = (0.5 * (a.normal - n_b).length_squared()).sqrt() / (1.0 - t.cos_theta_max).max(1e-12).sqrt();
+    let e3 = if len > 0.0 {
+        let ab = d / len;
+        let rho = if ab.dot(a.normal) <= 0.0 || (-ab).dot(n_b) <= 0.0 { 1.0 } else { 0.0 };
+        rho * ab.dot(a.normal).abs().sqrt() / t.cos_gamma_max.max(1e-12).sqrt()
+    } else {
+        0.0
+    };
+    [e1, e2, e3]
+}
+
+/// The weight of sample a toward b (Eq. 10), or None when b is not coherent to a (Eq. 9).
+pub fn weight(a: &HcbTexel, b: Vec3, n_b: Vec3, t: Thresholds) -> Option<f32> {
+    let [e1, e2, e3] = coherence_errors(a, b, n_b, t);
+    (e1.max(e2).max(e3) <= 1.0).then_some((1.0 - e1) * (1.0 - e2) * (1.0 - e3))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -275,9 +305,11 @@ mod tests {
         let (a, b) = (Vec3::ZERO, Vec3::new(0.1, 0.0, -0.2));
         assert!(!pose_coherent(a, n, b, n, 0.5));
         assert!(pose_coherent(a, n, Vec3::new(0.1, 0.0, 0.0), n, 0.5));
-        // Two points facing each other (a concave crease) are not pose-coherent either.
-        let (na, nb) = (Vec3::new(0.1, 0.0, 1.0).normalize(), Vec3::new(-0.1, 0.0, 1.0).normalize());
-        assert!(!pose_coherent(Vec3::ZERO, na, Vec3::new(0.1, 0.0, 0.0), nb, 0.9));
+        // Two points facing each other (a concave crease): no backward lighting, so the pose
+        // test passes (the normal test judges them); bent the other way (convex) it applies.
+        let (na, nb) = (Vec3::new(0.5, 0.0, 1.0).normalize(), Vec3::new(-0.5, 0.0, 1.0).normalize());
+        assert!(pose_coherent(Vec3::ZERO, na, Vec3::new(0.1, 0.0, 0.0), nb, 0.1));
+        assert!(!pose_coherent(Vec3::ZERO, nb, Vec3::new(0.1, 0.0, 0.0), na, 0.1));
     }
 
     #[test]

@@ -1,0 +1,23 @@
+// Eq. 11 of Nguyen et al.: each pixel's light is Σ w E / Σ w of the samples coherent to it
+// (`hcb.irradiance`, a = 1). A covered pixel no sample reaches keeps a = 0 and is counted,
+// so that it is shown, never silently black.
+@group(0) @binding(0) var accum: texture_2d<f32>;
+@group(0) @binding(1) var g_normal: texture_2d<f32>;
+@group(0) @binding(2) var out_light: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(3) var<storage, read_write> uncovered: array<atomic<u32>>;
+
+@compute @workgroup_size(8, 8, 1)
+fn cs_normalize(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let size = textureDimensions(out_light);
+    if (gid.x >= size.x || gid.y >= size.y) {
+        return;
+    }
+    let a = textureLoad(accum, gid.xy, 0);
+    var out = vec4<f32>(0.0);
+    if (a.a > 0.0) {
+        out = vec4<f32>(a.rgb / a.a, 1.0);
+    } else if (textureLoad(g_normal, gid.xy, 0).w > 0.5) {
+        atomicAdd(&uncovered[0], 1u);
+    }
+    textureStore(out_light, gid.xy, out);
+}
