@@ -171,6 +171,7 @@ pub fn section_title(group: &str) -> String {
         "ism" => "4 · VPL visibility (imperfect shadow maps)".into(),
         "interleave" => "5–6 · Interleaved sampling and filter".into(),
         "temporal" => "7 · Temporal coherence".into(),
+        "hcb" => "5–6 · Hierarchical coherence buffer (Nguyen)".into(),
         "reference" => "Exact-VPL reference (stages 3, 4, 6)".into(),
         "tonemap" => "7 · Tone mapping".into(),
         other => other.to_string(),
@@ -213,6 +214,12 @@ pub const TECHNIQUES: &[Technique] = &[
                 && s.ism.visibility == VplVisibility::Imperfect
                 && s.temporal.enabled
         },
+    },
+    Technique {
+        name: "Hierarchical coherence buffer (Nguyen)",
+        source: "Nguyen et al. 000 §3–4: VPLs gathered at HCB samples, coherence-weighted splatting",
+        apply: |s| s.indirect.technique = IndirectTechnique::Hcb,
+        is: |s| s.indirect.technique == IndirectTechnique::Hcb,
     },
     Technique {
         name: "Imperfect shadow maps without temporal coherence (Ritschel)",

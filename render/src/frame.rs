@@ -20,6 +20,7 @@ use crate::lab_settings::IndirectTechnique;
 use crate::passes::compose::ComposePass;
 use crate::passes::direct::DirectPass;
 use crate::passes::gbuffer::GBufferPass;
+use crate::passes::hcb::{HcbFrame, HcbGatherPass, HcbPass, HcbSplatPass};
 use crate::passes::interleave::{GatherVisibility, InterleavePass};
 use crate::passes::irsm::{IrsmFrame, IrsmPass};
 use crate::passes::ism::{IsmFrame, IsmLayout, IsmPass, MAX_BOUNCES, VplVisibility};
@@ -89,11 +90,35 @@ struct Knecht {
     bounce: VplBouncePass,
     /// The IRSM multi-bounce baseline, created when selected.
     irsm: Option<IrsmPass>,
+    /// The hierarchical coherence buffer's passes (Nguyen), created when it is the technique.
+    hcb: Option<HcbParts>,
     exact: Option<VplVisibilityPass>,
     interleave: InterleavePass,
     temporal: TemporalPass,
     /// Frames rendered (the Halton offset of a new VPL set per frame).
     frames: u32,
+}
+
+/// Sample statistics of the HCB (see [`Renderer::hcb_stats`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct HcbStats {
+    pub samples_per_level: Vec<u32>,
+    pub texels_per_level: Vec<u32>,
+    /// Covered pixels that no sample's splat reached.
+    pub uncovered: u32,
+}
+
+impl HcbStats {
+    pub fn samples(&self) -> u32 {
+        self.samples_per_level.iter().sum()
+    }
+}
+
+/// The HCB technique's passes: levels, masks and samples; gathering; splatting.
+struct HcbParts {
+    build: HcbPass,
+    gather: HcbGatherPass,
+    splat: HcbSplatPass,
 }
 
 /// The exact-VPL reference's passes and its progress (created when first selected).
@@ -235,8 +260,13 @@ impl Renderer {
             if let Some(irsm) = &k.irsm {
                 irsm.register(&mut self.registry);
             }
-            k.interleave.register(&mut self.registry);
-            k.temporal.register(&mut self.registry);
+            if let Some(h) = &k.hcb {
+                h.build.register(&mut self.registry);
+                h.splat.register(&mut self.registry);
+            } else {
+                k.interleave.register(&mut self.registry);
+                k.temporal.register(&mut self.registry);
+            }
         }
         if let Some(t) = &self.flip_map {
             self.registry.register(
@@ -457,7 +487,7 @@ impl Renderer {
         let indirect = match self.settings.indirect.technique {
             IndirectTechnique::None => None,
             IndirectTechnique::ExactVpl => self.exact_vpl_frame(&mut enc, &state, view_proj),
-            IndirectTechnique::InstantRadiosity => self.knecht_frame(&mut enc, &state),
+            IndirectTechnique::InstantRadiosity | IndirectTechnique::Hcb => self.knecht_frame(&mut enc, &state),
         };
 
         // Stage 7: compose and tone map.
@@ -588,7 +618,7 @@ impl Renderer {
     /// Creates or resizes the passes of instant radiosity for the current settings (when it is
     /// the indirect technique); drops them otherwise.
     fn ensure_knecht(&mut self) {
-        if self.settings.indirect.technique != IndirectTechnique::InstantRadiosity {
+        if !self.settings.indirect.technique.uses_vpls() {
             if self.knecht.take().is_some() {
                 self.register_all();
             }
@@ -606,6 +636,7 @@ impl Renderer {
             ism: IsmPass::new(&ctx),
             bounce: VplBouncePass::new(&ctx),
             irsm: None,
+            hcb: None,
             exact: None,
             interleave: InterleavePass::new(&ctx, camera_entry, w, h, s.interleave.n),
             temporal: TemporalPass::new(&ctx, w, h),
@@ -631,6 +662,17 @@ impl Renderer {
         if s.ism.visibility == VplVisibility::Exact {
             let e = k.exact.get_or_insert_with(|| VplVisibilityPass::new(&ctx, &self.gpu_scene));
             fresh |= e.ensure(&ctx, total, s.ism.map_size);
+        }
+        if s.indirect.technique == IndirectTechnique::Hcb {
+            let created = k.hcb.is_none();
+            let parts = k.hcb.get_or_insert_with(|| HcbParts {
+                build: HcbPass::new(&ctx, w, h, s.hcb.levels),
+                gather: HcbGatherPass::new(&ctx),
+                splat: HcbSplatPass::new(&ctx, bgl::uniform(0, wgpu::ShaderStages::VERTEX), w, h),
+            });
+            fresh |= created | parts.build.ensure(&ctx, w, h, s.hcb.levels) | parts.splat.ensure(&ctx, w, h);
+        } else if k.hcb.take().is_some() {
+            fresh = true;
         }
         fresh |= k.interleave.ensure(&ctx, w, h, s.interleave.n);
         fresh |= k.temporal.resize(&ctx, w, h);
@@ -762,6 +804,36 @@ impl Renderer {
             }
         };
 
+        // The HCB technique (Nguyen): stages 5–6 at the samples instead of every pixel.
+        if let Some(h) = &k.hcb {
+            let g = &self.gbuffer.targets.views;
+            let f = HcbFrame {
+                thresholds: s.hcb.thresholds(),
+                eye: self.camera.position,
+                pixel_scale: 2.0 * (self.camera.yfov * 0.5).tan() / self.height.max(1) as f32,
+            };
+            timer.scope(&ctx, enc, "hcb.build", |e, slot| h.build.run(&ctx, e, slot, &g.position, &g.normal, f));
+            let vpls = &k.vpl.vpls;
+            timer.scope(&ctx, enc, "hcb.gather", |e, slot| {
+                h.gather.run(&ctx, e, slot, &h.build, vpls, total, s.vpl.min_distance_m, vis)
+            });
+            let camera = &self.camera_buffer;
+            timer.scope(&ctx, enc, "hcb.splat", |e, slot| {
+                h.splat.run(
+                    &ctx,
+                    e,
+                    slot,
+                    camera,
+                    (&g.position, &g.normal, &g.albedo),
+                    &h.build.list,
+                    &h.gather.args,
+                    f,
+                )
+            });
+            k.frames = k.frames.wrapping_add(1);
+            return Some(crate::passes::view(&h.splat.indirect, "hcb.indirect"));
+        }
+
         // Stages 5–6: interleaved gather and merge.
         let g = &self.gbuffer.targets.views;
         k.interleave.shade(&ctx, enc, timer, &self.camera_buffer, g, &k.vpl.vpls, total, s.vpl.min_distance_m, vis);
@@ -885,11 +957,41 @@ impl Renderer {
     }
 
     /// Reads a registered buffer back (layer 0, level 0).
+    /// The HCB's samples of the last frame (Nguyen §3.6, Table 1's statistics): the count
+    /// per level, the texels per level and the covered pixels that no sample reached. None
+    /// when the technique is not the HCB or no frame was rendered with it. Blocks until the
+    /// data is on the CPU.
+    pub fn hcb_stats(&self) -> Option<HcbStats> {
+        let h = self.knecht.as_ref()?.hcb.as_ref()?;
+        let count: Vec<u32> =
+            bytemuck::pod_collect_to_vec(&crate::buffers::read_storage(&self.ctx, &h.build.counter, 16).ok()?);
+        let n = count[0].min(h.build.list_capacity) as u64;
+        let size = std::mem::size_of::<crate::passes::hcb::GpuHcbSample>() as u64;
+        let list: Vec<crate::passes::hcb::GpuHcbSample> = if n == 0 {
+            Vec::new()
+        } else {
+            bytemuck::pod_collect_to_vec(&crate::buffers::read_storage(&self.ctx, &h.build.list, n * size).ok()?)
+        };
+        let mut per_level = vec![0u32; h.build.levels.len()];
+        for smp in &list {
+            if let Some(c) = per_level.get_mut(smp.texel[2] as usize) {
+                *c += 1;
+            }
+        }
+        let uncovered: Vec<u32> =
+            bytemuck::pod_collect_to_vec(&crate::buffers::read_storage(&self.ctx, &h.splat.uncovered, 16).ok()?);
+        Some(HcbStats {
+            samples_per_level: per_level,
+            texels_per_level: h.build.levels.iter().map(|l| l.width * l.height).collect(),
+            uncovered: uncovered[0],
+        })
+    }
+
     /// The VPLs of instant radiosity's last frame (`vpl.list`, Knecht §3.3): position and
     /// incident flux of every filled slot; None when the technique is not instant radiosity
     /// or no frame was rendered with it. Blocks until the list is on the CPU.
     pub fn vpl_list(&self) -> Option<Vec<crate::passes::vpl::GpuVpl>> {
-        if self.settings.indirect.technique != crate::lab_settings::IndirectTechnique::InstantRadiosity {
+        if !self.settings.indirect.technique.uses_vpls() {
             return None;
         }
         let k = self.knecht.as_ref()?;
@@ -970,7 +1072,7 @@ fn ism_splats(s: &LabSettings) -> bool {
 /// Refuses an ISM (or exact-map) atlas of instant radiosity larger than the device allows,
 /// naming the largest VPL count at this map size and the largest map size for this count.
 fn check_ism_atlas(ctx: &GpuContext, settings: &LabSettings) -> Result<(), RenderError> {
-    if settings.indirect.technique != IndirectTechnique::InstantRadiosity {
+    if !settings.indirect.technique.uses_vpls() {
         return Ok(());
     }
     let (vpls, size) = (settings.vpl.count, settings.ism.map_size);
@@ -1061,7 +1163,13 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         | "interleave/gather.wgsl"
         | "interleave/merge.wgsl"
         | "interleave/filter.wgsl"
-        | "temporal/confidence.wgsl" => "instant_radiosity",
+        | "temporal/confidence.wgsl"
+        | "hcb/base.wgsl"
+        | "hcb/build.wgsl"
+        | "hcb/samples.wgsl"
+        | "hcb/gather.wgsl"
+        | "hcb/splat.wgsl"
+        | "hcb/normalize.wgsl" => "instant_radiosity",
         _ => return None,
     })
 }
@@ -1088,6 +1196,9 @@ pub fn scope_output(scope: &str) -> Option<&'static str> {
         "interleave.merge" => "indirect.merged",
         "temporal" => "temporal.confidence",
         "interleave.filter" => "indirect.filtered",
+        "hcb.build" => "hcb.samples",
+        "hcb.gather" => "hcb.samples",
+        "hcb.splat" => "hcb.indirect",
         _ => return None,
     })
 }

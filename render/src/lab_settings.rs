@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::passes::compose::TonemapSettings;
 use crate::passes::direct::DirectSettings;
+use crate::passes::hcb::HcbSettings;
 use crate::passes::interleave::InterleaveSettings;
 use crate::passes::ism::{IsmSettings, VplVisibility};
 use crate::passes::temporal::TemporalSettings;
@@ -38,8 +39,19 @@ settings_enum! {
         /// coherence (Knecht 002): stages 3–7 as the `vpl`, `ism`, `interleave` and
         /// `temporal` settings choose.
         InstantRadiosity = "instant radiosity (Knecht)",
+        /// The hierarchical coherence buffer (Nguyen et al.): the VPLs and visibility of
+        /// instant radiosity gathered at a few percent of the pixels, chosen by the `hcb`
+        /// settings, and splatted to the coherent pixels around them.
+        Hcb = "hierarchical coherence buffer (Nguyen)",
     }
     default None
+}
+
+impl IndirectTechnique {
+    /// Whether the technique lights the scene with instant radiosity's VPLs (stages 3–4).
+    pub fn uses_vpls(self) -> bool {
+        matches!(self, Self::InstantRadiosity | Self::Hcb)
+    }
 }
 
 settings_group! {
@@ -68,6 +80,7 @@ pub struct LabSettings {
     pub ism: IsmSettings,
     pub interleave: InterleaveSettings,
     pub temporal: TemporalSettings,
+    pub hcb: HcbSettings,
     pub reference: ReferenceSettings,
     pub tonemap: TonemapSettings,
 }
@@ -83,6 +96,7 @@ impl Default for LabSettings {
             ism: Default::default(),
             interleave: Default::default(),
             temporal: Default::default(),
+            hcb: Default::default(),
             reference: Default::default(),
             tonemap: Default::default(),
         }
@@ -99,6 +113,7 @@ macro_rules! for_each_group {
         $m!(ism, IsmSettings);
         $m!(interleave, InterleaveSettings);
         $m!(temporal, TemporalSettings);
+        $m!(hcb, HcbSettings);
         $m!(reference, ReferenceSettings);
         $m!(tonemap, TonemapSettings);
     };

@@ -14,7 +14,38 @@ use super::bgl;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::cpu::hcb::Thresholds;
 use crate::gpu::GpuContext;
+use crate::settings_group;
 use crate::timing::Slot;
+
+settings_group! {
+    /// The hierarchical coherence buffer (stages 5–6 of the HCB technique; Nguyen et al. 000
+    /// §3–4): where indirect light is gathered and how it is splatted. The paper gives no
+    /// values; the defaults were chosen on the default scene (see presets/nguyen-hcb.ron).
+    pub struct HcbSettings: "hcb" {
+        /// Largest normal divergence inside a coherent group (Eq. 2, combined by Eq. 6–7).
+        theta_max_deg: f32 = 20.0,
+        unit "°", symbol "θ_max", range 1.0..=89.0, cost "larger: fewer samples and blurrier light across bends", history false;
+        /// Pose limit under backward lighting (Eq. 3): |âb·n_a| ≤ cos γ_max.
+        gamma_max_deg: f32 = 70.0,
+        unit "°", symbol "γ_max", range 1.0..=90.0, cost "smaller: fewer samples, light leaks across steps", history false;
+        /// Largest radius of a coherent group (Eq. 1 on the accumulated distance, §3.5).
+        d_max_m: f32 = 0.5,
+        unit "m", symbol "d_max", range 0.001..=100.0, cost "larger: fewer samples, coarser light", history false;
+        /// HCB levels including the G-buffer's (1: every pixel is a sample, the per-pixel gather).
+        levels: u32 = 7,
+        unit "levels", symbol "", range 1..=12, cost "one pass per level; more levels, larger groups", history false;
+    }
+}
+
+impl HcbSettings {
+    pub fn thresholds(&self) -> Thresholds {
+        Thresholds {
+            cos_theta_max: self.theta_max_deg.to_radians().cos(),
+            cos_gamma_max: self.gamma_max_deg.to_radians().cos(),
+            d_max: self.d_max_m,
+        }
+    }
+}
 
 /// Uniform of the HCB passes; WGSL twin: `HcbParams` in `shaders/hcb/common.wgsl`.
 #[repr(C)]
@@ -391,6 +422,8 @@ impl HcbPass {
 pub struct HcbSplatPass {
     pub weight_sum: wgpu::Texture,
     pub irradiance: wgpu::Texture,
+    /// `hcb.indirect`: the indirect light the compose adds, c·DI/π × the splatted irradiance.
+    pub indirect: wgpu::Texture,
     /// Covered pixels that no sample reached (one u32).
     pub uncovered: wgpu::Buffer,
     splat_layout: wgpu::BindGroupLayout,
@@ -428,6 +461,8 @@ impl HcbSplatPass {
                 bgl::texture(1, cs, false),
                 bgl::storage_texture(2, wgpu::TextureFormat::Rgba32Float),
                 bgl::storage(3, cs, false),
+                bgl::texture(4, cs, false),
+                bgl::storage_texture(5, wgpu::TextureFormat::Rgba32Float),
             ],
         });
         let m_splat = crate::shaders::create_module(device, "hcb/splat.wgsl");
@@ -481,10 +516,11 @@ impl HcbSplatPass {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
-        let (weight_sum, irradiance) = Self::targets(device, width, height);
+        let (weight_sum, irradiance, indirect) = Self::targets(device, width, height);
         Self {
             weight_sum,
             irradiance,
+            indirect,
             uncovered,
             splat_layout,
             normalize_layout,
@@ -496,19 +532,15 @@ impl HcbSplatPass {
         }
     }
 
-    fn targets(device: &wgpu::Device, width: u32, height: u32) -> (wgpu::Texture, wgpu::Texture) {
+    fn targets(device: &wgpu::Device, width: u32, height: u32) -> (wgpu::Texture, wgpu::Texture, wgpu::Texture) {
         let (w, h) = (width.max(1), height.max(1));
         let weight_sum =
             super::create_target(device, "hcb.weight_sum", w, h, ACCUM_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT);
-        let irradiance = super::create_target(
-            device,
-            "hcb.irradiance",
-            w,
-            h,
-            wgpu::TextureFormat::Rgba32Float,
-            wgpu::TextureUsages::STORAGE_BINDING,
-        );
-        (weight_sum, irradiance)
+        let storage = wgpu::TextureUsages::STORAGE_BINDING;
+        let irradiance =
+            super::create_target(device, "hcb.irradiance", w, h, wgpu::TextureFormat::Rgba32Float, storage);
+        let indirect = super::create_target(device, "hcb.indirect", w, h, wgpu::TextureFormat::Rgba32Float, storage);
+        (weight_sum, irradiance, indirect)
     }
 
     /// Resizes the targets. Returns whether they were recreated.
@@ -516,7 +548,7 @@ impl HcbSplatPass {
         if (self.width, self.height) == (width, height) {
             return false;
         }
-        (self.weight_sum, self.irradiance) = Self::targets(&ctx.device, width, height);
+        (self.weight_sum, self.irradiance, self.indirect) = Self::targets(&ctx.device, width, height);
         (self.width, self.height) = (width, height);
         true
     }
@@ -534,6 +566,12 @@ impl HcbSplatPass {
             "HCB splatted light (Nguyen Eq. 11): Σ w·E / Σ w; a = 1 where a sample reached the pixel, 0 on covered pixels none reached",
             &self.irradiance,
         );
+        reg.register(
+            "hcb.indirect",
+            BufferKind::Hdr,
+            "HCB indirect light: each pixel's diffuse reflection c·DI/π of the splatted irradiance; a = 0 where no sample reached it",
+            &self.indirect,
+        );
     }
 
     /// Splats the samples of `list` (instance count from `draw_args`, a `DrawIndirectArgs`
@@ -543,8 +581,9 @@ impl HcbSplatPass {
         &self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
+        slot: Option<Slot<'_>>,
         camera: &wgpu::Buffer,
-        g: (&wgpu::TextureView, &wgpu::TextureView),
+        g: (&wgpu::TextureView, &wgpu::TextureView, &wgpu::TextureView),
         list: &wgpu::Buffer,
         draw_args: &wgpu::Buffer,
         f: HcbFrame,
@@ -582,7 +621,7 @@ impl HcbSplatPass {
                     },
                 })],
                 depth_stencil_attachment: None,
-                timestamp_writes: None,
+                timestamp_writes: slot.as_ref().and_then(|s| s.render(true, false)),
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
@@ -591,6 +630,7 @@ impl HcbSplatPass {
             pass.draw_indirect(draw_args, 0);
         }
         let out = super::view(&self.irradiance, "hcb.irradiance");
+        let radiance = super::view(&self.indirect, "hcb.indirect");
         let ngroup = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("hcb.normalize.inputs"),
             layout: &self.normalize_layout,
@@ -599,6 +639,8 @@ impl HcbSplatPass {
                 wgpu::BindGroupEntry { binding: 1, resource: tv(g.1) },
                 wgpu::BindGroupEntry { binding: 2, resource: tv(&out) },
                 wgpu::BindGroupEntry { binding: 3, resource: self.uncovered.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: tv(g.2) },
+                wgpu::BindGroupEntry { binding: 5, resource: tv(&radiance) },
             ],
         });
         encoder.clear_buffer(&self.uncovered, 0, None);
@@ -607,5 +649,122 @@ impl HcbSplatPass {
         pass.set_pipeline(&self.normalize_pipeline);
         pass.set_bind_group(0, &ngroup, &[]);
         pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
+    }
+}
+
+/// Uniform of the gather at the samples; WGSL twin: `HcbGatherParams` in
+/// `shaders/hcb/gather.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct HcbGatherParams {
+    /// VPL count, visibility (0 none, 1 ISM, 2 exact), atlas columns, map size.
+    pub counts: [u32; 4],
+    /// d_min², then as `interleave::GatherParams::shade`.
+    pub shade: Vec4,
+}
+
+/// Stage 5 of the HCB technique (Nguyen et al. §4.1): the irradiance the VPLs send each
+/// sample of the list (`shaders/hcb/gather.wgsl`), and the indirect arguments of this
+/// dispatch and of the splat draw (`args`: 4 draw then 3 dispatch words).
+pub struct HcbGatherPass {
+    layout: wgpu::BindGroupLayout,
+    args_pipeline: wgpu::ComputePipeline,
+    gather_pipeline: wgpu::ComputePipeline,
+    params: wgpu::Buffer,
+    pub args: wgpu::Buffer,
+    /// Bound in `args`'s place for the gather, which reads `args` as its indirect arguments
+    /// (a buffer cannot be both in one dispatch).
+    no_args: wgpu::Buffer,
+    no_ism: wgpu::TextureView,
+    no_exact: wgpu::TextureView,
+}
+
+impl HcbGatherPass {
+    pub fn new(ctx: &GpuContext) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("hcb.gather.inputs"),
+            entries: &[
+                bgl::uniform(0, cs),
+                bgl::storage(1, cs, true),
+                bgl::texture(2, cs, false),
+                bgl::depth(3, cs),
+                bgl::storage(4, cs, true),
+                bgl::storage(5, cs, false),
+                bgl::storage(6, cs, false),
+            ],
+        });
+        let module = crate::shaders::create_module(device, "hcb/gather.wgsl");
+        let args_pipeline = super::compute_pipeline(device, "hcb.gather.args", &module, "cs_args", &[&layout]);
+        let gather_pipeline = super::compute_pipeline(device, "hcb.gather", &module, "cs_gather", &[&layout]);
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("hcb.gather.params"),
+            size: std::mem::size_of::<HcbGatherParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let args = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("hcb.indirect_args"),
+            size: 32,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let no_args = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("hcb.no_args"),
+            size: 32,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let (no_ism, no_exact) = super::interleave::no_visibility_atlases(device, "hcb.gather");
+        Self { layout, args_pipeline, gather_pipeline, params, args, no_args, no_ism, no_exact }
+    }
+
+    /// Gathers at the samples of `hcb`'s list from `vpl_count` VPLs with `vis`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<Slot<'_>>,
+        hcb: &HcbPass,
+        vpls: &wgpu::Buffer,
+        vpl_count: u32,
+        d_min: f32,
+        vis: super::interleave::GatherVisibility<'_>,
+    ) {
+        let (code, ism, exact, cols, size, shade) = vis.parts(&self.no_ism, &self.no_exact);
+        let p = HcbGatherParams {
+            counts: [vpl_count, code, cols, size],
+            shade: Vec4::new(d_min * d_min, shade.y, shade.z, shade.w),
+        };
+        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        let tv = wgpu::BindingResource::TextureView;
+        let group = |args: &wgpu::Buffer| {
+            ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("hcb.gather.inputs"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: self.params.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 1, resource: vpls.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 2, resource: tv(ism) },
+                    wgpu::BindGroupEntry { binding: 3, resource: tv(exact) },
+                    wgpu::BindGroupEntry { binding: 4, resource: hcb.counter.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 5, resource: hcb.list.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 6, resource: args.as_entire_binding() },
+                ],
+            })
+        };
+        let (args_group, gather_group) = (group(&self.args), group(&self.no_args));
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("hcb.gather"),
+            timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+        });
+        pass.set_bind_group(0, &args_group, &[]);
+        pass.set_pipeline(&self.args_pipeline);
+        pass.dispatch_workgroups(1, 1, 1);
+        pass.set_bind_group(0, &gather_group, &[]);
+        pass.set_pipeline(&self.gather_pipeline);
+        pass.dispatch_workgroups_indirect(&self.args, 16);
     }
 }

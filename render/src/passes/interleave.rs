@@ -82,6 +82,38 @@ pub enum GatherVisibility<'a> {
     },
 }
 
+impl<'a> GatherVisibility<'a> {
+    /// The shaders' encoding: (mode 0 none / 1 ISM / 2 exact, the ISM atlas or `no_ism`, the
+    /// exact atlas or `no_exact`, atlas columns, map size, (0, eye offset or near, bias or
+    /// far, normal offset or eye offset)).
+    pub fn parts(
+        &self,
+        no_ism: &'a wgpu::TextureView,
+        no_exact: &'a wgpu::TextureView,
+    ) -> (u32, &'a wgpu::TextureView, &'a wgpu::TextureView, u32, u32, Vec4) {
+        match *self {
+            GatherVisibility::None => (0, no_ism, no_exact, 1, 1, Vec4::ZERO),
+            GatherVisibility::Ism { atlas, cols, size, eye_offset, bias, normal_offset } => {
+                (1, atlas, no_exact, cols, size, Vec4::new(0.0, eye_offset, bias, normal_offset))
+            }
+            GatherVisibility::Exact { atlas, cols, size, clip } => {
+                (2, no_ism, atlas, cols, size, Vec4::new(0.0, clip.x, clip.y, clip.z))
+            }
+        }
+    }
+}
+
+/// 1×1 stand-ins for the atlases a gather does not read (an ISM and an exact one).
+pub fn no_visibility_atlases(device: &wgpu::Device, label: &str) -> (wgpu::TextureView, wgpu::TextureView) {
+    let make = |name: String, format| {
+        super::view(&super::create_target(device, &name, 1, 1, format, wgpu::TextureUsages::empty()), &name)
+    };
+    (
+        make(format!("{label}.no_ism"), wgpu::TextureFormat::R32Float),
+        make(format!("{label}.no_exact"), wgpu::TextureFormat::Depth32Float),
+    )
+}
+
 struct Split {
     position: wgpu::Texture,
     normal: wgpu::Texture,
@@ -200,28 +232,7 @@ impl InterleavePass {
         let split_params = uniform("interleave.split.params", std::mem::size_of::<SplitParams>() as u64);
         let gather_params = uniform("interleave.gather.params", std::mem::size_of::<GatherParams>() as u64);
         let filter_params = uniform("interleave.filter.params", std::mem::size_of::<FilterParams>() as u64);
-        let dummy_ism = super::view(
-            &super::create_target(
-                device,
-                "interleave.no_ism",
-                1,
-                1,
-                wgpu::TextureFormat::R32Float,
-                wgpu::TextureUsages::empty(),
-            ),
-            "interleave.no_ism",
-        );
-        let dummy_exact = super::view(
-            &super::create_target(
-                device,
-                "interleave.no_exact",
-                1,
-                1,
-                wgpu::TextureFormat::Depth32Float,
-                wgpu::TextureUsages::empty(),
-            ),
-            "interleave.no_exact",
-        );
+        let (dummy_ism, dummy_exact) = no_visibility_atlases(device, "interleave");
         let (split, merged, filtered) = Self::targets(device, width, height, n);
         Self {
             n,
@@ -329,15 +340,7 @@ impl InterleavePass {
         let (tw, th) = Self::tile(self.width, self.height, n);
         let sp = SplitParams { n: [n, tw, th, 0] };
         ctx.queue.write_buffer(&self.split_params, 0, bytemuck::bytes_of(&sp));
-        let (code, atlas_ism, atlas_exact, cols, size, shade) = match vis {
-            GatherVisibility::None => (0, &self.dummy_ism, &self.dummy_exact, 1, 1, Vec4::ZERO),
-            GatherVisibility::Ism { atlas, cols, size, eye_offset, bias, normal_offset } => {
-                (1, atlas, &self.dummy_exact, cols, size, Vec4::new(0.0, eye_offset, bias, normal_offset))
-            }
-            GatherVisibility::Exact { atlas, cols, size, clip } => {
-                (2, &self.dummy_ism, atlas, cols, size, Vec4::new(0.0, clip.x, clip.y, clip.z))
-            }
-        };
+        let (code, atlas_ism, atlas_exact, cols, size, shade) = vis.parts(&self.dummy_ism, &self.dummy_exact);
         let gp = GatherParams {
             split: [n, tw, th, vpl_count],
             vis: [code, cols, size, 0],
