@@ -39,6 +39,9 @@ pub enum Command {
     /// Export a preset for engines: JSON or RON with schema id and provenance (GI Lab
     /// version, scene, camera, date); see docs/preset-schema.md.
     Export(ExportArgs),
+    /// Print the hierarchical coherence buffer's samples per level as Table 1 of Nguyen et
+    /// al. lays them out (the preset's technique is switched to the HCB).
+    HcbStats(HcbStatsArgs),
     /// Regenerate the embedded default scene (assets/cornell_box.glb).
     GenAssets {
         /// Where to write the .glb.
@@ -169,6 +172,14 @@ pub struct ReferenceArgs {
     /// Output EXR of the full image; `.direct.exr` and `.indirect.exr` go beside it.
     #[arg(long)]
     pub out: PathBuf,
+}
+
+#[derive(Args, Debug)]
+pub struct HcbStatsArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    #[arg(long, default_value = "512x512", value_parser = parse_size)]
+    pub size: (u32, u32),
 }
 
 #[derive(Args, Debug)]
@@ -315,6 +326,45 @@ pub fn write_buffer(r: &Renderer, spec: &str, dir: &Path) -> Result<Vec<PathBuf>
         files.push(exr);
     }
     Ok(files)
+}
+
+/// `gi-lab hcb-stats`: one frame at time 0 with the HCB, and its samples per level — count,
+/// share of the level's texels and of the G-buffer — as Nguyen et al.'s Table 1.
+fn hcb_stats(args: &HcbStatsArgs) -> Result<(), CliError> {
+    let mut r = renderer(&args.scene, args.size)?;
+    r.clock.playing = false;
+    let mut s = r.settings().clone();
+    s.indirect.technique = gi_render::lab_settings::IndirectTechnique::Hcb;
+    r.set_settings(s).map_err(|e| CliError::input(e.to_string()))?;
+    r.render_frame();
+    let stats = r.hcb_stats().ok_or_else(|| CliError::failure("the HCB produced no statistics"))?;
+    print!("{}", format_hcb_stats(&stats, args.size));
+    Ok(())
+}
+
+/// The statistics as Table 1 of Nguyen et al.: per level the samples, their share of the
+/// level's texels and of the G-buffer's pixels.
+pub fn format_hcb_stats(stats: &gi_render::frame::HcbStats, size: (u32, u32)) -> String {
+    let pixels = (size.0 * size.1).max(1) as f64;
+    let mut out = format!("HCB samples at {}×{} (Nguyen et al. Table 1)\n", size.0, size.1);
+    out += &format!("{:<8} {:>10} {:>12} {:>12} {:>14}\n", "level", "texels", "samples", "% of level", "% of G-buffer");
+    for (k, (&n, &t)) in stats.samples_per_level.iter().zip(&stats.texels_per_level).enumerate() {
+        out += &format!(
+            "{k:<8} {t:>10} {n:>12} {:>11.2}% {:>13.2}%\n",
+            100.0 * n as f64 / t.max(1) as f64,
+            100.0 * n as f64 / pixels
+        );
+    }
+    out += &format!(
+        "{:<8} {:>10} {:>12} {:>12} {:>13.2}%\n",
+        "total",
+        "",
+        stats.samples(),
+        "",
+        100.0 * stats.samples() as f64 / pixels
+    );
+    out += &format!("covered pixels no sample reached: {}\n", stats.uncovered);
+    out
 }
 
 fn render(args: &RenderArgs) -> Result<(), CliError> {
@@ -744,6 +794,7 @@ pub fn main() -> ExitCode {
         Some(Command::Bench(a)) => bench(a),
         Some(Command::Compare(a)) => compare(a),
         Some(Command::Reference(a)) => reference(a),
+        Some(Command::HcbStats(a)) => hcb_stats(a),
         Some(Command::Sweep(a)) => crate::sweep::sweep(a),
         Some(Command::Settings) => {
             settings();

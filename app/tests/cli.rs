@@ -275,3 +275,22 @@ fn the_knecht_bench_suite_prints_every_table_as_json() {
         assert!(r[1].as_f64().is_some_and(|t| t > 0.0) && r[2].as_f64().is_some_and(|t| t > 0.0), "{row}");
     }
 }
+
+#[test]
+fn hcb_stats_prints_the_samples_per_level_as_table_1() {
+    let o = gi_lab().args(["hcb-stats", "--size", "128x96"]).output().expect("runs");
+    assert!(o.status.success(), "hcb-stats failed: {}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("Table 1") && text.contains("% of G-buffer"), "{text}");
+    // One row per level of the default 7, and a total that is the sum of the rows.
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .filter(|l| l.starts_with(|c: char| c.is_ascii_digit()))
+        .map(|l| l.split_whitespace().collect())
+        .collect();
+    assert_eq!(rows.len(), 7, "{text}");
+    let sum: u64 = rows.iter().map(|r| r[2].parse::<u64>().expect("a count")).sum();
+    let total = text.lines().find(|l| l.starts_with("total")).expect("a total row");
+    assert_eq!(total.split_whitespace().nth(1).and_then(|v| v.parse::<u64>().ok()), Some(sum), "{text}");
+    assert!(sum > 0 && sum < 128 * 96, "{text}");
+}
