@@ -47,3 +47,16 @@ fn ism_visibility(atlas: texture_2d<f32>, i: u32, vpl: Vpl, x: vec3<f32>, nx: ve
     let stored = textureLoad(atlas, vpl_tile_origin(i, cols, size) + t, 0).r;
     return select(0.0, 1.0, d * (1.0 - bias) <= stored);
 }
+
+// Visibility of x (normal nx) from VPL k as a gather chooses it: `mode` 0 none, 1 the ISM
+// atlas, 2 the exact cube-face atlas; atlas columns and map size; p = (ISM eye offset, bias,
+// receiver normal offset) or (exact near, far, eye offset).
+fn gather_visibility(mode: u32, ism: texture_2d<f32>, exact: texture_depth_2d, k: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, cols: u32, size: u32, p: vec3<f32>) -> f32 {
+    if (mode == 1u) {
+        return ism_visibility(ism, k, vpl, x, nx, p.x, cols, size, p.y, p.z);
+    }
+    if (mode == 2u) {
+        return vpl_exact_visibility(exact, k, vpl, x, nx, p, cols, size, 1.0, 1.0);
+    }
+    return 1.0;
+}

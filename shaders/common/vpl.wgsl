@@ -76,10 +76,9 @@ fn vpl_tile_origin(tile: u32, cols: u32, size: u32) -> vec2<u32> {
     return vec2<u32>(tile % cols, tile / cols) * size;
 }
 
-// Radiance toward the eye at `eye` that one VPL sends to x (normal nx, colour c, DI, SI, SP),
-// visibility not included: Knecht 002 Eq. 4.7–4.9 with the one BRDF at both ends (CPU twin:
-// cpu::knecht::vpl_radiance, where the reading is documented). dmin2 = d_min².
-fn vpl_radiance(vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, eye: vec3<f32>, c: vec3<f32>, mat: vec3<f32>, dmin2: f32) -> vec3<f32> {
+// Irradiance at x (normal nx) from one VPL, visibility not included: Φ · f_y(ω_in, y→x) ·
+// cos θ_y · cos θ_x / max(d², d_min²) (Knecht 002 Eq. 4.7–4.8; dmin2 = d_min²).
+fn vpl_irradiance(vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, dmin2: f32) -> vec3<f32> {
     let w = vpl.position.xyz - x;
     let d2 = dot(w, w);
     let l = w * inverseSqrt(max(d2, 1e-12));
@@ -88,10 +87,21 @@ fn vpl_radiance(vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, eye: vec3<f32>, c: vec3<f
     if (cos_x <= 0.0 || cos_y <= 0.0) {
         return vec3<f32>(0.0);
     }
-    let v = normalize(eye - x);
     let f_y = brdf_eval(vpl.normal.xyz, vpl.incident.xyz, -l, vpl.albedo.rgb, vpl.normal.w, vpl.flux.a, vpl.incident.w);
-    let f_x = brdf_eval(nx, l, v, c, mat.x, mat.y, mat.z);
-    return vpl.flux.rgb * f_y * cos_y * f_x * cos_x / max(d2, dmin2);
+    return vpl.flux.rgb * f_y * cos_y * cos_x / max(d2, dmin2);
+}
+
+// Radiance toward the eye at `eye` that one VPL sends to x (normal nx, colour c, DI, SI, SP),
+// visibility not included: Knecht 002 Eq. 4.7–4.9 with the one BRDF at both ends — the
+// irradiance times f_x (CPU twin: cpu::knecht::vpl_radiance, where the reading is documented).
+fn vpl_radiance(vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, eye: vec3<f32>, c: vec3<f32>, mat: vec3<f32>, dmin2: f32) -> vec3<f32> {
+    let e = vpl_irradiance(vpl, x, nx, dmin2);
+    if (max(e.r, max(e.g, e.b)) <= 0.0) {
+        return vec3<f32>(0.0);
+    }
+    let l = normalize(vpl.position.xyz - x);
+    let f_x = brdf_eval(nx, l, normalize(eye - x), c, mat.x, mat.y, mat.z);
+    return e * f_x;
 }
 
 // Exact visibility of x (receiver normal nx) from VPL i in a cube-face atlas (stage 4's

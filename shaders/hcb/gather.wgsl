@@ -59,25 +59,11 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
         if (vpl.position.w < 0.5) {
             continue;
         }
-        let w = vpl.position.xyz - x;
-        let d2 = dot(w, w);
-        let l = w * inverseSqrt(max(d2, 1e-12));
-        let cos_x = dot(nx, l);
-        let cos_y = -dot(vpl.normal.xyz, l);
-        if (cos_x <= 0.0 || cos_y <= 0.0) {
+        let irradiance = vpl_irradiance(vpl, x, nx, params.shade.x);
+        if (max(irradiance.r, max(irradiance.g, irradiance.b)) <= 0.0) {
             continue;
         }
-        var vis = 1.0;
-        if (params.counts.y == 1u) {
-            vis = ism_visibility(ism_atlas, k, vpl, x, nx, params.shade.y, params.counts.z, params.counts.w, params.shade.z, params.shade.w);
-        } else if (params.counts.y == 2u) {
-            vis = vpl_exact_visibility(exact_atlas, k, vpl, x, nx, params.shade.yzw, params.counts.z, params.counts.w, 1.0, 1.0);
-        }
-        if (vis <= 0.0) {
-            continue;
-        }
-        let f_y = brdf_eval(vpl.normal.xyz, vpl.incident.xyz, -l, vpl.albedo.rgb, vpl.normal.w, vpl.flux.a, vpl.incident.w);
-        e = e + vis * vpl.flux.rgb * f_y * cos_y * cos_x / max(d2, params.shade.x);
+        e = e + irradiance * gather_visibility(params.counts.y, ism_atlas, exact_atlas, k, vpl, x, nx, params.counts.z, params.counts.w, params.shade.yzw);
     }
     list[i].light = vec4<f32>(e, 1.0);
 }

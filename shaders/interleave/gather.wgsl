@@ -58,12 +58,7 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
             if (max(l.r, max(l.g, l.b)) <= 0.0) {
                 continue;
             }
-            var vis = 1.0;
-            if (params.vis.x == 1u) {
-                vis = ism_visibility(ism_atlas, k, vpl, x, nx, params.shade.y, params.vis.y, params.vis.z, params.shade.z, params.shade.w);
-            } else if (params.vis.x == 2u) {
-                vis = vpl_exact_visibility(exact_atlas, k, vpl, x, nx, params.shade.yzw, params.vis.y, params.vis.z, 1.0, 1.0);
-            }
+            let vis = gather_visibility(params.vis.x, ism_atlas, exact_atlas, k, vpl, x, nx, params.vis.y, params.vis.z, params.shade.yzw);
             sum = sum + l * vis;
         }
         let per_tile = (count - tile + stride - 1u) / stride;
