@@ -483,3 +483,47 @@ fn hcb_samples_are_at_most_five_percent_of_the_pixels_at_512() {
         stats.samples_per_level
     );
 }
+
+#[test]
+fn hcb_on_the_hotel_room_stays_close_to_the_per_pixel_gather() {
+    use gi_render::image_io::hdr_display;
+    let opts = gi_render::scene::LoadOptions { unit_scale: 0.001, ..Default::default() };
+    let path = gi_lab_tests::shared_scene("hotel-room/hotel-room.glb");
+    let scene = gi_render::scene::load_gltf_file(&path, &opts).expect("the hotel room loads");
+    let loaded =
+        gi_render::preset::load_lenient(include_str!("../../presets/nguyen-hcb.ron"), "nguyen-hcb").expect("loads");
+    let size = 512;
+    let image = |levels: u32| {
+        let mut s = loaded.settings.clone();
+        s.hcb.levels = levels;
+        let mut r = gi_render::Renderer::new(gpu(), scene.clone(), s, size, size).expect("renderer");
+        r.clock.playing = false;
+        // Inside the closed room (the default camera frames it from outside): from near one
+        // corner at eye height toward the opposite one.
+        let b = r.bounds();
+        let e = b.extent();
+        let eye = b.min + Vec3::new(0.2 * e.x, 0.45 * e.y, 0.2 * e.z);
+        let target = b.min + Vec3::new(0.8 * e.x, 0.35 * e.y, 0.8 * e.z);
+        r.camera = gi_render::camera::Camera::look_at(eye, target, 60f32.to_radians(), b);
+        r.render_frame();
+        (r.readback("final.hdr").expect("final"), r.hcb_stats().expect("stats"))
+    };
+    let (hcb, stats) = image(loaded.settings.hcb.levels);
+    let (per_pixel, all) = image(1);
+    let covered = all.samples();
+    let flip = gi_render::metrics::flip(&hdr_display(&hcb), &hdr_display(&per_pixel)).expect("flip").0;
+    let share = 100.0 * stats.samples() as f64 / (size * size) as f64;
+    println!(
+        "hotel room {size}²: FLIP HCB vs per-pixel {flip:.4}; samples {} ({share:.2} % of the pixels, {covered} covered), per level {:?}, uncovered {}",
+        stats.samples(),
+        stats.samples_per_level,
+        stats.uncovered
+    );
+    assert!(covered > size * size / 2, "the room fills the view: {covered}");
+    // Measured on lavapipe at 512²: FLIP 0.0226 with 6.08 % of the pixels as samples. That
+    // is above the 5 % (met on the default scene, 2.98 %): the room's furniture has
+    // many creases, whose pixels are level-0 samples; the share falls with the resolution
+    // (11.3 % at 256²). The bounds guard these measurements; the 5 % goal is open (#6 note).
+    assert!(flip <= 0.03, "HCB vs per-pixel gather on the hotel room: FLIP {flip}");
+    assert!(share <= 6.5, "{share} % of the pixels are samples");
+}
