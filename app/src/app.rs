@@ -292,6 +292,8 @@ pub struct State {
     pub show_help: bool,
     /// View → VPL overlay: instant radiosity's VPLs (`vpl.list`) as dots over the viewport.
     pub show_vpls: bool,
+    /// Draw the HCB's samples over the viewport (Nguyen et al.'s white dots).
+    pub show_hcb_samples: bool,
     /// The A/B comparison, when one runs.
     pub ab: Option<crate::ab::Ab>,
     pub hot: crate::hot_reload::HotReload,
@@ -433,6 +435,7 @@ impl GiLabApp {
             visible_viewers: Vec::new(),
             show_help: false,
             show_vpls: false,
+            show_hcb_samples: false,
             ab: None,
             request_new_viewer: false,
             request_reset_layout: false,
@@ -1207,6 +1210,10 @@ impl State {
                 ui.checkbox(&mut self.show_vpls, "VPL overlay (vpl.list)").on_hover_text(
                     "instant radiosity's VPLs as dots over the viewport, coloured by their reflected flux \
                      (the brightest at full colour); reads the list back every frame",
+                );
+                ui.checkbox(&mut self.show_hcb_samples, "HCB samples overlay (Table 1)").on_hover_text(
+                    "the hierarchical coherence buffer's samples as white dots, larger for higher levels, \
+                     with the count per level; reads the sample list back every frame",
                 );
                 ui.horizontal(|ui| {
                     ui.label("render scale");

@@ -86,6 +86,9 @@ fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
     if st.show_vpls {
         vpl_overlay(st, ui, rect);
     }
+    if st.show_hcb_samples {
+        hcb_overlay(st, ui, rect);
+    }
     if !st.hot.errors.is_empty() {
         // The compile error stays on screen until the file is fixed.
         let text: Vec<String> = st.hot.errors.iter().map(|(f, e)| format!("{f}: {e}")).collect();
@@ -178,6 +181,33 @@ fn vpl_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
         painter.circle(pos, 3.0, colour, egui::Stroke::new(1.0, egui::Color32::BLACK));
     }
     note(format!("{} VPLs coloured by reflected flux Φ·c; brightest {brightest:.3e} W (full colour)", vpls.len()));
+}
+
+/// The HCB's samples over the viewport (Nguyen et al. Fig. 4b's white dots): each at its
+/// G-buffer pixel, its radius growing with its level, and Table 1's counts on a line.
+fn hcb_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
+    let Ok(l) = &st.lab else { return };
+    let painter = ui.painter_at(rect);
+    let text = |s: String| {
+        painter.text(
+            rect.left_top() + egui::vec2(8.0, 8.0),
+            egui::Align2::LEFT_TOP,
+            s,
+            egui::FontId::proportional(14.0),
+            egui::Color32::WHITE,
+        )
+    };
+    let Some(stats) = l.renderer.hcb_stats() else {
+        text("HCB samples: pick the hierarchical coherence buffer (Nguyen) to see its samples".into());
+        return;
+    };
+    let (w, h) = l.renderer.size();
+    let scale = egui::vec2(rect.width() / w.max(1) as f32, rect.height() / h.max(1) as f32);
+    for &[x, y, level] in &stats.samples {
+        let pos = rect.min + egui::vec2((x as f32 + 0.5) * scale.x, (y as f32 + 0.5) * scale.y);
+        painter.circle_filled(pos, 1.0 + 0.5 * level as f32, egui::Color32::WHITE);
+    }
+    text(stats.summary(w * h));
 }
 
 /// The A/B comparison drawn over the viewport: B right of a draggable divider, or the

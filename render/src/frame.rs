@@ -102,6 +102,8 @@ struct Knecht {
 /// Sample statistics of the HCB (see [`Renderer::hcb_stats`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct HcbStats {
+    /// Every sample's G-buffer pixel (x, y) and level.
+    pub samples: Vec<[u32; 3]>,
     pub samples_per_level: Vec<u32>,
     pub texels_per_level: Vec<u32>,
     /// Covered pixels that no sample's splat reached.
@@ -111,6 +113,17 @@ pub struct HcbStats {
 impl HcbStats {
     pub fn samples(&self) -> u32 {
         self.samples_per_level.iter().sum()
+    }
+
+    /// Table 1 of Nguyen et al. in one line: the count, its share of `pixels`, per level.
+    pub fn summary(&self, pixels: u32) -> String {
+        format!(
+            "{} HCB samples ({:.2} % of the pixels), per level {:?}; {} covered pixels no sample reached",
+            self.samples(),
+            100.0 * self.samples() as f64 / pixels.max(1) as f64,
+            self.samples_per_level,
+            self.uncovered
+        )
     }
 }
 
@@ -981,6 +994,7 @@ impl Renderer {
         let uncovered: Vec<u32> =
             bytemuck::pod_collect_to_vec(&crate::buffers::read_storage(&self.ctx, &h.splat.uncovered, 16).ok()?);
         Some(HcbStats {
+            samples: list.iter().map(|s| [s.texel[0] << s.texel[2], s.texel[1] << s.texel[2], s.texel[2]]).collect(),
             samples_per_level: per_level,
             texels_per_level: h.build.levels.iter().map(|l| l.width * l.height).collect(),
             uncovered: uncovered[0],

@@ -475,6 +475,18 @@ fn hcb_samples_are_at_most_five_percent_of_the_pixels_at_512() {
         stats.samples(),
         stats.samples_per_level
     );
+    // The overlay's dots: every listed sample sits on its pixel of the sample buffer.
+    let buffer = r.readback("hcb.samples").expect("hcb.samples");
+    assert_eq!(stats.samples.len() as u32, stats.samples());
+    for &[x, y, level] in &stats.samples {
+        assert_eq!(buffer.data[(y * 512 + x) as usize][0], (level + 1) as f32, "sample at ({x}, {y})");
+    }
+    assert_eq!(buffer.data.iter().filter(|p| p[0] > 0.0).count() as u32, stats.samples());
+    assert!(
+        stats.summary(pixels).starts_with(&format!("{} HCB samples (2.98 %", stats.samples())),
+        "{}",
+        stats.summary(pixels)
+    );
     // Measured 2.98 %; the paper reports 1.9–4.4 % on its scenes.
     assert!(share <= 5.0, "{share} % of the pixels are samples");
     assert!(
