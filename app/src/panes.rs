@@ -188,14 +188,13 @@ fn vpl_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
 fn hcb_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
     let Ok(l) = &st.lab else { return };
     let painter = ui.painter_at(rect);
+    // On a dark plate, so that it stays readable over the dots.
     let text = |s: String| {
-        painter.text(
-            rect.left_top() + egui::vec2(8.0, 8.0),
-            egui::Align2::LEFT_TOP,
-            s,
-            egui::FontId::proportional(14.0),
-            egui::Color32::WHITE,
-        )
+        let galley = painter.layout_no_wrap(s, egui::FontId::proportional(14.0), egui::Color32::WHITE);
+        let pos = rect.left_top() + egui::vec2(8.0, 8.0);
+        let plate = egui::Rect::from_min_size(pos, galley.size()).expand(4.0);
+        painter.rect_filled(plate, 3.0, egui::Color32::from_black_alpha(200));
+        painter.galley(pos, galley, egui::Color32::WHITE);
     };
     let Some(stats) = l.renderer.hcb_stats() else {
         text("HCB samples: pick the hierarchical coherence buffer (Nguyen) to see its samples".into());

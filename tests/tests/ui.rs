@@ -471,3 +471,41 @@ fn every_settings_text_has_glyphs() {
     });
     h.run_steps(1);
 }
+
+#[test]
+fn the_hcb_samples_overlay_draws_white_dots_and_table_1() {
+    let (mut h, _dir) = harness("hcb_overlay");
+    pause(&mut h);
+    if let Ok(l) = &mut h.state_mut().state.lab {
+        l.settings.indirect.technique = gi_render::lab_settings::IndirectTechnique::Hcb;
+        l.apply_settings();
+    }
+    h.run_steps(3);
+    let white = |h: &mut Harness<'static, GiLabApp>| {
+        let rect = h.state().state.viewport_rect;
+        let image = h.render().expect("the harness renders");
+        let mut n = 0;
+        for y in (rect.min.y + 40.0) as u32..(rect.max.y - 10.0) as u32 {
+            for x in (rect.min.x + 10.0) as u32..(rect.max.x - 10.0) as u32 {
+                let p = image.get_pixel(x, y).0;
+                if p[0] == 255 && p[1] == 255 && p[2] == 255 {
+                    n += 1;
+                }
+            }
+        }
+        (n, image)
+    };
+    let (before, _) = white(&mut h);
+    h.state_mut().state.show_hcb_samples = true;
+    h.run_steps(2);
+    let (after, image) = white(&mut h);
+    let _ = image.save(std::env::temp_dir().join("gi_lab_hcb_overlay.png"));
+    let stats = h.state().state.lab.as_ref().ok().and_then(|l| l.renderer.hcb_stats()).expect("HCB statistics");
+    assert!(stats.samples() > 100, "{}", stats.samples());
+    // Dots cover at least a pixel each where samples do not overlap.
+    assert!(
+        after > before + stats.samples() as usize / 4,
+        "white pixels {before} -> {after} for {} samples",
+        stats.samples()
+    );
+}
