@@ -219,8 +219,10 @@ pub struct BenchArgs {
     #[arg(long)]
     pub json: bool,
     /// Run a suite of rows instead of one configuration: `knecht` reproduces the shape of
-    /// Knecht's Tables 5.1–5.2 (frame time against VPL count and ISM size) and the temporal
-    /// coherence overhead, starting from --preset.
+    /// `knecht`: Knecht's Tables 5.1–5.3 (frame time against VPL count and ISM size, the
+    /// temporal coherence overhead, multi-bounce against IRSM); `nguyen`: the HCB against
+    /// gathering at every pixel at 1024 VPLs, with the samples' share of the pixels. Both
+    /// start from --preset.
     #[arg(long, value_enum)]
     pub suite: Option<BenchSuite>,
 }
@@ -229,6 +231,7 @@ pub struct BenchArgs {
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BenchSuite {
     Knecht,
+    Nguyen,
 }
 
 /// Parses `WIDTHxHEIGHT`.
@@ -587,6 +590,15 @@ fn bench(args: &BenchArgs) -> Result<(), CliError> {
             println!("{}", serde_json::to_string_pretty(&report).map_err(|e| CliError::failure(e.to_string()))?);
         } else {
             print!("{}", crate::bench_suites::format(&report));
+        }
+        return Ok(());
+    }
+    if let Some(BenchSuite::Nguyen) = args.suite {
+        let report = crate::bench_suites::nguyen(&mut r, args.frames, &name)?;
+        if args.json {
+            println!("{}", serde_json::to_string_pretty(&report).map_err(|e| CliError::failure(e.to_string()))?);
+        } else {
+            print!("{}", crate::bench_suites::format_nguyen(&report));
         }
         return Ok(());
     }

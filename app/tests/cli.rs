@@ -294,3 +294,22 @@ fn hcb_stats_prints_the_samples_per_level_as_table_1() {
     assert_eq!(total.split_whitespace().nth(1).and_then(|v| v.parse::<u64>().ok()), Some(sum), "{text}");
     assert!(sum > 0 && sum < 128 * 96, "{text}");
 }
+
+#[test]
+fn the_nguyen_bench_suite_compares_the_hcb_with_the_per_pixel_gather() {
+    let o = gi_lab()
+        .args(["bench", "--suite", "nguyen", "--size", "64x48", "--frames", "1", "--json"])
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "bench --suite nguyen failed: {}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let v: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    assert_eq!(v["vpls"], 1024, "{text}");
+    for k in ["hcb_ms", "per_pixel_ms", "hcb_gather_ms", "per_pixel_gather_ms"] {
+        assert!(v[k].as_f64().is_some_and(|t| t > 0.0), "{k}: {text}");
+    }
+    let samples = v["samples"].as_u64().expect("samples");
+    let per_level: u64 =
+        v["samples_per_level"].as_array().expect("levels").iter().map(|n| n.as_u64().expect("n")).sum();
+    assert!(samples > 0 && samples == per_level && samples < 64 * 48, "{text}");
+}
