@@ -168,22 +168,17 @@ impl HcbPass {
         let mask_pipeline = pipeline("hcb.mask", &m_samples, "cs_mask", &sample_layout);
         let clear_pipeline = pipeline("hcb.samples.clear", &m_samples, "cs_clear", &sample_layout);
         let samples_pipeline = pipeline("hcb.samples", &m_samples, "cs_samples", &sample_layout);
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("hcb.params"),
-            size: STRIDE * (2 * MAX_LEVELS as u64 + 1),
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let params = super::uniform_buffer(device, "hcb.params", STRIDE * (2 * MAX_LEVELS as u64 + 1));
         let storage = wgpu::TextureUsages::STORAGE_BINDING;
         let dummy_storage = super::create_target(device, "hcb.dummy_mask_out", 1, 1, r32, storage);
         let dummy_sampled = super::create_target(device, "hcb.dummy_mask_in", 1, 1, r32, storage);
         let (levels_v, samples, list, list_capacity) = Self::targets(device, width, height, levels);
-        let counter = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("hcb.sample_count"),
-            size: 16,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
+        let counter = super::buffer(
+            device,
+            "hcb.sample_count",
+            16,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+        );
         Self {
             levels: levels_v,
             samples,
@@ -254,12 +249,12 @@ impl HcbPass {
         );
         // Every pixel could be a level-0 sample.
         let capacity = width.max(1) * height.max(1);
-        let list = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("hcb.sample_list"),
-            size: std::mem::size_of::<GpuHcbSample>() as u64 * capacity as u64,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
+        let list = super::buffer(
+            device,
+            "hcb.sample_list",
+            std::mem::size_of::<GpuHcbSample>() as u64 * capacity as u64,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+        );
         (levels_v, samples, list, capacity)
     }
 
@@ -504,18 +499,13 @@ impl HcbSplatPass {
         });
         let normalize_pipeline =
             super::compute_pipeline(device, "hcb.normalize", &m_norm, "cs_normalize", &[&normalize_layout]);
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("hcb.splat.params"),
-            size: std::mem::size_of::<HcbParams>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let uncovered = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("hcb.uncovered"),
-            size: 16,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
+        let params = super::uniform_buffer(device, "hcb.splat.params", std::mem::size_of::<HcbParams>() as u64);
+        let uncovered = super::buffer(
+            device,
+            "hcb.uncovered",
+            16,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+        );
         let (weight_sum, irradiance, indirect) = Self::targets(device, width, height);
         Self {
             weight_sum,
@@ -698,24 +688,14 @@ impl HcbGatherPass {
         let module = crate::shaders::create_module(device, "hcb/gather.wgsl");
         let args_pipeline = super::compute_pipeline(device, "hcb.gather.args", &module, "cs_args", &[&layout]);
         let gather_pipeline = super::compute_pipeline(device, "hcb.gather", &module, "cs_gather", &[&layout]);
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("hcb.gather.params"),
-            size: std::mem::size_of::<HcbGatherParams>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let args = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("hcb.indirect_args"),
-            size: 32,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        let no_args = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("hcb.no_args"),
-            size: 32,
-            usage: wgpu::BufferUsages::STORAGE,
-            mapped_at_creation: false,
-        });
+        let params = super::uniform_buffer(device, "hcb.gather.params", std::mem::size_of::<HcbGatherParams>() as u64);
+        let args = super::buffer(
+            device,
+            "hcb.indirect_args",
+            32,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC,
+        );
+        let no_args = super::buffer(device, "hcb.no_args", 32, wgpu::BufferUsages::STORAGE);
         let (no_ism, no_exact) = super::interleave::no_visibility_atlases(device, "hcb.gather");
         Self { layout, args_pipeline, gather_pipeline, params, args, no_args, no_ism, no_exact }
     }

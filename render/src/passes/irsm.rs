@@ -96,14 +96,7 @@ impl IrsmPass {
         let owner_pipeline = super::compute_pipeline(device, "irsm.owner", &m_splat, "cs_owner", &[&splat_layout]);
         let cdf_pipeline = super::compute_pipeline(device, "irsm.cdf", &m_irsm, "cs_cdf", &[&sample_layout]);
         let sample_pipeline = super::compute_pipeline(device, "irsm.sample", &m_irsm, "cs_sample", &[&sample_layout]);
-        let uniform = |label| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: STRIDE * MAX_BOUNCES as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            })
-        };
+        let uniform = |label| super::uniform_buffer(device, label, STRIDE * MAX_BOUNCES as u64);
         let layout_info = IsmLayout::new(1, 16);
         let (depth, owner, cdf, totals, coverage) = Self::buffers(device, layout_info, 1, 1);
         let illumination = Self::illumination_texture(device, layout_info);
@@ -134,12 +127,12 @@ impl IrsmPass {
         points: usize,
     ) -> (wgpu::Buffer, wgpu::Buffer, wgpu::Buffer, wgpu::Buffer, wgpu::Buffer) {
         let make = |label, bytes: u64| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: bytes.max(4),
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            })
+            super::buffer(
+                device,
+                label,
+                bytes.max(4),
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+            )
         };
         let texels = l.width() * l.height();
         (

@@ -45,6 +45,16 @@ pub struct InstanceUniform {
     pub normal_matrix: Mat4,
 }
 
+/// An unmapped buffer of `size` bytes.
+pub fn buffer(device: &wgpu::Device, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
+}
+
+/// A uniform buffer of `size` bytes written with `queue.write_buffer`.
+pub fn uniform_buffer(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Buffer {
+    buffer(device, label, size, wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST)
+}
+
 /// A compute bind group layout of a dynamic-offset uniform at binding 0 and storage buffers
 /// at bindings 1… with `read_only[k]` for binding k + 1 (the bounce and splat kernels).
 pub fn uniform_and_storage_layout(device: &wgpu::Device, label: &str, read_only: &[bool]) -> wgpu::BindGroupLayout {

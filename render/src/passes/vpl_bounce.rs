@@ -88,12 +88,7 @@ impl VplBouncePass {
         let layout = super::uniform_and_storage_layout(device, "vpl.bounce.inputs", &[true, true, true, true, false]);
         let module = crate::shaders::create_module(device, "vpl/bounce.wgsl");
         let pipeline = super::compute_pipeline(device, "vpl.bounce", &module, "cs_bounce", &[&layout]);
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("vpl.bounce.params"),
-            size: STRIDE * MAX_BOUNCES as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let params = super::uniform_buffer(device, "vpl.bounce.params", STRIDE * MAX_BOUNCES as u64);
         Self { layout, pipeline, params }
     }
 
