@@ -180,6 +180,13 @@ pub struct HcbStatsArgs {
     pub scene: SceneArgs,
     #[arg(long, default_value = "512x512", value_parser = parse_size)]
     pub size: (u32, u32),
+    /// Frames to render (with `hcb.cache` on, one line of cache counts per frame; the table
+    /// is the last frame's).
+    #[arg(long, default_value_t = 1)]
+    pub frames: u32,
+    /// Play the scene's animation (otherwise time stays at 0).
+    #[arg(long)]
+    pub play: bool,
 }
 
 #[derive(Args, Debug)]
@@ -331,16 +338,37 @@ pub fn write_buffer(r: &Renderer, spec: &str, dir: &Path) -> Result<Vec<PathBuf>
     Ok(files)
 }
 
-/// `gi-lab hcb-stats`: one frame at time 0 with the HCB, and its samples per level — count,
-/// share of the level's texels and of the G-buffer — as Nguyen et al.'s Table 1.
+/// `gi-lab hcb-stats`: `--frames` frames with the HCB (time 0, or playing), and the last
+/// one's samples per level — count, share of the level's texels and of the G-buffer — as
+/// Nguyen et al.'s Table 1; with the cache, each frame's cached, new and recomputed samples.
 fn hcb_stats(args: &HcbStatsArgs) -> Result<(), CliError> {
+    if args.frames == 0 {
+        return Err(CliError::input("--frames must be at least 1"));
+    }
     let mut r = renderer(&args.scene, args.size)?;
-    r.clock.playing = false;
+    r.clock.playing = args.play;
     let mut s = r.settings().clone();
     s.indirect.technique = gi_render::lab_settings::IndirectTechnique::Hcb;
     r.set_settings(s).map_err(|e| CliError::input(e.to_string()))?;
-    r.render_frame();
-    let stats = r.hcb_stats().ok_or_else(|| CliError::failure("the HCB produced no statistics"))?;
+    let mut stats = None;
+    for frame in 0..args.frames {
+        r.render_frame();
+        let st = r.hcb_stats().ok_or_else(|| CliError::failure("the HCB produced no statistics"))?;
+        if let Some(c) = &st.cache {
+            println!(
+                "frame {frame:>3}: {:>7} samples = {:>7} cached + {:>6} new; {:>6} recomputed; removed {:>5} invalid, {:>5} surplus, {:>5} outside the view",
+                c.total,
+                c.cached,
+                c.new_samples(),
+                c.recomputed,
+                c.invalid,
+                c.surplus,
+                c.dropped
+            );
+        }
+        stats = Some(st);
+    }
+    let stats = stats.ok_or_else(|| CliError::failure("no frame rendered"))?;
     print!("{}", format_hcb_stats(&stats, args.size));
     Ok(())
 }

@@ -20,7 +20,8 @@ use crate::lab_settings::IndirectTechnique;
 use crate::passes::compose::ComposePass;
 use crate::passes::direct::DirectPass;
 use crate::passes::gbuffer::GBufferPass;
-use crate::passes::hcb::{HcbFrame, HcbGatherPass, HcbPass, HcbSplatPass};
+use crate::passes::hcb::{HcbFrame, HcbGatherPass, HcbPass, HcbSettings, HcbSplatPass};
+use crate::passes::hcb_cache::{CacheCounts, CacheFrame, HcbCachePass};
 use crate::passes::interleave::{GatherVisibility, InterleavePass};
 use crate::passes::irsm::{IrsmFrame, IrsmPass};
 use crate::passes::ism::{IsmFrame, IsmLayout, IsmPass, MAX_BOUNCES, VplVisibility};
@@ -108,6 +109,8 @@ pub struct HcbStats {
     pub texels_per_level: Vec<u32>,
     /// Covered pixels that no sample's splat reached.
     pub uncovered: u32,
+    /// The cache's counts of the frame (§5), None without the cache.
+    pub cache: Option<CacheCounts>,
 }
 
 impl HcbStats {
@@ -115,23 +118,41 @@ impl HcbStats {
         self.samples_per_level.iter().sum()
     }
 
-    /// Table 1 of Nguyen et al. in one line: the count, its share of `pixels`, per level.
+    /// Table 1 of Nguyen et al. in one line: the count, its share of `pixels`, per level
+    /// (and the cache's counts).
     pub fn summary(&self, pixels: u32) -> String {
-        format!(
+        let mut line = format!(
             "{} HCB samples ({:.2} % of the pixels), per level {:?}; {} covered pixels no sample reached",
             self.samples(),
             100.0 * self.samples() as f64 / pixels.max(1) as f64,
             self.samples_per_level,
             self.uncovered
-        )
+        );
+        if let Some(c) = &self.cache {
+            line += &format!(
+                "; cache: {} reused, {} new, {} recomputed, {} invalid + {} surplus removed, {} left the view",
+                c.cached,
+                c.new_samples(),
+                c.recomputed,
+                c.invalid,
+                c.surplus,
+                c.dropped
+            );
+        }
+        line
     }
 }
 
-/// The HCB technique's passes: levels, masks and samples; gathering; splatting.
+/// The HCB technique's passes: levels, masks and samples; gathering; splatting; the cache.
 struct HcbParts {
     build: HcbPass,
     gather: HcbGatherPass,
     splat: HcbSplatPass,
+    /// The sample cache (§5), created when `hcb.cache` is on.
+    cache: Option<HcbCachePass>,
+    /// The settings the cached samples were identified with; the cache empties when they
+    /// change.
+    cached_with: Option<HcbSettings>,
 }
 
 /// The exact-VPL reference's passes and its progress (created when first selected).
@@ -276,6 +297,9 @@ impl Renderer {
             if let Some(h) = &k.hcb {
                 h.build.register(&mut self.registry);
                 h.splat.register(&mut self.registry);
+                if let Some(c) = &h.cache {
+                    c.register(&mut self.registry);
+                }
             } else {
                 k.interleave.register(&mut self.registry);
                 k.temporal.register(&mut self.registry);
@@ -682,8 +706,22 @@ impl Renderer {
                 build: HcbPass::new(&ctx, w, h, s.hcb.levels),
                 gather: HcbGatherPass::new(&ctx),
                 splat: HcbSplatPass::new(&ctx, bgl::uniform(0, wgpu::ShaderStages::VERTEX), w, h),
+                cache: None,
+                cached_with: None,
             });
-            fresh |= created | parts.build.ensure(&ctx, w, h, s.hcb.levels) | parts.splat.ensure(&ctx, w, h);
+            let resized = parts.build.ensure(&ctx, w, h, s.hcb.levels) | parts.splat.ensure(&ctx, w, h);
+            fresh |= created | resized;
+            if s.hcb.cache {
+                let created = parts.cache.is_none();
+                let cache = parts.cache.get_or_insert_with(|| HcbCachePass::new(&ctx, w, h));
+                fresh |= cache.ensure(&ctx, w, h) | created;
+                if resized || parts.cached_with.as_ref() != Some(&s.hcb) {
+                    // The list and the cache are swapped each frame: both start empty.
+                    parts.cached_with = None;
+                }
+            } else if parts.cache.take().is_some() {
+                fresh = true;
+            }
         } else if k.hcb.take().is_some() {
             fresh = true;
         }
@@ -722,6 +760,15 @@ impl Renderer {
             .collect();
         let lights: Vec<_> = state.lights.iter().map(gpu_light).collect();
         let k = self.knecht.as_mut()?;
+        if let Some(h) = k.hcb.as_mut() {
+            if let Some(c) = h.cache.as_mut() {
+                c.swap(&mut h.build);
+                if h.cached_with.as_ref() != Some(&s.hcb) {
+                    c.reset(enc);
+                    h.cached_with = Some(s.hcb.clone());
+                }
+            }
+        }
         let (gpu_scene, timer) = (&self.gpu_scene, &mut self.timer);
         let halton_first = 1 + if s.vpl.new_set_each_frame { k.frames.wrapping_mul(s.vpl.count) } else { 0 };
         if lights.is_empty() {
@@ -824,25 +871,56 @@ impl Renderer {
                 thresholds: s.hcb.thresholds(),
                 eye: self.camera.position,
                 pixel_scale: 2.0 * (self.camera.yfov * 0.5).tan() / self.height.max(1) as f32,
+                pattern: crate::cpu::hcb::recompute_pattern(s.hcb.recompute_period),
+                incomplete_weight: s.hcb.incomplete_weight,
             };
-            timer.scope(&ctx, enc, "hcb.build", |e, slot| h.build.run(&ctx, e, slot, &g.position, &g.normal, f));
-            let vpls = &k.vpl.vpls;
-            timer.scope(&ctx, enc, "hcb.gather", |e, slot| {
-                h.gather.run(&ctx, e, slot, &h.build, vpls, total, s.vpl.min_distance_m, vis)
-            });
-            let camera = &self.camera_buffer;
-            timer.scope(&ctx, enc, "hcb.splat", |e, slot| {
-                h.splat.run(
-                    &ctx,
-                    e,
-                    slot,
-                    camera,
-                    (&g.position, &g.normal, &g.albedo),
-                    &h.build.list,
-                    &h.gather.args,
-                    f,
-                )
-            });
+            let (vpls, camera) = (&k.vpl.vpls, &self.camera_buffer);
+            let g3 = (&g.position, &g.normal, &g.albedo);
+            let samples = (&h.build.list, &h.build.counter);
+            let gather = |timer: &mut crate::timing::GpuTimer, enc: &mut wgpu::CommandEncoder, scope: &str| {
+                timer.scope(&ctx, enc, scope, |e, slot| {
+                    h.gather.run(&ctx, e, slot, &h.build, vpls, total, s.vpl.min_distance_m, vis)
+                })
+            };
+            match &h.cache {
+                None => {
+                    timer.scope(&ctx, enc, "hcb.build", |e, slot| {
+                        h.build.run(&ctx, e, slot, &g.position, &g.normal, f, None)
+                    });
+                    gather(timer, enc, "hcb.gather");
+                    timer.scope(&ctx, enc, "hcb.splat", |e, slot| {
+                        h.splat.run(&ctx, e, slot, camera, g3, samples, &h.gather.args, f)
+                    });
+                }
+                Some(c) => {
+                    // §5 (Fig. 5): update the cache, recompute the due samples' light, splat
+                    // the cached samples, then new samples where texels stay incomplete.
+                    let cf = CacheFrame {
+                        max_distance: s.hcb.cache_distance_m,
+                        max_normal_deg: s.hcb.cache_normal_deg,
+                        quad_px: s.hcb.surplus_quad_px,
+                        period: s.hcb.recompute_period,
+                    };
+                    timer.scope(&ctx, enc, "hcb.cache.update", |e, slot| {
+                        c.update(&ctx, e, slot, camera, (&g.position, &g.normal), &h.build, cf)
+                    });
+                    gather(timer, enc, "hcb.cache.recompute");
+                    timer.scope(&ctx, enc, "hcb.cache.splat", |e, slot| {
+                        h.splat.splat(&ctx, e, slot, camera, g3, samples, (&h.gather.args, 0), false, true, f)
+                    });
+                    let weight_sum = crate::passes::view(&h.splat.weight_sum, "hcb.weight_sum");
+                    let views = c.views();
+                    timer.scope(&ctx, enc, "hcb.build", |e, slot| {
+                        let io = crate::passes::hcb_cache::cache_views(&weight_sum, &views);
+                        h.build.run(&ctx, e, slot, &g.position, &g.normal, f, Some(io))
+                    });
+                    gather(timer, enc, "hcb.gather");
+                    timer.scope(&ctx, enc, "hcb.splat", |e, slot| {
+                        h.splat.splat(&ctx, e, slot, camera, g3, samples, (&h.gather.args, 32), true, false, f);
+                        h.splat.normalize(&ctx, e, slot, g3);
+                    });
+                }
+            }
             k.frames = k.frames.wrapping_add(1);
             return Some(crate::passes::view(&h.splat.indirect, "hcb.indirect"));
         }
@@ -976,8 +1054,9 @@ impl Renderer {
     /// data is on the CPU.
     pub fn hcb_stats(&self) -> Option<HcbStats> {
         let h = self.knecht.as_ref()?.hcb.as_ref()?;
-        let count: Vec<u32> =
-            bytemuck::pod_collect_to_vec(&crate::buffers::read_storage(&self.ctx, &h.build.counter, 16).ok()?);
+        let count: Vec<u32> = bytemuck::pod_collect_to_vec(
+            &crate::buffers::read_storage(&self.ctx, &h.build.counter, crate::passes::hcb::COUNTER_BYTES).ok()?,
+        );
         let n = count[0].min(h.build.list_capacity) as u64;
         let size = std::mem::size_of::<crate::passes::hcb::GpuHcbSample>() as u64;
         let list: Vec<crate::passes::hcb::GpuHcbSample> = if n == 0 {
@@ -987,17 +1066,24 @@ impl Renderer {
         };
         let mut per_level = vec![0u32; h.build.levels.len()];
         for smp in &list {
-            if let Some(c) = per_level.get_mut(smp.texel[2] as usize) {
+            if let Some(c) = per_level.get_mut(smp.level() as usize) {
                 *c += 1;
             }
         }
         let uncovered: Vec<u32> =
             bytemuck::pod_collect_to_vec(&crate::buffers::read_storage(&self.ctx, &h.splat.uncovered, 16).ok()?);
         Some(HcbStats {
-            samples: list.iter().map(|s| [s.texel[0] << s.texel[2], s.texel[1] << s.texel[2], s.texel[2]]).collect(),
+            samples: list
+                .iter()
+                .map(|s| {
+                    let [x, y] = s.pixel();
+                    [x, y, s.level()]
+                })
+                .collect(),
             samples_per_level: per_level,
             texels_per_level: h.build.levels.iter().map(|l| l.width * l.height).collect(),
             uncovered: uncovered[0],
+            cache: h.cache.as_ref().map(|_| CacheCounts::from_words(&count)),
         })
     }
 
@@ -1183,7 +1269,9 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         | "hcb/samples.wgsl"
         | "hcb/gather.wgsl"
         | "hcb/splat.wgsl"
-        | "hcb/normalize.wgsl" => "instant_radiosity",
+        | "hcb/normalize.wgsl"
+        | "hcb/cache.wgsl"
+        | "hcb/cache_removal.wgsl" => "instant_radiosity",
         _ => return None,
     })
 }
@@ -1213,6 +1301,9 @@ pub fn scope_output(scope: &str) -> Option<&'static str> {
         "hcb.build" => "hcb.samples",
         "hcb.gather" => "hcb.samples",
         "hcb.splat" => "hcb.indirect",
+        "hcb.cache.update" => "hcb.cache",
+        "hcb.cache.recompute" => "hcb.recompute_group",
+        "hcb.cache.splat" => "hcb.weight_sum",
         _ => return None,
     })
 }

@@ -45,6 +45,8 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("hcb/splat.wgsl", include_str!("../../shaders/hcb/splat.wgsl")),
     ("hcb/gather.wgsl", include_str!("../../shaders/hcb/gather.wgsl")),
     ("hcb/normalize.wgsl", include_str!("../../shaders/hcb/normalize.wgsl")),
+    ("hcb/cache.wgsl", include_str!("../../shaders/hcb/cache.wgsl")),
+    ("hcb/cache_removal.wgsl", include_str!("../../shaders/hcb/cache_removal.wgsl")),
     ("view/view.wgsl", include_str!("../../shaders/view/view.wgsl")),
     ("view/probe.wgsl", include_str!("../../shaders/view/probe.wgsl")),
 ];
@@ -79,6 +81,8 @@ pub const ENTRY_MODULES: &[&str] = &[
     "hcb/splat.wgsl",
     "hcb/gather.wgsl",
     "hcb/normalize.wgsl",
+    "hcb/cache.wgsl",
+    "hcb/cache_removal.wgsl",
     "view/view.wgsl",
     "view/probe.wgsl",
 ];

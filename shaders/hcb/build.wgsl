@@ -3,7 +3,9 @@
 // the centre a when n_c^w · (n_a · n_c) ≥ cos θ_max (Eq. 6–7), the pose test of Eq. 3
 // holds, and R'_c = ‖a − c‖ + R_c ≤ d_max (Eq. 1 on the accumulated distance). All eight
 // coherent: n^w = min(n_a^w, n_c^w (n_a · n_c)), a^w = max(R_a, R'_c); else n^w = 0.
-// A block reaching outside the level is incoherent. CPU twin: cpu::hcb::build_texel.
+// A block reaching outside the level is incoherent. With the cache's signs (§5.2) |n^w|
+// enters the test and the result keeps the centre's sign, or is positive when any texel of
+// the block is (Fig. 7d, hp.level.w). CPU twin: cpu::hcb::build_texel.
 #import hcb/common.wgsl
 
 @group(0) @binding(0) var<uniform> hp: HcbParams;
@@ -34,9 +36,10 @@ fn cs_build(@builtin(global_invocation_id) gid: vec3<u32>) {
     let c = vec2<i32>(gid.xy) * 2;
     let a = textureLoad(prev_position, c, 0);
     let na = textureLoad(prev_normal, c, 0);
-    var coherence = na.w;
+    var coherence = abs(na.w);
     var distance = a.w;
-    var all = na.w > 0.0;
+    var all = na.w != 0.0;
+    var positive = na.w > 0.0;
     for (var j = -1; j <= 1 && all; j = j + 1) {
         for (var i = -1; i <= 1 && all; i = i + 1) {
             if (i == 0 && j == 0) {
@@ -49,11 +52,12 @@ fn cs_build(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
             let b = textureLoad(prev_position, t, 0);
             let nb = textureLoad(prev_normal, t, 0);
-            let temp = nb.w * dot(na.xyz, nb.xyz);
+            let temp = abs(nb.w) * dot(na.xyz, nb.xyz);
             let reach = length(b.xyz - a.xyz) + b.w;
-            if (nb.w > 0.0 && temp >= hp.thresholds.x && pose_coherent(a.xyz, na.xyz, b.xyz, nb.xyz) && reach <= hp.thresholds.z) {
+            if (nb.w != 0.0 && temp >= hp.thresholds.x && pose_coherent(a.xyz, na.xyz, b.xyz, nb.xyz) && reach <= hp.thresholds.z) {
                 coherence = min(coherence, temp);
                 distance = max(distance, reach);
+                positive = positive || (hp.level.w == 1u && nb.w > 0.0);
             } else {
                 all = false;
             }
@@ -62,6 +66,8 @@ fn cs_build(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (!all) {
         coherence = 0.0;
         distance = a.w;
+    } else if (!positive) {
+        coherence = -coherence;
     }
     textureStore(out_position, gid.xy, vec4<f32>(a.xyz, distance));
     textureStore(out_normal, gid.xy, vec4<f32>(na.xyz, coherence));

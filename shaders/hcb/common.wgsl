@@ -10,8 +10,14 @@ struct HcbParams {
     thresholds: vec4<f32>,
     // xyz: eye position
     eye: vec4<f32>,
-    // x: 1 when this is the top level (sample pass), y: level index
+    // x: 1 when this is the top level (sample pass), y: level index, z: 1 for the cache's
+    // supplementary G-buffer (§5.2: n^w = ±1 from the splatted weight), w: 1 to spread the
+    // sign of incomplete texels upward (Fig. 7d)
     level: vec4<u32>,
+    // x: incomplete weight threshold (§5.2), y: recompute period (§5.3)
+    cache: vec4<f32>,
+    // §5.3's 4×4 index pattern: the recompute phase of a new sample at texel (x, y) of its level
+    pattern: array<vec4<u32>, 4>,
 }
 
 // One sample of the compact list (Rust twin: passes::hcb::GpuHcbSample).
@@ -20,8 +26,37 @@ struct HcbSample {
     position: vec4<f32>,
     // xyz: normal, w: n^w
     normal: vec4<f32>,
-    // x, y: texel at its level, z: level, w: 0
+    // x, y: texel at its level; z: bits 0–7 the level, 8–15 the recompute counter (§5.3),
+    // 16–23 the cache status while the cache is updated; w: G-buffer pixel x | y << 16
     texel: vec4<u32>,
-    // rgb: the light gathered at the sample (irradiance), a: 1 once gathered
+    // rgb: the light gathered at the sample (irradiance), a: 1 once gathered (0: gather it)
     light: vec4<f32>,
+}
+
+fn sample_level(s: HcbSample) -> u32 {
+    return s.texel.z & 0xffu;
+}
+
+fn pack_pixel(p: vec2<u32>) -> u32 {
+    return (p.x & 0xffffu) | (p.y << 16u);
+}
+
+fn unpack_pixel(v: u32) -> vec2<u32> {
+    return vec2<u32>(v & 0xffffu, v >> 16u);
+}
+
+// Parameters of the cache update (§5.1, §5.3); Rust twin: passes::hcb_cache::CacheParams.
+struct CacheParams {
+    // x: distance threshold (scene units), y: cos of the normal threshold, z: removal quad
+    // side (pixels), w: recompute period
+    limits: vec4<f32>,
+}
+
+// A cached sample's status during the update (texel.z bits 16–23).
+const DROPPED: u32 = 0u;
+const VALID: u32 = 1u;
+const INVALID: u32 = 2u;
+
+fn status(s: HcbSample) -> u32 {
+    return (s.texel.z >> 16u) & 0xffu;
 }

@@ -5,7 +5,8 @@
 // Irradiance, not radiance, is gathered and splatted: each pixel then reflects it with its
 // own colour (c·DI/π), so that texture detail survives the interpolation (the receiver's
 // glossy lobe is not included). cs_args turns the sample count into the indirect arguments
-// of this dispatch and of the splat draw.
+// of this dispatch and of the splat draws. Only samples not yet gathered (light.a = 0) are:
+// new ones, and with the cache the ones due for recomputation (§5.3).
 #import common/ism.wgsl
 #import hcb/common.wgsl
 
@@ -24,7 +25,8 @@ struct HcbGatherParams {
 @group(0) @binding(3) var exact_atlas: texture_depth_2d;
 @group(0) @binding(4) var<storage, read> counter: array<u32>;
 @group(0) @binding(5) var<storage, read_write> list: array<HcbSample>;
-// draw-indirect (vertices 6, instances, 0, 0) then dispatch-indirect (x, y, 1)
+// draw-indirect (vertices 6, instances, 0, 0), dispatch-indirect (x, y, 1), a spare word,
+// draw-indirect of the samples after the cached ones (counter word 1, §5.2)
 @group(0) @binding(6) var<storage, read_write> args: array<u32>;
 
 fn sample_count() -> u32 {
@@ -42,12 +44,18 @@ fn cs_args() {
     args[4] = min(groups, 65535u);
     args[5] = max((groups + 65534u) / 65535u, 1u);
     args[6] = 1u;
+    args[7] = 0u;
+    args[8] = 6u;
+    args[9] = n - min(counter[1], n);
+    args[10] = 0u;
+    args[11] = 0u;
 }
 
 @compute @workgroup_size(64, 1, 1)
 fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x + gid.y * 65535u * 64u;
-    if (i >= sample_count()) {
+    // Cached samples whose light stays this frame (§5.3) are skipped.
+    if (i >= sample_count() || list[i].light.a >= 0.5) {
         return;
     }
     let s = list[i];

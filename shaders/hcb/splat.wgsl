@@ -12,6 +12,8 @@
 @group(0) @binding(2) var<storage, read> samples: array<HcbSample>;
 @group(0) @binding(3) var g_position: texture_2d<f32>;
 @group(0) @binding(4) var g_normal: texture_2d<f32>;
+// the sample counter: word 1 is where the new samples start (§5.2; hp.level.x = 1)
+@group(0) @binding(5) var<storage, read> counter: array<u32>;
 
 struct VsOut {
     @builtin(position) clip: vec4<f32>,
@@ -19,8 +21,9 @@ struct VsOut {
 }
 
 @vertex
-fn vs_splat(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> VsOut {
+fn vs_splat(@builtin(vertex_index) v: u32, @builtin(instance_index) instance: u32) -> VsOut {
     var out: VsOut;
+    let i = instance + select(0u, counter[1], hp.level.x == 1u);
     out.index = i;
     let s = samples[i];
     let corners = array<vec2<f32>, 6>(

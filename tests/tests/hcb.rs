@@ -24,6 +24,8 @@ struct Case<'a> {
     nrm: &'a [[f32; 4]],
     levels: u32,
     frame: HcbFrame,
+    /// The cache's incomplete texels (§5.2): the base is then the supplementary G-buffer.
+    incomplete: Option<Vec<bool>>,
 }
 
 /// Runs the GPU HCB on a G-buffer; returns its levels, masks, sample list (sorted) and the
@@ -34,7 +36,38 @@ fn gpu_hcb(ctx: &GpuContext, c: &Case) -> (Vec<Level>, Vec<Vec<bool>>, Vec<Sampl
     let pass = HcbPass::new(ctx, w, h, c.levels);
     let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.hcb") });
     let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
-    pass.run(ctx, &mut enc, None, &view(&p), &view(&n), c.frame);
+    match &c.incomplete {
+        None => pass.run(ctx, &mut enc, None, &view(&p), &view(&n), c.frame, None),
+        Some(inc) => {
+            // The cached samples' splat: Σw 0 on the incomplete texels, 1 elsewhere.
+            let weights: Vec<[f32; 4]> = inc.iter().map(|&i| [0.0, 0.0, 0.0, if i { 0.0 } else { 1.0 }]).collect();
+            let ws = upload(ctx, "test.weight_sum", w, h, &weights);
+            let mark = |label| {
+                gi_render::passes::create_target(
+                    &ctx.device,
+                    label,
+                    w,
+                    h,
+                    wgpu::TextureFormat::R32Float,
+                    wgpu::TextureUsages::STORAGE_BINDING,
+                )
+            };
+            let (i, m, g) = (mark("test.incomplete"), mark("test.cache"), mark("test.group"));
+            let (wv, iv, mv, gv) = (view(&ws), view(&i), view(&m), view(&g));
+            let io = gi_render::passes::hcb::CacheViews {
+                weight_sum: &wv,
+                incomplete: &iv,
+                cache: &mv,
+                recompute_group: &gv,
+            };
+            pass.run(ctx, &mut enc, None, &view(&p), &view(&n), c.frame, Some(io));
+            ctx.queue.submit([enc.finish()]);
+            enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.hcb") });
+            let got = gi_render::buffers::read_texture(ctx, "hcb", &i, 0, 0).expect("read");
+            let want: Vec<f32> = inc.iter().zip(c.nrm).map(|(&i, n)| if i && n[3] > 0.5 { 1.0 } else { 0.0 }).collect();
+            assert_eq!(got.data.iter().map(|v| v[0]).collect::<Vec<_>>(), want, "hcb.incomplete");
+        }
+    }
     ctx.queue.submit([enc.finish()]);
     let read = |t: &wgpu::Texture| gi_render::buffers::read_texture(ctx, "hcb", t, 0, 0).expect("read");
     let mut out = Vec::new();
@@ -55,21 +88,22 @@ fn gpu_hcb(ctx: &GpuContext, c: &Case) -> (Vec<Level>, Vec<Vec<bool>>, Vec<Sampl
         out.push(Level { width: l.width, height: l.height, texels });
         masks.push(mm.data.iter().map(|m| m[0] > 0.5).collect());
     }
-    let count: Vec<u32> =
-        bytemuck::pod_collect_to_vec(&gi_render::buffers::read_storage(ctx, &pass.counter, 16).expect("count"));
+    let count: Vec<u32> = bytemuck::pod_collect_to_vec(
+        &gi_render::buffers::read_storage(ctx, &pass.counter, gi_render::passes::hcb::COUNTER_BYTES).expect("count"),
+    );
     let size = std::mem::size_of::<GpuHcbSample>() as u64;
     let list: Vec<GpuHcbSample> = bytemuck::pod_collect_to_vec(
         &gi_render::buffers::read_storage(ctx, &pass.list, size * count[0] as u64).expect("list"),
     );
     // Each listed sample carries its level texel's position, radius and normal.
     for s in &list {
-        let l = &out[s.texel[2] as usize];
+        let l = &out[s.level() as usize];
         let t = l.at(s.texel[0] as i64, s.texel[1] as i64).expect("the sample's texel");
         let got = (s.position.truncate(), s.position.w, s.normal.truncate(), s.normal.w);
         assert_eq!(got, (t.position, t.distance, t.normal, t.coherence), "{s:?}");
     }
     let mut samples: Vec<Sample> =
-        list.iter().map(|s| Sample { level: s.texel[2], x: s.texel[0], y: s.texel[1] }).collect();
+        list.iter().map(|s| Sample { level: s.level(), x: s.texel[0], y: s.texel[1] }).collect();
     samples.sort();
     let buffer = read(&pass.samples).data.iter().map(|v| v[0]).collect();
     (out, masks, samples, buffer)
@@ -79,7 +113,10 @@ fn gpu_hcb(ctx: &GpuContext, c: &Case) -> (Vec<Level>, Vec<Vec<bool>>, Vec<Sampl
 fn check(name: &str, c: Case) -> (Vec<Level>, Vec<Sample>) {
     let (w, h, f) = (c.w, c.h, c.frame);
     let ctx = gpu();
-    let base = hcb::base_level(c.pos, c.nrm, w, h, f.eye, f.pixel_scale);
+    let mut base = hcb::base_level(c.pos, c.nrm, w, h, f.eye, f.pixel_scale);
+    if let Some(inc) = &c.incomplete {
+        base = hcb::supplementary_base(base, inc);
+    }
     let cpu = hcb::build(base, c.levels, f.thresholds);
     let cpu_masks = hcb::masks(&cpu);
     let mut cpu_samples = hcb::samples(&cpu, &cpu_masks);
@@ -101,7 +138,7 @@ fn check(name: &str, c: Case) -> (Vec<Level>, Vec<Sample>) {
                 a.distance,
                 b.distance
             );
-            if b.coherence > 0.0 {
+            if b.coherence != 0.0 {
                 assert!(
                     (a.position - b.position).length() <= 1e-5 && (a.normal - b.normal).length() <= 1e-5,
                     "{name}: level {k} {at:?}"
@@ -120,11 +157,11 @@ fn check(name: &str, c: Case) -> (Vec<Level>, Vec<Sample>) {
     (cpu, cpu_samples)
 }
 
-const T: Thresholds = Thresholds { cos_theta_max: 0.9, cos_gamma_max: 0.3, d_max: 10.0 };
+const T: Thresholds = Thresholds { cos_theta_max: 0.9, cos_gamma_max: 0.3, d_max: 10.0, spread_incomplete: false };
 
 /// A synthetic case seen from the origin with thresholds `T`.
 fn case<'a>(w: u32, h: u32, pos: &'a [[f32; 4]], nrm: &'a [[f32; 4]], levels: u32) -> Case<'a> {
-    Case { w, h, pos, nrm, levels, frame: HcbFrame { thresholds: T, eye: EYE, pixel_scale: PIXEL_SCALE } }
+    Case { w, h, pos, nrm, levels, frame: HcbFrame::new(T, EYE, PIXEL_SCALE), incomplete: None }
 }
 
 /// A G-buffer of `w`×`h` from a function of the pixel: (position, view depth, normal), None
@@ -241,9 +278,15 @@ fn the_default_scene_at_128_matches_the_cpu() {
     let pos = r.readback("gbuffer.position").expect("position").data;
     let nrm = r.readback("gbuffer.normal").expect("normal").data;
     let pixel_scale = 2.0 * (r.camera.yfov * 0.5).tan() / 128.0;
-    let t = Thresholds { cos_theta_max: 20f32.to_radians().cos(), cos_gamma_max: 70f32.to_radians().cos(), d_max: 0.5 };
-    let frame = HcbFrame { thresholds: t, eye: r.camera.position, pixel_scale };
-    let (levels, samples) = check("default scene", Case { w: 128, h: 128, pos: &pos, nrm: &nrm, levels: 6, frame });
+    let t = Thresholds {
+        cos_theta_max: 20f32.to_radians().cos(),
+        cos_gamma_max: 70f32.to_radians().cos(),
+        d_max: 0.5,
+        spread_incomplete: false,
+    };
+    let frame = HcbFrame::new(t, r.camera.position, pixel_scale);
+    let (levels, samples) =
+        check("default scene", Case { w: 128, h: 128, pos: &pos, nrm: &nrm, levels: 6, frame, incomplete: None });
     let per_level: Vec<usize> =
         (0..levels.len()).map(|k| samples.iter().filter(|s| s.level == k as u32).count()).collect();
     println!(
@@ -252,6 +295,46 @@ fn the_default_scene_at_128_matches_the_cpu() {
         128 * 128
     );
     assert!(per_level[1..].iter().sum::<usize>() > 0, "samples above level 0: {per_level:?}");
+}
+
+/// §5.2 on the GPU against the CPU: the supplementary G-buffer of the default scene at 128²
+/// with a blob of incomplete texels (a disc, and a band along the sphere), built with both
+/// sign rules — Fig. 7c keeps new samples on the incomplete texels, Fig. 7d lets them out.
+#[test]
+fn the_supplementary_g_buffer_matches_the_cpu_in_both_variants() {
+    let mut r = default_renderer(128, 128);
+    r.render_frame();
+    let pos = r.readback("gbuffer.position").expect("position").data;
+    let nrm = r.readback("gbuffer.normal").expect("normal").data;
+    let pixel_scale = 2.0 * (r.camera.yfov * 0.5).tan() / 128.0;
+    let incomplete: Vec<bool> = (0..128 * 128)
+        .map(|i| {
+            let (x, y) = ((i % 128) as f32, (i / 128) as f32);
+            (x - 40.0).hypot(y - 70.0) < 14.0 || (90.0..100.0).contains(&x)
+        })
+        .collect();
+    let mut counts = Vec::new();
+    for spread in [false, true] {
+        let t = Thresholds {
+            cos_theta_max: 20f32.to_radians().cos(),
+            cos_gamma_max: 70f32.to_radians().cos(),
+            d_max: 0.5,
+            spread_incomplete: spread,
+        };
+        let frame = HcbFrame { incomplete_weight: 0.5, ..HcbFrame::new(t, r.camera.position, pixel_scale) };
+        let c = Case { w: 128, h: 128, pos: &pos, nrm: &nrm, levels: 6, frame, incomplete: Some(incomplete.clone()) };
+        let (_, samples) = check(if spread { "Fig. 7d" } else { "Fig. 7c" }, c);
+        assert!(!samples.is_empty());
+        let outside =
+            samples.iter().filter(|s| !incomplete[((s.y << s.level) * 128 + (s.x << s.level)) as usize]).count();
+        if spread {
+            assert!(outside > 0, "Fig. 7d places some samples beside the incomplete texels");
+        } else {
+            assert_eq!(outside, 0, "Fig. 7c places samples on incomplete texels only");
+        }
+        counts.push(samples.len());
+    }
+    println!("new samples on the supplementary G-buffer: Fig. 7c {}, Fig. 7d {}", counts[0], counts[1]);
 }
 
 /// A perspective camera at the origin looking down −z (60° vertical field of view) and the
@@ -310,11 +393,12 @@ fn gpu_splat(
     let list = buf("test.samples", bytemuck::cast_slice(samples), wgpu::BufferUsages::STORAGE);
     let args =
         buf("test.args", bytemuck::cast_slice(&[6u32, samples.len() as u32, 0, 0]), wgpu::BufferUsages::INDIRECT);
+    let counter = buf("test.counter", &[0u8; 32], wgpu::BufferUsages::STORAGE);
     let pass = HcbSplatPass::new(&ctx, gi_render::passes::bgl::uniform(0, wgpu::ShaderStages::VERTEX), w, h);
     let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.splat") });
     let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
     let white = upload(&ctx, "test.albedo", w, h, &vec![[1.0; 4]; (w * h) as usize]);
-    pass.run(&ctx, &mut enc, None, &cam, (&view(&p), &view(&n), &view(&white)), &list, &args, frame);
+    pass.run(&ctx, &mut enc, None, &cam, (&view(&p), &view(&n), &view(&white)), (&list, &counter), &args, frame);
     ctx.queue.submit([enc.finish()]);
     let read = |t: &wgpu::Texture| gi_render::buffers::read_texture(&ctx, "hcb", t, 0, 0).expect("read").data;
     let uncovered: Vec<u32> =
@@ -351,9 +435,13 @@ fn splat_samples(w: u32, pos: &[[f32; 4]], nrm: &[[f32; 4]], light: impl Fn(usiz
 fn splat_weights_on_the_gpu_equal_eq_8_and_10_on_the_cpu() {
     let (w, h) = (48, 36);
     let (camera, pos, nrm, pixel_scale) = splat_scene(w, h);
-    let t =
-        Thresholds { cos_theta_max: 15f32.to_radians().cos(), cos_gamma_max: 80f32.to_radians().cos(), d_max: 10.0 };
-    let frame = HcbFrame { thresholds: t, eye: Vec3::ZERO, pixel_scale };
+    let t = Thresholds {
+        cos_theta_max: 15f32.to_radians().cos(),
+        cos_gamma_max: 80f32.to_radians().cos(),
+        d_max: 10.0,
+        spread_incomplete: false,
+    };
+    let frame = HcbFrame::new(t, Vec3::ZERO, pixel_scale);
     let samples = splat_samples(w, &pos, &nrm, |k| Vec3::new(1.0 + k as f32, 0.5, 2.0 - 0.2 * k as f32));
     assert!(samples.len() >= 6, "the picked pixels are covered");
     let (sum, light, uncovered) = gpu_splat(w, h, &pos, &nrm, &camera, &samples, frame);
@@ -407,8 +495,8 @@ fn splat_weights_on_the_gpu_equal_eq_8_and_10_on_the_cpu() {
 fn splatting_a_constant_light_gives_that_constant_wherever_a_sample_reaches() {
     let (w, h) = (48, 36);
     let (camera, pos, nrm, pixel_scale) = splat_scene(w, h);
-    let t = Thresholds { cos_theta_max: 0.8, cos_gamma_max: 0.3, d_max: 10.0 };
-    let frame = HcbFrame { thresholds: t, eye: Vec3::ZERO, pixel_scale };
+    let t = Thresholds { cos_theta_max: 0.8, cos_gamma_max: 0.3, d_max: 10.0, spread_incomplete: false };
+    let frame = HcbFrame::new(t, Vec3::ZERO, pixel_scale);
     let e = Vec3::new(0.7, 0.25, 1.5);
     let samples = splat_samples(w, &pos, &nrm, |_| e);
     let (sum, light, _) = gpu_splat(w, h, &pos, &nrm, &camera, &samples, frame);

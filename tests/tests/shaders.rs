@@ -110,10 +110,12 @@ fn uniform_sizes_match_wgsl() {
         assert_eq!(struct_size(&m, "IsmPoint") as usize, std::mem::size_of::<ism::GpuPoint>(), "{file}");
         assert_eq!(struct_size(&m, "Vpl") as usize, std::mem::size_of::<vpl::GpuVpl>(), "{file}");
     }
-    for file in ["hcb/samples.wgsl", "hcb/splat.wgsl"] {
+    for file in ["hcb/samples.wgsl", "hcb/splat.wgsl", "hcb/cache.wgsl", "hcb/cache_removal.wgsl"] {
         let m = parse(file);
         let want = std::mem::size_of::<gi_render::passes::hcb::GpuHcbSample>();
         assert_eq!(struct_size(&m, "HcbSample") as usize, want, "{file}");
+        let want = std::mem::size_of::<gi_render::passes::hcb_cache::CacheParams>();
+        assert_eq!(struct_size(&m, "CacheParams") as usize, want, "{file}");
     }
     for file in ["hcb/base.wgsl", "hcb/build.wgsl", "hcb/samples.wgsl", "hcb/splat.wgsl"] {
         let m = parse(file);

@@ -45,6 +45,11 @@ pub struct Thresholds {
     pub cos_gamma_max: f32,
     /// d_max in scene units (distance coherence, Eq. 1).
     pub d_max: f32,
+    /// The caching HCB's sign rule (§5.2), where n^w carries +1 for incomplete texels and −1
+    /// for complete ones: false keeps the centre texel's sign (Fig. 7c: new samples only on
+    /// incomplete texels), true makes a block with any positive texel positive (Fig. 7d: new
+    /// samples may lie outside them). Without signs (the per-frame HCB) both are the same.
+    pub spread_incomplete: bool,
 }
 
 /// One level: `width` × `height` texels, row-major.
@@ -109,23 +114,26 @@ pub fn pose_coherent(a: Vec3, n_a: Vec3, b: Vec3, n_b: Vec3, cos_gamma_max: f32)
     !backward || ab.dot(n_a).abs() <= cos_gamma_max
 }
 
-/// Algorithm 1 with §3.5 for texel (x, y) of the level above `prev`.
+/// Algorithm 1 with §3.5 for texel (x, y) of the level above `prev`, with §5.2's
+/// modification: the normal coherence uses |n^w| and the result keeps a sign (the centre's,
+/// or positive when any texel of the block is, see [`Thresholds::spread_incomplete`]).
 pub fn build_texel(prev: &Level, x: u32, y: u32, t: Thresholds) -> HcbTexel {
     let (cx, cy) = (2 * x as i64, 2 * y as i64);
     let Some(&a) = prev.at(cx, cy) else { return HcbTexel::BACKGROUND };
     let mut out = HcbTexel { coherence: 0.0, ..a };
-    if a.coherence <= 0.0 {
+    if a.coherence == 0.0 {
         return out;
     }
-    let (mut coherence, mut distance, mut all) = (a.coherence, a.distance, true);
+    let (mut coherence, mut distance, mut all) = (a.coherence.abs(), a.distance, true);
+    let mut positive = a.coherence > 0.0;
     for (dx, dy) in (-1..=1).flat_map(|j| (-1..=1).map(move |i| (i, j))).filter(|&d| d != (0, 0)) {
         let Some(c) = prev.at(cx + dx, cy + dy) else {
             all = false;
             break;
         };
-        let temp = c.coherence * a.normal.dot(c.normal);
+        let temp = c.coherence.abs() * a.normal.dot(c.normal);
         let reach = (c.position - a.position).length() + c.distance;
-        let coherent = c.coherence > 0.0
+        let coherent = c.coherence != 0.0
             && temp >= t.cos_theta_max
             && pose_coherent(a.position, a.normal, c.position, c.normal, t.cos_gamma_max)
             && reach <= t.d_max;
@@ -135,9 +143,10 @@ pub fn build_texel(prev: &Level, x: u32, y: u32, t: Thresholds) -> HcbTexel {
         }
         coherence = coherence.min(temp);
         distance = distance.max(reach);
+        positive |= t.spread_incomplete && c.coherence > 0.0;
     }
     if all {
-        out.coherence = coherence;
+        out.coherence = if positive { coherence } else { -coherence };
         out.distance = distance;
     }
     out
@@ -162,7 +171,7 @@ pub fn build(base: Level, levels: u32, t: Thresholds) -> Vec<Level> {
 }
 
 /// The mask buffer of §3.6: for every level below the top, whether each texel lies inside
-/// the 3×3 splat of a coherent texel of the level above (the top level's mask is all
+/// the 3×3 splat of a coherent texel (n^w > 0: with §5.2's signs, a positive one) of the level above (the top level's mask is all
 /// outside). Every coherent texel splats, so the traversal needs no order.
 pub fn masks(levels: &[Level]) -> Vec<Vec<bool>> {
     let mut out: Vec<Vec<bool>> = levels.iter().map(|l| vec![false; l.texels.len()]).collect();
@@ -208,6 +217,83 @@ pub fn samples(levels: &[Level], masks: &[Vec<bool>]) -> Vec<Sample> {
     out
 }
 
+/// The supplementary G-buffer of §5.2 as the HCB's base: every texel of `base` with n^w =
+/// +1 where `incomplete` (the splatted weight below the threshold) and −1 elsewhere; the
+/// background stays 0. Built with [`build`], only positive groups become samples.
+pub fn supplementary_base(mut base: Level, incomplete: &[bool]) -> Level {
+    for (t, &inc) in base.texels.iter_mut().zip(incomplete) {
+        if t.coherence != 0.0 {
+            t.coherence = if inc { 1.0 } else { -1.0 };
+        }
+    }
+    base
+}
+
+/// §5.3's 4×4 index pattern (Fig. 8a): the recompute phase of a new sample at texel (x, y)
+/// of its level is `pattern[y mod 4][x mod 4]`.
+///
+/// Departures, both measured on the default scene: (1) the paper tiles the sample buffer at
+/// G-buffer resolution, where every sample above level 1 (at pixels that are multiples of 4)
+/// would fall on one cell, so we tile each level's texels; (2) a randomly shuffled pattern
+/// let the lines of level-0 samples along borders and silhouettes fall on few phases (groups
+/// of 838 to 1441 samples at 256²), so the 16 cells hold 4·L1 + L2 for two orthogonal Latin
+/// squares over GF(4) — L1 = x ⊕ y, L2 = x ⊕ 2y — with the symbols scrambled by a fixed
+/// random relabelling: every row, column and diagonal of the tile then holds each of the
+/// four phases of period 4 once, and the values modulo 2, 8 and 16 stay balanced too.
+pub fn recompute_pattern(period: u32) -> [[u32; 4]; 4] {
+    // Multiplication by 2 in GF(4) = {0, 1, a, a + 1} with a² = a + 1.
+    const TIMES_2: [u32; 4] = [0, 2, 3, 1];
+    // Fixed random relabellings of the two squares' symbols.
+    const RELABEL_1: [u32; 4] = [2, 0, 3, 1];
+    const RELABEL_2: [u32; 4] = [1, 3, 0, 2];
+    let p = period.max(1);
+    std::array::from_fn(|y| {
+        std::array::from_fn(|x| {
+            let (x, y) = (x as u32, y as u32);
+            let (l1, l2) = (RELABEL_1[(x ^ y) as usize], RELABEL_2[(x ^ TIMES_2[y as usize]) as usize]);
+            (4 * l1 + l2) % p
+        })
+    })
+}
+
+/// §5.3's counter: one frame later a sample's counter `c` is c + 1, and when it reaches the
+/// period the light is recomputed and the counter restarts at 0. Returns (counter, recompute).
+pub fn advance_counter(c: u32, period: u32) -> (u32, bool) {
+    let next = c + 1;
+    if next >= period.max(1) { (0, true) } else { (next, false) }
+}
+
+/// What §5.1's "updating cache" makes of a cached sample in the current view.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CacheStatus {
+    /// Outside the view (or behind the eye): dropped.
+    Dropped,
+    /// The G-buffer there agrees within the thresholds: reused.
+    Valid,
+    /// The G-buffer there differs (another surface, the background): removed, and the
+    /// samples in the quad around it with it.
+    Invalid,
+}
+
+/// §5.1: a cached sample at `a` (normal `n_a`) is invalid when the G-buffer point `g` (normal
+/// `n_g`, `covered` false for the background) it projects to lies farther than `max_distance`
+/// or its normal diverges by more than acos(`cos_max_angle`).
+pub fn validate(
+    a: Vec3,
+    n_a: Vec3,
+    g: Vec3,
+    n_g: Vec3,
+    covered: bool,
+    max_distance: f32,
+    cos_max_angle: f32,
+) -> CacheStatus {
+    if covered && (g - a).length() <= max_distance && n_a.dot(n_g) >= cos_max_angle {
+        CacheStatus::Valid
+    } else {
+        CacheStatus::Invalid
+    }
+}
+
 /// The coherence error of point b (normal n_b) toward sample a (§4.2, Eq. 8): the largest
 /// of the distance error ‖a − b‖ / a^w, the normal error √(1 − n_a·n_b) / √(1 − cos θ_max)
 /// and the pose error ρ √|âb·n_a| / √cos γ_max, with ρ = 1 when the two do not face each
@@ -251,7 +337,8 @@ mod tests {
         Level { width: w, height: h, texels }
     }
 
-    const LOOSE: Thresholds = Thresholds { cos_theta_max: 0.9, cos_gamma_max: 0.5, d_max: 1e9 };
+    const LOOSE: Thresholds =
+        Thresholds { cos_theta_max: 0.9, cos_gamma_max: 0.5, d_max: 1e9, spread_incomplete: false };
 
     /// Whether texel (x, y) of level k of a w×w image has every texel it stands for inside
     /// the image (its block, its children's blocks, … down to level 0).
@@ -330,5 +417,99 @@ mod tests {
             assert!(smp.x == 0 || smp.y == 0, "{smp:?}");
         }
         assert!(!s.contains(&Sample { level: 0, x: 0, y: 0 }), "the background is no sample");
+    }
+
+    #[test]
+    fn the_supplementary_hcb_samples_only_groups_with_incomplete_texels_and_fig_7d_spreads_them() {
+        // A 17×17 plane whose pixels (4…6, 4…6) are incomplete.
+        let incomplete: Vec<bool> =
+            (0..17 * 17).map(|i| (4..=6).contains(&(i % 17)) && (4..=6).contains(&(i / 17))).collect();
+        let base = supplementary_base(plane(17, 17, 0.1), &incomplete);
+        assert_eq!(base.at(5, 5).expect("t").coherence, 1.0);
+        assert_eq!(base.at(0, 0).expect("t").coherence, -1.0);
+        for spread in [false, true] {
+            let t = Thresholds { spread_incomplete: spread, ..LOOSE };
+            let levels = build(base.clone(), 4, t);
+            // Coherence magnitudes are those of the unsigned HCB.
+            let plain = build(plane(17, 17, 0.1), 4, t);
+            for (l, p) in levels.iter().zip(&plain) {
+                for (a, b) in l.texels.iter().zip(&p.texels) {
+                    assert_eq!(a.coherence.abs(), b.coherence, "spread {spread}");
+                    assert_eq!(a.distance, b.distance);
+                }
+            }
+            let s = samples(&levels, &masks(&levels));
+            assert!(!s.is_empty(), "the incomplete texels get samples (spread {spread})");
+            // Every incomplete pixel lies in the 3^k-footprint of a sample.
+            for i in (0..17 * 17).filter(|&i| incomplete[i]) {
+                let (x, y) = ((i % 17) as i64, (i / 17) as i64);
+                let covered = s.iter().any(|smp| {
+                    let r = (3i64.pow(smp.level) - 1) / 2;
+                    let (sx, sy) = ((smp.x as i64) << smp.level, (smp.y as i64) << smp.level);
+                    (x - sx).abs() <= r && (y - sy).abs() <= r
+                });
+                assert!(covered, "pixel ({x}, {y}) spread {spread}");
+            }
+            let outside = s.iter().any(|smp| {
+                let (sx, sy) = (smp.x << smp.level, smp.y << smp.level);
+                !(4..=6).contains(&sx) || !(4..=6).contains(&sy)
+            });
+            if spread {
+                assert!(outside, "Fig. 7d: a sample outside the incomplete texels: {s:?}");
+            } else {
+                assert!(!outside, "Fig. 7c: samples only on incomplete texels: {s:?}");
+            }
+        }
+        // A fully complete base has no samples at all.
+        let none = supplementary_base(plane(17, 17, 0.1), &vec![false; 17 * 17]);
+        let levels = build(none, 4, LOOSE);
+        assert!(samples(&levels, &masks(&levels)).is_empty());
+    }
+
+    #[test]
+    fn the_recompute_pattern_splits_a_tile_evenly_and_the_counter_fires_once_per_period() {
+        for period in [1u32, 2, 4, 8, 16] {
+            let p = recompute_pattern(period);
+            let mut counts = vec![0u32; period as usize];
+            for row in p {
+                for c in row {
+                    counts[c as usize] += 1;
+                }
+            }
+            assert!(counts.iter().all(|&c| c == 16 / period), "period {period}: {counts:?}");
+            // Each counter fires exactly once in `period` frames.
+            for start in 0..period {
+                let (mut c, mut fired) = (start, 0);
+                for _ in 0..period {
+                    let (next, recompute) = advance_counter(c, period);
+                    fired += recompute as u32;
+                    c = next;
+                }
+                assert_eq!((fired, c), (1, start), "period {period} start {start}");
+            }
+        }
+        // Period 4: each row, column and diagonal holds each phase once.
+        let p = recompute_pattern(4);
+        let all = |cells: [u32; 4]| {
+            let mut c = cells;
+            c.sort();
+            c == [0, 1, 2, 3]
+        };
+        for i in 0..4 {
+            assert!(all(p[i]), "row {i}: {p:?}");
+            assert!(all(std::array::from_fn(|y| p[y][i])), "column {i}: {p:?}");
+        }
+        assert!(all(std::array::from_fn(|i| p[i][i])), "diagonal: {p:?}");
+        assert!(all(std::array::from_fn(|i| p[i][3 - i])), "anti-diagonal: {p:?}");
+    }
+
+    #[test]
+    fn a_cached_sample_is_invalid_when_the_g_buffer_moved_or_turned() {
+        let (a, n) = (Vec3::ZERO, Vec3::Z);
+        let cos = 20f32.to_radians().cos();
+        assert_eq!(validate(a, n, Vec3::new(0.01, 0.0, 0.0), n, true, 0.05, cos), CacheStatus::Valid);
+        assert_eq!(validate(a, n, Vec3::new(0.0, 0.0, 0.3), n, true, 0.05, cos), CacheStatus::Invalid);
+        assert_eq!(validate(a, n, a, Vec3::X, true, 0.05, cos), CacheStatus::Invalid);
+        assert_eq!(validate(a, n, a, n, false, 0.05, cos), CacheStatus::Invalid);
     }
 }

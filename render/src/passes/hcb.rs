@@ -8,14 +8,15 @@
 //! Not yet part of the frame: gathering at the samples, the coherence-weighted splatting and
 //! the cache (issue #6) come next; this pass is built and tested on its own.
 
+use bytemuck::Zeroable;
 use glam::Vec4;
 
 use super::bgl;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::cpu::hcb::Thresholds;
 use crate::gpu::GpuContext;
-use crate::settings_group;
 use crate::timing::Slot;
+use crate::{settings_enum, settings_group};
 
 settings_group! {
     /// The hierarchical coherence buffer (stages 5–6 of the HCB technique; Nguyen et al. 000
@@ -34,7 +35,46 @@ settings_group! {
         /// HCB levels including the G-buffer's (1: every pixel is a sample, the per-pixel gather).
         levels: u32 = 7,
         unit "levels", symbol "", range 1..=12, cost "one pass per level; more levels, larger groups", history false;
+        /// Cache the samples from frame to frame (§5): reuse the valid ones, add samples only
+        /// where the cached ones leave texels incomplete, recompute a share per frame.
+        cache: bool = false,
+        unit "", symbol "", range 0..=1, cost "saves the gather at every sample that is reused", history false;
+        /// A cached sample is invalid when the G-buffer point it lands on is farther than
+        /// this (§5.1's distance threshold).
+        cache_distance_m: f32 = 0.05,
+        unit "m", symbol "", range 0.0001..=10.0, cost "larger: fewer samples renewed, light may stick to moved surfaces", history false;
+        /// A cached sample is invalid when the G-buffer normal it lands on diverges by more
+        /// than this (§5.1's normal threshold).
+        cache_normal_deg: f32 = 25.0,
+        unit "°", symbol "", range 1.0..=90.0, cost "larger: fewer samples renewed", history false;
+        /// Side of the quad around each invalid sample inside which the valid (surplus)
+        /// samples are removed too (§5.1, Fig. 6).
+        surplus_quad_px: u32 = 24,
+        unit "px", symbol "", range 1..=256, cost "larger: more samples renewed, fewer surplus ones kept", history false;
+        /// A texel whose splatted weight Σw (Eq. 10) is below this is incomplete and gets
+        /// new samples (§5.2).
+        incomplete_weight: f32 = 0.1,
+        unit "Σw", symbol "", range 0.0..=1.0, cost "larger: more new samples per frame", history false;
+        /// Where new samples may lie (§5.2): on the incomplete texels only (Fig. 7c) or also
+        /// around them (Fig. 7d).
+        new_samples: NewSamples = NewSamples::AroundIncomplete,
+        unit "", symbol "", range 0..=1, cost "around: a few larger samples, fewer seams", history false;
+        /// Frames between two recomputations of a cached sample's light (§5.3: 4, a quarter
+        /// of the samples per frame, by the randomized 4×4 index pattern of Fig. 8).
+        recompute_period: u32 = 4,
+        unit "frames", symbol "", range 1..=16, cost "smaller: more samples gathered per frame, light follows changes sooner", history false;
     }
+}
+
+settings_enum! {
+    /// Where the caching HCB places new samples (Nguyen §5.2).
+    pub enum NewSamples {
+        /// Only on incomplete texels (Fig. 7c): a block keeps its centre texel's sign.
+        OnIncomplete = "on incomplete texels (Fig. 7c)",
+        /// Also around them (Fig. 7d): a block with any incomplete texel is incomplete.
+        AroundIncomplete = "around incomplete texels (Fig. 7d)",
+    }
+    default AroundIncomplete
 }
 
 impl HcbSettings {
@@ -43,6 +83,7 @@ impl HcbSettings {
             cos_theta_max: self.theta_max_deg.to_radians().cos(),
             cos_gamma_max: self.gamma_max_deg.to_radians().cos(),
             d_max: self.d_max_m,
+            spread_incomplete: self.new_samples == NewSamples::AroundIncomplete,
         }
     }
 }
@@ -55,8 +96,14 @@ pub struct HcbParams {
     pub thresholds: Vec4,
     /// Eye position.
     pub eye: Vec4,
-    /// 1 for the top level, level index.
+    /// 1 for the top level, level index, 1 for the supplementary G-buffer of the cache
+    /// (§5.2: the base gets ±1 from the splatted weight), 1 to spread the sign (Fig. 7d).
     pub level: [u32; 4],
+    /// x: the incomplete weight threshold (§5.2), y: the recompute period (§5.3); z, w: 0.
+    pub cache: Vec4,
+    /// §5.3's 4×4 index pattern: the recompute phase of a new sample at texel (x, y) of its level
+    /// is `pattern[y mod 4][x mod 4]`.
+    pub pattern: [[u32; 4]; 4],
 }
 
 /// One sample of the compact list; WGSL twin: `HcbSample` in `shaders/hcb/common.wgsl`.
@@ -67,10 +114,27 @@ pub struct GpuHcbSample {
     pub position: Vec4,
     /// Normal, n^w.
     pub normal: Vec4,
-    /// Texel x, y at its level, the level, 0.
+    /// Texel x, y at its level; bits 0–7 the level, 8–15 the recompute counter (§5.3), 16–23
+    /// the cache status during its update; the G-buffer pixel x | y << 16.
     pub texel: [u32; 4],
-    /// Gathered light (rgb), 1 once gathered.
+    /// Gathered light (rgb), 1 once gathered (0: to be gathered this frame).
     pub light: Vec4,
+}
+
+impl GpuHcbSample {
+    pub fn level(&self) -> u32 {
+        self.texel[2] & 0xff
+    }
+
+    /// §5.3's counter.
+    pub fn counter(&self) -> u32 {
+        (self.texel[2] >> 8) & 0xff
+    }
+
+    /// The G-buffer pixel it stands at (for a cached sample, where it was reprojected).
+    pub fn pixel(&self) -> [u32; 2] {
+        [self.texel[3] & 0xffff, self.texel[3] >> 16]
+    }
 }
 
 const STRIDE: u64 = 256;
@@ -94,6 +158,38 @@ pub struct HcbFrame {
     pub eye: glam::Vec3,
     /// 2 tan(fov_y / 2) / height.
     pub pixel_scale: f32,
+    /// §5.3's index pattern (the recompute phase of a new sample by its level texel).
+    pub pattern: [[u32; 4]; 4],
+    /// §5.2's incomplete weight threshold.
+    pub incomplete_weight: f32,
+}
+
+impl HcbFrame {
+    /// A frame with §5.3's default period and no incomplete threshold (the per-frame HCB).
+    pub fn new(thresholds: Thresholds, eye: glam::Vec3, pixel_scale: f32) -> Self {
+        Self { thresholds, eye, pixel_scale, pattern: crate::cpu::hcb::recompute_pattern(4), incomplete_weight: 0.0 }
+    }
+
+    fn params(&self, level: [u32; 4]) -> HcbParams {
+        let t = self.thresholds;
+        HcbParams {
+            thresholds: Vec4::new(t.cos_theta_max, t.cos_gamma_max, t.d_max, self.pixel_scale),
+            eye: self.eye.extend(1.0),
+            level,
+            cache: Vec4::new(self.incomplete_weight, 0.0, 0.0, 0.0),
+            pattern: self.pattern,
+        }
+    }
+}
+
+/// The cache's textures the HCB build writes (§5.2): with them, level 0 is the supplementary
+/// G-buffer (n^w = ±1 from `weight_sum`'s Σw), `incomplete` marks the incomplete texels and
+/// new samples are marked in `cache` (2) and `recompute_group` (phase + 1).
+pub struct CacheViews<'a> {
+    pub weight_sum: &'a wgpu::TextureView,
+    pub incomplete: &'a wgpu::TextureView,
+    pub cache: &'a wgpu::TextureView,
+    pub recompute_group: &'a wgpu::TextureView,
 }
 
 pub struct HcbPass {
@@ -115,9 +211,16 @@ pub struct HcbPass {
     params: wgpu::Buffer,
     dummy_storage: wgpu::Texture,
     dummy_sampled: wgpu::Texture,
+    /// Stand-ins for the cache's textures without the cache (one each: two writable bindings
+    /// of one texture in a dispatch would conflict).
+    dummy_cache: [wgpu::Texture; 3],
     width: u32,
     height: u32,
 }
+
+/// Bytes of the sample counter: total, cached (reused), recomputed, invalid, surplus,
+/// dropped (outside the view), 2 spare — see [`CacheCounts`].
+pub const COUNTER_BYTES: u64 = 32;
 
 /// Sizes of levels 0 … `levels` − 1 of a `width` × `height` G-buffer (each ⌈half⌉ of the
 /// one below).
@@ -144,6 +247,8 @@ impl HcbPass {
                 bgl::texture(2, cs, false),
                 bgl::storage_texture(3, rgba),
                 bgl::storage_texture(4, rgba),
+                bgl::texture(5, cs, false),
+                bgl::storage_texture(6, r32),
             ],
         });
         let sample_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -157,6 +262,8 @@ impl HcbPass {
                 bgl::storage(5, cs, false),
                 bgl::texture(6, cs, false),
                 bgl::storage(7, cs, false),
+                bgl::storage_texture(8, r32),
+                bgl::storage_texture(9, r32),
             ],
         });
         let m_base = crate::shaders::create_module(device, "hcb/base.wgsl");
@@ -172,11 +279,13 @@ impl HcbPass {
         let storage = wgpu::TextureUsages::STORAGE_BINDING;
         let dummy_storage = super::create_target(device, "hcb.dummy_mask_out", 1, 1, r32, storage);
         let dummy_sampled = super::create_target(device, "hcb.dummy_mask_in", 1, 1, r32, storage);
+        let dummy_cache = ["hcb.dummy_incomplete", "hcb.dummy_cache", "hcb.dummy_recompute_group"]
+            .map(|label| super::create_target(device, label, 1, 1, r32, storage));
         let (levels_v, samples, list, list_capacity) = Self::targets(device, width, height, levels);
         let counter = super::buffer(
             device,
             "hcb.sample_count",
-            16,
+            COUNTER_BYTES,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
         );
         Self {
@@ -195,6 +304,7 @@ impl HcbPass {
             params,
             dummy_storage,
             dummy_sampled,
+            dummy_cache,
             width,
             height,
         }
@@ -300,7 +410,60 @@ impl HcbPass {
         );
     }
 
+    /// Clears `hcb.samples` and the cache's `recompute_group` before the cache pass marks the
+    /// reused samples (§5.1) and [`Self::run`] the new ones.
+    pub fn clear_marks(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        recompute_group: &wgpu::TextureView,
+    ) {
+        let slot = 2 * MAX_LEVELS as u64;
+        let mut p = HcbParams::zeroed();
+        p.level[2] = 1;
+        ctx.queue.write_buffer(&self.params, slot * STRIDE, bytemuck::bytes_of(&p));
+        let view = |t: &wgpu::Texture| super::view(t, "hcb.view");
+        let (samples, mask_out, mask_in, level) =
+            (view(&self.samples), view(&self.dummy_storage), view(&self.dummy_sampled), view(&self.levels[0].normal));
+        let dummies = self.dummy_cache.each_ref().map(view);
+        let tv = wgpu::BindingResource::TextureView;
+        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("hcb.samples.clear"),
+            layout: &self.sample_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &self.params,
+                        offset: 0,
+                        size: std::num::NonZeroU64::new(std::mem::size_of::<HcbParams>() as u64),
+                    }),
+                },
+                wgpu::BindGroupEntry { binding: 1, resource: tv(&level) },
+                wgpu::BindGroupEntry { binding: 2, resource: tv(&mask_out) },
+                wgpu::BindGroupEntry { binding: 3, resource: tv(&mask_in) },
+                wgpu::BindGroupEntry { binding: 4, resource: tv(&samples) },
+                wgpu::BindGroupEntry { binding: 5, resource: self.counter.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 6, resource: tv(&mask_in) },
+                wgpu::BindGroupEntry { binding: 7, resource: self.list.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 8, resource: tv(&dummies[1]) },
+                wgpu::BindGroupEntry { binding: 9, resource: tv(recompute_group) },
+            ],
+        });
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("hcb.samples.clear"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.clear_pipeline);
+        pass.set_bind_group(0, &group, &[(slot * STRIDE) as u32]);
+        pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
+    }
+
     /// Builds every level from the G-buffer's position and normal, the masks and the samples.
+    /// Without `cache` the sample counter and `hcb.samples` start empty; with it (§5.2) the
+    /// base is the supplementary G-buffer and the new samples are appended to the cached
+    /// ones the cache pass put in the list (and `hcb.samples`).
+    #[allow(clippy::too_many_arguments)]
     pub fn run(
         &self,
         ctx: &GpuContext,
@@ -309,16 +472,14 @@ impl HcbPass {
         g_position: &wgpu::TextureView,
         g_normal: &wgpu::TextureView,
         f: HcbFrame,
+        cache: Option<CacheViews<'_>>,
     ) {
         let n = self.levels.len() as u32;
-        let t = f.thresholds;
-        let params: Vec<HcbParams> = (0..n)
-            .map(|k| HcbParams {
-                thresholds: Vec4::new(t.cos_theta_max, t.cos_gamma_max, t.d_max, f.pixel_scale),
-                eye: f.eye.extend(1.0),
-                level: [(k + 1 == n) as u32, k, 0, 0],
-            })
-            .collect();
+        let cached = cache.is_some() as u32;
+        let spread = f.thresholds.spread_incomplete as u32;
+        let mut params: Vec<HcbParams> = (0..n).map(|k| f.params([(k + 1 == n) as u32, k, cached, spread])).collect();
+        // The clear of hcb.samples (and the recompute groups) uses the last slot.
+        params.push(f.params([0, 0, cached, spread]));
         ctx.queue.write_buffer(&self.params, 0, &super::strided_bytes(STRIDE, params.len(), &params));
         let uniform = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
             buffer: &self.params,
@@ -329,7 +490,19 @@ impl HcbPass {
         fn tv(v: &wgpu::TextureView) -> wgpu::BindingResource<'_> {
             wgpu::BindingResource::TextureView(v)
         }
-        let io_group = |a: &wgpu::TextureView, b: &wgpu::TextureView, c: &wgpu::TextureView, d: &wgpu::TextureView| {
+        let (samples_view, dummy_out, dummy_in) =
+            (view(&self.samples), view(&self.dummy_storage), view(&self.dummy_sampled));
+        let dummies = self.dummy_cache.each_ref().map(view);
+        let (weight_sum, incomplete, cache_view, group_view) = match &cache {
+            Some(c) => (c.weight_sum, c.incomplete, c.cache, c.recompute_group),
+            None => (&dummy_in, &dummies[0], &dummies[1], &dummies[2]),
+        };
+        let io_group = |a: &wgpu::TextureView,
+                        b: &wgpu::TextureView,
+                        c: &wgpu::TextureView,
+                        d: &wgpu::TextureView,
+                        weights: &wgpu::TextureView,
+                        marks: &wgpu::TextureView| {
             ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("hcb.level.inputs"),
                 layout: &self.io_layout,
@@ -339,17 +512,24 @@ impl HcbPass {
                     wgpu::BindGroupEntry { binding: 2, resource: tv(b) },
                     wgpu::BindGroupEntry { binding: 3, resource: tv(c) },
                     wgpu::BindGroupEntry { binding: 4, resource: tv(d) },
+                    wgpu::BindGroupEntry { binding: 5, resource: tv(weights) },
+                    wgpu::BindGroupEntry { binding: 6, resource: tv(marks) },
                 ],
             })
         };
         let views: Vec<(wgpu::TextureView, wgpu::TextureView, wgpu::TextureView)> =
             self.levels.iter().map(|l| (view(&l.position), view(&l.normal), view(&l.mask))).collect();
-        let mut io_groups = vec![io_group(g_position, g_normal, &views[0].0, &views[0].1)];
+        let mut io_groups = vec![io_group(g_position, g_normal, &views[0].0, &views[0].1, weight_sum, incomplete)];
         for k in 1..n as usize {
-            io_groups.push(io_group(&views[k - 1].0, &views[k - 1].1, &views[k].0, &views[k].1));
+            io_groups.push(io_group(
+                &views[k - 1].0,
+                &views[k - 1].1,
+                &views[k].0,
+                &views[k].1,
+                &dummy_in,
+                &dummies[0],
+            ));
         }
-        let (samples_view, dummy_out, dummy_in) =
-            (view(&self.samples), view(&self.dummy_storage), view(&self.dummy_sampled));
         let sample_group = |position: &wgpu::TextureView,
                             normal: &wgpu::TextureView,
                             mask_out: &wgpu::TextureView,
@@ -366,6 +546,8 @@ impl HcbPass {
                     wgpu::BindGroupEntry { binding: 5, resource: self.counter.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 6, resource: tv(position) },
                     wgpu::BindGroupEntry { binding: 7, resource: self.list.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 8, resource: tv(cache_view) },
+                    wgpu::BindGroupEntry { binding: 9, resource: tv(group_view) },
                 ],
             })
         };
@@ -378,7 +560,9 @@ impl HcbPass {
                 sample_group(&views[k].0, &views[k].1, &dummy_out, mask_in)
             })
             .collect();
-        encoder.clear_buffer(&self.counter, 0, None);
+        if cache.is_none() {
+            encoder.clear_buffer(&self.counter, 0, None);
+        }
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("hcb"),
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
@@ -397,10 +581,12 @@ impl HcbPass {
             let (gx, gy) = groups(self.levels[k - 1].width, self.levels[k - 1].height);
             pass.dispatch_workgroups(gx, gy, 1);
         }
-        pass.set_pipeline(&self.clear_pipeline);
-        pass.set_bind_group(0, &level_groups[0], &offset(0));
-        let (gx, gy) = groups(self.width, self.height);
-        pass.dispatch_workgroups(gx, gy, 1);
+        if cache.is_none() {
+            pass.set_pipeline(&self.clear_pipeline);
+            pass.set_bind_group(0, &level_groups[0], &offset(n as usize));
+            let (gx, gy) = groups(self.width, self.height);
+            pass.dispatch_workgroups(gx, gy, 1);
+        }
         pass.set_pipeline(&self.samples_pipeline);
         for (k, l) in self.levels.iter().enumerate() {
             pass.set_bind_group(0, &level_groups[k], &offset(k));
@@ -425,7 +611,8 @@ pub struct HcbSplatPass {
     normalize_layout: wgpu::BindGroupLayout,
     splat_pipeline: wgpu::RenderPipeline,
     normalize_pipeline: wgpu::ComputePipeline,
-    params: wgpu::Buffer,
+    /// The uniforms of the splat of every sample and of the new samples only (§5.2).
+    params: [wgpu::Buffer; 2],
     width: u32,
     height: u32,
 }
@@ -447,6 +634,7 @@ impl HcbSplatPass {
                 bgl::storage(2, vs | fs, true),
                 bgl::texture(3, fs, false),
                 bgl::texture(4, fs, false),
+                bgl::storage(5, vs, true),
             ],
         });
         let normalize_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -499,7 +687,11 @@ impl HcbSplatPass {
         });
         let normalize_pipeline =
             super::compute_pipeline(device, "hcb.normalize", &m_norm, "cs_normalize", &[&normalize_layout]);
-        let params = super::uniform_buffer(device, "hcb.splat.params", std::mem::size_of::<HcbParams>() as u64);
+        let size = std::mem::size_of::<HcbParams>() as u64;
+        let params = [
+            super::uniform_buffer(device, "hcb.splat.params", size),
+            super::uniform_buffer(device, "hcb.splat.new.params", size),
+        ];
         let uncovered = super::buffer(
             device,
             "hcb.uncovered",
@@ -574,51 +766,79 @@ impl HcbSplatPass {
         slot: Option<Slot<'_>>,
         camera: &wgpu::Buffer,
         g: (&wgpu::TextureView, &wgpu::TextureView, &wgpu::TextureView),
-        list: &wgpu::Buffer,
+        samples: (&wgpu::Buffer, &wgpu::Buffer),
         draw_args: &wgpu::Buffer,
         f: HcbFrame,
     ) {
-        let t = f.thresholds;
-        let p = HcbParams {
-            thresholds: Vec4::new(t.cos_theta_max, t.cos_gamma_max, t.d_max, f.pixel_scale),
-            eye: f.eye.extend(1.0),
-            level: [0; 4],
-        };
-        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        self.splat(ctx, encoder, slot, camera, g, samples, (draw_args, 0), false, false, f);
+        self.normalize(ctx, encoder, slot, g);
+    }
+
+    /// Adds the splats of the samples of `samples` = (list, counter) to `hcb.weight_sum`
+    /// (instance count from `draw_args` = (buffer, offset of a `DrawIndirectArgs`)): all of
+    /// them onto a cleared target, or with `new_only` the ones after the cached samples
+    /// (counter word 1, §5.2) onto what the cached ones left. `slot`'s scope begins here and
+    /// ends here with `ends_scope`, else with [`Self::normalize`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn splat(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<Slot<'_>>,
+        camera: &wgpu::Buffer,
+        g: (&wgpu::TextureView, &wgpu::TextureView, &wgpu::TextureView),
+        samples: (&wgpu::Buffer, &wgpu::Buffer),
+        draw_args: (&wgpu::Buffer, u64),
+        new_only: bool,
+        ends_scope: bool,
+        f: HcbFrame,
+    ) {
+        let params = &self.params[new_only as usize];
+        ctx.queue.write_buffer(params, 0, bytemuck::bytes_of(&f.params([new_only as u32, 0, 0, 0])));
         let tv = wgpu::BindingResource::TextureView;
         let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("hcb.splat.inputs"),
             layout: &self.splat_layout,
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: camera.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: self.params.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: list.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: params.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: samples.0.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 3, resource: tv(g.0) },
                 wgpu::BindGroupEntry { binding: 4, resource: tv(g.1) },
+                wgpu::BindGroupEntry { binding: 5, resource: samples.1.as_entire_binding() },
             ],
         });
         let accum = super::view(&self.weight_sum, "hcb.weight_sum");
-        {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("hcb.splat"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &accum,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: slot.as_ref().and_then(|s| s.render(true, false)),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_pipeline(&self.splat_pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            pass.draw_indirect(draw_args, 0);
-        }
+        let load = if new_only { wgpu::LoadOp::Load } else { wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT) };
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("hcb.splat"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &accum,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations { load, store: wgpu::StoreOp::Store },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: slot.as_ref().and_then(|s| s.render(true, ends_scope)),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.splat_pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.draw_indirect(draw_args.0, draw_args.1);
+    }
+
+    /// Eq. 11 over `hcb.weight_sum`: `hcb.irradiance`, `hcb.indirect` and the uncovered count
+    /// (ends `slot`'s scope).
+    pub fn normalize(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<Slot<'_>>,
+        g: (&wgpu::TextureView, &wgpu::TextureView, &wgpu::TextureView),
+    ) {
+        let tv = wgpu::BindingResource::TextureView;
+        let accum = super::view(&self.weight_sum, "hcb.weight_sum");
         let out = super::view(&self.irradiance, "hcb.irradiance");
         let radiance = super::view(&self.indirect, "hcb.indirect");
         let ngroup = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -634,8 +854,10 @@ impl HcbSplatPass {
             ],
         });
         encoder.clear_buffer(&self.uncovered, 0, None);
-        let mut pass = encoder
-            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("hcb.normalize"), timestamp_writes: None });
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("hcb.normalize"),
+            timestamp_writes: slot.and_then(|s| s.compute(false, true)),
+        });
         pass.set_pipeline(&self.normalize_pipeline);
         pass.set_bind_group(0, &ngroup, &[]);
         pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
@@ -655,7 +877,8 @@ pub struct HcbGatherParams {
 
 /// Stage 5 of the HCB technique (Nguyen et al. §4.1): the irradiance the VPLs send each
 /// sample of the list (`shaders/hcb/gather.wgsl`), and the indirect arguments of this
-/// dispatch and of the splat draw (`args`: 4 draw then 3 dispatch words).
+/// dispatch and of the splat draws (`args`: 4 draw words for every sample, 3 dispatch words,
+/// one spare, 4 draw words for the samples after the cached ones, §5.2).
 pub struct HcbGatherPass {
     layout: wgpu::BindGroupLayout,
     args_pipeline: wgpu::ComputePipeline,
@@ -692,10 +915,10 @@ impl HcbGatherPass {
         let args = super::buffer(
             device,
             "hcb.indirect_args",
-            32,
+            48,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC,
         );
-        let no_args = super::buffer(device, "hcb.no_args", 32, wgpu::BufferUsages::STORAGE);
+        let no_args = super::buffer(device, "hcb.no_args", 48, wgpu::BufferUsages::STORAGE);
         let (no_ism, no_exact) = super::interleave::no_visibility_atlases(device, "hcb.gather");
         Self { layout, args_pipeline, gather_pipeline, params, args, no_args, no_ism, no_exact }
     }

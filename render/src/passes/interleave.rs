@@ -61,6 +61,7 @@ pub struct FilterParams {
 }
 
 /// The visibility the gather reads.
+#[derive(Clone, Copy)]
 pub enum GatherVisibility<'a> {
     None,
     /// The ISM atlas (level 0 after pull-push), with columns, map size, eye offset, depth bias

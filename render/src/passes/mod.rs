@@ -6,6 +6,7 @@ pub mod compose;
 pub mod direct;
 pub mod gbuffer;
 pub mod hcb;
+pub mod hcb_cache;
 pub mod interleave;
 pub mod irsm;
 pub mod ism;
