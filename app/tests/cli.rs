@@ -312,4 +312,11 @@ fn the_nguyen_bench_suite_compares_the_hcb_with_the_per_pixel_gather() {
     let per_level: u64 =
         v["samples_per_level"].as_array().expect("levels").iter().map(|n| n.as_u64().expect("n")).sum();
     assert!(samples > 0 && samples == per_level && samples < 64 * 48, "{text}");
+    for run in ["cached_still", "cached_moving"] {
+        let c = &v[run];
+        assert!(c["hcb_passes_ms"].as_f64().is_some_and(|t| t > 0.0), "{run}: {text}");
+        let n = |k: &str| c["counts"][k].as_u64().expect("count");
+        assert_eq!(n("total"), n("cached") + n("new"), "{run}: {text}");
+        assert!(n("cached") > 0, "{run}: the cache is reused after the warm-up: {text}");
+    }
 }

@@ -20,7 +20,7 @@ use crate::lab_settings::IndirectTechnique;
 use crate::passes::compose::ComposePass;
 use crate::passes::direct::DirectPass;
 use crate::passes::gbuffer::GBufferPass;
-use crate::passes::hcb::{HcbFrame, HcbGatherPass, HcbPass, HcbSettings, HcbSplatPass};
+use crate::passes::hcb::{GatherSet, HcbFrame, HcbGatherPass, HcbPass, HcbSettings, HcbSplatPass};
 use crate::passes::hcb_cache::{CacheCounts, CacheFrame, HcbCachePass};
 use crate::passes::interleave::{GatherVisibility, InterleavePass};
 use crate::passes::irsm::{IrsmFrame, IrsmPass};
@@ -111,6 +111,8 @@ pub struct HcbStats {
     pub uncovered: u32,
     /// The cache's counts of the frame (§5), None without the cache.
     pub cache: Option<CacheCounts>,
+    /// The sample list itself (cached samples first, then the new ones).
+    pub list: Vec<crate::passes::hcb::GpuHcbSample>,
 }
 
 impl HcbStats {
@@ -760,13 +762,13 @@ impl Renderer {
             .collect();
         let lights: Vec<_> = state.lights.iter().map(gpu_light).collect();
         let k = self.knecht.as_mut()?;
-        if let Some(h) = k.hcb.as_mut() {
-            if let Some(c) = h.cache.as_mut() {
-                c.swap(&mut h.build);
-                if h.cached_with.as_ref() != Some(&s.hcb) {
-                    c.reset(enc);
-                    h.cached_with = Some(s.hcb.clone());
-                }
+        if let Some(h) = k.hcb.as_mut()
+            && let Some(c) = h.cache.as_mut()
+        {
+            c.swap(&mut h.build);
+            if h.cached_with.as_ref() != Some(&s.hcb) {
+                c.reset(enc);
+                h.cached_with = Some(s.hcb.clone());
             }
         }
         let (gpu_scene, timer) = (&self.gpu_scene, &mut self.timer);
@@ -877,9 +879,12 @@ impl Renderer {
             let (vpls, camera) = (&k.vpl.vpls, &self.camera_buffer);
             let g3 = (&g.position, &g.normal, &g.albedo);
             let samples = (&h.build.list, &h.build.counter);
-            let gather = |timer: &mut crate::timing::GpuTimer, enc: &mut wgpu::CommandEncoder, scope: &str| {
+            let gather = |timer: &mut crate::timing::GpuTimer,
+                          enc: &mut wgpu::CommandEncoder,
+                          scope: &str,
+                          set: GatherSet<'_>| {
                 timer.scope(&ctx, enc, scope, |e, slot| {
-                    h.gather.run(&ctx, e, slot, &h.build, vpls, total, s.vpl.min_distance_m, vis)
+                    h.gather.run(&ctx, e, slot, &h.build, vpls, total, s.vpl.min_distance_m, vis, set)
                 })
             };
             match &h.cache {
@@ -887,7 +892,7 @@ impl Renderer {
                     timer.scope(&ctx, enc, "hcb.build", |e, slot| {
                         h.build.run(&ctx, e, slot, &g.position, &g.normal, f, None)
                     });
-                    gather(timer, enc, "hcb.gather");
+                    gather(timer, enc, "hcb.gather", GatherSet::All);
                     timer.scope(&ctx, enc, "hcb.splat", |e, slot| {
                         h.splat.run(&ctx, e, slot, camera, g3, samples, &h.gather.args, f)
                     });
@@ -904,7 +909,7 @@ impl Renderer {
                     timer.scope(&ctx, enc, "hcb.cache.update", |e, slot| {
                         c.update(&ctx, e, slot, camera, (&g.position, &g.normal), &h.build, cf)
                     });
-                    gather(timer, enc, "hcb.cache.recompute");
+                    gather(timer, enc, "hcb.cache.recompute", GatherSet::Recompute(&c.queue));
                     timer.scope(&ctx, enc, "hcb.cache.splat", |e, slot| {
                         h.splat.splat(&ctx, e, slot, camera, g3, samples, (&h.gather.args, 0), false, true, f)
                     });
@@ -914,7 +919,7 @@ impl Renderer {
                         let io = crate::passes::hcb_cache::cache_views(&weight_sum, &views);
                         h.build.run(&ctx, e, slot, &g.position, &g.normal, f, Some(io))
                     });
-                    gather(timer, enc, "hcb.gather");
+                    gather(timer, enc, "hcb.gather", GatherSet::New);
                     timer.scope(&ctx, enc, "hcb.splat", |e, slot| {
                         h.splat.splat(&ctx, e, slot, camera, g3, samples, (&h.gather.args, 32), true, false, f);
                         h.splat.normalize(&ctx, e, slot, g3);
@@ -1084,6 +1089,7 @@ impl Renderer {
             texels_per_level: h.build.levels.iter().map(|l| l.width * l.height).collect(),
             uncovered: uncovered[0],
             cache: h.cache.as_ref().map(|_| CacheCounts::from_words(&count)),
+            list,
         })
     }
 

@@ -25,6 +25,8 @@
 @group(0) @binding(8) var removal: texture_2d<f32>;
 @group(0) @binding(9) var samples_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(10) var group_out: texture_storage_2d<r32float, write>;
+// the list slots of the samples to recompute this frame (for the gather, dense)
+@group(0) @binding(11) var<storage, read_write> queue: array<u32>;
 // draw-indirect of the removal (6, cached samples, 0, 0), dispatch-indirect (x, y, 1)
 @group(1) @binding(0) var<storage, read_write> args: array<u32>;
 
@@ -100,15 +102,18 @@ fn cs_compact(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let period = u32(cp.limits.w);
     var c = ((s.texel.z >> 8u) & 0xffu) + 1u;
+    let level = s.texel.z & 0xffu;
+    let slot = atomicAdd(&counter[0], 1u);
+    atomicAdd(&counter[1], 1u);
     var light = s.light;
     if (c >= period) {
         c = 0u;
         light.a = 0.0;
-        atomicAdd(&counter[2], 1u);
+        let r = atomicAdd(&counter[2], 1u);
+        if (r < arrayLength(&queue)) {
+            queue[r] = slot;
+        }
     }
-    let level = s.texel.z & 0xffu;
-    let slot = atomicAdd(&counter[0], 1u);
-    atomicAdd(&counter[1], 1u);
     if (slot < arrayLength(&list)) {
         list[slot] = HcbSample(s.position, s.normal, vec4<u32>(px >> vec2<u32>(level), level | (c << 8u), s.texel.w), light);
     }

@@ -5,8 +5,9 @@
 // Irradiance, not radiance, is gathered and splatted: each pixel then reflects it with its
 // own colour (c·DI/π), so that texture detail survives the interpolation (the receiver's
 // glossy lobe is not included). cs_args turns the sample count into the indirect arguments
-// of this dispatch and of the splat draws. Only samples not yet gathered (light.a = 0) are:
-// new ones, and with the cache the ones due for recomputation (§5.3).
+// of this dispatch and of the splat draws. With the cache the gather runs twice: over the
+// samples due for recomputation (§5.3, their slots compacted in `queue`, so that the work is
+// dense) and over the new ones (§5.2, the end of the list).
 #import common/ism.wgsl
 #import hcb/common.wgsl
 
@@ -14,6 +15,9 @@
 struct HcbGatherParams {
     // x: VPL count, y: visibility (0 none, 1 ISM, 2 exact), z: atlas columns, w: map size
     counts: vec4<u32>,
+    // x: which samples (0 every sample of the list; 1 the cached samples due for
+    // recomputation, listed in `queue`, §5.3; 2 the new samples after the cached ones, §5.2)
+    mode: vec4<u32>,
     // x: d_min², y: ISM eye offset / exact near, z: ISM bias / exact far,
     // w: ISM receiver normal offset (texels) / exact eye offset
     shade: vec4<f32>,
@@ -28,15 +32,47 @@ struct HcbGatherParams {
 // draw-indirect (vertices 6, instances, 0, 0), dispatch-indirect (x, y, 1), a spare word,
 // draw-indirect of the samples after the cached ones (counter word 1, §5.2)
 @group(0) @binding(6) var<storage, read_write> args: array<u32>;
+// the list slots of the samples to recompute (counter word 2 of them; mode 1)
+@group(0) @binding(7) var<storage, read> queue: array<u32>;
 
 fn sample_count() -> u32 {
     return min(counter[0], arrayLength(&list));
 }
 
+// How many samples this dispatch gathers, and where the n-th of them is in the list.
+fn gather_count() -> u32 {
+    let n = sample_count();
+    switch (params.mode.x) {
+        case 1u: {
+            return min(counter[2], n);
+        }
+        case 2u: {
+            return n - min(counter[1], n);
+        }
+        default: {
+            return n;
+        }
+    }
+}
+
+fn gather_slot(i: u32) -> u32 {
+    switch (params.mode.x) {
+        case 1u: {
+            return queue[i];
+        }
+        case 2u: {
+            return counter[1] + i;
+        }
+        default: {
+            return i;
+        }
+    }
+}
+
 @compute @workgroup_size(1, 1, 1)
 fn cs_args() {
     let n = sample_count();
-    let groups = (n + 63u) / 64u;
+    let groups = (gather_count() + 63u) / 64u;
     args[0] = 6u;
     args[1] = n;
     args[2] = 0u;
@@ -53,9 +89,12 @@ fn cs_args() {
 
 @compute @workgroup_size(64, 1, 1)
 fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * 65535u * 64u;
-    // Cached samples whose light stays this frame (§5.3) are skipped.
-    if (i >= sample_count() || list[i].light.a >= 0.5) {
+    let j = gid.x + gid.y * 65535u * 64u;
+    if (j >= gather_count()) {
+        return;
+    }
+    let i = gather_slot(j);
+    if (i >= sample_count()) {
         return;
     }
     let s = list[i];

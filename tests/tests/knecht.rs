@@ -276,9 +276,15 @@ fn every_shipped_preset_loads_cleanly_and_validates() {
         assert!(l.settings.validate().is_empty(), "{}: {:?}", path.display(), l.settings.validate());
         names.push(path.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default());
     }
-    for want in
-        ["default", "knecht-cornell-256", "knecht-multibounce", "ritschel-ism", "exact-vpl-reference", "nguyen-hcb"]
-    {
+    for want in [
+        "default",
+        "knecht-cornell-256",
+        "knecht-multibounce",
+        "ritschel-ism",
+        "exact-vpl-reference",
+        "nguyen-hcb",
+        "nguyen-hcb-cached",
+    ] {
         assert!(names.iter().any(|n| n == want), "presets/{want}.ron is missing");
     }
     let k = gi_render::preset::load_lenient(include_str!("../../presets/knecht-cornell-256.ron"), "k").expect("loads");

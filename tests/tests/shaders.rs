@@ -125,6 +125,11 @@ fn uniform_sizes_match_wgsl() {
             "{file}"
         );
     }
+    let hg = parse("hcb/gather.wgsl");
+    assert_eq!(
+        struct_size(&hg, "HcbGatherParams") as usize,
+        std::mem::size_of::<gi_render::passes::hcb::HcbGatherParams>()
+    );
     let pp = parse("ism/pull_push.wgsl");
     assert_eq!(struct_size(&pp, "LevelParams") as usize, std::mem::size_of::<ism::LevelParams>());
     let sl = parse("interleave/split.wgsl");

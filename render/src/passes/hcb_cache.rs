@@ -79,6 +79,8 @@ pub struct HcbCachePass {
     pub cache: wgpu::Texture,
     /// `hcb.recompute_group`: the recompute phase + 1 at each sample's pixel (§5.3, Fig. 8b).
     pub recompute_group: wgpu::Texture,
+    /// The list slots of the samples to recompute this frame (the gather's mode 1).
+    pub queue: wgpu::Buffer,
     depth: wgpu::Texture,
     layout: wgpu::BindGroupLayout,
     args_layout: wgpu::BindGroupLayout,
@@ -115,6 +117,7 @@ impl HcbCachePass {
                 bgl::texture(8, cs, false),
                 bgl::storage_texture(9, r32),
                 bgl::storage_texture(10, r32),
+                bgl::storage(11, cs, false),
             ],
         });
         let args_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -175,13 +178,15 @@ impl HcbCachePass {
             32,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
         );
-        let (prev_list, prev_counter, incomplete, cache, recompute_group, depth) = Self::targets(device, width, height);
+        let (prev_list, prev_counter, incomplete, cache, recompute_group, depth, queue) =
+            Self::targets(device, width, height);
         Self {
             prev_list,
             prev_counter,
             incomplete,
             cache,
             recompute_group,
+            queue,
             depth,
             layout,
             args_layout,
@@ -202,7 +207,7 @@ impl HcbCachePass {
         device: &wgpu::Device,
         width: u32,
         height: u32,
-    ) -> (wgpu::Buffer, wgpu::Buffer, wgpu::Texture, wgpu::Texture, wgpu::Texture, wgpu::Texture) {
+    ) -> (wgpu::Buffer, wgpu::Buffer, wgpu::Texture, wgpu::Texture, wgpu::Texture, wgpu::Texture, wgpu::Buffer) {
         let (w, h) = (width.max(1), height.max(1));
         let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
         // The HCB's list capacity: every pixel could be a level-0 sample.
@@ -234,7 +239,8 @@ impl HcbCachePass {
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
             view_formats: &[],
         });
-        (list, counter, incomplete, cache, group, depth)
+        let queue = super::buffer(device, "hcb.recompute_queue", 4 * (w * h) as u64, wgpu::BufferUsages::STORAGE);
+        (list, counter, incomplete, cache, group, depth, queue)
     }
 
     /// Resizes for a `width` × `height` G-buffer (the cache starts empty). Returns whether the
@@ -243,8 +249,15 @@ impl HcbCachePass {
         if (self.width, self.height) == (width, height) {
             return false;
         }
-        (self.prev_list, self.prev_counter, self.incomplete, self.cache, self.recompute_group, self.depth) =
-            Self::targets(&ctx.device, width, height);
+        (
+            self.prev_list,
+            self.prev_counter,
+            self.incomplete,
+            self.cache,
+            self.recompute_group,
+            self.depth,
+            self.queue,
+        ) = Self::targets(&ctx.device, width, height);
         (self.width, self.height) = (width, height);
         true
     }
@@ -336,6 +349,7 @@ impl HcbCachePass {
                 wgpu::BindGroupEntry { binding: 8, resource: tv(&cache_view) },
                 wgpu::BindGroupEntry { binding: 9, resource: tv(&samples_view) },
                 wgpu::BindGroupEntry { binding: 10, resource: tv(&group_view) },
+                wgpu::BindGroupEntry { binding: 11, resource: self.queue.as_entire_binding() },
             ],
         });
         let args_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
