@@ -218,8 +218,22 @@ pub const TECHNIQUES: &[Technique] = &[
     Technique {
         name: "Hierarchical coherence buffer (Nguyen)",
         source: "Nguyen et al. 000 §3–4: VPLs gathered at HCB samples, coherence-weighted splatting",
-        apply: |s| s.indirect.technique = IndirectTechnique::Hcb,
-        is: |s| s.indirect.technique == IndirectTechnique::Hcb,
+        apply: |s| {
+            s.indirect.technique = IndirectTechnique::Hcb;
+            s.hcb.cache = false;
+        },
+        is: |s| s.indirect.technique == IndirectTechnique::Hcb && !s.hcb.cache,
+    },
+    Technique {
+        name: "Hierarchical coherence buffer with the sample cache (Nguyen)",
+        source: "Nguyen et al. 000 §5: samples reused from frame to frame, new ones only where texels stay incomplete, a quarter recomputed per frame",
+        apply: |s| {
+            s.indirect.technique = IndirectTechnique::Hcb;
+            s.hcb.cache = true;
+            // Cached samples gathered in different frames must see the same VPLs.
+            s.vpl.new_set_each_frame = false;
+        },
+        is: |s| s.indirect.technique == IndirectTechnique::Hcb && s.hcb.cache,
     },
     Technique {
         name: "Imperfect shadow maps without temporal coherence (Ritschel)",

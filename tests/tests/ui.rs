@@ -509,3 +509,32 @@ fn the_hcb_samples_overlay_draws_white_dots_and_table_1() {
         stats.samples()
     );
 }
+
+#[test]
+fn the_settings_pane_shows_table_1_and_the_cache_counts_for_the_hcb() {
+    let dir = temp_dir("hcb_table_1");
+    // Tall, so that the settings pane shows the statistics below the groups.
+    let mut h = harness_in(&dir, egui::vec2(1400.0, 2600.0));
+    pause(&mut h);
+    if let Ok(l) = &mut h.state_mut().state.lab {
+        l.settings.indirect.technique = gi_render::lab_settings::IndirectTechnique::Hcb;
+        l.settings.hcb.cache = true;
+        l.apply_settings();
+    }
+    h.run_steps(4);
+    let _ = h.render().map(|i| i.save(std::env::temp_dir().join("gi_lab_hcb_table_1.png")));
+    let stats = h.state().state.lab.as_ref().ok().and_then(|l| l.renderer.hcb_stats()).expect("HCB statistics");
+    h.get_by_label("HCB statistics (Nguyen Table 1)");
+    h.get_by_label("level (resolution)");
+    // The total row carries the renderer's count; the cache's rows are there.
+    let c = stats.cache.expect("cache counts");
+    assert!(c.cached > 0, "{c:?}");
+    let shown = |label: &str| h.query_all_by_label(label).count() > 0;
+    for label in ["total", &stats.samples().to_string(), "cached (reused)", &c.cached.to_string(), "recomputed"] {
+        assert!(shown(label), "'{label}' is shown");
+    }
+    // The technique picker names the cached HCB.
+    let settings = h.state().state.lab.as_ref().map(|l| l.settings.clone()).expect("lab");
+    let current = gi_lab::settings_ui::TECHNIQUES.iter().find(|t| (t.is)(&settings)).map(|t| t.name);
+    assert_eq!(current, Some("Hierarchical coherence buffer with the sample cache (Nguyen)"));
+}
