@@ -627,3 +627,61 @@ fn hcb_on_the_hotel_room_stays_close_to_the_per_pixel_gather() {
     assert!(flip <= 0.03, "HCB vs per-pixel gather on the hotel room: FLIP {flip}");
     assert!(share <= 6.5, "{share} % of the pixels are samples");
 }
+
+/// §6, Fig. 9: the samples depend on the geometry alone, so a second light changes none of
+/// them, and the splatted light of both stays as close to the per-pixel gather as one.
+#[test]
+fn a_second_light_leaves_the_samples_unchanged_and_the_splatting_close_to_the_per_pixel_gather() {
+    use gi_render::image_io::hdr_display;
+    use gi_render::scene::{Light, LightKind, Node, Transform};
+    let two_lights = || {
+        let mut scene = gi_lab_tests::default_scene();
+        scene.lights.push(Light {
+            name: "warm point".into(),
+            kind: LightKind::Point,
+            color: Vec3::new(1.0, 0.7, 0.4),
+            intensity: 1.5,
+            range: None,
+        });
+        scene.nodes.push(Node {
+            name: "warm point".into(),
+            transform: Transform { translation: Vec3::new(0.55, 0.5, 0.4), ..Transform::default() },
+            children: vec![],
+            mesh: None,
+            light: Some(scene.lights.len() - 1),
+            camera: None,
+        });
+        scene.roots.push(scene.nodes.len() - 1);
+        scene
+    };
+    let run = |scene: gi_render::scene::Scene, levels: u32| {
+        let loaded =
+            gi_render::preset::load_lenient(include_str!("../../presets/nguyen-hcb.ron"), "nguyen-hcb").expect("loads");
+        let mut s = loaded.settings;
+        s.hcb.levels = levels;
+        let mut r = gi_render::Renderer::new(gpu(), scene, s, 192, 192).expect("renderer");
+        r.clock.playing = false;
+        r.render_frame();
+        let stats = r.hcb_stats().expect("HCB statistics");
+        let indirect = r.readback("hcb.indirect").expect("indirect").data;
+        let mean = indirect.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / indirect.len() as f32;
+        (r.readback("final.hdr").expect("final"), stats, mean)
+    };
+    let levels = gi_render::LabSettings::default().hcb.levels;
+    let (_, one, one_mean) = run(gi_lab_tests::default_scene(), levels);
+    let (hcb, two, two_mean) = run(two_lights(), levels);
+    let (per_pixel, _, _) = run(two_lights(), 1);
+    let flip = gi_render::metrics::flip(&hdr_display(&hcb), &hdr_display(&per_pixel)).expect("flip").0;
+    println!(
+        "two lights, 192²: {} samples (one light: {}), indirect mean {two_mean:.4} (one light {one_mean:.4}), FLIP HCB vs per-pixel {flip:.4}",
+        two.samples(),
+        one.samples()
+    );
+    let mut a = one.samples.clone();
+    let mut b = two.samples.clone();
+    a.sort();
+    b.sort();
+    assert_eq!(a, b, "the samples depend on the geometry alone");
+    assert!(two_mean > 1.1 * one_mean, "the second light adds indirect light: {one_mean} -> {two_mean}");
+    assert!(flip <= 0.065, "two lights, HCB vs per-pixel gather: FLIP {flip}");
+}
