@@ -395,6 +395,7 @@ pub fn format_hcb_stats(stats: &gi_render::frame::HcbStats, size: (u32, u32)) ->
         100.0 * stats.samples() as f64 / pixels
     );
     out += &format!("covered pixels no sample reached: {}\n", stats.uncovered);
+    out += &format!("d_max in use: {:.4} scene units\n", stats.d_max);
     out
 }
 

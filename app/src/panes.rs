@@ -362,7 +362,10 @@ pub fn hcb_stats_ui(ui: &mut egui::Ui, stats: &gi_render::frame::HcbStats, size:
         ui.strong(format!("{:.2} %", 100.0 * stats.samples() as f64 / pixels));
         ui.end_row();
     });
-    ui.small(format!("the paper: 1.9–4.4 % of the G-buffer; {} covered pixels no sample reached", stats.uncovered));
+    ui.small(format!(
+        "the paper: 1.9–4.4 % of the G-buffer; {} covered pixels no sample reached; d_max in use {:.3} scene units",
+        stats.uncovered, stats.d_max
+    ));
     if let Some(c) = &stats.cache {
         egui::Grid::new("hcb_cache_counts").num_columns(2).show(ui, |ui| {
             for (label, n, tip) in [

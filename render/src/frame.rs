@@ -113,6 +113,8 @@ pub struct HcbStats {
     pub cache: Option<CacheCounts>,
     /// The sample list itself (cached samples first, then the new ones).
     pub list: Vec<crate::passes::hcb::GpuHcbSample>,
+    /// The d_max in use (scene units; the setting or the scene-relative default).
+    pub d_max: f32,
 }
 
 impl HcbStats {
@@ -870,7 +872,7 @@ impl Renderer {
         if let Some(h) = &k.hcb {
             let g = &self.gbuffer.targets.views;
             let f = HcbFrame {
-                thresholds: s.hcb.thresholds(),
+                thresholds: s.hcb.thresholds(self.bounds.radius()),
                 eye: self.camera.position,
                 pixel_scale: 2.0 * (self.camera.yfov * 0.5).tan() / self.height.max(1) as f32,
                 pattern: crate::cpu::hcb::recompute_pattern(s.hcb.recompute_period),
@@ -1090,6 +1092,7 @@ impl Renderer {
             uncovered: uncovered[0],
             cache: h.cache.as_ref().map(|_| CacheCounts::from_words(&count)),
             list,
+            d_max: self.settings.hcb.d_max(self.bounds.radius()),
         })
     }
 

@@ -544,10 +544,11 @@ fn hcb_splatting_stays_close_to_gathering_at_every_pixel_with_few_samples() {
     // Levels = 1 makes every covered pixel a sample: the per-pixel gather.
     assert_eq!(per_pixel_stats.samples_per_level.len(), 1);
     assert_eq!(per_pixel_stats.uncovered, 0);
-    // Measured on lavapipe: FLIP 0.049 with 6.3 % of the pixels as samples at 256² (the
-    // crease and silhouette pixels are level-0 samples, a larger share at low resolution).
-    assert!(flip <= 0.065, "HCB vs per-pixel gather: FLIP {flip}");
-    assert!(stats.samples() * 100 <= 7 * covered, "{} samples of {covered}", stats.samples());
+    // Measured on lavapipe with the scene-relative d_max (0.26 here): FLIP 0.040 with 7.33 %
+    // of the pixels as samples at 256² (the crease and silhouette pixels are level-0
+    // samples, a larger share at low resolution; 3.26 % at 512²).
+    assert!(flip <= 0.05, "HCB vs per-pixel gather: FLIP {flip}");
+    assert!(stats.samples() * 100 <= 8 * covered, "{} samples of {covered}", stats.samples());
     assert!(stats.uncovered * 1000 <= covered, "{} covered pixels no sample reached", stats.uncovered);
 }
 
@@ -571,11 +572,11 @@ fn hcb_samples_are_at_most_five_percent_of_the_pixels_at_512() {
     }
     assert_eq!(buffer.data.iter().filter(|p| p[0] > 0.0).count() as u32, stats.samples());
     assert!(
-        stats.summary(pixels).starts_with(&format!("{} HCB samples (2.98 %", stats.samples())),
+        stats.summary(pixels).starts_with(&format!("{} HCB samples ({share:.2} %", stats.samples())),
         "{}",
         stats.summary(pixels)
     );
-    // Measured 2.98 %; the paper reports 1.9–4.4 % on its scenes.
+    // Measured 3.26 %; the paper reports 1.9–4.4 % on its scenes.
     assert!(share <= 5.0, "{share} % of the pixels are samples");
     assert!(
         stats.samples_per_level.iter().skip(2).sum::<u32>() > 0,
@@ -593,7 +594,7 @@ fn hcb_on_the_hotel_room_stays_close_to_the_per_pixel_gather() {
     let loaded =
         gi_render::preset::load_lenient(include_str!("../../presets/nguyen-hcb.ron"), "nguyen-hcb").expect("loads");
     let size = 512;
-    let image = |levels: u32| {
+    let image = |levels: u32, size: u32| {
         let mut s = loaded.settings.clone();
         s.hcb.levels = levels;
         let mut r = gi_render::Renderer::new(gpu(), scene.clone(), s, size, size).expect("renderer");
@@ -608,8 +609,8 @@ fn hcb_on_the_hotel_room_stays_close_to_the_per_pixel_gather() {
         r.render_frame();
         (r.readback("final.hdr").expect("final"), r.hcb_stats().expect("stats"))
     };
-    let (hcb, stats) = image(loaded.settings.hcb.levels);
-    let (per_pixel, all) = image(1);
+    let (hcb, stats) = image(loaded.settings.hcb.levels, size);
+    let (per_pixel, all) = image(1, size);
     let covered = all.samples();
     let flip = gi_render::metrics::flip(&hdr_display(&hcb), &hdr_display(&per_pixel)).expect("flip").0;
     let share = 100.0 * stats.samples() as f64 / (size * size) as f64;
@@ -620,12 +621,22 @@ fn hcb_on_the_hotel_room_stays_close_to_the_per_pixel_gather() {
         stats.uncovered
     );
     assert!(covered > size * size / 2, "the room fills the view: {covered}");
-    // Measured on lavapipe at 512²: FLIP 0.0226 with 6.08 % of the pixels as samples. That
-    // is above the 5 % (met on the default scene, 2.98 %): the room's furniture has
-    // many creases, whose pixels are level-0 samples; the share falls with the resolution
-    // (11.3 % at 256²). The bounds guard these measurements; the 5 % goal is open (#6 note).
-    assert!(flip <= 0.03, "HCB vs per-pixel gather on the hotel room: FLIP {flip}");
+    // Measured on lavapipe at 512² with the scene-relative d_max (0.91 m here): FLIP 0.0327
+    // with 5.91 % of the pixels as samples (a fixed 0.5 m gave 0.0226 and 6.08 %). The room's
+    // furniture has many creases, whose pixels are level-0 samples: the share falls with the
+    // resolution, and the 5 % is met at the paper's 1024² below.
+    assert!(flip <= 0.04, "HCB vs per-pixel gather on the hotel room: FLIP {flip}");
     assert!(share <= 6.5, "{share} % of the pixels are samples");
+    // At the paper's resolution (Table 1: 1024²) the crease bands are half as wide
+    // relative to the image.
+    let (_, big) = image(loaded.settings.hcb.levels, 1024);
+    let big_share = 100.0 * big.samples() as f64 / (1024.0 * 1024.0);
+    println!(
+        "hotel room 1024²: {} samples ({big_share:.2} % of the pixels), per level {:?}",
+        big.samples(),
+        big.samples_per_level
+    );
+    assert!(big_share <= 5.0, "{big_share} % of the pixels are samples at 1024²");
 }
 
 /// §6, Fig. 9: the samples depend on the geometry alone, so a second light changes none of
@@ -683,5 +694,6 @@ fn a_second_light_leaves_the_samples_unchanged_and_the_splatting_close_to_the_pe
     b.sort();
     assert_eq!(a, b, "the samples depend on the geometry alone");
     assert!(two_mean > 1.1 * one_mean, "the second light adds indirect light: {one_mean} -> {two_mean}");
-    assert!(flip <= 0.065, "two lights, HCB vs per-pixel gather: FLIP {flip}");
+    // Measured 0.037 (one light at 256²: 0.040).
+    assert!(flip <= 0.05, "two lights, HCB vs per-pixel gather: FLIP {flip}");
 }

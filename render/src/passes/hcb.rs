@@ -29,9 +29,11 @@ settings_group! {
         /// Pose limit under backward lighting (Eq. 3): |âb·n_a| ≤ cos γ_max.
         gamma_max_deg: f32 = 70.0,
         unit "°", symbol "γ_max", range 1.0..=90.0, cost "smaller: fewer samples, light leaks across steps", history false;
-        /// Largest radius of a coherent group (Eq. 1 on the accumulated distance, §3.5).
-        d_max_m: f32 = 0.5,
-        unit "m", symbol "d_max", range 0.001..=100.0, cost "larger: fewer samples, coarser light", history false;
+        /// Largest radius of a coherent group (Eq. 1 on the accumulated distance, §3.5), in
+        /// scene units; 0 picks it from the scene: 0.15 × its bounding radius (0.26 on the
+        /// default Cornell box, 0.91 on the hotel room).
+        d_max_m: f32 = 0.0,
+        unit "m", symbol "d_max", range 0.0..=100.0, cost "larger: fewer samples, coarser light", history false;
         /// HCB levels including the G-buffer's (1: every pixel is a sample, the per-pixel gather).
         levels: u32 = 7,
         unit "levels", symbol "", range 1..=12, cost "one pass per level; more levels, larger groups", history false;
@@ -77,12 +79,21 @@ settings_enum! {
     default AroundIncomplete
 }
 
+/// The scene-relative d_max: this fraction of the scene's bounding radius.
+pub const D_MAX_PER_RADIUS: f32 = 0.15;
+
 impl HcbSettings {
-    pub fn thresholds(&self) -> Thresholds {
+    /// d_max in scene units for a scene of bounding radius `scene_radius` (the setting, or
+    /// the scene-relative default when it is 0).
+    pub fn d_max(&self, scene_radius: f32) -> f32 {
+        if self.d_max_m > 0.0 { self.d_max_m } else { D_MAX_PER_RADIUS * scene_radius }
+    }
+
+    pub fn thresholds(&self, scene_radius: f32) -> Thresholds {
         Thresholds {
             cos_theta_max: self.theta_max_deg.to_radians().cos(),
             cos_gamma_max: self.gamma_max_deg.to_radians().cos(),
-            d_max: self.d_max_m,
+            d_max: self.d_max(scene_radius),
             spread_incomplete: self.new_samples == NewSamples::AroundIncomplete,
         }
     }
