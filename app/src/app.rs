@@ -1213,7 +1213,8 @@ impl State {
                 );
                 ui.checkbox(&mut self.show_hcb_samples, "HCB samples overlay (Table 1)").on_hover_text(
                     "the hierarchical coherence buffer's samples as white dots, larger for higher levels, \
-                     with the count per level; reads the sample list back every frame",
+                     with the count per level, and the covered pixels no sample reached in magenta; \
+                     reads the sample list back every frame",
                 );
                 ui.horizontal(|ui| {
                     ui.label("render scale");

@@ -202,9 +202,21 @@ fn hcb_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
     };
     let (w, h) = l.renderer.size();
     let scale = egui::vec2(rect.width() / w.max(1) as f32, rect.height() / h.max(1) as f32);
+    let at = |x: u32, y: u32| rect.min + egui::vec2((x as f32 + 0.5) * scale.x, (y as f32 + 0.5) * scale.y);
     for &[x, y, level] in &stats.samples {
-        let pos = rect.min + egui::vec2((x as f32 + 0.5) * scale.x, (y as f32 + 0.5) * scale.y);
-        painter.circle_filled(pos, 1.0 + 0.5 * level as f32, egui::Color32::WHITE);
+        painter.circle_filled(at(x, y), 1.0 + 0.5 * level as f32, egui::Color32::WHITE);
+    }
+    // Covered pixels that no sample reached (hcb.irradiance's a = 0): magenta, never
+    // silently black.
+    if stats.uncovered > 0
+        && let (Ok(light), Ok(normal)) = (l.renderer.readback("hcb.irradiance"), l.renderer.readback("gbuffer.normal"))
+    {
+        for (i, (e, n)) in light.data.iter().zip(&normal.data).enumerate() {
+            if e[3] == 0.0 && n[3] > 0.5 {
+                let (x, y) = (i as u32 % light.width, i as u32 / light.width);
+                painter.circle_filled(at(x, y), 2.0, egui::Color32::from_rgb(255, 0, 255));
+            }
+        }
     }
     text(stats.summary(w * h));
 }

@@ -296,6 +296,25 @@ fn hcb_stats_prints_the_samples_per_level_as_table_1() {
 }
 
 #[test]
+fn hcb_stats_with_the_cache_prints_a_line_per_frame() {
+    let o = gi_lab()
+        .args(["hcb-stats", "--size", "96x96", "--frames", "3", "--preset"])
+        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/../presets/nguyen-hcb-cached.ron"))
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "hcb-stats failed: {}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let frames: Vec<&str> = text.lines().filter(|l| l.starts_with("frame")).collect();
+    assert_eq!(frames.len(), 3, "{text}");
+    // The first frame has nothing cached; the still view then reuses its samples.
+    assert!(frames[0].contains(" 0 cached"), "{text}");
+    assert!(!frames[2].contains(" 0 cached"), "{text}");
+    assert!(text.contains("d_max in use"), "{text}");
+    let bad = gi_lab().args(["hcb-stats", "--frames", "0"]).output().expect("runs");
+    assert_eq!(bad.status.code(), Some(2), "--frames 0 is refused");
+}
+
+#[test]
 fn the_nguyen_bench_suite_compares_the_hcb_with_the_per_pixel_gather() {
     let o = gi_lab()
         .args(["bench", "--suite", "nguyen", "--size", "64x48", "--frames", "1", "--json"])

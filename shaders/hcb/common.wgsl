@@ -29,7 +29,8 @@ struct HcbSample {
     // x, y: texel at its level; z: bits 0–7 the level, 8–15 the recompute counter (§5.3),
     // 16–23 the cache status while the cache is updated; w: G-buffer pixel x | y << 16
     texel: vec4<u32>,
-    // rgb: the light gathered at the sample (irradiance), a: 1 once gathered (0: gather it)
+    // rgb: the light gathered at the sample (irradiance), a: 1 once gathered, 0 until then
+    // (new, or due for recomputation)
     light: vec4<f32>,
 }
 

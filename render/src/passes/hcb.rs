@@ -128,7 +128,7 @@ pub struct GpuHcbSample {
     /// Texel x, y at its level; bits 0–7 the level, 8–15 the recompute counter (§5.3), 16–23
     /// the cache status during its update; the G-buffer pixel x | y << 16.
     pub texel: [u32; 4],
-    /// Gathered light (rgb), 1 once gathered (0: to be gathered this frame).
+    /// Gathered light (rgb); a: 1 once gathered, 0 until then (new, or due for recomputation).
     pub light: Vec4,
 }
 
