@@ -355,16 +355,7 @@ fn hcb_stats(args: &HcbStatsArgs) -> Result<(), CliError> {
         r.render_frame();
         let st = r.hcb_stats().ok_or_else(|| CliError::failure("the HCB produced no statistics"))?;
         if let Some(c) = &st.cache {
-            println!(
-                "frame {frame:>3}: {:>7} samples = {:>7} cached + {:>6} new; {:>6} recomputed; removed {:>5} invalid, {:>5} surplus, {:>5} outside the view",
-                c.total,
-                c.cached,
-                c.new_samples(),
-                c.recomputed,
-                c.invalid,
-                c.surplus,
-                c.dropped
-            );
+            println!("frame {frame:>3}: {c}");
         }
         stats = Some(st);
     }

@@ -133,15 +133,7 @@ impl HcbStats {
             self.uncovered
         );
         if let Some(c) = &self.cache {
-            line += &format!(
-                "; cache: {} reused, {} new, {} recomputed, {} invalid + {} surplus removed, {} left the view",
-                c.cached,
-                c.new_samples(),
-                c.recomputed,
-                c.invalid,
-                c.surplus,
-                c.dropped
-            );
+            line += &format!("; cache: {}", c.to_string().split_whitespace().collect::<Vec<_>>().join(" "));
         }
         line
     }

@@ -41,15 +41,10 @@ fn index(gid: vec3<u32>) -> u32 {
 @compute @workgroup_size(1, 1, 1)
 fn cs_args() {
     let n = cached_count();
-    let groups = (n + 63u) / 64u;
-    args[0] = 6u;
-    args[1] = n;
-    args[2] = 0u;
-    args[3] = 0u;
-    args[4] = min(groups, 65535u);
-    args[5] = max((groups + 65534u) / 65535u, 1u);
-    args[6] = 1u;
-    args[7] = 0u;
+    var words = indirect_words(n, n);
+    for (var i = 0u; i < 8u; i = i + 1u) {
+        args[i] = words[i];
+    }
 }
 
 @compute @workgroup_size(64, 1, 1)

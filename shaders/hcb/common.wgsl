@@ -34,6 +34,13 @@ struct HcbSample {
     light: vec4<f32>,
 }
 
+// Indirect arguments of a quad draw over `instances` samples (6 vertices) and of a dispatch
+// of 64-wide workgroups over `items` (x, y within the 65535 limit), in 8 words.
+fn indirect_words(instances: u32, items: u32) -> array<u32, 8> {
+    let groups = (items + 63u) / 64u;
+    return array<u32, 8>(6u, instances, 0u, 0u, min(groups, 65535u), max((groups + 65534u) / 65535u, 1u), 1u, 0u);
+}
+
 fn sample_level(s: HcbSample) -> u32 {
     return s.texel.z & 0xffu;
 }

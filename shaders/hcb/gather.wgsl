@@ -72,15 +72,10 @@ fn gather_slot(i: u32) -> u32 {
 @compute @workgroup_size(1, 1, 1)
 fn cs_args() {
     let n = sample_count();
-    let groups = (gather_count() + 63u) / 64u;
-    args[0] = 6u;
-    args[1] = n;
-    args[2] = 0u;
-    args[3] = 0u;
-    args[4] = min(groups, 65535u);
-    args[5] = max((groups + 65534u) / 65535u, 1u);
-    args[6] = 1u;
-    args[7] = 0u;
+    var words = indirect_words(n, gather_count());
+    for (var i = 0u; i < 8u; i = i + 1u) {
+        args[i] = words[i];
+    }
     args[8] = 6u;
     args[9] = n - min(counter[1], n);
     args[10] = 0u;

@@ -30,7 +30,8 @@ fn frame(r: &mut Renderer) -> HcbStats {
 #[test]
 fn a_static_view_settles_to_almost_no_new_samples_and_stays_close_to_the_per_frame_hcb() {
     let size = 256;
-    let mut r = renderer(size, |_| {});
+    // 64 VPLs: the cache does not depend on their number, and the test stays short.
+    let mut r = renderer(size, |s| s.vpl.count = 64);
     let mut stats = Vec::new();
     for _ in 0..8 {
         stats.push(frame(&mut r));
@@ -60,7 +61,10 @@ fn a_static_view_settles_to_almost_no_new_samples_and_stays_close_to_the_per_fra
 
     // The image stays close to the per-frame HCB with the same VPLs.
     let cached = r.readback("final.hdr").expect("final").data;
-    let mut p = renderer(size, |s| s.hcb.cache = false);
+    let mut p = renderer(size, |s| {
+        s.hcb.cache = false;
+        s.vpl.count = 64;
+    });
     let per_frame_stats = frame(&mut p);
     let per_frame = p.readback("final.hdr").expect("final").data;
     let img = |d: Vec<[f32; 4]>| gi_render::ImageF32 { width: size, height: size, data: d };

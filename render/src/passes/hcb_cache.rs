@@ -59,6 +59,23 @@ impl CacheCounts {
     }
 }
 
+impl std::fmt::Display for CacheCounts {
+    /// One line, aligned for a column of frames.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{:>7} samples = {:>7} cached + {:>6} new; {:>6} recomputed; removed {:>5} invalid, {:>5} surplus, {:>5} outside the view",
+            self.total,
+            self.cached,
+            self.new_samples(),
+            self.recomputed,
+            self.invalid,
+            self.surplus,
+            self.dropped
+        )
+    }
+}
+
 /// What the cache update needs of the frame.
 #[derive(Clone, Copy, Debug)]
 pub struct CacheFrame {
