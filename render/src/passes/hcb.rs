@@ -421,6 +421,35 @@ impl HcbPass {
         );
     }
 
+    /// The bind group of `shaders/hcb/samples.wgsl` (mask, clear and sample passes) over the
+    /// parameter slots: `views` = level normal, mask out, mask in, `hcb.samples`, level
+    /// position, `hcb.cache`, `hcb.recompute_group`.
+    fn sample_group(&self, ctx: &GpuContext, views: [&wgpu::TextureView; 7]) -> wgpu::BindGroup {
+        let tv = wgpu::BindingResource::TextureView;
+        let uniform = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &self.params,
+            offset: 0,
+            size: std::num::NonZeroU64::new(std::mem::size_of::<HcbParams>() as u64),
+        });
+        let [normal, mask_out, mask_in, samples, position, cache, group] = views;
+        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("hcb.samples.inputs"),
+            layout: &self.sample_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: uniform },
+                wgpu::BindGroupEntry { binding: 1, resource: tv(normal) },
+                wgpu::BindGroupEntry { binding: 2, resource: tv(mask_out) },
+                wgpu::BindGroupEntry { binding: 3, resource: tv(mask_in) },
+                wgpu::BindGroupEntry { binding: 4, resource: tv(samples) },
+                wgpu::BindGroupEntry { binding: 5, resource: self.counter.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 6, resource: tv(position) },
+                wgpu::BindGroupEntry { binding: 7, resource: self.list.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 8, resource: tv(cache) },
+                wgpu::BindGroupEntry { binding: 9, resource: tv(group) },
+            ],
+        })
+    }
+
     /// Clears `hcb.samples` and the cache's `recompute_group` before the cache pass marks the
     /// reused samples (§5.1) and [`Self::run`] the new ones.
     pub fn clear_marks(
@@ -437,30 +466,8 @@ impl HcbPass {
         let (samples, mask_out, mask_in, level) =
             (view(&self.samples), view(&self.dummy_storage), view(&self.dummy_sampled), view(&self.levels[0].normal));
         let dummies = self.dummy_cache.each_ref().map(view);
-        let tv = wgpu::BindingResource::TextureView;
-        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("hcb.samples.clear"),
-            layout: &self.sample_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: &self.params,
-                        offset: 0,
-                        size: std::num::NonZeroU64::new(std::mem::size_of::<HcbParams>() as u64),
-                    }),
-                },
-                wgpu::BindGroupEntry { binding: 1, resource: tv(&level) },
-                wgpu::BindGroupEntry { binding: 2, resource: tv(&mask_out) },
-                wgpu::BindGroupEntry { binding: 3, resource: tv(&mask_in) },
-                wgpu::BindGroupEntry { binding: 4, resource: tv(&samples) },
-                wgpu::BindGroupEntry { binding: 5, resource: self.counter.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 6, resource: tv(&mask_in) },
-                wgpu::BindGroupEntry { binding: 7, resource: self.list.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 8, resource: tv(&dummies[1]) },
-                wgpu::BindGroupEntry { binding: 9, resource: tv(recompute_group) },
-            ],
-        });
+        let group =
+            self.sample_group(ctx, [&level, &mask_out, &mask_in, &samples, &mask_in, &dummies[1], recompute_group]);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("hcb.samples.clear"),
             timestamp_writes: None,
@@ -545,22 +552,7 @@ impl HcbPass {
                             normal: &wgpu::TextureView,
                             mask_out: &wgpu::TextureView,
                             mask_in: &wgpu::TextureView| {
-            ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("hcb.samples.inputs"),
-                layout: &self.sample_layout,
-                entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: uniform.clone() },
-                    wgpu::BindGroupEntry { binding: 1, resource: tv(normal) },
-                    wgpu::BindGroupEntry { binding: 2, resource: tv(mask_out) },
-                    wgpu::BindGroupEntry { binding: 3, resource: tv(mask_in) },
-                    wgpu::BindGroupEntry { binding: 4, resource: tv(&samples_view) },
-                    wgpu::BindGroupEntry { binding: 5, resource: self.counter.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 6, resource: tv(position) },
-                    wgpu::BindGroupEntry { binding: 7, resource: self.list.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 8, resource: tv(cache_view) },
-                    wgpu::BindGroupEntry { binding: 9, resource: tv(group_view) },
-                ],
-            })
+            self.sample_group(ctx, [normal, mask_out, mask_in, &samples_view, position, cache_view, group_view])
         };
         // Mask k − 1 from level k's coherence; the top's mask stays all outside.
         let mask_groups: Vec<wgpu::BindGroup> =
