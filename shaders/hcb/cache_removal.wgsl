@@ -25,12 +25,8 @@ fn vs_removal(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) ->
         out.clip = vec4<f32>(-2.0, -2.0, 0.5, 1.0);
         return out;
     }
-    let corners = array<vec2<f32>, 6>(
-        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, -1.0), vec2<f32>(1.0, 1.0),
-        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, 1.0), vec2<f32>(-1.0, 1.0),
-    );
     let half = select(0.5, 0.5 * cp.limits.z, st == INVALID);
-    let pixel = vec2<f32>(unpack_pixel(s.texel.w)) + 0.5 + corners[v % 6u] * half;
+    let pixel = vec2<f32>(unpack_pixel(s.texel.w)) + 0.5 + quad_corner(v) * half;
     let ndc = vec2<f32>(pixel.x * camera.viewport.z * 2.0 - 1.0, 1.0 - pixel.y * camera.viewport.w * 2.0);
     // Invalid samples nearer than valid ones: the depth test lets the quads clear them.
     out.clip = vec4<f32>(ndc, select(0.75, 0.25, st == INVALID), 1.0);

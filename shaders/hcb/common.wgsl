@@ -41,6 +41,15 @@ fn indirect_words(instances: u32, items: u32) -> array<u32, 8> {
     return array<u32, 8>(6u, instances, 0u, 0u, min(groups, 65535u), max((groups + 65534u) / 65535u, 1u), 1u, 0u);
 }
 
+// Corner of vertex `v` of a quad drawn as two triangles (6 vertices), in [−1, 1]².
+fn quad_corner(v: u32) -> vec2<f32> {
+    var corners = array<vec2<f32>, 6>(
+        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, -1.0), vec2<f32>(1.0, 1.0),
+        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, 1.0), vec2<f32>(-1.0, 1.0),
+    );
+    return corners[v % 6u];
+}
+
 fn sample_level(s: HcbSample) -> u32 {
     return s.texel.z & 0xffu;
 }

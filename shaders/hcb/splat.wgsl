@@ -26,11 +26,7 @@ fn vs_splat(@builtin(vertex_index) v: u32, @builtin(instance_index) instance: u3
     let i = instance + select(0u, counter[1], hp.level.x == 1u);
     out.index = i;
     let s = samples[i];
-    let corners = array<vec2<f32>, 6>(
-        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, -1.0), vec2<f32>(1.0, 1.0),
-        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, 1.0), vec2<f32>(-1.0, 1.0),
-    );
-    let corner = corners[v % 6u];
+    let corner = quad_corner(v);
     let depth = -(camera.view * vec4<f32>(s.position.xyz, 1.0)).z;
     let c = camera.view_proj * vec4<f32>(s.position.xyz, 1.0);
     if (depth <= s.position.w || c.w <= 0.0) {
