@@ -1,0 +1,127 @@
+//! Materials (§3.9) and textures (§3.8), with KHR_texture_transform.
+
+use glam::{Mat3, Vec2, Vec3, Vec4};
+
+use super::container::{decode_data_uri, is_data_uri};
+use super::{Loader, SceneError, UvUse};
+use crate::scene::{Material, TextureImage};
+
+impl Loader<'_> {
+    // -----------------------------------------------------------------------------------
+    // Materials and textures (§3.9, §3.8)
+    // -----------------------------------------------------------------------------------
+
+    /// Loads glTF material `index` (None: the default material of §3.9.6) as a scene material.
+    pub(super) fn material(&mut self, index: Option<usize>) -> Result<usize, SceneError> {
+        if let Some(&m) = self.material_map.get(&index) {
+            return Ok(m);
+        }
+        let (material, uv) = match index {
+            None => (Material::default(), UvUse::default()),
+            Some(i) => {
+                let root = self.root;
+                let m = root
+                    .materials
+                    .get(i)
+                    .ok_or_else(|| self.invalid(format!("a primitive refers to material {i}, which does not exist")))?;
+                let pbr = &m.pbr_metallic_roughness;
+                let (texture, uv) = match &pbr.base_color_texture {
+                    Some(info) => {
+                        let transform = info.extensions.as_ref().and_then(|e| e.texture_transform.as_ref());
+                        let uv = UvUse {
+                            set: transform.and_then(|t| t.tex_coord).unwrap_or(info.tex_coord),
+                            transform: transform.map(|t| uv_transform(t.offset.0, t.rotation.0, t.scale.0)),
+                        };
+                        (self.texture(info.index.value())?, uv)
+                    }
+                    None => (None, UvUse::default()),
+                };
+                let strength = m
+                    .extensions
+                    .as_ref()
+                    .and_then(|e| e.emissive_strength.as_ref())
+                    .map_or(1.0, |s| s.emissive_strength.0);
+                let material = Material {
+                    name: m.name.clone().unwrap_or_else(|| format!("material {i}")),
+                    base_color: Vec4::from_array(pbr.base_color_factor.0),
+                    base_color_texture: texture,
+                    metallic: pbr.metallic_factor.0.clamp(0.0, 1.0),
+                    roughness: pbr.roughness_factor.0.clamp(0.0, 1.0),
+                    emissive: (Vec3::from(m.emissive_factor.0) * strength).max(Vec3::ZERO),
+                    sample_weight: 1.0,
+                    double_sided: m.double_sided,
+                    specular_override: None,
+                };
+                (material, uv)
+            }
+        };
+        self.scene.materials.push(material);
+        self.material_uv.push(uv);
+        let id = self.scene.materials.len() - 1;
+        self.material_map.insert(index, id);
+        Ok(id)
+    }
+
+    /// Loads the image of texture `index` (decoded to RGBA8; shared between textures that
+    /// use the same image). A texture without an image (extension-only source) is skipped.
+    fn texture(&mut self, index: usize) -> Result<Option<usize>, SceneError> {
+        let root = self.root;
+        let tex = root
+            .textures
+            .get(index)
+            .ok_or_else(|| self.invalid(format!("a material refers to texture {index}, which does not exist")))?;
+        let image = tex.source.value();
+        if image == u32::MAX as usize {
+            self.warn(format!("texture {index} has no image in a supported format and is ignored"));
+            return Ok(None);
+        }
+        if let Some(&t) = self.image_map.get(&image) {
+            return Ok(Some(t));
+        }
+        let img = root
+            .images
+            .get(image)
+            .ok_or_else(|| self.invalid(format!("texture {index} refers to image {image}, which does not exist")))?;
+        let name = img.name.clone().unwrap_or_else(|| format!("image {image}"));
+        let missing = |uri: &str, reason: String| SceneError::MissingImage {
+            file: self.file.to_string(),
+            image,
+            uri: uri.to_string(),
+            reason,
+        };
+        let encoded: Vec<u8> =
+            match (img.buffer_view, img.uri.as_deref()) {
+                (Some(view), _) => self.view_bytes(view.value()).map_err(|r| missing("bufferView", r))?.to_vec(),
+                (None, Some(uri)) if is_data_uri(uri) => decode_data_uri(uri).map_err(|reason| {
+                    SceneError::BadDataUri { file: self.file.to_string(), what: format!("image {image}"), reason }
+                })?,
+                (None, Some(uri)) => self.read_external(uri, &format!("image {image}"), |r| missing(uri, r))?,
+                (None, None) => return Err(self.invalid(format!("image {image} has neither a uri nor a bufferView"))),
+            };
+        let decoded = image::load_from_memory(&encoded).map_err(|e| SceneError::Image {
+            file: self.file.to_string(),
+            image,
+            name: name.clone(),
+            reason: e.to_string(),
+        })?;
+        let rgba = decoded.to_rgba8();
+        self.scene.textures.push(TextureImage {
+            name,
+            width: rgba.width(),
+            height: rgba.height(),
+            rgba8: rgba.into_raw(),
+        });
+        let id = self.scene.textures.len() - 1;
+        self.image_map.insert(image, id);
+        Ok(Some(id))
+    }
+}
+
+/// KHR_texture_transform's UV matrix: translation × rotation × scale, with the rotation
+/// matrix of the ratified extension text (columns (cos, −sin), (sin, cos)).
+pub(super) fn uv_transform(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> Mat3 {
+    let (s, c) = rotation.sin_cos();
+    let t = Mat3::from_translation(Vec2::from(offset));
+    let r = Mat3::from_cols(Vec3::new(c, -s, 0.0), Vec3::new(s, c, 0.0), Vec3::Z);
+    t * r * Mat3::from_scale(Vec2::from(scale))
+}
