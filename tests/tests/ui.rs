@@ -7,8 +7,8 @@ use std::path::PathBuf;
 
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
-use gi_lab::app::GiLabApp;
-use gi_lab::cli::AppArgs;
+use gi_lab::args::AppArgs;
+use gi_lab::ui::app::GiLabApp;
 use gi_render::LabSettings;
 use gi_render::settings::{FieldKind, Value};
 
@@ -30,7 +30,7 @@ fn args_in(dir: &std::path::Path, fresh: bool) -> AppArgs {
 fn harness_with(args: AppArgs, size: egui::Vec2) -> Harness<'static, GiLabApp> {
     Harness::builder()
         .with_size(size)
-        .wgpu_setup(gi_lab::app::wgpu_setup())
+        .wgpu_setup(gi_lab::ui::wgpu_setup())
         .build_eframe(move |cc| GiLabApp::new(cc, args))
 }
 
@@ -134,7 +134,7 @@ fn every_setting_has_a_widget_that_changes_the_renderer() {
         let first = format!("{group}.{}", fields[0].name);
         if h.query_by_label(&first).is_none() {
             // A section that starts collapsed: open it.
-            h.get_by_label(&gi_lab::settings_ui::section_title(group)).click();
+            h.get_by_label(&gi_lab::ui::settings_ui::section_title(group)).click();
             h.run_steps(2);
         }
         for m in fields {
@@ -245,7 +245,7 @@ fn probe_shows_the_values_of_a_cpu_readback() {
     }
     // The Probes panel prints them.
     let hdr = st.hover_values.iter().find(|v| v.name == "final.hdr").expect("final.hdr probed");
-    let text = gi_lab::panes::format_value(hdr.value);
+    let text = gi_lab::ui::panes::format_value(hdr.value);
     assert!(h.query_all_by_label(&text).next().is_some(), "the Probes panel does not show final.hdr = {text}");
     // A click pins a probe there.
     h.get_by_label("Viewport");
@@ -361,7 +361,7 @@ fn the_ab_split_renders_both_sides() {
     pause(&mut h);
     h.run_steps(2);
     // B: the current (lit) settings, frozen. A: then switched to no light at all.
-    h.state_mut().state.start_ab(gi_lab::ab::AbSource::Frozen);
+    h.state_mut().state.start_ab(gi_lab::ui::ab::AbSource::Frozen);
     if let Ok(l) = &mut h.state_mut().state.lab {
         l.settings.direct.intensity_scale = 0.0;
         l.apply_settings();
@@ -390,7 +390,7 @@ fn the_ab_split_renders_both_sides() {
     // Measured: the unlit A side is black (mean 0.1 of 255), the lit B side 17.4.
     assert!(left < 2.0 && right > 8.0, "A (unlit) left {left:.1} should be black, B (lit) right {right:.1} lit");
     // The FLIP view measures the two.
-    h.state_mut().state.ab.as_mut().expect("ab").view = gi_lab::ab::AbView::Flip;
+    h.state_mut().state.ab.as_mut().expect("ab").view = gi_lab::ui::ab::AbView::Flip;
     h.run_steps(2);
     let (flip, rmse) = h.state().state.ab.as_ref().and_then(|a| a.metrics).expect("FLIP and RMSE computed");
     assert!(flip > 0.1 && rmse > 0.0, "FLIP {flip}, RMSE {rmse}");
@@ -455,13 +455,13 @@ fn shader_hot_reload_keeps_the_last_good_pipeline_and_shows_the_error() {
 fn every_settings_text_has_glyphs() {
     let mut texts: Vec<String> = Vec::new();
     for (group, fields) in LabSettings::groups() {
-        texts.push(gi_lab::settings_ui::section_title(group));
+        texts.push(gi_lab::ui::settings_ui::section_title(group));
         for m in fields {
-            texts.push(gi_lab::settings_ui::tooltip(m));
+            texts.push(gi_lab::ui::settings_ui::tooltip(m));
             texts.push(m.labels.join(" "));
         }
     }
-    for (k, what) in gi_lab::app::SHORTCUTS {
+    for (k, what) in gi_lab::ui::menus::SHORTCUTS {
         texts.push(format!("{k} {what}"));
     }
     let mut h = Harness::new_ui(move |ui| {
@@ -535,6 +535,6 @@ fn the_settings_pane_shows_table_1_and_the_cache_counts_for_the_hcb() {
     }
     // The technique picker names the cached HCB.
     let settings = h.state().state.lab.as_ref().map(|l| l.settings.clone()).expect("lab");
-    let current = gi_lab::settings_ui::TECHNIQUES.iter().find(|t| (t.is)(&settings)).map(|t| t.name);
+    let current = gi_lab::ui::settings_ui::TECHNIQUES.iter().find(|t| (t.is)(&settings)).map(|t| t.name);
     assert_eq!(current, Some("Hierarchical coherence buffer with the sample cache (Nguyen)"));
 }

@@ -126,7 +126,7 @@ impl Viewer {
                 self.error = None;
                 let Some(out) = gpu.output() else { return };
                 self.size = (out.width(), out.height());
-                self.texture = Some(crate::app::native_texture(render_state, &mut self.slot, out, recreated));
+                self.texture = Some(crate::ui::lab::native_texture(render_state, &mut self.slot, out, recreated));
             }
             Err(e) => self.error = Some(e.to_string()),
         }
@@ -323,7 +323,7 @@ impl Viewer {
     /// Saves the view as PNG and the raw buffer as EXR into `captures/`.
     pub fn capture(&self, renderer: &Renderer) -> String {
         let dir = std::path::PathBuf::from("captures");
-        let stamp = crate::app::capture_stamp();
+        let stamp = crate::ui::capture::capture_stamp();
         let base = dir.join(format!("{}-{stamp}", self.state.buffer));
         let result = (|| -> Result<String, String> {
             std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;

@@ -8,8 +8,9 @@ use clap::Args;
 use gi_render::settings::{FieldKind, Value};
 use gi_render::{LabSettings, Renderer};
 
-use crate::cli::{CliError, SceneArgs};
+use crate::error::CliError;
 use crate::plot::{Anchor, Canvas, tick_label, ticks};
+use crate::scene_args::SceneArgs;
 
 #[derive(Args, Debug, Clone)]
 pub struct SweepArgs {
@@ -20,7 +21,7 @@ pub struct SweepArgs {
     /// every combination is rendered.
     #[arg(long = "param", value_name = "GROUP.FIELD=FROM..TO:STEPS", required = true)]
     pub params: Vec<String>,
-    #[arg(long, default_value = "256x256", value_parser = crate::cli::parse_size)]
+    #[arg(long, default_value = "256x256", value_parser = super::parse_size)]
     pub size: (u32, u32),
     /// Timed frames per point (after 3 warm-up frames); the scene is paused at time 0.
     #[arg(long, default_value_t = 10)]
@@ -267,7 +268,7 @@ pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
     }
     let params: Vec<Param> =
         args.params.iter().map(|s| parse_param(s)).collect::<Result<_, _>>().map_err(CliError::input)?;
-    let base = crate::cli::load_settings(&args.scene)?;
+    let base = crate::scene_args::load_settings(&args.scene)?;
     let points = grid(&params);
     // Every point is checked before anything renders.
     let mut settings = Vec::with_capacity(points.len());
@@ -284,12 +285,12 @@ pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
         settings.push(s);
     }
     std::fs::create_dir_all(&args.out).map_err(|e| CliError::input(format!("--out {}: {e}", args.out.display())))?;
-    let mut r = crate::cli::renderer(&args.scene, args.size)?;
+    let mut r = super::renderer(&args.scene, args.size)?;
     r.clock.playing = false;
     r.clock.anim_frame = 0;
 
     let reference = match &args.reference {
-        Some(path) => crate::cli::load_image(path)?.0,
+        Some(path) => super::compare::load_image(path)?.0,
         None => {
             use gi_render::lab_settings::IndirectTechnique;
             let bounces = match base.indirect.technique {
@@ -319,7 +320,7 @@ pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
     for (pt, s) in points.iter().zip(settings) {
         r.set_settings(s).map_err(|e| CliError::input(format!("point {pt:?}: {e}")))?;
         r.reset_history();
-        let report = crate::cli::bench_run(&mut r, args.frames, "sweep");
+        let report = super::bench::bench_run(&mut r, args.frames, "sweep");
         let hdr = r.readback("final.hdr").map_err(|e| CliError::failure(e.to_string()))?;
         let metric = |e: gi_render::metrics::MetricError| CliError::input(format!("reference: {e}"));
         let rmse = gi_render::metrics::rmse(&hdr, &reference).map_err(metric)?;
@@ -327,7 +328,7 @@ pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
             gi_render::metrics::flip(&gi_render::image_io::hdr_display(&hdr), &display_ref).map_err(metric)?;
         r.set_flip_map(&map);
         let flicker = if args.flicker_frames >= 2 {
-            Some(crate::cli::measure_flicker(&mut r, args.flicker_frames)?)
+            Some(super::bench::measure_flicker(&mut r, args.flicker_frames)?)
         } else {
             None
         };

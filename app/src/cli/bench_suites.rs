@@ -12,7 +12,8 @@ use gi_render::Renderer;
 use gi_render::lab_settings::IndirectTechnique;
 use gi_render::passes::vpl_bounce::BounceMethod;
 
-use crate::cli::{BenchReport, CliError, bench_run};
+use super::bench::{BenchReport, bench_run};
+use crate::error::CliError;
 
 /// One row: what changed, and the measured frame (None: refused, with the reason).
 #[derive(Debug, Clone, serde::Serialize)]

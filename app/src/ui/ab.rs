@@ -120,7 +120,7 @@ impl Ab {
     /// B's final image as an egui texture.
     pub fn texture_b(&mut self, rs: &egui_wgpu::RenderState) -> (egui::TextureId, (u32, u32)) {
         let t = self.b.final_ldr().clone();
-        let id = crate::app::native_texture(rs, &mut self.texture_b, &t, false);
+        let id = crate::ui::lab::native_texture(rs, &mut self.texture_b, &t, false);
         (id, (t.width(), t.height()))
     }
 

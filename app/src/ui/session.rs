@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use gi_render::camera::Camera;
 use serde::{Deserialize, Serialize};
 
-use crate::viewer::ViewerState;
+use crate::ui::viewer::ViewerState;
 
 /// The panels of the lab (egui_tiles panes).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -1,0 +1,280 @@
+//! `gi-lab bench`: per-pass times of rendered frames, with flicker, afterglow and quality
+//! against a reference; `--suite` runs the suites of `bench_suites`.
+
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+use gi_render::Renderer;
+
+use super::compare::load_image;
+use super::{parse_size, renderer};
+use crate::error::CliError;
+use crate::scene_args::SceneArgs;
+
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Measured frames (after 3 warm-up frames).
+    #[arg(long, default_value_t = 30)]
+    pub frames: u32,
+    /// Frames of the paused scene over which temporal flicker is measured (0: skip).
+    #[arg(long, default_value_t = 8)]
+    pub flicker_frames: u32,
+    /// Frames over which the afterglow of a sudden light change is measured (0: skip).
+    #[arg(long, default_value_t = 12)]
+    pub afterglow_frames: u32,
+    /// A ground-truth EXR of the same scene, camera and size at animation time 0 (`gi-lab
+    /// reference`): adds FLIP and RMSE of final.hdr at time 0 against it.
+    #[arg(long)]
+    pub reference: Option<PathBuf>,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// Run a suite of rows instead of one configuration: `knecht` reproduces the shape of
+    /// `knecht`: Knecht's Tables 5.1–5.3 (frame time against VPL count and ISM size, the
+    /// temporal coherence overhead, multi-bounce against IRSM); `nguyen`: the HCB against
+    /// gathering at every pixel at 1024 VPLs, with the samples' share of the pixels. Both
+    /// start from --preset.
+    #[arg(long, value_enum)]
+    pub suite: Option<BenchSuite>,
+}
+
+/// Benchmark suites of `gi-lab bench --suite`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BenchSuite {
+    Knecht,
+    Nguyen,
+}
+
+/// Per-pass statistics of a benchmark run.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct PassStats {
+    pub pass: String,
+    pub mean_ms: f64,
+    pub min_ms: f64,
+    pub max_ms: f64,
+}
+
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct BenchReport {
+    pub adapter: String,
+    pub timing_source: String,
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub frames: u32,
+    pub passes: Vec<PassStats>,
+    pub total_mean_ms: f64,
+    /// Temporal flicker of final.hdr with the animation paused and the camera still
+    /// (`metrics::flicker`); None when not measured.
+    pub flicker: Option<f64>,
+    /// Quality against `--reference`: mean FLIP (tone-mapped x/(1+x)) and RMSE (linear).
+    pub flip: Option<f64>,
+    pub rmse: Option<f64>,
+    /// Frames until the error against the settled image returns within 2× its steady state
+    /// after the first light's intensity is halved (`metrics::afterglow`); None when not
+    /// measured or when it did not settle.
+    pub afterglow_frames: Option<usize>,
+}
+
+/// Renders warm-up and measured frames and aggregates the per-pass times.
+pub fn bench_run(r: &mut Renderer, frames: u32, scene_name: &str) -> BenchReport {
+    for _ in 0..3 {
+        r.render_frame();
+    }
+    let mut names: Vec<String> = Vec::new();
+    let mut samples: Vec<Vec<f64>> = Vec::new();
+    for _ in 0..frames {
+        for t in r.render_frame() {
+            let i = match names.iter().position(|n| *n == t.name) {
+                Some(i) => i,
+                None => {
+                    names.push(t.name.clone());
+                    samples.push(Vec::new());
+                    names.len() - 1
+                }
+            };
+            samples[i].push(t.ms);
+        }
+    }
+    let passes: Vec<PassStats> = names
+        .into_iter()
+        .zip(samples)
+        .map(|(pass, s)| PassStats {
+            pass,
+            mean_ms: s.iter().sum::<f64>() / s.len().max(1) as f64,
+            min_ms: s.iter().copied().fold(f64::INFINITY, f64::min),
+            max_ms: s.iter().copied().fold(0.0, f64::max),
+        })
+        .collect();
+    let (width, height) = r.size();
+    BenchReport {
+        adapter: r.ctx.adapter_summary(),
+        timing_source: format!("{:?}", r.timing_source()),
+        scene: scene_name.to_string(),
+        width,
+        height,
+        frames,
+        total_mean_ms: passes.iter().map(|p| p.mean_ms).sum(),
+        passes,
+        flicker: None,
+        flip: None,
+        rmse: None,
+        afterglow_frames: None,
+    }
+}
+
+pub fn format_bench_table(b: &BenchReport) -> String {
+    let mut s = format!(
+        "GI Lab bench — {} at {}×{}, {} frames, {} ({})\n",
+        b.scene, b.width, b.height, b.frames, b.adapter, b.timing_source
+    );
+    s += &format!("{:<16} {:>10} {:>10} {:>10}\n", "pass", "mean ms", "min ms", "max ms");
+    for p in &b.passes {
+        s += &format!("{:<16} {:>10.3} {:>10.3} {:>10.3}\n", p.pass, p.mean_ms, p.min_ms, p.max_ms);
+    }
+    s += &format!("{:<16} {:>10.3}\n", "total", b.total_mean_ms);
+    if let Some(f) = b.flicker {
+        s += &format!("flicker (static scene) {f:.6}\n");
+    }
+    if let Some(a) = b.afterglow_frames {
+        s += &format!("afterglow (first light halved) {a} frames\n");
+    }
+    if let (Some(flip), Some(rmse)) = (b.flip, b.rmse) {
+        s += &format!("quality vs reference: FLIP {flip:.4}, RMSE {rmse:.5}\n");
+    }
+    s
+}
+
+/// Temporal flicker over `frames` frames with the animation paused (the clock restored).
+pub fn measure_flicker(r: &mut Renderer, frames: u32) -> Result<f64, CliError> {
+    let playing = r.clock.playing;
+    r.clock.playing = false;
+    let mut images = Vec::new();
+    for _ in 0..frames {
+        r.render_frame();
+        images.push(r.readback("final.hdr").map_err(|e| CliError::failure(e.to_string()))?);
+    }
+    r.clock.playing = playing;
+    gi_render::metrics::flicker(&images).map_err(|e| CliError::input(format!("--flicker-frames: {e}")))
+}
+
+/// Afterglow of a sudden light change: the first light's intensity is halved and the RMSE of
+/// each of the next `frames` frames is taken against the image the renderer settles on when
+/// it starts with the halved light (`frames` frames after a history reset). The scene is
+/// paused; the light and the clock are restored afterwards. None when the scene has no light
+/// or the error does not settle.
+pub fn measure_afterglow(r: &mut Renderer, frames: u32) -> Result<Option<usize>, CliError> {
+    let Some(li) = r.scene().lights.iter().position(|_| true) else { return Ok(None) };
+    let clock = r.clock;
+    r.clock.playing = false;
+    let original = r.scene().lights[li].intensity;
+    let read = |r: &Renderer| r.readback("final.hdr").map_err(|e| CliError::failure(e.to_string()));
+    let run = |r: &mut Renderer, intensity: f32, reset: bool| {
+        r.scene_mut().lights[li].intensity = intensity;
+        if reset {
+            r.reset_history();
+        }
+    };
+    run(r, original * 0.5, true);
+    for _ in 0..frames {
+        r.render_frame();
+    }
+    let settled = read(r)?;
+    run(r, original, true);
+    for _ in 0..frames {
+        r.render_frame();
+    }
+    // The sudden change: no reset, the renderer must notice by itself.
+    run(r, original * 0.5, false);
+    let mut errors = Vec::with_capacity(frames as usize);
+    for _ in 0..frames {
+        r.render_frame();
+        let e = gi_render::metrics::rmse(&read(r)?, &settled).map_err(|e| CliError::failure(e.to_string()))?;
+        errors.push(e);
+    }
+    run(r, original, true);
+    r.clock = clock;
+    Ok(gi_render::metrics::afterglow(&errors, 0))
+}
+
+/// FLIP (tone-mapped) and RMSE (linear) of the renderer's final.hdr against a reference of
+/// the scene at animation time 0 (as `gi-lab reference` renders it): the clock is set back
+/// to 0 and paused for that frame.
+pub fn quality_against(r: &mut Renderer, reference: &Path) -> Result<(f64, f64), CliError> {
+    let (reference_img, _) = load_image(reference)?;
+    let clock = r.clock;
+    r.clock.anim_frame = 0;
+    r.clock.playing = false;
+    r.render_frame();
+    r.clock = clock;
+    let hdr = r.readback("final.hdr").map_err(|e| CliError::failure(e.to_string()))?;
+    let err = |e: gi_render::metrics::MetricError| CliError::input(format!("--reference {}: {e}", reference.display()));
+    let rmse = gi_render::metrics::rmse(&hdr, &reference_img).map_err(err)?;
+    let (flip, map) = gi_render::metrics::flip(
+        &gi_render::image_io::hdr_display(&hdr),
+        &gi_render::image_io::hdr_display(&reference_img),
+    )
+    .map_err(err)?;
+    r.set_flip_map(&map);
+    Ok((flip, rmse))
+}
+
+pub(super) fn bench(args: &BenchArgs) -> Result<(), CliError> {
+    if args.frames == 0 {
+        return Err(CliError::input("--frames must be at least 1"));
+    }
+    let mut r = renderer(&args.scene, args.size)?;
+    if !gi_render::timing::GpuTimer::timestamps_reliable(&r.ctx) {
+        // A software device's timestamps land in the wrong passes: time each pass by the
+        // wall clock instead (each scope is submitted and awaited on its own).
+        r.set_timing_source(gi_render::timing::TimingSource::CpuWallClock);
+    }
+    let name =
+        args.scene.scene.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| "default Cornell box".into());
+    if let Some(BenchSuite::Knecht) = args.suite {
+        let report = super::bench_suites::knecht(&mut r, args.frames, &name)?;
+        if args.json {
+            println!("{}", serde_json::to_string_pretty(&report).map_err(|e| CliError::failure(e.to_string()))?);
+        } else {
+            print!("{}", super::bench_suites::format(&report));
+        }
+        return Ok(());
+    }
+    if let Some(BenchSuite::Nguyen) = args.suite {
+        let report = super::bench_suites::nguyen(&mut r, args.frames, &name)?;
+        if args.json {
+            println!("{}", serde_json::to_string_pretty(&report).map_err(|e| CliError::failure(e.to_string()))?);
+        } else {
+            print!("{}", super::bench_suites::format_nguyen(&report));
+        }
+        return Ok(());
+    }
+    let mut report = bench_run(&mut r, args.frames, &name);
+    if args.flicker_frames == 1 {
+        return Err(CliError::input("--flicker-frames must be 0 or at least 2"));
+    }
+    if args.flicker_frames >= 2 {
+        report.flicker = Some(measure_flicker(&mut r, args.flicker_frames)?);
+    }
+    if args.afterglow_frames > 0 && args.afterglow_frames < 4 {
+        return Err(CliError::input("--afterglow-frames must be 0 or at least 4"));
+    }
+    if args.afterglow_frames >= 4 {
+        report.afterglow_frames = measure_afterglow(&mut r, args.afterglow_frames)?;
+    }
+    if let Some(reference) = &args.reference {
+        let (flip, rmse) = quality_against(&mut r, reference)?;
+        report.flip = Some(flip);
+        report.rmse = Some(rmse);
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report).map_err(|e| CliError::failure(e.to_string()))?);
+    } else {
+        print!("{}", format_bench_table(&report));
+    }
+    Ok(())
+}

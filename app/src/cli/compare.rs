@@ -1,0 +1,78 @@
+//! `gi-lab compare`: RMSE, relative MSE and mean FLIP of two images.
+
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+
+use crate::error::CliError;
+
+#[derive(Args, Debug)]
+pub struct CompareArgs {
+    /// The test image.
+    pub test: PathBuf,
+    /// The reference image (same size).
+    pub reference: PathBuf,
+    /// Write the FLIP error map here (PNG, turbo false colour).
+    #[arg(long)]
+    pub flip_map: Option<PathBuf>,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Metrics of one image pair.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct CompareReport {
+    /// Whether the inputs were float (HDR) images; FLIP then runs on their tone-mapped
+    /// versions (x / (1 + x), sRGB).
+    pub hdr: bool,
+    pub rmse: f64,
+    pub rel_mse: f64,
+    pub flip: f64,
+}
+
+/// Loads an image as f32 RGBA: EXR and other float formats as linear values, 8-bit images
+/// as their display values in [0, 1]. Returns whether it was a float image.
+pub fn load_image(path: &Path) -> Result<(gi_render::ImageF32, bool), CliError> {
+    let img = image::open(path).map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
+    let float = matches!(img.color(), image::ColorType::Rgb32F | image::ColorType::Rgba32F);
+    let rgba = img.into_rgba32f();
+    Ok((
+        gi_render::ImageF32 { width: rgba.width(), height: rgba.height(), data: rgba.pixels().map(|p| p.0).collect() },
+        float,
+    ))
+}
+
+/// Compares two image files.
+pub fn compare_files(test: &Path, reference: &Path, flip_map: Option<&Path>) -> Result<CompareReport, CliError> {
+    use gi_render::metrics;
+    let (t, t_float) = load_image(test)?;
+    let (r, r_float) = load_image(reference)?;
+    let hdr = t_float && r_float;
+    let err = |e: metrics::MetricError| CliError::input(format!("{} vs {}: {e}", test.display(), reference.display()));
+    let rmse = metrics::rmse(&t, &r).map_err(err)?;
+    let rel_mse = metrics::rel_mse(&t, &r).map_err(err)?;
+    let display = |i: &gi_render::ImageF32| if hdr { gi_render::image_io::hdr_display(i) } else { i.clone() };
+    let (flip, map) = metrics::flip(&display(&t), &display(&r)).map_err(err)?;
+    if let Some(path) = flip_map {
+        let mut png = image::RgbaImage::new(map.width, map.height);
+        for (px, e) in png.pixels_mut().zip(&map.data) {
+            let [r, g, b] = gi_render::image_io::turbo(e[0]);
+            *px = image::Rgba([r, g, b, 1.0].map(|x| (x * 255.0).round() as u8));
+        }
+        png.save(path).map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
+    }
+    Ok(CompareReport { hdr, rmse, rel_mse, flip })
+}
+
+pub(super) fn compare(args: &CompareArgs) -> Result<(), CliError> {
+    let r = compare_files(&args.test, &args.reference, args.flip_map.as_deref())?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&r).map_err(|e| CliError::failure(e.to_string()))?);
+    } else {
+        println!("RMSE     {:.6}{}", r.rmse, if r.hdr { " (linear HDR)" } else { " (display values)" });
+        println!("relMSE   {:.6}", r.rel_mse);
+        println!("FLIP     {:.6} (mean{})", r.flip, if r.hdr { ", on tone-mapped images" } else { "" });
+    }
+    Ok(())
+}

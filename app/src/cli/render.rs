@@ -1,0 +1,94 @@
+//! `gi-lab render`: headless frames to final.png plus the named buffers.
+
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+use gi_render::Renderer;
+
+use super::{parse_size, renderer};
+use crate::error::CliError;
+use crate::scene_args::SceneArgs;
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Image size.
+    #[arg(long, default_value = "512x512", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Frames to render (animation advances by the fixed time step).
+    #[arg(long, default_value_t = 1)]
+    pub frames: u32,
+    /// Keep the animation at time 0 for every frame (e.g. to let the exact-VPL reference
+    /// accumulate: `--paused --frames 64 --set indirect.technique=ExactVpl`).
+    #[arg(long)]
+    pub paused: bool,
+    /// A buffer to write besides final.png (repeatable; see `gi-lab buffers`); `NAME@K`
+    /// picks array layer K (e.g. `direct.shadow_map@2`).
+    #[arg(long = "buffer")]
+    pub buffers: Vec<String>,
+    /// Output folder (created).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Splits `NAME@LAYER` into the buffer name and the array layer (0 without `@`).
+pub fn parse_buffer_spec(spec: &str) -> Result<(&str, u32), CliError> {
+    match spec.rsplit_once('@') {
+        None => Ok((spec, 0)),
+        Some((name, layer)) => layer
+            .parse()
+            .map(|l| (name, l))
+            .map_err(|_| CliError::input(format!("--buffer {spec}: '{layer}' is not a layer number"))),
+    }
+}
+
+/// Writes a buffer (`NAME` or `NAME@LAYER`) as PNG, and as EXR for float formats, into
+/// `dir`; returns the files.
+pub fn write_buffer(r: &Renderer, spec: &str, dir: &Path) -> Result<Vec<PathBuf>, CliError> {
+    let (name, layer) = parse_buffer_spec(spec)?;
+    let entry = r.buffers().get(name).map_err(|e| CliError::input(e.to_string()))?;
+    let img = r.buffers().readback(&r.ctx, name, layer, 0).map_err(|e| CliError::input(e.to_string()))?;
+    let stem = if layer == 0 { name.to_string() } else { format!("{name}.layer{layer}") };
+    let mut files = Vec::new();
+    let png = dir.join(format!("{stem}.png"));
+    gi_render::image_io::save_png(&png, &img, entry.kind)
+        .map_err(|e| CliError::failure(format!("{}: {e}", png.display())))?;
+    files.push(png);
+    let is_float =
+        !matches!(entry.texture.format(), wgpu::TextureFormat::Rgba8Unorm | wgpu::TextureFormat::Rgba8UnormSrgb);
+    if is_float {
+        let exr = dir.join(format!("{stem}.exr"));
+        gi_render::image_io::save_exr(&exr, &img).map_err(|e| CliError::failure(format!("{}: {e}", exr.display())))?;
+        files.push(exr);
+    }
+    Ok(files)
+}
+
+pub(super) fn render(args: &RenderArgs) -> Result<(), CliError> {
+    if args.frames == 0 {
+        return Err(CliError::input("--frames must be at least 1"));
+    }
+    let mut r = renderer(&args.scene, args.size)?;
+    r.clock.playing = !args.paused;
+    // Check buffer names before spending time rendering.
+    for b in &args.buffers {
+        let (name, _) = parse_buffer_spec(b)?;
+        r.buffers().get(name).map_err(|e| CliError::input(e.to_string()))?;
+    }
+    std::fs::create_dir_all(&args.out).map_err(|e| CliError::input(format!("--out {}: {e}", args.out.display())))?;
+    for _ in 0..args.frames {
+        r.render_frame();
+    }
+    let img = r.readback("final.ldr").map_err(|e| CliError::failure(e.to_string()))?;
+    let final_png = args.out.join("final.png");
+    gi_render::image_io::save_png(&final_png, &img, gi_render::BufferKind::Ldr)
+        .map_err(|e| CliError::failure(format!("{}: {e}", final_png.display())))?;
+    println!("wrote {}", final_png.display());
+    for b in &args.buffers {
+        for f in write_buffer(&r, b, &args.out)? {
+            println!("wrote {}", f.display());
+        }
+    }
+    Ok(())
+}

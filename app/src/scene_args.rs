@@ -1,0 +1,61 @@
+//! The scene arguments shared by the window and the commands (`--scene`, `--unit-scale`,
+//! `--preset`, `--set`) and loading the scene and the settings they name.
+
+use std::path::PathBuf;
+
+use clap::Args;
+use gi_render::LabSettings;
+use gi_render::scene::{self, LoadOptions, Scene};
+
+use crate::error::CliError;
+
+#[derive(Args, Debug, Clone)]
+pub struct SceneArgs {
+    /// glTF 2.0 scene (.gltf or .glb); the embedded Cornell box when omitted.
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// Multiply the scene's coordinates by this (e.g. 0.001 for millimetres).
+    #[arg(long, default_value_t = 1.0)]
+    pub unit_scale: f32,
+    /// RON preset; the defaults when omitted.
+    #[arg(long)]
+    pub preset: Option<PathBuf>,
+    /// Override a setting, e.g. --set direct.pcf_radius=2 (repeatable).
+    #[arg(long = "set", value_name = "GROUP.FIELD=VALUE")]
+    pub overrides: Vec<String>,
+}
+
+impl Default for SceneArgs {
+    /// The embedded scene at unit scale with the default preset (as the CLI's defaults).
+    fn default() -> Self {
+        Self { scene: None, unit_scale: 1.0, preset: None, overrides: Vec::new() }
+    }
+}
+
+/// Loads the scene named by the arguments (or the embedded default).
+pub fn load_scene(args: &SceneArgs) -> Result<Scene, CliError> {
+    if !(args.unit_scale.is_finite() && args.unit_scale > 0.0) {
+        return Err(CliError::input(format!("--unit-scale {} must be a positive number", args.unit_scale)));
+    }
+    let opts = LoadOptions { unit_scale: args.unit_scale, ..LoadOptions::default() };
+    let scene = match &args.scene {
+        None => scene::cornell::default_scene().map_err(|e| CliError::failure(format!("embedded scene: {e}")))?,
+        Some(p) => scene::load_gltf_file(p, &opts).map_err(|e| CliError::input(e.to_string()))?,
+    };
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(scene)
+}
+
+/// Loads the preset and applies the `--set` overrides.
+pub fn load_settings(args: &SceneArgs) -> Result<LabSettings, CliError> {
+    let mut s = match &args.preset {
+        None => LabSettings::default(),
+        Some(p) => LabSettings::load(p).map_err(|e| CliError::input(e.to_string()))?,
+    };
+    for o in &args.overrides {
+        s.apply_override(o).map_err(|e| CliError::input(format!("--set {o}: {e}")))?;
+    }
+    Ok(s)
+}

@@ -1,0 +1,356 @@
+//! The eframe app: the tile tree and the state, created from the launch options and the
+//! restored session; the session autosave; each frame's panels.
+
+use std::collections::{BTreeMap, VecDeque};
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use gi_render::{LabSettings, Renderer};
+
+use crate::args::AppArgs;
+use crate::ui::ERROR;
+use crate::ui::lab::Lab;
+use crate::ui::presets::PresetState;
+use crate::ui::session::{self, LightEdit, Pane, Session};
+use crate::ui::state::State;
+use crate::ui::viewer::{Viewer, ViewerState};
+
+pub struct GiLabApp {
+    pub tree: egui_tiles::Tree<Pane>,
+    pub state: State,
+}
+
+impl GiLabApp {
+    pub fn new(cc: &eframe::CreationContext<'_>, args: AppArgs) -> Self {
+        let config_dir = session::config_dir(args.config_dir.as_deref());
+        let (mut session, session_problem) = match (&config_dir, args.fresh) {
+            (Some(dir), false) => Session::load(dir),
+            _ => (Session::default(), None),
+        };
+        // Command-line choices win over the restored session.
+        if args.scene.scene.is_some() {
+            session.scene = args.scene.scene.clone();
+            session.unit_scale = args.scene.unit_scale;
+            session.lights.clear();
+            session.camera = None;
+        }
+        let mut messages: Vec<String> = session_problem.into_iter().collect();
+        let mut preset_path = session.preset_path.clone();
+        let mut baseline = LabSettings::default();
+        let mut settings = LabSettings::default();
+        if let Some(p) = &args.scene.preset {
+            preset_path = Some(p.clone());
+        }
+        if let Some(p) = &preset_path {
+            match gi_render::preset::load_file(p) {
+                Ok(l) => {
+                    for pr in &l.problems {
+                        messages.push(format!("{}: {pr}", p.display()));
+                    }
+                    baseline = l.settings.clone();
+                    settings = l.settings;
+                }
+                Err(e) => {
+                    messages.push(format!("{e}; starting from the defaults"));
+                    preset_path = None;
+                }
+            }
+        }
+        // Unsaved edits of the last session come back on top of their preset.
+        if args.scene.preset.is_none()
+            && let Some(text) = &session.settings_ron
+            && let Ok(l) = gi_render::preset::load_lenient(text, "session")
+        {
+            settings = l.settings;
+        }
+        for o in &args.scene.overrides {
+            if let Err(e) = settings.apply_override(o) {
+                messages.push(format!("--set {o}: {e}"));
+            }
+        }
+        let scene_args = crate::scene_args::SceneArgs {
+            scene: session.scene.clone(),
+            unit_scale: session.unit_scale,
+            preset: None,
+            overrides: Vec::new(),
+        };
+        let mut lab = Lab::new(cc, &scene_args, settings.clone());
+        if lab.is_err() && session.scene.is_some() && args.scene.scene.is_none() {
+            // The remembered scene is gone: start on the default scene rather than not at all.
+            let e = lab.as_ref().err().cloned().unwrap_or_default();
+            messages.push(format!("the last session's scene could not be opened ({e}); the default scene is shown"));
+            session.scene = None;
+            session.lights.clear();
+            session.camera = None;
+            lab = Lab::new(cc, &crate::scene_args::SceneArgs::default(), settings.clone());
+        }
+        if let Err(e) = &lab {
+            log::error!("{e}");
+        }
+        if let Ok(l) = &mut lab {
+            restore_scene_state(l, &session);
+        }
+        let tree = session.layout.take().unwrap_or_else(session::default_layout);
+        let mut viewers = BTreeMap::new();
+        for (id, v) in session.viewers.drain(..) {
+            viewers.insert(id, Viewer::new(v));
+        }
+        for id in viewer_ids(&tree) {
+            viewers.entry(id).or_insert_with(|| Viewer::new(ViewerState::default()));
+        }
+        let pinned = std::mem::take(&mut session.probes);
+        let history = pinned.iter().map(|_| VecDeque::new()).collect();
+        let status = (!messages.is_empty()).then(|| (messages.join("\n"), Instant::now()));
+        for m in &messages {
+            log::warn!("{m}");
+        }
+        let mut hot = crate::ui::hot_reload::HotReload::new(args.shaders_dir.clone());
+        if args.hot_reload.unwrap_or(cfg!(debug_assertions))
+            && let Err(e) = hot.set_enabled(true)
+        {
+            log::info!("shader hot reload off: {e}");
+        }
+        let state = State {
+            hot,
+            args,
+            config_dir,
+            lab,
+            session,
+            viewers,
+            view_pipeline: None,
+            pass_view: None,
+            preset: PresetState {
+                path: preset_path,
+                baseline,
+                pending: None,
+                save_as_name: String::new(),
+                diff_with: None,
+                diff_cache: None,
+            },
+            hover: None,
+            hover_values: Vec::new(),
+            pinned,
+            probe_history: history,
+            timing_history: VecDeque::new(),
+            hovered_pass: None,
+            viewport_px: (640, 480),
+            viewport_rect: egui::Rect::NOTHING,
+            render_size_override: None,
+            status,
+            frames: 0,
+            recording: None,
+            bookmark_name: String::new(),
+            scene_path_text: String::new(),
+            record_frames: 60,
+            visible_viewers: Vec::new(),
+            show_help: false,
+            show_vpls: false,
+            show_hcb_samples: false,
+            ab: None,
+            request_new_viewer: false,
+            request_reset_layout: false,
+            screenshot: Arc::new(Mutex::new(None)),
+            screenshot_requested: false,
+            last_autosave: Instant::now(),
+            last_saved_session: String::new(),
+        };
+        Self { tree, state }
+    }
+
+    /// Whether a renderer is running (false when the GPU or scene failed).
+    pub fn is_rendering(&self) -> bool {
+        self.state.lab.is_ok()
+    }
+
+    /// Why the renderer could not start, if it could not.
+    pub fn error(&self) -> Option<&str> {
+        self.state.lab.as_ref().err().map(|e| e.as_str())
+    }
+
+    /// Opens a scene as Scene → Open does; on failure the current scene stays, and the
+    /// error is returned and shown.
+    pub fn open_scene(&mut self, path: &str, unit_scale: f32) -> Result<(), String> {
+        self.state.open_scene(Some(PathBuf::from(path)), unit_scale)
+    }
+
+    /// The running renderer, if any.
+    pub fn renderer(&self) -> Option<&Renderer> {
+        self.state.lab.as_ref().ok().map(|l| &l.renderer)
+    }
+
+    /// The live settings (what the panels show), if the renderer runs.
+    pub fn settings(&self) -> Option<&LabSettings> {
+        self.state.lab.as_ref().ok().map(|l| &l.settings)
+    }
+
+    /// Writes the session now (also done every few seconds and on exit).
+    pub fn save_session(&mut self) -> Result<(), String> {
+        let s = self.session_snapshot();
+        let dir = self.state.config_dir.clone().ok_or("no config directory on this platform")?;
+        s.save(&dir)?;
+        self.state.last_saved_session = s.to_ron();
+        Ok(())
+    }
+
+    fn session_snapshot(&self) -> Session {
+        let st = &self.state;
+        let mut s = st.session.clone();
+        s.layout = Some(self.tree.clone());
+        s.preset_path = st.preset.path.clone();
+        s.viewers = st.viewers.iter().map(|(id, v)| (*id, v.state.clone())).collect();
+        s.probes = st.pinned.clone();
+        if let Ok(l) = &st.lab {
+            s.settings_ron = Some(l.settings.to_ron());
+            s.scene = l.scene_path.clone();
+            s.unit_scale = l.unit_scale;
+            s.camera = Some(l.renderer.camera);
+            s.playing = l.renderer.clock.playing;
+            s.speed = l.renderer.clock.speed;
+            s.loop_s = l.renderer.clock.loop_s;
+            s.time_s = l.renderer.clock.time_s() as f64;
+            let scene = l.renderer.scene();
+            s.lights = scene
+                .nodes
+                .iter()
+                .enumerate()
+                .filter_map(|(i, n)| {
+                    let li = n.light?;
+                    Some(LightEdit {
+                        node: i,
+                        translation: n.transform.translation.to_array(),
+                        rotation: n.transform.rotation.to_array(),
+                        intensity: scene.lights[li].intensity,
+                    })
+                })
+                .collect();
+        }
+        s
+    }
+
+    fn autosave(&mut self) {
+        if self.state.last_autosave.elapsed().as_secs_f32() < 2.0 || self.state.config_dir.is_none() {
+            return;
+        }
+        self.state.last_autosave = Instant::now();
+        let text = self.session_snapshot().to_ron();
+        if text != self.state.last_saved_session
+            && let Err(e) = self.save_session()
+        {
+            self.state.set_status(format!("session autosave failed: {e}"));
+        }
+    }
+
+    /// Adds a buffer viewer panel next to the first viewer (or on the right).
+    pub fn add_viewer(&mut self) {
+        let id = self.state.viewers.keys().max().copied().unwrap_or(0) + 1;
+        let mut v = Viewer::new(ViewerState::default());
+        if let Ok(l) = &self.state.lab {
+            v.show_buffer(&l.renderer, "gbuffer.motion");
+        }
+        self.state.viewers.insert(id, v);
+        let pane = self.tree.tiles.insert_pane(Pane::Viewer(id));
+        let parent = viewer_ids(&self.tree)
+            .first()
+            .and_then(|first| self.tree.tiles.find_pane(&Pane::Viewer(*first)))
+            .and_then(|t| self.tree.tiles.parent_of(t))
+            .or(self.tree.root());
+        if let Some(parent) = parent
+            && let Some(egui_tiles::Tile::Container(c)) = self.tree.tiles.get_mut(parent)
+        {
+            c.add_child(pane);
+            if let egui_tiles::Container::Tabs(t) = c {
+                t.set_active(pane);
+            }
+        }
+    }
+}
+
+fn viewer_ids(tree: &egui_tiles::Tree<Pane>) -> Vec<u32> {
+    let mut ids: Vec<u32> = tree
+        .tiles
+        .tiles()
+        .filter_map(|t| match t {
+            egui_tiles::Tile::Pane(Pane::Viewer(id)) => Some(*id),
+            _ => None,
+        })
+        .collect();
+    ids.sort();
+    ids
+}
+
+/// Camera, light edits and timeline of the session, applied to a freshly created lab.
+fn restore_scene_state(l: &mut Lab, s: &Session) {
+    if let Some(c) = s.camera {
+        l.renderer.camera = c;
+    }
+    let scene = l.renderer.scene_mut();
+    for e in &s.lights {
+        if let Some(n) = scene.nodes.get_mut(e.node)
+            && let Some(li) = n.light
+        {
+            n.transform.translation = glam::Vec3::from_array(e.translation);
+            n.transform.rotation = glam::Quat::from_array(e.rotation).normalize();
+            if let Some(light) = scene.lights.get_mut(li) {
+                light.intensity = e.intensity;
+            }
+        }
+    }
+    let c = &mut l.renderer.clock;
+    c.playing = s.playing;
+    c.speed = if s.speed > 0.0 { s.speed } else { 1.0 };
+    c.loop_s = s.loop_s.max(0.0);
+    c.seek(s.time_s);
+    l.renderer.reset_history();
+}
+
+impl eframe::App for GiLabApp {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        let ctx = ui.ctx().clone();
+        self.state.handle_dropped_files(&ctx);
+        self.state.shortcuts(&ctx);
+        if std::mem::take(&mut self.state.request_new_viewer) {
+            self.add_viewer();
+        }
+        if std::mem::take(&mut self.state.request_reset_layout) {
+            self.tree = session::default_layout();
+            for id in viewer_ids(&self.tree) {
+                self.state.viewers.entry(id).or_insert_with(|| Viewer::new(ViewerState::default()));
+            }
+        }
+        self.state.frame();
+        // The panels set the hovered pixel again while they are drawn.
+        self.state.hover = None;
+        egui::Panel::top("menu").show(ui, |ui| self.state.menu_bar(ui));
+        egui::Panel::bottom("status").show(ui, |ui| self.state.status_bar(ui));
+        egui::CentralPanel::default().show(ui, |ui| {
+            if let Err(e) = &self.state.lab {
+                ui.centered_and_justified(|ui| {
+                    ui.colored_label(ERROR, format!("GI Lab cannot render:\n{e}"));
+                });
+                return;
+            }
+            self.state.visible_viewers.clear();
+            let mut behavior = crate::ui::panes::Behavior { state: &mut self.state, closed_viewers: Vec::new() };
+            self.tree.ui(&mut behavior, ui);
+            let closed = std::mem::take(&mut behavior.closed_viewers);
+            for id in closed {
+                if let (Some(mut v), Ok(l)) = (self.state.viewers.remove(&id), &self.state.lab) {
+                    v.release(&l.render_state);
+                }
+            }
+        });
+        self.state.problem_dialog(&ctx);
+        self.state.help_window(&ctx);
+        self.state.frames += 1;
+        self.screenshot_step(&ctx);
+        self.autosave();
+        ctx.request_repaint();
+    }
+
+    fn on_exit(&mut self) {
+        if let Err(e) = self.save_session() {
+            log::warn!("session not saved: {e}");
+        }
+    }
+}

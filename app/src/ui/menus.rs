@@ -1,0 +1,306 @@
+//! The menu bar, the status bar, the keyboard shortcuts and their help window.
+
+use gi_render::preset::ExportFormat;
+
+use crate::ui::ERROR;
+use crate::ui::state::State;
+
+/// The keyboard shortcuts (Help lists them).
+pub const SHORTCUTS: &[(&str, &str)] = &[
+    ("Space", "play / pause the animation"),
+    ("Period (.)", "step one frame (paused)"),
+    ("Ctrl+N", "new preset (defaults)"),
+    ("Ctrl+O", "open a preset"),
+    ("Ctrl+S", "save the preset"),
+    ("Ctrl+Shift+S", "save the preset as…"),
+    ("Ctrl+E", "export the preset as JSON"),
+    ("Ctrl+Shift+O", "open a glTF scene"),
+    ("Ctrl+B", "add a buffer viewer"),
+    ("F12", "save the viewport as PNG and EXR"),
+    ("Home", "reset the camera"),
+    ("H", "restart temporal accumulation"),
+    ("Escape", "unpin all probes"),
+    ("Drag / WASD QE / scroll", "orbit / fly / move (viewport)"),
+    ("Click", "pin a probe (viewport, viewers)"),
+];
+
+impl State {
+    pub(super) fn shortcuts(&mut self, ctx: &egui::Context) {
+        use egui::{Key, KeyboardShortcut, Modifiers};
+        let typing = ctx.egui_wants_keyboard_input();
+        let pressed = |m: Modifiers, k: Key| ctx.input_mut(|i| i.consume_shortcut(&KeyboardShortcut::new(m, k)));
+        let ctrl_shift = Modifiers::COMMAND | Modifiers::SHIFT;
+        if pressed(ctrl_shift, Key::S) {
+            self.save_preset_as_dialog();
+        } else if pressed(Modifiers::COMMAND, Key::S) {
+            self.save_preset();
+        }
+        if pressed(ctrl_shift, Key::O) {
+            self.open_scene_dialog();
+        } else if pressed(Modifiers::COMMAND, Key::O) {
+            self.open_preset_dialog();
+        }
+        if pressed(Modifiers::COMMAND, Key::N) {
+            self.new_preset();
+        }
+        if pressed(Modifiers::COMMAND, Key::E) {
+            self.export_dialog(ExportFormat::Json);
+        }
+        if pressed(Modifiers::COMMAND, Key::B) {
+            self.request_new_viewer = true;
+        }
+        if pressed(Modifiers::NONE, Key::F12) {
+            self.capture_viewport();
+        }
+        if typing {
+            return;
+        }
+        let Ok(l) = &mut self.lab else { return };
+        if pressed(Modifiers::NONE, Key::Space) {
+            l.renderer.clock.playing = !l.renderer.clock.playing;
+        }
+        if pressed(Modifiers::NONE, Key::Period) && !l.renderer.clock.playing {
+            l.renderer.clock.step();
+        }
+        if pressed(Modifiers::NONE, Key::Home) {
+            let (w, h) = l.renderer.size();
+            l.renderer.camera =
+                gi_render::frame::default_camera(l.renderer.scene(), l.renderer.bounds(), w as f32 / h.max(1) as f32);
+        }
+        if pressed(Modifiers::NONE, Key::H) {
+            l.renderer.reset_history();
+        }
+        if pressed(Modifiers::NONE, Key::Escape) {
+            self.pinned.clear();
+            self.probe_history.clear();
+        }
+    }
+
+    pub(super) fn menu_bar(&mut self, ui: &mut egui::Ui) {
+        let ctx = ui.ctx().clone();
+        egui::MenuBar::new().ui(ui, |ui| {
+            ui.menu_button("File", |ui| {
+                if ui.button("New preset").clicked() {
+                    self.new_preset();
+                }
+                if ui.button("Open preset…").clicked() {
+                    self.open_preset_dialog();
+                }
+                ui.menu_button("Recent presets", |ui| {
+                    for p in self.session.recent_presets.clone() {
+                        if ui.button(p.display().to_string()).clicked() {
+                            self.open_preset(&p);
+                        }
+                    }
+                });
+                if ui.button("Save preset").clicked() {
+                    self.save_preset();
+                }
+                if ui.button("Save preset as…").clicked() {
+                    self.save_preset_as_dialog();
+                }
+                if ui.add_enabled(self.unsaved(), egui::Button::new("Revert")).clicked() {
+                    self.revert_preset();
+                }
+                ui.separator();
+                if ui.button("Export for engines (JSON)…").clicked() {
+                    self.export_dialog(ExportFormat::Json);
+                }
+                if ui.button("Export for engines (RON)…").clicked() {
+                    self.export_dialog(ExportFormat::Ron);
+                }
+                if ui.button("Import an export…").clicked()
+                    && let Some(p) = rfd::FileDialog::new().add_filter("GI Lab export", &["json", "ron"]).pick_file()
+                    && let Err(e) = self.import_export(&p)
+                {
+                    self.set_status(format!("import failed: {e}"));
+                }
+                ui.separator();
+                if ui.button("Save viewport (PNG + EXR)").clicked() {
+                    self.capture_viewport();
+                }
+                ui.horizontal(|ui| {
+                    if ui.button("Record").clicked() {
+                        self.start_recording(self.record_frames);
+                    }
+                    ui.add(egui::DragValue::new(&mut self.record_frames).range(1..=100_000).suffix(" frames"));
+                });
+                ui.separator();
+                if ui.button("Quit").clicked() {
+                    ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+                }
+            });
+            ui.menu_button("View", |ui| {
+                if ui.button("Add buffer viewer").clicked() {
+                    self.request_new_viewer = true;
+                }
+                if ui.button("Reset panel layout").clicked() {
+                    self.request_reset_layout = true;
+                }
+                let mut hot = self.hot.enabled();
+                if ui
+                    .checkbox(&mut hot, "Shader hot reload")
+                    .on_hover_text(format!(
+                        "watch {} and rebuild the passes whose shaders change",
+                        self.hot.dir().display()
+                    ))
+                    .changed()
+                    && let Err(e) = self.hot.set_enabled(hot)
+                {
+                    self.set_status(e);
+                }
+                ui.checkbox(&mut self.show_vpls, "VPL overlay (vpl.list)").on_hover_text(
+                    "instant radiosity's VPLs as dots over the viewport, coloured by their reflected flux \
+                     (the brightest at full colour); reads the list back every frame",
+                );
+                ui.checkbox(&mut self.show_hcb_samples, "HCB samples overlay (Table 1)").on_hover_text(
+                    "the hierarchical coherence buffer's samples as white dots, larger for higher levels, \
+                     with the count per level, and the covered pixels no sample reached in magenta; \
+                     reads the sample list back every frame",
+                );
+                ui.horizontal(|ui| {
+                    ui.label("render scale");
+                    ui.add(egui::Slider::new(&mut self.session.render_scale, 0.1..=2.0).step_by(0.05))
+                        .on_hover_text("render resolution relative to the viewport's pixels");
+                });
+                ui.menu_button("A/B compare", |ui| {
+                    if ui.button("with the exact-VPL reference").clicked() {
+                        self.start_ab(crate::ui::ab::AbSource::Reference);
+                    }
+                    if ui.button("with the current settings (frozen)").clicked() {
+                        self.start_ab(crate::ui::ab::AbSource::Frozen);
+                    }
+                    if ui.button("with a preset file…").clicked()
+                        && let Some(p) = rfd::FileDialog::new()
+                            .add_filter("GI Lab preset", &["ron"])
+                            .set_directory(&self.args.presets_dir)
+                            .pick_file()
+                    {
+                        self.start_ab(crate::ui::ab::AbSource::Preset(p));
+                    }
+                    if ui.add_enabled(self.ab.is_some(), egui::Button::new("Stop")).clicked() {
+                        self.stop_ab();
+                    }
+                });
+                if let Ok(l) = &mut self.lab
+                    && ui.button("Reset camera").clicked()
+                {
+                    let (w, h) = l.renderer.size();
+                    l.renderer.camera = gi_render::frame::default_camera(
+                        l.renderer.scene(),
+                        l.renderer.bounds(),
+                        w as f32 / h.max(1) as f32,
+                    );
+                }
+            });
+            ui.menu_button("Scene", |ui| {
+                if ui.button("Open glTF…").clicked() {
+                    self.open_scene_dialog();
+                }
+                ui.menu_button("Recent scenes", |ui| {
+                    for p in self.session.recent_scenes.clone() {
+                        if ui.button(p.display().to_string()).clicked() {
+                            let scale = self.lab.as_ref().map(|l| l.unit_scale).unwrap_or(1.0);
+                            if let Err(e) = self.open_scene(Some(p.clone()), scale) {
+                                self.set_status(format!("scene not opened: {e}"));
+                            }
+                        }
+                    }
+                });
+                if ui.button("Default scene").clicked()
+                    && let Err(e) = self.open_scene(None, 1.0)
+                {
+                    self.set_status(format!("scene not opened: {e}"));
+                }
+                ui.menu_button("Camera bookmarks", |ui| {
+                    let mut restore = None;
+                    for b in &self.session.bookmarks {
+                        if ui.button(&b.name).clicked() {
+                            restore = Some(b.camera);
+                        }
+                    }
+                    if let (Some(c), Ok(l)) = (restore, &mut self.lab) {
+                        l.renderer.camera = c;
+                    }
+                    if ui.button("Bookmark this view").clicked() {
+                        self.add_bookmark();
+                    }
+                });
+            });
+            ui.menu_button("Help", |ui| {
+                if ui.button("Keyboard shortcuts").clicked() {
+                    self.show_help = true;
+                }
+                ui.label(format!("GI Lab {}", env!("CARGO_PKG_VERSION")));
+            });
+        });
+    }
+
+    pub(super) fn status_bar(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| match &self.lab {
+            Ok(l) => {
+                let (w, h) = l.renderer.size();
+                let gpu: f64 = l.renderer.timings().iter().map(|t| t.ms).sum();
+                ui.label(l.renderer.ctx.adapter_summary());
+                ui.separator();
+                ui.label(format!(
+                    "render {w}×{h} (viewport {}×{} × {:.2})",
+                    self.viewport_px.0, self.viewport_px.1, self.session.render_scale
+                ))
+                .on_hover_text("View > render scale changes the render resolution");
+                ui.separator();
+                ui.label(format!("frame {:.1} ms · GPU {:.2} ms ({:?})", l.frame_ms, gpu, l.renderer.timing_source()));
+                ui.separator();
+                let unsaved = l.settings != self.preset.baseline;
+                let label =
+                    format!("preset: {}{}", self.preset_label(), if unsaved { " (unsaved changes)" } else { "" });
+                if unsaved {
+                    ui.colored_label(crate::ui::settings_ui::CHANGED, label);
+                } else {
+                    ui.label(label);
+                }
+                if let Some(e) = l.gpu_error.lock().ok().and_then(|e| e.clone()) {
+                    ui.separator();
+                    ui.colored_label(ERROR, "GPU error").on_hover_text(e);
+                }
+                if !self.hot.errors.is_empty() {
+                    ui.separator();
+                    let all: Vec<String> = self.hot.errors.values().cloned().collect();
+                    ui.colored_label(
+                        ERROR,
+                        format!("shader error in {}", self.hot.errors.keys().cloned().collect::<Vec<_>>().join(", ")),
+                    )
+                    .on_hover_text(all.join("\n\n"));
+                }
+                if let Some(r) = &self.recording {
+                    ui.separator();
+                    ui.colored_label(ERROR, format!("recording, {} frames left", r.remaining));
+                }
+                if let Some((m, at)) = &self.status
+                    && at.elapsed().as_secs() < 20
+                {
+                    ui.separator();
+                    ui.label(m.lines().next().unwrap_or("")).on_hover_text(m.as_str());
+                }
+            }
+            Err(e) => {
+                ui.colored_label(ERROR, "renderer unavailable");
+                ui.label(e);
+            }
+        });
+    }
+
+    pub(super) fn help_window(&mut self, ctx: &egui::Context) {
+        let mut open = self.show_help;
+        egui::Window::new("Keyboard shortcuts").open(&mut open).collapsible(false).show(ctx, |ui| {
+            egui::Grid::new("shortcuts").striped(true).show(ui, |ui| {
+                for (k, what) in SHORTCUTS {
+                    ui.monospace(*k);
+                    ui.label(*what);
+                    ui.end_row();
+                }
+            });
+        });
+        self.show_help = open;
+    }
+}

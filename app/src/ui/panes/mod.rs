@@ -1,0 +1,98 @@
+//! The lab's panels as egui_tiles panes: viewport, settings, scene and timeline, presets,
+//! GPU timings, probes and buffer viewers. Panels can be dragged, tabbed and resized; the
+//! layout is part of the session.
+
+mod presets;
+mod probes;
+mod scene;
+mod settings;
+mod timings;
+mod viewport;
+
+use crate::ui::session::Pane;
+use crate::ui::state::State;
+use presets::presets_ui;
+pub use probes::format_value;
+use probes::probe_ui;
+use scene::scene_ui;
+use settings::settings_ui;
+use timings::timings_ui;
+use viewport::viewport_ui;
+
+pub struct Behavior<'a> {
+    pub state: &'a mut State,
+    /// Viewer panes closed this frame (their GPU resources are released by the app).
+    pub closed_viewers: Vec<u32>,
+}
+
+impl egui_tiles::Behavior<Pane> for Behavior<'_> {
+    fn tab_title_for_pane(&mut self, pane: &Pane) -> egui::WidgetText {
+        match pane {
+            Pane::Viewport => "Viewport".into(),
+            Pane::Settings => "Settings".into(),
+            Pane::Scene => "Scene & timeline".into(),
+            Pane::Presets => "Presets".into(),
+            Pane::Timings => "GPU timings".into(),
+            Pane::Probe => "Probes".into(),
+            Pane::Viewer(id) => {
+                let name = self.state.viewers.get(id).map(|v| v.state.buffer.as_str()).unwrap_or("?");
+                format!("Viewer {id}: {name}").into()
+            }
+        }
+    }
+
+    fn pane_ui(&mut self, ui: &mut egui::Ui, _tile: egui_tiles::TileId, pane: &mut Pane) -> egui_tiles::UiResponse {
+        let st = &mut *self.state;
+        match pane {
+            Pane::Viewport => viewport_ui(st, ui),
+            Pane::Settings => scrolled(ui, "settings", |ui| settings_ui(st, ui)),
+            Pane::Scene => scrolled(ui, "scene", |ui| scene_ui(st, ui)),
+            Pane::Presets => scrolled(ui, "presets", |ui| presets_ui(st, ui)),
+            Pane::Timings => timings_ui(st, ui),
+            Pane::Probe => scrolled(ui, "probe", |ui| probe_ui(st, ui)),
+            Pane::Viewer(id) => viewer_ui(st, ui, *id),
+        }
+        egui_tiles::UiResponse::None
+    }
+
+    fn is_tab_closable(&self, tiles: &egui_tiles::Tiles<Pane>, tile_id: egui_tiles::TileId) -> bool {
+        matches!(tiles.get(tile_id), Some(egui_tiles::Tile::Pane(Pane::Viewer(_))))
+    }
+
+    fn on_tab_close(&mut self, tiles: &mut egui_tiles::Tiles<Pane>, tile_id: egui_tiles::TileId) -> bool {
+        if let Some(egui_tiles::Tile::Pane(Pane::Viewer(id))) = tiles.get(tile_id) {
+            self.closed_viewers.push(*id);
+        }
+        true
+    }
+
+    fn simplification_options(&self) -> egui_tiles::SimplificationOptions {
+        egui_tiles::SimplificationOptions { all_panes_must_have_tabs: true, ..Default::default() }
+    }
+}
+
+fn scrolled(ui: &mut egui::Ui, id: &str, f: impl FnOnce(&mut egui::Ui)) {
+    egui::ScrollArea::vertical().id_salt(id).auto_shrink([false, false]).show(ui, |ui| {
+        ui.add_space(4.0);
+        f(ui)
+    });
+}
+
+fn viewer_ui(st: &mut State, ui: &mut egui::Ui, id: u32) {
+    st.visible_viewers.push(id);
+    let Ok(l) = &st.lab else { return };
+    let Some(v) = st.viewers.get_mut(&id) else {
+        ui.weak("this viewer was closed");
+        return;
+    };
+    let events = v.ui(ui, &l.renderer, &st.hover_values, id);
+    if let Some(p) = events.hovered_pixel {
+        st.hover = Some(p);
+    }
+    if let Some(p) = events.pin {
+        st.pin_probe(p);
+    }
+    if let Some(m) = events.message {
+        st.set_status(m);
+    }
+}

@@ -1,0 +1,198 @@
+//! The scene and timeline pane: scene file, lights, animation clock, camera bookmarks.
+
+use crate::ui::ERROR;
+use crate::ui::state::State;
+
+pub(super) fn scene_ui(st: &mut State, ui: &mut egui::Ui) {
+    let Ok(l) = &mut st.lab else { return };
+    ui.heading("Scene");
+    ui.label(&l.scene_name);
+    ui.small(format!("{} triangles", l.renderer.scene().triangle_count()));
+    for w in &l.renderer.scene().warnings {
+        ui.small(format!("warning: {w}"));
+    }
+    let mut open_dialog = false;
+    let mut open_default = false;
+    ui.horizontal(|ui| {
+        open_dialog = ui.button("Open glTF…").on_hover_text("or drop a .gltf / .glb file on the window").clicked();
+        open_default = ui.button("Default scene").clicked();
+        ui.label("unit scale");
+        ui.add(egui::DragValue::new(&mut l.unit_scale).range(1e-6..=1e6).speed(0.001))
+            .on_hover_text("multiplies the scene's coordinates (0.001 for millimetres); applies on the next open");
+    });
+    let mut open_typed = false;
+    ui.horizontal(|ui| {
+        let r = ui.add(
+            egui::TextEdit::singleline(&mut st.scene_path_text)
+                .hint_text("or type a .gltf / .glb path")
+                .desired_width(220.0),
+        );
+        let enter = r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+        open_typed = (ui.add_enabled(!st.scene_path_text.trim().is_empty(), egui::Button::new("Open")).clicked()
+            || enter)
+            && !st.scene_path_text.trim().is_empty();
+    });
+    if let Some(e) = &l.scene_error {
+        ui.colored_label(ERROR, e);
+    }
+    light_controls(l, ui);
+    ui.separator();
+    timeline(l, ui);
+    ui.separator();
+    ui.heading("Camera");
+    if ui.button("Reset camera (Home)").clicked() {
+        let (w, h) = l.renderer.size();
+        l.renderer.camera =
+            gi_render::frame::default_camera(l.renderer.scene(), l.renderer.bounds(), w as f32 / h.max(1) as f32);
+    }
+    let c = l.renderer.camera;
+    ui.small(format!(
+        "position ({:.2}, {:.2}, {:.2}) · yaw {:.1}° · pitch {:.1}° · fov {:.1}°",
+        c.position.x,
+        c.position.y,
+        c.position.z,
+        c.yaw.to_degrees(),
+        c.pitch.to_degrees(),
+        c.yfov.to_degrees()
+    ));
+    ui.horizontal(|ui| {
+        ui.add(egui::TextEdit::singleline(&mut st.bookmark_name).hint_text("bookmark name").desired_width(140.0));
+        if ui.button("Bookmark").clicked() {
+            st.add_bookmark();
+        }
+    });
+    let mut restore = None;
+    let mut delete = None;
+    for (i, b) in st.session.bookmarks.iter_mut().enumerate() {
+        ui.horizontal(|ui| {
+            ui.add(egui::TextEdit::singleline(&mut b.name).desired_width(140.0));
+            if ui.button("Go").clicked() {
+                restore = Some(b.camera);
+            }
+            if ui.button("Delete").clicked() {
+                delete = Some(i);
+            }
+        });
+    }
+    if let Some(i) = delete {
+        st.session.bookmarks.remove(i);
+    }
+    if let (Some(c), Ok(l)) = (restore, &mut st.lab) {
+        l.renderer.camera = c;
+    }
+    if open_dialog {
+        st.open_scene_dialog();
+    }
+    if open_typed {
+        let path = std::path::PathBuf::from(st.scene_path_text.trim());
+        let scale = st.lab.as_ref().map(|l| l.unit_scale).unwrap_or(1.0);
+        if let Err(e) = st.open_scene(Some(path), scale) {
+            st.set_status(format!("scene not opened: {e}"));
+        }
+    }
+    if open_default && let Err(e) = st.open_scene(None, 1.0) {
+        st.set_status(format!("scene not opened: {e}"));
+    }
+}
+
+fn light_controls(l: &mut crate::ui::lab::Lab, ui: &mut egui::Ui) {
+    let light_nodes: Vec<usize> =
+        l.renderer.scene().nodes.iter().enumerate().filter(|(_, n)| n.light.is_some()).map(|(i, _)| i).collect();
+    let r = l.renderer.bounds().radius();
+    let mut changed = false;
+    for (k, &ni) in light_nodes.iter().enumerate() {
+        let scene = l.renderer.scene_mut();
+        let Some(li) = scene.nodes[ni].light else { continue };
+        let name = scene.lights[li].name.clone();
+        let directional = matches!(scene.lights[li].kind, gi_render::scene::LightKind::Directional);
+        egui::CollapsingHeader::new(format!("Light {k}: {name}")).default_open(k == 0).show(ui, |ui| {
+            let tr = &mut scene.nodes[ni].transform;
+            if directional {
+                // A directional light has no position: edit where it shines from.
+                let dir = tr.rotation * glam::Vec3::NEG_Z;
+                let mut elevation = (-dir.y).clamp(-1.0, 1.0).asin().to_degrees();
+                let mut azimuth = (-dir.x).atan2(-dir.z).to_degrees();
+                ui.horizontal(|ui| {
+                    ui.label("elevation");
+                    let a = ui.add(egui::DragValue::new(&mut elevation).range(-90.0..=90.0).suffix("°"));
+                    ui.label("azimuth");
+                    let b = ui.add(egui::DragValue::new(&mut azimuth).suffix("°"));
+                    if a.changed() || b.changed() {
+                        let (e, z) = (elevation.to_radians(), azimuth.to_radians());
+                        let d = glam::Vec3::new(-z.sin() * e.cos(), -e.sin(), -z.cos() * e.cos());
+                        tr.rotation = glam::Quat::from_rotation_arc(glam::Vec3::NEG_Z, d.normalize());
+                        changed = true;
+                    }
+                });
+            } else {
+                let t = &mut tr.translation;
+                ui.horizontal(|ui| {
+                    ui.label("position");
+                    for (c, axis) in [(&mut t.x, "x"), (&mut t.y, "y"), (&mut t.z, "z")] {
+                        changed |= ui
+                            .add(egui::DragValue::new(c).speed(r * 0.005).max_decimals(3).prefix(format!("{axis} ")))
+                            .changed();
+                    }
+                });
+            }
+            let l = &mut scene.lights[li];
+            ui.horizontal(|ui| {
+                ui.label("intensity");
+                changed |= ui
+                    .add(egui::Slider::new(&mut l.intensity, 0.0..=100_000.0).logarithmic(true))
+                    .on_hover_text("candela for point and spot lights, lux for directional lights")
+                    .changed();
+            });
+        });
+    }
+    if changed {
+        l.renderer.reset_history();
+    }
+}
+
+fn timeline(l: &mut crate::ui::lab::Lab, ui: &mut egui::Ui) {
+    ui.heading("Animation");
+    let duration = l.renderer.scene().animation_duration() as f64;
+    let clock = &mut l.renderer.clock;
+    ui.horizontal(|ui| {
+        let label = if clock.playing { "Pause" } else { "Play" };
+        if ui.button(label).on_hover_text("Space").clicked() {
+            clock.playing = !clock.playing;
+        }
+        if ui.add_enabled(!clock.playing, egui::Button::new("Step")).on_hover_text("Period (.)").clicked() {
+            clock.step();
+        }
+        ui.monospace(format!("t = {:.3} s  frame {}", clock.time_s(), clock.anim_frame));
+    });
+    ui.horizontal(|ui| {
+        ui.label("speed");
+        let mut speed = clock.speed;
+        if ui.add(egui::Slider::new(&mut speed, 0.05..=8.0).logarithmic(true).suffix("×")).changed() {
+            clock.set_speed(speed);
+        }
+    });
+    ui.horizontal(|ui| {
+        let mut looping = clock.loop_s > 0.0;
+        if ui.checkbox(&mut looping, "loop").changed() {
+            clock.loop_s = if looping { if duration > 0.0 { duration } else { 10.0 } } else { 0.0 };
+        }
+        if looping {
+            ui.add(egui::DragValue::new(&mut clock.loop_s).range(0.01..=3600.0).speed(0.05).suffix(" s"));
+        }
+    });
+    let end = if clock.loop_s > 0.0 {
+        clock.loop_s
+    } else if duration > 0.0 {
+        duration
+    } else {
+        10.0
+    };
+    let mut t = clock.time_s() as f64;
+    let scrub = ui.add(egui::Slider::new(&mut t, 0.0..=end).text("time").suffix(" s"));
+    if scrub.changed() {
+        clock.seek(t);
+    }
+    if duration > 0.0 {
+        ui.small(format!("the scene's animations last {duration:.2} s"));
+    }
+}

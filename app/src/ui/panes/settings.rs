@@ -1,0 +1,83 @@
+//! The settings pane, with the HCB's Table 1.
+
+use crate::ui::ERROR;
+use crate::ui::state::State;
+
+pub(super) fn settings_ui(st: &mut State, ui: &mut egui::Ui) {
+    let Ok(l) = &mut st.lab else { return };
+    let changed = crate::ui::settings_ui::lab_settings_ui(ui, &mut l.settings, &st.preset.baseline);
+    if changed {
+        l.apply_settings();
+    }
+    if let Some((done, target)) = l.renderer.reference_progress() {
+        ui.add(
+            egui::ProgressBar::new(done as f32 / target.max(1) as f32)
+                .text(format!("{done} / {target} VPLs accumulated")),
+        );
+        if l.renderer.clock.playing {
+            ui.small("The accumulation restarts whenever the camera, a light or an animated object moves: pause the animation (Space) to let it converge.");
+        }
+    }
+    if let Some(e) = &l.settings_error {
+        ui.colored_label(ERROR, e);
+    }
+    if l.settings.indirect.technique == gi_render::lab_settings::IndirectTechnique::Hcb {
+        ui.separator();
+        egui::CollapsingHeader::new("HCB statistics (Nguyen Table 1)").id_salt("hcb_stats").default_open(true).show(
+            ui,
+            |ui| match l.renderer.hcb_stats() {
+                Some(stats) => hcb_stats_ui(ui, &stats, l.renderer.size()),
+                None => {
+                    ui.small("no HCB frame rendered yet");
+                }
+            },
+        );
+    }
+}
+
+/// Table 1 of Nguyen et al. for the last frame: per level its resolution, the samples and
+/// their share of the level's texels and of the G-buffer's pixels; the total; the covered
+/// pixels no sample reached; with the cache (§5), the reused, new and recomputed samples.
+pub fn hcb_stats_ui(ui: &mut egui::Ui, stats: &gi_render::frame::HcbStats, size: (u32, u32)) {
+    let pixels = (size.0 * size.1).max(1) as f64;
+    let (mut w, mut h) = size;
+    egui::Grid::new("hcb_table_1").num_columns(4).striped(true).show(ui, |ui| {
+        for head in ["level (resolution)", "samples", "% of level", "% of G-buffer"] {
+            ui.strong(head);
+        }
+        ui.end_row();
+        for (k, (&n, &t)) in stats.samples_per_level.iter().zip(&stats.texels_per_level).enumerate() {
+            ui.label(format!("{k} ({w}×{h})"));
+            ui.label(n.to_string());
+            ui.label(format!("{:.2} %", 100.0 * n as f64 / t.max(1) as f64));
+            ui.label(format!("{:.2} %", 100.0 * n as f64 / pixels));
+            ui.end_row();
+            (w, h) = (w.div_ceil(2), h.div_ceil(2));
+        }
+        ui.strong("total");
+        ui.strong(stats.samples().to_string());
+        ui.label("");
+        ui.strong(format!("{:.2} %", 100.0 * stats.samples() as f64 / pixels));
+        ui.end_row();
+    });
+    ui.small(format!(
+        "the paper: 1.9–4.4 % of the G-buffer; {} covered pixels no sample reached; d_max in use {:.3} scene units",
+        stats.uncovered, stats.d_max
+    ));
+    if let Some(c) = &stats.cache {
+        egui::Grid::new("hcb_cache_counts").num_columns(2).show(ui, |ui| {
+            for (label, n, tip) in [
+                ("cached (reused)", c.cached, "samples of the last frame still valid here (§5.1)"),
+                ("new", c.new_samples(), "identified on the incomplete texels this frame (§5.2)"),
+                ("recomputed", c.recomputed, "cached samples whose light was gathered again (§5.3)"),
+                ("removed: invalid", c.invalid, "the G-buffer moved or turned under them (§5.1)"),
+                ("removed: surplus", c.surplus, "valid, but inside an invalid sample's quad (§5.1)"),
+                ("left the view", c.dropped, "reprojected outside the image"),
+            ] {
+                ui.label(label).on_hover_text(tip);
+                ui.label(n.to_string());
+                ui.end_row();
+            }
+        });
+    }
+}

@@ -1,0 +1,52 @@
+//! The GPU timings pane: per-pass times and their history.
+
+use egui_plot::{Legend, Line, Plot, PlotPoints};
+
+use crate::ui::state::State;
+
+pub(super) fn timings_ui(st: &mut State, ui: &mut egui::Ui) {
+    let Ok(l) = &st.lab else { return };
+    let mut hovered = None;
+    ui.horizontal_top(|ui| {
+        ui.vertical(|ui| {
+            ui.set_width(230.0);
+            if l.renderer.timing_source() == gi_render::timing::TimingSource::GpuTimestamps
+                && !gi_render::timing::GpuTimer::timestamps_reliable(&l.renderer.ctx)
+            {
+                ui.colored_label(ui.visuals().warn_fg_color, "software device: its timestamps land in later passes, so per-pass times are unreliable here; `gi-lab bench` times each pass by the wall clock")
+                    .on_hover_text("lavapipe writes a timestamp where the pass is recorded, not where its work runs");
+            }
+            egui::Grid::new("timings").num_columns(2).striped(true).show(ui, |ui| {
+                let mut total = 0.0;
+                for t in l.renderer.timings() {
+                    let r = ui.label(&t.name) | ui.monospace(format!("{:8.3} ms", t.ms));
+                    if r.hovered() {
+                        hovered = Some(t.name.clone());
+                    }
+                    ui.end_row();
+                    total += t.ms;
+                }
+                ui.strong("total");
+                ui.monospace(format!("{total:8.3} ms"));
+                ui.end_row();
+            });
+            ui.small("hover a pass to see its output in the viewport");
+        });
+        let names: Vec<String> = l.renderer.timings().iter().map(|t| t.name.clone()).collect();
+        Plot::new("timing_history").legend(Legend::default()).y_axis_label("ms").x_axis_label("frame").show(
+            ui,
+            |plot| {
+                for name in names {
+                    let points: PlotPoints = st
+                        .timing_history
+                        .iter()
+                        .enumerate()
+                        .filter_map(|(i, ts)| ts.iter().find(|t| t.name == name).map(|t| [i as f64, t.ms]))
+                        .collect();
+                    plot.line(Line::new(name.clone(), points));
+                }
+            },
+        );
+    });
+    st.hovered_pass = hovered;
+}

@@ -1,0 +1,253 @@
+//! The viewport pane: the rendered image, camera navigation, probes and the VPL, HCB and A/B
+//! overlays.
+
+use crate::ui::ERROR;
+use crate::ui::state::State;
+
+pub(super) fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
+    let rect = ui.available_rect_before_wrap();
+    st.viewport_rect = rect;
+    let ppp = ui.ctx().pixels_per_point();
+    st.viewport_px = ((rect.width() * ppp).round().max(0.0) as u32, (rect.height() * ppp).round().max(0.0) as u32);
+    let Some((id, (w, h), label)) = st.viewport_texture() else { return };
+    let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
+    ui.painter().image(
+        id,
+        rect,
+        egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
+        egui::Color32::WHITE,
+    );
+    ab_overlay(st, ui, rect);
+    if st.show_vpls {
+        vpl_overlay(st, ui, rect);
+    }
+    if st.show_hcb_samples {
+        hcb_overlay(st, ui, rect);
+    }
+    if !st.hot.errors.is_empty() {
+        // The compile error stays on screen until the file is fixed.
+        let text: Vec<String> = st.hot.errors.iter().map(|(f, e)| format!("{f}: {e}")).collect();
+        let area = egui::Rect::from_min_max(
+            rect.left_top() + egui::vec2(8.0, 8.0),
+            rect.right_bottom() - egui::vec2(8.0, 40.0),
+        );
+        ui.scope_builder(egui::UiBuilder::new().max_rect(area), |ui| {
+            egui::Frame::new().fill(egui::Color32::from_black_alpha(200)).inner_margin(8.0).show(ui, |ui| {
+                ui.colored_label(ERROR, "Shader error — the last good pipelines keep running:");
+                for t in &text {
+                    ui.label(egui::RichText::new(t).monospace().color(egui::Color32::WHITE));
+                }
+            });
+        });
+    }
+    if let Some(text) = label {
+        ui.painter().text(
+            rect.left_top() + egui::vec2(8.0, 8.0),
+            egui::Align2::LEFT_TOP,
+            format!("showing {text}"),
+            egui::FontId::proportional(14.0),
+            egui::Color32::YELLOW,
+        );
+    }
+    // The hovered pixel of the render (for the probe); a click pins it.
+    if let Some(p) = response.hover_pos() {
+        let uv = (p - rect.min) / rect.size();
+        st.hover = Some((
+            (uv.x * w as f32).clamp(0.0, w as f32 - 1.0) as u32,
+            (uv.y * h as f32).clamp(0.0, h as f32 - 1.0) as u32,
+        ));
+    }
+    if response.clicked()
+        && let Some(p) = st.hover
+    {
+        st.pin_probe(p);
+    }
+    // Pinned probes as numbered rings.
+    for (k, p) in st.pinned.iter().enumerate() {
+        let pos = rect.min
+            + egui::vec2((p.pixel.0 as f32 + 0.5) / w as f32, (p.pixel.1 as f32 + 0.5) / h as f32) * rect.size();
+        ui.painter().circle_stroke(pos, 6.0, egui::Stroke::new(2.0, egui::Color32::YELLOW));
+        ui.painter().text(
+            pos + egui::vec2(8.0, -8.0),
+            egui::Align2::LEFT_BOTTOM,
+            format!("{}", k + 1),
+            egui::FontId::monospace(12.0),
+            egui::Color32::YELLOW,
+        );
+    }
+    if let Ok(l) = &mut st.lab {
+        navigate(l, ui, &response);
+    }
+}
+
+/// `vpl.list` over the viewport (Knecht §3.3): each VPL projected with the camera as a dot
+/// coloured by the flux it reflects diffusely, Φ·c (so a VPL on the red wall is red),
+/// normalised so that the brightest VPL has its full colour; VPLs behind the camera are left
+/// out. A line names the count and the brightest flux.
+fn vpl_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
+    let Ok(l) = &st.lab else { return };
+    let painter = ui.painter_at(rect);
+    let note = |s: String| {
+        painter.text(
+            rect.left_bottom() + egui::vec2(8.0, -8.0),
+            egui::Align2::LEFT_BOTTOM,
+            s,
+            egui::FontId::proportional(14.0),
+            egui::Color32::WHITE,
+        )
+    };
+    let Some(vpls) = l.renderer.vpl_list() else {
+        note("VPL overlay: pick instant radiosity (Knecht) to see its VPLs".into());
+        return;
+    };
+    let lum = |f: glam::Vec4| 0.2126 * f.x + 0.7152 * f.y + 0.0722 * f.z;
+    let reflected = |v: &gi_render::passes::vpl::GpuVpl| v.flux * v.albedo;
+    let brightest = vpls.iter().map(|v| lum(reflected(v))).fold(0.0f32, f32::max).max(1e-12);
+    let vp = l.renderer.view_proj();
+    for v in &vpls {
+        let clip = vp * v.position.truncate().extend(1.0);
+        if clip.w <= 0.0 {
+            continue;
+        }
+        let ndc = clip.truncate() / clip.w;
+        let pos = rect.min + egui::vec2((ndc.x * 0.5 + 0.5) * rect.width(), (0.5 - ndc.y * 0.5) * rect.height());
+        let c = (reflected(v).truncate() / brightest).clamp(glam::Vec3::ZERO, glam::Vec3::ONE);
+        let colour = egui::Color32::from(egui::Rgba::from_rgb(c.x, c.y, c.z));
+        painter.circle(pos, 3.0, colour, egui::Stroke::new(1.0, egui::Color32::BLACK));
+    }
+    note(format!("{} VPLs coloured by reflected flux Φ·c; brightest {brightest:.3e} W (full colour)", vpls.len()));
+}
+
+/// The HCB's samples over the viewport (Nguyen et al. Fig. 4b's white dots): each at its
+/// G-buffer pixel, its radius growing with its level, and Table 1's counts on a line.
+fn hcb_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
+    let Ok(l) = &st.lab else { return };
+    let painter = ui.painter_at(rect);
+    // On a dark plate, so that it stays readable over the dots.
+    let text = |s: String| {
+        let galley = painter.layout_no_wrap(s, egui::FontId::proportional(14.0), egui::Color32::WHITE);
+        let pos = rect.left_top() + egui::vec2(8.0, 8.0);
+        let plate = egui::Rect::from_min_size(pos, galley.size()).expand(4.0);
+        painter.rect_filled(plate, 3.0, egui::Color32::from_black_alpha(200));
+        painter.galley(pos, galley, egui::Color32::WHITE);
+    };
+    let Some(stats) = l.renderer.hcb_stats() else {
+        text("HCB samples: pick the hierarchical coherence buffer (Nguyen) to see its samples".into());
+        return;
+    };
+    let (w, h) = l.renderer.size();
+    let scale = egui::vec2(rect.width() / w.max(1) as f32, rect.height() / h.max(1) as f32);
+    let at = |x: u32, y: u32| rect.min + egui::vec2((x as f32 + 0.5) * scale.x, (y as f32 + 0.5) * scale.y);
+    for &[x, y, level] in &stats.samples {
+        painter.circle_filled(at(x, y), 1.0 + 0.5 * level as f32, egui::Color32::WHITE);
+    }
+    // Covered pixels that no sample reached (hcb.irradiance's a = 0): magenta, never
+    // silently black.
+    if stats.uncovered > 0
+        && let (Ok(light), Ok(normal)) = (l.renderer.readback("hcb.irradiance"), l.renderer.readback("gbuffer.normal"))
+    {
+        for (i, (e, n)) in light.data.iter().zip(&normal.data).enumerate() {
+            if e[3] == 0.0 && n[3] > 0.5 {
+                let (x, y) = (i as u32 % light.width, i as u32 / light.width);
+                painter.circle_filled(at(x, y), 2.0, egui::Color32::from_rgb(255, 0, 255));
+            }
+        }
+    }
+    text(stats.summary(w * h));
+}
+
+/// The A/B comparison drawn over the viewport: B right of a draggable divider, or the
+/// difference / FLIP image, with the two sources named and a mode switch.
+fn ab_overlay(st: &mut State, ui: &mut egui::Ui, rect: egui::Rect) {
+    use crate::ui::ab::AbView;
+    let a_label = st.preset_label_text();
+    let (Some(ab), Ok(l)) = (&mut st.ab, &st.lab) else { return };
+    let full = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
+    let painter = ui.painter_at(rect);
+    match ab.view {
+        AbView::Split => {
+            let (id, _) = ab.texture_b(&l.render_state);
+            let x = rect.min.x + ab.split * rect.width();
+            let right = egui::Rect::from_min_max(egui::pos2(x, rect.min.y), rect.max);
+            let uv = egui::Rect::from_min_max(egui::pos2(ab.split, 0.0), egui::pos2(1.0, 1.0));
+            painter.image(id, right, uv, egui::Color32::WHITE);
+            let handle = egui::Rect::from_center_size(egui::pos2(x, rect.center().y), egui::vec2(12.0, rect.height()));
+            let r = ui.interact(handle, ui.scope_id().with("ab_divider"), egui::Sense::drag());
+            if r.dragged() {
+                ab.split = ((x + r.drag_delta().x - rect.min.x) / rect.width()).clamp(0.0, 1.0);
+            }
+            let stroke = if r.hovered() || r.dragged() { 3.0 } else { 1.5 };
+            painter
+                .line_segment([egui::pos2(x, rect.min.y), egui::pos2(x, rect.max.y)], (stroke, egui::Color32::WHITE));
+            r.on_hover_cursor(egui::CursorIcon::ResizeHorizontal);
+        }
+        AbView::Difference | AbView::Flip => {
+            if let Some(id) = ab.compared(ui.ctx(), &l.renderer) {
+                painter.image(id, rect, full, egui::Color32::WHITE);
+            }
+        }
+    }
+    let text = |pos: egui::Pos2, align, s: String| {
+        painter.text(pos, align, s, egui::FontId::proportional(14.0), egui::Color32::WHITE);
+    };
+    text(rect.left_top() + egui::vec2(8.0, 28.0), egui::Align2::LEFT_TOP, format!("A: {a_label}"));
+    text(rect.right_top() + egui::vec2(-8.0, 8.0), egui::Align2::RIGHT_TOP, format!("B: {}", ab.source.label()));
+    if let Some((flip, rmse)) = ab.metrics {
+        text(
+            rect.right_top() + egui::vec2(-8.0, 28.0),
+            egui::Align2::RIGHT_TOP,
+            format!("FLIP {flip:.4} · RMSE {rmse:.4}"),
+        );
+    }
+    if let Some(e) = &ab.error {
+        text(rect.left_bottom() + egui::vec2(8.0, -40.0), egui::Align2::LEFT_BOTTOM, e.clone());
+    }
+    let bar = egui::Rect::from_min_size(rect.left_bottom() + egui::vec2(8.0, -30.0), egui::vec2(420.0, 24.0));
+    let mut stop = false;
+    ui.scope_builder(egui::UiBuilder::new().max_rect(bar), |ui| {
+        ui.horizontal(|ui| {
+            ui.selectable_value(&mut ab.view, AbView::Split, "A|B split");
+            ui.selectable_value(&mut ab.view, AbView::Difference, "|A-B|");
+            ui.selectable_value(&mut ab.view, AbView::Flip, "FLIP");
+            if ab.view == AbView::Difference {
+                ui.add(egui::DragValue::new(&mut ab.gain).range(0.1..=1000.0).speed(0.1).prefix("gain ×"));
+            }
+            stop = ui.button("stop A/B").clicked();
+        });
+    });
+    if stop {
+        st.stop_ab();
+    }
+}
+
+fn navigate(l: &mut crate::ui::lab::Lab, ui: &egui::Ui, response: &egui::Response) {
+    let r = l.renderer.bounds().radius();
+    let cam = &mut l.renderer.camera;
+    if response.dragged_by(egui::PointerButton::Primary) {
+        let d = response.drag_delta();
+        cam.orbit(-d.x * 0.008, -d.y * 0.008);
+    }
+    if response.hovered() && !ui.ctx().egui_wants_keyboard_input() {
+        let (scroll, dt, keys) = ui.input(|i| {
+            let k = |key| if i.key_down(key) && i.modifiers.is_none() { 1.0 } else { 0.0 };
+            (
+                i.smooth_scroll_delta.y,
+                i.stable_dt.min(0.1),
+                glam::Vec3::new(
+                    k(egui::Key::D) - k(egui::Key::A),
+                    k(egui::Key::E) - k(egui::Key::Q),
+                    k(egui::Key::W) - k(egui::Key::S),
+                ),
+            )
+        });
+        let speed = r * 0.8;
+        if keys != glam::Vec3::ZERO {
+            cam.fly(keys * speed * dt);
+        }
+        if scroll != 0.0 {
+            let step = scroll * r * 0.002;
+            cam.fly(glam::Vec3::new(0.0, 0.0, step));
+            cam.orbit_distance = (cam.orbit_distance - step).max(r * 0.05);
+        }
+    }
+}
