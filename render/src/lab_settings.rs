@@ -9,13 +9,14 @@ use serde::{Deserialize, Serialize};
 use crate::passes::compose::TonemapSettings;
 use crate::passes::direct::DirectSettings;
 use crate::passes::hcb::HcbSettings;
-use crate::passes::interleave::InterleaveSettings;
-use crate::passes::ism::{IsmSettings, VplVisibility};
-use crate::passes::temporal::TemporalSettings;
-use crate::passes::vpl::ReferenceSettings;
-use crate::passes::vpl_importance::VplSettings;
+use crate::passes::knecht::interleave::InterleaveSettings;
+use crate::passes::knecht::ism::IsmSettings;
+use crate::passes::knecht::temporal::TemporalSettings;
+use crate::passes::knecht::vpl_importance::VplSettings;
+use crate::passes::reference::vpl::ReferenceSettings;
+use crate::pipeline::{LegacyIndirect, PipelineSettings};
 use crate::settings::{FieldError, FieldMeta, PRESET_VERSION, PresetError, SettingsGroup, Value};
-use crate::{settings_enum, settings_group};
+use crate::settings_group;
 
 settings_group! {
     /// The deterministic clock (see `clock.rs`).
@@ -23,43 +24,6 @@ settings_group! {
         /// Fixed time step of one frame; animation time = animated frames × step.
         time_step_s: f32 = 1.0 / 60.0,
         unit "s", symbol "Δt", range 0.001..=1.0, cost "free", history true;
-    }
-}
-
-settings_enum! {
-    /// How stages 3–6 compute indirect light (DESIGN.md's pipeline table). The techniques of
-    /// issues #5 and #6 add their choices here.
-    pub enum IndirectTechnique {
-        /// No indirect light: the image is the direct light.
-        None = "none (direct light only)",
-        /// Many VPLs with exact visibility maps, accumulated over frames: the reference the
-        /// techniques are measured against (Knecht 002 §5.2).
-        ExactVpl = "exact-VPL reference",
-        /// Instant radiosity with imperfect shadow maps, interleaved sampling and temporal
-        /// coherence (Knecht 002): stages 3–7 as the `vpl`, `ism`, `interleave` and
-        /// `temporal` settings choose.
-        InstantRadiosity = "instant radiosity (Knecht)",
-        /// The hierarchical coherence buffer (Nguyen et al.): the VPLs and visibility of
-        /// instant radiosity gathered at a few percent of the pixels, chosen by the `hcb`
-        /// settings, and splatted to the coherent pixels around them.
-        Hcb = "hierarchical coherence buffer (Nguyen)",
-    }
-    default None
-}
-
-impl IndirectTechnique {
-    /// Whether the technique lights the scene with instant radiosity's VPLs (stages 3–4).
-    pub fn uses_vpls(self) -> bool {
-        matches!(self, Self::InstantRadiosity | Self::Hcb)
-    }
-}
-
-settings_group! {
-    /// Indirect light (stages 3–6): which technique computes it.
-    pub struct IndirectSettings: "indirect" {
-        /// The technique of stages 3–6.
-        technique: IndirectTechnique = IndirectTechnique::None,
-        unit "", symbol "", range 0..=2, cost "see the technique's own settings", history true;
     }
 }
 
@@ -75,7 +39,11 @@ pub struct LabSettings {
     pub version: u32,
     pub animation: AnimationSettings,
     pub direct: DirectSettings,
-    pub indirect: IndirectSettings,
+    /// The stage choices (stages 3–7): which pass each stage runs.
+    pub pipeline: PipelineSettings,
+    /// Version 1's technique, read from old presets only (see `pipeline::migrate_v1`).
+    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "crate::settings::legacy_field")]
+    pub indirect: Option<LegacyIndirect>,
     pub vpl: VplSettings,
     pub ism: IsmSettings,
     pub interleave: InterleaveSettings,
@@ -91,7 +59,8 @@ impl Default for LabSettings {
             version: PRESET_VERSION,
             animation: Default::default(),
             direct: Default::default(),
-            indirect: Default::default(),
+            pipeline: Default::default(),
+            indirect: None,
             vpl: Default::default(),
             ism: Default::default(),
             interleave: Default::default(),
@@ -108,7 +77,7 @@ macro_rules! for_each_group {
     ($m:ident) => {
         $m!(animation, AnimationSettings);
         $m!(direct, DirectSettings);
-        $m!(indirect, IndirectSettings);
+        $m!(pipeline, PipelineSettings);
         $m!(vpl, VplSettings);
         $m!(ism, IsmSettings);
         $m!(interleave, InterleaveSettings);
@@ -182,8 +151,18 @@ impl LabSettings {
     pub fn apply_override(&mut self, assignment: &str) -> Result<(), String> {
         let (path, text) =
             assignment.split_once('=').ok_or_else(|| format!("'{assignment}' is not of the form group.field=value"))?;
-        let meta = Self::field(path.trim())
-            .ok_or_else(|| format!("no setting named '{}'; known: {}", path.trim(), Self::all_paths().join(", ")))?;
+        if path.trim() == "indirect.technique" {
+            // Version 1's technique, kept for scripts written before the stage choices.
+            let t = crate::pipeline::Technique::from_v1_name(text.trim()).ok_or_else(|| {
+                format!("indirect.technique: '{}' is not one of None, ExactVpl, InstantRadiosity, Hcb", text.trim())
+            })?;
+            t.apply(self);
+            return Ok(());
+        }
+        let meta = Self::field(path.trim()).ok_or_else(|| match crate::pipeline::moved_setting(path.trim()) {
+            Some(to) => format!("{} was replaced by {to} (preset version 2)", path.trim()),
+            None => format!("no setting named '{}'; known: {}", path.trim(), Self::all_paths().join(", ")),
+        })?;
         let v = crate::settings::parse_value(meta.kind, text).map_err(|e| format!("{}: {e}", path.trim()))?;
         self.set(path.trim(), &v)
     }
@@ -235,29 +214,8 @@ impl LabSettings {
                 );
             }
         }
-        if self.indirect.technique == IndirectTechnique::InstantRadiosity {
-            let n = self.interleave.n;
-            if self.vpl.count < n * n {
-                err(
-                    "vpl.count",
-                    format!(
-                        "{} VPLs cannot cover {n}×{n} interleaved tiles (each tile needs at least one VPL): use at least {} VPLs or interleave.n ≤ {}",
-                        self.vpl.count,
-                        n * n,
-                        (self.vpl.count as f64).sqrt().floor() as u32
-                    ),
-                );
-            }
-            if self.ism.visibility == VplVisibility::Imperfect && self.ism.points < self.vpl.count {
-                err(
-                    "ism.points",
-                    format!(
-                        "{} points cannot give each of {} ISMs a point: use at least as many points as VPLs",
-                        self.ism.points, self.vpl.count
-                    ),
-                );
-            }
-        }
+        errors.extend(crate::pipeline::combination_errors(self));
+        errors.extend(crate::pipeline::legacy_field_errors(self));
         errors
     }
 
@@ -294,9 +252,13 @@ impl LabSettings {
         if errors.is_empty() { Ok(s) } else { Err(PresetError::Invalid { path: origin.into(), errors }) }
     }
 
-    /// Upgrades an older preset version (version 0 = files written before versioning).
-    fn migrate(mut self) -> Self {
-        if self.version == 0 {
+    /// Upgrades an older preset version (version 0 = files written before versioning):
+    /// version 1's technique and stage switches become the stage choices of version 2.
+    pub fn migrate(mut self) -> Self {
+        if self.version < 2 {
+            crate::pipeline::migrate_v1(&mut self);
+        }
+        if self.version < PRESET_VERSION {
             self.version = PRESET_VERSION;
         }
         self

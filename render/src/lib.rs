@@ -12,13 +12,16 @@ pub mod image_io;
 pub mod lab_settings;
 pub mod metrics;
 pub mod passes;
+pub mod pipeline;
 pub mod preset;
+pub mod renderer;
 pub mod scene;
 pub mod settings;
 pub mod shaders;
+pub mod stages;
 pub mod timing;
 
 pub use buffers::{BufferKind, BufferRegistry, ImageF32};
-pub use frame::{RenderError, Renderer};
 pub use gpu::GpuContext;
+pub use renderer::{RenderError, Renderer};
 pub use settings::LabSettings;

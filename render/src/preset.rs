@@ -125,12 +125,25 @@ fn number(v: &ron::Value) -> Option<f64> {
     }
 }
 
-/// Migrations of the raw preset, one per version step: (from version, what it does, fn).
-/// Version 0 is every file written before presets carried a `version`: its fields are
-/// those of version 1, so the step only stamps the version (and says so).
-type Migration = (u32, &'static str, fn(&mut ron::Map));
-const MIGRATIONS: &[Migration] =
-    &[(0, "files without a version field are version 0; their fields are unchanged in version 1", |_| {})];
+/// Migrations of the raw preset: (from version, to version, what it does, fn returning the
+/// (field, problem) pairs it could not carry over). Version 0 is every file written before
+/// presets carried a `version`: its fields are those of version 1, so it takes version 1's
+/// step.
+type Migration = (u32, u32, &'static str, fn(&mut ron::Map) -> Vec<(String, String)>);
+const MIGRATIONS: &[Migration] = &[
+    (
+        0,
+        2,
+        "files without a version field have version 1's fields; indirect.technique, ism.visibility, reference.visibility, interleave.filter, temporal.enabled and hcb.cache became the stage choices pipeline.*",
+        crate::pipeline::migrate_v1_map,
+    ),
+    (
+        1,
+        2,
+        "indirect.technique, ism.visibility, reference.visibility, interleave.filter, temporal.enabled and hcb.cache became the stage choices pipeline.*",
+        crate::pipeline::migrate_v1_map,
+    ),
+];
 
 /// Parses a preset leniently: syntax errors are fatal (nothing usable), but unknown
 /// groups and fields are ignored, wrong types fall back to the default, and out-of-range
@@ -170,10 +183,12 @@ pub fn load_lenient(text: &str, origin: &str) -> Result<Loaded, PresetError> {
         });
         version = PRESET_VERSION;
     }
-    for (from, what, step) in MIGRATIONS {
+    for (from, to, what, step) in MIGRATIONS {
         if version == *from {
-            step(&mut top);
-            version = from + 1;
+            for (field, message) in step(&mut top) {
+                problems.push(Problem { field, message });
+            }
+            version = *to;
             migrations.push(format!("version {from} → {version}: {what}"));
         }
     }
@@ -508,7 +523,7 @@ mod tests {
         assert!(l.migrations.is_empty());
         assert_eq!(l.settings, LabSettings::default());
         let mut s = LabSettings::default();
-        s.indirect.technique = crate::lab_settings::IndirectTechnique::ExactVpl;
+        crate::pipeline::Technique::ExactVpl.apply(&mut s);
         s.direct.pcf_radius = 3;
         let l = load_lenient(&s.to_ron(), "t").expect("loads");
         assert_eq!(l.settings, s);
@@ -559,7 +574,7 @@ mod tests {
         let mut s = LabSettings::default();
         s.tonemap.exposure_ev = 0.1 + 0.2;
         s.direct.depth_bias = 1.0 / 3.0;
-        s.indirect.technique = crate::lab_settings::IndirectTechnique::ExactVpl;
+        crate::pipeline::Technique::ExactVpl.apply(&mut s);
         let cam = Camera {
             position: glam::Vec3::new(0.1, 1.7, 3.3),
             yaw: 0.3,

@@ -265,6 +265,10 @@ macro_rules! settings_enum {
 ///     }
 /// }
 /// ```
+///
+/// An optional `legacy { /// doc\n name: Type; }` block after the fields declares fields of
+/// older preset versions: read on load (`Option`, absent by default), never written, not
+/// settings; the migration turns them into current fields.
 #[macro_export]
 macro_rules! settings_group {
     (
@@ -277,15 +281,21 @@ macro_rules! settings_group {
                 cost $cost:literal , history $hist:literal ;
             )+
         }
+        $( legacy { $( $(#[doc = $ldoc:literal])+ $lfield:ident : $lty:ty ; )+ } )?
     ) => {
         $(#[doc = $sdoc])*
         #[derive(Clone, PartialEq, Debug, serde::Serialize, serde::Deserialize)]
         #[serde(default, deny_unknown_fields)]
         pub struct $name {
             $( $(#[doc = $doc])+ pub $field: $ty, )+
+            $($(
+                $(#[doc = $ldoc])+
+                #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "crate::settings::legacy_field")]
+                pub $lfield: Option<$lty>,
+            )+)?
         }
         impl Default for $name {
-            fn default() -> Self { Self { $( $field: $default ),+ } }
+            fn default() -> Self { Self { $( $field: $default, )+ $($( $lfield: None, )+)? } }
         }
         impl $crate::settings::SettingsGroup for $name {
             const GROUP: &'static str = $group;
@@ -343,8 +353,16 @@ fn list(errors: &[FieldError]) -> String {
     errors.iter().map(|e| format!("  - {e}")).collect::<Vec<_>>().join("\n")
 }
 
-/// Current preset format version (see [`LabSettings::version`]).
-pub const PRESET_VERSION: u32 = 1;
+/// Current preset format version (see [`LabSettings::version`]). Version 2 replaced
+/// `indirect.technique` and the stage switches of the groups by the stage choices
+/// (`pipeline.*`, see `crate::pipeline::migrate_v1`).
+pub const PRESET_VERSION: u32 = 2;
+
+/// Reads a field of an older preset version (a `legacy` field of [`settings_group!`]),
+/// written without `Some(..)`.
+pub fn legacy_field<'de, D: serde::Deserializer<'de>, T: serde::Deserialize<'de>>(d: D) -> Result<Option<T>, D::Error> {
+    T::deserialize(d).map(Some)
+}
 
 /// Whether a value is the default, for `skip_serializing_if`.
 pub fn is_default<T: Default + PartialEq>(t: &T) -> bool {

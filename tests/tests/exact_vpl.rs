@@ -5,7 +5,7 @@
 
 use gi_lab_tests::{default_scene, gpu};
 use gi_render::cpu::pathtrace::{PathTracer, PtSettings};
-use gi_render::lab_settings::IndirectTechnique;
+use gi_render::pipeline::Technique;
 use gi_render::scene::{LightKind, Scene};
 use gi_render::{ImageF32, LabSettings, Renderer};
 
@@ -18,7 +18,7 @@ fn luminance_sum(img: &ImageF32) -> f64 {
 /// (exact-VPL indirect, path-traced indirect) total luminance for `scene` at time 0.
 fn indirect_energy(scene: Scene) -> (f64, f64) {
     let mut s = LabSettings::default();
-    s.indirect.technique = IndirectTechnique::ExactVpl;
+    Technique::ExactVpl.apply(&mut s);
     s.reference.vpls_per_frame = 128;
     s.reference.total_vpls = 2048;
     s.reference.light_gbuffer_size = 256;

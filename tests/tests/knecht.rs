@@ -4,10 +4,10 @@
 
 use gi_lab_tests::{default_scene, gpu};
 use gi_render::cpu::knecht::{self, ISM_EMPTY, Pyramid, halton};
-use gi_render::lab_settings::IndirectTechnique;
-use gi_render::passes::ism::{IsmPass, IsmSettings, VplVisibility};
+use gi_render::passes::knecht::ism::{IsmPass, IsmSettings};
+use gi_render::passes::knecht::vpl_importance::{ViewJob, VplImportancePass};
 use gi_render::passes::shadow::LightView;
-use gi_render::passes::vpl_importance::{ViewJob, VplImportancePass};
+use gi_render::pipeline::{Technique, VplVisibility};
 use gi_render::scene::upload::GpuScene;
 use gi_render::{GpuContext, LabSettings, RenderError, Renderer};
 use glam::{Mat4, Vec2, Vec3};
@@ -175,7 +175,7 @@ fn pull_push_on_the_gpu_equals_the_cpu_reference() {
 
 fn knecht_settings() -> LabSettings {
     let mut s = LabSettings::default();
-    s.indirect.technique = IndirectTechnique::InstantRadiosity;
+    Technique::Knecht.apply(&mut s);
     s
 }
 
@@ -257,7 +257,7 @@ fn combinations_that_cannot_work_are_refused_with_a_reason() {
     s.ism.map_size = 128;
     s.vpl.count = 16;
     assert!(s.validate().is_empty(), "{:?}", s.validate());
-    s.ism.visibility = VplVisibility::None;
+    s.pipeline.vpl_visibility = VplVisibility::None;
     assert!(s.validate().is_empty());
 }
 
@@ -289,7 +289,7 @@ fn every_shipped_preset_loads_cleanly_and_validates() {
     }
     let k = gi_render::preset::load_lenient(include_str!("../../presets/knecht-cornell-256.ron"), "k").expect("loads");
     let s = &k.settings;
-    assert_eq!(s.indirect.technique, IndirectTechnique::InstantRadiosity);
+    assert_eq!(Technique::of(&s.pipeline), Some(Technique::Knecht));
     assert_eq!((s.vpl.count, s.ism.map_size, s.interleave.n), (256, 128, 4));
     assert_eq!((s.temporal.c_base, s.interleave.alpha, s.interleave.beta), (0.9, 0.01, 0.8));
     assert_eq!(s.vpl.bounces, 1);
@@ -411,7 +411,7 @@ fn read(ctx: &GpuContext, t: &wgpu::Texture) -> gi_render::buffers::ImageF32 {
 
 #[test]
 fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
-    use gi_render::passes::interleave::{GatherVisibility, InterleavePass};
+    use gi_render::passes::knecht::interleave::{GatherVisibility, InterleavePass};
     let ctx = gpu();
     // An odd size, so that the last row and column of tiles are partial; n = 2 and 7 VPLs,
     // so that the tiles hold 2, 2, 2 and 1 VPLs and the N / N_t scaling differs per tile.
@@ -457,7 +457,7 @@ fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
         };
         // VPL 5 is an empty slot (position.w = 0): it is skipped but still counted in N_t.
         let enabled = k != 5;
-        gpu_vpls.push(gi_render::passes::vpl::GpuVpl {
+        gpu_vpls.push(gi_render::passes::reference::vpl::GpuVpl {
             position: v.position.extend(enabled as u32 as f32),
             normal: v.normal.extend(v.di),
             flux: v.flux.extend(v.si),
@@ -533,7 +533,7 @@ fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
 
 #[test]
 fn geometry_aware_filter_on_the_gpu_equals_the_cpu() {
-    use gi_render::passes::interleave::{InterleavePass, InterleaveSettings};
+    use gi_render::passes::knecht::interleave::{InterleavePass, InterleaveSettings};
     let ctx = gpu();
     let (w, h, n) = (27u32, 21u32, 4u32);
     let depth_range = 10.0;
@@ -597,7 +597,7 @@ fn geometry_aware_filter_on_the_gpu_equals_the_cpu() {
 
 #[test]
 fn confidence_and_merge_on_the_gpu_equal_eq_3_1_to_3_6_on_the_cpu() {
-    use gi_render::passes::temporal::{TemporalPass, TemporalSettings};
+    use gi_render::passes::knecht::temporal::{TemporalPass, TemporalSettings};
     let ctx = gpu();
     let (w, h) = (24u32, 20u32);
     let depth_range = 9.9;
@@ -751,7 +751,7 @@ fn the_vpl_list_holds_every_vpl_on_the_scene_surfaces() {
     let reflected: Vec<Vec3> = vpls.iter().map(|v| (v.flux * v.albedo).truncate()).collect();
     assert!(reflected.iter().any(|c| c.x > 2.0 * c.y) && reflected.iter().any(|c| c.y > 2.0 * c.x));
     let mut s = r.settings().clone();
-    s.indirect.technique = IndirectTechnique::None;
+    Technique::DirectOnly.apply(&mut s);
     r.set_settings(s).expect("valid");
     assert!(r.vpl_list().is_none(), "no list without instant radiosity");
 }
@@ -764,14 +764,14 @@ struct BounceFixture {
     gs: GpuScene,
     ism: IsmPass,
     s: IsmSettings,
-    vpls: Vec<gi_render::passes::vpl::GpuVpl>,
+    vpls: Vec<gi_render::passes::reference::vpl::GpuVpl>,
     vpl_buf: wgpu::Buffer,
     n: u32,
 }
 
 impl BounceFixture {
     fn new() -> Self {
-        use gi_render::passes::vpl::GpuVpl;
+        use gi_render::passes::reference::vpl::GpuVpl;
         use glam::Vec4;
         let ctx = gpu();
         let scene = default_scene();
@@ -854,8 +854,8 @@ impl BounceFixture {
         (self.ism.cloud.gpu.len() as u32 - i as u32).div_ceil(self.n)
     }
 
-    fn read_vpls(&self) -> Vec<gi_render::passes::vpl::GpuVpl> {
-        let size = std::mem::size_of::<gi_render::passes::vpl::GpuVpl>() as u64;
+    fn read_vpls(&self) -> Vec<gi_render::passes::reference::vpl::GpuVpl> {
+        let size = std::mem::size_of::<gi_render::passes::reference::vpl::GpuVpl>() as u64;
         bytemuck::pod_collect_to_vec(&read_buffer(&self.ctx, &self.vpl_buf, (2 * self.n) as u64 * size))
     }
 }
@@ -882,9 +882,9 @@ fn close(a: Vec3, b: Vec3, tol: f32) -> bool {
 #[test]
 fn bounce_selection_on_the_gpu_picks_the_cpu_arg_max() {
     use gi_render::cpu::knecht::Selection;
-    use gi_render::passes::ism::IsmFrame;
-    use gi_render::passes::vpl::GpuVpl;
-    use gi_render::passes::vpl_bounce::{BounceFrame, BounceSelection, VplBouncePass};
+    use gi_render::passes::knecht::ism::IsmFrame;
+    use gi_render::passes::knecht::vpl_bounce::{BounceFrame, BounceSelection, VplBouncePass};
+    use gi_render::passes::reference::vpl::GpuVpl;
     let fx = BounceFixture::new();
     let (ctx, s, ism, gs, n, vpl_buf) = (&fx.ctx, &fx.s, &fx.ism, &fx.gs, fx.n, &fx.vpl_buf);
     let bounce = VplBouncePass::new(ctx);
@@ -908,7 +908,7 @@ fn bounce_selection_on_the_gpu_picks_the_cpu_arg_max() {
         ctx.queue.submit([enc.finish()]);
         let out: Vec<GpuVpl> = fx.read_vpls();
         let depth: Vec<u32> = bytemuck::pod_collect_to_vec(&read_buffer(ctx, &ism.depth, l.width() * l.height() * 4));
-        let seed_gpu = gi_render::passes::vpl_bounce::bounce_seed(seed, 1);
+        let seed_gpu = gi_render::passes::knecht::vpl_bounce::bounce_seed(seed, 1);
         let sel = match selection {
             BounceSelection::Strongest => Selection::Strongest,
             BounceSelection::Proportional => Selection::Proportional { seed: seed_gpu },
@@ -962,7 +962,7 @@ fn bounce_selection_on_the_gpu_picks_the_cpu_arg_max() {
     }
 }
 
-fn assert_vpl_eq(got: &gi_render::passes::vpl::GpuVpl, want: &knecht::Vpl, what: &str) {
+fn assert_vpl_eq(got: &gi_render::passes::reference::vpl::GpuVpl, want: &knecht::Vpl, what: &str) {
     assert!(
         close(got.position.truncate(), want.position, 1e-5),
         "{what}: GPU at {:?}, CPU at {:?}",
@@ -988,7 +988,7 @@ fn assert_vpl_eq(got: &gi_render::passes::vpl::GpuVpl, want: &knecht::Vpl, what:
 /// with flux Φ_s · ΣC / (N n_s C_s).
 #[test]
 fn irsm_bounce_on_the_gpu_samples_the_texels_the_cpu_picks() {
-    use gi_render::passes::irsm::{IrsmFrame, IrsmPass};
+    use gi_render::passes::knecht::irsm::{IrsmFrame, IrsmPass};
     let fx = BounceFixture::new();
     let (ctx, ism, n) = (&fx.ctx, &fx.ism, fx.n);
     let mut irsm = IrsmPass::new(ctx);
@@ -1053,7 +1053,7 @@ fn irsm_bounce_on_the_gpu_samples_the_texels_the_cpu_picks() {
     assert!(covered > texels, "the IRSMs hold only {covered} lit texels");
     assert_eq!(coverage, owned, "texels owned per sample");
     // The picks.
-    let seed_gpu = gi_render::passes::vpl_bounce::bounce_seed(seed, 1);
+    let seed_gpu = gi_render::passes::knecht::vpl_bounce::bounce_seed(seed, 1);
     let grand: f32 = totals.iter().sum();
     let mut sources = std::collections::BTreeSet::new();
     for k in 0..n {

@@ -5,7 +5,7 @@
 
 use gi_lab_tests::{default_scene, gpu, stored_reference};
 use gi_render::image_io::hdr_display;
-use gi_render::passes::ism::VplVisibility;
+use gi_render::pipeline::{Temporal, VplVisibility};
 use gi_render::{ImageF32, LabSettings, Renderer};
 use glam::Vec3;
 
@@ -38,8 +38,8 @@ fn imperfect_shadow_maps_stay_close_to_exact_shadow_maps_for_the_same_vpls() {
     let image = |vis: VplVisibility| {
         let mut r = knecht(128, |s| {
             s.vpl.new_set_each_frame = false;
-            s.temporal.enabled = false;
-            s.ism.visibility = vis;
+            s.pipeline.temporal = Temporal::None;
+            s.pipeline.vpl_visibility = vis;
         });
         frames(&mut r, 1, "final.hdr").remove(0)
     };
@@ -59,7 +59,8 @@ fn imperfect_shadow_maps_stay_close_to_exact_shadow_maps_for_the_same_vpls() {
 fn temporal_coherence_brings_256_vpls_closer_to_the_path_traced_bounce() {
     let reference = stored_reference("cornell_1bounce_256.exr");
     let run = |temporal: bool| {
-        let mut r = knecht(256, |s| s.temporal.enabled = temporal);
+        let mut r =
+            knecht(256, |s| s.pipeline.temporal = if temporal { Temporal::ConfidenceMerge } else { Temporal::None });
         let t = std::time::Instant::now();
         let img = frames(&mut r, 16, "final.hdr").pop().expect("16 frames");
         println!("16 frames at 256² in {:.1} s", t.elapsed().as_secs_f32());
@@ -78,7 +79,8 @@ fn temporal_coherence_brings_256_vpls_closer_to_the_path_traced_bounce() {
 #[test]
 fn temporal_coherence_cuts_flicker_at_least_five_times() {
     let run = |temporal: bool| {
-        let mut r = knecht(128, |s| s.temporal.enabled = temporal);
+        let mut r =
+            knecht(128, |s| s.pipeline.temporal = if temporal { Temporal::ConfidenceMerge } else { Temporal::None });
         let all = frames(&mut r, 20, "final.hdr");
         gi_render::metrics::flicker(&all[8..]).expect("flicker")
     };
@@ -198,7 +200,7 @@ fn mean_luminance(img: &ImageF32) -> f64 {
 
 #[test]
 fn further_bounces_bring_the_image_closer_to_the_path_traced_three_bounces() {
-    use gi_render::passes::vpl_bounce::{BounceMethod, BounceSelection};
+    use gi_render::passes::knecht::vpl_bounce::{BounceMethod, BounceSelection};
     let reference = stored_reference("cornell_3bounce_128.exr");
     let run = |bounces: u32, selection: BounceSelection, method: BounceMethod| {
         let mut r = knecht(128, |s| {

@@ -499,15 +499,15 @@ fn an_exact_vpl_atlas_larger_than_the_device_is_refused_with_the_largest_valid_b
     let mut r = default_renderer(16, 16);
     let before = r.settings().clone();
     let mut s = before.clone();
-    s.indirect.technique = gi_render::lab_settings::IndirectTechnique::ExactVpl;
+    gi_render::pipeline::Technique::ExactVpl.apply(&mut s);
     s.reference.vpls_per_frame = 1024;
     s.reference.shadow_map_size = 1024;
     let e = r.set_settings(s.clone()).expect_err("a 73728-texel-wide atlas cannot exist").to_string();
     let max = r.ctx.limits.max_texture_dimension_2d;
-    let largest = gi_render::passes::vpl_visibility::AtlasLayout::largest_batch(1024, max);
+    let largest = gi_render::passes::reference::vpl_visibility::AtlasLayout::largest_batch(1024, max);
     assert!(e.contains(&format!("at most {largest} VPLs per frame")), "{e}");
     assert_eq!(r.settings(), &before, "a refused change leaves the settings as they were");
     // The largest batch the message names fits; one more does not.
-    assert!(gi_render::passes::vpl_visibility::AtlasLayout::new(largest, 1024).fits(max));
-    assert!(!gi_render::passes::vpl_visibility::AtlasLayout::new(largest + 1, 1024).fits(max));
+    assert!(gi_render::passes::reference::vpl_visibility::AtlasLayout::new(largest, 1024).fits(max));
+    assert!(!gi_render::passes::reference::vpl_visibility::AtlasLayout::new(largest + 1, 1024).fits(max));
 }

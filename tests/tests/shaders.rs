@@ -79,7 +79,7 @@ fn uniform_sizes_match_wgsl() {
     assert_eq!(struct_size(&t, "Params") as usize, std::mem::size_of::<ToneParams>());
     let s = parse("shadow/shadow.wgsl");
     assert_eq!(struct_size(&s, "Instance") as usize, std::mem::size_of::<InstanceUniform>());
-    use gi_render::passes::{vpl, vpl_gather, vpl_visibility};
+    use gi_render::passes::reference::{vpl, vpl_gather, vpl_visibility};
     let vs = parse("vpl/sample.wgsl");
     assert_eq!(struct_size(&vs, "Vpl") as usize, std::mem::size_of::<vpl::GpuVpl>());
     assert_eq!(struct_size(&vs, "Params") as usize, std::mem::size_of::<vpl::SampleParams>());
@@ -94,7 +94,7 @@ fn uniform_sizes_match_wgsl() {
     let p = parse("view/probe.wgsl");
     assert_eq!(struct_size(&p, "Jobs") as usize, std::mem::size_of::<gi_render::passes::view::ProbeJobs>());
     // Instant radiosity (issue #5).
-    use gi_render::passes::{interleave, ism, temporal, vpl_importance};
+    use gi_render::passes::knecht::{interleave, ism, temporal, vpl_importance};
     let w = parse("vpl/warp.wgsl");
     assert_eq!(struct_size(&w, "ViewParams") as usize, std::mem::size_of::<vpl_importance::ViewParams>());
     assert_eq!(struct_size(&w, "Vpl") as usize, std::mem::size_of::<vpl::GpuVpl>());
@@ -102,7 +102,7 @@ fn uniform_sizes_match_wgsl() {
     assert_eq!(struct_size(&sp, "IsmPoint") as usize, std::mem::size_of::<ism::GpuPoint>());
     assert_eq!(struct_size(&sp, "SplatParams") as usize, std::mem::size_of::<ism::SplatParams>());
     assert_eq!(struct_size(&sp, "Instance") as usize, std::mem::size_of::<InstanceUniform>());
-    use gi_render::passes::vpl_bounce::BounceParams;
+    use gi_render::passes::knecht::vpl_bounce::BounceParams;
     for file in ["vpl/bounce.wgsl", "vpl/irsm.wgsl"] {
         let m = parse(file);
         assert_eq!(struct_size(&m, "BounceParams") as usize, std::mem::size_of::<BounceParams>(), "{file}");
@@ -114,7 +114,7 @@ fn uniform_sizes_match_wgsl() {
         let m = parse(file);
         let want = std::mem::size_of::<gi_render::passes::hcb::GpuHcbSample>();
         assert_eq!(struct_size(&m, "HcbSample") as usize, want, "{file}");
-        let want = std::mem::size_of::<gi_render::passes::hcb_cache::CacheParams>();
+        let want = std::mem::size_of::<gi_render::passes::hcb::cache::CacheParams>();
         assert_eq!(struct_size(&m, "CacheParams") as usize, want, "{file}");
     }
     for file in ["hcb/base.wgsl", "hcb/build.wgsl", "hcb/samples.wgsl", "hcb/splat.wgsl"] {

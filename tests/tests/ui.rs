@@ -81,7 +81,7 @@ fn app_renders_into_a_viewport_the_panels_do_not_cover() {
     let names: Vec<_> = r.timings().iter().map(|t| t.name.clone()).collect();
     assert_eq!(names, ["gbuffer", "direct.shadow", "direct", "compose", "compose.luminance", "compose.tonemap"]);
     for n in &names {
-        let out = gi_render::frame::scope_output(n).unwrap_or_else(|| panic!("pass {n} has no output buffer"));
+        let out = gi_render::renderer::scope_output(n).unwrap_or_else(|| panic!("pass {n} has no output buffer"));
         assert!(r.buffers().get(out).is_ok(), "{n} → {out} is not registered");
     }
 }
@@ -477,7 +477,7 @@ fn the_hcb_samples_overlay_draws_white_dots_and_table_1() {
     let (mut h, _dir) = harness("hcb_overlay");
     pause(&mut h);
     if let Ok(l) = &mut h.state_mut().state.lab {
-        l.settings.indirect.technique = gi_render::lab_settings::IndirectTechnique::Hcb;
+        gi_render::pipeline::Technique::Nguyen.apply(&mut l.settings);
         l.apply_settings();
     }
     h.run_steps(3);
@@ -517,8 +517,7 @@ fn the_settings_pane_shows_table_1_and_the_cache_counts_for_the_hcb() {
     let mut h = harness_in(&dir, egui::vec2(1400.0, 2600.0));
     pause(&mut h);
     if let Ok(l) = &mut h.state_mut().state.lab {
-        l.settings.indirect.technique = gi_render::lab_settings::IndirectTechnique::Hcb;
-        l.settings.hcb.cache = true;
+        gi_render::pipeline::Technique::NguyenCached.apply(&mut l.settings);
         l.apply_settings();
     }
     h.run_steps(4);

@@ -9,8 +9,8 @@
 //! Rows that the device cannot hold (an ISM atlas too large) print the refusal instead.
 
 use gi_render::Renderer;
-use gi_render::lab_settings::IndirectTechnique;
-use gi_render::passes::vpl_bounce::BounceMethod;
+use gi_render::passes::knecht::vpl_bounce::BounceMethod;
+use gi_render::pipeline::{ShadingPoints, Technique, Temporal, VplSource, VplVisibility};
 
 use super::bench::{BenchReport, bench_run};
 use crate::error::CliError;
@@ -55,7 +55,13 @@ fn focus(report: &BenchReport, prefixes: &[&str]) -> f64 {
 pub fn knecht(r: &mut Renderer, frames: u32, scene: &str) -> Result<SuiteReport, CliError> {
     let original = r.settings().clone();
     let mut base = original.clone();
-    base.indirect.technique = IndirectTechnique::InstantRadiosity;
+    // Instant radiosity as the preset sets it, else Knecht's choices.
+    if base.pipeline.vpl_source != VplSource::ImportanceWarping
+        || base.pipeline.shading_points == ShadingPoints::HcbSamples
+        || !base.pipeline.uses_knecht_vpls()
+    {
+        Technique::Knecht.apply(&mut base);
+    }
     let mut rows = Vec::new();
     let mut run = |r: &mut Renderer, table: &str, setting: String, s: gi_render::LabSettings, f: &[&str]| match r
         .set_settings(s)
@@ -97,17 +103,17 @@ pub fn knecht(r: &mut Renderer, frames: u32, scene: &str) -> Result<SuiteReport,
     for size in [64u32, 128, 256, 512] {
         let mut s = base.clone();
         s.ism.map_size = size;
-        s.ism.visibility = gi_render::passes::ism::VplVisibility::Imperfect;
+        s.pipeline.vpl_visibility = VplVisibility::Imperfect;
         run(r, "ISM size", format!("{size}² × {} VPLs", s.vpl.count), s, &["ism."]);
     }
     // Temporal-coherence overhead at the base VPL count.
     let mut on = base.clone();
-    on.temporal.enabled = true;
+    on.pipeline.temporal = Temporal::ConfidenceMerge;
     let mut off = base.clone();
-    off.temporal.enabled = false;
-    // The temporal pass runs either way (off, it passes the new light through); its share of
-    // the frame with coherence on bounds what coherence costs. The difference of the two
-    // frames is kept in the table but is within a CPU device's frame-to-frame noise.
+    off.pipeline.temporal = Temporal::None;
+    // Off, the stage choice runs no temporal pass; the pass's share of the frame with
+    // coherence on bounds what coherence costs. The difference of the two frames is kept in
+    // the table but is within a CPU device's frame-to-frame noise.
     let t_on = run(r, "temporal coherence", "on".into(), on, &["temporal"]);
     run(r, "temporal coherence", "off".into(), off, &["temporal"]);
     let temporal_overhead = t_on.filter(|t| t.0 > 0.0).map(|(frame, pass)| pass / frame);
@@ -122,7 +128,7 @@ pub fn knecht(r: &mut Renderer, frames: u32, scene: &str) -> Result<SuiteReport,
             let label = match method {
                 BounceMethod::PointCloud => format!("B = {bounces}, point cloud"),
                 BounceMethod::Irsm => {
-                    format!("B = {bounces}, IRSM {}²", gi_render::passes::irsm::irsm_size(s.vpl.irsm_size))
+                    format!("B = {bounces}, IRSM {}²", gi_render::passes::knecht::irsm::irsm_size(s.vpl.irsm_size))
                 }
             };
             times.push(run(r, "bounces (focus: bounce passes only)", label, s, &["vpl.bounce."]).map(|t| t.1));
@@ -236,16 +242,16 @@ pub fn nguyen(r: &mut Renderer, frames: u32, scene: &str) -> Result<NguyenReport
     let original = r.settings().clone();
     let playing = r.clock.playing;
     let mut base = original.clone();
-    base.indirect.technique = IndirectTechnique::Hcb;
+    Technique::Nguyen.apply(&mut base);
     base.vpl.count = 1024;
     // The cache needs the same VPLs from frame to frame (see presets/nguyen-hcb-cached.ron);
     // the per-frame runs use them too.
     base.vpl.new_set_each_frame = false;
-    type Run = (BenchReport, Option<gi_render::frame::HcbStats>);
+    type Run = (BenchReport, Option<gi_render::passes::hcb::stage::HcbStats>);
     let run = |r: &mut Renderer, levels: u32, cache: bool, play: bool| -> Result<Run, CliError> {
         let mut s = base.clone();
         s.hcb.levels = levels;
-        s.hcb.cache = cache;
+        s.pipeline.temporal = if cache { Temporal::HcbSampleCache } else { Temporal::None };
         r.set_settings(s).map_err(|e| CliError::input(e.to_string()))?;
         r.clock.playing = play;
         let b = bench_run(r, frames, scene);

@@ -34,7 +34,7 @@ pub(super) fn export(a: &ExportArgs) -> Result<(), CliError> {
         .ok_or_else(|| CliError::input(format!("--format {}: expected json or ron", a.format)))?;
     let settings = load_settings(&a.scene)?;
     let scene = load_scene(&a.scene)?;
-    let camera = gi_render::frame::default_camera(&scene, scene.bounds(0.0), 16.0 / 9.0);
+    let camera = gi_render::renderer::default_camera(&scene, scene.bounds(0.0), 16.0 / 9.0);
     let name = a.scene.scene.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| scene.name.clone());
     let text = Export::new(settings, Provenance::now(&name, camera)).to_text(format);
     match &a.out {

@@ -31,7 +31,9 @@ pub(super) fn hcb_stats(args: &HcbStatsArgs) -> Result<(), CliError> {
     let mut r = renderer(&args.scene, args.size)?;
     r.clock.playing = args.play;
     let mut s = r.settings().clone();
-    s.indirect.technique = gi_render::lab_settings::IndirectTechnique::Hcb;
+    if !s.pipeline.uses_hcb() {
+        gi_render::pipeline::Technique::Nguyen.apply(&mut s);
+    }
     r.set_settings(s).map_err(|e| CliError::input(e.to_string()))?;
     let mut stats = None;
     for frame in 0..args.frames {
@@ -49,7 +51,7 @@ pub(super) fn hcb_stats(args: &HcbStatsArgs) -> Result<(), CliError> {
 
 /// The statistics as Table 1 of Nguyen et al.: per level the samples, their share of the
 /// level's texels and of the G-buffer's pixels.
-pub fn format_hcb_stats(stats: &gi_render::frame::HcbStats, size: (u32, u32)) -> String {
+pub fn format_hcb_stats(stats: &gi_render::passes::hcb::stage::HcbStats, size: (u32, u32)) -> String {
     let pixels = (size.0 * size.1).max(1) as f64;
     let mut out = format!("HCB samples at {}×{} (Nguyen et al. Table 1)\n", size.0, size.1);
     out += &format!("{:<8} {:>10} {:>12} {:>12} {:>14}\n", "level", "texels", "samples", "% of level", "% of G-buffer");

@@ -35,7 +35,7 @@ pub(super) fn reference(args: &ReferenceArgs) -> Result<(), CliError> {
     let scene = load_scene(&args.scene)?;
     let (w, h) = args.size;
     let bounds = scene.bounds(0.0);
-    let camera = gi_render::frame::default_camera(&scene, bounds, w as f32 / h as f32);
+    let camera = gi_render::renderer::default_camera(&scene, bounds, w as f32 / h as f32);
     let start = std::time::Instant::now();
     let pt = PathTracer::new(&scene, 0.0);
     let build_s = start.elapsed().as_secs_f64();

@@ -292,11 +292,14 @@ pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
     let reference = match &args.reference {
         Some(path) => super::compare::load_image(path)?.0,
         None => {
-            use gi_render::lab_settings::IndirectTechnique;
-            let bounces = match base.indirect.technique {
-                IndirectTechnique::None => 0,
-                IndirectTechnique::InstantRadiosity => base.vpl.bounces,
-                _ => 1,
+            use gi_render::pipeline::{Gather, ShadingPoints};
+            let p = &base.pipeline;
+            let bounces = if p.gather == Gather::None {
+                0
+            } else if p.uses_knecht_vpls() && p.shading_points != ShadingPoints::HcbSamples {
+                base.vpl.bounces
+            } else {
+                1
             };
             eprintln!(
                 "path-tracing the ground truth: {}×{}, {} spp, {bounces} bounce(s) …",

@@ -8,7 +8,6 @@
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use gi_render::lab_settings::IndirectTechnique;
 use gi_render::{LabSettings, Renderer};
 
 /// What B renders with.
@@ -64,7 +63,7 @@ impl Ab {
             AbSource::Frozen => live.clone(),
             AbSource::Reference => {
                 let mut s = live.clone();
-                s.indirect.technique = IndirectTechnique::ExactVpl;
+                gi_render::pipeline::Technique::ExactVpl.apply(&mut s);
                 s
             }
         };

@@ -64,8 +64,11 @@ impl State {
         }
         if pressed(Modifiers::NONE, Key::Home) {
             let (w, h) = l.renderer.size();
-            l.renderer.camera =
-                gi_render::frame::default_camera(l.renderer.scene(), l.renderer.bounds(), w as f32 / h.max(1) as f32);
+            l.renderer.camera = gi_render::renderer::default_camera(
+                l.renderer.scene(),
+                l.renderer.bounds(),
+                w as f32 / h.max(1) as f32,
+            );
         }
         if pressed(Modifiers::NONE, Key::H) {
             l.renderer.reset_history();
@@ -186,7 +189,7 @@ impl State {
                     && ui.button("Reset camera").clicked()
                 {
                     let (w, h) = l.renderer.size();
-                    l.renderer.camera = gi_render::frame::default_camera(
+                    l.renderer.camera = gi_render::renderer::default_camera(
                         l.renderer.scene(),
                         l.renderer.bounds(),
                         w as f32 / h.max(1) as f32,

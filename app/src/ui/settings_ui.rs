@@ -8,8 +8,8 @@
 
 use egui::Ui;
 use gi_render::LabSettings;
-use gi_render::lab_settings::{GroupVisitor, IndirectTechnique};
-use gi_render::passes::ism::VplVisibility;
+use gi_render::lab_settings::GroupVisitor;
+use gi_render::pipeline::{Technique as Choices, Temporal};
 use gi_render::settings::{FieldKind, FieldMeta, SettingsGroup, Value};
 
 /// Colour of the "differs from the preset" marker.
@@ -167,6 +167,7 @@ pub fn section_title(group: &str) -> String {
         "animation" => "Animation clock".into(),
         "direct" => "2 · Direct light".into(),
         "indirect" => "3–6 · Indirect light".into(),
+        "pipeline" => "Stage choices (3–7)".into(),
         "vpl" => "3 · VPLs (instant radiosity)".into(),
         "ism" => "4 · VPL visibility (imperfect shadow maps)".into(),
         "interleave" => "5–6 · Interleaved sampling and filter".into(),
@@ -186,67 +187,54 @@ pub struct Technique {
     pub is: fn(&LabSettings) -> bool,
 }
 
-/// The techniques the lab implements so far; the issues of Knecht (#5), Nguyen (#6),
-/// Gautron and Soler add theirs here.
+/// The techniques of the picker: each is a named set of stage choices
+/// (`gi_render::pipeline::Technique`); after picking one, every stage can be changed alone.
 pub const TECHNIQUES: &[Technique] = &[
     Technique {
         name: "Direct light only",
         source: "stages 1, 2, 7",
-        apply: |s| s.indirect.technique = IndirectTechnique::None,
-        is: |s| s.indirect.technique == IndirectTechnique::None,
+        apply: |s| Choices::DirectOnly.apply(s),
+        is: |s| Choices::of(&s.pipeline) == Some(Choices::DirectOnly),
     },
     Technique {
         name: "Exact-VPL reference",
         source: "Knecht 002 §5.2: many VPLs, exact visibility, accumulated",
-        apply: |s| s.indirect.technique = IndirectTechnique::ExactVpl,
-        is: |s| s.indirect.technique == IndirectTechnique::ExactVpl,
+        apply: |s| Choices::ExactVpl.apply(s),
+        is: |s| Choices::of(&s.pipeline) == Some(Choices::ExactVpl),
     },
     Technique {
         name: "Instant radiosity + ISM + temporal coherence (Knecht)",
         source: "Knecht 002 ch. 3–4: importance-warped VPLs, imperfect shadow maps, interleaved sampling, confidence merge",
-        apply: |s| {
-            s.indirect.technique = IndirectTechnique::InstantRadiosity;
-            s.ism.visibility = VplVisibility::Imperfect;
-            s.temporal.enabled = true;
-        },
-        is: |s| {
-            s.indirect.technique == IndirectTechnique::InstantRadiosity
-                && s.ism.visibility == VplVisibility::Imperfect
-                && s.temporal.enabled
-        },
+        apply: |s| Choices::Knecht.apply(s),
+        is: |s| Choices::of(&s.pipeline) == Some(Choices::Knecht),
     },
     Technique {
         name: "Hierarchical coherence buffer (Nguyen)",
         source: "Nguyen et al. 000 §3–4: VPLs gathered at HCB samples, coherence-weighted splatting",
-        apply: |s| {
-            s.indirect.technique = IndirectTechnique::Hcb;
-            s.hcb.cache = false;
-        },
-        is: |s| s.indirect.technique == IndirectTechnique::Hcb && !s.hcb.cache,
+        apply: |s| Choices::Nguyen.apply(s),
+        is: |s| Choices::of(&s.pipeline) == Some(Choices::Nguyen),
     },
     Technique {
         name: "Hierarchical coherence buffer with the sample cache (Nguyen)",
         source: "Nguyen et al. 000 §5: samples reused from frame to frame, new ones only where texels stay incomplete, a quarter recomputed per frame",
         apply: |s| {
-            s.indirect.technique = IndirectTechnique::Hcb;
-            s.hcb.cache = true;
+            Choices::NguyenCached.apply(s);
             // Cached samples gathered in different frames must see the same VPLs.
             s.vpl.new_set_each_frame = false;
         },
-        is: |s| s.indirect.technique == IndirectTechnique::Hcb && s.hcb.cache,
+        is: |s| Choices::of(&s.pipeline) == Some(Choices::NguyenCached),
     },
     Technique {
         name: "Imperfect shadow maps without temporal coherence (Ritschel)",
         source: "Knecht 002 §5.2's baseline: Ritschel et al. 2008, a new image every frame",
         apply: |s| {
-            s.indirect.technique = IndirectTechnique::InstantRadiosity;
-            s.ism.visibility = VplVisibility::Imperfect;
-            s.temporal.enabled = false;
+            Choices::Knecht.apply(s);
+            s.pipeline.temporal = Temporal::None;
         },
         is: |s| {
-            s.indirect.technique == IndirectTechnique::InstantRadiosity
-                && s.ism.visibility == VplVisibility::Imperfect
-                && !s.temporal.enabled
+            let mut ritschel = Choices::Knecht.choices(&s.pipeline);
+            ritschel.temporal = Temporal::None;
+            s.pipeline == ritschel
         },
     },
 ];
@@ -273,13 +261,19 @@ pub fn technique_picker(ui: &mut Ui, s: &mut LabSettings) -> bool {
 /// the loaded preset (for the markers). Returns whether anything changed.
 pub fn lab_settings_ui(ui: &mut Ui, s: &mut LabSettings, preset: &LabSettings) -> bool {
     ui.spacing_mut().slider_width = 95.0;
+    /// Visits the groups in use (`in_use`) or the others.
     struct Sections<'a> {
         ui: &'a mut Ui,
         changed: bool,
+        pipeline: gi_render::pipeline::PipelineSettings,
+        in_use: bool,
     }
     impl GroupVisitor for Sections<'_> {
         fn visit<S: SettingsGroup>(&mut self, s: &mut S, preset: &S) {
             let group = S::GROUP;
+            if self.pipeline.group_in_use(group) != self.in_use {
+                return;
+            }
             let mut title = egui::RichText::new(section_title(group));
             if s != preset {
                 title = title.color(CHANGED);
@@ -293,7 +287,19 @@ pub fn lab_settings_ui(ui: &mut Ui, s: &mut LabSettings, preset: &LabSettings) -
     }
     let changed = technique_picker(ui, s);
     ui.separator();
-    let mut v = Sections { ui, changed: false };
+    // The stage choices and the settings that act on the image first; the settings of
+    // stages no choice uses folded under "not in use".
+    let pipeline = s.pipeline.clone();
+    let mut v = Sections { ui, changed: false, pipeline: pipeline.clone(), in_use: true };
     s.visit_groups(preset, &mut v);
-    changed | v.changed
+    let mut changed = changed | v.changed;
+    egui::CollapsingHeader::new("Not in use (stages the current choices do not run)")
+        .id_salt("not_in_use")
+        .default_open(false)
+        .show(ui, |ui| {
+            let mut v = Sections { ui, changed: false, pipeline, in_use: false };
+            s.visit_groups(preset, &mut v);
+            changed |= v.changed;
+        });
+    changed
 }

@@ -198,7 +198,7 @@ impl State {
         }
         // The viewport shows the hovered pass's output instead of the final image.
         if let Some(pass) = &self.hovered_pass
-            && let Some(buffer) = gi_render::frame::scope_output(pass)
+            && let Some(buffer) = gi_render::renderer::scope_output(pass)
         {
             let v = self.pass_view.get_or_insert_with(|| Viewer::new(ViewerState::default()));
             if v.state.buffer != buffer {

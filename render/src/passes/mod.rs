@@ -1,23 +1,23 @@
-//! The passes, one file each (DESIGN.md principle 1). A pass owns its pipelines, its
-//! settings and its textures, registers every texture it writes in the buffer registry,
-//! and exposes `run(..)`. `frame.rs` wires them in the order of the pipeline table.
+//! The passes, one file each (DESIGN.md principle 1), in one folder per paper beside its
+//! shader folders. A pass owns its pipelines, its settings and its textures, registers every
+//! texture it writes in the buffer registry, and exposes `run(..)`. `frame.rs` runs the pass
+//! each stage's choice names (see `docs/architecture.md`).
+//!
+//! | folder | paper | stage choices | shaders |
+//! |---|---|---|---|
+//! | `gbuffer`, `shadow`, `direct`, `compose`, `view` | all | stages 1, 2, 7's compose, the viewer | `gbuffer/`, `shadow/`, `direct/`, `compose/`, `view/` |
+//! | `knecht/` | Knecht 002 | VPL source importance warping, visibility imperfect, shading points every pixel / interleaved tiles, VPL gather, geometry-aware filter, confidence merge | `vpl/{importance,reduce,warp,bounce,irsm}`, `ism/`, `interleave/`, `temporal/` |
+//! | `hcb/` | Nguyen et al. 000 | shading points HCB samples, coherence splatting, HCB sample cache | `hcb/` |
+//! | `reference/` | Knecht 002 §5.2 (the baseline) | VPL source uniform batches, visibility exact, running average | `vpl/{sample,shadow,gather}` |
 
 pub mod compose;
 pub mod direct;
 pub mod gbuffer;
 pub mod hcb;
-pub mod hcb_cache;
-pub mod interleave;
-pub mod irsm;
-pub mod ism;
+pub mod knecht;
+pub mod reference;
 pub mod shadow;
-pub mod temporal;
 pub mod view;
-pub mod vpl;
-pub mod vpl_bounce;
-pub mod vpl_gather;
-pub mod vpl_importance;
-pub mod vpl_visibility;
 
 use glam::{Mat4, Vec4};
 

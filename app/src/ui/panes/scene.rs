@@ -43,7 +43,7 @@ pub(super) fn scene_ui(st: &mut State, ui: &mut egui::Ui) {
     if ui.button("Reset camera (Home)").clicked() {
         let (w, h) = l.renderer.size();
         l.renderer.camera =
-            gi_render::frame::default_camera(l.renderer.scene(), l.renderer.bounds(), w as f32 / h.max(1) as f32);
+            gi_render::renderer::default_camera(l.renderer.scene(), l.renderer.bounds(), w as f32 / h.max(1) as f32);
     }
     let c = l.renderer.camera;
     ui.small(format!(

@@ -21,7 +21,7 @@ pub(super) fn settings_ui(st: &mut State, ui: &mut egui::Ui) {
     if let Some(e) = &l.settings_error {
         ui.colored_label(ERROR, e);
     }
-    if l.settings.indirect.technique == gi_render::lab_settings::IndirectTechnique::Hcb {
+    if l.settings.pipeline.uses_hcb() {
         ui.separator();
         egui::CollapsingHeader::new("HCB statistics (Nguyen Table 1)").id_salt("hcb_stats").default_open(true).show(
             ui,
@@ -38,7 +38,7 @@ pub(super) fn settings_ui(st: &mut State, ui: &mut egui::Ui) {
 /// Table 1 of Nguyen et al. for the last frame: per level its resolution, the samples and
 /// their share of the level's texels and of the G-buffer's pixels; the total; the covered
 /// pixels no sample reached; with the cache (§5), the reused, new and recomputed samples.
-pub fn hcb_stats_ui(ui: &mut egui::Ui, stats: &gi_render::frame::HcbStats, size: (u32, u32)) {
+pub fn hcb_stats_ui(ui: &mut egui::Ui, stats: &gi_render::passes::hcb::stage::HcbStats, size: (u32, u32)) {
     let pixels = (size.0 * size.1).max(1) as f64;
     let (mut w, mut h) = size;
     egui::Grid::new("hcb_table_1").num_columns(4).striped(true).show(ui, |ui| {

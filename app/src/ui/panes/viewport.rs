@@ -101,7 +101,7 @@ fn vpl_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
         return;
     };
     let lum = |f: glam::Vec4| 0.2126 * f.x + 0.7152 * f.y + 0.0722 * f.z;
-    let reflected = |v: &gi_render::passes::vpl::GpuVpl| v.flux * v.albedo;
+    let reflected = |v: &gi_render::passes::reference::vpl::GpuVpl| v.flux * v.albedo;
     let brightest = vpls.iter().map(|v| lum(reflected(v))).fold(0.0f32, f32::max).max(1e-12);
     let vp = l.renderer.view_proj();
     for v in &vpls {

@@ -10,19 +10,15 @@
 
 use glam::Vec4;
 
-use super::bgl;
-use super::gbuffer::{GBufferViews, NORMAL_FORMAT};
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
+use crate::passes::bgl;
+use crate::passes::gbuffer::{GBufferViews, NORMAL_FORMAT};
 use crate::settings_group;
 
 settings_group! {
     /// Temporal coherence (stage 7; Knecht 002 §3.5): the confidence merge.
     pub struct TemporalSettings: "temporal" {
-        /// Blend with the previous frame by the confidence (off: Ritschel et al.'s ISMs, a new
-        /// image every frame).
-        enabled: bool = true,
-        unit "", symbol "", range 0..=1, cost "one pass over the image and two copies", history true;
         /// Base confidence: the largest weight the previous frame gets (Eq. 3.4).
         c_base: f32 = 0.9,
         unit "", symbol "c_base", range 0.0..=1.0, cost "free", history false;
@@ -39,6 +35,10 @@ settings_group! {
         /// Weight of the illumination change (Eq. 3.3; relative difference, cubed).
         w_illumination: f32 = 1.0,
         unit "", symbol "w_illumination", range 0.0..=100.0, cost "free", history false;
+    }
+    legacy {
+        /// Version 1: the confidence merge on or off; now `pipeline.temporal = ConfidenceMerge`.
+        enabled: bool;
     }
 }
 
@@ -86,7 +86,8 @@ impl TemporalPass {
             ],
         });
         let module = crate::shaders::create_module(device, "temporal/confidence.wgsl");
-        let pipeline = super::compute_pipeline(device, "temporal.confidence", &module, "cs_confidence", &[&layout]);
+        let pipeline =
+            crate::passes::compute_pipeline(device, "temporal.confidence", &module, "cs_confidence", &[&layout]);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("temporal.params"),
             size: std::mem::size_of::<ConfidenceParams>() as u64,
@@ -99,7 +100,7 @@ impl TemporalPass {
 
     fn targets(device: &wgpu::Device, w: u32, h: u32) -> (wgpu::Texture, wgpu::Texture, wgpu::Texture, wgpu::Texture) {
         let st = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST;
-        let t = |label, f| super::create_target(device, label, w, h, f, st);
+        let t = |label, f| crate::passes::create_target(device, label, w, h, f, st);
         (
             t("temporal.confidence", wgpu::TextureFormat::R32Float),
             t("temporal.history", wgpu::TextureFormat::Rgba32Float),
@@ -162,11 +163,11 @@ impl TemporalPass {
     ) {
         let p = ConfidenceParams {
             weights: Vec4::new(s.c_base, s.w_pos, s.w_normal, s.w_illumination),
-            state: [(s.enabled && self.valid) as u32, 0, 0, 0],
+            state: [self.valid as u32, 0, 0, 0],
             range: Vec4::new(depth_range, 0.0, 0.0, 0.0),
         };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
-        let v = |t: &wgpu::Texture, l: &str| super::view(t, l);
+        let v = |t: &wgpu::Texture, l: &str| crate::passes::view(t, l);
         let (prev_n, hist_prev, conf, hist) = (
             v(&self.prev_normal, "temporal.prev_normal"),
             v(&self.history_prev, "temporal.history_prev"),
@@ -197,7 +198,11 @@ impl TemporalPass {
             });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(self.width.div_ceil(super::TILE), self.height.div_ceil(super::TILE), 1);
+            pass.dispatch_workgroups(
+                self.width.div_ceil(crate::passes::TILE),
+                self.height.div_ceil(crate::passes::TILE),
+                1,
+            );
         }
         let size = wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 };
         encoder.copy_texture_to_texture(self.history.as_image_copy(), self.history_prev.as_image_copy(), size);

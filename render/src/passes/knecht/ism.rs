@@ -13,26 +13,14 @@
 
 use glam::{Vec3, Vec4};
 
-use super::bgl;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::cpu::knecht::halton;
 use crate::gpu::GpuContext;
+use crate::passes::bgl;
+use crate::pipeline::VplVisibility;
 use crate::scene::{Scene, SceneState};
 use crate::timing::Slot;
 use crate::{settings_enum, settings_group};
-
-settings_enum! {
-    /// Stage 4: how VPL visibility is computed for instant radiosity.
-    pub enum VplVisibility {
-        /// No visibility: every VPL lights everything in front of it.
-        None = "none (unshadowed)",
-        /// Imperfect shadow maps from the point cloud (Knecht §2.6.5).
-        Imperfect = "imperfect shadow maps",
-        /// Exact cube-face depth maps from the triangles (the baseline).
-        Exact = "exact shadow maps",
-    }
-    default Imperfect
-}
 
 settings_enum! {
     /// How the point cloud places its samples.
@@ -48,9 +36,6 @@ settings_enum! {
 settings_group! {
     /// VPL visibility (stage 4): imperfect shadow maps (Knecht 002 §2.6.5) or a baseline.
     pub struct IsmSettings: "ism" {
-        /// How the VPLs' visibility is computed.
-        visibility: VplVisibility = VplVisibility::Imperfect,
-        unit "", symbol "V", range 0..=2, cost "ISM: one splat per point; exact: five depth renders of the scene per VPL", history false;
         /// Points of the point cloud; each ISM gets points / N of them.
         points: u32 = 32768,
         unit "points", symbol "", range 1024..=262144, cost "one splat of a few texels per point", history false;
@@ -87,6 +72,10 @@ settings_group! {
         /// Largest splat half-size in texels (a near point covers at most a (2k+1)² box).
         max_splat_radius: u32 = 4,
         unit "texels", symbol "", range 0..=16, cost "up to (2k+1)² atomics per point", history false;
+    }
+    legacy {
+        /// Version 1: the VPL visibility; now `pipeline.vpl_visibility`.
+        visibility: VplVisibility;
     }
 }
 
@@ -250,7 +239,7 @@ impl PointCloud {
 /// Bind group layout of `shaders/ism/splat.wgsl` (the ISMs' and the IRSM baseline's splats):
 /// params (dynamic), points, instances, VPLs, distances, IRSM owners.
 pub fn splat_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
-    super::uniform_and_storage_layout(device, label, &[true, true, true, false, false])
+    crate::passes::uniform_and_storage_layout(device, label, &[true, true, true, false, false])
 }
 
 /// Layout of the ISM atlas: `cols` × `rows` maps of `size`², map = VPL index.
@@ -395,11 +384,12 @@ impl IsmPass {
         let m_splat = crate::shaders::create_module(device, "ism/splat.wgsl");
         let m_resolve = crate::shaders::create_module(device, "ism/resolve.wgsl");
         let m_pp = crate::shaders::create_module(device, "ism/pull_push.wgsl");
-        let splat_pipeline = super::compute_pipeline(device, "ism.splat", &m_splat, "cs_splat", &[&splat_layout]);
+        let splat_pipeline =
+            crate::passes::compute_pipeline(device, "ism.splat", &m_splat, "cs_splat", &[&splat_layout]);
         let resolve_pipeline =
-            super::compute_pipeline(device, "ism.resolve", &m_resolve, "cs_resolve", &[&resolve_layout]);
-        let pull_pipeline = super::compute_pipeline(device, "ism.pull", &m_pp, "cs_pull", &[&pull_layout]);
-        let push_pipeline = super::compute_pipeline(device, "ism.push", &m_pp, "cs_push", &[&push_layout]);
+            crate::passes::compute_pipeline(device, "ism.resolve", &m_resolve, "cs_resolve", &[&resolve_layout]);
+        let pull_pipeline = crate::passes::compute_pipeline(device, "ism.pull", &m_pp, "cs_pull", &[&pull_layout]);
+        let push_pipeline = crate::passes::compute_pipeline(device, "ism.push", &m_pp, "cs_push", &[&push_layout]);
         let splat_params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("ism.splat.params"),
             size: LEVEL_STRIDE * MAX_BOUNCES as u64,
@@ -470,7 +460,7 @@ impl IsmPass {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
-        let atlas = super::create_target(
+        let atlas = crate::passes::create_target(
             device,
             "ism.atlas",
             w,
@@ -565,7 +555,7 @@ impl IsmPass {
                 slots: [b * f.vpls, b * f.vpls, 0, 0],
             })
             .collect();
-        let data = super::strided_bytes(LEVEL_STRIDE, MAX_BOUNCES as usize, &params);
+        let data = crate::passes::strided_bytes(LEVEL_STRIDE, MAX_BOUNCES as usize, &params);
         ctx.queue.write_buffer(&self.splat_params, 0, &data);
         let params = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
             buffer: &self.splat_params,
@@ -584,7 +574,7 @@ impl IsmPass {
                 wgpu::BindGroupEntry { binding: 5, resource: self.no_owner.as_entire_binding() },
             ],
         });
-        let atlas_view = super::view(&self.atlas, "ism.atlas");
+        let atlas_view = crate::passes::view(&self.atlas, "ism.atlas");
         let resolve = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("ism.resolve.inputs"),
             layout: &self.resolve_layout,

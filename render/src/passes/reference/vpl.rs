@@ -5,7 +5,7 @@
 //! The reference renders many VPLs progressively: each frame is one *batch* of
 //! [`ReferenceSettings::vpls_per_frame`] VPLs from one light view (the views of all lights
 //! are taken in turn), each VPL's flux divided by its sampling density so that every batch
-//! is an unbiased estimate of one-bounce light; `passes::vpl_gather` averages the batches.
+//! is an unbiased estimate of one-bounce light; `passes::reference::vpl_gather` averages the batches.
 //! The light G-buffer's projection is jittered by a Halton (2, 3) sub-texel offset per
 //! batch, so that VPL positions cover the surfaces continuously. Importance-driven VPL
 //! placement (hierarchical warping, Knecht §3.3 and §4.4) replaces the uniform sampling
@@ -13,10 +13,10 @@
 
 use glam::{Mat4, Vec3, Vec4};
 
-use super::gbuffer::GBufferPass;
-use super::shadow::{GpuLight, LightView};
-use super::{CameraUniform, bgl};
 use crate::gpu::GpuContext;
+use crate::passes::gbuffer::GBufferPass;
+use crate::passes::shadow::{GpuLight, LightView};
+use crate::passes::{CameraUniform, bgl};
 use crate::scene::SceneState;
 use crate::scene::upload::GpuScene;
 use crate::settings_group;
@@ -37,9 +37,6 @@ settings_group! {
         /// Side of each of the five cube faces of a VPL's visibility map.
         shadow_map_size: u32 = 128,
         unit "px", symbol "", range 16..=1024, cost "memory 20 B/texel² per VPL of a batch; raster time", history true;
-        /// Exact visibility of every VPL; off shows the unshadowed VPL light.
-        visibility: bool = true,
-        unit "", symbol "V", range 0..=1, cost "the depth maps and one lookup per VPL and pixel", history true;
         /// Distance clamp of the geometry term (1/max(d², d_min²), Knecht 002 Eq. 4.7);
         /// 0 keeps the reference unbiased.
         min_distance_m: f32 = 0.0,
@@ -53,6 +50,10 @@ settings_group! {
         /// Seed of the VPL sampling (identical seeds give identical images).
         seed: u32 = 1,
         unit "", symbol "", range 0..=4294967295u32, cost "free", history true;
+    }
+    legacy {
+        /// Version 1: exact visibility on or off; now `pipeline.vpl_visibility` (Exact or None).
+        visibility: bool;
     }
 }
 
@@ -129,7 +130,7 @@ impl VplSamplePass {
                 bgl::storage(6, cs, false),
             ],
         });
-        let pipeline = super::compute_pipeline(device, "vpl.sample", &module, "cs_main", &[&layout]);
+        let pipeline = crate::passes::compute_pipeline(device, "vpl.sample", &module, "cs_main", &[&layout]);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("vpl.sample.params"),
             size: std::mem::size_of::<SampleParams>() as u64,

@@ -10,10 +10,10 @@
 
 use glam::Vec4;
 
-use super::bgl;
-use super::hcb::{COUNTER_BYTES, CacheViews, GpuHcbSample, HcbPass};
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
+use crate::passes::bgl;
+use crate::passes::hcb::{COUNTER_BYTES, CacheViews, GpuHcbSample, HcbPass};
 use crate::timing::Slot;
 
 /// Uniform of the cache update; WGSL twin: `CacheParams` in `shaders/hcb/common.wgsl`.
@@ -148,10 +148,11 @@ impl HcbCachePass {
         let m_cache = crate::shaders::create_module(device, "hcb/cache.wgsl");
         let m_removal = crate::shaders::create_module(device, "hcb/cache_removal.wgsl");
         let args_pipeline =
-            super::compute_pipeline(device, "hcb.cache.args", &m_cache, "cs_args", &[&layout, &args_layout]);
+            crate::passes::compute_pipeline(device, "hcb.cache.args", &m_cache, "cs_args", &[&layout, &args_layout]);
         let validate_pipeline =
-            super::compute_pipeline(device, "hcb.cache.validate", &m_cache, "cs_validate", &[&layout]);
-        let compact_pipeline = super::compute_pipeline(device, "hcb.cache.compact", &m_cache, "cs_compact", &[&layout]);
+            crate::passes::compute_pipeline(device, "hcb.cache.validate", &m_cache, "cs_validate", &[&layout]);
+        let compact_pipeline =
+            crate::passes::compute_pipeline(device, "hcb.cache.compact", &m_cache, "cs_compact", &[&layout]);
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("hcb.cache.removal.pipeline_layout"),
             bind_group_layouts: &[Some(&removal_layout)],
@@ -188,8 +189,9 @@ impl HcbCachePass {
             multiview_mask: None,
             cache: None,
         });
-        let params = super::uniform_buffer(device, "hcb.cache.params", std::mem::size_of::<CacheParams>() as u64);
-        let args = super::buffer(
+        let params =
+            crate::passes::uniform_buffer(device, "hcb.cache.params", std::mem::size_of::<CacheParams>() as u64);
+        let args = crate::passes::buffer(
             device,
             "hcb.cache.indirect_args",
             32,
@@ -228,16 +230,16 @@ impl HcbCachePass {
         let (w, h) = (width.max(1), height.max(1));
         let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
         // The HCB's list capacity: every pixel could be a level-0 sample.
-        let list = super::buffer(
+        let list = crate::passes::buffer(
             device,
             "hcb.sample_cache",
             std::mem::size_of::<GpuHcbSample>() as u64 * (w * h) as u64,
             usage,
         );
-        let counter = super::buffer(device, "hcb.sample_cache_count", COUNTER_BYTES, usage);
+        let counter = crate::passes::buffer(device, "hcb.sample_cache_count", COUNTER_BYTES, usage);
         let storage = wgpu::TextureUsages::STORAGE_BINDING;
-        let incomplete = super::create_target(device, "hcb.incomplete", w, h, CACHE_FORMAT, storage);
-        let cache = super::create_target(
+        let incomplete = crate::passes::create_target(device, "hcb.incomplete", w, h, CACHE_FORMAT, storage);
+        let cache = crate::passes::create_target(
             device,
             "hcb.cache",
             w,
@@ -245,7 +247,7 @@ impl HcbCachePass {
             CACHE_FORMAT,
             storage | wgpu::TextureUsages::RENDER_ATTACHMENT,
         );
-        let group = super::create_target(device, "hcb.recompute_group", w, h, CACHE_FORMAT, storage);
+        let group = crate::passes::create_target(device, "hcb.recompute_group", w, h, CACHE_FORMAT, storage);
         let depth = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("hcb.cache.depth"),
             size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
@@ -256,7 +258,8 @@ impl HcbCachePass {
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
             view_formats: &[],
         });
-        let queue = super::buffer(device, "hcb.recompute_queue", 4 * (w * h) as u64, wgpu::BufferUsages::STORAGE);
+        let queue =
+            crate::passes::buffer(device, "hcb.recompute_queue", 4 * (w * h) as u64, wgpu::BufferUsages::STORAGE);
         (list, counter, incomplete, cache, group, depth, queue)
     }
 
@@ -316,9 +319,9 @@ impl HcbCachePass {
     /// The views [`HcbPass::run`] needs to build over the supplementary G-buffer.
     pub fn views(&self) -> (wgpu::TextureView, wgpu::TextureView, wgpu::TextureView) {
         (
-            super::view(&self.incomplete, "hcb.incomplete"),
-            super::view(&self.cache, "hcb.cache"),
-            super::view(&self.recompute_group, "hcb.recompute_group"),
+            crate::passes::view(&self.incomplete, "hcb.incomplete"),
+            crate::passes::view(&self.cache, "hcb.cache"),
+            crate::passes::view(&self.recompute_group, "hcb.recompute_group"),
         )
     }
 
@@ -349,7 +352,7 @@ impl HcbCachePass {
         let (_, cache_view, group_view) = self.views();
         encoder.clear_buffer(&hcb.counter, 0, None);
         hcb.clear_marks(ctx, encoder, &group_view);
-        let samples_view = super::view(&hcb.samples, "hcb.samples");
+        let samples_view = crate::passes::view(&hcb.samples, "hcb.samples");
         let tv = wgpu::BindingResource::TextureView;
         let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("hcb.cache.inputs"),
@@ -403,8 +406,8 @@ impl HcbCachePass {
             pass.dispatch_workgroups_indirect(&self.args, 16);
         }
         {
-            let cache = super::view(&self.cache, "hcb.cache");
-            let depth = super::view(&self.depth, "hcb.cache.depth");
+            let cache = crate::passes::view(&self.cache, "hcb.cache");
+            let depth = crate::passes::view(&self.depth, "hcb.cache.depth");
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("hcb.cache.removal"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {

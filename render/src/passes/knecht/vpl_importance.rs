@@ -11,12 +11,12 @@
 
 use glam::Vec4;
 
-use super::gbuffer::GBufferPass;
-use super::shadow::{GpuLight, LightView};
-use super::vpl::GpuVpl;
-use super::{CameraUniform, bgl};
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
+use crate::passes::gbuffer::GBufferPass;
+use crate::passes::reference::vpl::GpuVpl;
+use crate::passes::shadow::{GpuLight, LightView};
+use crate::passes::{CameraUniform, bgl};
 use crate::scene::upload::GpuScene;
 use crate::scene::{LightKind, SceneState, WorldLight};
 use crate::settings_group;
@@ -52,11 +52,11 @@ settings_group! {
         bounces: u32 = 1,
         unit "bounces", symbol "B", range 1..=6, cost "per extra bounce: N more ISMs (atlas × B), one splat of the cloud, one pass over the cloud, N more shading terms", history false;
         /// Which sample becomes the next bounce's VPL (§3.6.1; proportional is §6.1's future work).
-        bounce_selection: super::vpl_bounce::BounceSelection = super::vpl_bounce::BounceSelection::Strongest,
+        bounce_selection: crate::passes::knecht::vpl_bounce::BounceSelection = crate::passes::knecht::vpl_bounce::BounceSelection::Strongest,
         unit "", symbol "", range 0..=1, cost "free", history false;
         /// How further bounces are made: the thesis' one pass over the point cloud (§3.6.1)
         /// or the imperfect reflective shadow maps of Ritschel et al. it is measured against.
-        bounce_method: super::vpl_bounce::BounceMethod = super::vpl_bounce::BounceMethod::PointCloud,
+        bounce_method: crate::passes::knecht::vpl_bounce::BounceMethod = crate::passes::knecht::vpl_bounce::BounceMethod::PointCloud,
         unit "", symbol "", range 0..=1, cost "IRSM: a splat, an owner pass and a CDF over N IRSMs per bounce", history false;
         /// Side of each VPL's imperfect reflective shadow map (IRSM baseline; a power of two).
         irsm_size: u32 = 32,
@@ -200,10 +200,10 @@ impl VplImportancePass {
         let m_red = crate::shaders::create_module(device, "vpl/reduce.wgsl");
         let m_warp = crate::shaders::create_module(device, "vpl/warp.wgsl");
         let importance_pipeline =
-            super::compute_pipeline(device, "vpl.importance", &m_imp, "cs_importance", &[&importance_layout]);
+            crate::passes::compute_pipeline(device, "vpl.importance", &m_imp, "cs_importance", &[&importance_layout]);
         let reduce_pipeline =
-            super::compute_pipeline(device, "vpl.importance.reduce", &m_red, "cs_reduce", &[&reduce_layout]);
-        let warp_pipeline = super::compute_pipeline(device, "vpl.warp", &m_warp, "cs_warp", &[&warp_layout]);
+            crate::passes::compute_pipeline(device, "vpl.importance.reduce", &m_red, "cs_reduce", &[&reduce_layout]);
+        let warp_pipeline = crate::passes::compute_pipeline(device, "vpl.warp", &m_warp, "cs_warp", &[&warp_layout]);
         let (params, params_capacity) = Self::params_buffer(device, 6);
         let (lights, light_capacity) = Self::light_buffer(device, 4);
         let (vpls, warped) = Self::vpl_buffers(device, 256);
@@ -420,7 +420,7 @@ impl VplImportancePass {
 
     /// Bindings 0–5 shared by the importance and warp passes: the view uniform, the lights
     /// and the view's light G-buffer.
-    fn view_entries<'a>(&'a self, t: &'a super::gbuffer::GBufferViews) -> [wgpu::BindGroupEntry<'a>; 6] {
+    fn view_entries<'a>(&'a self, t: &'a crate::passes::gbuffer::GBufferViews) -> [wgpu::BindGroupEntry<'a>; 6] {
         let tv = wgpu::BindingResource::TextureView;
         [
             wgpu::BindGroupEntry { binding: 0, resource: dynamic(&self.params) },

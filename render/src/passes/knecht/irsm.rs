@@ -4,13 +4,13 @@
 //! illumination of the point that owns them, and the next bounce's N VPLs importance-sampled
 //! from all IRSMs together (`shaders/vpl/irsm.wgsl`, documented there; CPU twin
 //! `cpu::knecht::irsm_pick`). Table 5.3 of the thesis compares its time with §3.6.1's
-//! ([`super::vpl_bounce`]); `gi-lab bench --suite knecht` reproduces it.
+//! ([`crate::passes::knecht::vpl_bounce`]); `gi-lab bench --suite knecht` reproduces it.
 
 use glam::Vec4;
 
-use super::ism::{IsmLayout, IsmPass, MAX_BOUNCES, SplatParams};
-use super::vpl_bounce::{BounceParams, bounce_seed};
 use crate::gpu::GpuContext;
+use crate::passes::knecht::ism::{IsmLayout, IsmPass, MAX_BOUNCES, SplatParams};
+use crate::passes::knecht::vpl_bounce::{BounceParams, bounce_seed};
 use crate::timing::Slot;
 
 const STRIDE: u64 = 256;
@@ -83,20 +83,24 @@ pub fn irsm_size(setting: u32) -> u32 {
 impl IrsmPass {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let splat_layout = super::ism::splat_layout(device, "irsm.splat.inputs");
-        let mut entries = super::uniform_and_storage_entries(&[true, true, true, true, false, false, false, false]);
-        entries.push(super::bgl::storage_texture(9, wgpu::TextureFormat::R32Float));
+        let splat_layout = crate::passes::knecht::ism::splat_layout(device, "irsm.splat.inputs");
+        let mut entries =
+            crate::passes::uniform_and_storage_entries(&[true, true, true, true, false, false, false, false]);
+        entries.push(crate::passes::bgl::storage_texture(9, wgpu::TextureFormat::R32Float));
         let sample_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("irsm.sample.inputs"),
             entries: &entries,
         });
         let m_splat = crate::shaders::create_module(device, "ism/splat.wgsl");
         let m_irsm = crate::shaders::create_module(device, "vpl/irsm.wgsl");
-        let splat_pipeline = super::compute_pipeline(device, "irsm.splat", &m_splat, "cs_splat", &[&splat_layout]);
-        let owner_pipeline = super::compute_pipeline(device, "irsm.owner", &m_splat, "cs_owner", &[&splat_layout]);
-        let cdf_pipeline = super::compute_pipeline(device, "irsm.cdf", &m_irsm, "cs_cdf", &[&sample_layout]);
-        let sample_pipeline = super::compute_pipeline(device, "irsm.sample", &m_irsm, "cs_sample", &[&sample_layout]);
-        let uniform = |label| super::uniform_buffer(device, label, STRIDE * MAX_BOUNCES as u64);
+        let splat_pipeline =
+            crate::passes::compute_pipeline(device, "irsm.splat", &m_splat, "cs_splat", &[&splat_layout]);
+        let owner_pipeline =
+            crate::passes::compute_pipeline(device, "irsm.owner", &m_splat, "cs_owner", &[&splat_layout]);
+        let cdf_pipeline = crate::passes::compute_pipeline(device, "irsm.cdf", &m_irsm, "cs_cdf", &[&sample_layout]);
+        let sample_pipeline =
+            crate::passes::compute_pipeline(device, "irsm.sample", &m_irsm, "cs_sample", &[&sample_layout]);
+        let uniform = |label| crate::passes::uniform_buffer(device, label, STRIDE * MAX_BOUNCES as u64);
         let layout_info = IsmLayout::new(1, 16);
         let (depth, owner, cdf, totals, coverage) = Self::buffers(device, layout_info, 1, 1);
         let illumination = Self::illumination_texture(device, layout_info);
@@ -127,7 +131,7 @@ impl IrsmPass {
         points: usize,
     ) -> (wgpu::Buffer, wgpu::Buffer, wgpu::Buffer, wgpu::Buffer, wgpu::Buffer) {
         let make = |label, bytes: u64| {
-            super::buffer(
+            crate::passes::buffer(
                 device,
                 label,
                 bytes.max(4),
@@ -145,7 +149,7 @@ impl IrsmPass {
     }
 
     fn illumination_texture(device: &wgpu::Device, l: IsmLayout) -> wgpu::Texture {
-        super::create_target(
+        crate::passes::create_target(
             device,
             "irsm.illumination",
             l.width() as u32,
@@ -185,7 +189,7 @@ impl IrsmPass {
         &self,
         ctx: &GpuContext,
         ism: &IsmPass,
-        s: &super::ism::IsmSettings,
+        s: &crate::passes::knecht::ism::IsmSettings,
         instances: &wgpu::Buffer,
         vpls: &wgpu::Buffer,
         f: IrsmFrame,
@@ -210,8 +214,8 @@ impl IrsmPass {
             })
             .collect();
         let (splat, irsm) = (
-            super::strided_bytes(STRIDE, MAX_BOUNCES as usize, &splat),
-            super::strided_bytes(STRIDE, MAX_BOUNCES as usize, &irsm),
+            crate::passes::strided_bytes(STRIDE, MAX_BOUNCES as usize, &splat),
+            crate::passes::strided_bytes(STRIDE, MAX_BOUNCES as usize, &irsm),
         );
         ctx.queue.write_buffer(&self.splat_params, 0, &splat);
         ctx.queue.write_buffer(&self.params, 0, &irsm);
@@ -227,7 +231,7 @@ impl IrsmPass {
                 self.owner.as_entire_binding(),
             ]),
         });
-        let illumination = super::view(&self.illumination, "irsm.illumination");
+        let illumination = crate::passes::view(&self.illumination, "irsm.illumination");
         let sample = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("irsm.sample.inputs"),
             layout: &self.sample_layout,

@@ -11,10 +11,10 @@
 
 use glam::Vec4;
 
-use super::bgl;
-use super::gbuffer::{ALBEDO_FORMAT, GBufferViews, MATERIAL_FORMAT, NORMAL_FORMAT, POSITION_FORMAT};
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
+use crate::passes::bgl;
+use crate::passes::gbuffer::{ALBEDO_FORMAT, GBufferViews, MATERIAL_FORMAT, NORMAL_FORMAT, POSITION_FORMAT};
 use crate::settings_group;
 
 settings_group! {
@@ -23,9 +23,6 @@ settings_group! {
         /// Tiles per side: each VPL shades one pixel in n×n (1: every pixel gets every VPL).
         n: u32 = 4,
         unit "tiles", symbol "n", range 1..=8, cost "shading time falls as 1/n²; the filter reads n² pixels", history false;
-        /// Apply the geometry-aware n×n box filter after the merge.
-        filter: bool = true,
-        unit "", symbol "", range 0..=1, cost "n² texel reads per pixel", history false;
         /// Depth threshold: neighbours whose depth differs by more than α in the thesis' linear
         /// depth (view depth / (z_far − z_near), Eq. 4.2) are not averaged.
         alpha: f32 = 0.01,
@@ -33,6 +30,10 @@ settings_group! {
         /// Normal threshold: neighbours whose normal's dot product with the centre's is below β are not averaged.
         beta: f32 = 0.8,
         unit "", symbol "β", range -1.0..=1.0, cost "free", history false;
+    }
+    legacy {
+        /// Version 1: the filter on or off; now `pipeline.reconstruction = GeometryAwareFilter`.
+        filter: bool;
     }
 }
 
@@ -107,7 +108,10 @@ impl<'a> GatherVisibility<'a> {
 /// 1×1 stand-ins for the atlases a gather does not read (an ISM and an exact one).
 pub fn no_visibility_atlases(device: &wgpu::Device, label: &str) -> (wgpu::TextureView, wgpu::TextureView) {
     let make = |name: String, format| {
-        super::view(&super::create_target(device, &name, 1, 1, format, wgpu::TextureUsages::empty()), &name)
+        crate::passes::view(
+            &crate::passes::create_target(device, &name, 1, 1, format, wgpu::TextureUsages::empty()),
+            &name,
+        )
     };
     (
         make(format!("{label}.no_ism"), wgpu::TextureFormat::R32Float),
@@ -194,28 +198,28 @@ impl InterleavePass {
             ],
         });
         let module = |p| crate::shaders::create_module(device, p);
-        let split_pipeline = super::compute_pipeline(
+        let split_pipeline = crate::passes::compute_pipeline(
             device,
             "interleave.split",
             &module("interleave/split.wgsl"),
             "cs_split",
             &[&split_layout],
         );
-        let gather_pipeline = super::compute_pipeline(
+        let gather_pipeline = crate::passes::compute_pipeline(
             device,
             "interleave.gather",
             &module("interleave/gather.wgsl"),
             "cs_gather",
             &[&gather_layout],
         );
-        let merge_pipeline = super::compute_pipeline(
+        let merge_pipeline = crate::passes::compute_pipeline(
             device,
             "interleave.merge",
             &module("interleave/merge.wgsl"),
             "cs_merge",
             &[&merge_layout],
         );
-        let filter_pipeline = super::compute_pipeline(
+        let filter_pipeline = crate::passes::compute_pipeline(
             device,
             "interleave.filter",
             &module("interleave/filter.wgsl"),
@@ -267,7 +271,7 @@ impl InterleavePass {
         let (tw, th) = Self::tile(width, height, n);
         let (sw, sh) = (tw * n.max(1), th * n.max(1));
         let st = wgpu::TextureUsages::STORAGE_BINDING;
-        let t = |label, w, h, f| super::create_target(device, label, w, h, f, st);
+        let t = |label, w, h, f| crate::passes::create_target(device, label, w, h, f, st);
         let split = Split {
             position: t("interleave.split.position", sw, sh, POSITION_FORMAT),
             normal: t("interleave.split.normal", sw, sh, NORMAL_FORMAT),
@@ -349,7 +353,7 @@ impl InterleavePass {
         };
         ctx.queue.write_buffer(&self.gather_params, 0, bytemuck::bytes_of(&gp));
         let s = &self.split;
-        let v = |t: &wgpu::Texture, l: &str| super::view(t, l);
+        let v = |t: &wgpu::Texture, l: &str| crate::passes::view(t, l);
         let (sp_v, sn_v, sa_v, sm_v, acc_v) = (
             v(&s.position, "interleave.split.position"),
             v(&s.normal, "interleave.split.normal"),
@@ -397,7 +401,7 @@ impl InterleavePass {
             entries: &[entry(0, self.split_params.as_entire_binding()), entry(1, tv(&acc_v)), entry(2, tv(&merged_v))],
         });
         let (sw, sh) = (tw * n, th * n);
-        let tile = super::TILE;
+        let tile = crate::passes::TILE;
         timer.scope(ctx, encoder, "interleave.split", |e, slot| {
             let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("interleave.split"),
@@ -440,10 +444,10 @@ impl InterleavePass {
         src: &wgpu::TextureView,
         g: &GBufferViews,
     ) {
-        let n = if s.filter { self.n.max(1) } else { 1 };
+        let n = self.n.max(1);
         let fp = FilterParams { n: [n, 0, 0, 0], thresholds: Vec4::new(s.alpha * depth_range, s.beta, 0.0, 0.0) };
         ctx.queue.write_buffer(&self.filter_params, 0, bytemuck::bytes_of(&fp));
-        let dst = super::view(&self.filtered, "indirect.filtered");
+        let dst = crate::passes::view(&self.filtered, "indirect.filtered");
         let tv = wgpu::BindingResource::TextureView;
         let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("interleave.filter.inputs"),
@@ -462,6 +466,10 @@ impl InterleavePass {
         });
         pass.set_pipeline(&self.filter_pipeline);
         pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(self.width.div_ceil(super::TILE), self.height.div_ceil(super::TILE), 1);
+        pass.dispatch_workgroups(
+            self.width.div_ceil(crate::passes::TILE),
+            self.height.div_ceil(crate::passes::TILE),
+            1,
+        );
     }
 }

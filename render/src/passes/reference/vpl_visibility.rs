@@ -83,9 +83,9 @@ impl VplVisibilityPass {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("vpl.shadow.inputs"),
             entries: &[
-                super::bgl::uniform_dynamic(0, vs),
-                super::bgl::uniform(1, vs),
-                super::bgl::storage(2, vs, true),
+                crate::passes::bgl::uniform_dynamic(0, vs),
+                crate::passes::bgl::uniform(1, vs),
+                crate::passes::bgl::storage(2, vs, true),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -93,7 +93,7 @@ impl VplVisibilityPass {
             bind_group_layouts: &[Some(&layout), Some(&scene.instance_layout)],
             immediate_size: 0,
         });
-        let pipeline = super::depth_only_pipeline(device, "vpl.shadow.pipeline", &pipeline_layout, &module);
+        let pipeline = crate::passes::depth_only_pipeline(device, "vpl.shadow.pipeline", &pipeline_layout, &module);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("vpl.shadow.params"),
             size: std::mem::size_of::<VisibilityParams>() as u64,
@@ -107,7 +107,7 @@ impl VplVisibilityPass {
     }
 
     fn create_atlas(device: &wgpu::Device, l: AtlasLayout) -> (wgpu::Texture, wgpu::TextureView) {
-        let atlas = super::create_target(
+        let atlas = crate::passes::create_target(
             device,
             "vpl.shadow_atlas",
             l.width() as u32,
@@ -115,7 +115,7 @@ impl VplVisibilityPass {
             wgpu::TextureFormat::Depth32Float,
             wgpu::TextureUsages::RENDER_ATTACHMENT,
         );
-        let view = super::view(&atlas, "vpl.shadow_atlas");
+        let view = crate::passes::view(&atlas, "vpl.shadow_atlas");
         (atlas, view)
     }
 

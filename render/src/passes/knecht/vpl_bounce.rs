@@ -10,8 +10,8 @@
 
 use glam::Vec4;
 
-use super::ism::{IsmPass, MAX_BOUNCES};
 use crate::gpu::GpuContext;
+use crate::passes::knecht::ism::{IsmPass, MAX_BOUNCES};
 use crate::settings_enum;
 use crate::timing::Slot;
 
@@ -39,7 +39,7 @@ settings_enum! {
 }
 
 /// Uniform of one bounce; WGSL twin: `BounceParams` in `shaders/common/bounce.wgsl` (the
-/// IRSM baseline, `passes::irsm`, uses it too: counts, the two first slots, d_min², seed).
+/// IRSM baseline, `passes::knecht::irsm`, uses it too: counts, the two first slots, d_min², seed).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct BounceParams {
@@ -85,10 +85,11 @@ pub struct VplBouncePass {
 impl VplBouncePass {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let layout = super::uniform_and_storage_layout(device, "vpl.bounce.inputs", &[true, true, true, true, false]);
+        let layout =
+            crate::passes::uniform_and_storage_layout(device, "vpl.bounce.inputs", &[true, true, true, true, false]);
         let module = crate::shaders::create_module(device, "vpl/bounce.wgsl");
-        let pipeline = super::compute_pipeline(device, "vpl.bounce", &module, "cs_bounce", &[&layout]);
-        let params = super::uniform_buffer(device, "vpl.bounce.params", STRIDE * MAX_BOUNCES as u64);
+        let pipeline = crate::passes::compute_pipeline(device, "vpl.bounce", &module, "cs_bounce", &[&layout]);
+        let params = crate::passes::uniform_buffer(device, "vpl.bounce.params", STRIDE * MAX_BOUNCES as u64);
         Self { layout, pipeline, params }
     }
 
@@ -116,7 +117,7 @@ impl VplBouncePass {
                 seed: [bounce_seed(f.seed, b), 0, 0, 0],
             })
             .collect();
-        let data = super::strided_bytes(STRIDE, MAX_BOUNCES as usize, &params);
+        let data = crate::passes::strided_bytes(STRIDE, MAX_BOUNCES as usize, &params);
         ctx.queue.write_buffer(&self.params, 0, &data);
         ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("vpl.bounce.inputs"),

@@ -6,9 +6,9 @@
 
 use glam::Vec4;
 
-use super::gbuffer::GBufferViews;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
+use crate::passes::gbuffer::GBufferViews;
 
 pub const INDIRECT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
@@ -45,19 +45,19 @@ impl VplGatherPass {
             label: Some("indirect.gather.inputs"),
             entries: &[
                 camera_layout_entry,
-                super::bgl::uniform(1, cs),
-                super::bgl::storage(2, cs, true),
-                super::bgl::depth(3, cs),
-                super::bgl::texture(4, cs, false),
-                super::bgl::texture(5, cs, false),
-                super::bgl::texture(6, cs, false),
-                super::bgl::texture(7, cs, false),
-                super::bgl::texture(8, cs, false),
-                super::bgl::storage_texture(9, INDIRECT_FORMAT),
-                super::bgl::storage_texture(10, INDIRECT_FORMAT),
+                crate::passes::bgl::uniform(1, cs),
+                crate::passes::bgl::storage(2, cs, true),
+                crate::passes::bgl::depth(3, cs),
+                crate::passes::bgl::texture(4, cs, false),
+                crate::passes::bgl::texture(5, cs, false),
+                crate::passes::bgl::texture(6, cs, false),
+                crate::passes::bgl::texture(7, cs, false),
+                crate::passes::bgl::texture(8, cs, false),
+                crate::passes::bgl::storage_texture(9, INDIRECT_FORMAT),
+                crate::passes::bgl::storage_texture(10, INDIRECT_FORMAT),
             ],
         });
-        let pipeline = super::compute_pipeline(device, "indirect.gather", &module, "cs_main", &[&layout]);
+        let pipeline = crate::passes::compute_pipeline(device, "indirect.gather", &module, "cs_main", &[&layout]);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("indirect.gather.params"),
             size: std::mem::size_of::<GatherParams>() as u64,
@@ -70,9 +70,9 @@ impl VplGatherPass {
 
     fn targets(device: &wgpu::Device, width: u32, height: u32) -> (wgpu::Texture, wgpu::Texture, wgpu::Texture) {
         let storage = wgpu::TextureUsages::STORAGE_BINDING;
-        let raw = super::create_target(device, "indirect.raw", width, height, INDIRECT_FORMAT, storage);
-        let accum = super::create_target(device, "indirect.accum", width, height, INDIRECT_FORMAT, storage);
-        let prev = super::create_target(
+        let raw = crate::passes::create_target(device, "indirect.raw", width, height, INDIRECT_FORMAT, storage);
+        let accum = crate::passes::create_target(device, "indirect.accum", width, height, INDIRECT_FORMAT, storage);
+        let prev = crate::passes::create_target(
             device,
             "indirect.accum_prev",
             width,
@@ -121,9 +121,9 @@ impl VplGatherPass {
         params: GatherParams,
     ) {
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        let raw = super::view(&self.raw, "indirect.raw");
-        let accum = super::view(&self.accum, "indirect.accum");
-        let prev = super::view(&self.accum_prev, "indirect.accum_prev");
+        let raw = crate::passes::view(&self.raw, "indirect.raw");
+        let accum = crate::passes::view(&self.accum, "indirect.accum");
+        let prev = crate::passes::view(&self.accum_prev, "indirect.accum_prev");
         let tv = wgpu::BindingResource::TextureView;
         let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("indirect.gather.inputs"),
@@ -149,7 +149,11 @@ impl VplGatherPass {
             });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(self.width.div_ceil(super::TILE), self.height.div_ceil(super::TILE), 1);
+            pass.dispatch_workgroups(
+                self.width.div_ceil(crate::passes::TILE),
+                self.height.div_ceil(crate::passes::TILE),
+                1,
+            );
         }
         encoder.copy_texture_to_texture(
             self.accum.as_image_copy(),

@@ -1,0 +1,148 @@
+//! Stage 6 of the HCB (Nguyen et al. §4.1): gathering the VPLs at the samples.
+
+use glam::Vec4;
+
+use super::build::HcbPass;
+use crate::gpu::GpuContext;
+use crate::passes::bgl;
+use crate::timing::Slot;
+
+/// Uniform of the gather at the samples; WGSL twin: `HcbGatherParams` in
+/// `shaders/hcb/gather.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct HcbGatherParams {
+    /// VPL count, visibility (0 none, 1 ISM, 2 exact), atlas columns, map size.
+    pub counts: [u32; 4],
+    /// The samples gathered ([`GatherSet`] as u32), 0, 0, 0.
+    pub mode: [u32; 4],
+    /// d_min², then as `interleave::GatherParams::shade`.
+    pub shade: Vec4,
+}
+
+/// Which samples of the list a gather dispatch covers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GatherSet<'a> {
+    /// Every sample (the per-frame HCB).
+    All,
+    /// The cached samples due for recomputation (§5.3): the list slots in the queue.
+    Recompute(&'a wgpu::Buffer),
+    /// The new samples after the cached ones (§5.2).
+    New,
+}
+
+/// Stage 5 of the HCB technique (Nguyen et al. §4.1): the irradiance the VPLs send each
+/// sample of the list (`shaders/hcb/gather.wgsl`), and the indirect arguments of this
+/// dispatch and of the splat draws (`args`: 4 draw words for every sample, 3 dispatch words,
+/// one spare, 4 draw words for the samples after the cached ones, §5.2).
+pub struct HcbGatherPass {
+    layout: wgpu::BindGroupLayout,
+    args_pipeline: wgpu::ComputePipeline,
+    gather_pipeline: wgpu::ComputePipeline,
+    /// The uniforms of the gathers of every sample / the new samples, and of the recomputed
+    /// ones (both run in a cached frame).
+    params: [wgpu::Buffer; 2],
+    pub args: wgpu::Buffer,
+    /// Bound as the recompute queue when there is none.
+    no_queue: wgpu::Buffer,
+    /// Bound in `args`'s place for the gather, which reads `args` as its indirect arguments
+    /// (a buffer cannot be both in one dispatch).
+    no_args: wgpu::Buffer,
+    no_ism: wgpu::TextureView,
+    no_exact: wgpu::TextureView,
+}
+
+impl HcbGatherPass {
+    pub fn new(ctx: &GpuContext) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("hcb.gather.inputs"),
+            entries: &[
+                bgl::uniform(0, cs),
+                bgl::storage(1, cs, true),
+                bgl::texture(2, cs, false),
+                bgl::depth(3, cs),
+                bgl::storage(4, cs, true),
+                bgl::storage(5, cs, false),
+                bgl::storage(6, cs, false),
+                bgl::storage(7, cs, true),
+            ],
+        });
+        let module = crate::shaders::create_module(device, "hcb/gather.wgsl");
+        let args_pipeline = crate::passes::compute_pipeline(device, "hcb.gather.args", &module, "cs_args", &[&layout]);
+        let gather_pipeline = crate::passes::compute_pipeline(device, "hcb.gather", &module, "cs_gather", &[&layout]);
+        let size = std::mem::size_of::<HcbGatherParams>() as u64;
+        let params = [
+            crate::passes::uniform_buffer(device, "hcb.gather.params", size),
+            crate::passes::uniform_buffer(device, "hcb.gather.recompute.params", size),
+        ];
+        let no_queue = crate::passes::buffer(device, "hcb.no_recompute_queue", 16, wgpu::BufferUsages::STORAGE);
+        let args = crate::passes::buffer(
+            device,
+            "hcb.indirect_args",
+            48,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC,
+        );
+        let no_args = crate::passes::buffer(device, "hcb.no_args", 48, wgpu::BufferUsages::STORAGE);
+        let (no_ism, no_exact) = crate::passes::knecht::interleave::no_visibility_atlases(device, "hcb.gather");
+        Self { layout, args_pipeline, gather_pipeline, params, args, no_args, no_queue, no_ism, no_exact }
+    }
+
+    /// Gathers at the samples `set` of `hcb`'s list from `vpl_count` VPLs with `vis`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<Slot<'_>>,
+        hcb: &HcbPass,
+        vpls: &wgpu::Buffer,
+        vpl_count: u32,
+        d_min: f32,
+        vis: crate::passes::knecht::interleave::GatherVisibility<'_>,
+        set: GatherSet<'_>,
+    ) {
+        let (code, ism, exact, cols, size, shade) = vis.parts(&self.no_ism, &self.no_exact);
+        let (mode, queue) = match set {
+            GatherSet::All => (0, &self.no_queue),
+            GatherSet::Recompute(q) => (1, q),
+            GatherSet::New => (2, &self.no_queue),
+        };
+        let p = HcbGatherParams {
+            counts: [vpl_count, code, cols, size],
+            mode: [mode, 0, 0, 0],
+            shade: Vec4::new(d_min * d_min, shade.y, shade.z, shade.w),
+        };
+        let params = &self.params[(mode == 1) as usize];
+        ctx.queue.write_buffer(params, 0, bytemuck::bytes_of(&p));
+        let tv = wgpu::BindingResource::TextureView;
+        let group = |args: &wgpu::Buffer| {
+            ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("hcb.gather.inputs"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: params.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 1, resource: vpls.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 2, resource: tv(ism) },
+                    wgpu::BindGroupEntry { binding: 3, resource: tv(exact) },
+                    wgpu::BindGroupEntry { binding: 4, resource: hcb.counter.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 5, resource: hcb.list.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 6, resource: args.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 7, resource: queue.as_entire_binding() },
+                ],
+            })
+        };
+        let (args_group, gather_group) = (group(&self.args), group(&self.no_args));
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("hcb.gather"),
+            timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+        });
+        pass.set_bind_group(0, &args_group, &[]);
+        pass.set_pipeline(&self.args_pipeline);
+        pass.dispatch_workgroups(1, 1, 1);
+        pass.set_bind_group(0, &gather_group, &[]);
+        pass.set_pipeline(&self.gather_pipeline);
+        pass.dispatch_workgroups_indirect(&self.args, 16);
+    }
+}

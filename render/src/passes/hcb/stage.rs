@@ -1,0 +1,244 @@
+//! Stages 5–7 with the shading points "HCB samples" (Nguyen et al. 000): the HCB build
+//! (§3), the VPL gather at the samples (§4.1), coherence splatting and Eq. 11 (§4.2–4.3),
+//! and — as stage 7's choice "HCB sample cache" — the cache of §5 (Fig. 5), whose work
+//! surrounds the build: last frame's samples are validated, due ones re-gathered and splatted
+//! before the build adds samples only where texels stay incomplete.
+
+use crate::gpu::GpuContext;
+use crate::lab_settings::LabSettings;
+use crate::passes::bgl;
+use crate::passes::hcb::cache::{CacheCounts, CacheFrame, HcbCachePass, cache_views};
+use crate::passes::hcb::{GatherSet, GpuHcbSample, HcbFrame, HcbGatherPass, HcbPass, HcbSettings, HcbSplatPass};
+use crate::pipeline::Temporal;
+use crate::stages::{FrameInputs, Visibility, VplSet};
+use crate::timing::GpuTimer;
+
+/// The HCB's passes: levels, masks and samples; gathering; splatting; the cache.
+pub struct HcbStage {
+    pub build: HcbPass,
+    pub gather: HcbGatherPass,
+    pub splat: HcbSplatPass,
+    /// The sample cache (§5), created when it is stage 7's choice.
+    pub cache: Option<HcbCachePass>,
+    /// The settings the cached samples were identified with; the cache empties when they
+    /// change.
+    cached_with: Option<HcbSettings>,
+}
+
+/// Sample statistics of the HCB (see `Renderer::hcb_stats`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct HcbStats {
+    /// Every sample's G-buffer pixel (x, y) and level.
+    pub samples: Vec<[u32; 3]>,
+    pub samples_per_level: Vec<u32>,
+    pub texels_per_level: Vec<u32>,
+    /// Covered pixels that no sample's splat reached.
+    pub uncovered: u32,
+    /// The cache's counts of the frame (§5), None without the cache.
+    pub cache: Option<CacheCounts>,
+    /// The sample list itself (cached samples first, then the new ones).
+    pub list: Vec<GpuHcbSample>,
+    /// The d_max in use (scene units; the setting or the scene-relative default).
+    pub d_max: f32,
+}
+
+impl HcbStats {
+    pub fn samples(&self) -> u32 {
+        self.samples_per_level.iter().sum()
+    }
+
+    /// Table 1 of Nguyen et al. in one line: the count, its share of `pixels`, per level
+    /// (and the cache's counts).
+    pub fn summary(&self, pixels: u32) -> String {
+        let mut line = format!(
+            "{} HCB samples ({:.2} % of the pixels), per level {:?}; {} covered pixels no sample reached",
+            self.samples(),
+            100.0 * self.samples() as f64 / pixels.max(1) as f64,
+            self.samples_per_level,
+            self.uncovered
+        );
+        if let Some(c) = &self.cache {
+            line += &format!("; cache: {}", c.to_string().split_whitespace().collect::<Vec<_>>().join(" "));
+        }
+        line
+    }
+}
+
+impl HcbStage {
+    pub fn new(ctx: &GpuContext, s: &LabSettings, width: u32, height: u32) -> Self {
+        Self {
+            build: HcbPass::new(ctx, width, height, s.hcb.levels),
+            gather: HcbGatherPass::new(ctx),
+            splat: HcbSplatPass::new(ctx, bgl::uniform(0, wgpu::ShaderStages::VERTEX), width, height),
+            cache: None,
+            cached_with: None,
+        }
+    }
+
+    /// Resizes for the settings and creates or drops the cache; true when textures were
+    /// replaced.
+    pub fn ensure(&mut self, ctx: &GpuContext, s: &LabSettings, width: u32, height: u32) -> bool {
+        let resized = self.build.ensure(ctx, width, height, s.hcb.levels) | self.splat.ensure(ctx, width, height);
+        let mut fresh = resized;
+        if s.pipeline.temporal == Temporal::HcbSampleCache {
+            let created = self.cache.is_none();
+            let cache = self.cache.get_or_insert_with(|| HcbCachePass::new(ctx, width, height));
+            fresh |= cache.ensure(ctx, width, height) | created;
+            if resized || self.cached_with.as_ref() != Some(&s.hcb) {
+                // The list and the cache are swapped each frame: both start empty.
+                self.cached_with = None;
+            }
+        } else if self.cache.take().is_some() {
+            fresh = true;
+        }
+        fresh
+    }
+
+    pub fn register(&self, reg: &mut crate::buffers::BufferRegistry) {
+        self.build.register(reg);
+        self.splat.register(reg);
+        if let Some(c) = &self.cache {
+            c.register(reg);
+        }
+    }
+
+    fn frame(f: &FrameInputs) -> HcbFrame {
+        let s = &f.settings.hcb;
+        HcbFrame {
+            thresholds: s.thresholds(f.radius),
+            eye: f.camera.position,
+            pixel_scale: 2.0 * (f.camera.yfov * 0.5).tan() / f.height.max(1) as f32,
+            pattern: crate::cpu::hcb::recompute_pattern(s.recompute_period),
+            incomplete_weight: s.incomplete_weight,
+        }
+    }
+
+    fn run_gather(
+        &self,
+        f: &FrameInputs,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        scope: &str,
+        (vpls, vis): (&VplSet, &Visibility),
+        set: GatherSet<'_>,
+    ) {
+        let (ctx, list) = (f.ctx, &vpls.list);
+        timer.scope(ctx, enc, scope, |e, slot| {
+            self.gather.run(ctx, e, slot, &self.build, list, vpls.count, vpls.min_distance, vis.gather(), set)
+        });
+    }
+
+    /// Stage 5: the samples of this frame. With the cache (stage 7's choice, §5, Fig. 5) the
+    /// cached samples are validated, the due ones re-gathered with `light` and splatted
+    /// first, and the build adds samples only where texels stay incomplete.
+    pub fn select(
+        &mut self,
+        f: &FrameInputs,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        light: (&VplSet, &Visibility),
+    ) {
+        let ctx = f.ctx;
+        let hf = Self::frame(f);
+        let g = f.gbuffer;
+        if let Some(c) = self.cache.as_mut() {
+            c.swap(&mut self.build);
+            if self.cached_with.as_ref() != Some(&f.settings.hcb) {
+                c.reset(enc);
+                self.cached_with = Some(f.settings.hcb.clone());
+            }
+        }
+        let Some(c) = &self.cache else {
+            let build = &self.build;
+            timer.scope(ctx, enc, "hcb.build", |e, slot| build.run(ctx, e, slot, &g.position, &g.normal, hf, None));
+            return;
+        };
+        let s = &f.settings.hcb;
+        let cf = CacheFrame {
+            max_distance: s.cache_distance_m,
+            max_normal_deg: s.cache_normal_deg,
+            quad_px: s.surplus_quad_px,
+            period: s.recompute_period,
+        };
+        let (camera, g3) = (f.camera_buffer, (&g.position, &g.normal, &g.albedo));
+        let samples = (&self.build.list, &self.build.counter);
+        timer.scope(ctx, enc, "hcb.cache.update", |e, slot| {
+            c.update(ctx, e, slot, camera, (&g.position, &g.normal), &self.build, cf)
+        });
+        self.run_gather(f, enc, timer, "hcb.cache.recompute", light, GatherSet::Recompute(&c.queue));
+        let (splat, args) = (&self.splat, &self.gather.args);
+        timer.scope(ctx, enc, "hcb.cache.splat", |e, slot| {
+            splat.splat(ctx, e, slot, camera, g3, samples, (args, 0), false, true, hf)
+        });
+        let weight_sum = crate::passes::view(&self.splat.weight_sum, "hcb.weight_sum");
+        let views = c.views();
+        let build = &self.build;
+        timer.scope(ctx, enc, "hcb.build", |e, slot| {
+            let io = cache_views(&weight_sum, &views);
+            build.run(ctx, e, slot, &g.position, &g.normal, hf, Some(io))
+        });
+    }
+
+    /// Stage 6: the VPL gather at the (new) samples and the coherence-weighted splatting with
+    /// Eq. 11's normalisation; returns `hcb.indirect`.
+    pub fn gather_and_splat(
+        &self,
+        f: &FrameInputs,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        light: (&VplSet, &Visibility),
+    ) -> wgpu::TextureView {
+        let (ctx, g) = (f.ctx, f.gbuffer);
+        let hf = Self::frame(f);
+        let (camera, g3) = (f.camera_buffer, (&g.position, &g.normal, &g.albedo));
+        let samples = (&self.build.list, &self.build.counter);
+        let set = if self.cache.is_some() { GatherSet::New } else { GatherSet::All };
+        self.run_gather(f, enc, timer, "hcb.gather", light, set);
+        let (splat, args) = (&self.splat, &self.gather.args);
+        timer.scope(ctx, enc, "hcb.splat", |e, slot| {
+            if self.cache.is_some() {
+                splat.splat(ctx, e, slot, camera, g3, samples, (args, 32), true, false, hf);
+                splat.normalize(ctx, e, slot, g3);
+            } else {
+                splat.run(ctx, e, slot, camera, g3, samples, args, hf);
+            }
+        });
+        crate::passes::view(&self.splat.indirect, "hcb.indirect")
+    }
+
+    /// The statistics of the last frame (Table 1; blocks until the data is on the CPU).
+    pub fn stats(&self, ctx: &GpuContext, d_max: f32) -> Option<HcbStats> {
+        use crate::buffers::read_storage;
+        let count: Vec<u32> =
+            bytemuck::pod_collect_to_vec(&read_storage(ctx, &self.build.counter, super::COUNTER_BYTES).ok()?);
+        let n = count[0].min(self.build.list_capacity) as u64;
+        let size = std::mem::size_of::<GpuHcbSample>() as u64;
+        let list: Vec<GpuHcbSample> = if n == 0 {
+            Vec::new()
+        } else {
+            bytemuck::pod_collect_to_vec(&read_storage(ctx, &self.build.list, n * size).ok()?)
+        };
+        let mut per_level = vec![0u32; self.build.levels.len()];
+        for smp in &list {
+            if let Some(c) = per_level.get_mut(smp.level() as usize) {
+                *c += 1;
+            }
+        }
+        let uncovered: Vec<u32> = bytemuck::pod_collect_to_vec(&read_storage(ctx, &self.splat.uncovered, 16).ok()?);
+        Some(HcbStats {
+            samples: list
+                .iter()
+                .map(|s| {
+                    let [x, y] = s.pixel();
+                    [x, y, s.level()]
+                })
+                .collect(),
+            samples_per_level: per_level,
+            texels_per_level: self.build.levels.iter().map(|l| l.width * l.height).collect(),
+            uncovered: uncovered[0],
+            cache: self.cache.as_ref().map(|_| CacheCounts::from_words(&count)),
+            list,
+            d_max,
+        })
+    }
+}

@@ -1,0 +1,14 @@
+//! Instant radiosity with imperfect shadow maps and temporal coherence (Knecht 002): VPLs by
+//! importance and hierarchical warping with further bounces (`vpl_importance`, `vpl_bounce`,
+//! `irsm`), imperfect shadow maps with pull-push (`ism`), interleaved sampling and the
+//! geometry-aware filter (`interleave`), the confidence merge (`temporal`). `stage` runs
+//! stages 3–4 for the frame. Shaders: `shaders/vpl/{importance,reduce,warp,bounce,irsm}.wgsl`,
+//! `shaders/ism/`, `shaders/interleave/`, `shaders/temporal/`.
+
+pub mod interleave;
+pub mod irsm;
+pub mod ism;
+pub mod stage;
+pub mod temporal;
+pub mod vpl_bounce;
+pub mod vpl_importance;

@@ -1,0 +1,240 @@
+//! Stages 3–4 with the VPL source "importance warping" (Knecht 002 §3.3, §3.6.1, §4.3–4.4):
+//! VPLs from the light G-buffers of every light view, their further bounces, and their
+//! visibility by imperfect shadow maps (§2.6.5), exact cube-face maps or none.
+//!
+//! The further bounces need the ISMs of the bounce before them (§3.6.1: bounce b's ISMs are
+//! splatted, then bounce b + 1's VPLs are chosen from the point cloud with them), so stage 3
+//! splats the maps the bounces read and stage 4 splats what is left and pulls-pushes.
+
+use crate::cpu::knecht::split_budget;
+use crate::gpu::GpuContext;
+use crate::lab_settings::LabSettings;
+use crate::passes::knecht::irsm::{IrsmFrame, IrsmJob, IrsmPass};
+use crate::passes::knecht::ism::{IsmFrame, IsmJob, IsmPass, MAX_BOUNCES};
+use crate::passes::knecht::vpl_bounce::{BounceFrame, BounceMethod, VplBouncePass};
+use crate::passes::knecht::vpl_importance::{ViewJob, VplImportancePass, view_powers};
+use crate::passes::reference::vpl_visibility::{VisibilityParams, VplVisibilityPass};
+use crate::pipeline::VplVisibility;
+use crate::scene::upload::GpuScene;
+use crate::scene::{Scene, SceneState};
+use crate::stages::{FrameInputs, Visibility, VplSet, vpl_clip};
+use crate::timing::GpuTimer;
+
+/// The passes of importance-warped VPLs and their visibility.
+pub struct KnechtVpls {
+    pub vpl: VplImportancePass,
+    pub ism: IsmPass,
+    pub bounce: VplBouncePass,
+    /// The IRSM multi-bounce baseline, created when selected.
+    pub irsm: Option<IrsmPass>,
+    /// Exact visibility maps, created when selected.
+    pub exact: Option<VplVisibilityPass>,
+    /// Frames rendered (the Halton offset of a new VPL set per frame).
+    pub frames: u32,
+    /// This frame's ISM job (from stage 3 to stage 4).
+    job: Option<IsmJob>,
+}
+
+/// The pass that makes a frame's further bounces, with its bind groups.
+enum Bounces<'a> {
+    PointCloud(&'a VplBouncePass, wgpu::BindGroup),
+    Irsm(&'a IrsmPass, IrsmJob),
+}
+
+/// Whether the point cloud is splatted into ISMs this frame: for the ISM visibility, and for
+/// the further bounces' visibility test unless visibility is off.
+pub fn ism_splats(s: &LabSettings) -> bool {
+    match s.pipeline.vpl_visibility {
+        VplVisibility::None => false,
+        VplVisibility::Imperfect => true,
+        VplVisibility::Exact => s.vpl.bounces > 1 && s.vpl.bounce_method == BounceMethod::PointCloud,
+    }
+}
+
+impl KnechtVpls {
+    pub fn new(ctx: &GpuContext, s: &LabSettings) -> Self {
+        Self {
+            vpl: VplImportancePass::new(ctx, s.vpl.light_gbuffer_size),
+            ism: IsmPass::new(ctx),
+            bounce: VplBouncePass::new(ctx),
+            irsm: None,
+            exact: None,
+            frames: 0,
+            job: None,
+        }
+    }
+
+    /// Creates or resizes what the settings need; true when buffers were replaced (the
+    /// registry must be refreshed).
+    pub fn ensure(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        state: &SceneState,
+        gpu_scene: &GpuScene,
+        s: &LabSettings,
+        views: usize,
+    ) -> bool {
+        let total = s.vpl.count * s.vpl.bounces.clamp(1, MAX_BOUNCES);
+        let mut fresh = self.vpl.ensure(ctx, gpu_scene, s.vpl.light_gbuffer_size, views, total);
+        // The point cloud serves the ISMs and the bounces; the splatted maps the ISM
+        // visibility and the bounces' visibility test.
+        if s.pipeline.vpl_visibility == VplVisibility::Imperfect || s.vpl.bounces > 1 {
+            let maps = if ism_splats(s) { total } else { 1 };
+            fresh |= self.ism.ensure(ctx, scene, state, &s.ism, maps, false);
+        }
+        if s.vpl.bounces > 1 && s.vpl.bounce_method == BounceMethod::Irsm {
+            let points = self.ism.cloud.gpu.len();
+            let created = self.irsm.is_none();
+            let irsm = self.irsm.get_or_insert_with(|| IrsmPass::new(ctx));
+            fresh |= irsm.ensure(ctx, s.vpl.count, s.vpl.irsm_size, points) || created;
+        } else if self.irsm.take().is_some() {
+            fresh = true;
+        }
+        if s.pipeline.vpl_visibility == VplVisibility::Exact {
+            let e = self.exact.get_or_insert_with(|| VplVisibilityPass::new(ctx, gpu_scene));
+            fresh |= e.ensure(ctx, total, s.ism.map_size);
+        }
+        fresh
+    }
+
+    pub fn register(&self, reg: &mut crate::buffers::BufferRegistry, s: &LabSettings) {
+        self.vpl.register(reg);
+        match s.pipeline.vpl_visibility {
+            VplVisibility::Exact => {
+                if let Some(e) = &self.exact {
+                    e.register(reg);
+                }
+            }
+            VplVisibility::Imperfect => self.ism.register(reg),
+            VplVisibility::None => {}
+        }
+        if let Some(irsm) = &self.irsm {
+            irsm.register(reg);
+        }
+    }
+
+    /// Stage 3: this frame's VPLs of every light view and bounce (with the ISMs the bounces
+    /// need, §3.6.1).
+    pub fn vpls(&mut self, f: &FrameInputs, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) -> VplSet {
+        let (ctx, s) = (f.ctx, f.settings);
+        let powers = view_powers(&f.state.lights, f.vpl_radius(), s.vpl.split_by_power);
+        let counts = split_budget(&powers, s.vpl.count);
+        let mut first = 0;
+        let jobs: Vec<ViewJob> = f
+            .views
+            .iter()
+            .zip(&counts)
+            .map(|(&(light_index, view), &count)| {
+                let job = ViewJob { light_index, view, first, count };
+                first += count;
+                job
+            })
+            .collect();
+        let halton_first = 1 + if s.vpl.new_set_each_frame { self.frames.wrapping_mul(s.vpl.count) } else { 0 };
+        if f.lights.is_empty() {
+            // No light: no VPL slot is written, so the list is cleared.
+            enc.clear_buffer(&self.vpl.vpls, 0, None);
+        } else {
+            self.vpl.albedo_mip = s.vpl.albedo_mip;
+            let (scene, state, lights) = (f.gpu_scene, f.state, &f.lights);
+            self.vpl.run(ctx, enc, timer, scene, state, lights, &jobs, halton_first, s.direct.intensity_scale);
+        }
+        let bounces = s.vpl.bounces.clamp(1, MAX_BOUNCES);
+        let n_vpls = s.vpl.count.min(self.vpl.capacity / bounces);
+
+        let eye_offset = self.eye_offset(f.vpl_radius());
+        let splats = ism_splats(s);
+        let instances = &f.gpu_scene.instances;
+        self.job = (splats || bounces > 1).then(|| {
+            let frame = IsmFrame { vpls: n_vpls, bounces, eye_offset, extent: 2.0 * f.vpl_radius() };
+            self.ism.begin(ctx, instances, &self.vpl.vpls, &s.ism, frame)
+        });
+        if let Some(job) = &self.job {
+            let ism = &self.ism;
+            if splats {
+                timer.scope(ctx, enc, "ism.splat", |e, slot| ism.splat(e, slot, job, 0));
+            }
+            if bounces > 1 {
+                let seed = if s.vpl.new_set_each_frame { self.frames } else { 0 };
+                let make = match (s.vpl.bounce_method, self.irsm.as_ref()) {
+                    (BounceMethod::Irsm, Some(irsm)) => {
+                        let fr =
+                            IrsmFrame { vpls: n_vpls, bounces, eye_offset, min_distance: s.vpl.min_distance_m, seed };
+                        Bounces::Irsm(irsm, irsm.begin(ctx, ism, &s.ism, instances, &self.vpl.vpls, fr))
+                    }
+                    _ => {
+                        let fr = BounceFrame {
+                            vpls: n_vpls,
+                            selection: s.vpl.bounce_selection,
+                            visibility: splats,
+                            eye_offset,
+                            depth_bias: s.ism.depth_bias,
+                            min_distance: s.vpl.min_distance_m,
+                            seed,
+                        };
+                        let group = self.bounce.begin(ctx, ism, instances, &self.vpl.vpls, bounces, fr);
+                        Bounces::PointCloud(&self.bounce, group)
+                    }
+                };
+                let points = ism.cloud.gpu.len() as u32;
+                for b in 1..bounces {
+                    timer.scope(ctx, enc, &format!("vpl.bounce.{b}"), |e, slot| match &make {
+                        Bounces::PointCloud(pass, group) => pass.run(e, slot, group, b, n_vpls),
+                        Bounces::Irsm(pass, job) => pass.run(e, slot, job, b, n_vpls, points),
+                    });
+                    // The last bounce's maps are needed only when the ISMs are the shading's
+                    // visibility.
+                    if splats && (b + 1 < bounces || s.pipeline.vpl_visibility == VplVisibility::Imperfect) {
+                        timer.scope(ctx, enc, &format!("ism.splat.{b}"), |e, slot| ism.splat(e, slot, job, b));
+                    }
+                }
+            }
+        }
+        self.frames = self.frames.wrapping_add(1);
+        VplSet { list: self.vpl.vpls.clone(), count: n_vpls * bounces, min_distance: s.vpl.min_distance_m }
+    }
+
+    fn eye_offset(&self, radius: f32) -> f32 {
+        0.005 * radius
+    }
+
+    /// Stage 4: the visibility of this frame's VPLs (None when the passes it needs are
+    /// missing, which `ensure` prevents).
+    pub fn visibility(
+        &mut self,
+        f: &FrameInputs,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        vpls: &VplSet,
+    ) -> Option<Visibility> {
+        let (ctx, s) = (f.ctx, f.settings);
+        Some(match s.pipeline.vpl_visibility {
+            VplVisibility::None => Visibility::None,
+            VplVisibility::Imperfect => {
+                let (ism, job) = (&self.ism, self.job.as_ref()?);
+                let extent = 2.0 * f.vpl_radius();
+                timer.scope(ctx, enc, "ism.pull_push", |e, slot| ism.finish(ctx, e, slot, job, &s.ism, extent));
+                let l = self.ism.layout_info;
+                Visibility::Ism {
+                    atlas: self.ism.shading_view(),
+                    cols: l.cols,
+                    size: l.size,
+                    eye_offset: self.eye_offset(f.vpl_radius()),
+                    bias: s.ism.depth_bias,
+                    normal_offset: s.ism.normal_offset,
+                }
+            }
+            VplVisibility::Exact => {
+                let e = self.exact.as_ref()?;
+                let clip = vpl_clip(f.vpl_radius(), 0.0);
+                let (scene, state) = (f.gpu_scene, f.state);
+                timer.scope(ctx, enc, "vpl.shadow", |e2, slot| {
+                    e.run(ctx, e2, slot, scene, state, &vpls.list, vpls.count, VisibilityParams { clip })
+                });
+                let l = e.layout_info;
+                Visibility::Exact { atlas: e.atlas_view.clone(), cols: l.cols, size: l.size, clip: clip.truncate() }
+            }
+        })
+    }
+}

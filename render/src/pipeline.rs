@@ -1,0 +1,524 @@
+//! The stage choices: one setting per stage of DESIGN.md's pipeline table (stages 3–7),
+//! and the named techniques that are only sets of these choices.
+//!
+//! A paper is a preset of choices ([`Technique`]); after the technique picker has set them,
+//! every stage's choice can be changed on its own, and [`combination_errors`] refuses the
+//! mixes that cannot work with a message naming the stage and what it needs.
+//! `docs/architecture.md` lists every choice with the pass it runs; `frame.rs` runs them.
+
+use crate::lab_settings::LabSettings;
+use crate::settings::FieldError;
+use crate::{settings_enum, settings_group};
+
+settings_enum! {
+    /// Stage 3: where the virtual point lights come from.
+    pub enum VplSource {
+        /// No VPLs (a gather that needs none, or direct light only).
+        None = "none",
+        /// Importance-driven VPLs by hierarchical warping of a Halton set over the light
+        /// G-buffers of every light view, with multiple bounces (Knecht 002 §3.3, §3.6, §4.4).
+        ImportanceWarping = "importance warping (Knecht)",
+        /// Uniformly sampled batches from one light view per frame, each VPL's flux divided by
+        /// its density (the exact-VPL reference's unbiased VPLs, Knecht 002 §5.2).
+        UniformBatches = "uniform reference batches",
+    }
+    default None
+}
+
+settings_enum! {
+    /// Stage 4: how the VPLs' visibility is computed.
+    pub enum VplVisibility {
+        /// No visibility: every VPL lights everything in front of it.
+        None = "none (unshadowed)",
+        /// Imperfect shadow maps from the point cloud with pull-push (Knecht §2.6.5).
+        Imperfect = "imperfect shadow maps",
+        /// Exact cube-face depth maps from the triangles (the baseline and the reference).
+        Exact = "exact shadow maps",
+    }
+    default Imperfect
+}
+
+settings_enum! {
+    /// Stage 5: where the indirect light is gathered.
+    pub enum ShadingPoints {
+        /// Every pixel of the G-buffer gathers every VPL.
+        EveryPixel = "every pixel",
+        /// Interleaved n×n tiles: each pixel gathers one VPL subset in n² (Knecht 002 §3.4.1;
+        /// n is `interleave.n`).
+        InterleavedTiles = "interleaved tiles (Knecht)",
+        /// The samples of the hierarchical coherence buffer (Nguyen et al. 000 §3), a few
+        /// percent of the pixels.
+        HcbSamples = "HCB samples (Nguyen)",
+    }
+    default InterleavedTiles
+}
+
+settings_enum! {
+    /// Stage 6: how the shading points gather indirect light.
+    pub enum Gather {
+        /// No indirect light: the image is the direct light.
+        None = "none (direct light only)",
+        /// Sum over the VPLs with the chosen visibility (Knecht 002 §4.5, Eq. 4.6–4.7).
+        Vpl = "VPL gather",
+    }
+    default None
+}
+
+settings_enum! {
+    /// Stage 6: how the gathered light becomes a full image.
+    pub enum Reconstruction {
+        /// None: the gather's image as it is (every pixel, or the interleaved tiles merged).
+        None = "none",
+        /// Geometry-aware n×n box filter over the merged tiles (Knecht 002 §3.4.1, Eq. 4.2).
+        GeometryAwareFilter = "geometry-aware filter (Knecht)",
+        /// Coherence-weighted splatting of the HCB samples and normalisation (Nguyen et al.
+        /// §4.2–4.3, Eq. 8–11).
+        CoherenceSplatting = "coherence splatting (Nguyen)",
+    }
+    default GeometryAwareFilter
+}
+
+settings_enum! {
+    /// Stage 7: how the indirect light uses earlier frames.
+    pub enum Temporal {
+        /// None: a new image every frame.
+        None = "none",
+        /// Reprojection through the movement buffer and the confidence merge (Knecht 002 §3.5,
+        /// Eq. 3.1–3.6; settings in `temporal`).
+        ConfidenceMerge = "confidence merge (Knecht)",
+        /// The HCB's sample cache: valid samples of the last frame are kept, a share is
+        /// re-gathered each frame (Nguyen et al. §5; settings in `hcb`).
+        HcbSampleCache = "HCB sample cache (Nguyen)",
+        /// Running average of the reference's batches until `reference.total_vpls` are in.
+        RunningAverage = "running average (reference)",
+    }
+    default ConfidenceMerge
+}
+
+settings_group! {
+    /// The stage choices (DESIGN.md's pipeline table, stages 3–7): which pass each stage runs.
+    /// The technique picker sets them all; each can then be changed on its own.
+    pub struct PipelineSettings: "pipeline" {
+        /// Stage 3, VPL source (Knecht 002 §3.3/§4.4 or the reference's uniform batches).
+        vpl_source: VplSource = VplSource::None,
+        unit "", symbol "", range 0..=2, cost "importance warping: light G-buffers of every view and a warp per VPL; uniform: one light G-buffer per frame", history true;
+        /// Stage 4, VPL visibility (Knecht §2.6.5; exact: the reference's cube-face maps).
+        vpl_visibility: VplVisibility = VplVisibility::Imperfect,
+        unit "", symbol "V", range 0..=2, cost "ISM: one splat per point; exact: five depth renders of the scene per VPL", history true;
+        /// Stage 5, shading points (every pixel; Knecht §3.4.1's tiles; Nguyen §3's samples).
+        shading_points: ShadingPoints = ShadingPoints::InterleavedTiles,
+        unit "", symbol "", range 0..=2, cost "every pixel: N VPLs per pixel; tiles: N/n²; HCB: N at 2–5 % of the pixels plus the HCB build", history true;
+        /// Stage 6, gather (Knecht §4.5's VPL gather; none: direct light only).
+        gather: Gather = Gather::None,
+        unit "", symbol "", range 0..=1, cost "one term per VPL and shading point", history true;
+        /// Stage 6, reconstruction (Knecht §3.4.1's filter; Nguyen §4's splatting).
+        reconstruction: Reconstruction = Reconstruction::GeometryAwareFilter,
+        unit "", symbol "", range 0..=2, cost "filter: n² reads per pixel; splatting: one quad per sample", history true;
+        /// Stage 7, temporal (Knecht §3.5's confidence merge; Nguyen §5's sample cache; the
+        /// reference's running average).
+        temporal: Temporal = Temporal::ConfidenceMerge,
+        unit "", symbol "", range 0..=3, cost "merge: one pass and two copies; cache: validation and removal quads", history true;
+    }
+}
+
+settings_enum! {
+    /// A named set of stage choices: what the technique picker and `gi-lab --technique`
+    /// apply. Only the stage choices change; every other setting stays.
+    pub enum Technique {
+        /// Direct light only.
+        DirectOnly = "direct light only",
+        /// Instant radiosity with imperfect shadow maps, interleaved sampling and temporal
+        /// coherence (Knecht 002).
+        Knecht = "instant radiosity (Knecht)",
+        /// The hierarchical coherence buffer gathering instant radiosity's VPLs at its
+        /// samples (Nguyen et al. §3–4).
+        Nguyen = "hierarchical coherence buffer (Nguyen)",
+        /// The HCB with its sample cache (Nguyen et al. §5).
+        NguyenCached = "HCB with the sample cache (Nguyen §5)",
+        /// Many uniformly sampled VPLs with exact visibility, averaged over frames.
+        ExactVpl = "exact-VPL reference",
+    }
+    default DirectOnly
+}
+
+impl Technique {
+    pub const ALL: [Technique; 5] = [Self::DirectOnly, Self::Knecht, Self::Nguyen, Self::NguyenCached, Self::ExactVpl];
+
+    /// The technique's stage choices. `base` gives the choices the technique leaves open
+    /// (the visibility of instant radiosity and the HCB, direct light's unused stages).
+    pub fn choices(self, base: &PipelineSettings) -> PipelineSettings {
+        let ir = |points, reconstruction, temporal| PipelineSettings {
+            vpl_source: VplSource::ImportanceWarping,
+            vpl_visibility: match base.vpl_source {
+                VplSource::ImportanceWarping => base.vpl_visibility,
+                _ => VplVisibility::Imperfect,
+            },
+            shading_points: points,
+            gather: Gather::Vpl,
+            reconstruction,
+            temporal,
+        };
+        match self {
+            Self::DirectOnly => PipelineSettings { vpl_source: VplSource::None, gather: Gather::None, ..base.clone() },
+            Self::Knecht => PipelineSettings {
+                vpl_visibility: VplVisibility::Imperfect,
+                ..ir(ShadingPoints::InterleavedTiles, Reconstruction::GeometryAwareFilter, Temporal::ConfidenceMerge)
+            },
+            Self::Nguyen => ir(ShadingPoints::HcbSamples, Reconstruction::CoherenceSplatting, Temporal::None),
+            Self::NguyenCached => {
+                ir(ShadingPoints::HcbSamples, Reconstruction::CoherenceSplatting, Temporal::HcbSampleCache)
+            }
+            Self::ExactVpl => PipelineSettings {
+                vpl_source: VplSource::UniformBatches,
+                vpl_visibility: VplVisibility::Exact,
+                shading_points: ShadingPoints::EveryPixel,
+                gather: Gather::Vpl,
+                reconstruction: Reconstruction::None,
+                temporal: Temporal::RunningAverage,
+            },
+        }
+    }
+
+    /// The technique a version-1 `indirect.technique` name selected (`--set` of old scripts).
+    pub fn from_v1_name(name: &str) -> Option<Technique> {
+        Some(match name {
+            "None" => Self::DirectOnly,
+            "ExactVpl" => Self::ExactVpl,
+            "InstantRadiosity" => Self::Knecht,
+            "Hcb" => Self::Nguyen,
+            _ => return None,
+        })
+    }
+
+    /// Sets the technique's choices in `s`.
+    pub fn apply(self, s: &mut LabSettings) {
+        s.pipeline = self.choices(&s.pipeline);
+    }
+
+    /// The technique whose choices `p` are, if any (a mix of stages is none of them).
+    pub fn of(p: &PipelineSettings) -> Option<Technique> {
+        if p.gather == Gather::None {
+            return Some(Self::DirectOnly);
+        }
+        Self::ALL.into_iter().skip(1).find(|t| t.choices(p) == *p)
+    }
+}
+
+impl PipelineSettings {
+    /// Whether stage 3 runs (a gather consumes VPLs).
+    pub fn uses_vpls(&self) -> bool {
+        self.gather == Gather::Vpl && self.vpl_source != VplSource::None
+    }
+
+    /// Whether instant radiosity's VPLs (stages 3–4 of Knecht) are in use.
+    pub fn uses_knecht_vpls(&self) -> bool {
+        self.gather == Gather::Vpl && self.vpl_source == VplSource::ImportanceWarping
+    }
+
+    /// Whether the exact-VPL reference is the indirect light.
+    pub fn is_reference(&self) -> bool {
+        self.gather == Gather::Vpl && self.vpl_source == VplSource::UniformBatches
+    }
+
+    /// Whether the HCB's passes run (its samples are the shading points).
+    pub fn uses_hcb(&self) -> bool {
+        self.uses_knecht_vpls() && self.shading_points == ShadingPoints::HcbSamples
+    }
+
+    /// Whether the settings group `group` acts on the image with these choices (the panel
+    /// folds the others under "not in use").
+    pub fn group_in_use(&self, group: &str) -> bool {
+        let knecht = self.uses_knecht_vpls();
+        match group {
+            "vpl" => knecht,
+            "ism" => knecht && (self.vpl_visibility != VplVisibility::None),
+            "interleave" => {
+                knecht
+                    && (self.shading_points == ShadingPoints::InterleavedTiles
+                        || self.reconstruction == Reconstruction::GeometryAwareFilter)
+            }
+            "temporal" => knecht && self.temporal == Temporal::ConfidenceMerge,
+            "hcb" => self.uses_hcb(),
+            "reference" => self.is_reference(),
+            _ => true,
+        }
+    }
+}
+
+/// The stage choices that cannot work together, each with the stage that needs what
+/// (DESIGN.md: refused with a reason, never by a crash or a black image).
+pub fn combination_errors(s: &LabSettings) -> Vec<FieldError> {
+    let p = &s.pipeline;
+    let mut errors = Vec::new();
+    let mut err =
+        |field: &str, message: String| errors.push(FieldError { field: format!("pipeline.{field}"), message });
+    if p.gather == Gather::None {
+        return errors;
+    }
+    if p.vpl_source == VplSource::None {
+        err(
+            "gather",
+            "the VPL gather needs VPLs: set pipeline.vpl_source to ImportanceWarping or UniformBatches".into(),
+        );
+        return errors;
+    }
+    if p.vpl_source == VplSource::UniformBatches {
+        // The reference's gather folds each batch into its running average at every pixel
+        // (`passes::reference::gather`): its other stages are fixed.
+        if p.vpl_visibility == VplVisibility::Imperfect {
+            err("vpl_visibility", "the reference's uniform batches have exact visibility or none, not imperfect shadow maps (no point cloud is splatted for them)".into());
+        }
+        if p.shading_points != ShadingPoints::EveryPixel {
+            err(
+                "shading_points",
+                "the reference's uniform batches are gathered at every pixel: set pipeline.shading_points = EveryPixel"
+                    .into(),
+            );
+        }
+        if p.reconstruction != Reconstruction::None {
+            err(
+                "reconstruction",
+                "the reference gathers every pixel and needs no reconstruction: set pipeline.reconstruction = None"
+                    .into(),
+            );
+        }
+        if p.temporal != Temporal::RunningAverage {
+            err(
+                "temporal",
+                "the reference's batches are averaged over frames: set pipeline.temporal = RunningAverage".into(),
+            );
+        }
+        return errors;
+    }
+    // Importance-warped VPLs (Knecht).
+    if p.temporal == Temporal::RunningAverage {
+        err("temporal", "the running average accumulates the reference's uniform batches (pipeline.vpl_source = UniformBatches); with importance-warped VPLs use None, ConfidenceMerge or (with HCB samples) HcbSampleCache".into());
+    }
+    match p.shading_points {
+        ShadingPoints::HcbSamples => {
+            if p.reconstruction != Reconstruction::CoherenceSplatting {
+                err("reconstruction", "HCB samples cover a few percent of the pixels: only coherence splatting (CoherenceSplatting) fills the image from them".into());
+            }
+        }
+        ShadingPoints::EveryPixel | ShadingPoints::InterleavedTiles => {
+            if p.reconstruction == Reconstruction::CoherenceSplatting {
+                err(
+                    "reconstruction",
+                    "coherence splatting spreads HCB samples: it needs pipeline.shading_points = HcbSamples".into(),
+                );
+            }
+            if p.temporal == Temporal::HcbSampleCache {
+                err(
+                    "temporal",
+                    "the HCB sample cache keeps HCB samples: it needs pipeline.shading_points = HcbSamples".into(),
+                );
+            }
+        }
+    }
+    if p.shading_points == ShadingPoints::EveryPixel && p.reconstruction == Reconstruction::GeometryAwareFilter {
+        err("reconstruction", "the geometry-aware filter removes the interleaved tiles' pattern; every pixel has none: use pipeline.reconstruction = None or InterleavedTiles".into());
+    }
+    if p.shading_points == ShadingPoints::InterleavedTiles {
+        let n = s.interleave.n;
+        if s.vpl.count < n * n {
+            errors.push(FieldError {
+                field: "vpl.count".into(),
+                message: format!(
+                    "{} VPLs cannot cover {n}×{n} interleaved tiles (each tile needs at least one VPL): use at least {} VPLs or interleave.n ≤ {}",
+                    s.vpl.count,
+                    n * n,
+                    (s.vpl.count as f64).sqrt().floor() as u32
+                ),
+            });
+        }
+    }
+    if p.vpl_visibility == VplVisibility::Imperfect
+        && p.shading_points != ShadingPoints::HcbSamples
+        && s.ism.points < s.vpl.count
+    {
+        errors.push(FieldError {
+            field: "ism.points".into(),
+            message: format!(
+                "{} points cannot give each of {} ISMs a point: use at least as many points as VPLs",
+                s.ism.points, s.vpl.count
+            ),
+        });
+    }
+    errors
+}
+
+/// The settings of version-1 presets that the stage choices replaced; read on load only
+/// (`settings_group!`'s `legacy` fields) and turned into choices by [`migrate_v1`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum LegacyTechnique {
+    None,
+    ExactVpl,
+    InstantRadiosity,
+    Hcb,
+}
+
+/// Version 1's `indirect` group.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LegacyIndirect {
+    pub technique: LegacyTechnique,
+}
+
+/// Version 1's technique and stage switches as they were set (absent fields at their
+/// version-1 defaults).
+pub struct V1Choices {
+    pub technique: LegacyTechnique,
+    pub ism_visibility: VplVisibility,
+    pub reference_visibility: bool,
+    pub filter: bool,
+    pub temporal: bool,
+    pub cache: bool,
+}
+
+impl V1Choices {
+    /// The stage choices of version 2 that render what version 1 rendered.
+    pub fn choices(&self) -> PipelineSettings {
+        let reconstruction = if self.filter { Reconstruction::GeometryAwareFilter } else { Reconstruction::None };
+        let temporal = if self.temporal { Temporal::ConfidenceMerge } else { Temporal::None };
+        let ir = PipelineSettings {
+            vpl_source: VplSource::ImportanceWarping,
+            vpl_visibility: self.ism_visibility,
+            shading_points: ShadingPoints::InterleavedTiles,
+            gather: Gather::Vpl,
+            reconstruction,
+            temporal,
+        };
+        match self.technique {
+            LegacyTechnique::None => PipelineSettings { vpl_source: VplSource::None, gather: Gather::None, ..ir },
+            LegacyTechnique::InstantRadiosity => ir,
+            LegacyTechnique::Hcb => PipelineSettings {
+                shading_points: ShadingPoints::HcbSamples,
+                reconstruction: Reconstruction::CoherenceSplatting,
+                temporal: if self.cache { Temporal::HcbSampleCache } else { Temporal::None },
+                ..ir
+            },
+            LegacyTechnique::ExactVpl => PipelineSettings {
+                vpl_visibility: if self.reference_visibility { VplVisibility::Exact } else { VplVisibility::None },
+                ..Technique::ExactVpl.choices(&ir)
+            },
+        }
+    }
+}
+
+/// Migrates a version-1 preset read strictly (the `legacy` fields of the groups) to the
+/// stage choices of version 2 and clears the old fields.
+pub fn migrate_v1(s: &mut LabSettings) {
+    let v1 = V1Choices {
+        technique: s.indirect.take().map_or(LegacyTechnique::None, |i| i.technique),
+        ism_visibility: s.ism.visibility.take().unwrap_or_default(),
+        reference_visibility: s.reference.visibility.take().unwrap_or(true),
+        filter: s.interleave.filter.take().unwrap_or(true),
+        temporal: s.temporal.enabled.take().unwrap_or(true),
+        cache: s.hcb.cache.take().unwrap_or(false),
+    };
+    s.pipeline = v1.choices();
+}
+
+/// Migrates a version-1 preset read leniently (`preset::load_lenient`, identifiers quoted as
+/// names): the old fields are removed and a `pipeline` group of the same choices is added
+/// (returns the old values it could not read, as (field, problem)).
+pub fn migrate_v1_map(top: &mut ron::Map) -> Vec<(String, String)> {
+    use crate::settings::SettingType;
+    use ron::Value;
+    fn take(top: &mut ron::Map, group: &str, field: &str) -> Option<Value> {
+        match top.get_mut(&Value::String(group.into()))? {
+            Value::Map(m) => m.remove(&Value::String(field.into())),
+            _ => None,
+        }
+    }
+    let flag = |v: Option<Value>, default: bool| match v {
+        Some(Value::Bool(b)) => b,
+        _ => default,
+    };
+    let mut problems = Vec::new();
+    let technique = match take(top, "indirect", "technique") {
+        Some(Value::String(t)) => match t.as_str() {
+            "None" => LegacyTechnique::None,
+            "ExactVpl" => LegacyTechnique::ExactVpl,
+            "InstantRadiosity" => LegacyTechnique::InstantRadiosity,
+            "Hcb" => LegacyTechnique::Hcb,
+            other => {
+                problems.push((
+                    "indirect.technique".to_string(),
+                    format!("'{other}' is not one of None, ExactVpl, InstantRadiosity, Hcb; read as None"),
+                ));
+                LegacyTechnique::None
+            }
+        },
+        None => LegacyTechnique::None,
+        Some(_) => {
+            problems.push(("indirect.technique".to_string(), "expected a technique name; read as None".to_string()));
+            LegacyTechnique::None
+        }
+    };
+    if matches!(top.get(&Value::String("indirect".into())), Some(Value::Map(m)) if m.is_empty()) {
+        top.remove(&Value::String("indirect".into()));
+    }
+    let ism_visibility = match take(top, "ism", "visibility") {
+        Some(Value::String(v)) => VplVisibility::NAMES
+            .iter()
+            .position(|n| *n == v)
+            .and_then(|i| VplVisibility::from_value(&crate::settings::Value::Choice(VplVisibility::NAMES[i])))
+            .unwrap_or_default(),
+        _ => VplVisibility::default(),
+    };
+    let v1 = V1Choices {
+        technique,
+        ism_visibility,
+        reference_visibility: flag(take(top, "reference", "visibility"), true),
+        filter: flag(take(top, "interleave", "filter"), true),
+        temporal: flag(take(top, "temporal", "enabled"), true),
+        cache: flag(take(top, "hcb", "cache"), false),
+    };
+    let p = v1.choices();
+    let mut pipeline = ron::Map::new();
+    for m in <PipelineSettings as crate::settings::SettingsGroup>::fields() {
+        if let Some(v) = crate::settings::SettingsGroup::get(&p, m.name) {
+            pipeline.insert(Value::String(m.name.into()), Value::String(v.to_string()));
+        }
+    }
+    top.insert(Value::String("pipeline".into()), Value::Map(pipeline));
+    problems
+}
+
+/// Version 1's settings that the stage choices replaced, with what replaced them.
+const MOVED: [(&str, &str); 6] = [
+    ("indirect.technique", "the pipeline.* stage choices (a technique sets them all)"),
+    ("ism.visibility", "pipeline.vpl_visibility"),
+    ("reference.visibility", "pipeline.vpl_visibility"),
+    ("interleave.filter", "pipeline.reconstruction"),
+    ("temporal.enabled", "pipeline.temporal"),
+    ("hcb.cache", "pipeline.temporal = HcbSampleCache"),
+];
+
+/// What replaced a version-1 setting (for `--set` and sweeps written before version 2).
+pub fn moved_setting(path: &str) -> Option<&'static str> {
+    MOVED.iter().find(|(p, _)| *p == path).map(|(_, to)| *to)
+}
+
+/// The version-1 fields still set in a version-2 preset (they were replaced by the stage
+/// choices: a current preset naming them is refused with the new name).
+pub fn legacy_field_errors(s: &LabSettings) -> Vec<FieldError> {
+    let set = [
+        s.indirect.is_some(),
+        s.ism.visibility.is_some(),
+        s.reference.visibility.is_some(),
+        s.interleave.filter.is_some(),
+        s.temporal.enabled.is_some(),
+        s.hcb.cache.is_some(),
+    ];
+    MOVED
+        .into_iter()
+        .zip(set)
+        .filter(|(_, set)| *set)
+        .map(|((field, to), _)| FieldError {
+            field: field.into(),
+            message: format!("replaced by {to} in preset version 2 (set version: 1 to have it migrated)"),
+        })
+        .collect()
+}

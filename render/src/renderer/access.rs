@@ -1,0 +1,240 @@
+//! Reading the renderer's results back (timings, buffers, statistics, probes) and the
+//! shader hot reload.
+
+use glam::Mat4;
+
+use super::Renderer;
+use crate::buffers::{BufferError, BufferRegistry, ImageF32};
+use crate::camera::Camera;
+use crate::passes::bgl;
+use crate::passes::compose::ComposePass;
+use crate::passes::direct::DirectPass;
+use crate::passes::gbuffer::GBufferPass;
+use crate::passes::hcb::stage::HcbStats;
+use crate::passes::knecht::ism::MAX_BOUNCES;
+use crate::passes::shadow::ShadowPass;
+use crate::scene::{Aabb, Scene};
+use crate::timing::{GpuTimer, PassTiming};
+
+impl Renderer {
+    /// Rebuilds the passes whose shaders are among `entries` (entry modules, as listed in
+    /// `shaders::ENTRY_MODULES`) from the current shader sources — the shader hot reload.
+    /// Only those passes are recreated; their history restarts. If any new pipeline fails
+    /// to build, every old pass is kept and the error is returned. Returns the passes
+    /// rebuilt.
+    pub fn reload_shaders(&mut self, entries: &[&str]) -> Result<Vec<&'static str>, String> {
+        let mut passes: Vec<&'static str> = entries.iter().filter_map(|e| pass_of_shader(e)).collect();
+        if let Some(i) = passes.iter().position(|p| *p == "vpl_shadow") {
+            passes.swap_remove(i);
+            passes.extend(["exact_vpl", "instant_radiosity"]);
+        }
+        passes.sort();
+        passes.dedup();
+        // The exact-VPL passes exist only while that technique is on.
+        passes.retain(|p| *p != "exact_vpl" || self.stages.reference.is_some());
+        passes.retain(|p| *p != "instant_radiosity" || self.stages.knecht.is_some());
+        if passes.is_empty() {
+            return Ok(passes);
+        }
+        let ctx = self.ctx.clone();
+        let (w, h) = (self.width, self.height);
+        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let gbuffer = passes.contains(&"gbuffer").then(|| GBufferPass::new(&ctx, &self.gpu_scene, w, h));
+        let shadow = passes.contains(&"direct.shadow").then(|| ShadowPass::new(&ctx, &self.gpu_scene));
+        let direct = passes
+            .contains(&"direct")
+            .then(|| DirectPass::new(&ctx, bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h));
+        let compose = passes.contains(&"compose").then(|| ComposePass::new(&ctx, w, h));
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(e.to_string());
+        }
+        if let Some(g) = gbuffer {
+            self.gbuffer = g;
+            self.camera_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("frame.camera"),
+                layout: &self.gbuffer.camera_layout,
+                entries: &[wgpu::BindGroupEntry { binding: 0, resource: self.camera_buffer.as_entire_binding() }],
+            });
+        }
+        if let Some(p) = shadow {
+            self.shadow = p;
+        }
+        if let Some(p) = direct {
+            self.direct = p;
+        }
+        if let Some(p) = compose {
+            self.compose = p;
+        }
+        if passes.contains(&"exact_vpl") {
+            let old = self.stages.reference.take();
+            let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+            self.ensure_passes();
+            if let Some(e) = pollster::block_on(scope.pop()) {
+                self.stages.reference = old;
+                return Err(e.to_string());
+            }
+        }
+        if passes.contains(&"instant_radiosity") {
+            let x = &mut self.stages;
+            let old = (x.knecht.take(), x.interleave.take(), x.hcb.take(), x.temporal.take());
+            let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+            self.ensure_passes();
+            if let Some(e) = pollster::block_on(scope.pop()) {
+                let x = &mut self.stages;
+                (x.knecht, x.interleave, x.hcb, x.temporal) = old;
+                return Err(e.to_string());
+            }
+        }
+        self.register_all();
+        self.reset_history();
+        Ok(passes)
+    }
+
+    /// Timings of the last frame.
+    pub fn timings(&self) -> &[PassTiming] {
+        self.timer.last()
+    }
+
+    pub fn timing_source(&self) -> crate::timing::TimingSource {
+        self.timer.source()
+    }
+
+    /// Measures the passes with `source` from the next frame on (GPU timestamps fall back to
+    /// the wall clock where the device has none).
+    pub fn set_timing_source(&mut self, source: crate::timing::TimingSource) {
+        self.timer = GpuTimer::with_source(&self.ctx, source);
+    }
+
+    pub fn buffers(&self) -> &BufferRegistry {
+        &self.registry
+    }
+
+    /// Reads a registered buffer back (layer 0, level 0).
+    /// The HCB's samples of the last frame (Nguyen §3.6, Table 1's statistics): the count
+    /// per level, the texels per level and the covered pixels that no sample reached. None
+    /// when the technique is not the HCB or no frame was rendered with it. Blocks until the
+    pub fn hcb_stats(&self) -> Option<HcbStats> {
+        self.stages.hcb.as_ref()?.stats(&self.ctx, self.settings.hcb.d_max(self.bounds.radius()))
+    }
+
+    /// The VPLs of instant radiosity's last frame (`vpl.list`, Knecht §3.3): position and
+    /// incident flux of every filled slot; None when the technique is not instant radiosity
+    /// or no frame was rendered with it. Blocks until the list is on the CPU.
+    pub fn vpl_list(&self) -> Option<Vec<crate::passes::reference::vpl::GpuVpl>> {
+        if !self.settings.pipeline.uses_knecht_vpls() {
+            return None;
+        }
+        let k = self.stages.knecht.as_ref()?;
+        if k.frames == 0 {
+            return None;
+        }
+        let count =
+            (self.settings.vpl.count * self.settings.vpl.bounces.clamp(1, MAX_BOUNCES)).min(k.vpl.capacity) as u64;
+        let size = std::mem::size_of::<crate::passes::reference::vpl::GpuVpl>() as u64;
+        let bytes = crate::buffers::read_storage(&self.ctx, &k.vpl.vpls, count * size).ok()?;
+        Some(
+            bytemuck::pod_collect_to_vec::<u8, crate::passes::reference::vpl::GpuVpl>(&bytes)
+                .into_iter()
+                .filter(|v| v.position.w > 0.5)
+                .collect(),
+        )
+    }
+
+    pub fn readback(&self, name: &str) -> Result<ImageF32, BufferError> {
+        self.registry.readback(&self.ctx, name, 0, 0)
+    }
+
+    /// The tone-mapped image (Rgba8Unorm with an Rgba8UnormSrgb view format).
+    /// The raw value of every registered buffer at each pixel (see
+    /// [`BufferRegistry::probe`]); blocks until the values are on the CPU.
+    pub fn probe(&self, pixels: &[(u32, u32)]) -> Result<Vec<Vec<crate::buffers::ProbeValue>>, BufferError> {
+        let probe = self.depth_probe.get_or_init(|| crate::passes::view::DepthProbe::new(&self.ctx));
+        self.registry.probe(&self.ctx, probe, self.size(), pixels)
+    }
+
+    pub fn final_ldr(&self) -> &wgpu::Texture {
+        &self.compose.ldr
+    }
+
+    /// The camera uniform's view-projection for the current size (for CPU references).
+    pub fn view_proj(&self) -> Mat4 {
+        self.camera.view_proj(self.width as f32 / self.height as f32)
+    }
+}
+
+/// The pass (as `Renderer::reload_shaders` names it) that an entry module's pipelines
+/// belong to; None for shaders outside the frame (the viewer's).
+pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
+    Some(match entry {
+        "gbuffer/gbuffer.wgsl" => "gbuffer",
+        "shadow/shadow.wgsl" => "direct.shadow",
+        "direct/direct.wgsl" => "direct",
+        "compose/compose.wgsl" | "compose/tonemap.wgsl" | "compose/luminance.wgsl" => "compose",
+        "vpl/sample.wgsl" | "vpl/gather.wgsl" => "exact_vpl",
+        // The exact cube-face maps serve both VPL techniques.
+        "vpl/shadow.wgsl" => "vpl_shadow",
+        "vpl/importance.wgsl"
+        | "vpl/reduce.wgsl"
+        | "vpl/warp.wgsl"
+        | "vpl/bounce.wgsl"
+        | "vpl/irsm.wgsl"
+        | "ism/splat.wgsl"
+        | "ism/resolve.wgsl"
+        | "ism/pull_push.wgsl"
+        | "interleave/split.wgsl"
+        | "interleave/gather.wgsl"
+        | "interleave/merge.wgsl"
+        | "interleave/filter.wgsl"
+        | "temporal/confidence.wgsl"
+        | "hcb/base.wgsl"
+        | "hcb/build.wgsl"
+        | "hcb/samples.wgsl"
+        | "hcb/gather.wgsl"
+        | "hcb/splat.wgsl"
+        | "hcb/normalize.wgsl"
+        | "hcb/cache.wgsl"
+        | "hcb/cache_removal.wgsl" => "instant_radiosity",
+        _ => return None,
+    })
+}
+
+/// The buffer that shows what a timing scope produced (the lab's "hover a pass to see its
+/// output"). Every scope of `render_frame` is listed; a test checks it.
+pub fn scope_output(scope: &str) -> Option<&'static str> {
+    Some(match scope {
+        "gbuffer" => "gbuffer.albedo",
+        "direct.shadow" => "direct.shadow_map",
+        "direct" => "direct.radiance",
+        "compose" | "compose.luminance" => "final.hdr",
+        "compose.tonemap" => "final.ldr",
+        "vpl.light_gbuffer" => "vpl.light_gbuffer.albedo",
+        "vpl.sample" => "vpl.light_gbuffer.position",
+        "vpl.shadow" => "vpl.shadow_atlas",
+        "indirect.gather" => "indirect.raw",
+        "vpl.importance" => "vpl.importance",
+        "ism.splat" => "ism.atlas",
+        s if s.starts_with("ism.splat.") || s.starts_with("vpl.bounce.") => "ism.atlas",
+        "ism.pull_push" => "ism.atlas_pulled",
+        "interleave.split" => "interleave.split.albedo",
+        "interleave.gather" => "indirect.accum",
+        "interleave.merge" => "indirect.merged",
+        "temporal" => "temporal.confidence",
+        "interleave.filter" => "indirect.filtered",
+        "hcb.build" => "hcb.samples",
+        "hcb.gather" => "hcb.samples",
+        "hcb.splat" => "hcb.indirect",
+        "hcb.cache.update" => "hcb.cache",
+        "hcb.cache.recompute" => "hcb.recompute_group",
+        "hcb.cache.splat" => "hcb.weight_sum",
+        _ => return None,
+    })
+}
+
+/// The scene's first camera, else one that frames the bounds.
+pub fn default_camera(scene: &Scene, bounds: Aabb, aspect: f32) -> Camera {
+    let state = scene.evaluate(0.0);
+    match state.cameras.first() {
+        Some(c) => Camera::from_node(c.world, &c.camera, bounds),
+        None => Camera::frame_bounds(bounds, aspect),
+    }
+}

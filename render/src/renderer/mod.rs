@@ -1,0 +1,403 @@
+//! The renderer: scene, settings, camera, clock, and the passes each stage's choice needs
+//! (created when a choice selects them, dropped when none does). `frame.rs` renders a frame
+//! with them; `checks` refuses what the device cannot hold; `access` reads results back.
+
+mod access;
+pub mod checks;
+
+use glam::Mat4;
+
+pub use access::{default_camera, pass_of_shader, scope_output};
+pub use checks::RenderError;
+use checks::{check_ism_atlas, check_size, check_vpl_atlas};
+
+use crate::buffers::{BufferRegistry, ImageF32};
+use crate::camera::Camera;
+use crate::clock::Clock;
+use crate::gpu::GpuContext;
+use crate::passes::compose::ComposePass;
+use crate::passes::direct::DirectPass;
+use crate::passes::gbuffer::GBufferPass;
+use crate::passes::hcb::stage::HcbStage;
+use crate::passes::knecht::interleave::InterleavePass;
+use crate::passes::knecht::stage::KnechtVpls;
+use crate::passes::knecht::temporal::TemporalPass;
+use crate::passes::reference::stage::ReferenceVpls;
+use crate::passes::shadow::{ShadowPass, light_views};
+use crate::passes::{CameraUniform, bgl};
+use crate::pipeline::{ShadingPoints, Temporal};
+use crate::scene::upload::GpuScene;
+use crate::scene::{Aabb, Scene};
+use crate::settings::LabSettings;
+use crate::timing::GpuTimer;
+
+/// The passes of stages 3–7, each present while a stage's choice names it.
+#[derive(Default)]
+pub(crate) struct StagePasses {
+    /// VPL source "importance warping" with its visibility (Knecht).
+    pub knecht: Option<KnechtVpls>,
+    /// VPL source "uniform batches": the exact-VPL reference (its visibility, gather and
+    /// running average included).
+    pub reference: Option<ReferenceVpls>,
+    /// Shading points "every pixel" (n = 1) or "interleaved tiles", the VPL gather there and
+    /// the geometry-aware filter (Knecht).
+    pub interleave: Option<InterleavePass>,
+    /// Shading points "HCB samples", their gather, coherence splatting and the sample cache
+    /// (Nguyen).
+    pub hcb: Option<HcbStage>,
+    /// Temporal "confidence merge" (Knecht).
+    pub temporal: Option<TemporalPass>,
+}
+
+/// What the previous frame used, for the movement buffer (Knecht 002 §3.5.1).
+pub(crate) struct PrevFrame {
+    pub view_proj: Mat4,
+    pub models: Vec<Mat4>,
+}
+
+/// The renderer: scene, settings, camera, clock, passes and their buffers.
+pub struct Renderer {
+    pub ctx: GpuContext,
+    pub(crate) scene: Scene,
+    pub(crate) gpu_scene: GpuScene,
+    pub(crate) bounds: Aabb,
+    pub(crate) settings: LabSettings,
+    pub camera: Camera,
+    pub clock: Clock,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) camera_buffer: wgpu::Buffer,
+    pub(crate) camera_group: wgpu::BindGroup,
+    pub(crate) gbuffer: GBufferPass,
+    pub(crate) shadow: ShadowPass,
+    pub(crate) direct: DirectPass,
+    pub(crate) stages: StagePasses,
+    pub(crate) compose: ComposePass,
+    pub(crate) registry: BufferRegistry,
+    pub(crate) timer: GpuTimer,
+    pub(crate) prev: Option<PrevFrame>,
+    /// `metrics.flip`: the FLIP error map of the last comparison with a reference.
+    flip_map: Option<wgpu::Texture>,
+    /// Interactive mode (the app): timings are collected without waiting for the GPU.
+    pub(crate) interactive: bool,
+    /// The pixel probe's depth reader, created on first use.
+    pub(crate) depth_probe: std::sync::OnceLock<crate::passes::view::DepthProbe>,
+}
+
+impl Renderer {
+    /// Creates the renderer for `scene` at `width`×`height`; the camera is the scene's
+    /// first camera, else one that frames its bounds.
+    pub fn new(
+        ctx: GpuContext,
+        scene: Scene,
+        settings: LabSettings,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, RenderError> {
+        check_size(&ctx, width, height)?;
+        let errors = settings.validate();
+        if !errors.is_empty() {
+            return Err(RenderError::Settings(errors));
+        }
+        check_vpl_atlas(&ctx, &settings)?;
+        check_ism_atlas(&ctx, &settings)?;
+        let bounds = scene.bounds(0.0);
+        let camera = default_camera(&scene, bounds, width as f32 / height as f32);
+        let gpu_scene = GpuScene::new(&ctx, &scene);
+        let gbuffer = GBufferPass::new(&ctx, &gpu_scene, width, height);
+        let camera_buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame.camera"),
+            size: std::mem::size_of::<CameraUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let camera_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("frame.camera"),
+            layout: &gbuffer.camera_layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: camera_buffer.as_entire_binding() }],
+        });
+        let shadow = ShadowPass::new(&ctx, &gpu_scene);
+        let direct = DirectPass::new(&ctx, bgl::uniform(0, wgpu::ShaderStages::COMPUTE), width, height);
+        let compose = ComposePass::new(&ctx, width, height);
+        let timer = GpuTimer::new(&ctx);
+        let clock = Clock::new(settings.animation.time_step_s as f64);
+        let mut r = Self {
+            ctx,
+            scene,
+            gpu_scene,
+            bounds,
+            settings,
+            camera,
+            clock,
+            width,
+            height,
+            camera_buffer,
+            camera_group,
+            gbuffer,
+            shadow,
+            direct,
+            compose,
+            registry: BufferRegistry::default(),
+            timer,
+            prev: None,
+            stages: StagePasses::default(),
+            flip_map: None,
+            interactive: false,
+            depth_probe: std::sync::OnceLock::new(),
+        };
+        r.register_all();
+        r.ensure_passes();
+        Ok(r)
+    }
+
+    pub(crate) fn register_all(&mut self) {
+        self.registry = BufferRegistry::default();
+        self.gbuffer.register(&mut self.registry);
+        self.shadow.register(&mut self.registry);
+        self.direct.register(&mut self.registry);
+        self.compose.register(&mut self.registry);
+        let x = &self.stages;
+        if let Some(r) = &x.reference {
+            r.register(&mut self.registry);
+        }
+        if let Some(k) = &x.knecht {
+            k.register(&mut self.registry, &self.settings);
+        }
+        if let Some(i) = &x.interleave {
+            i.register(&mut self.registry);
+        }
+        if let Some(h) = &x.hcb {
+            h.register(&mut self.registry);
+        }
+        if let Some(t) = &x.temporal {
+            t.register(&mut self.registry);
+        }
+        if let Some(t) = &self.flip_map {
+            self.registry.register(
+                "metrics.flip",
+                crate::buffers::BufferKind::Data,
+                "per-pixel FLIP error (r = g = b, 0 … 1) of final.ldr against the last reference compared",
+                t,
+            );
+        }
+    }
+
+    /// Publishes a FLIP error map (as `metrics::flip` returns it) as the buffer
+    /// `metrics.flip`, so that viewers, the probe and `readback` can show it.
+    pub fn set_flip_map(&mut self, map: &ImageF32) {
+        if map.width == 0 || map.height == 0 {
+            return;
+        }
+        let fits = self.flip_map.as_ref().is_some_and(|t| (t.width(), t.height()) == (map.width, map.height));
+        if !fits {
+            self.flip_map = Some(crate::passes::create_target(
+                &self.ctx.device,
+                "metrics.flip",
+                map.width,
+                map.height,
+                wgpu::TextureFormat::Rgba32Float,
+                wgpu::TextureUsages::COPY_DST,
+            ));
+        }
+        let Some(t) = &self.flip_map else { return };
+        self.ctx.queue.write_texture(
+            t.as_image_copy(),
+            bytemuck::cast_slice(&map.data),
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(16 * map.width), rows_per_image: None },
+            wgpu::Extent3d { width: map.width, height: map.height, depth_or_array_layers: 1 },
+        );
+        if !fits {
+            self.register_all();
+        }
+    }
+
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// Mutable scene access for interactive edits of lights and materials' parameters that
+    /// live in node transforms and light records (geometry changes need a new renderer).
+    pub fn scene_mut(&mut self) -> &mut Scene {
+        &mut self.scene
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    pub fn settings(&self) -> &LabSettings {
+        &self.settings
+    }
+    /// Replaces the settings after validating them; invalid settings change nothing.
+    /// Returns whether temporal history was reset.
+    pub fn set_settings(&mut self, settings: LabSettings) -> Result<bool, RenderError> {
+        let errors = settings.validate();
+        if !errors.is_empty() {
+            return Err(RenderError::Settings(errors));
+        }
+        self.check_shadow_map(&settings)?;
+        check_vpl_atlas(&self.ctx, &settings)?;
+        check_ism_atlas(&self.ctx, &settings)?;
+        let reset = self.settings.history_invalidated_by(&settings);
+        let choices_changed = self.settings.pipeline != settings.pipeline;
+        self.clock.time_step_s = settings.animation.time_step_s as f64;
+        self.settings = settings;
+        if reset {
+            self.reset_history();
+        }
+        self.ensure_passes();
+        if choices_changed {
+            self.register_all();
+        }
+        Ok(reset)
+    }
+
+    /// Forgets everything temporal: the movement buffer's previous frame, the confidence
+    /// merge's history and the reference's average.
+    pub fn reset_history(&mut self) {
+        self.prev = None;
+        if let Some(x) = &mut self.stages.reference {
+            x.batches = 0;
+        }
+        if let Some(t) = &mut self.stages.temporal {
+            t.reset();
+        }
+    }
+
+    /// The exact-VPL reference's progress: (VPLs accumulated, VPLs at which it stops), when
+    /// it is the indirect light.
+    pub fn reference_progress(&self) -> Option<(u32, u32)> {
+        if !self.settings.pipeline.is_reference() {
+            return None;
+        }
+        let rs = &self.settings.reference;
+        let done = self.stages.reference.as_ref().map_or(0, |x| x.batches.saturating_mul(rs.vpls_per_frame));
+        Some((done.min(rs.total_vpls), rs.total_vpls))
+    }
+
+    /// Resizes every screen-sized target. Zero or too large sizes are refused and change
+    /// nothing.
+    pub fn resize(&mut self, width: u32, height: u32) -> Result<(), RenderError> {
+        check_size(&self.ctx, width, height)?;
+        if (width, height) == (self.width, self.height) {
+            return Ok(());
+        }
+        self.width = width;
+        self.height = height;
+        self.gbuffer.resize(&self.ctx, width, height);
+        self.direct.resize(&self.ctx, width, height);
+        self.compose.resize(&self.ctx, width, height);
+        if let Some(x) = &mut self.stages.reference {
+            x.gather.resize(&self.ctx, width, height);
+            x.batches = 0;
+        }
+        self.ensure_passes();
+        self.register_all();
+        Ok(())
+    }
+
+    fn shadow_layers(&self) -> u32 {
+        let state = self.scene.evaluate(self.clock.time_s());
+        state
+            .lights
+            .iter()
+            .map(|l| match l.light.kind {
+                crate::scene::LightKind::Point => 6,
+                _ => 1,
+            })
+            .sum()
+    }
+
+    fn check_shadow_map(&self, settings: &LabSettings) -> Result<(), RenderError> {
+        let size = settings.direct.shadow_map_size;
+        let layers = if settings.direct.shadows { self.shadow_layers().max(1) } else { 1 };
+        let max_dim = self.ctx.limits.max_texture_dimension_2d;
+        let max_layers = self.ctx.limits.max_texture_array_layers;
+        if size > max_dim || layers > max_layers {
+            return Err(RenderError::ShadowMapTooLarge { size, layers, max_dim, max_layers, largest: max_dim });
+        }
+        Ok(())
+    }
+
+    /// Interactive mode: `render_frame` does not wait for the GPU; its timings are those of
+    /// the newest finished frame (one or two frames late). Off by default, where every
+    /// frame's own timings are returned.
+    pub fn set_interactive(&mut self, interactive: bool) {
+        self.interactive = interactive;
+    }
+
+    /// Creates, resizes or drops the passes of stages 3–7 for the current stage choices, so
+    /// that their buffers are registered before the first frame.
+    pub(crate) fn ensure_passes(&mut self) {
+        let ctx = self.ctx.clone();
+        let s = self.settings.clone();
+        let p = &s.pipeline;
+        let (w, h) = (self.width, self.height);
+        let x = &mut self.stages;
+        let mut fresh = false;
+        if p.uses_knecht_vpls() {
+            let state = self.scene.evaluate(self.clock.time_s());
+            let views = light_view_list(&state, self.bounds).len();
+            let created = x.knecht.is_none();
+            let k = x.knecht.get_or_insert_with(|| KnechtVpls::new(&ctx, &s));
+            fresh |= k.ensure(&ctx, &self.scene, &state, &self.gpu_scene, &s, views) | created;
+        } else {
+            fresh |= x.knecht.take().is_some();
+        }
+        if p.is_reference() {
+            let created = x.reference.is_none();
+            let r = x.reference.get_or_insert_with(|| ReferenceVpls::new(&ctx, &self.gpu_scene, &s, w, h));
+            fresh |= r.ensure(&ctx, &s) | created;
+        } else {
+            fresh |= x.reference.take().is_some();
+        }
+        let tiles = match p.shading_points {
+            ShadingPoints::EveryPixel => Some(1),
+            ShadingPoints::InterleavedTiles => Some(s.interleave.n),
+            ShadingPoints::HcbSamples => None,
+        };
+        match tiles.filter(|_| p.uses_knecht_vpls()) {
+            Some(n) => {
+                let created = x.interleave.is_none();
+                let camera_entry = bgl::uniform(0, wgpu::ShaderStages::COMPUTE);
+                let i = x.interleave.get_or_insert_with(|| InterleavePass::new(&ctx, camera_entry, w, h, n));
+                fresh |= i.ensure(&ctx, w, h, n) | created;
+            }
+            None => fresh |= x.interleave.take().is_some(),
+        }
+        if p.uses_hcb() {
+            let created = x.hcb.is_none();
+            let hcb = x.hcb.get_or_insert_with(|| HcbStage::new(&ctx, &s, w, h));
+            fresh |= hcb.ensure(&ctx, &s, w, h) | created;
+        } else {
+            fresh |= x.hcb.take().is_some();
+        }
+        if p.uses_knecht_vpls() && p.temporal == Temporal::ConfidenceMerge {
+            let created = x.temporal.is_none();
+            let t = x.temporal.get_or_insert_with(|| TemporalPass::new(&ctx, w, h));
+            fresh |= t.resize(&ctx, w, h) | created;
+        } else {
+            fresh |= x.temporal.take().is_some();
+        }
+        if fresh {
+            self.register_all();
+        }
+    }
+}
+
+/// The light views of `state`, each with its light's index.
+pub(crate) fn light_view_list(
+    state: &crate::scene::SceneState,
+    bounds: Aabb,
+) -> Vec<(u32, crate::passes::shadow::LightView)> {
+    state
+        .lights
+        .iter()
+        .enumerate()
+        .flat_map(|(i, wl)| light_views(wl, bounds).into_iter().map(move |v| (i as u32, v)))
+        .collect()
+}

@@ -1,0 +1,108 @@
+//! The typed data that flows between the stages of `frame.rs` (DESIGN.md's pipeline table):
+//! what every stage's passes read of the frame, and what stages 3 and 4 hand on.
+
+use glam::{Vec3, Vec4};
+
+use crate::camera::Camera;
+use crate::gpu::GpuContext;
+use crate::lab_settings::LabSettings;
+use crate::passes::gbuffer::GBufferViews;
+use crate::passes::knecht::interleave::GatherVisibility;
+use crate::passes::shadow::{GpuLight, LightView};
+use crate::scene::upload::GpuScene;
+use crate::scene::{Scene, SceneState};
+
+/// What the stages read of the frame: the scene at this instant, the settings, the camera
+/// and the G-buffer of stage 1.
+pub struct FrameInputs<'a> {
+    pub ctx: &'a GpuContext,
+    pub scene: &'a Scene,
+    pub gpu_scene: &'a GpuScene,
+    pub state: &'a SceneState,
+    pub settings: &'a LabSettings,
+    /// The camera uniform buffer (`passes::CameraUniform`).
+    pub camera_buffer: &'a wgpu::Buffer,
+    pub camera: &'a Camera,
+    pub gbuffer: &'a GBufferViews,
+    /// The G-buffer's normal texture (copied by the confidence merge as next frame's history).
+    pub normal_texture: &'a wgpu::Texture,
+    /// The scene's bounding radius (scene-relative offsets and clip planes).
+    pub radius: f32,
+    pub height: u32,
+    /// Every light of the frame on the GPU, and the light views with their light's index.
+    pub lights: Vec<GpuLight>,
+    pub views: Vec<(u32, LightView)>,
+}
+
+impl FrameInputs<'_> {
+    /// The depth range of the thesis' linear depth (Knecht 002 Eq. 4.2).
+    pub fn depth_range(&self) -> f32 {
+        self.camera.zfar - self.camera.znear
+    }
+
+    /// The bounding radius the VPL passes scale their offsets and clip planes by (never 0).
+    pub fn vpl_radius(&self) -> f32 {
+        self.radius.max(1e-3)
+    }
+}
+
+/// Stage 3's output: the VPLs the gather reads.
+#[derive(Clone)]
+pub struct VplSet {
+    /// `vpl.list`: `passes::reference::vpl::GpuVpl` records, all bounces.
+    pub list: wgpu::Buffer,
+    /// Slots of the list to gather (all bounces).
+    pub count: u32,
+    /// The geometry term's distance clamp d_min (Knecht 002 Eq. 4.7).
+    pub min_distance: f32,
+}
+
+/// Stage 4's output: the visibility the gather reads.
+#[derive(Clone)]
+pub enum Visibility {
+    None,
+    /// The ISM atlas (level 0 after pull-push), columns, map size, eye offset, depth bias and
+    /// receiver normal offset (texels).
+    Ism {
+        atlas: wgpu::TextureView,
+        cols: u32,
+        size: u32,
+        eye_offset: f32,
+        bias: f32,
+        normal_offset: f32,
+    },
+    /// The exact cube-face atlas, columns, face size and (near, far, eye offset).
+    Exact {
+        atlas: wgpu::TextureView,
+        cols: u32,
+        size: u32,
+        clip: Vec3,
+    },
+}
+
+impl Visibility {
+    /// As the gather shaders bind it.
+    pub fn gather(&self) -> GatherVisibility<'_> {
+        match self {
+            Self::None => GatherVisibility::None,
+            Self::Ism { atlas, cols, size, eye_offset, bias, normal_offset } => GatherVisibility::Ism {
+                atlas,
+                cols: *cols,
+                size: *size,
+                eye_offset: *eye_offset,
+                bias: *bias,
+                normal_offset: *normal_offset,
+            },
+            Self::Exact { atlas, cols, size, clip } => {
+                GatherVisibility::Exact { atlas, cols: *cols, size: *size, clip: *clip }
+            }
+        }
+    }
+}
+
+/// The clip planes of VPL depth maps in a scene of bounding radius `r`: (near, far, eye
+/// offset, w).
+pub fn vpl_clip(r: f32, w: f32) -> Vec4 {
+    let (near, far) = ((r * 1e-3).max(1e-5), 2.2 * r);
+    Vec4::new(near, far, 2.0 * near, w)
+}
