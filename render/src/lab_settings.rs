@@ -35,7 +35,9 @@ pub const POWER_OF_TWO_FIELDS: &[&str] = &["vpl.light_gbuffer_size", "ism.map_si
 #[derive(Clone, PartialEq, Debug, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct LabSettings {
-    /// Preset format version; older versions are migrated on load.
+    /// Preset format version; older versions are migrated on load (a file without it is
+    /// version 0).
+    #[serde(default)]
     pub version: u32,
     pub animation: AnimationSettings,
     pub direct: DirectSettings,

@@ -22,7 +22,7 @@ settings_enum! {
         /// its density (the exact-VPL reference's unbiased VPLs, Knecht 002 §5.2).
         UniformBatches = "uniform reference batches",
     }
-    default None
+    default ImportanceWarping
 }
 
 settings_enum! {
@@ -100,7 +100,7 @@ settings_group! {
     /// The technique picker sets them all; each can then be changed on its own.
     pub struct PipelineSettings: "pipeline" {
         /// Stage 3, VPL source (Knecht 002 §3.3/§4.4 or the reference's uniform batches).
-        vpl_source: VplSource = VplSource::None,
+        vpl_source: VplSource = VplSource::ImportanceWarping,
         unit "", symbol "", range 0..=2, cost "importance warping: light G-buffers of every view and a warp per VPL; uniform: one light G-buffer per frame", history true;
         /// Stage 4, VPL visibility (Knecht §2.6.5; exact: the reference's cube-face maps).
         vpl_visibility: VplVisibility = VplVisibility::Imperfect,
@@ -159,7 +159,7 @@ impl Technique {
             temporal,
         };
         match self {
-            Self::DirectOnly => PipelineSettings { vpl_source: VplSource::None, gather: Gather::None, ..base.clone() },
+            Self::DirectOnly => PipelineSettings { gather: Gather::None, ..base.clone() },
             Self::Knecht => PipelineSettings {
                 vpl_visibility: VplVisibility::Imperfect,
                 ..ir(ShadingPoints::InterleavedTiles, Reconstruction::GeometryAwareFilter, Temporal::ConfidenceMerge)
@@ -389,7 +389,7 @@ impl V1Choices {
             temporal,
         };
         match self.technique {
-            LegacyTechnique::None => PipelineSettings { vpl_source: VplSource::None, gather: Gather::None, ..ir },
+            LegacyTechnique::None => PipelineSettings { gather: Gather::None, ..ir },
             LegacyTechnique::InstantRadiosity => ir,
             LegacyTechnique::Hcb => PipelineSettings {
                 shading_points: ShadingPoints::HcbSamples,
@@ -408,6 +408,17 @@ impl V1Choices {
 /// Migrates a version-1 preset read strictly (the `legacy` fields of the groups) to the
 /// stage choices of version 2 and clears the old fields.
 pub fn migrate_v1(s: &mut LabSettings) {
+    let any = s.indirect.is_some()
+        || s.ism.visibility.is_some()
+        || s.reference.visibility.is_some()
+        || s.interleave.filter.is_some()
+        || s.temporal.enabled.is_some()
+        || s.hcb.cache.is_some();
+    if !any {
+        // Nothing of version 1 to carry over (a file without `version` may be a version-2
+        // snippet): the stage choices stay as read.
+        return;
+    }
     let v1 = V1Choices {
         technique: s.indirect.take().map_or(LegacyTechnique::None, |i| i.technique),
         ism_visibility: s.ism.visibility.take().unwrap_or_default(),
@@ -436,6 +447,21 @@ pub fn migrate_v1_map(top: &mut ron::Map) -> Vec<(String, String)> {
         _ => default,
     };
     let mut problems = Vec::new();
+    let legacy = [
+        ("indirect", "technique"),
+        ("ism", "visibility"),
+        ("reference", "visibility"),
+        ("interleave", "filter"),
+        ("temporal", "enabled"),
+        ("hcb", "cache"),
+    ];
+    let any = legacy.iter().any(|(g, f)| match top.get(&Value::String((*g).into())) {
+        Some(Value::Map(m)) => m.get(&Value::String((*f).into())).is_some(),
+        _ => false,
+    });
+    if !any {
+        return problems;
+    }
     let technique = match take(top, "indirect", "technique") {
         Some(Value::String(t)) => match t.as_str() {
             "None" => LegacyTechnique::None,
@@ -450,7 +476,8 @@ pub fn migrate_v1_map(top: &mut ron::Map) -> Vec<(String, String)> {
                 LegacyTechnique::None
             }
         },
-        None => LegacyTechnique::None,
+        // `None` is RON's empty option, not a quoted name.
+        None | Some(Value::Option(None)) | Some(Value::Unit) => LegacyTechnique::None,
         Some(_) => {
             problems.push(("indirect.technique".to_string(), "expected a technique name; read as None".to_string()));
             LegacyTechnique::None
@@ -460,6 +487,7 @@ pub fn migrate_v1_map(top: &mut ron::Map) -> Vec<(String, String)> {
         top.remove(&Value::String("indirect".into()));
     }
     let ism_visibility = match take(top, "ism", "visibility") {
+        Some(Value::Option(None)) | Some(Value::Unit) => VplVisibility::None,
         Some(Value::String(v)) => VplVisibility::NAMES
             .iter()
             .position(|n| *n == v)

@@ -21,7 +21,7 @@ pub use crate::settings::FieldError as Problem;
 pub struct Loaded {
     pub settings: LabSettings,
     pub problems: Vec<Problem>,
-    /// Notes of the migrations applied (e.g. "version 0 → 1: …").
+    /// Notes of the migrations applied (e.g. "version 1 to 2: …").
     pub migrations: Vec<String>,
 }
 
@@ -189,7 +189,7 @@ pub fn load_lenient(text: &str, origin: &str) -> Result<Loaded, PresetError> {
                 problems.push(Problem { field, message });
             }
             version = *to;
-            migrations.push(format!("version {from} → {version}: {what}"));
+            migrations.push(format!("version {from} to {version}: {what}"));
         }
     }
     let mut settings = LabSettings::default();

@@ -278,7 +278,12 @@ pub fn lab_settings_ui(ui: &mut Ui, s: &mut LabSettings, preset: &LabSettings) -
             if s != preset {
                 title = title.color(CHANGED);
             }
-            let open = !matches!(group, "animation" | "reference" | "vpl" | "ism" | "interleave" | "temporal");
+            // Sections of stages no choice runs stay folded, their titles greyed.
+            let open =
+                self.in_use && !matches!(group, "animation" | "reference" | "vpl" | "ism" | "interleave" | "temporal");
+            if !self.in_use {
+                title = title.weak();
+            }
             let changed = &mut self.changed;
             egui::CollapsingHeader::new(title).id_salt(group).default_open(open).show(self.ui, |ui| {
                 *changed |= group_ui(ui, s, preset);
@@ -295,7 +300,7 @@ pub fn lab_settings_ui(ui: &mut Ui, s: &mut LabSettings, preset: &LabSettings) -
     let mut changed = changed | v.changed;
     egui::CollapsingHeader::new("Not in use (stages the current choices do not run)")
         .id_salt("not_in_use")
-        .default_open(false)
+        .default_open(true)
         .show(ui, |ui| {
             let mut v = Sections { ui, changed: false, pipeline, in_use: false };
             s.visit_groups(preset, &mut v);
