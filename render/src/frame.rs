@@ -158,17 +158,7 @@ fn indirect_light(
         (_, ShadingPoints::HcbSamples) => x.hcb.as_ref()?.gather_and_splat(f, enc, timer, light),
         _ => {
             let i = x.interleave.as_ref()?;
-            i.shade(
-                f.ctx,
-                enc,
-                timer,
-                f.camera_buffer,
-                f.gbuffer,
-                &vpls.list,
-                vpls.count,
-                vpls.min_distance,
-                vis.gather(),
-            );
+            i.shade(f.ctx, enc, timer, f.camera_buffer, f.gbuffer, &vpls.list, vpls.count, vpls.min_distance, &vis);
             crate::passes::view(&i.merged, "indirect.merged")
         }
     };

@@ -1,13 +1,12 @@
 //! The typed data that flows between the stages of `frame.rs` (DESIGN.md's pipeline table):
 //! what every stage's passes read of the frame, and what stages 3 and 4 hand on.
 
-use glam::{Vec3, Vec4};
+use glam::Vec4;
 
 use crate::camera::Camera;
 use crate::gpu::GpuContext;
 use crate::lab_settings::LabSettings;
 use crate::passes::gbuffer::GBufferViews;
-use crate::passes::knecht::interleave::GatherVisibility;
 use crate::passes::shadow::{GpuLight, LightView};
 use crate::scene::upload::GpuScene;
 use crate::scene::{Scene, SceneState};
@@ -58,47 +57,7 @@ pub struct VplSet {
 }
 
 /// Stage 4's output: the visibility the gather reads.
-#[derive(Clone)]
-pub enum Visibility {
-    None,
-    /// The ISM atlas (level 0 after pull-push), columns, map size, eye offset, depth bias and
-    /// receiver normal offset (texels).
-    Ism {
-        atlas: wgpu::TextureView,
-        cols: u32,
-        size: u32,
-        eye_offset: f32,
-        bias: f32,
-        normal_offset: f32,
-    },
-    /// The exact cube-face atlas, columns, face size and (near, far, eye offset).
-    Exact {
-        atlas: wgpu::TextureView,
-        cols: u32,
-        size: u32,
-        clip: Vec3,
-    },
-}
-
-impl Visibility {
-    /// As the gather shaders bind it.
-    pub fn gather(&self) -> GatherVisibility<'_> {
-        match self {
-            Self::None => GatherVisibility::None,
-            Self::Ism { atlas, cols, size, eye_offset, bias, normal_offset } => GatherVisibility::Ism {
-                atlas,
-                cols: *cols,
-                size: *size,
-                eye_offset: *eye_offset,
-                bias: *bias,
-                normal_offset: *normal_offset,
-            },
-            Self::Exact { atlas, cols, size, clip } => {
-                GatherVisibility::Exact { atlas, cols: *cols, size: *size, clip: *clip }
-            }
-        }
-    }
-}
+pub use crate::passes::knecht::interleave::GatherVisibility as Visibility;
 
 /// The clip planes of VPL depth maps in a scene of bounding radius `r`: (near, far, eye
 /// offset, w).

@@ -494,7 +494,17 @@ fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
     let pass = InterleavePass::new(&ctx, gi_render::passes::bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h, n);
     let mut timer = gi_render::timing::GpuTimer::new(&ctx);
     let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.shade") });
-    pass.shade(&ctx, &mut enc, &mut timer, &camera_buf, &g.views(), &vpl_buf, vpl_count, d_min, GatherVisibility::None);
+    pass.shade(
+        &ctx,
+        &mut enc,
+        &mut timer,
+        &camera_buf,
+        &g.views(),
+        &vpl_buf,
+        vpl_count,
+        d_min,
+        &GatherVisibility::None,
+    );
     ctx.queue.submit([enc.finish()]);
     let got = read(&ctx, &pass.merged);
     let stride = n * n;

@@ -100,7 +100,7 @@ impl HcbGatherPass {
         vpls: &wgpu::Buffer,
         vpl_count: u32,
         d_min: f32,
-        vis: crate::passes::knecht::interleave::GatherVisibility<'_>,
+        vis: &crate::passes::knecht::interleave::GatherVisibility,
         set: GatherSet<'_>,
     ) {
         let (code, ism, exact, cols, size, shade) = vis.parts(&self.no_ism, &self.no_exact);

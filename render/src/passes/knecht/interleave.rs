@@ -61,14 +61,15 @@ pub struct FilterParams {
     pub thresholds: Vec4,
 }
 
-/// The visibility the gather reads.
-#[derive(Clone, Copy)]
-pub enum GatherVisibility<'a> {
+/// The visibility the gather reads: stage 4's output (views are shared handles, cheap to
+/// clone).
+#[derive(Clone)]
+pub enum GatherVisibility {
     None,
     /// The ISM atlas (level 0 after pull-push), with columns, map size, eye offset, depth bias
     /// and receiver normal offset (texels).
     Ism {
-        atlas: &'a wgpu::TextureView,
+        atlas: wgpu::TextureView,
         cols: u32,
         size: u32,
         eye_offset: f32,
@@ -77,29 +78,29 @@ pub enum GatherVisibility<'a> {
     },
     /// The exact cube-face atlas, with columns, face size and (near, far, eye offset).
     Exact {
-        atlas: &'a wgpu::TextureView,
+        atlas: wgpu::TextureView,
         cols: u32,
         size: u32,
         clip: glam::Vec3,
     },
 }
 
-impl<'a> GatherVisibility<'a> {
+impl GatherVisibility {
     /// The shaders' encoding: (mode 0 none / 1 ISM / 2 exact, the ISM atlas or `no_ism`, the
     /// exact atlas or `no_exact`, atlas columns, map size, (0, eye offset or near, bias or
     /// far, normal offset or eye offset)).
-    pub fn parts(
-        &self,
+    pub fn parts<'a>(
+        &'a self,
         no_ism: &'a wgpu::TextureView,
         no_exact: &'a wgpu::TextureView,
     ) -> (u32, &'a wgpu::TextureView, &'a wgpu::TextureView, u32, u32, Vec4) {
-        match *self {
+        match self {
             GatherVisibility::None => (0, no_ism, no_exact, 1, 1, Vec4::ZERO),
             GatherVisibility::Ism { atlas, cols, size, eye_offset, bias, normal_offset } => {
-                (1, atlas, no_exact, cols, size, Vec4::new(0.0, eye_offset, bias, normal_offset))
+                (1, atlas, no_exact, *cols, *size, Vec4::new(0.0, *eye_offset, *bias, *normal_offset))
             }
             GatherVisibility::Exact { atlas, cols, size, clip } => {
-                (2, no_ism, atlas, cols, size, Vec4::new(0.0, clip.x, clip.y, clip.z))
+                (2, no_ism, atlas, *cols, *size, Vec4::new(0.0, clip.x, clip.y, clip.z))
             }
         }
     }
@@ -339,7 +340,7 @@ impl InterleavePass {
         vpls: &wgpu::Buffer,
         vpl_count: u32,
         d_min: f32,
-        vis: GatherVisibility<'_>,
+        vis: &GatherVisibility,
     ) {
         let n = self.n.max(1);
         let (tw, th) = Self::tile(self.width, self.height, n);

@@ -13,7 +13,7 @@ use crate::passes::knecht::irsm::{IrsmFrame, IrsmJob, IrsmPass};
 use crate::passes::knecht::ism::{IsmFrame, IsmJob, IsmPass, MAX_BOUNCES};
 use crate::passes::knecht::vpl_bounce::{BounceFrame, BounceMethod, VplBouncePass};
 use crate::passes::knecht::vpl_importance::{ViewJob, VplImportancePass, view_powers};
-use crate::passes::reference::vpl_visibility::{VisibilityParams, VplVisibilityPass};
+use crate::passes::reference::vpl_visibility::VplVisibilityPass;
 use crate::pipeline::VplVisibility;
 use crate::scene::upload::GpuScene;
 use crate::scene::{Scene, SceneState};
@@ -226,14 +226,7 @@ impl KnechtVpls {
                 }
             }
             VplVisibility::Exact => {
-                let e = self.exact.as_ref()?;
-                let clip = vpl_clip(f.vpl_radius(), 0.0);
-                let (scene, state) = (f.gpu_scene, f.state);
-                timer.scope(ctx, enc, "vpl.shadow", |e2, slot| {
-                    e.run(ctx, e2, slot, scene, state, &vpls.list, vpls.count, VisibilityParams { clip })
-                });
-                let l = e.layout_info;
-                Visibility::Exact { atlas: e.atlas_view.clone(), cols: l.cols, size: l.size, clip: clip.truncate() }
+                self.exact.as_ref()?.exact_visibility(f, enc, timer, vpls, vpl_clip(f.vpl_radius(), 0.0))
             }
         })
     }

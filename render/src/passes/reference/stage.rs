@@ -11,7 +11,7 @@ use crate::gpu::GpuContext;
 use crate::passes::bgl;
 use crate::passes::reference::vpl::{BatchView, VplSamplePass, halton};
 use crate::passes::reference::vpl_gather::{GatherParams, VplGatherPass};
-use crate::passes::reference::vpl_visibility::{VisibilityParams, VplVisibilityPass};
+use crate::passes::reference::vpl_visibility::VplVisibilityPass;
 use crate::pipeline::VplVisibility;
 use crate::scene::upload::GpuScene;
 use crate::stages::{FrameInputs, Visibility, VplSet, vpl_clip};
@@ -112,17 +112,10 @@ impl ReferenceVpls {
         timer: &mut GpuTimer,
         vpls: &VplSet,
     ) -> Visibility {
-        let clip = self.clip(f);
-        let v = &self.visibility;
         if f.settings.pipeline.vpl_visibility != VplVisibility::Exact {
             return Visibility::None;
         }
-        let (ctx, gpu_scene, state) = (f.ctx, f.gpu_scene, f.state);
-        timer.scope(ctx, enc, "vpl.shadow", |e, slot| {
-            v.run(ctx, e, slot, gpu_scene, state, &vpls.list, vpls.count, VisibilityParams { clip })
-        });
-        let l = v.layout_info;
-        Visibility::Exact { atlas: v.atlas_view.clone(), cols: l.cols, size: l.size, clip: clip.truncate() }
+        self.visibility.exact_visibility(f, enc, timer, vpls, self.clip(f))
     }
 
     /// Stage 6 (and 7): the full-BRDF gather at every pixel, folded into the running average.

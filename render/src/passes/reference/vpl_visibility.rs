@@ -9,8 +9,11 @@
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
+use crate::passes::knecht::interleave::GatherVisibility;
 use crate::scene::SceneState;
 use crate::scene::upload::GpuScene;
+use crate::stages::{FrameInputs, VplSet};
+use crate::timing::GpuTimer;
 
 /// Faces per VPL (`VPL_FACES` in `shaders/common/vpl.wgsl`).
 pub const FACES: u32 = 5;
@@ -215,5 +218,23 @@ impl VplVisibilityPass {
             pass.set_bind_group(0, &group, &[(tile as u64 * FACE_STRIDE) as u32]);
             scene.draw(&mut pass, state, None, None);
         }
+    }
+
+    /// Stage 4 "exact": renders the maps of `vpls` (scope `vpl.shadow`) and returns them as
+    /// the gathers read them; `clip` as [`crate::stages::vpl_clip`] makes it.
+    pub fn exact_visibility(
+        &self,
+        f: &FrameInputs,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        vpls: &VplSet,
+        clip: glam::Vec4,
+    ) -> GatherVisibility {
+        let (ctx, scene, state) = (f.ctx, f.gpu_scene, f.state);
+        timer.scope(ctx, enc, "vpl.shadow", |e, slot| {
+            self.run(ctx, e, slot, scene, state, &vpls.list, vpls.count, VisibilityParams { clip })
+        });
+        let l = self.layout_info;
+        GatherVisibility::Exact { atlas: self.atlas_view.clone(), cols: l.cols, size: l.size, clip: clip.truncate() }
     }
 }
