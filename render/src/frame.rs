@@ -16,6 +16,8 @@
 use glam::Vec4;
 
 use crate::passes::CameraUniform;
+use crate::passes::knecht::temporal::MergeOrder;
+use crate::passes::knecht::vpl_importance::ReceiverBrdf;
 use crate::passes::shadow::{gpu_light, setup_lights};
 use crate::pipeline::{Gather, Reconstruction, ShadingPoints, Temporal, VplSource, VplVisibility};
 use crate::renderer::{PrevFrame, Renderer, StagePasses, light_view_list};
@@ -157,38 +159,71 @@ fn indirect_light(
         (VplSource::UniformBatches, _) => x.reference.as_mut()?.gather(f, enc, timer, &vpls, &vis),
         (_, ShadingPoints::HcbSamples) => x.hcb.as_ref()?.gather_and_splat(f, enc, timer, light),
         _ => {
-            let i = x.interleave.as_ref()?;
-            i.shade(f.ctx, enc, timer, f.camera_buffer, f.gbuffer, &vpls.list, vpls.count, vpls.min_distance, &vis);
+            let i = x.interleave.as_mut()?;
+            let diffuse = f.settings.vpl.receiver_brdf == ReceiverBrdf::DiffuseOnly;
+            let (camera, g) = (f.camera_buffer, f.gbuffer);
+            i.shade(f.ctx, enc, timer, camera, g, &vpls.list, vpls.count, vpls.min_distance, &vis, diffuse);
             crate::passes::view(&i.merged, "indirect.merged")
         }
     };
-    // Coherence splatting ran with the gather at the samples; the reference needs none.
-    let reconstructed = match p.reconstruction {
-        Reconstruction::None | Reconstruction::CoherenceSplatting => gathered,
+    // Stages 6–7: reconstruction and temporal, in the order `temporal.order` says when the
+    // filter and the merge both run.
+    let merge_first = p.reconstruction == Reconstruction::GeometryAwareFilter
+        && p.temporal == Temporal::ConfidenceMerge
+        && f.settings.temporal.order == MergeOrder::MergeThenFilter;
+    Some(if merge_first {
+        let merged = temporal(f, x, enc, timer, gathered)?;
+        reconstruct(f, x, enc, timer, merged)?
+    } else {
+        let reconstructed = reconstruct(f, x, enc, timer, gathered)?;
+        temporal(f, x, enc, timer, reconstructed)?
+    })
+}
+
+/// Stage 6's reconstruction of the gathered light. Coherence splatting ran with the gather at
+/// the samples; the reference needs none.
+fn reconstruct(
+    f: &FrameInputs,
+    x: &mut StagePasses,
+    enc: &mut wgpu::CommandEncoder,
+    timer: &mut GpuTimer,
+    src: wgpu::TextureView,
+) -> Option<wgpu::TextureView> {
+    Some(match f.settings.pipeline.reconstruction {
+        Reconstruction::None | Reconstruction::CoherenceSplatting => src,
         Reconstruction::GeometryAwareFilter => {
-            // Knecht's thesis merges, then filters (§4 steps 11–12); we filter first because
-            // the confidence's illumination term (Eq. 3.3) then compares the filtered light,
-            // an estimate from all N VPLs, with the history instead of one pixel's N/n² VPLs,
-            // whose noise alone drove the confidence down and kept flicker high (measured in
+            // Knecht's thesis merges, then filters (§4 steps 11–12; `temporal.order`
+            // MergeThenFilter); we filter first by default because the confidence's
+            // illumination term (Eq. 3.3) then compares the filtered light, an estimate from
+            // all N VPLs, with the history instead of one pixel's N/n² VPLs, whose noise
+            // alone drove the confidence down and kept flicker high (measured in
             // tests/knecht_quality.rs).
             let i = x.interleave.as_ref()?;
             let (ctx, s, depth_range) = (f.ctx, &f.settings.interleave, f.depth_range());
             timer.scope(ctx, enc, "interleave.filter", |e, slot| {
-                i.filter(ctx, e, slot, s, depth_range, &gathered, f.gbuffer)
+                i.filter(ctx, e, slot, s, depth_range, &src, f.gbuffer)
             });
             crate::passes::view(&i.filtered, "indirect.filtered")
         }
-    };
+    })
+}
 
-    // Stage 7: temporal.
-    Some(match p.temporal {
+/// Stage 7's temporal choice on `src`.
+fn temporal(
+    f: &FrameInputs,
+    x: &mut StagePasses,
+    enc: &mut wgpu::CommandEncoder,
+    timer: &mut GpuTimer,
+    src: wgpu::TextureView,
+) -> Option<wgpu::TextureView> {
+    Some(match f.settings.pipeline.temporal {
         // The sample cache acted in stages 5–6, the running average in the reference's gather.
-        Temporal::None | Temporal::HcbSampleCache | Temporal::RunningAverage => reconstructed,
+        Temporal::None | Temporal::HcbSampleCache | Temporal::RunningAverage => src,
         Temporal::ConfidenceMerge => {
             let t = x.temporal.as_mut()?;
             let (ctx, s, depth_range) = (f.ctx, &f.settings.temporal, f.depth_range());
             timer.scope(ctx, enc, "temporal", |e, slot| {
-                t.run(ctx, e, slot, s, depth_range, &reconstructed, f.gbuffer, f.normal_texture)
+                t.run(ctx, e, slot, s, depth_range, &src, f.gbuffer, f.normal_texture)
             });
             crate::passes::view(&t.history, "temporal.history")
         }

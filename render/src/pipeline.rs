@@ -332,10 +332,8 @@ pub fn combination_errors(s: &LabSettings) -> Vec<FieldError> {
             });
         }
     }
-    if p.vpl_visibility == VplVisibility::Imperfect
-        && p.shading_points != ShadingPoints::HcbSamples
-        && s.ism.points < s.vpl.count
-    {
+    // Every ISM needs points, whoever gathers (the HCB with imperfect maps too).
+    if p.vpl_visibility == VplVisibility::Imperfect && s.ism.points < s.vpl.count {
         errors.push(FieldError {
             field: "ism.points".into(),
             message: format!(

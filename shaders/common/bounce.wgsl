@@ -29,10 +29,11 @@ struct BounceParams {
     // x: points P, y: VPLs per bounce N, z: atlas columns, w: map size
     counts: vec4<u32>,
     // x: first slot of the source bounce, y: first slot of the new bounce,
-    // z: selection (0 strongest, 1 proportional), w: ISM visibility (1) or none (0); the IRSM
-    // baseline uses x and y only
+    // z: selection (0 strongest, 1 proportional), w: shadow test: none (0), raw splats (1),
+    // pulled maps (2); the IRSM baseline uses x and y only
     slots: vec4<u32>,
-    // x: ISM eye offset, y: depth bias (point cloud only), z: d_min²
+    // x: ISM eye offset, y: depth bias (point cloud only), z: d_min², w: receiver normal
+    // offset in texels (pulled maps)
     geom: vec4<f32>,
     // x: random seed of this frame and bounce
     seed: vec4<u32>,
@@ -69,7 +70,8 @@ fn luminance(c: vec3<f32>) -> f32 {
 
 // Incident flux on sample p from `vpl` (rgb) and its contribution C (a), visibility not
 // included: Φ_s = Φ_v · f_v(ω_in, v→s) · cos θ_v · cos θ_s / max(d², d_min²) · W / (w_s · P_v)
-// (Eq. 4.7–4.8) and C_s = lum(Φ_s ⊙ (c_s·DI_s + SI_s·SI_v)).
+// (Eq. 4.7–4.8) and C_s = lum(Φ_s ⊙ (c_s·DI_s + SI_s)): Φ_s already holds the source's BRDF
+// f_v, so the sample reflects it with its own material alone (see bounce_vpl).
 fn bounce_light(vpl: Vpl, p: BouncePoint, surf: PointSurface, per_vpl: u32, dmin2: f32) -> vec4<f32> {
     let w = p.x - vpl.position.xyz;
     let d2 = dot(w, w);
@@ -82,17 +84,22 @@ fn bounce_light(vpl: Vpl, p: BouncePoint, surf: PointSurface, per_vpl: u32, dmin
     let f_v = brdf_eval(vpl.normal.xyz, vpl.incident.xyz, l, vpl.albedo.rgb, vpl.normal.w, vpl.flux.a, vpl.incident.w);
     let area = surf.albedo.a / f32(per_vpl);
     let flux = vpl.flux.rgb * f_v * cos_v * cos_s / max(d2, dmin2) * area;
-    let reflect = surf.albedo.rgb * surf.material.x + vec3<f32>(surf.material.y * vpl.flux.a);
+    let reflect = surf.albedo.rgb * surf.material.x + vec3<f32>(surf.material.y);
     return vec4<f32>(flux, luminance(flux * reflect));
 }
 
 // The VPL a sample becomes (§3.6.1): its position and normal, incident flux `flux` scaled by
-// `scale`, SI = SI_s · SI_v, ω_in toward the source VPL.
+// `scale`, ω_in toward the source VPL, and the sample's own material: DI_s, SP_s and
+// SI = SI_s. The thesis writes SI = SI_s · SI_v ("necessary to get correct specular light
+// bounces"); that product is right only for VPLs that carry the diffuse colour alone. Our Φ_s
+// already went through the source's full BRDF f_v (glossy lobe included, Eq. 4.8), so the
+// product would apply the source's specular intensity a second time (CPU twin and test:
+// cpu::knecht::bounce_vpl, bounce_vpl_reflects_with_the_samples_own_brdf).
 fn bounce_vpl(source: Vpl, p: BouncePoint, surf: PointSurface, flux: vec3<f32>, scale: f32) -> Vpl {
     return Vpl(
         vec4<f32>(p.x, 1.0),
         vec4<f32>(p.n, surf.material.x),
-        vec4<f32>(flux * scale, surf.material.y * source.flux.a),
+        vec4<f32>(flux * scale, surf.material.y),
         vec4<f32>(normalize(source.position.xyz - p.x), surf.material.z),
         vec4<f32>(surf.albedo.rgb, 0.0),
     );

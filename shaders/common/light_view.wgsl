@@ -20,7 +20,8 @@ struct ViewParams {
     range: vec4<u32>,
     // x: Halton index of this frame's first sample
     seq: vec4<u32>,
-    // x: flux scale (the direct light's intensity scale), y: finest level's side
+    // x: flux scale (the direct light's intensity scale), y: finest level's side, z: Eq. 4.3's
+    // constant b of (b + SP') (`vpl.importance_bias`)
     scale: vec4<f32>,
 }
 

@@ -1,6 +1,7 @@
 // HCB level 0 (Nguyen et al. §3.2, §3.5): the G-buffer's position and normal, with n^w = 1
 // (0 for the background) and a^w = the pixel's world-space footprint, √ of its back-projected
-// area: its width at the view depth over √|cos| of the angle to the eye (clamped at 1/100).
+// area: its width at the view depth over √|cos| of the angle to the eye (|cos| clamped below
+// at `hcb.footprint_min_cos`).
 // For the cache (§5.2) this is the supplementary G-buffer: all of the G-buffer, with n^w = +1
 // on incomplete texels (splatted weight Σw below the threshold) and −1 on the others, and
 // `hcb.incomplete` marks the former.
@@ -40,7 +41,7 @@ fn cs_base(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let nrm = normalize(n.xyz);
     let to_eye = normalize(hp.eye.xyz - p.xyz);
-    let r = p.w * hp.thresholds.w / sqrt(max(abs(dot(nrm, to_eye)), 0.01));
+    let r = p.w * hp.thresholds.w / sqrt(max(abs(dot(nrm, to_eye)), hp.cache.z));
     textureStore(out_position, gid.xy, vec4<f32>(p.xyz, r));
     textureStore(out_normal, gid.xy, vec4<f32>(nrm, coherence));
 }

@@ -14,7 +14,8 @@ struct HcbParams {
     // supplementary G-buffer (§5.2: n^w = ±1 from the splatted weight), w: 1 to spread the
     // sign of incomplete texels upward (Fig. 7d)
     level: vec4<u32>,
-    // x: incomplete weight threshold (§5.2), y: recompute period (§5.3)
+    // x: incomplete weight threshold (§5.2), y: unused, z: the footprint's clamp of |cos|
+    // (`hcb.footprint_min_cos`, base.wgsl)
     cache: vec4<f32>,
     // §5.3's 4×4 index pattern: the recompute phase of a new sample at texel (x, y) of its level
     pattern: array<vec4<u32>, 4>,

@@ -1,9 +1,10 @@
 // Stages 5–6 (Knecht 002 §3.4.1–3.4.2, §4.5): all VPLs shaded in one dispatch over the split
-// G-buffer. VPL k belongs to tile k mod n² (tile t = i + j·n), so each split pixel gathers the
-// N_t = ⌈(N − t) / n²⌉ VPLs of its tile, scaled by N / N_t so that each tile is an unbiased
-// estimate of all N (the n×n filter after the merge averages the tiles). Each VPL: Eq. 4.7–4.9
-// (common/vpl.wgsl) times its visibility — the ISM (common/ism.wgsl), the exact cube-face
-// maps, or none.
+// G-buffer. Slots are cut into blocks of n² consecutive slots and tile t (= i + j·n) takes
+// slot b·n² + (t + o_b) mod n² of block b, with per-frame offsets o_b that are a permutation
+// of 0…n² over every n² blocks (CPU twin and why: cpu::knecht::tile_offsets). Each split pixel
+// gathers its tile's N_t VPLs, scaled by N / N_t so that each tile is an unbiased estimate of
+// all N (the n×n filter averages the tiles). Each VPL: Eq. 4.7–4.9 (common/vpl.wgsl) times
+// its visibility — the ISM (common/ism.wgsl), the exact cube-face maps, or none.
 #import common/camera.wgsl
 #import common/ism.wgsl
 #import common/fullscreen.wgsl
@@ -11,7 +12,8 @@
 struct GatherParams {
     // x: n, y: tile width, z: tile height, w: VPL count N
     split: vec4<u32>,
-    // x: visibility (0 none, 1 ISM, 2 exact), y: atlas columns, z: map size
+    // x: visibility (0 none, 1 ISM, 2 exact), y: atlas columns, z: map size, w: receiver
+    // BRDF diffuse only (1: SI = 0, c·DI/π as the HCB's irradiance) or full (0)
     vis: vec4<u32>,
     // x: d_min², y: ISM eye offset / exact near, z: ISM bias / exact far,
     // w: ISM receiver normal offset (texels) / exact eye offset
@@ -28,6 +30,7 @@ struct GatherParams {
 @group(0) @binding(7) var s_albedo: texture_2d<f32>;
 @group(0) @binding(8) var s_material: texture_2d<f32>;
 @group(0) @binding(9) var out_accum: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(10) var<storage, read> tile_offsets: array<u32>;
 
 @compute @workgroup_size(TILE, TILE, 1)
 fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -43,13 +46,20 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     let t2 = gid.xy / params.split.yz;
     let tile = t2.x + t2.y * n;
     let stride = n * n;
-    if (nrm.w > 0.5 && tile < count) {
+    if (nrm.w > 0.5) {
         let x = textureLoad(s_position, px, 0).xyz;
         let nx = normalize(nrm.xyz);
         let alb = textureLoad(s_albedo, px, 0);
         let mat = textureLoad(s_material, px, 0);
-        let m = vec3<f32>(alb.a, mat.x, mat.y);
-        for (var k = tile; k < count; k = k + stride) {
+        let m = vec3<f32>(alb.a, select(mat.x, 0.0, params.vis.w == 1u), mat.y);
+        let blocks = (count + stride - 1u) / stride;
+        var per_tile = 0u;
+        for (var b = 0u; b < blocks; b = b + 1u) {
+            let k = b * stride + (tile + tile_offsets[b]) % stride;
+            if (k >= count) {
+                continue;
+            }
+            per_tile = per_tile + 1u;
             let vpl = vpls[k];
             if (vpl.position.w < 0.5) {
                 continue;
@@ -61,8 +71,9 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
             let vis = gather_visibility(params.vis.x, ism_atlas, exact_atlas, k, vpl, x, nx, params.vis.y, params.vis.z, params.shade.yzw);
             sum = sum + l * vis;
         }
-        let per_tile = (count - tile + stride - 1u) / stride;
-        sum = sum * (f32(count) / f32(per_tile));
+        if (per_tile > 0u) {
+            sum = sum * (f32(count) / f32(per_tile));
+        }
     }
     textureStore(out_accum, px, vec4<f32>(sum, 1.0));
 }

@@ -2,12 +2,14 @@
 // assigned to one VPL of the current bounce (point j → VPL j mod N, the same assignment as
 // its ISM splat), lit by it with the glossy bounce of Eq. 4.8 and the geometry term of
 // Eq. 4.7, and tested against that VPL's ISM; per VPL one sample becomes the VPL of the
-// next bounce. One workgroup per source VPL.
+// next bounce. One workgroup per source VPL. The shadow test (`ism.bounce_test`) reads the
+// pulled maps with the gather's depth bias and receiver normal offset (common/ism.wgsl:
+// ism_visibility), or the raw splats with the depth bias alone.
 //
 // - Incident flux on sample s: Φ_s = Φ_v · f_v(ω_in, v→s) · cos θ_v · cos θ_s / max(d², d_min²)
 //   · V · A_s, with A_s = W / (w_s · P_v) the surface area the sample stands for among the P_v
 //   samples of this VPL (W: the cloud's total area × object weight, w_s: its object's weight).
-// - Contribution (the light the sample would send on): C_s = lum(Φ_s ⊙ (c_s·DI_s + SI_s·SI_v)).
+// - Contribution (the light the sample would send on): C_s = lum(Φ_s ⊙ (c_s·DI_s + SI_s)).
 // - Selection: the thesis keeps the largest C_s by a depth test (strongest); its §6.1 asks
 //   for a choice ∝ C_s (proportional), done here as an exponential race: the largest
 //   C_s / (−ln u_s) wins with probability C_s / ΣC. Both are reductions of a key per sample:
@@ -15,7 +17,8 @@
 //   atomicMin on the sample index among the maxima (exact arg-max, ties to the lowest index).
 // - The new VPL: position and normal of the sample, Φ = Φ_s · ΣC / C_s (so that its
 //   contribution is the sum over the samples it stands for; unbiased for the proportional
-//   choice), SI = SI_s · SI_v (§3.6.1, for glossy chains), ω_in toward the source VPL.
+//   choice), SI = SI_s (not §3.6.1's SI_s · SI_v: Φ_s already holds the source's BRDF; see
+//   common/bounce.wgsl), ω_in toward the source VPL.
 //
 // CPU twin: cpu::knecht::{bounce_incident, select_bounce}.
 #import common/bounce.wgsl
@@ -28,6 +31,7 @@ const WG: u32 = 64u;
 @group(0) @binding(3) var<storage, read> instances: array<Instance>;
 @group(0) @binding(4) var<storage, read> depth: array<u32>;
 @group(0) @binding(5) var<storage, read_write> vpls: array<Vpl>;
+@group(0) @binding(6) var pulled: texture_2d<f32>;
 
 var<workgroup> sums: array<f32, WG>;
 var<workgroup> best_bits: atomic<u32>;
@@ -65,6 +69,10 @@ fn incident(j: u32, v: u32, vpl: Vpl, per_vpl: u32) -> Sample {
     let p = bounce_point(points[j], instances[points[j].draw]);
     var s = Sample(p.x, p.n, vec3<f32>(0.0), 0.0);
     if (bp.slots.w == 1u && !splat_visible(v, vpl, p.x)) {
+        return s;
+    }
+    if (bp.slots.w == 2u
+        && ism_visibility(pulled, v, vpl, p.x, p.n, bp.geom.x, bp.counts.z, bp.counts.w, bp.geom.y, bp.geom.w) < 0.5) {
         return s;
     }
     let l = bounce_light(vpl, p, surfaces[j], per_vpl, bp.geom.z);

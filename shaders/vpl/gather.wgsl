@@ -14,7 +14,8 @@ struct Params {
     batch: vec4<f32>,
     // x: near, y: far, z: eye offset along the VPL normal, w: d_min (scene units)
     clip: vec4<f32>,
-    // x: depth bias (texels), y: normal offset (texels), z: visibility on (1) / off (0)
+    // x: depth bias (texels), y: normal offset (texels), z: visibility on (1) / off (0),
+    // w: receiver BRDF diffuse only (1: SI = 0) or full (0)
     bias: vec4<f32>,
 }
 
@@ -57,7 +58,8 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
                     continue;
                 }
             }
-            sum = sum + vpl_radiance(vpl, x, nx, camera.position.xyz, alb.rgb, vec3<f32>(alb.a, mat.x, mat.y), dmin2);
+            let si = select(mat.x, 0.0, params.bias.w > 0.5);
+            sum = sum + vpl_radiance(vpl, x, nx, camera.position.xyz, alb.rgb, vec3<f32>(alb.a, si, mat.y), dmin2);
         }
     }
     textureStore(out_raw, px, vec4<f32>(sum, 1.0));

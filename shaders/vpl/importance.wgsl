@@ -7,7 +7,8 @@
 // - surfaceColor is the reflectance c·DI + SI (a black glossy surface still reflects), and
 //   the product with the light colour is the mean over r, g, b;
 // - SP is the thesis' 8-bit normalised power; ours is a Blinn-Phong exponent 1…4096, so
-//   SP' = saturate(log2(SP) / 12) enters as (0.5 + SP').
+//   SP' = saturate(log2(SP) / 12) enters as (b + SP'), b = `vpl.importance_bias` (0.5 as
+//   the thesis).
 // Surfaces facing away from the light and the background have importance 0.
 // CPU twin of the pyramid: cpu::knecht::Pyramid.
 #import common/light_view.wgsl
@@ -38,7 +39,7 @@ fn cs_importance(@builtin(global_invocation_id) gid: vec3<u32>) {
             let reflectance = alb.rgb * alb.a + vec3<f32>(mat.x);
             let flux = flux_per_uv(lights[vp.range.z], vp.view, p);
             let sp = clamp(log2(max(mat.y, 1.0)) / 12.0, 0.0, 1.0);
-            value = dot(flux, reflectance) / 3.0 * (0.5 + sp);
+            value = dot(flux, reflectance) / 3.0 * (vp.scale.z + sp);
         }
     }
     textureStore(importance, texel, vp.range.w, vec4<f32>(value, 0.0, 0.0, 0.0));

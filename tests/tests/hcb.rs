@@ -113,7 +113,7 @@ fn gpu_hcb(ctx: &GpuContext, c: &Case) -> (Vec<Level>, Vec<Vec<bool>>, Vec<Sampl
 fn check(name: &str, c: Case) -> (Vec<Level>, Vec<Sample>) {
     let (w, h, f) = (c.w, c.h, c.frame);
     let ctx = gpu();
-    let mut base = hcb::base_level(c.pos, c.nrm, w, h, f.eye, f.pixel_scale);
+    let mut base = hcb::base_level(c.pos, c.nrm, w, h, f.eye, f.pixel_scale, f.footprint_min_cos);
     if let Some(inc) = &c.incomplete {
         base = hcb::supplementary_base(base, inc);
     }

@@ -491,52 +491,60 @@ fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
     let camera_buf = buffer("test.camera", bytemuck::bytes_of(&camera), wgpu::BufferUsages::UNIFORM);
     let vpl_buf = buffer("test.vpls", bytemuck::cast_slice(&gpu_vpls), wgpu::BufferUsages::STORAGE);
     let g = SyntheticGBuffer::new(&ctx, w, h, &pos, &nrm, &alb, &mat, &vec![[0.0; 4]; len]);
-    let pass = InterleavePass::new(&ctx, gi_render::passes::bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h, n);
+    let mut pass = InterleavePass::new(&ctx, gi_render::passes::bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h, n);
     let mut timer = gi_render::timing::GpuTimer::new(&ctx);
-    let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.shade") });
-    pass.shade(
-        &ctx,
-        &mut enc,
-        &mut timer,
-        &camera_buf,
-        &g.views(),
-        &vpl_buf,
-        vpl_count,
-        d_min,
-        &GatherVisibility::None,
-    );
-    ctx.queue.submit([enc.finish()]);
-    let got = read(&ctx, &pass.merged);
-    let stride = n * n;
+    // Frame 0 with the full BRDF at the receiver, frame 1 (another slot→tile map) diffuse only.
     let (mut lit, mut dark) = (0, 0);
-    for y in 0..h {
-        for x in 0..w {
-            let i = (y * w + x) as usize;
-            let tile = (x % n) + (y % n) * n;
-            let mut expected = Vec3::ZERO;
-            if let Some(r) = &receivers[i] {
-                let per_tile = (vpl_count - tile).div_ceil(stride);
-                for k in (tile..vpl_count).step_by(stride as usize) {
-                    if let Some(v) = &cpu_vpls[k as usize] {
-                        expected += knecht::vpl_radiance(v, r, eye, d_min);
+    for (frame, diffuse) in [(0u32, false), (1, true)] {
+        let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.shade") });
+        pass.shade(
+            &ctx,
+            &mut enc,
+            &mut timer,
+            &camera_buf,
+            &g.views(),
+            &vpl_buf,
+            vpl_count,
+            d_min,
+            &GatherVisibility::None,
+            diffuse,
+        );
+        ctx.queue.submit([enc.finish()]);
+        let got = read(&ctx, &pass.merged);
+        let offsets = knecht::tile_offsets(vpl_count, n, frame);
+        for y in 0..h {
+            for x in 0..w {
+                let i = (y * w + x) as usize;
+                let tile = (x % n) + (y % n) * n;
+                let mut expected = Vec3::ZERO;
+                if let Some(r) = &receivers[i] {
+                    // Diffuse only: the receiver's SI is 0 (c·DI/π, as the HCB reflects).
+                    let r = knecht::Receiver { si: if diffuse { 0.0 } else { r.si }, ..*r };
+                    let slots: Vec<u32> = knecht::tile_slots(tile, vpl_count, n, &offsets).collect();
+                    let per_tile = slots.len() as u32;
+                    for k in slots {
+                        if let Some(v) = &cpu_vpls[k as usize] {
+                            expected += knecht::vpl_radiance(v, &r, eye, d_min);
+                        }
                     }
+                    expected *= vpl_count as f32 / per_tile as f32;
                 }
-                expected *= vpl_count as f32 / per_tile as f32;
-            }
-            let p = got.at(x, y);
-            let g3 = Vec3::new(p[0], p[1], p[2]);
-            let err = (g3 - expected).abs().max_element();
-            assert!(
-                err <= 1e-5 + 2e-4 * expected.abs().max_element(),
-                "pixel ({x}, {y}), tile {tile}: GPU {g3}, CPU {expected}"
-            );
-            if expected.max_element() > 1e-3 {
-                lit += 1;
-            } else if receivers[i].is_some() {
-                dark += 1;
+                let p = got.at(x, y);
+                let g3 = Vec3::new(p[0], p[1], p[2]);
+                let err = (g3 - expected).abs().max_element();
+                assert!(
+                    err <= 1e-5 + 2e-4 * expected.abs().max_element(),
+                    "frame {frame}, diffuse {diffuse}: pixel ({x}, {y}), tile {tile}: GPU {g3}, CPU {expected}"
+                );
+                if expected.max_element() > 1e-3 {
+                    lit += 1;
+                } else if receivers[i].is_some() {
+                    dark += 1;
+                }
             }
         }
     }
+    let len = 2 * len;
     // The inputs exercise both sides of the cosine tests.
     assert!(lit > len / 4 && dark > len / 20, "{lit} lit and {dark} unlit foreground pixels of {len}");
 }
@@ -886,38 +894,49 @@ fn close(a: Vec3, b: Vec3, tol: f32) -> bool {
 /// The bounce selection of Knecht 002 §3.6.1 on the GPU (`vpl/bounce.wgsl`) against its CPU
 /// twin: seven VPLs on the default scene's surfaces (one slot empty, some glossy), the point
 /// cloud splatted into their ISMs, then bounce 2's VPLs read back. For every source VPL the
-/// CPU lights its samples (Eq. 4.7–4.8 times the test against the GPU's splatted map), picks
+/// CPU lights its samples (Eq. 4.7–4.8 times the test against the GPU's splatted map, or the
+/// gather's test on its pulled map, `cpu::knecht::ism_visible`), picks
 /// the arg-max (strongest) or the exponential race's winner (proportional), and builds the
 /// new VPL; the GPU's must be the same sample with the same flux.
 #[test]
 fn bounce_selection_on_the_gpu_picks_the_cpu_arg_max() {
     use gi_render::cpu::knecht::Selection;
+    use gi_render::passes::knecht::ism::BounceShadowTest;
     use gi_render::passes::knecht::ism::IsmFrame;
     use gi_render::passes::knecht::vpl_bounce::{BounceFrame, BounceSelection, VplBouncePass};
     use gi_render::passes::reference::vpl::GpuVpl;
     let fx = BounceFixture::new();
     let (ctx, s, ism, gs, n, vpl_buf) = (&fx.ctx, &fx.s, &fx.ism, &fx.gs, fx.n, &fx.vpl_buf);
     let bounce = VplBouncePass::new(ctx);
-    let (eye_offset, d_min) = (0.01, 0.1);
+    let (eye_offset, d_min, extent) = (0.01, 0.1, 4.0);
     let l = ism.layout_info;
-    for (selection, seed) in [(BounceSelection::Strongest, 0u32), (BounceSelection::Proportional, 5)] {
-        let job = ism.begin(ctx, &gs.instances, vpl_buf, s, IsmFrame { vpls: n, bounces: 2, eye_offset, extent: 4.0 });
+    for (selection, seed, test) in [
+        (BounceSelection::Strongest, 0u32, BounceShadowTest::RawSplats),
+        (BounceSelection::Proportional, 5, BounceShadowTest::RawSplats),
+        (BounceSelection::Strongest, 0, BounceShadowTest::PulledMaps),
+    ] {
+        let job = ism.begin(ctx, &gs.instances, vpl_buf, s, IsmFrame { vpls: n, bounces: 2, eye_offset, extent });
         let f = BounceFrame {
             vpls: n,
             selection,
-            visibility: true,
+            visibility: Some(test),
             eye_offset,
             depth_bias: s.depth_bias,
+            normal_offset: s.normal_offset,
             min_distance: d_min,
             seed,
         };
         let group = bounce.begin(ctx, ism, &gs.instances, vpl_buf, 2, f);
         let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.bounce") });
         ism.splat(&mut enc, None, &job, 0);
+        if test == BounceShadowTest::PulledMaps {
+            ism.finish(ctx, &mut enc, None, &job, s, extent);
+        }
         bounce.run(&mut enc, None, &group, 1, n);
         ctx.queue.submit([enc.finish()]);
         let out: Vec<GpuVpl> = fx.read_vpls();
         let depth: Vec<u32> = bytemuck::pod_collect_to_vec(&read_buffer(ctx, &ism.depth, l.width() * l.height() * 4));
+        let pulled = read(ctx, &ism.pulled);
         let seed_gpu = gi_render::passes::knecht::vpl_bounce::bounce_seed(seed, 1);
         let sel = match selection {
             BounceSelection::Strongest => Selection::Strongest,
@@ -929,22 +948,37 @@ fn bounce_selection_on_the_gpu_picks_the_cpu_arg_max() {
             let per_vpl = fx.per_vpl(i);
             let mut contributions = Vec::new();
             let mut samples = Vec::new();
+            let (ox, oy) = ((i as u32 % l.cols) * l.size, (i as u32 / l.cols) * l.size);
             for m in 0..per_vpl {
                 let j = i as u32 + m * n;
                 let bs = fx.sample(j as usize);
-                // The splat test of `splat_visible`.
-                let w = bs.surface.position - (src.position + src.normal * eye_offset);
-                let d = w.length();
-                let (t, b, nn) = knecht::basis(src.normal);
-                let visible =
-                    knecht::paraboloid_project(Vec3::new(w.dot(t), w.dot(b), w.dot(nn)) / d).is_some_and(|uv| {
-                        let tx = ((uv.x * l.size as f32) as u32).min(l.size - 1);
-                        let ty = ((uv.y * l.size as f32) as u32).min(l.size - 1);
-                        let (ox, oy) = ((i as u32 % l.cols) * l.size, (i as u32 / l.cols) * l.size);
-                        let bits = depth[((oy + ty) * l.cols * l.size + ox + tx) as usize];
-                        let stored = if bits == 0 { ISM_EMPTY } else { f32::from_bits(!bits) };
-                        d * (1.0 - s.depth_bias) <= stored
-                    });
+                let visible = match test {
+                    // The splat test of `splat_visible`.
+                    BounceShadowTest::RawSplats => {
+                        let w = bs.surface.position - (src.position + src.normal * eye_offset);
+                        let d = w.length();
+                        let (t, b, nn) = knecht::basis(src.normal);
+                        knecht::paraboloid_project(Vec3::new(w.dot(t), w.dot(b), w.dot(nn)) / d).is_some_and(|uv| {
+                            let tx = ((uv.x * l.size as f32) as u32).min(l.size - 1);
+                            let ty = ((uv.y * l.size as f32) as u32).min(l.size - 1);
+                            let bits = depth[((oy + ty) * l.cols * l.size + ox + tx) as usize];
+                            let stored = if bits == 0 { ISM_EMPTY } else { f32::from_bits(!bits) };
+                            d * (1.0 - s.depth_bias) <= stored
+                        })
+                    }
+                    // The gather's test on the pulled maps.
+                    BounceShadowTest::PulledMaps => knecht::ism_visible(
+                        |tx, ty| pulled.at(ox + tx, oy + ty)[0],
+                        src.position,
+                        src.normal,
+                        bs.surface.position,
+                        bs.surface.normal,
+                        eye_offset,
+                        l.size,
+                        s.depth_bias,
+                        s.normal_offset,
+                    ),
+                };
                 let (flux, c) = knecht::bounce_incident(&src, &bs, per_vpl, d_min, visible);
                 let (_, c_unseen) = knecht::bounce_incident(&src, &bs, per_vpl, d_min, true);
                 if c_unseen > 0.0 && !visible {
@@ -965,7 +999,7 @@ fn bounce_selection_on_the_gpu_picks_the_cpu_arg_max() {
             lit += 1;
             let (bs, flux, c) = samples[((j - i as u32) / n) as usize];
             let want = knecht::bounce_vpl(&src, &bs, flux, c, sum);
-            assert_vpl_eq(&got, &want, &format!("{selection:?} VPL {i} (CPU sample {j})"));
+            assert_vpl_eq(&got, &want, &format!("{selection:?}, {test:?}: VPL {i} (CPU sample {j})"));
         }
         assert!(lit >= 5, "{selection:?}: only {lit} VPLs found a lit sample");
         assert!(hidden > 0, "{selection:?}: the ISM test hid no sample, so it was not exercised");

@@ -13,6 +13,7 @@ pub mod reference;
 pub mod render;
 pub mod settings;
 pub mod sweep;
+pub mod upgrade;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -29,6 +30,7 @@ use export::ExportArgs;
 use hcb_stats::HcbStatsArgs;
 use reference::ReferenceArgs;
 use render::RenderArgs;
+use upgrade::UpgradeArgs;
 
 #[derive(Parser, Debug)]
 #[command(name = "gi-lab", version, about = "GI Lab: a laboratory for real-time global illumination")]
@@ -63,6 +65,9 @@ pub enum Command {
     /// Print the hierarchical coherence buffer's samples per level as Table 1 of Nguyen et
     /// al. lays them out (the preset's technique is switched to the HCB).
     HcbStats(HcbStatsArgs),
+    /// Rewrite presets of an older version in the current one (the loader's migration),
+    /// keeping their leading comment; the old file is kept as `<name>.bak`.
+    Upgrade(UpgradeArgs),
     /// Regenerate the embedded default scene (assets/cornell_box.glb).
     GenAssets {
         /// Where to write the .glb.
@@ -114,6 +119,7 @@ pub fn main() -> ExitCode {
             Ok(())
         }
         Some(Command::Export(a)) => export::export(a),
+        Some(Command::Upgrade(a)) => upgrade::upgrade(a),
         Some(Command::GenAssets { out }) => gen_assets::gen_assets(out),
     };
     match result {

@@ -69,10 +69,10 @@ impl Level {
 
 /// World-space footprint of a pixel (§3.5): the square root of its back-projected area — the
 /// pixel's width at view depth `depth` (`pixel_scale` = 2 tan(fov_y / 2) / height) over
-/// √cos of the angle between the normal and the direction to the eye (clamped at 1/100, so
-/// that grazing pixels stay finite).
-pub fn footprint(depth: f32, pixel_scale: f32, normal: Vec3, to_eye: Vec3) -> f32 {
-    depth * pixel_scale / normal.dot(to_eye).abs().max(0.01).sqrt()
+/// √|cos| of the angle between the normal and the direction to the eye (|cos| clamped below
+/// at `min_cos`, `hcb.footprint_min_cos`, so that grazing pixels stay finite).
+pub fn footprint(depth: f32, pixel_scale: f32, normal: Vec3, to_eye: Vec3, min_cos: f32) -> f32 {
+    depth * pixel_scale / normal.dot(to_eye).abs().max(min_cos).sqrt()
 }
 
 /// Level 0 from G-buffer texels: `position` = (world xyz, view depth), `normal` = (xyz,
@@ -84,6 +84,7 @@ pub fn base_level(
     height: u32,
     eye: Vec3,
     pixel_scale: f32,
+    min_cos: f32,
 ) -> Level {
     let texels = position
         .iter()
@@ -95,7 +96,7 @@ pub fn base_level(
             let (pos, nrm) = (Vec3::new(p[0], p[1], p[2]), Vec3::new(n[0], n[1], n[2]).normalize_or(Vec3::Z));
             HcbTexel {
                 position: pos,
-                distance: footprint(p[3], pixel_scale, nrm, (eye - pos).normalize_or_zero()),
+                distance: footprint(p[3], pixel_scale, nrm, (eye - pos).normalize_or_zero(), min_cos),
                 normal: nrm,
                 coherence: 1.0,
             }

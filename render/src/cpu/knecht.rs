@@ -163,6 +163,42 @@ pub fn paraboloid_unproject(uv: Vec2) -> Vec3 {
     Vec3::new(p.x * (1.0 + z), p.y * (1.0 + z), z)
 }
 
+/// The ISM shadow test of a receiver x with normal nx (twin of `ism_visibility` in
+/// `shaders/common/ism.wgsl`): x is moved along nx by `normal_offset` texels of the map at
+/// its distance from the eye (the eye is the VPL lifted by `eye_offset` along its normal; a
+/// paraboloid texel at cos θ spans 2 (1 + cos θ) / size radians), then its distance less
+/// `bias` × that distance is tested against `stored(tx, ty)`, the map's value at the texel
+/// it projects to. Points below the VPL's horizon are hidden.
+#[allow(clippy::too_many_arguments)]
+pub fn ism_visible(
+    stored: impl Fn(u32, u32) -> f32,
+    vpl_position: Vec3,
+    vpl_normal: Vec3,
+    x: Vec3,
+    nx: Vec3,
+    eye_offset: f32,
+    size: u32,
+    bias: f32,
+    normal_offset: f32,
+) -> bool {
+    let eye = vpl_position + vpl_normal * eye_offset;
+    let w0 = x - eye;
+    let d0 = w0.length();
+    let cos0 = w0.dot(vpl_normal) / d0.max(1e-9);
+    let texel_angle = 2.0 * (1.0 + cos0.max(0.0)) / size as f32;
+    let w = w0 + nx * (normal_offset * d0 * texel_angle);
+    let d = w.length();
+    let (t, b, n) = basis(vpl_normal);
+    let q = Vec3::new(w.dot(t), w.dot(b), w.dot(n)) / d.max(1e-9);
+    if q.z < 0.0 {
+        return false;
+    }
+    let Some(uv) = paraboloid_project(q) else { return false };
+    let tx = ((uv.x * size as f32) as u32).min(size - 1);
+    let ty = ((uv.y * size as f32) as u32).min(size - 1);
+    d * (1.0 - bias) <= stored(tx, ty)
+}
+
 /// Depth of an empty ISM texel (a hole): any value at or above it is invalid.
 pub const ISM_EMPTY: f32 = 1.0e30;
 
@@ -301,6 +337,42 @@ pub fn vpl_radiance(vpl: &Vpl, x: &Receiver, eye: Vec3, d_min: f32) -> Vec3 {
     let f_y = crate::cpu::brdf::eval(vpl.normal, vpl.incident, -l, vpl.albedo, vpl.di, vpl.si, vpl.sp);
     let f_x = crate::cpu::brdf::eval(x.normal, l, v, x.albedo, x.di, x.si, x.sp);
     vpl.flux * f_y * cos_y * f_x * cos_x / d2.max(d_min * d_min)
+}
+
+/// The per-frame slot→tile map of interleaved sampling (Knecht §3.4.1; twin of the loop in
+/// `shaders/interleave/gather.wgsl`). Slots are cut into blocks of n² consecutive slots;
+/// in block b, tile t takes slot b·n² + (t + o_b) mod n². One VPL per block per tile keeps
+/// every tile a representative subset: consecutive slots hold consecutive Halton indices,
+/// which lie in different strips of the light view (the radical inverse's leading digits
+/// are the index's trailing ones), and the offsets o_b of every n² consecutive blocks are a
+/// permutation of 0…n², so each tile takes each of the n² strips once per n² blocks. The
+/// offsets are reshuffled every frame (seeded by `frame`), so that a tile's share — and the
+/// n×n pattern it would leave — changes from frame to frame. The old map, tile = slot mod
+/// n², gave tile t the same strip every frame (the 4×4 block pattern of issue #15).
+/// Returns one offset per block (⌈count / n²⌉ of them).
+pub fn tile_offsets(count: u32, n: u32, frame: u32) -> Vec<u32> {
+    let stride = (n.max(1) * n.max(1)) as usize;
+    let blocks = (count as usize).div_ceil(stride);
+    let mut offsets = Vec::with_capacity(blocks + stride);
+    let mut group = 0u32;
+    while offsets.len() < blocks {
+        let mut perm: Vec<u32> = (0..stride as u32).collect();
+        let seed = pcg_hash(frame.wrapping_mul(0x9E37_79B9) ^ pcg_hash(group));
+        for i in (1..stride).rev() {
+            let k = (pcg_hash(seed ^ i as u32) as usize) % (i + 1);
+            perm.swap(i, k);
+        }
+        offsets.extend(perm);
+        group += 1;
+    }
+    offsets.truncate(blocks);
+    offsets
+}
+
+/// The VPL slots of `tile` under [`tile_offsets`]: one per block, those below `count`.
+pub fn tile_slots(tile: u32, count: u32, n: u32, offsets: &[u32]) -> impl Iterator<Item = u32> + '_ {
+    let stride = n.max(1) * n.max(1);
+    offsets.iter().enumerate().map(move |(b, &o)| b as u32 * stride + (tile + o) % stride).filter(move |&k| k < count)
 }
 
 /// One pixel of the geometry-aware box filter's inputs.
@@ -443,7 +515,8 @@ pub struct BounceSample {
 ///   VPL emission of Eq. 4.8 (the one BRDF, [`crate::cpu::brdf`]) and the geometry term of
 ///   Eq. 4.7; A_s = W / (w_s · P_v) is the area the sample stands for among the P_v samples
 ///   assigned to the VPL;
-/// - C_s = lum(Φ_s ⊙ (c_s·DI_s + SI_s·SI_v)), the light the sample would send on.
+/// - C_s = lum(Φ_s ⊙ (c_s·DI_s + SI_s)), the light the sample would send on (Φ_s already
+///   holds the source's BRDF, see [`bounce_vpl`]).
 ///
 /// `visible` is the ISM test's result. Returns (Φ_s, C_s); zero when facing away or hidden.
 pub fn bounce_incident(vpl: &Vpl, sample: &BounceSample, per_vpl: u32, d_min: f32, visible: bool) -> (Vec3, f32) {
@@ -458,7 +531,7 @@ pub fn bounce_incident(vpl: &Vpl, sample: &BounceSample, per_vpl: u32, d_min: f3
     let f_v = crate::cpu::brdf::eval(vpl.normal, vpl.incident, l, vpl.albedo, vpl.di, vpl.si, vpl.sp);
     let area = sample.weighted_area / per_vpl as f32;
     let flux = vpl.flux * f_v * cos_v * cos_s / d2.max(d_min * d_min) * area;
-    let reflect = s.albedo * s.di + Vec3::splat(s.si * vpl.si);
+    let reflect = s.albedo * s.di + Vec3::splat(s.si);
     (flux, luminance(flux * reflect))
 }
 
@@ -500,8 +573,15 @@ pub fn select_bounce(samples: &[(u32, f32)], selection: Selection) -> Option<(u3
 }
 
 /// The next bounce's VPL from sample `s` with incident flux `flux` and contribution `c`
-/// out of `sum` (Knecht §3.6.1): Φ = Φ_s · ΣC / C_s, SI = SI_s · SI_v, ω_in toward the
-/// source VPL.
+/// out of `sum` (Knecht §3.6.1): Φ = Φ_s · ΣC / C_s, ω_in toward the source VPL, and the
+/// sample's own material (DI_s, SI_s, SP_s).
+///
+/// The thesis sets SI = SI_s · SI_v, "necessary to get correct specular light bounces"; that
+/// holds for VPLs whose flux is the diffuse colour alone. Here Φ_s = Φ_v · f_v · G already
+/// went through the source's whole BRDF, glossy lobe included (Eq. 4.8), so the new VPL
+/// reflects it with the sample's BRDF only; the product would apply SI_v twice. Energy is
+/// conserved along a chain: the light the new VPL sends is what the sample's surface
+/// reflects, f_s · E_s (test: `bounce_vpl_reflects_with_the_samples_own_brdf`).
 pub fn bounce_vpl(source: &Vpl, sample: &BounceSample, flux: Vec3, c: f32, sum: f32) -> Vpl {
     let s = &sample.surface;
     Vpl {
@@ -511,7 +591,7 @@ pub fn bounce_vpl(source: &Vpl, sample: &BounceSample, flux: Vec3, c: f32, sum: 
         incident: (source.position - s.position).normalize_or_zero(),
         albedo: s.albedo,
         di: s.di,
-        si: s.si * source.si,
+        si: s.si,
         sp: s.sp,
     }
 }
@@ -653,5 +733,86 @@ mod tests {
             let p = wins[k] as f64 / trials as f64;
             assert!((p - expect).abs() < 0.015, "sample {k}: {p} vs {expect}");
         }
+    }
+
+    #[test]
+    fn bounce_vpl_reflects_with_the_samples_own_brdf() {
+        // A glossy source VPL lights a glossy sample. Φ_s already went through the source's
+        // BRDF (Eq. 4.8), so the light the new VPL sends toward any ω must be what the
+        // sample's own surface reflects: Φ_s · f_s(ω_in, ω). Thesis' SI = SI_s · SI_v gives
+        // 0.8 · 0.5 = 0.4 here and fails near the mirror direction.
+        let source = Vpl {
+            position: Vec3::new(0.0, 1.0, 0.0),
+            normal: Vec3::new(0.0, -1.0, 0.0),
+            flux: Vec3::splat(10.0),
+            incident: Vec3::new(0.3, -1.0, 0.0).normalize(),
+            albedo: Vec3::new(0.7, 0.6, 0.5),
+            di: 0.6,
+            si: 0.5,
+            sp: 64.0,
+        };
+        let surface = Receiver {
+            position: Vec3::new(0.4, 0.0, 0.1),
+            normal: Vec3::Y,
+            albedo: Vec3::new(0.2, 0.5, 0.8),
+            di: 0.5,
+            si: 0.8,
+            sp: 200.0,
+        };
+        let sample = BounceSample { surface, weighted_area: 2.0 };
+        let (flux, c) = bounce_incident(&source, &sample, 1, 0.1, true);
+        assert!(c > 0.0 && flux.max_element() > 0.0);
+        let reflect = surface.albedo * surface.di + Vec3::splat(surface.si);
+        assert!((c - luminance(flux * reflect)).abs() <= 1e-6 * c, "C_s reflects with the sample's material");
+        // One sample stands for the whole VPL (ΣC = C_s): the new VPL's flux is Φ_s.
+        let v = bounce_vpl(&source, &sample, flux, c, c);
+        let to_source = (source.position - surface.position).normalize();
+        let mirror = (2.0 * surface.normal.dot(to_source) * surface.normal - to_source).normalize();
+        for w in [mirror, Vec3::new(-0.2, 1.0, 0.3).normalize(), Vec3::new(0.9, 0.2, -0.1).normalize()] {
+            let sent = v.flux * crate::cpu::brdf::eval(v.normal, v.incident, w, v.albedo, v.di, v.si, v.sp);
+            let reflected = flux
+                * crate::cpu::brdf::eval(
+                    surface.normal,
+                    to_source,
+                    w,
+                    surface.albedo,
+                    surface.di,
+                    surface.si,
+                    surface.sp,
+                );
+            assert!(
+                (sent - reflected).abs().max_element() <= 1e-4 * reflected.max_element(),
+                "{sent} vs {reflected} toward {w}"
+            );
+        }
+    }
+
+    #[test]
+    fn every_tile_takes_every_strip_once_and_the_map_changes_per_frame() {
+        let (count, n) = (256u32, 4u32);
+        let offsets = tile_offsets(count, n, 3);
+        assert_eq!(offsets.len(), 16);
+        let mut seen = vec![0u32; count as usize];
+        for tile in 0..16 {
+            let slots: Vec<u32> = tile_slots(tile, count, n, &offsets).collect();
+            assert_eq!(slots.len(), 16, "tile {tile}");
+            // One slot of each residue mod n² (each strip of the light view) per tile; the
+            // old map (slot mod n² = tile) gave every slot the same residue.
+            let mut residues: Vec<u32> = slots.iter().map(|k| k % 16).collect();
+            residues.sort_unstable();
+            assert_eq!(residues, (0..16).collect::<Vec<_>>(), "tile {tile}");
+            for k in slots {
+                seen[k as usize] += 1;
+            }
+        }
+        assert!(seen.iter().all(|&c| c == 1), "every slot belongs to exactly one tile");
+        assert_ne!(offsets, tile_offsets(count, n, 4), "the map is reshuffled each frame");
+        assert_eq!(offsets, tile_offsets(count, n, 3), "and deterministic");
+        // A partial last block: 7 slots over 4 tiles; n = 1 keeps every slot in its tile.
+        let short = tile_offsets(7, 2, 0);
+        let sizes: Vec<usize> = (0..4).map(|t| tile_slots(t, 7, 2, &short).count()).collect();
+        assert_eq!(sizes.iter().sum::<usize>(), 7);
+        assert!(sizes.iter().all(|&c| c == 1 || c == 2), "{sizes:?}");
+        assert_eq!(tile_slots(0, 5, 1, &tile_offsets(5, 1, 9)).collect::<Vec<_>>(), [0, 1, 2, 3, 4]);
     }
 }

@@ -68,6 +68,12 @@ settings_group! {
         /// of the samples per frame, by the randomized 4×4 index pattern of Fig. 8).
         recompute_period: u32 = 4,
         unit "frames", symbol "", range 1..=16, cost "smaller: more samples gathered per frame, light follows changes sooner", history false;
+        /// The smallest |cos| between a pixel's normal and the direction to the eye in its
+        /// footprint a^w = depth · pixel size / √|cos| (§3.5's back-projected area; our clamp:
+        /// the paper does not say how grazing pixels stay finite). Smaller: grazing pixels
+        /// get larger footprints, so distance coherence (Eq. 1) holds across more of them.
+        footprint_min_cos: f32 = 0.01,
+        unit "", symbol "", range 0.0001..=1.0, cost "free", history false;
     }
     legacy {
         /// Version 1: the sample cache on or off; now `pipeline.temporal = HcbSampleCache`.
@@ -180,12 +186,21 @@ pub struct HcbFrame {
     pub pattern: [[u32; 4]; 4],
     /// §5.2's incomplete weight threshold.
     pub incomplete_weight: f32,
+    /// The footprint's clamp of |cos| (`hcb.footprint_min_cos`).
+    pub footprint_min_cos: f32,
 }
 
 impl HcbFrame {
     /// A frame with §5.3's default period and no incomplete threshold (the per-frame HCB).
     pub fn new(thresholds: Thresholds, eye: glam::Vec3, pixel_scale: f32) -> Self {
-        Self { thresholds, eye, pixel_scale, pattern: crate::cpu::hcb::recompute_pattern(4), incomplete_weight: 0.0 }
+        Self {
+            thresholds,
+            eye,
+            pixel_scale,
+            pattern: crate::cpu::hcb::recompute_pattern(4),
+            incomplete_weight: 0.0,
+            footprint_min_cos: HcbSettings::default().footprint_min_cos,
+        }
     }
 
     fn params(&self, level: [u32; 4]) -> HcbParams {
@@ -194,7 +209,7 @@ impl HcbFrame {
             thresholds: Vec4::new(t.cos_theta_max, t.cos_gamma_max, t.d_max, self.pixel_scale),
             eye: self.eye.extend(1.0),
             level,
-            cache: Vec4::new(self.incomplete_weight, 0.0, 0.0, 0.0),
+            cache: Vec4::new(self.incomplete_weight, 0.0, self.footprint_min_cos, 0.0),
             pattern: self.pattern,
         }
     }

@@ -110,6 +110,7 @@ impl HcbStage {
             pixel_scale: 2.0 * (f.camera.yfov * 0.5).tan() / f.height.max(1) as f32,
             pattern: crate::cpu::hcb::recompute_pattern(s.recompute_period),
             incomplete_weight: s.incomplete_weight,
+            footprint_min_cos: s.footprint_min_cos,
         }
     }
 

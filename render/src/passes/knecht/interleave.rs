@@ -148,6 +148,10 @@ pub struct InterleavePass {
     filter_params: wgpu::Buffer,
     dummy_ism: wgpu::TextureView,
     dummy_exact: wgpu::TextureView,
+    /// This frame's slot→tile offsets (`cpu::knecht::tile_offsets`), one u32 per block.
+    tile_offsets: wgpu::Buffer,
+    /// Gathers run so far: the seed of the per-frame slot→tile map.
+    pub frames: u32,
 }
 
 impl InterleavePass {
@@ -182,6 +186,7 @@ impl InterleavePass {
                 t(7),
                 t(8),
                 bgl::storage_texture(9, wgpu::TextureFormat::Rgba32Float),
+                bgl::storage(10, cs, true),
             ],
         });
         let merge_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -260,7 +265,18 @@ impl InterleavePass {
             filter_params,
             dummy_ism,
             dummy_exact,
+            tile_offsets: Self::offsets_buffer(device, 256),
+            frames: 0,
         }
+    }
+
+    fn offsets_buffer(device: &wgpu::Device, blocks: u32) -> wgpu::Buffer {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("interleave.tile_offsets"),
+            size: blocks.max(1) as u64 * 4,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
     }
 
     /// Tile size of an n×n split of `width`×`height`.
@@ -327,11 +343,12 @@ impl InterleavePass {
         );
     }
 
-    /// Splits the G-buffer, gathers `vpl_count` VPLs into the split accumulation buffer and
-    /// merges it back into `indirect.merged`.
+    /// Splits the G-buffer, gathers `vpl_count` VPLs into the split accumulation buffer (tile
+    /// t takes this frame's share, `cpu::knecht::tile_offsets`) and merges it back into
+    /// `indirect.merged`.
     #[allow(clippy::too_many_arguments)]
     pub fn shade(
-        &self,
+        &mut self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         timer: &mut crate::timing::GpuTimer,
@@ -341,6 +358,7 @@ impl InterleavePass {
         vpl_count: u32,
         d_min: f32,
         vis: &GatherVisibility,
+        diffuse_only: bool,
     ) {
         let n = self.n.max(1);
         let (tw, th) = Self::tile(self.width, self.height, n);
@@ -349,10 +367,18 @@ impl InterleavePass {
         let (code, atlas_ism, atlas_exact, cols, size, shade) = vis.parts(&self.dummy_ism, &self.dummy_exact);
         let gp = GatherParams {
             split: [n, tw, th, vpl_count],
-            vis: [code, cols, size, 0],
+            vis: [code, cols, size, diffuse_only as u32],
             shade: Vec4::new(d_min * d_min, shade.y, shade.z, shade.w),
         };
         ctx.queue.write_buffer(&self.gather_params, 0, bytemuck::bytes_of(&gp));
+        let offsets = crate::cpu::knecht::tile_offsets(vpl_count, n, self.frames);
+        self.frames = self.frames.wrapping_add(1);
+        if (offsets.len() as u64) * 4 > self.tile_offsets.size() {
+            self.tile_offsets = Self::offsets_buffer(&ctx.device, offsets.len() as u32);
+        }
+        if !offsets.is_empty() {
+            ctx.queue.write_buffer(&self.tile_offsets, 0, bytemuck::cast_slice(&offsets));
+        }
         let s = &self.split;
         let v = |t: &wgpu::Texture, l: &str| crate::passes::view(t, l);
         let (sp_v, sn_v, sa_v, sm_v, acc_v) = (
@@ -394,6 +420,7 @@ impl InterleavePass {
                 entry(7, tv(&sa_v)),
                 entry(8, tv(&sm_v)),
                 entry(9, tv(&acc_v)),
+                entry(10, self.tile_offsets.as_entire_binding()),
             ],
         });
         let merge_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {

@@ -33,6 +33,21 @@ settings_enum! {
     default Halton
 }
 
+settings_enum! {
+    /// The shadow test of further bounces (Knecht 002 §3.6.1: a sample is "visible to the
+    /// assigned VPL" by "a simple shadow test with the ISM from the assigned VPL").
+    pub enum BounceShadowTest {
+        /// The splatted distances as they are: no pull-push, no receiver normal offset
+        /// (GI Lab before issue #15; light leaks through the maps' holes into the next
+        /// bounce's VPLs).
+        RawSplats = "raw splats",
+        /// The maps after pull-push, tested with the gather's depth bias and receiver normal
+        /// offset (`common/ism.wgsl`): one resolve and pull-push of the atlas per bounce.
+        PulledMaps = "pulled maps, as the gather",
+    }
+    default PulledMaps
+}
+
 settings_group! {
     /// VPL visibility (stage 4): imperfect shadow maps (Knecht 002 §2.6.5) or a baseline.
     pub struct IsmSettings: "ism" {
@@ -72,6 +87,15 @@ settings_group! {
         /// Largest splat half-size in texels (a near point covers at most a (2k+1)² box).
         max_splat_radius: u32 = 4,
         unit "texels", symbol "", range 0..=16, cost "up to (2k+1)² atomics per point", history false;
+        /// Lift of each ISM's eye above its VPL along the VPL's normal, as a fraction of the
+        /// scene's bounding radius, so that the surface the VPL lies on does not shadow it
+        /// (our addition; the thesis does not say how self-shadowing at the VPL is avoided).
+        eye_offset: f32 = 0.005,
+        unit "× scene radius", symbol "", range 0.0..=0.1, cost "free", history false;
+        /// The further bounces' shadow test (§3.6.1): the raw splats, or the pulled maps
+        /// with the gather's bias and normal offset.
+        bounce_test: BounceShadowTest = BounceShadowTest::PulledMaps,
+        unit "", symbol "", range 0..=1, cost "pulled maps: one resolve and pull-push of the atlas per extra bounce", history false;
     }
     legacy {
         /// Version 1: the VPL visibility; now `pipeline.vpl_visibility`.

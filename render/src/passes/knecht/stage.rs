@@ -10,7 +10,7 @@ use crate::cpu::knecht::split_budget;
 use crate::gpu::GpuContext;
 use crate::lab_settings::LabSettings;
 use crate::passes::knecht::irsm::{IrsmFrame, IrsmJob, IrsmPass};
-use crate::passes::knecht::ism::{IsmFrame, IsmJob, IsmPass, MAX_BOUNCES};
+use crate::passes::knecht::ism::{BounceShadowTest, IsmFrame, IsmJob, IsmPass, MAX_BOUNCES};
 use crate::passes::knecht::vpl_bounce::{BounceFrame, BounceMethod, VplBouncePass};
 use crate::passes::knecht::vpl_importance::{ViewJob, VplImportancePass, view_powers};
 use crate::passes::reference::vpl_visibility::VplVisibilityPass;
@@ -137,13 +137,14 @@ impl KnechtVpls {
             enc.clear_buffer(&self.vpl.vpls, 0, None);
         } else {
             self.vpl.albedo_mip = s.vpl.albedo_mip;
+            self.vpl.importance_bias = s.vpl.importance_bias;
             let (scene, state, lights) = (f.gpu_scene, f.state, &f.lights);
             self.vpl.run(ctx, enc, timer, scene, state, lights, &jobs, halton_first, s.direct.intensity_scale);
         }
         let bounces = s.vpl.bounces.clamp(1, MAX_BOUNCES);
         let n_vpls = s.vpl.count.min(self.vpl.capacity / bounces);
 
-        let eye_offset = self.eye_offset(f.vpl_radius());
+        let eye_offset = Self::eye_offset(s, f.vpl_radius());
         let splats = ism_splats(s);
         let instances = &f.gpu_scene.instances;
         self.job = (splats || bounces > 1).then(|| {
@@ -167,9 +168,10 @@ impl KnechtVpls {
                         let fr = BounceFrame {
                             vpls: n_vpls,
                             selection: s.vpl.bounce_selection,
-                            visibility: splats,
+                            visibility: splats.then_some(s.ism.bounce_test),
                             eye_offset,
                             depth_bias: s.ism.depth_bias,
+                            normal_offset: s.ism.normal_offset,
                             min_distance: s.vpl.min_distance_m,
                             seed,
                         };
@@ -178,7 +180,15 @@ impl KnechtVpls {
                     }
                 };
                 let points = ism.cloud.gpu.len() as u32;
+                let pulled = splats && s.ism.bounce_test == BounceShadowTest::PulledMaps;
+                let extent = 2.0 * f.vpl_radius();
                 for b in 1..bounces {
+                    // The pulled maps of bounces 0 … b − 1 for bounce b's shadow test.
+                    if pulled && matches!(make, Bounces::PointCloud(..)) {
+                        timer.scope(ctx, enc, &format!("ism.pull_push.{b}"), |e, slot| {
+                            ism.finish(ctx, e, slot, job, &s.ism, extent)
+                        });
+                    }
                     timer.scope(ctx, enc, &format!("vpl.bounce.{b}"), |e, slot| match &make {
                         Bounces::PointCloud(pass, group) => pass.run(e, slot, group, b, n_vpls),
                         Bounces::Irsm(pass, job) => pass.run(e, slot, job, b, n_vpls, points),
@@ -195,8 +205,9 @@ impl KnechtVpls {
         VplSet { list: self.vpl.vpls.clone(), count: n_vpls * bounces, min_distance: s.vpl.min_distance_m }
     }
 
-    fn eye_offset(&self, radius: f32) -> f32 {
-        0.005 * radius
+    /// The ISM eye's lift above its VPL (`ism.eye_offset` × the scene radius).
+    fn eye_offset(s: &LabSettings, radius: f32) -> f32 {
+        s.ism.eye_offset * radius
     }
 
     /// Stage 4: the visibility of this frame's VPLs (None when the passes it needs are
@@ -220,7 +231,7 @@ impl KnechtVpls {
                     atlas: self.ism.shading_view(),
                     cols: l.cols,
                     size: l.size,
-                    eye_offset: self.eye_offset(f.vpl_radius()),
+                    eye_offset: Self::eye_offset(s, f.vpl_radius()),
                     bias: s.ism.depth_bias,
                     normal_offset: s.ism.normal_offset,
                 }

@@ -16,6 +16,22 @@ use crate::passes::bgl;
 use crate::passes::gbuffer::{GBufferViews, NORMAL_FORMAT};
 use crate::settings_group;
 
+crate::settings_enum! {
+    /// The order of the geometry-aware filter (stage 6) and the confidence merge (stage 7)
+    /// when both run.
+    pub enum MergeOrder {
+        /// Filter the merged tiles, then merge with the history (GI Lab's default): the
+        /// confidence's illumination term (Eq. 3.3) compares an estimate from all N VPLs
+        /// with the history, and the history holds filtered light.
+        FilterThenMerge = "filter, then merge (GI Lab)",
+        /// The thesis' order (§4 steps 11–12): merge each pixel's N/n² VPLs with the
+        /// history, then filter; the history holds unfiltered light and Eq. 3.3 sees the
+        /// tiles' noise (Fig. 3.5's confidence).
+        MergeThenFilter = "merge, then filter (thesis §4)",
+    }
+    default FilterThenMerge
+}
+
 settings_group! {
     /// Temporal coherence (stage 7; Knecht 002 §3.5): the confidence merge.
     pub struct TemporalSettings: "temporal" {
@@ -35,6 +51,10 @@ settings_group! {
         /// Weight of the illumination change (Eq. 3.3; relative difference, cubed).
         w_illumination: f32 = 1.0,
         unit "", symbol "w_illumination", range 0.0..=100.0, cost "free", history false;
+        /// Whether the geometry-aware filter runs before the merge (GI Lab) or after it (the
+        /// thesis, §4 steps 11–12); only with both chosen.
+        order: MergeOrder = MergeOrder::FilterThenMerge,
+        unit "", symbol "", range 0..=1, cost "free", history true;
     }
     legacy {
         /// Version 1: the confidence merge on or off; now `pipeline.temporal = ConfidenceMerge`.

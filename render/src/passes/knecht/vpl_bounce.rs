@@ -11,7 +11,7 @@
 use glam::Vec4;
 
 use crate::gpu::GpuContext;
-use crate::passes::knecht::ism::{IsmPass, MAX_BOUNCES};
+use crate::passes::knecht::ism::{BounceShadowTest, IsmPass, MAX_BOUNCES};
 use crate::settings_enum;
 use crate::timing::Slot;
 
@@ -46,9 +46,9 @@ pub struct BounceParams {
     /// Points P, VPLs per bounce N, atlas columns, map (ISM or IRSM) size.
     pub counts: [u32; 4],
     /// First slot of the source bounce, first slot of the new one, selection (0 strongest,
-    /// 1 proportional), ISM visibility (1) or none (0).
+    /// 1 proportional), shadow test: none (0), raw splats (1) or pulled maps (2).
     pub slots: [u32; 4],
-    /// ISM eye offset, depth bias, d_min², 0.
+    /// ISM eye offset, depth bias, d_min², receiver normal offset (texels; pulled maps).
     pub geom: Vec4,
     /// Random seed of this frame and bounce.
     pub seed: [u32; 4],
@@ -67,10 +67,12 @@ pub struct BounceFrame {
     /// VPLs per bounce N.
     pub vpls: u32,
     pub selection: BounceSelection,
-    /// Test the samples against the source VPL's splatted ISM (false: no visibility).
-    pub visibility: bool,
+    /// How the samples are tested against the source VPL's ISM (None: no visibility).
+    pub visibility: Option<BounceShadowTest>,
     pub eye_offset: f32,
     pub depth_bias: f32,
+    /// Receiver normal offset in texels (the pulled-maps test, as the gather's).
+    pub normal_offset: f32,
     pub min_distance: f32,
     /// Seed of the frame (each bounce derives its own).
     pub seed: u32,
@@ -85,15 +87,20 @@ pub struct VplBouncePass {
 impl VplBouncePass {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let layout =
-            crate::passes::uniform_and_storage_layout(device, "vpl.bounce.inputs", &[true, true, true, true, false]);
+        let mut entries = crate::passes::uniform_and_storage_entries(&[true, true, true, true, false]);
+        entries.push(crate::passes::bgl::texture(6, wgpu::ShaderStages::COMPUTE, false));
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("vpl.bounce.inputs"),
+            entries: &entries,
+        });
         let module = crate::shaders::create_module(device, "vpl/bounce.wgsl");
         let pipeline = crate::passes::compute_pipeline(device, "vpl.bounce", &module, "cs_bounce", &[&layout]);
         let params = crate::passes::uniform_buffer(device, "vpl.bounce.params", STRIDE * MAX_BOUNCES as u64);
         Self { layout, pipeline, params }
     }
 
-    /// Writes the uniforms of bounces 1 … `bounces` − 1 and returns the frame's bind group.
+    /// Writes the uniforms of bounces 1 … `bounces` − 1 and returns the frame's bind group
+    /// (the raw splats and the pulled atlas are both bound; the uniform picks).
     pub fn begin(
         &self,
         ctx: &GpuContext,
@@ -111,9 +118,13 @@ impl VplBouncePass {
                     (b - 1) * f.vpls,
                     b * f.vpls,
                     (f.selection == BounceSelection::Proportional) as u32,
-                    f.visibility as u32,
+                    match f.visibility {
+                        None => 0,
+                        Some(BounceShadowTest::RawSplats) => 1,
+                        Some(BounceShadowTest::PulledMaps) => 2,
+                    },
                 ],
-                geom: Vec4::new(f.eye_offset, f.depth_bias, f.min_distance * f.min_distance, 0.0),
+                geom: Vec4::new(f.eye_offset, f.depth_bias, f.min_distance * f.min_distance, f.normal_offset),
                 seed: [bounce_seed(f.seed, b), 0, 0, 0],
             })
             .collect();
@@ -136,12 +147,14 @@ impl VplBouncePass {
                 wgpu::BindGroupEntry { binding: 3, resource: instances.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 4, resource: ism.depth.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 5, resource: vpls.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::TextureView(&ism.shading_view()) },
             ],
         })
     }
 
     /// Creates bounce `bounce`'s N VPLs (slots b·N …) from bounce b − 1's, whose ISMs must
-    /// have been splatted (when visibility is on).
+    /// have been splatted (when visibility is on) and, for the pulled-maps test, resolved
+    /// and pulled-pushed (`IsmPass::finish`).
     pub fn run(
         &self,
         encoder: &mut wgpu::CommandEncoder,

@@ -21,6 +21,20 @@ use crate::scene::upload::GpuScene;
 use crate::scene::{LightKind, SceneState, WorldLight};
 use crate::settings_group;
 
+crate::settings_enum! {
+    /// How a shading point reflects the light the VPLs send it (stage 6's VPL gather, Knecht
+    /// 002 Eq. 4.9 at the receiver).
+    pub enum ReceiverBrdf {
+        /// The full BRDF, f_x = c·DI/π + SI·(SP + 8)/(8π)·(n·h)^SP (Eq. 4.9, energy-normalised).
+        Full = "full BRDF (Eq. 4.9)",
+        /// The diffuse term alone, c·DI/π: what the HCB's splatted irradiance gives (Nguyen
+        /// §4 reflects it with c·DI/π), so that the HCB and the per-pixel or interleaved
+        /// gather compare like for like.
+        DiffuseOnly = "diffuse only (as the HCB)",
+    }
+    default Full
+}
+
 settings_group! {
     /// VPL generation of instant radiosity (stage 3; Knecht 002 §3.3, §4.3–4.4).
     pub struct VplSettings: "vpl" {
@@ -61,6 +75,14 @@ settings_group! {
         /// Side of each VPL's imperfect reflective shadow map (IRSM baseline; a power of two).
         irsm_size: u32 = 32,
         unit "px", symbol "", range 16..=128, cost "N IRSMs of this size² per bounce: splat fill, 16 B/texel", history false;
+        /// How the per-pixel or interleaved gather and the exact-VPL reference reflect the
+        /// VPLs' light at the shading point (the HCB always reflects diffusely).
+        receiver_brdf: ReceiverBrdf = ReceiverBrdf::Full,
+        unit "", symbol "f_x", range 0..=1, cost "free", history true;
+        /// The constant of Eq. 4.3's glossiness factor (b + SP'): 0.5 in the thesis. Smaller
+        /// values send more VPLs to glossy surfaces, larger ones spread them by flux alone.
+        importance_bias: f32 = 0.5,
+        unit "", symbol "b", range 0.0..=10.0, cost "free", history false;
     }
 }
 
@@ -75,7 +97,7 @@ pub struct ViewParams {
     pub range: [u32; 4],
     /// Halton index of this frame's first sample.
     pub seq: [u32; 4],
-    /// Flux scale, finest side.
+    /// Flux scale, finest side, Eq. 4.3's constant b.
     pub scale: Vec4,
 }
 
@@ -139,6 +161,8 @@ pub struct VplImportancePass {
     pub capacity: u32,
     /// Mip level of the surface colour in the light G-buffers (`vpl.albedo_mip`).
     pub albedo_mip: f32,
+    /// The constant b of Eq. 4.3's (b + SP') (`vpl.importance_bias`).
+    pub importance_bias: f32,
 }
 
 impl VplImportancePass {
@@ -226,6 +250,7 @@ impl VplImportancePass {
             warped,
             capacity: 256,
             albedo_mip: VplSettings::default().albedo_mip,
+            importance_bias: VplSettings::default().importance_bias,
         }
     }
 
@@ -397,7 +422,7 @@ impl VplImportancePass {
                 forward: v.forward.extend(v.pixel_extent),
                 range: [job.first, job.count, job.light_index, k as u32],
                 seq: [halton_first.wrapping_add(job.first), 0, 0, 0],
-                scale: Vec4::new(flux_scale, fs, 0.0, 0.0),
+                scale: Vec4::new(flux_scale, fs, self.importance_bias, 0.0),
             };
             params[k * STRIDE as usize..k * STRIDE as usize + std::mem::size_of::<ViewParams>()]
                 .copy_from_slice(bytemuck::bytes_of(&p));

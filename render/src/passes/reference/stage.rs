@@ -9,6 +9,7 @@ use glam::{Mat4, Vec4};
 
 use crate::gpu::GpuContext;
 use crate::passes::bgl;
+use crate::passes::knecht::vpl_importance::ReceiverBrdf;
 use crate::passes::reference::vpl::{BatchView, VplSamplePass, halton};
 use crate::passes::reference::vpl_gather::{GatherParams, VplGatherPass};
 use crate::passes::reference::vpl_visibility::VplVisibilityPass;
@@ -118,7 +119,8 @@ impl ReferenceVpls {
         self.visibility.exact_visibility(f, enc, timer, vpls, self.clip(f))
     }
 
-    /// Stage 6 (and 7): the full-BRDF gather at every pixel, folded into the running average.
+    /// Stage 6 (and 7): the gather at every pixel (full BRDF, or diffuse only by
+    /// `vpl.receiver_brdf`), folded into the running average.
     pub fn gather(
         &mut self,
         f: &FrameInputs,
@@ -134,7 +136,12 @@ impl ReferenceVpls {
         let params = GatherParams {
             batch: Vec4::new(vpls.count as f32, l.cols as f32, l.size as f32, 1.0 / (k + 1) as f32),
             clip: self.clip(f),
-            bias: Vec4::new(rs.depth_bias, rs.normal_offset, if visible { 1.0 } else { 0.0 }, 0.0),
+            bias: Vec4::new(
+                rs.depth_bias,
+                rs.normal_offset,
+                if visible { 1.0 } else { 0.0 },
+                (f.settings.vpl.receiver_brdf == ReceiverBrdf::DiffuseOnly) as u32 as f32,
+            ),
         };
         let (gather, atlas) = (&self.gather, &self.visibility.atlas_view);
         timer.scope(ctx, enc, "indirect.gather", |e, slot| {

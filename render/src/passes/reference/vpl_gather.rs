@@ -20,7 +20,8 @@ pub struct GatherParams {
     pub batch: Vec4,
     /// x: near, y: far, z: eye offset along the VPL normal, w: d_min.
     pub clip: Vec4,
-    /// x: depth bias (texels), y: normal offset (texels), z: visibility on.
+    /// x: depth bias (texels), y: normal offset (texels), z: visibility on, w: receiver BRDF
+    /// diffuse only (1) or full (0).
     pub bias: Vec4,
 }
 
