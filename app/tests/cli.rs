@@ -89,7 +89,7 @@ fn reference_path_traces_three_exr_files() {
     }
     // bench measures the renderer against it (same scene, camera and size).
     let o = gi_lab()
-        .args(["bench", "--size", "24x16", "--frames", "1", "--json", "--reference"])
+        .args(["bench", "--size", "24x16", "--frames", "1", "--json", "--set", "pipeline.gather=None", "--reference"])
         .arg(out.join("ref.direct.exr"))
         .output()
         .expect("runs");
@@ -189,10 +189,21 @@ fn buffers_lists_registered_names_and_bench_prints_every_pass() {
     for name in ["gbuffer.motion", "direct.shadow_map", "final.ldr"] {
         assert!(text.contains(name), "buffers output lacks {name}: {text}");
     }
-    let o = gi_lab().args(["bench", "--size", "64x64", "--frames", "2", "--json"]).output().expect("runs");
+    // The default is instant radiosity (Knecht): its passes are timed.
+    let o = gi_lab().args(["bench", "--size", "32x32", "--frames", "1", "--json"]).output().expect("runs");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("bench --json prints JSON");
-    // The renderer has nothing stochastic yet: a paused scene does not flicker at all.
+    let passes: Vec<&str> = v["passes"].as_array().expect("passes").iter().filter_map(|p| p["pass"].as_str()).collect();
+    for p in ["vpl.sample", "ism.splat", "interleave.gather", "interleave.filter", "temporal"] {
+        assert!(passes.contains(&p), "the default technique's pass {p} is missing from {passes:?}");
+    }
+    let o = gi_lab()
+        .args(["bench", "--size", "64x64", "--frames", "2", "--json", "--set", "pipeline.gather=None"])
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("bench --json prints JSON");
+    // Direct light alone has nothing stochastic: a paused scene does not flicker at all.
     assert_eq!(v["flicker"], 0.0, "flicker of a static scene");
     let passes: Vec<&str> = v["passes"].as_array().expect("passes").iter().filter_map(|p| p["pass"].as_str()).collect();
     assert_eq!(passes, ["gbuffer", "direct.shadow", "direct", "compose", "compose.luminance", "compose.tonemap"]);

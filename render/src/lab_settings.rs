@@ -272,9 +272,37 @@ impl LabSettings {
         Self::from_ron(&text, &path.display().to_string())
     }
 
+    /// The preset as RON, each choice field preceded by a comment with its options (name:
+    /// label), so that a preset read in an editor says what else may go there.
     pub fn to_ron(&self) -> String {
         let cfg = ron::ser::PrettyConfig::new().depth_limit(3).struct_names(false);
-        ron::ser::to_string_pretty(self, cfg).unwrap_or_else(|e| format!("// serialisation failed: {e}"))
+        let text = match ron::ser::to_string_pretty(self, cfg) {
+            Ok(t) => t,
+            Err(e) => return format!("// serialisation failed: {e}"),
+        };
+        let groups = Self::groups();
+        let mut out = String::with_capacity(text.len() * 2);
+        let mut group: Option<&str> = None;
+        for line in text.lines() {
+            let trimmed = line.trim_start();
+            let indent = &line[..line.len() - trimmed.len()];
+            if let Some(name) = trimmed.strip_suffix(": (") {
+                group = groups.iter().find(|(g, _)| *g == name).map(|(g, _)| *g);
+            } else if trimmed == ")," {
+                group = None;
+            } else if let (Some(g), Some((field, _))) = (group, trimmed.split_once(':')) {
+                let meta = groups.iter().find(|(n, _)| *n == g).and_then(|(_, f)| f.iter().find(|m| m.name == field));
+                if let Some(m) = meta
+                    && let crate::settings::FieldKind::Choice(names) = m.kind
+                {
+                    let options: Vec<String> = names.iter().zip(m.labels).map(|(n, l)| format!("{n}: {l}")).collect();
+                    out.push_str(&format!("{indent}// {}\n", options.join("; ")));
+                }
+            }
+            out.push_str(line);
+            out.push('\n');
+        }
+        out
     }
 
     /// Writes the preset atomically (`crate::preset::write_atomic`): a temporary file, then

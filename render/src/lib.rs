@@ -14,6 +14,7 @@ pub mod metrics;
 pub mod passes;
 pub mod pipeline;
 pub mod preset;
+pub mod quality;
 pub mod renderer;
 pub mod scene;
 pub mod settings;

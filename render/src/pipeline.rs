@@ -61,7 +61,7 @@ settings_enum! {
         /// Sum over the VPLs with the chosen visibility (Knecht 002 §4.5, Eq. 4.6–4.7).
         Vpl = "VPL gather",
     }
-    default None
+    default Vpl
 }
 
 settings_enum! {
@@ -109,7 +109,7 @@ settings_group! {
         shading_points: ShadingPoints = ShadingPoints::InterleavedTiles,
         unit "", symbol "", range 0..=2, cost "every pixel: N VPLs per pixel; tiles: N/n²; HCB: N at 2–5 % of the pixels plus the HCB build", history true;
         /// Stage 6, gather (Knecht §4.5's VPL gather; none: direct light only).
-        gather: Gather = Gather::None,
+        gather: Gather = Gather::Vpl,
         unit "", symbol "", range 0..=1, cost "one term per VPL and shading point", history true;
         /// Stage 6, reconstruction (Knecht §3.4.1's filter; Nguyen §4's splatting).
         reconstruction: Reconstruction = Reconstruction::GeometryAwareFilter,

@@ -21,6 +21,41 @@ pub fn default_scene() -> Scene {
     gi_render::scene::cornell::default_scene().expect("the embedded default scene loads")
 }
 
+/// The passes of a frame with the default settings (instant radiosity with ISMs and
+/// temporal coherence, Knecht), in order.
+pub const DEFAULT_PASSES: &[&str] = &[
+    "gbuffer",
+    "direct.shadow",
+    "direct",
+    "vpl.light_gbuffer",
+    "vpl.importance",
+    "vpl.sample",
+    "ism.splat",
+    "ism.pull_push",
+    "interleave.split",
+    "interleave.gather",
+    "interleave.merge",
+    "interleave.filter",
+    "temporal",
+    "compose",
+    "compose.luminance",
+    "compose.tonemap",
+];
+
+/// The passes of a frame of direct light only (`pipeline.gather = None`).
+pub const DIRECT_PASSES: &[&str] =
+    &["gbuffer", "direct.shadow", "direct", "compose", "compose.luminance", "compose.tonemap"];
+
+/// The default renderer with direct light only (`pipeline.gather = None`): deterministic
+/// from frame to frame, for tests of the direct light and the frame's machinery.
+pub fn direct_only_renderer(w: u32, h: u32) -> Renderer {
+    let mut s = LabSettings::default();
+    s.pipeline.gather = gi_render::pipeline::Gather::None;
+    let mut r = Renderer::new(gpu(), default_scene(), s, w, h).expect("renderer");
+    r.clock.playing = false;
+    r
+}
+
 /// A renderer of the default scene at `w`×`h` with default settings, animation paused.
 pub fn default_renderer(w: u32, h: u32) -> Renderer {
     let mut r = Renderer::new(gpu(), default_scene(), LabSettings::default(), w, h).expect("renderer");

@@ -91,10 +91,10 @@ fn gpu_direct_light_matches_the_stored_direct_reference() {
 }
 
 #[test]
-fn the_one_bounce_reference_has_indirect_light_the_gpu_lacks_today() {
-    // The renderer has no indirect technique yet (#5, #6): against the one-bounce reference
-    // its image is darker everywhere indirect light arrives.
-    let mut r = default_renderer(64, 64);
+fn the_one_bounce_reference_has_indirect_light_that_direct_light_lacks() {
+    // Direct light alone (`pipeline.gather = None`): against the one-bounce reference the
+    // image is darker everywhere indirect light arrives.
+    let mut r = gi_lab_tests::direct_only_renderer(64, 64);
     r.render_frame();
     let gpu = r.readback("final.hdr").expect("hdr");
     let reference = load("cornell_1bounce_64.exr");

@@ -326,7 +326,7 @@ fn every_registered_buffer_reads_back() {
     let mut r = default_renderer(64, 48);
     let timings = r.render_frame();
     let names: Vec<_> = timings.iter().map(|t| t.name.as_str()).collect();
-    assert_eq!(names, ["gbuffer", "direct.shadow", "direct", "compose", "compose.luminance", "compose.tonemap"]);
+    assert_eq!(names, gi_lab_tests::DEFAULT_PASSES);
     for t in &timings {
         assert!(t.ms.is_finite() && t.ms >= 0.0, "{}: {} ms", t.name, t.ms);
     }
@@ -462,16 +462,17 @@ fn interactive_mode_reports_timings_without_waiting_for_each_frame() {
         let t = r.render_frame();
         if !t.is_empty() {
             let names: Vec<_> = t.iter().map(|p| p.name.as_str()).collect();
-            assert_eq!(
-                names,
-                ["gbuffer", "direct.shadow", "direct", "compose", "compose.luminance", "compose.tonemap"]
-            );
+            assert_eq!(names, gi_lab_tests::DEFAULT_PASSES);
             seen += 1;
         }
     }
     assert!(seen >= 8, "timings arrived for only {seen} of 12 frames");
     r.set_interactive(false);
-    assert_eq!(r.render_frame().len(), 6, "blocking mode returns this frame's timings");
+    assert_eq!(
+        r.render_frame().len(),
+        gi_lab_tests::DEFAULT_PASSES.len(),
+        "blocking mode returns this frame's timings"
+    );
 }
 
 #[test]

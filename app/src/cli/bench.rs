@@ -37,7 +37,9 @@ pub struct BenchArgs {
     /// `knecht`: Knecht's Tables 5.1–5.3 (frame time against VPL count and ISM size, the
     /// temporal coherence overhead, multi-bounce against IRSM); `nguyen`: the HCB against
     /// gathering at every pixel at 1024 VPLs, with the samples' share of the pixels. Both
-    /// start from --preset.
+    /// start from --preset. `quality`: mean FLIP of the shipped Knecht, exact-VPL and HCB
+    /// presets against --reference (a path-traced image of one bounce at --size, `gi-lab
+    /// reference --bounces 1`), and of the HCB against the diffuse-only gather at every pixel.
     #[arg(long, value_enum)]
     pub suite: Option<BenchSuite>,
 }
@@ -47,6 +49,7 @@ pub struct BenchArgs {
 pub enum BenchSuite {
     Knecht,
     Nguyen,
+    Quality,
 }
 
 /// Per-pass statistics of a benchmark run.
@@ -227,6 +230,9 @@ pub(super) fn bench(args: &BenchArgs) -> Result<(), CliError> {
     if args.frames == 0 {
         return Err(CliError::input("--frames must be at least 1"));
     }
+    if let Some(BenchSuite::Quality) = args.suite {
+        return quality(args);
+    }
     let mut r = renderer(&args.scene, args.size)?;
     if !gi_render::timing::GpuTimer::timestamps_reliable(&r.ctx) {
         // A software device's timestamps land in the wrong passes: time each pass by the
@@ -275,6 +281,35 @@ pub(super) fn bench(args: &BenchArgs) -> Result<(), CliError> {
         println!("{}", serde_json::to_string_pretty(&report).map_err(|e| CliError::failure(e.to_string()))?);
     } else {
         print!("{}", format_bench_table(&report));
+    }
+    Ok(())
+}
+
+/// `gi-lab bench --suite quality`: the quality table of `gi_render::quality` on the scene.
+fn quality(args: &BenchArgs) -> Result<(), CliError> {
+    let reference = args.reference.as_ref().ok_or_else(|| {
+        CliError::input(format!(
+            "--suite quality needs --reference: a path-traced image of one indirect bounce of the same scene at {}x{} (`gi-lab reference --size {}x{} --spp 2048 --bounces 1 --out truth.exr`)",
+            args.size.0, args.size.1, args.size.0, args.size.1
+        ))
+    })?;
+    let (truth, _) = load_image(reference)?;
+    let scene = crate::scene_args::load_scene(&args.scene)?;
+    let ctx = gi_render::GpuContext::headless().map_err(|e| CliError::failure(e.to_string()))?;
+    let rows = gi_render::quality::quality_table(&ctx, &scene, &truth, args.size).map_err(CliError::input)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&rows).map_err(|e| CliError::failure(e.to_string()))?);
+    } else {
+        let name =
+            args.scene.scene.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| "default Cornell box".into());
+        println!(
+            "GI Lab bench suite quality — {name} at {}x{}, paused at time 0, mean FLIP (tone-mapped) against {}\n",
+            args.size.0,
+            args.size.1,
+            reference.display()
+        );
+        print!("{}", gi_render::quality::format_table(&rows));
+        println!("\ngoals: issue #15's, for the default scene at 256x256");
     }
     Ok(())
 }

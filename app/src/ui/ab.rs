@@ -58,15 +58,7 @@ pub struct Ab {
 impl Ab {
     /// Starts a comparison of `a` with `source`.
     pub fn start(a: &Renderer, live: &LabSettings, source: AbSource) -> Result<Self, String> {
-        let settings = match &source {
-            AbSource::Preset(p) => gi_render::preset::load_file(p).map_err(|e| e.to_string())?.settings,
-            AbSource::Frozen => live.clone(),
-            AbSource::Reference => {
-                let mut s = live.clone();
-                gi_render::pipeline::Technique::ExactVpl.apply(&mut s);
-                s
-            }
-        };
+        let settings = b_settings(live, &source)?;
         let (w, h) = a.size();
         let mut b = Renderer::new(a.ctx.clone(), a.scene().clone(), settings, w, h).map_err(|e| e.to_string())?;
         b.set_interactive(true);
@@ -183,5 +175,43 @@ impl Ab {
         if let Some((id, _)) = self.texture_b.take() {
             rs.renderer.write().free_texture(&id);
         }
+    }
+}
+
+/// B's settings for `source`, given A's live settings. The exact-VPL reference keeps A's
+/// scene-facing settings; when A is the HCB, which reflects its splatted irradiance
+/// diffusely (c·DI/π, Nguyen §4), the reference's gather is diffuse only too, so that the
+/// comparison is like for like (issue #15).
+pub fn b_settings(live: &LabSettings, source: &AbSource) -> Result<LabSettings, String> {
+    Ok(match source {
+        AbSource::Preset(p) => gi_render::preset::load_file(p).map_err(|e| e.to_string())?.settings,
+        AbSource::Frozen => live.clone(),
+        AbSource::Reference => {
+            let mut s = live.clone();
+            gi_render::pipeline::Technique::ExactVpl.apply(&mut s);
+            if live.pipeline.uses_hcb() {
+                s.vpl.receiver_brdf = gi_render::passes::knecht::vpl_importance::ReceiverBrdf::DiffuseOnly;
+            }
+            s
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gi_render::passes::knecht::vpl_importance::ReceiverBrdf;
+    use gi_render::pipeline::Technique;
+
+    #[test]
+    fn the_reference_of_the_hcb_reflects_diffusely_like_it() {
+        let mut live = LabSettings::default();
+        Technique::Nguyen.apply(&mut live);
+        let b = b_settings(&live, &AbSource::Reference).expect("settings");
+        assert!(b.pipeline.is_reference());
+        assert_eq!(b.vpl.receiver_brdf, ReceiverBrdf::DiffuseOnly);
+        Technique::Knecht.apply(&mut live);
+        let b = b_settings(&live, &AbSource::Reference).expect("settings");
+        assert_eq!(b.vpl.receiver_brdf, ReceiverBrdf::Full, "instant radiosity gathers with the full BRDF");
     }
 }

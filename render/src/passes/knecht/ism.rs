@@ -57,8 +57,9 @@ settings_group! {
         /// Placement of the points on the triangles.
         placement: PointPlacement = PointPlacement::Halton,
         unit "", symbol "", range 0..=1, cost "free (built once)", history false;
-        /// Side of each VPL's paraboloid map (a power of two).
-        map_size: u32 = 128,
+        /// Side of each VPL's paraboloid map (a power of two). The default, 64², is for
+        /// interactive rates on the software renderer (see `vpl.count`); the thesis uses 128².
+        map_size: u32 = 64,
         unit "px", symbol "", range 32..=512, cost "atlas memory 4 B/texel² per VPL; pull-push time", history false;
         /// Pull-push levels (0: none; Ritschel et al. compute two).
         pull_push_levels: u32 = 2,

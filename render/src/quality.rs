@@ -1,0 +1,110 @@
+//! The quality table of issue #15: how close instant radiosity (Knecht), the exact-VPL
+//! reference and the HCB (Nguyen) come to a path-traced ground truth of one indirect bounce,
+//! and how close the HCB comes to gathering at every pixel with the same VPLs. Each row
+//! renders a shipped preset on the scene, paused at animation time 0, and compares
+//! `final.hdr` with mean FLIP on the tone-mapped images (`metrics::flip`, as `gi-lab
+//! compare`). `gi-lab bench --suite quality` prints it; `tests/tests/quality.rs` bounds it.
+
+use crate::image_io::hdr_display;
+use crate::passes::knecht::vpl_importance::ReceiverBrdf;
+use crate::pipeline::{Reconstruction, ShadingPoints, Temporal};
+use crate::scene::Scene;
+use crate::{GpuContext, ImageF32, LabSettings, Renderer};
+
+/// The shipped presets the rows start from.
+const KNECHT: &str = include_str!("../../presets/knecht-cornell-256.ron");
+const EXACT: &str = include_str!("../../presets/exact-vpl-reference.ron");
+const NGUYEN: &str = include_str!("../../presets/nguyen-hcb.ron");
+
+/// One row: what was rendered, after how many frames, and its mean FLIP against what.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct QualityRow {
+    pub configuration: String,
+    pub frames: u32,
+    /// "ground truth" or the name of the other image.
+    pub against: String,
+    pub flip: f64,
+    /// The issue's goal for this row on the default scene (an upper bound on FLIP).
+    pub goal: f64,
+}
+
+fn preset(text: &str, name: &str) -> Result<LabSettings, String> {
+    crate::preset::load_lenient(text, name).map(|l| l.settings).map_err(|e| e.to_string())
+}
+
+/// Renders `frames` frames of `settings` paused at animation time 0; `final.hdr`.
+fn render(
+    ctx: &GpuContext,
+    scene: &Scene,
+    settings: LabSettings,
+    size: (u32, u32),
+    frames: u32,
+) -> Result<ImageF32, String> {
+    let mut r = Renderer::new(ctx.clone(), scene.clone(), settings, size.0, size.1).map_err(|e| e.to_string())?;
+    r.clock.anim_frame = 0;
+    r.clock.playing = false;
+    for _ in 0..frames.max(1) {
+        r.render_frame();
+    }
+    r.readback("final.hdr").map_err(|e| e.to_string())
+}
+
+fn flip(a: &ImageF32, b: &ImageF32) -> Result<f64, String> {
+    crate::metrics::flip(&hdr_display(a), &hdr_display(b)).map(|(f, _)| f).map_err(|e| e.to_string())
+}
+
+/// The four rows on `scene` at `size` against `truth` (a path-traced image of one indirect
+/// bounce at the same size and camera, `gi-lab reference --bounces 1`).
+pub fn quality_table(
+    ctx: &GpuContext,
+    scene: &Scene,
+    truth: &ImageF32,
+    size: (u32, u32),
+) -> Result<Vec<QualityRow>, String> {
+    if (truth.width, truth.height) != size {
+        return Err(format!(
+            "the ground truth is {}×{}, the table renders {}×{}: render it at the same size",
+            truth.width, truth.height, size.0, size.1
+        ));
+    }
+    let mut rows = Vec::new();
+    let mut row = |configuration: &str, frames: u32, against: &str, flip: f64, goal: f64| {
+        rows.push(QualityRow { configuration: configuration.into(), frames, against: against.into(), flip, goal })
+    };
+    let knecht = render(ctx, scene, preset(KNECHT, "knecht-cornell-256")?, size, 16)?;
+    row("knecht-cornell-256", 16, "ground truth", flip(&knecht, truth)?, 0.05);
+    let exact = preset(EXACT, "exact-vpl-reference")?;
+    let batches = exact.reference.total_vpls.div_ceil(exact.reference.vpls_per_frame.max(1));
+    let exact_img = render(ctx, scene, exact, size, batches)?;
+    row("exact-vpl-reference (4,096 VPLs)", batches, "ground truth", flip(&exact_img, truth)?, 0.035);
+    // The HCB with the same VPLs every frame, so that the per-pixel gather below sees them.
+    let mut nguyen = preset(NGUYEN, "nguyen-hcb")?;
+    nguyen.vpl.new_set_each_frame = false;
+    let hcb = render(ctx, scene, nguyen.clone(), size, 1)?;
+    row("nguyen-hcb", 1, "ground truth", flip(&hcb, truth)?, 0.06);
+    let mut every_pixel = nguyen;
+    every_pixel.pipeline.shading_points = ShadingPoints::EveryPixel;
+    every_pixel.pipeline.reconstruction = Reconstruction::None;
+    every_pixel.pipeline.temporal = Temporal::None;
+    every_pixel.vpl.receiver_brdf = ReceiverBrdf::DiffuseOnly;
+    let per_pixel = render(ctx, scene, every_pixel, size, 1)?;
+    row("nguyen-hcb", 1, "per-pixel gather, same VPLs, diffuse only", flip(&hcb, &per_pixel)?, 0.03);
+    Ok(rows)
+}
+
+/// The table as text, with the goals and whether each row meets it.
+pub fn format_table(rows: &[QualityRow]) -> String {
+    let mut s = format!("{:<36} {:>6}  {:<44} {:>8} {:>7}\n", "configuration", "frames", "against", "FLIP", "goal");
+    for r in rows {
+        let mark = if r.flip <= r.goal { "" } else { "  (above the goal)" };
+        s.push_str(&format!(
+            "{:<36} {:>6}  {:<44} {:>8.4} {:>7}{mark}\n",
+            r.configuration,
+            r.frames,
+            r.against,
+            r.flip,
+            format!("≤ {:.3}", r.goal)
+        ));
+    }
+    s
+}

@@ -1,0 +1,33 @@
+//! The quality table of issue #15 (`gi_render::quality`, `gi-lab bench --suite quality`) on
+//! the default scene at 256², against the stored path-traced bounce
+//! (`tests/data/cornell_1bounce_256.exr`, 256 spp: noisier than the issue's 2048-spp ground
+//! truth, so each FLIP here reads a little higher). Bounds are what was measured on lavapipe
+//! plus a margin; they guard against regressions. The issue's goals are not all met yet: see
+//! the note on issue #15 for the rows above their goals.
+
+use gi_lab_tests::{default_scene, gpu, stored_reference};
+
+#[test]
+fn the_quality_table_stays_within_its_measured_bounds() {
+    let truth = stored_reference("cornell_1bounce_256.exr");
+    let rows = gi_render::quality::quality_table(&gpu(), &default_scene(), &truth, (256, 256)).expect("the table");
+    print!("{}", gi_render::quality::format_table(&rows));
+    // Measured on lavapipe against the 256-spp reference: 0.068, 0.062, 0.081, 0.040.
+    let bounds = [0.078, 0.072, 0.093, 0.047];
+    assert_eq!(rows.len(), bounds.len());
+    for (row, bound) in rows.iter().zip(bounds) {
+        assert!(row.flip > 0.0, "{}: FLIP 0 means nothing was compared", row.configuration);
+        assert!(
+            row.flip <= bound,
+            "{} ({} frames) against {}: FLIP {:.4} > {bound}",
+            row.configuration,
+            row.frames,
+            row.against,
+            row.flip
+        );
+    }
+    // The exact-VPL reference is closer to the ground truth than the 256 VPLs of Knecht's
+    // configuration, and the HCB closer to the per-pixel gather than to the ground truth.
+    assert!(rows[1].flip < rows[0].flip, "{} vs {}", rows[1].flip, rows[0].flip);
+    assert!(rows[3].flip < rows[2].flip, "{} vs {}", rows[3].flip, rows[2].flip);
+}
