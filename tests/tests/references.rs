@@ -24,6 +24,9 @@ const REFERENCES: &[Reference] = &[
     Reference { file: "cornell_direct_64.exr", size: 64, spp: 1, bounces: 0, image: "direct" },
     Reference { file: "cornell_1bounce_64.exr", size: 64, spp: 256, bounces: 1, image: "full" },
     Reference { file: "cornell_1bounce_256.exr", size: 256, spp: 256, bounces: 1, image: "full" },
+    // The ground truth of issue #15's quality table (`gi-lab reference --size 256x256 --spp
+    // 2048 --bounces 1`; about 25 minutes on two cores in a debug build).
+    Reference { file: "cornell_1bounce_256_2048spp.exr", size: 256, spp: 2048, bounces: 1, image: "full" },
     Reference { file: "cornell_3bounce_128.exr", size: 128, spp: 256, bounces: 3, image: "full" },
 ];
 
