@@ -19,17 +19,11 @@ pub struct UpgradeArgs {
 
 /// The comment lines before a preset's opening parenthesis (its description).
 fn header(text: &str) -> String {
-    text.lines().take_while(|l| l.trim_start().starts_with("//") || l.trim().is_empty()).fold(
-        String::new(),
-        |mut acc, l| {
-            if l.trim().is_empty() {
-                return acc;
-            }
-            acc.push_str(l);
-            acc.push('\n');
-            acc
-        },
-    )
+    text.lines()
+        .take_while(|l| l.trim_start().starts_with("//") || l.trim().is_empty())
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| format!("{l}\n"))
+        .collect()
 }
 
 pub(super) fn upgrade(a: &UpgradeArgs) -> Result<(), CliError> {

@@ -4,6 +4,7 @@
 pub mod brdf;
 pub mod hcb;
 pub mod knecht;
+pub mod knecht_bounce;
 pub mod pathtrace;
 pub mod raycast;
 pub mod tonemap;
