@@ -18,6 +18,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("compose/luminance.wgsl", include_str!("../../shaders/compose/luminance.wgsl")),
     ("compose/compose.wgsl", include_str!("../../shaders/compose/compose.wgsl")),
     ("compose/tonemap.wgsl", include_str!("../../shaders/compose/tonemap.wgsl")),
+    ("common/random.wgsl", include_str!("../../shaders/common/random.wgsl")),
     ("common/vpl.wgsl", include_str!("../../shaders/common/vpl.wgsl")),
     ("vpl/sample.wgsl", include_str!("../../shaders/vpl/sample.wgsl")),
     ("vpl/shadow.wgsl", include_str!("../../shaders/vpl/shadow.wgsl")),

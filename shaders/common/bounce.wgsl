@@ -1,6 +1,7 @@
 // Shared by the bounce passes (Knecht 002 §3.6): the point cloud as the bounce kernels see it
 // and the light one VPL sends to one of its samples. CPU twin: cpu::knecht::bounce_incident.
 #import common/ism.wgsl
+#import common/random.wgsl
 
 struct Instance {
     model: mat4x4<f32>,
@@ -49,13 +50,6 @@ fn bounce_point(pt: IsmPoint, inst: Instance) -> BouncePoint {
     let x = (inst.model * vec4<f32>(pt.position, 1.0)).xyz;
     let n = normalize((inst.normal_matrix * vec4<f32>(pt.normal, 0.0)).xyz);
     return BouncePoint(x, n);
-}
-
-// PCG hash (Jarzynski & Olano 2020); CPU twin: cpu::knecht::pcg_hash.
-fn pcg_hash(v: u32) -> u32 {
-    let state = v * 747796405u + 2891336453u;
-    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
-    return (word >> 22u) ^ word;
 }
 
 // Uniform in (0, 1) for sample j (CPU twin: cpu::knecht::bounce_uniform).

@@ -1,6 +1,12 @@
 // Stage 3 of the exact-VPL reference: VPLs placed by uniform sampling of one light view's
-// G-buffer (the light G-buffer of Knecht 002 §4.3 rendered from the light). Each VPL picks
-// a uniformly random texel; its incident flux is the light's power through that texel,
+// G-buffer (the light G-buffer of Knecht 002 §4.3 rendered from the light). VPL j of the
+// view (j = b·N + i for the view's b-th batch) picks the texel under the Halton point
+// (h₂(j+1), h₃(j+1)) shifted by a random toroidal offset of the seed (Cranley–Patterson
+// rotation): each point is uniform over the texels, so the estimate stays unbiased, while
+// the whole set and every prefix of batches is stratified over the light view — the
+// quasi-random sampling of Keller's instant radiosity (1997), which makes the reference
+// converge faster than independent texels did (CPU twin: cpu::knecht::reference_uv). Its
+// incident flux is the light's power through that texel,
 // Φ = I(ω) · dω (spot and point: intensity × falloff × the texel's solid angle
 // dω = s² cos³θ) or Φ = E · s² (directional), divided by the sampling density N / (R² · V)
 // (N VPLs over R² texels, this view one of the V views taken in turn), so that the set is
@@ -8,6 +14,7 @@
 // sampling by hierarchical warping (Knecht §3.3, §4.4) replaces this with the Knecht issue.
 #import common/lights.wgsl
 #import common/vpl.wgsl
+#import common/random.wgsl
 
 struct Params {
     // xyz: eye of the light view; w: 1 for an orthographic view
@@ -16,7 +23,7 @@ struct Params {
     forward: vec4<f32>,
     // x: flux scale R² · V / N × intensity scale; y: VPL count N
     scale: vec4<f32>,
-    // x: seed, y: batch index, z: light index
+    // x: seed, y: batch index, z: light index, w: batch index within this view (b)
     seed: vec4<u32>,
 }
 
@@ -28,11 +35,11 @@ struct Params {
 @group(0) @binding(5) var lg_material: texture_2d<f32>;
 @group(0) @binding(6) var<storage, read_write> vpls: array<Vpl>;
 
-// PCG hash (Jarzynski and Olano, JCGT 2020).
-fn pcg(v: u32) -> u32 {
-    let state = v * 747796405u + 2891336453u;
-    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
-    return (word >> 22u) ^ word;
+// The rotated Halton point of VPL j (CPU twin: cpu::knecht::reference_uv).
+fn reference_uv(seed: u32, j: u32) -> vec2<f32> {
+    let h = pcg_hash(seed);
+    let offset = vec2<f32>(f32(h >> 8u), f32(pcg_hash(h) >> 8u)) / 16777216.0;
+    return fract(vec2<f32>(halton(j + 1u, 2u), halton(j + 1u, 3u)) + offset);
 }
 
 @compute @workgroup_size(64, 1, 1)
@@ -46,9 +53,8 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     empty.position = vec4<f32>(0.0);
     empty.flux = vec4<f32>(0.0);
     let size = textureDimensions(lg_position);
-    let h = pcg(pcg(params.seed.x ^ pcg(params.seed.y)) ^ (i * 0x9E3779B9u));
-    let h2 = pcg(h);
-    let texel = vec2<u32>(h % size.x, h2 % size.y);
+    let uv = reference_uv(params.seed.x, params.seed.w * count + i);
+    let texel = min(vec2<u32>(uv * vec2<f32>(size)), size - vec2<u32>(1u));
     let nrm = textureLoad(lg_normal, texel, 0);
     if (nrm.w < 0.5) {
         vpls[i] = empty;

@@ -9,6 +9,7 @@
 // the light the view delivers. CPU twins: cpu::knecht::{halton, Pyramid::warp}.
 #import common/light_view.wgsl
 #import common/vpl.wgsl
+#import common/random.wgsl
 
 @group(0) @binding(0) var<uniform> vp: ViewParams;
 @group(0) @binding(1) var<storage, read> lights: array<Light>;
@@ -20,18 +21,6 @@
 @group(0) @binding(7) var<storage, read_write> vpls: array<Vpl>;
 // Warped sample positions (uv, pdf, texel index) for the tests and the VPL overlay.
 @group(0) @binding(8) var<storage, read_write> warped: array<vec4<f32>>;
-
-fn halton(index_in: u32, base: u32) -> f32 {
-    var index = index_in;
-    var f = 1.0;
-    var r = 0.0;
-    while (index > 0u) {
-        f = f / f32(base);
-        r = r + f * f32(index % base);
-        index = index / base;
-    }
-    return r;
-}
 
 // (1 if the second half is chosen, u rescaled into the chosen half).
 fn split(u: f32, p: f32) -> vec2<f32> {

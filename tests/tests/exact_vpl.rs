@@ -79,3 +79,36 @@ fn directional_light_vpls_carry_the_path_traced_indirect_energy() {
     scene.lights[li].intensity = 2.0;
     check("directional", scene);
 }
+
+/// Stage 3 of the reference on the GPU (`vpl/sample.wgsl`) against its CPU twin
+/// `cpu::knecht::reference_uv`: VPL i of the first batch sits at the light G-buffer texel
+/// under point i of the seed's rotated Halton set (slots whose texel is empty or faces away
+/// from the light stay empty, so the filled VPLs are a subsequence of the predicted texels).
+#[test]
+fn reference_vpls_sit_at_the_texels_of_the_rotated_halton_set() {
+    let mut s = LabSettings::default();
+    Technique::ExactVpl.apply(&mut s);
+    s.reference.vpls_per_frame = 256;
+    s.reference.light_gbuffer_size = 128;
+    s.reference.seed = 7;
+    let mut r = Renderer::new(gpu(), default_scene(), s, SIZE, SIZE).expect("renderer");
+    r.clock.playing = false;
+    r.render_frame();
+    let vpls = r.vpl_list().expect("the reference has a VPL list");
+    let lg = r.readback("vpl.light_gbuffer.position").expect("light G-buffer");
+    let predicted: Vec<glam::Vec3> = (0..256)
+        .map(|i| {
+            let uv = gi_render::cpu::knecht::reference_uv(7, i) * lg.width as f32;
+            let t = uv.as_uvec2().min(glam::UVec2::splat(lg.width - 1));
+            let p = lg.data[(t.y * lg.width + t.x) as usize];
+            glam::Vec3::new(p[0], p[1], p[2])
+        })
+        .collect();
+    let mut next = predicted.iter();
+    for (k, v) in vpls.iter().enumerate() {
+        let p = v.position.truncate();
+        assert!(next.any(|q| (*q - p).length() < 1e-4), "VPL {k} at {p} is not at a predicted texel (in order)");
+    }
+    // Most of the spot light's view is covered and lit: most slots hold a VPL.
+    assert!(vpls.len() > 128, "{} of 256 slots filled", vpls.len());
+}

@@ -148,11 +148,13 @@ fn exact_vpl_reference_converges_to_the_one_bounce_path_traced_image() {
     println!(
         "exact-VPL vs path-traced one bounce (64×64): 256 VPLs FLIP {f_few:.4} RMSE {e_few:.4}; 4096 VPLs FLIP {f_many:.4} RMSE {e_many:.4}"
     );
-    // Measured on lavapipe (seed 1): 256 VPLs FLIP 0.114, 4096 VPLs FLIP 0.063, luminance
-    // ratio 0.979; most of what remains is the path tracer's own noise at 256 spp (the
-    // direct-only image scores 0.60). Bounds with margin:
+    // Measured on lavapipe (seed 1) with the stratified (rotated Halton) VPL set: 256 VPLs
+    // FLIP 0.084, 4096 VPLs FLIP 0.046, luminance ratio 0.996 (independent random texels
+    // gave 0.114, 0.063 and 0.979: their variance, not a difference of units, was the gap);
+    // most of what remains is the path tracer's own noise at 256 spp (the direct-only image
+    // scores 0.47). Bounds with margin:
     assert!(f_many < f_few && e_many < e_few, "more VPLs must come closer: {f_few} → {f_many}, {e_few} → {e_many}");
-    assert!(f_many <= 0.09, "mean FLIP of 4096 exact VPLs vs the one-bounce path tracer: {f_many} > 0.09");
+    assert!(f_many <= 0.06, "mean FLIP of 4096 exact VPLs vs the one-bounce path tracer: {f_many} > 0.06");
     let ratio = lum(&many) / lum(&reference);
-    assert!((0.95..=1.05).contains(&ratio), "the exact-VPL image's mean luminance is {ratio} × the path tracer's");
+    assert!((0.98..=1.02).contains(&ratio), "the exact-VPL image's mean luminance is {ratio} × the path tracer's");
 }

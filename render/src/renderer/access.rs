@@ -117,21 +117,29 @@ impl Renderer {
         self.stages.hcb.as_ref()?.stats(&self.ctx, self.settings.hcb.d_max(self.bounds.radius()))
     }
 
-    /// The VPLs of instant radiosity's last frame (`vpl.list`, Knecht §3.3): position and
-    /// incident flux of every filled slot; None when the technique is not instant radiosity
-    /// or no frame was rendered with it. Blocks until the list is on the CPU.
+    /// The VPLs of the last frame (`vpl.list`): instant radiosity's (Knecht §3.3), or the
+    /// exact-VPL reference's last batch, in slot order; position and incident flux of every
+    /// filled slot. None when no VPL source runs or no frame was rendered with it. Blocks
+    /// until the list is on the CPU.
     pub fn vpl_list(&self) -> Option<Vec<crate::passes::reference::vpl::GpuVpl>> {
-        if !self.settings.pipeline.uses_knecht_vpls() {
+        let (buffer, count) = if self.settings.pipeline.uses_knecht_vpls() {
+            let k = self.stages.knecht.as_ref()?;
+            if k.frames == 0 {
+                return None;
+            }
+            let count = (self.settings.vpl.count * self.settings.vpl.bounces.clamp(1, MAX_BOUNCES)).min(k.vpl.capacity);
+            (&k.vpl.vpls, count)
+        } else if self.settings.pipeline.is_reference() {
+            let x = self.stages.reference.as_ref()?;
+            if x.batches == 0 {
+                return None;
+            }
+            (&x.sample.vpls, self.settings.reference.vpls_per_frame.min(x.sample.capacity))
+        } else {
             return None;
-        }
-        let k = self.stages.knecht.as_ref()?;
-        if k.frames == 0 {
-            return None;
-        }
-        let count =
-            (self.settings.vpl.count * self.settings.vpl.bounces.clamp(1, MAX_BOUNCES)).min(k.vpl.capacity) as u64;
+        };
         let size = std::mem::size_of::<crate::passes::reference::vpl::GpuVpl>() as u64;
-        let bytes = crate::buffers::read_storage(&self.ctx, &k.vpl.vpls, count * size).ok()?;
+        let bytes = crate::buffers::read_storage(&self.ctx, buffer, count as u64 * size).ok()?;
         Some(
             bytemuck::pod_collect_to_vec::<u8, crate::passes::reference::vpl::GpuVpl>(&bytes)
                 .into_iter()

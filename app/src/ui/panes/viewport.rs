@@ -97,7 +97,7 @@ fn vpl_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
         )
     };
     let Some(vpls) = l.renderer.vpl_list() else {
-        note("VPL overlay: pick instant radiosity (Knecht) to see its VPLs".into());
+        note("VPL overlay: pick a VPL gather (instant radiosity or the exact-VPL reference) to see its VPLs".into());
         return;
     };
     let lum = |f: glam::Vec4| 0.2126 * f.x + 0.7152 * f.y + 0.0722 * f.z;

@@ -96,7 +96,7 @@ impl ReferenceVpls {
             sample.render_view(ctx, e, slot, gpu_scene, state, &batch.view, jitter)
         });
         timer.scope(ctx, enc, "vpl.sample", |e, slot| {
-            sample.sample(ctx, e, slot, &f.lights, batch, n, flux_scale, [rs.seed, k])
+            sample.sample(ctx, e, slot, &f.lights, batch, n, flux_scale, [rs.seed, k, k / v_count])
         });
         Some(VplSet { list: self.sample.vpls.clone(), count: n, min_distance: rs.min_distance_m })
     }

@@ -1,6 +1,7 @@
 //! Stage 3 for the exact-VPL reference (issue #3): the light G-buffer of Knecht 002 §4.3
 //! (`vpl.light_gbuffer.*`, this crate's G-buffer pass rendered from one light view) and VPLs
-//! placed by uniform sampling of its texels (`shaders/vpl/sample.wgsl`).
+//! placed by stratified uniform sampling of its texels (`shaders/vpl/sample.wgsl`: a
+//! Halton point set over the view, randomly rotated by the seed).
 //!
 //! The reference renders many VPLs progressively: each frame is one *batch* of
 //! [`ReferenceSettings::vpls_per_frame`] VPLs from one light view (the views of all lights
@@ -220,7 +221,9 @@ impl VplSamplePass {
     }
 
     /// Samples `count` VPLs uniformly from the light G-buffer of `batch.view`; their flux is
-    /// multiplied by `flux_scale` (R² · V / N × intensity scale).
+    /// multiplied by `flux_scale` (R² · V / N × intensity scale). `seed` is (the setting, the
+    /// batch index, the batch index within this view): VPL i of the view's b-th batch is point
+    /// b·N + i of the seed's rotated Halton set ([`crate::cpu::knecht::reference_uv`]).
     #[allow(clippy::too_many_arguments)]
     pub fn sample(
         &mut self,
@@ -231,7 +234,7 @@ impl VplSamplePass {
         batch: BatchView,
         count: u32,
         flux_scale: f32,
-        seed: [u32; 2],
+        seed: [u32; 3],
     ) {
         let size = self.size as f32;
         let v = batch.view;
@@ -243,7 +246,7 @@ impl VplSamplePass {
             eye: v.eye.extend(if v.orthographic { 1.0 } else { 0.0 }),
             forward: v.forward.extend(v.pixel_extent / size),
             scale: Vec4::new(flux_scale, count as f32, 0.0, 0.0),
-            seed: [seed[0], seed[1], batch.light_index, 0],
+            seed: [seed[0], seed[1], batch.light_index, seed[2]],
         };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         let t = &self.light_gbuffer.targets.views;
