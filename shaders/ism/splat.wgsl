@@ -17,7 +17,8 @@ struct SplatParams {
     // x: eye offset along the VPL normal, y: point radius r_s, z: largest splat half-size
     // (texels), w: splat scale
     geom: vec4<f32>,
-    // x: first VPL slot of the bounce, y: first map (tile) of the bounce
+    // x: first VPL slot of the bounce, y: first map (tile) of the bounce, z: splat depth
+    // (0: the point's distance in every texel, Ritschel et al.'s box; 1: its tangent plane's)
     slots: vec4<u32>,
 }
 
@@ -37,6 +38,12 @@ struct Footprint {
     side: i32,
     origin: vec2<u32>,
     key: u32,
+    // the point relative to the eye and its normal, in the VPL's frame; its distance and the
+    // largest depth change across the splat
+    local: vec3<f32>,
+    normal: vec3<f32>,
+    d: f32,
+    reach: f32,
 }
 
 fn footprint(j: u32) -> Footprint {
@@ -71,8 +78,37 @@ fn footprint(j: u32) -> Footprint {
     f.side = clamp(i32(round(1.7724539 * r)), 1, 2 * i32(sp.geom.z) + 1);
     f.origin = vpl_tile_origin(sp.slots.y + local, sp.counts.z, size);
     f.key = ~bitcast<u32>(d);
+    let nw = normalize((instances[pt.draw].normal_matrix * vec4<f32>(pt.normal, 0.0)).xyz);
+    f.local = q * d;
+    f.normal = vec3<f32>(dot(nw, tbn[0]), dot(nw, tbn[1]), dot(nw, tbn[2]));
+    f.d = d;
+    f.reach = 2.0 * sp.geom.w * sp.geom.y;
     f.start = vec2<i32>(ceil(c - vec2<f32>(0.5 * f32(f.side) + 0.5)));
     return f;
+}
+
+// The key of texel t (map-local) of a splat: the point's distance, or with tangent-plane
+// splats the distance along the texel's ray to the point's tangent plane, kept within
+// ± reach of the point's (a ray that misses the plane in front takes the far end).
+// CPU twin: cpu::knecht::splat_distance.
+fn texel_key(f: Footprint, t: vec2<i32>, size: i32) -> u32 {
+    if (sp.slots.z == 0u) {
+        return f.key;
+    }
+    let uv = (vec2<f32>(t) + 0.5) / f32(size);
+    let p = vec2<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
+    let r2 = dot(p, p);
+    let z = (1.0 - r2) / (1.0 + r2);
+    let ray = vec3<f32>(p * (1.0 + z), z);
+    let den = dot(ray, f.normal);
+    var s = f.d + f.reach;
+    if (abs(den) > 1e-6) {
+        let hit = dot(f.local, f.normal) / den;
+        if (hit > 0.0) {
+            s = hit;
+        }
+    }
+    return ~bitcast<u32>(clamp(s, max(f.d - f.reach, 1e-6), f.d + f.reach));
 }
 
 // Visits the texels of point j's box: the splat keeps the nearest distance; the owner pass
@@ -92,9 +128,10 @@ fn cover(j: u32, owner_pass: bool) {
             }
             let a = f.origin + vec2<u32>(t);
             let i = a.y * width + a.x;
+            let key = texel_key(f, t, size);
             if (!owner_pass) {
-                atomicMax(&depth[i], f.key);
-            } else if (atomicLoad(&depth[i]) == f.key) {
+                atomicMax(&depth[i], key);
+            } else if (atomicLoad(&depth[i]) == key) {
                 atomicMax(&owner[i], j + 1u);
             }
         }

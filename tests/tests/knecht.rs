@@ -4,7 +4,7 @@
 
 use gi_lab_tests::{default_scene, gpu};
 use gi_render::cpu::knecht::{self, ISM_EMPTY, Pyramid, halton};
-use gi_render::passes::knecht::ism::{IsmPass, IsmSettings};
+use gi_render::passes::knecht::ism::{IsmPass, IsmSettings, PushBehind};
 use gi_render::passes::knecht::vpl_importance::{ViewJob, VplImportancePass};
 use gi_render::passes::shadow::LightView;
 use gi_render::pipeline::{Technique, VplVisibility};
@@ -151,23 +151,33 @@ fn pull_push_on_the_gpu_equals_the_cpu_reference() {
         wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
     );
     let extent = 4.0;
-    let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.pull_push") });
-    pass.pull_push(&ctx, &mut enc, None, &s, extent);
-    ctx.queue.submit([enc.finish()]);
-    let cpu = knecht::pull_push(&atlas, w, h, 32, 3, s.pull_threshold * extent, s.push_threshold * extent);
-    for (level, expected) in cpu.iter().enumerate() {
-        let got =
-            gi_render::buffers::read_texture(&ctx, "ism.atlas_pulled", &pass.pulled, 0, level as u32).expect("read");
-        let mut bad = 0;
-        for (i, e) in expected.iter().enumerate() {
-            let g = got.data[i][0];
-            let ok = if *e >= ISM_EMPTY { g >= ISM_EMPTY } else { (g - e).abs() <= 1e-5 * e.abs().max(1.0) };
-            if !ok {
-                bad += 1;
+    let mut cpu = Vec::new();
+    let mut finest = Vec::new();
+    // Both push rules (`ism.push_behind`): the thesis' and inside-surfaces-only.
+    for rule in [PushBehind::Everywhere, PushBehind::InsideSurfaces] {
+        let s = IsmSettings { push_behind: rule, ..s.clone() };
+        let mut enc =
+            ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.pull_push") });
+        pass.pull_push(&ctx, &mut enc, None, &s, extent);
+        ctx.queue.submit([enc.finish()]);
+        let thresholds = [s.pull_threshold * extent, s.push_threshold * extent];
+        cpu = knecht::pull_push(&atlas, w, h, 32, 3, thresholds, rule == PushBehind::InsideSurfaces);
+        for (level, expected) in cpu.iter().enumerate() {
+            let got = gi_render::buffers::read_texture(&ctx, "ism.atlas_pulled", &pass.pulled, 0, level as u32)
+                .expect("read");
+            let mut bad = 0;
+            for (i, e) in expected.iter().enumerate() {
+                let g = got.data[i][0];
+                let ok = if *e >= ISM_EMPTY { g >= ISM_EMPTY } else { (g - e).abs() <= 1e-5 * e.abs().max(1.0) };
+                if !ok {
+                    bad += 1;
+                }
             }
+            assert_eq!(bad, 0, "{rule:?}, level {level}: {bad} texels differ from the CPU reference");
         }
-        assert_eq!(bad, 0, "level {level}: {bad} texels differ from the CPU reference");
+        finest.push(cpu[0].clone());
     }
+    assert_ne!(finest[0], finest[1], "the atlas has silhouettes where the two rules differ");
     // Pull-push filled holes: fewer holes at level 0 than splatted.
     let holes = |v: &[f32]| v.iter().filter(|&&d| d >= ISM_EMPTY).count();
     assert!(holes(&cpu[0]) * 4 < holes(&atlas), "{} holes left of {}", holes(&cpu[0]), holes(&atlas));

@@ -212,6 +212,19 @@ pub fn ism_visible(
     d * (1.0 - bias) <= stored(tx, ty)
 }
 
+/// What a tangent-plane splat (`ism.splat_depth`) writes into the texel at paraboloid
+/// coordinates `uv` (texel centre): the distance along the texel's ray from the eye to the
+/// plane through the point (`local`, relative to the eye in the VPL's frame, at distance `d`)
+/// with normal `normal` (same frame), kept within ± `reach` of `d`; a ray that misses the
+/// plane in front takes `d + reach`. Twin of `texel_key` in `shaders/ism/splat.wgsl`.
+pub fn splat_distance(local: Vec3, normal: Vec3, d: f32, reach: f32, uv: Vec2) -> f32 {
+    let ray = paraboloid_unproject(uv);
+    let den = ray.dot(normal);
+    let hit = if den.abs() > 1e-6 { local.dot(normal) / den } else { -1.0 };
+    let s = if hit > 0.0 { hit } else { d + reach };
+    s.clamp((d - reach).max(1e-6), d + reach)
+}
+
 /// Depth of an empty ISM texel (a hole): any value at or above it is invalid.
 pub const ISM_EMPTY: f32 = 1.0e30;
 
@@ -225,15 +238,18 @@ pub const ISM_EMPTY: f32 = 1.0e30;
 ///   nearest valid child (outliers behind are rejected); no valid child leaves a hole.
 /// - Push (level l+1 → l, from coarse to fine): the coarse value at a fine texel is the
 ///   bilinear interpolation of the valid coarse texels around it within the same map; it
-///   replaces the fine value if that is a hole or lies farther than `t_push`·2^l behind it.
+///   replaces the fine value if that is a hole or lies farther than `t_push`·2^l behind it —
+///   anywhere (the thesis), or with `inside_only` only where the four coarse texels around
+///   it are valid and agree within `t_push`·2^l (inside a surface, not at a silhouette;
+///   `ism.push_behind`).
 pub fn pull_push(
     atlas: &[f32],
     width: u32,
     height: u32,
     tile: u32,
     levels: u32,
-    t_pull: f32,
-    t_push: f32,
+    [t_pull, t_push]: [f32; 2],
+    inside_only: bool,
 ) -> Vec<Vec<f32>> {
     let mut pyr = vec![atlas.to_vec()];
     for l in 0..levels {
@@ -270,9 +286,9 @@ pub fn pull_push(
         let fine = &mut pyr[l as usize];
         for y in 0..h {
             for x in 0..w {
-                let c = coarse_at(&coarse, cw, ct, x, y);
+                let (c, agree) = coarse_at(&coarse, cw, ct, x, y, threshold);
                 let f = &mut fine[(y * w + x) as usize];
-                if c < ISM_EMPTY && (*f >= ISM_EMPTY || *f - c > threshold) {
+                if c < ISM_EMPTY && (*f >= ISM_EMPTY || ((agree || !inside_only) && *f - c > threshold)) {
                     *f = c;
                 }
             }
@@ -282,25 +298,30 @@ pub fn pull_push(
 }
 
 /// Bilinear interpolation of the valid coarse texels around fine texel (x, y), within the
-/// coarse map (`ct`² texels) that contains it; twin of `coarse_at` in `ism/pull_push.wgsl`.
-fn coarse_at(coarse: &[f32], cw: u32, ct: u32, x: u32, y: u32) -> f32 {
+/// coarse map (`ct`² texels) that contains it, and whether all four are valid and agree
+/// within `threshold`; twin of `coarse_at` in `ism/pull_push.wgsl`.
+fn coarse_at(coarse: &[f32], cw: u32, ct: u32, x: u32, y: u32, threshold: f32) -> (f32, bool) {
     let (px, py) = ((x as f32 + 0.5) * 0.5 - 0.5, (y as f32 + 0.5) * 0.5 - 0.5);
     let (x0, y0) = (px.floor(), py.floor());
     let (fx, fy) = (px - x0, py - y0);
     let (tx, ty) = ((x / 2) / ct * ct, (y / 2) / ct * ct);
-    let (mut sum, mut wsum) = (0.0f32, 0.0f32);
+    let (mut sum, mut wsum, mut lo, mut hi, mut taps) = (0.0f32, 0.0f32, ISM_EMPTY, 0.0f32, 0);
     for (dx, dy, w) in
         [(0, 0, (1.0 - fx) * (1.0 - fy)), (1, 0, fx * (1.0 - fy)), (0, 1, (1.0 - fx) * fy), (1, 1, fx * fy)]
     {
         let cx = (x0 as i32 + dx).clamp(tx as i32, (tx + ct - 1) as i32) as u32;
         let cy = (y0 as i32 + dy).clamp(ty as i32, (ty + ct - 1) as i32) as u32;
         let v = coarse[(cy * cw + cx) as usize];
+        if v < ISM_EMPTY {
+            (lo, hi, taps) = (lo.min(v), hi.max(v), taps + 1);
+        }
         if v < ISM_EMPTY && w > 0.0 {
             sum += w * v;
             wsum += w;
         }
     }
-    if wsum > 0.0 { sum / wsum } else { ISM_EMPTY }
+    let agree = taps == 4 && hi - lo <= threshold;
+    if wsum > 0.0 { (sum / wsum, agree) } else { (ISM_EMPTY, false) }
 }
 
 /// A VPL as the shading kernel sees it (twin of `Vpl` in `shaders/common/vpl.wgsl`).
@@ -595,10 +616,49 @@ mod tests {
     }
 
     #[test]
+    fn a_tangent_plane_splat_lies_on_its_surface() {
+        // A ceiling 1 above the eye (z = 1, facing it) seen at 45°: the point's own texel and
+        // the texels around it hold the distance along their rays to the ceiling; a box
+        // splat would hold d in all of them and stand out of the ceiling on one side.
+        let normal = Vec3::new(0.0, 0.0, -1.0);
+        let local = Vec3::new(1.0, 0.0, 1.0);
+        let d = local.length();
+        let size = 64.0;
+        let centre = paraboloid_project(local / d).expect("in the hemisphere") * size;
+        for (dx, dy) in [(0.0, 0.0), (2.0, 0.0), (-2.0, 0.0), (0.0, 2.0), (1.0, -1.0)] {
+            let uv = (centre.floor() + Vec2::new(dx + 0.5, dy + 0.5)) / size;
+            let ray = paraboloid_unproject(uv);
+            let exact = 1.0 / ray.z;
+            let got = splat_distance(local, normal, d, 0.5, uv);
+            assert!((got - exact).abs() < 1e-4 * exact, "({dx}, {dy}): {got} vs {exact}");
+        }
+        // A ray that grazes the plane is kept within reach of the point.
+        let edge_on = splat_distance(local, Vec3::new(0.0, 1.0, 0.0), d, 0.1, Vec2::new(0.3, 0.5));
+        assert!((edge_on - (d + 0.1)).abs() < 1e-6, "{edge_on}");
+    }
+
+    #[test]
+    fn the_inside_only_push_fills_holes_but_keeps_silhouettes() {
+        // Left half an occluder at 1, right half a wall at 3, one hole in the occluder.
+        let mut a: Vec<f32> = (0..64).map(|i| if i % 8 < 4 { 1.0 } else { 3.0 }).collect();
+        a[2 * 8 + 1] = ISM_EMPTY;
+        let thesis = pull_push(&a, 8, 8, 8, 2, [0.1, 0.1], false);
+        let inside = pull_push(&a, 8, 8, 8, 2, [0.1, 0.1], true);
+        for out in [&thesis, &inside] {
+            assert!((out[0][2 * 8 + 1] - 1.0).abs() < 1e-6, "the hole is filled");
+        }
+        // The thesis' push moves the wall texels next to the occluder nearer; inside-only
+        // leaves every wall texel at 3.
+        let grown = |out: &Vec<Vec<f32>>| (0..64).filter(|&i| i % 8 >= 4 && out[0][i] < 2.9).count();
+        assert!(grown(&thesis) > 0, "the thesis' push dilates the occluder");
+        assert_eq!(grown(&inside), 0, "the inside-only push keeps the silhouette");
+    }
+
+    #[test]
     fn pull_push_fills_a_hole_with_its_neighbours() {
         let mut a = vec![2.0; 16];
         a[5] = ISM_EMPTY;
-        let out = pull_push(&a, 4, 4, 4, 2, 0.1, 0.1);
+        let out = pull_push(&a, 4, 4, 4, 2, [0.1, 0.1], false);
         assert!((out[0][5] - 2.0).abs() < 1e-6);
         assert!(out[0].iter().all(|&v| v < ISM_EMPTY));
     }
