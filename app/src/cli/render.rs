@@ -20,7 +20,7 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 1)]
     pub frames: u32,
     /// Keep the animation at time 0 for every frame (e.g. to let the exact-VPL reference
-    /// accumulate: `--paused --frames 64 --set indirect.technique=ExactVpl`).
+    /// accumulate: `--paused --frames 64 --preset presets/exact-vpl-reference.ron`).
     #[arg(long)]
     pub paused: bool,
     /// A buffer to write besides final.png (repeatable; see `gi-lab buffers`); `NAME@K`
