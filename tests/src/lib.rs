@@ -56,6 +56,20 @@ pub fn direct_only_renderer(w: u32, h: u32) -> Renderer {
     r
 }
 
+/// The default scene at `w`×`h` with the `nguyen-hcb` preset's VPLs (the same set every
+/// frame) and the choices `edit` makes, validated; animation paused.
+pub fn nguyen_fixed_vpls_renderer(w: u32, h: u32, edit: impl FnOnce(&mut LabSettings)) -> Renderer {
+    let loaded =
+        gi_render::preset::load_lenient(include_str!("../../presets/nguyen-hcb.ron"), "nguyen-hcb").expect("loads");
+    let mut s = loaded.settings;
+    s.vpl.new_set_each_frame = false;
+    edit(&mut s);
+    assert!(s.validate().is_empty(), "{:?}", s.validate());
+    let mut r = Renderer::new(gpu(), default_scene(), s, w, h).expect("renderer");
+    r.clock.playing = false;
+    r
+}
+
 /// A renderer of the default scene at `w`×`h` with default settings, animation paused.
 pub fn default_renderer(w: u32, h: u32) -> Renderer {
     let mut r = Renderer::new(gpu(), default_scene(), LabSettings::default(), w, h).expect("renderer");

@@ -179,14 +179,7 @@ fn the_diffuse_only_gather_compares_like_for_like_with_the_hcb() {
     use gi_render::passes::knecht::vpl_importance::ReceiverBrdf;
     use gi_render::pipeline::ShadingPoints;
     let render = |edit: &dyn Fn(&mut LabSettings)| {
-        let loaded =
-            gi_render::preset::load_lenient(include_str!("../../presets/nguyen-hcb.ron"), "nguyen-hcb").expect("loads");
-        let mut s = loaded.settings;
-        s.vpl.new_set_each_frame = false;
-        edit(&mut s);
-        assert!(s.validate().is_empty(), "{:?}", s.validate());
-        let mut r = Renderer::new(gpu(), default_scene(), s, 128, 128).expect("renderer");
-        r.clock.playing = false;
+        let mut r = gi_lab_tests::nguyen_fixed_vpls_renderer(128, 128, edit);
         r.render_frame();
         r.readback("final.hdr").expect("final.hdr")
     };

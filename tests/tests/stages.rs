@@ -12,14 +12,7 @@ const SIZE: u32 = 128;
 /// Instant radiosity's VPLs of the `nguyen-hcb` preset (the same set every frame), with the
 /// choices `edit` makes; `frames` frames of a still scene; `final.hdr`.
 fn render(frames: u32, edit: impl FnOnce(&mut LabSettings)) -> ImageF32 {
-    let loaded =
-        gi_render::preset::load_lenient(include_str!("../../presets/nguyen-hcb.ron"), "nguyen-hcb").expect("loads");
-    let mut s = loaded.settings;
-    s.vpl.new_set_each_frame = false;
-    edit(&mut s);
-    assert!(s.validate().is_empty(), "{:?}", s.validate());
-    let mut r = Renderer::new(gpu(), default_scene(), s, SIZE, SIZE).expect("renderer");
-    r.clock.playing = false;
+    let mut r = gi_lab_tests::nguyen_fixed_vpls_renderer(SIZE, SIZE, edit);
     for _ in 0..frames {
         r.render_frame();
     }
