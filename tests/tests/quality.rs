@@ -12,11 +12,13 @@ fn the_quality_table_stays_within_its_measured_bounds() {
     let truth = stored_reference("cornell_1bounce_256_2048spp.exr");
     let rows = gi_render::quality::quality_table(&gpu(), &default_scene(), &truth, (256, 256)).expect("the table");
     print!("{}", gi_render::quality::format_table(&rows));
-    // Measured on lavapipe: 0.048, 0.033, 0.072, 0.038 (stratified reference VPLs, tangent-
-    // plane splats and the inside-surfaces push); before: 0.062, 0.056, 0.078, 0.040, and
-    // before issue #15 0.064, 0.056, 0.078, 0.040 with the HCB against its own levels = 1.
-    // The goals: 0.05, 0.035, 0.06, 0.03 — the first two are the bounds.
-    let bounds = [0.05, 0.035, 0.08, 0.042];
+    // Measured on lavapipe: 0.048, 0.033, 0.060, 0.022 (stratified reference VPLs, tangent-
+    // plane splats and the inside-surfaces push; the HCB with the paper's 1024 VPLs and
+    // d_max 0.1 × the scene radius); before: 0.062, 0.056, 0.078, 0.040, and before issue #15
+    // 0.064, 0.056, 0.078, 0.040 with the HCB against its own levels = 1.
+    // The goals: 0.05, 0.035, 0.06, 0.03 — the bounds, except the third, which the
+    // measurement meets by less than its run-to-run spread (0.057–0.060 over VPL sets): 0.062.
+    let bounds = [0.05, 0.035, 0.062, 0.03];
     assert_eq!(rows.len(), bounds.len());
     for (row, bound) in rows.iter().zip(bounds) {
         assert!(row.flip > 0.0, "{}: FLIP 0 means nothing was compared", row.configuration);
