@@ -9,8 +9,8 @@
 //! | 2. Direct light | `passes::shadow`, `passes::direct` |
 //! | 3. VPLs | none · importance warping → `passes::knecht::stage` · uniform batches → `passes::reference::stage` |
 //! | 4. VPL visibility | none · imperfect shadow maps (`passes::knecht::ism`) · exact maps (`passes::reference::vpl_visibility`) |
-//! | 5. Shading points | every pixel · interleaved tiles → `passes::knecht::interleave` · HCB samples → `passes::hcb::stage` |
-//! | 6. Gather + reconstruction | VPL gather at the shading points; none · geometry-aware filter (`knecht::interleave`) · coherence splatting (`hcb::splat`) |
+//! | 5. Shading points | every pixel · interleaved tiles → `passes::knecht::interleave` · HCB samples → `passes::hcb::stage` · mip levels → `passes::soler::stage` |
+//! | 6. Gather + reconstruction | VPL gather at the shading points, or the screen-space ring gather (`soler::gather`); none · geometry-aware filter (`knecht::interleave`) · coherence splatting (`hcb::splat`) · joint bilateral upsampling (`soler::upsample`) |
 //! | 7. Temporal + compose | none · confidence merge (`knecht::temporal`) · HCB sample cache (`hcb::cache`) · running average (`reference`); `passes::compose` |
 
 use glam::Vec4;
@@ -78,6 +78,7 @@ impl Renderer {
         });
         // Stages 3–7's indirect light, as the stage choices say (`pipeline.*`).
         self.ensure_passes();
+        let direct_view = crate::passes::view(&self.direct.radiance, "direct.radiance");
         let f = FrameInputs {
             ctx: &ctx,
             scene: &self.scene,
@@ -90,6 +91,9 @@ impl Renderer {
             normal_texture: &self.gbuffer.targets.normal,
             radius: self.bounds.radius(),
             height: self.height,
+            gbuffer_size: (self.width, self.height),
+            frame: self.clock.frame as u32,
+            direct_radiance: &direct_view,
             lights: state.lights.iter().map(gpu_light).collect(),
             views: light_view_list(&state, self.bounds),
         };
@@ -126,6 +130,11 @@ fn indirect_light(
     if p.gather == Gather::None {
         return None;
     }
+    // Soler et al.'s screen-space choices: mip levels (stage 5), the ring gather and the
+    // joint bilateral upsampling (stage 6); no VPLs. Temporal filtering (Eq. 6) is not built.
+    if p.gather == Gather::ScreenSpace {
+        return Some(x.soler.as_ref()?.run(f, enc, timer));
+    }
 
     // Stage 3: VPLs.
     let vpls = match p.vpl_source {
@@ -149,7 +158,8 @@ fn indirect_light(
     // Stage 5: shading points (the HCB sample cache, stage 7's choice, acts in the selection:
     // Nguyen §5, Fig. 5).
     match p.shading_points {
-        ShadingPoints::EveryPixel | ShadingPoints::InterleavedTiles => {}
+        // Mip levels belong to the screen-space gather, which returned above.
+        ShadingPoints::EveryPixel | ShadingPoints::InterleavedTiles | ShadingPoints::MipLevels => {}
         ShadingPoints::HcbSamples => x.hcb.as_mut()?.select(f, enc, timer, light),
     }
 
@@ -190,7 +200,8 @@ fn reconstruct(
     src: wgpu::TextureView,
 ) -> Option<wgpu::TextureView> {
     Some(match f.settings.pipeline.reconstruction {
-        Reconstruction::None | Reconstruction::CoherenceSplatting => src,
+        // The upsampling belongs to the screen-space gather, which returned above.
+        Reconstruction::None | Reconstruction::CoherenceSplatting | Reconstruction::BilateralUpsampling => src,
         Reconstruction::GeometryAwareFilter => {
             // Knecht's thesis merges, then filters (§4 steps 11–12; `temporal.order`
             // MergeThenFilter); we filter first by default because the confidence's

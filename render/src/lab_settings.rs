@@ -14,6 +14,7 @@ use crate::passes::knecht::ism::IsmSettings;
 use crate::passes::knecht::temporal::TemporalSettings;
 use crate::passes::knecht::vpl_importance::VplSettings;
 use crate::passes::reference::vpl::ReferenceSettings;
+use crate::passes::soler::SolerSettings;
 use crate::pipeline::{LegacyIndirect, PipelineSettings};
 use crate::settings::{FieldError, FieldMeta, PRESET_VERSION, PresetError, SettingsGroup, Value};
 use crate::settings_group;
@@ -51,6 +52,7 @@ pub struct LabSettings {
     pub interleave: InterleaveSettings,
     pub temporal: TemporalSettings,
     pub hcb: HcbSettings,
+    pub soler: SolerSettings,
     pub reference: ReferenceSettings,
     pub tonemap: TonemapSettings,
 }
@@ -68,6 +70,7 @@ impl Default for LabSettings {
             interleave: Default::default(),
             temporal: Default::default(),
             hcb: Default::default(),
+            soler: Default::default(),
             reference: Default::default(),
             tonemap: Default::default(),
         }
@@ -85,6 +88,7 @@ macro_rules! for_each_group {
         $m!(interleave, InterleaveSettings);
         $m!(temporal, TemporalSettings);
         $m!(hcb, HcbSettings);
+        $m!(soler, SolerSettings);
         $m!(reference, ReferenceSettings);
         $m!(tonemap, TonemapSettings);
     };

@@ -49,6 +49,9 @@ settings_enum! {
         /// The samples of the hierarchical coherence buffer (Nguyen et al. 000 §3), a few
         /// percent of the pixels.
         HcbSamples = "HCB samples (Nguyen)",
+        /// Every texel of the G-buffer's mip levels, made by voting among sub-pixels (Soler
+        /// et al. 004 §4, Eq. 5), from the start resolution down `soler.levels` levels.
+        MipLevels = "mip levels (Soler)",
     }
     default InterleavedTiles
 }
@@ -60,6 +63,9 @@ settings_enum! {
         None = "none (direct light only)",
         /// Sum over the VPLs with the chosen visibility (Knecht 002 §4.5, Eq. 4.6–4.7).
         Vpl = "VPL gather",
+        /// Screen-space samples on a ring around each texel of each mip level: the visible
+        /// surfaces' direct light as small emitters (Soler et al. 004 §3–4, Eq. 1–4).
+        ScreenSpace = "screen-space ring gather (Soler)",
     }
     default Vpl
 }
@@ -74,6 +80,9 @@ settings_enum! {
         /// Coherence-weighted splatting of the HCB samples and normalisation (Nguyen et al.
         /// §4.2–4.3, Eq. 8–11).
         CoherenceSplatting = "coherence splatting (Nguyen)",
+        /// Joint bilateral upsampling of every mip level's light, coarse to fine, added
+        /// level by level (Soler et al. 004 §4, "Continuous combination of all levels").
+        BilateralUpsampling = "joint bilateral upsampling (Soler)",
     }
     default GeometryAwareFilter
 }
@@ -107,13 +116,13 @@ settings_group! {
         unit "", symbol "V", range 0..=2, cost "ISM: one splat per point; exact: five depth renders of the scene per VPL", history true;
         /// Stage 5, shading points (every pixel; Knecht §3.4.1's tiles; Nguyen §3's samples).
         shading_points: ShadingPoints = ShadingPoints::InterleavedTiles,
-        unit "", symbol "", range 0..=2, cost "every pixel: N VPLs per pixel; tiles: N/n²; HCB: N at 2–5 % of the pixels plus the HCB build", history true;
+        unit "", symbol "", range 0..=3, cost "every pixel: N VPLs per pixel; tiles: N/n²; HCB: N at 2–5 % of the pixels plus the HCB build", history true;
         /// Stage 6, gather (Knecht §4.5's VPL gather; none: direct light only).
         gather: Gather = Gather::Vpl,
-        unit "", symbol "", range 0..=1, cost "one term per VPL and shading point", history true;
+        unit "", symbol "", range 0..=2, cost "one term per VPL and shading point", history true;
         /// Stage 6, reconstruction (Knecht §3.4.1's filter; Nguyen §4's splatting).
         reconstruction: Reconstruction = Reconstruction::GeometryAwareFilter,
-        unit "", symbol "", range 0..=2, cost "filter: n² reads per pixel; splatting: one quad per sample", history true;
+        unit "", symbol "", range 0..=3, cost "filter: n² reads per pixel; splatting: one quad per sample", history true;
         /// Stage 7, temporal (Knecht §3.5's confidence merge; Nguyen §5's sample cache; the
         /// reference's running average).
         temporal: Temporal = Temporal::ConfidenceMerge,
@@ -137,12 +146,16 @@ settings_enum! {
         NguyenCached = "HCB with the sample cache (Nguyen §5)",
         /// Many uniformly sampled VPLs with exact visibility, averaged over frames.
         ExactVpl = "exact-VPL reference",
+        /// Multi-resolution screen-space indirect illumination (Soler et al. 004): no VPLs,
+        /// the mip levels gather the visible direct light.
+        Soler = "screen-space mip levels (Soler)",
     }
     default DirectOnly
 }
 
 impl Technique {
-    pub const ALL: [Technique; 5] = [Self::DirectOnly, Self::Knecht, Self::Nguyen, Self::NguyenCached, Self::ExactVpl];
+    pub const ALL: [Technique; 6] =
+        [Self::DirectOnly, Self::Knecht, Self::Nguyen, Self::NguyenCached, Self::ExactVpl, Self::Soler];
 
     /// The technique's stage choices. `base` gives the choices the technique leaves open
     /// (the visibility of instant radiosity and the HCB, direct light's unused stages).
@@ -175,6 +188,14 @@ impl Technique {
                 gather: Gather::Vpl,
                 reconstruction: Reconstruction::None,
                 temporal: Temporal::RunningAverage,
+            },
+            Self::Soler => PipelineSettings {
+                vpl_source: VplSource::None,
+                vpl_visibility: VplVisibility::None,
+                shading_points: ShadingPoints::MipLevels,
+                gather: Gather::ScreenSpace,
+                reconstruction: Reconstruction::BilateralUpsampling,
+                temporal: Temporal::None,
             },
         }
     }
@@ -240,6 +261,7 @@ impl PipelineSettings {
             "temporal" => knecht && self.temporal == Temporal::ConfidenceMerge,
             "hcb" => self.uses_hcb(),
             "reference" => self.is_reference(),
+            "soler" => self.gather == Gather::ScreenSpace,
             _ => true,
         }
     }
@@ -254,6 +276,29 @@ pub fn combination_errors(s: &LabSettings) -> Vec<FieldError> {
         |field: &str, message: String| errors.push(FieldError { field: format!("pipeline.{field}"), message });
     if p.gather == Gather::None {
         return errors;
+    }
+    if p.gather == Gather::ScreenSpace {
+        // Soler et al.'s gather runs on the mip levels and is combined by the upsampling;
+        // it reads the direct light, not VPLs (stages 3–4 are idle).
+        if p.shading_points != ShadingPoints::MipLevels {
+            err("shading_points", "the screen-space gather samples rings on the mip levels: set pipeline.shading_points = MipLevels (the gather at HCB samples is not built yet)".into());
+        }
+        if p.reconstruction != Reconstruction::BilateralUpsampling {
+            err("reconstruction", "the screen-space gather's levels are combined by joint bilateral upsampling: set pipeline.reconstruction = BilateralUpsampling".into());
+        }
+        if p.temporal != Temporal::None {
+            err("temporal", "Soler's temporal filtering (Eq. 6) is not built yet and the other temporal choices belong to VPL gathers: set pipeline.temporal = None".into());
+        }
+        return errors;
+    }
+    if p.shading_points == ShadingPoints::MipLevels {
+        err(
+            "shading_points",
+            "mip levels are gathered by the screen-space gather: set pipeline.gather = ScreenSpace".into(),
+        );
+    }
+    if p.reconstruction == Reconstruction::BilateralUpsampling {
+        err("reconstruction", "joint bilateral upsampling combines the screen-space gather's mip levels: set pipeline.gather = ScreenSpace".into());
     }
     if p.vpl_source == VplSource::None {
         err(
@@ -300,7 +345,7 @@ pub fn combination_errors(s: &LabSettings) -> Vec<FieldError> {
                 err("reconstruction", "HCB samples cover a few percent of the pixels: only coherence splatting (CoherenceSplatting) fills the image from them".into());
             }
         }
-        ShadingPoints::EveryPixel | ShadingPoints::InterleavedTiles => {
+        ShadingPoints::EveryPixel | ShadingPoints::InterleavedTiles | ShadingPoints::MipLevels => {
             if p.reconstruction == Reconstruction::CoherenceSplatting {
                 err(
                     "reconstruction",

@@ -48,6 +48,11 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("hcb/normalize.wgsl", include_str!("../../shaders/hcb/normalize.wgsl")),
     ("hcb/cache.wgsl", include_str!("../../shaders/hcb/cache.wgsl")),
     ("hcb/cache_removal.wgsl", include_str!("../../shaders/hcb/cache_removal.wgsl")),
+    ("soler/common.wgsl", include_str!("../../shaders/soler/common.wgsl")),
+    ("soler/vote.wgsl", include_str!("../../shaders/soler/vote.wgsl")),
+    ("soler/gather.wgsl", include_str!("../../shaders/soler/gather.wgsl")),
+    ("soler/upsample.wgsl", include_str!("../../shaders/soler/upsample.wgsl")),
+    ("soler/resolve.wgsl", include_str!("../../shaders/soler/resolve.wgsl")),
     ("view/view.wgsl", include_str!("../../shaders/view/view.wgsl")),
     ("view/probe.wgsl", include_str!("../../shaders/view/probe.wgsl")),
 ];
@@ -84,6 +89,10 @@ pub const ENTRY_MODULES: &[&str] = &[
     "hcb/normalize.wgsl",
     "hcb/cache.wgsl",
     "hcb/cache_removal.wgsl",
+    "soler/vote.wgsl",
+    "soler/gather.wgsl",
+    "soler/upsample.wgsl",
+    "soler/resolve.wgsl",
     "view/view.wgsl",
     "view/probe.wgsl",
 ];

@@ -28,6 +28,12 @@ pub struct FrameInputs<'a> {
     /// The scene's bounding radius (scene-relative offsets and clip planes).
     pub radius: f32,
     pub height: u32,
+    /// The G-buffer's width and height.
+    pub gbuffer_size: (u32, u32),
+    /// The frame's index (per-frame sample rotations).
+    pub frame: u32,
+    /// Stage 2's direct light (`direct.radiance`), the first bounce's source.
+    pub direct_radiance: &'a wgpu::TextureView,
     /// Every light of the frame on the GPU, and the light views with their light's index.
     pub lights: Vec<GpuLight>,
     pub views: Vec<(u32, LightView)>,

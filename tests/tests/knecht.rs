@@ -294,6 +294,7 @@ fn every_shipped_preset_loads_cleanly_and_validates() {
         "exact-vpl-reference",
         "nguyen-hcb",
         "nguyen-hcb-cached",
+        "soler-quarter-4-64",
     ] {
         assert!(names.iter().any(|n| n == want), "presets/{want}.ron is missing");
     }
@@ -306,6 +307,11 @@ fn every_shipped_preset_loads_cleanly_and_validates() {
     let m = gi_render::preset::load_lenient(include_str!("../../presets/knecht-multibounce.ron"), "m").expect("loads");
     assert_eq!(m.settings.vpl.bounces, 2);
     assert_eq!((m.settings.vpl.count, m.settings.ism.map_size), (256, 128));
+    let sol =
+        gi_render::preset::load_lenient(include_str!("../../presets/soler-quarter-4-64.ron"), "s").expect("loads");
+    assert_eq!(Technique::of(&sol.settings.pipeline), Some(Technique::Soler));
+    let ss = &sol.settings.soler;
+    assert_eq!((ss.levels, ss.samples, ss.radius_px), (4, 64, 40.0));
 }
 
 // ---------------------------------------------------------------------------------------

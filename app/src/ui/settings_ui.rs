@@ -174,6 +174,7 @@ pub fn section_title(group: &str) -> String {
         "temporal" => "7 · Temporal coherence".into(),
         "hcb" => "5–6 · Hierarchical coherence buffer (Nguyen)".into(),
         "reference" => "Exact-VPL reference (stages 3, 4, 6)".into(),
+        "soler" => "5–6 · Screen-space mip levels (Soler)".into(),
         "tonemap" => "7 · Tone mapping".into(),
         other => other.to_string(),
     }
@@ -236,6 +237,12 @@ pub const TECHNIQUES: &[Technique] = &[
             ritschel.temporal = Temporal::None;
             s.pipeline == ritschel
         },
+    },
+    Technique {
+        name: "Screen-space mip levels (Soler)",
+        source: "Soler et al. 004 §3–4: voted mip levels, ring gather with the point-to-disc form factor, joint bilateral upsampling (no visibility or temporal filtering yet)",
+        apply: |s| Choices::Soler.apply(s),
+        is: |s| Choices::of(&s.pipeline) == Some(Choices::Soler),
     },
 ];
 

@@ -7,5 +7,6 @@ pub mod knecht;
 pub mod knecht_bounce;
 pub mod pathtrace;
 pub mod raycast;
+pub mod soler;
 pub mod tonemap;
 pub mod view;

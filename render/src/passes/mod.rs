@@ -9,6 +9,7 @@
 //! | `knecht/` | Knecht 002 | VPL source importance warping, visibility imperfect, shading points every pixel / interleaved tiles, VPL gather, geometry-aware filter, confidence merge | `vpl/{importance,reduce,warp,bounce,irsm}`, `ism/`, `interleave/`, `temporal/` |
 //! | `hcb/` | Nguyen et al. 000 | shading points HCB samples, coherence splatting, HCB sample cache | `hcb/` |
 //! | `reference/` | Knecht 002 §5.2 (the baseline) | VPL source uniform batches, visibility exact, running average | `vpl/{sample,shadow,gather}` |
+//! | `soler/` | Soler et al. 004 | shading points mip levels, screen-space ring gather, joint bilateral upsampling | `soler/` |
 
 pub mod compose;
 pub mod direct;
@@ -17,6 +18,7 @@ pub mod hcb;
 pub mod knecht;
 pub mod reference;
 pub mod shadow;
+pub mod soler;
 pub mod view;
 
 use glam::{Mat4, Vec4};

@@ -33,6 +33,7 @@ impl Renderer {
         // The exact-VPL passes exist only while that technique is on.
         passes.retain(|p| *p != "exact_vpl" || self.stages.reference.is_some());
         passes.retain(|p| *p != "instant_radiosity" || self.stages.knecht.is_some());
+        passes.retain(|p| *p != "soler" || self.stages.soler.is_some());
         if passes.is_empty() {
             return Ok(passes);
         }
@@ -82,6 +83,15 @@ impl Renderer {
             if let Some(e) = pollster::block_on(scope.pop()) {
                 let x = &mut self.stages;
                 (x.knecht, x.interleave, x.hcb, x.temporal) = old;
+                return Err(e.to_string());
+            }
+        }
+        if passes.contains(&"soler") {
+            let old = self.stages.soler.take();
+            let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+            self.ensure_passes();
+            if let Some(e) = pollster::block_on(scope.pop()) {
+                self.stages.soler = old;
                 return Err(e.to_string());
             }
         }
@@ -202,6 +212,7 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         | "hcb/normalize.wgsl"
         | "hcb/cache.wgsl"
         | "hcb/cache_removal.wgsl" => "instant_radiosity",
+        "soler/vote.wgsl" | "soler/gather.wgsl" | "soler/upsample.wgsl" | "soler/resolve.wgsl" => "soler",
         _ => return None,
     })
 }
@@ -234,6 +245,9 @@ pub fn scope_output(scope: &str) -> Option<&'static str> {
         "hcb.cache.update" => "hcb.cache",
         "hcb.cache.recompute" => "hcb.recompute_group",
         "hcb.cache.splat" => "hcb.weight_sum",
+        "soler.pyramid" => "soler.level.1.normal",
+        "soler.gather" => "soler.indirect",
+        "soler.upsample" => "soler.indirect",
         _ => return None,
     })
 }

@@ -24,8 +24,9 @@ use crate::passes::knecht::stage::KnechtVpls;
 use crate::passes::knecht::temporal::TemporalPass;
 use crate::passes::reference::stage::ReferenceVpls;
 use crate::passes::shadow::{ShadowPass, light_views};
+use crate::passes::soler::stage::SolerStage;
 use crate::passes::{CameraUniform, bgl};
-use crate::pipeline::{ShadingPoints, Temporal};
+use crate::pipeline::{Gather, ShadingPoints, Temporal};
 use crate::scene::upload::GpuScene;
 use crate::scene::{Aabb, Scene};
 use crate::settings::LabSettings;
@@ -47,6 +48,8 @@ pub(crate) struct StagePasses {
     pub hcb: Option<HcbStage>,
     /// Temporal "confidence merge" (Knecht).
     pub temporal: Option<TemporalPass>,
+    /// Shading points "mip levels", the screen-space gather and the upsampling (Soler).
+    pub soler: Option<SolerStage>,
 }
 
 /// What the previous frame used, for the movement buffer (Knecht 002 §3.5.1).
@@ -170,6 +173,9 @@ impl Renderer {
             h.register(&mut self.registry);
         }
         if let Some(t) = &x.temporal {
+            t.register(&mut self.registry);
+        }
+        if let Some(t) = &x.soler {
             t.register(&mut self.registry);
         }
         if let Some(t) = &self.flip_map {
@@ -358,7 +364,7 @@ impl Renderer {
         let tiles = match p.shading_points {
             ShadingPoints::EveryPixel => Some(1),
             ShadingPoints::InterleavedTiles => Some(s.interleave.n),
-            ShadingPoints::HcbSamples => None,
+            ShadingPoints::HcbSamples | ShadingPoints::MipLevels => None,
         };
         match tiles.filter(|_| p.uses_knecht_vpls()) {
             Some(n) => {
@@ -382,6 +388,13 @@ impl Renderer {
             fresh |= t.resize(&ctx, w, h) | created;
         } else {
             fresh |= x.temporal.take().is_some();
+        }
+        if p.gather == Gather::ScreenSpace {
+            let created = x.soler.is_none();
+            let st = x.soler.get_or_insert_with(|| SolerStage::new(&ctx, &s.soler, w, h));
+            fresh |= st.ensure(&ctx, &s.soler, w, h) | created;
+        } else {
+            fresh |= x.soler.take().is_some();
         }
         if fresh {
             self.register_all();

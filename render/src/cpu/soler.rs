@@ -1,0 +1,391 @@
+//! CPU twin of Soler et al.'s multi-resolution screen-space indirect illumination (004 §3–4):
+//! the screen-to-surface area (Eq. 2), the point-to-disc form factor (Eq. 4), the voting
+//! filter of the mip levels (Eq. 5), the ring of samples (§4, Fig. 3), the gather at one
+//! texel (Eq. 3) and the joint bilateral upsampling weights. The GPU kernels are
+//! `shaders/soler/{vote,gather,upsample}.wgsl`; tests compare them texel by texel.
+//!
+//! Readings chosen where the text is garbled or silent (also in `docs/preset-schema.md`):
+//! - Eq. 3 prints `4 tan f_h tan f_v`; Eq. 2's half angles `4 tan(f_h/2) tan(f_v/2)` are the
+//!   area of the screen rectangle at unit depth, so we use those.
+//! - Eq. 4 (point-to-disc) is the *form factor* F = R² cosθ / (r² + R²): for r ≫ R it tends to
+//!   cosθ cosθ' ds / (π r²), 1/π of Eq. 1's kernel. Eq. 1 carries the BRDF ρ (ρ_d/π for a
+//!   diffuse receiver), so the kernel that replaces Eq. 1's is π F; the receiver then reflects
+//!   E = Σ L_i π F_i as c·DI/π · E. [`kernel`] returns π F (or Eq. 1's kernel).
+//! - Eq. 5's g₃ takes z_j − z_i in scene units; we divide by z_i (relative depth) so that σ₃
+//!   does not depend on the scene's scale. The L1 neighbourhood of a sub-pixel reaches one
+//!   texel outside its 2×2 block (the apron); texels outside the image or on the background
+//!   take no part. The winner's position, depth and normal go down (no averaging); radiance
+//!   goes down as the mean over the block's texels inside the image (background counts as
+//!   black), so that a coarse texel emits the power of its sub-pixels.
+//! - The ring (Fig. 3): the first (finest) gathered level samples the full disc of radius r,
+//!   every other level the annulus r/2 … r, both in the level's own texels; N samples on a
+//!   Vogel spiral (radius √ of the area fraction, golden-angle steps) rotated per texel and
+//!   frame, each standing for 1/N of the area. The factor 2^{2k} of §4 is in Eq. 2's W, H:
+//!   they are the level's size.
+
+use glam::{Vec2, Vec3};
+
+use crate::cpu::knecht_bounce::pcg_hash;
+
+/// The golden angle (radians): successive spiral samples are this far apart.
+pub const GOLDEN_ANGLE: f32 = 2.399_963_2;
+
+/// One texel of a mip level (or of the G-buffer at level 0).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Texel {
+    /// World position.
+    pub position: Vec3,
+    /// View depth z (> 0 on a surface; 0 on the background).
+    pub depth: f32,
+    pub normal: Vec3,
+    /// Radiance leaving the texel (the previous bounce; direct light for the first).
+    pub radiance: Vec3,
+}
+
+impl Texel {
+    pub fn valid(&self) -> bool {
+        self.depth > 0.0
+    }
+}
+
+/// A mip level: `width` × `height` texels, row-major.
+#[derive(Clone, Debug, Default)]
+pub struct Level {
+    pub width: u32,
+    pub height: u32,
+    pub texels: Vec<Texel>,
+}
+
+impl Level {
+    pub fn at(&self, x: i64, y: i64) -> Option<&Texel> {
+        if x < 0 || y < 0 || x >= self.width as i64 || y >= self.height as i64 {
+            return None;
+        }
+        self.texels.get((y as u64 * self.width as u64 + x as u64) as usize)
+    }
+}
+
+/// The σ of the voting filter's three gaussians (Eq. 5; the paper gives none).
+#[derive(Clone, Copy, Debug)]
+pub struct VoteSigmas {
+    /// g₁ on the texel distance |p_i − p_j| (0 or 1 in the L1 neighbourhood), texels.
+    pub pixel: f32,
+    /// g₂ on 1 − n_i·n_j.
+    pub normal: f32,
+    /// g₃ on (z_j − z_i) / z_i.
+    pub depth: f32,
+}
+
+/// exp(−x² / 2σ²).
+pub fn gaussian(x: f32, sigma: f32) -> f32 {
+    (-(x * x) / (2.0 * sigma * sigma).max(1e-12)).exp()
+}
+
+/// Eq. 5: the score of sub-pixel `i` at (x, y) of `fine` over its L1 neighbourhood.
+pub fn vote_score(fine: &Level, x: i64, y: i64, s: VoteSigmas) -> f32 {
+    let Some(pi) = fine.at(x, y).filter(|t| t.valid()) else { return -1.0 };
+    let mut score = 0.0;
+    for (dx, dy) in [(0i64, 0i64), (1, 0), (-1, 0), (0, 1), (0, -1)] {
+        let Some(pj) = fine.at(x + dx, y + dy).filter(|t| t.valid()) else { continue };
+        let dist = (dx.abs() + dy.abs()) as f32;
+        score += gaussian(dist, s.pixel)
+            * gaussian(1.0 - pi.normal.dot(pj.normal), s.normal)
+            * gaussian((pj.depth - pi.depth) / pi.depth, s.depth);
+    }
+    score
+}
+
+/// The next coarser level of `fine` by voting (Eq. 5, Fig. 5), and each texel's winner
+/// (0–3: x + 2y in its 2×2 block; −1 where the whole block is background).
+pub fn vote_level(fine: &Level, s: VoteSigmas) -> (Level, Vec<i32>) {
+    let (w, h) = (fine.width.div_ceil(2), fine.height.div_ceil(2));
+    let mut texels = Vec::with_capacity((w * h) as usize);
+    let mut winners = Vec::with_capacity((w * h) as usize);
+    for cy in 0..h as i64 {
+        for cx in 0..w as i64 {
+            let mut best = (-1i32, 0.0f32);
+            let (mut sum, mut inside) = (Vec3::ZERO, 0u32);
+            for i in 0..4i64 {
+                let (x, y) = (2 * cx + i % 2, 2 * cy + i / 2);
+                let Some(t) = fine.at(x, y) else { continue };
+                inside += 1;
+                if !t.valid() {
+                    continue;
+                }
+                sum += t.radiance;
+                let score = vote_score(fine, x, y, s);
+                if best.0 < 0 || score > best.1 {
+                    best = (i as i32, score);
+                }
+            }
+            let mut out = Texel::default();
+            if best.0 >= 0 {
+                let i = best.0 as i64;
+                let win = fine.at(2 * cx + i % 2, 2 * cy + i / 2).copied().unwrap_or_default();
+                out = Texel { radiance: sum / inside.max(1) as f32, ..win };
+            }
+            texels.push(out);
+            winners.push(best.0);
+        }
+    }
+    (Level { width: w, height: h, texels }, winners)
+}
+
+/// Sample `i` of `n` of the ring at one texel (Fig. 3): its offset in the level's texels
+/// (rounded to the nearest texel) and the screen area dP it stands for (level texels²).
+/// `full_disc`: the first gathered level samples the whole disc of radius `r`.
+pub fn ring_sample(i: u32, n: u32, r: f32, full_disc: bool, rotation: f32) -> (Vec2, f32) {
+    let inner = if full_disc { 0.0 } else { 0.5 * r };
+    let u = (i as f32 + 0.5) / n.max(1) as f32;
+    let rho = (inner * inner + u * (r * r - inner * inner)).sqrt();
+    let phi = rotation + i as f32 * GOLDEN_ANGLE;
+    let offset = Vec2::new((rho * phi.cos()).round(), (rho * phi.sin()).round());
+    (offset, std::f32::consts::PI * (r * r - inner * inner) / n.max(1) as f32)
+}
+
+/// The spiral's rotation at texel (x, y) of level `level` in frame `frame` (radians).
+pub fn ring_rotation(x: u32, y: u32, level: u32, frame: u32) -> f32 {
+    let h = pcg_hash(x ^ pcg_hash(y ^ pcg_hash(level ^ pcg_hash(frame))));
+    (h >> 8) as f32 / (1u32 << 24) as f32 * std::f32::consts::TAU
+}
+
+/// The camera quantities Eq. 2 needs.
+#[derive(Clone, Copy, Debug)]
+pub struct ScreenCamera {
+    pub eye: Vec3,
+    /// tan(f_h/2), tan(f_v/2).
+    pub tan_half: Vec2,
+    /// The level's size in texels (W, H of Eq. 2).
+    pub size: Vec2,
+}
+
+/// Eq. 2: the scene area ds a screen area `dp` (level texels²) covers at texel `t`:
+/// z² · 4 tan(f_h/2) tan(f_v/2) · dP / (W H) · cos α / cos β, with α the angle between the
+/// view ray and the optical axis (cos α = z / distance) and β between the surface normal and
+/// the ray (cos β clamped below by `min_cos_beta`, our bound: grazing texels would stand for
+/// unbounded areas).
+pub fn surface_area(t: &Texel, dp: f32, cam: &ScreenCamera, min_cos_beta: f32) -> f32 {
+    let to_eye = cam.eye - t.position;
+    let dist = to_eye.length().max(1e-12);
+    let cos_alpha = (t.depth / dist).min(1.0);
+    let cos_beta = (t.normal.dot(to_eye) / dist).abs().max(min_cos_beta);
+    t.depth * t.depth * 4.0 * cam.tan_half.x * cam.tan_half.y * dp / (cam.size.x * cam.size.y) * cos_alpha / cos_beta
+}
+
+/// The kernel that multiplies a sample's radiance: Eq. 1's cosθ cosθ' ds / r², or (with
+/// `disc`) π × Eq. 4's point-to-disc form factor, R² = cosθ' ds / π (see the module).
+pub fn kernel(cos_theta: f32, cos_theta_p: f32, ds: f32, r2: f32, disc: bool) -> f32 {
+    if disc {
+        let big_r2 = cos_theta_p * ds / std::f32::consts::PI;
+        std::f32::consts::PI * big_r2 * cos_theta / (r2 + big_r2).max(1e-20)
+    } else {
+        cos_theta * cos_theta_p * ds / r2.max(1e-20)
+    }
+}
+
+/// The gather's parameters at one level.
+#[derive(Clone, Copy, Debug)]
+pub struct GatherParams {
+    pub samples: u32,
+    pub radius: f32,
+    pub full_disc: bool,
+    pub level: u32,
+    pub frame: u32,
+    pub disc: bool,
+    pub min_cos_beta: f32,
+}
+
+/// Eq. 3 at texel (x, y) of `level`: the irradiance E = Σ L_i K_i of the ring's samples
+/// (no visibility: v_i = 1). Samples off the image, on the background or on the texel
+/// itself add nothing.
+pub fn gather(level: &Level, x: u32, y: u32, cam: &ScreenCamera, p: GatherParams) -> Vec3 {
+    let Some(rx) = level.at(x as i64, y as i64).filter(|t| t.valid()) else { return Vec3::ZERO };
+    let rotation = ring_rotation(x, y, p.level, p.frame);
+    let mut e = Vec3::ZERO;
+    for i in 0..p.samples {
+        let (o, dp) = ring_sample(i, p.samples, p.radius, p.full_disc, rotation);
+        if o == Vec2::ZERO {
+            continue;
+        }
+        let Some(s) = level.at(x as i64 + o.x as i64, y as i64 + o.y as i64).filter(|t| t.valid()) else {
+            continue;
+        };
+        let d = s.position - rx.position;
+        let r2 = d.length_squared();
+        if r2 <= 0.0 {
+            continue;
+        }
+        let w = d / r2.sqrt();
+        let (cos_t, cos_tp) = (rx.normal.dot(w).max(0.0), (-s.normal.dot(w)).max(0.0));
+        if cos_t <= 0.0 || cos_tp <= 0.0 {
+            continue;
+        }
+        let ds = surface_area(s, dp, cam, p.min_cos_beta);
+        e += s.radiance * kernel(cos_t, cos_tp, ds, r2, p.disc);
+    }
+    e
+}
+
+/// The σ of the upsampling's range weights (joint bilateral upsampling, Kopf et al.).
+#[derive(Clone, Copy, Debug)]
+pub struct UpsampleSigmas {
+    /// On the relative depth difference (z_c − z) / z.
+    pub depth: f32,
+    /// On 1 − n·n_c.
+    pub normal: f32,
+}
+
+/// The four coarse texels under fine texel (x, y) and their bilinear weights.
+pub fn coarse_footprint(x: u32, y: u32) -> [((i64, i64), f32); 4] {
+    let c = Vec2::new((x as f32 + 0.5) * 0.5 - 0.5, (y as f32 + 0.5) * 0.5 - 0.5);
+    let q = c.floor();
+    let f = c - q;
+    let (qx, qy) = (q.x as i64, q.y as i64);
+    [
+        ((qx, qy), (1.0 - f.x) * (1.0 - f.y)),
+        ((qx + 1, qy), f.x * (1.0 - f.y)),
+        ((qx, qy + 1), (1.0 - f.x) * f.y),
+        ((qx + 1, qy + 1), f.x * f.y),
+    ]
+}
+
+/// Joint bilateral upsampling of `coarse_light` (one value per texel of `coarse`) at fine
+/// texel `fine`, (x, y): bilinear × depth × normal weights over the four coarse texels,
+/// background texels excluded. When every weight vanishes (a thin feature no coarse texel
+/// resembles), the most similar valid coarse texel of the four (depth × normal weight
+/// alone) gives its light; with none valid, zero. Light never comes from the background.
+pub fn upsample(coarse: &Level, coarse_light: &[Vec3], fine: &Texel, x: u32, y: u32, s: UpsampleSigmas) -> Vec3 {
+    if !fine.valid() {
+        return Vec3::ZERO;
+    }
+    let (mut sum, mut wsum) = (Vec3::ZERO, 0.0);
+    let mut best = (0.0f32, Vec3::ZERO);
+    for ((cx, cy), b) in coarse_footprint(x, y) {
+        let Some(c) = coarse.at(cx, cy).filter(|t| t.valid()) else { continue };
+        let light = coarse_light[(cy as u64 * coarse.width as u64 + cx as u64) as usize];
+        let range = gaussian((c.depth - fine.depth) / fine.depth, s.depth)
+            * gaussian(1.0 - fine.normal.dot(c.normal), s.normal);
+        sum += light * b * range;
+        wsum += b * range;
+        if range > best.0 {
+            best = (range, light);
+        }
+    }
+    if wsum > 1e-6 { sum / wsum } else { best.1 }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f32::consts::PI;
+
+    /// Eq. 4 against the form factor of a disc integrated numerically: a receiver facing a
+    /// disc of radius R on its axis at distance r (cosθ = cosθ' = 1) has
+    /// F = ∫ cosθ cosθ' / (π d²) dA = R² / (r² + R²); our kernel is π F, and for r ≫ R both
+    /// tend to Eq. 1's cosθ cosθ' ds / r².
+    #[test]
+    fn the_point_to_disc_kernel_is_pi_times_the_integrated_disc_form_factor() {
+        for (r, big_r) in [(1.0f32, 0.1f32), (1.0, 0.5), (0.3, 1.0), (2.0, 0.05)] {
+            let n_r = 2000;
+            let mut f = 0.0f64;
+            for i in 0..n_r {
+                let rho = (i as f64 + 0.5) / n_r as f64 * big_r as f64;
+                let d2 = (r as f64).powi(2) + rho * rho;
+                let cos = r as f64 / d2.sqrt();
+                let ring = 2.0 * std::f64::consts::PI * rho * (big_r as f64 / n_r as f64);
+                f += cos * cos / (std::f64::consts::PI * d2) * ring;
+            }
+            let ds = PI * big_r * big_r;
+            let k = kernel(1.0, 1.0, ds, r * r, true);
+            assert!((k as f64 - PI as f64 * f).abs() <= 1e-3 * PI as f64 * f, "r {r} R {big_r}: {k} vs π·{f}");
+            if r > 10.0 * big_r {
+                let point = kernel(1.0, 1.0, ds, r * r, false);
+                assert!((k - point).abs() <= 0.01 * point, "far field: disc {k} vs point {point}");
+            }
+        }
+        // Bounded where Eq. 1's kernel is not.
+        assert!(kernel(1.0, 1.0, 0.01, 0.0, true).is_finite());
+        assert!(kernel(1.0, 1.0, 0.01, 1e-8, false) > 1e5);
+    }
+
+    /// Eq. 2 over every texel of a plane facing the camera sums to the plane's visible area
+    /// (2 z tan(f_h/2)) · (2 z tan(f_v/2)): cos α = cos β for a plane parallel to the screen.
+    #[test]
+    fn screen_areas_of_a_facing_plane_sum_to_its_visible_area() {
+        let (w, h, z) = (64u32, 36u32, 3.0f32);
+        let tan_half = Vec2::new(0.7, 0.7 * 36.0 / 64.0);
+        let cam = ScreenCamera { eye: Vec3::ZERO, tan_half, size: Vec2::new(w as f32, h as f32) };
+        let mut sum = 0.0;
+        for y in 0..h {
+            for x in 0..w {
+                let ndc = Vec2::new((x as f32 + 0.5) / w as f32 * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / h as f32 * 2.0);
+                let p = Vec3::new(ndc.x * tan_half.x * z, ndc.y * tan_half.y * z, -z);
+                let t = Texel { position: p, depth: z, normal: Vec3::Z, radiance: Vec3::ONE };
+                sum += surface_area(&t, 1.0, &cam, 0.01);
+            }
+        }
+        let want = 4.0 * z * z * tan_half.x * tan_half.y;
+        assert!((sum - want).abs() <= 1e-3 * want, "{sum} vs {want}");
+    }
+
+    /// Fig. 3: the first level's samples fill the disc, the others the ring r/2 … r, and
+    /// their areas dP add up to it.
+    #[test]
+    fn the_ring_samples_cover_the_annulus_and_its_area() {
+        let (n, r) = (64u32, 20.0f32);
+        for full in [true, false] {
+            let inner = if full { 0.0 } else { 0.5 * r };
+            let mut area = 0.0;
+            let mut inside_half = 0;
+            for i in 0..n {
+                let (o, dp) = ring_sample(i, n, r, full, 0.3);
+                let rho = o.length();
+                assert!(rho <= r + 0.75 && rho >= inner - 0.75, "sample {i} at {rho}");
+                inside_half += (rho < 0.5 * r) as u32;
+                area += dp;
+            }
+            assert!((area - PI * (r * r - inner * inner)).abs() < 1e-2, "{area}");
+            // Uniform in area: a quarter of the disc's samples lie inside r/2.
+            if full {
+                assert!((14..=18).contains(&inside_half), "{inside_half} of {n} inside r/2");
+            }
+        }
+        assert_ne!(ring_rotation(3, 4, 1, 0), ring_rotation(3, 4, 1, 1), "the spiral turns each frame");
+    }
+
+    /// Fig. 5: a lone sub-pixel of another surface loses the vote, and the winner's depth
+    /// and normal are kept, not averaged.
+    #[test]
+    fn voting_keeps_the_larger_surface_and_never_averages() {
+        let t = |n: Vec3, z: f32| Texel { position: Vec3::new(0.0, 0.0, -z), depth: z, normal: n, radiance: Vec3::ONE };
+        let wall = t(Vec3::Z, 2.0);
+        let post = t(Vec3::X, 1.0);
+        // A 4×4 level: the wall everywhere but texel (1, 1), the post.
+        let mut texels = vec![wall; 16];
+        texels[5] = post;
+        let fine = Level { width: 4, height: 4, texels };
+        let s = VoteSigmas { pixel: 1.0, normal: 0.2, depth: 0.05 };
+        let (coarse, winners) = vote_level(&fine, s);
+        assert_eq!((coarse.width, coarse.height), (2, 2));
+        assert_ne!(winners[0], 3, "the post (x + 2y = 3 in block 0) loses");
+        assert_eq!((coarse.texels[0].normal, coarse.texels[0].depth), (Vec3::Z, 2.0));
+        // Background: no winner, no light.
+        let empty = Level { width: 2, height: 2, texels: vec![Texel::default(); 4] };
+        let (c, w) = vote_level(&empty, s);
+        assert_eq!(w, vec![-1]);
+        assert!(!c.texels[0].valid());
+    }
+
+    /// The upsampling takes nothing from a coarse texel of another surface or the background.
+    #[test]
+    fn upsampling_never_bleeds_across_a_depth_edge() {
+        let near = Texel { position: Vec3::ZERO, depth: 1.0, normal: Vec3::Z, radiance: Vec3::ZERO };
+        let far = Texel { depth: 5.0, ..near };
+        let coarse = Level { width: 2, height: 2, texels: vec![near, far, Texel::default(), far] };
+        let light = [Vec3::ONE, Vec3::splat(100.0), Vec3::splat(1000.0), Vec3::splat(100.0)];
+        let s = UpsampleSigmas { depth: 0.1, normal: 0.2 };
+        let got = upsample(&coarse, &light, &near, 1, 1, s);
+        assert!((got - Vec3::ONE).length() < 1e-3, "{got}");
+        assert_eq!(upsample(&coarse, &light, &Texel::default(), 1, 1, s), Vec3::ZERO);
+    }
+}

@@ -1,0 +1,145 @@
+//! Stage 6 "screen-space ring gather" (Soler et al. 004 §3–4, Eq. 1–4, Fig. 3): every texel
+//! of each gathered mip level sums the radiance of N samples on a ring around it
+//! (`shaders/soler/gather.wgsl`; CPU twin `cpu::soler::gather`). The result per level is
+//! irradiance (`soler.level.k.indirect`).
+
+use super::STRIDE;
+use crate::buffers::{BufferKind, BufferRegistry};
+use crate::gpu::GpuContext;
+use crate::passes::bgl;
+use crate::timing::Slot;
+
+/// Rust twin of `GatherParams` in `shaders/soler/gather.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GatherParams {
+    /// Samples N, first gathered level (full disc) 1/0, level index, frame.
+    pub counts: [u32; 4],
+    /// r (level texels), point-to-disc 1 / point-to-point 0, min cos β, unused.
+    pub shape: [f32; 4],
+    /// The eye (xyz).
+    pub eye: [f32; 4],
+    /// tan(f_h/2), tan(f_v/2), the level's W and H.
+    pub screen: [f32; 4],
+}
+
+/// Most levels a frame gathers (the settings' range).
+pub const MAX_GATHERED: usize = 8;
+
+/// One gathered level's input: its position, normal and radiance views and size.
+pub struct LevelInputs<'a> {
+    pub level: u32,
+    pub position: &'a wgpu::TextureView,
+    pub normal: &'a wgpu::TextureView,
+    pub radiance: &'a wgpu::TextureView,
+    pub size: (u32, u32),
+}
+
+pub struct SolerGather {
+    /// `soler.level.k.indirect` of each gathered level k (first = the start level).
+    pub light: Vec<(u32, wgpu::Texture)>,
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::ComputePipeline,
+    params: wgpu::Buffer,
+}
+
+impl SolerGather {
+    pub fn new(ctx: &GpuContext) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("soler.gather.inputs"),
+            entries: &[
+                bgl::uniform_dynamic(0, cs),
+                bgl::texture(1, cs, false),
+                bgl::texture(2, cs, false),
+                bgl::texture(3, cs, false),
+                bgl::storage_texture(4, wgpu::TextureFormat::Rgba32Float),
+            ],
+        });
+        let module = crate::shaders::create_module(device, "soler/gather.wgsl");
+        let pipeline = crate::passes::compute_pipeline(device, "soler.gather", &module, "cs_gather", &[&layout]);
+        let params = crate::passes::uniform_buffer(device, "soler.gather.params", STRIDE * MAX_GATHERED as u64);
+        Self { light: Vec::new(), layout, pipeline, params }
+    }
+
+    /// Textures for the gathered `levels`, each (level, size); true when replaced.
+    pub fn ensure(&mut self, ctx: &GpuContext, levels: &[(u32, (u32, u32))]) -> bool {
+        let have: Vec<(u32, (u32, u32))> = self.light.iter().map(|(k, t)| (*k, (t.width(), t.height()))).collect();
+        if have == levels {
+            return false;
+        }
+        let storage = wgpu::TextureUsages::STORAGE_BINDING;
+        self.light = levels
+            .iter()
+            .map(|&(k, (w, h))| {
+                let label = format!("soler.level.{k}.indirect");
+                (k, crate::passes::create_target(&ctx.device, &label, w, h, wgpu::TextureFormat::Rgba32Float, storage))
+            })
+            .collect();
+        true
+    }
+
+    pub fn register(&self, reg: &mut BufferRegistry) {
+        for (k, t) in &self.light {
+            reg.register(
+                &format!("soler.level.{k}.indirect"),
+                BufferKind::Hdr,
+                "Soler raw indirect of one mip level (004 Eq. 3–4): the irradiance its ring of samples gathers, before upsampling",
+                t,
+            );
+        }
+    }
+
+    /// Gathers every level of `inputs` (in the order of [`Self::light`]).
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<Slot<'_>>,
+        inputs: &[LevelInputs<'_>],
+        base: GatherParams,
+    ) {
+        let params: Vec<GatherParams> = inputs
+            .iter()
+            .enumerate()
+            .map(|(i, l)| {
+                let mut p = base;
+                p.counts[1] = (i == 0) as u32;
+                p.counts[2] = l.level;
+                p.screen[2] = l.size.0 as f32;
+                p.screen[3] = l.size.1 as f32;
+                p
+            })
+            .collect();
+        ctx.queue.write_buffer(&self.params, 0, &crate::passes::strided_bytes(STRIDE, params.len(), &params));
+        let uniform = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &self.params,
+            offset: 0,
+            size: std::num::NonZeroU64::new(std::mem::size_of::<GatherParams>() as u64),
+        });
+        let n = inputs.len();
+        for (i, (l, (_, out))) in inputs.iter().zip(&self.light).enumerate() {
+            let out_view = crate::passes::view(out, "soler.gather.out");
+            let tv = wgpu::BindingResource::TextureView;
+            let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("soler.gather.inputs"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: uniform.clone() },
+                    wgpu::BindGroupEntry { binding: 1, resource: tv(l.position) },
+                    wgpu::BindGroupEntry { binding: 2, resource: tv(l.normal) },
+                    wgpu::BindGroupEntry { binding: 3, resource: tv(l.radiance) },
+                    wgpu::BindGroupEntry { binding: 4, resource: tv(&out_view) },
+                ],
+            });
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("soler.gather"),
+                timestamp_writes: slot.as_ref().and_then(|s| s.compute(i == 0, i + 1 == n)),
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &group, &[(i as u64 * STRIDE) as u32]);
+            pass.dispatch_workgroups(l.size.0.div_ceil(8), l.size.1.div_ceil(8), 1);
+        }
+    }
+}

@@ -1,0 +1,115 @@
+//! Soler et al.'s multi-resolution screen-space indirect illumination (004 §3–4) as stage
+//! choices: shading points "mip levels" (the G-buffer mipmapped by the voting filter of Eq. 5,
+//! `pyramid`), the gather "screen-space ring gather" (Eq. 1–4 on every texel of each level,
+//! `gather`) and the reconstruction "joint bilateral upsampling" (the continuous combination
+//! of all levels, `upsample`); `stage` runs them for the frame. Shaders `shaders/soler/`; CPU
+//! twin `cpu::soler` (the readings of the garbled formulas are documented there).
+//!
+//! Not built yet (issue #16): voxel visibility (v_i = 1 here), temporal filtering (Eq. 6),
+//! multi-bounce, glossy importance sampling, the reach setting, the sample overlay and the
+//! mixes with the HCB and VPLs.
+
+use crate::{settings_enum, settings_group};
+
+pub mod gather;
+pub mod pyramid;
+pub mod stage;
+pub mod upsample;
+
+settings_enum! {
+    /// The resolution the first gathered level has (004 §4, Fig. 10).
+    pub enum StartResolution {
+        /// The G-buffer's resolution.
+        Full = "full",
+        /// Half the G-buffer's width and height (one vote down).
+        Half = "half",
+        /// A quarter (two votes down).
+        Quarter = "quarter",
+    }
+    default Quarter
+}
+
+impl StartResolution {
+    /// The pyramid level of the first gathered level (0: the G-buffer).
+    pub fn level(self) -> u32 {
+        match self {
+            Self::Full => 0,
+            Self::Half => 1,
+            Self::Quarter => 2,
+        }
+    }
+}
+
+settings_enum! {
+    /// The geometry term of each screen-space sample (004 §3).
+    pub enum FormFactor {
+        /// Eq. 1's cosθ cosθ' ds / r²: unbounded as r → 0 (noise near contacts, Fig. 2).
+        PointToPoint = "point to point (Eq. 1)",
+        /// Eq. 4's point-to-disc form factor R² cosθ / (r² + R²), R² = cosθ' ds / π, times
+        /// π (our reading: Eq. 4 is a form factor, 1/π of Eq. 1's kernel for r ≫ R).
+        PointToDisc = "point to disc (Eq. 4)",
+    }
+    default PointToDisc
+}
+
+settings_group! {
+    /// Soler et al.'s screen-space indirect illumination (004 §3–4): the mip levels, the ring
+    /// of samples and the upsampling. Defaults: the paper's typical setting (4 levels,
+    /// r = 40 px, 64 samples from a quarter resolution, Fig. 9's first column); it gives no σ.
+    pub struct SolerSettings: "soler" {
+        /// Mip levels gathered, from the start resolution down (004 §4; each adds a ring twice
+        /// as far).
+        levels: u32 = 4,
+        unit "levels", symbol "L", range 1..=8, cost "one gather per level, each a quarter of the one before", history false;
+        /// Ring radius r in texels of every level (004 §4, Fig. 3): level k covers r/2 … r of
+        /// its own texels, 2^k·r/2 … 2^k·r of the start level's; the first level the disc.
+        radius_px: f32 = 40.0,
+        unit "px", symbol "r", range 1.0..=256.0, cost "free (the samples spread wider)", history false;
+        /// Samples per texel and level, constant across levels (004 §4).
+        samples: u32 = 64,
+        unit "samples", symbol "N", range 1..=1024, cost "linear in N", history false;
+        /// Resolution of the first gathered level (004 §4, Fig. 10).
+        start_resolution: StartResolution = StartResolution::Quarter,
+        unit "", symbol "", range 0..=2, cost "full: 4× half's gather, 16× quarter's", history false;
+        /// σ₁ of Eq. 5's g₁ on the texel distance (the paper gives none).
+        vote_sigma_pixel: f32 = 1.0,
+        unit "px", symbol "σ₁", range 0.05..=10.0, cost "free", history false;
+        /// σ₂ of Eq. 5's g₂ on 1 − n_i·n_j.
+        vote_sigma_normal: f32 = 0.2,
+        unit "", symbol "σ₂", range 0.001..=2.0, cost "free", history false;
+        /// σ₃ of Eq. 5's g₃ on the relative depth difference (z_j − z_i)/z_i (our reading:
+        /// the paper's z_j − z_i divided by z_i, independent of the scene's scale).
+        vote_sigma_depth: f32 = 0.05,
+        unit "× z", symbol "σ₃", range 0.0001..=10.0, cost "free", history false;
+        /// The geometry term of each sample (004 §3, Eq. 1 or Eq. 4).
+        form_factor: FormFactor = FormFactor::PointToDisc,
+        unit "", symbol "", range 0..=1, cost "free", history false;
+        /// Smallest cos β in Eq. 2's cos α / cos β (our bound: a grazing texel would stand for
+        /// an unbounded area).
+        min_cos_beta: f32 = 0.1,
+        unit "", symbol "cos β_min", range 0.001..=1.0, cost "free", history false;
+        /// σ of the upsampling's depth weight on (z_c − z)/z (joint bilateral upsampling; the
+        /// paper gives no weights).
+        upsample_sigma_depth: f32 = 0.1,
+        unit "× z", symbol "", range 0.0001..=10.0, cost "free", history false;
+        /// σ of the upsampling's normal weight on 1 − n·n_c.
+        upsample_sigma_normal: f32 = 0.2,
+        unit "", symbol "", range 0.001..=2.0, cost "free", history false;
+    }
+}
+
+impl SolerSettings {
+    /// The pyramid levels the gather runs on: start … start + levels − 1.
+    pub fn gathered_levels(&self) -> std::ops::Range<u32> {
+        let s = self.start_resolution.level();
+        s..s + self.levels.max(1)
+    }
+
+    /// The reach of the coarsest ring in G-buffer pixels: r · 2^{start + levels − 1}.
+    pub fn reach_px(&self) -> f32 {
+        self.radius_px * (1u64 << (self.gathered_levels().end - 1)) as f32
+    }
+}
+
+/// Uniform slot stride for dynamic offsets (the device's minimum alignment).
+pub const STRIDE: u64 = 256;

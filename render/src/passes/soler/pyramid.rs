@@ -1,0 +1,194 @@
+//! Stage 5 "mip levels" (Soler et al. 004 §4, "Filtering of mipmap levels", Eq. 5): the
+//! G-buffer's position, depth and normal and the direct light are mipmapped by voting among
+//! the sub-pixels of each 2×2 block (`shaders/soler/vote.wgsl`; CPU twin
+//! `cpu::soler::vote_level`). Level 0 is the G-buffer itself.
+
+use crate::buffers::{BufferKind, BufferRegistry};
+use crate::gpu::GpuContext;
+use crate::passes::bgl;
+use crate::timing::Slot;
+
+/// Rust twin of `VoteParams` in `shaders/soler/vote.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct VoteParams {
+    /// σ₁, σ₂, σ₃, unused.
+    pub sigma: [f32; 4],
+}
+
+/// One mip level above the G-buffer.
+pub struct PyramidLevel {
+    pub width: u32,
+    pub height: u32,
+    /// xyz world position of the winner, w its view depth (0: background).
+    pub position: wgpu::Texture,
+    /// xyz the winner's normal, w 1 on a surface, 0 on the background.
+    pub normal: wgpu::Texture,
+    /// rgb the block's mean radiance (the previous bounce).
+    pub radiance: wgpu::Texture,
+    /// The winning sub-pixel, x + 2y in the block (0–3), −1 on the background.
+    pub winner: wgpu::Texture,
+}
+
+pub struct SolerPyramid {
+    /// Levels 1, 2, … (index k − 1 for level k).
+    pub levels: Vec<PyramidLevel>,
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::ComputePipeline,
+    params: wgpu::Buffer,
+}
+
+/// Sizes of pyramid levels 1 … `top` over a `width` × `height` G-buffer (each ⌈half⌉).
+pub fn sizes(width: u32, height: u32, top: u32) -> Vec<(u32, u32)> {
+    let mut out = Vec::new();
+    let (mut w, mut h) = (width.max(1), height.max(1));
+    for _ in 0..top {
+        (w, h) = (w.div_ceil(2), h.div_ceil(2));
+        out.push((w, h));
+    }
+    out
+}
+
+impl SolerPyramid {
+    pub fn new(ctx: &GpuContext, width: u32, height: u32, top: u32) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let rgba = wgpu::TextureFormat::Rgba32Float;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("soler.vote.inputs"),
+            entries: &[
+                bgl::uniform(0, cs),
+                bgl::texture(1, cs, false),
+                bgl::texture(2, cs, false),
+                bgl::texture(3, cs, false),
+                bgl::storage_texture(4, rgba),
+                bgl::storage_texture(5, rgba),
+                bgl::storage_texture(6, rgba),
+                bgl::storage_texture(7, wgpu::TextureFormat::R32Float),
+            ],
+        });
+        let module = crate::shaders::create_module(device, "soler/vote.wgsl");
+        let pipeline = crate::passes::compute_pipeline(device, "soler.vote", &module, "cs_vote", &[&layout]);
+        let params =
+            crate::passes::uniform_buffer(device, "soler.vote.params", std::mem::size_of::<VoteParams>() as u64);
+        Self { levels: Self::targets(device, width, height, top), layout, pipeline, params }
+    }
+
+    fn targets(device: &wgpu::Device, width: u32, height: u32, top: u32) -> Vec<PyramidLevel> {
+        let storage = wgpu::TextureUsages::STORAGE_BINDING;
+        let rgba = wgpu::TextureFormat::Rgba32Float;
+        sizes(width, height, top)
+            .into_iter()
+            .enumerate()
+            .map(|(i, (w, h))| {
+                let k = i + 1;
+                let t = |name: &str, format| {
+                    crate::passes::create_target(device, &format!("soler.level.{k}.{name}"), w, h, format, storage)
+                };
+                PyramidLevel {
+                    width: w,
+                    height: h,
+                    position: t("position", rgba),
+                    normal: t("normal", rgba),
+                    radiance: t("radiance", rgba),
+                    winner: t("winner", wgpu::TextureFormat::R32Float),
+                }
+            })
+            .collect()
+    }
+
+    /// Resizes for a `width` × `height` G-buffer and levels up to `top`; true when the
+    /// textures were replaced.
+    pub fn ensure(&mut self, ctx: &GpuContext, width: u32, height: u32, top: u32) -> bool {
+        let have: Vec<(u32, u32)> = self.levels.iter().map(|l| (l.width, l.height)).collect();
+        if have == sizes(width, height, top) {
+            return false;
+        }
+        self.levels = Self::targets(&ctx.device, width, height, top);
+        true
+    }
+
+    pub fn register(&self, reg: &mut BufferRegistry) {
+        for (i, l) in self.levels.iter().enumerate() {
+            let k = i + 1;
+            reg.register(
+                &format!("soler.level.{k}.position"),
+                BufferKind::Data,
+                "Soler mip level (004 §4, Eq. 5): world position of the voting winner; w its view depth (0: background)",
+                &l.position,
+            );
+            reg.register(
+                &format!("soler.level.{k}.normal"),
+                BufferKind::Direction,
+                "Soler mip level (004 §4, Eq. 5, Fig. 5): the voting winner's normal, never an average",
+                &l.normal,
+            );
+            reg.register(
+                &format!("soler.level.{k}.radiance"),
+                BufferKind::Hdr,
+                "Soler mip level (004 §4): radiance of the previous bounce (direct light), the 2×2 block's mean",
+                &l.radiance,
+            );
+            reg.register(
+                &format!("soler.level.{k}.winner"),
+                BufferKind::Data,
+                "Soler mip level (004 Eq. 5): the winning sub-pixel x + 2y of the 2×2 block (0–3), −1 on the background",
+                &l.winner,
+            );
+        }
+    }
+
+    /// Votes levels 1 … top from the G-buffer's `position` and `normal` and the `radiance`
+    /// of the previous bounce.
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<Slot<'_>>,
+        sigma: [f32; 3],
+        position: &wgpu::TextureView,
+        normal: &wgpu::TextureView,
+        radiance: &wgpu::TextureView,
+    ) {
+        let p = VoteParams { sigma: [sigma[0], sigma[1], sigma[2], 0.0] };
+        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        let view = |t: &wgpu::Texture| crate::passes::view(t, "soler.level.view");
+        let views: Vec<[wgpu::TextureView; 4]> = self
+            .levels
+            .iter()
+            .map(|l| [view(&l.position), view(&l.normal), view(&l.radiance), view(&l.winner)])
+            .collect();
+        let n = self.levels.len();
+        for (i, out) in views.iter().enumerate() {
+            let (fp, fnorm, fr) = if i == 0 {
+                (position, normal, radiance)
+            } else {
+                (&views[i - 1][0], &views[i - 1][1], &views[i - 1][2])
+            };
+            let tv = wgpu::BindingResource::TextureView;
+            let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("soler.vote.inputs"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: self.params.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 1, resource: tv(fp) },
+                    wgpu::BindGroupEntry { binding: 2, resource: tv(fnorm) },
+                    wgpu::BindGroupEntry { binding: 3, resource: tv(fr) },
+                    wgpu::BindGroupEntry { binding: 4, resource: tv(&out[0]) },
+                    wgpu::BindGroupEntry { binding: 5, resource: tv(&out[1]) },
+                    wgpu::BindGroupEntry { binding: 6, resource: tv(&out[2]) },
+                    wgpu::BindGroupEntry { binding: 7, resource: tv(&out[3]) },
+                ],
+            });
+            let l = &self.levels[i];
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("soler.vote"),
+                timestamp_writes: slot.as_ref().and_then(|s| s.compute(i == 0, i + 1 == n)),
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(l.width.div_ceil(8), l.height.div_ceil(8), 1);
+        }
+    }
+}

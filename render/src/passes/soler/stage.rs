@@ -1,0 +1,118 @@
+//! Stages 5–6 with Soler et al.'s choices (004 §4, Fig. 4): the mip levels by voting, the
+//! ring gather on each gathered level, and the joint bilateral upsampling that combines them
+//! into `soler.indirect`.
+
+use super::gather::{GatherParams, LevelInputs, SolerGather};
+use super::pyramid::{SolerPyramid, sizes};
+use super::upsample::{SolerUpsample, Step};
+use super::{FormFactor, SolerSettings};
+use crate::buffers::BufferRegistry;
+use crate::gpu::GpuContext;
+use crate::stages::FrameInputs;
+use crate::timing::GpuTimer;
+
+pub struct SolerStage {
+    pub pyramid: SolerPyramid,
+    pub gather: SolerGather,
+    pub upsample: SolerUpsample,
+}
+
+/// Level sizes 0 (the G-buffer) … top.
+fn all_sizes(width: u32, height: u32, top: u32) -> Vec<(u32, u32)> {
+    let mut v = vec![(width.max(1), height.max(1))];
+    v.extend(sizes(width, height, top));
+    v
+}
+
+impl SolerStage {
+    pub fn new(ctx: &GpuContext, s: &SolerSettings, width: u32, height: u32) -> Self {
+        let top = s.gathered_levels().end - 1;
+        let mut stage = Self {
+            pyramid: SolerPyramid::new(ctx, width, height, top),
+            gather: SolerGather::new(ctx),
+            upsample: SolerUpsample::new(ctx, &all_sizes(width, height, top)[..top as usize]),
+        };
+        stage.ensure(ctx, s, width, height);
+        stage
+    }
+
+    /// Resizes for the settings and the G-buffer; true when textures were replaced.
+    pub fn ensure(&mut self, ctx: &GpuContext, s: &SolerSettings, width: u32, height: u32) -> bool {
+        let top = s.gathered_levels().end - 1;
+        let all = all_sizes(width, height, top);
+        let gathered: Vec<(u32, (u32, u32))> = s.gathered_levels().map(|k| (k, all[k as usize])).collect();
+        let a = self.pyramid.ensure(ctx, width, height, top);
+        let b = self.gather.ensure(ctx, &gathered);
+        let c = self.upsample.ensure(ctx, &all[..top as usize], all[0]);
+        a | b | c
+    }
+
+    pub fn register(&self, reg: &mut BufferRegistry) {
+        self.pyramid.register(reg);
+        self.gather.register(reg);
+        self.upsample.register(reg);
+    }
+
+    /// The frame's indirect light (`soler.indirect`).
+    pub fn run(&self, f: &FrameInputs, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) -> wgpu::TextureView {
+        let s = &f.settings.soler;
+        let ctx = f.ctx;
+        let g = f.gbuffer;
+        if !self.pyramid.levels.is_empty() {
+            let sigma = [s.vote_sigma_pixel, s.vote_sigma_normal, s.vote_sigma_depth];
+            timer.scope(ctx, enc, "soler.pyramid", |e, slot| {
+                self.pyramid.run(ctx, e, slot, sigma, &g.position, &g.normal, f.direct_radiance)
+            });
+        }
+        let view = |t: &wgpu::Texture| crate::passes::view(t, "soler.level.view");
+        // Views of levels 1 … top: position, normal, radiance.
+        let lv: Vec<[wgpu::TextureView; 3]> =
+            self.pyramid.levels.iter().map(|l| [view(&l.position), view(&l.normal), view(&l.radiance)]).collect();
+        let level_views = |k: u32| -> [&wgpu::TextureView; 3] {
+            if k == 0 {
+                [&g.position, &g.normal, f.direct_radiance]
+            } else {
+                let v = &lv[k as usize - 1];
+                [&v[0], &v[1], &v[2]]
+            }
+        };
+        let top = s.gathered_levels().end - 1;
+        let all = all_sizes(f.gbuffer_size.0, f.gbuffer_size.1, top);
+        let inputs: Vec<LevelInputs> = s
+            .gathered_levels()
+            .map(|k| {
+                let [position, normal, radiance] = level_views(k);
+                LevelInputs { level: k, position, normal, radiance, size: all[k as usize] }
+            })
+            .collect();
+        let aspect = f.gbuffer_size.0 as f32 / f.gbuffer_size.1.max(1) as f32;
+        let tan_v = (0.5 * f.camera.yfov).tan();
+        let base = GatherParams {
+            counts: [s.samples, 0, 0, f.frame],
+            shape: [s.radius_px, (s.form_factor == FormFactor::PointToDisc) as u32 as f32, s.min_cos_beta, 0.0],
+            eye: f.camera.position.extend(1.0).to_array(),
+            screen: [aspect * tan_v, tan_v, 0.0, 0.0],
+        };
+        timer.scope(ctx, enc, "soler.gather", |e, slot| self.gather.run(ctx, e, slot, &inputs, base));
+
+        let light: Vec<wgpu::TextureView> = self.gather.light.iter().map(|(_, t)| view(t)).collect();
+        let accum: Vec<wgpu::TextureView> = self.upsample.accum.iter().map(view).collect();
+        let start = s.gathered_levels().start;
+        let own = |k: u32| (k >= start).then(|| &light[(k - start) as usize]);
+        // The accumulated light of level k: the top level's own light, else its accumulator.
+        let acc = |k: u32| if k == top { &light[light.len() - 1] } else { &accum[k as usize] };
+        let steps: Vec<Step> = (0..top)
+            .rev()
+            .map(|k| {
+                let [fp, fnorm, _] = level_views(k);
+                let [cp, cn, _] = level_views(k + 1);
+                Step { fine: [fp, fnorm], fine_light: own(k), coarse: [cp, cn, acc(k + 1)] }
+            })
+            .collect();
+        let sigma = [s.upsample_sigma_depth, s.upsample_sigma_normal];
+        timer.scope(ctx, enc, "soler.upsample", |e, slot| {
+            self.upsample.run(ctx, e, slot, sigma, &steps, acc(0), &g.albedo)
+        });
+        crate::passes::view(&self.upsample.indirect, "soler.indirect")
+    }
+}

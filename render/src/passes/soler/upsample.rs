@@ -1,0 +1,196 @@
+//! Stage 6 "joint bilateral upsampling" (Soler et al. 004 §4, "Continuous combination of all
+//! levels"): from the coarsest gathered level down to the G-buffer, the accumulated light is
+//! up-sampled with bilinear × depth × normal weights and each gathered level's own light is
+//! added (`soler.accum.k`); the receiver then reflects it with c·DI/π (`soler.indirect`).
+//! Shaders `soler/{upsample,resolve}.wgsl`; CPU twin `cpu::soler::upsample`.
+
+use super::STRIDE;
+use crate::buffers::{BufferKind, BufferRegistry};
+use crate::gpu::GpuContext;
+use crate::passes::bgl;
+use crate::timing::Slot;
+
+/// Rust twin of `UpsampleParams` in `shaders/soler/upsample.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct UpsampleParams {
+    /// σ depth, σ normal, 1 when the fine level adds its own light, unused.
+    pub sigma: [f32; 4],
+}
+
+/// Most upsampling steps (levels above the G-buffer: start 2 + 8 levels − 1).
+pub const MAX_STEPS: usize = 10;
+
+/// One step's views: the fine level (position, normal, its own gathered light if any) and
+/// the coarse level (position, normal, accumulated light).
+pub struct Step<'a> {
+    pub fine: [&'a wgpu::TextureView; 2],
+    pub fine_light: Option<&'a wgpu::TextureView>,
+    pub coarse: [&'a wgpu::TextureView; 3],
+}
+
+pub struct SolerUpsample {
+    /// `soler.accum.k` for k = 0 … top − 1 (the coarsest level's accumulator is its light).
+    pub accum: Vec<wgpu::Texture>,
+    /// `soler.indirect`: c·DI/π · E at G-buffer resolution.
+    pub indirect: wgpu::Texture,
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::ComputePipeline,
+    resolve_layout: wgpu::BindGroupLayout,
+    resolve_pipeline: wgpu::ComputePipeline,
+    params: wgpu::Buffer,
+    dummy: wgpu::Texture,
+}
+
+impl SolerUpsample {
+    pub fn new(ctx: &GpuContext, sizes: &[(u32, u32)]) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let rgba = wgpu::TextureFormat::Rgba32Float;
+        let mut entries: Vec<wgpu::BindGroupLayoutEntry> = vec![bgl::uniform_dynamic(0, cs)];
+        entries.extend((1..=6).map(|b| bgl::texture(b, cs, false)));
+        entries.push(bgl::storage_texture(7, rgba));
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("soler.upsample.inputs"),
+            entries: &entries,
+        });
+        let resolve_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("soler.resolve.inputs"),
+            entries: &[bgl::texture(0, cs, false), bgl::texture(1, cs, false), bgl::storage_texture(2, rgba)],
+        });
+        let m_up = crate::shaders::create_module(device, "soler/upsample.wgsl");
+        let m_resolve = crate::shaders::create_module(device, "soler/resolve.wgsl");
+        let pipeline = crate::passes::compute_pipeline(device, "soler.upsample", &m_up, "cs_upsample", &[&layout]);
+        let resolve_pipeline =
+            crate::passes::compute_pipeline(device, "soler.resolve", &m_resolve, "cs_resolve", &[&resolve_layout]);
+        let params = crate::passes::uniform_buffer(device, "soler.upsample.params", STRIDE * MAX_STEPS as u64);
+        let storage = wgpu::TextureUsages::STORAGE_BINDING;
+        let dummy = crate::passes::create_target(device, "soler.no_own_light", 1, 1, rgba, storage);
+        let (accum, indirect) = Self::targets(device, sizes);
+        Self { accum, indirect, layout, pipeline, resolve_layout, resolve_pipeline, params, dummy }
+    }
+
+    /// `sizes`: levels 0 (the G-buffer) … top − 1.
+    fn targets(device: &wgpu::Device, sizes: &[(u32, u32)]) -> (Vec<wgpu::Texture>, wgpu::Texture) {
+        let storage = wgpu::TextureUsages::STORAGE_BINDING;
+        let rgba = wgpu::TextureFormat::Rgba32Float;
+        let accum = sizes
+            .iter()
+            .enumerate()
+            .map(|(k, &(w, h))| crate::passes::create_target(device, &format!("soler.accum.{k}"), w, h, rgba, storage))
+            .collect();
+        let (w, h) = sizes.first().copied().unwrap_or((1, 1));
+        (accum, crate::passes::create_target(device, "soler.indirect", w, h, rgba, storage))
+    }
+
+    /// Resizes for the accumulators of levels 0 … top − 1 (`sizes`, the first the G-buffer's);
+    /// true when replaced.
+    pub fn ensure(&mut self, ctx: &GpuContext, sizes: &[(u32, u32)], gbuffer: (u32, u32)) -> bool {
+        let have: Vec<(u32, u32)> = self.accum.iter().map(|t| (t.width(), t.height())).collect();
+        if have == sizes && (self.indirect.width(), self.indirect.height()) == gbuffer {
+            return false;
+        }
+        let storage = wgpu::TextureUsages::STORAGE_BINDING;
+        (self.accum, _) = Self::targets(&ctx.device, sizes);
+        self.indirect = crate::passes::create_target(
+            &ctx.device,
+            "soler.indirect",
+            gbuffer.0,
+            gbuffer.1,
+            wgpu::TextureFormat::Rgba32Float,
+            storage,
+        );
+        true
+    }
+
+    pub fn register(&self, reg: &mut BufferRegistry) {
+        for (k, t) in self.accum.iter().enumerate() {
+            reg.register(
+                &format!("soler.accum.{k}"),
+                BufferKind::Hdr,
+                "Soler accumulator after the upsampling step to level k (004 §4): the irradiance of every coarser level, bilaterally up-sampled, plus level k's own",
+                t,
+            );
+        }
+        reg.register(
+            "soler.indirect",
+            BufferKind::Hdr,
+            "Soler indirect light (004 Fig. 4): the combined irradiance of all levels reflected with c·DI/π",
+            &self.indirect,
+        );
+    }
+
+    /// Runs `steps` (coarse to fine: the last writes `soler.accum.0`) and the resolve of
+    /// `last_light` (the accumulator at G-buffer resolution) with `albedo`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<Slot<'_>>,
+        sigma: [f32; 2],
+        steps: &[Step<'_>],
+        last_light: &wgpu::TextureView,
+        albedo: &wgpu::TextureView,
+    ) {
+        let params: Vec<UpsampleParams> = steps
+            .iter()
+            .map(|s| UpsampleParams { sigma: [sigma[0], sigma[1], s.fine_light.is_some() as u32 as f32, 0.0] })
+            .collect();
+        ctx.queue.write_buffer(&self.params, 0, &crate::passes::strided_bytes(STRIDE, params.len().max(1), &params));
+        let uniform = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &self.params,
+            offset: 0,
+            size: std::num::NonZeroU64::new(std::mem::size_of::<UpsampleParams>() as u64),
+        });
+        fn tv(v: &wgpu::TextureView) -> wgpu::BindingResource<'_> {
+            wgpu::BindingResource::TextureView(v)
+        }
+        let dummy = crate::passes::view(&self.dummy, "soler.no_own_light");
+        let n = steps.len();
+        // Step i writes the accumulator of level n − 1 − i.
+        for (i, s) in steps.iter().enumerate() {
+            let k = n - 1 - i;
+            let out = crate::passes::view(&self.accum[k], "soler.accum.view");
+            let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("soler.upsample.inputs"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: uniform.clone() },
+                    wgpu::BindGroupEntry { binding: 1, resource: tv(s.fine[0]) },
+                    wgpu::BindGroupEntry { binding: 2, resource: tv(s.fine[1]) },
+                    wgpu::BindGroupEntry { binding: 3, resource: tv(s.fine_light.unwrap_or(&dummy)) },
+                    wgpu::BindGroupEntry { binding: 4, resource: tv(s.coarse[0]) },
+                    wgpu::BindGroupEntry { binding: 5, resource: tv(s.coarse[1]) },
+                    wgpu::BindGroupEntry { binding: 6, resource: tv(s.coarse[2]) },
+                    wgpu::BindGroupEntry { binding: 7, resource: tv(&out) },
+                ],
+            });
+            let t = &self.accum[k];
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("soler.upsample"),
+                timestamp_writes: slot.as_ref().and_then(|s| s.compute(i == 0, false)),
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &group, &[(i as u64 * STRIDE) as u32]);
+            pass.dispatch_workgroups(t.width().div_ceil(8), t.height().div_ceil(8), 1);
+        }
+        let out = crate::passes::view(&self.indirect, "soler.indirect");
+        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("soler.resolve.inputs"),
+            layout: &self.resolve_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: tv(last_light) },
+                wgpu::BindGroupEntry { binding: 1, resource: tv(albedo) },
+                wgpu::BindGroupEntry { binding: 2, resource: tv(&out) },
+            ],
+        });
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("soler.resolve"),
+            timestamp_writes: slot.as_ref().and_then(|s| s.compute(n == 0, true)),
+        });
+        pass.set_pipeline(&self.resolve_pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(self.indirect.width().div_ceil(8), self.indirect.height().div_ceil(8), 1);
+    }
+}

@@ -1,0 +1,112 @@
+// The indirect lighting shader of Soler et al. (004 §3–4, Eq. 1–4, Fig. 3), run on one mip
+// level: every texel gathers N samples of a ring of radius r/2 … r (the full disc of radius r
+// on the first, finest gathered level) in the level's own texels, a Vogel spiral rotated per
+// texel and frame, each sample standing for 1/N of the ring's area dP. A sample's radiance L
+// (the previous bounce) reaches the texel through Eq. 3: ds by Eq. 2 (with the half angles,
+// W H the level's size — the 2^{2k} of §4), and the point-to-disc form factor of Eq. 4 times
+// π in place of cosθ cosθ' ds / r² (or that point-to-point term, a setting). The texel keeps
+// the irradiance E = Σ L_i K_i; the receiver reflects it with c·DI/π after upsampling.
+// No visibility (v_i = 1). CPU twin: cpu::soler::{ring_sample, ring_rotation, surface_area,
+// kernel, gather}.
+#import soler/common.wgsl
+#import common/random.wgsl
+
+// Rust twin: passes::soler::gather::GatherParams.
+struct GatherParams {
+    // x: samples N, y: first gathered level (full disc) 1/0, z: level index, w: frame
+    counts: vec4<u32>,
+    // x: r (level texels), y: point-to-disc 1 / point-to-point 0, z: min cos β, w: unused
+    shape: vec4<f32>,
+    // xyz: the eye; w unused
+    eye: vec4<f32>,
+    // x: tan(f_h/2), y: tan(f_v/2), z: W, w: H (the level's size)
+    screen: vec4<f32>,
+}
+
+const GOLDEN_ANGLE: f32 = 2.3999632;
+
+@group(0) @binding(0) var<uniform> params: GatherParams;
+@group(0) @binding(1) var level_position: texture_2d<f32>;
+@group(0) @binding(2) var level_normal: texture_2d<f32>;
+@group(0) @binding(3) var level_radiance: texture_2d<f32>;
+@group(0) @binding(4) var out_light: texture_storage_2d<rgba32float, write>;
+
+fn rotation(p: vec2<u32>) -> f32 {
+    let h = pcg_hash(p.x ^ pcg_hash(p.y ^ pcg_hash(params.counts.z ^ pcg_hash(params.counts.w))));
+    return f32(h >> 8u) / 16777216.0 * 2.0 * PI;
+}
+
+// Eq. 2 at a sample: z² · 4 tan(f_h/2) tan(f_v/2) · dP / (W H) · cos α / cos β.
+fn surface_area(position: vec4<f32>, normal: vec3<f32>, dp: f32) -> f32 {
+    let to_eye = params.eye.xyz - position.xyz;
+    let dist = max(length(to_eye), 1e-12);
+    let cos_alpha = min(position.w / dist, 1.0);
+    let cos_beta = max(abs(dot(normal, to_eye)) / dist, params.shape.z);
+    return position.w * position.w * 4.0 * params.screen.x * params.screen.y * dp
+        / (params.screen.z * params.screen.w) * cos_alpha / cos_beta;
+}
+
+fn kernel(cos_t: f32, cos_tp: f32, ds: f32, r2: f32) -> f32 {
+    if (params.shape.y > 0.5) {
+        let big_r2 = cos_tp * ds / PI;
+        return PI * big_r2 * cos_t / max(r2 + big_r2, 1e-20);
+    }
+    return cos_t * cos_tp * ds / max(r2, 1e-20);
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let size = textureDimensions(level_position);
+    if (gid.x >= size.x || gid.y >= size.y) {
+        return;
+    }
+    let x = vec2<i32>(gid.xy);
+    let nx = textureLoad(level_normal, x, 0);
+    if (nx.w < 0.5) {
+        textureStore(out_light, gid.xy, vec4<f32>(0.0));
+        return;
+    }
+    let px = textureLoad(level_position, x, 0).xyz;
+    let n = nx.xyz;
+    let count = params.counts.x;
+    let r = params.shape.x;
+    var inner = 0.5 * r;
+    if (params.counts.y == 1u) {
+        inner = 0.0;
+    }
+    let dp = PI * (r * r - inner * inner) / f32(max(count, 1u));
+    let rot = rotation(gid.xy);
+    var e = vec3<f32>(0.0);
+    for (var i = 0u; i < count; i = i + 1u) {
+        let u = (f32(i) + 0.5) / f32(max(count, 1u));
+        let rho = sqrt(inner * inner + u * (r * r - inner * inner));
+        let phi = rot + f32(i) * GOLDEN_ANGLE;
+        let o = vec2<i32>(round(vec2<f32>(rho * cos(phi), rho * sin(phi))));
+        if (o.x == 0 && o.y == 0) {
+            continue;
+        }
+        let q = x + o;
+        if (!inside(q, size)) {
+            continue;
+        }
+        let nq = textureLoad(level_normal, q, 0);
+        if (nq.w < 0.5) {
+            continue;
+        }
+        let pq = textureLoad(level_position, q, 0);
+        let d = pq.xyz - px;
+        let r2 = dot(d, d);
+        if (r2 <= 0.0) {
+            continue;
+        }
+        let w = d / sqrt(r2);
+        let cos_t = max(dot(n, w), 0.0);
+        let cos_tp = max(-dot(nq.xyz, w), 0.0);
+        if (cos_t <= 0.0 || cos_tp <= 0.0) {
+            continue;
+        }
+        let ds = surface_area(pq, nq.xyz, dp);
+        e = e + textureLoad(level_radiance, q, 0).rgb * kernel(cos_t, cos_tp, ds, r2);
+    }
+    textureStore(out_light, gid.xy, vec4<f32>(e, 1.0));
+}

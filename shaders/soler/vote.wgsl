@@ -1,0 +1,88 @@
+// The next coarser mip level by voting (Soler et al. 004 §4 "Filtering of mipmap levels",
+// Eq. 5, Fig. 5). Each coarse texel scores the sub-pixels of its 2×2 block with
+// s(p_i) = Σ_{|p_i − p_j|₁ ≤ 1} g₁(|p_i − p_j|) g₂(1 − n_j·n_i) g₃((z_j − z_i)/z_i) over the
+// L1 neighbourhood (which reaches one texel outside the block: the apron) and keeps the
+// winner's position, depth and normal — no averaging. Radiance goes down as the block's mean
+// (background is black), so that the coarse texel emits its sub-pixels' power.
+// CPU twin: cpu::soler::vote_level.
+#import soler/common.wgsl
+
+// Rust twin: passes::soler::pyramid::VoteParams.
+struct VoteParams {
+    // σ₁ (texels), σ₂ (on 1 − n·n), σ₃ (relative depth), unused
+    sigma: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> params: VoteParams;
+@group(0) @binding(1) var fine_position: texture_2d<f32>;
+@group(0) @binding(2) var fine_normal: texture_2d<f32>;
+@group(0) @binding(3) var fine_radiance: texture_2d<f32>;
+@group(0) @binding(4) var out_position: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(5) var out_normal: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(6) var out_radiance: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(7) var out_winner: texture_storage_2d<r32float, write>;
+
+fn valid(p: vec2<i32>, size: vec2<u32>) -> bool {
+    return inside(p, size) && textureLoad(fine_normal, p, 0).w > 0.5;
+}
+
+fn score(p: vec2<i32>, size: vec2<u32>) -> f32 {
+    let n_i = textureLoad(fine_normal, p, 0).xyz;
+    let z_i = textureLoad(fine_position, p, 0).w;
+    var s = 0.0;
+    var offsets = array<vec2<i32>, 5>(vec2<i32>(0, 0), vec2<i32>(1, 0), vec2<i32>(-1, 0), vec2<i32>(0, 1), vec2<i32>(0, -1));
+    for (var j = 0; j < 5; j = j + 1) {
+        let q = p + offsets[j];
+        if (!valid(q, size)) {
+            continue;
+        }
+        let n_j = textureLoad(fine_normal, q, 0).xyz;
+        let z_j = textureLoad(fine_position, q, 0).w;
+        let dist = f32(abs(offsets[j].x) + abs(offsets[j].y));
+        s = s + gaussian(dist, params.sigma.x) * gaussian(1.0 - dot(n_i, n_j), params.sigma.y)
+            * gaussian((z_j - z_i) / z_i, params.sigma.z);
+    }
+    return s;
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn cs_vote(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let out_size = textureDimensions(out_position);
+    if (gid.x >= out_size.x || gid.y >= out_size.y) {
+        return;
+    }
+    let size = textureDimensions(fine_position);
+    var best = -1;
+    var best_score = 0.0;
+    var sum = vec3<f32>(0.0);
+    var count = 0.0;
+    for (var i = 0; i < 4; i = i + 1) {
+        let p = vec2<i32>(2 * i32(gid.x) + i % 2, 2 * i32(gid.y) + i / 2);
+        if (!inside(p, size)) {
+            continue;
+        }
+        count = count + 1.0;
+        if (!valid(p, size)) {
+            continue;
+        }
+        sum = sum + textureLoad(fine_radiance, p, 0).rgb;
+        let s = score(p, size);
+        if (best < 0 || s > best_score) {
+            best = i;
+            best_score = s;
+        }
+    }
+    var position = vec4<f32>(0.0);
+    var normal = vec4<f32>(0.0);
+    var radiance = vec4<f32>(0.0);
+    if (best >= 0) {
+        let p = vec2<i32>(2 * i32(gid.x) + best % 2, 2 * i32(gid.y) + best / 2);
+        position = textureLoad(fine_position, p, 0);
+        normal = vec4<f32>(textureLoad(fine_normal, p, 0).xyz, 1.0);
+        radiance = vec4<f32>(sum / max(count, 1.0), 1.0);
+    }
+    textureStore(out_position, gid.xy, position);
+    textureStore(out_normal, gid.xy, normal);
+    textureStore(out_radiance, gid.xy, radiance);
+    textureStore(out_winner, gid.xy, vec4<f32>(f32(best), 0.0, 0.0, 0.0));
+}

@@ -1,0 +1,156 @@
+//! Soler et al.'s screen-space indirect illumination (issue #16): the GPU's mip levels,
+//! gather and upsampling against the CPU twin `cpu::soler` on the default scene, and the
+//! twin's formulas against closed forms.
+
+use gi_lab_tests::{default_scene, gpu};
+use gi_render::cpu::soler::{self, GatherParams, Level, ScreenCamera, Texel, UpsampleSigmas, VoteSigmas};
+use gi_render::passes::soler::{FormFactor, StartResolution};
+use gi_render::pipeline::Technique;
+use gi_render::{ImageF32, LabSettings, Renderer};
+use glam::{Vec2, Vec3};
+
+fn v3(p: [f32; 4]) -> Vec3 {
+    Vec3::new(p[0], p[1], p[2])
+}
+
+/// A level as the CPU twin reads it from the GPU's position, normal and radiance images.
+fn level(position: &ImageF32, normal: &ImageF32, radiance: &ImageF32) -> Level {
+    let texels = (0..position.data.len())
+        .map(|i| {
+            let (p, n, l) = (position.data[i], normal.data[i], radiance.data[i]);
+            if n[3] < 0.5 {
+                return Texel::default();
+            }
+            Texel { position: v3(p), depth: p[3], normal: v3(n), radiance: v3(l) }
+        })
+        .collect();
+    Level { width: position.width, height: position.height, texels }
+}
+
+fn renderer(size: u32, edit: impl FnOnce(&mut LabSettings)) -> Renderer {
+    let mut s = LabSettings::default();
+    Technique::Soler.apply(&mut s);
+    edit(&mut s);
+    assert!(s.validate().is_empty(), "{:?}", s.validate());
+    let mut r = Renderer::new(gpu(), default_scene(), s, size, size).expect("renderer");
+    r.clock.playing = false;
+    r
+}
+
+fn read(r: &Renderer, name: &str) -> ImageF32 {
+    r.readback(name).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+/// Texels where `a` and `b` differ by more than `rel` (relative) plus `abs`.
+fn mismatches(a: &[Vec3], b: &[Vec3], rel: f32, abs: f32) -> usize {
+    a.iter().zip(b).filter(|(x, y)| (**x - **y).length() > abs + rel * x.length().max(y.length())).count()
+}
+
+#[test]
+fn the_mip_levels_gather_and_upsampling_match_the_cpu() {
+    const SIZE: u32 = 64;
+    let mut r = renderer(SIZE, |s| {
+        s.soler.start_resolution = StartResolution::Half;
+        s.soler.levels = 3;
+        s.soler.samples = 24;
+        s.soler.radius_px = 6.0;
+    });
+    r.render_frame();
+    let s = r.settings().soler.clone();
+    let sig = VoteSigmas { pixel: s.vote_sigma_pixel, normal: s.vote_sigma_normal, depth: s.vote_sigma_depth };
+    let mut levels =
+        vec![level(&read(&r, "gbuffer.position"), &read(&r, "gbuffer.normal"), &read(&r, "direct.radiance"))];
+    // Voting (Eq. 5): each GPU level against the CPU's vote of the GPU level below it.
+    for k in 1..=s.gathered_levels().end - 1 {
+        let gpu = level(
+            &read(&r, &format!("soler.level.{k}.position")),
+            &read(&r, &format!("soler.level.{k}.normal")),
+            &read(&r, &format!("soler.level.{k}.radiance")),
+        );
+        let winners = read(&r, &format!("soler.level.{k}.winner"));
+        let (cpu, cpu_winners) = soler::vote_level(&levels[k as usize - 1], sig);
+        assert_eq!((gpu.width, gpu.height), (cpu.width, cpu.height), "level {k} size");
+        let differ = cpu_winners.iter().zip(&winners.data).filter(|(c, g)| **c as f32 != g[0]).count();
+        // The scores are sums of f32 exponentials: a near-tie may go either way.
+        assert!(differ * 100 <= cpu_winners.len(), "level {k}: {differ} of {} winners differ", cpu_winners.len());
+        for (i, (c, g)) in cpu.texels.iter().zip(&gpu.texels).enumerate() {
+            if cpu_winners[i] as f32 == winners.data[i][0] {
+                assert_eq!((c.position, c.depth, c.normal), (g.position, g.depth, g.normal), "level {k} texel {i}");
+                assert!(
+                    (c.radiance - g.radiance).length() <= 1e-5 * c.radiance.length().max(1.0),
+                    "level {k} texel {i}"
+                );
+            }
+        }
+        // The room fills the view (no background); edges pick other sub-pixels than the first.
+        assert!(winners.data.iter().any(|w| w[0] > 0.0), "level {k}: every winner is sub-pixel 0");
+        levels.push(gpu);
+    }
+    // The gather (Eq. 1–4) at every texel of each gathered level, from the GPU's level.
+    let aspect = 1.0;
+    let tan_v = (0.5 * r.camera.yfov).tan();
+    let mut gathered = Vec::new();
+    for (i, k) in s.gathered_levels().enumerate() {
+        let l = &levels[k as usize];
+        let cam = ScreenCamera {
+            eye: r.camera.position,
+            tan_half: Vec2::new(aspect * tan_v, tan_v),
+            size: Vec2::new(l.width as f32, l.height as f32),
+        };
+        let p = GatherParams {
+            samples: s.samples,
+            radius: s.radius_px,
+            full_disc: i == 0,
+            level: k,
+            frame: 0,
+            disc: s.form_factor == FormFactor::PointToDisc,
+            min_cos_beta: s.min_cos_beta,
+        };
+        let cpu: Vec<Vec3> = (0..l.height)
+            .flat_map(|y| (0..l.width).map(move |x| (x, y)))
+            .map(|(x, y)| soler::gather(l, x, y, &cam, p))
+            .collect();
+        let gpu: Vec<Vec3> = read(&r, &format!("soler.level.{k}.indirect")).data.into_iter().map(v3).collect();
+        let lit = cpu.iter().filter(|e| e.length() > 0.0).count();
+        // A sample offset rounds ρ·cos φ to a texel; where it lies on a half texel the GPU's
+        // cos may round the other way: a few texels may differ by one sample.
+        let bad = mismatches(&cpu, &gpu, 1e-3, 1e-6);
+        println!("level {k}: {lit} of {} texels lit, {bad} differ", cpu.len());
+        assert!(lit * 2 > cpu.len() / 3, "level {k}: {lit} lit texels");
+        assert!(bad * 50 <= cpu.len(), "level {k}: {bad} texels differ");
+        gathered.push(gpu);
+    }
+    // The upsampling, coarse to fine, from the GPU's accumulators.
+    let us = UpsampleSigmas { depth: s.upsample_sigma_depth, normal: s.upsample_sigma_normal };
+    let top = s.gathered_levels().end - 1;
+    let start = s.gathered_levels().start;
+    let accum = |k: u32| -> Vec<Vec3> {
+        if k == top {
+            gathered[gathered.len() - 1].clone()
+        } else {
+            read(&r, &format!("soler.accum.{k}")).data.into_iter().map(v3).collect()
+        }
+    };
+    for k in (0..top).rev() {
+        let (fine, coarse, coarse_light) = (&levels[k as usize], &levels[k as usize + 1], accum(k + 1));
+        let cpu: Vec<Vec3> = (0..fine.height)
+            .flat_map(|y| (0..fine.width).map(move |x| (x, y)))
+            .map(|(x, y)| {
+                let t = &fine.texels[(y * fine.width + x) as usize];
+                let own =
+                    if k >= start { gathered[(k - start) as usize][(y * fine.width + x) as usize] } else { Vec3::ZERO };
+                let own = if t.valid() { own } else { Vec3::ZERO };
+                soler::upsample(coarse, &coarse_light, t, x, y, us) + own
+            })
+            .collect();
+        let gpu = accum(k);
+        let bad = mismatches(&cpu, &gpu, 1e-4, 1e-6);
+        assert_eq!(bad, 0, "upsampling to level {k}: {bad} texels differ");
+    }
+    // The resolve: c·DI/π · E.
+    let albedo = read(&r, "gbuffer.albedo");
+    let e = accum(0);
+    let want: Vec<Vec3> = e.iter().zip(&albedo.data).map(|(e, a)| v3(*a) * a[3] / std::f32::consts::PI * *e).collect();
+    let got: Vec<Vec3> = read(&r, "soler.indirect").data.into_iter().map(v3).collect();
+    assert_eq!(mismatches(&want, &got, 1e-4, 1e-6), 0, "soler.indirect");
+}
