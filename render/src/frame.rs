@@ -100,10 +100,9 @@ impl Renderer {
         let indirect = indirect_light(&f, &mut self.stages, &mut enc, &mut self.timer, view_proj);
 
         // Stage 7: compose direct + indirect and tone map.
-        let radiance_view = crate::passes::view(&self.direct.radiance, "direct.radiance");
         let (compose, ts) = (&self.compose, &self.settings.tonemap);
         self.timer.scope(&ctx, &mut enc, "compose", |e, slot| {
-            compose.compose(&ctx, e, slot, &radiance_view, indirect.as_ref())
+            compose.compose(&ctx, e, slot, &direct_view, indirect.as_ref())
         });
         self.timer.scope(&ctx, &mut enc, "compose.luminance", |e, slot| compose.luminance(&ctx, e, slot, ts));
         self.timer.scope(&ctx, &mut enc, "compose.tonemap", |e, slot| compose.tonemap(&ctx, e, slot, ts));

@@ -170,6 +170,48 @@ pub fn compute_pipeline(
     })
 }
 
+/// A bind group whose entry k is binding k (the compute passes' inputs in binding order).
+pub fn bind_group(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    resources: Vec<wgpu::BindingResource<'_>>,
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry> = resources
+        .into_iter()
+        .enumerate()
+        .map(|(k, resource)| wgpu::BindGroupEntry { binding: k as u32, resource })
+        .collect();
+    device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(label), layout, entries: &entries })
+}
+
+/// The first `size` bytes of `buffer`, bound with a dynamic offset (one slot of
+/// [`strided_bytes`]).
+pub fn dynamic_slot(buffer: &wgpu::Buffer, size: usize) -> wgpu::BindingResource<'_> {
+    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+        buffer,
+        offset: 0,
+        size: std::num::NonZeroU64::new(size as u64),
+    })
+}
+
+/// One compute pass of `pipeline` over `group` (with `offsets`), 8×8 workgroups covering
+/// `size` texels.
+pub fn dispatch_2d(
+    encoder: &mut wgpu::CommandEncoder,
+    label: &str,
+    pipeline: &wgpu::ComputePipeline,
+    group: &wgpu::BindGroup,
+    offsets: &[u32],
+    timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    size: (u32, u32),
+) {
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(label), timestamp_writes });
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, group, offsets);
+    pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);
+}
+
 /// Bind group layout entry helpers.
 pub mod bgl {
     pub fn uniform(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {

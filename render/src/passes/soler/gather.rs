@@ -113,33 +113,17 @@ impl SolerGather {
             })
             .collect();
         ctx.queue.write_buffer(&self.params, 0, &crate::passes::strided_bytes(STRIDE, params.len(), &params));
-        let uniform = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-            buffer: &self.params,
-            offset: 0,
-            size: std::num::NonZeroU64::new(std::mem::size_of::<GatherParams>() as u64),
-        });
+        let uniform = crate::passes::dynamic_slot(&self.params, std::mem::size_of::<GatherParams>());
         let n = inputs.len();
         for (i, (l, (_, out))) in inputs.iter().zip(&self.light).enumerate() {
             let out_view = crate::passes::view(out, "soler.gather.out");
             let tv = wgpu::BindingResource::TextureView;
-            let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("soler.gather.inputs"),
-                layout: &self.layout,
-                entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: uniform.clone() },
-                    wgpu::BindGroupEntry { binding: 1, resource: tv(l.position) },
-                    wgpu::BindGroupEntry { binding: 2, resource: tv(l.normal) },
-                    wgpu::BindGroupEntry { binding: 3, resource: tv(l.radiance) },
-                    wgpu::BindGroupEntry { binding: 4, resource: tv(&out_view) },
-                ],
-            });
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("soler.gather"),
-                timestamp_writes: slot.as_ref().and_then(|s| s.compute(i == 0, i + 1 == n)),
-            });
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &group, &[(i as u64 * STRIDE) as u32]);
-            pass.dispatch_workgroups(l.size.0.div_ceil(8), l.size.1.div_ceil(8), 1);
+            let views = [l.position, l.normal, l.radiance, &out_view];
+            let resources = std::iter::once(uniform.clone()).chain(views.map(tv)).collect();
+            let group = crate::passes::bind_group(&ctx.device, "soler.gather.inputs", &self.layout, resources);
+            let stamps = slot.as_ref().and_then(|s| s.compute(i == 0, i + 1 == n));
+            let offset = [(i as u64 * STRIDE) as u32];
+            crate::passes::dispatch_2d(encoder, "soler.gather", &self.pipeline, &group, &offset, stamps, l.size);
         }
     }
 }

@@ -167,28 +167,12 @@ impl SolerPyramid {
                 (&views[i - 1][0], &views[i - 1][1], &views[i - 1][2])
             };
             let tv = wgpu::BindingResource::TextureView;
-            let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("soler.vote.inputs"),
-                layout: &self.layout,
-                entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: self.params.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 1, resource: tv(fp) },
-                    wgpu::BindGroupEntry { binding: 2, resource: tv(fnorm) },
-                    wgpu::BindGroupEntry { binding: 3, resource: tv(fr) },
-                    wgpu::BindGroupEntry { binding: 4, resource: tv(&out[0]) },
-                    wgpu::BindGroupEntry { binding: 5, resource: tv(&out[1]) },
-                    wgpu::BindGroupEntry { binding: 6, resource: tv(&out[2]) },
-                    wgpu::BindGroupEntry { binding: 7, resource: tv(&out[3]) },
-                ],
-            });
+            let inputs = [fp, fnorm, fr, &out[0], &out[1], &out[2], &out[3]];
+            let resources = std::iter::once(self.params.as_entire_binding()).chain(inputs.map(tv)).collect();
+            let group = crate::passes::bind_group(&ctx.device, "soler.vote.inputs", &self.layout, resources);
             let l = &self.levels[i];
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("soler.vote"),
-                timestamp_writes: slot.as_ref().and_then(|s| s.compute(i == 0, i + 1 == n)),
-            });
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(l.width.div_ceil(8), l.height.div_ceil(8), 1);
+            let stamps = slot.as_ref().and_then(|s| s.compute(i == 0, i + 1 == n));
+            crate::passes::dispatch_2d(encoder, "soler.vote", &self.pipeline, &group, &[], stamps, (l.width, l.height));
         }
     }
 }

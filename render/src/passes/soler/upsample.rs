@@ -138,11 +138,7 @@ impl SolerUpsample {
             .map(|s| UpsampleParams { sigma: [sigma[0], sigma[1], s.fine_light.is_some() as u32 as f32, 0.0] })
             .collect();
         ctx.queue.write_buffer(&self.params, 0, &crate::passes::strided_bytes(STRIDE, params.len().max(1), &params));
-        let uniform = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-            buffer: &self.params,
-            offset: 0,
-            size: std::num::NonZeroU64::new(std::mem::size_of::<UpsampleParams>() as u64),
-        });
+        let uniform = crate::passes::dynamic_slot(&self.params, std::mem::size_of::<UpsampleParams>());
         fn tv(v: &wgpu::TextureView) -> wgpu::BindingResource<'_> {
             wgpu::BindingResource::TextureView(v)
         }
@@ -152,45 +148,21 @@ impl SolerUpsample {
         for (i, s) in steps.iter().enumerate() {
             let k = n - 1 - i;
             let out = crate::passes::view(&self.accum[k], "soler.accum.view");
-            let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("soler.upsample.inputs"),
-                layout: &self.layout,
-                entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: uniform.clone() },
-                    wgpu::BindGroupEntry { binding: 1, resource: tv(s.fine[0]) },
-                    wgpu::BindGroupEntry { binding: 2, resource: tv(s.fine[1]) },
-                    wgpu::BindGroupEntry { binding: 3, resource: tv(s.fine_light.unwrap_or(&dummy)) },
-                    wgpu::BindGroupEntry { binding: 4, resource: tv(s.coarse[0]) },
-                    wgpu::BindGroupEntry { binding: 5, resource: tv(s.coarse[1]) },
-                    wgpu::BindGroupEntry { binding: 6, resource: tv(s.coarse[2]) },
-                    wgpu::BindGroupEntry { binding: 7, resource: tv(&out) },
-                ],
-            });
+            let views =
+                [s.fine[0], s.fine[1], s.fine_light.unwrap_or(&dummy), s.coarse[0], s.coarse[1], s.coarse[2], &out];
+            let resources = std::iter::once(uniform.clone()).chain(views.map(tv)).collect();
+            let group = crate::passes::bind_group(&ctx.device, "soler.upsample.inputs", &self.layout, resources);
             let t = &self.accum[k];
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("soler.upsample"),
-                timestamp_writes: slot.as_ref().and_then(|s| s.compute(i == 0, false)),
-            });
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &group, &[(i as u64 * STRIDE) as u32]);
-            pass.dispatch_workgroups(t.width().div_ceil(8), t.height().div_ceil(8), 1);
+            let stamps = slot.as_ref().and_then(|s| s.compute(i == 0, false));
+            let offset = [(i as u64 * STRIDE) as u32];
+            let size = (t.width(), t.height());
+            crate::passes::dispatch_2d(encoder, "soler.upsample", &self.pipeline, &group, &offset, stamps, size);
         }
         let out = crate::passes::view(&self.indirect, "soler.indirect");
-        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("soler.resolve.inputs"),
-            layout: &self.resolve_layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: tv(last_light) },
-                wgpu::BindGroupEntry { binding: 1, resource: tv(albedo) },
-                wgpu::BindGroupEntry { binding: 2, resource: tv(&out) },
-            ],
-        });
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("soler.resolve"),
-            timestamp_writes: slot.as_ref().and_then(|s| s.compute(n == 0, true)),
-        });
-        pass.set_pipeline(&self.resolve_pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(self.indirect.width().div_ceil(8), self.indirect.height().div_ceil(8), 1);
+        let resources = [last_light, albedo, &out].map(tv).into();
+        let group = crate::passes::bind_group(&ctx.device, "soler.resolve.inputs", &self.resolve_layout, resources);
+        let stamps = slot.as_ref().and_then(|s| s.compute(n == 0, true));
+        let size = (self.indirect.width(), self.indirect.height());
+        crate::passes::dispatch_2d(encoder, "soler.resolve", &self.resolve_pipeline, &group, &[], stamps, size);
     }
 }
