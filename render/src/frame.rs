@@ -90,6 +90,7 @@ impl Renderer {
             gbuffer: &self.gbuffer.targets.views,
             normal_texture: &self.gbuffer.targets.normal,
             radius: self.bounds.radius(),
+            center: self.bounds.center(),
             height: self.height,
             gbuffer_size: (self.width, self.height),
             frame: self.clock.frame as u32,
@@ -98,11 +99,12 @@ impl Renderer {
             views: light_view_list(&state, self.bounds),
         };
         let indirect = indirect_light(&f, &mut self.stages, &mut enc, &mut self.timer, view_proj);
+        let near_field = near_field_light(&f, &self.stages, &mut enc, &mut self.timer);
 
         // Stage 7: compose direct + indirect and tone map.
         let (compose, ts) = (&self.compose, &self.settings.tonemap);
         self.timer.scope(&ctx, &mut enc, "compose", |e, slot| {
-            compose.compose(&ctx, e, slot, &direct_view, indirect.as_ref())
+            compose.compose(&ctx, e, slot, &direct_view, indirect.as_ref(), near_field.as_ref())
         });
         self.timer.scope(&ctx, &mut enc, "compose.luminance", |e, slot| compose.luminance(&ctx, e, slot, ts));
         self.timer.scope(&ctx, &mut enc, "compose.tonemap", |e, slot| compose.tonemap(&ctx, e, slot, ts));
@@ -171,7 +173,19 @@ fn indirect_light(
             let i = x.interleave.as_mut()?;
             let diffuse = f.settings.vpl.receiver_brdf == ReceiverBrdf::DiffuseOnly;
             let (camera, g) = (f.camera_buffer, f.gbuffer);
-            i.shade(f.ctx, enc, timer, camera, g, &vpls.list, vpls.count, vpls.min_distance, &vis, diffuse);
+            i.shade(
+                f.ctx,
+                enc,
+                timer,
+                camera,
+                g,
+                &vpls.list,
+                vpls.count,
+                vpls.min_distance,
+                vpls.near_cut,
+                &vis,
+                diffuse,
+            );
             crate::passes::view(&i.merged, "indirect.merged")
         }
     };
@@ -187,6 +201,21 @@ fn indirect_light(
         let reconstructed = reconstruct(f, x, enc, timer, gathered)?;
         temporal(f, x, enc, timer, reconstructed)?
     })
+}
+
+/// Stage 6's near field (`pipeline.near_field`): Soler's screen-space gather of the senders
+/// closer than the split, added to the VPL gather's far field by the compose.
+fn near_field_light(
+    f: &FrameInputs,
+    x: &StagePasses,
+    enc: &mut wgpu::CommandEncoder,
+    timer: &mut GpuTimer,
+) -> Option<wgpu::TextureView> {
+    let p = &f.settings.pipeline;
+    if p.gather != Gather::Vpl || !p.uses_soler() {
+        return None;
+    }
+    Some(x.soler.as_ref()?.run(f, enc, timer))
 }
 
 /// Stage 6's reconstruction of the gathered light. Coherence splatting ran with the gather at

@@ -104,6 +104,22 @@ settings_enum! {
     default ConfidenceMerge
 }
 
+settings_enum! {
+    /// Stage 6, near field: a second gather that takes the light arriving from closer than a
+    /// split distance, the VPL gather then taking only what arrives from farther (no light
+    /// is counted twice: the two gathers split one integral by the distance to the sender).
+    pub enum NearField {
+        /// The main gather takes light from every distance.
+        None = "none",
+        /// Soler et al.'s screen-space gather (004 §3–4, settings in `soler`) within
+        /// `soler.near_field_distance`; VPLs beyond it. Screen-space gathering is strongest
+        /// where VPLs lose light to their distance clamp (corners, contacts), VPLs see what
+        /// the screen does not.
+        ScreenSpace = "screen-space (Soler) near, VPLs far",
+    }
+    default None
+}
+
 settings_group! {
     /// The stage choices (DESIGN.md's pipeline table, stages 3–7): which pass each stage runs.
     /// The technique picker sets them all; each can then be changed on its own.
@@ -127,6 +143,10 @@ settings_group! {
         /// reference's running average).
         temporal: Temporal = Temporal::ConfidenceMerge,
         unit "", symbol "", range 0..=3, cost "merge: one pass and two copies; cache: validation and removal quads", history true;
+        /// Stage 6, near field: Soler's screen-space gather for the light from closer than
+        /// `soler.near_field_distance`, the VPL gather for the rest.
+        near_field: NearField = NearField::None,
+        unit "", symbol "", range 0..=1, cost "screen-space: the mip levels, one ring gather per level and the upsampling", history true;
     }
 }
 
@@ -149,13 +169,23 @@ settings_enum! {
         /// Multi-resolution screen-space indirect illumination (Soler et al. 004): no VPLs,
         /// the mip levels gather the visible direct light.
         Soler = "screen-space mip levels (Soler)",
+        /// Soler's screen-space gather for the near field, Knecht's instant radiosity for the
+        /// far field (`pipeline.near_field`; split at `soler.near_field_distance`).
+        SolerNearKnechtFar = "near field Soler, far field Knecht",
     }
     default DirectOnly
 }
 
 impl Technique {
-    pub const ALL: [Technique; 6] =
-        [Self::DirectOnly, Self::Knecht, Self::Nguyen, Self::NguyenCached, Self::ExactVpl, Self::Soler];
+    pub const ALL: [Technique; 7] = [
+        Self::DirectOnly,
+        Self::Knecht,
+        Self::Nguyen,
+        Self::NguyenCached,
+        Self::ExactVpl,
+        Self::Soler,
+        Self::SolerNearKnechtFar,
+    ];
 
     /// The technique's stage choices. `base` gives the choices the technique leaves open
     /// (the visibility of instant radiosity and the HCB, direct light's unused stages).
@@ -170,6 +200,7 @@ impl Technique {
             gather: Gather::Vpl,
             reconstruction,
             temporal,
+            near_field: NearField::None,
         };
         match self {
             Self::DirectOnly => PipelineSettings { gather: Gather::None, ..base.clone() },
@@ -188,6 +219,7 @@ impl Technique {
                 gather: Gather::Vpl,
                 reconstruction: Reconstruction::None,
                 temporal: Temporal::RunningAverage,
+                near_field: NearField::None,
             },
             Self::Soler => PipelineSettings {
                 vpl_source: VplSource::None,
@@ -196,7 +228,11 @@ impl Technique {
                 gather: Gather::ScreenSpace,
                 reconstruction: Reconstruction::BilateralUpsampling,
                 temporal: Temporal::None,
+                near_field: NearField::None,
             },
+            Self::SolerNearKnechtFar => {
+                PipelineSettings { near_field: NearField::ScreenSpace, ..Self::Knecht.choices(base) }
+            }
         }
     }
 
@@ -231,6 +267,11 @@ impl PipelineSettings {
         self.gather == Gather::Vpl && self.vpl_source != VplSource::None
     }
 
+    /// Whether Soler et al.'s passes run: as the gather, or as the near field of a VPL gather.
+    pub fn uses_soler(&self) -> bool {
+        self.gather == Gather::ScreenSpace || (self.uses_vpls() && self.near_field == NearField::ScreenSpace)
+    }
+
     /// Whether instant radiosity's VPLs (stages 3–4 of Knecht) are in use.
     pub fn uses_knecht_vpls(&self) -> bool {
         self.gather == Gather::Vpl && self.vpl_source == VplSource::ImportanceWarping
@@ -261,7 +302,7 @@ impl PipelineSettings {
             "temporal" => knecht && self.temporal == Temporal::ConfidenceMerge,
             "hcb" => self.uses_hcb(),
             "reference" => self.is_reference(),
-            "soler" => self.gather == Gather::ScreenSpace,
+            "soler" => self.uses_soler(),
             _ => true,
         }
     }
@@ -288,6 +329,9 @@ pub fn combination_errors(s: &LabSettings) -> Vec<FieldError> {
         }
         if p.temporal != Temporal::None {
             err("temporal", "Soler's temporal filtering (Eq. 6) is not built yet and the other temporal choices belong to VPL gathers: set pipeline.temporal = None".into());
+        }
+        if p.near_field != NearField::None {
+            err("near_field", "the screen-space gather already takes the light from every distance; a near field splits a VPL gather: set pipeline.near_field = None or pipeline.gather = Vpl".into());
         }
         return errors;
     }
@@ -430,6 +474,7 @@ impl V1Choices {
             gather: Gather::Vpl,
             reconstruction,
             temporal,
+            near_field: NearField::None,
         };
         match self.technique {
             LegacyTechnique::None => PipelineSettings { gather: Gather::None, ..ir },

@@ -53,6 +53,10 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("soler/gather.wgsl", include_str!("../../shaders/soler/gather.wgsl")),
     ("soler/upsample.wgsl", include_str!("../../shaders/soler/upsample.wgsl")),
     ("soler/resolve.wgsl", include_str!("../../shaders/soler/resolve.wgsl")),
+    ("soler/voxel_common.wgsl", include_str!("../../shaders/soler/voxel_common.wgsl")),
+    ("soler/voxelize.wgsl", include_str!("../../shaders/soler/voxelize.wgsl")),
+    ("soler/voxel_down.wgsl", include_str!("../../shaders/soler/voxel_down.wgsl")),
+    ("soler/voxel_view.wgsl", include_str!("../../shaders/soler/voxel_view.wgsl")),
     ("view/view.wgsl", include_str!("../../shaders/view/view.wgsl")),
     ("view/probe.wgsl", include_str!("../../shaders/view/probe.wgsl")),
 ];
@@ -93,6 +97,9 @@ pub const ENTRY_MODULES: &[&str] = &[
     "soler/gather.wgsl",
     "soler/upsample.wgsl",
     "soler/resolve.wgsl",
+    "soler/voxelize.wgsl",
+    "soler/voxel_down.wgsl",
+    "soler/voxel_view.wgsl",
     "view/view.wgsl",
     "view/probe.wgsl",
 ];

@@ -27,6 +27,8 @@ pub struct FrameInputs<'a> {
     pub normal_texture: &'a wgpu::Texture,
     /// The scene's bounding radius (scene-relative offsets and clip planes).
     pub radius: f32,
+    /// The centre of the scene's bounds.
+    pub center: glam::Vec3,
     pub height: u32,
     /// The G-buffer's width and height.
     pub gbuffer_size: (u32, u32),
@@ -45,6 +47,18 @@ impl FrameInputs<'_> {
         self.camera.zfar - self.camera.znear
     }
 
+    /// The split distance of the near field when a VPL gather has one (`pipeline.near_field`,
+    /// scene units), else 0: the VPL gather skips senders closer, the screen-space gather
+    /// skips senders farther.
+    pub fn near_field_cut(&self) -> f32 {
+        let p = &self.settings.pipeline;
+        if p.uses_vpls() && p.near_field == crate::pipeline::NearField::ScreenSpace {
+            self.settings.soler.near_field_split(self.radius).max(0.0)
+        } else {
+            0.0
+        }
+    }
+
     /// The bounding radius the VPL passes scale their offsets and clip planes by (never 0).
     pub fn vpl_radius(&self) -> f32 {
         self.radius.max(1e-3)
@@ -60,6 +74,9 @@ pub struct VplSet {
     pub count: u32,
     /// The geometry term's distance clamp d_min (Knecht 002 Eq. 4.7).
     pub min_distance: f32,
+    /// Senders closer than this are the near field's (`pipeline.near_field`): the gather
+    /// skips them. 0: no near field.
+    pub near_cut: f32,
 }
 
 /// Stage 4's output: the visibility the gather reads.

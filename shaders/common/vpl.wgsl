@@ -77,10 +77,15 @@ fn vpl_tile_origin(tile: u32, cols: u32, size: u32) -> vec2<u32> {
 }
 
 // Irradiance at x (normal nx) from one VPL, visibility not included: Φ · f_y(ω_in, y→x) ·
-// cos θ_y · cos θ_x / max(d², d_min²) (Knecht 002 Eq. 4.7–4.8; dmin2 = d_min²).
-fn vpl_irradiance(vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, dmin2: f32) -> vec3<f32> {
+// cos θ_y · cos θ_x / max(d², d_min²) (Knecht 002 Eq. 4.7–4.8; dmin2 = d_min²). A VPL closer
+// than the near field's cut (near2 = cut², 0: none; `pipeline.near_field`) sends nothing:
+// the screen-space gather takes that light.
+fn vpl_irradiance(vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, dmin2: f32, near2: f32) -> vec3<f32> {
     let w = vpl.position.xyz - x;
     let d2 = dot(w, w);
+    if (d2 < near2) {
+        return vec3<f32>(0.0);
+    }
     let l = w * inverseSqrt(max(d2, 1e-12));
     let cos_x = dot(nx, l);
     let cos_y = -dot(vpl.normal.xyz, l);
@@ -94,8 +99,8 @@ fn vpl_irradiance(vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, dmin2: f32) -> vec3<f32
 // Radiance toward the eye at `eye` that one VPL sends to x (normal nx, colour c, DI, SI, SP),
 // visibility not included: Knecht 002 Eq. 4.7–4.9 with the one BRDF at both ends — the
 // irradiance times f_x (CPU twin: cpu::knecht::vpl_radiance, where the reading is documented).
-fn vpl_radiance(vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, eye: vec3<f32>, c: vec3<f32>, mat: vec3<f32>, dmin2: f32) -> vec3<f32> {
-    let e = vpl_irradiance(vpl, x, nx, dmin2);
+fn vpl_radiance(vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, eye: vec3<f32>, c: vec3<f32>, mat: vec3<f32>, dmin2: f32, near2: f32) -> vec3<f32> {
+    let e = vpl_irradiance(vpl, x, nx, dmin2, near2);
     if (max(e.r, max(e.g, e.b)) <= 0.0) {
         return vec3<f32>(0.0);
     }

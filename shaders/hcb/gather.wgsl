@@ -21,6 +21,8 @@ struct HcbGatherParams {
     // x: d_min², y: ISM eye offset / exact near, z: ISM bias / exact far,
     // w: ISM receiver normal offset (texels) / exact eye offset
     shade: vec4<f32>,
+    // x: the near field's cut² (senders closer are left to it; 0: none)
+    near: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> params: HcbGatherParams;
@@ -101,7 +103,7 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
         if (vpl.position.w < 0.5) {
             continue;
         }
-        let irradiance = vpl_irradiance(vpl, x, nx, params.shade.x);
+        let irradiance = vpl_irradiance(vpl, x, nx, params.shade.x, params.near.x);
         if (max(irradiance.r, max(irradiance.g, irradiance.b)) <= 0.0) {
             continue;
         }

@@ -18,6 +18,8 @@ struct GatherParams {
     // x: d_min², y: ISM eye offset / exact near, z: ISM bias / exact far,
     // w: ISM receiver normal offset (texels) / exact eye offset
     shade: vec4<f32>,
+    // x: the near field's cut² (senders closer are left to it; 0: none)
+    near: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> camera: Camera;
@@ -64,7 +66,7 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
             if (vpl.position.w < 0.5) {
                 continue;
             }
-            let l = vpl_radiance(vpl, x, nx, camera.position.xyz, alb.rgb, m, params.shade.x);
+            let l = vpl_radiance(vpl, x, nx, camera.position.xyz, alb.rgb, m, params.shade.x, params.near.x);
             if (max(l.r, max(l.g, l.b)) <= 0.0) {
                 continue;
             }

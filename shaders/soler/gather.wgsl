@@ -6,21 +6,33 @@
 // W H the level's size — the 2^{2k} of §4), and the point-to-disc form factor of Eq. 4 times
 // π in place of cosθ cosθ' ds / r² (or that point-to-point term, a setting). The texel keeps
 // the irradiance E = Σ L_i K_i; the receiver reflects it with c·DI/π after upsampling.
-// No visibility (v_i = 1). CPU twin: cpu::soler::{ring_sample, ring_rotation, surface_area,
+// Visibility v_i (004 §4 "Visibility", a setting): a march through this level's voxel grid
+// from the receiver's texel to the sample's, depth interpolated as 1/z (perspective-correct),
+// skipping `bias` texels at both ends and testing the slice `depth bias` slices in front of
+// the line; a solid voxel on the way hides the sample. Without it v_i = 1. The second output
+// keeps, per texel, the light the visibility removed (rgb) and the visible fraction of the
+// samples that carried light (a). As the near field of a VPL gather (`pipeline.near_field`), senders
+// at the cut distance or farther are skipped: the VPLs take them. CPU twin: cpu::soler::{ring_sample, ring_rotation, surface_area,
 // kernel, gather}.
 #import soler/common.wgsl
+#import soler/voxel_common.wgsl
 #import common/random.wgsl
 
 // Rust twin: passes::soler::gather::GatherParams.
 struct GatherParams {
     // x: samples N, y: first gathered level (full disc) 1/0, z: level index, w: frame
     counts: vec4<u32>,
-    // x: r (level texels), y: point-to-disc 1 / point-to-point 0, z: min cos β, w: unused
+    // x: r (level texels), y: point-to-disc 1 / point-to-point 0, z: min cos β, w: the
+    // near field's cut² (senders farther are the VPLs'; 0: none)
     shape: vec4<f32>,
     // xyz: the eye; w unused
     eye: vec4<f32>,
     // x: tan(f_h/2), y: tan(f_v/2), z: W, w: H (the level's size)
     screen: vec4<f32>,
+    // This level's voxel grid (grid.x = 0: no visibility).
+    voxels: VoxelParams,
+    // x: texels skipped at both ends of the march, y: depth bias (slices), z, w: unused
+    march: vec4<f32>,
 }
 
 const GOLDEN_ANGLE: f32 = 2.3999632;
@@ -30,6 +42,40 @@ const GOLDEN_ANGLE: f32 = 2.3999632;
 @group(0) @binding(2) var level_normal: texture_2d<f32>;
 @group(0) @binding(3) var level_radiance: texture_2d<f32>;
 @group(0) @binding(4) var out_light: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(5) var<storage, read> grid: array<u32>;
+@group(0) @binding(6) var out_occlusion: texture_storage_2d<rgba32float, write>;
+
+// v_i: false when a solid voxel of the grid lies between texel a (view depth za) and texel b
+// (view depth zb). CPU twin: cpu::soler::march_visible.
+fn visible(a: vec2<i32>, za: f32, b: vec2<i32>, zb: f32) -> bool {
+    let v = params.voxels;
+    let d = vec2<f32>(b - a);
+    let n = max(abs(d.x), abs(d.y));
+    let bias = params.march.x;
+    let steps = i32(ceil(n));
+    for (var i = 1; i < steps; i = i + 1) {
+        let fi = f32(i);
+        if (fi < bias || n - fi < bias) {
+            continue;
+        }
+        let t = fi / n;
+        let p = vec2<i32>(round(vec2<f32>(a) + d * t));
+        if (p.x < 0 || p.y < 0 || p.x >= i32(v.grid.x) || p.y >= i32(v.grid.y)) {
+            continue;
+        }
+        let z = 1.0 / mix(1.0 / za, 1.0 / zb, t);
+        let sf = floor((z - v.depth.x) / max(v.depth.y - v.depth.x, 1e-12) * f32(v.grid.w) - params.march.y);
+        if (sf < 0.0 || sf >= f32(v.grid.w)) {
+            continue;
+        }
+        let s = u32(sf);
+        let word = grid[(u32(p.y) * v.grid.x + u32(p.x)) * v.grid.z + s / 32u];
+        if (((word >> (s % 32u)) & 1u) != 0u) {
+            return false;
+        }
+    }
+    return true;
+}
 
 fn rotation(p: vec2<u32>) -> f32 {
     let h = pcg_hash(p.x ^ pcg_hash(p.y ^ pcg_hash(params.counts.z ^ pcg_hash(params.counts.w))));
@@ -64,9 +110,14 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     let nx = textureLoad(level_normal, x, 0);
     if (nx.w < 0.5) {
         textureStore(out_light, gid.xy, vec4<f32>(0.0));
+        textureStore(out_occlusion, gid.xy, vec4<f32>(0.0));
         return;
     }
-    let px = textureLoad(level_position, x, 0).xyz;
+    let px4 = textureLoad(level_position, x, 0);
+    let px = px4.xyz;
+    var hidden = vec3<f32>(0.0);
+    var lit = 0u;
+    var seen = 0u;
     let n = nx.xyz;
     let count = params.counts.x;
     let r = params.shape.x;
@@ -96,7 +147,7 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
         let pq = textureLoad(level_position, q, 0);
         let d = pq.xyz - px;
         let r2 = dot(d, d);
-        if (r2 <= 0.0) {
+        if (r2 <= 0.0 || (params.shape.w > 0.0 && r2 >= params.shape.w)) {
             continue;
         }
         let w = d / sqrt(r2);
@@ -106,7 +157,15 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
             continue;
         }
         let ds = surface_area(pq, nq.xyz, dp);
-        e = e + textureLoad(level_radiance, q, 0).rgb * kernel(cos_t, cos_tp, ds, r2);
+        let light = textureLoad(level_radiance, q, 0).rgb * kernel(cos_t, cos_tp, ds, r2);
+        lit = lit + 1u;
+        if (params.voxels.grid.x > 0u && !visible(x, px4.w, q, pq.w)) {
+            hidden = hidden + light;
+            continue;
+        }
+        seen = seen + 1u;
+        e = e + light;
     }
     textureStore(out_light, gid.xy, vec4<f32>(e, 1.0));
+    textureStore(out_occlusion, gid.xy, vec4<f32>(hidden, f32(seen) / f32(max(lit, 1u))));
 }

@@ -17,6 +17,8 @@ struct Params {
     // x: depth bias (texels), y: normal offset (texels), z: visibility on (1) / off (0),
     // w: receiver BRDF diffuse only (1: SI = 0) or full (0)
     bias: vec4<f32>,
+    // x: the near field's cut² (senders closer are left to it; 0: none)
+    near: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> camera: Camera;
@@ -59,7 +61,7 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
                 }
             }
             let si = select(mat.x, 0.0, params.bias.w > 0.5);
-            sum = sum + vpl_radiance(vpl, x, nx, camera.position.xyz, alb.rgb, vec3<f32>(alb.a, si, mat.y), dmin2);
+            sum = sum + vpl_radiance(vpl, x, nx, camera.position.xyz, alb.rgb, vec3<f32>(alb.a, si, mat.y), dmin2, params.near.x);
         }
     }
     textureStore(out_raw, px, vec4<f32>(sum, 1.0));

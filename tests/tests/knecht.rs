@@ -295,6 +295,8 @@ fn every_shipped_preset_loads_cleanly_and_validates() {
         "nguyen-hcb",
         "nguyen-hcb-cached",
         "soler-quarter-4-64",
+        "soler-near-knecht-far",
+        "soler-quarter-4-64-visibility",
     ] {
         assert!(names.iter().any(|n| n == want), "presets/{want}.ron is missing");
     }
@@ -312,6 +314,16 @@ fn every_shipped_preset_loads_cleanly_and_validates() {
     assert_eq!(Technique::of(&sol.settings.pipeline), Some(Technique::Soler));
     let ss = &sol.settings.soler;
     assert_eq!((ss.levels, ss.samples, ss.radius_px), (4, 64, 40.0));
+    let mix =
+        gi_render::preset::load_lenient(include_str!("../../presets/soler-near-knecht-far.ron"), "h").expect("loads");
+    assert_eq!(Technique::of(&mix.settings.pipeline), Some(Technique::SolerNearKnechtFar));
+    // The far field is knecht-cornell-256's instant radiosity.
+    assert_eq!((mix.settings.vpl.count, mix.settings.ism.map_size, mix.settings.interleave.n), (256, 128, 4));
+    assert_eq!(mix.settings.soler.near_field_distance, 0.1);
+    let vis = gi_render::preset::load_lenient(include_str!("../../presets/soler-quarter-4-64-visibility.ron"), "v")
+        .expect("loads");
+    assert_eq!(Technique::of(&vis.settings.pipeline), Some(Technique::Soler));
+    assert!(vis.settings.soler.visibility && vis.settings.soler.voxel_slices == 128);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -522,6 +534,7 @@ fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
             &vpl_buf,
             vpl_count,
             d_min,
+            0.0,
             &GatherVisibility::None,
             diffuse,
         );

@@ -27,9 +27,9 @@ fn level(position: &ImageF32, normal: &ImageF32, radiance: &ImageF32) -> Level {
     Level { width: position.width, height: position.height, texels }
 }
 
-fn renderer(size: u32, edit: impl FnOnce(&mut LabSettings)) -> Renderer {
+fn renderer(size: u32, technique: Technique, edit: impl FnOnce(&mut LabSettings)) -> Renderer {
     let mut s = LabSettings::default();
-    Technique::Soler.apply(&mut s);
+    technique.apply(&mut s);
     edit(&mut s);
     assert!(s.validate().is_empty(), "{:?}", s.validate());
     let mut r = Renderer::new(gpu(), default_scene(), s, size, size).expect("renderer");
@@ -48,14 +48,30 @@ fn mismatches(a: &[Vec3], b: &[Vec3], rel: f32, abs: f32) -> usize {
 
 #[test]
 fn the_mip_levels_gather_and_upsampling_match_the_cpu() {
+    gpu_matches_cpu(Technique::Soler, 0.0);
+}
+
+/// As the near field of Knecht's VPLs (`pipeline.near_field`), the gather skips senders at
+/// the split distance or farther.
+#[test]
+fn the_near_field_gather_matches_the_cpu_with_its_cut() {
+    gpu_matches_cpu(Technique::SolerNearKnechtFar, 0.3);
+}
+
+fn gpu_matches_cpu(technique: Technique, near_field_distance: f32) {
     const SIZE: u32 = 64;
-    let mut r = renderer(SIZE, |s| {
+    let mut r = renderer(SIZE, technique, |s| {
         s.soler.start_resolution = StartResolution::Half;
         s.soler.levels = 3;
         s.soler.samples = 24;
         s.soler.radius_px = 6.0;
+        if near_field_distance > 0.0 {
+            s.soler.near_field_distance = near_field_distance;
+        }
     });
     r.render_frame();
+    let start_level = r.settings().soler.gathered_levels().start;
+    let near_cut = if near_field_distance > 0.0 { near_field_distance * r.bounds().radius() } else { 0.0 };
     let s = r.settings().soler.clone();
     let sig = VoteSigmas { pixel: s.vote_sigma_pixel, normal: s.vote_sigma_normal, depth: s.vote_sigma_depth };
     let mut levels =
@@ -105,6 +121,7 @@ fn the_mip_levels_gather_and_upsampling_match_the_cpu() {
             frame: 0,
             disc: s.form_factor == FormFactor::PointToDisc,
             min_cos_beta: s.min_cos_beta,
+            near_cut,
         };
         let cpu: Vec<Vec3> = (0..l.height)
             .flat_map(|y| (0..l.width).map(move |x| (x, y)))
@@ -116,7 +133,19 @@ fn the_mip_levels_gather_and_upsampling_match_the_cpu() {
         // cos may round the other way: a few texels may differ by one sample.
         let bad = mismatches(&cpu, &gpu, 1e-3, 1e-6);
         println!("level {k}: {lit} of {} texels lit, {bad} differ", cpu.len());
-        assert!(lit * 2 > cpu.len() / 3, "level {k}: {lit} lit texels");
+        if near_cut > 0.0 {
+            // The cut removes light: without it the same samples would add more.
+            let uncut = GatherParams { near_cut: 0.0, ..p };
+            let more = (0..l.height)
+                .flat_map(|y| (0..l.width).map(move |x| (x, y)))
+                .zip(&cpu)
+                .filter(|((x, y), e)| soler::gather(l, *x, *y, &cam, uncut).length() > e.length() * 1.01 + 1e-6)
+                .count();
+            assert!(more > 0, "level {k}: the near-field cut removes no light");
+            assert!(lit > 0 || k > start_level, "level {k}: nothing lit");
+        } else {
+            assert!(lit * 2 > cpu.len() / 3, "level {k}: {lit} lit texels");
+        }
         assert!(bad * 50 <= cpu.len(), "level {k}: {bad} texels differ");
         gathered.push(gpu);
     }
@@ -153,4 +182,68 @@ fn the_mip_levels_gather_and_upsampling_match_the_cpu() {
     let want: Vec<Vec3> = e.iter().zip(&albedo.data).map(|(e, a)| v3(*a) * a[3] / std::f32::consts::PI * *e).collect();
     let got: Vec<Vec3> = read(&r, "soler.indirect").data.into_iter().map(v3).collect();
     assert_eq!(mismatches(&want, &got, 1e-4, 1e-6), 0, "soler.indirect");
+}
+
+/// Visibility (004 §4): the GPU's solid voxelization of the default scene against the CPU's,
+/// column by column (every surface crossing of the ray through the column's centre, toggled
+/// as `cpu::soler::voxelize_column` does), and its meshes' closedness.
+#[test]
+fn the_voxel_grid_matches_the_cpu_voxelization() {
+    use gi_render::cpu::raycast::{TriangleSoup, moller_trumbore, primary_ray};
+    use gi_render::passes::soler::voxels::{depth_range, open_meshes};
+    const SIZE: u32 = 64;
+    let mut r = renderer(SIZE, Technique::Soler, |s| {
+        s.soler.start_resolution = StartResolution::Half;
+        s.soler.levels = 2;
+        s.soler.visibility = true;
+    });
+    r.render_frame();
+    let s = r.settings().soler.clone();
+    let grid = read(&r, "soler.voxels.1");
+    let coarse = read(&r, "soler.voxels.2");
+    assert_eq!((grid.width, grid.height, coarse.width), (SIZE / 2, SIZE / 2, SIZE / 4));
+    let b = r.bounds();
+    let cam = &r.camera;
+    let (z0, z1) = depth_range(cam.position, cam.forward(), b.center(), b.radius(), cam.znear, 0.0, 1.0);
+    let state = r.scene().evaluate(0.0);
+    let soup = TriangleSoup::new(r.scene(), &state);
+    let inv = r.view_proj().inverse();
+    let (n, slices) = (grid.width, s.voxel_slices);
+    let mut columns = Vec::new();
+    let (mut differ, mut inside_box) = (0, 0);
+    for y in 0..n {
+        for x in 0..n {
+            let (o, d) = primary_ray(inv, x, y, n, n);
+            let depths: Vec<f32> = soup
+                .triangles
+                .iter()
+                .filter_map(|t| moller_trumbore(o, d, t.v).map(|(h, _, _)| h))
+                .filter(|h| *h > 0.0)
+                .map(|h| (o + d * h - cam.position).dot(cam.forward().normalize()))
+                .collect();
+            let col = soler::voxelize_column(&depths, z0, z1, slices, s.voxel_words());
+            let filled: u32 = col.iter().map(|w| w.count_ones()).sum();
+            let g = grid.data[(y * n + x) as usize];
+            // A crossing within a slice's rounding of a triangle edge may land one slice away.
+            if (g[0] * slices as f32 - filled as f32).abs() > 1.5 {
+                differ += 1;
+            }
+            // More than two crossings: the column passes through a closed box in the room.
+            inside_box += (depths.len() >= 3) as u32;
+            columns.push(soler::VoxelGrid { width: 1, height: 1, words: s.voxel_words(), slices, z0, z1, bits: col });
+        }
+    }
+    println!("{differ} of {} columns differ; {inside_box} cross a box", n * n);
+    assert!(differ * 50 <= (n * n) as usize, "{differ} columns differ");
+    assert!(inside_box * 10 >= n * n, "only {inside_box} columns cross a box");
+    // The AND of 2×2 columns never holds more than its finest column.
+    for (c, f) in coarse.data.iter().zip((0..).map(|i: u32| grid.data[((i / 16) * 2 * n + (i % 16) * 2) as usize])) {
+        assert!(c[0] <= f[0] + 1e-6, "coarse {} > fine {}", c[0], f[0]);
+    }
+    // The boxes and the sphere are closed; the room's walls are single quads.
+    let open: Vec<String> = open_meshes(r.scene()).into_iter().map(|(name, _)| name).collect();
+    for closed in ["tall_box", "short_box", "sphere"] {
+        assert!(!open.iter().any(|n| n == closed), "{closed} is open: {open:?}");
+    }
+    assert!(!open.is_empty(), "the room's walls are open surfaces");
 }

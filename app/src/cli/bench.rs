@@ -309,7 +309,9 @@ fn quality(args: &BenchArgs) -> Result<(), CliError> {
             reference.display()
         );
         print!("{}", gi_render::quality::format_table(&rows));
-        println!("\ngoals: issue #15's, for the default scene at 256x256");
+        println!(
+            "\ngoals: issue #15's rows 1–4, issue #16's row 6 (below rows 1 and 5), for the default scene at 256x256"
+        );
     }
     Ok(())
 }

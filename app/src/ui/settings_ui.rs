@@ -244,6 +244,12 @@ pub const TECHNIQUES: &[Technique] = &[
         apply: |s| Choices::Soler.apply(s),
         is: |s| Choices::of(&s.pipeline) == Some(Choices::Soler),
     },
+    Technique {
+        name: "Near field screen-space (Soler), far field VPLs (Knecht)",
+        source: "GI Lab's mix: Soler et al. 004 for senders closer than soler.near_field_distance, Knecht 002's instant radiosity beyond it",
+        apply: |s| Choices::SolerNearKnechtFar.apply(s),
+        is: |s| Choices::of(&s.pipeline) == Some(Choices::SolerNearKnechtFar),
+    },
 ];
 
 /// The technique picker: sets the stage choices of one technique at once.

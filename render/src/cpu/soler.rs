@@ -193,12 +193,139 @@ pub struct GatherParams {
     pub frame: u32,
     pub disc: bool,
     pub min_cos_beta: f32,
+    /// The near field's cut (`pipeline.near_field`): senders at this distance or farther
+    /// are left to the VPL gather. 0: none.
+    pub near_cut: f32,
+}
+
+/// A level's voxel grid (004 §4 "Visibility"): `words` u32 per column of `slices` bits, bit s
+/// set where slice s of view depth z₀ + (z₁ − z₀)·[s, s + 1)/slices is inside a solid.
+#[derive(Clone, Debug, Default)]
+pub struct VoxelGrid {
+    pub width: u32,
+    pub height: u32,
+    pub words: u32,
+    pub slices: u32,
+    pub z0: f32,
+    pub z1: f32,
+    pub bits: Vec<u32>,
+}
+
+/// The slice of view depth `z` (0 in front of the grid, `slices` behind it).
+pub fn slice_of(z: f32, z0: f32, z1: f32, slices: u32) -> i32 {
+    let s = ((z - z0) / (z1 - z0).max(1e-12) * slices as f32).floor();
+    s.clamp(0.0, slices as f32) as i32
+}
+
+/// Word `w` of the bits a surface at slice `first` toggles: slices `first` … `slices` − 1.
+pub fn mask_from(first: i32, w: u32, slices: u32) -> u32 {
+    let lo = (w * 32) as i32;
+    let hi = (lo + 32).min(slices as i32);
+    if first >= hi {
+        return 0;
+    }
+    let mut m = u32::MAX;
+    if first > lo {
+        m <<= (first - lo) as u32;
+    }
+    if hi - lo < 32 {
+        m &= (1u32 << (hi - lo) as u32) - 1;
+    }
+    m
+}
+
+/// One column of the solid voxelization: the XOR of what every surface crossing the column
+/// at view depth `depths[i]` toggles (Eisemann & Décoret).
+pub fn voxelize_column(depths: &[f32], z0: f32, z1: f32, slices: u32, words: u32) -> Vec<u32> {
+    let mut col = vec![0u32; words as usize];
+    for &z in depths {
+        let first = slice_of(z, z0, z1, slices);
+        for (w, c) in col.iter_mut().enumerate() {
+            *c ^= mask_from(first, w as u32, slices);
+        }
+    }
+    col
+}
+
+/// The next coarser grid: each column the AND of the (up to four) columns of its 2×2 block.
+pub fn and_down(fine: &VoxelGrid) -> VoxelGrid {
+    let (w, h, n) = (fine.width.div_ceil(2), fine.height.div_ceil(2), fine.words as usize);
+    let mut bits = vec![u32::MAX; (w * h) as usize * n];
+    for y in 0..h {
+        for x in 0..w {
+            for i in 0..4 {
+                let (fx, fy) = (2 * x + i % 2, 2 * y + i / 2);
+                if fx < fine.width && fy < fine.height {
+                    let src = ((fy * fine.width + fx) as usize) * n;
+                    let dst = ((y * w + x) as usize) * n;
+                    for k in 0..n {
+                        bits[dst + k] &= fine.bits[src + k];
+                    }
+                }
+            }
+        }
+    }
+    VoxelGrid { width: w, height: h, bits, ..fine.clone() }
+}
+
+/// v_i of the march from texel `a` (view depth `za`) to texel `b` (`zb`): false when a solid
+/// voxel lies on the way. Steps of one texel along the major axis, depth interpolated as 1/z
+/// (perspective-correct), `bias_px` texels skipped at both ends, the slice tested
+/// `depth_bias` slices in front of the line.
+pub fn march_visible(
+    g: &VoxelGrid,
+    a: (i64, i64),
+    za: f32,
+    b: (i64, i64),
+    zb: f32,
+    bias_px: f32,
+    depth_bias: f32,
+) -> bool {
+    let d = Vec2::new((b.0 - a.0) as f32, (b.1 - a.1) as f32);
+    let n = d.x.abs().max(d.y.abs());
+    let steps = n.ceil() as i64;
+    for i in 1..steps {
+        let fi = i as f32;
+        if fi < bias_px || n - fi < bias_px {
+            continue;
+        }
+        let t = fi / n;
+        let p = (Vec2::new(a.0 as f32, a.1 as f32) + d * t).round();
+        let (px, py) = (p.x as i64, p.y as i64);
+        if px < 0 || py < 0 || px >= g.width as i64 || py >= g.height as i64 {
+            continue;
+        }
+        let z = 1.0 / (1.0 / za + (1.0 / zb - 1.0 / za) * t);
+        let sf = ((z - g.z0) / (g.z1 - g.z0).max(1e-12) * g.slices as f32 - depth_bias).floor();
+        if sf < 0.0 || sf >= g.slices as f32 {
+            continue;
+        }
+        let s = sf as u32;
+        let word = g.bits[((py as u64 * g.width as u64 + px as u64) * g.words as u64 + (s / 32) as u64) as usize];
+        if (word >> (s % 32)) & 1 != 0 {
+            return false;
+        }
+    }
+    true
 }
 
 /// Eq. 3 at texel (x, y) of `level`: the irradiance E = Σ L_i K_i of the ring's samples
 /// (no visibility: v_i = 1). Samples off the image, on the background or on the texel
 /// itself add nothing.
 pub fn gather(level: &Level, x: u32, y: u32, cam: &ScreenCamera, p: GatherParams) -> Vec3 {
+    gather_visible(level, x, y, cam, p, None)
+}
+
+/// [`gather`] with visibility: each sample's path marched through `vis` (the level's grid,
+/// the march's end bias in texels and depth bias in slices); hidden samples add nothing.
+pub fn gather_visible(
+    level: &Level,
+    x: u32,
+    y: u32,
+    cam: &ScreenCamera,
+    p: GatherParams,
+    vis: Option<(&VoxelGrid, f32, f32)>,
+) -> Vec3 {
     let Some(rx) = level.at(x as i64, y as i64).filter(|t| t.valid()) else { return Vec3::ZERO };
     let rotation = ring_rotation(x, y, p.level, p.frame);
     let mut e = Vec3::ZERO;
@@ -212,13 +339,19 @@ pub fn gather(level: &Level, x: u32, y: u32, cam: &ScreenCamera, p: GatherParams
         };
         let d = s.position - rx.position;
         let r2 = d.length_squared();
-        if r2 <= 0.0 {
+        if r2 <= 0.0 || (p.near_cut > 0.0 && r2 >= p.near_cut * p.near_cut) {
             continue;
         }
         let w = d / r2.sqrt();
         let (cos_t, cos_tp) = (rx.normal.dot(w).max(0.0), (-s.normal.dot(w)).max(0.0));
         if cos_t <= 0.0 || cos_tp <= 0.0 {
             continue;
+        }
+        if let Some((g, bias_px, depth_bias)) = vis {
+            let (a, b) = ((x as i64, y as i64), (x as i64 + o.x as i64, y as i64 + o.y as i64));
+            if !march_visible(g, a, rx.depth, b, s.depth, bias_px, depth_bias) {
+                continue;
+            }
         }
         let ds = surface_area(s, dp, cam, p.min_cos_beta);
         e += s.radiance * kernel(cos_t, cos_tp, ds, r2, p.disc);
@@ -374,6 +507,54 @@ mod tests {
         let (c, w) = vote_level(&empty, s);
         assert_eq!(w, vec![-1]);
         assert!(!c.texels[0].valid());
+    }
+
+    /// Solid voxelization of one column: inside a closed box (entered at 2, left at 3) the
+    /// parity is 1, outside 0; a second box behind it adds its own interval.
+    #[test]
+    fn voxel_parity_is_one_inside_closed_boxes_and_zero_outside() {
+        let (z0, z1, slices) = (0.0, 8.0, 128u32);
+        let col = voxelize_column(&[3.0, 2.0, 5.0, 6.0], z0, z1, slices, 4);
+        let bit = |z: f32| {
+            let s = slice_of(z, z0, z1, slices) as u32;
+            (col[(s / 32) as usize] >> (s % 32)) & 1
+        };
+        for (z, want) in
+            [(1.0, 0), (1.99, 0), (2.0, 1), (2.5, 1), (2.99, 1), (3.01, 0), (4.0, 0), (5.5, 1), (6.5, 0), (7.9, 0)]
+        {
+            assert_eq!(bit(z), want, "z {z}");
+        }
+        // An open surface leaves the column "inside" to its back.
+        let open = voxelize_column(&[2.0], z0, z1, slices, 4);
+        assert_eq!(open[3] >> 31, 1);
+        // Fewer slices than bits: the unused bits stay 0.
+        assert_eq!(voxelize_column(&[0.0], z0, z1, 40, 2), vec![u32::MAX, 0xff]);
+    }
+
+    /// The march: a wall of solid voxels between two texels hides, a path in front of it
+    /// does not; AND-down keeps only what all four sub-columns hold.
+    #[test]
+    fn the_march_is_blocked_by_solid_voxels_only() {
+        let (w, h, slices) = (16u32, 4u32, 32u32);
+        let mut g =
+            VoxelGrid { width: w, height: h, words: 1, slices, z0: 0.0, z1: 32.0, bits: vec![0; (w * h) as usize] };
+        // A block solid from depth 10 to 20 in columns x = 8, every row.
+        for y in 0..h {
+            g.bits[(y * w + 8) as usize] = voxelize_column(&[10.0, 20.0], 0.0, 32.0, slices, 1)[0];
+        }
+        assert!(!march_visible(&g, (2, 1), 15.0, (14, 1), 15.0, 1.0, 0.0), "through the block");
+        assert!(march_visible(&g, (2, 1), 5.0, (14, 1), 5.0, 1.0, 0.0), "in front of it");
+        assert!(march_visible(&g, (2, 1), 25.0, (14, 1), 25.0, 1.0, 0.0), "behind it");
+        assert!(march_visible(&g, (2, 1), 15.0, (6, 1), 15.0, 1.0, 0.0), "short of it");
+        let c = and_down(&g);
+        assert_eq!((c.width, c.height), (8, 2));
+        // Column 8 is solid, 9 is not: their AND is empty.
+        assert_eq!(c.bits[4], 0);
+        let mut full = g.clone();
+        for y in 0..h {
+            full.bits[(y * w + 9) as usize] = full.bits[(y * w + 8) as usize];
+        }
+        assert_eq!(and_down(&full).bits[4], g.bits[8]);
     }
 
     /// The upsampling takes nothing from a coarse texel of another surface or the background.

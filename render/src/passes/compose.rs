@@ -72,6 +72,7 @@ impl ComposePass {
                 super::bgl::texture(1, cs, false),
                 super::bgl::texture(2, cs, false),
                 super::bgl::storage_texture(3, HDR_FORMAT),
+                super::bgl::texture(4, cs, false),
             ],
         });
         let layout1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -186,6 +187,7 @@ impl ComposePass {
         slot: Option<crate::timing::Slot<'_>>,
         direct: &wgpu::TextureView,
         indirect: Option<&wgpu::TextureView>,
+        near_field: Option<&wgpu::TextureView>,
     ) {
         let hdr_view = super::view(&self.hdr, "final.hdr");
         let tv = wgpu::BindingResource::TextureView;
@@ -196,6 +198,7 @@ impl ComposePass {
                 wgpu::BindGroupEntry { binding: 1, resource: tv(direct) },
                 wgpu::BindGroupEntry { binding: 2, resource: tv(indirect.unwrap_or(&self.black)) },
                 wgpu::BindGroupEntry { binding: 3, resource: tv(&hdr_view) },
+                wgpu::BindGroupEntry { binding: 4, resource: tv(near_field.unwrap_or(&self.black)) },
             ],
         });
         self.dispatch(encoder, slot, "compose.compose", &self.compose, &group, self.screen_groups());

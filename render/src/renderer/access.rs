@@ -175,6 +175,14 @@ impl Renderer {
     }
 
     /// The camera uniform's view-projection for the current size (for CPU references).
+    /// The meshes Soler's voxel visibility treats wrongly (not closed), while it is on.
+    pub fn voxel_visibility_open_meshes(&self) -> &[(String, usize)] {
+        match &self.stages.soler {
+            Some(st) if self.settings.soler.visibility => &st.open_meshes,
+            _ => &[],
+        }
+    }
+
     pub fn view_proj(&self) -> Mat4 {
         self.camera.view_proj(self.width as f32 / self.height as f32)
     }
@@ -212,7 +220,14 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         | "hcb/normalize.wgsl"
         | "hcb/cache.wgsl"
         | "hcb/cache_removal.wgsl" => "instant_radiosity",
-        "soler/vote.wgsl" | "soler/gather.wgsl" | "soler/upsample.wgsl" | "soler/resolve.wgsl" => "soler",
+        "soler/vote.wgsl"
+        | "soler/gather.wgsl"
+        | "soler/upsample.wgsl"
+        | "soler/resolve.wgsl"
+        | "soler/voxelize.wgsl"
+        | "soler/voxel_down.wgsl"
+        | "soler/voxel_view.wgsl"
+        | "soler/voxel_common.wgsl" => "soler",
         _ => return None,
     })
 }
@@ -248,6 +263,7 @@ pub fn scope_output(scope: &str) -> Option<&'static str> {
         "soler.pyramid" => "soler.level.1.normal",
         "soler.gather" => "soler.indirect",
         "soler.upsample" => "soler.indirect",
+        "soler.voxels" => "soler.voxels.2",
         _ => return None,
     })
 }

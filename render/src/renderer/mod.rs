@@ -26,7 +26,7 @@ use crate::passes::reference::stage::ReferenceVpls;
 use crate::passes::shadow::{ShadowPass, light_views};
 use crate::passes::soler::stage::SolerStage;
 use crate::passes::{CameraUniform, bgl};
-use crate::pipeline::{Gather, ShadingPoints, Temporal};
+use crate::pipeline::{ShadingPoints, Temporal};
 use crate::scene::upload::GpuScene;
 use crate::scene::{Aabb, Scene};
 use crate::settings::LabSettings;
@@ -389,9 +389,14 @@ impl Renderer {
         } else {
             fresh |= x.temporal.take().is_some();
         }
-        if p.gather == Gather::ScreenSpace {
+        if p.uses_soler() {
             let created = x.soler.is_none();
-            let st = x.soler.get_or_insert_with(|| SolerStage::new(&ctx, &s.soler, w, h));
+            let scene = &self.scene;
+            let st = x.soler.get_or_insert_with(|| {
+                let mut st = SolerStage::new(&ctx, &s.soler, w, h);
+                st.open_meshes = crate::passes::soler::voxels::open_meshes(scene);
+                st
+            });
             fresh |= st.ensure(&ctx, &s.soler, w, h) | created;
         } else {
             fresh |= x.soler.take().is_some();

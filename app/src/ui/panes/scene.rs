@@ -11,6 +11,15 @@ pub(super) fn scene_ui(st: &mut State, ui: &mut egui::Ui) {
     for w in &l.renderer.scene().warnings {
         ui.small(format!("warning: {w}"));
     }
+    let open = l.renderer.voxel_visibility_open_meshes();
+    if !open.is_empty() {
+        let names: Vec<String> = open.iter().map(|(n, e)| format!("{n} ({e} open edges)")).collect();
+        ui.small(format!(
+            "warning: Soler's voxel visibility needs closed meshes; these are open, and the space behind them counts as solid: {}",
+            names.join(", ")
+        ))
+        .on_hover_text("Solid voxelization (004 §4) fills a column from each surface crossing to the next by parity. A room of single walls seen from inside is fine (behind its walls is outside the room); an open mesh inside the room blocks light wrongly.");
+    }
     let mut open_dialog = false;
     let mut open_default = false;
     ui.horizontal(|ui| {

@@ -18,6 +18,8 @@ pub struct HcbGatherParams {
     pub mode: [u32; 4],
     /// d_min², then as `interleave::GatherParams::shade`.
     pub shade: Vec4,
+    /// x: the near field's cut² (senders closer are skipped; 0: none), y–w: 0.
+    pub near: Vec4,
 }
 
 /// Which samples of the list a gather dispatch covers.
@@ -100,6 +102,7 @@ impl HcbGatherPass {
         vpls: &wgpu::Buffer,
         vpl_count: u32,
         d_min: f32,
+        near_cut: f32,
         vis: &crate::passes::knecht::interleave::GatherVisibility,
         set: GatherSet<'_>,
     ) {
@@ -113,6 +116,7 @@ impl HcbGatherPass {
             counts: [vpl_count, code, cols, size],
             mode: [mode, 0, 0, 0],
             shade: Vec4::new(d_min * d_min, shade.y, shade.z, shade.w),
+            near: Vec4::new(near_cut * near_cut, 0.0, 0.0, 0.0),
         };
         let params = &self.params[(mode == 1) as usize];
         ctx.queue.write_buffer(params, 0, bytemuck::bytes_of(&p));

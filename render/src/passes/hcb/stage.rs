@@ -125,7 +125,7 @@ impl HcbStage {
     ) {
         let (ctx, list) = (f.ctx, &vpls.list);
         timer.scope(ctx, enc, scope, |e, slot| {
-            self.gather.run(ctx, e, slot, &self.build, list, vpls.count, vpls.min_distance, vis, set)
+            self.gather.run(ctx, e, slot, &self.build, list, vpls.count, vpls.min_distance, vpls.near_cut, vis, set)
         });
     }
 

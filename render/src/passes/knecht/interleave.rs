@@ -51,6 +51,8 @@ pub struct GatherParams {
     pub split: [u32; 4],
     pub vis: [u32; 4],
     pub shade: Vec4,
+    /// x: the near field's cut² (senders closer are skipped; 0: none), y–w: 0.
+    pub near: Vec4,
 }
 
 /// Uniform of the filter; WGSL twin: `FilterParams`.
@@ -357,6 +359,7 @@ impl InterleavePass {
         vpls: &wgpu::Buffer,
         vpl_count: u32,
         d_min: f32,
+        near_cut: f32,
         vis: &GatherVisibility,
         diffuse_only: bool,
     ) {
@@ -369,6 +372,7 @@ impl InterleavePass {
             split: [n, tw, th, vpl_count],
             vis: [code, cols, size, diffuse_only as u32],
             shade: Vec4::new(d_min * d_min, shade.y, shade.z, shade.w),
+            near: Vec4::new(near_cut * near_cut, 0.0, 0.0, 0.0),
         };
         ctx.queue.write_buffer(&self.gather_params, 0, bytemuck::bytes_of(&gp));
         let offsets = crate::cpu::knecht::tile_offsets(vpl_count, n, self.frames);

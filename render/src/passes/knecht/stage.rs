@@ -202,7 +202,12 @@ impl KnechtVpls {
             }
         }
         self.frames = self.frames.wrapping_add(1);
-        VplSet { list: self.vpl.vpls.clone(), count: n_vpls * bounces, min_distance: s.vpl.min_distance_m }
+        VplSet {
+            list: self.vpl.vpls.clone(),
+            count: n_vpls * bounces,
+            min_distance: s.vpl.min_distance_m,
+            near_cut: f.near_field_cut(),
+        }
     }
 
     /// The ISM eye's lift above its VPL (`ism.eye_offset` × the scene radius).

@@ -98,7 +98,12 @@ impl ReferenceVpls {
         timer.scope(ctx, enc, "vpl.sample", |e, slot| {
             sample.sample(ctx, e, slot, &f.lights, batch, n, flux_scale, [rs.seed, k, k / v_count])
         });
-        Some(VplSet { list: self.sample.vpls.clone(), count: n, min_distance: rs.min_distance_m })
+        Some(VplSet {
+            list: self.sample.vpls.clone(),
+            count: n,
+            min_distance: rs.min_distance_m,
+            near_cut: f.near_field_cut(),
+        })
     }
 
     fn clip(&self, f: &FrameInputs) -> Vec4 {
@@ -142,6 +147,7 @@ impl ReferenceVpls {
                 if visible { 1.0 } else { 0.0 },
                 (f.settings.vpl.receiver_brdf == ReceiverBrdf::DiffuseOnly) as u32 as f32,
             ),
+            near: Vec4::new(vpls.near_cut * vpls.near_cut, 0.0, 0.0, 0.0),
         };
         let (gather, atlas) = (&self.gather, &self.visibility.atlas_view);
         timer.scope(ctx, enc, "indirect.gather", |e, slot| {

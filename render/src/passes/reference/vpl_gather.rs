@@ -23,6 +23,8 @@ pub struct GatherParams {
     /// x: depth bias (texels), y: normal offset (texels), z: visibility on, w: receiver BRDF
     /// diffuse only (1) or full (0).
     pub bias: Vec4,
+    /// x: the near field's cut² (senders closer are skipped; 0: none), y–w: 0.
+    pub near: Vec4,
 }
 
 pub struct VplGatherPass {

@@ -21,6 +21,10 @@ pub struct GatherParams {
     pub eye: [f32; 4],
     /// tan(f_h/2), tan(f_v/2), the level's W and H.
     pub screen: [f32; 4],
+    /// This level's voxel grid (`grid[0]` = 0: no visibility).
+    pub voxels: super::voxels::VoxelParams,
+    /// Texels skipped at both ends of the march, depth bias (slices), unused, unused.
+    pub march: [f32; 4],
 }
 
 /// Most levels a frame gathers (the settings' range).
@@ -33,11 +37,18 @@ pub struct LevelInputs<'a> {
     pub normal: &'a wgpu::TextureView,
     pub radiance: &'a wgpu::TextureView,
     pub size: (u32, u32),
+    /// The level's voxel grid and its parameters (the empty buffer and zeros without
+    /// visibility).
+    pub grid: &'a wgpu::Buffer,
+    pub voxels: super::voxels::VoxelParams,
 }
 
 pub struct SolerGather {
     /// `soler.level.k.indirect` of each gathered level k (first = the start level).
     pub light: Vec<(u32, wgpu::Texture)>,
+    /// `soler.level.k.occlusion`: the light the visibility removed (rgb) and the visible
+    /// fraction of the samples that carried light (a).
+    pub occlusion: Vec<wgpu::Texture>,
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::ComputePipeline,
     params: wgpu::Buffer,
@@ -55,12 +66,14 @@ impl SolerGather {
                 bgl::texture(2, cs, false),
                 bgl::texture(3, cs, false),
                 bgl::storage_texture(4, wgpu::TextureFormat::Rgba32Float),
+                bgl::storage(5, cs, true),
+                bgl::storage_texture(6, wgpu::TextureFormat::Rgba32Float),
             ],
         });
         let module = crate::shaders::create_module(device, "soler/gather.wgsl");
         let pipeline = crate::passes::compute_pipeline(device, "soler.gather", &module, "cs_gather", &[&layout]);
         let params = crate::passes::uniform_buffer(device, "soler.gather.params", STRIDE * MAX_GATHERED as u64);
-        Self { light: Vec::new(), layout, pipeline, params }
+        Self { light: Vec::new(), occlusion: Vec::new(), layout, pipeline, params }
     }
 
     /// Textures for the gathered `levels`, each (level, size); true when replaced.
@@ -77,6 +90,13 @@ impl SolerGather {
                 (k, crate::passes::create_target(&ctx.device, &label, w, h, wgpu::TextureFormat::Rgba32Float, storage))
             })
             .collect();
+        self.occlusion = levels
+            .iter()
+            .map(|&(k, (w, h))| {
+                let label = format!("soler.level.{k}.occlusion");
+                crate::passes::create_target(&ctx.device, &label, w, h, wgpu::TextureFormat::Rgba32Float, storage)
+            })
+            .collect();
         true
     }
 
@@ -86,6 +106,14 @@ impl SolerGather {
                 &format!("soler.level.{k}.indirect"),
                 BufferKind::Hdr,
                 "Soler raw indirect of one mip level (004 Eq. 3–4): the irradiance its ring of samples gathers, before upsampling",
+                t,
+            );
+        }
+        for ((k, _), t) in self.light.iter().zip(&self.occlusion) {
+            reg.register(
+                &format!("soler.level.{k}.occlusion"),
+                BufferKind::Hdr,
+                "Soler visibility of one mip level (004 §4 \"Visibility\"): rgb the irradiance the voxel march removed (no-vis minus vis), a the visible fraction of the samples that carried light",
                 t,
             );
         }
@@ -109,17 +137,21 @@ impl SolerGather {
                 p.counts[2] = l.level;
                 p.screen[2] = l.size.0 as f32;
                 p.screen[3] = l.size.1 as f32;
+                p.voxels = l.voxels;
                 p
             })
             .collect();
         ctx.queue.write_buffer(&self.params, 0, &crate::passes::strided_bytes(STRIDE, params.len(), &params));
         let uniform = crate::passes::dynamic_slot(&self.params, std::mem::size_of::<GatherParams>());
         let n = inputs.len();
-        for (i, (l, (_, out))) in inputs.iter().zip(&self.light).enumerate() {
+        for (i, ((l, (_, out)), occ)) in inputs.iter().zip(&self.light).zip(&self.occlusion).enumerate() {
             let out_view = crate::passes::view(out, "soler.gather.out");
+            let occ_view = crate::passes::view(occ, "soler.gather.occlusion");
             let tv = wgpu::BindingResource::TextureView;
             let views = [l.position, l.normal, l.radiance, &out_view];
-            let resources = std::iter::once(uniform.clone()).chain(views.map(tv)).collect();
+            let mut resources: Vec<_> = std::iter::once(uniform.clone()).chain(views.map(tv)).collect();
+            resources.push(l.grid.as_entire_binding());
+            resources.push(tv(&occ_view));
             let group = crate::passes::bind_group(&ctx.device, "soler.gather.inputs", &self.layout, resources);
             let stamps = slot.as_ref().and_then(|s| s.compute(i == 0, i + 1 == n));
             let offset = [(i as u64 * STRIDE) as u32];

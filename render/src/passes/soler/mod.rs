@@ -5,9 +5,11 @@
 //! of all levels, `upsample`); `stage` runs them for the frame. Shaders `shaders/soler/`; CPU
 //! twin `cpu::soler` (the readings of the garbled formulas are documented there).
 //!
-//! Not built yet (issue #16): voxel visibility (v_i = 1 here), temporal filtering (Eq. 6),
-//! multi-bounce, glossy importance sampling, the reach setting, the sample overlay and the
-//! mixes with the HCB and VPLs.
+//! Visibility (`voxels`): the camera-space solid voxelization of 004 §4, marched per sample.
+//! As `pipeline.near_field`, the gather is the near field of a VPL gather.
+//!
+//! Not built yet (issue #16): temporal filtering (Eq. 6), multi-bounce, glossy importance
+//! sampling, the sample overlay and the mix with the HCB's samples.
 
 use crate::{settings_enum, settings_group};
 
@@ -15,6 +17,7 @@ pub mod gather;
 pub mod pyramid;
 pub mod stage;
 pub mod upsample;
+pub mod voxels;
 
 settings_enum! {
     /// The resolution the first gathered level has (004 §4, Fig. 10).
@@ -95,6 +98,37 @@ settings_group! {
         /// σ of the upsampling's normal weight on 1 − n·n_c.
         upsample_sigma_normal: f32 = 0.2,
         unit "", symbol "", range 0.001..=2.0, cost "free", history false;
+        /// Split distance of `pipeline.near_field`, in units of the scene's bounding radius:
+        /// the screen-space gather takes senders closer than it, the VPL gather the others.
+        near_field_distance: f32 = 0.25,
+        unit "× radius", symbol "d_near", range 0.001..=4.0, cost "free", history false;
+        /// Visibility by solid voxelization (004 §4 "Visibility", Eisemann & Décoret): the
+        /// scene's closed meshes are voxelized from the camera and each sample's path is
+        /// marched through the grid of its level; off: every sample is visible (v_i = 1).
+        visibility: bool = false,
+        unit "", symbol "v_i", range 0..=1, cost "one voxelization of the scene, an AND per coarser level and a march of up to r steps per sample (the paper: 5.9×)", history false;
+        /// Depth slices of the voxel grid (004 §4: 128 bits per pixel column).
+        voxel_slices: u32 = 128,
+        unit "slices", symbol "", range 32..=128, cost "memory: slices/8 bytes per texel of the first level", history false;
+        /// Front of the grid's depth range, as a fraction of the scene's extent along the
+        /// view axis (0: the nearest point of the scene's bounding sphere).
+        voxel_depth_from: f32 = 0.0,
+        unit "× extent", symbol "z₀", range 0.0..=1.0, cost "free (finer slices where the range is short)", history false;
+        /// Back of the grid's depth range, as a fraction of the scene's extent along the view
+        /// axis (1: the farthest point of its bounding sphere).
+        voxel_depth_to: f32 = 1.0,
+        unit "× extent", symbol "z₁", range 0.0..=1.0, cost "free", history false;
+        /// Texels of the march skipped at both ends (the start/end bias: the receiver and the
+        /// sender sit on the voxels of their own surfaces).
+        march_bias_px: f32 = 1.5,
+        unit "texels", symbol "", range 0.0..=16.0, cost "free", history false;
+        /// The march tests the slice this many slices in front of its line (a surface's own
+        /// voxels start at its slice).
+        march_depth_bias: f32 = 1.0,
+        unit "slices", symbol "", range 0.0..=16.0, cost "free", history false;
+        /// The slice `soler.voxels.k` shows (−1: each column's filled fraction).
+        voxel_view_slice: f32 = -1.0,
+        unit "slice", symbol "", range -1.0..=127.0, cost "free (the viewer only)", history false;
     }
 }
 
@@ -103,6 +137,17 @@ impl SolerSettings {
     pub fn gathered_levels(&self) -> std::ops::Range<u32> {
         let s = self.start_resolution.level();
         s..s + self.levels.max(1)
+    }
+
+    /// The split distance of the near field in scene units (`near_field_distance` × the
+    /// scene's bounding radius `radius`).
+    pub fn near_field_split(&self, radius: f32) -> f32 {
+        self.near_field_distance * radius
+    }
+
+    /// 32-bit words per column of the voxel grid.
+    pub fn voxel_words(&self) -> u32 {
+        self.voxel_slices.clamp(32, 128).div_ceil(32)
     }
 
     /// The reach of the coarsest ring in G-buffer pixels: r · 2^{start + levels − 1}.

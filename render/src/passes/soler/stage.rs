@@ -5,6 +5,7 @@
 use super::gather::{GatherParams, LevelInputs, SolerGather};
 use super::pyramid::{SolerPyramid, sizes};
 use super::upsample::{SolerUpsample, Step};
+use super::voxels::{SolerVoxels, VoxelParams};
 use super::{FormFactor, SolerSettings};
 use crate::buffers::BufferRegistry;
 use crate::gpu::GpuContext;
@@ -15,6 +16,10 @@ pub struct SolerStage {
     pub pyramid: SolerPyramid,
     pub gather: SolerGather,
     pub upsample: SolerUpsample,
+    pub voxels: SolerVoxels,
+    /// The scene's meshes that are not closed, with their open edges (solid voxelization's
+    /// visibility is wrong behind them; `voxels::open_meshes`).
+    pub open_meshes: Vec<(String, usize)>,
 }
 
 /// Level sizes 0 (the G-buffer) … top.
@@ -31,6 +36,8 @@ impl SolerStage {
             pyramid: SolerPyramid::new(ctx, width, height, top),
             gather: SolerGather::new(ctx),
             upsample: SolerUpsample::new(ctx, &all_sizes(width, height, top)[..top as usize]),
+            voxels: SolerVoxels::new(ctx),
+            open_meshes: Vec::new(),
         };
         stage.ensure(ctx, s, width, height);
         stage
@@ -44,13 +51,15 @@ impl SolerStage {
         let a = self.pyramid.ensure(ctx, width, height, top);
         let b = self.gather.ensure(ctx, &gathered);
         let c = self.upsample.ensure(ctx, &all[..top as usize], all[0]);
-        a | b | c
+        let d = self.voxels.ensure(ctx, &gathered, s.voxel_words(), s.visibility);
+        a | b | c | d
     }
 
     pub fn register(&self, reg: &mut BufferRegistry) {
         self.pyramid.register(reg);
         self.gather.register(reg);
         self.upsample.register(reg);
+        self.voxels.register(reg);
     }
 
     /// The frame's indirect light (`soler.indirect`).
@@ -78,20 +87,49 @@ impl SolerStage {
         };
         let top = s.gathered_levels().end - 1;
         let all = all_sizes(f.gbuffer_size.0, f.gbuffer_size.1, top);
+        // Visibility (004 §4): the scene voxelized from the camera, one grid per level.
+        let z = super::voxels::depth_range(
+            f.camera.position,
+            f.camera.forward(),
+            f.center,
+            f.radius,
+            f.camera.znear,
+            s.voxel_depth_from,
+            s.voxel_depth_to,
+        );
+        let voxel_params = self.voxels.params_of(z, s.voxel_slices.clamp(32, 128), s.voxel_view_slice);
+        if !voxel_params.is_empty() {
+            timer.scope(ctx, enc, "soler.voxels", |e, slot| {
+                let (cam, scene, state) = (f.camera_buffer, f.gpu_scene, f.state);
+                self.voxels.run(ctx, e, slot, cam, scene, state, &voxel_params, f.gbuffer_size)
+            });
+        }
         let inputs: Vec<LevelInputs> = s
             .gathered_levels()
-            .map(|k| {
+            .enumerate()
+            .map(|(i, k)| {
                 let [position, normal, radiance] = level_views(k);
-                LevelInputs { level: k, position, normal, radiance, size: all[k as usize] }
+                let (grid, voxels) = match (self.voxels.grids.get(i), voxel_params.get(i)) {
+                    (Some(g), Some(p)) => (&g.buffer, *p),
+                    _ => (&self.voxels.empty, VoxelParams::default()),
+                };
+                LevelInputs { level: k, position, normal, radiance, size: all[k as usize], grid, voxels }
             })
             .collect();
         let aspect = f.gbuffer_size.0 as f32 / f.gbuffer_size.1.max(1) as f32;
         let tan_v = (0.5 * f.camera.yfov).tan();
         let base = GatherParams {
             counts: [s.samples, 0, 0, f.frame],
-            shape: [s.radius_px, (s.form_factor == FormFactor::PointToDisc) as u32 as f32, s.min_cos_beta, 0.0],
+            shape: [
+                s.radius_px,
+                (s.form_factor == FormFactor::PointToDisc) as u32 as f32,
+                s.min_cos_beta,
+                f.near_field_cut() * f.near_field_cut(),
+            ],
             eye: f.camera.position.extend(1.0).to_array(),
             screen: [aspect * tan_v, tan_v, 0.0, 0.0],
+            voxels: VoxelParams::default(),
+            march: [s.march_bias_px, s.march_depth_bias, 0.0, 0.0],
         };
         timer.scope(ctx, enc, "soler.gather", |e, slot| self.gather.run(ctx, e, slot, &inputs, base));
 
