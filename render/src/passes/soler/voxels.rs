@@ -50,7 +50,6 @@ pub struct SolerVoxels {
     /// The colour target the voxelization needs (nothing is written to it).
     target: Option<wgpu::Texture>,
     camera_layout: wgpu::BindGroupLayout,
-    instance_layout: wgpu::BindGroupLayout,
     grid_layout: wgpu::BindGroupLayout,
     voxelize: wgpu::RenderPipeline,
     down_layout: wgpu::BindGroupLayout,
@@ -139,7 +138,6 @@ impl SolerVoxels {
             empty,
             target: None,
             camera_layout,
-            instance_layout,
             grid_layout,
             voxelize,
             down_layout,
@@ -251,7 +249,6 @@ impl SolerVoxels {
             &self.grid_layout,
             vec![uniform.clone(), first.buffer.as_entire_binding()],
         );
-        let _ = &self.instance_layout;
         let target_view = crate::passes::view(target, "soler.voxelize.target");
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
