@@ -11,7 +11,7 @@
 //! | 4. VPL visibility | none · imperfect shadow maps (`passes::knecht::ism`) · exact maps (`passes::reference::vpl_visibility`) |
 //! | 5. Shading points | every pixel · interleaved tiles → `passes::knecht::interleave` · HCB samples → `passes::hcb::stage` · mip levels → `passes::soler::stage` |
 //! | 6. Gather + reconstruction | VPL gather at the shading points, or the screen-space ring gather (`soler::gather`); none · geometry-aware filter (`knecht::interleave`) · coherence splatting (`hcb::splat`) · joint bilateral upsampling (`soler::upsample`) |
-//! | 7. Temporal + compose | none · confidence merge (`knecht::temporal`) · HCB sample cache (`hcb::cache`) · running average (`reference`); `passes::compose` |
+//! | 7. Temporal + compose | none · confidence merge (`knecht::temporal`) · HCB sample cache (`hcb::cache`) · running average (`reference`) · warped blend (`soler::temporal`); `passes::compose` |
 
 use glam::Vec4;
 
@@ -99,7 +99,7 @@ impl Renderer {
             views: light_view_list(&state, self.bounds),
         };
         let indirect = indirect_light(&f, &mut self.stages, &mut enc, &mut self.timer, view_proj);
-        let near_field = near_field_light(&f, &self.stages, &mut enc, &mut self.timer);
+        let near_field = near_field_light(&f, &mut self.stages, &mut enc, &mut self.timer);
 
         // Stage 7: compose direct + indirect and tone map.
         let (compose, ts) = (&self.compose, &self.settings.tonemap);
@@ -132,9 +132,10 @@ fn indirect_light(
         return None;
     }
     // Soler et al.'s screen-space choices: mip levels (stage 5), the ring gather and the
-    // joint bilateral upsampling (stage 6); no VPLs. Temporal filtering (Eq. 6) is not built.
+    // joint bilateral upsampling (stage 6), and the warped blend of Eq. 6 (stage 7) when
+    // `pipeline.temporal` is WarpedBlend; no VPLs.
     if p.gather == Gather::ScreenSpace {
-        return Some(x.soler.as_ref()?.run(f, enc, timer));
+        return Some(x.soler.as_mut()?.run(f, enc, timer));
     }
 
     // Stage 3: VPLs.
@@ -204,10 +205,12 @@ fn indirect_light(
 }
 
 /// Stage 6's near field (`pipeline.near_field`): Soler's screen-space gather of the senders
-/// closer than the split, added to the VPL gather's far field by the compose.
+/// closer than the split, added to the VPL gather's far field by the compose. Whenever stage
+/// 7 filters the far field, Eq. 6's warped blend filters the near field
+/// (`PipelineSettings::soler_temporal`).
 fn near_field_light(
     f: &FrameInputs,
-    x: &StagePasses,
+    x: &mut StagePasses,
     enc: &mut wgpu::CommandEncoder,
     timer: &mut GpuTimer,
 ) -> Option<wgpu::TextureView> {
@@ -215,7 +218,7 @@ fn near_field_light(
     if p.gather != Gather::Vpl || !p.uses_soler() {
         return None;
     }
-    Some(x.soler.as_ref()?.run(f, enc, timer))
+    Some(x.soler.as_mut()?.run(f, enc, timer))
 }
 
 /// Stage 6's reconstruction of the gathered light. Coherence splatting ran with the gather at
@@ -256,8 +259,9 @@ fn temporal(
     src: wgpu::TextureView,
 ) -> Option<wgpu::TextureView> {
     Some(match f.settings.pipeline.temporal {
-        // The sample cache acted in stages 5–6, the running average in the reference's gather.
-        Temporal::None | Temporal::HcbSampleCache | Temporal::RunningAverage => src,
+        // The sample cache acted in stages 5–6, the running average in the reference's gather;
+        // the warped blend belongs to the screen-space gather, which returned above.
+        Temporal::None | Temporal::HcbSampleCache | Temporal::RunningAverage | Temporal::WarpedBlend => src,
         Temporal::ConfidenceMerge => {
             let t = x.temporal.as_mut()?;
             let (ctx, s, depth_range) = (f.ctx, &f.settings.temporal, f.depth_range());

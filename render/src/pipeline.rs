@@ -100,6 +100,10 @@ settings_enum! {
         HcbSampleCache = "HCB sample cache (Nguyen)",
         /// Running average of the reference's batches until `reference.total_vpls` are in.
         RunningAverage = "running average (reference)",
+        /// The previous result warped through the movement buffer, rejected on depth and
+        /// normal disagreement, blended by a (Soler et al. 004 §4, Eq. 6; settings
+        /// `soler.temporal_*`, `soler.reject_*`): the screen-space gather's filter.
+        WarpedBlend = "warped blend (Soler Eq. 6)",
     }
     default ConfidenceMerge
 }
@@ -142,7 +146,7 @@ settings_group! {
         /// Stage 7, temporal (Knecht §3.5's confidence merge; Nguyen §5's sample cache; the
         /// reference's running average).
         temporal: Temporal = Temporal::ConfidenceMerge,
-        unit "", symbol "", range 0..=3, cost "merge: one pass and two copies; cache: validation and removal quads", history true;
+        unit "", symbol "", range 0..=4, cost "merge, warped blend: one pass and two copies; cache: validation and removal quads", history true;
         /// Stage 6, near field: Soler's screen-space gather for the light from closer than
         /// `soler.near_field_distance`, the VPL gather for the rest.
         near_field: NearField = NearField::None,
@@ -227,7 +231,7 @@ impl Technique {
                 shading_points: ShadingPoints::MipLevels,
                 gather: Gather::ScreenSpace,
                 reconstruction: Reconstruction::BilateralUpsampling,
-                temporal: Temporal::None,
+                temporal: Temporal::WarpedBlend,
                 near_field: NearField::None,
             },
             Self::SolerNearKnechtFar => {
@@ -270,6 +274,16 @@ impl PipelineSettings {
     /// Whether Soler et al.'s passes run: as the gather, or as the near field of a VPL gather.
     pub fn uses_soler(&self) -> bool {
         self.gather == Gather::ScreenSpace || (self.uses_vpls() && self.near_field == NearField::ScreenSpace)
+    }
+
+    /// Whether Eq. 6's warped blend filters Soler's light: stage 7's choice with the
+    /// screen-space gather; as a near field, whenever stage 7 filters the far field (the
+    /// near field's own filter, since the far field's choice acts on the VPL gather).
+    pub fn soler_temporal(&self) -> bool {
+        match self.gather {
+            Gather::ScreenSpace => self.temporal == Temporal::WarpedBlend,
+            _ => self.uses_soler() && self.temporal != Temporal::None,
+        }
     }
 
     /// Whether instant radiosity's VPLs (stages 3–4 of Knecht) are in use.
@@ -327,8 +341,8 @@ pub fn combination_errors(s: &LabSettings) -> Vec<FieldError> {
         if p.reconstruction != Reconstruction::BilateralUpsampling {
             err("reconstruction", "the screen-space gather's levels are combined by joint bilateral upsampling: set pipeline.reconstruction = BilateralUpsampling".into());
         }
-        if p.temporal != Temporal::None {
-            err("temporal", "Soler's temporal filtering (Eq. 6) is not built yet and the other temporal choices belong to VPL gathers: set pipeline.temporal = None".into());
+        if !matches!(p.temporal, Temporal::None | Temporal::WarpedBlend) {
+            err("temporal", "the screen-space gather is filtered by Eq. 6's warped blend (WarpedBlend) or not at all (None); the other temporal choices belong to VPL gathers".into());
         }
         if p.near_field != NearField::None {
             err("near_field", "the screen-space gather already takes the light from every distance; a near field splits a VPL gather: set pipeline.near_field = None or pipeline.gather = Vpl".into());
@@ -382,6 +396,9 @@ pub fn combination_errors(s: &LabSettings) -> Vec<FieldError> {
     // Importance-warped VPLs (Knecht).
     if p.temporal == Temporal::RunningAverage {
         err("temporal", "the running average accumulates the reference's uniform batches (pipeline.vpl_source = UniformBatches); with importance-warped VPLs use None, ConfidenceMerge or (with HCB samples) HcbSampleCache".into());
+    }
+    if p.temporal == Temporal::WarpedBlend {
+        err("temporal", "Eq. 6's warped blend filters the screen-space gather (pipeline.gather = ScreenSpace); a VPL gather's near field gets it whenever stage 7 filters the far field: use None or ConfidenceMerge here".into());
     }
     match p.shading_points {
         ShadingPoints::HcbSamples => {

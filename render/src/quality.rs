@@ -93,11 +93,11 @@ pub fn quality_table(
     every_pixel.vpl.receiver_brdf = ReceiverBrdf::DiffuseOnly;
     let per_pixel = render(ctx, scene, every_pixel, size, 1)?;
     row("nguyen-hcb", 1, "per-pixel gather, same VPLs, diffuse only", flip(&hcb, &per_pixel)?, Some(0.03));
-    // Soler et al.'s gather alone (one frame: it keeps no history) sees only the direct light
-    // on screen; the mix must beat it and Knecht's row (issue #16).
+    // Soler et al.'s gather alone (16 frames: its temporal filter, Eq. 6, averages them) sees
+    // only the direct light on screen; the mix must beat it and Knecht's row (issue #16).
     let knecht_flip = flip(&knecht, truth)?;
-    let soler = flip(&render(ctx, scene, preset(SOLER, "soler-quarter-4-64")?, size, 1)?, truth)?;
-    row("soler-quarter-4-64", 1, "ground truth", soler, None);
+    let soler = flip(&render(ctx, scene, preset(SOLER, "soler-quarter-4-64")?, size, 16)?, truth)?;
+    row("soler-quarter-4-64", 16, "ground truth", soler, None);
     let mix = render(ctx, scene, preset(SOLER_NEAR_KNECHT_FAR, "soler-near-knecht-far")?, size, 16)?;
     row("soler-near-knecht-far", 16, "ground truth", flip(&mix, truth)?, Some(knecht_flip.min(soler)));
     Ok(rows)

@@ -57,6 +57,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("soler/voxelize.wgsl", include_str!("../../shaders/soler/voxelize.wgsl")),
     ("soler/voxel_down.wgsl", include_str!("../../shaders/soler/voxel_down.wgsl")),
     ("soler/voxel_view.wgsl", include_str!("../../shaders/soler/voxel_view.wgsl")),
+    ("soler/temporal.wgsl", include_str!("../../shaders/soler/temporal.wgsl")),
     ("view/view.wgsl", include_str!("../../shaders/view/view.wgsl")),
     ("view/probe.wgsl", include_str!("../../shaders/view/probe.wgsl")),
 ];
@@ -100,6 +101,7 @@ pub const ENTRY_MODULES: &[&str] = &[
     "soler/voxelize.wgsl",
     "soler/voxel_down.wgsl",
     "soler/voxel_view.wgsl",
+    "soler/temporal.wgsl",
     "view/view.wgsl",
     "view/probe.wgsl",
 ];

@@ -227,6 +227,7 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         | "soler/voxelize.wgsl"
         | "soler/voxel_down.wgsl"
         | "soler/voxel_view.wgsl"
+        | "soler/temporal.wgsl"
         | "soler/voxel_common.wgsl" => "soler",
         _ => return None,
     })
@@ -264,6 +265,7 @@ pub fn scope_output(scope: &str) -> Option<&'static str> {
         "soler.gather" => "soler.indirect",
         "soler.upsample" => "soler.indirect",
         "soler.voxels" => "soler.voxels.2",
+        "soler.temporal" => "soler.temporal",
         _ => return None,
     })
 }

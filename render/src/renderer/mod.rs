@@ -272,6 +272,9 @@ impl Renderer {
         if let Some(t) = &mut self.stages.temporal {
             t.reset();
         }
+        if let Some(x) = &mut self.stages.soler {
+            x.reset();
+        }
     }
 
     /// The exact-VPL reference's progress: (VPLs accumulated, VPLs at which it stops), when
@@ -392,12 +395,13 @@ impl Renderer {
         if p.uses_soler() {
             let created = x.soler.is_none();
             let scene = &self.scene;
+            let temporal = p.soler_temporal();
             let st = x.soler.get_or_insert_with(|| {
-                let mut st = SolerStage::new(&ctx, &s.soler, w, h);
+                let mut st = SolerStage::new(&ctx, &s.soler, w, h, temporal);
                 st.open_meshes = crate::passes::soler::voxels::open_meshes(scene);
                 st
             });
-            fresh |= st.ensure(&ctx, &s.soler, w, h) | created;
+            fresh |= st.ensure(&ctx, &s.soler, w, h, temporal) | created;
         } else {
             fresh |= x.soler.take().is_some();
         }

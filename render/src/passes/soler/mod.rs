@@ -8,14 +8,17 @@
 //! Visibility (`voxels`): the camera-space solid voxelization of 004 §4, marched per sample.
 //! As `pipeline.near_field`, the gather is the near field of a VPL gather.
 //!
-//! Not built yet (issue #16): temporal filtering (Eq. 6), multi-bounce, glossy importance
-//! sampling, the sample overlay and the mix with the HCB's samples.
+//! Temporal filtering (Eq. 6, `temporal`) is stage 7's choice `WarpedBlend`.
+//!
+//! Not built yet (issue #16): multi-bounce, glossy importance sampling, the sample overlay
+//! and the mix with the HCB's samples.
 
 use crate::{settings_enum, settings_group};
 
 pub mod gather;
 pub mod pyramid;
 pub mod stage;
+pub mod temporal;
 pub mod upsample;
 pub mod voxels;
 
@@ -53,6 +56,21 @@ settings_enum! {
         PointToDisc = "point to disc (Eq. 4)",
     }
     default PointToDisc
+}
+
+settings_enum! {
+    /// What Eq. 6's history W(·) warps (004 §4 "Temporal filtering"; the paper writes I_{i−1},
+    /// the previous frame's unfiltered light, but "blending … with that of the previous frame"
+    /// reads either way).
+    pub enum TemporalHistory {
+        /// F_{i−1}, the previous filtered result: an exponential moving average over frames
+        /// (variance × (1 − a)/(1 + a) for a still pixel).
+        Filtered = "F(i−1): the previous result",
+        /// I_{i−1}, the previous frame's own gather, as Eq. 6 prints it: two frames averaged
+        /// (variance × a² + (1 − a)²).
+        Raw = "I(i−1): the previous gather (Eq. 6 as printed)",
+    }
+    default Filtered
 }
 
 settings_group! {
@@ -98,6 +116,33 @@ settings_group! {
         /// σ of the upsampling's normal weight on 1 − n·n_c.
         upsample_sigma_normal: f32 = 0.2,
         unit "", symbol "", range 0.001..=2.0, cost "free", history false;
+        /// a of Eq. 6, F_i = a·W(history) + (1 − a)·I_i: the warped history's weight where it
+        /// is accepted and nothing moves (`pipeline.temporal = WarpedBlend`; the paper gives no
+        /// value).
+        temporal_a: f32 = 0.85,
+        unit "", symbol "a", range 0.0..=0.99, cost "free (one pass at the G-buffer's resolution)", history false;
+        /// Adaptation of a to motion (004 §4: "adapting a to the moving speed"): a is scaled
+        /// by m½ / (m½ + |m|), |m| the movement buffer's length, so it halves at m½ pixels
+        /// per frame.
+        temporal_motion_px: f32 = 4.0,
+        unit "px/frame", symbol "m½", range 0.01..=1000.0, cost "free", history false;
+        /// Adaptation of a to glossiness (004 §4 and §5.3: ghosting on shiny surfaces): a is
+        /// divided by 1 + k_g · SI · √SP (the lobe's width goes as 1/√SP, Ramamoorthi's
+        /// frequency estimate the paper cites); 0: no adaptation.
+        temporal_gloss: f32 = 0.05,
+        unit "", symbol "k_g", range 0.0..=10.0, cost "free", history false;
+        /// Rejection on depth: the history is dropped where the stored depth at the warped
+        /// position differs from the point's depth in the previous camera by more than this
+        /// fraction of it.
+        reject_depth: f32 = 0.05,
+        unit "× z", symbol "τ_z", range 0.0001..=10.0, cost "free", history false;
+        /// Rejection on normals: the history is dropped where n · n_prev at the warped position
+        /// is below this.
+        reject_normal: f32 = 0.9,
+        unit "cos", symbol "τ_n", range -1.0..=1.0, cost "free", history false;
+        /// What the history holds: F_{i−1} (the filtered result) or I_{i−1} (Eq. 6 as printed).
+        temporal_history: TemporalHistory = TemporalHistory::Filtered,
+        unit "", symbol "", range 0..=1, cost "free", history true;
         /// Split distance of `pipeline.near_field`, in units of the scene's bounding radius:
         /// the screen-space gather takes senders closer than it, the VPL gather the others.
         near_field_distance: f32 = 0.25,

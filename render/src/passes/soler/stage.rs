@@ -1,9 +1,10 @@
 //! Stages 5–6 with Soler et al.'s choices (004 §4, Fig. 4): the mip levels by voting, the
 //! ring gather on each gathered level, and the joint bilateral upsampling that combines them
-//! into `soler.indirect`.
+//! into `soler.indirect`; with temporal filtering (Eq. 6) the result is `soler.temporal`.
 
 use super::gather::{GatherParams, LevelInputs, SolerGather};
 use super::pyramid::{SolerPyramid, sizes};
+use super::temporal::SolerTemporal;
 use super::upsample::{SolerUpsample, Step};
 use super::voxels::{SolerVoxels, VoxelParams};
 use super::{FormFactor, SolerSettings};
@@ -17,6 +18,9 @@ pub struct SolerStage {
     pub gather: SolerGather,
     pub upsample: SolerUpsample,
     pub voxels: SolerVoxels,
+    /// Eq. 6's temporal filtering, when stage 7 filters this stage's light
+    /// (`PipelineSettings::soler_temporal`).
+    pub temporal: Option<SolerTemporal>,
     /// The scene's meshes that are not closed, with their open edges (solid voxelization's
     /// visibility is wrong behind them; `voxels::open_meshes`).
     pub open_meshes: Vec<(String, usize)>,
@@ -30,21 +34,23 @@ fn all_sizes(width: u32, height: u32, top: u32) -> Vec<(u32, u32)> {
 }
 
 impl SolerStage {
-    pub fn new(ctx: &GpuContext, s: &SolerSettings, width: u32, height: u32) -> Self {
+    pub fn new(ctx: &GpuContext, s: &SolerSettings, width: u32, height: u32, temporal: bool) -> Self {
         let top = s.gathered_levels().end - 1;
         let mut stage = Self {
             pyramid: SolerPyramid::new(ctx, width, height, top),
             gather: SolerGather::new(ctx),
             upsample: SolerUpsample::new(ctx, &all_sizes(width, height, top)[..top as usize]),
             voxels: SolerVoxels::new(ctx),
+            temporal: None,
             open_meshes: Vec::new(),
         };
-        stage.ensure(ctx, s, width, height);
+        stage.ensure(ctx, s, width, height, temporal);
         stage
     }
 
-    /// Resizes for the settings and the G-buffer; true when textures were replaced.
-    pub fn ensure(&mut self, ctx: &GpuContext, s: &SolerSettings, width: u32, height: u32) -> bool {
+    /// Resizes for the settings and the G-buffer (`temporal`: whether Eq. 6 filters the
+    /// result); true when textures were created, replaced or dropped.
+    pub fn ensure(&mut self, ctx: &GpuContext, s: &SolerSettings, width: u32, height: u32, temporal: bool) -> bool {
         let top = s.gathered_levels().end - 1;
         let all = all_sizes(width, height, top);
         let gathered: Vec<(u32, (u32, u32))> = s.gathered_levels().map(|k| (k, all[k as usize])).collect();
@@ -52,7 +58,15 @@ impl SolerStage {
         let b = self.gather.ensure(ctx, &gathered);
         let c = self.upsample.ensure(ctx, &all[..top as usize], all[0]);
         let d = self.voxels.ensure(ctx, &gathered, s.voxel_words(), s.visibility);
-        a | b | c | d
+        let e = match (&mut self.temporal, temporal) {
+            (Some(t), true) => t.ensure(ctx, all[0]),
+            (None, true) => {
+                self.temporal = Some(SolerTemporal::new(ctx, all[0]));
+                true
+            }
+            (t, false) => t.take().is_some(),
+        };
+        a | b | c | d | e
     }
 
     pub fn register(&self, reg: &mut BufferRegistry) {
@@ -60,10 +74,20 @@ impl SolerStage {
         self.gather.register(reg);
         self.upsample.register(reg);
         self.voxels.register(reg);
+        if let Some(t) = &self.temporal {
+            t.register(reg);
+        }
     }
 
-    /// The frame's indirect light (`soler.indirect`).
-    pub fn run(&self, f: &FrameInputs, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) -> wgpu::TextureView {
+    /// Forgets the temporal filter's history.
+    pub fn reset(&mut self) {
+        if let Some(t) = &mut self.temporal {
+            t.reset();
+        }
+    }
+
+    /// The frame's indirect light (`soler.indirect`, or `soler.temporal` when filtered).
+    pub fn run(&mut self, f: &FrameInputs, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) -> wgpu::TextureView {
         let s = &f.settings.soler;
         let ctx = f.ctx;
         let g = f.gbuffer;
@@ -151,6 +175,14 @@ impl SolerStage {
         timer.scope(ctx, enc, "soler.upsample", |e, slot| {
             self.upsample.run(ctx, e, slot, sigma, &steps, acc(0), &g.albedo)
         });
-        crate::passes::view(&self.upsample.indirect, "soler.indirect")
+        let indirect = crate::passes::view(&self.upsample.indirect, "soler.indirect");
+        match &mut self.temporal {
+            Some(t) => {
+                let (camera, normal) = (f.camera_buffer, f.normal_texture);
+                timer.scope(ctx, enc, "soler.temporal", |e, slot| t.run(ctx, e, slot, s, camera, &indirect, g, normal));
+                crate::passes::view(&t.filtered, "soler.temporal")
+            }
+            None => indirect,
+        }
     }
 }

@@ -1,0 +1,227 @@
+//! CPU twin of Soler et al.'s temporal filtering (004 §4, Eq. 6; GPU:
+//! `shaders/soler/temporal.wgsl`): F_i = a·W(H) + (1 − a)·I_i, with the warp through the
+//! movement buffer (nearest texel of p + m), rejection where the stored depth at the warped
+//! position differs from the point's depth in the previous camera by more than τ_z of it or
+//! where n · n_prev < τ_n, and a adapted to motion (× m½ / (m½ + |m|)) and glossiness
+//! (÷ (1 + k_g · SI · √SP)).
+//!
+//! Readings (⚠ in the issue): the paper gives no value of a nor its adaptation, only that it
+//! depends on speed and shininess; it does not say whether H is I_{i−1} (as printed) or
+//! F_{i−1}: both are offered (`soler.temporal_history`, default F_{i−1}, whose flicker is
+//! lower; measured in tests/soler_temporal.rs).
+
+use glam::{Mat4, Vec2, Vec3, Vec4};
+
+use crate::buffers::ImageF32;
+
+/// The blend's settings (`passes::soler::temporal::TemporalParams` without the validity).
+#[derive(Clone, Copy, Debug)]
+pub struct BlendParams {
+    pub a: f32,
+    pub motion_half_px: f32,
+    pub gloss: f32,
+    pub reject_depth: f32,
+    pub reject_normal: f32,
+    /// The history keeps I_i (else F_i).
+    pub raw_history: bool,
+}
+
+/// One frame's inputs, images of the G-buffer's size.
+pub struct BlendInputs<'a> {
+    /// I_i (rgb).
+    pub current: &'a ImageF32,
+    /// xyz world position, w view depth.
+    pub position: &'a ImageF32,
+    /// xyz normal, w 1 on a surface.
+    pub normal: &'a ImageF32,
+    /// xy: the pixel's offset to its previous position.
+    pub motion: &'a ImageF32,
+    /// x SI, y SP.
+    pub material: &'a ImageF32,
+    /// The previous frame's normals.
+    pub prev_normal: &'a ImageF32,
+    /// The previous frame's history (rgb, depth in a); None: no history yet.
+    pub history: Option<&'a ImageF32>,
+    pub prev_view_proj: Mat4,
+}
+
+/// The blend's outputs, as the GPU's buffers hold them.
+pub struct BlendOutputs {
+    /// `soler.temporal`: F_i.
+    pub filtered: Vec<Vec3>,
+    /// `soler.temporal.history`: rgb F_i or I_i, a depth.
+    pub history: Vec<Vec4>,
+    /// `soler.temporal.warped`: W(H), a 1 where found.
+    pub warped: Vec<Vec4>,
+    /// `soler.temporal.rejection`: depth, normal, no history.
+    pub rejection: Vec<[bool; 3]>,
+    /// `soler.temporal.a`.
+    pub a: Vec<f32>,
+}
+
+fn xyz(v: [f32; 4]) -> Vec3 {
+    Vec3::new(v[0], v[1], v[2])
+}
+
+/// Eq. 6 at every pixel.
+pub fn blend(p: BlendParams, x: &BlendInputs) -> BlendOutputs {
+    let (w, h) = (x.current.width as i32, x.current.height as i32);
+    let n = (w * h) as usize;
+    let mut out = BlendOutputs {
+        filtered: Vec::with_capacity(n),
+        history: Vec::with_capacity(n),
+        warped: Vec::with_capacity(n),
+        rejection: Vec::with_capacity(n),
+        a: Vec::with_capacity(n),
+    };
+    for i in 0..n {
+        let (px, py) = ((i as i32) % w, (i as i32) / w);
+        let i_new = xyz(x.current.data[i]);
+        let nrm = x.normal.data[i];
+        let pos = x.position.data[i];
+        let mut a = 0.0;
+        let mut warped = Vec4::ZERO;
+        let mut mask = [false, false, true];
+        if let Some(hist) = x.history.filter(|_| nrm[3] > 0.5) {
+            let m = Vec2::new(x.motion.data[i][0], x.motion.data[i][1]);
+            let q = (Vec2::new(px as f32, py as f32) + 0.5 + m).floor();
+            let (qx, qy) = (q.x as i32, q.y as i32);
+            if qx >= 0 && qy >= 0 && qx < w && qy < h {
+                let j = (qy * w + qx) as usize;
+                let (pn, hv) = (x.prev_normal.data[j], hist.data[j]);
+                if pn[3] > 0.5 && hv[3] > 0.0 {
+                    warped = Vec4::new(hv[0], hv[1], hv[2], 1.0);
+                    mask[2] = false;
+                    let z_prev = (x.prev_view_proj * Vec4::new(pos[0], pos[1], pos[2], 1.0)).w;
+                    mask[0] = (hv[3] - z_prev).abs() > p.reject_depth * z_prev.max(1e-6);
+                    mask[1] = xyz(nrm).dot(xyz(pn)) < p.reject_normal;
+                    if !mask[0] && !mask[1] {
+                        let mat = x.material.data[i];
+                        let half = p.motion_half_px;
+                        a = p.a * half
+                            / (half + m.length())
+                            / (1.0 + p.gloss * mat[0].max(0.0) * mat[1].max(0.0).sqrt());
+                    }
+                }
+            }
+        }
+        let f = a * warped.truncate() + (1.0 - a) * i_new;
+        let keep = if p.raw_history { i_new } else { f };
+        let depth = if nrm[3] > 0.5 { pos[3] } else { 0.0 };
+        out.filtered.push(f);
+        out.history.push(keep.extend(depth));
+        out.warped.push(warped);
+        out.rejection.push(mask);
+        out.a.push(a);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn img(w: u32, h: u32, v: [f32; 4]) -> ImageF32 {
+        ImageF32 { width: w, height: h, data: vec![v; (w * h) as usize] }
+    }
+
+    fn params() -> BlendParams {
+        BlendParams {
+            a: 0.8,
+            motion_half_px: 4.0,
+            gloss: 0.0,
+            reject_depth: 0.05,
+            reject_normal: 0.9,
+            raw_history: false,
+        }
+    }
+
+    /// A still, diffuse surface at depth 2 seen by a camera at the origin looking down −z.
+    fn still(current: f32, history: f32) -> (Vec<ImageF32>, Mat4) {
+        let vp = glam::camera::rh::proj::directx::perspective(1.0, 1.0, 0.1, 10.0);
+        (
+            vec![
+                img(4, 4, [current, current, current, 1.0]),
+                img(4, 4, [0.0, 0.0, -2.0, 2.0]),
+                img(4, 4, [0.0, 0.0, 1.0, 1.0]),
+                img(4, 4, [0.0; 4]),
+                img(4, 4, [0.0; 4]),
+                img(4, 4, [history, history, history, 2.0]),
+            ],
+            vp,
+        )
+    }
+
+    fn run(p: BlendParams, v: &[ImageF32], vp: Mat4, with_history: bool) -> BlendOutputs {
+        let x = BlendInputs {
+            current: &v[0],
+            position: &v[1],
+            normal: &v[2],
+            motion: &v[3],
+            material: &v[4],
+            prev_normal: &v[2],
+            history: with_history.then_some(&v[5]),
+            prev_view_proj: vp,
+        };
+        blend(p, &x)
+    }
+
+    #[test]
+    fn a_still_pixel_blends_by_a_and_the_first_frame_keeps_the_gather() {
+        let (v, vp) = still(1.0, 0.5);
+        let o = run(params(), &v, vp, true);
+        // F = 0.8 · 0.5 + 0.2 · 1.0 = 0.6.
+        assert!((o.filtered[5].x - 0.6).abs() < 1e-6, "{}", o.filtered[5]);
+        assert_eq!(o.rejection[5], [false, false, false]);
+        assert_eq!(o.history[5].w, 2.0);
+        let first = run(params(), &v, vp, false);
+        assert_eq!(first.filtered[5].x, 1.0);
+        assert_eq!(first.rejection[5], [false, false, true]);
+        let raw = run(BlendParams { raw_history: true, ..params() }, &v, vp, true);
+        assert_eq!(raw.history[5].x, 1.0, "Eq. 6 as printed keeps I_i");
+    }
+
+    #[test]
+    fn depth_and_normal_disagreement_reject_the_history() {
+        let (mut v, vp) = still(1.0, 0.5);
+        // The stored depth 2.2 is 10 % off the point's 2.0 (τ_z 5 %).
+        v[5] = img(4, 4, [0.5, 0.5, 0.5, 2.2]);
+        let o = run(params(), &v, vp, true);
+        assert_eq!((o.rejection[5], o.a[5], o.filtered[5].x), ([true, false, false], 0.0, 1.0));
+        let (mut v, vp) = still(1.0, 0.5);
+        // A previous normal 60° away (cos 0.5 < τ_n 0.9).
+        v[2] = img(4, 4, [0.0, 0.866, 0.5, 1.0]);
+        let x = BlendInputs {
+            current: &v[0],
+            position: &v[1],
+            normal: &img(4, 4, [0.0, 0.0, 1.0, 1.0]),
+            motion: &v[3],
+            material: &v[4],
+            prev_normal: &v[2],
+            history: Some(&v[5]),
+            prev_view_proj: vp,
+        };
+        let o = blend(params(), &x);
+        assert_eq!(o.rejection[5], [false, true, false]);
+    }
+
+    #[test]
+    fn motion_and_glossiness_lower_a() {
+        let (mut v, vp) = still(1.0, 0.5);
+        v[3] = img(4, 4, [-1.0, 0.0, 0.0, 0.0]);
+        let o = run(params(), &v, vp, true);
+        // m½ = 4 px: a = 0.8 · 4 / 5.
+        assert!((o.a[5] - 0.64).abs() < 1e-6, "{}", o.a[5]);
+        // Moving 3 px per frame to the right: the previous position is 3 px left, off this
+        // 4-pixel-wide image for every column but the last.
+        v[3] = img(4, 4, [-3.0, 0.0, 0.0, 0.0]);
+        let o = run(params(), &v, vp, true);
+        assert_eq!(o.rejection[6], [false, false, true], "warped off screen");
+        assert!((o.a[7] - 0.8 * 4.0 / 7.0).abs() < 1e-6, "{}", o.a[7]);
+        let (mut v, vp) = still(1.0, 0.5);
+        v[4] = img(4, 4, [0.5, 64.0, 0.0, 0.0]);
+        let o = run(BlendParams { gloss: 0.05, ..params() }, &v, vp, true);
+        // SI 0.5, SP 64: a = 0.8 / (1 + 0.05 · 0.5 · 8).
+        assert!((o.a[5] - 0.8 / 1.2).abs() < 1e-6, "{}", o.a[5]);
+    }
+}

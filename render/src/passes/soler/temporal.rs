@@ -1,0 +1,211 @@
+//! Stage 7 "warped blend" (Soler et al. 004 §4 "Temporal filtering", Eq. 6): the history,
+//! warped through the movement buffer and rejected on depth and normal disagreement, is
+//! blended with this frame's screen-space indirect light by an a adapted to motion and
+//! glossiness. Shader `shaders/soler/temporal.wgsl`; CPU twin `cpu::soler_temporal::blend`.
+//!
+//! Buffers: `soler.temporal` (F_i, what compose adds), `soler.temporal.warped` (W of the
+//! history), `soler.temporal.rejection` (r depth, g normal, b no history), `soler.temporal.a`
+//! (the effective a) and `soler.temporal.history` (what the next frame warps: F_i or I_i as
+//! `soler.temporal_history` says, depth in a). The history and the normals are
+//! double-buffered by copy, as in `knecht::temporal`.
+
+use super::{SolerSettings, TemporalHistory};
+use crate::buffers::{BufferKind, BufferRegistry};
+use crate::gpu::GpuContext;
+use crate::passes::bgl;
+use crate::passes::gbuffer::{GBufferViews, NORMAL_FORMAT};
+use crate::timing::Slot;
+
+/// Rust twin of `TemporalParams` in `shaders/soler/temporal.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct TemporalParams {
+    /// a, m½, k_g, 1 when the history holds a frame.
+    pub blend: [f32; 4],
+    /// τ_z, τ_n, 1 when the history keeps I_{i−1}, unused.
+    pub reject: [f32; 4],
+}
+
+impl TemporalParams {
+    pub fn of(s: &SolerSettings, valid: bool) -> Self {
+        Self {
+            blend: [s.temporal_a, s.temporal_motion_px, s.temporal_gloss, valid as u32 as f32],
+            reject: [s.reject_depth, s.reject_normal, (s.temporal_history == TemporalHistory::Raw) as u32 as f32, 0.0],
+        }
+    }
+}
+
+pub struct SolerTemporal {
+    size: (u32, u32),
+    /// F_i.
+    pub filtered: wgpu::Texture,
+    pub history: wgpu::Texture,
+    history_prev: wgpu::Texture,
+    prev_normal: wgpu::Texture,
+    pub warped: wgpu::Texture,
+    pub rejection: wgpu::Texture,
+    pub a: wgpu::Texture,
+    /// Whether `history_prev` holds a frame.
+    valid: bool,
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::ComputePipeline,
+    params: wgpu::Buffer,
+}
+
+struct Targets {
+    filtered: wgpu::Texture,
+    history: wgpu::Texture,
+    history_prev: wgpu::Texture,
+    prev_normal: wgpu::Texture,
+    warped: wgpu::Texture,
+    rejection: wgpu::Texture,
+    a: wgpu::Texture,
+}
+
+fn targets(device: &wgpu::Device, (w, h): (u32, u32)) -> Targets {
+    let st = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::COPY_DST;
+    let t = |label, f| crate::passes::create_target(device, label, w, h, f, st);
+    let rgba = wgpu::TextureFormat::Rgba32Float;
+    Targets {
+        filtered: t("soler.temporal", rgba),
+        history: t("soler.temporal.history", rgba),
+        history_prev: t("soler.temporal.history_prev", rgba),
+        prev_normal: t("soler.temporal.prev_normal", NORMAL_FORMAT),
+        warped: t("soler.temporal.warped", rgba),
+        rejection: t("soler.temporal.rejection", rgba),
+        a: t("soler.temporal.a", wgpu::TextureFormat::R32Float),
+    }
+}
+
+impl SolerTemporal {
+    pub fn new(ctx: &GpuContext, size: (u32, u32)) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let rgba = wgpu::TextureFormat::Rgba32Float;
+        let mut entries = vec![bgl::uniform(0, cs), bgl::uniform(1, cs)];
+        entries.extend((2..=8).map(|b| bgl::texture(b, cs, false)));
+        entries.extend((9..=12).map(|b| bgl::storage_texture(b, rgba)));
+        entries.push(bgl::storage_texture(13, wgpu::TextureFormat::R32Float));
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("soler.temporal.inputs"),
+            entries: &entries,
+        });
+        let module = crate::shaders::create_module(device, "soler/temporal.wgsl");
+        let pipeline = crate::passes::compute_pipeline(device, "soler.temporal", &module, "cs_temporal", &[&layout]);
+        let params = crate::passes::uniform_buffer(
+            device,
+            "soler.temporal.params",
+            std::mem::size_of::<TemporalParams>() as u64,
+        );
+        let t = targets(device, size);
+        Self {
+            size,
+            filtered: t.filtered,
+            history: t.history,
+            history_prev: t.history_prev,
+            prev_normal: t.prev_normal,
+            warped: t.warped,
+            rejection: t.rejection,
+            a: t.a,
+            valid: false,
+            layout,
+            pipeline,
+            params,
+        }
+    }
+
+    /// Resizes to the G-buffer; true when the textures were replaced (the history is lost).
+    pub fn ensure(&mut self, ctx: &GpuContext, size: (u32, u32)) -> bool {
+        if size == self.size {
+            return false;
+        }
+        let t = targets(&ctx.device, size);
+        (self.filtered, self.history, self.history_prev, self.prev_normal) =
+            (t.filtered, t.history, t.history_prev, t.prev_normal);
+        (self.warped, self.rejection, self.a) = (t.warped, t.rejection, t.a);
+        self.size = size;
+        self.valid = false;
+        true
+    }
+
+    /// Forgets the history.
+    pub fn reset(&mut self) {
+        self.valid = false;
+    }
+
+    pub fn register(&self, reg: &mut BufferRegistry) {
+        let entries: [(&str, BufferKind, &str, &wgpu::Texture); 5] = [
+            (
+                "soler.temporal",
+                BufferKind::Hdr,
+                "Soler temporal filtering (004 Eq. 6): F_i = a·W(history) + (1 − a)·I_i, what compose adds",
+                &self.filtered,
+            ),
+            (
+                "soler.temporal.warped",
+                BufferKind::Hdr,
+                "Soler Eq. 6's W(history): the history at the pixel's previous position (movement buffer), black where none",
+                &self.warped,
+            ),
+            (
+                "soler.temporal.rejection",
+                BufferKind::Data,
+                "Soler Eq. 6's rejection mask: r depth disagrees (τ_z), g normal disagrees (τ_n), b no history (off screen, background, first frame)",
+                &self.rejection,
+            ),
+            (
+                "soler.temporal.a",
+                BufferKind::Data,
+                "Soler Eq. 6's effective a: a adapted to motion and glossiness, 0 where the history is rejected",
+                &self.a,
+            ),
+            (
+                "soler.temporal.history",
+                BufferKind::Hdr,
+                "Soler Eq. 6's history for the next frame: F_i or I_i (soler.temporal_history), view depth in a",
+                &self.history,
+            ),
+        ];
+        for (name, kind, doc, t) in entries {
+            reg.register(name, kind, doc, t);
+        }
+    }
+
+    /// Blends `current` (I_i) with the warped history into `soler.temporal`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<Slot<'_>>,
+        s: &SolerSettings,
+        camera: &wgpu::Buffer,
+        current: &wgpu::TextureView,
+        g: &GBufferViews,
+        normal: &wgpu::Texture,
+    ) {
+        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&TemporalParams::of(s, self.valid)));
+        let v = |t: &wgpu::Texture| crate::passes::view(t, "soler.temporal.view");
+        let (prev_n, hist_prev, filtered, hist, warped, rejection, a) = (
+            v(&self.prev_normal),
+            v(&self.history_prev),
+            v(&self.filtered),
+            v(&self.history),
+            v(&self.warped),
+            v(&self.rejection),
+            v(&self.a),
+        );
+        let tv = wgpu::BindingResource::TextureView;
+        let mut resources = vec![self.params.as_entire_binding(), camera.as_entire_binding()];
+        let views = [current, &g.position, &g.normal, &g.motion, &g.material, &prev_n, &hist_prev];
+        resources.extend(views.map(tv));
+        resources.extend([&filtered, &hist, &warped, &rejection, &a].map(tv));
+        let group = crate::passes::bind_group(&ctx.device, "soler.temporal.inputs", &self.layout, resources);
+        let stamps = slot.and_then(|s| s.compute(true, true));
+        crate::passes::dispatch_2d(encoder, "soler.temporal", &self.pipeline, &group, &[], stamps, self.size);
+        let size = wgpu::Extent3d { width: self.size.0, height: self.size.1, depth_or_array_layers: 1 };
+        encoder.copy_texture_to_texture(self.history.as_image_copy(), self.history_prev.as_image_copy(), size);
+        encoder.copy_texture_to_texture(normal.as_image_copy(), self.prev_normal.as_image_copy(), size);
+        self.valid = true;
+    }
+}

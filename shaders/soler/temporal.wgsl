@@ -1,0 +1,89 @@
+// Temporal filtering of the screen-space indirect light (Soler et al. 004 §4, Eq. 6):
+// F_i = a·W(H) + (1 − a)·I_i. W warps the history H to the current pixel p through the
+// movement buffer (camera and object motion): the pixel was at q = p + m(p) in the previous
+// frame (nearest texel). The history is rejected (a = 0) where q is off screen or was
+// background, where the depth stored at q differs from the point's depth in the previous
+// camera (w of prev_view_proj · x) by more than τ_z of it, or where n · n_prev(q) < τ_n.
+// a adapts to motion, a · m½ / (m½ + |m|), and to glossiness, ÷ (1 + k_g · SI · √SP).
+// H is F_{i−1} or I_{i−1} (a setting: the paper prints I_{i−1}). Outputs: F (`soler.temporal`),
+// the next history (rgb, depth in a), W(H) (a: 1 where q holds a surface), the rejection mask
+// (r depth, g normal, b no history) and the effective a. CPU twin: cpu::soler_temporal::blend.
+#import common/camera.wgsl
+
+// Rust twin: passes::soler::temporal::TemporalParams.
+struct TemporalParams {
+    // x: a, y: m½ (px/frame), z: k_g, w: 1 when the history holds a frame
+    blend: vec4<f32>,
+    // x: τ_z, y: τ_n, z: 1 when the history keeps I_{i−1} (else F_{i−1}), w: unused
+    reject: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> params: TemporalParams;
+@group(0) @binding(1) var<uniform> camera: Camera;
+@group(0) @binding(2) var current: texture_2d<f32>;
+@group(0) @binding(3) var g_position: texture_2d<f32>;
+@group(0) @binding(4) var g_normal: texture_2d<f32>;
+@group(0) @binding(5) var g_motion: texture_2d<f32>;
+@group(0) @binding(6) var g_material: texture_2d<f32>;
+@group(0) @binding(7) var prev_normal: texture_2d<f32>;
+@group(0) @binding(8) var history_prev: texture_2d<f32>;
+@group(0) @binding(9) var out_filtered: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(10) var out_history: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(11) var out_warped: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(12) var out_mask: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(13) var out_a: texture_storage_2d<r32float, write>;
+
+@compute @workgroup_size(8, 8, 1)
+fn cs_temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let size = textureDimensions(current);
+    if (gid.x >= size.x || gid.y >= size.y) {
+        return;
+    }
+    let p = vec2<i32>(gid.xy);
+    let i_new = textureLoad(current, p, 0).rgb;
+    let nrm = textureLoad(g_normal, p, 0);
+    let pos = textureLoad(g_position, p, 0);
+    var a = 0.0;
+    var warped = vec4<f32>(0.0);
+    var mask = vec4<f32>(0.0, 0.0, 1.0, 1.0);
+    if (params.blend.w > 0.5 && nrm.w > 0.5) {
+        let motion = textureLoad(g_motion, p, 0).xy;
+        let q = vec2<i32>(floor(vec2<f32>(p) + 0.5 + motion));
+        if (q.x >= 0 && q.y >= 0 && q.x < i32(size.x) && q.y < i32(size.y)) {
+            let pn = textureLoad(prev_normal, q, 0);
+            let h = textureLoad(history_prev, q, 0);
+            if (pn.w > 0.5 && h.a > 0.0) {
+                warped = vec4<f32>(h.rgb, 1.0);
+                mask.z = 0.0;
+                let z_prev = (camera.prev_view_proj * vec4<f32>(pos.xyz, 1.0)).w;
+                if (abs(h.a - z_prev) > params.reject.x * max(z_prev, 1e-6)) {
+                    mask.x = 1.0;
+                }
+                if (dot(nrm.xyz, pn.xyz) < params.reject.y) {
+                    mask.y = 1.0;
+                }
+                if (mask.x < 0.5 && mask.y < 0.5) {
+                    let mat = textureLoad(g_material, p, 0);
+                    let speed = length(motion);
+                    let half = params.blend.y;
+                    a = params.blend.x * half / (half + speed)
+                        / (1.0 + params.blend.z * max(mat.x, 0.0) * sqrt(max(mat.y, 0.0)));
+                }
+            }
+        }
+    }
+    let f = a * warped.rgb + (1.0 - a) * i_new;
+    textureStore(out_filtered, gid.xy, vec4<f32>(f, 1.0));
+    var keep = f;
+    if (params.reject.z > 0.5) {
+        keep = i_new;
+    }
+    var depth = 0.0;
+    if (nrm.w > 0.5) {
+        depth = pos.w;
+    }
+    textureStore(out_history, gid.xy, vec4<f32>(keep, depth));
+    textureStore(out_warped, gid.xy, warped);
+    textureStore(out_mask, gid.xy, mask);
+    textureStore(out_a, gid.xy, vec4<f32>(a, 0.0, 0.0, 0.0));
+}
