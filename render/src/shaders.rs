@@ -58,6 +58,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("soler/voxel_down.wgsl", include_str!("../../shaders/soler/voxel_down.wgsl")),
     ("soler/voxel_view.wgsl", include_str!("../../shaders/soler/voxel_view.wgsl")),
     ("soler/temporal.wgsl", include_str!("../../shaders/soler/temporal.wgsl")),
+    ("soler/bounces.wgsl", include_str!("../../shaders/soler/bounces.wgsl")),
     ("view/view.wgsl", include_str!("../../shaders/view/view.wgsl")),
     ("view/probe.wgsl", include_str!("../../shaders/view/probe.wgsl")),
 ];
@@ -102,6 +103,7 @@ pub const ENTRY_MODULES: &[&str] = &[
     "soler/voxel_down.wgsl",
     "soler/voxel_view.wgsl",
     "soler/temporal.wgsl",
+    "soler/bounces.wgsl",
     "view/view.wgsl",
     "view/probe.wgsl",
 ];

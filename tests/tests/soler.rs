@@ -48,17 +48,32 @@ fn mismatches(a: &[Vec3], b: &[Vec3], rel: f32, abs: f32) -> usize {
 
 #[test]
 fn the_mip_levels_gather_and_upsampling_match_the_cpu() {
-    gpu_matches_cpu(Technique::Soler, 0.0);
+    gpu_matches_cpu(Technique::Soler, 0.0, 1, false);
+}
+
+/// Multi-bounce (004 §4): the second bounce mipmaps and gathers the first bounce's light
+/// (`soler.bounce.1`), and `soler.indirect` is the sum of the bounces.
+#[test]
+fn the_second_bounce_gathers_the_first_bounces_light() {
+    gpu_matches_cpu(Technique::Soler, 0.0, 2, false);
+}
+
+/// Alternating bounces (004 §5.3): frame 1 gathers bounce 2 from the bounce 1 that frame 0
+/// stored, and frame 2 (bounce 1 again) keeps bounce 2 as it was.
+#[test]
+fn alternating_bounces_gather_one_bounce_per_frame() {
+    gpu_matches_cpu(Technique::Soler, 0.0, 2, true);
 }
 
 /// As the near field of Knecht's VPLs (`pipeline.near_field`), the gather skips senders at
 /// the split distance or farther.
 #[test]
 fn the_near_field_gather_matches_the_cpu_with_its_cut() {
-    gpu_matches_cpu(Technique::SolerNearKnechtFar, 0.3);
+    gpu_matches_cpu(Technique::SolerNearKnechtFar, 0.3, 1, false);
 }
 
-fn gpu_matches_cpu(technique: Technique, near_field_distance: f32) {
+/// The last bounce of the frame (with `alternate`, frame 1's: bounce 2) against the CPU.
+fn gpu_matches_cpu(technique: Technique, near_field_distance: f32, bounces: u32, alternate: bool) {
     const SIZE: u32 = 64;
     let mut r = renderer(SIZE, technique, |s| {
         s.soler.start_resolution = StartResolution::Half;
@@ -68,14 +83,20 @@ fn gpu_matches_cpu(technique: Technique, near_field_distance: f32) {
         if near_field_distance > 0.0 {
             s.soler.near_field_distance = near_field_distance;
         }
+        s.soler.bounces = bounces;
+        s.soler.alternate_bounces = alternate;
     });
     r.render_frame();
+    if alternate {
+        r.render_frame();
+    }
     let start_level = r.settings().soler.gathered_levels().start;
     let near_cut = if near_field_distance > 0.0 { near_field_distance * r.bounds().radius() } else { 0.0 };
     let s = r.settings().soler.clone();
     let sig = VoteSigmas { pixel: s.vote_sigma_pixel, normal: s.vote_sigma_normal, depth: s.vote_sigma_depth };
-    let mut levels =
-        vec![level(&read(&r, "gbuffer.position"), &read(&r, "gbuffer.normal"), &read(&r, "direct.radiance"))];
+    // The light the last bounce gathered: the direct light, or the bounce before's.
+    let input = if bounces == 1 { "direct.radiance".to_string() } else { format!("soler.bounce.{}", bounces - 1) };
+    let mut levels = vec![level(&read(&r, "gbuffer.position"), &read(&r, "gbuffer.normal"), &read(&r, &input))];
     // Voting (Eq. 5): each GPU level against the CPU's vote of the GPU level below it.
     for k in 1..=s.gathered_levels().end - 1 {
         let gpu = level(
@@ -118,7 +139,7 @@ fn gpu_matches_cpu(technique: Technique, near_field_distance: f32) {
             radius: s.radius_px,
             full_disc: i == 0,
             level: k,
-            frame: 0,
+            frame: alternate as u32,
             disc: s.form_factor == FormFactor::PointToDisc,
             min_cos_beta: s.min_cos_beta,
             near_cut,
@@ -180,8 +201,26 @@ fn gpu_matches_cpu(technique: Technique, near_field_distance: f32) {
     let albedo = read(&r, "gbuffer.albedo");
     let e = accum(0);
     let want: Vec<Vec3> = e.iter().zip(&albedo.data).map(|(e, a)| v3(*a) * a[3] / std::f32::consts::PI * *e).collect();
-    let got: Vec<Vec3> = read(&r, "soler.indirect").data.into_iter().map(v3).collect();
-    assert_eq!(mismatches(&want, &got, 1e-4, 1e-6), 0, "soler.indirect");
+    let out = if bounces == 1 { "soler.indirect".to_string() } else { format!("soler.bounce.{bounces}") };
+    let got: Vec<Vec3> = read(&r, &out).data.into_iter().map(v3).collect();
+    assert_eq!(mismatches(&want, &got, 1e-4, 1e-6), 0, "{out}");
+    if bounces > 1 {
+        let all: Vec<Vec<Vec3>> =
+            (1..=bounces).map(|b| read(&r, &format!("soler.bounce.{b}")).data.into_iter().map(v3).collect()).collect();
+        let sum: Vec<Vec3> = (0..got.len()).map(|i| all.iter().map(|b| b[i]).sum()).collect();
+        let indirect: Vec<Vec3> = read(&r, "soler.indirect").data.into_iter().map(v3).collect();
+        assert_eq!(mismatches(&sum, &indirect, 1e-5, 1e-7), 0, "soler.indirect = the sum of the bounces");
+        let lit = |v: &[Vec3]| v.iter().map(|e| e.length()).sum::<f32>();
+        assert!(lit(&all[1]) > 0.0 && lit(&all[1]) < lit(&all[0]), "bounce 2 must add less light than bounce 1");
+    }
+    if alternate {
+        // Frame 2 gathers bounce 1 again and keeps frame 1's bounce 2.
+        let before = read(&r, "soler.bounce.2");
+        let first = read(&r, "soler.bounce.1");
+        r.render_frame();
+        assert_eq!(read(&r, "soler.bounce.2").data, before.data, "bounce 2 is not gathered on even frames");
+        assert_ne!(read(&r, "soler.bounce.1").data, first.data, "bounce 1 is gathered on even frames");
+    }
 }
 
 /// Visibility (004 §4): the GPU's solid voxelization of the default scene against the CPU's,
@@ -246,4 +285,29 @@ fn the_voxel_grid_matches_the_cpu_voxelization() {
         assert!(!open.iter().any(|n| n == closed), "{closed} is open: {open:?}");
     }
     assert!(!open.is_empty(), "the room's walls are open surfaces");
+}
+
+/// Visibility per bounce (004 §5.3): by default only the first bounce marches the voxel grid;
+/// `visibility_all_bounces` marches it on every bounce. After a two-bounce frame the levels'
+/// occlusion buffers hold the second bounce's.
+#[test]
+fn visibility_marches_later_bounces_only_when_asked() {
+    let hidden = |all: bool| {
+        let mut r = renderer(64, Technique::Soler, |s| {
+            s.soler.start_resolution = StartResolution::Half;
+            s.soler.levels = 2;
+            s.soler.samples = 32;
+            s.soler.radius_px = 8.0;
+            s.soler.visibility = true;
+            s.soler.bounces = 2;
+            s.soler.visibility_all_bounces = all;
+        });
+        r.render_frame();
+        let occ = read(&r, "soler.level.1.occlusion");
+        occ.data.iter().map(|o| v3(*o).length()).sum::<f32>()
+    };
+    let (first_only, every) = (hidden(false), hidden(true));
+    println!("light the march removed from bounce 2 at level 1: first bounce only {first_only}, every bounce {every}");
+    assert_eq!(first_only, 0.0, "bounce 2 marched the grid although visibility_all_bounces is off");
+    assert!(every > 0.0, "bounce 2 with visibility removed no light");
 }

@@ -228,6 +228,7 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         | "soler/voxel_down.wgsl"
         | "soler/voxel_view.wgsl"
         | "soler/temporal.wgsl"
+        | "soler/bounces.wgsl"
         | "soler/voxel_common.wgsl" => "soler",
         _ => return None,
     })
@@ -262,12 +263,35 @@ pub fn scope_output(scope: &str) -> Option<&'static str> {
         "hcb.cache.recompute" => "hcb.recompute_group",
         "hcb.cache.splat" => "hcb.weight_sum",
         "soler.pyramid" => "soler.level.1.normal",
-        "soler.gather" => "soler.indirect",
         "soler.upsample" => "soler.indirect",
+        "soler.bounces" => "soler.indirect",
+        // One scope per gathered level k (`soler.gather.k`), per bounce b ≥ 2
+        // (`soler.bounceb.{pyramid,gather.k,upsample}`).
+        s if s.starts_with("soler.gather.") => level_indirect(s.rsplit('.').next()?)?,
+        s if s.starts_with("soler.bounce") && s.contains(".gather.") => level_indirect(s.rsplit('.').next()?)?,
+        s if s.starts_with("soler.bounce") && s.ends_with(".pyramid") => "soler.level.1.radiance",
+        s if s.starts_with("soler.bounce") && s.ends_with(".upsample") => "soler.indirect",
         "soler.voxels" => "soler.voxels.2",
         "soler.temporal" => "soler.temporal",
         _ => return None,
     })
+}
+
+/// `soler.level.k.indirect` for the level number `k` of a timing scope.
+fn level_indirect(k: &str) -> Option<&'static str> {
+    const NAMES: [&str; 10] = [
+        "soler.level.0.indirect",
+        "soler.level.1.indirect",
+        "soler.level.2.indirect",
+        "soler.level.3.indirect",
+        "soler.level.4.indirect",
+        "soler.level.5.indirect",
+        "soler.level.6.indirect",
+        "soler.level.7.indirect",
+        "soler.level.8.indirect",
+        "soler.level.9.indirect",
+    ];
+    NAMES.get(k.parse::<usize>().ok()?).copied()
 }
 
 /// The scene's first camera, else one that frames the bounds.

@@ -30,6 +30,9 @@ pub struct GatherParams {
 /// Most levels a frame gathers (the settings' range).
 pub const MAX_GATHERED: usize = 8;
 
+/// Most bounces (the settings' range).
+pub const MAX_BOUNCES: usize = 4;
+
 /// One gathered level's input: its position, normal and radiance views and size.
 pub struct LevelInputs<'a> {
     pub level: u32,
@@ -72,7 +75,8 @@ impl SolerGather {
         });
         let module = crate::shaders::create_module(device, "soler/gather.wgsl");
         let pipeline = crate::passes::compute_pipeline(device, "soler.gather", &module, "cs_gather", &[&layout]);
-        let params = crate::passes::uniform_buffer(device, "soler.gather.params", STRIDE * MAX_GATHERED as u64);
+        let params =
+            crate::passes::uniform_buffer(device, "soler.gather.params", STRIDE * (MAX_GATHERED * MAX_BOUNCES) as u64);
         Self { light: Vec::new(), occlusion: Vec::new(), layout, pipeline, params }
     }
 
@@ -119,43 +123,57 @@ impl SolerGather {
         }
     }
 
-    /// Gathers every level of `inputs` (in the order of [`Self::light`]).
-    pub fn run(
+    /// Writes the parameters of every gather of the frame: slot `b · levels + i` is level i
+    /// (in the order of [`Self::light`]) of the b-th bounce gathered, `voxels[b][i]` its grid.
+    /// `levels`: each gathered level and its size.
+    pub fn write_params(
+        &self,
+        ctx: &GpuContext,
+        levels: &[(u32, (u32, u32))],
+        base: GatherParams,
+        voxels: &[Vec<super::voxels::VoxelParams>],
+    ) {
+        let params: Vec<GatherParams> = voxels
+            .iter()
+            .flat_map(|per_level| {
+                levels.iter().enumerate().map(move |(i, &(level, size))| {
+                    let mut p = base;
+                    p.counts[1] = (i == 0) as u32;
+                    p.counts[2] = level;
+                    p.screen[2] = size.0 as f32;
+                    p.screen[3] = size.1 as f32;
+                    p.voxels = per_level.get(i).copied().unwrap_or_default();
+                    p
+                })
+            })
+            .collect();
+        ctx.queue.write_buffer(&self.params, 0, &crate::passes::strided_bytes(STRIDE, params.len(), &params));
+    }
+
+    /// Gathers the level `l`, the i-th of [`Self::light`], with the parameters of `slot_index`
+    /// ([`Self::write_params`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn run_level(
         &self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         slot: Option<Slot<'_>>,
-        inputs: &[LevelInputs<'_>],
-        base: GatherParams,
+        l: &LevelInputs<'_>,
+        i: usize,
+        slot_index: usize,
     ) {
-        let params: Vec<GatherParams> = inputs
-            .iter()
-            .enumerate()
-            .map(|(i, l)| {
-                let mut p = base;
-                p.counts[1] = (i == 0) as u32;
-                p.counts[2] = l.level;
-                p.screen[2] = l.size.0 as f32;
-                p.screen[3] = l.size.1 as f32;
-                p.voxels = l.voxels;
-                p
-            })
-            .collect();
-        ctx.queue.write_buffer(&self.params, 0, &crate::passes::strided_bytes(STRIDE, params.len(), &params));
         let uniform = crate::passes::dynamic_slot(&self.params, std::mem::size_of::<GatherParams>());
-        let n = inputs.len();
-        for (i, ((l, (_, out)), occ)) in inputs.iter().zip(&self.light).zip(&self.occlusion).enumerate() {
-            let out_view = crate::passes::view(out, "soler.gather.out");
-            let occ_view = crate::passes::view(occ, "soler.gather.occlusion");
-            let tv = wgpu::BindingResource::TextureView;
-            let views = [l.position, l.normal, l.radiance, &out_view];
-            let mut resources: Vec<_> = std::iter::once(uniform.clone()).chain(views.map(tv)).collect();
-            resources.push(l.grid.as_entire_binding());
-            resources.push(tv(&occ_view));
-            let group = crate::passes::bind_group(&ctx.device, "soler.gather.inputs", &self.layout, resources);
-            let stamps = slot.as_ref().and_then(|s| s.compute(i == 0, i + 1 == n));
-            let offset = [(i as u64 * STRIDE) as u32];
-            crate::passes::dispatch_2d(encoder, "soler.gather", &self.pipeline, &group, &offset, stamps, l.size);
-        }
+        let (out, occ) = (&self.light[i].1, &self.occlusion[i]);
+        let out_view = crate::passes::view(out, "soler.gather.out");
+        let occ_view = crate::passes::view(occ, "soler.gather.occlusion");
+        let tv = wgpu::BindingResource::TextureView;
+        let views = [l.position, l.normal, l.radiance, &out_view];
+        let mut resources: Vec<_> = std::iter::once(uniform).chain(views.map(tv)).collect();
+        resources.push(l.grid.as_entire_binding());
+        resources.push(tv(&occ_view));
+        let group = crate::passes::bind_group(&ctx.device, "soler.gather.inputs", &self.layout, resources);
+        let stamps = slot.as_ref().and_then(|s| s.compute(true, true));
+        let offset = [(slot_index as u64 * STRIDE) as u32];
+        crate::passes::dispatch_2d(encoder, "soler.gather", &self.pipeline, &group, &offset, stamps, l.size);
     }
 }

@@ -10,11 +10,16 @@
 //!
 //! Temporal filtering (Eq. 6, `temporal`) is stage 7's choice `WarpedBlend`.
 //!
-//! Not built yet (issue #16): multi-bounce, glossy importance sampling, the sample overlay
-//! and the mix with the HCB's samples.
+//! Multi-bounce (004 §4, §5.3): `bounces` runs the pyramid, the gather and the upsampling
+//! once per bounce on the previous bounce's light (`soler.bounce.n`), or one bounce per frame
+//! in turn (`alternate_bounces`); `bounces.wgsl` adds them into `soler.indirect`.
+//!
+//! Not built yet (issue #16): glossy importance sampling, the sample overlay and the mix with
+//! the HCB's samples.
 
 use crate::{settings_enum, settings_group};
 
+pub mod bounces;
 pub mod gather;
 pub mod pyramid;
 pub mod stage;
@@ -116,6 +121,20 @@ settings_group! {
         /// σ of the upsampling's normal weight on 1 − n·n_c.
         upsample_sigma_normal: f32 = 0.2,
         unit "", symbol "", range 0.001..=2.0, cost "free", history false;
+        /// Bounces of indirect light (004 §4 "Multi-bounce computation"): bounce n gathers
+        /// bounce n − 1's light (c·DI/π · E at every pixel, mipmapped like the direct light);
+        /// the indirect light is their sum.
+        bounces: u32 = 1,
+        unit "bounces", symbol "n", range 1..=4, cost "a pyramid, a gather per level and an upsampling per bounce (the voxel grid is shared)", history false;
+        /// Visibility on every bounce; off: on the first only (004 §5.3: suppressing it after
+        /// bounce 1 "results in acceptable artifacts" and saves most of the cost).
+        visibility_all_bounces: bool = false,
+        unit "", symbol "", range 0..=1, cost "with visibility: the march on every bounce", history false;
+        /// One bounce per frame, in turn: frame f gathers bounce (f mod n) + 1 from the stored
+        /// result of the bounce before it, and the newest result of every bounce is added
+        /// (004 §5.3's odd/even frames for n = 2; relies on the light's temporal coherence).
+        alternate_bounces: bool = false,
+        unit "", symbol "", range 0..=1, cost "one bounce's gather per frame instead of n", history true;
         /// a of Eq. 6, F_i = a·W(history) + (1 − a)·I_i: the warped history's weight where it
         /// is accepted and nothing moves (`pipeline.temporal = WarpedBlend`; the paper gives no
         /// value).

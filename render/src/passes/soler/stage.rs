@@ -2,6 +2,7 @@
 //! ring gather on each gathered level, and the joint bilateral upsampling that combines them
 //! into `soler.indirect`; with temporal filtering (Eq. 6) the result is `soler.temporal`.
 
+use super::bounces::SolerBounces;
 use super::gather::{GatherParams, LevelInputs, SolerGather};
 use super::pyramid::{SolerPyramid, sizes};
 use super::temporal::SolerTemporal;
@@ -18,6 +19,8 @@ pub struct SolerStage {
     pub gather: SolerGather,
     pub upsample: SolerUpsample,
     pub voxels: SolerVoxels,
+    /// Multi-bounce: every bounce's light and their sum.
+    pub bounces: SolerBounces,
     /// Eq. 6's temporal filtering, when stage 7 filters this stage's light
     /// (`PipelineSettings::soler_temporal`).
     pub temporal: Option<SolerTemporal>,
@@ -41,6 +44,7 @@ impl SolerStage {
             gather: SolerGather::new(ctx),
             upsample: SolerUpsample::new(ctx, &all_sizes(width, height, top)[..top as usize]),
             voxels: SolerVoxels::new(ctx),
+            bounces: SolerBounces::new(ctx),
             temporal: None,
             open_meshes: Vec::new(),
         };
@@ -57,7 +61,8 @@ impl SolerStage {
         let a = self.pyramid.ensure(ctx, width, height, top);
         let b = self.gather.ensure(ctx, &gathered);
         let c = self.upsample.ensure(ctx, &all[..top as usize], all[0]);
-        let d = self.voxels.ensure(ctx, &gathered, s.voxel_words(), s.visibility);
+        let d = self.voxels.ensure(ctx, &gathered, s.voxel_words(), s.visibility)
+            | self.bounces.ensure(ctx, s.bounces, all[0]);
         let e = match (&mut self.temporal, temporal) {
             (Some(t), true) => t.ensure(ctx, all[0]),
             (None, true) => {
@@ -74,6 +79,7 @@ impl SolerStage {
         self.gather.register(reg);
         self.upsample.register(reg);
         self.voxels.register(reg);
+        self.bounces.register(reg);
         if let Some(t) = &self.temporal {
             t.register(reg);
         }
@@ -86,32 +92,21 @@ impl SolerStage {
         }
     }
 
+    /// The bounces this frame gathers, 0-based (all, or one in turn when alternating).
+    pub fn bounces_of_frame(s: &SolerSettings, frame: u32) -> Vec<u32> {
+        let n = s.bounces.clamp(1, super::gather::MAX_BOUNCES as u32);
+        if s.alternate_bounces && n > 1 { vec![frame % n] } else { (0..n).collect() }
+    }
+
     /// The frame's indirect light (`soler.indirect`, or `soler.temporal` when filtered).
     pub fn run(&mut self, f: &FrameInputs, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) -> wgpu::TextureView {
         let s = &f.settings.soler;
         let ctx = f.ctx;
         let g = f.gbuffer;
-        if !self.pyramid.levels.is_empty() {
-            let sigma = [s.vote_sigma_pixel, s.vote_sigma_normal, s.vote_sigma_depth];
-            timer.scope(ctx, enc, "soler.pyramid", |e, slot| {
-                self.pyramid.run(ctx, e, slot, sigma, &g.position, &g.normal, f.direct_radiance)
-            });
-        }
-        let view = |t: &wgpu::Texture| crate::passes::view(t, "soler.level.view");
-        // Views of levels 1 … top: position, normal, radiance.
-        let lv: Vec<[wgpu::TextureView; 3]> =
-            self.pyramid.levels.iter().map(|l| [view(&l.position), view(&l.normal), view(&l.radiance)]).collect();
-        let level_views = |k: u32| -> [&wgpu::TextureView; 3] {
-            if k == 0 {
-                [&g.position, &g.normal, f.direct_radiance]
-            } else {
-                let v = &lv[k as usize - 1];
-                [&v[0], &v[1], &v[2]]
-            }
-        };
         let top = s.gathered_levels().end - 1;
         let all = all_sizes(f.gbuffer_size.0, f.gbuffer_size.1, top);
-        // Visibility (004 §4): the scene voxelized from the camera, one grid per level.
+        // Visibility (004 §4): the scene voxelized from the camera, one grid per level, shared
+        // by the bounces.
         let z = super::voxels::depth_range(
             f.camera.position,
             f.camera.forward(),
@@ -128,17 +123,12 @@ impl SolerStage {
                 self.voxels.run(ctx, e, slot, cam, scene, state, &voxel_params, f.gbuffer_size)
             });
         }
-        let inputs: Vec<LevelInputs> = s
-            .gathered_levels()
-            .enumerate()
-            .map(|(i, k)| {
-                let [position, normal, radiance] = level_views(k);
-                let (grid, voxels) = match (self.voxels.grids.get(i), voxel_params.get(i)) {
-                    (Some(g), Some(p)) => (&g.buffer, *p),
-                    _ => (&self.voxels.empty, VoxelParams::default()),
-                };
-                LevelInputs { level: k, position, normal, radiance, size: all[k as usize], grid, voxels }
-            })
+        let bounces = Self::bounces_of_frame(s, f.frame);
+        // Per bounce gathered, the grids its levels march (none after the first bounce unless
+        // `visibility_all_bounces`).
+        let grids: Vec<Vec<VoxelParams>> = bounces
+            .iter()
+            .map(|&b| if b == 0 || s.visibility_all_bounces { voxel_params.clone() } else { Vec::new() })
             .collect();
         let aspect = f.gbuffer_size.0 as f32 / f.gbuffer_size.1.max(1) as f32;
         let tan_v = (0.5 * f.camera.yfov).tan();
@@ -155,8 +145,86 @@ impl SolerStage {
             voxels: VoxelParams::default(),
             march: [s.march_bias_px, s.march_depth_bias, 0.0, 0.0],
         };
-        timer.scope(ctx, enc, "soler.gather", |e, slot| self.gather.run(ctx, e, slot, &inputs, base));
+        let levels: Vec<(u32, (u32, u32))> = s.gathered_levels().map(|k| (k, all[k as usize])).collect();
+        self.gather.write_params(ctx, &levels, base, &grids);
+        let bounce_views: Vec<wgpu::TextureView> =
+            self.bounces.light.iter().map(|t| crate::passes::view(t, "soler.bounce")).collect();
+        for (j, &b) in bounces.iter().enumerate() {
+            // Bounce b + 1 gathers the light of bounce b (the direct light for the first).
+            let radiance = if b == 0 { f.direct_radiance } else { &bounce_views[b as usize - 1] };
+            let prefix = if b == 0 { "soler".to_string() } else { format!("soler.bounce{}", b + 1) };
+            self.bounce(f, enc, timer, &prefix, radiance, &grids[j], (j, &all));
+            self.bounces.keep(enc, &self.upsample.indirect, b as usize);
+        }
+        if !self.bounces.light.is_empty() {
+            let (bounces, out) = (&self.bounces, &self.upsample.indirect);
+            timer.scope(ctx, enc, "soler.bounces", |e, slot| bounces.sum(ctx, e, slot, out));
+        }
+        let indirect = crate::passes::view(&self.upsample.indirect, "soler.indirect");
+        match &mut self.temporal {
+            Some(t) => {
+                let (camera, normal) = (f.camera_buffer, f.normal_texture);
+                timer.scope(ctx, enc, "soler.temporal", |e, slot| t.run(ctx, e, slot, s, camera, &indirect, g, normal));
+                crate::passes::view(&t.filtered, "soler.temporal")
+            }
+            None => indirect,
+        }
+    }
 
+    /// One bounce: the pyramid of `radiance`, the gather of every level (timing scopes
+    /// `{prefix}.gather.k`) and the upsampling into `soler.indirect`. `slot.0` is the bounce's
+    /// index among the frame's gathers (its parameter slots), `slot.1` the level sizes.
+    #[allow(clippy::too_many_arguments)]
+    fn bounce(
+        &self,
+        f: &FrameInputs,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        prefix: &str,
+        radiance: &wgpu::TextureView,
+        grids: &[VoxelParams],
+        (j, all): (usize, &[(u32, u32)]),
+    ) {
+        let s = &f.settings.soler;
+        let ctx = f.ctx;
+        let g = f.gbuffer;
+        if !self.pyramid.levels.is_empty() {
+            let sigma = [s.vote_sigma_pixel, s.vote_sigma_normal, s.vote_sigma_depth];
+            timer.scope(ctx, enc, &format!("{prefix}.pyramid"), |e, slot| {
+                self.pyramid.run(ctx, e, slot, sigma, &g.position, &g.normal, radiance)
+            });
+        }
+        let view = |t: &wgpu::Texture| crate::passes::view(t, "soler.level.view");
+        // Views of levels 1 … top: position, normal, radiance.
+        let lv: Vec<[wgpu::TextureView; 3]> =
+            self.pyramid.levels.iter().map(|l| [view(&l.position), view(&l.normal), view(&l.radiance)]).collect();
+        let level_views = |k: u32| -> [&wgpu::TextureView; 3] {
+            if k == 0 {
+                [&g.position, &g.normal, radiance]
+            } else {
+                let v = &lv[k as usize - 1];
+                [&v[0], &v[1], &v[2]]
+            }
+        };
+        let inputs: Vec<LevelInputs> = s
+            .gathered_levels()
+            .enumerate()
+            .map(|(i, k)| {
+                let [position, normal, radiance] = level_views(k);
+                let (grid, voxels) = match (self.voxels.grids.get(i), grids.get(i)) {
+                    (Some(g), Some(p)) => (&g.buffer, *p),
+                    _ => (&self.voxels.empty, VoxelParams::default()),
+                };
+                LevelInputs { level: k, position, normal, radiance, size: all[k as usize], grid, voxels }
+            })
+            .collect();
+        let n = inputs.len();
+        for (i, l) in inputs.iter().enumerate() {
+            timer.scope(ctx, enc, &format!("{prefix}.gather.{}", l.level), |e, slot| {
+                self.gather.run_level(ctx, e, slot, l, i, j * n + i)
+            });
+        }
+        let top = s.gathered_levels().end - 1;
         let light: Vec<wgpu::TextureView> = self.gather.light.iter().map(|(_, t)| view(t)).collect();
         let accum: Vec<wgpu::TextureView> = self.upsample.accum.iter().map(view).collect();
         let start = s.gathered_levels().start;
@@ -172,17 +240,8 @@ impl SolerStage {
             })
             .collect();
         let sigma = [s.upsample_sigma_depth, s.upsample_sigma_normal];
-        timer.scope(ctx, enc, "soler.upsample", |e, slot| {
+        timer.scope(ctx, enc, &format!("{prefix}.upsample"), |e, slot| {
             self.upsample.run(ctx, e, slot, sigma, &steps, acc(0), &g.albedo)
         });
-        let indirect = crate::passes::view(&self.upsample.indirect, "soler.indirect");
-        match &mut self.temporal {
-            Some(t) => {
-                let (camera, normal) = (f.camera_buffer, f.normal_texture);
-                timer.scope(ctx, enc, "soler.temporal", |e, slot| t.run(ctx, e, slot, s, camera, &indirect, g, normal));
-                crate::passes::view(&t.filtered, "soler.temporal")
-            }
-            None => indirect,
-        }
     }
 }
