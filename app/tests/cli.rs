@@ -350,3 +350,42 @@ fn the_nguyen_bench_suite_compares_the_hcb_with_the_per_pixel_gather() {
         assert!(n("cached") > 0, "{run}: the cache is reused after the warm-up: {text}");
     }
 }
+
+#[test]
+fn the_soler_bench_suite_prints_fig_9_with_every_part() {
+    let o = gi_lab()
+        .args(["bench", "--suite", "soler", "--size", "96x64", "--frames", "1", "--json"])
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "bench --suite soler failed: {}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let v: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    let rows = v["rows"].as_array().expect("rows");
+    // Fig. 9: quarter/4/64, quarter/4/256, half/4/64, half/5/64, each without and with visibility.
+    assert_eq!(rows.len(), 8, "{text}");
+    for r in rows {
+        let levels = r["levels"].as_u64().expect("levels");
+        let per_level = r["levels_ms"].as_array().expect("levels_ms");
+        assert_eq!(per_level.len() as u64, levels, "{r}");
+        assert!(per_level.iter().all(|t| t.as_f64().is_some_and(|t| t > 0.0)), "every level is timed: {r}");
+        let vis = r["visibility"].as_bool().expect("visibility");
+        assert_eq!(
+            r["voxels_ms"].as_f64().is_some_and(|t| t > 0.0),
+            vis,
+            "the voxel grid runs with visibility only: {r}"
+        );
+        assert!(r["upsampling_tc_ms"].as_f64().is_some_and(|t| t > 0.0), "{r}");
+        let parts: f64 =
+            ["voxels_ms", "pyramid_ms", "upsampling_tc_ms"].iter().map(|k| r[*k].as_f64().unwrap_or(0.0)).sum::<f64>()
+                + per_level.iter().filter_map(|t| t.as_f64()).sum::<f64>();
+        let total = r["total_ms"].as_f64().expect("total");
+        assert!((total - parts).abs() <= 1e-6 * total.max(1.0), "the parts make the total: {r}");
+    }
+    let table =
+        gi_lab().args(["bench", "--suite", "soler", "--size", "96x64", "--frames", "1"]).output().expect("runs");
+    let text = String::from_utf8_lossy(&table.stdout);
+    for line in ["voxel grid", "SSIL level 5", "total SSIL (1 bounce)", "upsampling + TC", "ratio to column 1", "goals"]
+    {
+        assert!(text.contains(line), "{line}: {text}");
+    }
+}

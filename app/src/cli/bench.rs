@@ -40,6 +40,8 @@ pub struct BenchArgs {
     /// start from --preset. `quality`: mean FLIP of the shipped Knecht, exact-VPL and HCB
     /// presets against --reference (a path-traced image of one bounce at --size, `gi-lab
     /// reference --bounces 1`), and of the HCB against the diffuse-only gather at every pixel.
+    /// `soler`: Soler et al.'s Fig. 9 (four parameter sets with and without visibility, per
+    /// part; run it at --size 1280x720).
     #[arg(long, value_enum)]
     pub suite: Option<BenchSuite>,
 }
@@ -50,6 +52,7 @@ pub enum BenchSuite {
     Knecht,
     Nguyen,
     Quality,
+    Soler,
 }
 
 /// Per-pass statistics of a benchmark run.
@@ -247,6 +250,15 @@ pub(super) fn bench(args: &BenchArgs) -> Result<(), CliError> {
             println!("{}", serde_json::to_string_pretty(&report).map_err(|e| CliError::failure(e.to_string()))?);
         } else {
             print!("{}", super::bench_suites::format(&report));
+        }
+        return Ok(());
+    }
+    if let Some(BenchSuite::Soler) = args.suite {
+        let report = super::bench_soler::soler(&mut r, args.frames)?;
+        if args.json {
+            println!("{}", serde_json::to_string_pretty(&report).map_err(|e| CliError::failure(e.to_string()))?);
+        } else {
+            print!("{}", super::bench_soler::format(&report));
         }
         return Ok(());
     }
