@@ -571,3 +571,80 @@ fn the_settings_pane_shows_table_1_and_the_cache_counts_for_the_hcb() {
     let current = gi_lab::ui::settings_ui::TECHNIQUES.iter().find(|t| (t.is)(&settings)).map(|t| t.name);
     assert_eq!(current, Some("Hierarchical coherence buffer with the sample cache (Nguyen)"));
 }
+
+/// Soler et al. (issue #16) in the lab: with the technique picked, visibility and two
+/// bounces, every Soler setting is in the settings pane, every Soler buffer (per level, the
+/// voxel grids, the bounces, Eq. 6's) is in the viewer's picker and shows without error, and
+/// the rings and reach per level are listed.
+#[test]
+fn soler_settings_buffers_and_reach_appear_in_the_lab() {
+    let dir = temp_dir("soler");
+    let mut h = harness_in(&dir, egui::vec2(1400.0, 2600.0));
+    pause(&mut h);
+    if let Ok(l) = &mut h.state_mut().state.lab {
+        gi_render::pipeline::Technique::Soler.apply(&mut l.settings);
+        l.settings.soler.visibility = true;
+        l.settings.soler.bounces = 2;
+        l.apply_settings();
+    }
+    h.run_steps(4);
+    let err = h.state().state.lab.as_ref().ok().and_then(|l| l.settings_error.clone());
+    assert!(err.is_none(), "{err:?}");
+    let settings = h.state().state.lab.as_ref().map(|l| l.settings.clone()).expect("lab");
+    let current = gi_lab::ui::settings_ui::TECHNIQUES.iter().find(|t| (t.is)(&settings)).map(|t| t.name);
+    assert!(current.is_some_and(|n| n.contains("Soler")), "{current:?}");
+    let (_, fields) = LabSettings::groups().into_iter().find(|(g, _)| *g == "soler").expect("soler group");
+    for m in fields {
+        let path = format!("soler.{}", m.name);
+        // (`soler.bounces` is also a pass in the GPU timings.)
+        assert!(h.query_all_by_label(&path).next().is_some(), "{path} has no widget");
+    }
+    h.get_by_label("Soler rings and reach (Fig. 3)");
+    // 4 levels from a quarter of the render size, r = 40: the reach is 40 · 2^5 px.
+    let reach = format!("reach {:.0} px", settings.soler.reach_px());
+    assert_eq!(settings.soler.reach_px(), 1280.0);
+    assert!(h.query_all_by_label_contains(&reach).next().is_some(), "'{reach}' is shown");
+    let names = h.state().renderer().expect("renderer").buffers().names();
+    let soler: Vec<&String> = names.iter().filter(|n| n.starts_with("soler.")).collect();
+    for want in [
+        "soler.level.2.position",
+        "soler.level.3.normal",
+        "soler.level.4.radiance",
+        "soler.level.5.winner",
+        "soler.level.2.indirect",
+        "soler.level.2.occlusion",
+        "soler.accum.0",
+        "soler.voxels.2",
+        "soler.bounce.1",
+        "soler.bounce.2",
+        "soler.indirect",
+        "soler.temporal",
+        "soler.temporal.warped",
+        "soler.temporal.rejection",
+        "soler.temporal.a",
+    ] {
+        assert!(soler.iter().any(|n| *n == want), "{want} is not registered: {soler:?}");
+    }
+    h.get_by_label("viewer 1 buffer").click();
+    h.run_steps(2);
+    for n in &soler {
+        assert!(h.query_all_by_label(n).next().is_some(), "buffer {n} is not listed in the viewer's picker");
+    }
+    // The list is long: the picker's filter field narrows it to the one wanted.
+    for n in ["soler.voxels.2", "soler.temporal.rejection", "soler.bounce.2"] {
+        if h.query_by_label("viewer 1 buffer filter").is_none() {
+            h.get_by_label("viewer 1 buffer").click();
+            h.run_steps(2);
+        }
+        h.get_by_label("viewer 1 buffer filter").click();
+        h.run_steps(1);
+        h.get_by_label("viewer 1 buffer filter").type_text(n);
+        h.run_steps(2);
+        h.get_by_label(n).click();
+        h.run_steps(3);
+        let v = h.state().state.viewers.values().next().expect("a viewer");
+        assert_eq!(v.state.buffer, n);
+        assert!(v.error.is_none(), "{n}: {:?}", v.error);
+    }
+    let _ = h.render().map(|i| i.save(std::env::temp_dir().join("gi_lab_soler_viewer.png")));
+}

@@ -345,15 +345,25 @@ impl Viewer {
     }
 }
 
-/// A combo box listing every buffer as a tree of its dotted names; returns whether the
-/// selection changed. Each entry's accessible name is the full dotted name.
+/// A combo box listing every buffer as a tree of its dotted names, with a filter field at
+/// the top (the list is long: Soler's levels alone add dozens); returns whether the selection
+/// changed. Each entry's accessible name is the full dotted name.
 pub fn buffer_picker(ui: &mut egui::Ui, id: u32, names: &[String], selected: &mut String) -> bool {
     let mut changed = false;
-    let r = egui::ComboBox::from_id_salt(("buffer_picker", id)).selected_text(selected.as_str()).height(600.0).show_ui(
-        ui,
-        |ui| {
+    let filter_id = egui::Id::unique(("buffer_picker_filter", id));
+    // Typing in the filter must not close the list; picking an entry closes it and clears
+    // the filter.
+    let r = egui::ComboBox::from_id_salt(("buffer_picker", id))
+        .selected_text(selected.as_str())
+        .height(600.0)
+        .close_behavior(egui::PopupCloseBehavior::CloseOnClickOutside)
+        .show_ui(ui, |ui| {
+            let mut filter: String = ui.data(|d| d.get_temp(filter_id)).unwrap_or_default();
+            let edit = ui.add(egui::TextEdit::singleline(&mut filter).hint_text("filter, e.g. level.2"));
+            let _ = edit.accessible_name(format!("viewer {id} buffer filter"));
+            ui.data_mut(|d| d.insert_temp(filter_id, filter.clone()));
             let mut shown_groups: Vec<String> = Vec::new();
-            for name in names {
+            for name in names.iter().filter(|n| n.contains(filter.trim())) {
                 let parts: Vec<&str> = name.split('.').collect();
                 // Headers for the groups of this name not shown yet (the tree's inner nodes).
                 for depth in 1..parts.len() {
@@ -373,11 +383,12 @@ pub fn buffer_picker(ui: &mut egui::Ui, id: u32, names: &[String], selected: &mu
                     if r.clicked() {
                         *selected = name.clone();
                         changed = true;
+                        ui.close();
+                        ui.data_mut(|d| d.remove::<String>(filter_id));
                     }
                 });
             }
-        },
-    );
+        });
     let _ = r.response.accessible_name(format!("viewer {id} buffer"));
     changed
 }

@@ -1,4 +1,4 @@
-//! The settings pane, with the HCB's Table 1.
+//! The settings pane, with the HCB's Table 1 and Soler's ring reach per level.
 
 use crate::ui::ERROR;
 use crate::ui::state::State;
@@ -20,6 +20,13 @@ pub(super) fn settings_ui(st: &mut State, ui: &mut egui::Ui) {
     }
     if let Some(e) = &l.settings_error {
         ui.colored_label(ERROR, e);
+    }
+    if l.settings.pipeline.uses_soler() {
+        ui.separator();
+        egui::CollapsingHeader::new("Soler rings and reach (Fig. 3)")
+            .id_salt("soler_reach")
+            .default_open(true)
+            .show(ui, |ui| soler_reach_ui(ui, &l.settings.soler, l.renderer.size()));
     }
     if l.settings.pipeline.uses_hcb() {
         ui.separator();
@@ -80,4 +87,37 @@ pub fn hcb_stats_ui(ui: &mut egui::Ui, stats: &gi_render::passes::hcb::stage::Hc
             }
         });
     }
+}
+
+/// Soler et al.'s rings (004 §4, Fig. 3) for the settings and the render size: per gathered
+/// level its resolution and the ring it samples, in its own texels and in G-buffer pixels,
+/// and the reach of the coarsest ring against the image (⚠ the paper's "r so that the whole
+/// screen is sampled" does not hold for every setting: 4 levels of r = 40 from a quarter
+/// reach 1280 px, but the first level only from a full start).
+pub fn soler_reach_ui(ui: &mut egui::Ui, s: &gi_render::passes::soler::SolerSettings, size: (u32, u32)) {
+    let r = s.radius_px;
+    egui::Grid::new("soler_rings").num_columns(4).striped(true).show(ui, |ui| {
+        for head in ["level (resolution)", "ring (level texels)", "ring (G-buffer px)", "texels"] {
+            ui.strong(head);
+        }
+        ui.end_row();
+        for (i, k) in s.gathered_levels().enumerate() {
+            let scale = (1u64 << k) as f32;
+            let (w, h) = (size.0.div_ceil(1 << k).max(1), size.1.div_ceil(1 << k).max(1));
+            let inner = if i == 0 { 0.0 } else { 0.5 * r };
+            ui.label(format!("{k} ({w}×{h})"));
+            ui.label(if i == 0 { format!("disc 0 … {r:.0}") } else { format!("{inner:.0} … {r:.0}") });
+            ui.label(format!("{:.0} … {:.0}", inner * scale, r * scale));
+            ui.label((w as u64 * h as u64).to_string());
+            ui.end_row();
+        }
+    });
+    let reach = s.reach_px();
+    let diagonal = (size.0 as f32).hypot(size.1 as f32);
+    let verdict =
+        if reach >= diagonal { "every pixel reaches every other" } else { "pixels farther apart exchange no light" };
+    ui.label(format!(
+        "reach {reach:.0} px = {:.0} % of the image diagonal ({diagonal:.0} px): {verdict}",
+        100.0 * reach / diagonal.max(1.0)
+    ));
 }
