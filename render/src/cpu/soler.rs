@@ -139,7 +139,8 @@ pub fn ring_sample(i: u32, n: u32, r: f32, full_disc: bool, rotation: f32) -> (V
     let u = (i as f32 + 0.5) / n.max(1) as f32;
     let rho = (inner * inner + u * (r * r - inner * inner)).sqrt();
     let phi = rotation + i as f32 * GOLDEN_ANGLE;
-    let offset = Vec2::new((rho * phi.cos()).round(), (rho * phi.sin()).round());
+    // WGSL's round() rounds halves to even, Rust's round() away from zero.
+    let offset = Vec2::new((rho * phi.cos()).round_ties_even(), (rho * phi.sin()).round_ties_even());
     (offset, std::f32::consts::PI * (r * r - inner * inner) / n.max(1) as f32)
 }
 
@@ -290,7 +291,9 @@ pub fn march_visible(
             continue;
         }
         let t = fi / n;
-        let p = (Vec2::new(a.0 as f32, a.1 as f32) + d * t).round();
+        // As WGSL's round(): halves to even (a + d·t often lands on one: d = (4, 2), t = ¼).
+        let q = Vec2::new(a.0 as f32, a.1 as f32) + d * t;
+        let p = Vec2::new(q.x.round_ties_even(), q.y.round_ties_even());
         let (px, py) = (p.x as i64, p.y as i64);
         if px < 0 || py < 0 || px >= g.width as i64 || py >= g.height as i64 {
             continue;

@@ -16,7 +16,22 @@ use crate::passes::shadow::ShadowPass;
 use crate::scene::{Aabb, Scene};
 use crate::timing::{GpuTimer, PassTiming};
 
+/// A voxel grid read back: width, height, 32-bit words per column, the columns row-major.
+pub type VoxelBits = (u32, u32, u32, Vec<u32>);
+
 impl Renderer {
+    /// The bits of Soler's voxel grid of the i-th gathered level, read back for tests; None
+    /// without visibility.
+    pub fn soler_voxel_bits(&self, i: usize) -> Option<Result<VoxelBits, String>> {
+        let v = &self.stages.soler.as_ref()?.voxels;
+        let g = v.grids.get(i)?;
+        let bytes = (g.width * g.height * v.words) as u64 * 4;
+        Some(crate::buffers::read_storage(&self.ctx, &g.buffer, bytes).map(|b| {
+            let bits = b.chunks_exact(4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]])).collect();
+            (g.width, g.height, v.words, bits)
+        }))
+    }
+
     /// Rebuilds the passes whose shaders are among `entries` (entry modules, as listed in
     /// `shaders::ENTRY_MODULES`) from the current shader sources — the shader hot reload.
     /// Only those passes are recreated; their history restarts. If any new pipeline fails
