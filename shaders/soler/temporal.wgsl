@@ -9,6 +9,7 @@
 // the next history (rgb, depth in a), W(H) (a: 1 where q holds a surface), the rejection mask
 // (r depth, g normal, b no history) and the effective a. CPU twin: cpu::soler_temporal::blend.
 #import common/camera.wgsl
+#import common/reproject.wgsl
 
 // Rust twin: passes::soler::temporal::TemporalParams.
 struct TemporalParams {
@@ -48,8 +49,8 @@ fn cs_temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
     var mask = vec4<f32>(0.0, 0.0, 1.0, 1.0);
     if (params.blend.w > 0.5 && nrm.w > 0.5) {
         let motion = textureLoad(g_motion, p, 0).xy;
-        let q = vec2<i32>(floor(vec2<f32>(p) + 0.5 + motion));
-        if (q.x >= 0 && q.y >= 0 && q.x < i32(size.x) && q.y < i32(size.y)) {
+        let q = previous_texel(p, motion, size);
+        if (q.x >= 0) {
             let pn = textureLoad(prev_normal, q, 0);
             let h = textureLoad(history_prev, q, 0);
             if (pn.w > 0.5 && h.a > 0.0) {

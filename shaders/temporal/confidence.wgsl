@@ -7,6 +7,7 @@
 // merged light in rgb and the linear depth in a, as the thesis stores depth in the fourth
 // channel of the old illumination. CPU twin: cpu::knecht::confidence (readings there).
 #import common/fullscreen.wgsl
+#import common/reproject.wgsl
 
 struct ConfidenceParams {
     // x: c_base, y: w_pos, z: w_normal, w: w_illumination
@@ -52,8 +53,8 @@ fn cs_confidence(@builtin(global_invocation_id) gid: vec3<u32>) {
     var merged = i_new;
     if (params.state.x == 1u && nrm.w > 0.5) {
         let motion = textureLoad(g_motion, p, 0).xy;
-        let q = vec2<i32>(floor(vec2<f32>(p) + 0.5 + motion));
-        if (q.x >= 0 && q.y >= 0 && q.x < i32(size.x) && q.y < i32(size.y)) {
+        let q = previous_texel(p, motion, size);
+        if (q.x >= 0) {
             let pn = textureLoad(prev_normal, q, 0);
             let h = textureLoad(history_prev, q, 0);
             if (pn.w > 0.5 && h.a > 0.0) {

@@ -104,13 +104,17 @@ pub fn soler(r: &mut Renderer, frames: u32) -> Result<SolerReport, CliError> {
     Ok(SolerReport { adapter, timing_source, width, height, frames, radius_px: 40.0, rows })
 }
 
-/// The total of the row with these parameters.
-fn total(report: &SolerReport, start: &str, levels: u32, samples: u32, visibility: bool) -> Option<f64> {
+/// The row with these parameters.
+fn row<'a>(report: &'a SolerReport, start: &str, levels: u32, samples: u32, visibility: bool) -> Option<&'a SolerRow> {
     report
         .rows
         .iter()
         .find(|r| r.start == start && r.levels == levels && r.samples == samples && r.visibility == visibility)
-        .map(|r| r.total_ms)
+}
+
+/// The total of the row with these parameters.
+fn total(report: &SolerReport, start: &str, levels: u32, samples: u32, visibility: bool) -> Option<f64> {
+    row(report, start, levels, samples, visibility).map(|r| r.total_ms)
 }
 
 /// The goals on the ratios: (what, measured, goal, met; None: shown for comparison).
@@ -127,13 +131,8 @@ pub fn goals(report: &SolerReport) -> Vec<(String, f64, String, Option<bool>)> {
     }
     // The same on the gathers alone (Fig. 9's "Total SSIL"): the fixed full-resolution passes
     // (voting, upsampling, temporal) weigh far more on a CPU device than on the paper's GPU.
-    let ssil = |start: &str, visibility: bool| {
-        report
-            .rows
-            .iter()
-            .find(|r| r.start == start && r.levels == 4 && r.samples == 64 && r.visibility == visibility)
-            .map(|r| r.levels_ms.iter().sum::<f64>())
-    };
+    let ssil =
+        |start: &str, visibility: bool| row(report, start, 4, 64, visibility).map(|r| r.levels_ms.iter().sum::<f64>());
     if let (Some(a), Some(b)) = (ssil(q, false), ssil(h, false)) {
         out.push(("  the same, gathers only (total SSIL)".into(), b / a, "(paper 3.9)".into(), None));
     }
@@ -144,8 +143,7 @@ pub fn goals(report: &SolerReport) -> Vec<(String, f64, String, Option<bool>)> {
         out.push(("visibility on / off, quarter 4 64".into(), b / a, "≤ 6 (paper 5.9)".into(), Some(b <= 6.0 * a)));
     }
     if let (Some(a), Some(b)) = (ssil(q, false), ssil(q, true)) {
-        let v = report.rows.iter().find(|r| r.start == q && r.levels == 4 && r.samples == 64 && r.visibility);
-        let b = b + v.map_or(0.0, |r| r.voxels_ms);
+        let b = b + row(report, q, 4, 64, true).map_or(0.0, |r| r.voxels_ms);
         out.push(("  the same, gathers and voxel grid only".into(), b / a, "(paper 8.3)".into(), None));
     }
     out
