@@ -60,6 +60,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("soler/voxel_view.wgsl", include_str!("../../shaders/soler/voxel_view.wgsl")),
     ("soler/temporal.wgsl", include_str!("../../shaders/soler/temporal.wgsl")),
     ("soler/bounces.wgsl", include_str!("../../shaders/soler/bounces.wgsl")),
+    ("soler/glossy.wgsl", include_str!("../../shaders/soler/glossy.wgsl")),
     ("view/view.wgsl", include_str!("../../shaders/view/view.wgsl")),
     ("view/probe.wgsl", include_str!("../../shaders/view/probe.wgsl")),
 ];

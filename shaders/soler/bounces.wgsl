@@ -1,11 +1,13 @@
 // Multi-bounce (Soler et al. 004 §4 "Multi-bounce computation", §5.3): the indirect light is
 // the sum of every bounce's newest result, L_1 + … + L_n (each c·DI/π · E of its bounce;
 // bounce b gathered bounce b − 1's light). With alternating bounces only one of them is new
-// each frame. Unused inputs (count < 4) are not read.
+// each frame. With the glossy reflection each bounce's specular light toward the eye (kept
+// apart: the next bounce gathers the diffuse light only) is added too. Unused inputs
+// (count < 4) are not read.
 
 // Rust twin: passes::soler::bounces::BounceParams.
 struct BounceParams {
-    // x: bounces n (1–4), y, z, w: unused
+    // x: bounces n (1–4), y: 1 adds the specular inputs, z, w: unused
     count: vec4<u32>,
 }
 
@@ -15,6 +17,10 @@ struct BounceParams {
 @group(0) @binding(3) var bounce3: texture_2d<f32>;
 @group(0) @binding(4) var bounce4: texture_2d<f32>;
 @group(0) @binding(5) var out_sum: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(6) var specular1: texture_2d<f32>;
+@group(0) @binding(7) var specular2: texture_2d<f32>;
+@group(0) @binding(8) var specular3: texture_2d<f32>;
+@group(0) @binding(9) var specular4: texture_2d<f32>;
 
 @compute @workgroup_size(8, 8, 1)
 fn cs_sum(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -33,6 +39,18 @@ fn cs_sum(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     if (n > 3u) {
         sum = sum + textureLoad(bounce4, p, 0).rgb;
+    }
+    if (params.count.y != 0u) {
+        sum = sum + textureLoad(specular1, p, 0).rgb;
+        if (n > 1u) {
+            sum = sum + textureLoad(specular2, p, 0).rgb;
+        }
+        if (n > 2u) {
+            sum = sum + textureLoad(specular3, p, 0).rgb;
+        }
+        if (n > 3u) {
+            sum = sum + textureLoad(specular4, p, 0).rgb;
+        }
     }
     textureStore(out_sum, gid.xy, vec4<f32>(sum, 1.0));
 }

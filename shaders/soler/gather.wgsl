@@ -11,11 +11,14 @@
 // skipping `bias` texels at both ends and testing the slice `depth bias` slices in front of
 // the line; a solid voxel on the way hides the sample. Without it v_i = 1. The second output
 // keeps, per texel, the light the visibility removed (rgb) and the visible fraction of the
-// samples that carried light (a). As the near field of a VPL gather (`pipeline.near_field`), senders
+// samples that carried light (a). Glossy reflection (004 §4 "Screen-space importance
+// sampling", soler/glossy.wgsl): each sample also adds L_i K_i f_s(l_i, v) into the third
+// output, and a glossy receiver draws its angles from f(θ). As the near field of a VPL gather (`pipeline.near_field`), senders
 // at the cut distance or farther are skipped: the VPLs take them. CPU twin: cpu::soler::{ring_sample, ring_rotation, surface_area,
 // kernel, gather}.
 #import soler/common.wgsl
 #import soler/voxel_common.wgsl
+#import soler/glossy.wgsl
 #import common/random.wgsl
 
 // Rust twin: passes::soler::gather::GatherParams.
@@ -33,6 +36,13 @@ struct GatherParams {
     voxels: VoxelParams,
     // x: texels skipped at both ends of the march, y: depth bias (slices), z, w: unused
     march: vec4<f32>,
+    // x: α, y: k (s = k √SP), z: the least SP importance sampled, w: 1 glossy reflection
+    // + 2 importance sampling
+    gloss: vec4<f32>,
+    // The camera's right, up and forward axes (xyz).
+    right: vec4<f32>,
+    up: vec4<f32>,
+    forward: vec4<f32>,
 }
 
 const GOLDEN_ANGLE: f32 = 2.3999632;
@@ -44,6 +54,9 @@ const GOLDEN_ANGLE: f32 = 2.3999632;
 @group(0) @binding(4) var out_light: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(5) var<storage, read> grid: array<u32>;
 @group(0) @binding(6) var out_occlusion: texture_storage_2d<rgba32float, write>;
+// SI (r), SP (g) of the level's texels.
+@group(0) @binding(7) var level_material: texture_2d<f32>;
+@group(0) @binding(8) var out_specular: texture_storage_2d<rgba32float, write>;
 
 // v_i: false when a solid voxel of the grid lies between texel a (view depth za) and texel b
 // (view depth zb). CPU twin: cpu::soler::march_visible.
@@ -111,6 +124,7 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (nx.w < 0.5) {
         textureStore(out_light, gid.xy, vec4<f32>(0.0));
         textureStore(out_occlusion, gid.xy, vec4<f32>(0.0));
+        textureStore(out_specular, gid.xy, vec4<f32>(0.0));
         return;
     }
     let px4 = textureLoad(level_position, x, 0);
@@ -128,10 +142,25 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     let dp = PI * (r * r - inner * inner) / f32(max(count, 1u));
     let rot = rotation(gid.xy);
     var e = vec3<f32>(0.0);
+    // The glossy reflection: the receiver's lobe (cpu::soler_glossy::receiver_lobe).
+    let flags = u32(params.gloss.w);
+    let glossy = (flags & 1u) != 0u;
+    let mat = textureLoad(level_material, x, 0).xy;
+    var lobe = vec2<f32>(0.0);
+    var warped = false;
+    if ((flags & 2u) != 0u && mat.x > 0.0 && mat.y >= params.gloss.z) {
+        let a = params.right.xyz;
+        let l = gloss_lobe_angle(px, n, params.eye.xyz, a, params.up.xyz, params.forward.xyz, params.screen.xy);
+        warped = l.y > 0.0;
+        lobe = vec2<f32>(l.x, params.gloss.y * sqrt(max(mat.y, 0.0)));
+    }
+    let v = normalize(params.eye.xyz - px);
+    var spec = vec3<f32>(0.0);
     for (var i = 0u; i < count; i = i + 1u) {
         let u = (f32(i) + 0.5) / f32(max(count, 1u));
         let rho = sqrt(inner * inner + u * (r * r - inner * inner));
-        let phi = rot + f32(i) * GOLDEN_ANGLE;
+        let pw = gloss_warp(rot + f32(i) * GOLDEN_ANGLE, lobe, warped, params.gloss.x);
+        let phi = pw.x;
         let o = vec2<i32>(round(vec2<f32>(rho * cos(phi), rho * sin(phi))));
         if (o.x == 0 && o.y == 0) {
             continue;
@@ -156,7 +185,7 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
         if (cos_t <= 0.0 || cos_tp <= 0.0) {
             continue;
         }
-        let ds = surface_area(pq, nq.xyz, dp);
+        let ds = surface_area(pq, nq.xyz, dp * pw.y);
         let light = textureLoad(level_radiance, q, 0).rgb * kernel(cos_t, cos_tp, ds, r2);
         lit = lit + 1u;
         if (params.voxels.grid.x > 0u && !visible(x, px4.w, q, pq.w)) {
@@ -165,7 +194,11 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         seen = seen + 1u;
         e = e + light;
+        if (glossy) {
+            spec = spec + light * gloss_specular(n, w, v, mat.x, mat.y);
+        }
     }
     textureStore(out_light, gid.xy, vec4<f32>(e, 1.0));
     textureStore(out_occlusion, gid.xy, vec4<f32>(hidden, f32(seen) / f32(max(lit, 1u))));
+    textureStore(out_specular, gid.xy, vec4<f32>(spec, 1.0));
 }

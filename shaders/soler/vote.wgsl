@@ -2,7 +2,8 @@
 // Eq. 5, Fig. 5). Each coarse texel scores the sub-pixels of its 2×2 block with
 // s(p_i) = Σ_{|p_i − p_j|₁ ≤ 1} g₁(|p_i − p_j|) g₂(1 − n_j·n_i) g₃((z_j − z_i)/z_i) over the
 // L1 neighbourhood (which reaches one texel outside the block: the apron) and keeps the
-// winner's position, depth and normal — no averaging. Radiance goes down as the block's mean
+// winner's position, depth, normal and material (SI, SP: the glossy reflection's) — no
+// averaging. Radiance goes down as the block's mean
 // (background is black), so that the coarse texel emits its sub-pixels' power.
 // CPU twin: cpu::soler::vote_level.
 #import soler/common.wgsl
@@ -21,6 +22,8 @@ struct VoteParams {
 @group(0) @binding(5) var out_normal: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(6) var out_radiance: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(7) var out_winner: texture_storage_2d<r32float, write>;
+@group(0) @binding(8) var fine_material: texture_2d<f32>;
+@group(0) @binding(9) var out_material: texture_storage_2d<rgba32float, write>;
 
 fn valid(p: vec2<i32>, size: vec2<u32>) -> bool {
     return inside(p, size) && textureLoad(fine_normal, p, 0).w > 0.5;
@@ -75,14 +78,17 @@ fn cs_vote(@builtin(global_invocation_id) gid: vec3<u32>) {
     var position = vec4<f32>(0.0);
     var normal = vec4<f32>(0.0);
     var radiance = vec4<f32>(0.0);
+    var material = vec4<f32>(0.0);
     if (best >= 0) {
         let p = vec2<i32>(2 * i32(gid.x) + best % 2, 2 * i32(gid.y) + best / 2);
         position = textureLoad(fine_position, p, 0);
         normal = vec4<f32>(textureLoad(fine_normal, p, 0).xyz, 1.0);
         radiance = vec4<f32>(sum / max(count, 1.0), 1.0);
+        material = textureLoad(fine_material, p, 0);
     }
     textureStore(out_position, gid.xy, position);
     textureStore(out_normal, gid.xy, normal);
     textureStore(out_radiance, gid.xy, radiance);
     textureStore(out_winner, gid.xy, vec4<f32>(f32(best), 0.0, 0.0, 0.0));
+    textureStore(out_material, gid.xy, material);
 }

@@ -4,6 +4,7 @@
 
 use gi_lab_tests::{default_scene, gpu};
 use gi_render::cpu::soler::{self, GatherParams, Level, ScreenCamera, Texel, UpsampleSigmas, VoteSigmas};
+use gi_render::cpu::soler_glossy::Gloss;
 use gi_render::passes::soler::{FormFactor, StartResolution};
 use gi_render::pipeline::Technique;
 use gi_render::{ImageF32, LabSettings, Renderer};
@@ -13,18 +14,34 @@ fn v3(p: [f32; 4]) -> Vec3 {
     Vec3::new(p[0], p[1], p[2])
 }
 
-/// A level as the CPU twin reads it from the GPU's position, normal and radiance images.
-fn level(position: &ImageF32, normal: &ImageF32, radiance: &ImageF32) -> Level {
+/// A level as the CPU twin reads it from the GPU's position, normal, radiance and material
+/// images.
+fn level(position: &ImageF32, normal: &ImageF32, radiance: &ImageF32, material: &ImageF32) -> Level {
     let texels = (0..position.data.len())
         .map(|i| {
-            let (p, n, l) = (position.data[i], normal.data[i], radiance.data[i]);
+            let (p, n, l, m) = (position.data[i], normal.data[i], radiance.data[i], material.data[i]);
             if n[3] < 0.5 {
                 return Texel::default();
             }
-            Texel { position: v3(p), depth: p[3], normal: v3(n), radiance: v3(l) }
+            let material = Vec2::new(m[0], m[1]);
+            Texel { position: v3(p), depth: p[3], normal: v3(n), radiance: v3(l), material }
         })
         .collect();
     Level { width: position.width, height: position.height, texels }
+}
+
+/// The glossy reflection's settings as the CPU twin takes them.
+fn gloss_of(r: &Renderer) -> Option<Gloss> {
+    let s = &r.settings().soler;
+    let forward = r.camera.forward();
+    let right = r.camera.right();
+    s.glossy_reflection.then(|| Gloss {
+        alpha: s.glossy_alpha,
+        sharpness: s.glossy_sharpness,
+        min_power: s.glossy_min_power,
+        importance: s.glossy_sampling,
+        axes: [right, right.cross(forward), forward],
+    })
 }
 
 fn renderer(size: u32, technique: Technique, edit: impl FnOnce(&mut LabSettings)) -> Renderer {
@@ -96,13 +113,19 @@ fn gpu_matches_cpu(technique: Technique, near_field_distance: f32, bounces: u32,
     let sig = VoteSigmas { pixel: s.vote_sigma_pixel, normal: s.vote_sigma_normal, depth: s.vote_sigma_depth };
     // The light the last bounce gathered: the direct light, or the bounce before's.
     let input = if bounces == 1 { "direct.radiance".to_string() } else { format!("soler.bounce.{}", bounces - 1) };
-    let mut levels = vec![level(&read(&r, "gbuffer.position"), &read(&r, "gbuffer.normal"), &read(&r, &input))];
+    let mut levels = vec![level(
+        &read(&r, "gbuffer.position"),
+        &read(&r, "gbuffer.normal"),
+        &read(&r, &input),
+        &read(&r, "gbuffer.material"),
+    )];
     // Voting (Eq. 5): each GPU level against the CPU's vote of the GPU level below it.
     for k in 1..=s.gathered_levels().end - 1 {
         let gpu = level(
             &read(&r, &format!("soler.level.{k}.position")),
             &read(&r, &format!("soler.level.{k}.normal")),
             &read(&r, &format!("soler.level.{k}.radiance")),
+            &read(&r, &format!("soler.level.{k}.material")),
         );
         let winners = read(&r, &format!("soler.level.{k}.winner"));
         let (cpu, cpu_winners) = soler::vote_level(&levels[k as usize - 1], sig);
@@ -112,7 +135,11 @@ fn gpu_matches_cpu(technique: Technique, near_field_distance: f32, bounces: u32,
         assert!(differ * 100 <= cpu_winners.len(), "level {k}: {differ} of {} winners differ", cpu_winners.len());
         for (i, (c, g)) in cpu.texels.iter().zip(&gpu.texels).enumerate() {
             if cpu_winners[i] as f32 == winners.data[i][0] {
-                assert_eq!((c.position, c.depth, c.normal), (g.position, g.depth, g.normal), "level {k} texel {i}");
+                assert_eq!(
+                    (c.position, c.depth, c.normal, c.material),
+                    (g.position, g.depth, g.normal, g.material),
+                    "level {k} texel {i}"
+                );
                 assert!(
                     (c.radiance - g.radiance).length() <= 1e-5 * c.radiance.length().max(1.0),
                     "level {k} texel {i}"
@@ -126,7 +153,8 @@ fn gpu_matches_cpu(technique: Technique, near_field_distance: f32, bounces: u32,
     // The gather (Eq. 1–4) at every texel of each gathered level, from the GPU's level.
     let aspect = 1.0;
     let tan_v = (0.5 * r.camera.yfov).tan();
-    let mut gathered = Vec::new();
+    let gloss = gloss_of(&r);
+    let (mut gathered, mut gathered_spec) = (Vec::new(), Vec::new());
     for (i, k) in s.gathered_levels().enumerate() {
         let l = &levels[k as usize];
         let cam = ScreenCamera {
@@ -144,11 +172,23 @@ fn gpu_matches_cpu(technique: Technique, near_field_distance: f32, bounces: u32,
             min_cos_beta: s.min_cos_beta,
             near_cut,
         };
-        let cpu: Vec<Vec3> = (0..l.height)
+        let both: Vec<(Vec3, Vec3)> = (0..l.height)
             .flat_map(|y| (0..l.width).map(move |x| (x, y)))
-            .map(|(x, y)| soler::gather(l, x, y, &cam, p))
+            .map(|(x, y)| soler::gather_glossy(l, x, y, &cam, p, None, gloss.as_ref()))
             .collect();
+        let cpu: Vec<Vec3> = both.iter().map(|b| b.0).collect();
+        let cpu_spec: Vec<Vec3> = both.iter().map(|b| b.1).collect();
         let gpu: Vec<Vec3> = read(&r, &format!("soler.level.{k}.indirect")).data.into_iter().map(v3).collect();
+        let gpu_spec: Vec<Vec3> = read(&r, &format!("soler.level.{k}.specular")).data.into_iter().map(v3).collect();
+        // The glossy reflection: importance-sampled angles go through an 8-step Newton
+        // inversion; f32 differences may move a sample to the next texel.
+        let bad_spec = mismatches(&cpu_spec, &gpu_spec, 2e-3, 1e-6);
+        let shiny = cpu_spec.iter().filter(|e| e.length() > 0.0).count();
+        println!("level {k}: glossy reflection on {shiny} texels, {bad_spec} differ");
+        let lit_here = cpu.iter().any(|e| e.length() > 0.0);
+        assert_eq!(shiny > 0, gloss.is_some() && lit_here, "level {k}: glossy reflection");
+        assert!(bad_spec * 50 <= cpu.len(), "level {k}: {bad_spec} glossy texels differ");
+        gathered_spec.push(gpu_spec);
         let lit = cpu.iter().filter(|e| e.length() > 0.0).count();
         // A sample offset rounds ρ·cos φ to a texel; where it lies on a half texel the GPU's
         // cos may round the other way: a few texels may differ by one sample.
@@ -174,39 +214,62 @@ fn gpu_matches_cpu(technique: Technique, near_field_distance: f32, bounces: u32,
     let us = UpsampleSigmas { depth: s.upsample_sigma_depth, normal: s.upsample_sigma_normal };
     let top = s.gathered_levels().end - 1;
     let start = s.gathered_levels().start;
-    let accum = |k: u32| -> Vec<Vec3> {
-        if k == top {
-            gathered[gathered.len() - 1].clone()
-        } else {
-            read(&r, &format!("soler.accum.{k}")).data.into_iter().map(v3).collect()
+    // The irradiance's chain and, with the glossy reflection, the specular light's.
+    let chains = [("soler.accum", &gathered), ("soler.specular.accum", &gathered_spec)];
+    let mut full = Vec::new();
+    for (name, own_light) in chains.into_iter().take(if gloss.is_some() { 2 } else { 1 }) {
+        let accum = |k: u32| -> Vec<Vec3> {
+            if k == top {
+                own_light[own_light.len() - 1].clone()
+            } else {
+                read(&r, &format!("{name}.{k}")).data.into_iter().map(v3).collect()
+            }
+        };
+        for k in (0..top).rev() {
+            let (fine, coarse, coarse_light) = (&levels[k as usize], &levels[k as usize + 1], accum(k + 1));
+            let cpu: Vec<Vec3> = (0..fine.height)
+                .flat_map(|y| (0..fine.width).map(move |x| (x, y)))
+                .map(|(x, y)| {
+                    let t = &fine.texels[(y * fine.width + x) as usize];
+                    let i = (y * fine.width + x) as usize;
+                    let own = if k >= start && t.valid() { own_light[(k - start) as usize][i] } else { Vec3::ZERO };
+                    soler::upsample(coarse, &coarse_light, t, x, y, us) + own
+                })
+                .collect();
+            let gpu = accum(k);
+            let bad = mismatches(&cpu, &gpu, 1e-4, 1e-6);
+            assert_eq!(bad, 0, "upsampling to {name}.{k}: {bad} texels differ");
         }
-    };
-    for k in (0..top).rev() {
-        let (fine, coarse, coarse_light) = (&levels[k as usize], &levels[k as usize + 1], accum(k + 1));
-        let cpu: Vec<Vec3> = (0..fine.height)
-            .flat_map(|y| (0..fine.width).map(move |x| (x, y)))
-            .map(|(x, y)| {
-                let t = &fine.texels[(y * fine.width + x) as usize];
-                let own =
-                    if k >= start { gathered[(k - start) as usize][(y * fine.width + x) as usize] } else { Vec3::ZERO };
-                let own = if t.valid() { own } else { Vec3::ZERO };
-                soler::upsample(coarse, &coarse_light, t, x, y, us) + own
-            })
-            .collect();
-        let gpu = accum(k);
-        let bad = mismatches(&cpu, &gpu, 1e-4, 1e-6);
-        assert_eq!(bad, 0, "upsampling to level {k}: {bad} texels differ");
+        full.push(accum(0));
     }
-    // The resolve: c·DI/π · E.
+    // The resolve: c·DI/π · E (+ the glossy reflection with one bounce; with more, each
+    // bounce keeps it apart and the sum adds it).
     let albedo = read(&r, "gbuffer.albedo");
-    let e = accum(0);
-    let want: Vec<Vec3> = e.iter().zip(&albedo.data).map(|(e, a)| v3(*a) * a[3] / std::f32::consts::PI * *e).collect();
+    let zero = vec![Vec3::ZERO; full[0].len()];
+    let spec = full.get(1).unwrap_or(&zero);
+    let diffuse: Vec<Vec3> =
+        full[0].iter().zip(&albedo.data).map(|(e, a)| v3(*a) * a[3] / std::f32::consts::PI * *e).collect();
+    let add = if bounces == 1 { spec } else { &zero };
+    let want: Vec<Vec3> = diffuse.iter().zip(add).map(|(d, s)| *d + *s).collect();
     let out = if bounces == 1 { "soler.indirect".to_string() } else { format!("soler.bounce.{bounces}") };
     let got: Vec<Vec3> = read(&r, &out).data.into_iter().map(v3).collect();
     assert_eq!(mismatches(&want, &got, 1e-4, 1e-6), 0, "{out}");
     if bounces > 1 {
-        let all: Vec<Vec<Vec3>> =
-            (1..=bounces).map(|b| read(&r, &format!("soler.bounce.{b}")).data.into_iter().map(v3).collect()).collect();
+        let kept = |name: String| -> Vec<Vec3> { read(&r, &name).data.into_iter().map(v3).collect() };
+        if gloss.is_some() {
+            let s_kept = kept(format!("soler.bounce.{bounces}.specular"));
+            assert_eq!(mismatches(spec, &s_kept, 1e-6, 1e-9), 0, "the kept glossy reflection");
+        }
+        let all: Vec<Vec<Vec3>> = (1..=bounces)
+            .map(|b| {
+                let d = kept(format!("soler.bounce.{b}"));
+                if gloss.is_none() {
+                    return d;
+                }
+                let sp = kept(format!("soler.bounce.{b}.specular"));
+                d.iter().zip(&sp).map(|(d, s)| *d + *s).collect()
+            })
+            .collect();
         let sum: Vec<Vec3> = (0..got.len()).map(|i| all.iter().map(|b| b[i]).sum()).collect();
         let indirect: Vec<Vec3> = read(&r, "soler.indirect").data.into_iter().map(v3).collect();
         assert_eq!(mismatches(&sum, &indirect, 1e-5, 1e-7), 0, "soler.indirect = the sum of the bounces");
@@ -336,6 +399,7 @@ fn the_gather_with_visibility_matches_the_cpu_march() {
             &read(&r, &format!("soler.level.{k}.position")),
             &read(&r, &format!("soler.level.{k}.normal")),
             &read(&r, &format!("soler.level.{k}.radiance")),
+            &read(&r, &format!("soler.level.{k}.material")),
         );
         let (w, h, words, bits) = r.soler_voxel_bits(i).expect("a voxel grid").expect("readback");
         assert_eq!((w, h), (l.width, l.height), "level {k}: grid size");
@@ -357,8 +421,11 @@ fn the_gather_with_visibility_matches_the_cpu_march() {
         };
         let vis = Some((&grid, s.march_bias_px, s.march_depth_bias));
         let texels: Vec<(u32, u32)> = (0..l.height).flat_map(|y| (0..l.width).map(move |x| (x, y))).collect();
-        let cpu: Vec<Vec3> = texels.iter().map(|&(x, y)| soler::gather_visible(&l, x, y, &screen, p, vis)).collect();
-        let open: Vec<Vec3> = texels.iter().map(|&(x, y)| soler::gather_visible(&l, x, y, &screen, p, None)).collect();
+        let gloss = gloss_of(&r);
+        let gather = |vis| -> Vec<Vec3> {
+            texels.iter().map(|&(x, y)| soler::gather_glossy(&l, x, y, &screen, p, vis, gloss.as_ref()).0).collect()
+        };
+        let (cpu, open) = (gather(vis), gather(None));
         let gpu: Vec<Vec3> = read(&r, &format!("soler.level.{k}.indirect")).data.into_iter().map(v3).collect();
         // Measured: 0 texels differ (the CPU twin rounds halves to even, as WGSL's round();
         // with Rust's round() 15 and 9 texels differed). A driver's cos/sin may still put a

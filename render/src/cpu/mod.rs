@@ -8,6 +8,7 @@ pub mod knecht_bounce;
 pub mod pathtrace;
 pub mod raycast;
 pub mod soler;
+pub mod soler_glossy;
 pub mod soler_temporal;
 pub mod tonemap;
 pub mod view;

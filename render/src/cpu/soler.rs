@@ -40,6 +40,9 @@ pub struct Texel {
     pub normal: Vec3,
     /// Radiance leaving the texel (the previous bounce; direct light for the first).
     pub radiance: Vec3,
+    /// Specular intensity SI and power SP (the G-buffer's material, voted down with the
+    /// winner); only the glossy reflection reads it.
+    pub material: Vec2,
 }
 
 impl Texel {
@@ -135,13 +138,23 @@ pub fn vote_level(fine: &Level, s: VoteSigmas) -> (Level, Vec<i32>) {
 /// (rounded to the nearest texel) and the screen area dP it stands for (level texels²).
 /// `full_disc`: the first gathered level samples the whole disc of radius `r`.
 pub fn ring_sample(i: u32, n: u32, r: f32, full_disc: bool, rotation: f32) -> (Vec2, f32) {
+    let (rho, dp) = ring_radius(i, n, r, full_disc);
+    (ring_offset(rho, rotation + i as f32 * GOLDEN_ANGLE), dp)
+}
+
+/// The distance of sample `i` of `n` from the texel (√ of its area fraction of the ring) and
+/// the area dP each sample stands for.
+pub fn ring_radius(i: u32, n: u32, r: f32, full_disc: bool) -> (f32, f32) {
     let inner = if full_disc { 0.0 } else { 0.5 * r };
     let u = (i as f32 + 0.5) / n.max(1) as f32;
     let rho = (inner * inner + u * (r * r - inner * inner)).sqrt();
-    let phi = rotation + i as f32 * GOLDEN_ANGLE;
+    (rho, std::f32::consts::PI * (r * r - inner * inner) / n.max(1) as f32)
+}
+
+/// The texel offset at distance `rho` and angle `phi` (rounded to the nearest texel).
+pub fn ring_offset(rho: f32, phi: f32) -> Vec2 {
     // WGSL's round() rounds halves to even, Rust's round() away from zero.
-    let offset = Vec2::new((rho * phi.cos()).round_ties_even(), (rho * phi.sin()).round_ties_even());
-    (offset, std::f32::consts::PI * (r * r - inner * inner) / n.max(1) as f32)
+    Vec2::new((rho * phi.cos()).round_ties_even(), (rho * phi.sin()).round_ties_even())
 }
 
 /// The spiral's rotation at texel (x, y) of level `level` in frame `frame` (radians).
@@ -329,11 +342,33 @@ pub fn gather_visible(
     p: GatherParams,
     vis: Option<(&VoxelGrid, f32, f32)>,
 ) -> Vec3 {
-    let Some(rx) = level.at(x as i64, y as i64).filter(|t| t.valid()) else { return Vec3::ZERO };
+    gather_glossy(level, x, y, cam, p, vis, None).0
+}
+
+/// [`gather_visible`] with the glossy reflection (`cpu::soler_glossy`): the irradiance E
+/// and the light the receiver's specular lobe reflects toward the eye, Σ L_i K_i f_s(l_i, v);
+/// with `gloss`, a glossy receiver draws its samples' angles from f(θ) and each stands for
+/// dP / (2π p(θ)).
+pub fn gather_glossy(
+    level: &Level,
+    x: u32,
+    y: u32,
+    cam: &ScreenCamera,
+    p: GatherParams,
+    vis: Option<(&VoxelGrid, f32, f32)>,
+    gloss: Option<&crate::cpu::soler_glossy::Gloss>,
+) -> (Vec3, Vec3) {
+    use crate::cpu::soler_glossy as glossy;
+    let Some(rx) = level.at(x as i64, y as i64).filter(|t| t.valid()) else { return (Vec3::ZERO, Vec3::ZERO) };
     let rotation = ring_rotation(x, y, p.level, p.frame);
-    let mut e = Vec3::ZERO;
+    let lobe = gloss.and_then(|g| glossy::receiver_lobe(g, rx.position, rx.normal, cam.eye, rx.material, cam.tan_half));
+    let alpha = gloss.map_or(0.0, |g| g.alpha);
+    let v = (cam.eye - rx.position).normalize_or_zero();
+    let (mut e, mut spec) = (Vec3::ZERO, Vec3::ZERO);
     for i in 0..p.samples {
-        let (o, dp) = ring_sample(i, p.samples, p.radius, p.full_disc, rotation);
+        let (rho, dp) = ring_radius(i, p.samples, p.radius, p.full_disc);
+        let (phi, weight) = glossy::warp(rotation + i as f32 * GOLDEN_ANGLE, lobe, alpha);
+        let o = ring_offset(rho, phi);
         if o == Vec2::ZERO {
             continue;
         }
@@ -356,10 +391,14 @@ pub fn gather_visible(
                 continue;
             }
         }
-        let ds = surface_area(s, dp, cam, p.min_cos_beta);
-        e += s.radiance * kernel(cos_t, cos_tp, ds, r2, p.disc);
+        let ds = surface_area(s, dp * weight, cam, p.min_cos_beta);
+        let light = s.radiance * kernel(cos_t, cos_tp, ds, r2, p.disc);
+        e += light;
+        if gloss.is_some() {
+            spec += light * glossy::specular(rx.normal, w, v, rx.material);
+        }
     }
-    e
+    (e, spec)
 }
 
 /// The σ of the upsampling's range weights (joint bilateral upsampling, Kopf et al.).
@@ -456,7 +495,7 @@ mod tests {
             for x in 0..w {
                 let ndc = Vec2::new((x as f32 + 0.5) / w as f32 * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / h as f32 * 2.0);
                 let p = Vec3::new(ndc.x * tan_half.x * z, ndc.y * tan_half.y * z, -z);
-                let t = Texel { position: p, depth: z, normal: Vec3::Z, radiance: Vec3::ONE };
+                let t = Texel { position: p, depth: z, normal: Vec3::Z, radiance: Vec3::ONE, ..Default::default() };
                 sum += surface_area(&t, 1.0, &cam, 0.01);
             }
         }
@@ -493,7 +532,7 @@ mod tests {
     /// and normal are kept, not averaged.
     #[test]
     fn voting_keeps_the_larger_surface_and_never_averages() {
-        let t = |n: Vec3, z: f32| Texel { position: Vec3::new(0.0, 0.0, -z), depth: z, normal: n, radiance: Vec3::ONE };
+        let t = |n: Vec3, z: f32| Texel { position: Vec3::new(0.0, 0.0, -z), depth: z, normal: n, radiance: Vec3::ONE, ..Default::default() };
         let wall = t(Vec3::Z, 2.0);
         let post = t(Vec3::X, 1.0);
         // A 4×4 level: the wall everywhere but texel (1, 1), the post.
@@ -563,7 +602,7 @@ mod tests {
     /// The upsampling takes nothing from a coarse texel of another surface or the background.
     #[test]
     fn upsampling_never_bleeds_across_a_depth_edge() {
-        let near = Texel { position: Vec3::ZERO, depth: 1.0, normal: Vec3::Z, radiance: Vec3::ZERO };
+        let near = Texel { position: Vec3::ZERO, depth: 1.0, normal: Vec3::Z, radiance: Vec3::ZERO, ..Default::default() };
         let far = Texel { depth: 5.0, ..near };
         let coarse = Level { width: 2, height: 2, texels: vec![near, far, Texel::default(), far] };
         let light = [Vec3::ONE, Vec3::splat(100.0), Vec3::splat(1000.0), Vec3::splat(100.0)];

@@ -1,7 +1,10 @@
 //! Multi-bounce of Soler et al. (004 §4 "Multi-bounce computation", §5.3): each bounce's
 //! light is kept (`soler.bounce.b`, b = 1 … n: the previous bounce's input and, with
 //! alternating bounces, what the frames that do not gather it reuse) and their sum is the
-//! stage's indirect light (`shaders/soler/bounces.wgsl`). With one bounce nothing here runs.
+//! stage's indirect light (`shaders/soler/bounces.wgsl`). With the glossy reflection each
+//! bounce's specular light toward the eye is kept apart (`soler.bounce.b.specular`: the next
+//! bounce gathers the diffuse light only, 004 §5.3) and added to the sum. With one bounce
+//! nothing here runs.
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
@@ -12,13 +15,15 @@ use crate::timing::Slot;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct BounceParams {
-    /// Bounces n, unused ×3.
+    /// Bounces n, 1 when the specular light is added, unused ×2.
     pub count: [u32; 4],
 }
 
 pub struct SolerBounces {
     /// `soler.bounce.b` for b = 1 … n (empty with one bounce).
     pub light: Vec<wgpu::Texture>,
+    /// `soler.bounce.b.specular` for b = 1 … n with the glossy reflection (else empty).
+    pub specular: Vec<wgpu::Texture>,
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::ComputePipeline,
     params: wgpu::Buffer,
@@ -32,6 +37,7 @@ impl SolerBounces {
         let mut entries = vec![bgl::uniform(0, cs)];
         entries.extend((1..=4).map(|b| bgl::texture(b, cs, false)));
         entries.push(bgl::storage_texture(5, wgpu::TextureFormat::Rgba32Float));
+        entries.extend((6..=9).map(|b| bgl::texture(b, cs, false)));
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("soler.bounces.inputs"),
             entries: &entries,
@@ -48,23 +54,24 @@ impl SolerBounces {
             wgpu::TextureFormat::Rgba32Float,
             wgpu::TextureUsages::empty(),
         );
-        Self { light: Vec::new(), layout, pipeline, params, dummy }
+        Self { light: Vec::new(), specular: Vec::new(), layout, pipeline, params, dummy }
     }
 
-    /// One texture per bounce at the G-buffer's `size` (none for one bounce); true when
-    /// replaced (the stored bounces are lost: they restart black).
-    pub fn ensure(&mut self, ctx: &GpuContext, bounces: u32, size: (u32, u32)) -> bool {
+    /// One texture per bounce at the G-buffer's `size` (none for one bounce), and one for
+    /// its specular light with the glossy reflection (`specular`); true when replaced (the
+    /// stored bounces are lost: they restart black).
+    pub fn ensure(&mut self, ctx: &GpuContext, bounces: u32, size: (u32, u32), specular: bool) -> bool {
         let n = if bounces > 1 { bounces as usize } else { 0 };
-        if self.light.len() == n && self.light.iter().all(|t| (t.width(), t.height()) == size) {
+        let ns = if specular { n } else { 0 };
+        let fits = |v: &[wgpu::Texture], n: usize| v.len() == n && v.iter().all(|t| (t.width(), t.height()) == size);
+        if fits(&self.light, n) && fits(&self.specular, ns) {
             return false;
         }
         let usage = wgpu::TextureUsages::COPY_DST;
         let rgba = wgpu::TextureFormat::Rgba32Float;
-        self.light = (1..=n)
-            .map(|b| {
-                crate::passes::create_target(&ctx.device, &format!("soler.bounce.{b}"), size.0, size.1, rgba, usage)
-            })
-            .collect();
+        let make = |name: &str| crate::passes::create_target(&ctx.device, name, size.0, size.1, rgba, usage);
+        self.light = (1..=n).map(|b| make(&format!("soler.bounce.{b}"))).collect();
+        self.specular = (1..=ns).map(|b| make(&format!("soler.bounce.{b}.specular"))).collect();
         true
     }
 
@@ -77,12 +84,30 @@ impl SolerBounces {
                 t,
             );
         }
+        for (i, t) in self.specular.iter().enumerate() {
+            reg.register(
+                &format!("soler.bounce.{}.specular", i + 1),
+                BufferKind::Hdr,
+                "Soler multi-bounce (004 §4, §5.3): the light this bounce's receivers reflect toward the eye with their specular lobe (added to the sum, not gathered by the next bounce)",
+                t,
+            );
+        }
     }
 
-    /// Keeps `light` (this frame's result of bounce `b`, 0-based) as `soler.bounce.{b+1}`.
-    pub fn keep(&self, encoder: &mut wgpu::CommandEncoder, light: &wgpu::Texture, b: usize) {
-        if let Some(t) = self.light.get(b) {
-            encoder.copy_texture_to_texture(light.as_image_copy(), t.as_image_copy(), t.size());
+    /// Keeps `light` (this frame's diffuse result of bounce `b`, 0-based) as
+    /// `soler.bounce.{b+1}`, and its glossy reflection `specular` when kept.
+    pub fn keep(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        light: &wgpu::Texture,
+        specular: Option<&wgpu::Texture>,
+        b: usize,
+    ) {
+        let pairs = [(Some(light), self.light.get(b)), (specular, self.specular.get(b))];
+        for (from, to) in pairs {
+            if let (Some(from), Some(to)) = (from, to) {
+                encoder.copy_texture_to_texture(from.as_image_copy(), to.as_image_copy(), to.size());
+            }
         }
     }
 
@@ -94,15 +119,19 @@ impl SolerBounces {
         slot: Option<Slot<'_>>,
         out: &wgpu::Texture,
     ) {
-        let p = BounceParams { count: [self.light.len() as u32, 0, 0, 0] };
+        let spec = !self.specular.is_empty();
+        let p = BounceParams { count: [self.light.len() as u32, spec as u32, 0, 0] };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
         let view = |t: &wgpu::Texture| crate::passes::view(t, "soler.bounce.view");
         let views: Vec<wgpu::TextureView> = (0..4).map(|b| view(self.light.get(b).unwrap_or(&self.dummy))).collect();
+        let spec_views: Vec<wgpu::TextureView> =
+            (0..4).map(|b| view(self.specular.get(b).unwrap_or(&self.dummy))).collect();
         let out_view = view(out);
         let tv = wgpu::BindingResource::TextureView;
         let mut resources = vec![self.params.as_entire_binding()];
         resources.extend(views.iter().map(tv));
         resources.push(tv(&out_view));
+        resources.extend(spec_views.iter().map(tv));
         let group = crate::passes::bind_group(&ctx.device, "soler.bounces.inputs", &self.layout, resources);
         let stamps = slot.and_then(|s| s.compute(true, true));
         crate::passes::dispatch_2d(

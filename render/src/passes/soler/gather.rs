@@ -25,6 +25,13 @@ pub struct GatherParams {
     pub voxels: super::voxels::VoxelParams,
     /// Texels skipped at both ends of the march, depth bias (slices), unused, unused.
     pub march: [f32; 4],
+    /// α, k (s = k √SP), the least SP importance sampled, flags (1 glossy reflection, 2
+    /// importance sampling) of the glossy reflection (`cpu::soler_glossy`).
+    pub gloss: [f32; 4],
+    /// The camera's right, up and forward axes (xyz).
+    pub right: [f32; 4],
+    pub up: [f32; 4],
+    pub forward: [f32; 4],
 }
 
 /// Most levels a frame gathers (the settings' range).
@@ -39,6 +46,8 @@ pub struct LevelInputs<'a> {
     pub position: &'a wgpu::TextureView,
     pub normal: &'a wgpu::TextureView,
     pub radiance: &'a wgpu::TextureView,
+    /// SI (r) and SP (g) of the level's texels.
+    pub material: &'a wgpu::TextureView,
     pub size: (u32, u32),
     /// The level's voxel grid and its parameters (the empty buffer and zeros without
     /// visibility).
@@ -52,6 +61,9 @@ pub struct SolerGather {
     /// `soler.level.k.occlusion`: the light the visibility removed (rgb) and the visible
     /// fraction of the samples that carried light (a).
     pub occlusion: Vec<wgpu::Texture>,
+    /// `soler.level.k.specular`: the light the receiver's specular lobe reflects toward the
+    /// eye (004 §4 "Screen-space importance sampling"), black without glossy reflection.
+    pub specular: Vec<wgpu::Texture>,
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::ComputePipeline,
     params: wgpu::Buffer,
@@ -71,13 +83,15 @@ impl SolerGather {
                 bgl::storage_texture(4, wgpu::TextureFormat::Rgba32Float),
                 bgl::storage(5, cs, true),
                 bgl::storage_texture(6, wgpu::TextureFormat::Rgba32Float),
+                bgl::texture(7, cs, false),
+                bgl::storage_texture(8, wgpu::TextureFormat::Rgba32Float),
             ],
         });
         let module = crate::shaders::create_module(device, "soler/gather.wgsl");
         let pipeline = crate::passes::compute_pipeline(device, "soler.gather", &module, "cs_gather", &[&layout]);
         let params =
             crate::passes::uniform_buffer(device, "soler.gather.params", STRIDE * (MAX_GATHERED * MAX_BOUNCES) as u64);
-        Self { light: Vec::new(), occlusion: Vec::new(), layout, pipeline, params }
+        Self { light: Vec::new(), occlusion: Vec::new(), specular: Vec::new(), layout, pipeline, params }
     }
 
     /// Textures for the gathered `levels`, each (level, size); true when replaced.
@@ -94,13 +108,17 @@ impl SolerGather {
                 (k, crate::passes::create_target(&ctx.device, &label, w, h, wgpu::TextureFormat::Rgba32Float, storage))
             })
             .collect();
-        self.occlusion = levels
-            .iter()
-            .map(|&(k, (w, h))| {
-                let label = format!("soler.level.{k}.occlusion");
-                crate::passes::create_target(&ctx.device, &label, w, h, wgpu::TextureFormat::Rgba32Float, storage)
-            })
-            .collect();
+        let targets = |name: &str| -> Vec<wgpu::Texture> {
+            levels
+                .iter()
+                .map(|&(k, (w, h))| {
+                    let label = format!("soler.level.{k}.{name}");
+                    crate::passes::create_target(&ctx.device, &label, w, h, wgpu::TextureFormat::Rgba32Float, storage)
+                })
+                .collect()
+        };
+        self.occlusion = targets("occlusion");
+        self.specular = targets("specular");
         true
     }
 
@@ -118,6 +136,14 @@ impl SolerGather {
                 &format!("soler.level.{k}.occlusion"),
                 BufferKind::Hdr,
                 "Soler visibility of one mip level (004 §4 \"Visibility\"): rgb the irradiance the voxel march removed (no-vis minus vis), a the visible fraction of the samples that carried light",
+                t,
+            );
+        }
+        for ((k, _), t) in self.light.iter().zip(&self.specular) {
+            reg.register(
+                &format!("soler.level.{k}.specular"),
+                BufferKind::Hdr,
+                "Soler glossy reflection of one mip level (004 §4 \"Screen-space importance sampling\"): Σ L_i K_i f_s(l_i, v), the light the receiver's specular lobe sends to the eye, before upsampling",
                 t,
             );
         }
@@ -166,11 +192,14 @@ impl SolerGather {
         let (out, occ) = (&self.light[i].1, &self.occlusion[i]);
         let out_view = crate::passes::view(out, "soler.gather.out");
         let occ_view = crate::passes::view(occ, "soler.gather.occlusion");
+        let spec_view = crate::passes::view(&self.specular[i], "soler.gather.specular");
         let tv = wgpu::BindingResource::TextureView;
         let views = [l.position, l.normal, l.radiance, &out_view];
         let mut resources: Vec<_> = std::iter::once(uniform).chain(views.map(tv)).collect();
         resources.push(l.grid.as_entire_binding());
         resources.push(tv(&occ_view));
+        resources.push(tv(l.material));
+        resources.push(tv(&spec_view));
         let group = crate::passes::bind_group(&ctx.device, "soler.gather.inputs", &self.layout, resources);
         let stamps = slot.as_ref().and_then(|s| s.compute(true, true));
         let offset = [(slot_index as u64 * STRIDE) as u32];

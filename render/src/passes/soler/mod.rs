@@ -14,8 +14,12 @@
 //! once per bounce on the previous bounce's light (`soler.bounce.n`), or one bounce per frame
 //! in turn (`alternate_bounces`); `bounces.wgsl` adds them into `soler.indirect`.
 //!
-//! Not built yet (issue #16): glossy importance sampling, the sample overlay and the mix with
-//! the HCB's samples.
+//! Glossy reflection (004 §4 "Screen-space importance sampling"): the gather also sums each
+//! sample's light through the receiver's specular lobe, glossy receivers draw the samples'
+//! angles from the paper's importance function (`shaders/soler/glossy.wgsl`, CPU twin
+//! `cpu::soler_glossy`), and the specular light goes up its own upsampling chain.
+//!
+//! Not built yet (issue #16): the sample overlay and the mix with the HCB's samples.
 
 use crate::{settings_enum, settings_group};
 
@@ -135,6 +139,29 @@ settings_group! {
         /// (004 §5.3's odd/even frames for n = 2; relies on the light's temporal coherence).
         alternate_bounces: bool = false,
         unit "", symbol "", range 0..=1, cost "one bounce's gather per frame instead of n", history true;
+        /// Glossy reflection of the gathered light on the last bounce before the camera
+        /// (004 §4 "Screen-space importance sampling"): each sample also adds L·K·f_s(l, v),
+        /// f_s the BRDF's specular lobe, into a second accumulator that is upsampled like the
+        /// irradiance and added after the resolve; the light passed to further bounces stays
+        /// diffuse (§5.3). Off: the receiver reflects diffusely only (Fig. 4).
+        glossy_reflection: bool = true,
+        unit "", symbol "f_s", range 0..=1, cost "a second upsampling chain and the lobe per sample", history false;
+        /// Importance sampling of glossy receivers: the angle of each ring sample is drawn in
+        /// proportion to f(θ) = α + exp(−s (θ_r − θ)² / 2π) around the projected mirror
+        /// direction θ_r and weighted by 1/pdf (unbiased); off: uniform angles.
+        glossy_sampling: bool = true,
+        unit "", symbol "", range 0..=1, cost "an inverse CDF (8 Newton steps) per sample of a glossy receiver", history false;
+        /// α of f(θ): the share of the samples kept away from the lobe (the paper: 0.1).
+        glossy_alpha: f32 = 0.1,
+        unit "", symbol "α", range 0.001..=10.0, cost "free", history false;
+        /// k in s = k·√SP (our reading: the text calls the gaussian's variance inversely
+        /// proportional to √SP, its formula's variance is π/s).
+        glossy_sharpness: f32 = 1.0,
+        unit "× √SP", symbol "s", range 0.01..=100.0, cost "free", history false;
+        /// Receivers with a specular power SP below this are sampled uniformly (their lobe is
+        /// too wide to be worth concentrating the samples).
+        glossy_min_power: f32 = 16.0,
+        unit "SP", symbol "SP_min", range 0.0..=4096.0, cost "free", history false;
         /// a of Eq. 6, F_i = a·W(history) + (1 − a)·I_i: the warped history's weight where it
         /// is accepted and nothing moves (`pipeline.temporal = WarpedBlend`; the paper gives no
         /// value).

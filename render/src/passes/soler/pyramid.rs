@@ -28,6 +28,8 @@ pub struct PyramidLevel {
     pub radiance: wgpu::Texture,
     /// The winning sub-pixel, x + 2y in the block (0–3), −1 on the background.
     pub winner: wgpu::Texture,
+    /// The winner's material as in the G-buffer: SI (r), SP (g), metallic, roughness.
+    pub material: wgpu::Texture,
 }
 
 pub struct SolerPyramid {
@@ -65,6 +67,8 @@ impl SolerPyramid {
                 bgl::storage_texture(5, rgba),
                 bgl::storage_texture(6, rgba),
                 bgl::storage_texture(7, wgpu::TextureFormat::R32Float),
+                bgl::texture(8, cs, false),
+                bgl::storage_texture(9, rgba),
             ],
         });
         let module = crate::shaders::create_module(device, "soler/vote.wgsl");
@@ -92,6 +96,7 @@ impl SolerPyramid {
                     normal: t("normal", rgba),
                     radiance: t("radiance", rgba),
                     winner: t("winner", wgpu::TextureFormat::R32Float),
+                    material: t("material", rgba),
                 }
             })
             .collect()
@@ -135,11 +140,17 @@ impl SolerPyramid {
                 "Soler mip level (004 Eq. 5): the winning sub-pixel x + 2y of the 2×2 block (0–3), −1 on the background",
                 &l.winner,
             );
+            reg.register(
+                &format!("soler.level.{k}.material"),
+                BufferKind::Data,
+                "Soler mip level (004 §4): the voting winner's material, SI (r) and SP (g) for the glossy reflection",
+                &l.material,
+            );
         }
     }
 
-    /// Votes levels 1 … top from the G-buffer's `position` and `normal` and the `radiance`
-    /// of the previous bounce.
+    /// Votes levels 1 … top from the G-buffer's `position`, `normal` and `material` and the
+    /// `radiance` of the previous bounce.
     #[allow(clippy::too_many_arguments)]
     pub fn run(
         &self,
@@ -150,24 +161,25 @@ impl SolerPyramid {
         position: &wgpu::TextureView,
         normal: &wgpu::TextureView,
         radiance: &wgpu::TextureView,
+        material: &wgpu::TextureView,
     ) {
         let p = VoteParams { sigma: [sigma[0], sigma[1], sigma[2], 0.0] };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
         let view = |t: &wgpu::Texture| crate::passes::view(t, "soler.level.view");
-        let views: Vec<[wgpu::TextureView; 4]> = self
+        let views: Vec<[wgpu::TextureView; 5]> = self
             .levels
             .iter()
-            .map(|l| [view(&l.position), view(&l.normal), view(&l.radiance), view(&l.winner)])
+            .map(|l| [view(&l.position), view(&l.normal), view(&l.radiance), view(&l.winner), view(&l.material)])
             .collect();
         let n = self.levels.len();
         for (i, out) in views.iter().enumerate() {
-            let (fp, fnorm, fr) = if i == 0 {
-                (position, normal, radiance)
+            let (fp, fnorm, fr, fm) = if i == 0 {
+                (position, normal, radiance, material)
             } else {
-                (&views[i - 1][0], &views[i - 1][1], &views[i - 1][2])
+                (&views[i - 1][0], &views[i - 1][1], &views[i - 1][2], &views[i - 1][4])
             };
             let tv = wgpu::BindingResource::TextureView;
-            let inputs = [fp, fnorm, fr, &out[0], &out[1], &out[2], &out[3]];
+            let inputs = [fp, fnorm, fr, &out[0], &out[1], &out[2], &out[3], fm, &out[4]];
             let resources = std::iter::once(self.params.as_entire_binding()).chain(inputs.map(tv)).collect();
             let group = crate::passes::bind_group(&ctx.device, "soler.vote.inputs", &self.layout, resources);
             let l = &self.levels[i];

@@ -60,9 +60,9 @@ impl SolerStage {
         let gathered: Vec<(u32, (u32, u32))> = s.gathered_levels().map(|k| (k, all[k as usize])).collect();
         let a = self.pyramid.ensure(ctx, width, height, top);
         let b = self.gather.ensure(ctx, &gathered);
-        let c = self.upsample.ensure(ctx, &all[..top as usize], all[0]);
+        let c = self.upsample.ensure(ctx, &all[..top as usize], all[0], s.glossy_reflection);
         let d = self.voxels.ensure(ctx, &gathered, s.voxel_words(), s.visibility)
-            | self.bounces.ensure(ctx, s.bounces, all[0]);
+            | self.bounces.ensure(ctx, s.bounces, all[0], s.glossy_reflection);
         let e = match (&mut self.temporal, temporal) {
             (Some(t), true) => t.ensure(ctx, all[0]),
             (None, true) => {
@@ -82,6 +82,16 @@ impl SolerStage {
         self.bounces.register(reg);
         if let Some(t) = &self.temporal {
             t.register(reg);
+        }
+    }
+
+    /// The glossy reflection at G-buffer resolution (`soler.specular.accum.0`, or the
+    /// full-resolution level's own when it is the only one), None without it.
+    pub fn specular_light(&self) -> Option<&wgpu::Texture> {
+        match self.upsample.spec_accum.first() {
+            Some(t) => Some(t),
+            None if self.upsample.accum.is_empty() => self.gather.specular.first(),
+            None => None,
         }
     }
 
@@ -144,6 +154,15 @@ impl SolerStage {
             screen: [aspect * tan_v, tan_v, 0.0, 0.0],
             voxels: VoxelParams::default(),
             march: [s.march_bias_px, s.march_depth_bias, 0.0, 0.0],
+            gloss: [
+                s.glossy_alpha,
+                s.glossy_sharpness,
+                s.glossy_min_power,
+                (s.glossy_reflection as u32 + 2 * (s.glossy_reflection && s.glossy_sampling) as u32) as f32,
+            ],
+            right: f.camera.right().extend(0.0).to_array(),
+            up: f.camera.right().cross(f.camera.forward()).extend(0.0).to_array(),
+            forward: f.camera.forward().extend(0.0).to_array(),
         };
         let levels: Vec<(u32, (u32, u32))> = s.gathered_levels().map(|k| (k, all[k as usize])).collect();
         self.gather.write_params(ctx, &levels, base, &grids);
@@ -154,7 +173,7 @@ impl SolerStage {
             let radiance = if b == 0 { f.direct_radiance } else { &bounce_views[b as usize - 1] };
             let prefix = if b == 0 { "soler".to_string() } else { format!("soler.bounce{}", b + 1) };
             self.bounce(f, enc, timer, &prefix, radiance, &grids[j], (j, &all));
-            self.bounces.keep(enc, &self.upsample.indirect, b as usize);
+            self.bounces.keep(enc, &self.upsample.indirect, self.specular_light(), b as usize);
         }
         if !self.bounces.light.is_empty() {
             let (bounces, out) = (&self.bounces, &self.upsample.indirect);
@@ -191,31 +210,35 @@ impl SolerStage {
         if !self.pyramid.levels.is_empty() {
             let sigma = [s.vote_sigma_pixel, s.vote_sigma_normal, s.vote_sigma_depth];
             timer.scope(ctx, enc, &format!("{prefix}.pyramid"), |e, slot| {
-                self.pyramid.run(ctx, e, slot, sigma, &g.position, &g.normal, radiance)
+                self.pyramid.run(ctx, e, slot, sigma, &g.position, &g.normal, radiance, &g.material)
             });
         }
         let view = |t: &wgpu::Texture| crate::passes::view(t, "soler.level.view");
-        // Views of levels 1 … top: position, normal, radiance.
-        let lv: Vec<[wgpu::TextureView; 3]> =
-            self.pyramid.levels.iter().map(|l| [view(&l.position), view(&l.normal), view(&l.radiance)]).collect();
-        let level_views = |k: u32| -> [&wgpu::TextureView; 3] {
+        // Views of levels 1 … top: position, normal, radiance, material.
+        let lv: Vec<[wgpu::TextureView; 4]> = self
+            .pyramid
+            .levels
+            .iter()
+            .map(|l| [view(&l.position), view(&l.normal), view(&l.radiance), view(&l.material)])
+            .collect();
+        let level_views = |k: u32| -> [&wgpu::TextureView; 4] {
             if k == 0 {
-                [&g.position, &g.normal, radiance]
+                [&g.position, &g.normal, radiance, &g.material]
             } else {
                 let v = &lv[k as usize - 1];
-                [&v[0], &v[1], &v[2]]
+                [&v[0], &v[1], &v[2], &v[3]]
             }
         };
         let inputs: Vec<LevelInputs> = s
             .gathered_levels()
             .enumerate()
             .map(|(i, k)| {
-                let [position, normal, radiance] = level_views(k);
+                let [position, normal, radiance, material] = level_views(k);
                 let (grid, voxels) = match (self.voxels.grids.get(i), grids.get(i)) {
                     (Some(g), Some(p)) => (&g.buffer, *p),
                     _ => (&self.voxels.empty, VoxelParams::default()),
                 };
-                LevelInputs { level: k, position, normal, radiance, size: all[k as usize], grid, voxels }
+                LevelInputs { level: k, position, normal, radiance, material, size: all[k as usize], grid, voxels }
             })
             .collect();
         let n = inputs.len();
@@ -227,21 +250,42 @@ impl SolerStage {
         let top = s.gathered_levels().end - 1;
         let light: Vec<wgpu::TextureView> = self.gather.light.iter().map(|(_, t)| view(t)).collect();
         let accum: Vec<wgpu::TextureView> = self.upsample.accum.iter().map(view).collect();
+        let spec: Vec<wgpu::TextureView> = self.gather.specular.iter().map(view).collect();
+        let spec_accum: Vec<wgpu::TextureView> = self.upsample.spec_accum.iter().map(view).collect();
         let start = s.gathered_levels().start;
-        let own = |k: u32| (k >= start).then(|| &light[(k - start) as usize]);
-        // The accumulated light of level k: the top level's own light, else its accumulator.
-        let acc = |k: u32| if k == top { &light[light.len() - 1] } else { &accum[k as usize] };
-        let steps: Vec<Step> = (0..top)
-            .rev()
-            .map(|k| {
-                let [fp, fnorm, _] = level_views(k);
-                let [cp, cn, _] = level_views(k + 1);
-                Step { fine: [fp, fnorm], fine_light: own(k), coarse: [cp, cn, acc(k + 1)] }
-            })
-            .collect();
+        let lvs: Vec<[&wgpu::TextureView; 4]> = (0..=top).map(level_views).collect();
+        fn last<'v>(top: u32, own: &'v [wgpu::TextureView], acc: &'v [wgpu::TextureView]) -> &'v wgpu::TextureView {
+            if top == 0 { &own[own.len() - 1] } else { &acc[0] }
+        }
+        let steps = chain(start, &lvs, &light, &accum);
+        let glossy = s.glossy_reflection;
+        let spec_steps = if glossy { chain(start, &lvs, &spec, &spec_accum) } else { Vec::new() };
         let sigma = [s.upsample_sigma_depth, s.upsample_sigma_normal];
+        let add_specular = self.bounces.light.is_empty();
         timer.scope(ctx, enc, &format!("{prefix}.upsample"), |e, slot| {
-            self.upsample.run(ctx, e, slot, sigma, &steps, acc(0), &g.albedo)
+            let spec_chain = glossy.then(|| (&spec_steps[..], last(top, &spec, &spec_accum)));
+            self.upsample.run(ctx, e, slot, sigma, &steps, last(top, &light, &accum), &g.albedo, spec_chain, add_specular)
         });
     }
+}
+
+/// The upsampling steps of one chain, coarse to fine: `lvs` the views of levels 0 … top,
+/// `own` the gathered levels' light (from `start`), `acc` the chain's accumulators (the top
+/// level's accumulated light is its own).
+fn chain<'v>(
+    start: u32,
+    lvs: &[[&'v wgpu::TextureView; 4]],
+    own: &'v [wgpu::TextureView],
+    acc: &'v [wgpu::TextureView],
+) -> Vec<Step<'v>> {
+    let top = lvs.len() as u32 - 1;
+    (0..top)
+        .rev()
+        .map(|k| {
+            let [fp, fnorm, _, _] = lvs[k as usize];
+            let [cp, cn, _, _] = lvs[k as usize + 1];
+            let coarse = if k + 1 == top { &own[own.len() - 1] } else { &acc[k as usize + 1] };
+            Step { fine: [fp, fnorm], fine_light: (k >= start).then(|| &own[(k - start) as usize]), coarse: [cp, cn, coarse] }
+        })
+        .collect()
 }
