@@ -36,7 +36,7 @@ struct GatherParams {
     voxels: VoxelParams,
     // x: texels skipped at both ends of the march, y: depth bias (slices), z, w: unused
     march: vec4<f32>,
-    // x: α, y: k (s = k √SP), z: the least SP importance sampled, w: 1 glossy reflection
+    // x: α, y: k (s = k·SP), z: the least SP importance sampled, w: 1 glossy reflection
     // + 2 importance sampling
     gloss: vec4<f32>,
     // The camera's right, up and forward axes (xyz).
@@ -152,7 +152,7 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
         let a = params.right.xyz;
         let l = gloss_lobe_angle(px, n, params.eye.xyz, a, params.up.xyz, params.forward.xyz, params.screen.xy);
         warped = l.y > 0.0;
-        lobe = vec2<f32>(l.x, params.gloss.y * sqrt(max(mat.y, 0.0)));
+        lobe = vec2<f32>(l.x, params.gloss.y * max(mat.y, 0.0));
     }
     let v = normalize(params.eye.xyz - px);
     var spec = vec3<f32>(0.0);

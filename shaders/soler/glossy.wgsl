@@ -1,5 +1,5 @@
 // Screen-space importance sampling of glossy receivers (Soler et al. 004 §4, Fig. 3 middle):
-// f(θ) = α + exp(−s (θ_r − θ)² / 2π) with s = k·√SP, θ_r the screen angle of the projected
+// f(θ) = α + exp(−s (θ_r − θ)² / 2π) with s = k·SP, θ_r the screen angle of the projected
 // mirror direction; the spiral's angle is mapped through the inverse CDF of f's mixture
 // (uniform part, truncated gaussian by erf⁻¹) and the sample stands for dP / (2π p(θ)). The readings are documented in the CPU twin
 // render/src/cpu/soler_glossy.rs (erf, erfinv, importance, cdf, invert, lobe_angle, warp, specular).
@@ -47,7 +47,7 @@ fn gloss_erfinv(x: f32) -> f32 {
         p = 5.7395077e-3 + p * w;
         p = -7.622461e-3 + p * w;
         p = 9.4388705e-3 + p * w;
-        p = 1.0016741 + p * w;
+        p = 1.001674 + p * w;
         p = 2.8329768 + p * w;
     }
     return p * x;

@@ -532,7 +532,13 @@ mod tests {
     /// and normal are kept, not averaged.
     #[test]
     fn voting_keeps_the_larger_surface_and_never_averages() {
-        let t = |n: Vec3, z: f32| Texel { position: Vec3::new(0.0, 0.0, -z), depth: z, normal: n, radiance: Vec3::ONE, ..Default::default() };
+        let t = |n: Vec3, z: f32| Texel {
+            position: Vec3::new(0.0, 0.0, -z),
+            depth: z,
+            normal: n,
+            radiance: Vec3::ONE,
+            ..Default::default()
+        };
         let wall = t(Vec3::Z, 2.0);
         let post = t(Vec3::X, 1.0);
         // A 4×4 level: the wall everywhere but texel (1, 1), the post.
@@ -602,7 +608,8 @@ mod tests {
     /// The upsampling takes nothing from a coarse texel of another surface or the background.
     #[test]
     fn upsampling_never_bleeds_across_a_depth_edge() {
-        let near = Texel { position: Vec3::ZERO, depth: 1.0, normal: Vec3::Z, radiance: Vec3::ZERO, ..Default::default() };
+        let near =
+            Texel { position: Vec3::ZERO, depth: 1.0, normal: Vec3::Z, radiance: Vec3::ZERO, ..Default::default() };
         let far = Texel { depth: 5.0, ..near };
         let coarse = Level { width: 2, height: 2, texels: vec![near, far, Texel::default(), far] };
         let light = [Vec3::ONE, Vec3::splat(100.0), Vec3::splat(1000.0), Vec3::splat(100.0)];

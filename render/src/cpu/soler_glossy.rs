@@ -9,12 +9,14 @@
 //! ```
 //!
 //! where θ_r is the screen-space angle of the projected lobe (the mirror direction of the
-//! view vector, projected at the receiver) and α = 0.1 in the paper. Readings (⚠ the text is
-//! inconsistent: it calls the gaussian's variance "inversely proportional to the square root
-//! of the exponent s" while the formula's variance is π/s):
-//! - the formula's s is `k · √SP`, SP the receiver's specular power and k a setting (1 by
-//!   default): the variance is then π / (k √SP), inversely proportional to √SP as the text
-//!   says (Ramamoorthi's angular-frequency estimate of a Phong lobe goes as √SP);
+//! view vector, projected at the receiver) and α = 0.1 in the paper. Readings (⚠ the text
+//! calls the gaussian's *variance* "inversely proportional to the square root of the exponent
+//! s of the lobe", while the formula's variance is π/s):
+//! - s is the lobe's exponent, as the text says: the receiver's specular power SP, times a
+//!   setting k (1: the formula as printed; 0.25 by default, measured better: a lobe spreads
+//!   wider on screen than in space). The gaussian's standard deviation √(π/s) is then what
+//!   goes as 1/√SP (Ramamoorthi's angular-frequency estimate of a Phong lobe, which the
+//!   paper cites): we read the text's "variance" as the standard deviation;
 //! - θ − θ_r is wrapped to [−π, π], and the pdf over that interval is p(θ) = f(θ) / Z;
 //!   each sample stands for the screen area dP / (2π p(θ)) instead of dP, so the estimate of
 //!   both the irradiance and the glossy reflection stays unbiased;
@@ -36,7 +38,7 @@ use std::f32::consts::PI;
 pub struct Gloss {
     /// α of f(θ).
     pub alpha: f32,
-    /// k of s = k · √SP.
+    /// k of s = k · SP.
     pub sharpness: f32,
     /// Receivers with a specular power below this are sampled uniformly.
     pub min_power: f32,
@@ -54,9 +56,9 @@ pub fn erf(x: f32) -> f32 {
     if x < 0.0 { -y } else { y }
 }
 
-/// s of f(θ) for a receiver of specular power `sp`: k · √SP.
+/// s of f(θ) for a receiver of specular power `sp`: k · SP.
 pub fn sharpness(sp: f32, k: f32) -> f32 {
-    k * sp.max(0.0).sqrt()
+    k * sp.max(0.0)
 }
 
 /// f(d) = α + exp(−s d² / 2π), d = θ − θ_r in [−π, π].
@@ -77,14 +79,32 @@ pub fn erfinv(x: f32) -> f32 {
     let mut w = -((1.0 - x) * (1.0 + x)).max(1e-30).ln();
     let p = if w < 5.0 {
         w -= 2.5;
-        [3.432_739_4e-7, -3.523_387_7e-6, -4.391_506_5e-6, 2.185_808_7e-4, -1.253_725e-3, -4.177_681_6e-3, 0.246_640_73, 1.501_409_4]
-            .iter()
-            .fold(2.810_226_4e-8, |p, c| c + p * w)
+        [
+            3.432_739_4e-7,
+            -3.523_387_7e-6,
+            -4.391_506_5e-6,
+            2.185_808_7e-4,
+            -1.253_725e-3,
+            -4.177_681_6e-3,
+            0.246_640_73,
+            1.501_409_4,
+        ]
+        .iter()
+        .fold(2.810_226_4e-8, |p, c| c + p * w)
     } else {
         w = w.sqrt() - 3.0;
-        [1.009_505_6e-4, 1.349_343_2e-3, -3.673_428_4e-3, 5.739_507_7e-3, -7.622_461e-3, 9.438_870_5e-3, 1.001_674_1, 2.832_976_8]
-            .iter()
-            .fold(-2.002_142_6e-4, |p, c| c + p * w)
+        [
+            1.009_505_6e-4,
+            1.349_343_2e-3,
+            -3.673_428_4e-3,
+            5.739_507_7e-3,
+            -7.622_461e-3,
+            9.438_870_5e-3,
+            1.001_674,
+            2.832_976_8,
+        ]
+        .iter()
+        .fold(-2.002_142_6e-4, |p, c| c + p * w)
     };
     p * x
 }
@@ -155,7 +175,9 @@ mod tests {
 
     #[test]
     fn erf_matches_known_values() {
-        for (x, want) in [(0.0f32, 0.0f32), (0.5, 0.520_499_9), (1.0, 0.842_700_8), (2.0, 0.995_322_3), (-1.0, -0.842_700_8)] {
+        for (x, want) in
+            [(0.0f32, 0.0f32), (0.5, 0.520_499_9), (1.0, 0.842_700_8), (2.0, 0.995_322_3), (-1.0, -0.842_700_8)]
+        {
             assert!((erf(x) - want).abs() < 3e-7, "erf({x}) = {} not {want}", erf(x));
         }
     }
@@ -249,6 +271,6 @@ mod tests {
         let p = Vec3::new(0.0, 0.0, -3.0);
         assert!(receiver_lobe(&g, p, Vec3::Y, eye, Vec2::new(0.5, 8.0), tan_half).is_none(), "SP below the minimum");
         let (_, s) = receiver_lobe(&g, p, Vec3::Y, eye, Vec2::new(0.5, 64.0), tan_half).expect("glossy");
-        assert!((s - 8.0).abs() < 1e-5);
+        assert!((s - 64.0).abs() < 1e-5);
     }
 }

@@ -25,7 +25,7 @@ pub struct GatherParams {
     pub voxels: super::voxels::VoxelParams,
     /// Texels skipped at both ends of the march, depth bias (slices), unused, unused.
     pub march: [f32; 4],
-    /// α, k (s = k √SP), the least SP importance sampled, flags (1 glossy reflection, 2
+    /// α, k (s = k·SP), the least SP importance sampled, flags (1 glossy reflection, 2
     /// importance sampling) of the glossy reflection (`cpu::soler_glossy`).
     pub gloss: [f32; 4],
     /// The camera's right, up and forward axes (xyz).

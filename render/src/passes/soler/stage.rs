@@ -264,7 +264,17 @@ impl SolerStage {
         let add_specular = self.bounces.light.is_empty();
         timer.scope(ctx, enc, &format!("{prefix}.upsample"), |e, slot| {
             let spec_chain = glossy.then(|| (&spec_steps[..], last(top, &spec, &spec_accum)));
-            self.upsample.run(ctx, e, slot, sigma, &steps, last(top, &light, &accum), &g.albedo, spec_chain, add_specular)
+            self.upsample.run(
+                ctx,
+                e,
+                slot,
+                sigma,
+                &steps,
+                last(top, &light, &accum),
+                &g.albedo,
+                spec_chain,
+                add_specular,
+            )
         });
     }
 }
@@ -285,7 +295,11 @@ fn chain<'v>(
             let [fp, fnorm, _, _] = lvs[k as usize];
             let [cp, cn, _, _] = lvs[k as usize + 1];
             let coarse = if k + 1 == top { &own[own.len() - 1] } else { &acc[k as usize + 1] };
-            Step { fine: [fp, fnorm], fine_light: (k >= start).then(|| &own[(k - start) as usize]), coarse: [cp, cn, coarse] }
+            Step {
+                fine: [fp, fnorm],
+                fine_light: (k >= start).then(|| &own[(k - start) as usize]),
+                coarse: [cp, cn, coarse],
+            }
         })
         .collect()
 }
