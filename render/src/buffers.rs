@@ -243,6 +243,59 @@ impl BufferRegistry {
     }
 }
 
+impl BufferRegistry {
+    /// The raw values of chosen texels: each (buffer, x, y) in that buffer's own texels
+    /// (clamped to its size). One copy per texel, one map.
+    pub fn read_texels(&self, ctx: &GpuContext, points: &[(&str, u32, u32)]) -> Result<Vec<[f32; 4]>, BufferError> {
+        const STRIDE: u64 = 256;
+        if points.is_empty() {
+            return Ok(Vec::new());
+        }
+        let mut decoders = Vec::with_capacity(points.len());
+        let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("buffers.read_texels"),
+            size: points.len() as u64 * STRIDE,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut enc =
+            ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("buffers.read_texels") });
+        for (i, &(name, x, y)) in points.iter().enumerate() {
+            let t = &self.get(name)?.texture;
+            let format = t.format();
+            let (bpp, decode) = match decoder(format) {
+                Some(d) if !format.is_depth_stencil_format() => d,
+                _ => return Err(BufferError::Format { name: name.into(), format }),
+            };
+            decoders.push((bpp as usize, decode));
+            enc.copy_texture_to_buffer(
+                wgpu::TexelCopyTextureInfo {
+                    texture: t,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d { x: x.min(t.width() - 1), y: y.min(t.height() - 1), z: 0 },
+                    aspect: wgpu::TextureAspect::All,
+                },
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &buffer,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: i as u64 * STRIDE,
+                        bytes_per_row: None,
+                        rows_per_image: None,
+                    },
+                },
+                wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+            );
+        }
+        ctx.queue.submit([enc.finish()]);
+        let bytes = map_read(ctx, &buffer).map_err(|message| BufferError::Map { name: "texels".into(), message })?;
+        Ok(decoders
+            .iter()
+            .enumerate()
+            .map(|(i, (bpp, decode))| decode(&bytes[i * STRIDE as usize..i * STRIDE as usize + bpp]))
+            .collect())
+    }
+}
+
 /// Decodes one texel's bytes to f32 RGBA.
 type TexelDecoder = fn(&[u8]) -> [f32; 4];
 

@@ -121,3 +121,44 @@ fn importance_sampling_gains(roughness: f32, gain: f32) {
     assert!(si * gain < su, "roughness {roughness}: importance sampling {si} vs uniform {su}");
     assert!((mi - mr).abs() < 0.08 * mr && (mu - mr).abs() < 0.08 * mr, "means {mu} {mi} vs {mr}");
 }
+
+/// The sample overlay's replay (`Renderer::soler_samples`, Fig. 3 right): at each gathered
+/// level the receiver is the texel under the pixel and its samples lie on its ring (the
+/// full disc at the first level, r/2 … r after, in the level's texels), most can light a
+/// floor pixel, and a glossy floor's samples lean toward its mirror direction (up the
+/// screen: θ_r ≈ −π/2 with y down).
+#[test]
+fn the_sample_overlay_replays_the_rings_of_a_pixel() {
+    let r = glossy_renderer(0.3, |s| {
+        s.soler.samples = 64;
+        s.soler.levels = 2;
+        s.soler.radius_px = 6.0;
+    });
+    let pixel = (SIZE / 2, SIZE - 8);
+    let receivers = r.soler_samples(pixel).expect("samples");
+    let s = r.settings().soler.clone();
+    assert_eq!(receivers.len(), s.levels as usize, "every level has a receiver on the floor");
+    for (i, rx) in receivers.iter().enumerate() {
+        let scale = (rx.footprint.1.x - rx.footprint.0.x).max(1e-6);
+        let centre = (rx.footprint.0 + rx.footprint.1) * 0.5;
+        let inside = |p: glam::Vec2| {
+            let d = (p - centre).length() / scale;
+            let inner = if i == 0 { 0.0 } else { 0.5 * s.radius_px };
+            d >= inner - 1.0 && d <= s.radius_px + 1.0
+        };
+        assert!(rx.samples.iter().all(|p| inside(p.pixel)), "level {}: a sample off its ring", rx.level);
+        assert!(rx.samples.len() as u32 <= s.samples);
+        let lit = rx.samples.iter().filter(|p| p.lit).count();
+        println!("level {}: {} samples, {lit} lit, glossy {}", rx.level, rx.samples.len(), rx.glossy);
+        assert!(rx.glossy, "level {}: the glossy floor is importance sampled", rx.level);
+        // The samples' mean direction from the receiver points up the screen.
+        let mean = rx.samples.iter().map(|p| (p.pixel - centre).normalize_or_zero()).sum::<glam::Vec2>();
+        assert!(mean.y < -0.2 * rx.samples.len() as f32, "level {}: mean direction {mean}", rx.level);
+    }
+    // A pixel off every gather (no Soler stage) is an error, not an empty list.
+    let mut s = LabSettings::default();
+    Technique::Knecht.apply(&mut s);
+    let mut k = Renderer::new(gpu(), default_scene(), s, 32, 32).expect("renderer");
+    k.render_frame();
+    assert!(k.soler_samples((4, 4)).is_err());
+}

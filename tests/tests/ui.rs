@@ -622,6 +622,10 @@ fn soler_settings_buffers_and_reach_appear_in_the_lab() {
         "soler.temporal.warped",
         "soler.temporal.rejection",
         "soler.temporal.a",
+        "soler.level.2.material",
+        "soler.level.2.specular",
+        "soler.specular.accum.0",
+        "soler.bounce.2.specular",
     ] {
         assert!(soler.iter().any(|n| *n == want), "{want} is not registered: {soler:?}");
     }
@@ -647,4 +651,37 @@ fn soler_settings_buffers_and_reach_appear_in_the_lab() {
         assert!(v.error.is_none(), "{n}: {:?}", v.error);
     }
     let _ = h.render().map(|i| i.save(std::env::temp_dir().join("gi_lab_soler_viewer.png")));
+}
+
+/// Soler's Fig. 3 right in the lab: View → "Soler samples overlay" draws the ring samples
+/// behind the pinned pixel, one colour per level, and names the levels' counts.
+#[test]
+fn the_soler_samples_overlay_draws_the_rings_behind_a_pixel() {
+    let dir = temp_dir("soler_overlay");
+    let mut h = harness_in(&dir, egui::vec2(1200.0, 800.0));
+    pause(&mut h);
+    if let Ok(l) = &mut h.state_mut().state.lab {
+        gi_render::pipeline::Technique::Soler.apply(&mut l.settings);
+        l.settings.soler.radius_px = 12.0;
+        l.apply_settings();
+    }
+    h.run_steps(4);
+    let (w, hh) = h.state().renderer().expect("renderer").size();
+    h.state_mut().state.pin_probe((w / 2, hh * 3 / 4));
+    // Level 2's colour (the first gathered level from a quarter start).
+    let cyan = |h: &mut Harness<'static, GiLabApp>| -> usize {
+        let image = h.render().expect("the harness renders");
+        // Anti-aliased dots blend with the image: near-cyan counts.
+        image.pixels().filter(|p| p.0[0] < 80 && p.0[1] > 150 && p.0[2] > 190 && p.0[2] > p.0[1]).count()
+    };
+    let before = cyan(&mut h);
+    h.state_mut().state.show_soler_samples = true;
+    h.run_steps(2);
+    let after = cyan(&mut h);
+    let _ = h.render().map(|i| i.save(std::env::temp_dir().join("gi_lab_soler_overlay.png")));
+    // (The legend is painted text, not a widget: the renderer's replay stands for it.)
+    let pinned = h.state().state.pinned[0].pixel;
+    let rings = h.state().renderer().expect("renderer").soler_samples(pinned).expect("the samples");
+    assert!(rings.iter().any(|r| r.level == 2 && !r.samples.is_empty()), "level 2's ring: {rings:?}");
+    assert!(after > before + 20, "level 2's samples: {before} -> {after} cyan pixels");
 }

@@ -147,6 +147,7 @@ impl GiLabApp {
             show_help: false,
             show_vpls: false,
             show_hcb_samples: false,
+            show_soler_samples: false,
             ab: None,
             request_new_viewer: false,
             request_reset_layout: false,

@@ -161,6 +161,12 @@ impl State {
                      with the count per level, and the covered pixels no sample reached in magenta; \
                      reads the sample list back every frame",
                 );
+                ui.checkbox(&mut self.show_soler_samples, "Soler samples overlay (Fig. 3 right)").on_hover_text(
+                    "the screen-space gather's ring samples behind the pixel under the cursor (or the first \
+                     pinned probe), one colour per mip level: filled where the sample can light the pixel, \
+                     hollow where it cannot (background, facing away, beyond the near field's cut); the \
+                     receiver texel of each level outlined; glossy receivers' samples follow their lobe",
+                );
                 ui.horizontal(|ui| {
                     ui.label("render scale");
                     ui.add(egui::Slider::new(&mut self.session.render_scale, 0.1..=2.0).step_by(0.05))

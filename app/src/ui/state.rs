@@ -57,6 +57,9 @@ pub struct State {
     pub show_vpls: bool,
     /// Draw the HCB's samples over the viewport (Nguyen et al.'s white dots).
     pub show_hcb_samples: bool,
+    /// View → Soler samples overlay: the ring samples of the hovered pixel per level (004
+    /// Fig. 3 right).
+    pub show_soler_samples: bool,
     /// The A/B comparison, when one runs.
     pub ab: Option<crate::ui::ab::Ab>,
     pub hot: crate::ui::hot_reload::HotReload,

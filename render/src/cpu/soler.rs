@@ -360,38 +360,23 @@ pub fn gather_glossy(
 ) -> (Vec3, Vec3) {
     use crate::cpu::soler_glossy as glossy;
     let Some(rx) = level.at(x as i64, y as i64).filter(|t| t.valid()) else { return (Vec3::ZERO, Vec3::ZERO) };
-    let rotation = ring_rotation(x, y, p.level, p.frame);
-    let lobe = gloss.and_then(|g| glossy::receiver_lobe(g, rx.position, rx.normal, cam.eye, rx.material, cam.tan_half));
-    let alpha = gloss.map_or(0.0, |g| g.alpha);
     let v = (cam.eye - rx.position).normalize_or_zero();
     let (mut e, mut spec) = (Vec3::ZERO, Vec3::ZERO);
-    for i in 0..p.samples {
-        let (rho, dp) = ring_radius(i, p.samples, p.radius, p.full_disc);
-        let (phi, weight) = glossy::warp(rotation + i as f32 * GOLDEN_ANGLE, lobe, alpha);
-        let o = ring_offset(rho, phi);
+    for (o, dp) in receiver_samples(rx, x, y, cam, p, gloss) {
         if o == Vec2::ZERO {
             continue;
         }
         let Some(s) = level.at(x as i64 + o.x as i64, y as i64 + o.y as i64).filter(|t| t.valid()) else {
             continue;
         };
-        let d = s.position - rx.position;
-        let r2 = d.length_squared();
-        if r2 <= 0.0 || (p.near_cut > 0.0 && r2 >= p.near_cut * p.near_cut) {
-            continue;
-        }
-        let w = d / r2.sqrt();
-        let (cos_t, cos_tp) = (rx.normal.dot(w).max(0.0), (-s.normal.dot(w)).max(0.0));
-        if cos_t <= 0.0 || cos_tp <= 0.0 {
-            continue;
-        }
+        let Some((w, r2, cos_t, cos_tp)) = facing(rx, s, p.near_cut) else { continue };
         if let Some((g, bias_px, depth_bias)) = vis {
             let (a, b) = ((x as i64, y as i64), (x as i64 + o.x as i64, y as i64 + o.y as i64));
             if !march_visible(g, a, rx.depth, b, s.depth, bias_px, depth_bias) {
                 continue;
             }
         }
-        let ds = surface_area(s, dp * weight, cam, p.min_cos_beta);
+        let ds = surface_area(s, dp, cam, p.min_cos_beta);
         let light = s.radiance * kernel(cos_t, cos_tp, ds, r2, p.disc);
         e += light;
         if gloss.is_some() {
@@ -399,6 +384,43 @@ pub fn gather_glossy(
         }
     }
     (e, spec)
+}
+
+/// The ring samples of receiver `rx` at texel (x, y) (Fig. 3): each one's texel offset and
+/// the screen area it stands for (dP, or dP / (2π p(θ)) where `gloss` importance samples
+/// the receiver).
+pub fn receiver_samples(
+    rx: &Texel,
+    x: u32,
+    y: u32,
+    cam: &ScreenCamera,
+    p: GatherParams,
+    gloss: Option<&crate::cpu::soler_glossy::Gloss>,
+) -> Vec<(Vec2, f32)> {
+    use crate::cpu::soler_glossy as glossy;
+    let rotation = ring_rotation(x, y, p.level, p.frame);
+    let lobe = gloss.and_then(|g| glossy::receiver_lobe(g, rx.position, rx.normal, cam.eye, rx.material, cam.tan_half));
+    let alpha = gloss.map_or(0.0, |g| g.alpha);
+    (0..p.samples)
+        .map(|i| {
+            let (rho, dp) = ring_radius(i, p.samples, p.radius, p.full_disc);
+            let (phi, weight) = glossy::warp(rotation + i as f32 * GOLDEN_ANGLE, lobe, alpha);
+            (ring_offset(rho, phi), dp * weight)
+        })
+        .collect()
+}
+
+/// Whether sender `s` can light receiver `rx` (Eq. 1's cosines both positive, closer than
+/// the near field's cut when there is one): the unit direction to it, r², cos θ and cos θ'.
+pub fn facing(rx: &Texel, s: &Texel, near_cut: f32) -> Option<(Vec3, f32, f32, f32)> {
+    let d = s.position - rx.position;
+    let r2 = d.length_squared();
+    if r2 <= 0.0 || (near_cut > 0.0 && r2 >= near_cut * near_cut) {
+        return None;
+    }
+    let w = d / r2.sqrt();
+    let (cos_t, cos_tp) = (rx.normal.dot(w).max(0.0), (-s.normal.dot(w)).max(0.0));
+    (cos_t > 0.0 && cos_tp > 0.0).then_some((w, r2, cos_t, cos_tp))
 }
 
 /// The σ of the upsampling's range weights (joint bilateral upsampling, Kopf et al.).

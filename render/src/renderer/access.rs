@@ -244,6 +244,7 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         | "soler/voxel_view.wgsl"
         | "soler/temporal.wgsl"
         | "soler/bounces.wgsl"
+        | "soler/glossy.wgsl"
         | "soler/voxel_common.wgsl" => "soler",
         _ => return None,
     })

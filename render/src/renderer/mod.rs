@@ -3,6 +3,8 @@
 //! with them; `checks` refuses what the device cannot hold; `access` reads results back.
 
 mod access;
+mod soler_samples;
+pub use soler_samples::{SolerReceiver, SolerSample};
 pub mod checks;
 
 use glam::Mat4;

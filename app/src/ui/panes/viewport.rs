@@ -24,6 +24,9 @@ pub(super) fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
     if st.show_hcb_samples {
         hcb_overlay(st, ui, rect);
     }
+    if st.show_soler_samples {
+        soler_overlay(st, ui, rect);
+    }
     if !st.hot.errors.is_empty() {
         // The compile error stays on screen until the file is fixed.
         let text: Vec<String> = st.hot.errors.iter().map(|(f, e)| format!("{f}: {e}")).collect();
@@ -154,6 +157,67 @@ fn hcb_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
         }
     }
     text(stats.summary(w * h));
+}
+
+/// Level colours of the Soler samples overlay (level k: `LEVEL_COLOURS[k % 6]`).
+const LEVEL_COLOURS: [egui::Color32; 6] = [
+    egui::Color32::from_rgb(255, 255, 255),
+    egui::Color32::from_rgb(255, 220, 0),
+    egui::Color32::from_rgb(0, 220, 255),
+    egui::Color32::from_rgb(255, 80, 200),
+    egui::Color32::from_rgb(120, 255, 80),
+    egui::Color32::from_rgb(255, 140, 40),
+];
+
+/// Soler et al.'s Fig. 3 right over the viewport: the ring samples of the hovered pixel (or
+/// the first pinned probe) at every gathered level, coloured by level, filled where the
+/// sample can light the pixel, with each level's receiver texel outlined and a legend.
+fn soler_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
+    let Ok(l) = &st.lab else { return };
+    let painter = ui.painter_at(rect);
+    let text = |s: String| {
+        let galley = painter.layout_no_wrap(s, egui::FontId::proportional(14.0), egui::Color32::WHITE);
+        let pos = rect.left_bottom() + egui::vec2(8.0, -8.0 - galley.size().y);
+        painter.rect_filled(
+            egui::Rect::from_min_size(pos, galley.size()).expand(4.0),
+            3.0,
+            egui::Color32::from_black_alpha(200),
+        );
+        painter.galley(pos, galley, egui::Color32::WHITE);
+    };
+    let Some(pixel) = st.pinned.first().map(|p| p.pixel).or(st.hover) else {
+        text("Soler samples: hover the image (or pin a probe) to see the samples behind a pixel".into());
+        return;
+    };
+    let receivers = match l.renderer.soler_samples(pixel) {
+        Ok(r) => r,
+        Err(e) => return text(format!("Soler samples: {e}")),
+    };
+    let (w, h) = l.renderer.size();
+    let scale = egui::vec2(rect.width() / w.max(1) as f32, rect.height() / h.max(1) as f32);
+    let at = |p: glam::Vec2| rect.min + egui::vec2(p.x * scale.x, p.y * scale.y);
+    let mut legend = Vec::new();
+    for r in &receivers {
+        let colour = LEVEL_COLOURS[r.level as usize % LEVEL_COLOURS.len()];
+        for smp in &r.samples {
+            if smp.lit {
+                painter.circle_filled(at(smp.pixel), 2.5, colour);
+            } else {
+                painter.circle_stroke(at(smp.pixel), 2.5, egui::Stroke::new(1.0, colour));
+            }
+        }
+        let fp = egui::Rect::from_min_max(at(r.footprint.0), at(r.footprint.1));
+        painter.rect_stroke(fp, 0.0, egui::Stroke::new(1.5, colour), egui::StrokeKind::Outside);
+        let lit = r.samples.iter().filter(|s| s.lit).count();
+        let gloss = if r.glossy { ", glossy lobe" } else { "" };
+        legend.push(format!("level {}: {lit}/{} lit{gloss}", r.level, r.samples.len()));
+    }
+    let pos = rect.min + egui::vec2((pixel.0 as f32 + 0.5) * scale.x, (pixel.1 as f32 + 0.5) * scale.y);
+    painter.circle_stroke(pos, 4.0, egui::Stroke::new(2.0, egui::Color32::RED));
+    if legend.is_empty() {
+        legend.push("the pixel is background at every level".into());
+    }
+    text(format!("Soler samples of pixel ({}, {}) — {}", pixel.0, pixel.1, legend.join(" · ")));
 }
 
 /// The A/B comparison drawn over the viewport: B right of a draggable divider, or the

@@ -19,7 +19,9 @@
 //! angles from the paper's importance function (`shaders/soler/glossy.wgsl`, CPU twin
 //! `cpu::soler_glossy`), and the specular light goes up its own upsampling chain.
 //!
-//! Not built yet (issue #16): the sample overlay and the mix with the HCB's samples.
+//! The lab's sample overlay (Fig. 3 right) replays a pixel's rings: `Renderer::soler_samples`.
+//!
+//! Not built yet (issue #16): the mix with the HCB's samples.
 
 use crate::{settings_enum, settings_group};
 
