@@ -135,6 +135,14 @@ fn indirect_light(
     // joint bilateral upsampling (stage 6), and the warped blend of Eq. 6 (stage 7) when
     // `pipeline.temporal` is WarpedBlend; no VPLs.
     if p.gather == Gather::ScreenSpace {
+        // GI Lab's mix with Nguyen et al.: the ring gather at the HCB's samples, splatted by
+        // coherence (stage 5 HcbSamples, stage 6 CoherenceSplatting).
+        if p.shading_points == ShadingPoints::HcbSamples {
+            let (hcb, soler) = (x.hcb.as_ref()?, x.soler.as_ref()?);
+            hcb.build_only(f, enc, timer);
+            soler.gather_at_samples(f, enc, timer, hcb.sample_buffers());
+            return Some(hcb.splat_only(f, enc, timer));
+        }
         return Some(x.soler.as_mut()?.run(f, enc, timer));
     }
 

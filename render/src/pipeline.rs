@@ -176,12 +176,15 @@ settings_enum! {
         /// Soler's screen-space gather for the near field, Knecht's instant radiosity for the
         /// far field (`pipeline.near_field`; split at `soler.near_field_distance`).
         SolerNearKnechtFar = "near field Soler, far field Knecht",
+        /// Soler's screen-space gather evaluated at the HCB's samples and spread by coherence
+        /// splatting (GI Lab's mix of Nguyen et al. and Soler et al.).
+        SolerAtHcbSamples = "screen-space gather at HCB samples (Nguyen + Soler)",
     }
     default DirectOnly
 }
 
 impl Technique {
-    pub const ALL: [Technique; 7] = [
+    pub const ALL: [Technique; 8] = [
         Self::DirectOnly,
         Self::Knecht,
         Self::Nguyen,
@@ -189,6 +192,7 @@ impl Technique {
         Self::ExactVpl,
         Self::Soler,
         Self::SolerNearKnechtFar,
+        Self::SolerAtHcbSamples,
     ];
 
     /// The technique's stage choices. `base` gives the choices the technique leaves open
@@ -237,6 +241,12 @@ impl Technique {
             Self::SolerNearKnechtFar => {
                 PipelineSettings { near_field: NearField::ScreenSpace, ..Self::Knecht.choices(base) }
             }
+            Self::SolerAtHcbSamples => PipelineSettings {
+                shading_points: ShadingPoints::HcbSamples,
+                reconstruction: Reconstruction::CoherenceSplatting,
+                temporal: Temporal::None,
+                ..Self::Soler.choices(base)
+            },
         }
     }
 
@@ -298,7 +308,8 @@ impl PipelineSettings {
 
     /// Whether the HCB's passes run (its samples are the shading points).
     pub fn uses_hcb(&self) -> bool {
-        self.uses_knecht_vpls() && self.shading_points == ShadingPoints::HcbSamples
+        (self.uses_knecht_vpls() || self.gather == Gather::ScreenSpace)
+            && self.shading_points == ShadingPoints::HcbSamples
     }
 
     /// Whether the settings group `group` acts on the image with these choices (the panel
@@ -333,16 +344,29 @@ pub fn combination_errors(s: &LabSettings) -> Vec<FieldError> {
         return errors;
     }
     if p.gather == Gather::ScreenSpace {
-        // Soler et al.'s gather runs on the mip levels and is combined by the upsampling;
-        // it reads the direct light, not VPLs (stages 3–4 are idle).
-        if p.shading_points != ShadingPoints::MipLevels {
-            err("shading_points", "the screen-space gather samples rings on the mip levels: set pipeline.shading_points = MipLevels (the gather at HCB samples is not built yet)".into());
-        }
-        if p.reconstruction != Reconstruction::BilateralUpsampling {
-            err("reconstruction", "the screen-space gather's levels are combined by joint bilateral upsampling: set pipeline.reconstruction = BilateralUpsampling".into());
-        }
-        if !matches!(p.temporal, Temporal::None | Temporal::WarpedBlend) {
-            err("temporal", "the screen-space gather is filtered by Eq. 6's warped blend (WarpedBlend) or not at all (None); the other temporal choices belong to VPL gathers".into());
+        // Soler et al.'s gather runs on the mip levels and is combined by the upsampling, or
+        // (GI Lab's mix with Nguyen et al.) at the HCB's samples, splatted by coherence; it
+        // reads the direct light, not VPLs (stages 3–4 are idle).
+        if p.shading_points == ShadingPoints::HcbSamples {
+            if p.reconstruction != Reconstruction::CoherenceSplatting {
+                err("reconstruction", "the screen-space gather at HCB samples is spread by coherence splatting: set pipeline.reconstruction = CoherenceSplatting".into());
+            }
+            if p.temporal != Temporal::None {
+                err("temporal", "the screen-space gather at HCB samples has no temporal choice yet (the sample cache re-gathers with VPLs, Eq. 6 filters the per-pixel gather): set pipeline.temporal = None".into());
+            }
+            if s.soler.bounces > 1 {
+                err("gather", "the screen-space gather at HCB samples gathers one bounce (a second bounce needs the first one at every pixel): set soler.bounces = 1".into());
+            }
+        } else {
+            if p.shading_points != ShadingPoints::MipLevels {
+                err("shading_points", "the screen-space gather samples rings on the mip levels (MipLevels) or at the HCB's samples (HcbSamples)".into());
+            }
+            if p.reconstruction != Reconstruction::BilateralUpsampling {
+                err("reconstruction", "the screen-space gather's levels are combined by joint bilateral upsampling: set pipeline.reconstruction = BilateralUpsampling".into());
+            }
+            if !matches!(p.temporal, Temporal::None | Temporal::WarpedBlend) {
+                err("temporal", "the screen-space gather is filtered by Eq. 6's warped blend (WarpedBlend) or not at all (None); the other temporal choices belong to VPL gathers".into());
+            }
         }
         if p.near_field != NearField::None {
             err("near_field", "the screen-space gather already takes the light from every distance; a near field splits a VPL gather: set pipeline.near_field = None or pipeline.gather = Vpl".into());

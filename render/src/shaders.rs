@@ -61,6 +61,8 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("soler/temporal.wgsl", include_str!("../../shaders/soler/temporal.wgsl")),
     ("soler/bounces.wgsl", include_str!("../../shaders/soler/bounces.wgsl")),
     ("soler/glossy.wgsl", include_str!("../../shaders/soler/glossy.wgsl")),
+    ("soler/ring.wgsl", include_str!("../../shaders/soler/ring.wgsl")),
+    ("soler/hcb_gather.wgsl", include_str!("../../shaders/soler/hcb_gather.wgsl")),
     ("view/view.wgsl", include_str!("../../shaders/view/view.wgsl")),
     ("view/probe.wgsl", include_str!("../../shaders/view/probe.wgsl")),
 ];
@@ -106,6 +108,7 @@ pub const ENTRY_MODULES: &[&str] = &[
     "soler/voxel_view.wgsl",
     "soler/temporal.wgsl",
     "soler/bounces.wgsl",
+    "soler/hcb_gather.wgsl",
     "view/view.wgsl",
     "view/probe.wgsl",
 ];

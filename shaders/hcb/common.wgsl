@@ -42,6 +42,14 @@ fn indirect_words(instances: u32, items: u32) -> array<u32, 8> {
     return array<u32, 8>(6u, instances, 0u, 0u, min(groups, 65535u), max((groups + 65534u) / 65535u, 1u), 1u, 0u);
 }
 
+// The 12 words of the HCB's indirect arguments: the splat draw over `n` samples, the gather
+// dispatch over `items`, a spare word, and the draw over the samples after the `cached`
+// first ones (§5.2).
+fn hcb_args(n: u32, items: u32, cached: u32) -> array<u32, 12> {
+    let w = indirect_words(n, items);
+    return array<u32, 12>(w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7], 6u, n - min(cached, n), 0u, 0u);
+}
+
 // Corner of vertex `v` of a quad drawn as two triangles (6 vertices), in [−1, 1]².
 fn quad_corner(v: u32) -> vec2<f32> {
     var corners = array<vec2<f32>, 6>(

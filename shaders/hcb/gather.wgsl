@@ -73,15 +73,10 @@ fn gather_slot(i: u32) -> u32 {
 
 @compute @workgroup_size(1, 1, 1)
 fn cs_args() {
-    let n = sample_count();
-    var words = indirect_words(n, gather_count());
-    for (var i = 0u; i < 8u; i = i + 1u) {
+    let words = hcb_args(sample_count(), gather_count(), counter[1]);
+    for (var i = 0u; i < 12u; i = i + 1u) {
         args[i] = words[i];
     }
-    args[8] = 6u;
-    args[9] = n - min(counter[1], n);
-    args[10] = 0u;
-    args[11] = 0u;
 }
 
 @compute @workgroup_size(64, 1, 1)

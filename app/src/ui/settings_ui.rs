@@ -240,7 +240,7 @@ pub const TECHNIQUES: &[Technique] = &[
     },
     Technique {
         name: "Screen-space mip levels (Soler)",
-        source: "Soler et al. 004 §3–4: voted mip levels, ring gather with the point-to-disc form factor, joint bilateral upsampling (no visibility or temporal filtering yet)",
+        source: "Soler et al. 004 §3–4: voted mip levels, ring gather with the point-to-disc form factor, joint bilateral upsampling, Eq. 6's temporal filter (visibility, bounces and the glossy reflection are settings)",
         apply: |s| Choices::Soler.apply(s),
         is: |s| Choices::of(&s.pipeline) == Some(Choices::Soler),
     },
@@ -249,6 +249,12 @@ pub const TECHNIQUES: &[Technique] = &[
         source: "GI Lab's mix: Soler et al. 004 for senders closer than soler.near_field_distance, Knecht 002's instant radiosity beyond it",
         apply: |s| Choices::SolerNearKnechtFar.apply(s),
         is: |s| Choices::of(&s.pipeline) == Some(Choices::SolerNearKnechtFar),
+    },
+    Technique {
+        name: "Screen-space gather at HCB samples (Nguyen + Soler)",
+        source: "GI Lab's mix: Soler et al. 004's rings of every level gathered at Nguyen et al. 000's HCB samples only, spread by coherence splatting",
+        apply: |s| Choices::SolerAtHcbSamples.apply(s),
+        is: |s| Choices::of(&s.pipeline) == Some(Choices::SolerAtHcbSamples),
     },
 ];
 

@@ -358,8 +358,43 @@ pub fn gather_glossy(
     vis: Option<(&VoxelGrid, f32, f32)>,
     gloss: Option<&crate::cpu::soler_glossy::Gloss>,
 ) -> (Vec3, Vec3) {
-    use crate::cpu::soler_glossy as glossy;
     let Some(rx) = level.at(x as i64, y as i64).filter(|t| t.valid()) else { return (Vec3::ZERO, Vec3::ZERO) };
+    gather_for(level, x, y, rx, cam, p, vis, gloss)
+}
+
+/// GI Lab's mix with Nguyen et al. (`shaders/soler/hcb_gather.wgsl`): the irradiance one
+/// level sends a point `x` (an HCB sample: its position, normal and view depth) that lies
+/// under G-buffer pixel `pixel`: the ring of the level's texel `pixel >> level` with `x` as
+/// the receiver. The sample's irradiance is the sum over the gathered levels.
+pub fn gather_at(
+    level: &Level,
+    pixel: (u32, u32),
+    x: &Texel,
+    cam: &ScreenCamera,
+    p: GatherParams,
+    vis: Option<(&VoxelGrid, f32, f32)>,
+) -> Vec3 {
+    let q = (
+        (pixel.0 >> p.level).min(level.width.saturating_sub(1)),
+        (pixel.1 >> p.level).min(level.height.saturating_sub(1)),
+    );
+    gather_for(level, q.0, q.1, x, cam, p, vis, None).0
+}
+
+/// The ring of texel (x, y) of `level` gathered at receiver `rx` (the texel itself, or a
+/// point under it): the irradiance and, with `gloss`, the glossy reflection.
+#[allow(clippy::too_many_arguments)]
+fn gather_for(
+    level: &Level,
+    x: u32,
+    y: u32,
+    rx: &Texel,
+    cam: &ScreenCamera,
+    p: GatherParams,
+    vis: Option<(&VoxelGrid, f32, f32)>,
+    gloss: Option<&crate::cpu::soler_glossy::Gloss>,
+) -> (Vec3, Vec3) {
+    use crate::cpu::soler_glossy as glossy;
     let v = (cam.eye - rx.position).normalize_or_zero();
     let (mut e, mut spec) = (Vec3::ZERO, Vec3::ZERO);
     for (o, dp) in receiver_samples(rx, x, y, cam, p, gloss) {

@@ -245,6 +245,8 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         | "soler/temporal.wgsl"
         | "soler/bounces.wgsl"
         | "soler/glossy.wgsl"
+        | "soler/ring.wgsl"
+        | "soler/hcb_gather.wgsl"
         | "soler/voxel_common.wgsl" => "soler",
         _ => return None,
     })
@@ -274,6 +276,7 @@ pub fn scope_output(scope: &str) -> Option<&'static str> {
         "interleave.filter" => "indirect.filtered",
         "hcb.build" => "hcb.samples",
         "hcb.gather" => "hcb.samples",
+        "soler.hcb_gather" => "hcb.samples",
         "hcb.splat" => "hcb.indirect",
         "hcb.cache.update" => "hcb.cache",
         "hcb.cache.recompute" => "hcb.recompute_group",

@@ -207,6 +207,36 @@ impl HcbStage {
         crate::passes::view(&self.splat.indirect, "hcb.indirect")
     }
 
+    /// Stage 5 without VPLs (the mix with Soler's screen-space gather, which refuses the
+    /// cache): the levels, masks and samples of this frame.
+    pub fn build_only(&self, f: &FrameInputs, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) {
+        let (ctx, g, hf) = (f.ctx, f.gbuffer, Self::frame(f));
+        let build = &self.build;
+        timer.scope(ctx, enc, "hcb.build", |e, slot| build.run(ctx, e, slot, &g.position, &g.normal, hf, None));
+    }
+
+    /// The buffers another gather fills at the samples: the list, its counter and the
+    /// indirect arguments of the splat.
+    pub fn sample_buffers(&self) -> (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer) {
+        (&self.build.list, &self.build.counter, &self.gather.args)
+    }
+
+    /// Stage 6's coherence splatting (§4.2–4.3) of samples another gather lit; returns
+    /// `hcb.indirect`.
+    pub fn splat_only(
+        &self,
+        f: &FrameInputs,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+    ) -> wgpu::TextureView {
+        let (ctx, g, hf) = (f.ctx, f.gbuffer, Self::frame(f));
+        let (camera, g3) = (f.camera_buffer, (&g.position, &g.normal, &g.albedo));
+        let samples = (&self.build.list, &self.build.counter);
+        let (splat, args) = (&self.splat, &self.gather.args);
+        timer.scope(ctx, enc, "hcb.splat", |e, slot| splat.run(ctx, e, slot, camera, g3, samples, args, hf));
+        crate::passes::view(&self.splat.indirect, "hcb.indirect")
+    }
+
     /// The statistics of the last frame (Table 1; blocks until the data is on the CPU).
     pub fn stats(&self, ctx: &GpuContext, d_max: f32) -> Option<HcbStats> {
         use crate::buffers::read_storage;

@@ -66,7 +66,7 @@ pub struct SolerGather {
     pub specular: Vec<wgpu::Texture>,
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::ComputePipeline,
-    params: wgpu::Buffer,
+    pub(super) params: wgpu::Buffer,
 }
 
 impl SolerGather {

@@ -21,12 +21,14 @@
 //!
 //! The lab's sample overlay (Fig. 3 right) replays a pixel's rings: `Renderer::soler_samples`.
 //!
-//! Not built yet (issue #16): the mix with the HCB's samples.
+//! The mix with Nguyen et al. (`hcb_gather`): the rings of every level gathered at the HCB's
+//! samples, spread by its coherence splatting (`Technique::SolerAtHcbSamples`).
 
 use crate::{settings_enum, settings_group};
 
 pub mod bounces;
 pub mod gather;
+pub mod hcb_gather;
 pub mod pyramid;
 pub mod stage;
 pub mod temporal;

@@ -4,6 +4,7 @@
 
 use super::bounces::SolerBounces;
 use super::gather::{GatherParams, LevelInputs, SolerGather};
+use super::hcb_gather::SolerHcbGather;
 use super::pyramid::{SolerPyramid, sizes};
 use super::temporal::SolerTemporal;
 use super::upsample::{SolerUpsample, Step};
@@ -21,6 +22,8 @@ pub struct SolerStage {
     pub voxels: SolerVoxels,
     /// Multi-bounce: every bounce's light and their sum.
     pub bounces: SolerBounces,
+    /// The gather at the HCB's samples (the mix with Nguyen et al.).
+    pub hcb_gather: SolerHcbGather,
     /// Eq. 6's temporal filtering, when stage 7 filters this stage's light
     /// (`PipelineSettings::soler_temporal`).
     pub temporal: Option<SolerTemporal>,
@@ -45,6 +48,7 @@ impl SolerStage {
             upsample: SolerUpsample::new(ctx, &all_sizes(width, height, top)[..top as usize]),
             voxels: SolerVoxels::new(ctx),
             bounces: SolerBounces::new(ctx),
+            hcb_gather: SolerHcbGather::new(ctx),
             temporal: None,
             open_meshes: Vec::new(),
         };
@@ -117,22 +121,7 @@ impl SolerStage {
         let all = all_sizes(f.gbuffer_size.0, f.gbuffer_size.1, top);
         // Visibility (004 §4): the scene voxelized from the camera, one grid per level, shared
         // by the bounces.
-        let z = super::voxels::depth_range(
-            f.camera.position,
-            f.camera.forward(),
-            f.center,
-            f.radius,
-            f.camera.znear,
-            s.voxel_depth_from,
-            s.voxel_depth_to,
-        );
-        let voxel_params = self.voxels.params_of(z, s.voxel_slices.clamp(32, 128), s.voxel_view_slice);
-        if !voxel_params.is_empty() {
-            timer.scope(ctx, enc, "soler.voxels", |e, slot| {
-                let (cam, scene, state) = (f.camera_buffer, f.gpu_scene, f.state);
-                self.voxels.run(ctx, e, slot, cam, scene, state, &voxel_params, f.gbuffer_size)
-            });
-        }
+        let voxel_params = self.voxelize(f, enc, timer);
         let bounces = Self::bounces_of_frame(s, f.frame);
         // Per bounce gathered, the grids its levels march (none after the first bounce unless
         // `visibility_all_bounces`).
@@ -140,30 +129,7 @@ impl SolerStage {
             .iter()
             .map(|&b| if b == 0 || s.visibility_all_bounces { voxel_params.clone() } else { Vec::new() })
             .collect();
-        let aspect = f.gbuffer_size.0 as f32 / f.gbuffer_size.1.max(1) as f32;
-        let tan_v = (0.5 * f.camera.yfov).tan();
-        let base = GatherParams {
-            counts: [s.samples, 0, 0, f.frame],
-            shape: [
-                s.radius_px,
-                (s.form_factor == FormFactor::PointToDisc) as u32 as f32,
-                s.min_cos_beta,
-                f.near_field_cut() * f.near_field_cut(),
-            ],
-            eye: f.camera.position.extend(1.0).to_array(),
-            screen: [aspect * tan_v, tan_v, 0.0, 0.0],
-            voxels: VoxelParams::default(),
-            march: [s.march_bias_px, s.march_depth_bias, 0.0, 0.0],
-            gloss: [
-                s.glossy_alpha,
-                s.glossy_sharpness,
-                s.glossy_min_power,
-                (s.glossy_reflection as u32 + 2 * (s.glossy_reflection && s.glossy_sampling) as u32) as f32,
-            ],
-            right: f.camera.right().extend(0.0).to_array(),
-            up: f.camera.right().cross(f.camera.forward()).extend(0.0).to_array(),
-            forward: f.camera.forward().extend(0.0).to_array(),
-        };
+        let base = gather_base(f);
         let levels: Vec<(u32, (u32, u32))> = s.gathered_levels().map(|k| (k, all[k as usize])).collect();
         self.gather.write_params(ctx, &levels, base, &grids);
         let bounce_views: Vec<wgpu::TextureView> =
@@ -190,6 +156,101 @@ impl SolerStage {
         }
     }
 
+    /// The voxel grids of the frame (004 §4 "Visibility"), built when visibility is on; their
+    /// parameters per gathered level (empty when off).
+    fn voxelize(&self, f: &FrameInputs, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) -> Vec<VoxelParams> {
+        let s = &f.settings.soler;
+        let z = super::voxels::depth_range(
+            f.camera.position,
+            f.camera.forward(),
+            f.center,
+            f.radius,
+            f.camera.znear,
+            s.voxel_depth_from,
+            s.voxel_depth_to,
+        );
+        let voxel_params = self.voxels.params_of(z, s.voxel_slices.clamp(32, 128), s.voxel_view_slice);
+        if !voxel_params.is_empty() {
+            timer.scope(f.ctx, enc, "soler.voxels", |e, slot| {
+                let (cam, scene, state) = (f.camera_buffer, f.gpu_scene, f.state);
+                self.voxels.run(f.ctx, e, slot, cam, scene, state, &voxel_params, f.gbuffer_size)
+            });
+        }
+        voxel_params
+    }
+
+    /// GI Lab's mix with Nguyen et al. (`shading_points = HcbSamples`): the pyramid of the
+    /// direct light and the ring gather of every level at each sample of the HCB's `list`
+    /// (`hcb_gather`), which also writes the HCB's indirect arguments `args` for the splat.
+    pub fn gather_at_samples(
+        &self,
+        f: &FrameInputs,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        hcb: (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
+    ) {
+        let s = &f.settings.soler;
+        let (ctx, g) = (f.ctx, f.gbuffer);
+        let top = s.gathered_levels().end - 1;
+        let all = all_sizes(f.gbuffer_size.0, f.gbuffer_size.1, top);
+        let voxel_params = self.voxelize(f, enc, timer);
+        let levels: Vec<(u32, (u32, u32))> = s.gathered_levels().map(|k| (k, all[k as usize])).collect();
+        self.gather.write_params(ctx, &levels, gather_base(f), std::slice::from_ref(&voxel_params));
+        if !self.pyramid.levels.is_empty() {
+            let sigma = [s.vote_sigma_pixel, s.vote_sigma_normal, s.vote_sigma_depth];
+            let radiance = f.direct_radiance;
+            timer.scope(ctx, enc, "soler.pyramid", |e, slot| {
+                self.pyramid.run(ctx, e, slot, sigma, &g.position, &g.normal, radiance, &g.material)
+            });
+        }
+        let lv = self.level_views();
+        let inputs = self.level_inputs(f, f.direct_radiance, &lv, &voxel_params, &all);
+        let params = &self.gather.params;
+        timer.scope(ctx, enc, "soler.hcb_gather", |e, slot| self.hcb_gather.run(ctx, e, slot, params, &inputs, hcb));
+    }
+
+    /// Views of pyramid levels 1 … top: position, normal, radiance, material.
+    fn level_views(&self) -> Vec<[wgpu::TextureView; 4]> {
+        let view = |t: &wgpu::Texture| crate::passes::view(t, "soler.level.view");
+        self.pyramid
+            .levels
+            .iter()
+            .map(|l| [view(&l.position), view(&l.normal), view(&l.radiance), view(&l.material)])
+            .collect()
+    }
+
+    /// The gathered levels' inputs: level 0 is the G-buffer with `radiance`, level k ≥ 1 the
+    /// pyramid's (`lv`, from [`Self::level_views`]); `grids` the voxel grids they march.
+    fn level_inputs<'a>(
+        &'a self,
+        f: &'a FrameInputs,
+        radiance: &'a wgpu::TextureView,
+        lv: &'a [[wgpu::TextureView; 4]],
+        grids: &[VoxelParams],
+        all: &[(u32, u32)],
+    ) -> Vec<LevelInputs<'a>> {
+        let g = f.gbuffer;
+        f.settings
+            .soler
+            .gathered_levels()
+            .enumerate()
+            .map(|(i, k)| {
+                let [position, normal, radiance, material] = match k {
+                    0 => [&g.position, &g.normal, radiance, &g.material],
+                    _ => {
+                        let v = &lv[k as usize - 1];
+                        [&v[0], &v[1], &v[2], &v[3]]
+                    }
+                };
+                let (grid, voxels) = match (self.voxels.grids.get(i), grids.get(i)) {
+                    (Some(g), Some(p)) => (&g.buffer, *p),
+                    _ => (&self.voxels.empty, VoxelParams::default()),
+                };
+                LevelInputs { level: k, position, normal, radiance, material, size: all[k as usize], grid, voxels }
+            })
+            .collect()
+    }
+
     /// One bounce: the pyramid of `radiance`, the gather of every level (timing scopes
     /// `{prefix}.gather.k`) and the upsampling into `soler.indirect`. `slot.0` is the bounce's
     /// index among the frame's gathers (its parameter slots), `slot.1` the level sizes.
@@ -214,13 +275,7 @@ impl SolerStage {
             });
         }
         let view = |t: &wgpu::Texture| crate::passes::view(t, "soler.level.view");
-        // Views of levels 1 … top: position, normal, radiance, material.
-        let lv: Vec<[wgpu::TextureView; 4]> = self
-            .pyramid
-            .levels
-            .iter()
-            .map(|l| [view(&l.position), view(&l.normal), view(&l.radiance), view(&l.material)])
-            .collect();
+        let lv = self.level_views();
         let level_views = |k: u32| -> [&wgpu::TextureView; 4] {
             if k == 0 {
                 [&g.position, &g.normal, radiance, &g.material]
@@ -229,18 +284,7 @@ impl SolerStage {
                 [&v[0], &v[1], &v[2], &v[3]]
             }
         };
-        let inputs: Vec<LevelInputs> = s
-            .gathered_levels()
-            .enumerate()
-            .map(|(i, k)| {
-                let [position, normal, radiance, material] = level_views(k);
-                let (grid, voxels) = match (self.voxels.grids.get(i), grids.get(i)) {
-                    (Some(g), Some(p)) => (&g.buffer, *p),
-                    _ => (&self.voxels.empty, VoxelParams::default()),
-                };
-                LevelInputs { level: k, position, normal, radiance, material, size: all[k as usize], grid, voxels }
-            })
-            .collect();
+        let inputs = self.level_inputs(f, radiance, &lv, grids, all);
         let n = inputs.len();
         for (i, l) in inputs.iter().enumerate() {
             timer.scope(ctx, enc, &format!("{prefix}.gather.{}", l.level), |e, slot| {
@@ -302,4 +346,34 @@ fn chain<'v>(
             }
         })
         .collect()
+}
+
+/// The gather's parameters shared by every level and bounce of the frame (level, size and
+/// grid are set per slot by `SolerGather::write_params`).
+fn gather_base(f: &FrameInputs) -> GatherParams {
+    let s = &f.settings.soler;
+    let aspect = f.gbuffer_size.0 as f32 / f.gbuffer_size.1.max(1) as f32;
+    let tan_v = (0.5 * f.camera.yfov).tan();
+    GatherParams {
+        counts: [s.samples, 0, 0, f.frame],
+        shape: [
+            s.radius_px,
+            (s.form_factor == FormFactor::PointToDisc) as u32 as f32,
+            s.min_cos_beta,
+            f.near_field_cut() * f.near_field_cut(),
+        ],
+        eye: f.camera.position.extend(1.0).to_array(),
+        screen: [aspect * tan_v, tan_v, 0.0, 0.0],
+        voxels: VoxelParams::default(),
+        march: [s.march_bias_px, s.march_depth_bias, 0.0, 0.0],
+        gloss: [
+            s.glossy_alpha,
+            s.glossy_sharpness,
+            s.glossy_min_power,
+            (s.glossy_reflection as u32 + 2 * (s.glossy_reflection && s.glossy_sampling) as u32) as f32,
+        ],
+        right: f.camera.right().extend(0.0).to_array(),
+        up: f.camera.right().cross(f.camera.forward()).extend(0.0).to_array(),
+        forward: f.camera.forward().extend(0.0).to_array(),
+    }
 }

@@ -1,0 +1,111 @@
+//! GI Lab's mix of Nguyen et al. and Soler et al. (issue #16 "Mixes"): stage 6's
+//! screen-space gather at stage 5's HCB samples (`pipeline.shading_points = HcbSamples`,
+//! `gather = ScreenSpace`, `reconstruction = CoherenceSplatting`). Every sample of the HCB's
+//! list sums the rings of Soler's gathered levels around its pixel with itself as the
+//! receiver (`shaders/soler/hcb_gather.wgsl`, one dispatch per level; CPU twin
+//! `cpu::soler::gather_at`), and the HCB's coherence splatting spreads the result.
+
+use super::gather::{GatherParams, LevelInputs};
+use crate::gpu::GpuContext;
+use crate::passes::bgl;
+use crate::timing::Slot;
+
+pub struct SolerHcbGather {
+    layout: wgpu::BindGroupLayout,
+    args_layout: wgpu::BindGroupLayout,
+    args_pipeline: wgpu::ComputePipeline,
+    pipeline: wgpu::ComputePipeline,
+}
+
+impl SolerHcbGather {
+    pub fn new(ctx: &GpuContext) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("soler.hcb_gather.inputs"),
+            entries: &[
+                bgl::uniform_dynamic(0, cs),
+                bgl::texture(1, cs, false),
+                bgl::texture(2, cs, false),
+                bgl::texture(3, cs, false),
+                bgl::storage(4, cs, true),
+                bgl::storage(5, cs, true),
+                bgl::storage(6, cs, false),
+            ],
+        });
+        let args_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("soler.hcb_gather.args"),
+            entries: &[bgl::storage(0, cs, false)],
+        });
+        let module = crate::shaders::create_module(device, "soler/hcb_gather.wgsl");
+        let args_pipeline = crate::passes::compute_pipeline(
+            device,
+            "soler.hcb_gather.args",
+            &module,
+            "cs_args",
+            &[&layout, &args_layout],
+        );
+        let pipeline = crate::passes::compute_pipeline(device, "soler.hcb_gather", &module, "cs_gather", &[&layout]);
+        Self { layout, args_layout, args_pipeline, pipeline }
+    }
+
+    /// Writes the HCB's indirect arguments (`args`) for its `list` of `counter` samples, then
+    /// gathers `levels` (in order; the i-th with the parameter slot i of `params`) into each
+    /// sample's light.
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<Slot<'_>>,
+        params: &wgpu::Buffer,
+        levels: &[LevelInputs<'_>],
+        (list, counter, args): (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
+    ) {
+        let uniform = || crate::passes::dynamic_slot(params, std::mem::size_of::<GatherParams>());
+        let tv = wgpu::BindingResource::TextureView;
+        let groups: Vec<wgpu::BindGroup> = levels
+            .iter()
+            .map(|l| {
+                let resources = vec![
+                    uniform(),
+                    tv(l.position),
+                    tv(l.normal),
+                    tv(l.radiance),
+                    l.grid.as_entire_binding(),
+                    counter.as_entire_binding(),
+                    list.as_entire_binding(),
+                ];
+                crate::passes::bind_group(&ctx.device, "soler.hcb_gather.inputs", &self.layout, resources)
+            })
+            .collect();
+        let Some(first) = groups.first() else { return };
+        let args_group = crate::passes::bind_group(
+            &ctx.device,
+            "soler.hcb_gather.args",
+            &self.args_layout,
+            vec![args.as_entire_binding()],
+        );
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("soler.hcb_gather.args"),
+                timestamp_writes: slot.as_ref().and_then(|s| s.compute(true, false)),
+            });
+            pass.set_pipeline(&self.args_pipeline);
+            pass.set_bind_group(0, first, &[0]);
+            pass.set_bind_group(1, &args_group, &[]);
+            pass.dispatch_workgroups(1, 1, 1);
+        }
+        let n = groups.len();
+        for (i, g) in groups.iter().enumerate() {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("soler.hcb_gather"),
+                timestamp_writes: slot.as_ref().and_then(|s| s.compute(false, i + 1 == n)),
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, g, &[(i as u64 * super::STRIDE) as u32]);
+            // Words 4–6 of the HCB's arguments: the dispatch over every sample.
+            pass.dispatch_workgroups_indirect(args, 16);
+        }
+    }
+}
