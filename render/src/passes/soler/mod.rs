@@ -154,7 +154,7 @@ settings_group! {
         /// proportion to f(θ) = α + exp(−s (θ_r − θ)² / 2π) around the projected mirror
         /// direction θ_r and weighted by 1/pdf (unbiased); off: uniform angles.
         glossy_sampling: bool = true,
-        unit "", symbol "", range 0..=1, cost "an erf and an erf⁻¹ per sample of a glossy receiver", history false;
+        unit "", symbol "", range 0..=1, cost "an erf and an inverse erf per sample of a glossy receiver", history false;
         /// α of f(θ): the share of the samples kept away from the lobe (the paper: 0.1).
         glossy_alpha: f32 = 0.1,
         unit "", symbol "α", range 0.001..=10.0, cost "free", history false;
