@@ -446,3 +446,99 @@ fn the_gather_with_visibility_matches_the_cpu_march() {
     }
     assert!(removed > 0.0, "the march hid no sample: the test would not see a wrong march");
 }
+
+/// Visibility (004 §4) against exact visibility: on the texels where ray casts between
+/// receiver and sender (the same samples, `cpu::soler::gather_with`) remove a tenth or more
+/// of the light — where the boxes occlude — the voxel march's irradiance is closer to the
+/// exactly occluded one than the irradiance without visibility.
+#[test]
+fn voxel_visibility_is_closer_to_exact_visibility_where_the_boxes_occlude() {
+    use gi_render::cpu::raycast::TriangleSoup;
+    let mut r = renderer(128, Technique::Soler, |s| {
+        s.soler.start_resolution = StartResolution::Half;
+        s.soler.levels = 2;
+        s.soler.samples = 32;
+        s.soler.radius_px = 12.0;
+        s.soler.visibility = true;
+    });
+    r.render_frame();
+    let s = r.settings().soler.clone();
+    let (b, cam) = (r.bounds(), r.camera);
+    let (z0, z1) = gi_render::passes::soler::voxels::depth_range(
+        cam.position,
+        cam.forward(),
+        b.center(),
+        b.radius(),
+        cam.znear,
+        0.0,
+        1.0,
+    );
+    let state = r.scene().evaluate(0.0);
+    let soup = TriangleSoup::new(r.scene(), &state);
+    let eps = 1e-3 * b.radius();
+    let exact = |_: (i64, i64), rx: &Texel, _: (i64, i64), s: &Texel| {
+        let (from, to) = (rx.position + rx.normal * eps, s.position + s.normal * eps);
+        let d = to - from;
+        let len = d.length();
+        len <= 0.0 || soup.intersect(from, d / len, 0.0, len * (1.0 - 1e-3)).is_none()
+    };
+    let tan_v = (0.5 * cam.yfov).tan();
+    let k = s.gathered_levels().start;
+    let l = level(
+        &read(&r, &format!("soler.level.{k}.position")),
+        &read(&r, &format!("soler.level.{k}.normal")),
+        &read(&r, &format!("soler.level.{k}.radiance")),
+        &read(&r, &format!("soler.level.{k}.material")),
+    );
+    let (w, h, words, bits) = r.soler_voxel_bits(0).expect("a voxel grid").expect("readback");
+    let grid = soler::VoxelGrid { width: w, height: h, words, slices: s.voxel_slices, z0, z1, bits };
+    let screen = ScreenCamera {
+        eye: cam.position,
+        tan_half: Vec2::new(tan_v, tan_v),
+        size: Vec2::new(l.width as f32, l.height as f32),
+    };
+    let p = GatherParams {
+        samples: s.samples,
+        radius: s.radius_px,
+        full_disc: true,
+        level: k,
+        frame: 0,
+        disc: s.form_factor == FormFactor::PointToDisc,
+        min_cos_beta: s.min_cos_beta,
+        near_cut: 0.0,
+    };
+    let march = |a: (i64, i64), rx: &Texel, b: (i64, i64), t: &Texel| {
+        soler::march_visible(&grid, a, rx.depth, b, t.depth, s.march_bias_px, s.march_depth_bias)
+    };
+    let open = |_: (i64, i64), _: &Texel, _: (i64, i64), _: &Texel| true;
+    let (mut region, mut err_vox, mut err_none, mut removed) = (0usize, 0.0f32, 0.0f32, 0.0f32);
+    let (mut all_vox, mut all_none) = (0.0f32, 0.0f32);
+    for y in 0..l.height {
+        for x in 0..l.width {
+            let Some(rx) = l.at(x as i64, y as i64).filter(|t| t.valid()) else { continue };
+            let e = |v: &soler::VisibleFn<'_>| soler::gather_with(&l, x, y, rx, &screen, p, v, None).0;
+            let (e_exact, e_vox, e_none) = (e(&exact), e(&march), e(&open));
+            all_vox += (e_vox - e_exact).length();
+            all_none += (e_none - e_exact).length();
+            if (e_none - e_exact).length() < 0.1 * e_none.length() || e_none.length() <= 0.0 {
+                continue;
+            }
+            region += 1;
+            removed += (e_none - e_exact).length();
+            err_vox += (e_vox - e_exact).length();
+            err_none += (e_none - e_exact).length();
+        }
+    }
+    println!(
+        "level {k}: {region} texels where exact visibility removes ≥ 10 %: error of the voxel march {err_vox:.4}, \
+         without visibility {err_none:.4} (÷{:.2}); over every texel {all_vox:.4} vs {all_none:.4}",
+        err_none / err_vox.max(1e-12)
+    );
+    assert!(region > 20, "{region} occluded texels");
+    assert!(removed > 0.0);
+    // Measured on lavapipe: 43 texels, error 0.385 with the march, 0.736 without (÷1.91).
+    // Over every texel the march's error is the larger (1.446 vs 0.799): it also hides
+    // samples that exact visibility sees (false occlusion, open in issue #16's note), which
+    // is why, against the path tracer, visibility does not lower the image's error yet.
+    assert!(err_vox < err_none, "voxel march {err_vox} vs none {err_none}");
+}

@@ -394,6 +394,29 @@ fn gather_for(
     vis: Option<(&VoxelGrid, f32, f32)>,
     gloss: Option<&crate::cpu::soler_glossy::Gloss>,
 ) -> (Vec3, Vec3) {
+    let march = |a: (i64, i64), rx: &Texel, b: (i64, i64), s: &Texel| match vis {
+        Some((g, bias_px, depth_bias)) => march_visible(g, a, rx.depth, b, s.depth, bias_px, depth_bias),
+        None => true,
+    };
+    gather_with(level, x, y, rx, cam, p, &march, gloss)
+}
+
+/// A visibility test between receiver texel a (the point `rx`) and sender texel b (`s`).
+pub type VisibleFn<'a> = dyn Fn((i64, i64), &Texel, (i64, i64), &Texel) -> bool + 'a;
+
+/// The ring of texel (x, y) of `level` gathered at receiver `rx` with any visibility test
+/// (the voxel march, none, or exact ray casts in tests): irradiance and glossy reflection.
+#[allow(clippy::too_many_arguments)]
+pub fn gather_with(
+    level: &Level,
+    x: u32,
+    y: u32,
+    rx: &Texel,
+    cam: &ScreenCamera,
+    p: GatherParams,
+    visible: &VisibleFn<'_>,
+    gloss: Option<&crate::cpu::soler_glossy::Gloss>,
+) -> (Vec3, Vec3) {
     use crate::cpu::soler_glossy as glossy;
     let v = (cam.eye - rx.position).normalize_or_zero();
     let (mut e, mut spec) = (Vec3::ZERO, Vec3::ZERO);
@@ -405,11 +428,8 @@ fn gather_for(
             continue;
         };
         let Some((w, r2, cos_t, cos_tp)) = facing(rx, s, p.near_cut) else { continue };
-        if let Some((g, bias_px, depth_bias)) = vis {
-            let (a, b) = ((x as i64, y as i64), (x as i64 + o.x as i64, y as i64 + o.y as i64));
-            if !march_visible(g, a, rx.depth, b, s.depth, bias_px, depth_bias) {
-                continue;
-            }
+        if !visible((x as i64, y as i64), rx, (x as i64 + o.x as i64, y as i64 + o.y as i64), s) {
+            continue;
         }
         let ds = surface_area(s, dp, cam, p.min_cos_beta);
         let light = s.radiance * kernel(cos_t, cos_tp, ds, r2, p.disc);
