@@ -107,11 +107,20 @@ impl PathTracer {
             .iter()
             .map(|t| obvhs::triangle::Triangle { v0: t.v[0].into(), v1: t.v[1].into(), v2: t.v[2].into() })
             .collect();
-        let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(
+        // obvhs's `build_cwbvh_from_tris` steps (PLOC, reinsertion, conversion), without its
+        // debug-build validation of the intermediate binary BVH, which panics when that tree
+        // is deeper than 96 (the hotel room's is 99): the traversal of the CWBVH does not
+        // need that bound.
+        let params = obvhs::BvhBuildParams::medium_build();
+        let mut bvh2 = obvhs::ploc::PlocBuilder::with_capacity(bvh_tris.len()).build(
+            params.ploc_search_distance,
             &bvh_tris,
-            obvhs::BvhBuildParams::medium_build(),
-            &mut std::time::Duration::default(),
+            (0..bvh_tris.len() as u32).collect(),
+            params.sort_precision,
+            params.search_depth_threshold,
         );
+        obvhs::bvh2::reinsertion::ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
+        let bvh = obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false);
         let eps = scene.bounds(time_s).radius().max(1e-3) * 1e-4;
         let materials = if scene.materials.is_empty() { vec![Material::default()] } else { scene.materials.clone() };
         Self { tris, bvh, materials, lights: state.lights, eps }
