@@ -55,12 +55,8 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     var seen = 0u;
     let n = nx.xyz;
     let count = params.counts.x;
-    let r = params.shape.x;
-    var inner = 0.5 * r;
-    if (params.counts.y == 1u) {
-        inner = 0.0;
-    }
-    let dp = PI * (r * r - inner * inner) / f32(max(count, 1u));
+    let inner = ring_inner();
+    let dp = ring_area(inner);
     let rot = rotation(gid.xy);
     var e = vec3<f32>(0.0);
     // The glossy reflection: the receiver's lobe (cpu::soler_glossy::receiver_lobe).
@@ -78,38 +74,21 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     let v = normalize(params.eye.xyz - px);
     var spec = vec3<f32>(0.0);
     for (var i = 0u; i < count; i = i + 1u) {
-        let u = (f32(i) + 0.5) / f32(max(count, 1u));
-        let rho = sqrt(inner * inner + u * (r * r - inner * inner));
         let pw = gloss_warp(rot + f32(i) * GOLDEN_ANGLE, lobe, warped, params.gloss.x);
-        let phi = pw.x;
-        let o = vec2<i32>(round(vec2<f32>(rho * cos(phi), rho * sin(phi))));
+        let o = ring_offset(i, inner, pw.x);
         if (o.x == 0 && o.y == 0) {
             continue;
         }
         let q = x + o;
-        if (!inside(q, size)) {
+        let sq = sender(q, px, n);
+        if (!sq.lit) {
             continue;
         }
-        let nq = textureLoad(level_normal, q, 0);
-        if (nq.w < 0.5) {
-            continue;
-        }
-        let pq = textureLoad(level_position, q, 0);
-        let d = pq.xyz - px;
-        let r2 = dot(d, d);
-        if (r2 <= 0.0 || (params.shape.w > 0.0 && r2 >= params.shape.w)) {
-            continue;
-        }
-        let w = d / sqrt(r2);
-        let cos_t = max(dot(n, w), 0.0);
-        let cos_tp = max(-dot(nq.xyz, w), 0.0);
-        if (cos_t <= 0.0 || cos_tp <= 0.0) {
-            continue;
-        }
-        let ds = surface_area(pq, nq.xyz, dp * pw.y);
-        let light = textureLoad(level_radiance, q, 0).rgb * kernel(cos_t, cos_tp, ds, r2);
+        let w = sq.w;
+        let ds = surface_area(sq.position, sq.normal, dp * pw.y);
+        let light = textureLoad(level_radiance, q, 0).rgb * kernel(sq.cos_t, sq.cos_tp, ds, sq.r2);
         lit = lit + 1u;
-        if (params.voxels.grid.x > 0u && !visible(x, px4.w, q, pq.w)) {
+        if (params.voxels.grid.x > 0u && !visible(x, px4.w, q, sq.position.w)) {
             hidden = hidden + light;
             continue;
         }

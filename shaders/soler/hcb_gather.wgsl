@@ -56,47 +56,24 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (params.counts.y == 0u) {
         e = list[i].light.rgb;
     }
-    let count = params.counts.x;
-    let r = params.shape.x;
-    var inner = 0.5 * r;
-    if (params.counts.y == 1u) {
-        inner = 0.0;
-    }
-    let dp = PI * (r * r - inner * inner) / f32(max(count, 1u));
+    let inner = ring_inner();
+    let dp = ring_area(inner);
     let rot = rotation(q);
-    for (var j = 0u; j < count; j = j + 1u) {
-        let u = (f32(j) + 0.5) / f32(max(count, 1u));
-        let rho = sqrt(inner * inner + u * (r * r - inner * inner));
-        let phi = rot + f32(j) * GOLDEN_ANGLE;
-        let o = vec2<i32>(round(vec2<f32>(rho * cos(phi), rho * sin(phi))));
+    for (var j = 0u; j < params.counts.x; j = j + 1u) {
+        let o = ring_offset(j, inner, rot + f32(j) * GOLDEN_ANGLE);
         if (o.x == 0 && o.y == 0) {
             continue;
         }
         let t = vec2<i32>(q) + o;
-        if (!inside(t, size)) {
+        let st = sender(t, x, n);
+        if (!st.lit) {
             continue;
         }
-        let nt = textureLoad(level_normal, t, 0);
-        if (nt.w < 0.5) {
+        if (params.voxels.grid.x > 0u && !visible(vec2<i32>(q), zx, t, st.position.w)) {
             continue;
         }
-        let pt = textureLoad(level_position, t, 0);
-        let d = pt.xyz - x;
-        let r2 = dot(d, d);
-        if (r2 <= 0.0) {
-            continue;
-        }
-        let w = d / sqrt(r2);
-        let cos_t = max(dot(n, w), 0.0);
-        let cos_tp = max(-dot(nt.xyz, w), 0.0);
-        if (cos_t <= 0.0 || cos_tp <= 0.0) {
-            continue;
-        }
-        if (params.voxels.grid.x > 0u && !visible(vec2<i32>(q), zx, t, pt.w)) {
-            continue;
-        }
-        let ds = surface_area(pt, nt.xyz, dp);
-        e = e + textureLoad(level_radiance, t, 0).rgb * kernel(cos_t, cos_tp, ds, r2);
+        let ds = surface_area(st.position, st.normal, dp);
+        e = e + textureLoad(level_radiance, t, 0).rgb * kernel(st.cos_t, st.cos_tp, ds, st.r2);
     }
     list[i].light = vec4<f32>(e, 1.0);
 }

@@ -1,7 +1,8 @@
 // The ring gather's parameters and per-sample terms (Soler et al. 004 §3–4, Eq. 1–4,
 // Fig. 3), shared by the gather on every texel of a level (soler/gather.wgsl) and the gather
 // at the HCB's samples (soler/hcb_gather.wgsl). Needs soler/common.wgsl and
-// soler/voxel_common.wgsl; the includer binds `params` and `grid`. CPU twin: cpu::soler.
+// soler/voxel_common.wgsl; the includer binds `params`, `grid` and the level's
+// `level_position` and `level_normal`. CPU twin: cpu::soler.
 
 // Rust twin: passes::soler::gather::GatherParams.
 struct GatherParams {
@@ -84,3 +85,63 @@ fn kernel(cos_t: f32, cos_tp: f32, ds: f32, r2: f32) -> f32 {
     return cos_t * cos_tp * ds / max(r2, 1e-20);
 }
 
+
+// The ring of this level (Fig. 3): its inner radius (0 on the first gathered level, which
+// samples the full disc) and the screen area dP each of the N samples stands for.
+fn ring_inner() -> f32 {
+    if (params.counts.y == 1u) {
+        return 0.0;
+    }
+    return 0.5 * params.shape.x;
+}
+
+fn ring_area(inner: f32) -> f32 {
+    let r = params.shape.x;
+    return PI * (r * r - inner * inner) / f32(max(params.counts.x, 1u));
+}
+
+// The texel offset of sample j at angle phi: √ of its area fraction of the ring, rounded to
+// the nearest texel (cpu::soler::{ring_radius, ring_offset}).
+fn ring_offset(j: u32, inner: f32, phi: f32) -> vec2<i32> {
+    let r = params.shape.x;
+    let u = (f32(j) + 0.5) / f32(max(params.counts.x, 1u));
+    let rho = sqrt(inner * inner + u * (r * r - inner * inner));
+    return vec2<i32>(round(vec2<f32>(rho * cos(phi), rho * sin(phi))));
+}
+
+// A sender texel t of the level seen from receiver x (normal n): Eq. 1's direction, r² and
+// cosines; lit = false off the image, on the background, beyond the near field's cut or
+// facing away (cpu::soler::facing).
+struct Sender {
+    position: vec4<f32>,
+    normal: vec3<f32>,
+    w: vec3<f32>,
+    r2: f32,
+    cos_t: f32,
+    cos_tp: f32,
+    lit: bool,
+}
+
+fn sender(t: vec2<i32>, x: vec3<f32>, n: vec3<f32>) -> Sender {
+    var s: Sender;
+    s.lit = false;
+    if (!inside(t, textureDimensions(level_position))) {
+        return s;
+    }
+    let nt = textureLoad(level_normal, t, 0);
+    if (nt.w < 0.5) {
+        return s;
+    }
+    s.position = textureLoad(level_position, t, 0);
+    s.normal = nt.xyz;
+    let d = s.position.xyz - x;
+    s.r2 = dot(d, d);
+    if (s.r2 <= 0.0 || (params.shape.w > 0.0 && s.r2 >= params.shape.w)) {
+        return s;
+    }
+    s.w = d / sqrt(s.r2);
+    s.cos_t = max(dot(n, s.w), 0.0);
+    s.cos_tp = max(-dot(s.normal, s.w), 0.0);
+    s.lit = s.cos_t > 0.0 && s.cos_tp > 0.0;
+    return s;
+}

@@ -124,3 +124,58 @@ pub fn texture_from_bytes(
     );
     t
 }
+
+/// A renderer of `technique` on the default scene at `size`², its settings edited by `edit`
+/// (which must leave them valid), with the animation paused.
+pub fn paused_renderer(
+    size: u32,
+    technique: gi_render::pipeline::Technique,
+    edit: impl FnOnce(&mut LabSettings),
+) -> Renderer {
+    let mut s = LabSettings::default();
+    technique.apply(&mut s);
+    edit(&mut s);
+    assert!(s.validate().is_empty(), "{:?}", s.validate());
+    let mut r = Renderer::new(gpu(), default_scene(), s, size, size).expect("renderer");
+    r.clock.playing = false;
+    r
+}
+
+/// A registered buffer read back, or the test fails naming it.
+pub fn read(r: &Renderer, name: &str) -> gi_render::ImageF32 {
+    r.readback(name).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+/// The rgb of a texel.
+pub fn v3(p: [f32; 4]) -> glam::Vec3 {
+    glam::Vec3::new(p[0], p[1], p[2])
+}
+
+/// A Soler mip level as the CPU twin (`cpu::soler`) reads it from the GPU: level k ≥ 1 from
+/// `soler.level.k.{position,normal,radiance,material}`, level 0 from the G-buffer with the
+/// light named `radiance` (`direct.radiance`, or the bounce before's).
+pub fn soler_level(r: &Renderer, k: u32, radiance: &str) -> gi_render::cpu::soler::Level {
+    use gi_render::cpu::soler::{Level, Texel};
+    let names: [String; 4] = if k == 0 {
+        ["gbuffer.position".into(), "gbuffer.normal".into(), radiance.into(), "gbuffer.material".into()]
+    } else {
+        ["position", "normal", "radiance", "material"].map(|n| format!("soler.level.{k}.{n}"))
+    };
+    let [p, n, l, m] = names.map(|name| read(r, &name));
+    let texels = (0..p.data.len())
+        .map(|i| {
+            if n.data[i][3] < 0.5 {
+                return Texel::default();
+            }
+            let material = glam::Vec2::new(m.data[i][0], m.data[i][1]);
+            Texel {
+                position: v3(p.data[i]),
+                depth: p.data[i][3],
+                normal: v3(n.data[i]),
+                radiance: v3(l.data[i]),
+                material,
+            }
+        })
+        .collect();
+    Level { width: p.width, height: p.height, texels }
+}

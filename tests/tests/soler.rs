@@ -2,33 +2,13 @@
 //! gather and upsampling against the CPU twin `cpu::soler` on the default scene, and the
 //! twin's formulas against closed forms.
 
-use gi_lab_tests::{default_scene, gpu};
-use gi_render::cpu::soler::{self, GatherParams, Level, ScreenCamera, Texel, UpsampleSigmas, VoteSigmas};
+use gi_lab_tests::{paused_renderer, read, soler_level, v3};
+use gi_render::Renderer;
+use gi_render::cpu::soler::{self, GatherParams, ScreenCamera, Texel, UpsampleSigmas, VoteSigmas};
 use gi_render::cpu::soler_glossy::Gloss;
 use gi_render::passes::soler::{FormFactor, StartResolution};
 use gi_render::pipeline::Technique;
-use gi_render::{ImageF32, LabSettings, Renderer};
 use glam::{Vec2, Vec3};
-
-fn v3(p: [f32; 4]) -> Vec3 {
-    Vec3::new(p[0], p[1], p[2])
-}
-
-/// A level as the CPU twin reads it from the GPU's position, normal, radiance and material
-/// images.
-fn level(position: &ImageF32, normal: &ImageF32, radiance: &ImageF32, material: &ImageF32) -> Level {
-    let texels = (0..position.data.len())
-        .map(|i| {
-            let (p, n, l, m) = (position.data[i], normal.data[i], radiance.data[i], material.data[i]);
-            if n[3] < 0.5 {
-                return Texel::default();
-            }
-            let material = Vec2::new(m[0], m[1]);
-            Texel { position: v3(p), depth: p[3], normal: v3(n), radiance: v3(l), material }
-        })
-        .collect();
-    Level { width: position.width, height: position.height, texels }
-}
 
 /// The glossy reflection's settings as the CPU twin takes them.
 fn gloss_of(r: &Renderer) -> Option<Gloss> {
@@ -42,20 +22,6 @@ fn gloss_of(r: &Renderer) -> Option<Gloss> {
         importance: s.glossy_sampling,
         axes: [right, right.cross(forward), forward],
     })
-}
-
-fn renderer(size: u32, technique: Technique, edit: impl FnOnce(&mut LabSettings)) -> Renderer {
-    let mut s = LabSettings::default();
-    technique.apply(&mut s);
-    edit(&mut s);
-    assert!(s.validate().is_empty(), "{:?}", s.validate());
-    let mut r = Renderer::new(gpu(), default_scene(), s, size, size).expect("renderer");
-    r.clock.playing = false;
-    r
-}
-
-fn read(r: &Renderer, name: &str) -> ImageF32 {
-    r.readback(name).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 /// Texels where `a` and `b` differ by more than `rel` (relative) plus `abs`.
@@ -92,7 +58,7 @@ fn the_near_field_gather_matches_the_cpu_with_its_cut() {
 /// The last bounce of the frame (with `alternate`, frame 1's: bounce 2) against the CPU.
 fn gpu_matches_cpu(technique: Technique, near_field_distance: f32, bounces: u32, alternate: bool) {
     const SIZE: u32 = 64;
-    let mut r = renderer(SIZE, technique, |s| {
+    let mut r = paused_renderer(SIZE, technique, |s| {
         s.soler.start_resolution = StartResolution::Half;
         s.soler.levels = 3;
         s.soler.samples = 24;
@@ -113,20 +79,10 @@ fn gpu_matches_cpu(technique: Technique, near_field_distance: f32, bounces: u32,
     let sig = VoteSigmas { pixel: s.vote_sigma_pixel, normal: s.vote_sigma_normal, depth: s.vote_sigma_depth };
     // The light the last bounce gathered: the direct light, or the bounce before's.
     let input = if bounces == 1 { "direct.radiance".to_string() } else { format!("soler.bounce.{}", bounces - 1) };
-    let mut levels = vec![level(
-        &read(&r, "gbuffer.position"),
-        &read(&r, "gbuffer.normal"),
-        &read(&r, &input),
-        &read(&r, "gbuffer.material"),
-    )];
+    let mut levels = vec![soler_level(&r, 0, &input)];
     // Voting (Eq. 5): each GPU level against the CPU's vote of the GPU level below it.
     for k in 1..=s.gathered_levels().end - 1 {
-        let gpu = level(
-            &read(&r, &format!("soler.level.{k}.position")),
-            &read(&r, &format!("soler.level.{k}.normal")),
-            &read(&r, &format!("soler.level.{k}.radiance")),
-            &read(&r, &format!("soler.level.{k}.material")),
-        );
+        let gpu = soler_level(&r, k, "");
         let winners = read(&r, &format!("soler.level.{k}.winner"));
         let (cpu, cpu_winners) = soler::vote_level(&levels[k as usize - 1], sig);
         assert_eq!((gpu.width, gpu.height), (cpu.width, cpu.height), "level {k} size");
@@ -294,7 +250,7 @@ fn the_voxel_grid_matches_the_cpu_voxelization() {
     use gi_render::cpu::raycast::{TriangleSoup, moller_trumbore, primary_ray};
     use gi_render::passes::soler::voxels::{depth_range, open_meshes};
     const SIZE: u32 = 64;
-    let mut r = renderer(SIZE, Technique::Soler, |s| {
+    let mut r = paused_renderer(SIZE, Technique::Soler, |s| {
         s.soler.start_resolution = StartResolution::Half;
         s.soler.levels = 2;
         s.soler.visibility = true;
@@ -356,7 +312,7 @@ fn the_voxel_grid_matches_the_cpu_voxelization() {
 #[test]
 fn visibility_marches_later_bounces_only_when_asked() {
     let hidden = |all: bool| {
-        let mut r = renderer(64, Technique::Soler, |s| {
+        let mut r = paused_renderer(64, Technique::Soler, |s| {
             s.soler.start_resolution = StartResolution::Half;
             s.soler.levels = 2;
             s.soler.samples = 32;
@@ -381,7 +337,7 @@ fn visibility_marches_later_bounces_only_when_asked() {
 fn the_gather_with_visibility_matches_the_cpu_march() {
     use gi_render::passes::soler::voxels::depth_range;
     const SIZE: u32 = 64;
-    let mut r = renderer(SIZE, Technique::Soler, |s| {
+    let mut r = paused_renderer(SIZE, Technique::Soler, |s| {
         s.soler.start_resolution = StartResolution::Half;
         s.soler.levels = 2;
         s.soler.samples = 24;
@@ -395,12 +351,7 @@ fn the_gather_with_visibility_matches_the_cpu_march() {
     let tan_v = (0.5 * cam.yfov).tan();
     let mut removed = 0.0;
     for (i, k) in s.gathered_levels().enumerate() {
-        let l = level(
-            &read(&r, &format!("soler.level.{k}.position")),
-            &read(&r, &format!("soler.level.{k}.normal")),
-            &read(&r, &format!("soler.level.{k}.radiance")),
-            &read(&r, &format!("soler.level.{k}.material")),
-        );
+        let l = soler_level(&r, k, "");
         let (w, h, words, bits) = r.soler_voxel_bits(i).expect("a voxel grid").expect("readback");
         assert_eq!((w, h), (l.width, l.height), "level {k}: grid size");
         let grid = soler::VoxelGrid { width: w, height: h, words, slices: s.voxel_slices, z0, z1, bits };
@@ -454,7 +405,7 @@ fn the_gather_with_visibility_matches_the_cpu_march() {
 #[test]
 fn voxel_visibility_is_closer_to_exact_visibility_where_the_boxes_occlude() {
     use gi_render::cpu::raycast::TriangleSoup;
-    let mut r = renderer(128, Technique::Soler, |s| {
+    let mut r = paused_renderer(128, Technique::Soler, |s| {
         s.soler.start_resolution = StartResolution::Half;
         s.soler.levels = 2;
         s.soler.samples = 32;
@@ -484,12 +435,7 @@ fn voxel_visibility_is_closer_to_exact_visibility_where_the_boxes_occlude() {
     };
     let tan_v = (0.5 * cam.yfov).tan();
     let k = s.gathered_levels().start;
-    let l = level(
-        &read(&r, &format!("soler.level.{k}.position")),
-        &read(&r, &format!("soler.level.{k}.normal")),
-        &read(&r, &format!("soler.level.{k}.radiance")),
-        &read(&r, &format!("soler.level.{k}.material")),
-    );
+    let l = soler_level(&r, k, "");
     let (w, h, words, bits) = r.soler_voxel_bits(0).expect("a voxel grid").expect("readback");
     let grid = soler::VoxelGrid { width: w, height: h, words, slices: s.voxel_slices, z0, z1, bits };
     let screen = ScreenCamera {

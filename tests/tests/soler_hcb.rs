@@ -1,49 +1,11 @@
 //! GI Lab's mix of Nguyen et al. and Soler et al. (issue #16 "Mixes"): Soler's screen-space
 //! gather at the HCB's samples, spread by coherence splatting (`Technique::SolerAtHcbSamples`).
 
-use gi_lab_tests::{default_scene, gpu, stored_reference};
+use gi_lab_tests::{paused_renderer, read, soler_level, stored_reference, v3};
 use gi_render::cpu::soler::{self, GatherParams, Level, ScreenCamera, Texel};
 use gi_render::passes::soler::{FormFactor, StartResolution};
 use gi_render::pipeline::{Technique, Temporal};
-use gi_render::{ImageF32, LabSettings, Renderer};
 use glam::{Vec2, Vec3};
-
-fn renderer(size: u32, technique: Technique, edit: impl FnOnce(&mut LabSettings)) -> Renderer {
-    let mut s = LabSettings::default();
-    technique.apply(&mut s);
-    edit(&mut s);
-    assert!(s.validate().is_empty(), "{:?}", s.validate());
-    let mut r = Renderer::new(gpu(), default_scene(), s, size, size).expect("renderer");
-    r.clock.playing = false;
-    r
-}
-
-fn read(r: &Renderer, name: &str) -> ImageF32 {
-    r.readback(name).unwrap_or_else(|e| panic!("{name}: {e}"))
-}
-
-fn v3(p: [f32; 4]) -> Vec3 {
-    Vec3::new(p[0], p[1], p[2])
-}
-
-/// A Soler level as the CPU twin reads it from the GPU.
-fn level(r: &Renderer, k: u32) -> Level {
-    let (p, n, l) = (
-        read(r, &format!("soler.level.{k}.position")),
-        read(r, &format!("soler.level.{k}.normal")),
-        read(r, &format!("soler.level.{k}.radiance")),
-    );
-    let texels = (0..p.data.len())
-        .map(|i| {
-            if n.data[i][3] < 0.5 {
-                return Texel::default();
-            }
-            let (pi, ni, li) = (p.data[i], n.data[i], l.data[i]);
-            Texel { position: v3(pi), depth: pi[3], normal: v3(ni), radiance: v3(li), ..Default::default() }
-        })
-        .collect();
-    Level { width: p.width, height: p.height, texels }
-}
 
 /// Every HCB sample's light is the sum, over Soler's gathered levels, of the ring of the
 /// level's texel under the sample's pixel gathered at the sample's own point
@@ -52,7 +14,7 @@ fn level(r: &Renderer, k: u32) -> Level {
 #[test]
 fn the_gather_at_hcb_samples_matches_the_cpu() {
     const SIZE: u32 = 64;
-    let mut r = renderer(SIZE, Technique::SolerAtHcbSamples, |s| {
+    let mut r = paused_renderer(SIZE, Technique::SolerAtHcbSamples, |s| {
         s.soler.start_resolution = StartResolution::Half;
         s.soler.levels = 3;
         s.soler.samples = 24;
@@ -61,7 +23,7 @@ fn the_gather_at_hcb_samples_matches_the_cpu() {
     r.render_frame();
     let s = r.settings().soler.clone();
     let stats = r.hcb_stats().expect("the HCB's samples");
-    let levels: Vec<(u32, Level)> = s.gathered_levels().map(|k| (k, level(&r, k))).collect();
+    let levels: Vec<(u32, Level)> = s.gathered_levels().map(|k| (k, soler_level(&r, k, "direct.radiance"))).collect();
     let (eye, forward) = (r.camera.position, r.camera.forward());
     let tan_v = (0.5 * r.camera.yfov).tan();
     let mut bad = 0;
@@ -123,7 +85,7 @@ fn the_gather_at_hcb_samples_is_close_to_the_per_pixel_gather() {
     use gi_render::image_io::hdr_display;
     let reference = stored_reference("cornell_1bounce_256_2048spp.exr");
     let run = |t: Technique| {
-        let mut r = renderer(256, t, |s| s.pipeline.temporal = Temporal::None);
+        let mut r = paused_renderer(256, t, |s| s.pipeline.temporal = Temporal::None);
         r.render_frame();
         let img = read(&r, "final.hdr");
         let flip = gi_render::metrics::flip(&hdr_display(&img), &hdr_display(&reference)).expect("flip").0;

@@ -2,7 +2,7 @@
 //! blend against the CPU twin `cpu::soler_temporal` on the default scene with its moving
 //! sphere, and the flicker it removes, measured.
 
-use gi_lab_tests::{default_scene, gpu};
+use gi_lab_tests::{paused_renderer, read};
 use gi_render::cpu::soler_temporal::{BlendInputs, BlendParams, blend};
 use gi_render::passes::soler::TemporalHistory;
 use gi_render::pipeline::{Technique, Temporal};
@@ -10,17 +10,9 @@ use gi_render::{ImageF32, LabSettings, Renderer};
 use glam::Vec3;
 
 fn renderer(size: u32, technique: Technique, playing: bool, edit: impl FnOnce(&mut LabSettings)) -> Renderer {
-    let mut s = LabSettings::default();
-    technique.apply(&mut s);
-    edit(&mut s);
-    assert!(s.validate().is_empty(), "{:?}", s.validate());
-    let mut r = Renderer::new(gpu(), default_scene(), s, size, size).expect("renderer");
+    let mut r = paused_renderer(size, technique, edit);
     r.clock.playing = playing;
     r
-}
-
-fn read(r: &Renderer, name: &str) -> ImageF32 {
-    r.readback(name).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 fn rgb(v: [f32; 4]) -> Vec3 {

@@ -190,23 +190,37 @@ impl SolerStage {
         hcb: (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
     ) {
         let s = &f.settings.soler;
-        let (ctx, g) = (f.ctx, f.gbuffer);
+        let ctx = f.ctx;
         let top = s.gathered_levels().end - 1;
         let all = all_sizes(f.gbuffer_size.0, f.gbuffer_size.1, top);
         let voxel_params = self.voxelize(f, enc, timer);
         let levels: Vec<(u32, (u32, u32))> = s.gathered_levels().map(|k| (k, all[k as usize])).collect();
         self.gather.write_params(ctx, &levels, gather_base(f), std::slice::from_ref(&voxel_params));
-        if !self.pyramid.levels.is_empty() {
-            let sigma = [s.vote_sigma_pixel, s.vote_sigma_normal, s.vote_sigma_depth];
-            let radiance = f.direct_radiance;
-            timer.scope(ctx, enc, "soler.pyramid", |e, slot| {
-                self.pyramid.run(ctx, e, slot, sigma, &g.position, &g.normal, radiance, &g.material)
-            });
-        }
+        self.vote(f, enc, timer, "soler.pyramid", f.direct_radiance);
         let lv = self.level_views();
         let inputs = self.level_inputs(f, f.direct_radiance, &lv, &voxel_params, &all);
         let params = &self.gather.params;
         timer.scope(ctx, enc, "soler.hcb_gather", |e, slot| self.hcb_gather.run(ctx, e, slot, params, &inputs, hcb));
+    }
+
+    /// Stage 5: the mip levels of the G-buffer and of `radiance` by voting (Eq. 5), timed as
+    /// `scope`.
+    fn vote(
+        &self,
+        f: &FrameInputs,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        scope: &str,
+        radiance: &wgpu::TextureView,
+    ) {
+        if self.pyramid.levels.is_empty() {
+            return;
+        }
+        let (s, g) = (&f.settings.soler, f.gbuffer);
+        let sigma = [s.vote_sigma_pixel, s.vote_sigma_normal, s.vote_sigma_depth];
+        timer.scope(f.ctx, enc, scope, |e, slot| {
+            self.pyramid.run(f.ctx, e, slot, sigma, &g.position, &g.normal, radiance, &g.material)
+        });
     }
 
     /// Views of pyramid levels 1 … top: position, normal, radiance, material.
@@ -268,12 +282,7 @@ impl SolerStage {
         let s = &f.settings.soler;
         let ctx = f.ctx;
         let g = f.gbuffer;
-        if !self.pyramid.levels.is_empty() {
-            let sigma = [s.vote_sigma_pixel, s.vote_sigma_normal, s.vote_sigma_depth];
-            timer.scope(ctx, enc, &format!("{prefix}.pyramid"), |e, slot| {
-                self.pyramid.run(ctx, e, slot, sigma, &g.position, &g.normal, radiance, &g.material)
-            });
-        }
+        self.vote(f, enc, timer, &format!("{prefix}.pyramid"), radiance);
         let view = |t: &wgpu::Texture| crate::passes::view(t, "soler.level.view");
         let lv = self.level_views();
         let level_views = |k: u32| -> [&wgpu::TextureView; 4] {
