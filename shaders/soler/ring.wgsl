@@ -69,12 +69,8 @@ fn rotation(p: vec2<u32>) -> f32 {
 
 // Eq. 2 at a sample: z² · 4 tan(f_h/2) tan(f_v/2) · dP / (W H) · cos α / cos β.
 fn surface_area(position: vec4<f32>, normal: vec3<f32>, dp: f32) -> f32 {
-    let to_eye = params.eye.xyz - position.xyz;
-    let dist = max(length(to_eye), 1e-12);
-    let cos_alpha = min(position.w / dist, 1.0);
-    let cos_beta = max(abs(dot(normal, to_eye)) / dist, params.shape.z);
-    return position.w * position.w * 4.0 * params.screen.x * params.screen.y * dp
-        / (params.screen.z * params.screen.w) * cos_alpha / cos_beta;
+    return area_factor(position, normal, params.eye.xyz, params.shape.z) * 4.0 * params.screen.x * params.screen.y * dp
+        / (params.screen.z * params.screen.w);
 }
 
 fn kernel(cos_t: f32, cos_tp: f32, ds: f32, r2: f32) -> f32 {

@@ -3,8 +3,10 @@
 // s(p_i) = Σ_{|p_i − p_j|₁ ≤ 1} g₁(|p_i − p_j|) g₂(1 − n_j·n_i) g₃((z_j − z_i)/z_i) over the
 // L1 neighbourhood (which reaches one texel outside the block: the apron) and keeps the
 // winner's position, depth, normal and material (SI, SP: the glossy reflection's) — no
-// averaging. Radiance goes down as the block's mean
-// (background is black), so that the coarse texel emits its sub-pixels' power.
+// averaging. Radiance goes down as the block's mean (background is black); with
+// `vote_power`, each sub-pixel's weighted by its Eq. 2 area over the winner's, so that the
+// coarse texel, whose area Eq. 2 takes from the winner, emits its sub-pixels' power
+// Σ L_i ds_i (the plain mean loses what the winner's smaller area leaves out).
 // CPU twin: cpu::soler::vote_level.
 #import soler/common.wgsl
 
@@ -12,6 +14,8 @@
 struct VoteParams {
     // σ₁ (texels), σ₂ (on 1 − n·n), σ₃ (relative depth), unused
     sigma: vec4<f32>,
+    // xyz: the eye, w: Eq. 2's least cos β (< 0: the plain mean, no area weights)
+    power: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> params: VoteParams;
@@ -68,7 +72,11 @@ fn cs_vote(@builtin(global_invocation_id) gid: vec3<u32>) {
         if (!valid(p, size)) {
             continue;
         }
-        sum = sum + textureLoad(fine_radiance, p, 0).rgb;
+        var weight = 1.0;
+        if (params.power.w >= 0.0) {
+            weight = area_factor(textureLoad(fine_position, p, 0), textureLoad(fine_normal, p, 0).xyz, params.power.xyz, params.power.w);
+        }
+        sum = sum + textureLoad(fine_radiance, p, 0).rgb * weight;
         let s = score(p, size);
         if (best < 0 || s > best_score) {
             best = i;
@@ -83,7 +91,11 @@ fn cs_vote(@builtin(global_invocation_id) gid: vec3<u32>) {
         let p = vec2<i32>(2 * i32(gid.x) + best % 2, 2 * i32(gid.y) + best / 2);
         position = textureLoad(fine_position, p, 0);
         normal = vec4<f32>(textureLoad(fine_normal, p, 0).xyz, 1.0);
-        radiance = vec4<f32>(sum / max(count, 1.0), 1.0);
+        var winner_area = 1.0;
+        if (params.power.w >= 0.0) {
+            winner_area = max(area_factor(position, normal.xyz, params.power.xyz, params.power.w), 1e-20);
+        }
+        radiance = vec4<f32>(sum / (max(count, 1.0) * winner_area), 1.0);
         material = textureLoad(fine_material, p, 0);
     }
     textureStore(out_position, gid.xy, position);

@@ -3,7 +3,9 @@
 // depth test; every fragment toggles the bits of its column from its slice to the back
 // (XOR). A column then holds 1 where an odd number of surfaces lie in front: inside closed
 // meshes. WebGPU has no logic-op blending, so the XOR is an atomicXor into a storage buffer
-// from the fragment stage. The viewport maps the G-buffer's pixels onto the level's texels
+// from the fragment stage. A surface facing the viewer toggles at its depth moved back by its
+// slope across the texel (voxel_toggle_depth; a setting, 0 = the paper's centre depth), so that
+// a column turns solid only behind the whole texel's surface. The viewport maps the G-buffer's pixels onto the level's texels
 // (1/2^k), so that the grid's columns are the level's texels. CPU twin:
 // cpu::soler::voxelize_column.
 #import common/camera.wgsl
@@ -30,6 +32,8 @@ struct VsOut {
     @builtin(position) clip: vec4<f32>,
     // View depth (clip w of the perspective projection).
     @location(0) depth: f32,
+    @location(1) world: vec3<f32>,
+    @location(2) normal: vec3<f32>,
 }
 
 @vertex
@@ -38,15 +42,20 @@ fn vs_voxelize(v: VsIn, @builtin(instance_index) instance: u32) -> VsOut {
     var o: VsOut;
     o.clip = camera.view_proj * world;
     o.depth = o.clip.w;
+    o.world = world.xyz;
+    o.normal = (instances[instance].normal_matrix * vec4<f32>(v.normal, 0.0)).xyz;
     return o;
 }
 
 @fragment
 fn fs_voxelize(in: VsOut) -> @location(0) vec4<f32> {
+    // The depth's change across one grid texel (the viewport's pixels are the grid's texels).
+    let slope = fwidth(in.depth);
     let x = u32(in.clip.x);
     let y = u32(in.clip.y);
     if (x < params.grid.x && y < params.grid.y) {
-        let first = voxel_slice(in.depth, params);
+        let facing = dot(in.normal, camera.position.xyz - in.world) >= 0.0;
+        let first = voxel_slice(voxel_toggle_depth(in.depth, slope, facing, params), params);
         let base = (y * params.grid.x + x) * params.grid.z;
         for (var w = 0u; w < params.grid.z; w = w + 1u) {
             let mask = voxel_mask_from(first, w, params.grid.w);

@@ -179,3 +179,32 @@ pub fn soler_level(r: &Renderer, k: u32, radiance: &str) -> gi_render::cpu::sole
         .collect();
     Level { width: p.width, height: p.height, texels }
 }
+
+/// The CPU twin's screen camera and gather parameters for `level`, the `i`-th gathered level
+/// (mip level `k`) of `r`'s Soler settings, at frame 0 and without a near-field cut.
+pub fn soler_gather_params(
+    r: &Renderer,
+    i: usize,
+    k: u32,
+    level: &gi_render::cpu::soler::Level,
+) -> (gi_render::cpu::soler::ScreenCamera, gi_render::cpu::soler::GatherParams) {
+    use gi_render::passes::soler::FormFactor;
+    let s = &r.settings().soler;
+    let tan_v = (0.5 * r.camera.yfov).tan();
+    let screen = gi_render::cpu::soler::ScreenCamera {
+        eye: r.camera.position,
+        tan_half: glam::Vec2::new(tan_v, tan_v),
+        size: glam::Vec2::new(level.width as f32, level.height as f32),
+    };
+    let p = gi_render::cpu::soler::GatherParams {
+        samples: s.samples,
+        radius: s.radius_px,
+        full_disc: i == 0,
+        level: k,
+        frame: 0,
+        disc: s.form_factor == FormFactor::PointToDisc,
+        min_cos_beta: s.min_cos_beta,
+        near_cut: 0.0,
+    };
+    (screen, p)
+}

@@ -30,7 +30,13 @@ fn indirect_energy(scene: Scene) -> (f64, f64) {
     assert_eq!(r.reference_progress(), Some((2048, 2048)));
     let vpl = r.readback("indirect.accum").expect("indirect.accum");
     let pt = PathTracer::new(&scene, 0.0);
-    let img = pt.render(r.view_proj(), r.camera.position, SIZE, SIZE, PtSettings { bounces: 1, spp: 64, seed: 3 });
+    let img = pt.render(
+        r.view_proj(),
+        r.camera.position,
+        SIZE,
+        SIZE,
+        PtSettings { bounces: 1, spp: 64, seed: 3, ..Default::default() },
+    );
     (luminance_sum(&vpl), luminance_sum(&img.indirect))
 }
 

@@ -62,7 +62,8 @@ fn white_furnace_converges_to_le_over_one_minus_rho() {
     let pt = PathTracer::new(&furnace(rho, le), 0.0);
     let view_proj = glam::camera::rh::proj::directx::perspective(1.2, 1.0, 0.01, 10.0)
         * glam::camera::rh::view::look_to_mat4(Vec3::ZERO, Vec3::new(0.3, -0.2, -1.0).normalize(), Vec3::Y);
-    let img = pt.render(view_proj, Vec3::ZERO, 16, 16, PtSettings { bounces: 60, spp: 2, seed: 7 });
+    let img =
+        pt.render(view_proj, Vec3::ZERO, 16, 16, PtSettings { bounces: 60, spp: 2, seed: 7, ..Default::default() });
     let want = le / (1.0 - rho);
     for v in img.full.data.iter().flat_map(|p| &p[..3]) {
         assert!((v - want).abs() / want < 0.01, "furnace radiance {v} vs analytic {want}");
@@ -77,7 +78,13 @@ fn path_traced_direct_light_agrees_with_the_gpu_direct_pass() {
     r.render_frame();
     let gpu = r.readback("direct.radiance").expect("radiance");
     let pt = PathTracer::new(r.scene(), 0.0);
-    let img = pt.render(r.view_proj(), r.camera.position, 128, 128, PtSettings { bounces: 0, spp: 1, seed: 1 });
+    let img = pt.render(
+        r.view_proj(),
+        r.camera.position,
+        128,
+        128,
+        PtSettings { bounces: 0, spp: 1, seed: 1, ..Default::default() },
+    );
     let (flip, _) = gi_render::metrics::flip(&hdr_display(&gpu), &hdr_display(&img.direct)).expect("flip");
     println!("mean FLIP, GPU direct vs path-traced direct at 128×128: {flip:.4}");
     assert!(flip <= 0.02, "mean FLIP {flip} > 0.02");
@@ -88,7 +95,7 @@ fn identical_seeds_give_identical_images_and_progressive_passes_accumulate() {
     let scene = default_scene();
     let r = default_renderer(24, 24);
     let pt = PathTracer::new(&scene, 0.0);
-    let s = PtSettings { bounces: 2, spp: 2, seed: 42 };
+    let s = PtSettings { bounces: 2, spp: 2, seed: 42, ..Default::default() };
     let a = pt.render(r.view_proj(), r.camera.position, 24, 24, s);
     let b = pt.render(r.view_proj(), r.camera.position, 24, 24, s);
     assert!(a.full == b.full, "same seed, same image");
@@ -110,4 +117,26 @@ fn identical_seeds_give_identical_images_and_progressive_passes_accumulate() {
         .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs() / b[c].abs().max(1e-3)))
         .fold(0.0f32, f32::max);
     assert!(worst < 1e-5, "two passes of 2 spp differ from one pass of 4 spp by {worst}");
+}
+
+/// `Senders::ScreenVisible` (the truth for screen-space gathers) keeps the same paths and drops
+/// the indirect light of those whose first bounce lands where the camera does not see: the
+/// same direct light, never more indirect light per pixel, and less in all (the default
+/// scene's boxes hide lit sides, and the walls reach past the screen's edges).
+#[test]
+fn screen_visible_senders_drop_the_light_of_hidden_surfaces() {
+    use gi_render::cpu::pathtrace::Senders;
+    let r = default_renderer(32, 32);
+    let pt = PathTracer::new(r.scene(), 0.0);
+    let s = PtSettings { bounces: 1, spp: 16, seed: 9, ..Default::default() };
+    let all = pt.render(r.view_proj(), r.camera.position, 32, 32, s);
+    let seen = pt.render(r.view_proj(), r.camera.position, 32, 32, PtSettings { senders: Senders::ScreenVisible, ..s });
+    assert!(all.direct == seen.direct, "the direct light does not depend on the senders");
+    for (a, b) in all.indirect.data.iter().zip(&seen.indirect.data) {
+        assert!((0..3).all(|c| b[c] <= a[c]), "a pixel gained light: {b:?} > {a:?}");
+    }
+    let sum = |img: &gi_render::ImageF32| img.data.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>();
+    let (l_all, l_seen) = (sum(&all.indirect), sum(&seen.indirect));
+    println!("indirect light at 32², 16 spp: every sender {l_all:.3}, screen-visible senders {l_seen:.3}");
+    assert!(l_seen < 0.95 * l_all && l_seen > 0.2 * l_all, "{l_seen} of {l_all}");
 }

@@ -20,10 +20,10 @@ fn the_quality_table_stays_within_its_measured_bounds() {
     // measurement meets by less than its run-to-run spread (0.057–0.060 over VPL sets): 0.062.
     // Issue #16's rows: Soler's gather alone measured 0.273 after one frame, 0.264 after 16
     // with its temporal filter (it sees only the direct light on screen: 40 % of the indirect
-    // light comes from senders the camera does not see), 0.2555 with the glossy reflection;
-    // the near/far mix 0.0454, 0.0449 with it; its goal is to beat both Knecht's row and
-    // Soler's.
-    let bounds = [0.05, 0.035, 0.062, 0.03, 0.27, 0.05];
+    // light comes from senders the camera does not see), 0.2555 with the glossy reflection,
+    // 0.2419 with the power-preserving vote (`soler.vote_power`); the near/far mix 0.0454,
+    // 0.0449 with it; its goal is to beat both Knecht's row and Soler's.
+    let bounds = [0.05, 0.035, 0.062, 0.03, 0.255, 0.05];
     assert_eq!(rows.len(), bounds.len());
     for (row, bound) in rows.iter().zip(bounds) {
         assert!(row.flip > 0.0, "{}: FLIP 0 means nothing was compared", row.configuration);

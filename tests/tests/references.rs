@@ -48,7 +48,7 @@ fn stamp() -> String {
 fn render(r: &Reference) -> ImageF32 {
     let renderer = default_renderer(r.size, r.size);
     let pt = PathTracer::new(renderer.scene(), 0.0);
-    let settings = PtSettings { bounces: r.bounces, spp: r.spp, seed: 1 };
+    let settings = PtSettings { bounces: r.bounces, spp: r.spp, seed: 1, ..Default::default() };
     let img = pt.render(renderer.view_proj(), renderer.camera.position, r.size, r.size, settings);
     if r.image == "direct" { img.direct } else { img.full }
 }

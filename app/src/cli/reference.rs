@@ -22,13 +22,18 @@ pub struct ReferenceArgs {
     pub bounces: u32,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Count only light whose first bounce lands on a surface the camera sees (in its frustum,
+    /// unoccluded from the eye): the ground truth of what a screen-space gather (Soler et al.)
+    /// can know, so that its own error shows apart from the light hidden from the screen.
+    #[arg(long)]
+    pub screen_visible_senders: bool,
     /// Output EXR of the full image; `.direct.exr` and `.indirect.exr` go beside it.
     #[arg(long)]
     pub out: PathBuf,
 }
 
 pub(super) fn reference(args: &ReferenceArgs) -> Result<(), CliError> {
-    use gi_render::cpu::pathtrace::{PathTracer, PtSettings};
+    use gi_render::cpu::pathtrace::{PathTracer, PtSettings, Senders};
     if args.spp == 0 {
         return Err(CliError::input("--spp must be at least 1"));
     }
@@ -44,7 +49,12 @@ pub(super) fn reference(args: &ReferenceArgs) -> Result<(), CliError> {
         camera.position,
         w,
         h,
-        PtSettings { bounces: args.bounces, spp: args.spp, seed: args.seed },
+        PtSettings {
+            bounces: args.bounces,
+            spp: args.spp,
+            seed: args.seed,
+            senders: if args.screen_visible_senders { Senders::ScreenVisible } else { Senders::All },
+        },
     );
     let total_s = start.elapsed().as_secs_f64();
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
@@ -64,9 +74,10 @@ pub(super) fn reference(args: &ReferenceArgs) -> Result<(), CliError> {
         .map_err(|e| CliError::input(format!("{}: {e}", preview.display())))?;
     println!("wrote {} (preview: x/(1+x), sRGB)", preview.display());
     println!(
-        "path traced {w}×{h}, {} spp, {} bounces in {total_s:.2} s (BVH {build_s:.2} s, {} threads)",
+        "path traced {w}×{h}, {} spp, {} bounces{} in {total_s:.2} s (BVH {build_s:.2} s, {} threads)",
         args.spp,
         args.bounces,
+        if args.screen_visible_senders { " from screen-visible senders" } else { "" },
         rayon_threads()
     );
     Ok(())

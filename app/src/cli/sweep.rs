@@ -256,7 +256,7 @@ fn path_trace(r: &Renderer, spp: u32, bounces: u32) -> gi_render::ImageF32 {
     use gi_render::cpu::pathtrace::{PathTracer, PtSettings};
     let (w, h) = r.size();
     let pt = PathTracer::new(r.scene(), 0.0);
-    pt.render(r.view_proj(), r.camera.position, w, h, PtSettings { bounces, spp, seed: 1 }).full
+    pt.render(r.view_proj(), r.camera.position, w, h, PtSettings { bounces, spp, seed: 1, ..Default::default() }).full
 }
 
 pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {

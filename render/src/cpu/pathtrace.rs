@@ -12,6 +12,12 @@
 //!
 //! Output: `direct` (emission + direct light at the first hit), `indirect` (everything
 //! after the first bounce, up to `bounces`), and `full` = direct + indirect.
+//!
+//! [`Senders::ScreenVisible`] keeps only the paths whose first bounce lands on a surface the
+//! camera sees (inside the frustum, unoccluded from the eye): the ground truth of what a
+//! screen-space gather such as Soler et al.'s (004 §3) can know. Against it the gather's own
+//! errors (sampling, visibility) show apart from the light no screen-space method has
+//! (surfaces hidden from the camera or off screen).
 
 use glam::{Mat4, Vec3, Vec3A, Vec4Swizzles};
 use obvhs::cwbvh::CwBvh;
@@ -35,6 +41,31 @@ pub struct PtSettings {
     /// Samples per pixel of one pass.
     pub spp: u32,
     pub seed: u64,
+    pub senders: Senders,
+}
+
+impl Default for PtSettings {
+    fn default() -> Self {
+        Self { bounces: 1, spp: 1, seed: 1, senders: Senders::All }
+    }
+}
+
+/// Which surfaces a path's first bounce may land on.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Senders {
+    /// Every surface: the full ground truth.
+    #[default]
+    All,
+    /// Only surfaces the camera sees (in its frustum and unoccluded from the eye); a path whose
+    /// first bounce lands elsewhere carries no indirect light.
+    ScreenVisible,
+}
+
+/// The camera a [`Senders::ScreenVisible`] render tests the first bounce against.
+#[derive(Clone, Copy, Debug)]
+struct Viewer {
+    eye: Vec3,
+    view_proj: Mat4,
 }
 
 struct Tri {
@@ -217,18 +248,34 @@ impl PathTracer {
         Some((l, f * ndl / pdf))
     }
 
-    /// One path through pixel (x, y): (direct, indirect).
-    fn trace(&self, origin: Vec3, dir: Vec3, bounces: u32, rng: &mut Pcg) -> (Vec3, Vec3) {
+    /// Whether the camera sees point `p`: inside its frustum and nothing between the eye and
+    /// `p` (up to a relative ε, which leaves `p`'s own surface out).
+    fn seen(&self, viewer: &Viewer, p: Vec3) -> bool {
+        let clip = viewer.view_proj * p.extend(1.0);
+        if clip.w <= 0.0 || clip.x.abs() > clip.w || clip.y.abs() > clip.w {
+            return false;
+        }
+        let d = p - viewer.eye;
+        let len = d.length();
+        len <= 2.0 * self.eps || self.intersect(viewer.eye, d / len, 0.0, len - 2.0 * self.eps).is_none()
+    }
+
+    /// One path through pixel (x, y): (direct, indirect). With a `viewer`, the first bounce
+    /// counts only where the camera sees its hit ([`Senders::ScreenVisible`]).
+    fn trace(&self, origin: Vec3, dir: Vec3, bounces: u32, viewer: Option<&Viewer>, rng: &mut Pcg) -> (Vec3, Vec3) {
         let Some(mut h) = self.intersect(origin, dir, 0.0, f32::INFINITY) else { return (Vec3::ZERO, Vec3::ZERO) };
         let mut v = -dir;
         let emission = |h: &Hit| self.materials[h.material.min(self.materials.len() - 1)].emissive;
         let direct = emission(&h) + self.direct(&h, v);
         let mut indirect = Vec3::ZERO;
         let mut throughput = Vec3::ONE;
-        for _ in 0..bounces {
+        for bounce in 0..bounces {
             let Some((l, weight)) = self.sample_brdf(&h, v, rng) else { break };
             throughput *= weight;
             let Some(next) = self.intersect(h.p + h.n * self.eps, l, 0.0, f32::INFINITY) else { break };
+            if bounce == 0 && viewer.is_some_and(|c| !self.seen(c, next.p)) {
+                break;
+            }
             v = -l;
             indirect += throughput * (emission(&next) + self.direct(&next, v));
             h = next;
@@ -274,6 +321,7 @@ impl Accumulator {
     /// Adds `settings.spp` samples per pixel (multithreaded over rows; deterministic).
     pub fn add_pass(&mut self, pt: &PathTracer, view_proj: Mat4, eye: Vec3, settings: PtSettings) {
         let inv = view_proj.inverse();
+        let viewer = (settings.senders == Senders::ScreenVisible).then_some(Viewer { eye, view_proj });
         let (w, h) = (self.width, self.height);
         let first = self.spp;
         let rows: Vec<Vec<(Vec3, Vec3)>> = (0..h)
@@ -287,7 +335,7 @@ impl Accumulator {
                         for s in 0..settings.spp {
                             let stream = ((y as u64 * w as u64 + x as u64) << 20) ^ (first + s) as u64;
                             let mut rng = Pcg::new(settings.seed, stream);
-                            let (dl, il) = pt.trace(o, d, settings.bounces, &mut rng);
+                            let (dl, il) = pt.trace(o, d, settings.bounces, viewer.as_ref(), &mut rng);
                             sum.0 += dl;
                             sum.1 += il;
                         }

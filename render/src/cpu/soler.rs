@@ -77,6 +77,9 @@ pub struct VoteSigmas {
     pub normal: f32,
     /// g₃ on (z_j − z_i) / z_i.
     pub depth: f32,
+    /// `vote_power`: the eye and Eq. 2's least cos β; the sub-pixels' radiance is weighted by
+    /// their Eq. 2 areas over the winner's. None: the block's plain mean.
+    pub power: Option<(Vec3, f32)>,
 }
 
 /// exp(−x² / 2σ²).
@@ -115,7 +118,7 @@ pub fn vote_level(fine: &Level, s: VoteSigmas) -> (Level, Vec<i32>) {
                 if !t.valid() {
                     continue;
                 }
-                sum += t.radiance;
+                sum += t.radiance * s.power.map_or(1.0, |(eye, m)| area_factor(t, eye, m));
                 let score = vote_score(fine, x, y, s);
                 if best.0 < 0 || score > best.1 {
                     best = (i as i32, score);
@@ -125,7 +128,8 @@ pub fn vote_level(fine: &Level, s: VoteSigmas) -> (Level, Vec<i32>) {
             if best.0 >= 0 {
                 let i = best.0 as i64;
                 let win = fine.at(2 * cx + i % 2, 2 * cy + i / 2).copied().unwrap_or_default();
-                out = Texel { radiance: sum / inside.max(1) as f32, ..win };
+                let area = s.power.map_or(1.0, |(eye, m)| area_factor(&win, eye, m).max(1e-20));
+                out = Texel { radiance: sum / (inside.max(1) as f32 * area), ..win };
             }
             texels.push(out);
             winners.push(best.0);
@@ -179,11 +183,17 @@ pub struct ScreenCamera {
 /// the ray (cos β clamped below by `min_cos_beta`, our bound: grazing texels would stand for
 /// unbounded areas).
 pub fn surface_area(t: &Texel, dp: f32, cam: &ScreenCamera, min_cos_beta: f32) -> f32 {
-    let to_eye = cam.eye - t.position;
+    area_factor(t, cam.eye, min_cos_beta) * 4.0 * cam.tan_half.x * cam.tan_half.y * dp / (cam.size.x * cam.size.y)
+}
+
+/// Eq. 2's z² · cos α / cos β at texel `t` seen from `eye` (cos β clamped below by
+/// `min_cos_beta`): its surface area per unit screen area, up to the level's constant.
+pub fn area_factor(t: &Texel, eye: Vec3, min_cos_beta: f32) -> f32 {
+    let to_eye = eye - t.position;
     let dist = to_eye.length().max(1e-12);
     let cos_alpha = (t.depth / dist).min(1.0);
     let cos_beta = (t.normal.dot(to_eye) / dist).abs().max(min_cos_beta);
-    t.depth * t.depth * 4.0 * cam.tan_half.x * cam.tan_half.y * dp / (cam.size.x * cam.size.y) * cos_alpha / cos_beta
+    t.depth * t.depth * cos_alpha / cos_beta
 }
 
 /// The kernel that multiplies a sample's radiance: Eq. 1's cosθ cosθ' ds / r², or (with
@@ -229,6 +239,14 @@ pub struct VoxelGrid {
 pub fn slice_of(z: f32, z0: f32, z1: f32, slices: u32) -> i32 {
     let s = ((z - z0) / (z1 - z0).max(1e-12) * slices as f32).floor();
     s.clamp(0.0, slices as f32) as i32
+}
+
+/// The depth a surface crossing toggles its column at (`voxel_toggle_depth` in
+/// `shaders/soler/voxel_common.wgsl`): its view depth `z` at the column's centre, moved back by
+/// `bias` × `slope` (|∂z/∂x| + |∂z/∂y| per texel), at most `cap` (a depth), where the surface
+/// faces the viewer; a surface facing away stays at `z`.
+pub fn toggle_depth(z: f32, slope: f32, facing: bool, bias: f32, cap: f32) -> f32 {
+    if facing { z + (bias * slope).min(cap) } else { z }
 }
 
 /// Word `w` of the bits a surface at slice `first` toggles: slices `first` … `slices` − 1.
@@ -622,7 +640,7 @@ mod tests {
         let mut texels = vec![wall; 16];
         texels[5] = post;
         let fine = Level { width: 4, height: 4, texels };
-        let s = VoteSigmas { pixel: 1.0, normal: 0.2, depth: 0.05 };
+        let s = VoteSigmas { pixel: 1.0, normal: 0.2, depth: 0.05, power: None };
         let (coarse, winners) = vote_level(&fine, s);
         assert_eq!((coarse.width, coarse.height), (2, 2));
         assert_ne!(winners[0], 3, "the post (x + 2y = 3 in block 0) loses");
@@ -632,6 +650,49 @@ mod tests {
         let (c, w) = vote_level(&empty, s);
         assert_eq!(w, vec![-1]);
         assert!(!c.texels[0].valid());
+    }
+
+    /// `vote_power`: a block of a grazing floor and a wall facing the eye keeps its power
+    /// Σ L_i a_i (Eq. 2's area factors) in the winner's area; the plain mean does not.
+    #[test]
+    fn the_power_preserving_vote_keeps_the_blocks_power() {
+        let eye = Vec3::ZERO;
+        let t = |p: Vec3, n: Vec3, l: f32| Texel {
+            position: p,
+            depth: -p.z,
+            normal: n,
+            radiance: Vec3::splat(l),
+            ..Default::default()
+        };
+        // Block: two texels of a wall facing the eye (z = −2), two of a floor seen at a
+        // grazing angle below them.
+        let wall = |x: f32| t(Vec3::new(x, 0.0, -2.0), Vec3::Z, 1.0);
+        let floor = |x: f32| t(Vec3::new(x, -0.3, -2.0), Vec3::Y, 3.0);
+        let fine = Level { width: 2, height: 2, texels: vec![wall(0.0), wall(0.01), floor(0.0), floor(0.01)] };
+        let power = |tx: &[Texel]| tx.iter().map(|t| t.radiance.x * area_factor(t, eye, 0.05)).sum::<f32>();
+        let sig = |power| VoteSigmas { pixel: 1.0, normal: 0.2, depth: 0.05, power };
+        let (kept, _) = vote_level(&fine, sig(Some((eye, 0.05))));
+        let (mean, _) = vote_level(&fine, sig(None));
+        let fine_power = power(&fine.texels);
+        let coarse = |c: &Level| 4.0 * power(&c.texels);
+        assert!((coarse(&kept) - fine_power).abs() < 1e-4 * fine_power, "{} vs {fine_power}", coarse(&kept));
+        assert!(
+            (coarse(&mean) - fine_power).abs() > 0.1 * fine_power,
+            "the plain mean: {} vs {fine_power}",
+            coarse(&mean)
+        );
+    }
+
+    /// The slope bias (voxel_toggle_depth): a surface facing the viewer toggles b × its slope
+    /// behind its centre's depth, at most the cap; one facing away, and b = 0 (the paper), at
+    /// the centre's depth.
+    #[test]
+    fn a_facing_surface_toggles_behind_its_texel_and_a_receding_one_at_its_centre() {
+        let close = |a: f32, b: f32| (a - b).abs() < 1e-6;
+        assert!(close(toggle_depth(2.0, 0.4, true, 0.5, 1.0), 2.2));
+        assert!(close(toggle_depth(2.0, 10.0, true, 0.5, 1.0), 3.0), "capped");
+        assert_eq!(toggle_depth(2.0, 0.4, false, 0.5, 1.0), 2.0);
+        assert_eq!(toggle_depth(2.0, 0.4, true, 0.0, 1.0), 2.0);
     }
 
     /// Solid voxelization of one column: inside a closed box (entered at 2, left at 3) the

@@ -14,6 +14,8 @@ use crate::timing::Slot;
 pub struct VoteParams {
     /// σ₁, σ₂, σ₃, unused.
     pub sigma: [f32; 4],
+    /// The eye, Eq. 2's least cos β (< 0: the block's plain mean, `vote_power` off).
+    pub power: [f32; 4],
 }
 
 /// One mip level above the G-buffer.
@@ -24,7 +26,8 @@ pub struct PyramidLevel {
     pub position: wgpu::Texture,
     /// xyz the winner's normal, w 1 on a surface, 0 on the background.
     pub normal: wgpu::Texture,
-    /// rgb the block's mean radiance (the previous bounce).
+    /// rgb the block's mean radiance (the previous bounce), weighted by Eq. 2's areas with
+    /// `vote_power`.
     pub radiance: wgpu::Texture,
     /// The winning sub-pixel, x + 2y in the block (0–3), −1 on the background.
     pub winner: wgpu::Texture,
@@ -158,12 +161,13 @@ impl SolerPyramid {
         encoder: &mut wgpu::CommandEncoder,
         slot: Option<Slot<'_>>,
         sigma: [f32; 3],
+        power: [f32; 4],
         position: &wgpu::TextureView,
         normal: &wgpu::TextureView,
         radiance: &wgpu::TextureView,
         material: &wgpu::TextureView,
     ) {
-        let p = VoteParams { sigma: [sigma[0], sigma[1], sigma[2], 0.0] };
+        let p = VoteParams { sigma: [sigma[0], sigma[1], sigma[2], 0.0], power };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
         let view = |t: &wgpu::Texture| crate::passes::view(t, "soler.level.view");
         let views: Vec<[wgpu::TextureView; 5]> = self

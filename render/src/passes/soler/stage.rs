@@ -169,7 +169,12 @@ impl SolerStage {
             s.voxel_depth_from,
             s.voxel_depth_to,
         );
-        let voxel_params = self.voxels.params_of(z, s.voxel_slices.clamp(32, 128), s.voxel_view_slice);
+        let voxel_params = self.voxels.params_of(
+            z,
+            s.voxel_slices.clamp(32, 128),
+            s.voxel_view_slice,
+            (s.voxel_slope_bias, s.voxel_slope_cap),
+        );
         if !voxel_params.is_empty() {
             timer.scope(f.ctx, enc, "soler.voxels", |e, slot| {
                 let (cam, scene, state) = (f.camera_buffer, f.gpu_scene, f.state);
@@ -218,8 +223,10 @@ impl SolerStage {
         }
         let (s, g) = (&f.settings.soler, f.gbuffer);
         let sigma = [s.vote_sigma_pixel, s.vote_sigma_normal, s.vote_sigma_depth];
+        let eye = f.camera.position;
+        let power = [eye.x, eye.y, eye.z, if s.vote_power { s.min_cos_beta } else { -1.0 }];
         timer.scope(f.ctx, enc, scope, |e, slot| {
-            self.pyramid.run(f.ctx, e, slot, sigma, &g.position, &g.normal, radiance, &g.material)
+            self.pyramid.run(f.ctx, e, slot, sigma, power, &g.position, &g.normal, radiance, &g.material)
         });
     }
 

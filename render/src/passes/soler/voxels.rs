@@ -2,7 +2,8 @@
 //! solid voxelization): the scene drawn from the camera into a grid of one column of
 //! `voxel_slices` bits per texel of the first gathered level, every fragment toggling its
 //! column from its slice to the back (`shaders/soler/voxelize.wgsl`, atomicXor from the
-//! fragment stage: WebGPU has no logic-op blending); each coarser gathered level's grid is the
+//! fragment stage: WebGPU has no logic-op blending), a surface that faces the viewer toggling
+//! at its depth moved back by its slope across the texel (`voxel_slope_bias`); each coarser gathered level's grid is the
 //! AND of the four columns below (`voxel_down.wgsl`); the gather marches each sample's path
 //! through its level's grid (`gather.wgsl`). CPU twin: `cpu::soler::{voxelize_column, and_down,
 //! march_visible}`. The viewer's image of each grid is `soler.voxels.k` (`voxel_view.wgsl`).
@@ -28,6 +29,8 @@ pub struct VoxelParams {
     /// z₀, z₁ (view depths of the grid's front and back), G-buffer pixels per texel (2^k),
     /// the viewer's slice (< 0: the filled fraction).
     pub depth: [f32; 4],
+    /// The toggles' slope bias b, its cap (slices); unused, unused.
+    pub toggle: [f32; 4],
 }
 
 /// One gathered level's grid.
@@ -205,13 +208,15 @@ impl SolerVoxels {
     }
 
     /// The grid parameters of each gathered level: `z` the grid's depth range, `scale` the
-    /// G-buffer pixels per texel of each level (2^k), `view_slice` the viewer's slice.
-    pub fn params_of(&self, z: (f32, f32), slices: u32, view_slice: f32) -> Vec<VoxelParams> {
+    /// G-buffer pixels per texel of each level (2^k), `view_slice` the viewer's slice, `slope`
+    /// the toggles' slope bias and its cap in slices.
+    pub fn params_of(&self, z: (f32, f32), slices: u32, view_slice: f32, slope: (f32, f32)) -> Vec<VoxelParams> {
         self.grids
             .iter()
             .map(|g| VoxelParams {
                 grid: [g.width, g.height, self.words, slices],
                 depth: [z.0, z.1, (1u64 << g.level) as f32, view_slice],
+                toggle: [slope.0, slope.1, 0.0, 0.0],
             })
             .collect()
     }
