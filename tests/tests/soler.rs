@@ -247,6 +247,28 @@ fn gpu_matches_cpu(technique: Technique, near_field_distance: f32, bounces: u32,
     }
 }
 
+/// The voxel grid's view depth range (z₀, z₁) for `r`'s camera and settings.
+fn grid_depth_range(r: &Renderer) -> (f32, f32) {
+    let (b, cam, s) = (r.bounds(), &r.camera, &r.settings().soler);
+    let (from, to) = (s.voxel_depth_from, s.voxel_depth_to);
+    gi_render::passes::soler::voxels::depth_range(
+        cam.position,
+        cam.forward(),
+        b.center(),
+        b.radius(),
+        cam.znear,
+        from,
+        to,
+    )
+}
+
+/// The GPU's voxel grid of the `i`-th gathered level, read back for the CPU march.
+fn voxel_grid(r: &Renderer, i: usize) -> soler::VoxelGrid {
+    let (z0, z1) = grid_depth_range(r);
+    let (width, height, words, bits) = r.soler_voxel_bits(i).expect("a voxel grid").expect("readback");
+    soler::VoxelGrid { width, height, words, slices: r.settings().soler.voxel_slices, z0, z1, bits }
+}
+
 /// Visibility (004 §4): the GPU's solid voxelization of the default scene against the CPU's,
 /// column by column (every surface crossing of the ray through the column's centre, moved by
 /// its slope bias as `cpu::soler::toggle_depth` does, the slope from the crossing's plane at
@@ -255,7 +277,7 @@ fn gpu_matches_cpu(technique: Technique, near_field_distance: f32, bounces: u32,
 #[test]
 fn the_voxel_grid_matches_the_cpu_voxelization() {
     use gi_render::cpu::raycast::{TriangleSoup, moller_trumbore, primary_ray};
-    use gi_render::passes::soler::voxels::{depth_range, open_meshes};
+    use gi_render::passes::soler::voxels::open_meshes;
     const SIZE: u32 = 64;
     let mut r = paused_renderer(SIZE, Technique::Soler, |s| {
         s.soler.start_resolution = StartResolution::Half;
@@ -267,9 +289,8 @@ fn the_voxel_grid_matches_the_cpu_voxelization() {
     let grid = read(&r, "soler.voxels.1");
     let coarse = read(&r, "soler.voxels.2");
     assert_eq!((grid.width, grid.height, coarse.width), (SIZE / 2, SIZE / 2, SIZE / 4));
-    let b = r.bounds();
     let cam = &r.camera;
-    let (z0, z1) = depth_range(cam.position, cam.forward(), b.center(), b.radius(), cam.znear, 0.0, 1.0);
+    let (z0, z1) = grid_depth_range(&r);
     let state = r.scene().evaluate(0.0);
     let soup = TriangleSoup::new(r.scene(), &state);
     let inv = r.view_proj().inverse();
@@ -358,7 +379,6 @@ fn visibility_marches_later_bounces_only_when_asked() {
 /// of its level, on the CPU (`cpu::soler::gather_visible`), against the GPU's gathered light.
 #[test]
 fn the_gather_with_visibility_matches_the_cpu_march() {
-    use gi_render::passes::soler::voxels::depth_range;
     const SIZE: u32 = 64;
     let mut r = paused_renderer(SIZE, Technique::Soler, |s| {
         s.soler.start_resolution = StartResolution::Half;
@@ -369,14 +389,11 @@ fn the_gather_with_visibility_matches_the_cpu_march() {
     });
     r.render_frame();
     let s = r.settings().soler.clone();
-    let (b, cam) = (r.bounds(), r.camera);
-    let (z0, z1) = depth_range(cam.position, cam.forward(), b.center(), b.radius(), cam.znear, 0.0, 1.0);
     let mut removed = 0.0;
     for (i, k) in s.gathered_levels().enumerate() {
         let l = soler_level(&r, k, "");
-        let (w, h, words, bits) = r.soler_voxel_bits(i).expect("a voxel grid").expect("readback");
-        assert_eq!((w, h), (l.width, l.height), "level {k}: grid size");
-        let grid = soler::VoxelGrid { width: w, height: h, words, slices: s.voxel_slices, z0, z1, bits };
+        let grid = voxel_grid(&r, i);
+        assert_eq!((grid.width, grid.height), (l.width, l.height), "level {k}: grid size");
         let (screen, p) = soler_gather_params(&r, i, k, &l);
         let vis = Some((&grid, s.march_bias_px, s.march_depth_bias));
         let texels: Vec<(u32, u32)> = (0..l.height).flat_map(|y| (0..l.width).map(move |x| (x, y))).collect();
@@ -432,16 +449,7 @@ fn march_against_exact_visibility(
     });
     r.render_frame();
     let s = r.settings().soler.clone();
-    let (b, cam) = (r.bounds(), r.camera);
-    let (z0, z1) = gi_render::passes::soler::voxels::depth_range(
-        cam.position,
-        cam.forward(),
-        b.center(),
-        b.radius(),
-        cam.znear,
-        0.0,
-        1.0,
-    );
+    let b = r.bounds();
     let state = r.scene().evaluate(0.0);
     let soup = TriangleSoup::new(r.scene(), &state);
     let eps = 1e-3 * b.radius();
@@ -455,8 +463,7 @@ fn march_against_exact_visibility(
     let mut out = Vec::new();
     for (i, k) in s.gathered_levels().enumerate() {
         let l = soler_level(&r, k, "");
-        let (w, h, words, bits) = r.soler_voxel_bits(i).expect("a voxel grid").expect("readback");
-        let grid = soler::VoxelGrid { width: w, height: h, words, slices: s.voxel_slices, z0, z1, bits };
+        let grid = voxel_grid(&r, i);
         let (screen, p) = soler_gather_params(&r, i, k, &l);
         let march = |a: (i64, i64), rx: &Texel, b: (i64, i64), t: &Texel| {
             soler::march_visible(&grid, a, rx.depth, b, t.depth, s.march_bias_px, s.march_depth_bias)
