@@ -9,7 +9,7 @@
 //! | 2. Direct light | `passes::shadow`, `passes::direct` |
 //! | 3. VPLs | none · importance warping → `passes::knecht::stage` · uniform batches → `passes::reference::stage` |
 //! | 4. VPL visibility | none · imperfect shadow maps (`passes::knecht::ism`) · exact maps (`passes::reference::vpl_visibility`) |
-//! | 5. Shading points | every pixel · interleaved tiles → `passes::knecht::interleave` · HCB samples → `passes::hcb::stage` · mip levels → `passes::soler::stage` |
+//! | 5. Shading points | every pixel · interleaved tiles → `passes::knecht::interleave` · HCB samples → `passes::hcb::stage` · mip levels → `passes::soler::stage` · irradiance records → `passes::gautron::stage` |
 //! | 6. Gather + reconstruction | VPL gather at the shading points, or the screen-space ring gather (`soler::gather`); none · geometry-aware filter (`knecht::interleave`) · coherence splatting (`hcb::splat`) · joint bilateral upsampling (`soler::upsample`) |
 //! | 7. Temporal + compose | none · confidence merge (`knecht::temporal`) · HCB sample cache (`hcb::cache`) · running average (`reference`) · warped blend (`soler::temporal`); `passes::compose` |
 
@@ -94,6 +94,7 @@ impl Renderer {
             height: self.height,
             gbuffer_size: (self.width, self.height),
             frame: self.clock.frame as u32,
+            direct: &self.direct,
             direct_radiance: &direct_view,
             lights: state.lights.iter().map(gpu_light).collect(),
             views: light_view_list(&state, self.bounds),
@@ -130,6 +131,12 @@ fn indirect_light(
     let p = &f.settings.pipeline;
     if p.gather == Gather::None {
         return None;
+    }
+    // Gautron et al.'s choices: irradiance records (stage 5), their hemispheres (stage 6's
+    // gather), Ward-weight splatting (stage 6's reconstruction) and the record cache (stage
+    // 7), run together; no VPLs.
+    if p.gather == Gather::Hemispheres {
+        return Some(x.gautron.as_mut()?.run(f, enc, timer));
     }
     // Soler et al.'s screen-space choices: mip levels (stage 5), the ring gather and the
     // joint bilateral upsampling (stage 6), and the warped blend of Eq. 6 (stage 7) when
@@ -169,7 +176,10 @@ fn indirect_light(
     // Nguyen §5, Fig. 5).
     match p.shading_points {
         // Mip levels belong to the screen-space gather, which returned above.
-        ShadingPoints::EveryPixel | ShadingPoints::InterleavedTiles | ShadingPoints::MipLevels => {}
+        ShadingPoints::EveryPixel
+        | ShadingPoints::InterleavedTiles
+        | ShadingPoints::MipLevels
+        | ShadingPoints::IrradianceRecords => {}
         ShadingPoints::HcbSamples => x.hcb.as_mut()?.select(f, enc, timer, light),
     }
 
@@ -240,7 +250,10 @@ fn reconstruct(
 ) -> Option<wgpu::TextureView> {
     Some(match f.settings.pipeline.reconstruction {
         // The upsampling belongs to the screen-space gather, which returned above.
-        Reconstruction::None | Reconstruction::CoherenceSplatting | Reconstruction::BilateralUpsampling => src,
+        Reconstruction::None
+        | Reconstruction::CoherenceSplatting
+        | Reconstruction::BilateralUpsampling
+        | Reconstruction::WeightSplatting => src,
         Reconstruction::GeometryAwareFilter => {
             // Knecht's thesis merges, then filters (§4 steps 11–12; `temporal.order`
             // MergeThenFilter); we filter first by default because the confidence's
@@ -269,7 +282,11 @@ fn temporal(
     Some(match f.settings.pipeline.temporal {
         // The sample cache acted in stages 5–6, the running average in the reference's gather;
         // the warped blend belongs to the screen-space gather, which returned above.
-        Temporal::None | Temporal::HcbSampleCache | Temporal::RunningAverage | Temporal::WarpedBlend => src,
+        Temporal::None
+        | Temporal::HcbSampleCache
+        | Temporal::RunningAverage
+        | Temporal::WarpedBlend
+        | Temporal::RecordCache => src,
         Temporal::ConfidenceMerge => {
             let t = x.temporal.as_mut()?;
             let (ctx, s, depth_range) = (f.ctx, &f.settings.temporal, f.depth_range());

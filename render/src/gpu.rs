@@ -3,14 +3,19 @@
 //! Headless opening honours `WGPU_BACKEND` (e.g. `vulkan`), prefers a real GPU and
 //! falls back to any adapter (lavapipe on machines without a GPU). The pipeline needs
 //! float32 blending and filtering (additive splatting of Nguyen Eq. 11 and Gautron's
-//! weights into `Rgba32Float`, filtered lookups into float pyramids); timestamp queries
-//! are used when the adapter has them.
+//! weights into `Rgba32Float`, filtered lookups into float pyramids), clip distances and
+//! indirect draws with a first instance (Gautron's record hemispheres: every record's tile
+//! of the atlas in one draw per scene draw, instance counts written by the GPU; lavapipe and
+//! every desktop Vulkan, Metal and DX12 driver have them); timestamp queries are used when
+//! the adapter has them.
 
 use std::sync::Arc;
 
-/// Features without which the pipeline cannot run.
-pub const REQUIRED_FEATURES: wgpu::Features =
-    wgpu::Features::FLOAT32_BLENDABLE.union(wgpu::Features::FLOAT32_FILTERABLE);
+/// Features without which the pipeline cannot run (see the module docs).
+pub const REQUIRED_FEATURES: wgpu::Features = wgpu::Features::FLOAT32_BLENDABLE
+    .union(wgpu::Features::FLOAT32_FILTERABLE)
+    .union(wgpu::Features::CLIP_DISTANCES)
+    .union(wgpu::Features::INDIRECT_FIRST_INSTANCE);
 
 /// Features used when present: GPU timestamps per pass and read-write storage textures
 /// of more formats.

@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::passes::compose::TonemapSettings;
 use crate::passes::direct::DirectSettings;
+use crate::passes::gautron::GautronSettings;
 use crate::passes::hcb::HcbSettings;
 use crate::passes::knecht::interleave::InterleaveSettings;
 use crate::passes::knecht::ism::IsmSettings;
@@ -53,6 +54,7 @@ pub struct LabSettings {
     pub temporal: TemporalSettings,
     pub hcb: HcbSettings,
     pub soler: SolerSettings,
+    pub gautron: GautronSettings,
     pub reference: ReferenceSettings,
     pub tonemap: TonemapSettings,
 }
@@ -71,6 +73,7 @@ impl Default for LabSettings {
             temporal: Default::default(),
             hcb: Default::default(),
             soler: Default::default(),
+            gautron: Default::default(),
             reference: Default::default(),
             tonemap: Default::default(),
         }
@@ -89,6 +92,7 @@ macro_rules! for_each_group {
         $m!(temporal, TemporalSettings);
         $m!(hcb, HcbSettings);
         $m!(soler, SolerSettings);
+        $m!(gautron, GautronSettings);
         $m!(reference, ReferenceSettings);
         $m!(tonemap, TonemapSettings);
     };

@@ -52,6 +52,10 @@ settings_enum! {
         /// Every texel of the G-buffer's mip levels, made by voting among sub-pixels (Soler
         /// et al. 004 §4, Eq. 5), from the start resolution down `soler.levels` levels.
         MipLevels = "mip levels (Soler)",
+        /// Irradiance records where the splatted coverage is insufficient, made in rounds on
+        /// the GPU and kept in a cache (Gautron et al. 003, "Irradiance Caching",
+        /// "Algorithm"; settings in `gautron`).
+        IrradianceRecords = "irradiance records (Gautron)",
     }
     default InterleavedTiles
 }
@@ -66,6 +70,10 @@ settings_enum! {
         /// Screen-space samples on a ring around each texel of each mip level: the visible
         /// surfaces' direct light as small emitters (Soler et al. 004 §3–4, Eq. 1–4).
         ScreenSpace = "screen-space ring gather (Soler)",
+        /// Each record's hemisphere rasterized through one wide camera, lit by the direct light
+        /// and its shadow maps, reduced to irradiance, gradients and the harmonic mean
+        /// distance (Gautron et al. 003, "Simple plane sampling").
+        Hemispheres = "hemisphere rasterization (Gautron)",
     }
     default Vpl
 }
@@ -83,6 +91,9 @@ settings_enum! {
         /// Joint bilateral upsampling of every mip level's light, coarse to fine, added
         /// level by level (Soler et al. 004 §4, "Continuous combination of all levels").
         BilateralUpsampling = "joint bilateral upsampling (Soler)",
+        /// Each record's bounding quad splatted with Ward's weight, Σ w·E and Σ w added by the
+        /// blending, divided in a resolve (Gautron et al. 003, "From Octree to Splatting").
+        WeightSplatting = "Ward-weight splatting (Gautron)",
     }
     default GeometryAwareFilter
 }
@@ -104,6 +115,10 @@ settings_enum! {
         /// normal disagreement, blended by a (Soler et al. 004 §4, Eq. 6; settings
         /// `soler.temporal_*`, `soler.reject_*`): the screen-space gather's filter.
         WarpedBlend = "warped blend (Soler Eq. 6)",
+        /// The irradiance records are kept across frames while the scene, its lights and the
+        /// record settings stay (Gautron et al. 003, "Results": "the irradiance cache is
+        /// reused across frames"); new records only where the coverage is insufficient.
+        RecordCache = "irradiance record cache (Gautron)",
     }
     default ConfidenceMerge
 }
@@ -136,17 +151,17 @@ settings_group! {
         unit "", symbol "V", range 0..=2, cost "ISM: one splat per point; exact: five depth renders of the scene per VPL", history true;
         /// Stage 5, shading points (every pixel; Knecht §3.4.1's tiles; Nguyen §3's samples).
         shading_points: ShadingPoints = ShadingPoints::InterleavedTiles,
-        unit "", symbol "", range 0..=3, cost "every pixel: N VPLs per pixel; tiles: N/n²; HCB: N at 2–5 % of the pixels plus the HCB build", history true;
+        unit "", symbol "", range 0..=4, cost "every pixel: N VPLs per pixel; tiles: N/n²; HCB: N at 2–5 % of the pixels plus the HCB build; records: one hemisphere each", history true;
         /// Stage 6, gather (Knecht §4.5's VPL gather; none: direct light only).
         gather: Gather = Gather::Vpl,
-        unit "", symbol "", range 0..=2, cost "one term per VPL and shading point", history true;
+        unit "", symbol "", range 0..=3, cost "one term per VPL and shading point", history true;
         /// Stage 6, reconstruction (Knecht §3.4.1's filter; Nguyen §4's splatting).
         reconstruction: Reconstruction = Reconstruction::GeometryAwareFilter,
-        unit "", symbol "", range 0..=3, cost "filter: n² reads per pixel; splatting: one quad per sample", history true;
+        unit "", symbol "", range 0..=4, cost "filter: n² reads per pixel; splatting: one quad per sample or record", history true;
         /// Stage 7, temporal (Knecht §3.5's confidence merge; Nguyen §5's sample cache; the
         /// reference's running average).
         temporal: Temporal = Temporal::ConfidenceMerge,
-        unit "", symbol "", range 0..=4, cost "merge, warped blend: one pass and two copies; cache: validation and removal quads", history true;
+        unit "", symbol "", range 0..=5, cost "merge, warped blend: one pass and two copies; cache: validation and removal quads", history true;
         /// Stage 6, near field: Soler's screen-space gather for the light from closer than
         /// `soler.near_field_distance`, the VPL gather for the rest.
         near_field: NearField = NearField::None,
@@ -179,12 +194,16 @@ settings_enum! {
         /// Soler's screen-space gather evaluated at the HCB's samples and spread by coherence
         /// splatting (GI Lab's mix of Nguyen et al. and Soler et al.).
         SolerAtHcbSamples = "screen-space gather at HCB samples (Nguyen + Soler)",
+        /// Irradiance cache splatting (Gautron et al. 003): records made where the coverage
+        /// is insufficient, their hemispheres rasterized, Ward's weights splatted, the records
+        /// kept across frames.
+        Gautron = "irradiance cache splatting (Gautron)",
     }
     default DirectOnly
 }
 
 impl Technique {
-    pub const ALL: [Technique; 8] = [
+    pub const ALL: [Technique; 9] = [
         Self::DirectOnly,
         Self::Knecht,
         Self::Nguyen,
@@ -193,6 +212,7 @@ impl Technique {
         Self::Soler,
         Self::SolerNearKnechtFar,
         Self::SolerAtHcbSamples,
+        Self::Gautron,
     ];
 
     /// The technique's stage choices. `base` gives the choices the technique leaves open
@@ -247,6 +267,15 @@ impl Technique {
                 temporal: Temporal::None,
                 ..Self::Soler.choices(base)
             },
+            Self::Gautron => PipelineSettings {
+                vpl_source: VplSource::None,
+                vpl_visibility: VplVisibility::None,
+                shading_points: ShadingPoints::IrradianceRecords,
+                gather: Gather::Hemispheres,
+                reconstruction: Reconstruction::WeightSplatting,
+                temporal: Temporal::RecordCache,
+                near_field: NearField::None,
+            },
         }
     }
 
@@ -296,6 +325,11 @@ impl PipelineSettings {
         }
     }
 
+    /// Whether Gautron et al.'s irradiance records are the gather.
+    pub fn uses_gautron(&self) -> bool {
+        self.gather == Gather::Hemispheres
+    }
+
     /// Whether instant radiosity's VPLs (stages 3–4 of Knecht) are in use.
     pub fn uses_knecht_vpls(&self) -> bool {
         self.gather == Gather::Vpl && self.vpl_source == VplSource::ImportanceWarping
@@ -328,6 +362,7 @@ impl PipelineSettings {
             "hcb" => self.uses_hcb(),
             "reference" => self.is_reference(),
             "soler" => self.uses_soler(),
+            "gautron" => self.uses_gautron(),
             _ => true,
         }
     }
@@ -342,6 +377,35 @@ pub fn combination_errors(s: &LabSettings) -> Vec<FieldError> {
         |field: &str, message: String| errors.push(FieldError { field: format!("pipeline.{field}"), message });
     if p.gather == Gather::None {
         return errors;
+    }
+    let gautron_choice = p.shading_points == ShadingPoints::IrradianceRecords
+        || p.reconstruction == Reconstruction::WeightSplatting
+        || p.temporal == Temporal::RecordCache;
+    if p.gather == Gather::Hemispheres {
+        // Gautron et al.'s records: their own shading points, splatting and cache; no VPLs.
+        if p.shading_points != ShadingPoints::IrradianceRecords {
+            err(
+                "shading_points",
+                "the hemisphere gather computes irradiance records: set pipeline.shading_points = IrradianceRecords"
+                    .into(),
+            );
+        }
+        if p.reconstruction != Reconstruction::WeightSplatting {
+            err("reconstruction", "irradiance records are interpolated by splatting Ward's weights: set pipeline.reconstruction = WeightSplatting".into());
+        }
+        if !matches!(p.temporal, Temporal::None | Temporal::RecordCache) {
+            err(
+                "temporal",
+                "irradiance records are kept by the record cache (RecordCache) or made anew every frame (None)".into(),
+            );
+        }
+        if p.near_field != NearField::None {
+            err("near_field", "the hemispheres already take the light from every distance; a near field splits a VPL gather: set pipeline.near_field = None".into());
+        }
+        return errors;
+    }
+    if gautron_choice {
+        err("gather", "irradiance records, Ward-weight splatting and the record cache belong to the hemisphere gather: set pipeline.gather = Hemispheres".into());
     }
     if p.gather == Gather::ScreenSpace {
         // Soler et al.'s gather runs on the mip levels and is combined by the upsampling, or
@@ -430,7 +494,10 @@ pub fn combination_errors(s: &LabSettings) -> Vec<FieldError> {
                 err("reconstruction", "HCB samples cover a few percent of the pixels: only coherence splatting (CoherenceSplatting) fills the image from them".into());
             }
         }
-        ShadingPoints::EveryPixel | ShadingPoints::InterleavedTiles | ShadingPoints::MipLevels => {
+        ShadingPoints::EveryPixel
+        | ShadingPoints::InterleavedTiles
+        | ShadingPoints::MipLevels
+        | ShadingPoints::IrradianceRecords => {
             if p.reconstruction == Reconstruction::CoherenceSplatting {
                 err(
                     "reconstruction",

@@ -34,6 +34,8 @@ pub struct FrameInputs<'a> {
     pub gbuffer_size: (u32, u32),
     /// The frame's index (per-frame sample rotations).
     pub frame: u32,
+    /// Stage 2's pass: its lights and shadow maps also light Gautron's record hemispheres.
+    pub direct: &'a crate::passes::direct::DirectPass,
     /// Stage 2's direct light (`direct.radiance`), the first bounce's source.
     pub direct_radiance: &'a wgpu::TextureView,
     /// Every light of the frame on the GPU, and the light views with their light's index.

@@ -81,25 +81,10 @@ fn shadow_visibility(light: Light, p: vec3<f32>, n: vec3<f32>, l: vec3<f32>) -> 
     return sum / count;
 }
 
-@compute @workgroup_size(TILE, TILE, 1)
-fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let size = textureDimensions(out_radiance);
-    if (gid.x >= size.x || gid.y >= size.y) {
-        return;
-    }
-    let px = vec2<i32>(gid.xy);
-    let nrm = textureLoad(g_normal, px, 0);
-    if (nrm.w < 0.5) {
-        textureStore(out_radiance, px, vec4<f32>(0.0));
-        return;
-    }
-    let p = textureLoad(g_position, px, 0).xyz;
-    let n = normalize(nrm.xyz);
-    let alb = textureLoad(g_albedo, px, 0);
-    let mat = textureLoad(g_material, px, 0);
-    let v = normalize(camera.position.xyz - p);
-    // The surface's own emission reaches the eye directly.
-    var radiance = textureLoad(g_emission, px, 0).rgb;
+// `start` (the surface's emission) plus the light of every punctual light reflected toward v
+// at p.
+fn reflected_direct(start: vec3<f32>, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, alb: vec4<f32>, mat: vec4<f32>) -> vec3<f32> {
+    var radiance = start;
     let count = arrayLength(&lights);
     for (var i = 0u; i < count; i = i + 1u) {
         let light = lights[i];
@@ -125,5 +110,61 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let e = light.color.rgb * params.light.x * irradiance_scale * ndl * vis;
         radiance = radiance + brdf_eval(n, l, v, alb.rgb, alb.a, mat.x, mat.y) * e;
     }
+    return radiance;
+}
+
+@compute @workgroup_size(TILE, TILE, 1)
+fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let size = textureDimensions(out_radiance);
+    if (gid.x >= size.x || gid.y >= size.y) {
+        return;
+    }
+    let px = vec2<i32>(gid.xy);
+    let nrm = textureLoad(g_normal, px, 0);
+    if (nrm.w < 0.5) {
+        textureStore(out_radiance, px, vec4<f32>(0.0));
+        return;
+    }
+    let p = textureLoad(g_position, px, 0).xyz;
+    let n = normalize(nrm.xyz);
+    let alb = textureLoad(g_albedo, px, 0);
+    let mat = textureLoad(g_material, px, 0);
+    let v = normalize(camera.position.xyz - p);
+    // The surface's own emission reaches the eye directly.
+    let radiance = reflected_direct(textureLoad(g_emission, px, 0).rgb, p, n, v, alb, mat);
+    textureStore(out_radiance, px, vec4<f32>(radiance, 1.0));
+}
+
+// An atlas of G-buffer tiles, each seen from its own viewpoint: the hemispheres of Gautron
+// et al.'s records (003, "Simple plane sampling": "the shadowing effects can be accounted for
+// using … shadow mapping"), lit by the same lights, shadow maps and BRDF as the screen, toward
+// the record. Emission is counted as the path tracer counts it at a bounce.
+struct AtlasParams {
+    // x: tile side in texels, y: tiles per row
+    tile: vec4<u32>,
+}
+@group(2) @binding(0) var<uniform> atlas: AtlasParams;
+@group(2) @binding(1) var<storage, read> viewers: array<vec4<f32>>;
+
+@compute @workgroup_size(TILE, TILE, 1)
+fn cs_atlas(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let size = textureDimensions(out_radiance);
+    if (gid.x >= size.x || gid.y >= size.y) {
+        return;
+    }
+    let px = vec2<i32>(gid.xy);
+    let cell = gid.xy / atlas.tile.x;
+    let viewer = viewers[min(cell.y * atlas.tile.y + cell.x, arrayLength(&viewers) - 1u)];
+    let nrm = textureLoad(g_normal, px, 0);
+    if (nrm.w < 0.5 || viewer.w < 0.5) {
+        textureStore(out_radiance, px, vec4<f32>(0.0));
+        return;
+    }
+    let p = textureLoad(g_position, px, 0).xyz;
+    let n = normalize(nrm.xyz);
+    let alb = textureLoad(g_albedo, px, 0);
+    let mat = textureLoad(g_material, px, 0);
+    let v = normalize(viewer.xyz - p);
+    let radiance = reflected_direct(textureLoad(g_emission, px, 0).rgb, p, n, v, alb, mat);
     textureStore(out_radiance, px, vec4<f32>(radiance, 1.0));
 }

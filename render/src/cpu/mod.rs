@@ -2,6 +2,7 @@
 //! the passes' outputs with these on small inputs.
 
 pub mod brdf;
+pub mod gautron;
 pub mod hcb;
 pub mod knecht;
 pub mod knecht_bounce;

@@ -50,6 +50,12 @@ pub const RADIANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Floa
 
 pub struct DirectPass {
     pipeline: wgpu::ComputePipeline,
+    /// `cs_atlas`: the same light at an atlas of G-buffer tiles, each seen from its own
+    /// viewer (Gautron et al.'s record hemispheres).
+    atlas_pipeline: wgpu::ComputePipeline,
+    layout2: wgpu::BindGroupLayout,
+    /// The lights, shadow maps and parameters of the last `run`, for `shade_atlas`.
+    group0: Option<wgpu::BindGroup>,
     layout0: wgpu::BindGroupLayout,
     layout1: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
@@ -90,6 +96,17 @@ impl DirectPass {
             ],
         });
         let pipeline = super::compute_pipeline(device, "direct.pipeline", &module, "cs_main", &[&layout0, &layout1]);
+        let layout2 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("direct.atlas"),
+            entries: &[super::bgl::uniform(0, cs), super::bgl::storage(1, cs, true)],
+        });
+        let atlas_pipeline = super::compute_pipeline(
+            device,
+            "direct.atlas_pipeline",
+            &module,
+            "cs_atlas",
+            &[&layout0, &layout1, &layout2],
+        );
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("direct.params"),
             size: std::mem::size_of::<DirectParams>() as u64,
@@ -116,6 +133,9 @@ impl DirectPass {
         let (radiance, radiance_view) = Self::target(ctx, width, height);
         Self {
             pipeline,
+            atlas_pipeline,
+            layout2,
+            group0: None,
             layout0,
             layout1,
             params,
@@ -242,5 +262,55 @@ impl DirectPass {
         pass.set_bind_group(1, &group1, &[]);
         let (w, h) = (self.radiance.width(), self.radiance.height());
         pass.dispatch_workgroups(w.div_ceil(super::TILE), h.div_ceil(super::TILE), 1);
+        drop(pass);
+        self.group0 = Some(group0);
+    }
+
+    /// The direct light of this frame (the lights and shadow maps of the last [`Self::run`])
+    /// at an atlas of G-buffer tiles of `tile` texels, `per_row` to a row, tile k seen from
+    /// `viewers[k]` (xyz; w = 0: an empty tile), into `out` (`RADIANCE_FORMAT`, the atlas's
+    /// size): the hemispheres of Gautron et al.'s records (003, "Simple plane sampling").
+    #[allow(clippy::too_many_arguments)]
+    pub fn shade_atlas(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        atlas: &GBufferViews,
+        out: &wgpu::TextureView,
+        size: (u32, u32),
+        params: &wgpu::Buffer,
+        viewers: &wgpu::Buffer,
+    ) {
+        let Some(group0) = &self.group0 else { return };
+        let device = &ctx.device;
+        let tv = wgpu::BindingResource::TextureView;
+        let group1 = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("direct.atlas_gbuffer"),
+            layout: &self.layout1,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: tv(&atlas.position) },
+                wgpu::BindGroupEntry { binding: 1, resource: tv(&atlas.normal) },
+                wgpu::BindGroupEntry { binding: 2, resource: tv(&atlas.albedo) },
+                wgpu::BindGroupEntry { binding: 3, resource: tv(&atlas.material) },
+                wgpu::BindGroupEntry { binding: 4, resource: tv(out) },
+                wgpu::BindGroupEntry { binding: 5, resource: tv(&atlas.emission) },
+            ],
+        });
+        let group2 = super::bind_group(
+            device,
+            "direct.atlas",
+            &self.layout2,
+            vec![params.as_entire_binding(), viewers.as_entire_binding()],
+        );
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("direct.atlas_pass"),
+            timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+        });
+        pass.set_pipeline(&self.atlas_pipeline);
+        pass.set_bind_group(0, group0, &[]);
+        pass.set_bind_group(1, &group1, &[]);
+        pass.set_bind_group(2, &group2, &[]);
+        pass.dispatch_workgroups(size.0.div_ceil(super::TILE), size.1.div_ceil(super::TILE), 1);
     }
 }

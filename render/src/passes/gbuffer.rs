@@ -249,7 +249,8 @@ impl GBufferPass {
     }
 }
 
-fn create_targets(ctx: &GpuContext, width: u32, height: u32, name: &str) -> GBuffer {
+/// The G-buffer's textures at `width`×`height` (also the atlas of Gautron's hemispheres).
+pub(crate) fn create_targets(ctx: &GpuContext, width: u32, height: u32, name: &str) -> GBuffer {
     let d = &ctx.device;
     let att = wgpu::TextureUsages::RENDER_ATTACHMENT;
     let position = super::create_target(d, &format!("{name}.position"), width, height, POSITION_FORMAT, att);

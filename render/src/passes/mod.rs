@@ -13,6 +13,7 @@
 
 pub mod compose;
 pub mod direct;
+pub mod gautron;
 pub mod gbuffer;
 pub mod hcb;
 pub mod knecht;

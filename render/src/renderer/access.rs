@@ -49,6 +49,7 @@ impl Renderer {
         passes.retain(|p| *p != "exact_vpl" || self.stages.reference.is_some());
         passes.retain(|p| *p != "instant_radiosity" || self.stages.knecht.is_some());
         passes.retain(|p| *p != "soler" || self.stages.soler.is_some());
+        passes.retain(|p| *p != "gautron" || self.stages.gautron.is_some());
         if passes.is_empty() {
             return Ok(passes);
         }
@@ -110,9 +111,24 @@ impl Renderer {
                 return Err(e.to_string());
             }
         }
+        if passes.contains(&"gautron") {
+            let old = self.stages.gautron.take();
+            let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+            self.ensure_passes();
+            if let Some(e) = pollster::block_on(scope.pop()) {
+                self.stages.gautron = old;
+                return Err(e.to_string());
+            }
+        }
         self.register_all();
         self.reset_history();
         Ok(passes)
+    }
+
+    /// Gautron et al.'s passes, when the hemisphere gather is on (tests and the bench read its
+    /// records and counters).
+    pub fn gautron(&self) -> Option<&crate::passes::gautron::stage::GautronStage> {
+        self.stages.gautron.as_ref()
     }
 
     /// Timings of the last frame.
@@ -248,6 +264,12 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         | "soler/ring.wgsl"
         | "soler/hcb_gather.wgsl"
         | "soler/voxel_common.wgsl" => "soler",
+        "gautron/create.wgsl"
+        | "gautron/hemisphere.wgsl"
+        | "gautron/reduce.wgsl"
+        | "gautron/splat.wgsl"
+        | "gautron/resolve.wgsl"
+        | "gautron/common.wgsl" => "gautron",
         _ => return None,
     })
 }
@@ -292,6 +314,10 @@ pub fn scope_output(scope: &str) -> Option<&'static str> {
         s if s.starts_with("soler.bounce") && s.ends_with(".upsample") => "soler.indirect",
         "soler.voxels" => "soler.voxels.2",
         "soler.temporal" => "soler.temporal",
+        "gautron.splat" => "gautron.accum",
+        "gautron.create" => "gautron.candidates",
+        "gautron.hemispheres" => "gautron.hemisphere.radiance",
+        "gautron.resolve" => "gautron.irradiance",
         _ => return None,
     })
 }

@@ -19,6 +19,7 @@ use crate::clock::Clock;
 use crate::gpu::GpuContext;
 use crate::passes::compose::ComposePass;
 use crate::passes::direct::DirectPass;
+use crate::passes::gautron::stage::GautronStage;
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::hcb::stage::HcbStage;
 use crate::passes::knecht::interleave::InterleavePass;
@@ -52,6 +53,8 @@ pub(crate) struct StagePasses {
     pub temporal: Option<TemporalPass>,
     /// Shading points "mip levels", the screen-space gather and the upsampling (Soler).
     pub soler: Option<SolerStage>,
+    /// Irradiance records, their hemispheres, the splatting and the record cache (Gautron).
+    pub gautron: Option<GautronStage>,
 }
 
 /// What the previous frame used, for the movement buffer (Knecht 002 §3.5.1).
@@ -180,6 +183,9 @@ impl Renderer {
         if let Some(t) = &x.soler {
             t.register(&mut self.registry);
         }
+        if let Some(t) = &x.gautron {
+            t.register(&mut self.registry);
+        }
         if let Some(t) = &self.flip_map {
             self.registry.register(
                 "metrics.flip",
@@ -277,6 +283,9 @@ impl Renderer {
         if let Some(x) = &mut self.stages.soler {
             x.reset();
         }
+        if let Some(x) = &mut self.stages.gautron {
+            x.reset();
+        }
     }
 
     /// The exact-VPL reference's progress: (VPLs accumulated, VPLs at which it stops), when
@@ -369,7 +378,7 @@ impl Renderer {
         let tiles = match p.shading_points {
             ShadingPoints::EveryPixel => Some(1),
             ShadingPoints::InterleavedTiles => Some(s.interleave.n),
-            ShadingPoints::HcbSamples | ShadingPoints::MipLevels => None,
+            ShadingPoints::HcbSamples | ShadingPoints::MipLevels | ShadingPoints::IrradianceRecords => None,
         };
         match tiles.filter(|_| p.uses_knecht_vpls()) {
             Some(n) => {
@@ -406,6 +415,14 @@ impl Renderer {
             fresh |= st.ensure(&ctx, &s.soler, w, h, temporal) | created;
         } else {
             fresh |= x.soler.take().is_some();
+        }
+        if p.uses_gautron() {
+            let created = x.gautron.is_none();
+            let scene = &self.gpu_scene;
+            let st = x.gautron.get_or_insert_with(|| GautronStage::new(&ctx, scene, &s.gautron, w, h));
+            fresh |= st.ensure(&ctx, &s.gautron, w, h) | created;
+        } else {
+            fresh |= x.gautron.take().is_some();
         }
         if fresh {
             self.register_all();

@@ -243,6 +243,54 @@ impl GpuScene {
     }
 }
 
+impl GpuScene {
+    /// The indexed draws [`Self::draw`] issues for `state`: (first index, index count, base
+    /// vertex, instance), in its order.
+    pub fn indexed_draws(&self, state: &SceneState) -> Vec<(u32, u32, i32, u32)> {
+        state
+            .draws
+            .iter()
+            .take(self.instance_capacity)
+            .enumerate()
+            .filter_map(|(i, d)| {
+                let p = self.primitives.get(d.mesh).and_then(|m| m.get(d.primitive))?;
+                (p.index_count > 0).then_some((p.first_index, p.index_count, p.base_vertex, i as u32))
+            })
+            .collect()
+    }
+
+    /// [`Self::draw`] with indirect draws: draw k of [`Self::indexed_draws`] reads its
+    /// arguments (5 words) at k·20 bytes of `args` (Gautron's hemispheres: the instance count
+    /// is written by the GPU).
+    pub fn draw_indirect(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        state: &SceneState,
+        material_group: u32,
+        (single, double): (&wgpu::RenderPipeline, &wgpu::RenderPipeline),
+        args: &wgpu::Buffer,
+    ) {
+        pass.set_vertex_buffer(0, self.vertices.slice(..));
+        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+        let mut k = 0u64;
+        for d in state.draws.iter().take(self.instance_capacity) {
+            let Some(p) = self.primitives.get(d.mesh).and_then(|m| m.get(d.primitive)) else { continue };
+            if p.index_count == 0 {
+                continue;
+            }
+            let ds = self.double_sided.get(p.material).copied().unwrap_or(true);
+            pass.set_pipeline(if ds { double } else { single });
+            pass.set_bind_group(
+                material_group,
+                &self.material_groups[p.material.min(self.material_groups.len() - 1)],
+                &[],
+            );
+            pass.draw_indexed_indirect(args, k * 20);
+            k += 1;
+        }
+    }
+}
+
 /// Uploads an sRGB RGBA8 image with a box-filtered mip chain; levels larger than the
 /// device allows are dropped (the texture starts at the first level that fits).
 fn upload_texture(ctx: &GpuContext, img: &super::TextureImage) -> wgpu::Texture {

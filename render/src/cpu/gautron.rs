@@ -1,0 +1,461 @@
+//! CPU twin of Gautron, Křivánek et al.'s irradiance cache splatting (003, SIGGRAPH 2008
+//! course notes). The text has no section numbers: the docs cite its slide headings.
+//!
+//! - The hemisphere camera ("From Ray Tracing to Rasterization", "Simple plane sampling"): the
+//!   per-texel terms [`TexelTerms`] of an `n`×`n` image plane at distance 1 along the record's
+//!   normal, with the border compensation of the missing grazing directions. The GPU uploads
+//!   [`HemisphereTable::texels`] verbatim (64 bytes a texel, row-major).
+//! - The record's terms ("Irradiance Caching": position, normal, irradiance, gradients, mean
+//!   distance) from the hemisphere's radiance and distances: [`reduce`].
+//! - The interpolation ("From Octree to Splatting": "Irradiance Interpolation", "Weighting
+//!   Function", "Principle"): [`weight`], [`extrapolate`], [`accumulate`], and the splat's
+//!   screen bounds [`sphere_ndc_rect`].
+//! - The creation ("Algorithm": records are made where the splatted coverage is
+//!   insufficient): [`candidates`], one pixel per screen tile and round.
+//!
+//! Readings chosen where the text is inconsistent (⚠; also in the items' docs):
+//! - ⚠ "Simple plane sampling" prints Ω_p = A·cos θ / d² with d "the distance between the point
+//!   of interest and the image plane". For a plane at distance d the solid angle of a small
+//!   texel of area A is A·cos θ / r² with r = d / cos θ the distance to the *texel*, i.e.
+//!   A·cos³ θ / d². We use Ω_p = A / (1 + x² + y²)^{3/2} (d = 1); the tests check that Σ Ω_p is
+//!   the pyramid's exact solid angle.
+//! - ⚠ The compensation Ω_border = Ω_p + cos θ_border · δφ is a solid angle, but irradiance
+//!   needs cosine-weighted measure; [`BorderCompensation`] selects the reading (`Paper`: the
+//!   band's solid angle reflected with the border texel's own cosine, `CosineWeighted`: the
+//!   band's own cosines, cos² θ_b / 2 · δφ). θ_border is taken per boundary edge, at the
+//!   edge's middle (the text's "largest θ covered by the aperture" varies along the edge).
+//! - ⚠ "Weighting Function" prints w = 1/(√(‖P−P_k‖² + √(1 − n·n_k))) with no R_k; the next
+//!   slide ("Simplified Weighting Function") and Ward 1988 have ‖P−P_k‖/R_k + √(1 − n·n_k): we
+//!   use that one, clamped to `w_max` (it is unbounded at P = P_k).
+//! - ⚠ "Irradiance Interpolation" takes S = {k : w_k > 1/a} while "Algorithm"'s creation test
+//!   is "W < a": one reading for both, a point is covered iff some record passes w_k > 1/a.
+//! - ⚠ "Algorithm"'s TransformVertex offsets the centre by ±a·H in view x, y before the
+//!   projection: that square is too small, slightly on the optical axis (the silhouette's
+//!   half-width is ρ/√(w² − ρ²), not ρ/w, at depth w) and badly off it (the perspective
+//!   stretches the projection outward). We bound the sphere exactly from its tangent planes
+//!   through the eye ([`sphere_ndc_rect`]).
+//!
+//! What the border compensation costs the gradients (measured in `tests/tests/gautron_cpu.rs`
+//! at 126.87°, tan = 2):
+//! - The square pyramid holds 83.1 % of the cosine-weighted hemisphere (the form factor of the
+//!   square, 4/π · T/√(1+T²) · atan(T/√(1+T²))), not the 86 % "Simple plane sampling" quotes
+//!   from Larsen et al.; `Off` loses 16.9 % of a uniform sky's irradiance.
+//! - ∇_r is not cosine-weighted, so the grazing directions dominate it: the bands hold 58 % of
+//!   ∫ ω_x² dω. Each band takes the radiance seen in its border texel's direction (more
+//!   upright than the band), so for radiance linear in ω ∇_r tends (n → ∞) to 0.964 × the
+//!   exact value, while the derivative of the compensated E under a rotation of the frame
+//!   tends to 1.035 ×: the two differ by 7.4 % at any n (at a 170° aperture, without bands,
+//!   they agree to 0.7 % at n = 32).
+//! - ∇_t has no term for the bands' radiance, which follows the border texels as the record
+//!   moves: 2 % of the gradient on a smooth ceiling, and steps where a silhouette crosses the
+//!   tile's border.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Vec2, Vec3};
+
+use crate::passes::gautron::BorderCompensation;
+
+/// Tangent frame of a record's hemisphere camera: (t, b) with t, b, n orthonormal,
+/// right-handed (t × b = n).
+/// If |n.z| < 0.999: t = normalize(cross(Vec3::Z, n)), else t = normalize(cross(Vec3::X, n));
+/// b = cross(n, t).
+pub fn frame(n: Vec3) -> (Vec3, Vec3) {
+    let t = if n.z.abs() < 0.999 { Vec3::Z.cross(n) } else { Vec3::X.cross(n) }.normalize();
+    (t, n.cross(t))
+}
+
+/// Per-texel terms of the hemisphere camera ("Simple plane sampling"), 4 vec4 = 64 bytes: the
+/// layout the GPU reads (a `storage` array of 4 × `vec4<f32>`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct TexelTerms {
+    /// xyz: unit direction through the texel centre in the local frame (x along t, y along b,
+    /// z along n); w: its solid angle Ω_p = A / (1 + x² + y²)^{3/2} (⚠ not the printed
+    /// A·cos θ / d², see the module docs).
+    pub dir: [f32; 4],
+    /// x: the band's irradiance weight for the chosen compensation (0 for interior texels or
+    /// `Off`); y: the band's solid angle (Σ over the texel's boundary edges of cos θ_b · δφ;
+    /// 0 for interior texels or `Off`); zw: the band's ∫(n × ω) dω in the local frame (x, y
+    /// components; z is 0) (0 for interior texels or `Off`).
+    pub band: [f32; 4],
+    /// The edge shared with the right neighbour (i+1, j): xyz = unit normal m_e of the edge on
+    /// the sphere pointing toward the neighbour, w = cos θ_e · l_e (cosine at the edge's middle
+    /// direction times the edge's angular length); all 0 for the last column.
+    pub right: [f32; 4],
+    /// The edge shared with the neighbour below (i, j+1): the same; all 0 for the last row.
+    pub down: [f32; 4],
+}
+
+/// The hemisphere camera's per-texel table ("Simple plane sampling"): an `n`×`n` image plane
+/// at distance 1 along the normal, half-width `tan_half` = tan(aperture / 2). Texel (i = column,
+/// j = row, row 0 at the top) has its centre at x = (2(i+½)/n − 1)·T, y = (1 − 2(j+½)/n)·T.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HemisphereTable {
+    pub n: u32,
+    pub tan_half: f32,
+    pub compensation: BorderCompensation,
+    /// Row-major, index j·n + i.
+    pub texels: Vec<TexelTerms>,
+}
+
+/// The band beyond one boundary edge of the tile (p0, p1: its endpoints on the plane z = 1):
+/// (cos θ_b · δφ, cos² θ_b / 2 · δφ, ∫_band (n × ω) dω in local x, y).
+fn edge_band(p0: Vec2, p1: Vec2) -> (f32, f32, Vec2) {
+    let (fa, fb) = (p0.y.atan2(p0.x), p1.y.atan2(p1.x));
+    // Wrapped difference in (−π, π]: the left edge (x = −T) straddles φ = ±π.
+    let mut d = fb - fa;
+    if d > std::f32::consts::PI {
+        d -= std::f32::consts::TAU;
+    } else if d <= -std::f32::consts::PI {
+        d += std::f32::consts::TAU;
+    }
+    // Integrate in increasing φ so that δφ > 0.
+    let (phi0, dphi) = if d >= 0.0 { (fa, d) } else { (fb, -d) };
+    let phi1 = phi0 + dphi;
+    let mid = (p0 + p1) * 0.5;
+    let theta_b = mid.length().atan();
+    let cos_b = theta_b.cos();
+    let k = (std::f32::consts::FRAC_PI_2 - theta_b) * 0.5 + (2.0 * theta_b).sin() * 0.25;
+    let zw = Vec2::new(phi1.cos() - phi0.cos(), phi1.sin() - phi0.sin()) * k;
+    (cos_b * dphi, cos_b * cos_b * 0.5 * dphi, zw)
+}
+
+/// An interior edge between two texels (p0, p1: its endpoints on the plane z = 1; `toward`:
+/// the side of the neighbour): [m_e, cos θ_e · l_e].
+fn edge_terms(p0: Vec2, p1: Vec2, toward: Vec3) -> [f32; 4] {
+    let e0 = p0.extend(1.0).normalize();
+    let e1 = p1.extend(1.0).normalize();
+    let c = e0.cross(e1);
+    let len = c.length().atan2(e0.dot(e1));
+    let cos_e = (e0 + e1).normalize().z;
+    let mut m = c.normalize();
+    if m.dot(toward) < 0.0 {
+        m = -m;
+    }
+    [m.x, m.y, m.z, cos_e * len]
+}
+
+impl HemisphereTable {
+    /// The table of an `n`×`n` camera of full aperture `aperture_deg` (Larsen et al.'s 126.87°:
+    /// tan(aperture/2) = 2).
+    ///
+    /// Border compensation ("Simple plane sampling": the border pixels are "extended" to the
+    /// horizon): each texel edge on the tile's boundary (corner texels have two) spans the
+    /// azimuths φ0 … φ1 of its endpoints (δφ = |φ1 − φ0| wrapped; Σ δφ = 2π over the boundary)
+    /// and has θ_b = the polar angle of its middle point. The band θ_b … 90° over δφ has solid
+    /// angle cos θ_b · δφ and cosine-weighted measure cos² θ_b / 2 · δφ. `band.x` is
+    /// `Off`: 0; `Paper`: cos θ_texel · Σ cos θ_b δφ (the text's Ω_border = Ω_p + cos θ_b δφ
+    /// reflected with the texel's own cosine: the extra over Ω_p cos θ_texel); `CosineWeighted`:
+    /// Σ cos² θ_b / 2 · δφ. `band.zw` = ∫_band (n × ω) dω with ω = (sin θ cos φ, sin θ sin φ,
+    /// cos θ), n × ω = (−sin θ sin φ, sin θ cos φ, 0): K·(cos φ1 − cos φ0, sin φ1 − sin φ0),
+    /// K = ∫_{θ_b}^{π/2} sin² θ dθ = (π/2 − θ_b)/2 + sin(2θ_b)/4.
+    pub fn new(n: u32, aperture_deg: f32, compensation: BorderCompensation) -> Self {
+        assert!(n >= 1, "the hemisphere camera needs at least one texel");
+        let tan_half = (aperture_deg.to_radians() * 0.5).tan();
+        let nf = n as f32;
+        // Plane coordinates of column boundary i and row boundary j (fractional: centres).
+        let px = |i: f32| (2.0 * i / nf - 1.0) * tan_half;
+        let py = |j: f32| (1.0 - 2.0 * j / nf) * tan_half;
+        let area = (2.0 * tan_half / nf).powi(2);
+        let mut texels = Vec::with_capacity((n * n) as usize);
+        for j in 0..n {
+            for i in 0..n {
+                let (fi, fj) = (i as f32, j as f32);
+                let centre = Vec3::new(px(fi + 0.5), py(fj + 0.5), 1.0);
+                let d = centre.normalize();
+                let omega = area / centre.length_squared().powf(1.5);
+                // The tile's boundary edges of this texel.
+                let (x0, x1, y0, y1) = (px(fi), px(fi + 1.0), py(fj), py(fj + 1.0));
+                let mut edges = Vec::new();
+                if j == 0 {
+                    edges.push((Vec2::new(x0, y0), Vec2::new(x1, y0)));
+                }
+                if j + 1 == n {
+                    edges.push((Vec2::new(x0, y1), Vec2::new(x1, y1)));
+                }
+                if i == 0 {
+                    edges.push((Vec2::new(x0, y0), Vec2::new(x0, y1)));
+                }
+                if i + 1 == n {
+                    edges.push((Vec2::new(x1, y0), Vec2::new(x1, y1)));
+                }
+                let (mut solid, mut cosw, mut zw) = (0.0, 0.0, Vec2::ZERO);
+                for (p0, p1) in edges {
+                    let (s, c, z) = edge_band(p0, p1);
+                    solid += s;
+                    cosw += c;
+                    zw += z;
+                }
+                let band = match compensation {
+                    BorderCompensation::Off => [0.0; 4],
+                    BorderCompensation::Paper => [d.z * solid, solid, zw.x, zw.y],
+                    BorderCompensation::CosineWeighted => [cosw, solid, zw.x, zw.y],
+                };
+                let right =
+                    if i + 1 < n { edge_terms(Vec2::new(x1, y0), Vec2::new(x1, y1), Vec3::X) } else { [0.0; 4] };
+                let down =
+                    if j + 1 < n { edge_terms(Vec2::new(x0, y1), Vec2::new(x1, y1), Vec3::NEG_Y) } else { [0.0; 4] };
+                texels.push(TexelTerms { dir: [d.x, d.y, d.z, omega], band, right, down });
+            }
+        }
+        Self { n, tan_half, compensation, texels }
+    }
+
+    /// Texel k's direction in a world frame (t, b, n).
+    pub fn world_dir(&self, k: usize, t: Vec3, b: Vec3, n: Vec3) -> Vec3 {
+        let d = self.texels[k].dir;
+        t * d[0] + b * d[1] + n * d[2]
+    }
+}
+
+/// A record's terms from its hemisphere ("Irradiance Caching": position, normal, irradiance,
+/// gradients, harmonic mean distance).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RecordTerms {
+    pub e: Vec3,
+    /// Harmonic mean distance (f32::INFINITY when nothing was hit).
+    pub h: f32,
+    /// ∇_r E per colour channel (world space).
+    pub rot: [Vec3; 3],
+    /// ∇_t E per colour channel (world space).
+    pub trans: [Vec3; 3],
+}
+
+/// `radiance[k]` (rgb) is the radiance arriving from texel k (0 for the background),
+/// `distance[k]` the distance to what texel k sees (f32::INFINITY for the background); `n` the
+/// record's normal (its frame is [`frame`]`(n)`). See [`reduce_in_frame`] for the terms.
+pub fn reduce(table: &HemisphereTable, n: Vec3, radiance: &[Vec3], distance: &[f32]) -> RecordTerms {
+    let (t, b) = frame(n);
+    reduce_in_frame(table, t, b, n, radiance, distance)
+}
+
+/// [`reduce`] in an explicit right-handed orthonormal frame (t, b, n) (texel k looks along
+/// `to_world(dir_k)`, to_world(v) = v.x·t + v.y·b + v.z·n). Sums over the texels k (L_k the
+/// radiance, c_k = dir.z, Ω_k = dir.w, ω_k = to_world(dir.xyz)):
+///
+/// - E = Σ L_k c_k Ω_k + Σ L_k band.x (the compensated bands carry their border texel's
+///   radiance, "Simple plane sampling").
+/// - H = (Σ_all c_k Ω_k) / (Σ_hit c_k Ω_k / r_k): Ward's harmonic mean, cosine-weighted; a
+///   miss counts as infinitely far; ∞ when nothing is hit.
+/// - ∇_r = Σ L_k Ω_k (n × ω_k) + Σ L_k to_world(band.z, band.w, 0). Rotating n by a small
+///   rotation δ·a (n' = n + δ a × n) changes E = ∫ L max(0, n·ω) dω by
+///   δ ∫ L (a × n)·ω dω = δ a·∫ L (n × ω) dω (the max's kink lies on the horizon, where the
+///   integrand is 0, so it adds nothing): that integral is ∇_r, and the texels and bands are
+///   its quadrature (Ward & Heckbert 1992, "Irradiance Interpolation"'s (n_k × n)·∇_r).
+/// - ∇_t = −Σ_edges (L_a − L_b) (cos θ_e l_e) m_e / min(r_a, r_b) over the right and down
+///   edges of every texel a with neighbour b (world m_e); an edge whose two sides both miss
+///   adds 0. Derivation (Ward & Heckbert 1992; Křivánek et al. 2005's cell boundaries): the
+///   radiance is constant per texel and the texels move nowhere, but their *boundaries* do:
+///   translating the record by t moves the image of a surface at distance r by −t_⊥ / r on the
+///   sphere (t_⊥: t's part orthogonal to the direction), and a boundary moves with the closer
+///   of its two surfaces (it occludes the other). The edge's motion along its normal m_e
+///   (tangent to the sphere, toward b) is −(t·m_e)/min(r_a, r_b); the cell a then grows into b
+///   by that times the edge's length l_e, a sliver of cosine-weighted measure cos θ_e l_e
+///   which changes from L_b to L_a: dE = −Σ (L_a − L_b) cos θ_e l_e (m_e·t) / min(r_a, r_b).
+///   The tile's outer boundary is fixed (the camera only translates) and the bands keep their
+///   border texel's radiance, so neither adds a term.
+pub fn reduce_in_frame(
+    table: &HemisphereTable,
+    t: Vec3,
+    b: Vec3,
+    n: Vec3,
+    radiance: &[Vec3],
+    distance: &[f32],
+) -> RecordTerms {
+    let count = table.texels.len();
+    assert_eq!(radiance.len(), count, "one radiance per texel");
+    assert_eq!(distance.len(), count, "one distance per texel");
+    let to_world = |x: f32, y: f32, z: f32| t * x + b * y + n * z;
+    let side = table.n as usize;
+    let mut e = Vec3::ZERO;
+    let (mut all, mut hit) = (0.0f32, 0.0f32);
+    let mut rot = [Vec3::ZERO; 3];
+    let mut trans = [Vec3::ZERO; 3];
+    for (k, tx) in table.texels.iter().enumerate() {
+        let l = radiance[k];
+        let [dx, dy, c, omega] = tx.dir;
+        e += l * (c * omega + tx.band[0]);
+        all += c * omega;
+        if distance[k].is_finite() {
+            hit += c * omega / distance[k];
+        }
+        // n × ω_k = to_world((0,0,1) × dir) = to_world(−dir.y, dir.x, 0) (a rotation keeps ×).
+        let g = to_world(-dy, dx, 0.0) * omega + to_world(tx.band[2], tx.band[3], 0.0);
+        for (ch, r) in rot.iter_mut().enumerate() {
+            *r += g * l[ch];
+        }
+        let (i, j) = (k % side, k / side);
+        let neighbours = [(tx.right, i + 1 < side, k + 1), (tx.down, j + 1 < side, k + side)];
+        for (edge, exists, nb) in neighbours {
+            if !exists {
+                continue;
+            }
+            let (ra, rb) = (distance[k], distance[nb]);
+            if !ra.is_finite() && !rb.is_finite() {
+                continue;
+            }
+            let m = to_world(edge[0], edge[1], edge[2]) * (edge[3] / ra.min(rb));
+            let dl = l - radiance[nb];
+            for (ch, g) in trans.iter_mut().enumerate() {
+                *g -= m * dl[ch];
+            }
+        }
+    }
+    let h = if hit > 0.0 { all / hit } else { f32::INFINITY };
+    RecordTerms { e, h, rot, trans }
+}
+
+/// An irradiance record as the splat reads it ("Irradiance Caching", "Irradiance
+/// Interpolation").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Record {
+    pub p: Vec3,
+    pub n: Vec3,
+    /// R_k after the clamps.
+    pub r: f32,
+    pub e: Vec3,
+    /// ∇_r E per colour channel.
+    pub rot: [Vec3; 3],
+    /// ∇_t E per colour channel.
+    pub trans: [Vec3; 3],
+}
+
+/// Ward's weight ("Simplified Weighting Function", Ward 1988) 1/(‖P−P_k‖/R_k + √(1 − n·n_k))
+/// (1 − n·n_k clamped at 0 under the root), clamped to `w_max` (⚠ unbounded at P = P_k; ⚠ the
+/// "Weighting Function" slide's √(‖P−P_k‖² + …) without R_k is not used). 0 when the record is
+/// behind P by Ward's "in front" test: (P − P_k)·(n + n_k)/2 < −0.05·R_k.
+pub fn weight(rec: &Record, p: Vec3, n: Vec3, w_max: f32) -> f32 {
+    let d = p - rec.p;
+    if d.dot((n + rec.n) * 0.5) < -0.05 * rec.r {
+        return 0.0;
+    }
+    let denom = d.length() / rec.r + (1.0 - n.dot(rec.n)).max(0.0).sqrt();
+    // 1/0 = ∞ at P = P_k, n = n_k: the clamp gives w_max.
+    (1.0 / denom).min(w_max)
+}
+
+/// A record's contribution at (P, n) ("Irradiance Interpolation"):
+/// E_k + (n_k × n)·∇_r E_k + (P − P_k)·∇_t E_k per channel, each gradient on or off, clamped to
+/// ≥ 0 per channel (a gradient extrapolated far can turn negative).
+pub fn extrapolate(rec: &Record, p: Vec3, n: Vec3, rotational: bool, translational: bool) -> Vec3 {
+    let axis = rec.n.cross(n);
+    let d = p - rec.p;
+    let mut out = rec.e;
+    for ch in 0..3 {
+        if rotational {
+            out[ch] += axis.dot(rec.rot[ch]);
+        }
+        if translational {
+            out[ch] += d.dot(rec.trans[ch]);
+        }
+    }
+    out.max(Vec3::ZERO)
+}
+
+/// The splat's accumulation at one point ("Principle": the RGB of the blended splats is
+/// Σ w_k E'_k, their alpha Σ w_k): (Σ w_k E'_k, Σ w_k) over the records with w_k > 1/a
+/// (⚠ the text's set S = {w_k > 1/a} and its creation test "W < a": one reading for both, a
+/// point is covered iff some record passes, i.e. Σ w_k ≥ 1/a; otherwise the sum is exactly 0).
+/// The irradiance estimate is the first over the second.
+pub fn accumulate(
+    records: &[Record],
+    p: Vec3,
+    n: Vec3,
+    a: f32,
+    w_max: f32,
+    rotational: bool,
+    translational: bool,
+) -> (Vec3, f32) {
+    let threshold = 1.0 / a;
+    let mut sum = Vec3::ZERO;
+    let mut wsum = 0.0;
+    for rec in records {
+        let w = weight(rec, p, n, w_max);
+        if w > threshold {
+            sum += extrapolate(rec, p, n, rotational, translational) * w;
+            wsum += w;
+        }
+    }
+    (sum, wsum)
+}
+
+/// NDC rectangle [x0, y0, x1, y1] bounding the perspective projection of the sphere of
+/// `radius` about `center_view` (view space, camera looking down −z; NDC x = p00 · x_v / (−z_v),
+/// y = p11 · y_v / (−z_v)); `None` when the sphere reaches the plane z_v = −near or lies
+/// behind it (then the splat covers the whole screen).
+///
+/// "Principle" splats "a quadrilateral tightly enclosing the splatted sphere" (of radius a·R_k
+/// where the simplified weight passes, "Simplified Weighting Function"); ⚠ "Algorithm"'s
+/// TransformVertex (centre ± a·H before the projection) is too small: ρ/w instead of
+/// ρ/√(w² − ρ²) on the axis, and off the axis it misses the perspective's stretching.
+/// Exact bounds: the values of x_v/(−z_v) are constant on the planes x + k z = 0 through the
+/// eye (containing the y axis), so the extremes over the sphere are the k whose plane is
+/// tangent to it: (c_x + k c_z)² = ρ²(1 + k²), with w = −c_z:
+/// k = (c_x w ± ρ √(c_x² + w² − ρ²)) / (w² − ρ²); the same in y separately.
+pub fn sphere_ndc_rect(center_view: Vec3, radius: f32, p00: f32, p11: f32, near: f32) -> Option<[f32; 4]> {
+    let w = -center_view.z;
+    if w - radius <= near {
+        return None;
+    }
+    let den = w * w - radius * radius;
+    let bounds = |c: f32, scale: f32| {
+        let s = radius * (c * c + den).sqrt();
+        let (lo, hi) = ((c * w - s) / den * scale, (c * w + s) / den * scale);
+        (lo.min(hi), lo.max(hi))
+    };
+    let (x0, x1) = bounds(center_view.x, p00);
+    let (y0, y1) = bounds(center_view.y, p11);
+    Some([x0, y0, x1, y1])
+}
+
+/// One creation round's candidates ("Algorithm": a record is made where "W < a", read as no
+/// record passing w_k > 1/a, i.e. coverage Σ w < 1/a; the GPU does the detection per tile):
+/// per tile of `tile`×`tile` pixels (row-major tiles; partial tiles at the right and bottom),
+/// the pixel with geometry (`valid`) and `coverage` < 1/a nearest the tile's centre
+/// ((tile − 1)/2 from the tile's origin in both axes, also for partial tiles; ties: the lowest
+/// row-major index); the candidates in tile order, at most `budget`.
+pub fn candidates(
+    coverage: &[f32],
+    valid: &[bool],
+    width: u32,
+    height: u32,
+    tile: u32,
+    a: f32,
+    budget: u32,
+) -> Vec<(u32, u32)> {
+    let count = (width * height) as usize;
+    assert_eq!(coverage.len(), count, "one coverage per pixel");
+    assert_eq!(valid.len(), count, "one validity per pixel");
+    assert!(tile >= 1, "tiles have at least one pixel");
+    let threshold = 1.0 / a;
+    let mut out = Vec::new();
+    for ty in 0..height.div_ceil(tile) {
+        for tx in 0..width.div_ceil(tile) {
+            if out.len() >= budget as usize {
+                return out;
+            }
+            let (x0, y0) = (tx * tile, ty * tile);
+            // Twice the offset from the centre, in integers: exact distances and ties.
+            let mut best: Option<(i64, u32, u32)> = None;
+            for y in y0..(y0 + tile).min(height) {
+                for x in x0..(x0 + tile).min(width) {
+                    let k = (y * width + x) as usize;
+                    if !valid[k] || coverage[k] >= threshold {
+                        continue;
+                    }
+                    let dx = 2 * i64::from(x - x0) - i64::from(tile - 1);
+                    let dy = 2 * i64::from(y - y0) - i64::from(tile - 1);
+                    let d2 = dx * dx + dy * dy;
+                    // Row-major scan: a strict < keeps the lowest index on ties.
+                    if best.is_none_or(|(b, _, _)| d2 < b) {
+                        best = Some((d2, x, y));
+                    }
+                }
+            }
+            if let Some((_, x, y)) = best {
+                out.push((x, y));
+            }
+        }
+    }
+    out
+}

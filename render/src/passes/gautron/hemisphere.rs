@@ -1,0 +1,348 @@
+//! The records' hemispheres by rasterization (Gautron et al. 003, "Simple plane sampling"):
+//! every new record of a round renders the scene through its wide camera into its tile of one
+//! G-buffer atlas (one draw per scene draw for all the round's records: instance i·S + s,
+//! clipped to tile s by clip distances; instance counts written by the GPU's creation pass),
+//! the direct pass lights the atlas toward each record (`DirectPass::shade_atlas`), and a
+//! compute pass reduces each tile to the record's irradiance, gradients and harmonic mean
+//! distance with the per-texel table of `cpu::gautron::HemisphereTable`. Shaders
+//! `gautron/hemisphere.wgsl`, `gautron/reduce.wgsl`.
+
+use super::{GautronSettings, atlas_grid};
+use crate::buffers::{BufferKind, BufferRegistry};
+use crate::cpu::gautron::HemisphereTable;
+use crate::gpu::GpuContext;
+use crate::passes::gbuffer::{self, GBuffer};
+use crate::passes::{bgl, bind_group};
+use crate::scene::SceneState;
+use crate::scene::upload::GpuScene;
+
+/// The atlas, its pipelines and the texel table of one hemisphere resolution.
+pub struct HemispherePass {
+    single_sided: wgpu::RenderPipeline,
+    double_sided: wgpu::RenderPipeline,
+    raster_layout: wgpu::BindGroupLayout,
+    reduce: wgpu::ComputePipeline,
+    reduce_layout: wgpu::BindGroupLayout,
+    pub atlas: GBuffer,
+    pub radiance: wgpu::Texture,
+    radiance_view: wgpu::TextureView,
+    /// The solid angle Ω_p of each texel (r) and its border band's weight (g) (`gautron.solid_angle`).
+    pub solid_angle: wgpu::Texture,
+    pub table: wgpu::Buffer,
+    /// Atlas size in texels.
+    pub size: (u32, u32),
+    /// (N, slots, aperture, compensation) the atlas and table were made for.
+    key: (u32, u32, u32, u32),
+}
+
+impl HemispherePass {
+    pub fn new(ctx: &GpuContext, scene: &GpuScene, s: &GautronSettings) -> Self {
+        let device = &ctx.device;
+        let module = crate::shaders::create_module(device, "gautron/hemisphere.wgsl");
+        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let raster_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gautron.hemisphere.cameras"),
+            entries: &[bgl::uniform(0, vf), bgl::storage(1, wgpu::ShaderStages::VERTEX, true), bgl::uniform(2, vf)],
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("gautron.hemisphere.layout"),
+            bind_group_layouts: &[Some(&raster_layout), Some(&scene.instance_layout), Some(&scene.material_layout)],
+            immediate_size: 0,
+        });
+        let [single_sided, double_sided] =
+            [Some(wgpu::Face::Back), None].map(|cull| raster_pipeline(device, &layout, &module, cull));
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let reduce_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gautron.reduce"),
+            entries: &[
+                bgl::uniform(0, cs),
+                bgl::storage(1, cs, true),
+                bgl::storage(2, cs, true),
+                bgl::storage(3, cs, true),
+                bgl::storage(4, cs, false),
+                bgl::texture(5, cs, false),
+                bgl::texture(6, cs, false),
+                bgl::texture(7, cs, false),
+            ],
+        });
+        let reduce_module = crate::shaders::create_module(device, "gautron/reduce.wgsl");
+        let reduce =
+            crate::passes::compute_pipeline(device, "gautron.reduce", &reduce_module, "cs_reduce", &[&reduce_layout]);
+        let radiance = crate::passes::create_target(
+            device,
+            "gautron.hemisphere.radiance",
+            1,
+            1,
+            crate::passes::direct::RADIANCE_FORMAT,
+            wgpu::TextureUsages::STORAGE_BINDING,
+        );
+        let radiance_view = crate::passes::view(&radiance, "gautron.hemisphere.radiance");
+        let solid_angle = crate::passes::create_target(
+            device,
+            "gautron.solid_angle",
+            1,
+            1,
+            wgpu::TextureFormat::Rgba32Float,
+            wgpu::TextureUsages::COPY_DST,
+        );
+        let mut pass = Self {
+            single_sided,
+            double_sided,
+            raster_layout,
+            reduce,
+            reduce_layout,
+            atlas: gbuffer::create_targets(ctx, 1, 1, "gautron.hemisphere"),
+            radiance,
+            radiance_view,
+            solid_angle,
+            table: crate::passes::buffer(device, "gautron.table", 64, wgpu::BufferUsages::STORAGE),
+            size: (1, 1),
+            key: (0, 0, 0, 0),
+        };
+        pass.ensure(ctx, s);
+        pass
+    }
+
+    /// Remakes the atlas and the table when the resolution, the slots, the aperture or the
+    /// compensation changed; true when it did.
+    pub fn ensure(&mut self, ctx: &GpuContext, s: &GautronSettings) -> bool {
+        let n = s.hemisphere_resolution.max(1);
+        let key = (n, s.records_per_round, s.aperture_deg.to_bits(), s.border_compensation as u32);
+        if key == self.key {
+            return false;
+        }
+        self.key = key;
+        let device = &ctx.device;
+        let (per_row, rows) = atlas_grid(s.records_per_round);
+        let max = ctx.limits.max_texture_dimension_2d;
+        self.size = ((per_row * n).min(max), (rows * n).min(max));
+        let (w, h) = self.size;
+        self.atlas = gbuffer::create_targets(ctx, w, h, "gautron.hemisphere");
+        self.radiance = crate::passes::create_target(
+            device,
+            "gautron.hemisphere.radiance",
+            w,
+            h,
+            crate::passes::direct::RADIANCE_FORMAT,
+            wgpu::TextureUsages::STORAGE_BINDING,
+        );
+        self.radiance_view = crate::passes::view(&self.radiance, "gautron.hemisphere.radiance");
+        let table = HemisphereTable::new(n, s.aperture_deg, s.border_compensation);
+        self.table = crate::passes::buffer(
+            device,
+            "gautron.table",
+            (table.texels.len() * 64) as u64,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        );
+        ctx.queue.write_buffer(&self.table, 0, bytemuck::cast_slice(&table.texels));
+        self.solid_angle = crate::passes::create_target(
+            device,
+            "gautron.solid_angle",
+            n,
+            n,
+            wgpu::TextureFormat::Rgba32Float,
+            wgpu::TextureUsages::COPY_DST,
+        );
+        let texels: Vec<[f32; 4]> =
+            table.texels.iter().map(|t| [t.dir[3], t.band[0], t.dir[2] * t.dir[3] + t.band[0], t.band[1]]).collect();
+        ctx.queue.write_texture(
+            self.solid_angle.as_image_copy(),
+            bytemuck::cast_slice(&texels),
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(n * 16), rows_per_image: Some(n) },
+            wgpu::Extent3d { width: n, height: n, depth_or_array_layers: 1 },
+        );
+        true
+    }
+
+    pub fn register(&self, reg: &mut BufferRegistry) {
+        let t = &self.atlas;
+        reg.register(
+            "gautron.hemisphere.radiance",
+            BufferKind::Hdr,
+            "the last round's hemispheres, one tile per new record: the radiance arriving at the record (direct light and emission of what it sees)",
+            &self.radiance,
+        );
+        reg.register(
+            "gautron.hemisphere.position",
+            BufferKind::Data,
+            "the last round's hemispheres: the world position each texel sees (w: the main camera's depth, unused)",
+            &t.position,
+        );
+        reg.register(
+            "gautron.hemisphere.normal",
+            BufferKind::Direction,
+            "the last round's hemispheres: the normal each texel sees (w = 1 where it sees geometry)",
+            &t.normal,
+        );
+        reg.register(
+            "gautron.solid_angle",
+            BufferKind::Data,
+            "one hemisphere tile's weights: r = solid angle Ω_p = A·cos³θ, g = the border band's irradiance weight, b = the texel's whole irradiance weight cosθ·Ω_p + band, a = the band's solid angle",
+            &self.solid_angle,
+        );
+    }
+
+    /// Renders the round's hemispheres into the atlas (`args`: the indirect draws, one per
+    /// scene draw, written by the creation pass; `cameras`: the slots' cameras).
+    #[allow(clippy::too_many_arguments)]
+    pub fn raster(
+        &self,
+        ctx: &GpuContext,
+        enc: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        scene: &GpuScene,
+        state: &SceneState,
+        camera: &wgpu::Buffer,
+        cameras: &wgpu::Buffer,
+        params: &wgpu::Buffer,
+        args: &wgpu::Buffer,
+    ) {
+        let group = bind_group(
+            &ctx.device,
+            "gautron.hemisphere.cameras",
+            &self.raster_layout,
+            vec![camera.as_entire_binding(), cameras.as_entire_binding(), params.as_entire_binding()],
+        );
+        let v = &self.atlas.views;
+        let clear = |view| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        };
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("gautron.hemisphere.pass"),
+            color_attachments: &[
+                clear(&v.position),
+                clear(&v.normal),
+                clear(&v.albedo),
+                clear(&v.material),
+                clear(&v.motion),
+                clear(&v.emission),
+            ],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &v.depth,
+                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: slot.and_then(|s| s.render(true, false)),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_bind_group(0, &group, &[]);
+        pass.set_bind_group(1, &scene.instance_group, &[]);
+        scene.draw_indirect(&mut pass, state, 2, (&self.single_sided, &self.double_sided), args);
+    }
+
+    /// The indirect draw arguments of the scene's draws for `slots` slots: draw i renders
+    /// instances i·S … i·S + n (n written by the creation pass into word 1).
+    pub fn draw_args(scene: &GpuScene, state: &SceneState, slots: u32) -> Vec<u32> {
+        scene
+            .indexed_draws(state)
+            .iter()
+            .flat_map(|&(first, count, base, i)| [count, 0, first, base as u32, i * slots])
+            .collect()
+    }
+
+    /// Reduces each new record's tile to its terms (`gautron/reduce.wgsl`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn reduce(
+        &self,
+        ctx: &GpuContext,
+        enc: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        params: &wgpu::Buffer,
+        state: &wgpu::Buffer,
+        cameras: &wgpu::Buffer,
+        records: &wgpu::Buffer,
+        slots: u32,
+    ) {
+        let tv = wgpu::BindingResource::TextureView;
+        let group = bind_group(
+            &ctx.device,
+            "gautron.reduce",
+            &self.reduce_layout,
+            vec![
+                params.as_entire_binding(),
+                state.as_entire_binding(),
+                self.table.as_entire_binding(),
+                cameras.as_entire_binding(),
+                records.as_entire_binding(),
+                tv(&self.radiance_view),
+                tv(&self.atlas.views.position),
+                tv(&self.atlas.views.normal),
+            ],
+        );
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("gautron.reduce"),
+            timestamp_writes: slot.and_then(|s| s.compute(false, true)),
+        });
+        pass.set_pipeline(&self.reduce);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(slots, 1, 1);
+    }
+
+    pub fn radiance_view(&self) -> &wgpu::TextureView {
+        &self.radiance_view
+    }
+}
+
+fn raster_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    cull_mode: Option<wgpu::Face>,
+) -> wgpu::RenderPipeline {
+    let target = |format| Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL });
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(if cull_mode.is_some() {
+            "gautron.hemisphere.single_sided"
+        } else {
+            "gautron.hemisphere.double_sided"
+        }),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some("vs_hemisphere"),
+            compilation_options: Default::default(),
+            buffers: &[Some(crate::scene::upload::vertex_layout())],
+        },
+        // The record's view has rows (t, b, −n) so that the image's x and y are the table's t
+        // and b (`cpu::gautron::frame`): a mirror (determinant −1), so front faces wind
+        // clockwise on screen.
+        primitive: wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::TriangleList,
+            front_face: wgpu::FrontFace::Cw,
+            cull_mode,
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: gbuffer::DEPTH_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some("fs_main"),
+            compilation_options: Default::default(),
+            targets: &[
+                target(gbuffer::POSITION_FORMAT),
+                target(gbuffer::NORMAL_FORMAT),
+                target(gbuffer::ALBEDO_FORMAT),
+                target(gbuffer::MATERIAL_FORMAT),
+                target(gbuffer::MOTION_FORMAT),
+                target(gbuffer::EMISSION_FORMAT),
+            ],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}

@@ -1,0 +1,177 @@
+//! Gautron, Křivánek et al.'s irradiance cache splatting (003, SIGGRAPH 2008 course notes;
+//! the text has no section numbers, so the docs cite its slide headings) as stage choices:
+//! shading points "irradiance records" (created where the splatted coverage is insufficient,
+//! "Irradiance Caching", "Algorithm"), the gather "hemisphere rasterization" ("From Ray
+//! Tracing to Rasterization", "Simple plane sampling"), the reconstruction "weight splatting"
+//! ("From Octree to Splatting": "Principle") and the temporal choice "record cache" (records
+//! kept across frames, "Results"). Shaders `shaders/gautron/`; CPU twin `cpu::gautron` (the
+//! readings of the inconsistent formulas are documented there).
+
+use glam::{Mat4, Vec4};
+
+use crate::{settings_enum, settings_group};
+
+pub mod hemisphere;
+pub mod splat;
+pub mod stage;
+
+settings_enum! {
+    /// The directions the 126.87° camera misses ("Simple plane sampling": Larsen et al.'s
+    /// aperture sees 86 % of the cosine-weighted hemisphere).
+    pub enum BorderCompensation {
+        /// No compensation: the irradiance misses the grazing band (about 14 % of a uniform
+        /// sky's).
+        Off = "off",
+        /// The text's Ω_border = Ω_p + cos θ_border · δφ, reflected with the border pixel's own
+        /// cos θ: the band's solid angle counted at the border's cosine (overestimates, since
+        /// the band's cosines fall from cos θ_border to 0).
+        Paper = "paper (Ω_p + cos θ_b δφ)",
+        /// Our reading: the band θ_border … 90° over the pixel's δφ weighted by its own cosines,
+        /// ∫ cos θ sin θ dθ δφ = cos² θ_border / 2 · δφ: exact for uniform incident radiance.
+        CosineWeighted = "cosine-weighted (cos² θ_b / 2 · δφ)",
+    }
+    default CosineWeighted
+}
+
+settings_enum! {
+    /// What becomes of the records between frames (stage 7, "Results": "the scene being
+    /// static, the irradiance cache is reused across frames").
+    pub enum ReusePolicy {
+        /// Records persist while the scene, its lights and the record settings stay the
+        /// same; off-screen records are kept (a camera that returns finds them).
+        KeepAll = "keep all",
+        /// As KeepAll, but records whose position leaves the view frustum are dropped (a
+        /// bounded cache for long camera paths).
+        DropOffscreen = "drop off-screen",
+    }
+    default KeepAll
+}
+
+settings_group! {
+    /// Gautron et al.'s irradiance cache splatting (003): records, their hemispheres, the
+    /// splatting of Ward's weights and the cache across frames.
+    pub struct GautronSettings: "gautron" {
+        /// Ward's accuracy a ("Irradiance Interpolation"): a record contributes where its
+        /// weight w_k > 1/a, inside the sphere of radius a·R_k ("Principle"); new records are
+        /// made where no record passes (the creation's "W < a" read as Σ w < 1/a).
+        accuracy: f32 = 0.4,
+        unit "", symbol "a", range 0.02..=2.0, cost "records ∝ 1/a²", history true;
+        /// Pixels per side of each record's hemisphere tile ("Simple plane sampling").
+        hemisphere_resolution: u32 = 32,
+        unit "px", symbol "N", range 4..=128, cost "raster and reduction ∝ N² per record", history true;
+        /// Full aperture of the hemisphere camera (Larsen et al.: 126.87°, tan = 2, 86 % of
+        /// the cosine-weighted directions).
+        aperture_deg: f32 = 126.87,
+        unit "°", symbol "", range 60.0..=170.0, cost "free (wider: coarser pixels)", history true;
+        /// How the directions outside the aperture are compensated ("Simple plane sampling").
+        border_compensation: BorderCompensation = BorderCompensation::CosineWeighted,
+        unit "", symbol "", range 0..=2, cost "free", history true;
+        /// Extrapolate with the rotational gradient ∇_r E_k (Ward and Heckbert 1992, as
+        /// "Irradiance Interpolation" writes it).
+        rotational_gradient: bool = true,
+        unit "", symbol "∇r", range 0..=1, cost "free", history false;
+        /// Extrapolate with the translational gradient ∇_t E_k (Křivánek et al. 2005).
+        translational_gradient: bool = true,
+        unit "", symbol "∇t", range 0..=1, cost "free", history false;
+        /// New records per creation round (the per-round budget; one hemisphere tile each).
+        records_per_round: u32 = 64,
+        unit "records", symbol "", range 1..=1024, cost "one hemisphere raster each", history true;
+        /// Creation rounds per frame: splat, find the under-covered pixels, create, repeat.
+        rounds: u32 = 4,
+        unit "rounds", symbol "K", range 1..=32, cost "one splat and one creation pass each", history true;
+        /// Side of the tiles in which the creation picks one under-covered pixel per round.
+        creation_tile_px: u32 = 8,
+        unit "px", symbol "", range 2..=64, cost "smaller: more candidates per round", history true;
+        /// Records the cache can hold (creation stops when full).
+        capacity: u32 = 4096,
+        unit "records", symbol "", range 16..=65536, cost "memory 160 B per record", history true;
+        /// Lower clamp of R_k projected on the screen at the record's depth.
+        r_min_px: f32 = 10.0,
+        unit "px", symbol "R_min", range 0.0..=1000.0, cost "free (larger: fewer records)", history true;
+        /// Upper clamp of R_k projected on the screen at the record's depth.
+        r_max_px: f32 = 150.0,
+        unit "px", symbol "R_max", range 1.0..=4000.0, cost "free (smaller: more records)", history true;
+        /// Lower clamp of R_k in scene units, as a fraction of the scene's bounding radius.
+        r_min_scene: f32 = 0.005,
+        unit "× radius", symbol "", range 0.0..=10.0, cost "free", history true;
+        /// Upper clamp of R_k in scene units, as a fraction of the scene's bounding radius.
+        r_max_scene: f32 = 1.0,
+        unit "× radius", symbol "", range 0.0001..=100.0, cost "free", history true;
+        /// Ward's weight is unbounded at P = P_k: it is clamped to this before blending.
+        weight_clamp: f32 = 100.0,
+        unit "", symbol "w_max", range 1.0..=1.0e6, cost "free", history false;
+        /// What becomes of the records between frames with stage 7's record cache (without
+        /// it every frame starts from an empty cache: the cold-cache cost).
+        reuse: ReusePolicy = ReusePolicy::KeepAll,
+        unit "", symbol "", range 0..=1, cost "free", history true;
+    }
+}
+
+/// One irradiance record on the GPU; WGSL twin: `Record` in `shaders/gautron/common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuRecord {
+    /// xyz: P_k, w: R_k after the clamps.
+    pub position: Vec4,
+    /// xyz: n_k, w: the harmonic mean distance H before the clamps.
+    pub normal: Vec4,
+    /// rgb: E_k, w: the frame it was made in.
+    pub irradiance: Vec4,
+    /// ∇_r E_k per colour channel (xyz).
+    pub rot: [Vec4; 3],
+    /// ∇_t E_k per colour channel (xyz).
+    pub trans: [Vec4; 3],
+    /// xy: the pixel it was made at, z: its linear view depth, w: 1 once computed.
+    pub pixel: Vec4,
+}
+
+/// The cache's counters; WGSL twin: `CacheState`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct CacheState {
+    /// Records in the cache.
+    pub count: u32,
+    /// First record of the last round's new ones.
+    pub new_base: u32,
+    /// New records of the last round.
+    pub new_count: u32,
+    /// Records made this frame.
+    pub made: u32,
+    /// Candidates the last round found (before the budget).
+    pub candidates: u32,
+    pub pad: [u32; 3],
+}
+
+/// Uniform of every Gautron pass; WGSL twin: `GautronParams`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GautronParams {
+    /// x: a, y: w_max, z: ∇r on, w: ∇t on.
+    pub weight: Vec4,
+    /// x: N, y: tiles per atlas row, z: tan(aperture / 2), w: near plane.
+    pub hemisphere: Vec4,
+    /// x: R_min, y: R_max (scene units); z: R_min, w: R_max (px).
+    pub clamps: Vec4,
+    /// x: creation tile, y: slots per round, z: capacity, w: far plane.
+    pub creation: Vec4,
+    /// x: frame, y: P00, z: P11, w: half the G-buffer's height.
+    pub misc: Vec4,
+}
+
+/// A record's hemisphere camera; WGSL twin: `HemisphereCamera` (create, hemisphere, reduce).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct HemisphereCamera {
+    pub view_proj: Mat4,
+    pub position: Vec4,
+    pub t: Vec4,
+    pub b: Vec4,
+    pub n: Vec4,
+    pub tile: Vec4,
+}
+
+/// Tiles per row of the hemisphere atlas for `slots` tiles (a square-ish grid).
+pub fn atlas_grid(slots: u32) -> (u32, u32) {
+    let per_row = (slots as f64).sqrt().ceil().max(1.0) as u32;
+    (per_row, slots.div_ceil(per_row))
+}

@@ -1,0 +1,398 @@
+//! Gautron et al.'s stages for the frame (003): shading points "irradiance records" (the
+//! creation rounds), gather "hemisphere rasterization", reconstruction "weight splatting",
+//! temporal "record cache". One frame: splat the cached records; K times: find the
+//! under-covered pixels (one per creation tile), make up to the round's budget of records
+//! there, render and reduce their hemispheres, splat them; resolve. The order the records are
+//! made or splatted in does not change the image ("Algorithm: Summary": no order
+//! constraint): the blending adds, and the creation lists its candidates in tile order.
+
+use std::hash::{Hash, Hasher};
+
+use super::hemisphere::HemispherePass;
+use super::splat::SplatPass;
+use super::{CacheState, GautronParams, GautronSettings, GpuRecord, HemisphereCamera, ReusePolicy, atlas_grid};
+use crate::buffers::{BufferKind, BufferRegistry, read_storage};
+use crate::gpu::GpuContext;
+use crate::passes::{bgl, bind_group, buffer, create_target, view};
+use crate::pipeline::Temporal;
+use crate::stages::FrameInputs;
+use crate::timing::GpuTimer;
+
+/// Bytes between the rounds' uniforms (dynamic offsets).
+const ROUND_STRIDE: u64 = 256;
+/// Most creation rounds per frame (`gautron.rounds`' range).
+const MAX_ROUNDS: u64 = 32;
+
+pub struct GautronStage {
+    pub hemisphere: HemispherePass,
+    pub splat: SplatPass,
+    candidates: wgpu::ComputePipeline,
+    compact: wgpu::ComputePipeline,
+    cameras_pipeline: wgpu::ComputePipeline,
+    begin: wgpu::ComputePipeline,
+    cull: wgpu::ComputePipeline,
+    layout0: wgpu::BindGroupLayout,
+    layout1: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    rounds: wgpu::Buffer,
+    pub state: wgpu::Buffer,
+    candidate_list: wgpu::Buffer,
+    slots: wgpu::Buffer,
+    pub records: wgpu::Buffer,
+    cameras: wgpu::Buffer,
+    viewers: wgpu::Buffer,
+    atlas_params: wgpu::Buffer,
+    raster_args: wgpu::Buffer,
+    raster_draws: usize,
+    splat_args: wgpu::Buffer,
+    /// The round in which a record was made at each pixel this frame (`gautron.candidates`).
+    pub candidate_mask: wgpu::Texture,
+    /// What the cached records depend on (scene, lights, settings), hashed: a change empties
+    /// the cache.
+    cache_key: Option<u64>,
+    /// (capacity, slots, tiles) the buffers were made for.
+    sizes: (u32, u32, u32),
+}
+
+impl GautronStage {
+    pub fn new(
+        ctx: &GpuContext,
+        f_scene: &crate::scene::upload::GpuScene,
+        s: &GautronSettings,
+        w: u32,
+        h: u32,
+    ) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let layout0 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gautron.create"),
+            entries: &[
+                bgl::uniform(0, cs),
+                bgl::uniform_dynamic(1, cs),
+                bgl::uniform(2, cs),
+                bgl::storage(3, cs, false),
+                bgl::storage(4, cs, false),
+                bgl::storage(5, cs, false),
+                bgl::storage(6, cs, false),
+                bgl::storage(7, cs, false),
+                bgl::storage(8, cs, false),
+                bgl::storage(9, cs, false),
+                bgl::storage(10, cs, false),
+            ],
+        });
+        let layout1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gautron.create.gbuffer"),
+            entries: &[
+                bgl::texture(0, cs, false),
+                bgl::texture(1, cs, false),
+                bgl::texture(2, cs, false),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 3,
+                    visibility: cs,
+                    ty: wgpu::BindingType::StorageTexture {
+                        access: wgpu::StorageTextureAccess::WriteOnly,
+                        format: wgpu::TextureFormat::R32Float,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let module = crate::shaders::create_module(device, "gautron/create.wgsl");
+        let pipeline = |entry: &str| {
+            crate::passes::compute_pipeline(device, &format!("gautron.{entry}"), &module, entry, &[&layout0, &layout1])
+        };
+        let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
+        let indirect = storage | wgpu::BufferUsages::INDIRECT;
+        let mut stage = Self {
+            hemisphere: HemispherePass::new(ctx, f_scene, s),
+            splat: SplatPass::new(ctx, w, h),
+            candidates: pipeline("cs_candidates"),
+            compact: pipeline("cs_compact"),
+            cameras_pipeline: pipeline("cs_cameras"),
+            begin: pipeline("cs_begin"),
+            cull: pipeline("cs_cull"),
+            layout0,
+            layout1,
+            params: crate::passes::uniform_buffer(
+                device,
+                "gautron.params",
+                std::mem::size_of::<GautronParams>() as u64,
+            ),
+            rounds: crate::passes::uniform_buffer(device, "gautron.rounds", ROUND_STRIDE * MAX_ROUNDS),
+            state: buffer(device, "gautron.state", std::mem::size_of::<CacheState>() as u64, storage),
+            candidate_list: buffer(device, "gautron.candidate_list", 4, storage),
+            slots: buffer(device, "gautron.slots", 4, storage),
+            records: buffer(device, "gautron.records", 160, storage),
+            cameras: buffer(device, "gautron.cameras", 144, storage),
+            viewers: buffer(device, "gautron.viewers", 16, storage),
+            atlas_params: crate::passes::uniform_buffer(device, "gautron.atlas_params", 16),
+            raster_args: buffer(device, "gautron.raster_args", 20, indirect),
+            raster_draws: 0,
+            splat_args: buffer(device, "gautron.splat_args", 16, indirect),
+            candidate_mask: mask(device, w, h),
+            cache_key: None,
+            sizes: (0, 0, 0),
+        };
+        let rounds: Vec<[u32; 4]> = (0..MAX_ROUNDS as u32).map(|k| [k, 0, 0, 0]).collect();
+        ctx.queue.write_buffer(
+            &stage.rounds,
+            0,
+            &crate::passes::strided_bytes(ROUND_STRIDE, MAX_ROUNDS as usize, &rounds),
+        );
+        stage.ensure(ctx, s, w, h);
+        stage
+    }
+
+    /// Resizes the targets and buffers for the settings and the G-buffer; true when any was
+    /// remade (the cache is then emptied).
+    pub fn ensure(&mut self, ctx: &GpuContext, s: &GautronSettings, w: u32, h: u32) -> bool {
+        let device = &ctx.device;
+        let mut fresh = self.hemisphere.ensure(ctx, s);
+        if self.splat.resize(ctx, w, h) {
+            self.candidate_mask = mask(device, w, h);
+            fresh = true;
+        }
+        let tile = s.creation_tile_px.max(1);
+        let tiles = w.div_ceil(tile) * h.div_ceil(tile);
+        let sizes = (s.capacity.max(1), s.records_per_round.max(1), tiles);
+        if sizes != self.sizes {
+            self.sizes = sizes;
+            let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
+            let (capacity, slots, tiles) = (sizes.0 as u64, sizes.1 as u64, sizes.2 as u64);
+            self.records = buffer(device, "gautron.records", capacity * 160, storage);
+            self.candidate_list = buffer(device, "gautron.candidate_list", tiles * 4, storage);
+            self.slots = buffer(device, "gautron.slots", slots * 4, storage);
+            self.cameras = buffer(device, "gautron.cameras", slots * 144, storage);
+            self.viewers = buffer(device, "gautron.viewers", slots * 16, storage);
+            fresh = true;
+        }
+        if fresh {
+            self.cache_key = None;
+        }
+        fresh
+    }
+
+    pub fn register(&self, reg: &mut BufferRegistry) {
+        self.hemisphere.register(reg);
+        self.splat.register(reg);
+        reg.register(
+            "gautron.candidates",
+            BufferKind::Data,
+            "the creation round (1…K) in which a record was made at this pixel this frame; 0 elsewhere",
+            &self.candidate_mask,
+        );
+    }
+
+    /// Forgets the cached records (the next frame starts cold).
+    pub fn reset(&mut self) {
+        self.cache_key = None;
+    }
+
+    /// Stages 5–7 for the frame: returns the reflected indirect light (`gautron.indirect`).
+    pub fn run(&mut self, f: &FrameInputs, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) -> wgpu::TextureView {
+        let (ctx, s) = (f.ctx, &f.settings.gautron);
+        self.ensure(ctx, s, f.gbuffer_size.0, f.gbuffer_size.1);
+        let slots = s.records_per_round.max(1);
+        let (per_row, _) = atlas_grid(slots);
+        let aspect = f.gbuffer_size.0 as f32 / f.gbuffer_size.1.max(1) as f32;
+        let proj = f.camera.projection(aspect);
+        let r = f.radius.max(1e-6);
+        let params = GautronParams {
+            weight: glam::Vec4::new(
+                s.accuracy,
+                s.weight_clamp,
+                s.rotational_gradient as u32 as f32,
+                s.translational_gradient as u32 as f32,
+            ),
+            hemisphere: glam::Vec4::new(
+                s.hemisphere_resolution as f32,
+                per_row as f32,
+                (s.aperture_deg.to_radians() * 0.5).tan(),
+                r * 1e-4,
+            ),
+            clamps: glam::Vec4::new(s.r_min_scene * r, s.r_max_scene * r, s.r_min_px, s.r_max_px),
+            creation: glam::Vec4::new(s.creation_tile_px as f32, slots as f32, s.capacity as f32, 4.0 * r),
+            misc: glam::Vec4::new(f.frame as f32, proj.x_axis.x, proj.y_axis.y, f.gbuffer_size.1 as f32 * 0.5),
+        };
+        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        ctx.queue.write_buffer(&self.atlas_params, 0, bytemuck::cast_slice(&[s.hemisphere_resolution, per_row, 0, 0]));
+
+        // The record cache (stage 7): records stay while what they depend on stays.
+        let key = self.dependencies(f);
+        let keep = f.settings.pipeline.temporal == Temporal::RecordCache && self.cache_key == Some(key);
+        if !keep {
+            ctx.queue.write_buffer(&self.state, 0, bytemuck::bytes_of(&CacheState::default()));
+        }
+        self.cache_key = Some(key);
+        let args = HemispherePass::draw_args(f.gpu_scene, f.state, slots);
+        if args.len() * 4 > self.raster_args.size() as usize || args.is_empty() {
+            let usage = wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::INDIRECT;
+            self.raster_args = buffer(&ctx.device, "gautron.raster_args", (args.len().max(5) * 4) as u64, usage);
+        }
+        self.raster_draws = args.len() / 5;
+        if !args.is_empty() {
+            ctx.queue.write_buffer(&self.raster_args, 0, bytemuck::cast_slice(&args));
+        }
+
+        let (g0, g1) = &self.create_groups(f);
+        let tile = s.creation_tile_px.max(1);
+        let tiles = (f.gbuffer_size.0.div_ceil(tile), f.gbuffer_size.1.div_ceil(tile));
+        let (splat, records, camera) = (&self.splat, &self.records, f.camera_buffer);
+        // Every cached record, once (after dropping those off-screen when the policy says so).
+        let (begin, cull) = (&self.begin, keep.then_some(&self.cull).filter(|_| s.reuse == ReusePolicy::DropOffscreen));
+        timer.scope(ctx, enc, "gautron.splat", |e, slot| {
+            {
+                let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("gautron.begin"),
+                    timestamp_writes: None,
+                });
+                if let Some(cull) = cull {
+                    pass.set_pipeline(cull);
+                    pass.set_bind_group(0, g0, &[0]);
+                    pass.set_bind_group(1, g1, &[]);
+                    pass.dispatch_workgroups(1, 1, 1);
+                }
+                pass.set_pipeline(begin);
+                pass.set_bind_group(0, g0, &[0]);
+                pass.set_bind_group(1, g1, &[]);
+                pass.dispatch_workgroups(1, 1, 1);
+            }
+            splat.splat(ctx, e, slot, true, &self.params, camera, records, f.gbuffer, &self.splat_args)
+        });
+        for k in 0..s.rounds.min(MAX_ROUNDS as u32) {
+            let offset = [(k as u64 * ROUND_STRIDE) as u32];
+            timer.scope(ctx, enc, "gautron.create", |e, slot| {
+                let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("gautron.create"),
+                    timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+                });
+                pass.set_bind_group(0, g0, &offset);
+                pass.set_bind_group(1, g1, &[]);
+                pass.set_pipeline(&self.candidates);
+                pass.dispatch_workgroups(tiles.0, tiles.1, 1);
+                pass.set_pipeline(&self.compact);
+                pass.dispatch_workgroups(1, 1, 1);
+                pass.set_pipeline(&self.cameras_pipeline);
+                pass.dispatch_workgroups(slots.div_ceil(64), 1, 1);
+            });
+            let hemisphere = &self.hemisphere;
+            timer.scope(ctx, enc, "gautron.hemispheres", |e, slot| {
+                hemisphere.raster(
+                    ctx,
+                    e,
+                    slot,
+                    f.gpu_scene,
+                    f.state,
+                    camera,
+                    &self.cameras,
+                    &self.params,
+                    &self.raster_args,
+                );
+                f.direct.shade_atlas(
+                    ctx,
+                    e,
+                    None,
+                    &hemisphere.atlas.views,
+                    hemisphere.radiance_view(),
+                    hemisphere.size,
+                    &self.atlas_params,
+                    &self.viewers,
+                );
+                hemisphere.reduce(ctx, e, slot, &self.params, &self.state, &self.cameras, records, slots);
+            });
+            timer.scope(ctx, enc, "gautron.splat", |e, slot| {
+                splat.splat(ctx, e, slot, false, &self.params, camera, records, f.gbuffer, &self.splat_args)
+            });
+        }
+        timer.scope(ctx, enc, "gautron.resolve", |e, slot| splat.resolve(ctx, e, slot, &f.gbuffer.albedo));
+        splat.indirect_view()
+    }
+
+    fn create_groups(&self, f: &FrameInputs) -> (wgpu::BindGroup, wgpu::BindGroup) {
+        let device = &f.ctx.device;
+        let g0 = bind_group(
+            device,
+            "gautron.create",
+            &self.layout0,
+            vec![
+                self.params.as_entire_binding(),
+                crate::passes::dynamic_slot(&self.rounds, 16),
+                f.camera_buffer.as_entire_binding(),
+                self.state.as_entire_binding(),
+                self.candidate_list.as_entire_binding(),
+                self.slots.as_entire_binding(),
+                self.records.as_entire_binding(),
+                self.cameras.as_entire_binding(),
+                self.viewers.as_entire_binding(),
+                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &self.raster_args,
+                    offset: 0,
+                    size: std::num::NonZeroU64::new((self.raster_draws.max(1) * 20) as u64),
+                }),
+                self.splat_args.as_entire_binding(),
+            ],
+        );
+        let tv = wgpu::BindingResource::TextureView;
+        let mask_view = view(&self.candidate_mask, "gautron.candidates");
+        let g1 = bind_group(
+            device,
+            "gautron.create.gbuffer",
+            &self.layout1,
+            vec![tv(&f.gbuffer.position), tv(&f.gbuffer.normal), tv(self.splat.accum_view()), tv(&mask_view)],
+        );
+        (g0, g1)
+    }
+
+    /// A hash of what the records depend on: the scene's transforms, the lights, the direct
+    /// light's settings and the record settings that change a record (`history` fields).
+    fn dependencies(&self, f: &FrameInputs) -> u64 {
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        for d in &f.state.draws {
+            bytemuck::bytes_of(&d.world).hash(&mut h);
+        }
+        for l in &f.lights {
+            bytemuck::bytes_of(l).hash(&mut h);
+        }
+        format!("{:?}", f.settings.direct).hash(&mut h);
+        let g = &f.settings.gautron;
+        use crate::settings::SettingsGroup;
+        for m in GautronSettings::fields().iter().filter(|m| m.resets_history) {
+            format!("{:?}", g.get(m.name)).hash(&mut h);
+        }
+        f.gbuffer_size.hash(&mut h);
+        h.finish()
+    }
+
+    /// The cache's counters (blocks; tests, the bench and the lab's status line).
+    pub fn read_state(&self, ctx: &GpuContext) -> Option<CacheState> {
+        let b = read_storage(ctx, &self.state, std::mem::size_of::<CacheState>() as u64).ok()?;
+        Some(bytemuck::pod_read_unaligned(&b))
+    }
+
+    /// The first `count` records (blocks).
+    pub fn read_records(&self, ctx: &GpuContext, count: u32) -> Option<Vec<GpuRecord>> {
+        let b = read_storage(ctx, &self.records, count as u64 * 160).ok()?;
+        Some(bytemuck::pod_collect_to_vec(&b))
+    }
+
+    /// The hemisphere cameras of the last round's slots (blocks; tests).
+    pub fn read_cameras(&self, ctx: &GpuContext) -> Option<Vec<HemisphereCamera>> {
+        let b = read_storage(ctx, &self.cameras, self.cameras.size()).ok()?;
+        Some(bytemuck::pod_collect_to_vec(&b))
+    }
+}
+
+fn mask(device: &wgpu::Device, w: u32, h: u32) -> wgpu::Texture {
+    create_target(
+        device,
+        "gautron.candidates",
+        w,
+        h,
+        wgpu::TextureFormat::R32Float,
+        wgpu::TextureUsages::STORAGE_BINDING,
+    )
+}

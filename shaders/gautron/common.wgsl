@@ -1,0 +1,89 @@
+// Gautron, Křivánek et al. 003: the irradiance record and Ward's weight, shared by the
+// creation, the hemisphere reduction, the splat and the resolve. CPU twin: cpu::gautron.
+
+// One irradiance record ("Irradiance Caching": position, normal, irradiance, gradients,
+// harmonic mean distance). Rust twin: passes::gautron::GpuRecord (160 bytes).
+struct Record {
+    // xyz: P_k, w: R_k after the clamps (scene units)
+    position: vec4<f32>,
+    // xyz: n_k, w: the harmonic mean distance H before the clamps
+    normal: vec4<f32>,
+    // rgb: E_k, w: the frame it was made in
+    irradiance: vec4<f32>,
+    // ∇_r E_k of the red, green and blue channel (xyz, world space)
+    rot: array<vec4<f32>, 3>,
+    // ∇_t E_k of the red, green and blue channel (xyz, world space)
+    trans: array<vec4<f32>, 3>,
+    // xy: the pixel it was made at, z: its linear view depth then, w: 1 once computed
+    pixel: vec4<f32>,
+}
+
+// The cache's counters. Rust twin: passes::gautron::CacheState.
+struct CacheState {
+    // records in the cache (computed or being computed this round)
+    count: u32,
+    // first record of this round's new ones
+    new_base: u32,
+    // new records this round
+    new_count: u32,
+    // records made this frame
+    made: u32,
+    // candidates found this round (before the budget)
+    candidates: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
+}
+
+// Rust twin: passes::gautron::GautronParams.
+struct GautronParams {
+    // x: accuracy a, y: weight clamp w_max, z: rotational gradient on, w: translational on
+    weight: vec4<f32>,
+    // x: hemisphere px N, y: tiles per atlas row, z: tan(aperture / 2), w: near plane
+    hemisphere: vec4<f32>,
+    // x: R_min, y: R_max in scene units; z: R_min, w: R_max in px
+    clamps: vec4<f32>,
+    // x: creation tile px, y: records per round (slots), z: capacity, w: far plane
+    creation: vec4<f32>,
+    // x: frame, y: projection's P00, z: P11, w: half the G-buffer's height
+    misc: vec4<f32>,
+}
+
+// Ward's weight ("Weighting Function", Ward 1988): 1 / (‖P − P_k‖/R_k + √(1 − n·n_k)),
+// clamped to w_max (⚠ unbounded at P = P_k); 0 when the record lies in front of P by Ward's
+// test (P − P_k)·(n + n_k)/2 < −0.05 R_k. Twin: cpu::gautron::weight.
+fn ward_weight(rec: Record, p: vec3<f32>, n: vec3<f32>, w_max: f32) -> f32 {
+    let d = p - rec.position.xyz;
+    let r = max(rec.position.w, 1e-20);
+    if (dot(d, n + rec.normal.xyz) * 0.5 < -0.05 * r) {
+        return 0.0;
+    }
+    let denom = length(d) / r + sqrt(max(0.0, 1.0 - dot(n, rec.normal.xyz)));
+    return 1.0 / max(denom, 1.0 / w_max);
+}
+
+// E_k + (n_k × n)·∇_r + (P − P_k)·∇_t per channel ("Irradiance Interpolation"), each gradient
+// on or off, clamped at 0. Twin: cpu::gautron::extrapolate.
+fn extrapolate(rec: Record, p: vec3<f32>, n: vec3<f32>, rotational: bool, translational: bool) -> vec3<f32> {
+    var e = rec.irradiance.rgb;
+    if (rotational) {
+        let axis = cross(rec.normal.xyz, n);
+        e = e + vec3<f32>(dot(axis, rec.rot[0].xyz), dot(axis, rec.rot[1].xyz), dot(axis, rec.rot[2].xyz));
+    }
+    if (translational) {
+        let d = p - rec.position.xyz;
+        e = e + vec3<f32>(dot(d, rec.trans[0].xyz), dot(d, rec.trans[1].xyz), dot(d, rec.trans[2].xyz));
+    }
+    return max(e, vec3<f32>(0.0));
+}
+
+// The hemisphere camera's tangent frame (t, b) of a normal, t × b = n. Twin: cpu::gautron::frame.
+fn tangent_frame(n: vec3<f32>) -> mat2x3<f32> {
+    var t: vec3<f32>;
+    if (abs(n.z) < 0.999) {
+        t = normalize(cross(vec3<f32>(0.0, 0.0, 1.0), n));
+    } else {
+        t = normalize(cross(vec3<f32>(1.0, 0.0, 0.0), n));
+    }
+    return mat2x3<f32>(t, cross(n, t));
+}

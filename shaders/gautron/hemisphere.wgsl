@@ -1,0 +1,55 @@
+enable clip_distances;
+// The records' hemispheres by rasterization (Gautron et al. 003, "Simple plane sampling"):
+// each new record's wide camera (aperture 126.87° by default, Larsen et al.) renders the scene
+// into its tile of one atlas, every tile in the same draws: instance i·S + s is scene draw i
+// seen by slot s, the vertex is moved into slot s's tile and clipped to it by four clip
+// distances (the record's own frustum sides), so no triangle reaches a neighbour's tile.
+// The fragment stage is the G-buffer's (stage 1), so that the direct pass lights the atlas
+// exactly as it lights the screen (`direct.wgsl`'s cs_atlas, viewed from each record).
+#import gbuffer/gbuffer.wgsl
+#import gautron/common.wgsl
+
+// Rust twin: passes::gautron::HemisphereCamera (create.wgsl writes it).
+struct HemisphereCamera {
+    view_proj: mat4x4<f32>,
+    position: vec4<f32>,
+    t: vec4<f32>,
+    b: vec4<f32>,
+    n: vec4<f32>,
+    tile: vec4<f32>,
+}
+
+@group(0) @binding(1) var<storage, read> hemispheres: array<HemisphereCamera>;
+@group(0) @binding(2) var<uniform> params: GautronParams;
+
+struct HemiOut {
+    @builtin(position) clip: vec4<f32>,
+    @builtin(clip_distances) clip_distances: array<f32, 4>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) cur_clip: vec4<f32>,
+    @location(4) prev_clip: vec4<f32>,
+}
+
+@vertex
+fn vs_hemisphere(v: VsIn, @builtin(instance_index) instance: u32) -> HemiOut {
+    let slots = u32(params.creation.y);
+    let object = instance / slots;
+    let cam = hemispheres[instance % slots];
+    let inst = instances[object];
+    let world = inst.model * vec4<f32>(v.position, 1.0);
+    let clip = cam.view_proj * world;
+    var o: HemiOut;
+    o.clip_distances[0] = clip.w - clip.x;
+    o.clip_distances[1] = clip.w + clip.x;
+    o.clip_distances[2] = clip.w - clip.y;
+    o.clip_distances[3] = clip.w + clip.y;
+    o.clip = vec4<f32>(clip.xy * cam.tile.zw + cam.tile.xy * clip.w, clip.zw);
+    o.world = world.xyz;
+    o.normal = (inst.normal_matrix * vec4<f32>(v.normal, 0.0)).xyz;
+    o.uv = v.uv;
+    o.cur_clip = o.clip;
+    o.prev_clip = o.clip;
+    return o;
+}

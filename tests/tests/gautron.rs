@@ -1,0 +1,268 @@
+//! Gautron et al.'s irradiance cache splatting on the GPU (003) against its CPU twin
+//! (`cpu::gautron`) and the path tracer.
+
+use gi_lab_tests::{paused_renderer, read, stored_reference, v3};
+use gi_render::cpu::gautron::{self, HemisphereTable, Record};
+use gi_render::passes::gautron::GpuRecord;
+use gi_render::pipeline::Technique;
+use glam::Vec3;
+
+fn cpu_record(g: &GpuRecord) -> Record {
+    Record {
+        p: g.position.truncate(),
+        n: g.normal.truncate(),
+        r: g.position.w,
+        e: g.irradiance.truncate(),
+        rot: g.rot.map(|v| v.truncate()),
+        trans: g.trans.map(|v| v.truncate()),
+    }
+}
+
+fn close(a: Vec3, b: Vec3, scale: f32, tol: f32) -> bool {
+    (a - b).abs().max_element() <= tol * scale.max(1e-12)
+}
+
+/// Renders frames until a frame makes no record (the cache covers the image), at most `max`.
+fn render_until_covered(r: &mut gi_render::Renderer, max: u32) -> u32 {
+    for frame in 1..=max {
+        r.render_frame();
+        if r.gautron().unwrap().read_state(&r.ctx).unwrap().made == 0 {
+            return frame;
+        }
+    }
+    panic!("the cache was still growing after {max} frames");
+}
+
+/// The GPU's reduction of each hemisphere tile equals the CPU twin's reduction of the same
+/// tile (read back from the atlas): irradiance, both gradients and the harmonic mean distance.
+#[test]
+fn hemisphere_reduction_matches_the_cpu_twin() {
+    let mut r = paused_renderer(96, Technique::Gautron, |s| {
+        s.gautron.rounds = 1;
+        s.gautron.records_per_round = 16;
+        s.gautron.hemisphere_resolution = 24;
+    });
+    r.render_frame();
+    let g = r.gautron().unwrap();
+    let st = g.read_state(&r.ctx).unwrap();
+    assert_eq!(st.new_count, 16, "{st:?}");
+    let records = g.read_records(&r.ctx, st.count).unwrap();
+    let cameras = g.read_cameras(&r.ctx).unwrap();
+    let (radiance, position, normal) = (
+        read(&r, "gautron.hemisphere.radiance"),
+        read(&r, "gautron.hemisphere.position"),
+        read(&r, "gautron.hemisphere.normal"),
+    );
+    let s = &r.settings().gautron;
+    let n = s.hemisphere_resolution;
+    let table = HemisphereTable::new(n, s.aperture_deg, s.border_compensation);
+    let per_row = gi_render::passes::gautron::atlas_grid(s.records_per_round).0;
+    let mut checked = 0;
+    for slot in 0..st.new_count {
+        let cam = &cameras[slot as usize];
+        let rec = &records[cam.n.w as usize];
+        let (p, nrm) = (cam.position.truncate(), cam.n.truncate());
+        let (ox, oy) = ((slot % per_row) * n, (slot / per_row) * n);
+        let mut light = Vec::new();
+        let mut dist = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let (x, y) = (ox + i, oy + j);
+                light.push(v3(radiance.at(x, y)));
+                let hit = normal.at(x, y)[3] > 0.5;
+                dist.push(if hit { (v3(position.at(x, y)) - p).length().max(1e-6) } else { f32::INFINITY });
+            }
+        }
+        let cpu = gautron::reduce(&table, nrm, &light, &dist);
+        let e_scale = cpu.e.max_element();
+        assert!(
+            close(rec.irradiance.truncate(), cpu.e, e_scale, 1e-4),
+            "slot {slot}: E {:?} vs {:?}",
+            rec.irradiance,
+            cpu.e
+        );
+        for c in 0..3 {
+            let rot_scale = cpu.rot.iter().map(|v| v.length()).fold(e_scale, f32::max);
+            assert!(
+                close(rec.rot[c].truncate(), cpu.rot[c], rot_scale, 1e-3),
+                "slot {slot}: ∇r {:?} vs {:?}",
+                rec.rot[c],
+                cpu.rot[c]
+            );
+            let t_scale = cpu.trans.iter().map(|v| v.length()).fold(1e-9, f32::max);
+            assert!(
+                close(rec.trans[c].truncate(), cpu.trans[c], t_scale, 1e-3),
+                "slot {slot}: ∇t {:?} vs {:?}",
+                rec.trans[c],
+                cpu.trans[c]
+            );
+        }
+        if cpu.h.is_finite() {
+            assert!((rec.normal.w - cpu.h).abs() <= 1e-3 * cpu.h, "slot {slot}: H {} vs {}", rec.normal.w, cpu.h);
+        }
+        checked += 1;
+    }
+    assert_eq!(checked, 16);
+}
+
+/// The splat's sums at every pixel equal the CPU twin's accumulation of the same records
+/// (Ward's weight, the threshold 1/a, the clamp and both gradients).
+#[test]
+fn the_splat_matches_the_cpu_accumulation() {
+    let mut r = paused_renderer(64, Technique::Gautron, |s| s.gautron.records_per_round = 32);
+    r.render_frame();
+    r.render_frame();
+    let g = r.gautron().unwrap();
+    let st = g.read_state(&r.ctx).unwrap();
+    let records: Vec<Record> = g.read_records(&r.ctx, st.count).unwrap().iter().map(cpu_record).collect();
+    assert!(records.len() > 20, "{st:?}");
+    let (accum, position, normal) =
+        (read(&r, "gautron.accum"), read(&r, "gbuffer.position"), read(&r, "gbuffer.normal"));
+    let s = r.settings().gautron.clone();
+    let (mut compared, mut covered) = (0, 0);
+    for y in 0..64 {
+        for x in 0..64 {
+            let nrm = normal.at(x, y);
+            if nrm[3] < 0.5 {
+                continue;
+            }
+            let (p, n) = (v3(position.at(x, y)), v3(nrm).normalize());
+            let (sum, w) = gautron::accumulate(&records, p, n, s.accuracy, s.weight_clamp, true, true);
+            let gpu = accum.at(x, y);
+            assert!((gpu[3] - w).abs() <= 1e-3 * w.max(1.0), "({x}, {y}): Σw {} vs {w}", gpu[3]);
+            assert!(close(v3(gpu), sum, sum.max_element().max(1e-6), 2e-3), "({x}, {y}): Σ w·E {:?} vs {sum:?}", gpu);
+            compared += 1;
+            covered += (w >= 1.0 / s.accuracy) as u32;
+        }
+    }
+    assert!(compared > 3000 && covered > compared / 2, "{compared} pixels, {covered} covered");
+}
+
+/// "No order constraint for image traversal" (003, "Algorithm: Summary"): the splatted image
+/// does not depend on the order of the records (the cache's records reversed on the GPU give
+/// the same sums to float rounding).
+#[test]
+fn the_splat_does_not_depend_on_record_order() {
+    let mut r = paused_renderer(64, Technique::Gautron, |s| s.gautron.records_per_round = 64);
+    render_until_covered(&mut r, 16);
+    r.render_frame();
+    let before = read(&r, "gautron.accum");
+    let g = r.gautron().unwrap();
+    let st = g.read_state(&r.ctx).unwrap();
+    let mut records = g.read_records(&r.ctx, st.count).unwrap();
+    records.reverse();
+    r.ctx.queue.write_buffer(&g.records, 0, bytemuck::cast_slice(&records));
+    r.render_frame();
+    assert_eq!(r.gautron().unwrap().read_state(&r.ctx).unwrap().made, 0);
+    let after = read(&r, "gautron.accum");
+    let mut worst = 0.0f32;
+    for (a, b) in before.data.iter().zip(&after.data) {
+        for c in 0..4 {
+            worst = worst.max((a[c] - b[c]).abs() / a[c].abs().max(1e-3));
+        }
+    }
+    eprintln!("{} records, largest relative difference {worst:e}", st.count);
+    assert!(worst < 1e-4, "{worst}");
+}
+
+/// Creation: once a frame makes no record, every pixel with geometry is covered (some record
+/// passes Ward's test, Σ w ≥ 1/a); a warm frame makes none; changing what the records depend
+/// on empties the cache, and without the record cache every frame starts cold.
+#[test]
+fn creation_covers_every_pixel_and_the_cache_keeps_its_records() {
+    let mut r = paused_renderer(96, Technique::Gautron, |_| {});
+    let frames = render_until_covered(&mut r, 24);
+    let s = r.settings().gautron.clone();
+    let (accum, normal) = (read(&r, "gautron.accum"), read(&r, "gbuffer.normal"));
+    let uncovered = (0..96 * 96).filter(|&k| normal.data[k][3] > 0.5 && accum.data[k][3] < 1.0 / s.accuracy).count();
+    let count = r.gautron().unwrap().read_state(&r.ctx).unwrap().count;
+    eprintln!("covered after {frames} frames with {count} records");
+    assert_eq!(uncovered, 0);
+    r.render_frame();
+    let warm = r.gautron().unwrap().read_state(&r.ctx).unwrap();
+    assert_eq!((warm.made, warm.count), (0, count));
+
+    let mut changed = r.settings().clone();
+    changed.direct.intensity_scale *= 2.0;
+    r.set_settings(changed).unwrap();
+    r.render_frame();
+    let cold = r.gautron().unwrap().read_state(&r.ctx).unwrap();
+    assert_eq!(cold.made, cold.count, "a new light empties the cache: {cold:?}");
+
+    let mut none = r.settings().clone();
+    none.pipeline.temporal = gi_render::pipeline::Temporal::None;
+    r.set_settings(none).unwrap();
+    r.render_frame();
+    r.render_frame();
+    let again = r.gautron().unwrap().read_state(&r.ctx).unwrap();
+    assert_eq!(again.made, again.count, "without the cache every frame starts cold: {again:?}");
+}
+
+/// One bounce on the default scene against the path tracer: FLIP below the bound measured
+/// when the technique landed (0.0699 at 256² with the default settings, covered after a few
+/// frames), and the gradients lower the error at equal records.
+#[test]
+fn irradiance_cache_splatting_against_the_path_tracer() {
+    let truth = stored_reference("cornell_1bounce_256_2048spp.exr");
+    let mut r = paused_renderer(256, Technique::Gautron, |_| {});
+    render_until_covered(&mut r, 24);
+    let with = read(&r, "final.hdr");
+    let records = r.gautron().unwrap().read_state(&r.ctx).unwrap().count;
+    let mut plain = r.settings().clone();
+    plain.gautron.rotational_gradient = false;
+    plain.gautron.translational_gradient = false;
+    r.set_settings(plain).unwrap();
+    r.render_frame();
+    assert_eq!(r.gautron().unwrap().read_state(&r.ctx).unwrap().count, records, "the same records");
+    let without = read(&r, "final.hdr");
+    let metric = |img: &gi_render::ImageF32| {
+        use gi_render::image_io::hdr_display;
+        let flip = gi_render::metrics::flip(&hdr_display(img), &hdr_display(&truth)).expect("flip").0;
+        (gi_render::metrics::rmse(img, &truth).expect("rmse"), flip)
+    };
+    let ((rmse_with, flip_with), (rmse_without, flip_without)) = (metric(&with), metric(&without));
+    eprintln!(
+        "{records} records: gradients RMSE {rmse_with:.5} FLIP {flip_with:.4}; none RMSE {rmse_without:.5} FLIP {flip_without:.4}"
+    );
+    assert!(flip_with < 0.08, "{flip_with}");
+    assert!(rmse_with < 0.85 * rmse_without && flip_with < flip_without);
+}
+
+/// Reuse across camera motion: the records are world-space, so turning the camera away keeps
+/// them all with `KeepAll` and keeps only those still in the frustum with `DropOffscreen`.
+#[test]
+fn the_reuse_policy_keeps_or_drops_off_screen_records() {
+    use gi_render::passes::gautron::ReusePolicy;
+    let mut counts = Vec::new();
+    for policy in [ReusePolicy::KeepAll, ReusePolicy::DropOffscreen] {
+        let mut r = paused_renderer(64, Technique::Gautron, |s| s.gautron.reuse = policy);
+        render_until_covered(&mut r, 24);
+        let before = r.gautron().unwrap().read_state(&r.ctx).unwrap().count;
+        // Turn toward a side wall: part of the records leave the frustum.
+        r.camera.yaw += 0.35;
+        r.render_frame();
+        let st = r.gautron().unwrap().read_state(&r.ctx).unwrap();
+        let records = r.gautron().unwrap().read_records(&r.ctx, st.count).unwrap();
+        let vp = r.camera.view_proj(1.0);
+        let inside = |g: &GpuRecord| {
+            let c = vp * g.position.truncate().extend(1.0);
+            c.w > 0.0 && c.x.abs() <= c.w && c.y.abs() <= c.w
+        };
+        // Those made this frame are at the end; the kept ones before them.
+        let kept = &records[..(st.count - st.made) as usize];
+        eprintln!(
+            "{policy:?}: {before} records, then {} kept ({} inside), {} made",
+            kept.len(),
+            kept.iter().filter(|g| inside(g)).count(),
+            st.made
+        );
+        match policy {
+            ReusePolicy::KeepAll => assert_eq!(kept.len() as u32, before),
+            ReusePolicy::DropOffscreen => assert!(kept.iter().all(inside), "an off-screen record was kept"),
+        }
+        counts.push((kept.len(), kept.iter().filter(|g| inside(g)).count()));
+    }
+    // Off-screen: exactly the records KeepAll has outside the frustum are gone.
+    assert_eq!(counts[1].0, counts[0].1);
+    assert!(counts[1].0 < counts[0].0);
+}
