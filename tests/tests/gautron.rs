@@ -199,7 +199,7 @@ fn creation_covers_every_pixel_and_the_cache_keeps_its_records() {
 }
 
 /// One bounce on the default scene against the path tracer: FLIP below the bound measured
-/// when the technique landed (0.0699 at 256² with the default settings, covered after a few
+/// when the technique landed (0.0701 at 256² with the default settings, covered after a few
 /// frames), and the gradients lower the error at equal records.
 #[test]
 fn irradiance_cache_splatting_against_the_path_tracer() {

@@ -256,6 +256,12 @@ pub const TECHNIQUES: &[Technique] = &[
         apply: |s| Choices::SolerAtHcbSamples.apply(s),
         is: |s| Choices::of(&s.pipeline) == Some(Choices::SolerAtHcbSamples),
     },
+    Technique {
+        name: "Irradiance cache splatting (Gautron)",
+        source: "Gautron et al. 003: records where the coverage is insufficient, hemispheres rasterized and reduced to irradiance and gradients, Ward's weights splatted, the records kept across frames",
+        apply: |s| Choices::Gautron.apply(s),
+        is: |s| Choices::of(&s.pipeline) == Some(Choices::Gautron),
+    },
 ];
 
 /// The technique picker: sets the stage choices of one technique at once.

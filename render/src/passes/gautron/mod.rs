@@ -16,15 +16,16 @@ pub mod splat;
 pub mod stage;
 
 settings_enum! {
-    /// The directions the 126.87° camera misses ("Simple plane sampling": Larsen et al.'s
-    /// aperture sees 86 % of the cosine-weighted hemisphere).
+    /// The directions the 126.87° camera misses ("Simple plane sampling" quotes Larsen et
+    /// al.'s 86 % of the incoming directions; the square pyramid sees 83.1 % of a uniform
+    /// sky's irradiance, measured in tests/gautron_cpu.rs).
     pub enum BorderCompensation {
-        /// No compensation: the irradiance misses the grazing band (about 14 % of a uniform
-        /// sky's).
+        /// No compensation: the irradiance misses the grazing band (16.9 % of a uniform
+        /// sky's at 126.87°).
         Off = "off",
         /// The text's Ω_border = Ω_p + cos θ_border · δφ, reflected with the border pixel's own
         /// cos θ: the band's solid angle counted at the border's cosine (overestimates, since
-        /// the band's cosines fall from cos θ_border to 0).
+        /// the band's cosines fall from cos θ_border to 0: a uniform sky's E is 1.18·π).
         Paper = "paper (Ω_p + cos θ_b δφ)",
         /// Our reading: the band θ_border … 90° over the pixel's δφ weighted by its own cosines,
         /// ∫ cos θ sin θ dθ δφ = cos² θ_border / 2 · δφ: exact for uniform incident radiance.
@@ -55,24 +56,25 @@ settings_group! {
         /// weight w_k > 1/a, inside the sphere of radius a·R_k ("Principle"); new records are
         /// made where no record passes (the creation's "W < a" read as Σ w < 1/a).
         accuracy: f32 = 0.4,
-        unit "", symbol "a", range 0.02..=2.0, cost "records ∝ 1/a²", history true;
+        unit "", symbol "a", range 0.02..=2.0, cost "records grow as 1/a²", history true;
         /// Pixels per side of each record's hemisphere tile ("Simple plane sampling").
         hemisphere_resolution: u32 = 32,
-        unit "px", symbol "N", range 4..=128, cost "raster and reduction ∝ N² per record", history true;
-        /// Full aperture of the hemisphere camera (Larsen et al.: 126.87°, tan = 2, 86 % of
-        /// the cosine-weighted directions).
+        unit "px", symbol "N", range 4..=128, cost "raster and reduction grow as N² per record", history true;
+        /// Full aperture of the hemisphere camera (Larsen et al.: 126.87°, tan = 2; the text
+        /// quotes 86 % of the directions, the square sees 83.1 % of a uniform sky's irradiance).
         aperture_deg: f32 = 126.87,
         unit "°", symbol "", range 60.0..=170.0, cost "free (wider: coarser pixels)", history true;
         /// How the directions outside the aperture are compensated ("Simple plane sampling").
         border_compensation: BorderCompensation = BorderCompensation::CosineWeighted,
         unit "", symbol "", range 0..=2, cost "free", history true;
-        /// Extrapolate with the rotational gradient ∇_r E_k (Ward and Heckbert 1992, as
-        /// "Irradiance Interpolation" writes it).
+        /// Extrapolate with the rotational gradient of E_k (Ward and Heckbert 1992, as
+        /// "Irradiance Interpolation" writes it: (n_k × n) · grad_r E_k).
         rotational_gradient: bool = true,
-        unit "", symbol "∇r", range 0..=1, cost "free", history false;
-        /// Extrapolate with the translational gradient ∇_t E_k (Křivánek et al. 2005).
+        unit "", symbol "", range 0..=1, cost "free", history false;
+        /// Extrapolate with the translational gradient of E_k ((P − P_k) · grad_t E_k; from
+        /// the hemisphere's texel edges, Ward and Heckbert 1992, Křivánek et al. 2005).
         translational_gradient: bool = true,
-        unit "", symbol "∇t", range 0..=1, cost "free", history false;
+        unit "", symbol "", range 0..=1, cost "free", history false;
         /// New records per creation round (the per-round budget; one hemisphere tile each).
         records_per_round: u32 = 64,
         unit "records", symbol "", range 1..=1024, cost "one hemisphere raster each", history true;
@@ -83,10 +85,10 @@ settings_group! {
         creation_tile_px: u32 = 8,
         unit "px", symbol "", range 2..=64, cost "smaller: more candidates per round", history true;
         /// Records the cache can hold (creation stops when full).
-        capacity: u32 = 4096,
+        capacity: u32 = 16384,
         unit "records", symbol "", range 16..=65536, cost "memory 160 B per record", history true;
         /// Lower clamp of R_k projected on the screen at the record's depth.
-        r_min_px: f32 = 10.0,
+        r_min_px: f32 = 20.0,
         unit "px", symbol "R_min", range 0.0..=1000.0, cost "free (larger: fewer records)", history true;
         /// Upper clamp of R_k projected on the screen at the record's depth.
         r_max_px: f32 = 150.0,
