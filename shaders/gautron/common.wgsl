@@ -49,6 +49,20 @@ struct GautronParams {
     misc: vec4<f32>,
 }
 
+// A record's hemisphere camera ("Simple plane sampling"), written by create.wgsl, read by
+// the raster and the reduction. Rust twin: passes::gautron::HemisphereCamera.
+struct HemisphereCamera {
+    view_proj: mat4x4<f32>,
+    // xyz: P_k (the viewer), w: 1 when the slot holds a new record
+    position: vec4<f32>,
+    t: vec4<f32>,
+    b: vec4<f32>,
+    // xyz: n_k, w: the record's index in the cache
+    n: vec4<f32>,
+    // the tile in the atlas's NDC: xy offset of its centre, zw scale
+    tile: vec4<f32>,
+}
+
 // Ward's weight ("Weighting Function", Ward 1988): 1 / (‖P − P_k‖/R_k + √(1 − n·n_k)),
 // clamped to w_max (⚠ unbounded at P = P_k); 0 when the record lies in front of P by Ward's
 // test (P − P_k)·(n + n_k)/2 < −0.05 R_k. Twin: cpu::gautron::weight.

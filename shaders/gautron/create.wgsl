@@ -10,18 +10,6 @@
 
 const NONE: u32 = 0xffffffffu;
 
-// A record's hemisphere camera ("Simple plane sampling"). Rust twin: passes::gautron::HemisphereCamera.
-struct HemisphereCamera {
-    view_proj: mat4x4<f32>,
-    // xyz: P_k (the viewer), w: 1 when the slot holds a new record
-    position: vec4<f32>,
-    t: vec4<f32>,
-    b: vec4<f32>,
-    // xyz: n_k, w: the record's index in the cache
-    n: vec4<f32>,
-    // the tile in the atlas's NDC: xy offset of its centre, zw scale
-    tile: vec4<f32>,
-}
 
 struct RoundParams {
     // x: round index, yzw unused
@@ -97,6 +85,22 @@ fn cs_candidates(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation
 var<workgroup> scan: array<u32, 256>;
 var<workgroup> taken: u32;
 
+// The inclusive prefix sum of the 256 threads' flags into `scan` (Hillis–Steele; every
+// thread of the workgroup calls it).
+fn scan_flags(li: u32, flag: u32) {
+    scan[li] = flag;
+    workgroupBarrier();
+    for (var off = 1u; off < 256u; off = off * 2u) {
+        var v = 0u;
+        if (li >= off) {
+            v = scan[li - off];
+        }
+        workgroupBarrier();
+        scan[li] = scan[li] + v;
+        workgroupBarrier();
+    }
+}
+
 // One workgroup: the candidates in tile order (a prefix sum per chunk of 256 tiles) up to
 // the budget and the capacity; then the counters and the indirect draws of the round.
 @compute @workgroup_size(256, 1, 1)
@@ -116,17 +120,7 @@ fn cs_compact(@builtin(local_invocation_index) li: u32) {
         if (t < tiles && candidates[t] != NONE) {
             flag = 1u;
         }
-        scan[li] = flag;
-        workgroupBarrier();
-        for (var off = 1u; off < 256u; off = off * 2u) {
-            var v = 0u;
-            if (li >= off) {
-                v = scan[li - off];
-            }
-            workgroupBarrier();
-            scan[li] = scan[li] + v;
-            workgroupBarrier();
-        }
+        scan_flags(li, flag);
         let before = taken;
         let slot = before + scan[li] - flag;
         if (flag == 1u && slot < room) {
@@ -253,17 +247,7 @@ fn cs_cull(@builtin(local_invocation_index) li: u32) {
             let inside = clip.w > 0.0 && all(abs(clip.xy) <= vec2<f32>(clip.w)) && clip.z >= 0.0 && clip.z <= clip.w;
             flag = select(0u, 1u, inside);
         }
-        scan[li] = flag;
-        workgroupBarrier();
-        for (var off = 1u; off < 256u; off = off * 2u) {
-            var v = 0u;
-            if (li >= off) {
-                v = scan[li - off];
-            }
-            workgroupBarrier();
-            scan[li] = scan[li] + v;
-            workgroupBarrier();
-        }
+        scan_flags(li, flag);
         let before = taken;
         if (flag == 1u) {
             records[before + scan[li] - 1u] = rec;

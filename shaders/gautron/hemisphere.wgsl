@@ -9,15 +9,6 @@ enable clip_distances;
 #import gbuffer/gbuffer.wgsl
 #import gautron/common.wgsl
 
-// Rust twin: passes::gautron::HemisphereCamera (create.wgsl writes it).
-struct HemisphereCamera {
-    view_proj: mat4x4<f32>,
-    position: vec4<f32>,
-    t: vec4<f32>,
-    b: vec4<f32>,
-    n: vec4<f32>,
-    tile: vec4<f32>,
-}
 
 @group(0) @binding(1) var<storage, read> hemispheres: array<HemisphereCamera>;
 @group(0) @binding(2) var<uniform> params: GautronParams;

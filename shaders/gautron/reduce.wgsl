@@ -18,15 +18,6 @@ struct TexelTerms {
     down: vec4<f32>,
 }
 
-// Rust twin: passes::gautron::HemisphereCamera.
-struct HemisphereCamera {
-    view_proj: mat4x4<f32>,
-    position: vec4<f32>,
-    t: vec4<f32>,
-    b: vec4<f32>,
-    n: vec4<f32>,
-    tile: vec4<f32>,
-}
 
 @group(0) @binding(0) var<uniform> params: GautronParams;
 @group(0) @binding(1) var<storage, read> state: CacheState;

@@ -73,17 +73,22 @@ impl GBufferPass {
             bind_group_layouts: &[Some(&camera_layout), Some(&scene.instance_layout), Some(&scene.material_layout)],
             immediate_size: 0,
         });
-        let pipelines =
-            [Some(wgpu::Face::Back), None].map(|cull_mode| Self::pipeline(device, &layout, &module, cull_mode, &name));
+        let pipelines = [Some(wgpu::Face::Back), None].map(|cull_mode| {
+            Self::pipeline(device, &layout, &module, ("vs_main", wgpu::FrontFace::Ccw), cull_mode, &name)
+        });
         let [single_sided, double_sided] = pipelines;
         let targets = create_targets(ctx, width, height, &name);
         Self { name, single_sided, double_sided, camera_layout, targets }
     }
 
-    fn pipeline(
+    /// The G-buffer's render pipeline with vertex entry `vs_entry` of `module` and the
+    /// fragment stage `fs_main` (also Gautron's hemisphere atlas, whose mirrored record views
+    /// wind front faces clockwise).
+    pub(crate) fn pipeline(
         device: &wgpu::Device,
         layout: &wgpu::PipelineLayout,
         module: &wgpu::ShaderModule,
+        (vs_entry, front_face): (&str, wgpu::FrontFace),
         cull_mode: Option<wgpu::Face>,
         name: &str,
     ) -> wgpu::RenderPipeline {
@@ -97,12 +102,13 @@ impl GBufferPass {
             layout: Some(layout),
             vertex: wgpu::VertexState {
                 module,
-                entry_point: Some("vs_main"),
+                entry_point: Some(vs_entry),
                 compilation_options: Default::default(),
                 buffers: &[Some(crate::scene::upload::vertex_layout())],
             },
             primitive: wgpu::PrimitiveState {
                 topology: wgpu::PrimitiveTopology::TriangleList,
+                front_face,
                 // glTF: single-sided materials cull back faces; double-sided ones keep them
                 // and the shader flips the normal toward the viewer.
                 cull_mode,
@@ -211,7 +217,24 @@ impl GBufferPass {
         scene: &GpuScene,
         state: &SceneState,
     ) {
-        let v = &self.targets.views;
+        let label = format!("{}.pass", self.name);
+        let mut pass = self.targets.begin_clear_pass(encoder, &label, slot.and_then(|s| s.render(first, last)));
+        pass.set_pipeline(&self.double_sided);
+        pass.set_bind_group(0, camera_group, &[]);
+        pass.set_bind_group(1, &scene.instance_group, &[]);
+        scene.draw(&mut pass, state, Some(2), Some((&self.single_sided, &self.double_sided)));
+    }
+}
+
+impl GBuffer {
+    /// A render pass into every target, all cleared (colour to 0, depth to 1).
+    pub(crate) fn begin_clear_pass<'e>(
+        &self,
+        encoder: &'e mut wgpu::CommandEncoder,
+        label: &str,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) -> wgpu::RenderPass<'e> {
+        let v = &self.views;
         let clear = |view| {
             Some(wgpu::RenderPassColorAttachment {
                 view,
@@ -223,8 +246,8 @@ impl GBufferPass {
                 },
             })
         };
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some(&format!("{}.pass", self.name)),
+        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(label),
             color_attachments: &[
                 clear(&v.position),
                 clear(&v.normal),
@@ -238,14 +261,10 @@ impl GBufferPass {
                 depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
                 stencil_ops: None,
             }),
-            timestamp_writes: slot.and_then(|s| s.render(first, last)),
+            timestamp_writes,
             occlusion_query_set: None,
             multiview_mask: None,
-        });
-        pass.set_pipeline(&self.double_sided);
-        pass.set_bind_group(0, camera_group, &[]);
-        pass.set_bind_group(1, &scene.instance_group, &[]);
-        scene.draw(&mut pass, state, Some(2), Some((&self.single_sided, &self.double_sided)));
+        })
     }
 }
 

@@ -203,37 +203,8 @@ impl HemispherePass {
             &self.raster_layout,
             vec![camera.as_entire_binding(), cameras.as_entire_binding(), params.as_entire_binding()],
         );
-        let v = &self.atlas.views;
-        let clear = |view| {
-            Some(wgpu::RenderPassColorAttachment {
-                view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
-                },
-            })
-        };
-        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("gautron.hemisphere.pass"),
-            color_attachments: &[
-                clear(&v.position),
-                clear(&v.normal),
-                clear(&v.albedo),
-                clear(&v.material),
-                clear(&v.motion),
-                clear(&v.emission),
-            ],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &v.depth,
-                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: slot.and_then(|s| s.render(true, false)),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let mut pass =
+            self.atlas.begin_clear_pass(enc, "gautron.hemisphere.pass", slot.and_then(|s| s.render(true, false)));
         pass.set_bind_group(0, &group, &[]);
         pass.set_bind_group(1, &scene.instance_group, &[]);
         scene.draw_indirect(&mut pass, state, 2, (&self.single_sided, &self.double_sided), args);
@@ -292,57 +263,21 @@ impl HemispherePass {
     }
 }
 
+/// The G-buffer's pipeline with the record cameras' vertex stage: the record's view has
+/// rows (t, b, −n) so that the image's x and y are the table's t and b
+/// (`cpu::gautron::frame`), a mirror (determinant −1), so front faces wind clockwise.
 fn raster_pipeline(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
     cull_mode: Option<wgpu::Face>,
 ) -> wgpu::RenderPipeline {
-    let target = |format| Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL });
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(if cull_mode.is_some() {
-            "gautron.hemisphere.single_sided"
-        } else {
-            "gautron.hemisphere.double_sided"
-        }),
-        layout: Some(layout),
-        vertex: wgpu::VertexState {
-            module,
-            entry_point: Some("vs_hemisphere"),
-            compilation_options: Default::default(),
-            buffers: &[Some(crate::scene::upload::vertex_layout())],
-        },
-        // The record's view has rows (t, b, −n) so that the image's x and y are the table's t
-        // and b (`cpu::gautron::frame`): a mirror (determinant −1), so front faces wind
-        // clockwise on screen.
-        primitive: wgpu::PrimitiveState {
-            topology: wgpu::PrimitiveTopology::TriangleList,
-            front_face: wgpu::FrontFace::Cw,
-            cull_mode,
-            ..Default::default()
-        },
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: gbuffer::DEPTH_FORMAT,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: Default::default(),
-        fragment: Some(wgpu::FragmentState {
-            module,
-            entry_point: Some("fs_main"),
-            compilation_options: Default::default(),
-            targets: &[
-                target(gbuffer::POSITION_FORMAT),
-                target(gbuffer::NORMAL_FORMAT),
-                target(gbuffer::ALBEDO_FORMAT),
-                target(gbuffer::MATERIAL_FORMAT),
-                target(gbuffer::MOTION_FORMAT),
-                target(gbuffer::EMISSION_FORMAT),
-            ],
-        }),
-        multiview_mask: None,
-        cache: None,
-    })
+    gbuffer::GBufferPass::pipeline(
+        device,
+        layout,
+        module,
+        ("vs_hemisphere", wgpu::FrontFace::Cw),
+        cull_mode,
+        "gautron.hemisphere",
+    )
 }
