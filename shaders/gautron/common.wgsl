@@ -14,9 +14,16 @@ struct Record {
     rot: array<vec4<f32>, 3>,
     // ∇_t E_k of the red, green and blue channel (xyz, world space)
     trans: array<vec4<f32>, 3>,
-    // xy: the pixel it was made at, z: its linear view depth then, w: 1 once computed
+    // xy: the pixel it was made at, z: its linear view depth then, w: 0 while its hemisphere
+    // is being computed, 1 once computed, 2 stale (to be computed again: see cs_maintain)
     pixel: vec4<f32>,
+    // the scene draws its hemisphere saw, as 128 bits: bit (draw mod 128) (the record
+    // cache's invalidation when objects move)
+    seen: vec4<u32>,
 }
+
+const RECORD_VALID: f32 = 1.0;
+const RECORD_STALE: f32 = 2.0;
 
 // The cache's counters. Rust twin: passes::gautron::CacheState.
 struct CacheState {
@@ -30,6 +37,14 @@ struct CacheState {
     made: u32,
     // candidates found this round (before the budget)
     candidates: u32,
+    // stale records waiting to be computed again
+    stale: u32,
+    // where the next round's search for stale records starts (round robin)
+    cursor: u32,
+    // stale records this round computes again (slots new_count … new_count + refresh − 1)
+    refresh: u32,
+    // records computed again this frame
+    refreshed: u32,
     pad0: u32,
     pad1: u32,
     pad2: u32,

@@ -3,12 +3,34 @@
 // per creation tile, the under-covered pixel nearest the tile's centre (covered: the splatted
 // Σ w_k ≥ 1/a, i.e. some record passes Ward's test); `cs_compact` lists them in tile order up
 // to the round's budget and the capacity (one workgroup: the same set, in the same order,
-// whatever order the GPU ran the tiles in); `cs_cameras` sets up each new record's
-// hemisphere camera. Twin: cpu::gautron::candidates.
+// whatever order the GPU ran the tiles in), then fills the rest of the budget with stale
+// records to compute again (round robin from a cursor); `cs_cameras` sets up each slot's
+// hemisphere camera. `cs_maintain` runs once per frame before the first splat: the reuse
+// policy and the invalidation by moved objects and changed lights. Twin:
+// cpu::gautron::candidates.
 #import gautron/common.wgsl
 #import common/camera.wgsl
 
 const NONE: u32 = 0xffffffffu;
+// a slot that computes stale record (slot & ~REFRESH) again instead of making one
+const REFRESH: u32 = 0x80000000u;
+
+// What changed since the last frame (stage.rs fills it).
+struct MaintainParams {
+    // x: drop the records outside the view frustum, y: moved objects, z: every record is
+    // invalid (a light changed), w: invalid records are refreshed (1) or dropped (0)
+    flags: vec4<u32>,
+    // the moved draws as 128 bits (bit draw mod 128), as `Record.seen`
+    mask: vec4<u32>,
+}
+
+// A moved scene draw: its world bounds last frame and now.
+struct MovedObject {
+    old_min: vec4<f32>,
+    old_max: vec4<f32>,
+    new_min: vec4<f32>,
+    new_max: vec4<f32>,
+}
 
 
 struct RoundParams {
@@ -29,6 +51,8 @@ struct RoundParams {
 @group(0) @binding(9) var<storage, read_write> raster_args: array<u32>;
 // the splat's indirect draw: vertex count, instance count, first vertex, first instance
 @group(0) @binding(10) var<storage, read_write> splat_args: array<u32, 4>;
+@group(0) @binding(11) var<uniform> maintain: MaintainParams;
+@group(0) @binding(12) var<storage, read> moved: array<MovedObject>;
 @group(1) @binding(0) var g_position: texture_2d<f32>;
 @group(1) @binding(1) var g_normal: texture_2d<f32>;
 @group(1) @binding(2) var accum: texture_2d<f32>;
@@ -84,6 +108,8 @@ fn cs_candidates(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation
 
 var<workgroup> scan: array<u32, 256>;
 var<workgroup> taken: u32;
+var<workgroup> furthest: atomic<u32>;
+var<workgroup> stale_left: atomic<u32>;
 
 // The inclusive prefix sum of the 256 threads' flags into `scan` (Hillis–Steele; every
 // thread of the workgroup calls it).
@@ -134,12 +160,62 @@ fn cs_compact(@builtin(local_invocation_index) li: u32) {
         workgroupBarrier();
     }
     let new_count = min(taken, room);
+    let candidates_found = taken;
+    workgroupBarrier();
+
+    // The rest of the budget computes stale records again, in cache order from the cursor
+    // (round robin, so that a scene that keeps moving refreshes every record in turn).
+    let want = budget - new_count;
+    let stale = state.stale;
+    let cursor = state.cursor % max(base, 1u);
+    if (li == 0u) {
+        taken = 0u;
+        atomicStore(&furthest, 0u);
+    }
+    workgroupBarrier();
+    if (stale > 0u && want > 0u) {
+        for (var start = 0u; start < base; start = start + 256u) {
+            let t = start + li;
+            var flag = 0u;
+            var index = 0u;
+            if (t < base) {
+                index = (cursor + t) % base;
+                if (records[index].pixel.w == RECORD_STALE) {
+                    flag = 1u;
+                }
+            }
+            scan_flags(li, flag);
+            let before = taken;
+            let slot = before + scan[li] - flag;
+            if (flag == 1u && slot < want) {
+                slots[new_count + slot] = index | REFRESH;
+                records[index].pixel.w = 0.0;
+                atomicMax(&furthest, t + 1u);
+            }
+            let total = scan[255];
+            workgroupBarrier();
+            if (li == 0u) {
+                taken = before + total;
+            }
+            if (workgroupUniformLoad(&taken) >= want) {
+                break;
+            }
+        }
+    }
+    workgroupBarrier();
+    let refresh = min(taken, want);
     if (li == 0u) {
         state.new_base = base;
         state.new_count = new_count;
         state.count = base + new_count;
         state.made = state.made + new_count;
-        state.candidates = taken;
+        state.candidates = candidates_found;
+        state.refresh = refresh;
+        state.refreshed = state.refreshed + refresh;
+        state.stale = stale - min(refresh, stale);
+        if (refresh > 0u) {
+            state.cursor = (cursor + atomicLoad(&furthest)) % max(base, 1u);
+        }
         splat_args[0] = 6u;
         splat_args[1] = new_count;
         splat_args[2] = 0u;
@@ -147,7 +223,7 @@ fn cs_compact(@builtin(local_invocation_index) li: u32) {
     }
     let draws = arrayLength(&raster_args) / 5u;
     for (var d = li; d < draws; d = d + 256u) {
-        raster_args[d * 5u + 1u] = new_count;
+        raster_args[d * 5u + 1u] = new_count + refresh;
     }
 }
 
@@ -167,16 +243,29 @@ fn cs_cameras(@builtin(global_invocation_id) gid: vec3<u32>) {
     let cell = vec2<f32>(f32(s % per_row), f32(s / per_row));
     var cam: HemisphereCamera;
     cam.tile = vec4<f32>(-1.0 + (2.0 * cell.x + 1.0) * scale.x, 1.0 - (2.0 * cell.y + 1.0) * scale.y, scale);
-    if (s >= state.new_count) {
+    if (s >= state.new_count + state.refresh) {
         cam.view_proj = mat4x4<f32>(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
         cameras[s] = cam;
         viewers[s] = vec4<f32>(0.0);
         return;
     }
+    let refresh = s >= state.new_count;
     let width = textureDimensions(g_normal).x;
-    let px = vec2<i32>(i32(slots[s] % width), i32(slots[s] / width));
-    let pos = textureLoad(g_position, px, 0);
-    let n = normalize(textureLoad(g_normal, px, 0).xyz);
+    var px = vec2<i32>(i32(slots[s] % width), i32(slots[s] / width));
+    var index = state.new_base + s;
+    var pos: vec4<f32>;
+    var n: vec3<f32>;
+    var rec: Record;
+    if (refresh) {
+        // a stale record: the same place, computed again
+        index = slots[s] & ~REFRESH;
+        rec = records[index];
+        pos = vec4<f32>(rec.position.xyz, rec.pixel.z);
+        n = rec.normal.xyz;
+    } else {
+        pos = textureLoad(g_position, px, 0);
+        n = normalize(textureLoad(g_normal, px, 0).xyz);
+    }
     let f = tangent_frame(n);
     let t = f[0];
     let b = f[1];
@@ -197,7 +286,6 @@ fn cs_cameras(@builtin(global_invocation_id) gid: vec3<u32>) {
         vec4<f32>(0.0, 0.0, far / (near - far), -1.0),
         vec4<f32>(0.0, 0.0, near * far / (near - far), 0.0),
     );
-    let index = state.new_base + s;
     cam.view_proj = proj * view;
     cam.position = vec4<f32>(p, 1.0);
     cam.t = vec4<f32>(t, 0.0);
@@ -205,11 +293,16 @@ fn cs_cameras(@builtin(global_invocation_id) gid: vec3<u32>) {
     cam.n = vec4<f32>(n, f32(index));
     cameras[s] = cam;
     viewers[s] = vec4<f32>(p, 1.0);
-    var rec: Record;
+    if (refresh) {
+        // E_k stays until the reduction overwrites it; the frame says when it was computed
+        records[index].irradiance.w = params.misc.x;
+        return;
+    }
     rec.position = vec4<f32>(p, 0.0);
     rec.normal = vec4<f32>(n, 0.0);
     rec.irradiance = vec4<f32>(0.0, 0.0, 0.0, params.misc.x);
     rec.pixel = vec4<f32>(vec2<f32>(px), pos.w, 0.0);
+    rec.seen = vec4<u32>(0u);
     records[index] = rec;
     textureStore(candidate_mask, px, vec4<f32>(f32(round.round.x + 1u)));
 }
@@ -219,6 +312,8 @@ fn cs_cameras(@builtin(global_invocation_id) gid: vec3<u32>) {
 @compute @workgroup_size(1, 1, 1)
 fn cs_begin() {
     state.made = 0u;
+    state.refreshed = 0u;
+    state.refresh = 0u;
     state.new_base = 0u;
     state.new_count = 0u;
     splat_args[0] = 6u;
@@ -227,14 +322,57 @@ fn cs_begin() {
     splat_args[3] = 0u;
 }
 
-// The reuse policy "drop off-screen": the cache keeps, in order, only the records whose
-// position is inside the view frustum (one workgroup; a record moves only to a lower index,
-// which its chunk has already read).
+fn inside(p: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>, margin: f32) -> bool {
+    return all(p >= lo - vec3<f32>(margin)) && all(p <= hi + vec3<f32>(margin));
+}
+
+// Whether the box [lo, hi] reaches into the half-space in front of the record (its
+// hemisphere could see it: a conservative test of the camera's view).
+fn in_front(rec: Record, lo: vec3<f32>, hi: vec3<f32>) -> bool {
+    let c = (lo + hi) * 0.5;
+    let e = (hi - lo) * 0.5;
+    let n = rec.normal.xyz;
+    return dot(c - rec.position.xyz, n) + dot(e, abs(n)) > 0.0;
+}
+
+// What the record cache does with record `rec` this frame: 0 drop, 1 keep, 2 keep stale
+// (stage 7): off-screen records go under the "drop off-screen" policy; a record lying on a
+// moved object (inside its old or new bounds) goes; a record whose hemisphere saw a moved
+// object (its `seen` bits) or could see it now (the new bounds in front of it), and every
+// record when a light changed, is invalid: dropped or kept stale by `gautron.invalidation`.
+fn fate(rec: Record) -> u32 {
+    if (maintain.flags.x == 1u) {
+        let clip = camera.view_proj * vec4<f32>(rec.position.xyz, 1.0);
+        let visible = clip.w > 0.0 && all(abs(clip.xy) <= vec2<f32>(clip.w)) && clip.z >= 0.0 && clip.z <= clip.w;
+        if (!visible) {
+            return 0u;
+        }
+    }
+    var invalid = maintain.flags.z == 1u || any((rec.seen & maintain.mask) != vec4<u32>(0u));
+    let margin = params.hemisphere.w * 10.0;
+    for (var m = 0u; m < maintain.flags.y; m = m + 1u) {
+        let o = moved[m];
+        let p = rec.position.xyz;
+        if (inside(p, o.old_min.xyz, o.old_max.xyz, margin) || inside(p, o.new_min.xyz, o.new_max.xyz, margin)) {
+            return 0u;
+        }
+        invalid = invalid || in_front(rec, o.new_min.xyz, o.new_max.xyz);
+    }
+    if (!invalid) {
+        return select(1u, 2u, rec.pixel.w == RECORD_STALE);
+    }
+    return select(0u, 2u, maintain.flags.w == 1u);
+}
+
+// Once per frame before the first splat, when something changed or the policy drops
+// off-screen records: the cache keeps, in order, the records `fate` keeps (one workgroup; a
+// record moves only to a lower index, which its chunk has already read) and counts the stale.
 @compute @workgroup_size(256, 1, 1)
-fn cs_cull(@builtin(local_invocation_index) li: u32) {
+fn cs_maintain(@builtin(local_invocation_index) li: u32) {
     let count = state.count;
     if (li == 0u) {
         taken = 0u;
+        atomicStore(&stale_left, 0u);
     }
     workgroupBarrier();
     for (var start = 0u; start < count; start = start + 256u) {
@@ -243,9 +381,12 @@ fn cs_cull(@builtin(local_invocation_index) li: u32) {
         var rec: Record;
         if (i < count) {
             rec = records[i];
-            let clip = camera.view_proj * vec4<f32>(rec.position.xyz, 1.0);
-            let inside = clip.w > 0.0 && all(abs(clip.xy) <= vec2<f32>(clip.w)) && clip.z >= 0.0 && clip.z <= clip.w;
-            flag = select(0u, 1u, inside);
+            let f = fate(rec);
+            if (f == 2u) {
+                rec.pixel.w = RECORD_STALE;
+                atomicAdd(&stale_left, 1u);
+            }
+            flag = select(0u, 1u, f > 0u);
         }
         scan_flags(li, flag);
         let before = taken;
@@ -261,5 +402,7 @@ fn cs_cull(@builtin(local_invocation_index) li: u32) {
     }
     if (li == 0u) {
         state.count = taken;
+        state.stale = atomicLoad(&stale_left);
+        state.cursor = state.cursor % max(taken, 1u);
     }
 }

@@ -5,7 +5,9 @@ enable clip_distances;
 // seen by slot s, the vertex is moved into slot s's tile and clipped to it by four clip
 // distances (the record's own frustum sides), so no triangle reaches a neighbour's tile.
 // The fragment stage is the G-buffer's (stage 1), so that the direct pass lights the atlas
-// exactly as it lights the screen (`direct.wgsl`'s cs_atlas, viewed from each record).
+// exactly as it lights the screen (`direct.wgsl`'s cs_atlas, viewed from each record); it
+// writes the scene draw's index where the screen writes its motion (the atlas has none), so
+// that the reduction knows which objects a record saw (the record cache's invalidation).
 #import gbuffer/gbuffer.wgsl
 #import gautron/common.wgsl
 
@@ -21,6 +23,7 @@ struct HemiOut {
     @location(2) uv: vec2<f32>,
     @location(3) cur_clip: vec4<f32>,
     @location(4) prev_clip: vec4<f32>,
+    @location(5) @interpolate(flat) object: u32,
 }
 
 @vertex
@@ -42,5 +45,32 @@ fn vs_hemisphere(v: VsIn, @builtin(instance_index) instance: u32) -> HemiOut {
     o.uv = v.uv;
     o.cur_clip = o.clip;
     o.prev_clip = o.clip;
+    o.object = object;
+    return o;
+}
+
+// HemiOut without the clip distances (a vertex output only).
+struct HemiIn {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) cur_clip: vec4<f32>,
+    @location(4) prev_clip: vec4<f32>,
+    @location(5) @interpolate(flat) object: u32,
+}
+
+@fragment
+fn fs_hemisphere(i: HemiIn, @builtin(front_facing) front: bool) -> FsOut {
+    var v: VsOut;
+    v.clip = i.clip;
+    v.world = i.world;
+    v.normal = i.normal;
+    v.uv = i.uv;
+    v.cur_clip = i.cur_clip;
+    v.prev_clip = i.prev_clip;
+    var o = gbuffer_fragment(v, front);
+    // x: the scene draw's index (exact in f32 below 2²⁴)
+    o.motion = vec2<f32>(f32(i.object), 0.0);
     return o;
 }

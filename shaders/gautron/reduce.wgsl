@@ -7,8 +7,9 @@
 //   ∇_r = Σ L Ω (n × ω) + Σ L ∫_band (n × ω) dω           (the derivative of ∫ L max(0, n·ω) dω under rotation)
 //   ∇_t = −Σ_edges (L_a − L_b) cosθ_e l_e m_e / min(r_a, r_b)   (Ward–Heckbert / Křivánek: the nearer
 //         surface owns a texel boundary and its image moves by −t⊥/r)
-// then R_k = H clamped in scene units, then in pixels at the record's depth. Twin:
-// cpu::gautron::reduce.
+// then R_k = H clamped in scene units, then in pixels at the record's depth; and the scene
+// draws the tile saw (the atlas's motion target holds the draw's index), for the record
+// cache's invalidation. Twin: cpu::gautron::reduce.
 #import gautron/common.wgsl
 
 struct TexelTerms {
@@ -27,10 +28,12 @@ struct TexelTerms {
 @group(0) @binding(5) var radiance: texture_2d<f32>;
 @group(0) @binding(6) var position: texture_2d<f32>;
 @group(0) @binding(7) var normal: texture_2d<f32>;
+@group(0) @binding(8) var object: texture_2d<f32>;
 
 const FAR: f32 = 1e30;
 const TERMS: u32 = 23u;
 var<workgroup> part: array<f32, 1472>;
+var<workgroup> seen_bits: array<atomic<u32>, 4>;
 
 struct Seen {
     light: vec3<f32>,
@@ -60,9 +63,13 @@ fn edge(a: Seen, b: Seen, terms: vec4<f32>) -> mat3x3<f32> {
 @compute @workgroup_size(64, 1, 1)
 fn cs_reduce(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     let s = wg.x;
-    if (s >= state.new_count) {
+    if (s >= state.new_count + state.refresh) {
         return;
     }
+    if (li < 4u) {
+        atomicStore(&seen_bits[li], 0u);
+    }
+    workgroupBarrier();
     let cam = cameras[s];
     let n_px = u32(params.hemisphere.x);
     let per_row = u32(params.hemisphere.y);
@@ -78,6 +85,10 @@ fn cs_reduce(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
         let j = k / n_px;
         let tt = table[k];
         let a = seen(origin, i, j, p);
+        if (a.r < FAR * 0.5) {
+            let draw = u32(textureLoad(object, origin + vec2<i32>(i32(i), i32(j)), 0).x) % 128u;
+            atomicOr(&seen_bits[draw / 32u], 1u << (draw % 32u));
+        }
         let c_omega = tt.dir.z * tt.dir.w;
         e = e + a.light * (c_omega + tt.band.x);
         h_num = h_num + c_omega;
@@ -136,6 +147,7 @@ fn cs_reduce(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
     r = clamp(r * px_per_unit, params.clamps.z, params.clamps.w) / px_per_unit;
     rec.position.w = r;
     rec.normal.w = h;
-    rec.pixel.w = 1.0;
+    rec.pixel.w = RECORD_VALID;
+    rec.seen = vec4<u32>(atomicLoad(&seen_bits[0]), atomicLoad(&seen_bits[1]), atomicLoad(&seen_bits[2]), atomicLoad(&seen_bits[3]));
     records[index] = rec;
 }

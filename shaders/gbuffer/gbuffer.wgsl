@@ -69,6 +69,12 @@ struct FsOut {
 
 @fragment
 fn fs_main(i: VsOut, @builtin(front_facing) front: bool) -> FsOut {
+    return gbuffer_fragment(i, front);
+}
+
+// The G-buffer's outputs for one fragment (also Gautron's hemisphere atlas, whose fragment
+// stage adds the object's index).
+fn gbuffer_fragment(i: VsOut, front: bool) -> FsOut {
     var n = normalize(i.normal);
     if (!front) {
         n = -n;

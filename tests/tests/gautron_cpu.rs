@@ -710,3 +710,37 @@ fn creation_rounds_cover_every_valid_pixel_independently_of_record_order() {
     );
     assert!(checked_order > 0);
 }
+
+/// The record cache's invalidation (stage 7): a record lying on a moved object goes, one that
+/// saw it or faces its new place is invalid (dropped or stale by the policy), one facing away
+/// that never saw it stays; a light change invalidates every record.
+#[test]
+fn invalidation_drops_or_refreshes_what_a_change_touches() {
+    use gi_render::cpu::gautron::{Changes, Fate, fate};
+    let unit = (Vec3::splat(-0.5), Vec3::splat(0.5));
+    let moved = (unit.0 + Vec3::X, unit.1 + Vec3::X);
+    let changes =
+        |refresh| Changes { moved: vec![5], bounds: vec![(unit, moved)], margin: 1e-3, lights: false, refresh };
+    let none = [0u32; 4];
+    let saw_5 = [1 << 5, 0, 0, 0];
+    let saw_133 = [1 << 5, 0, 0, 0]; // draw 133 shares draw 5's bit: conservative
+    let (c, r) = (changes(false), changes(true));
+    // On the object (old or new place, or within the margin of its face).
+    assert_eq!(fate(Vec3::new(0.0, 0.5005, 0.0), Vec3::Y, none, false, &c), Fate::Drop);
+    assert_eq!(fate(Vec3::new(1.2, 0.0, 0.0), Vec3::Y, none, false, &r), Fate::Drop);
+    // Facing away from both places, never saw it: kept (a stale one stays stale).
+    let away = Vec3::new(-3.0, 0.0, 0.0);
+    assert_eq!(fate(away, Vec3::NEG_X, none, false, &c), Fate::Keep);
+    assert_eq!(fate(away, Vec3::NEG_X, none, true, &c), Fate::Stale);
+    // Saw it (its bit): invalid, even facing away from the new place.
+    assert_eq!(fate(away, Vec3::NEG_X, saw_5, false, &c), Fate::Drop);
+    assert_eq!(fate(away, Vec3::NEG_X, saw_133, false, &r), Fate::Stale);
+    // Facing the new place: it could see it now.
+    assert_eq!(fate(away, Vec3::X, none, false, &c), Fate::Drop);
+    assert_eq!(fate(away, Vec3::X, none, false, &r), Fate::Stale);
+    // A plane through the box's far side facing away: the box is behind it.
+    assert_eq!(fate(Vec3::new(1.6, 3.0, 0.0), Vec3::X, none, false, &c), Fate::Keep);
+    // A light change: every record.
+    let lights = Changes { lights: true, refresh: true, ..Default::default() };
+    assert_eq!(fate(away, Vec3::NEG_X, none, false, &lights), Fate::Stale);
+}

@@ -459,3 +459,56 @@ pub fn candidates(
     }
     out
 }
+
+/// What the record cache does with a record when something changed (stage 7, the cache
+/// across frames; GPU twin `fate` in `shaders/gautron/create.wgsl`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Fate {
+    Drop,
+    Keep,
+    /// Kept and splatted with its old value until computed again in place.
+    Stale,
+}
+
+/// What changed since the last frame, as the invalidation sees it.
+#[derive(Clone, Debug, Default)]
+pub struct Changes {
+    /// The moved scene draws' indices.
+    pub moved: Vec<usize>,
+    /// Each moved draw's world bounds (min, max) last frame and now.
+    pub bounds: Vec<((Vec3, Vec3), (Vec3, Vec3))>,
+    /// How far outside a moved object's bounds a record still counts as lying on it.
+    pub margin: f32,
+    /// A light changed: every record is invalid.
+    pub lights: bool,
+    /// Invalid records are kept stale (`Invalidation::Refresh`) instead of dropped.
+    pub refresh: bool,
+}
+
+/// A record at `p` with normal `n`, whose hemisphere saw the draws of the 128-bit `seen`
+/// (bit draw mod 128), already `stale` or not: dropped when it lies on a moved object (inside
+/// its old or new bounds, within the margin); invalid when its hemisphere saw a moved draw
+/// (by the bits: conservative, a draw 128 further shares the bit), when a moved object's new
+/// bounds reach into the half-space in front of it (it could see it now), or when a light
+/// changed; an invalid record is dropped or kept stale.
+pub fn fate(p: Vec3, n: Vec3, seen: [u32; 4], stale: bool, changes: &Changes) -> Fate {
+    let mut invalid = changes.lights;
+    for &d in &changes.moved {
+        invalid |= seen[(d % 128) / 32] & (1 << (d % 32)) != 0;
+    }
+    let m = Vec3::splat(changes.margin);
+    for &((old_lo, old_hi), (new_lo, new_hi)) in &changes.bounds {
+        let inside = |lo: Vec3, hi: Vec3| p.cmpge(lo - m).all() && p.cmple(hi + m).all();
+        if inside(old_lo, old_hi) || inside(new_lo, new_hi) {
+            return Fate::Drop;
+        }
+        let (c, e) = ((new_lo + new_hi) * 0.5, (new_hi - new_lo) * 0.5);
+        invalid |= (c - p).dot(n) + e.dot(n.abs()) > 0.0;
+    }
+    match (invalid, changes.refresh) {
+        (false, _) if stale => Fate::Stale,
+        (false, _) => Fate::Keep,
+        (true, true) => Fate::Stale,
+        (true, false) => Fate::Drop,
+    }
+}

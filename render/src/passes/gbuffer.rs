@@ -74,21 +74,21 @@ impl GBufferPass {
             immediate_size: 0,
         });
         let pipelines = [Some(wgpu::Face::Back), None].map(|cull_mode| {
-            Self::pipeline(device, &layout, &module, ("vs_main", wgpu::FrontFace::Ccw), cull_mode, &name)
+            Self::pipeline(device, &layout, &module, ("vs_main", "fs_main", wgpu::FrontFace::Ccw), cull_mode, &name)
         });
         let [single_sided, double_sided] = pipelines;
         let targets = create_targets(ctx, width, height, &name);
         Self { name, single_sided, double_sided, camera_layout, targets }
     }
 
-    /// The G-buffer's render pipeline with vertex entry `vs_entry` of `module` and the
-    /// fragment stage `fs_main` (also Gautron's hemisphere atlas, whose mirrored record views
-    /// wind front faces clockwise).
+    /// The G-buffer's render pipeline with the vertex and fragment entries `(vs, fs)` of
+    /// `module` (`fs_main` or a wrapper of `gbuffer_fragment`: also Gautron's hemisphere
+    /// atlas, whose mirrored record views wind front faces clockwise).
     pub(crate) fn pipeline(
         device: &wgpu::Device,
         layout: &wgpu::PipelineLayout,
         module: &wgpu::ShaderModule,
-        (vs_entry, front_face): (&str, wgpu::FrontFace),
+        (vs_entry, fs_entry, front_face): (&str, &str, wgpu::FrontFace),
         cull_mode: Option<wgpu::Face>,
         name: &str,
     ) -> wgpu::RenderPipeline {
@@ -124,7 +124,7 @@ impl GBufferPass {
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module,
-                entry_point: Some("fs_main"),
+                entry_point: Some(fs_entry),
                 compilation_options: Default::default(),
                 targets: &[
                     target(POSITION_FORMAT),

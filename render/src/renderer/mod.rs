@@ -261,7 +261,7 @@ impl Renderer {
         self.clock.time_step_s = settings.animation.time_step_s as f64;
         self.settings = settings;
         if reset {
-            self.reset_history();
+            self.reset_history_but_records();
         }
         self.ensure_passes();
         if choices_changed {
@@ -271,8 +271,18 @@ impl Renderer {
     }
 
     /// Forgets everything temporal: the movement buffer's previous frame, the confidence
-    /// merge's history and the reference's average.
+    /// merge's history, the reference's average and Gautron's record cache.
     pub fn reset_history(&mut self) {
+        self.reset_history_but_records();
+        if let Some(x) = &mut self.stages.gautron {
+            x.reset();
+        }
+    }
+
+    /// [`Self::reset_history`] but for Gautron's record cache, which finds by itself what a
+    /// settings, light or object change invalidates (stage 7, `gautron.invalidation`): after
+    /// a settings change or a light edit.
+    pub fn reset_history_but_records(&mut self) {
         self.prev = None;
         if let Some(x) = &mut self.stages.reference {
             x.batches = 0;
@@ -281,9 +291,6 @@ impl Renderer {
             t.reset();
         }
         if let Some(x) = &mut self.stages.soler {
-            x.reset();
-        }
-        if let Some(x) = &mut self.stages.gautron {
             x.reset();
         }
     }

@@ -155,7 +155,7 @@ fn light_controls(l: &mut crate::ui::lab::Lab, ui: &mut egui::Ui) {
         });
     }
     if changed {
-        l.renderer.reset_history();
+        l.renderer.reset_history_but_records();
     }
 }
 

@@ -63,6 +63,7 @@ impl HemispherePass {
                 bgl::texture(5, cs, false),
                 bgl::texture(6, cs, false),
                 bgl::texture(7, cs, false),
+                bgl::texture(8, cs, false),
             ],
         });
         let reduce_module = crate::shaders::create_module(device, "gautron/reduce.wgsl");
@@ -175,6 +176,12 @@ impl HemispherePass {
             &t.normal,
         );
         reg.register(
+            "gautron.hemisphere.object",
+            BufferKind::Data,
+            "the last round's hemispheres: r = the index of the scene draw each texel sees (the record cache invalidates a record when one it saw moves)",
+            &t.motion,
+        );
+        reg.register(
             "gautron.solid_angle",
             BufferKind::Data,
             "one hemisphere tile's weights: r = solid angle Ω_p = A·cos³θ, g = the border band's irradiance weight, b = the texel's whole irradiance weight cosθ·Ω_p + band, a = the band's solid angle",
@@ -220,7 +227,7 @@ impl HemispherePass {
             .collect()
     }
 
-    /// Reduces each new record's tile to its terms (`gautron/reduce.wgsl`).
+    /// Reduces each new or refreshed record's tile to its terms (`gautron/reduce.wgsl`).
     #[allow(clippy::too_many_arguments)]
     pub fn reduce(
         &self,
@@ -247,6 +254,7 @@ impl HemispherePass {
                 tv(&self.radiance_view),
                 tv(&self.atlas.views.position),
                 tv(&self.atlas.views.normal),
+                tv(&self.atlas.views.motion),
             ],
         );
         let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -276,7 +284,7 @@ fn raster_pipeline(
         device,
         layout,
         module,
-        ("vs_hemisphere", wgpu::FrontFace::Cw),
+        ("vs_hemisphere", "fs_hemisphere", wgpu::FrontFace::Cw),
         cull_mode,
         "gautron.hemisphere",
     )

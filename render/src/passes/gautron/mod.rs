@@ -48,6 +48,23 @@ settings_enum! {
     default KeepAll
 }
 
+settings_enum! {
+    /// What the record cache does with the records a change invalidates (stage 7; the text
+    /// only reuses records of static scenes, "Results"): records whose hemisphere saw a moved
+    /// object (old or new place), and every record when a light or the direct light's
+    /// settings change. Records lying on a moved object are always dropped.
+    pub enum Invalidation {
+        /// Invalid records are dropped: the creation makes new ones where the coverage falls
+        /// short (black until then when the round budget runs out).
+        Drop = "drop",
+        /// Invalid records stay, marked stale, and are splatted with their old value until
+        /// a round computes them again at the same place (after the new records, round
+        /// robin): no holes, the change shows with a delay.
+        Refresh = "refresh in place",
+    }
+    default Refresh
+}
+
 settings_group! {
     /// Gautron et al.'s irradiance cache splatting (003): records, their hemispheres, the
     /// splatting of Ward's weights and the cache across frames.
@@ -86,7 +103,7 @@ settings_group! {
         unit "px", symbol "", range 2..=64, cost "smaller: more candidates per round", history true;
         /// Records the cache can hold (creation stops when full).
         capacity: u32 = 16384,
-        unit "records", symbol "", range 16..=65536, cost "memory 160 B per record", history true;
+        unit "records", symbol "", range 16..=65536, cost "memory 176 B per record", history true;
         /// Lower clamp of R_k projected on the screen at the record's depth.
         r_min_px: f32 = 20.0,
         unit "px", symbol "R_min", range 0.0..=1000.0, cost "free (larger: fewer records)", history true;
@@ -106,6 +123,9 @@ settings_group! {
         /// it every frame starts from an empty cache: the cold-cache cost).
         reuse: ReusePolicy = ReusePolicy::KeepAll,
         unit "", symbol "", range 0..=1, cost "free", history true;
+        /// What becomes of the records a moving object or a light change invalidates.
+        invalidation: Invalidation = Invalidation::Refresh,
+        unit "", symbol "", range 0..=1, cost "refresh: one hemisphere per stale record", history false;
     }
 }
 
@@ -123,9 +143,22 @@ pub struct GpuRecord {
     pub rot: [Vec4; 3],
     /// ∇_t E_k per colour channel (xyz).
     pub trans: [Vec4; 3],
-    /// xy: the pixel it was made at, z: its linear view depth, w: 1 once computed.
+    /// xy: the pixel it was made at, z: its linear view depth, w: 0 being computed, 1
+    /// computed, 2 stale.
     pub pixel: Vec4,
+    /// The scene draws its hemisphere saw: bit (draw mod 128) of the 128.
+    pub seen: [u32; 4],
 }
+
+impl GpuRecord {
+    /// Whether the record's hemisphere saw scene draw `draw` (or another of its bit).
+    pub fn saw(&self, draw: usize) -> bool {
+        self.seen[(draw % 128) / 32] & (1 << (draw % 32)) != 0
+    }
+}
+
+/// Bytes per record on the GPU.
+pub const RECORD_BYTES: u64 = std::mem::size_of::<GpuRecord>() as u64;
 
 /// The cache's counters; WGSL twin: `CacheState`.
 #[repr(C)]
@@ -141,6 +174,14 @@ pub struct CacheState {
     pub made: u32,
     /// Candidates the last round found (before the budget).
     pub candidates: u32,
+    /// Stale records waiting to be computed again.
+    pub stale: u32,
+    /// Where the next search for stale records starts (round robin).
+    pub cursor: u32,
+    /// Stale records the last round computed again.
+    pub refresh: u32,
+    /// Records computed again this frame.
+    pub refreshed: u32,
     pub pad: [u32; 3],
 }
 

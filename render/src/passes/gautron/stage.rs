@@ -10,7 +10,10 @@ use std::hash::{Hash, Hasher};
 
 use super::hemisphere::HemispherePass;
 use super::splat::SplatPass;
-use super::{CacheState, GautronParams, GautronSettings, GpuRecord, HemisphereCamera, ReusePolicy, atlas_grid};
+use super::{
+    CacheState, GautronParams, GautronSettings, GpuRecord, HemisphereCamera, Invalidation, RECORD_BYTES, ReusePolicy,
+    atlas_grid,
+};
 use crate::buffers::{BufferKind, BufferRegistry, read_storage};
 use crate::gpu::GpuContext;
 use crate::passes::{bgl, bind_group, buffer, create_target, view};
@@ -22,6 +25,29 @@ use crate::timing::GpuTimer;
 const ROUND_STRIDE: u64 = 256;
 /// Most creation rounds per frame (`gautron.rounds`' range).
 const MAX_ROUNDS: u64 = 32;
+/// Most scene draws that may move in one frame with the cache kept (each is tested against
+/// every record); more empty the cache.
+pub const MAX_MOVED: usize = 64;
+
+/// What changed since the last frame (WGSL twin: `MaintainParams` in create.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct MaintainParams {
+    /// x: drop off-screen records, y: moved objects, z: every record invalid, w: refresh.
+    flags: [u32; 4],
+    /// The moved draws, bit (draw mod 128).
+    mask: [u32; 4],
+}
+
+/// A moved draw's world bounds last frame and now (WGSL twin: `MovedObject`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct MovedObject {
+    old_min: [f32; 4],
+    old_max: [f32; 4],
+    new_min: [f32; 4],
+    new_max: [f32; 4],
+}
 
 pub struct GautronStage {
     pub hemisphere: HemispherePass,
@@ -30,7 +56,9 @@ pub struct GautronStage {
     compact: wgpu::ComputePipeline,
     cameras_pipeline: wgpu::ComputePipeline,
     begin: wgpu::ComputePipeline,
-    cull: wgpu::ComputePipeline,
+    maintain: wgpu::ComputePipeline,
+    maintain_params: wgpu::Buffer,
+    moved: wgpu::Buffer,
     layout0: wgpu::BindGroupLayout,
     layout1: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
@@ -47,9 +75,15 @@ pub struct GautronStage {
     splat_args: wgpu::Buffer,
     /// The round in which a record was made at each pixel this frame (`gautron.candidates`).
     pub candidate_mask: wgpu::Texture,
-    /// What the cached records depend on (scene, lights, settings), hashed: a change empties
+    /// What every cached record depends on (record settings, size), hashed: a change empties
     /// the cache.
     cache_key: Option<u64>,
+    /// The lights and the direct light's settings, hashed: a change invalidates every record.
+    lights_key: Option<u64>,
+    /// Every scene draw's world matrix last frame (the moved objects).
+    prev_worlds: Vec<glam::Mat4>,
+    /// Local bounds of each (mesh, primitive), computed when it first moves.
+    local_bounds: std::collections::HashMap<(usize, usize), crate::scene::Aabb>,
     /// (capacity, slots, tiles) the buffers were made for.
     sizes: (u32, u32, u32),
 }
@@ -78,6 +112,8 @@ impl GautronStage {
                 bgl::storage(8, cs, false),
                 bgl::storage(9, cs, false),
                 bgl::storage(10, cs, false),
+                bgl::uniform(11, cs),
+                bgl::storage(12, cs, true),
             ],
         });
         let layout1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -111,7 +147,18 @@ impl GautronStage {
             compact: pipeline("cs_compact"),
             cameras_pipeline: pipeline("cs_cameras"),
             begin: pipeline("cs_begin"),
-            cull: pipeline("cs_cull"),
+            maintain: pipeline("cs_maintain"),
+            maintain_params: crate::passes::uniform_buffer(
+                device,
+                "gautron.maintain",
+                std::mem::size_of::<MaintainParams>() as u64,
+            ),
+            moved: buffer(
+                device,
+                "gautron.moved",
+                (MAX_MOVED * std::mem::size_of::<MovedObject>()) as u64,
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            ),
             layout0,
             layout1,
             params: crate::passes::uniform_buffer(
@@ -123,7 +170,7 @@ impl GautronStage {
             state: buffer(device, "gautron.state", std::mem::size_of::<CacheState>() as u64, storage),
             candidate_list: buffer(device, "gautron.candidate_list", 4, storage),
             slots: buffer(device, "gautron.slots", 4, storage),
-            records: buffer(device, "gautron.records", 160, storage),
+            records: buffer(device, "gautron.records", RECORD_BYTES, storage),
             cameras: buffer(device, "gautron.cameras", 144, storage),
             viewers: buffer(device, "gautron.viewers", 16, storage),
             atlas_params: crate::passes::uniform_buffer(device, "gautron.atlas_params", 16),
@@ -132,6 +179,9 @@ impl GautronStage {
             splat_args: buffer(device, "gautron.splat_args", 16, indirect),
             candidate_mask: mask(device, w, h),
             cache_key: None,
+            lights_key: None,
+            prev_worlds: Vec::new(),
+            local_bounds: Default::default(),
             sizes: (0, 0, 0),
         };
         let rounds: Vec<[u32; 4]> = (0..MAX_ROUNDS as u32).map(|k| [k, 0, 0, 0]).collect();
@@ -160,7 +210,7 @@ impl GautronStage {
             self.sizes = sizes;
             let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
             let (capacity, slots, tiles) = (sizes.0 as u64, sizes.1 as u64, sizes.2 as u64);
-            self.records = buffer(device, "gautron.records", capacity * 160, storage);
+            self.records = buffer(device, "gautron.records", capacity * RECORD_BYTES, storage);
             self.candidate_list = buffer(device, "gautron.candidate_list", tiles * 4, storage);
             self.slots = buffer(device, "gautron.slots", slots * 4, storage);
             self.cameras = buffer(device, "gautron.cameras", slots * 144, storage);
@@ -169,6 +219,7 @@ impl GautronStage {
         }
         if fresh {
             self.cache_key = None;
+            self.lights_key = None;
         }
         fresh
     }
@@ -187,6 +238,7 @@ impl GautronStage {
     /// Forgets the cached records (the next frame starts cold).
     pub fn reset(&mut self) {
         self.cache_key = None;
+        self.lights_key = None;
     }
 
     /// Stages 5–7 for the frame: returns the reflected indirect light (`gautron.indirect`).
@@ -218,13 +270,17 @@ impl GautronStage {
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         ctx.queue.write_buffer(&self.atlas_params, 0, bytemuck::cast_slice(&[s.hemisphere_resolution, per_row, 0, 0]));
 
-        // The record cache (stage 7): records stay while what they depend on stays.
-        let key = self.dependencies(f);
-        let keep = f.settings.pipeline.temporal == Temporal::RecordCache && self.cache_key == Some(key);
+        // The record cache (stage 7): records stay while what they depend on stays; a moved
+        // object or a changed light invalidates the records it changes (cs_maintain).
+        let maintain = self.changes(f);
+        let keep = maintain.is_some();
         if !keep {
             ctx.queue.write_buffer(&self.state, 0, bytemuck::bytes_of(&CacheState::default()));
         }
-        self.cache_key = Some(key);
+        let maintain = maintain.filter(|m| m.flags[0] + m.flags[1] + m.flags[2] > 0);
+        if let Some(m) = &maintain {
+            ctx.queue.write_buffer(&self.maintain_params, 0, bytemuck::bytes_of(m));
+        }
         let args = HemispherePass::draw_args(f.gpu_scene, f.state, slots);
         if args.len() * 4 > self.raster_args.size() as usize || args.is_empty() {
             let usage = wgpu::BufferUsages::STORAGE
@@ -242,8 +298,8 @@ impl GautronStage {
         let tile = s.creation_tile_px.max(1);
         let tiles = (f.gbuffer_size.0.div_ceil(tile), f.gbuffer_size.1.div_ceil(tile));
         let (splat, records, camera) = (&self.splat, &self.records, f.camera_buffer);
-        // Every cached record, once (after dropping those off-screen when the policy says so).
-        let (begin, cull) = (&self.begin, keep.then_some(&self.cull).filter(|_| s.reuse == ReusePolicy::DropOffscreen));
+        // Every cached record, once (after the reuse policy and the invalidation).
+        let (begin, cull) = (&self.begin, maintain.is_some().then_some(&self.maintain));
         timer.scope(ctx, enc, "gautron.splat", |e, slot| {
             {
                 let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -334,6 +390,8 @@ impl GautronStage {
                     size: std::num::NonZeroU64::new((self.raster_draws.max(1) * 20) as u64),
                 }),
                 self.splat_args.as_entire_binding(),
+                self.maintain_params.as_entire_binding(),
+                self.moved.as_entire_binding(),
             ],
         );
         let tv = wgpu::BindingResource::TextureView;
@@ -347,17 +405,10 @@ impl GautronStage {
         (g0, g1)
     }
 
-    /// A hash of what the records depend on: the scene's transforms, the lights, the direct
-    /// light's settings and the record settings that change a record (`history` fields).
+    /// A hash of what every record depends on: the record settings that change a record
+    /// (`history` fields) and the size.
     fn dependencies(&self, f: &FrameInputs) -> u64 {
         let mut h = std::collections::hash_map::DefaultHasher::new();
-        for d in &f.state.draws {
-            bytemuck::bytes_of(&d.world).hash(&mut h);
-        }
-        for l in &f.lights {
-            bytemuck::bytes_of(l).hash(&mut h);
-        }
-        format!("{:?}", f.settings.direct).hash(&mut h);
         let g = &f.settings.gautron;
         use crate::settings::SettingsGroup;
         for m in GautronSettings::fields().iter().filter(|m| m.resets_history) {
@@ -365,6 +416,67 @@ impl GautronStage {
         }
         f.gbuffer_size.hash(&mut h);
         h.finish()
+    }
+
+    /// A hash of the lights and the direct light's settings.
+    fn lights(f: &FrameInputs) -> u64 {
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        for l in &f.lights {
+            bytemuck::bytes_of(l).hash(&mut h);
+        }
+        format!("{:?}", f.settings.direct).hash(&mut h);
+        h.finish()
+    }
+
+    /// What changed since the last frame, and the moved objects uploaded: None empties the
+    /// cache (no record cache, the record settings or the size changed, the draws were
+    /// replaced, more than [`MAX_MOVED`] draws moved, or a light changed under the Drop
+    /// policy); otherwise what `cs_maintain` must do (all zero flags: nothing).
+    fn changes(&mut self, f: &FrameInputs) -> Option<MaintainParams> {
+        let s = &f.settings.gautron;
+        let key = self.dependencies(f);
+        let lights = Self::lights(f);
+        let worlds: Vec<glam::Mat4> = f.state.draws.iter().map(|d| d.world).collect();
+        let previous = (self.cache_key.replace(key), self.lights_key.replace(lights));
+        let prev_worlds = std::mem::replace(&mut self.prev_worlds, worlds);
+        if f.settings.pipeline.temporal != Temporal::RecordCache
+            || previous.0 != Some(key)
+            || prev_worlds.len() != f.state.draws.len()
+        {
+            return None;
+        }
+        let refresh = s.invalidation == Invalidation::Refresh;
+        let lights_changed = previous.1 != Some(lights);
+        if lights_changed && !refresh {
+            return None;
+        }
+        let mut m = MaintainParams::default();
+        let mut moved = Vec::new();
+        for (i, (d, old)) in f.state.draws.iter().zip(&prev_worlds).enumerate() {
+            if d.world == *old {
+                continue;
+            }
+            if moved.len() == MAX_MOVED {
+                return None;
+            }
+            let local = *self.local_bounds.entry((d.mesh, d.primitive)).or_insert_with(|| {
+                let mut b = crate::scene::Aabb::EMPTY;
+                for v in &f.scene.meshes[d.mesh].primitives[d.primitive].vertices {
+                    b.grow(glam::Vec3::from(v.position));
+                }
+                b
+            });
+            let (old_min, old_max) = world_bounds(local, *old);
+            let (new_min, new_max) = world_bounds(local, d.world);
+            moved.push(MovedObject { old_min, old_max, new_min, new_max });
+            m.mask[(i % 128) / 32] |= 1 << (i % 32);
+        }
+        if !moved.is_empty() {
+            f.ctx.queue.write_buffer(&self.moved, 0, bytemuck::cast_slice(&moved));
+        }
+        m.flags =
+            [(s.reuse == ReusePolicy::DropOffscreen) as u32, moved.len() as u32, lights_changed as u32, refresh as u32];
+        Some(m)
     }
 
     /// The cache's counters (blocks; tests, the bench and the lab's status line).
@@ -375,7 +487,7 @@ impl GautronStage {
 
     /// The first `count` records (blocks).
     pub fn read_records(&self, ctx: &GpuContext, count: u32) -> Option<Vec<GpuRecord>> {
-        let b = read_storage(ctx, &self.records, count as u64 * 160).ok()?;
+        let b = read_storage(ctx, &self.records, count as u64 * RECORD_BYTES).ok()?;
         Some(bytemuck::pod_collect_to_vec(&b))
     }
 
@@ -395,4 +507,19 @@ fn mask(device: &wgpu::Device, w: u32, h: u32) -> wgpu::Texture {
         wgpu::TextureFormat::R32Float,
         wgpu::TextureUsages::STORAGE_BINDING,
     )
+}
+
+/// The world bounds (min, max; w = 0) of local bounds under `world` (its eight corners).
+fn world_bounds(local: crate::scene::Aabb, world: glam::Mat4) -> ([f32; 4], [f32; 4]) {
+    let mut b = crate::scene::Aabb::EMPTY;
+    for k in 0..8 {
+        let pick = |bit: u32, lo: f32, hi: f32| if k & bit == 0 { lo } else { hi };
+        let c = glam::Vec3::new(
+            pick(1, local.min.x, local.max.x),
+            pick(2, local.min.y, local.max.y),
+            pick(4, local.min.z, local.max.z),
+        );
+        b.grow(world.transform_point3(c));
+    }
+    (b.min.extend(0.0).to_array(), b.max.extend(0.0).to_array())
 }
