@@ -406,3 +406,76 @@ fn cs_maintain(@builtin(local_invocation_index) li: u32) {
         state.cursor = state.cursor % max(taken, 1u);
     }
 }
+
+// R_k's lower clamps (scene units, then pixels at the record's depth), as the reduction
+// applies them.
+fn lower_clamps(r: f32, rec: Record) -> f32 {
+    let px_per_unit = params.misc.z * params.misc.w / max(rec.pixel.z, 1e-6);
+    return max(max(r, params.clamps.x), params.clamps.z / px_per_unit);
+}
+
+// Neighbour clamping (Křivánek et al. 2006, "Making radiance and irradiance caching
+// practical"; not in 003): the harmonic mean distance obeys the triangle inequality, so a
+// record's R_k is clamped to R_j + ‖P_k − P_j‖ for every neighbour j, here the records whose
+// influence spheres (a·R) overlap. First the cached records by the round's new ones (one
+// thread per record; a new record parks its unclamped R in its camera's b.w for the second
+// pass), then the new ones by all (one thread per slot), from the unclamped values: the
+// result does not depend on the records' order.
+@compute @workgroup_size(64, 1, 1)
+fn cs_clamp_cached(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let j = gid.x;
+    let base = state.new_base;
+    let fresh = state.new_count;
+    if (j >= base + fresh) {
+        return;
+    }
+    let a = params.weight.x;
+    if (j >= base) {
+        cameras[j - base].b.w = records[j].position.w;
+        return;
+    }
+    let rj = records[j];
+    var r = rj.position.w;
+    for (var k = base; k < base + fresh; k = k + 1u) {
+        let rk = records[k];
+        let d = distance(rk.position.xyz, rj.position.xyz);
+        if (d <= a * (rk.position.w + rj.position.w)) {
+            r = min(r, rk.position.w + d);
+        }
+    }
+    if (r < rj.position.w) {
+        records[j].position.w = lower_clamps(r, rj);
+    }
+}
+
+@compute @workgroup_size(64, 1, 1)
+fn cs_clamp_new(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let s = gid.x;
+    let base = state.new_base;
+    let fresh = state.new_count;
+    if (s >= fresh) {
+        return;
+    }
+    let a = params.weight.x;
+    let k = base + s;
+    let rk = records[k];
+    let own = cameras[s].b.w;
+    var r = own;
+    for (var j = 0u; j < base + fresh; j = j + 1u) {
+        if (j == k) {
+            continue;
+        }
+        let rj = records[j];
+        var rr = rj.position.w;
+        if (j >= base) {
+            rr = cameras[j - base].b.w;
+        }
+        let d = distance(rk.position.xyz, rj.position.xyz);
+        if (d <= a * (own + rr)) {
+            r = min(r, rr + d);
+        }
+    }
+    if (r < own) {
+        records[k].position.w = lower_clamps(r, rk);
+    }
+}

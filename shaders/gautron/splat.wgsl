@@ -47,7 +47,12 @@ fn vs_splat(@builtin(vertex_index) vi: u32, @builtin(instance_index) index: u32)
     if (d - rho > camera.params.x) {
         let x = tangent_interval(c.x, d, rho, params.misc.y);
         let y = tangent_interval(c.y, d, rho, params.misc.z);
-        rect = vec4<f32>(max(x.x, -1.0), max(y.x, -1.0), min(x.y, 1.0), min(y.y, 1.0));
+        // half a pixel more on every side: a sphere smaller than a pixel (R_k clamped to
+        // ~1 px, the brute force of the bench) still reaches its own pixel's centre despite
+        // the rounding of its position
+        let half_px = vec2<f32>(1.0) / camera.viewport.xy;
+        rect = vec4<f32>(x.x - half_px.x, y.x - half_px.y, x.y + half_px.x, y.y + half_px.y);
+        rect = vec4<f32>(max(rect.xy, vec2<f32>(-1.0)), min(rect.zw, vec2<f32>(1.0)));
     }
     // two triangles: (0, 0) (1, 0) (0, 1) · (0, 1) (1, 0) (1, 1)
     let corners = array<vec2<f32>, 6>(

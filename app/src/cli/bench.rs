@@ -42,6 +42,9 @@ pub struct BenchArgs {
     /// reference --bounces 1`), and of the HCB against the diffuse-only gather at every pixel.
     /// `soler`: Soler et al.'s Fig. 9 (four parameter sets with and without visibility, per
     /// part; run it at --size 1280x720).
+    /// `gautron`: irradiance cache splatting from a cold cache at five accuracies against a
+    /// hemisphere at every pixel (records, time per record, cold and warm frames, FLIP, the
+    /// speedup; run it at --size 64x64; --reference: the one-bounce truth, else traced).
     #[arg(long, value_enum)]
     pub suite: Option<BenchSuite>,
 }
@@ -53,6 +56,7 @@ pub enum BenchSuite {
     Nguyen,
     Quality,
     Soler,
+    Gautron,
 }
 
 /// Per-pass statistics of a benchmark run.
@@ -259,6 +263,19 @@ pub(super) fn bench(args: &BenchArgs) -> Result<(), CliError> {
             println!("{}", serde_json::to_string_pretty(&report).map_err(|e| CliError::failure(e.to_string()))?);
         } else {
             print!("{}", super::bench_soler::format(&report));
+        }
+        return Ok(());
+    }
+    if let Some(BenchSuite::Gautron) = args.suite {
+        let truth = match &args.reference {
+            Some(p) => Some((load_image(p)?.0, p.display().to_string())),
+            None => None,
+        };
+        let report = super::bench_gautron::gautron(&mut r, truth)?;
+        if args.json {
+            println!("{}", serde_json::to_string_pretty(&report).map_err(|e| CliError::failure(e.to_string()))?);
+        } else {
+            print!("{}", super::bench_gautron::format(&report));
         }
         return Ok(());
     }

@@ -116,6 +116,12 @@ settings_group! {
         /// Upper clamp of R_k in scene units, as a fraction of the scene's bounding radius.
         r_max_scene: f32 = 1.0,
         unit "× radius", symbol "", range 0.0001..=100.0, cost "free", history true;
+        /// Neighbour clamping (Křivánek et al. 2006; not in 003): each new record's R_k and
+        /// its overlapping neighbours' are clamped to R_j + ‖P_k − P_j‖ (the harmonic mean
+        /// distance's triangle inequality), so that records near geometry a neighbour saw
+        /// do not spread over it. Applies to the records made from now on.
+        neighbour_clamping: bool = true,
+        unit "", symbol "", range 0..=1, cost "new records × cached records distance tests per round", history false;
         /// Ward's weight is unbounded at P = P_k: it is clamped to this before blending.
         weight_clamp: f32 = 100.0,
         unit "", symbol "w_max", range 1.0..=1.0e6, cost "free", history false;

@@ -57,6 +57,8 @@ pub struct GautronStage {
     cameras_pipeline: wgpu::ComputePipeline,
     begin: wgpu::ComputePipeline,
     maintain: wgpu::ComputePipeline,
+    clamp_cached: wgpu::ComputePipeline,
+    clamp_new: wgpu::ComputePipeline,
     maintain_params: wgpu::Buffer,
     moved: wgpu::Buffer,
     layout0: wgpu::BindGroupLayout,
@@ -148,6 +150,8 @@ impl GautronStage {
             cameras_pipeline: pipeline("cs_cameras"),
             begin: pipeline("cs_begin"),
             maintain: pipeline("cs_maintain"),
+            clamp_cached: pipeline("cs_clamp_cached"),
+            clamp_new: pipeline("cs_clamp_new"),
             maintain_params: crate::passes::uniform_buffer(
                 device,
                 "gautron.maintain",
@@ -359,6 +363,18 @@ impl GautronStage {
                     &self.viewers,
                 );
                 hemisphere.reduce(ctx, e, slot, &self.params, &self.state, &self.cameras, records, slots);
+                if s.neighbour_clamping {
+                    let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                        label: Some("gautron.neighbours"),
+                        timestamp_writes: None,
+                    });
+                    pass.set_bind_group(0, g0, &offset);
+                    pass.set_bind_group(1, g1, &[]);
+                    pass.set_pipeline(&self.clamp_cached);
+                    pass.dispatch_workgroups(s.capacity.max(1).div_ceil(64), 1, 1);
+                    pass.set_pipeline(&self.clamp_new);
+                    pass.dispatch_workgroups(slots.div_ceil(64), 1, 1);
+                }
             });
             timer.scope(ctx, enc, "gautron.splat", |e, slot| {
                 splat.splat(ctx, e, slot, false, &self.params, camera, records, f.gbuffer, &self.splat_args)

@@ -1,0 +1,216 @@
+//! `gi-lab bench --suite gautron`: Gautron et al.'s irradiance cache splatting (003,
+//! "Results": 29.7–47× over Radiance, a record-versus-brute-force ratio) against a hemisphere
+//! at every pixel, the brute force, made by the same machinery (a record per pixel: R_k
+//! clamped to 1 px, a = 0.02, 2-pixel creation tiles). Per accuracy a: the records a cold
+//! cache makes until it covers the image, the frames and the time that takes, the time per
+//! record, a warm frame, FLIP against the brute force and against a path-traced truth of one
+//! bounce (computed on the CPU at the bench size unless `--reference` is given), and the
+//! brute force's time over the row's. The goal: ≥ 20× at equal FLIP (the cheapest row whose
+//! FLIP against the truth is within 10 % of the brute force's). Run it at a small size
+//! (`--size 64x64`): the brute force computes a hemisphere per pixel.
+
+use gi_render::Renderer;
+use gi_render::metrics::flip;
+use gi_render::pipeline::{Technique, Temporal};
+use gi_render::{ImageF32, image_io::hdr_display};
+
+use crate::error::CliError;
+
+/// One cold-to-covered run.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct GautronRow {
+    pub accuracy: f32,
+    /// Records in the cache once it covers the image.
+    pub records: u32,
+    /// Frames from an empty cache until a frame makes no record.
+    pub frames_to_cover: u32,
+    /// Every Gautron pass of those frames (ms).
+    pub cold_ms: f64,
+    /// Record creation and hemispheres (create, raster, lighting, reduction) per record (ms).
+    pub per_record_ms: f64,
+    /// A frame with the covered cache (splat and resolve; ms).
+    pub warm_ms: f64,
+    pub flip_vs_brute_force: f64,
+    pub flip_vs_truth: f64,
+    /// The brute force's cold time over this row's.
+    pub speedup: f64,
+}
+
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct GautronReport {
+    pub adapter: String,
+    pub timing_source: String,
+    pub width: u32,
+    pub height: u32,
+    pub truth: String,
+    /// The brute force: a hemisphere per covered pixel.
+    pub brute_force: GautronRow,
+    pub rows: Vec<GautronRow>,
+}
+
+/// Renders from an empty cache until a frame makes no record (at most 256 frames), then one
+/// warm frame; returns the row (FLIPs and speedup filled in later) and the final image.
+fn cold_to_covered(r: &mut Renderer, accuracy: f32) -> Result<(GautronRow, ImageF32), CliError> {
+    let fail = |e: String| CliError::failure(e);
+    r.reset_history();
+    let gautron = |t: &[gi_render::timing::PassTiming], keep: &dyn Fn(&str) -> bool| {
+        t.iter().filter(|p| p.name.starts_with("gautron.") && keep(&p.name)).map(|p| p.ms).sum::<f64>()
+    };
+    let (mut cold_ms, mut making_ms, mut frames) = (0.0, 0.0, 0);
+    loop {
+        let t = r.render_frame();
+        let st = r.gautron().and_then(|g| g.read_state(&r.ctx)).ok_or_else(|| fail("no Gautron stage".into()))?;
+        if st.made == 0 {
+            break;
+        }
+        frames += 1;
+        cold_ms += gautron(&t, &|_| true);
+        making_ms += gautron(&t, &|n| n == "gautron.create" || n == "gautron.hemispheres");
+        if frames >= 256 {
+            return Err(fail(format!("a = {accuracy}: the cache still grew after 256 frames")));
+        }
+    }
+    let warm = r.render_frame();
+    let records = r.gautron().and_then(|g| g.read_state(&r.ctx)).map_or(0, |s| s.count);
+    let image = r.readback("final.hdr").map_err(|e| fail(e.to_string()))?;
+    let row = GautronRow {
+        accuracy,
+        records,
+        frames_to_cover: frames,
+        cold_ms,
+        per_record_ms: making_ms / records.max(1) as f64,
+        warm_ms: gautron(&warm, &|_| true),
+        flip_vs_brute_force: 0.0,
+        flip_vs_truth: 0.0,
+        speedup: 0.0,
+    };
+    Ok((row, image))
+}
+
+fn flip_of(a: &ImageF32, b: &ImageF32) -> Result<f64, CliError> {
+    flip(&hdr_display(a), &hdr_display(b)).map(|(f, _)| f).map_err(|e| CliError::input(e.to_string()))
+}
+
+/// Runs the suite with `r`'s settings as the base (Gautron's stage choices and the record
+/// cache are set; the other settings are the preset's but for the accuracy). `truth`: a
+/// path-traced image of one bounce at the renderer's size, or None to trace one (1,024 spp).
+pub fn gautron(r: &mut Renderer, truth: Option<(ImageF32, String)>) -> Result<GautronReport, CliError> {
+    let (width, height) = r.size();
+    if width * height > 65536 {
+        return Err(CliError::input(format!(
+            "--suite gautron computes a hemisphere per pixel for the brute force: {width}x{height} is more than the cache's 65,536 records; use --size 64x64"
+        )));
+    }
+    let original = r.settings().clone();
+    let clock = r.clock;
+    r.clock.anim_frame = 0;
+    r.clock.playing = false;
+    let (truth, truth_name) = match truth {
+        Some(t) => t,
+        None => {
+            use gi_render::cpu::pathtrace::{PathTracer, PtSettings, Senders};
+            let scene = r.scene();
+            let camera = gi_render::renderer::default_camera(scene, scene.bounds(0.0), width as f32 / height as f32);
+            let pt = PathTracer::new(scene, 0.0);
+            let settings = PtSettings { bounces: 1, spp: 1024, seed: 1, senders: Senders::All };
+            let img =
+                pt.render(camera.view_proj(width as f32 / height as f32), camera.position, width, height, settings);
+            (img.full, "path tracer, 1 bounce, 1,024 spp (traced here)".to_string())
+        }
+    };
+    let mut base = original.clone();
+    if !base.pipeline.uses_gautron() {
+        Technique::Gautron.apply(&mut base);
+    }
+    base.pipeline.temporal = Temporal::RecordCache;
+    let set = |r: &mut Renderer, s| r.set_settings(s).map_err(|e| CliError::failure(e.to_string()));
+
+    let mut brute = base.clone();
+    let g = &mut brute.gautron;
+    (g.accuracy, g.r_min_px, g.r_max_px, g.r_min_scene) = (0.02, 0.0, 1.0, 0.0);
+    // One frame covers the image: 2×2-pixel tiles give a quarter of the pixels per round.
+    let per_round = (width * height).div_ceil(4).min(1024);
+    let rounds = (width * height).div_ceil(per_round).min(32);
+    (g.creation_tile_px, g.records_per_round, g.rounds, g.capacity) = (2, per_round, rounds, 65536);
+    set(r, brute)?;
+    let (mut brute_force, brute_image) = cold_to_covered(r, 0.02)?;
+    brute_force.flip_vs_truth = flip_of(&brute_image, &truth)?;
+    brute_force.speedup = 1.0;
+
+    let mut rows = Vec::new();
+    for accuracy in [0.6, 0.4, 0.2, 0.1, 0.05] {
+        let mut s = base.clone();
+        s.gautron.accuracy = accuracy;
+        set(r, s)?;
+        let (mut row, image) = cold_to_covered(r, accuracy)?;
+        row.flip_vs_brute_force = flip_of(&image, &brute_image)?;
+        row.flip_vs_truth = flip_of(&image, &truth)?;
+        row.speedup = brute_force.cold_ms / row.cold_ms.max(1e-9);
+        rows.push(row);
+    }
+    let adapter = r.ctx.adapter_summary();
+    let timing_source = format!("{:?}", r.timing_source());
+    set(r, original)?;
+    r.clock = clock;
+    Ok(GautronReport { adapter, timing_source, width, height, truth: truth_name, brute_force, rows })
+}
+
+/// The goal on the rows: the cheapest row whose FLIP against the truth is within 10 % of the
+/// brute force's, and its speedup (None: no row is).
+pub fn goal(report: &GautronReport) -> Option<&GautronRow> {
+    let bound = report.brute_force.flip_vs_truth * 1.1;
+    report.rows.iter().filter(|r| r.flip_vs_truth <= bound).min_by(|a, b| a.cold_ms.total_cmp(&b.cold_ms))
+}
+
+/// The suite as text: one line per accuracy, the brute force first.
+pub fn format(report: &GautronReport) -> String {
+    let mut s = format!(
+        "GI Lab bench suite gautron (Gautron et al. 003) — {}×{}, {} ({}); truth: {}\n\n",
+        report.width, report.height, report.adapter, report.timing_source, report.truth
+    );
+    s += &format!(
+        "{:<16} {:>8} {:>7} {:>11} {:>12} {:>9} {:>10} {:>10} {:>8}\n",
+        "", "records", "frames", "cold ms*", "ms/record*", "warm ms*", "FLIP brute", "FLIP truth", "speedup"
+    );
+    let line = |name: String, r: &GautronRow| {
+        format!(
+            "{name:<16} {:>8} {:>7} {:>11.2} {:>12.4} {:>9.2} {:>10.4} {:>10.4} {:>7.1}×\n",
+            r.records,
+            r.frames_to_cover,
+            r.cold_ms,
+            r.per_record_ms,
+            r.warm_ms,
+            r.flip_vs_brute_force,
+            r.flip_vs_truth,
+            r.speedup
+        )
+    };
+    s += &line("brute force".into(), &report.brute_force);
+    for r in &report.rows {
+        s += &line(format!("a = {}", r.accuracy), r);
+    }
+    s += "\n* sums of the Gautron passes' times (create, hemispheres, splat, resolve) over the frames from an empty cache until one makes no record; the warm frame is the next one\n";
+    let pixels = report.width * report.height;
+    s += &format!(
+        "\npixels per record (the hemispheres saved): {}\n",
+        report
+            .rows
+            .iter()
+            .map(|r| format!("a = {}: {:.1}", r.accuracy, pixels as f64 / r.records.max(1) as f64))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    s += &match goal(report) {
+        Some(r) => format!(
+            "goal: ≥ 20× over the brute force at equal FLIP (within 10 %): a = {} is {:.1}× faster — {}\n",
+            r.accuracy,
+            r.speedup,
+            if r.speedup >= 20.0 { "met" } else { "NOT met" }
+        ),
+        None => format!(
+            "goal: ≥ 20× over the brute force at equal FLIP: NOT met — no row's FLIP is within 10 % of the brute force's {:.4}\n",
+            report.brute_force.flip_vs_truth
+        ),
+    };
+    s
+}
