@@ -131,7 +131,7 @@ fn every_setting_has_a_widget_that_changes_the_renderer() {
     let dir = temp_dir("fields");
     // Tall enough that the whole settings panel (every group, Soler's included) is on
     // screen: the reset buttons are clicked where they are drawn.
-    let mut h = harness_in(&dir, egui::vec2(1400.0, 3500.0));
+    let mut h = harness_in(&dir, egui::vec2(1400.0, 3600.0));
     h.run_steps(2);
     // Choices that no other value of can be applied alone from the defaults (each refused
     // with its reason): the VPL source, since the default VPL gather needs importance-warped
