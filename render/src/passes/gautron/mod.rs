@@ -117,7 +117,7 @@ settings_group! {
         r_max_scene: f32 = 1.0,
         unit "× radius", symbol "", range 0.0001..=100.0, cost "free", history true;
         /// Neighbour clamping (Křivánek et al. 2006; not in 003): each new record's R_k and
-        /// its overlapping neighbours' are clamped to R_j + ‖P_k − P_j‖ (the harmonic mean
+        /// its overlapping neighbours' are clamped to R_j + |P_k − P_j| (the harmonic mean
         /// distance's triangle inequality), so that records near geometry a neighbour saw
         /// do not spread over it. Applies to the records made from now on.
         neighbour_clamping: bool = true,
