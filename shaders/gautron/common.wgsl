@@ -116,3 +116,8 @@ fn tangent_frame(n: vec3<f32>) -> mat2x3<f32> {
     }
     return mat2x3<f32>(t, cross(n, t));
 }
+
+// Pixels per scene unit at the record's depth when it was made (R_k's clamps in pixels).
+fn record_px_per_unit(params: GautronParams, rec: Record) -> f32 {
+    return params.misc.z * params.misc.w / max(rec.pixel.z, 1e-6);
+}

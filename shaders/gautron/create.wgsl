@@ -410,8 +410,7 @@ fn cs_maintain(@builtin(local_invocation_index) li: u32) {
 // R_k's lower clamps (scene units, then pixels at the record's depth), as the reduction
 // applies them.
 fn lower_clamps(r: f32, rec: Record) -> f32 {
-    let px_per_unit = params.misc.z * params.misc.w / max(rec.pixel.z, 1e-6);
-    return max(max(r, params.clamps.x), params.clamps.z / px_per_unit);
+    return max(max(r, params.clamps.x), params.clamps.z / record_px_per_unit(params, rec));
 }
 
 // Neighbour clamping (Křivánek et al. 2006, "Making radiance and irradiance caching

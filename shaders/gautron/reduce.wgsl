@@ -143,7 +143,7 @@ fn cs_reduce(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
     }
     // R_k: H clamped in scene units, then its projection at the record's depth in pixels
     var r = clamp(h, params.clamps.x, params.clamps.y);
-    let px_per_unit = params.misc.z * params.misc.w / max(rec.pixel.z, 1e-6);
+    let px_per_unit = record_px_per_unit(params, rec);
     r = clamp(r * px_per_unit, params.clamps.z, params.clamps.w) / px_per_unit;
     rec.position.w = r;
     rec.normal.w = h;

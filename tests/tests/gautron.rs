@@ -60,9 +60,8 @@ fn hemisphere_reduction_matches_the_cpu_twin() {
         .draws
         .iter()
         .map(|d| {
-            let v = &r.scene().meshes[d.mesh].primitives[d.primitive].vertices;
-            let w = v.iter().map(|v| d.world.transform_point3(Vec3::from(v.position)));
-            (w.clone().fold(Vec3::INFINITY, Vec3::min), w.fold(Vec3::NEG_INFINITY, Vec3::max))
+            let b = r.scene().draw_bounds(d);
+            (b.min, b.max)
         })
         .collect();
     let s = &r.settings().gautron;

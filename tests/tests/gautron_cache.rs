@@ -48,11 +48,8 @@ fn uncovered(r: &Renderer) -> usize {
 
 /// The world bounds of scene draw `d` now.
 fn draw_bounds(r: &Renderer, d: usize) -> (Vec3, Vec3) {
-    let state = r.scene().evaluate(0.0);
-    let item = &state.draws[d];
-    let v = &r.scene().meshes[item.mesh].primitives[item.primitive].vertices;
-    let w = v.iter().map(|v| item.world.transform_point3(Vec3::from(v.position)));
-    (w.clone().fold(Vec3::INFINITY, Vec3::min), w.fold(Vec3::NEG_INFINITY, Vec3::max))
+    let b = r.scene().draw_bounds(&r.scene().evaluate(0.0).draws[d]);
+    (b.min, b.max)
 }
 
 /// Moves the node of the draw named `name` by `by`; returns the draw's index and the

@@ -266,6 +266,31 @@ impl Aabb {
     pub fn radius(&self) -> f32 {
         self.extent().length() * 0.5
     }
+    /// The bounds of this box's eight corners under `m`.
+    pub fn transformed(&self, m: Mat4) -> Aabb {
+        let mut b = Aabb::EMPTY;
+        for k in 0..8 {
+            let pick = |bit: u32, lo: f32, hi: f32| if k & bit == 0 { lo } else { hi };
+            let c = Vec3::new(
+                pick(1, self.min.x, self.max.x),
+                pick(2, self.min.y, self.max.y),
+                pick(4, self.min.z, self.max.z),
+            );
+            b.grow(m.transform_point3(c));
+        }
+        b
+    }
+}
+
+impl Primitive {
+    /// Bounds of the vertices in the mesh's own space.
+    pub fn bounds(&self) -> Aabb {
+        let mut b = Aabb::EMPTY;
+        for v in &self.vertices {
+            b.grow(Vec3::from(v.position));
+        }
+        b
+    }
 }
 
 impl Scene {
@@ -319,13 +344,24 @@ impl Scene {
         state
     }
 
+    /// World-space bounds of one draw's vertices (empty without vertices).
+    pub fn draw_bounds(&self, d: &DrawItem) -> Aabb {
+        let mut b = Aabb::EMPTY;
+        for v in &self.meshes[d.mesh].primitives[d.primitive].vertices {
+            b.grow(d.world.transform_point3(Vec3::from(v.position)));
+        }
+        b
+    }
+
     /// World-space bounds of the geometry at `time_s`.
     pub fn bounds(&self, time_s: f32) -> Aabb {
         let state = self.evaluate(time_s);
         let mut b = Aabb::EMPTY;
         for d in &state.draws {
-            for v in &self.meshes[d.mesh].primitives[d.primitive].vertices {
-                b.grow(d.world.transform_point3(Vec3::from(v.position)));
+            let w = self.draw_bounds(d);
+            if !w.is_empty() {
+                b.grow(w.min);
+                b.grow(w.max);
             }
         }
         if b.is_empty() {

@@ -475,16 +475,18 @@ impl GautronStage {
             if moved.len() == MAX_MOVED {
                 return None;
             }
-            let local = *self.local_bounds.entry((d.mesh, d.primitive)).or_insert_with(|| {
-                let mut b = crate::scene::Aabb::EMPTY;
-                for v in &f.scene.meshes[d.mesh].primitives[d.primitive].vertices {
-                    b.grow(glam::Vec3::from(v.position));
-                }
-                b
+            let local = *self
+                .local_bounds
+                .entry((d.mesh, d.primitive))
+                .or_insert_with(|| f.scene.meshes[d.mesh].primitives[d.primitive].bounds());
+            let (old, new) = (local.transformed(*old), local.transformed(d.world));
+            let v4 = |v: glam::Vec3| v.extend(0.0).to_array();
+            moved.push(MovedObject {
+                old_min: v4(old.min),
+                old_max: v4(old.max),
+                new_min: v4(new.min),
+                new_max: v4(new.max),
             });
-            let (old_min, old_max) = world_bounds(local, *old);
-            let (new_min, new_max) = world_bounds(local, d.world);
-            moved.push(MovedObject { old_min, old_max, new_min, new_max });
             m.mask[(i % 128) / 32] |= 1 << (i % 32);
         }
         if !moved.is_empty() {
@@ -523,19 +525,4 @@ fn mask(device: &wgpu::Device, w: u32, h: u32) -> wgpu::Texture {
         wgpu::TextureFormat::R32Float,
         wgpu::TextureUsages::STORAGE_BINDING,
     )
-}
-
-/// The world bounds (min, max; w = 0) of local bounds under `world` (its eight corners).
-fn world_bounds(local: crate::scene::Aabb, world: glam::Mat4) -> ([f32; 4], [f32; 4]) {
-    let mut b = crate::scene::Aabb::EMPTY;
-    for k in 0..8 {
-        let pick = |bit: u32, lo: f32, hi: f32| if k & bit == 0 { lo } else { hi };
-        let c = glam::Vec3::new(
-            pick(1, local.min.x, local.max.x),
-            pick(2, local.min.y, local.max.y),
-            pick(4, local.min.z, local.max.z),
-        );
-        b.grow(world.transform_point3(c));
-    }
-    (b.min.extend(0.0).to_array(), b.max.extend(0.0).to_array())
 }
