@@ -416,27 +416,41 @@ fn lower_clamps(r: f32, rec: Record) -> f32 {
 // Neighbour clamping (Křivánek et al. 2006, "Making radiance and irradiance caching
 // practical"; not in 003): the harmonic mean distance obeys the triangle inequality, so a
 // record's R_k is clamped to R_j + ‖P_k − P_j‖ for every neighbour j, here the records whose
-// influence spheres (a·R) overlap. First the cached records by the round's new ones (one
-// thread per record; a new record parks its unclamped R in its camera's b.w for the second
-// pass), then the new ones by all (one thread per slot), from the unclamped values: the
-// result does not depend on the records' order.
+// influence spheres (a·R) overlap. The round's fresh records are its new ones and the stale
+// ones it computed again. First the other cached records are clamped by the fresh ones (one
+// thread per record), then the fresh ones by all (one thread per slot, the result parked in
+// its camera's t.w), then the parked values are stored: every pass reads the fresh records'
+// unclamped R, so the result does not depend on the records' order. Twin:
+// cpu::gautron::neighbour_clamp.
+
+// The record a slot computes this round (a new one, or a stale one again).
+fn slot_record(s: u32) -> u32 {
+    if (s < state.new_count) {
+        return state.new_base + s;
+    }
+    return slots[s] & ~REFRESH;
+}
+
 @compute @workgroup_size(64, 1, 1)
 fn cs_clamp_cached(@builtin(global_invocation_id) gid: vec3<u32>) {
     let j = gid.x;
     let base = state.new_base;
     let fresh = state.new_count;
-    if (j >= base + fresh) {
+    let slots_used = fresh + state.refresh;
+    if (j >= base) {
         return;
+    }
+    for (var s = fresh; s < slots_used; s = s + 1u) {
+        if (slot_record(s) == j) {
+            // computed again this round: clamped with the new ones
+            return;
+        }
     }
     let a = params.weight.x;
-    if (j >= base) {
-        cameras[j - base].b.w = records[j].position.w;
-        return;
-    }
     let rj = records[j];
     var r = rj.position.w;
-    for (var k = base; k < base + fresh; k = k + 1u) {
-        let rk = records[k];
+    for (var s = 0u; s < slots_used; s = s + 1u) {
+        let rk = records[slot_record(s)];
         let d = distance(rk.position.xyz, rj.position.xyz);
         if (d <= a * (rk.position.w + rj.position.w)) {
             r = min(r, rk.position.w + d);
@@ -450,31 +464,35 @@ fn cs_clamp_cached(@builtin(global_invocation_id) gid: vec3<u32>) {
 @compute @workgroup_size(64, 1, 1)
 fn cs_clamp_new(@builtin(global_invocation_id) gid: vec3<u32>) {
     let s = gid.x;
-    let base = state.new_base;
-    let fresh = state.new_count;
-    if (s >= fresh) {
+    if (s >= state.new_count + state.refresh) {
         return;
     }
     let a = params.weight.x;
-    let k = base + s;
+    let k = slot_record(s);
     let rk = records[k];
-    let own = cameras[s].b.w;
+    let own = rk.position.w;
     var r = own;
-    for (var j = 0u; j < base + fresh; j = j + 1u) {
+    for (var j = 0u; j < state.new_base + state.new_count; j = j + 1u) {
         if (j == k) {
             continue;
         }
         let rj = records[j];
-        var rr = rj.position.w;
-        if (j >= base) {
-            rr = cameras[j - base].b.w;
-        }
         let d = distance(rk.position.xyz, rj.position.xyz);
-        if (d <= a * (own + rr)) {
-            r = min(r, rr + d);
+        if (d <= a * (own + rj.position.w)) {
+            r = min(r, rj.position.w + d);
         }
     }
     if (r < own) {
-        records[k].position.w = lower_clamps(r, rk);
+        r = lower_clamps(r, rk);
     }
+    cameras[s].t.w = r;
+}
+
+@compute @workgroup_size(64, 1, 1)
+fn cs_clamp_store(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let s = gid.x;
+    if (s >= state.new_count + state.refresh) {
+        return;
+    }
+    records[slot_record(s)].position.w = cameras[s].t.w;
 }

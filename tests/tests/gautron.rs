@@ -292,6 +292,8 @@ fn the_reuse_policy_keeps_or_drops_off_screen_records() {
 /// Neighbour clamping on the GPU equals the CPU twin's: two renderers reach the same cache,
 /// then make the same round with and without clamping; the twin clamps the unclamped one's
 /// records into the clamped one's (lower clamps off, so that they do not hide the clamp).
+/// Twice: a round of new records, then a round after a light change, whose fresh records are
+/// the stale ones it computes again (and the new ones).
 #[test]
 fn neighbour_clamping_matches_the_cpu_twin() {
     let make = || {
@@ -300,31 +302,55 @@ fn neighbour_clamping_matches_the_cpu_twin() {
             (s.gautron.r_min_px, s.gautron.r_min_scene) = (0.0, 0.0);
         })
     };
-    let (mut on, mut off) = (make(), make());
-    on.render_frame();
-    off.render_frame();
-    let base = on.gautron().unwrap().read_state(&on.ctx).unwrap().count as usize;
-    let mut s = off.settings().clone();
-    s.gautron.neighbour_clamping = false;
-    off.set_settings(s).unwrap();
-    on.render_frame();
-    off.render_frame();
     let read_all = |r: &gi_render::Renderer| {
         let g = r.gautron().unwrap();
         g.read_records(&r.ctx, g.read_state(&r.ctx).unwrap().count).unwrap()
     };
-    let (clamped, unclamped) = (read_all(&on), read_all(&off));
-    assert_eq!(clamped.len(), unclamped.len());
-    assert!(clamped.len() > base, "the second round made records");
-    let p: Vec<Vec3> = unclamped.iter().map(|g| g.position.truncate()).collect();
-    let mut r: Vec<f32> = unclamped.iter().map(|g| g.position.w).collect();
-    let a = on.settings().gautron.accuracy;
-    gautron::neighbour_clamp(&p, &mut r, base, a, &|_, v| v);
-    let changed = r.iter().zip(&unclamped).filter(|(c, g)| **c < g.position.w).count();
-    eprintln!("{} records ({base} cached), {changed} clamped", r.len());
-    assert!(changed > 0);
-    for (i, (g, want)) in clamped.iter().zip(&r).enumerate() {
-        assert_eq!(g.position.truncate(), p[i], "record {i}");
-        assert!((g.position.w - want).abs() <= 1e-5 * want, "record {i}: R {} vs {want}", g.position.w);
+    for light_change in [false, true] {
+        // Both reach the same cache with clamping on: one round, or every pixel covered.
+        let (mut on, mut off) = (make(), make());
+        for r in [&mut on, &mut off] {
+            if light_change {
+                render_until_covered(r, 40);
+            } else {
+                r.render_frame();
+            }
+        }
+        let before = read_all(&off);
+        for (i, r) in [&mut on, &mut off].into_iter().enumerate() {
+            let mut s = r.settings().clone();
+            s.gautron.neighbour_clamping = i == 0;
+            if light_change {
+                s.direct.intensity_scale *= 1.5;
+            }
+            r.set_settings(s).unwrap();
+            r.render_frame();
+        }
+        let (clamped, unclamped) = (read_all(&on), read_all(&off));
+        assert_eq!(clamped.len(), unclamped.len());
+        let base = before.len();
+        assert!(clamped.len() > base || light_change, "the round made records");
+        // This round's records: the new ones and those whose irradiance it computed again.
+        let frame = unclamped.iter().map(|g| g.irradiance.w).fold(f32::MIN, f32::max);
+        let fresh: Vec<bool> =
+            unclamped.iter().enumerate().map(|(i, g)| i >= base || g.irradiance.w == frame).collect();
+        let refreshed = fresh[..base].iter().filter(|f| **f).count();
+        assert_eq!(refreshed > 0, light_change, "{refreshed} records computed again");
+        let p: Vec<Vec3> = unclamped.iter().map(|g| g.position.truncate()).collect();
+        let mut r: Vec<f32> = unclamped.iter().map(|g| g.position.w).collect();
+        let a = on.settings().gautron.accuracy;
+        gautron::neighbour_clamp(&p, &mut r, &fresh, a, &|_, v| v);
+        let changed = r.iter().zip(&unclamped).filter(|(c, g)| **c < g.position.w).count();
+        let changed_fresh = (0..base).filter(|&i| fresh[i] && r[i] < unclamped[i].position.w).count();
+        eprintln!(
+            "{} records ({base} before, {refreshed} computed again): {changed} clamped ({changed_fresh} of those computed again)",
+            r.len()
+        );
+        assert!(changed > 0);
+        assert!(changed_fresh > 0 || !light_change);
+        for (i, (g, want)) in clamped.iter().zip(&r).enumerate() {
+            assert_eq!(g.position.truncate(), p[i], "record {i}");
+            assert!((g.position.w - want).abs() <= 1e-5 * want, "record {i}: R {} vs {want}", g.position.w);
+        }
     }
 }

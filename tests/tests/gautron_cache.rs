@@ -151,11 +151,6 @@ fn refreshing_keeps_the_coverage_and_computes_invalid_records_again() {
 #[test]
 fn a_light_change_computes_every_record_again() {
     let mut r = renderer(Invalidation::Refresh);
-    // A refreshed record is not clamped by its neighbours again (open in issue #17's note):
-    // its R_k and ∇t would differ from the first computation's for that reason alone.
-    let mut s = r.settings().clone();
-    s.gautron.neighbour_clamping = false;
-    r.set_settings(s).unwrap();
     settle(&mut r, 24);
     let before = records(&r);
     let mut s = r.settings().clone();
@@ -165,9 +160,11 @@ fn a_light_change_computes_every_record_again() {
     let st = state(&r);
     assert_eq!((st.made, st.stale + st.refreshed), (0, before.len() as u32), "{st:?}");
     settle(&mut r, 24);
+    // Neighbour clamping shrinks some refreshed R_k more than the first time (all the
+    // neighbours are fresh at once now), which can leave a pixel for a new record.
     let after = records(&r);
-    assert_eq!(after.len(), before.len());
-    let mut worst = (0.0f32, 0.0f32);
+    assert!(after.len() >= before.len() && after.len() <= before.len() + 4, "{} vs {}", after.len(), before.len());
+    let mut worst = (0.0f32, 0.0f32, 0.0f32);
     for (i, (a, b)) in after.iter().zip(&before).enumerate() {
         assert_eq!(
             (a.position.truncate(), a.normal.truncate()),
@@ -178,7 +175,8 @@ fn a_light_change_computes_every_record_again() {
         // see the scene from positions that differ in the last bits (measured: 5.8e-5 in a
         // release build, 1.2e-4 in a debug one with neighbour clamping's records).
         let scale = b.irradiance.truncate().max_element().max(1e-12);
-        worst.0 = worst.0.max((a.position.w / b.position.w - 1.0).abs());
+        // H before the clamps (R_k after them depends on the neighbours computed with it)
+        worst.0 = worst.0.max((a.normal.w / b.normal.w - 1.0).abs());
         worst.1 = worst.1.max((a.irradiance.truncate() - 2.0 * b.irradiance.truncate()).abs().max_element() / scale);
         assert!(
             (a.irradiance.truncate() - 2.0 * b.irradiance.truncate()).abs().max_element() <= 3e-4 * scale,
@@ -186,12 +184,25 @@ fn a_light_change_computes_every_record_again() {
             a.irradiance,
             b.irradiance
         );
+        // ∇t relative to the value compared (twice the old one), whose edge terms depend on
+        // which texels see an edge: measured 7.4e-4 for a record 1.3 cm from a wall.
         for c in 0..3 {
-            let t = (a.trans[c] - 2.0 * b.trans[c]).abs().max_element();
-            assert!(t <= 1e-3 * b.trans[c].abs().max_element().max(scale), "record {i}: ∇t {c}");
+            let want = 2.0 * b.trans[c];
+            let t = (a.trans[c] - want).abs().max_element();
+            worst.2 = worst.2.max(t / want.abs().max_element().max(2.0 * scale));
+            assert!(
+                t <= 1e-3 * want.abs().max_element().max(2.0 * scale),
+                "record {i}: ∇t {c}: {:?} vs 2 × {:?} (H {})",
+                a.trans[c],
+                b.trans[c],
+                b.normal.w
+            );
         }
     }
-    eprintln!("refreshed records: R_k within {:.2e}, E within {:.2e} of twice the old", worst.0, worst.1);
+    eprintln!(
+        "refreshed records: H within {:.2e}, E within {:.2e} and ∇t within {:.2e} of twice the old",
+        worst.0, worst.1, worst.2
+    );
     assert!(worst.0 < 1e-4);
 
     // Dropping instead: a light change empties the cache.
@@ -235,9 +246,10 @@ fn popping_while_the_scene_animates() {
     eprintln!(
         "flicker over 12 animated frames: refresh {refresh:.4} ({refresh_holes} uncovered pixel-frames), drop {drop:.4} ({drop_holes}), cold {cold:.4} ({cold_holes})"
     );
-    // Measured (96², neighbour clamping on): refresh 0.0239 with 2 uncovered pixel-frames,
-    // drop 0.0333 with 2,195, cold 0.0295 with 2,425 (without clamping: 0 holes when
-    // refreshing). The 2 are open in issue #17's note.
+    // Measured (96², neighbour clamping on, refreshed records clamped again): refresh 0.0183
+    // with 2 uncovered pixel-frames, drop 0.0333 with 2,195, cold 0.0295 with 2,425 (without
+    // clamping: 0 holes when refreshing; the last round's clamp of cached records can uncover
+    // a pixel that only the next frame's first round fills).
     assert!(refresh_holes * 100 <= drop_holes, "refresh {refresh_holes} vs drop {drop_holes} uncovered");
     assert!(refresh < drop, "refresh {refresh} vs drop {drop}");
 }

@@ -513,18 +513,19 @@ pub fn fate(p: Vec3, n: Vec3, seen: [u32; 4], stale: bool, changes: &Changes) ->
     }
 }
 
-/// Neighbour clamping (Křivánek et al. 2006; GPU twins `cs_clamp_cached`, `cs_clamp_new` in
-/// `shaders/gautron/create.wgsl`): records `base..` are a round's new ones, `r[i]` every
-/// record's R before; neighbours are records whose influence spheres overlap, ‖P_k − P_j‖ ≤
-/// a·(R_k + R_j). First each cached record j < base: R_j ← min(R_j, R_k + d) over the new k;
-/// then each new k: R_k ← min(R_k, R_j + d) over all j ≠ k, with the cached ones' clamped
-/// values and the new ones' unclamped values; `lower` re-applies R's lower clamps to a value
-/// that changed.
-pub fn neighbour_clamp(p: &[Vec3], r: &mut [f32], base: usize, a: f32, lower: &dyn Fn(usize, f32) -> f32) {
+/// Neighbour clamping (Křivánek et al. 2006; GPU twins `cs_clamp_cached`, `cs_clamp_new`,
+/// `cs_clamp_store` in `shaders/gautron/create.wgsl`): `fresh[i]` marks a round's fresh
+/// records (its new ones and the stale ones it computed again), `r[i]` every record's R
+/// before; neighbours are records whose influence spheres overlap, ‖P_k − P_j‖ ≤ a·(R_k +
+/// R_j). First each other record j: R_j ← min(R_j, R_k + d) over the fresh k; then each fresh
+/// k: R_k ← min(R_k, R_j + d) over all j ≠ k, with the others' clamped values and the fresh
+/// ones' unclamped values; `lower` re-applies R's lower clamps to a value that changed.
+pub fn neighbour_clamp(p: &[Vec3], r: &mut [f32], fresh: &[bool], a: f32, lower: &dyn Fn(usize, f32) -> f32) {
     let unclamped = r.to_vec();
-    for j in 0..base {
+    let fresh_ones: Vec<usize> = (0..p.len()).filter(|&k| fresh[k]).collect();
+    for j in (0..p.len()).filter(|&j| !fresh[j]) {
         let mut c = unclamped[j];
-        for k in base..p.len() {
+        for &k in &fresh_ones {
             let d = p[k].distance(p[j]);
             if d <= a * (unclamped[k] + unclamped[j]) {
                 c = c.min(unclamped[k] + d);
@@ -534,11 +535,11 @@ pub fn neighbour_clamp(p: &[Vec3], r: &mut [f32], base: usize, a: f32, lower: &d
             r[j] = lower(j, c);
         }
     }
-    for k in base..p.len() {
+    for &k in &fresh_ones {
         let own = unclamped[k];
         let mut c = own;
         for j in (0..p.len()).filter(|&j| j != k) {
-            let rj = if j >= base { unclamped[j] } else { r[j] };
+            let rj = if fresh[j] { unclamped[j] } else { r[j] };
             let d = p[k].distance(p[j]);
             if d <= a * (own + rj) {
                 c = c.min(rj + d);

@@ -59,6 +59,7 @@ pub struct GautronStage {
     maintain: wgpu::ComputePipeline,
     clamp_cached: wgpu::ComputePipeline,
     clamp_new: wgpu::ComputePipeline,
+    clamp_store: wgpu::ComputePipeline,
     maintain_params: wgpu::Buffer,
     moved: wgpu::Buffer,
     layout0: wgpu::BindGroupLayout,
@@ -152,6 +153,7 @@ impl GautronStage {
             maintain: pipeline("cs_maintain"),
             clamp_cached: pipeline("cs_clamp_cached"),
             clamp_new: pipeline("cs_clamp_new"),
+            clamp_store: pipeline("cs_clamp_store"),
             maintain_params: crate::passes::uniform_buffer(
                 device,
                 "gautron.maintain",
@@ -373,6 +375,8 @@ impl GautronStage {
                     pass.set_pipeline(&self.clamp_cached);
                     pass.dispatch_workgroups(s.capacity.max(1).div_ceil(64), 1, 1);
                     pass.set_pipeline(&self.clamp_new);
+                    pass.dispatch_workgroups(slots.div_ceil(64), 1, 1);
+                    pass.set_pipeline(&self.clamp_store);
                     pass.dispatch_workgroups(slots.div_ceil(64), 1, 1);
                 }
             });
