@@ -136,7 +136,17 @@ fn indirect_light(
     // gather), Ward-weight splatting (stage 6's reconstruction) and the record cache (stage
     // 7), run together; no VPLs.
     if p.gather == Gather::Hemispheres {
-        return Some(x.gautron.as_mut()?.run(f, enc, timer));
+        // GI Lab's mix with Nguyen et al.: the hemispheres at the HCB's samples, splatted by
+        // coherence (stage 5 HcbSamples, stage 6 CoherenceSplatting).
+        if p.shading_points == ShadingPoints::HcbSamples {
+            let (hcb, gautron) = (x.hcb.as_ref()?, x.gautron.as_mut()?);
+            hcb.build_only(f, enc, timer);
+            if let Err(e) = gautron.gather_at_samples(f, enc, timer, hcb.sample_buffers()) {
+                eprintln!("gautron: the HCB's sample count could not be read: {e}");
+            }
+            return Some(hcb.splat_only(f, enc, timer));
+        }
+        return Some(x.gautron.as_mut()?.run(f, enc, timer, None));
     }
     // Soler et al.'s screen-space choices: mip levels (stage 5), the ring gather and the
     // joint bilateral upsampling (stage 6), and the warped blend of Eq. 6 (stage 7) when
@@ -171,6 +181,12 @@ fn indirect_light(
         _ => x.knecht.as_mut()?.visibility(f, enc, timer, &vpls)?,
     };
     let light = (&vpls, &vis);
+
+    // GI Lab's mix with Gautron et al.: irradiance records lit by the VPLs (stages 5–7 are
+    // Gautron's creation, splatting and cache).
+    if p.shading_points == ShadingPoints::IrradianceRecords {
+        return Some(x.gautron.as_mut()?.run(f, enc, timer, Some(light)));
+    }
 
     // Stage 5: shading points (the HCB sample cache, stage 7's choice, acts in the selection:
     // Nguyen §5, Fig. 5).

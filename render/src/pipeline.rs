@@ -198,12 +198,18 @@ settings_enum! {
         /// is insufficient, their hemispheres rasterized, Ward's weights splatted, the records
         /// kept across frames.
         Gautron = "irradiance cache splatting (Gautron)",
+        /// Gautron's irradiance records and splatting, the records lit by Knecht's VPLs
+        /// (instant radiosity at the records) instead of their hemispheres (GI Lab's mix).
+        GautronVplRecords = "irradiance records lit by VPLs (Gautron + Knecht)",
+        /// Gautron's hemispheres computed at the HCB's samples and spread by coherence
+        /// splatting (GI Lab's mix of Nguyen et al. and Gautron et al.).
+        GautronAtHcbSamples = "hemispheres at HCB samples (Nguyen + Gautron)",
     }
     default DirectOnly
 }
 
 impl Technique {
-    pub const ALL: [Technique; 9] = [
+    pub const ALL: [Technique; 11] = [
         Self::DirectOnly,
         Self::Knecht,
         Self::Nguyen,
@@ -213,6 +219,8 @@ impl Technique {
         Self::SolerNearKnechtFar,
         Self::SolerAtHcbSamples,
         Self::Gautron,
+        Self::GautronVplRecords,
+        Self::GautronAtHcbSamples,
     ];
 
     /// The technique's stage choices. `base` gives the choices the technique leaves open
@@ -276,6 +284,15 @@ impl Technique {
                 temporal: Temporal::RecordCache,
                 near_field: NearField::None,
             },
+            Self::GautronVplRecords => {
+                ir(ShadingPoints::IrradianceRecords, Reconstruction::WeightSplatting, Temporal::RecordCache)
+            }
+            Self::GautronAtHcbSamples => PipelineSettings {
+                shading_points: ShadingPoints::HcbSamples,
+                reconstruction: Reconstruction::CoherenceSplatting,
+                temporal: Temporal::None,
+                ..Self::Gautron.choices(base)
+            },
         }
     }
 
@@ -325,9 +342,11 @@ impl PipelineSettings {
         }
     }
 
-    /// Whether Gautron et al.'s irradiance records are the gather.
+    /// Whether Gautron et al.'s passes run: the hemisphere gather (at irradiance records or,
+    /// GI Lab's mix, at the HCB's samples), or irradiance records lit by the VPL gather.
     pub fn uses_gautron(&self) -> bool {
         self.gather == Gather::Hemispheres
+            || (self.gather == Gather::Vpl && self.shading_points == ShadingPoints::IrradianceRecords)
     }
 
     /// Whether instant radiosity's VPLs (stages 3–4 of Knecht) are in use.
@@ -342,7 +361,7 @@ impl PipelineSettings {
 
     /// Whether the HCB's passes run (its samples are the shading points).
     pub fn uses_hcb(&self) -> bool {
-        (self.uses_knecht_vpls() || self.gather == Gather::ScreenSpace)
+        (self.uses_knecht_vpls() || matches!(self.gather, Gather::ScreenSpace | Gather::Hemispheres))
             && self.shading_points == ShadingPoints::HcbSamples
     }
 
@@ -378,18 +397,49 @@ pub fn combination_errors(s: &LabSettings) -> Vec<FieldError> {
     if p.gather == Gather::None {
         return errors;
     }
-    let gautron_choice = p.shading_points == ShadingPoints::IrradianceRecords
-        || p.reconstruction == Reconstruction::WeightSplatting
-        || p.temporal == Temporal::RecordCache;
     if p.gather == Gather::Hemispheres {
         // Gautron et al.'s records: their own shading points, splatting and cache; no VPLs.
-        if p.shading_points != ShadingPoints::IrradianceRecords {
-            err(
-                "shading_points",
-                "the hemisphere gather computes irradiance records: set pipeline.shading_points = IrradianceRecords"
-                    .into(),
-            );
+        // GI Lab's mix with Nguyen et al.: the hemispheres at the HCB's samples, splatted by
+        // coherence.
+        if p.shading_points == ShadingPoints::HcbSamples {
+            if p.reconstruction != Reconstruction::CoherenceSplatting {
+                err("reconstruction", "hemispheres at HCB samples are spread by coherence splatting: set pipeline.reconstruction = CoherenceSplatting".into());
+            }
+            if p.temporal != Temporal::None {
+                err("temporal", "hemispheres at HCB samples are computed every frame (the sample cache re-gathers with VPLs, the record cache keeps irradiance records): set pipeline.temporal = None".into());
+            }
+        } else {
+            if p.shading_points != ShadingPoints::IrradianceRecords {
+                err(
+                    "shading_points",
+                    "the hemisphere gather computes irradiance records (IrradianceRecords) or the HCB's samples (HcbSamples)".into(),
+                );
+            }
+            if p.reconstruction != Reconstruction::WeightSplatting {
+                err("reconstruction", "irradiance records are interpolated by splatting Ward's weights: set pipeline.reconstruction = WeightSplatting".into());
+            }
+            if !matches!(p.temporal, Temporal::None | Temporal::RecordCache) {
+                err(
+                    "temporal",
+                    "irradiance records are kept by the record cache (RecordCache) or made anew every frame (None)"
+                        .into(),
+                );
+            }
         }
+        if p.near_field != NearField::None {
+            err("near_field", "the hemispheres already take the light from every distance; a near field splits a VPL gather: set pipeline.near_field = None".into());
+        }
+        return errors;
+    }
+    let records = p.shading_points == ShadingPoints::IrradianceRecords;
+    if !records && (p.reconstruction == Reconstruction::WeightSplatting || p.temporal == Temporal::RecordCache) {
+        err("shading_points", "Ward-weight splatting and the record cache act on irradiance records: set pipeline.shading_points = IrradianceRecords".into());
+    }
+    if records && p.gather != Gather::Vpl {
+        err("gather", "irradiance records are lit by their hemispheres (Hemispheres) or by the VPLs (Vpl)".into());
+    }
+    if records && p.gather == Gather::Vpl {
+        // GI Lab's mix with Knecht: the records lit by the VPL gather.
         if p.reconstruction != Reconstruction::WeightSplatting {
             err("reconstruction", "irradiance records are interpolated by splatting Ward's weights: set pipeline.reconstruction = WeightSplatting".into());
         }
@@ -399,13 +449,10 @@ pub fn combination_errors(s: &LabSettings) -> Vec<FieldError> {
                 "irradiance records are kept by the record cache (RecordCache) or made anew every frame (None)".into(),
             );
         }
-        if p.near_field != NearField::None {
-            err("near_field", "the hemispheres already take the light from every distance; a near field splits a VPL gather: set pipeline.near_field = None".into());
+        if p.vpl_source != VplSource::ImportanceWarping {
+            err("vpl_source", "irradiance records are lit by instant radiosity's VPLs: set pipeline.vpl_source = ImportanceWarping (the reference's batches are averaged at every pixel)".into());
         }
         return errors;
-    }
-    if gautron_choice {
-        err("gather", "irradiance records, Ward-weight splatting and the record cache belong to the hemisphere gather: set pipeline.gather = Hemispheres".into());
     }
     if p.gather == Gather::ScreenSpace {
         // Soler et al.'s gather runs on the mip levels and is combined by the upsampling, or

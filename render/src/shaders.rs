@@ -69,6 +69,8 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("gautron/reduce.wgsl", include_str!("../../shaders/gautron/reduce.wgsl")),
     ("gautron/splat.wgsl", include_str!("../../shaders/gautron/splat.wgsl")),
     ("gautron/resolve.wgsl", include_str!("../../shaders/gautron/resolve.wgsl")),
+    ("gautron/vpl_records.wgsl", include_str!("../../shaders/gautron/vpl_records.wgsl")),
+    ("gautron/at_samples.wgsl", include_str!("../../shaders/gautron/at_samples.wgsl")),
     ("view/view.wgsl", include_str!("../../shaders/view/view.wgsl")),
     ("view/probe.wgsl", include_str!("../../shaders/view/probe.wgsl")),
 ];
@@ -110,6 +112,8 @@ pub const ENTRY_MODULES: &[&str] = &[
     "gautron/reduce.wgsl",
     "gautron/splat.wgsl",
     "gautron/resolve.wgsl",
+    "gautron/vpl_records.wgsl",
+    "gautron/at_samples.wgsl",
     "soler/vote.wgsl",
     "soler/gather.wgsl",
     "soler/upsample.wgsl",

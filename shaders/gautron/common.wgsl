@@ -121,3 +121,11 @@ fn tangent_frame(n: vec3<f32>) -> mat2x3<f32> {
 fn record_px_per_unit(params: GautronParams, rec: Record) -> f32 {
     return params.misc.z * params.misc.w / max(rec.pixel.z, 1e-6);
 }
+
+// R_k from the harmonic mean distance H: clamped in scene units, then its projection at the
+// record's depth in pixels (the reduction and the VPL-lit records).
+fn clamped_radius(params: GautronParams, h: f32, rec: Record) -> f32 {
+    let r = clamp(h, params.clamps.x, params.clamps.y);
+    let px_per_unit = record_px_per_unit(params, rec);
+    return clamp(r * px_per_unit, params.clamps.z, params.clamps.w) / px_per_unit;
+}

@@ -141,11 +141,7 @@ fn cs_reduce(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
     if (sum[4] > 0.0) {
         h = sum[3] / sum[4];
     }
-    // R_k: H clamped in scene units, then its projection at the record's depth in pixels
-    var r = clamp(h, params.clamps.x, params.clamps.y);
-    let px_per_unit = record_px_per_unit(params, rec);
-    r = clamp(r * px_per_unit, params.clamps.z, params.clamps.w) / px_per_unit;
-    rec.position.w = r;
+    rec.position.w = clamped_radius(params, h, rec);
     rec.normal.w = h;
     rec.pixel.w = RECORD_VALID;
     rec.seen = vec4<u32>(atomicLoad(&seen_bits[0]), atomicLoad(&seen_bits[1]), atomicLoad(&seen_bits[2]), atomicLoad(&seen_bits[3]));

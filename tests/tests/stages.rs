@@ -135,6 +135,22 @@ fn impossible_mixes_are_refused_with_the_stage_that_needs_what() {
     refused(|s| s.pipeline.temporal = Temporal::HcbSampleCache, "pipeline.temporal", "HcbSamples");
     refused(|s| s.pipeline.temporal = Temporal::RunningAverage, "pipeline.temporal", "UniformBatches");
     refused(|s| s.pipeline.vpl_source = VplSource::None, "pipeline.gather", "needs VPLs");
+    // Gautron's mixes: records lit by VPLs are splatted by Ward's weights; hemispheres at HCB
+    // samples are spread by coherence and not cached; the record cache needs records.
+    refused(
+        |s| s.pipeline.shading_points = ShadingPoints::IrradianceRecords,
+        "pipeline.reconstruction",
+        "Ward's weights",
+    );
+    refused(
+        |s| {
+            Technique::GautronAtHcbSamples.apply(s);
+            s.pipeline.temporal = Temporal::RecordCache;
+        },
+        "pipeline.temporal",
+        "every frame",
+    );
+    refused(|s| s.pipeline.temporal = Temporal::RecordCache, "pipeline.shading_points", "IrradianceRecords");
     refused(
         |s| {
             Technique::ExactVpl.apply(s);

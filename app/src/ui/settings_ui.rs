@@ -262,6 +262,18 @@ pub const TECHNIQUES: &[Technique] = &[
         apply: |s| Choices::Gautron.apply(s),
         is: |s| Choices::of(&s.pipeline) == Some(Choices::Gautron),
     },
+    Technique {
+        name: "Irradiance records lit by VPLs (Gautron + Knecht)",
+        source: "GI Lab's mix: Gautron et al. 003's records, splatting and cache, each record lit by Knecht 002's VPLs and their visibility instead of a rasterized hemisphere",
+        apply: |s| Choices::GautronVplRecords.apply(s),
+        is: |s| Choices::of(&s.pipeline) == Some(Choices::GautronVplRecords),
+    },
+    Technique {
+        name: "Hemispheres at HCB samples (Nguyen + Gautron)",
+        source: "GI Lab's mix: Gautron et al. 003's rasterized hemisphere at each of Nguyen et al. 000's HCB samples, spread by coherence splatting",
+        apply: |s| Choices::GautronAtHcbSamples.apply(s),
+        is: |s| Choices::of(&s.pipeline) == Some(Choices::GautronAtHcbSamples),
+    },
 ];
 
 /// The technique picker: sets the stage choices of one technique at once.

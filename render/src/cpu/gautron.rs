@@ -550,3 +550,85 @@ pub fn neighbour_clamp(p: &[Vec3], r: &mut [f32], fresh: &[bool], a: f32, lower:
         }
     }
 }
+
+/// Irradiance at `x` (normal `n`) from one VPL, visibility not included (GI Lab's mix of
+/// records lit by instant radiosity; twin of `vpl_irradiance` in `shaders/common/vpl.wgsl`):
+/// Φ · f_y(ω_in, y→x) · cos θ_y · cos θ_x / max(d², d_min²) (Knecht 002 Eq. 4.7–4.8); a VPL
+/// closer than `near` (the near field's cut) sends nothing.
+pub fn vpl_irradiance(vpl: &crate::cpu::knecht::Vpl, x: Vec3, n: Vec3, d_min: f32, near: f32) -> Vec3 {
+    let w = vpl.position - x;
+    let d2 = w.length_squared();
+    if d2 < near * near {
+        return Vec3::ZERO;
+    }
+    let l = w / d2.max(1e-12).sqrt();
+    let (cos_x, cos_y) = (n.dot(l), -vpl.normal.dot(l));
+    if cos_x <= 0.0 || cos_y <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let f_y = crate::cpu::brdf::eval(vpl.normal, vpl.incident, -l, vpl.albedo, vpl.di, vpl.si, vpl.sp);
+    vpl.flux * f_y * cos_y * cos_x / d2.max(d_min * d_min)
+}
+
+/// A record lit by VPLs instead of a hemisphere (twin of `cs_vpl_records` in
+/// `shaders/gautron/vpl_records.wgsl`), in the record's frame (t, b, n):
+///
+/// - E = Σ V_i E_i(P, n), with `visibility(i)` ∈ [0, 1] held at P for every term;
+/// - ⚠ H = Σ ℓ_i / Σ (ℓ_i / d_i), ℓ_i the luminance of V_i E_i(P, n): the harmonic mean of the
+///   visible VPLs' distances weighted by what each sends (∞ when none sends anything);
+/// - ∇_t = t·D_t + b·D_b with D_u = (E(P + ε_t u) − E(P − ε_t u)) / 2ε_t, and ∇_r = t·R_t +
+///   b·R_b with R_u the central difference of E over n turned by ±ε_r about u (about t: n ∓
+///   ε_r b; about b: n ± ε_r t, normalised), so that E(n') ≈ E + (n × n')·∇_r as the
+///   hemisphere's ∇_r.
+#[allow(clippy::too_many_arguments)]
+pub fn vpl_record(
+    vpls: &[crate::cpu::knecht::Vpl],
+    visibility: &dyn Fn(usize) -> f32,
+    (p, t, b, n): (Vec3, Vec3, Vec3, Vec3),
+    d_min: f32,
+    near: f32,
+    eps_t: f32,
+    eps_r: f32,
+) -> RecordTerms {
+    let nt = [(n - eps_r * b).normalize(), (n + eps_r * b).normalize()];
+    let nb = [(n + eps_r * t).normalize(), (n - eps_r * t).normalize()];
+    let mut e = Vec3::ZERO;
+    let (mut h_num, mut h_den) = (0.0f32, 0.0f32);
+    let mut d = [Vec3::ZERO; 8];
+    for (i, vpl) in vpls.iter().enumerate() {
+        let v = visibility(i);
+        if v <= 0.0 {
+            continue;
+        }
+        let at = |x: Vec3, m: Vec3| vpl_irradiance(vpl, x, m, d_min, near) * v;
+        let ei = at(p, n);
+        e += ei;
+        let l = ei.dot(Vec3::new(0.2126, 0.7152, 0.0722));
+        if l > 0.0 {
+            h_num += l;
+            h_den += l / vpl.position.distance(p).max(1e-6);
+        }
+        let terms = [
+            at(p + eps_t * t, n),
+            at(p - eps_t * t, n),
+            at(p + eps_t * b, n),
+            at(p - eps_t * b, n),
+            at(p, nt[0]),
+            at(p, nt[1]),
+            at(p, nb[0]),
+            at(p, nb[1]),
+        ];
+        for (acc, term) in d.iter_mut().zip(terms) {
+            *acc += term;
+        }
+    }
+    let (gt, gb) = ((d[0] - d[1]) / (2.0 * eps_t), (d[2] - d[3]) / (2.0 * eps_t));
+    let (rt, rb) = ((d[4] - d[5]) / (2.0 * eps_r), (d[6] - d[7]) / (2.0 * eps_r));
+    let channel = |u: Vec3, w: Vec3, c: usize| t * u[c] + b * w[c];
+    RecordTerms {
+        e,
+        h: if h_den > 0.0 { h_num / h_den } else { f32::INFINITY },
+        rot: [channel(rt, rb, 0), channel(rt, rb, 1), channel(rt, rb, 2)],
+        trans: [channel(gt, gb, 0), channel(gt, gb, 1), channel(gt, gb, 2)],
+    }
+}

@@ -269,6 +269,8 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         | "gautron/reduce.wgsl"
         | "gautron/splat.wgsl"
         | "gautron/resolve.wgsl"
+        | "gautron/vpl_records.wgsl"
+        | "gautron/at_samples.wgsl"
         | "gautron/common.wgsl" => "gautron",
         _ => return None,
     })

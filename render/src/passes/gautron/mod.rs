@@ -11,9 +11,11 @@ use glam::{Mat4, Vec4};
 
 use crate::{settings_enum, settings_group};
 
+pub mod at_samples;
 pub mod hemisphere;
 pub mod splat;
 pub mod stage;
+pub mod vpl_records;
 
 settings_enum! {
     /// The directions the 126.87° camera misses ("Simple plane sampling" quotes Larsen et

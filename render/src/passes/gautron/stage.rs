@@ -8,8 +8,10 @@
 
 use std::hash::{Hash, Hasher};
 
+use super::at_samples::AtSamplesPass;
 use super::hemisphere::HemispherePass;
 use super::splat::SplatPass;
+use super::vpl_records::VplRecordPass;
 use super::{
     CacheState, GautronParams, GautronSettings, GpuRecord, HemisphereCamera, Invalidation, RECORD_BYTES, ReusePolicy,
     atlas_grid,
@@ -18,7 +20,7 @@ use crate::buffers::{BufferKind, BufferRegistry, read_storage};
 use crate::gpu::GpuContext;
 use crate::passes::{bgl, bind_group, buffer, create_target, view};
 use crate::pipeline::Temporal;
-use crate::stages::FrameInputs;
+use crate::stages::{FrameInputs, Visibility, VplSet};
 use crate::timing::GpuTimer;
 
 /// Bytes between the rounds' uniforms (dynamic offsets).
@@ -52,6 +54,10 @@ struct MovedObject {
 pub struct GautronStage {
     pub hemisphere: HemispherePass,
     pub splat: SplatPass,
+    /// The records lit by VPLs instead of hemispheres (GI Lab's mix; made when first used).
+    vpl_records: Option<VplRecordPass>,
+    /// The hemispheres at the HCB's samples (GI Lab's mix; made when first used).
+    at_samples: Option<AtSamplesPass>,
     candidates: wgpu::ComputePipeline,
     compact: wgpu::ComputePipeline,
     cameras_pipeline: wgpu::ComputePipeline,
@@ -146,6 +152,8 @@ impl GautronStage {
         let mut stage = Self {
             hemisphere: HemispherePass::new(ctx, f_scene, s),
             splat: SplatPass::new(ctx, w, h),
+            vpl_records: None,
+            at_samples: None,
             candidates: pipeline("cs_candidates"),
             compact: pipeline("cs_compact"),
             cameras_pipeline: pipeline("cs_cameras"),
@@ -247,8 +255,9 @@ impl GautronStage {
         self.lights_key = None;
     }
 
-    /// Stages 5–7 for the frame: returns the reflected indirect light (`gautron.indirect`).
-    pub fn run(&mut self, f: &FrameInputs, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) -> wgpu::TextureView {
+    /// Writes the frame's uniforms and the hemisphere raster's indirect draws; returns the
+    /// round's slots.
+    fn prepare(&mut self, f: &FrameInputs) -> u32 {
         let (ctx, s) = (f.ctx, &f.settings.gautron);
         self.ensure(ctx, s, f.gbuffer_size.0, f.gbuffer_size.1);
         let slots = s.records_per_round.max(1);
@@ -275,18 +284,6 @@ impl GautronStage {
         };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         ctx.queue.write_buffer(&self.atlas_params, 0, bytemuck::cast_slice(&[s.hemisphere_resolution, per_row, 0, 0]));
-
-        // The record cache (stage 7): records stay while what they depend on stays; a moved
-        // object or a changed light invalidates the records it changes (cs_maintain).
-        let maintain = self.changes(f);
-        let keep = maintain.is_some();
-        if !keep {
-            ctx.queue.write_buffer(&self.state, 0, bytemuck::bytes_of(&CacheState::default()));
-        }
-        let maintain = maintain.filter(|m| m.flags[0] + m.flags[1] + m.flags[2] > 0);
-        if let Some(m) = &maintain {
-            ctx.queue.write_buffer(&self.maintain_params, 0, bytemuck::bytes_of(m));
-        }
         let args = HemispherePass::draw_args(f.gpu_scene, f.state, slots);
         if args.len() * 4 > self.raster_args.size() as usize || args.is_empty() {
             let usage = wgpu::BufferUsages::STORAGE
@@ -299,7 +296,78 @@ impl GautronStage {
         if !args.is_empty() {
             ctx.queue.write_buffer(&self.raster_args, 0, bytemuck::cast_slice(&args));
         }
+        slots
+    }
 
+    /// Computes the round's slots' records (new ones and stale ones again): their hemispheres
+    /// rasterized, lit by stage 2 and reduced ("Simple plane sampling"), or with `light` the
+    /// VPL sums of GI Lab's mix with instant radiosity.
+    fn compute_records(
+        &self,
+        f: &FrameInputs,
+        e: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        light: Option<(&VplSet, &Visibility)>,
+        slots: u32,
+    ) {
+        let ctx = f.ctx;
+        if let (Some((vpls, vis)), Some(pass)) = (light, &self.vpl_records) {
+            let buffers = (&self.params, &self.state, &self.cameras, &self.records);
+            pass.run(ctx, e, slot, buffers, (vpls, vis), f.radius, slots);
+            return;
+        }
+        let hemisphere = &self.hemisphere;
+        hemisphere.raster(
+            ctx,
+            e,
+            slot,
+            f.gpu_scene,
+            f.state,
+            f.camera_buffer,
+            &self.cameras,
+            &self.params,
+            &self.raster_args,
+        );
+        f.direct.shade_atlas(
+            ctx,
+            e,
+            None,
+            &hemisphere.atlas.views,
+            hemisphere.radiance_view(),
+            hemisphere.size,
+            &self.atlas_params,
+            &self.viewers,
+        );
+        hemisphere.reduce(ctx, e, slot, &self.params, &self.state, &self.cameras, &self.records, slots);
+    }
+
+    /// Stages 5–7 for the frame: returns the reflected indirect light (`gautron.indirect`).
+    /// `light`: the VPLs and their visibility when the records are lit by the VPL gather
+    /// (GI Lab's mix, `pipeline.gather = Vpl`), None for the hemispheres.
+    pub fn run(
+        &mut self,
+        f: &FrameInputs,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        light: Option<(&VplSet, &Visibility)>,
+    ) -> wgpu::TextureView {
+        let (ctx, s) = (f.ctx, &f.settings.gautron);
+        if light.is_some() && self.vpl_records.is_none() {
+            self.vpl_records = Some(VplRecordPass::new(ctx));
+        }
+        let slots = self.prepare(f);
+
+        // The record cache (stage 7): records stay while what they depend on stays; a moved
+        // object or a changed light invalidates the records it changes (cs_maintain).
+        let maintain = self.changes(f);
+        let keep = maintain.is_some();
+        if !keep {
+            ctx.queue.write_buffer(&self.state, 0, bytemuck::bytes_of(&CacheState::default()));
+        }
+        let maintain = maintain.filter(|m| m.flags[0] + m.flags[1] + m.flags[2] > 0);
+        if let Some(m) = &maintain {
+            ctx.queue.write_buffer(&self.maintain_params, 0, bytemuck::bytes_of(m));
+        }
         let (g0, g1) = &self.create_groups(f);
         let tile = s.creation_tile_px.max(1);
         let tiles = (f.gbuffer_size.0.div_ceil(tile), f.gbuffer_size.1.div_ceil(tile));
@@ -341,30 +409,9 @@ impl GautronStage {
                 pass.set_pipeline(&self.cameras_pipeline);
                 pass.dispatch_workgroups(slots.div_ceil(64), 1, 1);
             });
-            let hemisphere = &self.hemisphere;
-            timer.scope(ctx, enc, "gautron.hemispheres", |e, slot| {
-                hemisphere.raster(
-                    ctx,
-                    e,
-                    slot,
-                    f.gpu_scene,
-                    f.state,
-                    camera,
-                    &self.cameras,
-                    &self.params,
-                    &self.raster_args,
-                );
-                f.direct.shade_atlas(
-                    ctx,
-                    e,
-                    None,
-                    &hemisphere.atlas.views,
-                    hemisphere.radiance_view(),
-                    hemisphere.size,
-                    &self.atlas_params,
-                    &self.viewers,
-                );
-                hemisphere.reduce(ctx, e, slot, &self.params, &self.state, &self.cameras, records, slots);
+            let name = if light.is_some() { "gautron.vpl_records" } else { "gautron.hemispheres" };
+            timer.scope(ctx, enc, name, |e, slot| {
+                self.compute_records(f, e, slot, light, slots);
                 if s.neighbour_clamping {
                     let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
                         label: Some("gautron.neighbours"),
@@ -388,6 +435,75 @@ impl GautronStage {
         splat.indirect_view()
     }
 
+    /// GI Lab's mix with Nguyen et al.: a hemisphere at each of the HCB's samples (`list`,
+    /// `counter` from `HcbStage::sample_buffers`), in chunks of the round's slots; each
+    /// sample's irradiance goes to its `light`, and `args` gets the HCB splat's indirect
+    /// arguments. The chunks are counted on the CPU: the frame's commands so far are
+    /// submitted and the sample count read back (one stall per frame; the mix is a lab
+    /// comparison, not a shipping path). No cache: the records are scratch.
+    pub fn gather_at_samples(
+        &mut self,
+        f: &FrameInputs,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        (list, counter, args): (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
+    ) -> Result<u32, String> {
+        let ctx = f.ctx;
+        let slots = self.prepare(f);
+        self.cache_key = None;
+        ctx.queue.write_buffer(&self.state, 0, bytemuck::bytes_of(&CacheState::default()));
+        let done = std::mem::replace(
+            enc,
+            ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame.after_hcb") }),
+        );
+        ctx.queue.submit([done.finish()]);
+        let words = read_storage(ctx, counter, 4)?;
+        let list_len = list.size() / super::at_samples::HCB_SAMPLE_BYTES;
+        let n = (bytemuck::pod_read_unaligned::<u32>(&words[..4]) as u64).min(list_len) as u32;
+        let chunks = n.div_ceil(slots).max(1);
+        let pass = self.at_samples.get_or_insert_with(|| AtSamplesPass::new(ctx));
+        pass.ensure_chunks(ctx, chunks);
+        let pass = self.at_samples.as_ref().ok_or("no pass")?;
+        let group = pass.group(
+            ctx,
+            (&self.params, &self.state, &self.slots, &self.records),
+            &self.raster_args_binding(),
+            (counter, list, args),
+        );
+        let (g0, g1) = &self.create_groups(f);
+        for k in 0..chunks {
+            timer.scope(ctx, enc, "gautron.create", |e, slot| {
+                let mut c = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("gautron.at_samples"),
+                    timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+                });
+                pass.begin(&mut c, &group, k);
+                c.set_bind_group(0, g0, &[0]);
+                c.set_bind_group(1, g1, &[]);
+                c.set_pipeline(&self.cameras_pipeline);
+                c.dispatch_workgroups(slots.div_ceil(64), 1, 1);
+            });
+            timer.scope(ctx, enc, "gautron.hemispheres", |e, slot| {
+                self.compute_records(f, e, slot, None, slots);
+                let mut c = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("gautron.at_samples.store"),
+                    timestamp_writes: None,
+                });
+                pass.store(&mut c, &group, k, slots);
+            });
+        }
+        Ok(n)
+    }
+
+    /// The raster's indirect draws as bound by the compute passes that write them.
+    fn raster_args_binding(&self) -> wgpu::BufferBinding<'_> {
+        wgpu::BufferBinding {
+            buffer: &self.raster_args,
+            offset: 0,
+            size: std::num::NonZeroU64::new((self.raster_draws.max(1) * 20) as u64),
+        }
+    }
+
     fn create_groups(&self, f: &FrameInputs) -> (wgpu::BindGroup, wgpu::BindGroup) {
         let device = &f.ctx.device;
         let g0 = bind_group(
@@ -404,11 +520,7 @@ impl GautronStage {
                 self.records.as_entire_binding(),
                 self.cameras.as_entire_binding(),
                 self.viewers.as_entire_binding(),
-                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                    buffer: &self.raster_args,
-                    offset: 0,
-                    size: std::num::NonZeroU64::new((self.raster_draws.max(1) * 20) as u64),
-                }),
+                wgpu::BindingResource::Buffer(self.raster_args_binding()),
                 self.splat_args.as_entire_binding(),
                 self.maintain_params.as_entire_binding(),
                 self.moved.as_entire_binding(),
@@ -435,6 +547,8 @@ impl GautronStage {
             format!("{:?}", g.get(m.name)).hash(&mut h);
         }
         f.gbuffer_size.hash(&mut h);
+        // another gather (hemispheres or VPLs) makes other records
+        format!("{:?}", f.settings.pipeline).hash(&mut h);
         h.finish()
     }
 
@@ -445,6 +559,10 @@ impl GautronStage {
             bytemuck::bytes_of(l).hash(&mut h);
         }
         format!("{:?}", f.settings.direct).hash(&mut h);
+        // records lit by VPLs also depend on what makes the VPLs and their visibility
+        if f.settings.pipeline.uses_vpls() {
+            format!("{:?} {:?}", f.settings.vpl, f.settings.ism).hash(&mut h);
+        }
         h.finish()
     }
 

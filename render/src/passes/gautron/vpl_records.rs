@@ -1,0 +1,117 @@
+//! GI Lab's mix of Gautron et al. 003 and Knecht 002 (issue #17 "Mixes"): the round's
+//! irradiance records lit by the VPLs of stages 3–4 (instant radiosity at the records)
+//! instead of their rasterized hemispheres (`pipeline.shading_points = IrradianceRecords`
+//! with `pipeline.gather = Vpl`). The creation, the clamps, the splatting and the cache are
+//! Gautron's; only the record's E, H and gradients come from the VPL sums of
+//! `shaders/gautron/vpl_records.wgsl` (CPU twin `cpu::gautron::vpl_record`, where the ⚠
+//! reading of H is documented).
+
+use glam::Vec4;
+
+use crate::gpu::GpuContext;
+use crate::passes::{bgl, bind_group};
+use crate::stages::{Visibility, VplSet};
+use crate::timing::Slot;
+
+/// Uniform of the VPL-lit records; WGSL twin: `VplRecordParams` in
+/// `shaders/gautron/vpl_records.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct VplRecordParams {
+    /// VPL count, visibility (0 none, 1 ISM, 2 exact), atlas columns, map size.
+    pub counts: [u32; 4],
+    /// d_min², then the visibility's parameters as `interleave::GatherParams::shade`.
+    pub shade: Vec4,
+    /// The near field's cut², ε of the translational differences (scene units), ε of the
+    /// rotational ones (radians), 0.
+    pub misc: Vec4,
+}
+
+/// The step of the translational differences, relative to the scene's radius.
+pub const EPS_T: f32 = 1e-3;
+/// The step of the rotational differences (radians).
+pub const EPS_R: f32 = 1e-2;
+
+pub struct VplRecordPass {
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::ComputePipeline,
+    params: wgpu::Buffer,
+    no_ism: wgpu::TextureView,
+    no_exact: wgpu::TextureView,
+}
+
+impl VplRecordPass {
+    pub fn new(ctx: &GpuContext) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gautron.vpl_records"),
+            entries: &[
+                bgl::uniform(0, cs),
+                bgl::uniform(1, cs),
+                bgl::storage(2, cs, true),
+                bgl::storage(3, cs, true),
+                bgl::storage(4, cs, false),
+                bgl::storage(5, cs, true),
+                bgl::texture(6, cs, false),
+                bgl::depth(7, cs),
+            ],
+        });
+        let module = crate::shaders::create_module(device, "gautron/vpl_records.wgsl");
+        let pipeline =
+            crate::passes::compute_pipeline(device, "gautron.vpl_records", &module, "cs_vpl_records", &[&layout]);
+        let params = crate::passes::uniform_buffer(
+            device,
+            "gautron.vpl_records.params",
+            std::mem::size_of::<VplRecordParams>() as u64,
+        );
+        let (no_ism, no_exact) =
+            crate::passes::knecht::interleave::no_visibility_atlases(device, "gautron.vpl_records");
+        Self { layout, pipeline, params, no_ism, no_exact }
+    }
+
+    /// Lights the records of the round's slots (`cameras` says which) with `light`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        enc: &mut wgpu::CommandEncoder,
+        slot: Option<Slot<'_>>,
+        (gautron_params, state, cameras, records): (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
+        (vpls, vis): (&VplSet, &Visibility),
+        radius: f32,
+        slots: u32,
+    ) {
+        let (code, ism, exact, cols, size, shade) = vis.parts(&self.no_ism, &self.no_exact);
+        let d_min = vpls.min_distance;
+        let p = VplRecordParams {
+            counts: [vpls.count, code, cols, size],
+            shade: Vec4::new(d_min * d_min, shade.y, shade.z, shade.w),
+            misc: Vec4::new(vpls.near_cut * vpls.near_cut, EPS_T * radius.max(1e-6), EPS_R, 0.0),
+        };
+        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        let tv = wgpu::BindingResource::TextureView;
+        let group = bind_group(
+            &ctx.device,
+            "gautron.vpl_records",
+            &self.layout,
+            vec![
+                gautron_params.as_entire_binding(),
+                self.params.as_entire_binding(),
+                state.as_entire_binding(),
+                cameras.as_entire_binding(),
+                records.as_entire_binding(),
+                vpls.list.as_entire_binding(),
+                tv(ism),
+                tv(exact),
+            ],
+        );
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("gautron.vpl_records"),
+            timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(slots.div_ceil(64), 1, 1);
+    }
+}

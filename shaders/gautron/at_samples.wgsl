@@ -1,0 +1,86 @@
+// GI Lab's mix of Nguyen et al. 000 and Gautron et al. 003 (issue #17 "Mixes"): a record's
+// hemisphere ("Simple plane sampling") computed at each of the HCB's samples (000 §3)
+// instead of where Gautron's coverage test asks for one, and the samples' irradiance then
+// spread by the HCB's coherence splatting (000 §4.2–4.3, hcb/splat.wgsl). The samples are
+// taken in chunks of the round's slots: `cs_samples_begin` turns chunk k's samples into
+// records in slots 0…m−1 of the record buffer (as stale records computed again in place, so
+// that cs_cameras sets their cameras at the sample's own position and normal), the
+// hemisphere raster and reduction compute them, `cs_samples_store` writes each E into its
+// sample's light (irradiance, as the HCB's VPL gather: the splat reflects it with c·DI/π).
+#import gautron/common.wgsl
+#import hcb/common.wgsl
+
+const REFRESH: u32 = 0x80000000u;
+
+struct RoundParams {
+    // x: the chunk's index, yzw unused
+    round: vec4<u32>,
+}
+
+@group(0) @binding(0) var<uniform> params: GautronParams;
+@group(0) @binding(1) var<uniform> round: RoundParams;
+@group(0) @binding(2) var<storage, read_write> state: CacheState;
+@group(0) @binding(3) var<storage, read_write> slots: array<u32>;
+@group(0) @binding(4) var<storage, read_write> records: array<Record>;
+// the hemisphere raster's indirect draws: 5 words per scene draw, word 1 the instance count
+@group(0) @binding(5) var<storage, read_write> raster_args: array<u32>;
+@group(0) @binding(6) var<storage, read> counter: array<u32>;
+@group(0) @binding(7) var<storage, read_write> list: array<HcbSample>;
+// the HCB splat's indirect arguments (as hcb/gather.wgsl's cs_args writes them)
+@group(0) @binding(8) var<storage, read_write> args: array<u32>;
+
+fn sample_count() -> u32 {
+    return min(counter[0], arrayLength(&list));
+}
+
+// The first sample of this chunk and how many it takes.
+fn chunk() -> vec2<u32> {
+    let n = sample_count();
+    let per = u32(params.creation.y);
+    let base = min(round.round.x * per, n);
+    return vec2<u32>(base, min(per, n - base));
+}
+
+@compute @workgroup_size(64, 1, 1)
+fn cs_samples_begin(@builtin(local_invocation_index) li: u32) {
+    let c = chunk();
+    for (var s = li; s < c.y; s = s + 64u) {
+        let smp = list[c.x + s];
+        var rec: Record;
+        rec.position = vec4<f32>(smp.position.xyz, 0.0);
+        rec.normal = vec4<f32>(normalize(smp.normal.xyz), 0.0);
+        rec.irradiance = vec4<f32>(0.0, 0.0, 0.0, params.misc.x);
+        // the pixel; its depth 1 (R_k's pixel clamps are unused: the HCB splats)
+        rec.pixel = vec4<f32>(f32(smp.texel.w & 0xffffu), f32(smp.texel.w >> 16u), 1.0, RECORD_STALE);
+        records[s] = rec;
+        slots[s] = s | REFRESH;
+    }
+    if (li == 0u) {
+        state.count = c.y;
+        state.new_base = 0u;
+        state.new_count = 0u;
+        state.refresh = c.y;
+        state.made = state.made + c.y;
+        if (round.round.x == 0u) {
+            let n = sample_count();
+            let words = hcb_args(n, n, 0u);
+            for (var i = 0u; i < 12u; i = i + 1u) {
+                args[i] = words[i];
+            }
+        }
+    }
+    let draws = arrayLength(&raster_args) / 5u;
+    for (var d = li; d < draws; d = d + 64u) {
+        raster_args[d * 5u + 1u] = c.y;
+    }
+}
+
+@compute @workgroup_size(64, 1, 1)
+fn cs_samples_store(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let s = gid.x;
+    let c = chunk();
+    if (s >= c.y) {
+        return;
+    }
+    list[c.x + s].light = vec4<f32>(records[s].irradiance.rgb, 1.0);
+}
