@@ -297,6 +297,10 @@ fn every_shipped_preset_loads_cleanly_and_validates() {
         "soler-quarter-4-64",
         "soler-near-knecht-far",
         "soler-quarter-4-64-visibility",
+        "soler-at-hcb-samples",
+        "gautron-ic-splatting",
+        "gautron-vpl-records",
+        "gautron-at-hcb-samples",
     ] {
         assert!(names.iter().any(|n| n == want), "presets/{want}.ron is missing");
     }

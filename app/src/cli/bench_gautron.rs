@@ -8,6 +8,11 @@
 //! brute force's time over the row's. The goal: ≥ 20× at equal FLIP (the cheapest row whose
 //! FLIP against the truth is within 10 % of the brute force's). Run it at a small size
 //! (`--size 64x64`): the brute force computes a hemisphere per pixel.
+//!
+//! Then GI Lab's two mixes (issue #17 "Mixes") at the preset's accuracy: the records lit by
+//! the VPLs (every pass of stages 3–7 timed, the VPLs' and ISMs' included) and a hemisphere
+//! at each of the HCB's samples (one frame: no cache), with the accuracy row nearest in time
+//! to the latter (Nguyen's samples against Gautron's records at equal time).
 
 use gi_render::Renderer;
 use gi_render::metrics::flip;
@@ -46,6 +51,27 @@ pub struct GautronReport {
     /// The brute force: a hemisphere per covered pixel.
     pub brute_force: GautronRow,
     pub rows: Vec<GautronRow>,
+    /// The mixes: records lit by VPLs, hemispheres at the HCB's samples.
+    pub mixes: Vec<MixRow>,
+}
+
+/// One of GI Lab's mixes with Gautron et al.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct MixRow {
+    pub name: String,
+    /// Records (VPL-lit) or HCB samples (one hemisphere each).
+    pub points: u32,
+    /// Frames until covered (VPL-lit records), 1 for the HCB's samples.
+    pub frames: u32,
+    /// Every pass of stages 3–7 over those frames (ms).
+    pub ms: f64,
+    pub flip_vs_brute_force: f64,
+    pub flip_vs_truth: f64,
+}
+
+/// Whether a pass belongs to stages 3–7 (not the G-buffer, direct light or compose).
+fn indirect_pass(name: &str) -> bool {
+    !(name.starts_with("gbuffer") || name.starts_with("direct") || name.starts_with("compose"))
 }
 
 /// Renders from an empty cache until a frame makes no record (at most 256 frames), then one
@@ -128,6 +154,8 @@ pub fn gautron(r: &mut Renderer, truth: Option<(ImageF32, String)>) -> Result<Ga
     let mut brute = base.clone();
     let g = &mut brute.gautron;
     (g.accuracy, g.r_min_px, g.r_max_px, g.r_min_scene) = (0.02, 0.0, 1.0, 0.0);
+    // R_k ≤ 1 px leaves neighbour clamping nothing to do but its O(records × round) cost.
+    g.neighbour_clamping = false;
     // One frame covers the image: 2×2-pixel tiles give a quarter of the pixels per round.
     let per_round = (width * height).div_ceil(4).min(1024);
     let rounds = (width * height).div_ceil(per_round).min(32);
@@ -148,11 +176,56 @@ pub fn gautron(r: &mut Renderer, truth: Option<(ImageF32, String)>) -> Result<Ga
         row.speedup = brute_force.cold_ms / row.cold_ms.max(1e-9);
         rows.push(row);
     }
+    let mut mixes = Vec::new();
+    // Records lit by the VPLs: cold until covered.
+    let mut s = base.clone();
+    Technique::GautronVplRecords.apply(&mut s);
+    set(r, s)?;
+    r.reset_history();
+    let (mut frames, mut ms) = (0, 0.0);
+    loop {
+        let t = r.render_frame();
+        let st = r
+            .gautron()
+            .and_then(|g| g.read_state(&r.ctx))
+            .ok_or_else(|| CliError::failure("no Gautron stage".to_string()))?;
+        if st.made == 0 || frames >= 256 {
+            break;
+        }
+        frames += 1;
+        ms += t.iter().filter(|p| indirect_pass(&p.name)).map(|p| p.ms).sum::<f64>();
+    }
+    let points = r.gautron().and_then(|g| g.read_state(&r.ctx)).map_or(0, |s| s.count);
+    let image = r.readback("final.hdr").map_err(|e| CliError::failure(e.to_string()))?;
+    mixes.push(MixRow {
+        name: "records lit by VPLs".into(),
+        points,
+        frames,
+        ms,
+        flip_vs_brute_force: flip_of(&image, &brute_image)?,
+        flip_vs_truth: flip_of(&image, &truth)?,
+    });
+    // A hemisphere at each HCB sample: one frame.
+    let mut s = base.clone();
+    Technique::GautronAtHcbSamples.apply(&mut s);
+    set(r, s)?;
+    r.render_frame();
+    let t = r.render_frame();
+    let points = r.gautron().and_then(|g| g.read_state(&r.ctx)).map_or(0, |s| s.made);
+    let image = r.readback("final.hdr").map_err(|e| CliError::failure(e.to_string()))?;
+    mixes.push(MixRow {
+        name: "hemispheres at HCB samples".into(),
+        points,
+        frames: 1,
+        ms: t.iter().filter(|p| indirect_pass(&p.name)).map(|p| p.ms).sum(),
+        flip_vs_brute_force: flip_of(&image, &brute_image)?,
+        flip_vs_truth: flip_of(&image, &truth)?,
+    });
     let adapter = r.ctx.adapter_summary();
     let timing_source = format!("{:?}", r.timing_source());
     set(r, original)?;
     r.clock = clock;
-    Ok(GautronReport { adapter, timing_source, width, height, truth: truth_name, brute_force, rows })
+    Ok(GautronReport { adapter, timing_source, width, height, truth: truth_name, brute_force, rows, mixes })
 }
 
 /// The goal on the rows: the cheapest row whose FLIP against the truth is within 10 % of the
@@ -200,6 +273,29 @@ pub fn format(report: &GautronReport) -> String {
             .collect::<Vec<_>>()
             .join(", ")
     );
+    if !report.mixes.is_empty() {
+        s += &format!(
+            "\nmixes (GI Lab's)            {:>8} {:>7} {:>11} {:>10} {:>10}\n",
+            "points", "frames", "ms†", "FLIP brute", "FLIP truth"
+        );
+        for m in &report.mixes {
+            s += &format!(
+                "{:<27} {:>8} {:>7} {:>11.2} {:>10.4} {:>10.4}\n",
+                m.name, m.points, m.frames, m.ms, m.flip_vs_brute_force, m.flip_vs_truth
+            );
+        }
+        s += "† every pass of stages 3–7 (the VPLs, ISMs and the HCB's build and splat included) over the frames\n";
+        if let Some(h) = report.mixes.iter().find(|m| m.name.starts_with("hemispheres")) {
+            if let Some(r) =
+                report.rows.iter().min_by(|a, b| (a.cold_ms - h.ms).abs().total_cmp(&(b.cold_ms - h.ms).abs()))
+            {
+                s += &format!(
+                    "at equal time: {} HCB samples in {:.1} ms, FLIP {:.4}; Gautron's a = {}: {} records in {:.1} ms, FLIP {:.4}\n",
+                    h.points, h.ms, h.flip_vs_truth, r.accuracy, r.records, r.cold_ms, r.flip_vs_truth
+                );
+            }
+        }
+    }
     s += &match goal(report) {
         Some(r) => format!(
             "goal: ≥ 20× over the brute force at equal FLIP (within 10 %): a = {} is {:.1}× faster — {}\n",
