@@ -685,3 +685,84 @@ fn the_soler_samples_overlay_draws_the_rings_behind_a_pixel() {
     assert!(rings.iter().any(|r| r.level == 2 && !r.samples.is_empty()), "level 2's ring: {rings:?}");
     assert!(after > before + 20, "level 2's samples: {before} -> {after} cyan pixels");
 }
+
+/// Gautron et al. (issue #17) in the lab: with the technique picked, every Gautron setting
+/// has a widget, every Gautron buffer is in the viewer's picker and shows without error, the
+/// settings pane lists the record cache's counts, and View → "Gautron records overlay"
+/// draws the records with their influence circles.
+#[test]
+fn gautron_settings_buffers_cache_and_records_appear_in_the_lab() {
+    let dir = temp_dir("gautron");
+    let mut h = harness_in(&dir, egui::vec2(1400.0, 2600.0));
+    pause(&mut h);
+    // A third of the viewport's pixels: the tall harness would need thousands of records.
+    h.state_mut().state.session.render_scale = 0.35;
+    if let Ok(l) = &mut h.state_mut().state.lab {
+        gi_render::pipeline::Technique::Gautron.apply(&mut l.settings);
+        l.apply_settings();
+    }
+    h.run_steps(8);
+    let settings = h.state().state.lab.as_ref().map(|l| l.settings.clone()).expect("lab");
+    let current = gi_lab::ui::settings_ui::TECHNIQUES.iter().find(|t| (t.is)(&settings)).map(|t| t.name);
+    assert_eq!(current, Some("Irradiance cache splatting (Gautron)"));
+    let (_, fields) = LabSettings::groups().into_iter().find(|(g, _)| *g == "gautron").expect("gautron group");
+    for m in fields {
+        let path = format!("gautron.{}", m.name);
+        assert!(h.query_all_by_label(&path).next().is_some(), "{path} has no widget");
+    }
+    // The cache's counts: the renderer's record count is shown.
+    h.get_by_label("Gautron record cache");
+    let r = h.state().renderer().expect("renderer");
+    let st = r.gautron().and_then(|g| g.read_state(&r.ctx)).expect("cache state");
+    assert!(st.count > 50, "{st:?}");
+    let count = format!("{} of {}", st.count, settings.gautron.capacity);
+    assert!(h.query_all_by_label_contains(&count).next().is_some(), "'{count}' is shown");
+    let _ = h.render().map(|i| i.save(std::env::temp_dir().join("gi_lab_gautron_settings.png")));
+    // Every buffer in the picker, each shown without error.
+    let names = h.state().renderer().expect("renderer").buffers().names();
+    let gautron: Vec<String> = names.iter().filter(|n| n.starts_with("gautron.")).cloned().collect();
+    for want in [
+        "gautron.hemisphere.radiance",
+        "gautron.solid_angle",
+        "gautron.accum",
+        "gautron.irradiance.plain",
+        "gautron.candidates",
+    ] {
+        assert!(gautron.iter().any(|n| n == want), "{want} is not registered: {gautron:?}");
+    }
+    for n in &gautron {
+        if h.query_by_label("viewer 1 buffer filter").is_none() {
+            h.get_by_label("viewer 1 buffer").click();
+            h.run_steps(2);
+        }
+        h.get_by_label("viewer 1 buffer filter").click();
+        h.run_steps(1);
+        h.get_by_label("viewer 1 buffer filter").type_text(n);
+        h.run_steps(2);
+        h.get_by_label(n).click();
+        h.run_steps(2);
+        let v = h.state().state.viewers.values().next().expect("a viewer");
+        assert_eq!(&v.state.buffer, n);
+        assert!(v.error.is_none(), "{n}: {:?}", v.error);
+    }
+    // The records overlay changes the viewport where the records are.
+    let viewport = |h: &mut Harness<'static, GiLabApp>| {
+        let rect = h.state().state.viewport_rect;
+        let image = h.render().expect("the harness renders");
+        let mut pixels = Vec::new();
+        for y in (rect.min.y + 40.0) as u32..(rect.max.y - 40.0) as u32 {
+            for x in (rect.min.x + 10.0) as u32..(rect.max.x - 10.0) as u32 {
+                pixels.push(image.get_pixel(x, y).0);
+            }
+        }
+        (pixels, image)
+    };
+    let (before, _) = viewport(&mut h);
+    h.state_mut().state.show_gautron_records = true;
+    h.run_steps(2);
+    let (after, image) = viewport(&mut h);
+    let _ = image.save(std::env::temp_dir().join("gi_lab_gautron_records.png"));
+    let changed =
+        before.iter().zip(&after).filter(|(a, b)| a.iter().zip(b.iter()).any(|(x, y)| x.abs_diff(*y) > 40)).count();
+    assert!(changed > 4 * st.count as usize, "{changed} pixels changed for {} records", st.count);
+}

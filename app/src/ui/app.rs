@@ -148,6 +148,7 @@ impl GiLabApp {
             show_vpls: false,
             show_hcb_samples: false,
             show_soler_samples: false,
+            show_gautron_records: false,
             ab: None,
             request_new_viewer: false,
             request_reset_layout: false,

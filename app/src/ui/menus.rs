@@ -167,6 +167,11 @@ impl State {
                      hollow where it cannot (background, facing away, beyond the near field's cut); the \
                      receiver texel of each level outlined; glossy receivers' samples follow their lobe",
                 );
+                ui.checkbox(&mut self.show_gautron_records, "Gautron records overlay").on_hover_text(
+                    "the irradiance records as dots at P_k coloured by their irradiance E_k (the brightest \
+                     at full colour), each with its influence circle of radius a·R_k; stale records \
+                     (waiting to be computed again) outlined in orange; reads the records back every frame",
+                );
                 ui.horizontal(|ui| {
                     ui.label("render scale");
                     ui.add(egui::Slider::new(&mut self.session.render_scale, 0.1..=2.0).step_by(0.05))

@@ -60,6 +60,9 @@ pub struct State {
     /// View → Soler samples overlay: the ring samples of the hovered pixel per level (004
     /// Fig. 3 right).
     pub show_soler_samples: bool,
+    /// View → Gautron records overlay: the irradiance records as dots coloured by E_k with
+    /// their influence circles a·R_k (003, "From Octree to Splatting").
+    pub show_gautron_records: bool,
     /// The A/B comparison, when one runs.
     pub ab: Option<crate::ui::ab::Ab>,
     pub hot: crate::ui::hot_reload::HotReload,

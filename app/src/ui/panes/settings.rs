@@ -28,6 +28,13 @@ pub(super) fn settings_ui(st: &mut State, ui: &mut egui::Ui) {
             .default_open(true)
             .show(ui, |ui| soler_reach_ui(ui, &l.settings.soler, l.renderer.size()));
     }
+    if l.settings.pipeline.uses_gautron() {
+        ui.separator();
+        egui::CollapsingHeader::new("Gautron record cache")
+            .id_salt("gautron_cache")
+            .default_open(true)
+            .show(ui, |ui| gautron_cache_ui(ui, &l.renderer, &l.settings));
+    }
     if l.settings.pipeline.uses_hcb() {
         ui.separator();
         egui::CollapsingHeader::new("HCB statistics (Nguyen Table 1)").id_salt("hcb_stats").default_open(true).show(
@@ -120,4 +127,45 @@ pub fn soler_reach_ui(ui: &mut egui::Ui, s: &gi_render::passes::soler::SolerSett
         "reach {reach:.0} px = {:.0} % of the image diagonal ({diagonal:.0} px): {verdict}",
         100.0 * reach / diagonal.max(1.0)
     ));
+}
+
+/// The record cache's counters of the last frame (Gautron et al. 003, "Results"), and a
+/// warning when it is full while pixels still lack a record.
+pub fn gautron_cache_ui(ui: &mut egui::Ui, r: &gi_render::Renderer, s: &gi_render::LabSettings) {
+    let Some(st) = r.gautron().and_then(|g| g.read_state(&r.ctx)) else {
+        ui.small("no Gautron frame rendered yet");
+        return;
+    };
+    if s.pipeline.shading_points == gi_render::pipeline::ShadingPoints::HcbSamples {
+        ui.label(format!("{} hemispheres this frame, one per HCB sample (no cache)", st.made));
+        return;
+    }
+    let g = &s.gautron;
+    egui::Grid::new("gautron_cache_counts").num_columns(2).striped(true).show(ui, |ui| {
+        let mut row = |name: &str, value: String| {
+            ui.label(name);
+            ui.label(value);
+            ui.end_row();
+        };
+        row(
+            "records",
+            format!("{} of {} ({:.1} %)", st.count, g.capacity, 100.0 * st.count as f64 / g.capacity.max(1) as f64),
+        );
+        row("made this frame", st.made.to_string());
+        row("computed again this frame", st.refreshed.to_string());
+        row("stale, waiting", st.stale.to_string());
+        row("candidates, last round", st.candidates.to_string());
+    });
+    if st.count >= g.capacity && st.candidates > 0 {
+        ui.colored_label(
+            ERROR,
+            format!(
+                "The cache is full: {} under-covered pixels found no room for a record (they stay without indirect light). \
+                 Raise gautron.capacity, use a larger accuracy a, or drop off-screen records (gautron.reuse).",
+                st.candidates
+            ),
+        );
+    } else if st.candidates > 0 && st.made >= g.records_per_round * g.rounds {
+        ui.small("still covering the image: every round used its whole budget (records per round × rounds)");
+    }
 }

@@ -27,6 +27,9 @@ pub(super) fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
     if st.show_soler_samples {
         soler_overlay(st, ui, rect);
     }
+    if st.show_gautron_records {
+        records_overlay(st, ui, rect);
+    }
     if !st.hot.errors.is_empty() {
         // The compile error stays on screen until the file is fixed.
         let text: Vec<String> = st.hot.errors.iter().map(|(f, e)| format!("{f}: {e}")).collect();
@@ -157,6 +160,60 @@ fn hcb_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
         }
     }
     text(stats.summary(w * h));
+}
+
+/// Gautron's irradiance records over the viewport (003, "From Octree to Splatting"): each
+/// record a dot at P_k coloured by E_k (normalised so that the brightest has its full
+/// colour), with the circle its influence sphere of radius a·R_k projects to (the radius
+/// measured along the camera's right vector at P_k's depth); stale records in orange.
+fn records_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
+    let Ok(l) = &st.lab else { return };
+    let painter = ui.painter_at(rect);
+    let text = |s: String| {
+        let galley = painter.layout_no_wrap(s, egui::FontId::proportional(14.0), egui::Color32::WHITE);
+        let pos = rect.left_bottom() + egui::vec2(8.0, -8.0 - galley.size().y);
+        let plate = egui::Rect::from_min_size(pos, galley.size()).expand(4.0);
+        painter.rect_filled(plate, 3.0, egui::Color32::from_black_alpha(200));
+        painter.galley(pos, galley, egui::Color32::WHITE);
+    };
+    let r = &l.renderer;
+    let records = r.gautron().and_then(|g| {
+        let st = g.read_state(&r.ctx)?;
+        g.read_records(&r.ctx, st.count)
+    });
+    let Some(records) =
+        records.filter(|_| l.settings.pipeline.shading_points == gi_render::pipeline::ShadingPoints::IrradianceRecords)
+    else {
+        text("Gautron records: pick irradiance records (Gautron, or records lit by VPLs) to see them".into());
+        return;
+    };
+    let a = l.settings.gautron.accuracy;
+    let vp = r.view_proj();
+    let right = r.camera.view().row(0).truncate();
+    let screen = |p: glam::Vec3| {
+        let clip = vp * p.extend(1.0);
+        (clip.w > 0.0).then(|| {
+            let ndc = clip.truncate() / clip.w;
+            rect.min + egui::vec2((ndc.x * 0.5 + 0.5) * rect.width(), (0.5 - ndc.y * 0.5) * rect.height())
+        })
+    };
+    let brightest = records.iter().map(|g| g.irradiance.truncate().max_element()).fold(0.0f32, f32::max).max(1e-12);
+    let mut stale = 0;
+    for g in &records {
+        let p = g.position.truncate();
+        let (Some(centre), Some(edge)) = (screen(p), screen(p + right * a * g.position.w)) else { continue };
+        let is_stale = g.pixel.w == 2.0;
+        stale += is_stale as usize;
+        let outline = if is_stale { egui::Color32::from_rgb(255, 150, 0) } else { egui::Color32::from_white_alpha(60) };
+        painter.circle_stroke(centre, centre.distance(edge), egui::Stroke::new(1.0, outline));
+        let c = (g.irradiance.truncate() / brightest).clamp(glam::Vec3::ZERO, glam::Vec3::ONE);
+        let colour = egui::Color32::from(egui::Rgba::from_rgb(c.x, c.y, c.z));
+        painter.circle(centre, 2.5, colour, egui::Stroke::new(1.0, egui::Color32::BLACK));
+    }
+    text(format!(
+        "{} irradiance records ({stale} stale, orange), dots coloured by E_k (brightest {brightest:.3e} W/m² at full colour), circles a·R_k with a = {a}",
+        records.len()
+    ));
 }
 
 /// Level colours of the Soler samples overlay (level k: `LEVEL_COLOURS[k % 6]`).
