@@ -285,15 +285,15 @@ pub fn format(report: &GautronReport) -> String {
             );
         }
         s += "† every pass of stages 3–7 (the VPLs, ISMs and the HCB's build and splat included) over the frames\n";
-        if let Some(h) = report.mixes.iter().find(|m| m.name.starts_with("hemispheres")) {
-            if let Some(r) =
-                report.rows.iter().min_by(|a, b| (a.cold_ms - h.ms).abs().total_cmp(&(b.cold_ms - h.ms).abs()))
-            {
-                s += &format!(
-                    "at equal time: {} HCB samples in {:.1} ms, FLIP {:.4}; Gautron's a = {}: {} records in {:.1} ms, FLIP {:.4}\n",
-                    h.points, h.ms, h.flip_vs_truth, r.accuracy, r.records, r.cold_ms, r.flip_vs_truth
-                );
-            }
+        let hcb = report.mixes.iter().find(|m| m.name.starts_with("hemispheres"));
+        let nearest = |h: &MixRow| {
+            report.rows.iter().min_by(|a, b| (a.cold_ms - h.ms).abs().total_cmp(&(b.cold_ms - h.ms).abs()))
+        };
+        if let Some((h, r)) = hcb.and_then(|h| nearest(h).map(|r| (h, r))) {
+            s += &format!(
+                "at equal time: {} HCB samples in {:.1} ms, FLIP {:.4}; Gautron's a = {}: {} records in {:.1} ms, FLIP {:.4}\n",
+                h.points, h.ms, h.flip_vs_truth, r.accuracy, r.records, r.cold_ms, r.flip_vs_truth
+            );
         }
     }
     s += &match goal(report) {
