@@ -1,4 +1,4 @@
-//! The quality table of issues #15 and #16 (`gi_render::quality`, `gi-lab bench --suite quality`) on
+//! The quality table of issues #15, #16 and #17 (`gi_render::quality`, `gi-lab bench --suite quality`) on
 //! the default scene at 256², against the stored path-traced bounce of 2048 spp
 //! (`tests/data/cornell_1bounce_256_2048spp.exr`, the issue's ground truth). Bounds are what
 //! was measured on lavapipe plus a margin, or the issue's goal where it is met (the first two
@@ -23,7 +23,8 @@ fn the_quality_table_stays_within_its_measured_bounds() {
     // light comes from senders the camera does not see), 0.2555 with the glossy reflection,
     // 0.2419 with the power-preserving vote (`soler.vote_power`); the near/far mix 0.0454,
     // 0.0449 with it; its goal is to beat both Knecht's row and Soler's.
-    let bounds = [0.05, 0.035, 0.062, 0.03, 0.255, 0.05];
+    // Issue #17's row: Gautron's records measured 0.0546 (a hemisphere per pixel: 0.0542).
+    let bounds = [0.05, 0.035, 0.062, 0.03, 0.255, 0.05, 0.06];
     assert_eq!(rows.len(), bounds.len());
     for (row, bound) in rows.iter().zip(bounds) {
         assert!(row.flip > 0.0, "{}: FLIP 0 means nothing was compared", row.configuration);
