@@ -10,5 +10,6 @@ pub mod args;
 pub mod cli;
 pub mod error;
 pub mod plot;
+pub mod runtime_dir;
 pub mod scene_args;
 pub mod ui;

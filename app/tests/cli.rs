@@ -389,3 +389,24 @@ fn the_soler_bench_suite_prints_fig_9_with_every_part() {
         assert!(text.contains(line), "{line}: {text}");
     }
 }
+
+/// A newcomer's first run prints no driver noise: without `XDG_RUNTIME_DIR` (as in a bare
+/// container or a CI job) Mesa would complain on stderr; `gi-lab` sets a private one.
+#[cfg(target_os = "linux")]
+#[test]
+fn no_runtime_dir_complaint_without_xdg_runtime_dir() {
+    let out = temp_dir("xdg");
+    let o = gi_lab()
+        .env_remove("XDG_RUNTIME_DIR")
+        .args(["render", "--size", "32x32"])
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "render failed: {stderr}");
+    assert!(!stderr.contains("XDG_RUNTIME_DIR"), "driver noise on stderr: {stderr}");
+    let dir = gi_lab::runtime_dir::private_runtime_dir().expect("a private runtime dir");
+    use std::os::unix::fs::PermissionsExt;
+    assert_eq!(std::fs::metadata(&dir).expect("exists").permissions().mode() & 0o777, 0o700);
+}
