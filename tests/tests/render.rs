@@ -512,3 +512,101 @@ fn an_exact_vpl_atlas_larger_than_the_device_is_refused_with_the_largest_valid_b
     assert!(gi_render::passes::reference::vpl_visibility::AtlasLayout::new(largest, 1024).fits(max));
     assert!(!gi_render::passes::reference::vpl_visibility::AtlasLayout::new(largest + 1, 1024).fits(max));
 }
+
+/// The hotel room (a closed room without lights or cameras) with a glTF camera added inside
+/// it, from near one corner toward the opposite one, and optionally a copy of its first
+/// mesh far above its roof (so that the bounds' top lies above the ceiling).
+fn hotel_room_with_camera_inside(roof_object: bool) -> gi_render::scene::Scene {
+    use gi_render::scene::{CameraDef, Node, Projection, Transform};
+    let opts = LoadOptions { unit_scale: 0.001, add_default_light: false };
+    let mut scene = gi_render::scene::load_gltf_file(&shared_scene("hotel-room/hotel-room.glb"), &opts)
+        .expect("the hotel room loads");
+    assert!(scene.lights.is_empty());
+    let b = scene.bounds(0.0);
+    let e = b.extent();
+    let eye = b.min + glam::Vec3::new(0.2 * e.x, 0.45 * e.y, 0.2 * e.z);
+    let target = b.min + glam::Vec3::new(0.8 * e.x, 0.35 * e.y, 0.8 * e.z);
+    scene.cameras.push(CameraDef {
+        name: "inside".into(),
+        projection: Projection::Perspective { yfov: 60f32.to_radians(), znear: 0.05, zfar: None },
+    });
+    let rotation = glam::Quat::from_rotation_arc(-glam::Vec3::Z, (target - eye).normalize());
+    scene.nodes.push(Node {
+        name: "inside".into(),
+        transform: Transform { translation: eye, rotation, scale: glam::Vec3::ONE },
+        children: vec![],
+        mesh: None,
+        light: None,
+        camera: Some(scene.cameras.len() - 1),
+    });
+    scene.roots.push(scene.nodes.len() - 1);
+    if roof_object {
+        // A copy of the first draw, at its world transform (the unit scale sits on a root),
+        // lifted ten room heights (the default spot at 85 % of the bounds then hangs between it
+        // and the room).
+        let d = scene.evaluate(0.0).draws[0];
+        let (scale, rotation, translation) = d.world.to_scale_rotation_translation();
+        let mut copy = scene.nodes[d.node].clone();
+        copy.children.clear();
+        copy.transform = Transform { translation: translation + glam::Vec3::Y * (10.0 * e.y), rotation, scale };
+        scene.nodes.push(copy);
+        scene.roots.push(scene.nodes.len() - 1);
+    }
+    scene
+}
+
+/// Lit share of the covered pixels of stage 2's direct light at the scene's camera.
+fn lit_share(scene: gi_render::scene::Scene) -> f64 {
+    let mut r = Renderer::new(gpu(), scene, LabSettings::default(), 96, 96).expect("renderer");
+    r.clock.playing = false;
+    if r.scene().cameras.is_empty() {
+        // the inside view of `hotel_room_with_camera_inside`
+        let b = r.bounds();
+        let e = hotel_room_with_camera_inside(false).bounds(0.0);
+        let x = e.extent();
+        let eye = e.min + glam::Vec3::new(0.2 * x.x, 0.45 * x.y, 0.2 * x.z);
+        let target = e.min + glam::Vec3::new(0.8 * x.x, 0.35 * x.y, 0.8 * x.z);
+        r.camera = gi_render::camera::Camera::look_at(eye, target, 60f32.to_radians(), b);
+    }
+    r.render_frame();
+    let direct = r.readback("direct.radiance").expect("direct");
+    let normal = r.readback("gbuffer.normal").expect("normal");
+    let covered: Vec<_> = direct.data.iter().zip(&normal.data).filter(|(_, n)| n[3] > 0.5).collect();
+    assert!(covered.len() > direct.data.len() / 2, "the camera sees geometry");
+    covered.iter().filter(|(d, _)| d[0] + d[1] + d[2] > 1e-3).count() as f64 / covered.len() as f64
+}
+
+/// Issue #18 (3): a closed room without lights, its camera inside, gets a point light in
+/// the camera's view: the image is not black, and says why.
+#[test]
+fn a_closed_room_without_lights_is_lit_where_its_camera_looks() {
+    let mut scene = hotel_room_with_camera_inside(false);
+    scene.ensure_light();
+    assert_eq!(scene.lights.len(), 1);
+    assert_eq!(scene.lights[0].name, "default point");
+    let note = scene.default_light_note().expect("a note on the added light").to_string();
+    assert!(note.contains("camera"), "{note}");
+    let lit = lit_share(scene);
+    eprintln!("{note}; lit share of the view {lit:.3}");
+    assert!(lit > 0.4, "only {lit:.3} of the view is lit");
+}
+
+/// Issue #18 (3): when something above the roof lifts the bounds' top above the ceiling, the
+/// default spot is moved under the ceiling (it would light the roof from above otherwise)
+/// — the room's floor, seen from the camera inside, is lit.
+#[test]
+fn the_default_spot_is_moved_under_the_ceiling() {
+    let mut scene = hotel_room_with_camera_inside(true);
+    // Without the camera rule: the spot, as a scene with an outside camera gets it.
+    scene.cameras.clear();
+    scene.nodes.iter_mut().for_each(|n| n.camera = None);
+    scene.ensure_light();
+    let note = scene.default_light_note().expect("a note").to_string();
+    assert!(note.contains("under the ceiling"), "{note}");
+    let ceiling_room = hotel_room_with_camera_inside(false).bounds(0.0).max.y;
+    let spot = scene.nodes.iter().find(|n| n.light.is_some()).expect("light node").transform.translation;
+    assert!(spot.y < ceiling_room, "the spot at {spot} is above the room's top {ceiling_room}");
+    let lit = lit_share(scene);
+    eprintln!("{note}; lit share of the inside view {lit:.3}");
+    assert!(lit > 0.1, "only {lit:.3} of the inside view is lit");
+}

@@ -90,6 +90,10 @@ impl GiLabApp {
         }
         if let Ok(l) = &mut lab {
             restore_scene_state(l, &session);
+            // A scene without lights got one: say where (issue #18).
+            if let Some(note) = l.renderer.scene().default_light_note() {
+                messages.push(note.to_string());
+            }
         }
         let tree = session.layout.take().unwrap_or_else(session::default_layout);
         let mut viewers = BTreeMap::new();

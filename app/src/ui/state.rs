@@ -93,6 +93,11 @@ impl State {
                 Session::remember(&mut self.session.recent_scenes, p);
             }
             self.pass_view = None;
+            // A scene without lights got one: say where (issue #18).
+            let note = self.lab.as_ref().ok().and_then(|l| l.renderer.scene().default_light_note().map(String::from));
+            if let Some(note) = note {
+                self.set_status(note);
+            }
         }
         r
     }

@@ -9,6 +9,7 @@
 
 mod animation;
 pub mod cornell;
+pub mod default_light;
 mod gltf_load;
 pub mod upload;
 
@@ -373,47 +374,6 @@ impl Scene {
     /// Duration of the longest animation in seconds (0 without animations).
     pub fn animation_duration(&self) -> f32 {
         self.animations.iter().map(|a| a.duration()).fold(0.0, f32::max)
-    }
-
-    /// Adds the default light when the scene has none: a spot light at 85 % of the bounds'
-    /// height above their centre (below typical ceiling fixtures of interiors), pointing
-    /// down, with a cone wide enough to reach the walls.
-    pub fn ensure_light(&mut self) {
-        if !self.lights.is_empty() {
-            return;
-        }
-        let b = self.bounds(0.0);
-        let ext = b.extent();
-        let c = b.center();
-        let pos = Vec3::new(c.x, b.min.y + 0.85 * ext.y.max(1e-3), c.z);
-        let height = (pos.y - b.min.y).max(1e-3);
-        let half_width = 0.5 * ext.x.max(ext.z);
-        let outer = (1.5 * half_width / height).atan().clamp(0.5, 1.35);
-        // Intensity such that the floor under the light receives about π W/m² (a white
-        // floor then shows radiance ≈ 1 before exposure).
-        let intensity = std::f32::consts::PI * height * height;
-        self.lights.push(Light {
-            name: "default spot".into(),
-            kind: LightKind::Spot { inner_cone: outer * 0.6, outer_cone: outer },
-            color: Vec3::ONE,
-            intensity,
-            range: None,
-        });
-        self.nodes.push(Node {
-            name: "default spot".into(),
-            transform: Transform {
-                translation: pos,
-                // −Z rotated to −Y: the light looks straight down.
-                rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
-                scale: Vec3::ONE,
-            },
-            children: vec![],
-            mesh: None,
-            light: Some(self.lights.len() - 1),
-            camera: None,
-        });
-        self.roots.push(self.nodes.len() - 1);
-        self.warnings.push("the scene has no lights: added a default spot light under the top of its bounds".into());
     }
 }
 
