@@ -12,4 +12,5 @@ pub mod error;
 pub mod plot;
 pub mod runtime_dir;
 pub mod scene_args;
+pub mod scene_lights;
 pub mod ui;

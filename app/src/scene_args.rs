@@ -38,10 +38,23 @@ pub fn load_scene(args: &SceneArgs) -> Result<Scene, CliError> {
         return Err(CliError::input(format!("--unit-scale {} must be a positive number", args.unit_scale)));
     }
     let opts = LoadOptions { unit_scale: args.unit_scale, ..LoadOptions::default() };
-    let scene = match &args.scene {
+    let mut scene = match &args.scene {
         None => scene::cornell::default_scene().map_err(|e| CliError::failure(format!("embedded scene: {e}")))?,
         Some(p) => scene::load_gltf_file(p, &opts).map_err(|e| CliError::input(e.to_string()))?,
     };
+    // The lab's light edits saved beside the scene (issue #18): a broken file keeps the
+    // scene's own lights and says why.
+    if let Some(p) = &args.scene {
+        match crate::scene_lights::load_overrides(p) {
+            Some(Ok(edits)) => {
+                crate::scene_lights::apply_light_edits(&mut scene, &edits, true);
+                let file = crate::scene_lights::overrides_path(p);
+                scene.warnings.push(format!("lights from {} (the lab's edits; the glTF is unchanged)", file.display()));
+            }
+            Some(Err(e)) => scene.warnings.push(format!("the lights file was not applied: {e}")),
+            None => {}
+        }
+    }
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }

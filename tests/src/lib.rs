@@ -208,3 +208,4 @@ pub fn soler_gather_params(
     };
     (screen, p)
 }
+pub mod ui_harness;

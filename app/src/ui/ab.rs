@@ -88,6 +88,14 @@ impl Ab {
         self.b.clock = a.clock;
         let (src, dst) = (a.scene(), self.b.scene_mut());
         let mut lights_moved = false;
+        // Lights added or removed in the lab (issue #18): B takes A's whole light set.
+        let lit = |s: &gi_render::scene::Scene| s.nodes.iter().map(|n| n.light.is_some()).collect::<Vec<_>>();
+        if src.nodes.len() != dst.nodes.len() || lit(src) != lit(dst) || src.lights.len() != dst.lights.len() {
+            dst.nodes = src.nodes.clone();
+            dst.roots = src.roots.clone();
+            dst.lights = src.lights.clone();
+            lights_moved = true;
+        }
         for (i, n) in src.nodes.iter().enumerate() {
             if let (Some(li), Some(d)) = (n.light, dst.nodes.get_mut(i)) {
                 if d.transform != n.transform {
@@ -95,9 +103,9 @@ impl Ab {
                     lights_moved = true;
                 }
                 if let (Some(sl), Some(dl)) = (src.lights.get(li), dst.lights.get_mut(li))
-                    && dl.intensity != sl.intensity
+                    && dl != sl
                 {
-                    dl.intensity = sl.intensity;
+                    *dl = sl.clone();
                     lights_moved = true;
                 }
             }

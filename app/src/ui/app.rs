@@ -12,7 +12,7 @@ use crate::args::AppArgs;
 use crate::ui::ERROR;
 use crate::ui::lab::Lab;
 use crate::ui::presets::PresetState;
-use crate::ui::session::{self, LightEdit, Pane, Session};
+use crate::ui::session::{self, Pane, Session};
 use crate::ui::state::State;
 use crate::ui::viewer::{Viewer, ViewerState};
 
@@ -33,6 +33,7 @@ impl GiLabApp {
             session.scene = args.scene.scene.clone();
             session.unit_scale = args.scene.unit_scale;
             session.lights.clear();
+            session.lights_complete = false;
             session.camera = None;
         }
         let mut messages: Vec<String> = session_problem.into_iter().collect();
@@ -82,6 +83,7 @@ impl GiLabApp {
             messages.push(format!("the last session's scene could not be opened ({e}); the default scene is shown"));
             session.scene = None;
             session.lights.clear();
+            session.lights_complete = false;
             session.camera = None;
             lab = Lab::new(cc, &crate::scene_args::SceneArgs::default(), settings.clone());
         }
@@ -215,21 +217,8 @@ impl GiLabApp {
             s.speed = l.renderer.clock.speed;
             s.loop_s = l.renderer.clock.loop_s;
             s.time_s = l.renderer.clock.time_s() as f64;
-            let scene = l.renderer.scene();
-            s.lights = scene
-                .nodes
-                .iter()
-                .enumerate()
-                .filter_map(|(i, n)| {
-                    let li = n.light?;
-                    Some(LightEdit {
-                        node: i,
-                        translation: n.transform.translation.to_array(),
-                        rotation: n.transform.rotation.to_array(),
-                        intensity: scene.lights[li].intensity,
-                    })
-                })
-                .collect();
+            s.lights = crate::scene_lights::light_edits(l.renderer.scene());
+            s.lights_complete = true;
         }
         s
     }
@@ -290,18 +279,7 @@ fn restore_scene_state(l: &mut Lab, s: &Session) {
     if let Some(c) = s.camera {
         l.renderer.camera = c;
     }
-    let scene = l.renderer.scene_mut();
-    for e in &s.lights {
-        if let Some(n) = scene.nodes.get_mut(e.node)
-            && let Some(li) = n.light
-        {
-            n.transform.translation = glam::Vec3::from_array(e.translation);
-            n.transform.rotation = glam::Quat::from_array(e.rotation).normalize();
-            if let Some(light) = scene.lights.get_mut(li) {
-                light.intensity = e.intensity;
-            }
-        }
-    }
+    crate::scene_lights::apply_light_edits(l.renderer.scene_mut(), &s.lights, s.lights_complete);
     let c = &mut l.renderer.clock;
     c.playing = s.playing;
     c.speed = if s.speed > 0.0 { s.speed } else { 1.0 };

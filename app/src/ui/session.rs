@@ -31,14 +31,7 @@ pub struct Bookmark {
     pub camera: Camera,
 }
 
-/// A light's edited transform and intensity (by node index of the scene).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct LightEdit {
-    pub node: usize,
-    pub translation: [f32; 3],
-    pub rotation: [f32; 4],
-    pub intensity: f32,
-}
+pub use crate::scene_lights::{LightDef, LightEdit, LightKindDef};
 
 /// A pinned probe: a frame pixel and the buffer/channel its history plot shows.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -64,6 +57,9 @@ pub struct Session {
     pub camera: Option<Camera>,
     pub bookmarks: Vec<Bookmark>,
     pub lights: Vec<LightEdit>,
+    /// Whether `lights` lists every light of the scene (lights it does not list were
+    /// removed); false for sessions of older GI Labs, whose list only edits.
+    pub lights_complete: bool,
     pub viewers: Vec<(u32, ViewerState)>,
     pub probes: Vec<PinnedProbe>,
     /// Render resolution relative to the viewport's pixels.
@@ -89,6 +85,7 @@ impl Default for Session {
             camera: None,
             bookmarks: Vec::new(),
             lights: Vec::new(),
+            lights_complete: false,
             viewers: Vec::new(),
             probes: Vec::new(),
             render_scale: default_render_scale(),

@@ -89,6 +89,7 @@ impl State {
             // B renders the old scene: the comparison ends with it.
             self.stop_ab();
             self.session.lights.clear();
+            self.session.lights_complete = false;
             if let Some(p) = &path {
                 Session::remember(&mut self.session.recent_scenes, p);
             }

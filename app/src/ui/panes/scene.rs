@@ -44,7 +44,7 @@ pub(super) fn scene_ui(st: &mut State, ui: &mut egui::Ui) {
     if let Some(e) = &l.scene_error {
         ui.colored_label(ERROR, e);
     }
-    light_controls(l, ui);
+    let lights_message = super::lights::light_controls(l, ui);
     ui.separator();
     timeline(l, ui);
     ui.separator();
@@ -99,63 +99,11 @@ pub(super) fn scene_ui(st: &mut State, ui: &mut egui::Ui) {
             st.set_status(format!("scene not opened: {e}"));
         }
     }
+    if let Some(m) = lights_message {
+        st.set_status(m);
+    }
     if open_default && let Err(e) = st.open_scene(None, 1.0) {
         st.set_status(format!("scene not opened: {e}"));
-    }
-}
-
-fn light_controls(l: &mut crate::ui::lab::Lab, ui: &mut egui::Ui) {
-    let light_nodes: Vec<usize> =
-        l.renderer.scene().nodes.iter().enumerate().filter(|(_, n)| n.light.is_some()).map(|(i, _)| i).collect();
-    let r = l.renderer.bounds().radius();
-    let mut changed = false;
-    for (k, &ni) in light_nodes.iter().enumerate() {
-        let scene = l.renderer.scene_mut();
-        let Some(li) = scene.nodes[ni].light else { continue };
-        let name = scene.lights[li].name.clone();
-        let directional = matches!(scene.lights[li].kind, gi_render::scene::LightKind::Directional);
-        egui::CollapsingHeader::new(format!("Light {k}: {name}")).default_open(k == 0).show(ui, |ui| {
-            let tr = &mut scene.nodes[ni].transform;
-            if directional {
-                // A directional light has no position: edit where it shines from.
-                let dir = tr.rotation * glam::Vec3::NEG_Z;
-                let mut elevation = (-dir.y).clamp(-1.0, 1.0).asin().to_degrees();
-                let mut azimuth = (-dir.x).atan2(-dir.z).to_degrees();
-                ui.horizontal(|ui| {
-                    ui.label("elevation");
-                    let a = ui.add(egui::DragValue::new(&mut elevation).range(-90.0..=90.0).suffix("°"));
-                    ui.label("azimuth");
-                    let b = ui.add(egui::DragValue::new(&mut azimuth).suffix("°"));
-                    if a.changed() || b.changed() {
-                        let (e, z) = (elevation.to_radians(), azimuth.to_radians());
-                        let d = glam::Vec3::new(-z.sin() * e.cos(), -e.sin(), -z.cos() * e.cos());
-                        tr.rotation = glam::Quat::from_rotation_arc(glam::Vec3::NEG_Z, d.normalize());
-                        changed = true;
-                    }
-                });
-            } else {
-                let t = &mut tr.translation;
-                ui.horizontal(|ui| {
-                    ui.label("position");
-                    for (c, axis) in [(&mut t.x, "x"), (&mut t.y, "y"), (&mut t.z, "z")] {
-                        changed |= ui
-                            .add(egui::DragValue::new(c).speed(r * 0.005).max_decimals(3).prefix(format!("{axis} ")))
-                            .changed();
-                    }
-                });
-            }
-            let l = &mut scene.lights[li];
-            ui.horizontal(|ui| {
-                ui.label("intensity");
-                changed |= ui
-                    .add(egui::Slider::new(&mut l.intensity, 0.0..=100_000.0).logarithmic(true))
-                    .on_hover_text("candela for point and spot lights, lux for directional lights")
-                    .changed();
-            });
-        });
-    }
-    if changed {
-        l.renderer.reset_history_but_records();
     }
 }
 

@@ -1,0 +1,157 @@
+//! The Scene panel's lights (issue #18 point 4): add a point, spot or directional light where
+//! the camera looks, duplicate or remove any light, edit its place (or direction), colour,
+//! intensity and spot cones; save them beside the scene or reset them to the file's.
+
+use crate::scene_lights::{self, NewLight};
+use crate::ui::lab::Lab;
+
+/// Draws the controls; returns a message for the status bar (saving, resetting).
+pub(super) fn light_controls(l: &mut Lab, ui: &mut egui::Ui) -> Option<String> {
+    let r = l.renderer.bounds().radius();
+    let mut changed = false;
+    let mut message = None;
+    ui.horizontal(|ui| {
+        ui.label("add light");
+        for (kind, label) in
+            [(NewLight::Point, "point"), (NewLight::Spot, "spot"), (NewLight::Directional, "directional")]
+        {
+            if ui.button(label).on_hover_text(format!("add a {label} light where the camera looks")).clicked() {
+                let c = l.renderer.camera;
+                scene_lights::add_light(l.renderer.scene_mut(), kind, c.position, c.forward(), r);
+                changed = true;
+            }
+        }
+    });
+    let light_nodes: Vec<usize> =
+        l.renderer.scene().nodes.iter().enumerate().filter(|(_, n)| n.light.is_some()).map(|(i, _)| i).collect();
+    if light_nodes.is_empty() {
+        ui.small("no lights: the image has no direct light (add one above)");
+    }
+    let mut remove = None;
+    let mut duplicate = None;
+    for (k, &ni) in light_nodes.iter().enumerate() {
+        let scene = l.renderer.scene_mut();
+        let Some(li) = scene.nodes[ni].light else { continue };
+        let name = scene.lights[li].name.clone();
+        let directional = matches!(scene.lights[li].kind, gi_render::scene::LightKind::Directional);
+        egui::CollapsingHeader::new(format!("Light {k}: {name}")).id_salt(("light", ni)).default_open(k == 0).show(
+            ui,
+            |ui| {
+                let tr = &mut scene.nodes[ni].transform;
+                if directional {
+                    // A directional light has no position: edit where it shines from.
+                    let dir = tr.rotation * glam::Vec3::NEG_Z;
+                    let mut elevation = (-dir.y).clamp(-1.0, 1.0).asin().to_degrees();
+                    let mut azimuth = (-dir.x).atan2(-dir.z).to_degrees();
+                    ui.horizontal(|ui| {
+                        ui.label("elevation");
+                        let a = ui.add(egui::DragValue::new(&mut elevation).range(-90.0..=90.0).suffix("°"));
+                        ui.label("azimuth");
+                        let b = ui.add(egui::DragValue::new(&mut azimuth).suffix("°"));
+                        if a.changed() || b.changed() {
+                            let (e, z) = (elevation.to_radians(), azimuth.to_radians());
+                            let d = glam::Vec3::new(-z.sin() * e.cos(), -e.sin(), -z.cos() * e.cos());
+                            tr.rotation = glam::Quat::from_rotation_arc(glam::Vec3::NEG_Z, d.normalize());
+                            changed = true;
+                        }
+                    });
+                } else {
+                    let t = &mut tr.translation;
+                    ui.horizontal(|ui| {
+                        ui.label("position");
+                        for (c, axis) in [(&mut t.x, "x"), (&mut t.y, "y"), (&mut t.z, "z")] {
+                            let value = *c as f64;
+                            let field = ui.add(
+                                egui::DragValue::new(c).speed(r * 0.005).max_decimals(3).prefix(format!("{axis} ")),
+                            );
+                            // Named for assistive technology (and the UI tests): "light 1 y".
+                            field.widget_info(|| {
+                                let mut info = egui::WidgetInfo::drag_value(true, value);
+                                info.label = Some(format!("light {k} {axis}"));
+                                info
+                            });
+                            changed |= field.changed();
+                        }
+                    });
+                }
+                let light = &mut scene.lights[li];
+                ui.horizontal(|ui| {
+                    ui.label("intensity");
+                    changed |= ui
+                        .add(egui::Slider::new(&mut light.intensity, 0.0..=100_000.0).logarithmic(true))
+                        .on_hover_text("candela (W/sr) for point and spot lights, lux (W/m²) for directional lights")
+                        .changed();
+                });
+                ui.horizontal(|ui| {
+                    ui.label("colour");
+                    let mut c = light.color.to_array();
+                    if ui.color_edit_button_rgb(&mut c).changed() {
+                        light.color = glam::Vec3::from_array(c);
+                        changed = true;
+                    }
+                });
+                if let gi_render::scene::LightKind::Spot { inner_cone, outer_cone } = &mut light.kind {
+                    ui.horizontal(|ui| {
+                        let (mut inner, mut outer) = (inner_cone.to_degrees(), outer_cone.to_degrees());
+                        ui.label("cone");
+                        let a = ui.add(egui::DragValue::new(&mut inner).range(0.0..=90.0).suffix("° inner"));
+                        let b = ui.add(egui::DragValue::new(&mut outer).range(0.1..=90.0).suffix("° outer"));
+                        if a.changed() || b.changed() {
+                            *outer_cone = outer.to_radians();
+                            *inner_cone = inner.min(outer).to_radians();
+                            changed = true;
+                        }
+                    });
+                }
+                ui.horizontal(|ui| {
+                    if ui.button(format!("duplicate light {k}")).clicked() {
+                        duplicate = Some(ni);
+                    }
+                    if ui.button(format!("remove light {k}")).clicked() {
+                        remove = Some(ni);
+                    }
+                });
+            },
+        );
+    }
+    if let Some(ni) = duplicate {
+        scene_lights::duplicate_light(l.renderer.scene_mut(), ni, r);
+        changed = true;
+    }
+    if let Some(ni) = remove {
+        scene_lights::remove_light(l.renderer.scene_mut(), ni);
+        changed = true;
+    }
+    ui.horizontal(|ui| {
+        let path = l.scene_path.clone();
+        let save = ui
+            .add_enabled(path.is_some(), egui::Button::new("save lights beside the scene"))
+            .on_hover_text("writes <scene file>.lights.ron next to the glTF (never the glTF itself); it is applied whenever that scene is opened");
+        if save.clicked()
+            && let Some(p) = &path
+        {
+            message = Some(match scene_lights::save_overrides(l.renderer.scene(), p) {
+                Ok(f) => format!("lights saved to {}", f.display()),
+                Err(e) => format!("lights not saved: {e}"),
+            });
+        }
+        if ui.button("reset lights").on_hover_text("the lights as the scene file (and its saved lights) have them").clicked() {
+            let args = crate::scene_args::SceneArgs { scene: path.clone(), unit_scale: l.unit_scale, ..Default::default() };
+            match crate::scene_args::load_scene(&args) {
+                Ok(fresh) => {
+                    let scene = l.renderer.scene_mut();
+                    scene.nodes = fresh.nodes;
+                    scene.roots = fresh.roots;
+                    scene.lights = fresh.lights;
+                    changed = true;
+                    message = Some("lights reset to the scene's".into());
+                }
+                Err(e) => message = Some(format!("lights not reset: {}", e.message)),
+            }
+        }
+    });
+    if changed {
+        l.renderer.reset_history_but_records();
+    }
+    message
+}

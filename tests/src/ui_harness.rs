@@ -1,0 +1,56 @@
+//! The lab in an egui_kittest harness, with its own session and presets folders (the UI
+//! tests in tests/ui.rs and tests/ui_lights.rs).
+
+use std::path::PathBuf;
+
+use egui_kittest::Harness;
+use gi_lab::args::AppArgs;
+use gi_lab::ui::app::GiLabApp;
+
+/// A fresh temporary folder for one test.
+pub fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("gi-lab-ui-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("temp dir");
+    d
+}
+
+/// Arguments that keep the app's session and presets in `dir` (never the user's).
+pub fn args_in(dir: &std::path::Path, fresh: bool) -> AppArgs {
+    let _ = std::fs::create_dir_all(dir.join("presets"));
+    AppArgs { config_dir: Some(dir.join("config")), presets_dir: dir.join("presets"), fresh, ..AppArgs::default() }
+}
+
+/// The app with `args` in a harness of `size` points.
+pub fn harness_with(args: AppArgs, size: egui::Vec2) -> Harness<'static, GiLabApp> {
+    Harness::builder()
+        .with_size(size)
+        .wgpu_setup(gi_lab::ui::wgpu_setup())
+        .build_eframe(move |cc| GiLabApp::new(cc, args))
+}
+
+/// The app in a harness with its own config and presets folders.
+pub fn harness_in(dir: &std::path::Path, size: egui::Vec2) -> Harness<'static, GiLabApp> {
+    let h = harness_with(args_in(dir, true), size);
+    if let Some(e) = h.state().error() {
+        panic!(
+            "the app could not start its renderer: {e}\n\
+             Install Mesa's software Vulkan driver: `sudo apt-get install -y mesa-vulkan-drivers libvulkan1` \
+             (or run `bash scripts/test.sh`)"
+        );
+    }
+    h
+}
+
+pub fn harness(name: &str) -> (Harness<'static, GiLabApp>, PathBuf) {
+    let dir = temp_dir(name);
+    (harness_in(&dir, egui::vec2(1400.0, 1000.0)), dir)
+}
+
+/// Pauses the animation at t = 0 so that frames repeat exactly.
+pub fn pause(h: &mut Harness<'static, GiLabApp>) {
+    if let Ok(l) = &mut h.state_mut().state.lab {
+        l.renderer.clock.playing = false;
+        l.renderer.clock.seek(0.0);
+    }
+}
