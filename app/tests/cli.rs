@@ -410,3 +410,36 @@ fn no_runtime_dir_complaint_without_xdg_runtime_dir() {
     use std::os::unix::fs::PermissionsExt;
     assert_eq!(std::fs::metadata(&dir).expect("exists").permissions().mode() & 0o777, 0o700);
 }
+
+/// `bench --suite scenes` lists the project's scene and every shared scene with a frame time
+/// for each technique preset (issue #18).
+#[test]
+fn bench_scenes_lists_every_scene_with_each_technique() {
+    let o = gi_lab()
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+        .args(["bench", "--suite", "scenes", "--size", "32x32", "--frames", "1", "--json"])
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "bench failed: {}", String::from_utf8_lossy(&o.stderr));
+    let rows: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    let rows = rows.as_array().expect("rows");
+    let names: Vec<&str> = rows.iter().filter_map(|r| r["scene"].as_str()).collect();
+    for want in ["assets/cornell_box.glb", "CornellBox-Original.gltf", "hotel-room.glb", "MixedLightingExample.gltf"] {
+        assert!(names.iter().any(|n| n.ends_with(want)), "{want} missing from {names:?}");
+    }
+    for r in rows {
+        let times = r["frame_ms"].as_array().expect("frame times");
+        assert_eq!(times.len(), 4, "{r}");
+        for t in times {
+            let ms = t[1]["Ok"].as_f64().unwrap_or_else(|| panic!("{}: {}", r["scene"], t));
+            assert!(ms > 0.0, "{r}");
+        }
+    }
+    // The shared Cornell box has an emissive quad and no punctual light.
+    let cornell = rows
+        .iter()
+        .find(|r| r["scene"].as_str().is_some_and(|n| n.ends_with("CornellBox-Original.gltf")))
+        .expect("row");
+    assert_eq!(cornell["default_light"], true);
+    assert!(cornell["emissive_triangles"].as_u64().unwrap_or(0) > 0);
+}

@@ -45,8 +45,13 @@ pub struct BenchArgs {
     /// `gautron`: irradiance cache splatting from a cold cache at five accuracies against a
     /// hemisphere at every pixel (records, time per record, cold and warm frames, FLIP, the
     /// speedup; run it at --size 64x64; --reference: the one-bounce truth, else traced).
+    /// `scenes`: every scene of --scenes-dir and assets/ (triangles, lights, emitters, load
+    /// time, the frame time of each technique preset; run it at --size 256x256).
     #[arg(long, value_enum)]
     pub suite: Option<BenchSuite>,
+    /// The scenes of `--suite scenes` (every .gltf/.glb below it).
+    #[arg(long, default_value = "../shared/scenes")]
+    pub scenes_dir: PathBuf,
 }
 
 /// Benchmark suites of `gi-lab bench --suite`.
@@ -57,6 +62,7 @@ pub enum BenchSuite {
     Quality,
     Soler,
     Gautron,
+    Scenes,
 }
 
 /// Per-pass statistics of a benchmark run.
@@ -239,6 +245,15 @@ pub(super) fn bench(args: &BenchArgs) -> Result<(), CliError> {
     }
     if let Some(BenchSuite::Quality) = args.suite {
         return quality(args);
+    }
+    if let Some(BenchSuite::Scenes) = args.suite {
+        let rows = super::bench_scenes::scenes(&args.scenes_dir, args.size, args.frames)?;
+        if args.json {
+            println!("{}", serde_json::to_string_pretty(&rows).map_err(|e| CliError::failure(e.to_string()))?);
+        } else {
+            print!("{}", super::bench_scenes::format(&rows, args.size, args.frames));
+        }
+        return Ok(());
     }
     let mut r = renderer(&args.scene, args.size)?;
     if !gi_render::timing::GpuTimer::timestamps_reliable(&r.ctx) {

@@ -4,6 +4,7 @@
 
 pub mod bench;
 pub mod bench_gautron;
+pub mod bench_scenes;
 pub mod bench_soler;
 pub mod bench_suites;
 pub mod buffers;

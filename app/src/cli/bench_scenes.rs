@@ -1,0 +1,156 @@
+//! `gi-lab bench --suite scenes` (issue #18, "Tests and measures"): for every scene in the
+//! shared scenes folder (`--scenes-dir`, by default `../shared/scenes`) and in `assets/`, its
+//! triangles, punctual lights (and whether the lab added the default one), emissive
+//! triangles, load time, and the mean frame time (sum of the passes) of each shipped
+//! technique preset at `--size`. Scenes whose extent exceeds 100 units are read as
+//! millimetres (× 0.001, as the hotel room needs).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use gi_render::{GpuContext, LabSettings, Renderer};
+
+use crate::error::CliError;
+
+/// The technique presets of the table's columns.
+const PRESETS: [(&str, &str); 4] = [
+    ("knecht", include_str!("../../../presets/knecht-cornell-256.ron")),
+    ("nguyen", include_str!("../../../presets/nguyen-hcb.ron")),
+    ("soler", include_str!("../../../presets/soler-quarter-4-64.ron")),
+    ("gautron", include_str!("../../../presets/gautron-ic-splatting.ron")),
+];
+
+/// One scene's row.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct SceneRow {
+    pub scene: String,
+    pub triangles: usize,
+    /// Punctual lights (with the default one the lab adds to a scene without lights).
+    pub lights: usize,
+    pub default_light: bool,
+    /// Triangles whose material emits.
+    pub emissive_triangles: usize,
+    pub unit_scale: f32,
+    pub load_ms: f64,
+    /// Mean frame time of each preset (ms; the passes' sum over `frames` after 3 warm-up
+    /// frames), or the error that stopped it.
+    pub frame_ms: Vec<(String, Result<f64, String>)>,
+}
+
+/// The glTF files of a folder and its subfolders (sorted).
+fn scene_files(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let Ok(entries) = std::fs::read_dir(dir) else { return out };
+    for e in entries.flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            out.extend(scene_files(&p));
+        } else if p.extension().is_some_and(|x| x == "gltf" || x == "glb") {
+            out.push(p);
+        }
+    }
+    out.sort();
+    out
+}
+
+fn load(path: &Path, unit_scale: f32) -> Result<gi_render::scene::Scene, CliError> {
+    let args = crate::scene_args::SceneArgs { scene: Some(path.to_path_buf()), unit_scale, ..Default::default() };
+    crate::scene_args::load_scene(&args)
+}
+
+/// Runs the suite.
+pub fn scenes(scenes_dir: &Path, size: (u32, u32), frames: u32) -> Result<Vec<SceneRow>, CliError> {
+    let mut files = scene_files(Path::new("assets"));
+    files.extend(scene_files(scenes_dir));
+    if files.is_empty() {
+        return Err(CliError::input(format!(
+            "no glTF scenes in assets/ or {} (run from the project root, or give --scenes-dir)",
+            scenes_dir.display()
+        )));
+    }
+    let ctx = GpuContext::headless().map_err(|e| CliError::failure(e.to_string()))?;
+    let mut rows = Vec::new();
+    for path in files {
+        let mut start = Instant::now();
+        let mut scene = load(&path, 1.0)?;
+        let mut unit_scale = 1.0;
+        if scene.bounds(0.0).extent().max_element() > 100.0 {
+            unit_scale = 0.001;
+            start = Instant::now();
+            scene = load(&path, unit_scale)?;
+        }
+        let load_ms = start.elapsed().as_secs_f64() * 1e3;
+        let emissive_triangles = scene
+            .meshes
+            .iter()
+            .flat_map(|m| &m.primitives)
+            .filter(|p| scene.materials.get(p.material).is_some_and(|m| m.emissive.max_element() > 0.0))
+            .map(|p| p.indices.len() / 3)
+            .sum();
+        let mut row = SceneRow {
+            scene: path.display().to_string(),
+            triangles: scene.triangle_count(),
+            lights: scene.lights.len(),
+            default_light: scene.default_light_note().is_some(),
+            emissive_triangles,
+            unit_scale,
+            load_ms,
+            frame_ms: Vec::new(),
+        };
+        for (name, text) in PRESETS {
+            let settings = gi_render::preset::load_lenient(text, name)
+                .map(|l| l.settings)
+                .map_err(|e| CliError::failure(format!("preset {name}: {e}")))?;
+            row.frame_ms.push((name.to_string(), frame_ms(&ctx, &scene, settings, size, frames)));
+        }
+        rows.push(row);
+    }
+    Ok(rows)
+}
+
+fn frame_ms(
+    ctx: &GpuContext,
+    scene: &gi_render::scene::Scene,
+    settings: LabSettings,
+    size: (u32, u32),
+    frames: u32,
+) -> Result<f64, String> {
+    let mut r = Renderer::new(ctx.clone(), scene.clone(), settings, size.0, size.1).map_err(|e| e.to_string())?;
+    if !gi_render::timing::GpuTimer::timestamps_reliable(&r.ctx) {
+        r.set_timing_source(gi_render::timing::TimingSource::CpuWallClock);
+    }
+    r.clock.playing = false;
+    Ok(super::bench::bench_run(&mut r, frames.max(1), "").total_mean_ms)
+}
+
+/// The table.
+pub fn format(rows: &[SceneRow], size: (u32, u32), frames: u32) -> String {
+    let mut s = format!(
+        "GI Lab bench suite scenes — {}×{}, mean frame time (ms, sum of the passes) over {frames} frames after 3 warm-up frames\n\n",
+        size.0, size.1
+    );
+    s += &format!("{:<62} {:>9} {:>7} {:>9} {:>8}", "scene", "triangles", "lights", "emissive", "load ms");
+    for (name, _) in PRESETS {
+        s += &format!(" {name:>9}");
+    }
+    s += "\n";
+    for r in rows {
+        let lights = if r.default_light { format!("{}*", r.lights) } else { r.lights.to_string() };
+        let name = if r.unit_scale != 1.0 { format!("{} (×{})", r.scene, r.unit_scale) } else { r.scene.clone() };
+        s += &format!("{name:<62} {:>9} {lights:>7} {:>9} {:>8.1}", r.triangles, r.emissive_triangles, r.load_ms);
+        for (_, t) in &r.frame_ms {
+            s += &match t {
+                Ok(ms) => format!(" {ms:>9.1}"),
+                Err(_) => format!(" {:>9}", "error"),
+            };
+        }
+        s += "\n";
+        for (name, t) in &r.frame_ms {
+            if let Err(e) = t {
+                s += &format!("    {name}: {e}\n");
+            }
+        }
+    }
+    s += "\n* the lab's default light (the scene has no punctual light); emissive: triangles whose material emits (not yet a light source: issue #18 point 1)\n";
+    s
+}
