@@ -142,7 +142,7 @@ fn indirect_light(
             let (hcb, gautron) = (x.hcb.as_ref()?, x.gautron.as_mut()?);
             hcb.build_only(f, enc, timer);
             if let Err(e) = gautron.gather_at_samples(f, enc, timer, hcb.sample_buffers()) {
-                eprintln!("gautron: the HCB's sample count could not be read: {e}");
+                log::warn!("gautron: the HCB's sample count could not be read: {e}");
             }
             return Some(hcb.splat_only(f, enc, timer));
         }

@@ -54,3 +54,22 @@ pub fn pause(h: &mut Harness<'static, GiLabApp>) {
         l.renderer.clock.seek(0.0);
     }
 }
+
+/// Shows buffer `name` in viewer 1 through its picker's filter field (opening the picker
+/// when it is closed); the viewer must show it without error.
+pub fn show_in_viewer(h: &mut Harness<'static, GiLabApp>, name: &str) {
+    use egui_kittest::kittest::Queryable;
+    if h.query_by_label("viewer 1 buffer filter").is_none() {
+        h.get_by_label("viewer 1 buffer").click();
+        h.run_steps(2);
+    }
+    h.get_by_label("viewer 1 buffer filter").click();
+    h.run_steps(1);
+    h.get_by_label("viewer 1 buffer filter").type_text(name);
+    h.run_steps(2);
+    h.get_by_label(name).click();
+    h.run_steps(3);
+    let v = h.state().state.viewers.values().next().expect("a viewer");
+    assert_eq!(v.state.buffer, name);
+    assert!(v.error.is_none(), "{name}: {:?}", v.error);
+}

@@ -7,17 +7,6 @@ use gi_render::passes::gautron::GpuRecord;
 use gi_render::pipeline::Technique;
 use glam::Vec3;
 
-fn cpu_record(g: &GpuRecord) -> Record {
-    Record {
-        p: g.position.truncate(),
-        n: g.normal.truncate(),
-        r: g.position.w,
-        e: g.irradiance.truncate(),
-        rot: g.rot.map(|v| v.truncate()),
-        trans: g.trans.map(|v| v.truncate()),
-    }
-}
-
 fn close(a: Vec3, b: Vec3, scale: f32, tol: f32) -> bool {
     (a - b).abs().max_element() <= tol * scale.max(1e-12)
 }
@@ -141,7 +130,7 @@ fn the_splat_matches_the_cpu_accumulation() {
     r.render_frame();
     let g = r.gautron().unwrap();
     let st = g.read_state(&r.ctx).unwrap();
-    let records: Vec<Record> = g.read_records(&r.ctx, st.count).unwrap().iter().map(cpu_record).collect();
+    let records: Vec<Record> = g.read_records(&r.ctx, st.count).unwrap().iter().map(GpuRecord::to_cpu).collect();
     assert!(records.len() > 20, "{st:?}");
     let (accum, position, normal) =
         (read(&r, "gautron.accum"), read(&r, "gbuffer.position"), read(&r, "gbuffer.normal"));

@@ -10,7 +10,7 @@ use gi_lab::ui::app::GiLabApp;
 use gi_render::LabSettings;
 use gi_render::settings::{FieldKind, Value};
 
-use gi_lab_tests::ui_harness::{args_in, harness, harness_in, harness_with, pause, temp_dir};
+use gi_lab_tests::ui_harness::{args_in, harness, harness_in, harness_with, pause, show_in_viewer, temp_dir};
 
 #[test]
 fn app_renders_into_a_viewport_the_panels_do_not_cover() {
@@ -591,19 +591,7 @@ fn soler_settings_buffers_and_reach_appear_in_the_lab() {
     }
     // The list is long: the picker's filter field narrows it to the one wanted.
     for n in ["soler.voxels.2", "soler.temporal.rejection", "soler.bounce.2"] {
-        if h.query_by_label("viewer 1 buffer filter").is_none() {
-            h.get_by_label("viewer 1 buffer").click();
-            h.run_steps(2);
-        }
-        h.get_by_label("viewer 1 buffer filter").click();
-        h.run_steps(1);
-        h.get_by_label("viewer 1 buffer filter").type_text(n);
-        h.run_steps(2);
-        h.get_by_label(n).click();
-        h.run_steps(3);
-        let v = h.state().state.viewers.values().next().expect("a viewer");
-        assert_eq!(v.state.buffer, n);
-        assert!(v.error.is_none(), "{n}: {:?}", v.error);
+        show_in_viewer(&mut h, n);
     }
     let _ = h.render().map(|i| i.save(std::env::temp_dir().join("gi_lab_soler_viewer.png")));
 }
@@ -686,19 +674,7 @@ fn gautron_settings_buffers_cache_and_records_appear_in_the_lab() {
         assert!(gautron.iter().any(|n| n == want), "{want} is not registered: {gautron:?}");
     }
     for n in &gautron {
-        if h.query_by_label("viewer 1 buffer filter").is_none() {
-            h.get_by_label("viewer 1 buffer").click();
-            h.run_steps(2);
-        }
-        h.get_by_label("viewer 1 buffer filter").click();
-        h.run_steps(1);
-        h.get_by_label("viewer 1 buffer filter").type_text(n);
-        h.run_steps(2);
-        h.get_by_label(n).click();
-        h.run_steps(2);
-        let v = h.state().state.viewers.values().next().expect("a viewer");
-        assert_eq!(&v.state.buffer, n);
-        assert!(v.error.is_none(), "{n}: {:?}", v.error);
+        show_in_viewer(&mut h, n);
     }
     // The records overlay changes the viewport where the records are.
     let viewport = |h: &mut Harness<'static, GiLabApp>| {

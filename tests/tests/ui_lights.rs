@@ -17,6 +17,12 @@ fn lights(h: &Harness<'static, GiLabApp>) -> usize {
     h.state().renderer().expect("renderer").scene().evaluate(0.0).lights.len()
 }
 
+/// The height of the last light node (the one added last).
+fn last_light_y(h: &Harness<'static, GiLabApp>) -> f32 {
+    let scene = h.state().renderer().expect("renderer").scene();
+    scene.nodes.iter().rev().find(|n| n.light.is_some()).expect("a light node").transform.translation.y
+}
+
 #[test]
 fn a_light_is_added_moved_removed_and_reset_in_the_scene_panel() {
     let (mut h, dir) = harness("lights");
@@ -32,34 +38,10 @@ fn a_light_is_added_moved_removed_and_reset_in_the_scene_panel() {
     // Move it: its header, then its y field (typed), lower toward the floor.
     h.get_by_label_contains(&format!("Light {n0}:")).click();
     h.run_steps(2);
-    let y = h
-        .state()
-        .renderer()
-        .expect("renderer")
-        .scene()
-        .nodes
-        .iter()
-        .rev()
-        .find(|n| n.light.is_some())
-        .expect("node")
-        .transform
-        .translation
-        .y;
+    let y = last_light_y(&h);
     h.get_by_label(&format!("light {n0} y")).set_value_accesskit((y * 0.5) as f64);
     h.run_steps(3);
-    let moved = h
-        .state()
-        .renderer()
-        .expect("renderer")
-        .scene()
-        .nodes
-        .iter()
-        .rev()
-        .find(|n| n.light.is_some())
-        .expect("node")
-        .transform
-        .translation
-        .y;
+    let moved = last_light_y(&h);
     assert!((moved - y * 0.5).abs() < 1e-2 * y.abs().max(1.0), "the light moved to {moved} (wanted {})", y * 0.5);
     let lum2 = mean_luminance(&h);
     assert!((lum2 - lum1).abs() > 1e-3 * lum1, "moving the light changes the image: {lum1} -> {lum2}");

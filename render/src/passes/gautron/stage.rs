@@ -461,9 +461,8 @@ impl GautronStage {
         let list_len = list.size() / super::at_samples::HCB_SAMPLE_BYTES;
         let n = (bytemuck::pod_read_unaligned::<u32>(&words[..4]) as u64).min(list_len) as u32;
         let chunks = n.div_ceil(slots).max(1);
-        let pass = self.at_samples.get_or_insert_with(|| AtSamplesPass::new(ctx));
-        pass.ensure_chunks(ctx, chunks);
-        let pass = self.at_samples.as_ref().ok_or("no pass")?;
+        self.at_samples.get_or_insert_with(|| AtSamplesPass::new(ctx)).ensure_chunks(ctx, chunks);
+        let pass = self.at_samples.as_ref().ok_or("no chunk pass")?;
         let group = pass.group(
             ctx,
             (&self.params, &self.state, &self.slots, &self.records),
