@@ -55,11 +55,14 @@ impl Renderer {
 
         let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
 
+        // The passes the stage choices name (stage 2's emitters, stages 3–7).
+        self.ensure_passes();
+
         // Stage 1: G-buffer and movement buffer.
         let (gbuffer, camera_group, gpu_scene) = (&self.gbuffer, &self.camera_group, &self.gpu_scene);
         self.timer.scope(&ctx, &mut enc, "gbuffer", |e, slot| gbuffer.run(e, slot, camera_group, gpu_scene, &state));
 
-        // Stage 2: shadow maps and direct light.
+        // Stage 2: shadow maps, the emitters' VPLs and their visibility, direct light.
         let ds = self.settings.direct.clone();
         let lights = setup_lights(&state.lights, self.bounds, ds.shadow_map_size, ds.shadows);
         let size = ds.shadow_map_size.min(ctx.limits.max_texture_dimension_2d);
@@ -71,13 +74,19 @@ impl Renderer {
         self.timer.scope(&ctx, &mut enc, "direct.shadow", |e, slot| {
             shadow.run(&ctx, e, slot, gpu_scene, &state, &lights.views)
         });
+        let emitters = match self.stages.emitters.as_mut() {
+            Some(pass) => {
+                let (scene, radius) = (&self.scene, self.bounds.radius());
+                pass.run(&ctx, &mut enc, &mut self.timer, scene, &state, gpu_scene, &self.settings, radius)
+            }
+            None => None,
+        };
         let (direct, camera_buffer, gviews) = (&mut self.direct, &self.camera_buffer, &self.gbuffer.targets.views);
         let shadow_view = &self.shadow.array_view;
         self.timer.scope(&ctx, &mut enc, "direct", |e, slot| {
-            direct.run(&ctx, e, slot, &ds, camera_buffer, gviews, &lights, shadow_view)
+            direct.run(&ctx, e, slot, &ds, camera_buffer, gviews, &lights, shadow_view, emitters.as_ref())
         });
         // Stages 3–7's indirect light, as the stage choices say (`pipeline.*`).
-        self.ensure_passes();
         let direct_view = crate::passes::view(&self.direct.radiance, "direct.radiance");
         let f = FrameInputs {
             ctx: &ctx,
@@ -103,9 +112,9 @@ impl Renderer {
         let near_field = near_field_light(&f, &mut self.stages, &mut enc, &mut self.timer);
 
         // Stage 7: compose direct + indirect and tone map.
-        let (compose, ts) = (&self.compose, &self.settings.tonemap);
+        let (compose, ts, emission) = (&self.compose, &self.settings.tonemap, &self.gbuffer.targets.views.emission);
         self.timer.scope(&ctx, &mut enc, "compose", |e, slot| {
-            compose.compose(&ctx, e, slot, &direct_view, indirect.as_ref(), near_field.as_ref())
+            compose.compose(&ctx, e, slot, emission, &direct_view, indirect.as_ref(), near_field.as_ref())
         });
         self.timer.scope(&ctx, &mut enc, "compose.luminance", |e, slot| compose.luminance(&ctx, e, slot, ts));
         self.timer.scope(&ctx, &mut enc, "compose.tonemap", |e, slot| compose.tonemap(&ctx, e, slot, ts));
@@ -166,7 +175,7 @@ fn indirect_light(
     // Stage 3: VPLs.
     let vpls = match p.vpl_source {
         VplSource::None => return None,
-        VplSource::ImportanceWarping => x.knecht.as_mut()?.vpls(f, enc, timer),
+        VplSource::ImportanceWarping => x.knecht.as_mut()?.vpls(f, enc, timer, x.emitters.as_mut()),
         VplSource::UniformBatches => match x.reference.as_mut()?.vpls(f, enc, timer, view_proj) {
             Some(batch) => batch,
             // The running average is complete (or there is no light): stage 7's image stays.

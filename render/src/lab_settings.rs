@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::passes::compose::TonemapSettings;
 use crate::passes::direct::DirectSettings;
+use crate::passes::emitters::EmitterSettings;
 use crate::passes::gautron::GautronSettings;
 use crate::passes::hcb::HcbSettings;
 use crate::passes::knecht::interleave::InterleaveSettings;
@@ -43,6 +44,8 @@ pub struct LabSettings {
     pub version: u32,
     pub animation: AnimationSettings,
     pub direct: DirectSettings,
+    /// Emissive surfaces as lights (stage 2).
+    pub emitters: EmitterSettings,
     /// The stage choices (stages 3–7): which pass each stage runs.
     pub pipeline: PipelineSettings,
     /// Version 1's technique, read from old presets only (see `pipeline::migrate_v1`).
@@ -65,6 +68,7 @@ impl Default for LabSettings {
             version: PRESET_VERSION,
             animation: Default::default(),
             direct: Default::default(),
+            emitters: Default::default(),
             pipeline: Default::default(),
             indirect: None,
             vpl: Default::default(),
@@ -85,6 +89,7 @@ macro_rules! for_each_group {
     ($m:ident) => {
         $m!(animation, AnimationSettings);
         $m!(direct, DirectSettings);
+        $m!(emitters, EmitterSettings);
         $m!(pipeline, PipelineSettings);
         $m!(vpl, VplSettings);
         $m!(ism, IsmSettings);

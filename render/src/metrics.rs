@@ -58,6 +58,30 @@ pub fn rel_mse(test: &ImageF32, reference: &ImageF32) -> Result<f64, MetricError
     Ok(sum / (3 * test.data.len()) as f64)
 }
 
+/// The exposure that brings `img`'s log-average luminance to the middle grey 0.18 (Reinhard
+/// et al. 2002's key, as the lab's automatic exposure): compare dim scenes (a room lit by a
+/// weak emitter) on their visible range. 1 for a black image.
+pub fn auto_exposure(img: &ImageF32) -> f32 {
+    let (mut sum, mut n) = (0.0f64, 0u64);
+    for p in &img.data {
+        let l = luminance([p[0], p[1], p[2]]) as f64;
+        if l.is_finite() && l > 0.0 {
+            sum += (l + 1e-6).ln();
+            n += 1;
+        }
+    }
+    if n == 0 {
+        return 1.0;
+    }
+    (0.18 / (sum / n as f64).exp()) as f32
+}
+
+/// `img` with its colour scaled by `k` (alpha kept).
+pub fn scaled(img: &ImageF32, k: f32) -> ImageF32 {
+    let data = img.data.iter().map(|p| [p[0] * k, p[1] * k, p[2] * k, p[3]]).collect();
+    ImageF32 { width: img.width, height: img.height, data }
+}
+
 /// 8-bit sRGB RGB bytes of a display image with values in [0, 1] (such as `final.ldr`).
 fn to_rgb8(img: &ImageF32) -> Vec<u8> {
     img.data.iter().flat_map(|p| [p[0], p[1], p[2]].map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8)).collect()

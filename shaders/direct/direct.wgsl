@@ -1,10 +1,15 @@
 // Stage 2, direct light: every punctual light evaluated with the BRDF of
 // common/brdf.wgsl at each G-buffer pixel, visibility from the shadow map with
-// percentage-closer filtering over (2r+1)² comparisons.
+// percentage-closer filtering over (2r+1)² comparisons; and every emitter VPL
+// (passes/emitters.rs: emissive surfaces as lights) with the irradiance of common/vpl.wgsl
+// (Knecht 002 Eq. 4.7, d_min clamped) and the visibility of common/ism.wgsl's
+// gather_visibility (imperfect shadow maps, exact maps or none). The surface's own emission
+// is not added here: the compose adds it.
 #import common/camera.wgsl
 #import common/brdf.wgsl
 #import common/lights.wgsl
 #import common/fullscreen.wgsl
+#import common/ism.wgsl
 
 struct Params {
     // x: PCF radius in texels, y: shadow map size, z: depth bias in texels (toward the
@@ -12,6 +17,11 @@ struct Params {
     shadow: vec4<f32>,
     // x: intensity scale, y: shadows enabled
     light: vec4<f32>,
+    // x: emitter VPLs, y: their visibility (0 none, 1 ISM, 2 exact), z: atlas columns,
+    // w: map size
+    emitter_counts: vec4<u32>,
+    // xyz: gather_visibility's parameters, w: d_min²
+    emitter_vis: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> camera: Camera;
@@ -20,12 +30,14 @@ struct Params {
 @group(0) @binding(3) var<storage, read> light_view_proj: array<mat4x4<f32>>;
 @group(0) @binding(4) var shadow_map: texture_depth_2d_array;
 @group(0) @binding(5) var shadow_sampler: sampler_comparison;
+@group(0) @binding(6) var<storage, read> emitter_vpls: array<Vpl>;
+@group(0) @binding(7) var emitter_ism: texture_2d<f32>;
+@group(0) @binding(8) var emitter_exact: texture_depth_2d;
 @group(1) @binding(0) var g_position: texture_2d<f32>;
 @group(1) @binding(1) var g_normal: texture_2d<f32>;
 @group(1) @binding(2) var g_albedo: texture_2d<f32>;
 @group(1) @binding(3) var g_material: texture_2d<f32>;
 @group(1) @binding(4) var out_radiance: texture_storage_2d<rgba32float, write>;
-@group(1) @binding(5) var g_emission: texture_2d<f32>;
 
 // Picks the cube face of a point light from the major axis of the light-to-surface vector
 // (faces ordered +X, −X, +Y, −Y, +Z, −Z as in passes/shadow.rs).
@@ -81,10 +93,30 @@ fn shadow_visibility(light: Light, p: vec3<f32>, n: vec3<f32>, l: vec3<f32>) -> 
     return sum / count;
 }
 
-// `start` (the surface's emission) plus the light of every punctual light reflected toward v
-// at p.
-fn reflected_direct(start: vec3<f32>, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, alb: vec4<f32>, mat: vec4<f32>) -> vec3<f32> {
-    var radiance = start;
+// The light of every emitter VPL reflected toward v at p.
+fn reflected_emitters(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, alb: vec4<f32>, mat: vec4<f32>) -> vec3<f32> {
+    var radiance = vec3<f32>(0.0);
+    let ec = params.emitter_counts;
+    let count = min(ec.x, arrayLength(&emitter_vpls));
+    for (var k = 0u; k < count; k = k + 1u) {
+        let vpl = emitter_vpls[k];
+        let e = vpl_irradiance(vpl, p, n, params.emitter_vis.w, 0.0);
+        if (max(e.r, max(e.g, e.b)) <= 0.0) {
+            continue;
+        }
+        let vis = gather_visibility(ec.y, emitter_ism, emitter_exact, k, vpl, p, n, ec.z, ec.w, params.emitter_vis.xyz);
+        if (vis <= 0.0) {
+            continue;
+        }
+        let l = normalize(vpl.position.xyz - p);
+        radiance = radiance + brdf_eval(n, l, v, alb.rgb, alb.a, mat.x, mat.y) * e * vis;
+    }
+    return radiance;
+}
+
+// The light of every punctual light and emitter VPL reflected toward v at p.
+fn reflected_direct(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, alb: vec4<f32>, mat: vec4<f32>) -> vec3<f32> {
+    var radiance = reflected_emitters(p, n, v, alb, mat);
     let count = arrayLength(&lights);
     for (var i = 0u; i < count; i = i + 1u) {
         let light = lights[i];
@@ -130,15 +162,15 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let alb = textureLoad(g_albedo, px, 0);
     let mat = textureLoad(g_material, px, 0);
     let v = normalize(camera.position.xyz - p);
-    // The surface's own emission reaches the eye directly.
-    let radiance = reflected_direct(textureLoad(g_emission, px, 0).rgb, p, n, v, alb, mat);
+    let radiance = reflected_direct(p, n, v, alb, mat);
     textureStore(out_radiance, px, vec4<f32>(radiance, 1.0));
 }
 
 // An atlas of G-buffer tiles, each seen from its own viewpoint: the hemispheres of Gautron
 // et al.'s records (003, "Simple plane sampling": "the shadowing effects can be accounted for
 // using … shadow mapping"), lit by the same lights, shadow maps and BRDF as the screen, toward
-// the record. Emission is counted as the path tracer counts it at a bounce.
+// the record. Emission is not counted: emitters light the record through their VPLs, as the
+// path tracer reaches them by next-event estimation.
 struct AtlasParams {
     // x: tile side in texels, y: tiles per row
     tile: vec4<u32>,
@@ -165,6 +197,6 @@ fn cs_atlas(@builtin(global_invocation_id) gid: vec3<u32>) {
     let alb = textureLoad(g_albedo, px, 0);
     let mat = textureLoad(g_material, px, 0);
     let v = normalize(viewer.xyz - p);
-    let radiance = reflected_direct(textureLoad(g_emission, px, 0).rgb, p, n, v, alb, mat);
+    let radiance = reflected_direct(p, n, v, alb, mat);
     textureStore(out_radiance, px, vec4<f32>(radiance, 1.0));
 }

@@ -18,6 +18,28 @@ pub struct CompareArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Scale both float images by this before tone mapping for FLIP, or `auto`: the exposure
+    /// that brings the reference's log-average luminance to 0.18 (dim scenes, such as a
+    /// room lit by a weak emitter, would otherwise compare as black).
+    #[arg(long, default_value = "1", value_parser = parse_exposure)]
+    pub exposure: Exposure,
+}
+
+/// `--exposure`: a factor or `auto`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Exposure {
+    Factor(f32),
+    Auto,
+}
+
+fn parse_exposure(s: &str) -> Result<Exposure, String> {
+    if s.trim().eq_ignore_ascii_case("auto") {
+        return Ok(Exposure::Auto);
+    }
+    match s.trim().parse::<f32>() {
+        Ok(k) if k.is_finite() && k > 0.0 => Ok(Exposure::Factor(k)),
+        _ => Err(format!("'{s}' is not a positive number or 'auto'")),
+    }
 }
 
 /// Metrics of one image pair.
@@ -45,6 +67,16 @@ pub fn load_image(path: &Path) -> Result<(gi_render::ImageF32, bool), CliError> 
 
 /// Compares two image files.
 pub fn compare_files(test: &Path, reference: &Path, flip_map: Option<&Path>) -> Result<CompareReport, CliError> {
+    compare_files_exposed(test, reference, flip_map, Exposure::Factor(1.0))
+}
+
+/// Compares two image files, the float ones scaled by `exposure` for FLIP.
+pub fn compare_files_exposed(
+    test: &Path,
+    reference: &Path,
+    flip_map: Option<&Path>,
+    exposure: Exposure,
+) -> Result<CompareReport, CliError> {
     use gi_render::metrics;
     let (t, t_float) = load_image(test)?;
     let (r, r_float) = load_image(reference)?;
@@ -52,7 +84,13 @@ pub fn compare_files(test: &Path, reference: &Path, flip_map: Option<&Path>) -> 
     let err = |e: metrics::MetricError| CliError::input(format!("{} vs {}: {e}", test.display(), reference.display()));
     let rmse = metrics::rmse(&t, &r).map_err(err)?;
     let rel_mse = metrics::rel_mse(&t, &r).map_err(err)?;
-    let display = |i: &gi_render::ImageF32| if hdr { gi_render::image_io::hdr_display(i) } else { i.clone() };
+    let k = match exposure {
+        Exposure::Factor(k) => k,
+        Exposure::Auto => metrics::auto_exposure(&r),
+    };
+    let display = |i: &gi_render::ImageF32| {
+        if hdr { gi_render::image_io::hdr_display(&metrics::scaled(i, k)) } else { i.clone() }
+    };
     let (flip, map) = metrics::flip(&display(&t), &display(&r)).map_err(err)?;
     if let Some(path) = flip_map {
         let mut png = image::RgbaImage::new(map.width, map.height);
@@ -66,7 +104,7 @@ pub fn compare_files(test: &Path, reference: &Path, flip_map: Option<&Path>) -> 
 }
 
 pub(super) fn compare(args: &CompareArgs) -> Result<(), CliError> {
-    let r = compare_files(&args.test, &args.reference, args.flip_map.as_deref())?;
+    let r = compare_files_exposed(&args.test, &args.reference, args.flip_map.as_deref(), args.exposure)?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&r).map_err(|e| CliError::failure(e.to_string()))?);
     } else {

@@ -166,6 +166,7 @@ pub fn section_title(group: &str) -> String {
     match group {
         "animation" => "Animation clock".into(),
         "direct" => "2 · Direct light".into(),
+        "emitters" => "2 · Emissive surfaces as lights".into(),
         "indirect" => "3–6 · Indirect light".into(),
         "pipeline" => "Stage choices (3–7)".into(),
         "vpl" => "3 · VPLs (instant radiosity)".into(),
@@ -175,6 +176,7 @@ pub fn section_title(group: &str) -> String {
         "hcb" => "5–6 · Hierarchical coherence buffer (Nguyen)".into(),
         "reference" => "Exact-VPL reference (stages 3, 4, 6)".into(),
         "soler" => "5–6 · Screen-space mip levels (Soler)".into(),
+        "gautron" => "5–7 · Irradiance cache splatting (Gautron)".into(),
         "tonemap" => "7 · Tone mapping".into(),
         other => other.to_string(),
     }

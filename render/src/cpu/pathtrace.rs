@@ -3,8 +3,13 @@
 //! The same camera, punctual lights, materials and BRDF (`cpu::brdf`) as the renderer, over
 //! the scene's world-space triangles in a BVH (the `obvhs` crate's CWBVH). Paths start with
 //! a ray through the pixel centre (the rasteriser has no anti-aliasing either), punctual
-//! lights are reached by next-event estimation (they cannot be hit), emissive surfaces add
-//! their emission where a path hits them, and each bounce samples the BRDF: a cosine lobe
+//! lights are reached by next-event estimation (they cannot be hit), emissive surfaces are
+//! lights too (issue #18): at every vertex one point of the emitters is sampled by power
+//! ([`crate::scene::emitters::Emitters::sample`], the distribution the renderer's emitter VPLs
+//! come from) and its light L_e · f · cos θ_x · cos θ_y / (d² · pdf_A) added when unoccluded,
+//! so a path that hits an emitter after a bounce does not add its emission again (only the
+//! camera's first hit shows it); with [`PathTracer::set_emitter_lights`] off, emitters only
+//! glow (their emission at the first hit, no light). Each bounce samples the BRDF: a cosine lobe
 //! for c·DI/π and the normalised Blinn-Phong lobe (SP) for the specular term, mixed by
 //! their weights. Every pixel and sample has its own seeded random stream, so results do
 //! not depend on thread scheduling: identical seeds give identical images. Rendering is
@@ -27,6 +32,7 @@ use rayon::prelude::*;
 use crate::buffers::ImageF32;
 use crate::cpu::brdf;
 use crate::cpu::raycast::{moller_trumbore, primary_ray};
+use crate::scene::emitters::Emitters;
 use crate::scene::{Material, Scene, WorldLight};
 
 /// Version of the estimator: bump it whenever a change alters the images (references
@@ -80,6 +86,8 @@ pub struct PathTracer {
     bvh: CwBvh,
     materials: Vec<Material>,
     lights: Vec<WorldLight>,
+    /// The emissive triangles, sampled by next-event estimation (empty: emitters only glow).
+    emitters: Emitters,
     /// Offset for secondary rays, relative to the scene size.
     eps: f32,
 }
@@ -154,7 +162,14 @@ impl PathTracer {
         let bvh = obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false);
         let eps = scene.bounds(time_s).radius().max(1e-3) * 1e-4;
         let materials = if scene.materials.is_empty() { vec![Material::default()] } else { scene.materials.clone() };
-        Self { tris, bvh, materials, lights: state.lights, eps }
+        let emitters = Emitters::collect(scene, &state);
+        Self { tris, bvh, materials, lights: state.lights, emitters, eps }
+    }
+
+    /// Whether emissive surfaces light the scene (`emitters.enabled`, on by default) or only
+    /// glow.
+    pub fn set_emitter_lights(&mut self, on: bool, scene: &Scene, time_s: f32) {
+        self.emitters = if on { Emitters::collect(scene, &scene.evaluate(time_s)) } else { Emitters::default() };
     }
 
     /// Closest hit in (tmin, tmax); the normal is the interpolated one, facing the ray.
@@ -190,9 +205,9 @@ impl PathTracer {
         len > 2.0 * self.eps && self.intersect(a, d / len, self.eps, len - self.eps).is_some()
     }
 
-    /// Direct light from every punctual light at a hit (next-event estimation; exact for
-    /// punctual lights, so no noise).
-    fn direct(&self, h: &Hit, v: Vec3) -> Vec3 {
+    /// Direct light at a hit: every punctual light (exact, so no noise) and one point of the
+    /// emitters (next-event estimation with the area density of [`Emitters::sample`]).
+    fn direct(&self, h: &Hit, v: Vec3, rng: &mut Pcg) -> Vec3 {
         let m = &self.materials[h.material.min(self.materials.len() - 1)];
         let origin = h.p + h.n * self.eps;
         let mut sum = Vec3::ZERO;
@@ -200,6 +215,18 @@ impl PathTracer {
             let (radiance, target) = brdf::punctual_radiance(wl, h.p, h.n, v, m, 1e6);
             if radiance != Vec3::ZERO && !self.occluded(origin, target) {
                 sum += radiance;
+            }
+        }
+        if let Some(s) = self.emitters.sample([rng.f(), rng.f(), rng.f()]) {
+            let w = s.position - h.p;
+            let d2 = w.length_squared();
+            let l = w / d2.sqrt().max(1e-12);
+            let (cos_x, cos_y) = (h.n.dot(l), -s.normal.dot(l));
+            if cos_x > 0.0 && cos_y > 0.0 && d2 > 0.0 && !self.occluded(origin, s.position) {
+                let c = m.base_color.xyz();
+                let (di, si, sp) = (m.diffuse_intensity(), m.specular_intensity(), m.specular_power());
+                let f = brdf::eval(h.n, l, v, c, di, si, sp);
+                sum += s.radiance * f * (cos_x * cos_y / (d2 * s.pdf_area));
             }
         }
         sum
@@ -266,7 +293,7 @@ impl PathTracer {
         let Some(mut h) = self.intersect(origin, dir, 0.0, f32::INFINITY) else { return (Vec3::ZERO, Vec3::ZERO) };
         let mut v = -dir;
         let emission = |h: &Hit| self.materials[h.material.min(self.materials.len() - 1)].emissive;
-        let direct = emission(&h) + self.direct(&h, v);
+        let direct = emission(&h) + self.direct(&h, v, rng);
         let mut indirect = Vec3::ZERO;
         let mut throughput = Vec3::ONE;
         for bounce in 0..bounces {
@@ -277,7 +304,8 @@ impl PathTracer {
                 break;
             }
             v = -l;
-            indirect += throughput * (emission(&next) + self.direct(&next, v));
+            // Emitters are lights: their light came by next-event estimation at `h`.
+            indirect += throughput * self.direct(&next, v, rng);
             h = next;
             if throughput.max_element() <= 0.0 {
                 break;

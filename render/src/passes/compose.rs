@@ -73,6 +73,7 @@ impl ComposePass {
                 super::bgl::texture(2, cs, false),
                 super::bgl::storage_texture(3, HDR_FORMAT),
                 super::bgl::texture(4, cs, false),
+                super::bgl::texture(5, cs, false),
             ],
         });
         let layout1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -179,12 +180,14 @@ impl ComposePass {
         reg.register("final.ldr", BufferKind::Ldr, "tone-mapped image (Reinhard), sRGB-encoded", &self.ldr);
     }
 
-    /// final.hdr = direct + indirect.
+    /// final.hdr = emission + direct + indirect + near field.
+    #[allow(clippy::too_many_arguments)]
     pub fn compose(
         &self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         slot: Option<crate::timing::Slot<'_>>,
+        emission: &wgpu::TextureView,
         direct: &wgpu::TextureView,
         indirect: Option<&wgpu::TextureView>,
         near_field: Option<&wgpu::TextureView>,
@@ -199,6 +202,7 @@ impl ComposePass {
                 wgpu::BindGroupEntry { binding: 2, resource: tv(indirect.unwrap_or(&self.black)) },
                 wgpu::BindGroupEntry { binding: 3, resource: tv(&hdr_view) },
                 wgpu::BindGroupEntry { binding: 4, resource: tv(near_field.unwrap_or(&self.black)) },
+                wgpu::BindGroupEntry { binding: 5, resource: tv(emission) },
             ],
         });
         self.dispatch(encoder, slot, "compose.compose", &self.compose, &group, self.screen_groups());

@@ -1,8 +1,12 @@
-//! Stage 2, direct light from the scene's punctual lights with PCF shadow maps.
+//! Stage 2, direct light from the scene's punctual lights with PCF shadow maps, and from its
+//! emissive surfaces by their VPLs (`passes::emitters`).
 //! Shader: `shaders/direct/direct.wgsl`; BRDF: `shaders/common/brdf.wgsl` (CPU twin
-//! `cpu::brdf`). Radiance L = L_e + Σ f(l, v) · I · falloff / d² · max(0, n·l) · visibility
+//! `cpu::brdf`). Radiance L = Σ f(l, v) · I · falloff / d² · max(0, n·l) · visibility
 //! over point and spot lights (KHR_lights_punctual units), with f · E · max(0, n·l) ·
-//! visibility for directional lights; L_e is the surface's emission (`gbuffer.emission`).
+//! visibility for directional lights, plus Σ f(l, v) · E_k · V_k over the emitter VPLs (E_k
+//! the irradiance of Knecht 002 Eq. 4.7 with d_min, V_k the visibility of
+//! `emitters.visibility`). The surface's own emission L_e is not part of it: the compose adds
+//! `gbuffer.emission` (so no gather takes an emitter for a sender besides its VPLs).
 
 use glam::Vec4;
 
@@ -44,6 +48,10 @@ settings_group! {
 pub struct DirectParams {
     pub shadow: Vec4,
     pub light: Vec4,
+    /// Emitter VPLs, visibility mode (0 none, 1 ISM, 2 exact), atlas columns, map size.
+    pub emitter_counts: [u32; 4],
+    /// The visibility's parameters (`GatherVisibility::parts`), d_min².
+    pub emitter_vis: Vec4,
 }
 
 pub const RADIANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -66,6 +74,10 @@ pub struct DirectPass {
     sampler: wgpu::Sampler,
     pub radiance: wgpu::Texture,
     radiance_view: wgpu::TextureView,
+    /// Stand-ins for the emitter VPLs and their atlases when there are none.
+    no_emitters: wgpu::Buffer,
+    no_ism: wgpu::TextureView,
+    no_exact: wgpu::TextureView,
 }
 
 impl DirectPass {
@@ -82,6 +94,9 @@ impl DirectPass {
                 super::bgl::storage(3, cs, true),
                 super::bgl::depth_array(4, cs),
                 super::bgl::sampler(5, cs, wgpu::SamplerBindingType::Comparison),
+                super::bgl::storage(6, cs, true),
+                super::bgl::texture(7, cs, false),
+                super::bgl::depth(8, cs),
             ],
         });
         let layout1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -92,7 +107,6 @@ impl DirectPass {
                 super::bgl::texture(2, cs, false),
                 super::bgl::texture(3, cs, false),
                 super::bgl::storage_texture(4, RADIANCE_FORMAT),
-                super::bgl::texture(5, cs, false),
             ],
         });
         let pipeline = super::compute_pipeline(device, "direct.pipeline", &module, "cs_main", &[&layout0, &layout1]);
@@ -131,7 +145,12 @@ impl DirectPass {
             ..Default::default()
         });
         let (radiance, radiance_view) = Self::target(ctx, width, height);
+        let no_emitters = storage("direct.no_emitters", std::mem::size_of::<super::reference::vpl::GpuVpl>() as u64);
+        let (no_ism, no_exact) = super::knecht::interleave::no_visibility_atlases(device, "direct.emitters");
         Self {
+            no_emitters,
+            no_ism,
+            no_exact,
             pipeline,
             atlas_pipeline,
             layout2,
@@ -170,7 +189,7 @@ impl DirectPass {
         reg.register(
             "direct.radiance",
             BufferKind::Hdr,
-            "outgoing radiance from the primary lights plus the surface's emission (W/(m²·sr))",
+            "outgoing radiance from the punctual lights and the emitter VPLs (W/(m²·sr)); the surface's own emission is gbuffer.emission",
             &self.radiance,
         );
     }
@@ -186,9 +205,16 @@ impl DirectPass {
         gbuffer: &GBufferViews,
         lights: &LightSetup,
         shadow_map: &wgpu::TextureView,
+        emitters: Option<&super::emitters::EmitterLight>,
     ) {
         let device = &ctx.device;
+        let none = super::knecht::interleave::GatherVisibility::None;
+        let vis = emitters.map_or(&none, |e| &e.visibility);
+        let (mode, ism, exact, cols, size, vp) = vis.parts(&self.no_ism, &self.no_exact);
+        let (count, dmin) = emitters.map_or((0, 0.0), |e| (e.count, e.min_distance));
         let p = DirectParams {
+            emitter_counts: [count, mode, cols, size],
+            emitter_vis: Vec4::new(vp.y, vp.z, vp.w, dmin * dmin),
             shadow: Vec4::new(
                 settings.pcf_radius as f32,
                 settings.shadow_map_size as f32,
@@ -238,6 +264,12 @@ impl DirectPass {
                 wgpu::BindGroupEntry { binding: 3, resource: self.matrices.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(shadow_map) },
                 wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::Sampler(&self.sampler) },
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: emitters.map_or(&self.no_emitters, |e| &e.list).as_entire_binding(),
+                },
+                wgpu::BindGroupEntry { binding: 7, resource: wgpu::BindingResource::TextureView(ism) },
+                wgpu::BindGroupEntry { binding: 8, resource: wgpu::BindingResource::TextureView(exact) },
             ],
         });
         let tv = wgpu::BindingResource::TextureView;
@@ -250,7 +282,6 @@ impl DirectPass {
                 wgpu::BindGroupEntry { binding: 2, resource: tv(&gbuffer.albedo) },
                 wgpu::BindGroupEntry { binding: 3, resource: tv(&gbuffer.material) },
                 wgpu::BindGroupEntry { binding: 4, resource: tv(&self.radiance_view) },
-                wgpu::BindGroupEntry { binding: 5, resource: tv(&gbuffer.emission) },
             ],
         });
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -294,7 +325,6 @@ impl DirectPass {
                 wgpu::BindGroupEntry { binding: 2, resource: tv(&atlas.albedo) },
                 wgpu::BindGroupEntry { binding: 3, resource: tv(&atlas.material) },
                 wgpu::BindGroupEntry { binding: 4, resource: tv(out) },
-                wgpu::BindGroupEntry { binding: 5, resource: tv(&atlas.emission) },
             ],
         });
         let group2 = super::bind_group(

@@ -13,6 +13,7 @@
 
 pub mod compose;
 pub mod direct;
+pub mod emitters;
 pub mod gautron;
 pub mod gbuffer;
 pub mod hcb;

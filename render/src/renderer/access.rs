@@ -158,6 +158,13 @@ impl Renderer {
         self.stages.hcb.as_ref()?.stats(&self.ctx, self.settings.hcb.d_max(self.bounds.radius()))
     }
 
+    /// The emitters of the last frame (issue #18): emissive triangles, their power, the VPLs on
+    /// them and stage 3's share for their first bounce. None while emitters are off or the
+    /// scene has none.
+    pub fn emitter_stats(&self) -> Option<crate::passes::emitters::EmitterStats> {
+        Some(self.stages.emitters.as_ref()?.stats)
+    }
+
     /// The VPLs of the last frame (`vpl.list`): instant radiosity's (Knecht §3.3), or the
     /// exact-VPL reference's last batch, in slot order; position and incident flux of every
     /// filled slot. None when no VPL source runs or no frame was rendered with it. Blocks

@@ -19,6 +19,7 @@ use crate::clock::Clock;
 use crate::gpu::GpuContext;
 use crate::passes::compose::ComposePass;
 use crate::passes::direct::DirectPass;
+use crate::passes::emitters::EmitterPass;
 use crate::passes::gautron::stage::GautronStage;
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::hcb::stage::HcbStage;
@@ -35,9 +36,12 @@ use crate::scene::{Aabb, Scene};
 use crate::settings::LabSettings;
 use crate::timing::GpuTimer;
 
-/// The passes of stages 3–7, each present while a stage's choice names it.
+/// The passes of stages 3–7, each present while a stage's choice names it, and the emitters'
+/// VPLs of stage 2 while the scene has emitters and `emitters.enabled` is on.
 #[derive(Default)]
 pub(crate) struct StagePasses {
+    /// Emissive surfaces as lights (stage 2; their first bounce in stage 3).
+    pub emitters: Option<EmitterPass>,
     /// VPL source "importance warping" with its visibility (Knecht).
     pub knecht: Option<KnechtVpls>,
     /// VPL source "uniform batches": the exact-VPL reference (its visibility, gather and
@@ -165,6 +169,9 @@ impl Renderer {
         self.direct.register(&mut self.registry);
         self.compose.register(&mut self.registry);
         let x = &self.stages;
+        if let Some(e) = &x.emitters {
+            e.register(&mut self.registry, &self.settings);
+        }
         if let Some(r) = &x.reference {
             r.register(&mut self.registry);
         }
@@ -366,6 +373,14 @@ impl Renderer {
         let (w, h) = (self.width, self.height);
         let x = &mut self.stages;
         let mut fresh = false;
+        if s.emitters.enabled && self.scene.has_emitters() {
+            let state = self.scene.evaluate(self.clock.time_s());
+            let created = x.emitters.is_none();
+            let e = x.emitters.get_or_insert_with(|| EmitterPass::new(&ctx));
+            fresh |= e.ensure(&ctx, &self.scene, &state, &self.gpu_scene, &s) | created;
+        } else {
+            fresh |= x.emitters.take().is_some();
+        }
         if p.uses_knecht_vpls() {
             let state = self.scene.evaluate(self.clock.time_s());
             let views = light_view_list(&state, self.bounds).len();

@@ -22,10 +22,25 @@ use crate::cpu::raycast::TriangleSoup;
 /// show it).
 pub const NO_LIGHTS: &str = "the scene has no lights";
 
+/// The start of the note that says a scene is lit by its emissive surfaces alone.
+pub const LIT_BY_EMITTERS: &str = "the scene is lit by its emissive surfaces";
+
 impl Scene {
-    /// Adds the default light when the scene has none (see the module doc).
+    /// Adds the default light when the scene has none (see the module doc). Emissive surfaces
+    /// are lights (`passes::emitters`): a scene with them gets no default light, and a note
+    /// says what lights it.
     pub fn ensure_light(&mut self) {
         if !self.lights.is_empty() {
+            return;
+        }
+        if self.has_emitters() {
+            let state = self.evaluate(0.0);
+            let e = super::emitters::Emitters::collect(self, &state);
+            self.warnings.push(format!(
+                "{LIT_BY_EMITTERS}: {} emissive triangles, {:.3} W in all (no punctual light; turning emitters.enabled off leaves it dark)",
+                e.triangles.len(),
+                e.luminance_power()
+            ));
             return;
         }
         let state = self.evaluate(0.0);
@@ -75,9 +90,10 @@ impl Scene {
         });
     }
 
-    /// The note on the default light, when the scene got one.
+    /// The note on the default light, when the scene got one, or on the emitters that light a
+    /// scene without punctual lights.
     pub fn default_light_note(&self) -> Option<&str> {
-        self.warnings.iter().find(|w| w.starts_with(NO_LIGHTS)).map(|w| w.as_str())
+        self.warnings.iter().find(|w| w.starts_with(NO_LIGHTS) || w.starts_with(LIT_BY_EMITTERS)).map(|w| w.as_str())
     }
 
     fn push_light(&mut self, name: &str, kind: LightKind, intensity: f32, transform: Transform) {

@@ -10,6 +10,7 @@
 mod animation;
 pub mod cornell;
 pub mod default_light;
+pub mod emitters;
 mod gltf_load;
 pub mod upload;
 
@@ -300,6 +301,17 @@ impl Scene {
     pub fn triangle_count(&self) -> usize {
         let state = self.evaluate(0.0);
         state.draws.iter().map(|d| self.meshes[d.mesh].primitives[d.primitive].indices.len() / 3).sum()
+    }
+
+    /// Whether a drawn primitive has an emissive material (`emitters::Emitters` finds its
+    /// triangles).
+    pub fn has_emitters(&self) -> bool {
+        let drawn = |mesh: usize| self.nodes.iter().any(|n| n.mesh == Some(mesh));
+        self.meshes.iter().enumerate().any(|(i, m)| {
+            m.primitives
+                .iter()
+                .any(|p| self.materials.get(p.material).is_some_and(|mat| mat.emissive.max_element() > 0.0) && drawn(i))
+        })
     }
 
     /// Evaluates animations at `time_s` and the hierarchy into world space.

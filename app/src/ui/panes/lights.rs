@@ -24,7 +24,8 @@ pub(super) fn light_controls(l: &mut Lab, ui: &mut egui::Ui) -> Option<String> {
     });
     let light_nodes: Vec<usize> =
         l.renderer.scene().nodes.iter().enumerate().filter(|(_, n)| n.light.is_some()).map(|(i, _)| i).collect();
-    if light_nodes.is_empty() {
+    emitter_controls(l, ui);
+    if light_nodes.is_empty() && l.renderer.emitter_stats().is_none() {
         ui.small("no lights: the image has no direct light (add one above)");
     }
     let mut remove = None;
@@ -154,4 +155,39 @@ pub(super) fn light_controls(l: &mut Lab, ui: &mut egui::Ui) -> Option<String> {
         l.renderer.reset_history_but_records();
     }
     message
+}
+
+/// Emissive surfaces as lights: the toggle (`emitters.enabled`), their power and the VPLs
+/// they get (issue #18 point 1).
+fn emitter_controls(l: &mut Lab, ui: &mut egui::Ui) {
+    if !l.renderer.scene().has_emitters() {
+        return;
+    }
+    let mut on = l.settings.emitters.enabled;
+    if ui
+        .checkbox(&mut on, "emissive surfaces are lights")
+        .on_hover_text("off: emissive surfaces only glow (emitters.enabled)")
+        .changed()
+    {
+        l.settings.emitters.enabled = on;
+        l.apply_settings();
+    }
+    match l.renderer.emitter_stats() {
+        Some(e) => {
+            ui.small(format!(
+                "emitters: {} triangles, {:.3} W, {:.3} m²; {} VPLs for their direct light",
+                e.triangles, e.power, e.area, e.vpls
+            ));
+            if e.bounce_budget > 0 {
+                let share = 100.0 * e.bounce_share as f32 / e.bounce_budget as f32;
+                ui.small(format!(
+                    "first bounce: {} of stage 3's {} VPLs ({share:.0} %)",
+                    e.bounce_share, e.bounce_budget
+                ));
+            }
+        }
+        None => {
+            ui.small("emitters only glow");
+        }
+    }
 }

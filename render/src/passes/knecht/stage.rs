@@ -9,6 +9,7 @@
 use crate::cpu::knecht::split_budget;
 use crate::gpu::GpuContext;
 use crate::lab_settings::LabSettings;
+use crate::passes::emitters::EmitterPass;
 use crate::passes::knecht::irsm::{IrsmFrame, IrsmJob, IrsmPass};
 use crate::passes::knecht::ism::{BounceShadowTest, IsmFrame, IsmJob, IsmPass, MAX_BOUNCES};
 use crate::passes::knecht::vpl_bounce::{BounceFrame, BounceMethod, VplBouncePass};
@@ -115,11 +116,23 @@ impl KnechtVpls {
     }
 
     /// Stage 3: this frame's VPLs of every light view and bounce (with the ISMs the bounces
-    /// need, §3.6.1).
-    pub fn vpls(&mut self, f: &FrameInputs, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) -> VplSet {
+    /// need, §3.6.1). With emitters as lights (`passes::emitters`), bounce 0 also holds the
+    /// emitters' first bounce: their share of the budget by power, after the light views'.
+    pub fn vpls(
+        &mut self,
+        f: &FrameInputs,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        emitters: Option<&mut EmitterPass>,
+    ) -> VplSet {
         let (ctx, s) = (f.ctx, f.settings);
-        let powers = view_powers(&f.state.lights, f.vpl_radius(), s.vpl.split_by_power);
-        let counts = split_budget(&powers, s.vpl.count);
+        let mut powers = view_powers(&f.state.lights, f.vpl_radius(), s.vpl.split_by_power);
+        let emitters = emitters.filter(|e| e.stats.vpls > 0);
+        if let Some(e) = &emitters {
+            powers.push(if s.vpl.split_by_power { e.stats.power } else { 1.0 });
+        }
+        let mut counts = split_budget(&powers, s.vpl.count);
+        let emitter_share = if emitters.is_some() { counts.pop().unwrap_or(0) } else { 0 };
         let mut first = 0;
         let jobs: Vec<ViewJob> = f
             .views
@@ -143,6 +156,15 @@ impl KnechtVpls {
         }
         let bounces = s.vpl.bounces.clamp(1, MAX_BOUNCES);
         let n_vpls = s.vpl.count.min(self.vpl.capacity / bounces);
+        if let Some(e) = emitters {
+            let (scene, list, r) = (f.gpu_scene, &self.vpl.vpls, f.vpl_radius());
+            let written = e.bounce_into(ctx, enc, timer, scene, s, r, emitter_share, s.vpl.count, list, first);
+            // Slots the emitters could not fill (more than their VPLs) stay empty.
+            let (used, size) = (first + written, std::mem::size_of::<crate::passes::reference::vpl::GpuVpl>() as u64);
+            if used < n_vpls {
+                enc.clear_buffer(list, used as u64 * size, Some((n_vpls - used) as u64 * size));
+            }
+        }
 
         let eye_offset = Self::eye_offset(s, f.vpl_radius());
         let splats = ism_splats(s);

@@ -109,14 +109,14 @@ fn load_str(json: &str) -> Result<Scene, SceneError> {
 // ---- the shared real-world scenes -------------------------------------------------
 
 #[test]
-fn shared_cornell_box_loads_with_default_light() {
+fn shared_cornell_box_loads_lit_by_its_emitter() {
     let scene = load_gltf_file(&shared_scene("cornell-box/CornellBox-Original.gltf"), &LoadOptions::default())
         .expect("CornellBox-Original loads");
     assert_eq!(scene.triangle_count(), 32);
     assert_eq!(scene.name, "CornellBox-Original");
-    assert_eq!(scene.lights.len(), 1, "only the default light: the file has an emissive quad, no punctual light");
-    assert_eq!(scene.lights[0].name, "default spot");
-    assert!(scene.warnings.iter().any(|w| w.contains("no lights")), "{:?}", scene.warnings);
+    assert!(scene.lights.is_empty(), "no default light: the file's emissive quad lights it");
+    assert!(scene.has_emitters());
+    assert!(scene.warnings.iter().any(|w| w.contains("lit by its emissive surfaces")), "{:?}", scene.warnings);
     let light = scene.materials.iter().find(|m| m.name == "Light").expect("Light material");
     assert_eq!(light.emissive, Vec3::ONE);
     // The mesh node is rotated +90° about X in the file; the floor ends up at y ≈ 0.

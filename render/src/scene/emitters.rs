@@ -1,0 +1,243 @@
+//! Emissive surfaces as lights (issue #18 point 1): the scene's emissive triangles in world
+//! space, with the power each emits, and the two ways the lab samples them.
+//!
+//! - A Lambertian emitter of radiance L_e and area A emits the power Φ = π · L_e · A from each
+//!   side it emits on (one side, the side its vertex normals face; both when its material is
+//!   `doubleSided`). Its radiant intensity toward ω is L_e · A · cos θ, which is the intensity
+//!   Φ · cos θ / π of a diffuse VPL of flux Φ: **an emitter sample is a VPL** with f = 1/π.
+//! - [`Emitters::vpls`]: `count` such VPLs, importance-sampled by power (a triangle with
+//!   probability ∝ its luminance power, a point uniform on it, a side uniform among its
+//!   sides) from the Halton points (h₂, h₃, h₅)(j + 1): a stratified set, the same every frame.
+//!   Each carries Φ_j = π · L_e(y_j) / (pdf_A(y_j) · count), so that Σ_j Φ_j · cos θ / π · … is
+//!   an unbiased estimate of the emitters' light (Keller 1997's instant radiosity starts its
+//!   light paths on the lights this way; Ritschel et al. 2008 light area lights with ISMs of
+//!   such VPLs).
+//! - [`Emitters::sample`]: one point with its area density, for the path tracer's next-event
+//!   estimation (`cpu::pathtrace`), so that ground truth samples the same emitters.
+//!
+//! Emission is the material's emissive factor × `KHR_materials_emissive_strength`
+//! ([`super::Material::emissive`]); emissive textures are not loaded (the G-buffer and the
+//! lights both use the factor).
+
+use glam::{Mat4, Vec3, Vec4Swizzles};
+
+use super::{Scene, SceneState};
+use crate::cpu::knecht::halton;
+
+/// One emissive triangle in world space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EmitterTriangle {
+    pub v: [Vec3; 3],
+    /// Unit normal of the emitting side (for two-sided emitters, the front one).
+    pub normal: Vec3,
+    /// Emitted radiance L_e (W/(m²·sr)).
+    pub radiance: Vec3,
+    pub area: f32,
+    /// 1, or 2 for a double-sided material (it emits from both sides).
+    pub sides: u32,
+}
+
+impl EmitterTriangle {
+    /// Power emitted, all sides: π · L_e · A · sides (W per channel).
+    pub fn power(&self) -> Vec3 {
+        self.radiance * (std::f32::consts::PI * self.area * self.sides as f32)
+    }
+}
+
+/// A point on an emitter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EmitterSample {
+    pub position: Vec3,
+    /// Unit normal of the side it emits from.
+    pub normal: Vec3,
+    pub radiance: Vec3,
+    /// Probability density of the point per unit area of that side.
+    pub pdf_area: f32,
+}
+
+/// A VPL on an emitter: position, normal and flux Φ (W).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EmitterVpl {
+    pub position: Vec3,
+    pub normal: Vec3,
+    pub flux: Vec3,
+}
+
+/// The emissive triangles of a scene at one instant, with the distribution that samples them.
+#[derive(Clone, Debug, Default)]
+pub struct Emitters {
+    pub triangles: Vec<EmitterTriangle>,
+    /// Cumulative luminance power, ending at 1 (empty without emitters).
+    cdf: Vec<f32>,
+    /// Total power emitted, all sides (W per channel).
+    pub power: Vec3,
+    /// Total emitting area, all sides (m²).
+    pub area: f32,
+}
+
+fn luminance(c: Vec3) -> f32 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
+impl Emitters {
+    /// The emissive triangles of `state`'s draws (materials with a non-zero emission;
+    /// degenerate triangles are skipped).
+    pub fn collect(scene: &Scene, state: &SceneState) -> Self {
+        let mut triangles = Vec::new();
+        for d in &state.draws {
+            let Some(p) = scene.meshes.get(d.mesh).and_then(|m| m.primitives.get(d.primitive)) else { continue };
+            let Some(m) = scene.materials.get(p.material) else { continue };
+            if luminance(m.emissive) <= 0.0 {
+                continue;
+            }
+            let nm: Mat4 = d.world.inverse().transpose();
+            for t in p.indices.chunks_exact(3) {
+                let Some(vs) = t.iter().map(|&i| p.vertices.get(i as usize)).collect::<Option<Vec<_>>>() else {
+                    continue;
+                };
+                let v = [0, 1, 2].map(|k| d.world.transform_point3(Vec3::from(vs[k].position)));
+                let cross = (v[1] - v[0]).cross(v[2] - v[0]);
+                let area = 0.5 * cross.length();
+                if !(area > 0.0 && area.is_finite()) {
+                    continue;
+                }
+                let shading: Vec3 = vs.iter().map(|x| (nm * Vec3::from(x.normal).extend(0.0)).xyz()).sum();
+                let mut normal = cross / (2.0 * area);
+                if shading.dot(normal) < 0.0 {
+                    normal = -normal;
+                }
+                let sides = if m.double_sided { 2 } else { 1 };
+                triangles.push(EmitterTriangle { v, normal, radiance: m.emissive, area, sides });
+            }
+        }
+        Self::from_triangles(triangles)
+    }
+
+    pub fn from_triangles(triangles: Vec<EmitterTriangle>) -> Self {
+        let mut cdf = Vec::with_capacity(triangles.len());
+        let mut total = 0.0f64;
+        let (mut power, mut area) = (Vec3::ZERO, 0.0);
+        for t in &triangles {
+            total += luminance(t.power()) as f64;
+            cdf.push(total as f32);
+            power += t.power();
+            area += t.area * t.sides as f32;
+        }
+        if total > 0.0 {
+            for c in &mut cdf {
+                *c = (*c as f64 / total) as f32;
+            }
+            if let Some(last) = cdf.last_mut() {
+                *last = 1.0;
+            }
+        } else {
+            cdf.clear();
+        }
+        Self { triangles, cdf, power, area }
+    }
+
+    /// Whether there is anything to sample.
+    pub fn is_empty(&self) -> bool {
+        self.cdf.is_empty()
+    }
+
+    /// Luminance of the total power (W).
+    pub fn luminance_power(&self) -> f32 {
+        luminance(self.power)
+    }
+
+    /// The triangle that `u` ∈ [0, 1) picks (∝ luminance power) and its probability.
+    fn pick(&self, u: f32) -> (usize, f32) {
+        let i = self.cdf.partition_point(|&c| c <= u).min(self.cdf.len() - 1);
+        let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
+        (i, (self.cdf[i] - lo).max(f32::MIN_POSITIVE))
+    }
+
+    /// The point of `u` ∈ [0, 1)³: u.x picks the triangle, (u.y, u.z) a uniform point on it
+    /// (the square-root warp), and for two-sided triangles the side (u.x rescaled within the
+    /// triangle's interval). None without emitters.
+    pub fn sample(&self, u: [f32; 3]) -> Option<EmitterSample> {
+        if self.is_empty() {
+            return None;
+        }
+        let (i, p_tri) = self.pick(u[0]);
+        let t = &self.triangles[i];
+        let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
+        let within = ((u[0] - lo) / p_tri).clamp(0.0, 1.0);
+        let normal = if t.sides == 2 && within >= 0.5 { -t.normal } else { t.normal };
+        let s = u[1].sqrt();
+        let (b1, b2) = (1.0 - s, u[2] * s);
+        let position = t.v[0] * b1 + t.v[1] * b2 + t.v[2] * (1.0 - b1 - b2);
+        let pdf_area = p_tri / (t.area * t.sides as f32);
+        Some(EmitterSample { position, normal, radiance: t.radiance, pdf_area })
+    }
+
+    /// `count` VPLs on the emitters (see the module doc): Halton points `first + 1` ….
+    pub fn vpls(&self, count: u32, first: u32) -> Vec<EmitterVpl> {
+        (0..count)
+            .filter_map(|j| {
+                let k = first + j + 1;
+                let s = self.sample([halton(k, 2), halton(k, 3), halton(k, 5)])?;
+                let flux = s.radiance * std::f32::consts::PI / (s.pdf_area * count as f32);
+                Some(EmitterVpl { position: s.position, normal: s.normal, flux })
+            })
+            .collect()
+    }
+
+    /// Mean spacing of `count` samples over the emitting area: √(A / count).
+    pub fn spacing(&self, count: u32) -> f32 {
+        (self.area / count.max(1) as f32).sqrt()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn quad(radiance: Vec3, sides: u32) -> Vec<EmitterTriangle> {
+        let (a, b, c, d) = (Vec3::ZERO, Vec3::X, Vec3::new(1.0, 0.0, 2.0), Vec3::new(0.0, 0.0, 2.0));
+        let n = Vec3::NEG_Y;
+        vec![
+            EmitterTriangle { v: [a, b, c], normal: n, radiance, area: 1.0, sides },
+            EmitterTriangle { v: [a, c, d], normal: n, radiance, area: 1.0, sides },
+        ]
+    }
+
+    #[test]
+    fn vpl_fluxes_add_up_to_the_emitted_power() {
+        for sides in [1, 2] {
+            let e = Emitters::from_triangles(quad(Vec3::new(1.0, 2.0, 0.5), sides));
+            let expected = Vec3::new(1.0, 2.0, 0.5) * std::f32::consts::PI * 2.0 * sides as f32;
+            assert!((e.power - expected).length() < 1e-4);
+            let vpls = e.vpls(64, 0);
+            assert_eq!(vpls.len(), 64);
+            let sum: Vec3 = vpls.iter().map(|v| v.flux).sum();
+            assert!((sum - expected).length() < 1e-3 * expected.length(), "{sum} vs {expected}");
+            let down = vpls.iter().filter(|v| v.normal == Vec3::NEG_Y).count();
+            assert_eq!(down, if sides == 1 { 64 } else { 32 }, "a two-sided emitter emits from both sides");
+            for v in &vpls {
+                assert!((0.0..=1.0).contains(&v.position.x) && (0.0..=2.0).contains(&v.position.z));
+                assert!(v.position.y.abs() < 1e-6);
+            }
+        }
+    }
+
+    #[test]
+    fn brighter_triangles_get_more_samples() {
+        let mut tris = quad(Vec3::ONE, 1);
+        tris[1].radiance = Vec3::splat(3.0);
+        let e = Emitters::from_triangles(tris);
+        let vpls = e.vpls(400, 0);
+        // Triangle 0 is the half with x > z/2.
+        let on_bright = vpls.iter().filter(|v| v.position.x < v.position.z * 0.5).count();
+        assert!((290..=310).contains(&on_bright), "{on_bright} of 400 on the triangle with 3/4 of the power");
+        // Equal flux per VPL: the importance sampling is by power.
+        assert!(vpls.iter().all(|v| (v.flux - vpls[0].flux).length() < 1e-4));
+    }
+
+    #[test]
+    fn no_emitters_no_samples() {
+        let e = Emitters::from_triangles(quad(Vec3::ZERO, 1));
+        assert!(e.is_empty() && e.vpls(8, 0).is_empty() && e.sample([0.5; 3]).is_none());
+    }
+}
