@@ -42,7 +42,9 @@ pub(super) fn reference(args: &ReferenceArgs) -> Result<(), CliError> {
     let bounds = scene.bounds(0.0);
     let camera = gi_render::renderer::default_camera(&scene, bounds, w as f32 / h as f32);
     let start = std::time::Instant::now();
-    let pt = PathTracer::new(&scene, 0.0);
+    let mut pt = PathTracer::new(&scene, 0.0);
+    // The emitters as the preset says (`emitters.enabled`, `emitters.two_sided`).
+    pt.use_emitter_settings(&crate::scene_args::load_settings(&args.scene)?.emitters, &scene, 0.0);
     let build_s = start.elapsed().as_secs_f64();
     let img = pt.render(
         camera.view_proj(w as f32 / h as f32),

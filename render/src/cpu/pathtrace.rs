@@ -172,6 +172,15 @@ impl PathTracer {
         self.emitters = if on { Emitters::collect(scene, &scene.evaluate(time_s)) } else { Emitters::default() };
     }
 
+    /// The emitters as the lab's `emitters.*` settings say (on or off, one or two sides).
+    pub fn use_emitter_settings(&mut self, s: &crate::passes::emitters::EmitterSettings, scene: &Scene, time_s: f32) {
+        self.emitters = if s.enabled {
+            Emitters::collect_sides(scene, &scene.evaluate(time_s), s.two_sided)
+        } else {
+            Emitters::default()
+        };
+    }
+
     /// Closest hit in (tmin, tmax); the normal is the interpolated one, facing the ray.
     fn intersect(&self, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
         let ray = Ray::new(Vec3A::from(o), Vec3A::from(d), tmin, tmax);

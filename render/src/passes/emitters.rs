@@ -76,6 +76,10 @@ settings_group! {
         /// more than it (0: no clamp, bright spots next to emitters).
         min_distance: f32 = 1.0,
         unit "× spacing", symbol "", range 0.0..=16.0, cost "free", history true;
+        /// Double-sided materials (glTF `doubleSided`) emit from both sides; off: from the
+        /// side their normals face (see `scene::emitters`).
+        two_sided: bool = false,
+        unit "", symbol "", range 0..=1, cost "free", history true;
     }
 }
 
@@ -239,7 +243,7 @@ impl EmitterPass {
         s: &LabSettings,
         radius: f32,
     ) -> Option<EmitterLight> {
-        self.emitters = Emitters::collect(scene, state);
+        self.emitters = Emitters::collect_sides(scene, state, s.emitters.two_sided);
         self.splatted = false;
         self.stats = EmitterStats {
             triangles: self.emitters.triangles.len(),

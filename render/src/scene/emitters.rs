@@ -2,8 +2,11 @@
 //! space, with the power each emits, and the two ways the lab samples them.
 //!
 //! - A Lambertian emitter of radiance L_e and area A emits the power Φ = π · L_e · A from each
-//!   side it emits on (one side, the side its vertex normals face; both when its material is
-//!   `doubleSided`). Its radiant intensity toward ω is L_e · A · cos θ, which is the intensity
+//!   side it emits on: the side its vertex normals face, and with `emitters.two_sided` the
+//!   back too when its material is `doubleSided` (off by default: exporters mark most
+//!   materials double-sided, and a light panel just under a ceiling — the shared Cornell
+//!   box's — would pour half its power into the gap, measured ≈ 30 % of that box's first
+//!   bounce, as noisy light leaking from a 1 cm slit). Its radiant intensity toward ω is L_e · A · cos θ, which is the intensity
 //!   Φ · cos θ / π of a diffuse VPL of flux Φ: **an emitter sample is a VPL** with f = 1/π.
 //! - [`Emitters::vpls`]: `count` such VPLs, importance-sampled by power (a triangle with
 //!   probability ∝ its luminance power, a point uniform on it, a side uniform among its
@@ -81,8 +84,13 @@ fn luminance(c: Vec3) -> f32 {
 
 impl Emitters {
     /// The emissive triangles of `state`'s draws (materials with a non-zero emission;
-    /// degenerate triangles are skipped).
+    /// degenerate triangles are skipped), emitting from their front side.
     pub fn collect(scene: &Scene, state: &SceneState) -> Self {
+        Self::collect_sides(scene, state, false)
+    }
+
+    /// As [`Self::collect`]; `two_sided`: double-sided materials emit from both sides.
+    pub fn collect_sides(scene: &Scene, state: &SceneState, two_sided: bool) -> Self {
         let mut triangles = Vec::new();
         for d in &state.draws {
             let Some(p) = scene.meshes.get(d.mesh).and_then(|m| m.primitives.get(d.primitive)) else { continue };
@@ -106,7 +114,7 @@ impl Emitters {
                 if shading.dot(normal) < 0.0 {
                     normal = -normal;
                 }
-                let sides = if m.double_sided { 2 } else { 1 };
+                let sides = if two_sided && m.double_sided { 2 } else { 1 };
                 triangles.push(EmitterTriangle { v, normal, radiance: m.emissive, area, sides });
             }
         }
@@ -188,6 +196,69 @@ impl Emitters {
     pub fn spacing(&self, count: u32) -> f32 {
         (self.area / count.max(1) as f32).sqrt()
     }
+}
+
+/// Adds a glowing UV sphere (`rings` × `segments` quads, two triangles each; the pole rows
+/// degenerate to one) of emitted radiance `radiance` to `scene`: the many-emitter case of
+/// issue #18 (tests and `gi-lab bench --suite scenes`). Returns its triangle count.
+pub fn add_glowing_sphere(
+    scene: &mut Scene,
+    center: Vec3,
+    radius: f32,
+    rings: u32,
+    segments: u32,
+    radiance: Vec3,
+) -> usize {
+    use super::{Material, Mesh, Node, Primitive, Transform, Vertex};
+    let (rings, segments) = (rings.max(2), segments.max(3));
+    let mut vertices = Vec::new();
+    for i in 0..=rings {
+        let theta = std::f32::consts::PI * i as f32 / rings as f32;
+        for j in 0..=segments {
+            let phi = std::f32::consts::TAU * j as f32 / segments as f32;
+            let n = Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin());
+            vertices.push(Vertex {
+                position: (n * radius).to_array(),
+                normal: n.to_array(),
+                uv: [j as f32 / segments as f32, i as f32 / rings as f32],
+            });
+        }
+    }
+    let mut indices = Vec::new();
+    let row = segments + 1;
+    for i in 0..rings {
+        for j in 0..segments {
+            let (a, b) = (i * row + j, (i + 1) * row + j);
+            // Counter-clockwise seen from outside.
+            if i > 0 {
+                indices.extend_from_slice(&[a, a + 1, b]);
+            }
+            if i + 1 < rings {
+                indices.extend_from_slice(&[a + 1, b + 1, b]);
+            }
+        }
+    }
+    let triangles = indices.len() / 3;
+    scene.materials.push(Material {
+        name: "glow".into(),
+        base_color: glam::Vec4::new(0.8, 0.8, 0.8, 1.0),
+        emissive: radiance,
+        ..Material::default()
+    });
+    let material = scene.materials.len() - 1;
+    scene
+        .meshes
+        .push(Mesh { name: "glowing sphere".into(), primitives: vec![Primitive { vertices, indices, material }] });
+    scene.nodes.push(Node {
+        name: "glowing sphere".into(),
+        transform: Transform { translation: center, ..Transform::default() },
+        children: vec![],
+        mesh: Some(scene.meshes.len() - 1),
+        light: None,
+        camera: None,
+    });
+    scene.roots.push(scene.nodes.len() - 1);
+    triangles
 }
 
 #[cfg(test)]

@@ -1,0 +1,191 @@
+//! Emissive surfaces as lights (issue #18 point 1): the emitter VPLs' direct light against its
+//! CPU twin, the shared Cornell box lit only by its ceiling quad against the path tracer in
+//! every technique, emitters that only glow, and thousands of emissive triangles.
+
+use gi_lab_tests::{gpu, read, shared_scene};
+use gi_render::cpu::knecht;
+use gi_render::cpu::pathtrace::{PathTracer, PtSettings};
+use gi_render::image_io::hdr_display;
+use gi_render::metrics::{auto_exposure, flip, scaled};
+use gi_render::scene::emitters::{Emitters, add_glowing_sphere};
+use gi_render::scene::{LoadOptions, Scene, load_gltf_file};
+use gi_render::{ImageF32, LabSettings, Renderer};
+use glam::Vec3;
+
+fn cornell() -> Scene {
+    load_gltf_file(&shared_scene("cornell-box/CornellBox-Original.gltf"), &LoadOptions::default())
+        .expect("the shared Cornell box loads")
+}
+
+fn renderer(scene: Scene, size: u32, edit: impl FnOnce(&mut LabSettings)) -> Renderer {
+    let mut s = LabSettings::default();
+    edit(&mut s);
+    let mut r = Renderer::new(gpu(), scene, s, size, size).expect("renderer");
+    r.clock.playing = false;
+    r
+}
+
+fn luminance(p: &[f32; 4]) -> f64 {
+    (0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]) as f64
+}
+
+fn mean(img: &ImageF32) -> f64 {
+    img.data.iter().map(luminance).sum::<f64>() / img.data.len() as f64
+}
+
+fn sub(a: &ImageF32, b: &ImageF32) -> ImageF32 {
+    let data = a.data.iter().zip(&b.data).map(|(x, y)| [x[0] - y[0], x[1] - y[1], x[2] - y[2], 1.0]).collect();
+    ImageF32 { width: a.width, height: a.height, data }
+}
+
+/// FLIP of `test` against `truth`, both at the exposure that brings the truth to middle grey
+/// (the box lit by a 1 W quad is dim).
+fn exposed_flip(test: &ImageF32, truth: &ImageF32) -> f64 {
+    let k = auto_exposure(truth);
+    flip(&hdr_display(&scaled(test, k)), &hdr_display(&scaled(truth, k))).expect("same size").0
+}
+
+#[test]
+fn emitter_direct_light_matches_its_cpu_twin() {
+    // No visibility: the direct pass's emitter sum against cpu::knecht::vpl_radiance of the
+    // same VPLs at every covered pixel.
+    let size = 48;
+    let mut r = renderer(cornell(), size, |s| {
+        gi_render::pipeline::Technique::DirectOnly.apply(s);
+        s.apply_override("emitters.visibility=None").expect("valid");
+    });
+    r.render_frame();
+    let stats = r.emitter_stats().expect("the box has an emitter");
+    assert_eq!(stats.triangles, 2);
+    assert_eq!(stats.vpls, 64, "emitters.vpls VPLs");
+    assert_eq!(stats.bounce_share, 0, "no VPL technique runs: no first-bounce share");
+    let state = r.scene().evaluate(0.0);
+    let emitters = Emitters::collect(r.scene(), &state);
+    let d_min = r.settings().emitters.min_distance * emitters.spacing(stats.vpls);
+    let vpls: Vec<knecht::Vpl> = emitters
+        .vpls(stats.vpls, 0)
+        .iter()
+        .map(|v| knecht::Vpl {
+            position: v.position,
+            normal: v.normal,
+            flux: v.flux,
+            incident: v.normal,
+            albedo: Vec3::ONE,
+            di: 1.0,
+            si: 0.0,
+            sp: 1.0,
+        })
+        .collect();
+    let (pos, nrm, alb, mat) = (
+        read(&r, "gbuffer.position"),
+        read(&r, "gbuffer.normal"),
+        read(&r, "gbuffer.albedo"),
+        read(&r, "gbuffer.material"),
+    );
+    let direct = read(&r, "direct.radiance");
+    let eye = r.camera.position;
+    let (mut worst, mut covered, mut lit) = (0.0f32, 0, 0);
+    for i in 0..direct.data.len() {
+        if nrm.data[i][3] < 0.5 {
+            continue;
+        }
+        covered += 1;
+        let x = knecht::Receiver {
+            position: Vec3::from_slice(&pos.data[i][..3]),
+            normal: Vec3::from_slice(&nrm.data[i][..3]).normalize(),
+            albedo: Vec3::from_slice(&alb.data[i][..3]),
+            di: alb.data[i][3],
+            si: mat.data[i][0],
+            sp: mat.data[i][1],
+        };
+        let cpu: Vec3 = vpls.iter().map(|v| knecht::vpl_radiance(v, &x, eye, d_min)).sum();
+        let gpu = Vec3::from_slice(&direct.data[i][..3]);
+        if cpu.max_element() > 0.0 {
+            lit += 1;
+        }
+        worst = worst.max((gpu - cpu).abs().max_element() / cpu.max_element().max(1e-3));
+    }
+    assert!(covered > 1000 && lit > covered / 2, "{lit} of {covered} pixels lit by the emitter");
+    assert!(worst < 1e-3, "largest relative difference GPU vs CPU twin {worst}");
+}
+
+#[test]
+fn the_shared_cornell_box_lit_only_by_its_ceiling_quad_matches_the_path_tracer() {
+    let size = 96;
+    let scene = cornell();
+    assert!(scene.lights.is_empty(), "no punctual light, no default one");
+    let mut pt = PathTracer::new(&scene, 0.0);
+    let probe = renderer(scene.clone(), size, |_| {});
+    let (view_proj, eye) = (probe.view_proj(), probe.camera.position);
+    drop(probe);
+    let truth =
+        pt.render(view_proj, eye, size, size, PtSettings { bounces: 1, spp: 256, seed: 3, ..Default::default() });
+    let truth_indirect = mean(&truth.indirect);
+    assert!(mean(&truth.direct) > 0.0 && truth_indirect > 0.0);
+    let direct_only_flip = exposed_flip(&truth.direct, &truth.full);
+    // (technique, frames, FLIP bound, lowest share of the path tracer's indirect light).
+    // Measured on lavapipe at 96² (direct only: FLIP 0.120): knecht 0.0775 with 0.85 of the
+    // indirect light, nguyen 0.0803 / 0.81, soler 0.1026 / 0.60 (the screen-space gather sees
+    // only the senders on screen), gautron 0.0630 / 0.89; the bounds are those + ~20 %.
+    let cases: [(&str, u32, f64, f64); 4] =
+        [("knecht", 8, 0.095, 0.7), ("nguyen", 4, 0.097, 0.65), ("soler", 4, 0.123, 0.48), ("gautron", 6, 0.076, 0.7)];
+    for (name, frames, bound, least) in cases {
+        let mut r = renderer(scene.clone(), size, |s| {
+            let t = match name {
+                "knecht" => gi_render::pipeline::Technique::Knecht,
+                "nguyen" => gi_render::pipeline::Technique::Nguyen,
+                "soler" => gi_render::pipeline::Technique::Soler,
+                _ => gi_render::pipeline::Technique::Gautron,
+            };
+            t.apply(s);
+        });
+        for _ in 0..frames {
+            r.render_frame();
+        }
+        let (direct, emission, full) =
+            (read(&r, "direct.radiance"), read(&r, "gbuffer.emission"), read(&r, "final.hdr"));
+        let indirect = sub(&sub(&full, &direct), &emission);
+        let direct_flip = exposed_flip(&direct, &truth.direct);
+        let ratio = mean(&indirect) / truth_indirect;
+        let f = exposed_flip(&full, &truth.full);
+        println!(
+            "{name}: direct FLIP {direct_flip:.4}, indirect mean {ratio:.3} × the path tracer's, full FLIP {f:.4} (direct only {direct_only_flip:.4})"
+        );
+        assert!(direct_flip < 0.08, "{name}: the emitter's direct light against the path tracer's: FLIP {direct_flip}");
+        assert!((least..1.5).contains(&ratio), "{name}: indirect light {ratio} × the path tracer's");
+        assert!(f < bound, "{name}: FLIP {f} against the path tracer (bound {bound})");
+        assert!(f < direct_only_flip, "{name}: the indirect light brings it closer ({f} vs {direct_only_flip})");
+    }
+    // With emitters off the box only glows: nothing is lit, and the path tracer agrees.
+    pt.set_emitter_lights(false, &scene, 0.0);
+    let dark = pt.render(view_proj, eye, size, size, PtSettings { bounces: 1, spp: 4, seed: 3, ..Default::default() });
+    let mut r = renderer(scene, size, |s| s.emitters.enabled = false);
+    r.render_frame();
+    assert!(r.emitter_stats().is_none());
+    let (direct, emission, full) = (read(&r, "direct.radiance"), read(&r, "gbuffer.emission"), read(&r, "final.hdr"));
+    assert_eq!(mean(&direct), 0.0, "emitters off: no direct light");
+    assert!(mean(&sub(&full, &emission)).abs() < 1e-9, "emitters off: the image is their glow alone");
+    assert!(
+        mean(&dark.indirect) == 0.0 && (mean(&dark.full) - mean(&emission)).abs() < 1e-3 * mean(&emission).max(1e-3)
+    );
+}
+
+#[test]
+fn thousands_of_emissive_triangles_keep_the_vpl_budget() {
+    let mut scene = gi_lab_tests::default_scene();
+    let b = scene.bounds(0.0);
+    let tris = add_glowing_sphere(&mut scene, b.center(), 0.08 * b.radius(), 48, 64, Vec3::splat(20.0));
+    assert!(tris > 5000, "{tris} triangles");
+    let mut r = renderer(scene, 64, |_| {});
+    r.render_frame();
+    r.render_frame();
+    let e = r.emitter_stats().expect("the sphere glows");
+    assert_eq!(e.triangles, tris);
+    let s = r.settings();
+    assert_eq!(e.vpls, s.emitters.vpls, "the emitter VPLs do not grow with the triangles");
+    assert_eq!(e.bounce_budget, s.vpl.count);
+    assert!(e.bounce_share > 0 && e.bounce_share <= s.vpl.count, "{e:?}");
+    let vpls = r.vpl_list().expect("VPLs");
+    let filled = vpls.iter().filter(|v| v.position.w > 0.5).count() as u32;
+    assert!(filled <= s.vpl.count * s.vpl.bounces, "{filled} VPLs in the list");
+}
