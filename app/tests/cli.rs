@@ -435,11 +435,21 @@ fn bench_scenes_lists_every_scene_with_each_technique() {
             assert!(ms > 0.0, "{r}");
         }
     }
-    // The shared Cornell box has an emissive quad and no punctual light.
+    // The shared Cornell box has an emissive quad and no punctual light: the quad lights it,
+    // no default light is added.
     let cornell = rows
         .iter()
         .find(|r| r["scene"].as_str().is_some_and(|n| n.ends_with("CornellBox-Original.gltf")))
         .expect("row");
-    assert_eq!(cornell["default_light"], true);
+    assert_eq!(cornell["default_light"], false);
+    assert_eq!(cornell["lights"], 0);
     assert!(cornell["emissive_triangles"].as_u64().unwrap_or(0) > 0);
+    // The glowing spheres: many emissive triangles, every technique renders them.
+    let spheres: Vec<u64> = rows
+        .iter()
+        .filter(|r| r["scene"].as_str().is_some_and(|n| n.contains("glowing sphere")))
+        .map(|r| r["emissive_triangles"].as_u64().unwrap_or(0))
+        .collect();
+    assert_eq!(spheres.len(), 3, "{names:?}");
+    assert!(spheres.iter().any(|&t| t > 5000), "{spheres:?}");
 }

@@ -62,14 +62,20 @@ fn white_furnace_converges_to_le_over_one_minus_rho() {
     let pt = PathTracer::new(&furnace(rho, le), 0.0);
     let view_proj = glam::camera::rh::proj::directx::perspective(1.2, 1.0, 0.01, 10.0)
         * glam::camera::rh::view::look_to_mat4(Vec3::ZERO, Vec3::new(0.3, -0.2, -1.0).normalize(), Vec3::Y);
+    // The walls are lights too (issue #18): every vertex samples a point of them by next-event
+    // estimation, an unbiased but noisy estimate (the emission a path hits was exact before),
+    // so the mean is held to 1 % at 64 spp.
     let img =
-        pt.render(view_proj, Vec3::ZERO, 16, 16, PtSettings { bounces: 60, spp: 2, seed: 7, ..Default::default() });
+        pt.render(view_proj, Vec3::ZERO, 16, 16, PtSettings { bounces: 60, spp: 64, seed: 7, ..Default::default() });
     let want = le / (1.0 - rho);
-    for v in img.full.data.iter().flat_map(|p| &p[..3]) {
-        assert!((v - want).abs() / want < 0.01, "furnace radiance {v} vs analytic {want}");
-    }
-    // Direct = emission + no lights; every bounce adds ρ^k Le.
-    assert!(img.direct.data.iter().all(|p| (p[0] - le).abs() < 1e-6));
+    let values: Vec<f32> = img.full.data.iter().flat_map(|p| p[..3].to_vec()).collect();
+    let mean = values.iter().sum::<f32>() / values.len() as f32;
+    assert!((mean - want).abs() / want < 0.01, "furnace mean radiance {mean} vs analytic {want}");
+    // Single pixels carry the heavy tail of 1/d² near the edges (at 64 spp the 5th
+    // percentile is 15 % low): only the image's mean is an energy check.
+    // Direct = emission + the walls' light reflected once: Le (1 + ρ) on average.
+    let direct = img.direct.data.iter().map(|p| p[0]).sum::<f32>() / img.direct.data.len() as f32;
+    assert!((direct - le * (1.0 + rho)).abs() / (le * (1.0 + rho)) < 0.01, "direct {direct}");
 }
 
 #[test]

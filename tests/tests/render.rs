@@ -409,7 +409,8 @@ fn emissive_surfaces_show_their_emission() {
     r.camera.orbit(0.0, 0.3); // look a little upward so that the ceiling light is in view
     r.render_frame();
     let emission = r.readback("gbuffer.emission").expect("emission");
-    let radiance = r.readback("direct.radiance").expect("radiance");
+    // The compose adds the emission (direct.radiance holds only the light reflected there).
+    let radiance = r.readback("final.hdr").expect("radiance");
     let mut emitting = 0;
     for (e, l) in emission.data.iter().zip(&radiance.data) {
         if e[0] > 0.5 {

@@ -74,9 +74,10 @@ fn opening_a_bad_scene_keeps_the_current_one_and_says_why() {
     let r = h.state().renderer().expect("renderer");
     assert_eq!(r.scene().triangle_count(), 32);
     assert!(r.clock.frame >= 2, "the new scene renders");
-    // It has no punctual light: the status bar says which light the lab added (issue #18).
+    // It has no punctual light: the status bar says that its emissive quad lights it (issue
+    // #18).
     let status = h.state().state.status.as_ref().map(|s| s.0.clone()).unwrap_or_default();
-    assert!(status.starts_with("the scene has no lights"), "status: {status}");
+    assert!(status.starts_with("the scene is lit by its emissive surfaces"), "status: {status}");
 }
 
 /// Every field of `LabSettings` (enumerated from the settings' own metadata) has a widget

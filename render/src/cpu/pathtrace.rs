@@ -226,7 +226,10 @@ impl PathTracer {
                 sum += radiance;
             }
         }
-        if let Some(s) = self.emitters.sample([rng.f(), rng.f(), rng.f()]) {
+        // Without emitters no random number is drawn: images of scenes without them are the
+        // ones of version 1.
+        let sample = if self.emitters.is_empty() { None } else { self.emitters.sample([rng.f(), rng.f(), rng.f()]) };
+        if let Some(s) = sample {
             let w = s.position - h.p;
             let d2 = w.length_squared();
             let l = w / d2.sqrt().max(1e-12);
