@@ -36,7 +36,7 @@ pub struct SceneRow {
     pub load_ms: f64,
     /// Mean frame time of each preset (ms; the passes' sum over `frames` after 3 warm-up
     /// frames), or the error that stopped it.
-    pub frame_ms: Vec<(String, Result<f64, String>)>,
+    pub frame_ms: Vec<PresetTime>,
 }
 
 /// The glTF files of a folder and its subfolders (sorted).
@@ -89,7 +89,7 @@ pub fn scenes(scenes_dir: &Path, size: (u32, u32), frames: u32) -> Result<Vec<Sc
             .filter(|p| scene.materials.get(p.material).is_some_and(|m| m.emissive.max_element() > 0.0))
             .map(|p| p.indices.len() / 3)
             .sum();
-        let mut row = SceneRow {
+        let row = SceneRow {
             scene: path.display().to_string(),
             triangles: scene.triangle_count(),
             lights: scene.lights.len(),
@@ -97,14 +97,8 @@ pub fn scenes(scenes_dir: &Path, size: (u32, u32), frames: u32) -> Result<Vec<Sc
             emissive_triangles,
             unit_scale,
             load_ms,
-            frame_ms: Vec::new(),
+            frame_ms: preset_times(&ctx, &scene, size, frames)?,
         };
-        for (name, text) in PRESETS {
-            let settings = gi_render::preset::load_lenient(text, name)
-                .map(|l| l.settings)
-                .map_err(|e| CliError::failure(format!("preset {name}: {e}")))?;
-            row.frame_ms.push((name.to_string(), frame_ms(&ctx, &scene, settings, size, frames)));
-        }
         rows.push(row);
     }
     for (rings, segments) in [(4, 8), (16, 32), (48, 64)] {
@@ -120,7 +114,7 @@ pub fn scenes(scenes_dir: &Path, size: (u32, u32), frames: u32) -> Result<Vec<Sc
             segments,
             radiance,
         );
-        let mut row = SceneRow {
+        let row = SceneRow {
             scene: format!("default box + glowing sphere ({rings}×{segments})"),
             triangles: scene.triangle_count(),
             lights: scene.lights.len(),
@@ -128,17 +122,31 @@ pub fn scenes(scenes_dir: &Path, size: (u32, u32), frames: u32) -> Result<Vec<Sc
             emissive_triangles: tris,
             unit_scale: 1.0,
             load_ms: 0.0,
-            frame_ms: Vec::new(),
+            frame_ms: preset_times(&ctx, &scene, size, frames)?,
         };
-        for (name, text) in PRESETS {
-            let settings = gi_render::preset::load_lenient(text, name)
-                .map(|l| l.settings)
-                .map_err(|e| CliError::failure(format!("preset {name}: {e}")))?;
-            row.frame_ms.push((name.to_string(), frame_ms(&ctx, &scene, settings, size, frames)));
-        }
         rows.push(row);
     }
     Ok(rows)
+}
+
+/// A preset's name and its mean frame time (ms) or the error that stopped it.
+pub type PresetTime = (String, Result<f64, String>);
+
+/// The mean frame time of every technique preset on `scene`.
+fn preset_times(
+    ctx: &GpuContext,
+    scene: &gi_render::scene::Scene,
+    size: (u32, u32),
+    frames: u32,
+) -> Result<Vec<PresetTime>, CliError> {
+    let mut out = Vec::new();
+    for (name, text) in PRESETS {
+        let settings = gi_render::preset::load_lenient(text, name)
+            .map(|l| l.settings)
+            .map_err(|e| CliError::failure(format!("preset {name}: {e}")))?;
+        out.push((name.to_string(), frame_ms(ctx, scene, settings, size, frames)));
+    }
+    Ok(out)
 }
 
 fn frame_ms(
