@@ -208,4 +208,5 @@ pub fn soler_gather_params(
     };
     (screen, p)
 }
+pub mod meshopt_copy;
 pub mod ui_harness;

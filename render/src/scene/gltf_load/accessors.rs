@@ -86,6 +86,12 @@ impl Loader<'_> {
         for (i, b) in root.buffers.iter().enumerate() {
             let declared = b.byte_length.0;
             let (uri, mut data) = match b.uri.as_deref() {
+                // A meshopt fallback buffer without data: only compressed views point into it,
+                // and they are decoded from their own buffers (see `compression.rs`).
+                None if super::compression::is_fallback(b) => {
+                    self.buffers.push(Vec::new());
+                    continue;
+                }
                 None => match bin {
                     Some(bin) if i == 0 => ("GLB BIN chunk".to_string(), bin.to_vec()),
                     _ => {
@@ -130,8 +136,12 @@ impl Loader<'_> {
         Ok(())
     }
 
-    /// The bytes of buffer view `view` (§3.6.2.2), checked against its buffer.
+    /// The bytes of buffer view `view` (§3.6.2.2), checked against its buffer; for a
+    /// compressed view, its decoded bytes.
     pub(super) fn view_bytes(&self, view: usize) -> Result<&[u8], String> {
+        if let Some(decoded) = self.decoded_views.get(&view) {
+            return Ok(decoded);
+        }
         let v = self.root.buffer_views.get(view).ok_or_else(|| format!("buffer view {view} does not exist"))?;
         let b = v.buffer.value();
         let buffer = self

@@ -15,6 +15,9 @@
 
 mod accessors;
 mod animations;
+mod compression;
+#[cfg(test)]
+mod compression_tests;
 mod container;
 mod materials;
 mod meshes;
@@ -32,11 +35,20 @@ use super::{Node, Scene, Transform};
 use container::split_container;
 
 /// glTF extensions this loader understands; others are reported in [`Scene::warnings`].
-const SUPPORTED_EXTENSIONS: &[&str] =
-    &["KHR_lights_punctual", "KHR_texture_transform", "KHR_materials_emissive_strength"];
+/// `KHR_mesh_quantization` needs no code of its own: accessors of any component type, normalized
+/// or not, are read as floats (`accessors.rs`), and the dequantizing transform is the node's.
+const SUPPORTED_EXTENSIONS: &[&str] = &[
+    "KHR_lights_punctual",
+    "KHR_texture_transform",
+    "KHR_materials_emissive_strength",
+    "KHR_mesh_quantization",
+    compression::MESHOPT_EXTENSIONS[0],
+    compression::MESHOPT_EXTENSIONS[1],
+];
 
 /// Required extensions without which the geometry itself cannot be read: loading fails.
-const GEOMETRY_COMPRESSION_EXTENSIONS: &[&str] = &["KHR_draco_mesh_compression", "EXT_meshopt_compression"];
+/// Draco stays refused: no maintained Rust decoder exists (see the note on issue #18).
+const GEOMETRY_COMPRESSION_EXTENSIONS: &[&str] = &["KHR_draco_mesh_compression"];
 
 /// How a glTF file is turned into a [`Scene`].
 #[derive(Clone, Debug, PartialEq)]
@@ -155,6 +167,7 @@ fn load(bytes: &[u8], base_dir: Option<&Path>, opts: &LoadOptions, file: &str) -
     loader.check_asset()?;
     loader.check_extensions()?;
     loader.load_buffers(bin)?;
+    loader.decode_compressed_views()?;
     let (roots, reachable) = loader.hierarchy()?;
     loader.load_nodes(&reachable)?;
     loader.load_animations()?;
@@ -222,6 +235,8 @@ struct Loader<'a> {
     root: &'a json::Root,
     base_dir: Option<&'a Path>,
     buffers: Vec<Vec<u8>>,
+    /// Decoded bytes of the compressed buffer views (`compression.rs`), by view index.
+    decoded_views: HashMap<usize, Vec<u8>>,
     scene: Scene,
     /// glTF material (None: the default material) → index into `scene.materials`.
     material_map: HashMap<Option<usize>, usize>,
@@ -242,6 +257,7 @@ impl<'a> Loader<'a> {
             root,
             base_dir,
             buffers: Vec::new(),
+            decoded_views: HashMap::new(),
             scene: Scene::default(),
             material_map: HashMap::new(),
             material_uv: Vec::new(),
@@ -295,7 +311,8 @@ impl<'a> Loader<'a> {
                     file: self.file.to_string(),
                     message: format!(
                         "the file requires {ext} (compressed geometry), which GI Lab cannot decode; \
-                         decompress it first (for example with glTF-Transform)"
+                         decompress it first or re-compress it with meshopt (for example \
+                         `gltf-transform meshopt` or `gltfpack -cc`), which GI Lab reads"
                     ),
                 });
             }

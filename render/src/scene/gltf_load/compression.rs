@@ -1,0 +1,229 @@
+//! Compressed buffer views: `EXT_meshopt_compression` and its ratified successor
+//! `KHR_meshopt_compression` (Khronos extension specifications, "Compressing buffer views"
+//! and "Filters"), decoded with the `meshopt` crate (meshoptimizer's own decoder, which is
+//! safe on untrusted input: it returns an error or garbage, never reads out of bounds).
+//!
+//! A compressed view keeps its glTF meaning (the parent view's `buffer`, `byteOffset` and
+//! `byteLength` describe the *decoded* bytes, usually in a "fallback" buffer with no data);
+//! its extension names where the encoded bytes are and how to decode them. Every view is
+//! decoded once, after the buffers are loaded, and [`Loader::view_bytes`] serves the decoded
+//! bytes from then on, so accessors, sparse data and images read compressed views through the
+//! same range checks as plain ones.
+
+use serde_json::Value;
+
+use super::{Loader, SceneError, json};
+
+/// The extension names that carry compressed views; the data formats are the same.
+pub(super) const MESHOPT_EXTENSIONS: [&str; 2] = ["EXT_meshopt_compression", "KHR_meshopt_compression"];
+
+/// Upper bound on the decoded bytes of one file. Meshopt streams compress runs of equal bytes
+/// to a few bits per vertex, so a small hostile file could otherwise ask for gigabytes; real
+/// scenes decode to a fraction of this (the Amazon Lumberyard Bistro, 2.8 M triangles,
+/// decodes to about 200 MB).
+pub(super) const MAX_DECODED_BYTES: usize = 1 << 30;
+
+/// How a compressed view is encoded (the extension's `mode`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Mode {
+    /// Vertex codec: `count` elements of `byteStride` bytes (a multiple of 4, at most 256).
+    Attributes,
+    /// Index codec for triangle lists: `count` (a multiple of 3) indices of 2 or 4 bytes.
+    Triangles,
+    /// Index-sequence codec: `count` indices of 2 or 4 bytes.
+    Indices,
+}
+
+/// The filter applied after the vertex codec (the extension's `filter`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Filter {
+    None,
+    /// Octahedral unit vectors, K-bit X/Y in 8- or 16-bit components (stride 4 or 8).
+    Octahedral,
+    /// Quaternions, three 16-bit components and the index of the largest (stride 8).
+    Quaternion,
+    /// Floats as 8-bit exponent and 24-bit mantissa (stride a multiple of 4).
+    Exponential,
+    /// RGBA in YCoCg (KHR_meshopt_compression only; stride 4 or 8).
+    Color,
+}
+
+/// The decoded fields of one view's extension object.
+#[derive(Debug)]
+struct Compressed {
+    extension: &'static str,
+    buffer: usize,
+    offset: usize,
+    length: usize,
+    stride: usize,
+    count: usize,
+    mode: Mode,
+    filter: Filter,
+}
+
+/// The extension object of buffer view `view`, if it is compressed.
+fn extension_of(view: &json::buffer::View) -> Option<(&'static str, &Value)> {
+    let others = &view.extensions.as_ref()?.others;
+    MESHOPT_EXTENSIONS.iter().find_map(|name| others.get(*name).map(|v| (*name, v)))
+}
+
+/// Whether buffer `b` is a meshopt fallback buffer (`"fallback": true`): it may have no data,
+/// since every view on it is compressed elsewhere.
+pub(super) fn is_fallback(buffer: &json::Buffer) -> bool {
+    buffer.extensions.as_ref().is_some_and(|e| {
+        MESHOPT_EXTENSIONS
+            .iter()
+            .any(|name| e.others.get(*name).and_then(|v| v.get("fallback")) == Some(&Value::Bool(true)))
+    })
+}
+
+/// Reads and checks the extension object of view `view` against the rules of the specification
+/// ("Compressing buffer views": mode, stride and count constraints; filters only on attributes).
+fn parse(view: usize, extension: &'static str, ext: &Value) -> Result<Compressed, String> {
+    let field = |name: &str| -> Result<usize, String> {
+        ext.get(name)
+            .and_then(Value::as_u64)
+            .map(|v| usize::try_from(v).unwrap_or(usize::MAX))
+            .ok_or_else(|| format!("buffer view {view}: {extension}.{name} is missing or not a non-negative integer"))
+    };
+    let buffer = field("buffer")?;
+    let offset = ext.get("byteOffset").map_or(Ok(0), |_| field("byteOffset"))?;
+    let length = field("byteLength")?;
+    let stride = field("byteStride")?;
+    let count = field("count")?;
+    let mode = match ext.get("mode").and_then(Value::as_str) {
+        Some("ATTRIBUTES") => Mode::Attributes,
+        Some("TRIANGLES") => Mode::Triangles,
+        Some("INDICES") => Mode::Indices,
+        other => {
+            return Err(format!(
+                "buffer view {view}: {extension}.mode is {other:?}, not ATTRIBUTES, TRIANGLES or INDICES"
+            ));
+        }
+    };
+    let filter = match ext.get("filter").and_then(Value::as_str) {
+        None | Some("NONE") => Filter::None,
+        Some("OCTAHEDRAL") => Filter::Octahedral,
+        Some("QUATERNION") => Filter::Quaternion,
+        Some("EXPONENTIAL") => Filter::Exponential,
+        Some("COLOR") if extension == "KHR_meshopt_compression" => Filter::Color,
+        Some(other) => return Err(format!("buffer view {view}: {extension}.filter '{other}' is not defined")),
+    };
+    let bad = |rule: &str| Err(format!("buffer view {view}: {extension} with mode {mode:?} {rule}"));
+    match mode {
+        Mode::Attributes if stride == 0 || stride % 4 != 0 || stride > 256 => {
+            return bad(&format!("needs a byteStride that is a multiple of 4 up to 256, not {stride}"));
+        }
+        Mode::Triangles | Mode::Indices if stride != 2 && stride != 4 => {
+            return bad(&format!("needs a byteStride of 2 or 4, not {stride}"));
+        }
+        Mode::Triangles if count % 3 != 0 => {
+            return bad(&format!("needs a count that is a multiple of 3, not {count}"));
+        }
+        Mode::Triangles | Mode::Indices if filter != Filter::None => return bad("cannot have a filter"),
+        _ => {}
+    }
+    let filter_ok = match filter {
+        Filter::None => true,
+        Filter::Octahedral | Filter::Color => stride == 4 || stride == 8,
+        Filter::Quaternion => stride == 8,
+        Filter::Exponential => stride % 4 == 0,
+    };
+    if !filter_ok {
+        return Err(format!("buffer view {view}: {extension} filter {filter:?} cannot have byteStride {stride}"));
+    }
+    Ok(Compressed { extension, buffer, offset, length, stride, count, mode, filter })
+}
+
+/// Decodes `c` from `encoded` into `count × stride` bytes. The destination is a `u32`
+/// vector so that the filters may read it as 16-bit and 32-bit components.
+fn decode(view: usize, c: &Compressed, encoded: &[u8]) -> Result<Vec<u8>, String> {
+    let size = c.count.checked_mul(c.stride).filter(|&s| s <= MAX_DECODED_BYTES).ok_or_else(|| {
+        format!(
+            "buffer view {view}: {} decodes to {} × {} bytes, more than the {} MiB GI Lab accepts per file",
+            c.extension,
+            c.count,
+            c.stride,
+            MAX_DECODED_BYTES >> 20
+        )
+    })?;
+    let mut words = vec![0u32; size.div_ceil(4)];
+    let dst = words.as_mut_ptr().cast::<std::ffi::c_void>();
+    // SAFETY: `words` holds at least count × stride bytes (checked above), which is what
+    // every decoder writes; the encoded slice is passed with its own length, and the
+    // meshoptimizer decoders never read past it ("safe to use for untrusted input"). The
+    // filters rewrite count × stride bytes in place, with the stride checked in `parse`.
+    let code = unsafe {
+        match c.mode {
+            Mode::Attributes => {
+                meshopt::ffi::meshopt_decodeVertexBuffer(dst, c.count, c.stride, encoded.as_ptr(), encoded.len())
+            }
+            Mode::Triangles => {
+                meshopt::ffi::meshopt_decodeIndexBuffer(dst, c.count, c.stride, encoded.as_ptr(), encoded.len())
+            }
+            Mode::Indices => {
+                meshopt::ffi::meshopt_decodeIndexSequence(dst, c.count, c.stride, encoded.as_ptr(), encoded.len())
+            }
+        }
+    };
+    if code != 0 {
+        return Err(format!(
+            "buffer view {view}: the {} data ({} bytes, mode {:?}) is malformed (meshoptimizer error {code})",
+            c.extension,
+            encoded.len(),
+            c.mode
+        ));
+    }
+    // SAFETY: as above; the filters only touch count × stride bytes.
+    unsafe {
+        match c.filter {
+            Filter::None => {}
+            Filter::Octahedral => meshopt::ffi::meshopt_decodeFilterOct(dst, c.count, c.stride),
+            Filter::Quaternion => meshopt::ffi::meshopt_decodeFilterQuat(dst, c.count, c.stride),
+            Filter::Exponential => meshopt::ffi::meshopt_decodeFilterExp(dst, c.count, c.stride),
+            Filter::Color => meshopt::ffi::meshopt_decodeFilterColor(dst, c.count, c.stride),
+        }
+    }
+    let mut bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+    bytes.truncate(size);
+    Ok(bytes)
+}
+
+impl Loader<'_> {
+    /// Decodes every compressed buffer view (after [`Loader::load_buffers`]); from then on
+    /// [`Loader::view_bytes`] returns the decoded bytes of these views.
+    pub(super) fn decode_compressed_views(&mut self) -> Result<(), SceneError> {
+        let root = self.root;
+        let mut total = 0usize;
+        for (i, v) in root.buffer_views.iter().enumerate() {
+            let Some((extension, ext)) = extension_of(v) else { continue };
+            let invalid = |message: String| SceneError::Invalid { file: self.file.to_string(), message };
+            let c = parse(i, extension, ext).map_err(invalid)?;
+            let encoded = self
+                .buffers
+                .get(c.buffer)
+                .and_then(|b| c.offset.checked_add(c.length).and_then(|end| b.get(c.offset..end)))
+                .ok_or_else(|| {
+                    invalid(format!(
+                        "buffer view {i}: {extension} reads {} bytes from offset {} of buffer {}, which {}",
+                        c.length,
+                        c.offset,
+                        c.buffer,
+                        self.buffers
+                            .get(c.buffer)
+                            .map_or("does not exist".to_string(), |b| format!("has only {} bytes", b.len()))
+                    ))
+                })?;
+            let decoded = decode(i, &c, encoded).map_err(invalid)?;
+            total = total.saturating_add(decoded.len());
+            if total > MAX_DECODED_BYTES {
+                return Err(invalid(format!(
+                    "the compressed buffer views decode to more than the {} MiB GI Lab accepts per file",
+                    MAX_DECODED_BYTES >> 20
+                )));
+            }
+            self.decoded_views.insert(i, decoded);
+        }
+        Ok(())
+    }
+}
