@@ -46,10 +46,15 @@ pub fn load_scene(args: &SceneArgs) -> Result<Scene, CliError> {
     // scene's own lights and says why.
     if let Some(p) = &args.scene {
         match crate::scene_lights::load_overrides(p) {
-            Some(Ok(edits)) => {
-                crate::scene_lights::apply_light_edits(&mut scene, &edits, true);
+            Some(Ok(o)) => {
+                crate::scene_lights::apply_light_edits(&mut scene, &o.lights, true);
                 let file = crate::scene_lights::overrides_path(p);
                 scene.warnings.push(format!("lights from {} (the lab's edits; the glTF is unchanged)", file.display()));
+                if let Some(sky) = &o.sky
+                    && let Err(e) = crate::scene_lights::apply_sky(&mut scene, sky, p)
+                {
+                    scene.warnings.push(format!("the sky of {} was not applied in full: {e}", file.display()));
+                }
             }
             Some(Err(e)) => scene.warnings.push(format!("the lights file was not applied: {e}")),
             None => {}

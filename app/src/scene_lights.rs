@@ -5,6 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
+use gi_render::scene::sky::Sky;
 use gi_render::scene::{Light, LightKind, Node, Scene, Transform};
 use glam::{Quat, Vec3};
 
@@ -188,15 +189,72 @@ pub fn overrides_path(scene_file: &Path) -> PathBuf {
 #[derive(Debug, Serialize, Deserialize)]
 pub struct LightOverrides {
     pub lights: Vec<LightEdit>,
+    /// The scene's sky (issue #18 point 2); files written before it have none.
+    #[serde(default)]
+    pub sky: Option<SkyDef>,
+}
+
+/// `gi_render::scene::sky::Sky` as the overrides file keeps it: the image by its path
+/// (relative to the scene's folder when it lies inside it).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SkyDef {
+    pub enabled: bool,
+    /// Linear colour of a constant sky.
+    pub color: [f32; 3],
+    /// Radiance scale, W/(m²·sr).
+    pub intensity: f32,
+    pub image: Option<PathBuf>,
+    pub rotation_deg: f32,
+}
+
+/// The sky of `scene` as saved beside `scene_file`.
+pub fn sky_def(sky: &Sky, scene_file: &Path) -> SkyDef {
+    let image = sky.image.as_ref().map(|(p, _)| {
+        let dir = scene_file.parent().unwrap_or(Path::new("."));
+        p.strip_prefix(dir).map(Path::to_path_buf).unwrap_or_else(|_| p.clone())
+    });
+    SkyDef {
+        enabled: sky.enabled,
+        color: sky.color.to_array(),
+        intensity: sky.intensity,
+        image,
+        rotation_deg: sky.rotation_deg,
+    }
+}
+
+/// Applies a saved sky to `scene` (an image path is relative to the scene's folder). Values
+/// that are not finite, or a negative colour or intensity, are refused with the reason; an
+/// image that cannot be read leaves the constant colour and says why.
+pub fn apply_sky(scene: &mut Scene, def: &SkyDef, scene_file: &Path) -> Result<(), String> {
+    let numbers = def.color.iter().chain([&def.intensity, &def.rotation_deg]);
+    if numbers.clone().any(|x| !x.is_finite()) || def.color.iter().chain([&def.intensity]).any(|&x| x < 0.0) {
+        return Err(format!(
+            "the sky's colour {:?} and intensity {} must be finite and non-negative, its rotation {} finite",
+            def.color, def.intensity, def.rotation_deg
+        ));
+    }
+    let mut sky = Sky {
+        enabled: def.enabled,
+        color: Vec3::from(def.color),
+        intensity: def.intensity,
+        image: None,
+        rotation_deg: def.rotation_deg,
+    };
+    let result = match &def.image {
+        Some(p) => sky.load_image(&scene_file.parent().unwrap_or(Path::new(".")).join(p)),
+        None => Ok(()),
+    };
+    scene.sky = sky;
+    result
 }
 
 /// Writes the scene's lights beside `scene_file` (atomically: a temporary file renamed).
 pub fn save_overrides(scene: &Scene, scene_file: &Path) -> Result<PathBuf, String> {
     let path = overrides_path(scene_file);
-    let text = ron::ser::to_string_pretty(&LightOverrides { lights: light_edits(scene) }, Default::default())
-        .map_err(|e| e.to_string())?;
+    let overrides = LightOverrides { lights: light_edits(scene), sky: Some(sky_def(&scene.sky, scene_file)) };
+    let text = ron::ser::to_string_pretty(&overrides, Default::default()).map_err(|e| e.to_string())?;
     let text = format!(
-        "// GI Lab's lights for {} (every punctual light; the glTF is not changed)\n{text}\n",
+        "// GI Lab's lights for {} (every punctual light and the sky; the glTF is not changed)\n{text}\n",
         scene_file.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default()
     );
     let tmp = path.with_extension("ron.tmp");
@@ -207,8 +265,8 @@ pub fn save_overrides(scene: &Scene, scene_file: &Path) -> Result<PathBuf, Strin
 
 /// Reads the overrides beside `scene_file`: None when there is no file, an error when it
 /// does not parse (the scene then keeps its own lights).
-pub fn load_overrides(scene_file: &Path) -> Option<Result<Vec<LightEdit>, String>> {
+pub fn load_overrides(scene_file: &Path) -> Option<Result<LightOverrides, String>> {
     let path = overrides_path(scene_file);
     let text = std::fs::read_to_string(&path).ok()?;
-    Some(ron::from_str::<LightOverrides>(&text).map(|o| o.lights).map_err(|e| format!("{}: {e}", path.display())))
+    Some(ron::from_str::<LightOverrides>(&text).map_err(|e| format!("{}: {e}", path.display())))
 }

@@ -6,7 +6,7 @@
 //! | stage | choices → pass |
 //! |---|---|
 //! | 1. G-buffer | `passes::gbuffer`: position, normal, albedo, material, depth, movement buffer |
-//! | 2. Direct light | `passes::shadow`, `passes::direct` |
+//! | 2. Direct light | `passes::shadow`, `passes::direct`; the emitters' VPLs (`passes::emitters`) and the sky's directions (`passes::sky`) |
 //! | 3. VPLs | none · importance warping → `passes::knecht::stage` · uniform batches → `passes::reference::stage` |
 //! | 4. VPL visibility | none · imperfect shadow maps (`passes::knecht::ism`) · exact maps (`passes::reference::vpl_visibility`) |
 //! | 5. Shading points | every pixel · interleaved tiles → `passes::knecht::interleave` · HCB samples → `passes::hcb::stage` · mip levels → `passes::soler::stage` · irradiance records → `passes::gautron::stage` |
@@ -32,7 +32,8 @@ impl Renderer {
         let aspect = self.width as f32 / self.height as f32;
 
         // The scene at this instant.
-        let state = self.scene.evaluate(self.clock.time_s());
+        // The scene at this instant; the sky's directions join its lights (`passes::sky`).
+        let state = self.frame_state();
         let view_proj = self.camera.view_proj(aspect);
         let prev_view_proj = self.prev.as_ref().map(|p| p.view_proj).unwrap_or(view_proj);
         let cam = CameraUniform {

@@ -16,6 +16,7 @@ use crate::passes::knecht::ism::IsmSettings;
 use crate::passes::knecht::temporal::TemporalSettings;
 use crate::passes::knecht::vpl_importance::VplSettings;
 use crate::passes::reference::vpl::ReferenceSettings;
+use crate::passes::sky::SkySettings;
 use crate::passes::soler::SolerSettings;
 use crate::pipeline::{LegacyIndirect, PipelineSettings};
 use crate::settings::{FieldError, FieldMeta, PRESET_VERSION, PresetError, SettingsGroup, Value};
@@ -46,6 +47,8 @@ pub struct LabSettings {
     pub direct: DirectSettings,
     /// Emissive surfaces as lights (stage 2).
     pub emitters: EmitterSettings,
+    /// The sky light's sampling (stage 2; the sky itself belongs to the scene).
+    pub sky: SkySettings,
     /// The stage choices (stages 3–7): which pass each stage runs.
     pub pipeline: PipelineSettings,
     /// Version 1's technique, read from old presets only (see `pipeline::migrate_v1`).
@@ -69,6 +72,7 @@ impl Default for LabSettings {
             animation: Default::default(),
             direct: Default::default(),
             emitters: Default::default(),
+            sky: Default::default(),
             pipeline: Default::default(),
             indirect: None,
             vpl: Default::default(),
@@ -90,6 +94,7 @@ macro_rules! for_each_group {
         $m!(animation, AnimationSettings);
         $m!(direct, DirectSettings);
         $m!(emitters, EmitterSettings);
+        $m!(sky, SkySettings);
         $m!(pipeline, PipelineSettings);
         $m!(vpl, VplSettings);
         $m!(ism, IsmSettings);

@@ -9,7 +9,12 @@
 //! come from) and its light L_e · f · cos θ_x · cos θ_y / (d² · pdf_A) added when unoccluded,
 //! so a path that hits an emitter after a bounce does not add its emission again (only the
 //! camera's first hit shows it); with [`PathTracer::set_emitter_lights`] off, emitters only
-//! glow (their emission at the first hit, no light). Each bounce samples the BRDF: a cosine lobe
+//! glow (their emission at the first hit, no light). The scene's sky (`Scene::sky`, issue #18)
+//! is reached the same way: one direction per vertex, ∝ cos θ for a constant sky, by the
+//! image's radiance otherwise ([`crate::scene::sky::SkySampler::sample_at`], continuously: the
+//! truth the lab's directions estimate),
+//! L · f · cos θ / p(ω) when nothing is in the way; escaping paths add nothing (the sky is not
+//! drawn behind the scene, in the lab either). Each bounce samples the BRDF: a cosine lobe
 //! for c·DI/π and the normalised Blinn-Phong lobe (SP) for the specular term, mixed by
 //! their weights. Every pixel and sample has its own seeded random stream, so results do
 //! not depend on thread scheduling: identical seeds give identical images. Rendering is
@@ -33,6 +38,7 @@ use crate::buffers::ImageF32;
 use crate::cpu::brdf;
 use crate::cpu::raycast::{moller_trumbore, primary_ray};
 use crate::scene::emitters::Emitters;
+use crate::scene::sky::{Sky, SkySampler};
 use crate::scene::{Material, Scene, WorldLight};
 
 /// Version of the estimator: bump it whenever a change alters the images (references
@@ -88,6 +94,9 @@ pub struct PathTracer {
     lights: Vec<WorldLight>,
     /// The emissive triangles, sampled by next-event estimation (empty: emitters only glow).
     emitters: Emitters,
+    /// The scene's sky when it is on ([`crate::scene::sky`]), sampled by next-event
+    /// estimation from its radiance distribution (continuously, not in the lab's directions).
+    sky: Option<Sky>,
     /// Offset for secondary rays, relative to the scene size.
     eps: f32,
 }
@@ -163,7 +172,8 @@ impl PathTracer {
         let eps = scene.bounds(time_s).radius().max(1e-3) * 1e-4;
         let materials = if scene.materials.is_empty() { vec![Material::default()] } else { scene.materials.clone() };
         let emitters = Emitters::collect(scene, &state);
-        Self { tris, bvh, materials, lights: state.lights, emitters, eps }
+        let sky = scene.sky.is_lit().then(|| scene.sky.clone());
+        Self { tris, bvh, materials, lights: state.lights, emitters, sky, eps }
     }
 
     /// Whether emissive surfaces light the scene (`emitters.enabled`, on by default) or only
@@ -239,6 +249,18 @@ impl PathTracer {
                 let (di, si, sp) = (m.diffuse_intensity(), m.specular_intensity(), m.specular_power());
                 let f = brdf::eval(h.n, l, v, c, di, si, sp);
                 sum += s.radiance * f * (cos_x * cos_y / (d2 * s.pdf_area));
+            }
+        }
+        // The sky, one direction by its radiance; a path that escapes adds nothing, so the sky
+        // is counted once. Without a sky no random number is drawn.
+        if let Some(sky) = &self.sky
+            && let Some((l, radiance, pdf)) = SkySampler::new(sky).sample_at(h.n, [rng.f(), rng.f()])
+        {
+            let cos_x = h.n.dot(l);
+            if cos_x > 0.0 && self.intersect(origin, l, 0.0, f32::INFINITY).is_none() {
+                let c = m.base_color.xyz();
+                let (di, si, sp) = (m.diffuse_intensity(), m.specular_intensity(), m.specular_power());
+                sum += radiance * brdf::eval(h.n, l, v, c, di, si, sp) * (cos_x / pdf);
             }
         }
         sum

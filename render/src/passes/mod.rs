@@ -20,6 +20,7 @@ pub mod hcb;
 pub mod knecht;
 pub mod reference;
 pub mod shadow;
+pub mod sky;
 pub mod soler;
 pub mod view;
 

@@ -92,6 +92,8 @@ pub struct Renderer {
     flip_map: Option<wgpu::Texture>,
     /// Interactive mode (the app): timings are collected without waiting for the GPU.
     pub(crate) interactive: bool,
+    /// The scene's sky as directional lights (`passes::sky`), cached.
+    pub(crate) sky_lights: crate::passes::sky::SkyLights,
     /// The pixel probe's depth reader, created on first use.
     pub(crate) depth_probe: std::sync::OnceLock<crate::passes::view::DepthProbe>,
 }
@@ -155,6 +157,7 @@ impl Renderer {
             stages: StagePasses::default(),
             flip_map: None,
             interactive: false,
+            sky_lights: Default::default(),
             depth_probe: std::sync::OnceLock::new(),
         };
         r.register_all();
@@ -334,8 +337,15 @@ impl Renderer {
         Ok(())
     }
 
-    fn shadow_layers(&self) -> u32 {
+    /// Shadow map layers the current settings need: the punctual lights' and the sky's.
+    pub fn shadow_layer_count(&self) -> u32 {
+        self.shadow_layers(&self.settings)
+    }
+
+    /// Shadow map layers of the punctual lights and the sky's directions.
+    fn shadow_layers(&self, settings: &LabSettings) -> u32 {
         let state = self.scene.evaluate(self.clock.time_s());
+        let sky = if self.scene.sky.is_lit() { settings.sky.directions } else { 0 };
         state
             .lights
             .iter()
@@ -343,12 +353,13 @@ impl Renderer {
                 crate::scene::LightKind::Point => 6,
                 _ => 1,
             })
-            .sum()
+            .sum::<u32>()
+            + sky
     }
 
     fn check_shadow_map(&self, settings: &LabSettings) -> Result<(), RenderError> {
         let size = settings.direct.shadow_map_size;
-        let layers = if settings.direct.shadows { self.shadow_layers().max(1) } else { 1 };
+        let layers = if settings.direct.shadows { self.shadow_layers(settings).max(1) } else { 1 };
         let max_dim = self.ctx.limits.max_texture_dimension_2d;
         let max_layers = self.ctx.limits.max_texture_array_layers;
         if size > max_dim || layers > max_layers {
@@ -364,6 +375,13 @@ impl Renderer {
         self.interactive = interactive;
     }
 
+    /// The scene at this instant, with the sky's directions among its lights (`passes::sky`).
+    pub(crate) fn frame_state(&mut self) -> crate::scene::SceneState {
+        let mut state = self.scene.evaluate(self.clock.time_s());
+        state.lights.extend_from_slice(self.sky_lights.get(&self.scene.sky, self.settings.sky.directions));
+        state
+    }
+
     /// Creates, resizes or drops the passes of stages 3–7 for the current stage choices, so
     /// that their buffers are registered before the first frame.
     pub(crate) fn ensure_passes(&mut self) {
@@ -371,10 +389,10 @@ impl Renderer {
         let s = self.settings.clone();
         let p = &s.pipeline;
         let (w, h) = (self.width, self.height);
+        let state = self.frame_state();
         let x = &mut self.stages;
         let mut fresh = false;
         if s.emitters.enabled && self.scene.has_emitters() {
-            let state = self.scene.evaluate(self.clock.time_s());
             let created = x.emitters.is_none();
             let e = x.emitters.get_or_insert_with(|| EmitterPass::new(&ctx));
             fresh |= e.ensure(&ctx, &self.scene, &state, &self.gpu_scene, &s) | created;
@@ -382,7 +400,6 @@ impl Renderer {
             fresh |= x.emitters.take().is_some();
         }
         if p.uses_knecht_vpls() {
-            let state = self.scene.evaluate(self.clock.time_s());
             let views = light_view_list(&state, self.bounds).len();
             let created = x.knecht.is_none();
             let k = x.knecht.get_or_insert_with(|| KnechtVpls::new(&ctx, &s));

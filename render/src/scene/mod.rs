@@ -12,6 +12,7 @@ pub mod cornell;
 pub mod default_light;
 pub mod emitters;
 mod gltf_load;
+pub mod sky;
 pub mod upload;
 
 pub use animation::{Animation, Channel, ChannelTarget, Interpolation};
@@ -205,6 +206,8 @@ pub struct Scene {
     pub animations: Vec<Animation>,
     /// Non-fatal problems found while loading (unsupported extensions, …).
     pub warnings: Vec<String>,
+    /// The sky around the scene (off unless the user turns it on; see [`sky`]).
+    pub sky: sky::Sky,
 }
 
 /// A primitive to draw with its world transform, as of one instant.

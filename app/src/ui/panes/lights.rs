@@ -1,6 +1,7 @@
 //! The Scene panel's lights (issue #18 point 4): add a point, spot or directional light where
 //! the camera looks, duplicate or remove any light, edit its place (or direction), colour,
-//! intensity and spot cones; save them beside the scene or reset them to the file's.
+//! intensity and spot cones; the sky light (point 2); save them beside the scene or reset them
+//! to the file's.
 
 use crate::scene_lights::{self, NewLight};
 use crate::ui::lab::Lab;
@@ -25,7 +26,8 @@ pub(super) fn light_controls(l: &mut Lab, ui: &mut egui::Ui) -> Option<String> {
     let light_nodes: Vec<usize> =
         l.renderer.scene().nodes.iter().enumerate().filter(|(_, n)| n.light.is_some()).map(|(i, _)| i).collect();
     emitter_controls(l, ui);
-    if light_nodes.is_empty() && l.renderer.emitter_stats().is_none() {
+    changed |= sky_controls(l, ui);
+    if light_nodes.is_empty() && l.renderer.emitter_stats().is_none() && !l.renderer.scene().sky.is_lit() {
         ui.small("no lights: the image has no direct light (add one above)");
     }
     let mut remove = None;
@@ -190,4 +192,81 @@ fn emitter_controls(l: &mut Lab, ui: &mut egui::Ui) {
             ui.small("emitters only glow");
         }
     }
+}
+
+/// The sky light (issue #18 point 2): on or off, a constant colour or an equirectangular
+/// `.hdr` / `.exr` image, its radiance scale and rotation; the lab samples it in
+/// `sky.directions` directional VPLs. Returns whether the sky changed.
+fn sky_controls(l: &mut Lab, ui: &mut egui::Ui) -> bool {
+    let mut changed = false;
+    let directions = l.settings.sky.directions;
+    egui::CollapsingHeader::new("Sky light").id_salt("sky").default_open(l.renderer.scene().sky.enabled).show(
+        ui,
+        |ui| {
+            let sky = &mut l.renderer.scene_mut().sky;
+            changed |= ui
+                .checkbox(&mut sky.enabled, "sky lights the scene")
+                .on_hover_text("a sky around the scene, for outdoor scenes; saved with the lights beside the scene")
+                .changed();
+            if sky.intensity == 0.0 && sky.color == glam::Vec3::ZERO && sky.enabled {
+                sky.color = glam::Vec3::new(0.6, 0.75, 1.0);
+                sky.intensity = 1.0;
+                changed = true;
+            }
+            ui.horizontal(|ui| {
+                ui.label("radiance");
+                changed |= ui
+                    .add(egui::DragValue::new(&mut sky.intensity).range(0.0..=1.0e5).speed(0.01).suffix(" W/(m²·sr)"))
+                    .changed();
+                if sky.image.is_none() {
+                    let mut c = sky.color.to_array();
+                    if ui.color_edit_button_rgb(&mut c).on_hover_text("the constant sky's linear colour").changed() {
+                        sky.color = glam::Vec3::from(c);
+                        changed = true;
+                    }
+                }
+            });
+            let id = ui.make_persistent_id("sky image path");
+            let mut text = ui.data_mut(|d| d.get_temp::<String>(id)).unwrap_or_default();
+            let mut message = None;
+            ui.horizontal(|ui| {
+                ui.label("image");
+                ui.add(
+                    egui::TextEdit::singleline(&mut text)
+                        .hint_text("equirectangular .hdr or .exr")
+                        .desired_width(160.0),
+                );
+                if ui.button("load").clicked() {
+                    match sky.load_image(std::path::Path::new(text.trim())) {
+                        Ok(()) => changed = true,
+                        Err(e) => message = Some(e),
+                    }
+                }
+                if sky.image.is_some() && ui.button("constant colour").clicked() {
+                    sky.image = None;
+                    changed = true;
+                }
+            });
+            ui.data_mut(|d| d.insert_temp(id, text));
+            if let Some(e) = message {
+                ui.colored_label(ui.visuals().error_fg_color, format!("sky image not loaded: {e}"));
+            }
+            if let Some((p, map)) = &sky.image {
+                ui.small(format!("{} ({}×{})", p.display(), map.width, map.height));
+                ui.horizontal(|ui| {
+                    ui.label("rotation");
+                    changed |=
+                        ui.add(egui::DragValue::new(&mut sky.rotation_deg).range(-360.0..=360.0).suffix("°")).changed();
+                });
+            }
+            if sky.enabled {
+                ui.small(if sky.is_lit() {
+                    format!("{directions} directional VPLs, each with a shadow map (sky.directions)")
+                } else {
+                    "the sky is dark: no light".to_string()
+                });
+            }
+        },
+    );
+    changed
 }

@@ -1,0 +1,143 @@
+//! The sky light (issue #18 point 2): the default box with its lights removed, open to a
+//! constant sky (its open side faces the camera), against the path tracer in every technique;
+//! an image sky's light comes from where its image is bright.
+
+use gi_lab_tests::{default_scene, gpu, read};
+use gi_render::cpu::pathtrace::{PathTracer, PtSettings};
+use gi_render::image_io::hdr_display;
+use gi_render::metrics::{auto_exposure, flip, scaled};
+use gi_render::pipeline::Technique;
+use gi_render::scene::Scene;
+use gi_render::scene::sky::{EnvMap, Sky};
+use gi_render::{ImageF32, LabSettings, Renderer};
+use glam::Vec3;
+
+/// The default box without its punctual lights, under `sky`.
+fn sky_box(sky: Sky) -> Scene {
+    let mut scene = default_scene();
+    for n in &mut scene.nodes {
+        n.light = None;
+    }
+    scene.lights.clear();
+    scene.sky = sky;
+    scene
+}
+
+fn renderer(scene: Scene, size: u32, edit: impl FnOnce(&mut LabSettings)) -> Renderer {
+    let mut s = LabSettings::default();
+    edit(&mut s);
+    let mut r = Renderer::new(gpu(), scene, s, size, size).expect("renderer");
+    r.clock.playing = false;
+    r
+}
+
+fn mean(img: &ImageF32) -> f64 {
+    img.data.iter().map(|p| (0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]) as f64).sum::<f64>() / img.data.len() as f64
+}
+
+fn sub(a: &ImageF32, b: &ImageF32) -> ImageF32 {
+    let data = a.data.iter().zip(&b.data).map(|(x, y)| [x[0] - y[0], x[1] - y[1], x[2] - y[2], 1.0]).collect();
+    ImageF32 { width: a.width, height: a.height, data }
+}
+
+/// FLIP of `test` against `truth`, both at the truth's middle-grey exposure.
+fn exposed_flip(test: &ImageF32, truth: &ImageF32) -> f64 {
+    let k = auto_exposure(truth);
+    flip(&hdr_display(&scaled(test, k)), &hdr_display(&scaled(truth, k))).expect("same size").0
+}
+
+/// Direct light in every technique (they share stage 2) and the full image of the techniques
+/// whose first bounce reads `direct.radiance` (Soler, Gautron) against the path tracer, with
+/// the sky in 64 directions. Measured on lavapipe at 96² (PT 256 spp, 1 bounce): direct light
+/// FLIP 0.154 with 1.04 × the path tracer's mean (the 64 directions' banded penumbrae and the
+/// path tracer's noise; shadow maps of 256²); Soler full FLIP 0.149 with 0.63 of the indirect light (on-screen
+/// senders only), Gautron 0.133 with 0.99; direct light alone 0.219. Bounds: measured + 13–20 %.
+/// Knecht's and Nguyen's first bounce is left out: their VPLs overestimate the indirect light
+/// of scenes with several lights (2 lights 2.5 ×, 4 lights 4.6 × the path tracer's; see the
+/// note on issue #18), and the sky is 64 lights.
+#[test]
+fn the_default_box_open_to_a_constant_sky_matches_the_path_tracer() {
+    let size = 96;
+    let scene = sky_box(Sky::constant(Vec3::new(0.6, 0.75, 1.0), 1.0));
+    let pt = PathTracer::new(&scene, 0.0);
+    let probe = renderer(scene.clone(), size, |_| {});
+    let (view_proj, eye) = (probe.view_proj(), probe.camera.position);
+    drop(probe);
+    let truth =
+        pt.render(view_proj, eye, size, size, PtSettings { bounces: 1, spp: 256, seed: 5, ..Default::default() });
+    let truth_indirect = mean(&truth.indirect);
+    assert!(mean(&truth.direct) > 0.0 && truth_indirect > 0.0);
+    let direct_only_flip = exposed_flip(&truth.direct, &truth.full);
+    // (technique, full-image FLIP bound, lowest share of the path tracer's indirect light).
+    let cases = [(Technique::Soler, 0.177, 0.5), (Technique::Gautron, 0.16, 0.8), (Technique::Knecht, 1.0, 0.0)];
+    for (t, bound, least) in cases {
+        let mut r = renderer(scene.clone(), size, |s| {
+            t.apply(s);
+            s.sky.directions = 64;
+            s.direct.shadow_map_size = 256;
+        });
+        assert_eq!(r.shadow_layer_count(), 64, "one shadow map per sky direction");
+        for _ in 0..6 {
+            r.render_frame();
+        }
+        let (direct, full) = (read(&r, "direct.radiance"), read(&r, "final.hdr"));
+        let direct_flip = exposed_flip(&direct, &truth.direct);
+        let direct_ratio = mean(&direct) / mean(&truth.direct);
+        println!("{t:?}: direct FLIP {direct_flip:.4} ({direct_ratio:.3} × the path tracer's mean)");
+        assert!(direct_flip < 0.175, "{t:?}: the sky's direct light against the path tracer's: FLIP {direct_flip}");
+        assert!((0.95..1.1).contains(&direct_ratio), "{t:?}: direct light {direct_ratio} × the path tracer's");
+        if t == Technique::Knecht {
+            continue;
+        }
+        let ratio = mean(&sub(&full, &direct)) / truth_indirect;
+        let f = exposed_flip(&full, &truth.full);
+        println!(
+            "{t:?}: indirect {ratio:.3} × the path tracer's, full FLIP {f:.4} (direct only {direct_only_flip:.4})"
+        );
+        assert!((least..1.3).contains(&ratio), "{t:?}: indirect light {ratio} × the path tracer's");
+        assert!(f < bound, "{t:?}: FLIP {f} against the path tracer (bound {bound})");
+        assert!(f < direct_only_flip, "{t:?}: the indirect light brings it closer ({f} vs {direct_only_flip})");
+    }
+}
+
+/// The sky is off by default and then adds nothing; turned on, it lights the box, and turned
+/// off again, the image is the dark one again (the cached directions follow the scene).
+#[test]
+fn the_sky_is_off_by_default_and_follows_the_scene() {
+    let mut lit = sky_box(Sky::constant(Vec3::ONE, 1.0));
+    lit.sky.enabled = false;
+    assert_eq!(default_scene().sky, Sky::default(), "no sky unless the user turns it on");
+    let mut r = renderer(lit, 64, |s| Technique::DirectOnly.apply(s));
+    r.render_frame();
+    assert_eq!(mean(&read(&r, "direct.radiance")), 0.0, "no light, sky off: black");
+    r.scene_mut().sky.enabled = true;
+    r.render_frame();
+    let on = mean(&read(&r, "direct.radiance"));
+    assert!(on > 0.0, "the sky lights the box");
+    r.scene_mut().sky.intensity = 2.0;
+    r.render_frame();
+    let twice = mean(&read(&r, "direct.radiance"));
+    assert!((twice / on - 2.0).abs() < 1e-3, "twice the radiance, twice the light: {twice} vs {on}");
+    r.scene_mut().sky.enabled = false;
+    r.render_frame();
+    assert_eq!(mean(&read(&r, "direct.radiance")), 0.0);
+}
+
+/// An image sky lights from where it is bright: a sky black but for a cap overhead sends every
+/// direction from the cap, with the cap's irradiance on an up-facing plane.
+#[test]
+fn an_image_sky_lights_from_where_it_is_bright() {
+    let (w, h) = (32u32, 16u32);
+    let texels: Vec<Vec3> = (0..w * h).map(|i| if i / w == 0 { Vec3::splat(8.0) } else { Vec3::ZERO }).collect();
+    let mut sky = Sky::constant(Vec3::ONE, 1.0);
+    sky.image = Some(("patch".into(), std::sync::Arc::new(EnvMap::new(w, h, texels).expect("map"))));
+    let lights = sky.world_lights(16);
+    assert_eq!(lights.len(), 16);
+    for l in &lights {
+        assert!(l.direction.y < -0.98, "every direction comes from the bright cap overhead: {}", l.direction);
+    }
+    // E on an up-facing plane: ∫ over the cap of 8 cos θ dω = 8 π sin²(π/16).
+    let e: f32 = lights.iter().map(|l| l.light.intensity * l.light.color.x * (-l.direction.y)).sum();
+    let expected = 8.0 * std::f32::consts::PI * (std::f32::consts::PI / 16.0).sin().powi(2);
+    assert!((e / expected - 1.0).abs() < 0.02, "irradiance {e} vs {expected}");
+}
