@@ -167,6 +167,7 @@ pub fn section_title(group: &str) -> String {
         "animation" => "Animation clock".into(),
         "direct" => "2 · Direct light".into(),
         "emitters" => "2 · Emissive surfaces as lights".into(),
+        "sky" => "2 · Sky light".into(),
         "indirect" => "3–6 · Indirect light".into(),
         "pipeline" => "Stage choices (3–7)".into(),
         "vpl" => "3 · VPLs (instant radiosity)".into(),
