@@ -49,6 +49,9 @@ pub struct GBufferPass {
     name: String,
     single_sided: wgpu::RenderPipeline,
     double_sided: wgpu::RenderPipeline,
+    /// Whether single-sided materials cull their back faces (the camera's G-buffer, as glTF
+    /// asks); light views draw every face (see [`Self::light_view`]).
+    cull_single_sided: bool,
     pub camera_layout: wgpu::BindGroupLayout,
     pub targets: GBuffer,
 }
@@ -78,7 +81,17 @@ impl GBufferPass {
         });
         let [single_sided, double_sided] = pipelines;
         let targets = create_targets(ctx, width, height, &name);
-        Self { name, single_sided, double_sided, camera_layout, targets }
+        Self { name, single_sided, double_sided, cull_single_sided: true, camera_layout, targets }
+    }
+
+    /// The G-buffer of a light's view (Knecht 002 §4.3): every face is drawn, single-sided
+    /// or not, as the shadow maps draw them. A wall's back face seen from the light stops the
+    /// light there like the path tracer's two-sided surfaces do; culled, the light would pass
+    /// through it and create VPLs on the surfaces behind (the open default box lit by a
+    /// directional light from above got 1.5 × the path tracer's first bounce through its
+    /// ceiling).
+    pub fn light_view(ctx: &GpuContext, scene: &GpuScene, size: u32, name: impl Into<String>) -> Self {
+        Self { cull_single_sided: false, ..Self::named(ctx, scene, size, size, name) }
     }
 
     /// The G-buffer's render pipeline with the vertex and fragment entries `(vs, fs)` of
@@ -222,7 +235,8 @@ impl GBufferPass {
         pass.set_pipeline(&self.double_sided);
         pass.set_bind_group(0, camera_group, &[]);
         pass.set_bind_group(1, &scene.instance_group, &[]);
-        scene.draw(&mut pass, state, Some(2), Some((&self.single_sided, &self.double_sided)));
+        let single = if self.cull_single_sided { &self.single_sided } else { &self.double_sided };
+        scene.draw(&mut pass, state, Some(2), Some((single, &self.double_sided)));
     }
 }
 

@@ -335,7 +335,7 @@ impl VplImportancePass {
         while self.views.len() < views {
             let k = self.views.len();
             let name = if k == 0 { "vpl.light_gbuffer".to_string() } else { format!("vpl.light_gbuffer.{k}") };
-            let gbuffer = GBufferPass::named(ctx, scene, size, size, name.clone());
+            let gbuffer = GBufferPass::light_view(ctx, scene, size, name.clone());
             let camera = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(&format!("{name}.camera")),
                 size: std::mem::size_of::<CameraUniform>() as u64,

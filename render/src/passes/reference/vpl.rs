@@ -106,7 +106,7 @@ impl VplSamplePass {
     pub fn new(ctx: &GpuContext, scene: &GpuScene, size: u32, capacity: u32) -> Self {
         let device = &ctx.device;
         let cs = wgpu::ShaderStages::COMPUTE;
-        let light_gbuffer = GBufferPass::named(ctx, scene, size, size, "vpl.light_gbuffer");
+        let light_gbuffer = GBufferPass::light_view(ctx, scene, size, "vpl.light_gbuffer");
         let camera_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("vpl.light_gbuffer.camera"),
             size: std::mem::size_of::<CameraUniform>() as u64,
