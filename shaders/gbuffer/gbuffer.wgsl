@@ -18,7 +18,7 @@ struct Material {
     params: vec4<f32>,
     // metallic, roughness, 0, 0
     extra: vec4<f32>,
-    // rgb: emitted radiance L_e (glTF emissive factor × strength)
+    // rgb: emitted radiance L_e (glTF emissive factor × strength), w: has emissive texture
     emissive: vec4<f32>,
 }
 
@@ -27,6 +27,7 @@ struct Material {
 @group(2) @binding(0) var<uniform> material: Material;
 @group(2) @binding(1) var base_tex: texture_2d<f32>;
 @group(2) @binding(2) var base_sampler: sampler;
+@group(2) @binding(3) var emissive_tex: texture_2d<f32>;
 
 struct VsIn {
     @location(0) position: vec3<f32>,
@@ -96,6 +97,17 @@ fn gbuffer_fragment(i: VsOut, front: bool) -> FsOut {
     o.albedo = vec4<f32>(color.rgb, material.params.x);
     o.material = vec4<f32>(material.params.y, material.params.z, material.extra.x, material.extra.y);
     o.motion = clip_to_pixel(i.prev_clip, camera.viewport) - clip_to_pixel(i.cur_clip, camera.viewport);
-    o.emission = vec4<f32>(material.emissive.rgb, 1.0);
+    var emission = material.emissive.rgb;
+    if (material.emissive.w > 0.5) {
+        // The camera filters by its footprint like the base colour; the light views read mip
+        // 0 (their colour blur is for the VPLs' albedo, §4.3). The emitters' light samples
+        // read the same texels on the CPU (scene::texture).
+        if (camera.lod.x >= 0.0) {
+            emission = emission * textureSampleLevel(emissive_tex, base_sampler, i.uv, 0.0).rgb;
+        } else {
+            emission = emission * textureSample(emissive_tex, base_sampler, i.uv).rgb;
+        }
+    }
+    o.emission = vec4<f32>(emission, 1.0);
     return o;
 }

@@ -69,7 +69,12 @@ fn the_default_box_open_to_a_constant_sky_matches_the_path_tracer() {
     assert!(mean(&truth.direct) > 0.0 && truth_indirect > 0.0);
     let direct_only_flip = exposed_flip(&truth.direct, &truth.full);
     // (technique, full-image FLIP bound, lowest share of the path tracer's indirect light).
-    let cases = [(Technique::Soler, 0.177, 0.5), (Technique::Gautron, 0.16, 0.8), (Technique::Knecht, 0.175, 0.6), (Technique::Nguyen, 0.19, 0.55)];
+    let cases = [
+        (Technique::Soler, 0.177, 0.5),
+        (Technique::Gautron, 0.16, 0.8),
+        (Technique::Knecht, 0.175, 0.6),
+        (Technique::Nguyen, 0.19, 0.55),
+    ];
     for (t, bound, least) in cases {
         let mut r = renderer(scene.clone(), size, |s| {
             t.apply(s);

@@ -9,7 +9,8 @@
 //! come from) and its light L_e · f · cos θ_x · cos θ_y / (d² · pdf_A) added when unoccluded,
 //! so a path that hits an emitter after a bounce does not add its emission again (only the
 //! camera's first hit shows it); with [`PathTracer::set_emitter_lights`] off, emitters only
-//! glow (their emission at the first hit, no light). The scene's sky (`Scene::sky`, issue #18)
+//! glow (their emission at the first hit, no light). Emission is factor × emissive texture at
+//! the hit's UVs (base colour textures are not read: the materials' factors are). The scene's sky (`Scene::sky`, issue #18)
 //! is reached the same way: one direction per vertex, ∝ cos θ for a constant sky, by the
 //! image's radiance otherwise ([`crate::scene::sky::SkySampler::sample_at`], continuously: the
 //! truth the lab's directions estimate),
@@ -29,7 +30,7 @@
 //! errors (sampling, visibility) show apart from the light no screen-space method has
 //! (surfaces hidden from the camera or off screen).
 
-use glam::{Mat4, Vec3, Vec3A, Vec4Swizzles};
+use glam::{Mat4, Vec2, Vec3, Vec3A, Vec4Swizzles};
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::{Ray, RayHit};
 use rayon::prelude::*;
@@ -39,7 +40,7 @@ use crate::cpu::brdf;
 use crate::cpu::raycast::{moller_trumbore, primary_ray};
 use crate::scene::emitters::Emitters;
 use crate::scene::sky::{Sky, SkySampler};
-use crate::scene::{Material, Scene, WorldLight};
+use crate::scene::{Material, Scene, TextureImage, WorldLight};
 
 /// Version of the estimator: bump it whenever a change alters the images (references
 /// stored under `tests/data/` record the version they were made with).
@@ -83,6 +84,7 @@ struct Viewer {
 struct Tri {
     v: [Vec3; 3],
     n: [Vec3; 3],
+    uv: [Vec2; 3],
     material: usize,
 }
 
@@ -91,6 +93,8 @@ pub struct PathTracer {
     tris: Vec<Tri>,
     bvh: CwBvh,
     materials: Vec<Material>,
+    /// The scene's textures (shared), for emissive textures.
+    textures: Vec<TextureImage>,
     lights: Vec<WorldLight>,
     /// The emissive triangles, sampled by next-event estimation (empty: emitters only glow).
     emitters: Emitters,
@@ -104,6 +108,7 @@ pub struct PathTracer {
 struct Hit {
     p: Vec3,
     n: Vec3,
+    uv: Vec2,
     material: usize,
 }
 
@@ -147,6 +152,7 @@ impl PathTracer {
                 tris.push(Tri {
                     v: [0, 1, 2].map(|k| d.world.transform_point3(Vec3::from(vert(k).position))),
                     n: [0, 1, 2].map(|k| (nm * Vec3::from(vert(k).normal).extend(0.0)).xyz().normalize_or_zero()),
+                    uv: [0, 1, 2].map(|k| Vec2::from(vert(k).uv)),
                     material: p.material,
                 });
             }
@@ -173,7 +179,8 @@ impl PathTracer {
         let materials = if scene.materials.is_empty() { vec![Material::default()] } else { scene.materials.clone() };
         let emitters = Emitters::collect(scene, &state);
         let sky = scene.sky.is_lit().then(|| scene.sky.clone());
-        Self { tris, bvh, materials, lights: state.lights, emitters, sky, eps }
+        let textures = scene.textures.clone();
+        Self { tris, bvh, materials, textures, lights: state.lights, emitters, sky, eps }
     }
 
     /// Whether emissive surfaces light the scene (`emitters.enabled`, on by default) or only
@@ -215,7 +222,8 @@ impl PathTracer {
         if n.dot(d) > 0.0 {
             n = -n;
         }
-        Some(Hit { p: o + d * hit.t, n, material: tri.material })
+        let uv = tri.uv[0] * (1.0 - u - v) + tri.uv[1] * u + tri.uv[2] * v;
+        Some(Hit { p: o + d * hit.t, n, uv, material: tri.material })
     }
 
     fn occluded(&self, a: Vec3, b: Vec3) -> bool {
@@ -326,7 +334,13 @@ impl PathTracer {
     fn trace(&self, origin: Vec3, dir: Vec3, bounces: u32, viewer: Option<&Viewer>, rng: &mut Pcg) -> (Vec3, Vec3) {
         let Some(mut h) = self.intersect(origin, dir, 0.0, f32::INFINITY) else { return (Vec3::ZERO, Vec3::ZERO) };
         let mut v = -dir;
-        let emission = |h: &Hit| self.materials[h.material.min(self.materials.len() - 1)].emissive;
+        let emission = |h: &Hit| {
+            let m = &self.materials[h.material.min(self.materials.len() - 1)];
+            match m.emissive_texture.and_then(|t| self.textures.get(t)) {
+                Some(image) => m.emissive * image.sample_linear(h.uv),
+                None => m.emissive,
+            }
+        };
         let direct = emission(&h) + self.direct(&h, v, rng);
         let mut indirect = Vec3::ZERO;
         let mut throughput = Vec3::ONE;

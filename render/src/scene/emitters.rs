@@ -19,12 +19,15 @@
 //!   estimation (`cpu::pathtrace`), so that ground truth samples the same emitters.
 //!
 //! Emission is the material's emissive factor × `KHR_materials_emissive_strength`
-//! ([`super::Material::emissive`]); emissive textures are not loaded (the G-buffer and the
-//! lights both use the factor).
+//! ([`super::Material::emissive`]) × its emissive texture (the G-buffer's `gbuffer.emission`
+//! reads the same). A textured triangle is picked by its mean emitted power (the texture's
+//! mean over the triangle, [`super::TextureImage::triangle_mean`]) and its samples carry the
+//! texture's radiance at their point, so that the estimate stays unbiased where the texture
+//! varies within a triangle; triangles whose texels are all black emit nothing.
 
-use glam::{Mat4, Vec3, Vec4Swizzles};
+use glam::{Mat4, Vec2, Vec3, Vec4Swizzles};
 
-use super::{Scene, SceneState};
+use super::{Scene, SceneState, TextureImage};
 use crate::cpu::knecht::halton;
 
 /// One emissive triangle in world space.
@@ -33,11 +36,14 @@ pub struct EmitterTriangle {
     pub v: [Vec3; 3],
     /// Unit normal of the emitting side (for two-sided emitters, the front one).
     pub normal: Vec3,
-    /// Emitted radiance L_e (W/(m²·sr)).
+    /// Emitted radiance L_e (W/(m²·sr)), the mean over the triangle for a textured emitter.
     pub radiance: Vec3,
     pub area: f32,
     /// 1, or 2 for a double-sided material (it emits from both sides).
     pub sides: u32,
+    /// Emissive texture (index into [`Emitters::textures`]), its UVs at the corners and the
+    /// factor it multiplies; None: `radiance` everywhere.
+    pub texture: Option<(usize, [Vec2; 3], Vec3)>,
 }
 
 impl EmitterTriangle {
@@ -76,6 +82,8 @@ pub struct Emitters {
     pub power: Vec3,
     /// Total emitting area, all sides (m²).
     pub area: f32,
+    /// The emissive textures the triangles read (shared with the scene, not copied).
+    pub textures: Vec<TextureImage>,
 }
 
 fn luminance(c: Vec3) -> f32 {
@@ -92,12 +100,22 @@ impl Emitters {
     /// As [`Self::collect`]; `two_sided`: double-sided materials emit from both sides.
     pub fn collect_sides(scene: &Scene, state: &SceneState, two_sided: bool) -> Self {
         let mut triangles = Vec::new();
+        // Scene texture → index into `textures`.
+        let mut textures: Vec<TextureImage> = Vec::new();
+        let mut texture_map = std::collections::HashMap::new();
         for d in &state.draws {
             let Some(p) = scene.meshes.get(d.mesh).and_then(|m| m.primitives.get(d.primitive)) else { continue };
             let Some(m) = scene.materials.get(p.material) else { continue };
             if luminance(m.emissive) <= 0.0 {
                 continue;
             }
+            let texture = m.emissive_texture.and_then(|t| {
+                let image = scene.textures.get(t)?;
+                Some(*texture_map.entry(t).or_insert_with(|| {
+                    textures.push(image.clone());
+                    textures.len() - 1
+                }))
+            });
             let nm: Mat4 = d.world.inverse().transpose();
             for t in p.indices.chunks_exact(3) {
                 let Some(vs) = t.iter().map(|&i| p.vertices.get(i as usize)).collect::<Option<Vec<_>>>() else {
@@ -115,10 +133,20 @@ impl Emitters {
                     normal = -normal;
                 }
                 let sides = if two_sided && m.double_sided { 2 } else { 1 };
-                triangles.push(EmitterTriangle { v, normal, radiance: m.emissive, area, sides });
+                let (radiance, texture) = match texture {
+                    Some(ti) => {
+                        let uv = [0, 1, 2].map(|k| Vec2::from(vs[k].uv));
+                        (m.emissive * textures[ti].triangle_mean(uv), Some((ti, uv, m.emissive)))
+                    }
+                    None => (m.emissive, None),
+                };
+                if luminance(radiance) <= 0.0 {
+                    continue;
+                }
+                triangles.push(EmitterTriangle { v, normal, radiance, area, sides, texture });
             }
         }
-        Self::from_triangles(triangles)
+        Self { textures, ..Self::from_triangles(triangles) }
     }
 
     pub fn from_triangles(triangles: Vec<EmitterTriangle>) -> Self {
@@ -141,7 +169,7 @@ impl Emitters {
         } else {
             cdf.clear();
         }
-        Self { triangles, cdf, power, area }
+        Self { triangles, cdf, power, area, textures: Vec::new() }
     }
 
     /// Whether there is anything to sample.
@@ -177,7 +205,13 @@ impl Emitters {
         let (b1, b2) = (1.0 - s, u[2] * s);
         let position = t.v[0] * b1 + t.v[1] * b2 + t.v[2] * (1.0 - b1 - b2);
         let pdf_area = p_tri / (t.area * t.sides as f32);
-        Some(EmitterSample { position, normal, radiance: t.radiance, pdf_area })
+        let radiance = match t.texture.and_then(|(i, uv, factor)| Some((self.textures.get(i)?, uv, factor))) {
+            Some((image, uv, factor)) => {
+                factor * image.sample_linear(uv[0] * b1 + uv[1] * b2 + uv[2] * (1.0 - b1 - b2))
+            }
+            None => t.radiance,
+        };
+        Some(EmitterSample { position, normal, radiance, pdf_area })
     }
 
     /// `count` VPLs on the emitters (see the module doc): Halton points `first + 1` ….
@@ -269,8 +303,8 @@ mod tests {
         let (a, b, c, d) = (Vec3::ZERO, Vec3::X, Vec3::new(1.0, 0.0, 2.0), Vec3::new(0.0, 0.0, 2.0));
         let n = Vec3::NEG_Y;
         vec![
-            EmitterTriangle { v: [a, b, c], normal: n, radiance, area: 1.0, sides },
-            EmitterTriangle { v: [a, c, d], normal: n, radiance, area: 1.0, sides },
+            EmitterTriangle { v: [a, b, c], normal: n, radiance, area: 1.0, sides, texture: None },
+            EmitterTriangle { v: [a, c, d], normal: n, radiance, area: 1.0, sides, texture: None },
         ]
     }
 
@@ -304,6 +338,44 @@ mod tests {
         assert!((290..=310).contains(&on_bright), "{on_bright} of 400 on the triangle with 3/4 of the power");
         // Equal flux per VPL: the importance sampling is by power.
         assert!(vpls.iter().all(|v| (v.flux - vpls[0].flux).length() < 1e-4));
+    }
+
+    #[test]
+    fn textured_emitters_emit_where_their_texture_is_bright() {
+        // The quad's uv is (x, z / 2); its texture is black for u < ½ and white beyond. Both
+        // triangles straddle the edge: the samples must carry light only at x ≥ ½, with the
+        // power of the white half.
+        let rgba8: Vec<u8> = (0..32 * 32).flat_map(|i| if i % 32 < 16 { [0, 0, 0, 255] } else { [255; 4] }).collect();
+        let image = TextureImage { name: "half".into(), width: 32, height: 32, rgba8: rgba8.into() };
+        let factor = Vec3::new(2.0, 1.0, 0.5);
+        let uv = |p: Vec3| Vec2::new(p.x, p.z * 0.5);
+        let tris: Vec<EmitterTriangle> = quad(Vec3::ONE, 1)
+            .into_iter()
+            .map(|t| {
+                let corners = t.v.map(uv);
+                EmitterTriangle {
+                    radiance: factor * image.triangle_mean(corners),
+                    texture: Some((0, corners, factor)),
+                    ..t
+                }
+            })
+            .collect();
+        let e = Emitters { textures: vec![image], ..Emitters::from_triangles(tris) };
+        // The white half (x > ½ of the 1 × 2 quad, with the bilinear ramp over the middle texel).
+        let expected = factor * std::f32::consts::PI * 1.0;
+        assert!((e.power - expected).length() < 0.03 * expected.length(), "{} vs {expected}", e.power);
+        let vpls = e.vpls(512, 0);
+        let lit: Vec<&EmitterVpl> = vpls.iter().filter(|v| v.flux.max_element() > 0.0).collect();
+        // (x < 1/64: the repeat wrap blends the last, white column in, as the GPU sampler does.)
+        assert!(lit.iter().all(|v| v.position.x > 0.48 || v.position.x < 1.0 / 64.0), "only where it is bright");
+        // Triangles are picked by their mean power and sampled uniformly: here half of each
+        // triangle is black, so about half the samples carry nothing (unbiased, not efficient).
+        assert!(lit.len() > 230, "{} of 512 samples lit", lit.len());
+        let sum: Vec3 = vpls.iter().map(|v| v.flux).sum();
+        assert!((sum - expected).length() < 0.03 * expected.length(), "{sum} vs {expected}");
+        // Inside the white half the flux is the factor's colour.
+        let v = lit.iter().find(|v| v.position.x > 0.7).expect("a sample well inside");
+        assert!((v.flux / v.flux.x - factor / factor.x).length() < 1e-4);
     }
 
     #[test]

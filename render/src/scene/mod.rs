@@ -13,6 +13,7 @@ pub mod default_light;
 pub mod emitters;
 mod gltf_load;
 pub mod sky;
+mod texture;
 pub mod upload;
 
 pub use animation::{Animation, Channel, ChannelTarget, Interpolation};
@@ -51,8 +52,9 @@ pub struct TextureImage {
     pub name: String,
     pub width: u32,
     pub height: u32,
-    /// `width * height * 4` bytes, sRGB-encoded RGBA.
-    pub rgba8: Vec<u8>,
+    /// `width * height * 4` bytes, sRGB-encoded RGBA (shared: the emitters' light samples
+    /// read emissive textures every frame without copying them).
+    pub rgba8: std::sync::Arc<[u8]>,
 }
 
 /// Surface description in the terms of Knecht's G-buffer (002 §4.2): colour `c`,
@@ -76,8 +78,12 @@ pub struct Material {
     pub base_color_texture: Option<usize>,
     pub metallic: f32,
     pub roughness: f32,
-    /// Linear emitted radiance (emissive factor × strength).
+    /// Linear emitted radiance (emissive factor × strength); the emitted radiance of a point
+    /// is this × the emissive texture there.
     pub emissive: Vec3,
+    /// Index into [`Scene::textures`] of the emissive texture (sRGB), read with the same UVs
+    /// as the base colour texture.
+    pub emissive_texture: Option<usize>,
     /// Per-object weight an artist gives to point-cloud sampling (Knecht §5.1); 1 by default.
     pub sample_weight: f32,
     /// glTF `doubleSided`: when false, back faces are culled in the camera G-buffer (a
@@ -119,6 +125,7 @@ impl Default for Material {
             metallic: 0.0,
             roughness: 1.0,
             emissive: Vec3::ZERO,
+            emissive_texture: None,
             sample_weight: 1.0,
             double_sided: false,
             specular_override: None,

@@ -1,5 +1,5 @@
 //! GPU upload of a scene: one vertex and one index buffer for all primitives, a uniform
-//! and bind group per material (base colour texture with a CPU-built mip chain), and a
+//! and bind group per material (base colour and emissive textures with a CPU-built mip chain), and a
 //! storage buffer of per-draw transforms rewritten every frame.
 
 use glam::Mat4;
@@ -17,7 +17,7 @@ pub struct MaterialUniform {
     pub params: [f32; 4],
     /// metallic, roughness, 0, 0.
     pub extra: [f32; 4],
-    /// Emitted radiance (rgb), 0.
+    /// Emitted radiance (rgb), has emissive texture.
     pub emissive: [f32; 4],
 }
 
@@ -121,6 +121,7 @@ impl GpuScene {
                 crate::passes::bgl::uniform(0, fs),
                 crate::passes::bgl::texture(1, fs, true),
                 crate::passes::bgl::sampler(2, fs, wgpu::SamplerBindingType::Filtering),
+                crate::passes::bgl::texture(3, fs, true),
             ],
         });
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
@@ -135,7 +136,7 @@ impl GpuScene {
         });
         let white = upload_texture(
             ctx,
-            &super::TextureImage { name: "white".into(), width: 1, height: 1, rgba8: vec![255; 4] },
+            &super::TextureImage { name: "white".into(), width: 1, height: 1, rgba8: vec![255; 4].into() },
         );
         let mut textures: Vec<wgpu::Texture> = scene.textures.iter().map(|t| upload_texture(ctx, t)).collect();
         let mut material_buffers = Vec::new();
@@ -145,6 +146,7 @@ impl GpuScene {
             if scene.materials.is_empty() { &default_material } else { &scene.materials };
         for (i, m) in materials.iter().enumerate() {
             let tex = m.base_color_texture.filter(|&t| t < textures.len());
+            let emissive_tex = m.emissive_texture.filter(|&t| t < textures.len());
             let u = MaterialUniform {
                 base_color: m.base_color.to_array(),
                 params: [
@@ -154,7 +156,7 @@ impl GpuScene {
                     tex.is_some() as u32 as f32,
                 ],
                 extra: [m.metallic, m.roughness, 0.0, 0.0],
-                emissive: m.emissive.extend(0.0).to_array(),
+                emissive: m.emissive.extend(emissive_tex.is_some() as u32 as f32).to_array(),
             };
             let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(&format!("scene.material[{i}]")),
@@ -165,6 +167,11 @@ impl GpuScene {
                 label: Some("scene.material_texture"),
                 ..Default::default()
             });
+            let emissive_view =
+                emissive_tex.map(|t| &textures[t]).unwrap_or(&white).create_view(&wgpu::TextureViewDescriptor {
+                    label: Some("scene.material_emissive_texture"),
+                    ..Default::default()
+                });
             material_groups.push(device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some(&format!("scene.material[{i}]")),
                 layout: &material_layout,
@@ -172,6 +179,7 @@ impl GpuScene {
                     wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&view) },
                     wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&sampler) },
+                    wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&emissive_view) },
                 ],
             }));
             material_buffers.push(buffer);
@@ -297,7 +305,7 @@ fn upload_texture(ctx: &GpuContext, img: &super::TextureImage) -> wgpu::Texture 
     let (w, h) = (img.width.max(1), img.height.max(1));
     let max_dim = ctx.limits.max_texture_dimension_2d;
     let mut level = if img.rgba8.len() == (w as usize * h as usize * 4) {
-        img.rgba8.clone()
+        img.rgba8.to_vec()
     } else {
         vec![255; (w * h * 4) as usize]
     };

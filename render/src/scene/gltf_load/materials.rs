@@ -25,16 +25,29 @@ impl Loader<'_> {
                     .get(i)
                     .ok_or_else(|| self.invalid(format!("a primitive refers to material {i}, which does not exist")))?;
                 let pbr = &m.pbr_metallic_roughness;
-                let (texture, uv) = match &pbr.base_color_texture {
-                    Some(info) => {
-                        let transform = info.extensions.as_ref().and_then(|e| e.texture_transform.as_ref());
-                        let uv = UvUse {
-                            set: transform.and_then(|t| t.tex_coord).unwrap_or(info.tex_coord),
-                            transform: transform.map(|t| uv_transform(t.offset.0, t.rotation.0, t.scale.0)),
-                        };
-                        (self.texture(info.index.value())?, uv)
+                let (texture, base_uv) = match &pbr.base_color_texture {
+                    Some(info) => (self.texture(info.index.value())?, Some(uv_use(info))),
+                    None => (None, None),
+                };
+                let (emissive_texture, emissive_uv) = match &m.emissive_texture {
+                    Some(info) => (self.texture(info.index.value())?, Some(uv_use(info))),
+                    None => (None, None),
+                };
+                // One UV set per vertex (`Vertex::uv`): the base colour's, else the emissive
+                // texture's. An emissive texture on other UVs is read with the base colour's.
+                let uv = match (base_uv, emissive_uv) {
+                    (Some(b), Some(e)) if texture.is_some() && emissive_texture.is_some() && b != e => {
+                        self.warn(format!(
+                            "material {i}: the emissive texture uses other texture coordinates than the base colour \
+                             texture (TEXCOORD_{} vs TEXCOORD_{}, or another KHR_texture_transform); it is read with \
+                             the base colour's",
+                            e.set, b.set
+                        ));
+                        b
                     }
-                    None => (None, UvUse::default()),
+                    (Some(b), _) if texture.is_some() => b,
+                    (_, Some(e)) if emissive_texture.is_some() => e,
+                    _ => UvUse::default(),
                 };
                 let strength = m
                     .extensions
@@ -48,6 +61,7 @@ impl Loader<'_> {
                     metallic: pbr.metallic_factor.0.clamp(0.0, 1.0),
                     roughness: pbr.roughness_factor.0.clamp(0.0, 1.0),
                     emissive: (Vec3::from(m.emissive_factor.0) * strength).max(Vec3::ZERO),
+                    emissive_texture,
                     sample_weight: 1.0,
                     double_sided: m.double_sided,
                     specular_override: None,
@@ -109,11 +123,20 @@ impl Loader<'_> {
             name,
             width: rgba.width(),
             height: rgba.height(),
-            rgba8: rgba.into_raw(),
+            rgba8: rgba.into_raw().into(),
         });
         let id = self.scene.textures.len() - 1;
         self.image_map.insert(image, id);
         Ok(Some(id))
+    }
+}
+
+/// The texture coordinates a texture reference reads: its set and KHR_texture_transform.
+fn uv_use(info: &gltf::json::texture::Info) -> UvUse {
+    let transform = info.extensions.as_ref().and_then(|e| e.texture_transform.as_ref());
+    UvUse {
+        set: transform.and_then(|t| t.tex_coord).unwrap_or(info.tex_coord),
+        transform: transform.map(|t| uv_transform(t.offset.0, t.rotation.0, t.scale.0)),
     }
 }
 

@@ -215,8 +215,8 @@ fn load(bytes: &[u8], base_dir: Option<&Path>, opts: &LoadOptions, file: &str) -
     Ok(scene)
 }
 
-/// Texture coordinate set and KHR_texture_transform matrix a material's base colour texture uses.
-#[derive(Clone, Copy, Debug, Default)]
+/// Texture coordinate set and KHR_texture_transform matrix of a material's textures.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct UvUse {
     set: u32,
     transform: Option<Mat3>,

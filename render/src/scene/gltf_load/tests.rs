@@ -277,6 +277,47 @@ fn embedded_png_texture_is_decoded() {
 }
 
 #[test]
+fn emissive_textures_are_loaded_with_the_base_colours_uvs() {
+    let mut png = Vec::new();
+    image::RgbaImage::from_pixel(2, 2, image::Rgba([200, 100, 50, 255]))
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .expect("encode png");
+    let png_uri = format!("data:image/png;base64,{}", base64::engine::general_purpose::STANDARD.encode(&png));
+    let tri = data_uri(&triangle_bin([0, 1, 2]));
+    let with_material = |material: &str| {
+        let json = triangle_gltf(&tri).replacen(r#""indices":1,"#, r#""indices":1,"material":0,"#, 1);
+        let json = json.trim_end().strip_suffix('}').expect("object").to_string();
+        format!(
+            r#"{json},"materials":[{material}],"textures":[{{"source":0}},{{"source":0}}],"images":[{{"uri":"{png_uri}"}}]}}"#
+        )
+    };
+    let emissive_only = with_material(r#"{"emissiveFactor":[1,0.5,1],"emissiveTexture":{"index":1}}"#);
+    let scene = load_str(&emissive_only).expect("loads");
+    let m = &scene.materials[0];
+    assert_eq!((m.base_color_texture, m.emissive_texture), (None, Some(0)), "one image, decoded once");
+    assert_eq!(m.emissive, Vec3::new(1.0, 0.5, 1.0));
+    let about_uvs = |s: &Scene| s.warnings.iter().any(|w| w.contains("texture coordinates"));
+    assert!(!about_uvs(&scene), "{:?}", scene.warnings);
+
+    // Both textures on set 0: no warning; the emissive texture on set 1: read with set 0.
+    let both = |emissive_uv: &str| {
+        with_material(&format!(
+            r#"{{"pbrMetallicRoughness":{{"baseColorTexture":{{"index":0}}}},"emissiveFactor":[1,1,1],"emissiveTexture":{{"index":1{emissive_uv}}}}}"#
+        ))
+    };
+    let same = load_str(&both("")).expect("loads");
+    assert_eq!(same.materials[0].emissive_texture, Some(0));
+    assert!(!about_uvs(&same), "{:?}", same.warnings);
+    let other = load_str(&both(r#","texCoord":1"#)).expect("loads");
+    assert_eq!(other.materials[0].emissive_texture, Some(0));
+    assert!(
+        other.warnings.iter().any(|w| w.contains("emissive texture uses other texture coordinates")),
+        "{:?}",
+        other.warnings
+    );
+}
+
+#[test]
 fn unsupported_required_extension_is_a_warning() {
     let json = triangle_gltf(&data_uri(&triangle_bin([0, 1, 2]))).replacen(
         r#""asset":{"version":"2.0"},"#,

@@ -1,0 +1,114 @@
+//! CPU lookups of a scene texture, as the GPU's material sampler reads it (repeat wrap,
+//! bilinear, sRGB decoded to linear): the emitted radiance of emissive textures for the
+//! emitters' light samples (`scene::emitters`) and the path tracer (issue #18 point 1).
+
+use glam::{Vec2, Vec3};
+
+use super::TextureImage;
+
+/// sRGB → linear of each 8-bit value (IEC 61966-2-1).
+fn srgb_table() -> &'static [f32; 256] {
+    static TABLE: std::sync::OnceLock<[f32; 256]> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| {
+        std::array::from_fn(|i| {
+            let c = i as f32 / 255.0;
+            if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+        })
+    })
+}
+
+impl TextureImage {
+    /// Linear RGB of texel (x, y), wrapped (a malformed image reads black).
+    fn texel(&self, x: i64, y: i64) -> Vec3 {
+        let (w, h) = (self.width.max(1) as i64, self.height.max(1) as i64);
+        let i = 4 * (y.rem_euclid(h) * w + x.rem_euclid(w)) as usize;
+        match self.rgba8.get(i..i + 3) {
+            Some(t) => {
+                let lut = srgb_table();
+                Vec3::new(lut[t[0] as usize], lut[t[1] as usize], lut[t[2] as usize])
+            }
+            None => Vec3::ZERO,
+        }
+    }
+
+    /// Linear RGB at `uv` (texel centres at (i + ½) / size, repeat wrap, bilinear), as the
+    /// GPU's `scene.material_sampler` reads mip level 0.
+    pub fn sample_linear(&self, uv: Vec2) -> Vec3 {
+        if !uv.is_finite() {
+            return Vec3::ZERO;
+        }
+        let p = uv * Vec2::new(self.width as f32, self.height as f32) - 0.5;
+        let f = p.floor();
+        let (x, y, t) = (f.x as i64, f.y as i64, p - f);
+        let top = self.texel(x, y).lerp(self.texel(x + 1, y), t.x);
+        let bottom = self.texel(x, y + 1).lerp(self.texel(x + 1, y + 1), t.x);
+        top.lerp(bottom, t.y)
+    }
+
+    /// Mean linear RGB over the triangle `uv` of texture space, from a stratified set of
+    /// barycentric points (about one per covered texel, 1 … 256).
+    pub fn triangle_mean(&self, uv: [Vec2; 3]) -> Vec3 {
+        let texels = 0.5 * (uv[1] - uv[0]).perp_dot(uv[2] - uv[0]).abs() * self.width as f32 * self.height as f32;
+        let n = (texels.sqrt().ceil() as u32).clamp(1, 16);
+        let mut sum = Vec3::ZERO;
+        let mut count = 0;
+        // n² sub-triangles of the triangle's regular subdivision, each sampled at its centroid.
+        for i in 0..n {
+            for j in 0..n - i {
+                let (a, b) = (i as f32, j as f32);
+                let up = [(a, b), (a + 1.0, b), (a, b + 1.0)];
+                let mut cells = vec![up];
+                if i + j + 1 < n {
+                    cells.push([(a + 1.0, b), (a + 1.0, b + 1.0), (a, b + 1.0)]);
+                }
+                for c in cells {
+                    let (s, t) =
+                        ((c[0].0 + c[1].0 + c[2].0) / (3.0 * n as f32), (c[0].1 + c[1].1 + c[2].1) / (3.0 * n as f32));
+                    sum += self.sample_linear(uv[0] + (uv[1] - uv[0]) * s + (uv[2] - uv[0]) * t);
+                    count += 1;
+                }
+            }
+        }
+        sum / count.max(1) as f32
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn image(w: u32, h: u32, f: impl Fn(u32, u32) -> [u8; 4]) -> TextureImage {
+        let rgba8: Vec<u8> = (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).flat_map(|(x, y)| f(x, y)).collect();
+        TextureImage { name: "t".into(), width: w, height: h, rgba8: rgba8.into() }
+    }
+
+    #[test]
+    fn lookups_decode_srgb_wrap_and_interpolate() {
+        let t = image(2, 1, |x, _| if x == 0 { [0, 0, 0, 255] } else { [255, 188, 255, 255] });
+        assert_eq!(t.sample_linear(Vec2::new(0.25, 0.5)), Vec3::ZERO);
+        let white = t.sample_linear(Vec2::new(0.75, 0.5));
+        assert!((white.x - 1.0).abs() < 1e-6 && (white.y - 0.5029).abs() < 1e-3, "sRGB 188 is linear 0.503: {white}");
+        // Halfway between the texel centres, and the same one period over.
+        let mid = t.sample_linear(Vec2::new(0.5, 0.5));
+        assert!((mid.x - 0.5).abs() < 1e-6);
+        assert!((t.sample_linear(Vec2::new(1.5, 3.5)) - mid).length() < 1e-6);
+        // Repeat wrap across the left edge blends the last texel back in.
+        assert!((t.sample_linear(Vec2::new(0.0, 0.5)).x - 0.5).abs() < 1e-6);
+        assert_eq!(t.sample_linear(Vec2::NAN), Vec3::ZERO);
+        let broken = TextureImage { name: "short".into(), width: 4, height: 4, rgba8: vec![255; 8].into() };
+        assert_eq!(broken.sample_linear(Vec2::new(0.6, 0.6)), Vec3::ZERO, "a short image reads black");
+    }
+
+    #[test]
+    fn triangle_means_follow_the_covered_texels() {
+        // Left half black, right half white (64² texels).
+        let t = image(64, 64, |x, _| if x < 32 { [0, 0, 0, 255] } else { [255, 255, 255, 255] });
+        let left = t.triangle_mean([Vec2::new(0.05, 0.1), Vec2::new(0.4, 0.1), Vec2::new(0.05, 0.9)]);
+        let right = t.triangle_mean([Vec2::new(0.6, 0.1), Vec2::new(0.95, 0.1), Vec2::new(0.6, 0.9)]);
+        assert!(left.length() < 1e-6 && (right - Vec3::ONE).length() < 1e-6, "{left} {right}");
+        // A triangle over both halves: the white part's share of its area (1/2 here).
+        let both = t.triangle_mean([Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 1.0)]);
+        // x > ½ covers a quarter of the lower-left half square (the corner (½..1, 0..½)).
+        assert!((both.x - 0.25).abs() < 0.03, "{both}");
+    }
+}
