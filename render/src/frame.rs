@@ -177,11 +177,14 @@ fn indirect_light(
     let vpls = match p.vpl_source {
         VplSource::None => return None,
         VplSource::ImportanceWarping => x.knecht.as_mut()?.vpls(f, enc, timer, x.emitters.as_mut()),
-        VplSource::UniformBatches => match x.reference.as_mut()?.vpls(f, enc, timer, view_proj) {
-            Some(batch) => batch,
-            // The running average is complete (or there is no light): stage 7's image stays.
-            None => return Some(x.reference.as_ref()?.average()),
-        },
+        VplSource::UniformBatches => {
+            let emitters = x.emitters.as_ref().filter(|e| e.stats.vpls > 0).map(|e| &e.emitters);
+            match x.reference.as_mut()?.vpls(f, enc, timer, view_proj, emitters) {
+                Some(batch) => batch,
+                // The running average is complete (or there is no light): stage 7's image stays.
+                None => return Some(x.reference.as_ref()?.average()),
+            }
+        }
     };
 
     // Stage 4: VPL visibility, by the source's maps of its VPLs.

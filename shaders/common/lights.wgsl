@@ -16,6 +16,9 @@ struct Light {
 const LIGHT_POINT: f32 = 0.0;
 const LIGHT_SPOT: f32 = 1.0;
 const LIGHT_DIRECTIONAL: f32 = 2.0;
+// A point of an emissive surface as a light (only in the exact-VPL reference's sampling
+// list): radiant intensity color · max(n · ω, 0), n = direction.xyz.
+const LIGHT_EMITTER: f32 = 3.0;
 
 // KHR_lights_punctual recommended spot falloff: t = saturate((cos θ − cos θ_outer) ·
 // 1/(cos θ_inner − cos θ_outer)); attenuation t².

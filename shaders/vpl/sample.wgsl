@@ -7,8 +7,8 @@
 // quasi-random sampling of Keller's instant radiosity (1997), which makes the reference
 // converge faster than independent texels did (CPU twin: cpu::knecht::reference_uv). Its
 // incident flux is the light's power through that texel,
-// Φ = I(ω) · dω (spot and point: intensity × falloff × the texel's solid angle
-// dω = s² cos³θ) or Φ = E · s² (directional), divided by the sampling density N / (R² · V)
+// Φ = I(ω) · dω (spot, point and emitter point: intensity × falloff × the texel's solid
+// angle dω = s² cos³θ; an emitter point's falloff is its cosine lobe max(n · ω, 0)) or Φ = E · s² (directional), divided by the sampling density N / (R² · V)
 // (N VPLs over R² texels, this view one of the V views taken in turn), so that the set is
 // an unbiased estimate of the power the light delivers to the visible surfaces. Importance
 // sampling by hierarchical warping (Knecht §3.3, §4.4) replaces this with the Knecht issue.
@@ -78,6 +78,9 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         var falloff = range_window(light.direction.w, d);
         if (light.position.w == LIGHT_SPOT) {
             falloff = falloff * spot_falloff(light, dir);
+        }
+        if (light.position.w == LIGHT_EMITTER) {
+            falloff = falloff * max(dot(light.direction.xyz, dir), 0.0);
         }
         power = light.color.rgb * falloff * s * s * cos_axis * cos_axis * cos_axis;
     }

@@ -15,19 +15,20 @@ fn luminance_sum(img: &ImageF32) -> f64 {
     img.data.iter().map(|p| (0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]) as f64).sum()
 }
 
-/// (exact-VPL indirect, path-traced indirect) total luminance for `scene` at time 0.
-fn indirect_energy(scene: Scene) -> (f64, f64) {
+/// (exact-VPL indirect, path-traced indirect) total luminance for `scene` at time 0, after
+/// `batches` batches of 128 VPLs.
+fn indirect_energy(scene: Scene, batches: u32) -> (f64, f64) {
     let mut s = LabSettings::default();
     Technique::ExactVpl.apply(&mut s);
     s.reference.vpls_per_frame = 128;
-    s.reference.total_vpls = 2048;
+    s.reference.total_vpls = 128 * batches;
     s.reference.light_gbuffer_size = 256;
     let mut r = Renderer::new(gpu(), scene.clone(), s, SIZE, SIZE).expect("renderer");
     r.clock.playing = false;
-    for _ in 0..16 {
+    for _ in 0..batches {
         r.render_frame();
     }
-    assert_eq!(r.reference_progress(), Some((2048, 2048)));
+    assert_eq!(r.reference_progress(), Some((128 * batches, 128 * batches)));
     let vpl = r.readback("indirect.accum").expect("indirect.accum");
     let pt = PathTracer::new(&scene, 0.0);
     let img = pt.render(
@@ -45,7 +46,11 @@ fn light_node(scene: &Scene) -> usize {
 }
 
 fn check(name: &str, scene: Scene) {
-    let (vpl, pt) = indirect_energy(scene);
+    check_batches(name, scene, 16);
+}
+
+fn check_batches(name: &str, scene: Scene, batches: u32) {
+    let (vpl, pt) = indirect_energy(scene, batches);
     let ratio = vpl / pt;
     println!("{name}: exact-VPL / path-traced indirect energy = {ratio:.4} ({vpl:.3} / {pt:.3})");
     assert!(pt > 0.0, "{name}: the path tracer finds indirect light");
@@ -101,6 +106,20 @@ fn directional_light_vpls_stop_at_the_back_of_a_wall() {
     scene.lights[li].kind = LightKind::Directional;
     scene.lights[li].intensity = 2.0;
     check("directional from above", scene);
+}
+
+/// The shared Cornell box lit only by its emissive ceiling quad (issue #18): the reference's
+/// first bounce comes from `reference.emitter_points` (16) points of the quad, five views
+/// each, so 80 batches take every view once.
+#[test]
+fn emitter_points_carry_the_path_traced_indirect_energy() {
+    let scene = gi_render::scene::load_gltf_file(
+        &gi_lab_tests::shared_scene("cornell-box/CornellBox-Original.gltf"),
+        &gi_render::scene::LoadOptions::default(),
+    )
+    .expect("the shared Cornell box loads");
+    assert!(scene.lights.is_empty(), "lit by its quad alone");
+    check_batches("emitters", scene, 80);
 }
 
 /// Stage 3 of the reference on the GPU (`vpl/sample.wgsl`) against its CPU twin

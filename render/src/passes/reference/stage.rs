@@ -4,8 +4,14 @@
 //! the running average (`vpl/gather.wgsl` weights batch k by 1/(k+1): the gather and the
 //! temporal choice "running average" are one shader). Once `total_vpls` are in, the average
 //! is kept as it is; anything the image depends on restarts it.
+//!
+//! With emissive surfaces as lights (issue #18), `reference.emitter_points` points of the
+//! emitters' stratified set join the cycle as lights of their own (`LIGHT_EMITTER`: a point
+//! of flux Φ_j emits the radiant intensity Φ_j/π · max(n · ω, 0)) with five 90° views around
+//! their normal, so the reference's first bounce includes the emitters' light, sampled from
+//! light G-buffers rendered at those points (exact visibility, as for the punctual lights).
 
-use glam::{Mat4, Vec4};
+use glam::{Mat4, Vec3, Vec4};
 
 use crate::gpu::GpuContext;
 use crate::passes::bgl;
@@ -13,7 +19,9 @@ use crate::passes::knecht::vpl_importance::ReceiverBrdf;
 use crate::passes::reference::vpl::{BatchView, VplSamplePass, halton};
 use crate::passes::reference::vpl_gather::{GatherParams, VplGatherPass};
 use crate::passes::reference::vpl_visibility::VplVisibilityPass;
+use crate::passes::shadow::{GpuLight, LightView};
 use crate::pipeline::VplVisibility;
+use crate::scene::emitters::Emitters;
 use crate::scene::upload::GpuScene;
 use crate::stages::{FrameInputs, Visibility, VplSet, vpl_clip};
 use crate::timing::GpuTimer;
@@ -61,42 +69,53 @@ impl ReferenceVpls {
     }
 
     /// Stage 3: the next batch, or None when the average is complete (or there is no light).
+    /// `emitters`: this frame's emissive triangles when they are lights.
     pub fn vpls(
         &mut self,
         f: &FrameInputs,
         enc: &mut wgpu::CommandEncoder,
         timer: &mut GpuTimer,
         view_proj: Mat4,
+        emitters: Option<&Emitters>,
     ) -> Option<VplSet> {
         let (ctx, rs) = (f.ctx, &f.settings.reference);
         let n = rs.vpls_per_frame;
+        // The lights' views and the emitter points' views, taken in turn; each batch stands
+        // for all V of them.
+        let mut lights = f.lights.clone();
+        let mut views: Vec<BatchView> =
+            f.views.iter().map(|&(light_index, view)| BatchView { light_index, view }).collect();
+        if let Some(e) = emitters {
+            emitter_lights(e, rs.emitter_points, f.center, f.vpl_radius(), &mut lights, &mut views);
+        }
         // Restart when anything the image depends on changed.
         let mut fingerprint: Vec<f32> = view_proj.to_cols_array().to_vec();
-        fingerprint.extend(f.lights.iter().flat_map(|l| bytemuck::cast::<_, [f32; 20]>(*l)));
+        fingerprint.extend(lights.iter().flat_map(|l| bytemuck::cast::<_, [f32; 20]>(*l)));
         fingerprint.extend(f.state.draws.iter().flat_map(|d| d.world.to_cols_array()));
         if fingerprint != self.fingerprint {
             self.fingerprint = fingerprint;
             self.batches = 0;
         }
-        if self.batches >= rs.total_vpls.div_ceil(n) || f.lights.is_empty() {
+        if self.batches >= rs.total_vpls.div_ceil(n) || views.is_empty() {
             return None;
         }
-        // The views of all lights, taken in turn; each batch stands for all V of them.
-        let views: Vec<BatchView> =
-            f.views.iter().map(|&(light_index, view)| BatchView { light_index, view }).collect();
         let v_count = views.len() as u32;
         let batch = views[(self.batches % v_count) as usize];
         let k = self.batches;
         let jitter = (halton(k / v_count + 1, 2) - 0.5, halton(k / v_count + 1, 3) - 0.5);
         let size = rs.light_gbuffer_size as f32;
-        let flux_scale = size * size * v_count as f32 / n as f32 * f.settings.direct.intensity_scale;
+        // The direct light's intensity scale applies to the punctual lights, not the emitters
+        // (as in stage 2).
+        let punctual = (batch.light_index as usize) < f.lights.len();
+        let intensity = if punctual { f.settings.direct.intensity_scale } else { 1.0 };
+        let flux_scale = size * size * v_count as f32 / n as f32 * intensity;
         let (gpu_scene, state) = (f.gpu_scene, f.state);
         let sample = &mut self.sample;
         timer.scope(ctx, enc, "vpl.light_gbuffer", |e, slot| {
             sample.render_view(ctx, e, slot, gpu_scene, state, &batch.view, jitter)
         });
         timer.scope(ctx, enc, "vpl.sample", |e, slot| {
-            sample.sample(ctx, e, slot, &f.lights, batch, n, flux_scale, [rs.seed, k, k / v_count])
+            sample.sample(ctx, e, slot, &lights, batch, n, flux_scale, [rs.seed, k, k / v_count])
         });
         Some(VplSet {
             list: self.sample.vpls.clone(),
@@ -155,5 +174,46 @@ impl ReferenceVpls {
         });
         self.batches += 1;
         self.average()
+    }
+}
+
+/// Appends `points` points of the emitters' stratified set (`Emitters::vpls`) to `lights` as
+/// `LIGHT_EMITTER` lights (colour Φ_j/π: the radiant intensity along the normal) and their
+/// five 90° views around the normal to `views` (the face behind the emitting side would see
+/// nothing it lights). The eye sits 10⁻⁴ × the scene radius off the surface, in front.
+fn emitter_lights(
+    emitters: &Emitters,
+    points: u32,
+    center: Vec3,
+    radius: f32,
+    lights: &mut Vec<GpuLight>,
+    views: &mut Vec<BatchView>,
+) {
+    let near = (radius * 0.002).max(1e-3);
+    for p in emitters.vpls(points, 0) {
+        let n = p.normal.normalize_or(Vec3::Y);
+        let eye = p.position + n * (1e-4 * radius);
+        let far = (eye.distance(center) + 1.05 * radius).max(2.0 * near);
+        let proj = glam::camera::rh::proj::directx::perspective(std::f32::consts::FRAC_PI_2, 1.0, near, far);
+        let light_index = lights.len() as u32;
+        lights.push(GpuLight {
+            position: eye.extend(3.0),
+            direction: n.extend(0.0),
+            color: (p.flux / std::f32::consts::PI).extend(0.0),
+            cone: Vec4::new(-1.0, 1.0, 0.0, 0.0),
+            shadow: Vec4::ZERO,
+        });
+        let (t, b) = n.any_orthonormal_pair();
+        for (forward, up) in [(n, t), (t, n), (-t, n), (b, n), (-b, n)] {
+            let view = LightView {
+                view: glam::camera::rh::view::look_to_mat4(eye, forward, up),
+                proj,
+                eye,
+                forward,
+                pixel_extent: 2.0,
+                orthographic: false,
+            };
+            views.push(BatchView { light_index, view });
+        }
     }
 }

@@ -51,6 +51,11 @@ settings_group! {
         /// Seed of the VPL sampling (identical seeds give identical images).
         seed: u32 = 1,
         unit "", symbol "", range 0..=4294967295u32, cost "free", history true;
+        /// Points on the emissive surfaces whose first bounce the reference samples exactly
+        /// (each a cosine-lobed point light with five views taken in turn with the lights'
+        /// views; issue #18). Their direct light is stage 2's, with `emitters.vpls` points.
+        emitter_points: u32 = 16,
+        unit "points", symbol "", range 1..=256, cost "five more light views in the batches' cycle per point", history true;
     }
     legacy {
         /// Version 1: exact visibility on or off; now `pipeline.vpl_visibility` (Exact or None).
