@@ -86,3 +86,77 @@ fn lights_saved_beside_the_scene_come_back_when_it_opens() {
     assert!(r.scene().warnings.iter().any(|w| w.contains("lights from")), "{:?}", r.scene().warnings);
     let _ = std::fs::remove_dir_all(dir);
 }
+
+fn sky(h: &Harness<'static, GiLabApp>) -> gi_render::scene::sky::Sky {
+    h.state().renderer().expect("renderer").scene().sky.clone()
+}
+
+/// The sky in the Scene panel (issue #18 point 2): off by default; turned on it lights the
+/// default box through its open side; a file that is not an image gives an error that stays
+/// on screen and changes nothing; an image loads and lights from where it is bright.
+#[test]
+fn the_sky_is_turned_on_in_the_scene_panel_and_a_bad_image_says_why() {
+    let (mut h, dir) = harness("sky");
+    pause(&mut h);
+    h.get_by_label("Scene & timeline").click();
+    h.run_steps(3);
+    assert!(!sky(&h).enabled, "off by default");
+    let lum0 = mean_luminance(&h);
+    h.get_by_label("Sky light").click();
+    h.run_steps(2);
+    h.get_by_label("sky lights the scene").click();
+    h.run_steps(3);
+    assert!(sky(&h).enabled && sky(&h).is_lit(), "{:?}", sky(&h));
+    let lum1 = mean_luminance(&h);
+    assert!(lum1 > lum0 * 1.02, "the sky lights the box: {lum0} -> {lum1}");
+    assert!(h.query_by_label_contains("directional VPLs, each with a shadow map").is_some());
+
+    let bad = dir.join("not-an-image.hdr");
+    std::fs::write(&bad, b"hello").expect("write");
+    h.get_by_label("sky image path").type_text(&bad.to_string_lossy());
+    h.get_by_label("load").click();
+    h.run_steps(3);
+    h.run_steps(3);
+    assert!(h.query_by_label_contains("sky image not loaded").is_some(), "the error stays on screen");
+    assert!(sky(&h).image.is_none() && sky(&h).enabled, "a bad file changes nothing");
+    assert!((mean_luminance(&h) - lum1).abs() <= 1e-6 * lum1);
+
+    // A sky dark but for its upper half.
+    let (w, hgt) = (16u32, 8u32);
+    let data =
+        (0..w * hgt).map(|i| if i / w < hgt / 2 { [2.0, 2.0, 2.0, 1.0] } else { [0.0, 0.0, 0.0, 1.0] }).collect();
+    let exr = dir.join("upper.exr");
+    gi_render::image_io::save_exr(&exr, &gi_render::ImageF32 { width: w, height: hgt, data }).expect("exr");
+    h.get_by_label("sky image path").set_text_value_accesskit(&exr.to_string_lossy());
+    h.run_steps(1);
+    h.get_by_label("load").click();
+    h.run_steps(3);
+    let s = sky(&h);
+    assert!(s.image.as_ref().is_some_and(|(p, m)| p == &exr && m.width == w), "the image is the sky");
+    assert!(h.query_by_label_contains("sky image not loaded").is_none(), "the error is gone");
+    let lum2 = mean_luminance(&h);
+    assert!((lum2 - lum1).abs() > 1e-3 * lum1, "the image sky lights differently: {lum1} -> {lum2}");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// The emitter lines of the Scene panel (issue #18 point 1): the shared Cornell box lit by its
+/// ceiling quad shows its emitters' triangles and power; turned off, the emitters only glow
+/// and the box is dark.
+#[test]
+fn the_scene_panel_shows_the_emitters_and_turns_them_into_glow() {
+    let (mut h, dir) = harness("emitters");
+    pause(&mut h);
+    let path = gi_lab_tests::shared_scene("cornell-box/CornellBox-Original.gltf");
+    h.state_mut().open_scene(&path.to_string_lossy(), 1.0).expect("opens");
+    pause(&mut h);
+    h.get_by_label("Scene & timeline").click();
+    h.run_steps(3);
+    assert!(h.query_by_label_contains("emitters: 2 triangles").is_some(), "the emitter line");
+    assert!(mean_luminance(&h) > 0.0, "lit by the quad");
+    h.get_by_label("emissive surfaces are lights").click();
+    h.run_steps(3);
+    assert!(h.query_by_label_contains("emitters only glow").is_some());
+    assert_eq!(mean_luminance(&h), 0.0, "no light but the emitters'");
+    assert!(!h.state().renderer().expect("renderer").settings().emitters.enabled);
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -227,19 +227,26 @@ fn sky_controls(l: &mut Lab, ui: &mut egui::Ui) -> bool {
                 }
             });
             let id = ui.make_persistent_id("sky image path");
+            let error_id = ui.make_persistent_id("sky image error");
             let mut text = ui.data_mut(|d| d.get_temp::<String>(id)).unwrap_or_default();
-            let mut message = None;
+            // The last load's error stays until the next load (a click's frame is too short
+            // to read it).
+            let mut error = ui.data_mut(|d| d.get_temp::<String>(error_id));
             ui.horizontal(|ui| {
                 ui.label("image");
                 ui.add(
                     egui::TextEdit::singleline(&mut text)
                         .hint_text("equirectangular .hdr or .exr")
                         .desired_width(160.0),
-                );
+                )
+                .accessible_name("sky image path");
                 if ui.button("load").clicked() {
                     match sky.load_image(std::path::Path::new(text.trim())) {
-                        Ok(()) => changed = true,
-                        Err(e) => message = Some(e),
+                        Ok(()) => {
+                            changed = true;
+                            error = None;
+                        }
+                        Err(e) => error = Some(e),
                     }
                 }
                 if sky.image.is_some() && ui.button("constant colour").clicked() {
@@ -247,8 +254,16 @@ fn sky_controls(l: &mut Lab, ui: &mut egui::Ui) -> bool {
                     changed = true;
                 }
             });
-            ui.data_mut(|d| d.insert_temp(id, text));
-            if let Some(e) = message {
+            ui.data_mut(|d| {
+                d.insert_temp(id, text);
+                match &error {
+                    Some(e) => {
+                        d.insert_temp(error_id, e.clone());
+                    }
+                    None => d.remove::<String>(error_id),
+                }
+            });
+            if let Some(e) = error {
                 ui.colored_label(ui.visuals().error_fg_color, format!("sky image not loaded: {e}"));
             }
             if let Some((p, map)) = &sky.image {
