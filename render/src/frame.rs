@@ -113,9 +113,11 @@ impl Renderer {
         let near_field = near_field_light(&f, &mut self.stages, &mut enc, &mut self.timer);
 
         // Stage 7: compose direct + indirect and tone map.
+        self.sky_background.update(&ctx, &self.scene.sky, self.settings.sky.background);
         let (compose, ts, emission) = (&self.compose, &self.settings.tonemap, &self.gbuffer.targets.views.emission);
+        let sky = (&self.sky_background, &self.camera_buffer, &self.gbuffer.targets.views.normal);
         self.timer.scope(&ctx, &mut enc, "compose", |e, slot| {
-            compose.compose(&ctx, e, slot, emission, &direct_view, indirect.as_ref(), near_field.as_ref())
+            compose.compose(&ctx, e, slot, emission, &direct_view, indirect.as_ref(), near_field.as_ref(), sky)
         });
         self.timer.scope(&ctx, &mut enc, "compose.luminance", |e, slot| compose.luminance(&ctx, e, slot, ts));
         self.timer.scope(&ctx, &mut enc, "compose.tonemap", |e, slot| compose.tonemap(&ctx, e, slot, ts));

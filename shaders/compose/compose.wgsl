@@ -3,13 +3,52 @@
 // that no gather takes an emitter for a sender besides its VPLs; each
 // indirect input is black when no stage provides it; the near field is `pipeline.near_field`'s
 // screen-space gather of the senders closer than the split, the indirect input the VPLs'). Tone mapping: compose/tonemap.wgsl.
+// Where the G-buffer is empty, the scene's sky (issue #18, `sky.background`): its radiance
+// along the pixel's ray, read from the equirectangular image at the texel the CPU's
+// scene::sky::SkySampler::radiance reads (nearest, no filtering) or the constant colour.
 #import common/fullscreen.wgsl
+#import common/camera.wgsl
+
+struct SkyParams {
+    // rgb: constant radiance or image scale; w: 0 none, 1 constant, 2 image
+    radiance: vec4<f32>,
+    // x: rotation about +Y (radians)
+    rotation: vec4<f32>,
+}
 
 @group(0) @binding(1) var direct: texture_2d<f32>;
 @group(0) @binding(2) var indirect: texture_2d<f32>;
 @group(0) @binding(3) var out_hdr: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(4) var near_field: texture_2d<f32>;
 @group(0) @binding(5) var emission: texture_2d<f32>;
+@group(0) @binding(6) var<uniform> sky: SkyParams;
+@group(0) @binding(7) var sky_image: texture_2d<f32>;
+@group(0) @binding(8) var<uniform> camera: Camera;
+@group(0) @binding(9) var gbuffer_normal: texture_2d<f32>;
+
+const PI: f32 = 3.14159265358979;
+
+// Radiance of the sky seen along the unit direction d (Rust twin: SkySampler::radiance).
+fn sky_radiance(d: vec3<f32>) -> vec3<f32> {
+    if (sky.radiance.w < 1.5) {
+        return sky.radiance.rgb;
+    }
+    let size = textureDimensions(sky_image);
+    let phi = atan2(d.x, -d.z) - sky.rotation.x + PI;
+    let u = fract(phi / (2.0 * PI));
+    let v = acos(clamp(d.y, -1.0, 1.0)) / PI;
+    let x = min(u32(u * f32(size.x)), size.x - 1u);
+    let y = min(u32(v * f32(size.y)), size.y - 1u);
+    return textureLoad(sky_image, vec2<u32>(x, y), 0).rgb * sky.radiance.rgb;
+}
+
+// The camera ray through pixel px's centre (Rust twin: cpu::raycast::primary_ray).
+fn pixel_ray(px: vec2<u32>, size: vec2<u32>) -> vec3<f32> {
+    let ndc = vec2<f32>((f32(px.x) + 0.5) / f32(size.x) * 2.0 - 1.0, 1.0 - (f32(px.y) + 0.5) / f32(size.y) * 2.0);
+    let near = camera.inv_view_proj * vec4<f32>(ndc, 0.0, 1.0);
+    let far = camera.inv_view_proj * vec4<f32>(ndc, 1.0, 1.0);
+    return normalize(far.xyz / far.w - near.xyz / near.w);
+}
 
 @compute @workgroup_size(TILE, TILE, 1)
 fn cs_compose(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -18,7 +57,10 @@ fn cs_compose(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let px = vec2<i32>(gid.xy);
-    let c = textureLoad(emission, px, 0).rgb + textureLoad(direct, px, 0).rgb + textureLoad(indirect, px, 0).rgb + textureLoad(near_field, px, 0).rgb;
+    var c = textureLoad(emission, px, 0).rgb + textureLoad(direct, px, 0).rgb + textureLoad(indirect, px, 0).rgb + textureLoad(near_field, px, 0).rgb;
+    if (sky.radiance.w > 0.5 && textureLoad(gbuffer_normal, px, 0).w < 0.5) {
+        c = c + sky_radiance(pixel_ray(gid.xy, size));
+    }
     textureStore(out_hdr, px, vec4<f32>(c, 1.0));
 }
 

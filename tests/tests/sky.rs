@@ -143,3 +143,73 @@ fn an_image_sky_lights_from_where_it_is_bright() {
     let expected = 8.0 * std::f32::consts::PI * (std::f32::consts::PI / 16.0).sin().powi(2);
     assert!((e / expected - 1.0).abs() < 0.02, "irradiance {e} vs {expected}");
 }
+
+/// Where the scene leaves the screen empty the sky is drawn (`sky.background`, on by default):
+/// a constant sky's radiance, or an image's texel along the pixel's ray (the texel the CPU's
+/// `SkySampler::radiance` reads), as the path tracer's camera rays that leave the scene see;
+/// off, the background is black and the lit pixels are unchanged.
+#[test]
+fn the_sky_is_drawn_behind_the_scene() {
+    use gi_render::cpu::raycast::primary_ray;
+    use gi_render::scene::sky::SkySampler;
+    let size = 48;
+    // An image whose every texel differs (a hue and brightness ramp), turned by 30°.
+    let (w, h) = (24u32, 12u32);
+    let texels: Vec<Vec3> =
+        (0..w * h).map(|i| Vec3::new((i % w) as f32 / w as f32, (i / w) as f32 / h as f32, 0.25) * 2.0).collect();
+    let mut image = Sky::constant(Vec3::ONE, 1.5);
+    image.image = Some(("ramp".into(), std::sync::Arc::new(EnvMap::new(w, h, texels).expect("map"))));
+    image.rotation_deg = 30.0;
+    for sky in [Sky::constant(Vec3::new(0.6, 0.75, 1.0), 2.0), image] {
+        let scene = sky_box(sky.clone());
+        let mut r = renderer(scene.clone(), size, |s| Technique::DirectOnly.apply(s));
+        // Turned aside so that half the view is sky.
+        r.camera.yaw += 0.6;
+        r.render_frame();
+        let (full, normal) = (read(&r, "final.hdr"), read(&r, "gbuffer.normal"));
+        let inv = r.view_proj().inverse();
+        let sampler = SkySampler::new(&sky);
+        let (mut background, mut wrong) = (0, 0);
+        for (i, (c, n)) in full.data.iter().zip(&normal.data).enumerate() {
+            if n[3] > 0.5 {
+                continue;
+            }
+            background += 1;
+            let (x, y) = (i as u32 % size, i as u32 / size);
+            let expected = sampler.radiance(primary_ray(inv, x, y, size, size).1);
+            if (Vec3::new(c[0], c[1], c[2]) - expected).abs().max_element() > 1e-4 * expected.max_element().max(1.0) {
+                wrong += 1;
+            }
+        }
+        let covered = full.data.len() - background;
+        assert!(background > 200 && covered > 200, "{background} sky pixels, {covered} scene pixels");
+        // An image texel boundary can fall between the GPU's and the CPU's rounding of a ray.
+        assert!(wrong * 100 <= background, "{wrong} of {background} sky pixels differ from the CPU's radiance");
+        // The path tracer's camera rays see the same sky.
+        let pt = PathTracer::new(&scene, 0.0);
+        let truth =
+            pt.render(r.view_proj(), r.camera.position, size, size, PtSettings { spp: 1, ..Default::default() });
+        let pt_wrong = truth
+            .direct
+            .data
+            .iter()
+            .zip(&full.data)
+            .zip(&normal.data)
+            .filter(|((t, c), n)| n[3] < 0.5 && (t[0] - c[0]).abs().max((t[2] - c[2]).abs()) > 1e-3 * c[0].max(1.0))
+            .count();
+        assert!(pt_wrong * 100 <= background, "{pt_wrong} sky pixels differ from the path tracer's");
+        // Off: a black background, the scene's pixels as they were.
+        let mut s = r.settings().clone();
+        s.sky.background = false;
+        r.set_settings(s).expect("valid");
+        r.render_frame();
+        let off = read(&r, "final.hdr");
+        for ((a, b), n) in off.data.iter().zip(&full.data).zip(&normal.data) {
+            if n[3] < 0.5 {
+                assert_eq!(a[..3], [0.0; 3], "no sky behind the scene");
+            } else {
+                assert_eq!(a[..3], b[..3], "the scene's pixels do not change");
+            }
+        }
+    }
+}

@@ -43,8 +43,11 @@ pub(super) fn reference(args: &ReferenceArgs) -> Result<(), CliError> {
     let camera = gi_render::renderer::default_camera(&scene, bounds, w as f32 / h as f32);
     let start = std::time::Instant::now();
     let mut pt = PathTracer::new(&scene, 0.0);
-    // The emitters as the preset says (`emitters.enabled`, `emitters.two_sided`).
-    pt.use_emitter_settings(&crate::scene_args::load_settings(&args.scene)?.emitters, &scene, 0.0);
+    // The emitters and the sky's background as the preset says (`emitters.enabled`,
+    // `emitters.two_sided`, `sky.background`).
+    let preset = crate::scene_args::load_settings(&args.scene)?;
+    pt.use_emitter_settings(&preset.emitters, &scene, 0.0);
+    pt.set_sky_background(preset.sky.background);
     let build_s = start.elapsed().as_secs_f64();
     let img = pt.render(
         camera.view_proj(w as f32 / h as f32),

@@ -14,8 +14,9 @@
 //! is reached the same way: one direction per vertex, ∝ cos θ for a constant sky, by the
 //! image's radiance otherwise ([`crate::scene::sky::SkySampler::sample_at`], continuously: the
 //! truth the lab's directions estimate),
-//! L · f · cos θ / p(ω) when nothing is in the way; escaping paths add nothing (the sky is not
-//! drawn behind the scene, in the lab either). Each bounce samples the BRDF: a cosine lobe
+//! L · f · cos θ / p(ω) when nothing is in the way; a camera ray that leaves the scene sees the
+//! sky (as the lab's `sky.background` draws it; [`PathTracer::set_sky_background`]), later
+//! escaping segments add nothing (next-event estimation took that light). Each bounce samples the BRDF: a cosine lobe
 //! for c·DI/π and the normalised Blinn-Phong lobe (SP) for the specular term, mixed by
 //! their weights. Every pixel and sample has its own seeded random stream, so results do
 //! not depend on thread scheduling: identical seeds give identical images. Rendering is
@@ -101,6 +102,8 @@ pub struct PathTracer {
     /// The scene's sky when it is on ([`crate::scene::sky`]), sampled by next-event
     /// estimation from its radiance distribution (continuously, not in the lab's directions).
     sky: Option<Sky>,
+    /// Whether camera rays that leave the scene see the sky (`sky.background`, on by default).
+    sky_background: bool,
     /// Offset for secondary rays, relative to the scene size.
     eps: f32,
 }
@@ -180,13 +183,19 @@ impl PathTracer {
         let emitters = Emitters::collect(scene, &state);
         let sky = scene.sky.is_lit().then(|| scene.sky.clone());
         let textures = scene.textures.clone();
-        Self { tris, bvh, materials, textures, lights: state.lights, emitters, sky, eps }
+        Self { tris, bvh, materials, textures, lights: state.lights, emitters, sky, sky_background: true, eps }
     }
 
     /// Whether emissive surfaces light the scene (`emitters.enabled`, on by default) or only
     /// glow.
     pub fn set_emitter_lights(&mut self, on: bool, scene: &Scene, time_s: f32) {
         self.emitters = if on { Emitters::collect(scene, &scene.evaluate(time_s)) } else { Emitters::default() };
+    }
+
+    /// Whether camera rays that leave the scene see the sky, as the lab's `sky.background`
+    /// (it is on by default; with the sky off there is nothing to see).
+    pub fn set_sky_background(&mut self, on: bool) {
+        self.sky_background = on;
     }
 
     /// The emitters as the lab's `emitters.*` settings say (on or off, one or two sides).
@@ -332,7 +341,11 @@ impl PathTracer {
     /// One path through pixel (x, y): (direct, indirect). With a `viewer`, the first bounce
     /// counts only where the camera sees its hit ([`Senders::ScreenVisible`]).
     fn trace(&self, origin: Vec3, dir: Vec3, bounces: u32, viewer: Option<&Viewer>, rng: &mut Pcg) -> (Vec3, Vec3) {
-        let Some(mut h) = self.intersect(origin, dir, 0.0, f32::INFINITY) else { return (Vec3::ZERO, Vec3::ZERO) };
+        let Some(mut h) = self.intersect(origin, dir, 0.0, f32::INFINITY) else {
+            // A camera ray that leaves the scene sees the sky (stage 7 of the lab draws it).
+            let sky = self.sky.as_ref().filter(|_| self.sky_background);
+            return (sky.map_or(Vec3::ZERO, |s| SkySampler::new(s).radiance(dir)), Vec3::ZERO);
+        };
         let mut v = -dir;
         let emission = |h: &Hit| {
             let m = &self.materials[h.material.min(self.materials.len() - 1)];

@@ -74,6 +74,10 @@ impl ComposePass {
                 super::bgl::storage_texture(3, HDR_FORMAT),
                 super::bgl::texture(4, cs, false),
                 super::bgl::texture(5, cs, false),
+                super::bgl::uniform(6, cs),
+                super::bgl::texture(7, cs, false),
+                super::bgl::uniform(8, cs),
+                super::bgl::texture(9, cs, false),
             ],
         });
         let layout1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -180,7 +184,9 @@ impl ComposePass {
         reg.register("final.ldr", BufferKind::Ldr, "tone-mapped image (Reinhard), sRGB-encoded", &self.ldr);
     }
 
-    /// final.hdr = emission + direct + indirect + near field.
+    /// final.hdr = emission + direct + indirect + near field, and the sky where the G-buffer
+    /// is empty (`sky`: its parameters and image, `camera`: the camera uniform for the rays,
+    /// `normal`: the G-buffer's coverage).
     #[allow(clippy::too_many_arguments)]
     pub fn compose(
         &self,
@@ -191,7 +197,9 @@ impl ComposePass {
         direct: &wgpu::TextureView,
         indirect: Option<&wgpu::TextureView>,
         near_field: Option<&wgpu::TextureView>,
+        (sky, camera, normal): (&super::sky::SkyBackground, &wgpu::Buffer, &wgpu::TextureView),
     ) {
+        let sky_view = super::view(&sky.texture, "sky.background.image");
         let hdr_view = super::view(&self.hdr, "final.hdr");
         let tv = wgpu::BindingResource::TextureView;
         let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -203,6 +211,10 @@ impl ComposePass {
                 wgpu::BindGroupEntry { binding: 3, resource: tv(&hdr_view) },
                 wgpu::BindGroupEntry { binding: 4, resource: tv(near_field.unwrap_or(&self.black)) },
                 wgpu::BindGroupEntry { binding: 5, resource: tv(emission) },
+                wgpu::BindGroupEntry { binding: 6, resource: sky.params.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 7, resource: tv(&sky_view) },
+                wgpu::BindGroupEntry { binding: 8, resource: camera.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 9, resource: tv(normal) },
             ],
         });
         self.dispatch(encoder, slot, "compose.compose", &self.compose, &group, self.screen_groups());

@@ -7,7 +7,8 @@
 //! pixel and at Gautron's hemisphere texels, and stage 3 treats each as a light view (Knecht's
 //! importance warping gives the sky its share of the VPL budget by power). What the sky is —
 //! on or off, colour or image, intensity, rotation — belongs to the scene (`Scene::sky`, saved
-//! in the scene overrides file); how finely the lab samples it is this group.
+//! in the scene overrides file); how finely the lab samples it is this group. Where the scene
+//! leaves the screen empty, stage 7 draws the sky ([`SkyBackground`], `sky.background`).
 
 use crate::scene::WorldLight;
 use crate::scene::sky::Sky;
@@ -21,6 +22,11 @@ settings_group! {
         /// light view. 16 shows banded penumbrae of wide occluders; 64 is smoother.
         directions: u32 = 16,
         unit "directions", symbol "N_sky", range 1..=64, cost "one shadow map (direct.shadow_map_size²) and one light view each, only with the scene's sky on", history true;
+        /// Draw the sky behind the scene: pixels the scene does not cover show the sky's
+        /// radiance along their ray (stage 7's compose; the path tracer's escaping camera
+        /// rays see it too). Off: black, the sky only lights.
+        background: bool = true,
+        unit "", symbol "", range 0..=1, cost "free", history false;
     }
 }
 
@@ -55,5 +61,88 @@ impl SkyLights {
             self.key = Some((sky.clone(), n));
         }
         &self.lights
+    }
+}
+
+/// Uniform of the compose's sky background; WGSL twin: `SkyParams` in
+/// `shaders/compose/compose.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SkyParams {
+    /// rgb: the constant sky's radiance, or the image's scale; w: 0 none, 1 constant, 2 image.
+    pub radiance: glam::Vec4,
+    /// x: the image's rotation about +Y (radians).
+    pub rotation: glam::Vec4,
+}
+
+/// The sky's image on the GPU for the background (stage 7), uploaded when the image changes.
+pub struct SkyBackground {
+    pub params: wgpu::Buffer,
+    pub texture: wgpu::Texture,
+    /// The uploaded image (compared by identity).
+    image: Option<std::sync::Arc<crate::scene::sky::EnvMap>>,
+}
+
+impl SkyBackground {
+    pub fn new(device: &wgpu::Device) -> Self {
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("sky.background.params"),
+            size: std::mem::size_of::<SkyParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let texture = Self::texture(device, 1, 1);
+        Self { params, texture, image: None }
+    }
+
+    fn texture(device: &wgpu::Device, width: u32, height: u32) -> wgpu::Texture {
+        device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("sky.background.image"),
+            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba32Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        })
+    }
+
+    /// This frame's sky behind the scene (`draw`: `sky.background`). An image wider or taller
+    /// than the device allows is uploaded at every k-th texel (the lights sample it whole).
+    pub fn update(&mut self, ctx: &crate::gpu::GpuContext, sky: &Sky, draw: bool) {
+        let mode = match (&sky.image, draw && sky.is_lit()) {
+            (_, false) => 0.0,
+            (None, true) => 1.0,
+            (Some(_), true) => 2.0,
+        };
+        let scale = if sky.image.is_some() { glam::Vec3::splat(sky.intensity) } else { sky.color * sky.intensity };
+        let p = SkyParams {
+            radiance: scale.extend(mode),
+            rotation: glam::Vec4::new(sky.rotation_deg.to_radians(), 0.0, 0.0, 0.0),
+        };
+        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        let Some((_, map)) = sky.image.as_ref().filter(|_| mode == 2.0) else { return };
+        if self.image.as_ref().is_some_and(|m| std::sync::Arc::ptr_eq(m, map)) {
+            return;
+        }
+        let max = ctx.device.limits().max_texture_dimension_2d.max(1);
+        let step = map.width.div_ceil(max).max(map.height.div_ceil(max)).max(1);
+        let (w, h) = (map.width.div_ceil(step), map.height.div_ceil(step));
+        let mut texels = Vec::with_capacity((w * h) as usize);
+        for y in 0..h {
+            for x in 0..w {
+                let t = map.texels[(y * step * map.width + x * step) as usize];
+                texels.push([t.x, t.y, t.z, 1.0]);
+            }
+        }
+        self.texture = Self::texture(&ctx.device, w, h);
+        ctx.queue.write_texture(
+            self.texture.as_image_copy(),
+            bytemuck::cast_slice(&texels),
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(16 * w), rows_per_image: Some(h) },
+            wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+        );
+        self.image = Some(map.clone());
     }
 }

@@ -94,6 +94,8 @@ pub struct Renderer {
     pub(crate) interactive: bool,
     /// The scene's sky as directional lights (`passes::sky`), cached.
     pub(crate) sky_lights: crate::passes::sky::SkyLights,
+    /// The sky drawn behind the scene by stage 7.
+    pub(crate) sky_background: crate::passes::sky::SkyBackground,
     /// The pixel probe's depth reader, created on first use.
     pub(crate) depth_probe: std::sync::OnceLock<crate::passes::view::DepthProbe>,
 }
@@ -133,6 +135,7 @@ impl Renderer {
         let shadow = ShadowPass::new(&ctx, &gpu_scene);
         let direct = DirectPass::new(&ctx, bgl::uniform(0, wgpu::ShaderStages::COMPUTE), width, height);
         let compose = ComposePass::new(&ctx, width, height);
+        let sky_background = crate::passes::sky::SkyBackground::new(&ctx.device);
         let timer = GpuTimer::new(&ctx);
         let clock = Clock::new(settings.animation.time_step_s as f64);
         let mut r = Self {
@@ -158,6 +161,7 @@ impl Renderer {
             flip_map: None,
             interactive: false,
             sky_lights: Default::default(),
+            sky_background,
             depth_probe: std::sync::OnceLock::new(),
         };
         r.register_all();
