@@ -23,12 +23,30 @@ pub struct SceneArgs {
     /// Override a setting, e.g. --set direct.pcf_radius=2 (repeatable).
     #[arg(long = "set", value_name = "GROUP.FIELD=VALUE")]
     pub overrides: Vec<String>,
+    /// A sky around the scene: `R,G,B` (a constant linear colour), the path of an
+    /// equirectangular .hdr/.exr image, or `off`; it replaces a sky saved beside the scene.
+    #[arg(long, value_name = "R,G,B|IMAGE|off")]
+    pub sky: Option<String>,
+    /// Radiance scale of --sky, W/(m²·sr).
+    #[arg(long, default_value_t = 1.0)]
+    pub sky_intensity: f32,
+    /// Rotation of --sky's image about the up axis, degrees.
+    #[arg(long, default_value_t = 0.0)]
+    pub sky_rotation: f32,
 }
 
 impl Default for SceneArgs {
     /// The embedded scene at unit scale with the default preset (as the CLI's defaults).
     fn default() -> Self {
-        Self { scene: None, unit_scale: 1.0, preset: None, overrides: Vec::new() }
+        Self {
+            scene: None,
+            unit_scale: 1.0,
+            preset: None,
+            overrides: Vec::new(),
+            sky: None,
+            sky_intensity: 1.0,
+            sky_rotation: 0.0,
+        }
     }
 }
 
@@ -60,6 +78,9 @@ pub fn load_scene(args: &SceneArgs) -> Result<Scene, CliError> {
             None => {}
         }
     }
+    if let Some(spec) = &args.sky {
+        apply_sky_arg(&mut scene, spec, args.sky_intensity, args.sky_rotation).map_err(CliError::input)?;
+    }
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
@@ -76,4 +97,28 @@ pub fn load_settings(args: &SceneArgs) -> Result<LabSettings, CliError> {
         s.apply_override(o).map_err(|e| CliError::input(format!("--set {o}: {e}")))?;
     }
     Ok(s)
+}
+
+/// `--sky SPEC` with its intensity and rotation: `off`, `R,G,B` or an image path (relative to
+/// the working directory).
+pub fn apply_sky_arg(scene: &mut Scene, spec: &str, intensity: f32, rotation_deg: f32) -> Result<(), String> {
+    let spec = spec.trim();
+    if spec.eq_ignore_ascii_case("off") {
+        scene.sky.enabled = false;
+        return Ok(());
+    }
+    let numbers: Vec<Result<f32, _>> = spec.split(',').map(|x| x.trim().parse::<f32>()).collect();
+    let (color, image) = match numbers.as_slice() {
+        [Ok(r), Ok(g), Ok(b)] => ([*r, *g, *b], None),
+        _ if std::path::Path::new(spec).is_file() => ([1.0; 3], Some(PathBuf::from(spec))),
+        _ => {
+            return Err(format!(
+                "--sky {spec}: not three numbers R,G,B, `off`, or an image file (.hdr or .exr) that exists"
+            ));
+        }
+    };
+    let def = crate::scene_lights::SkyDef { enabled: true, color, intensity, image, rotation_deg };
+    // Image paths are taken as given (the scene file's folder is for the saved overrides).
+    crate::scene_lights::apply_sky(scene, &def, std::path::Path::new("./--sky"))
+        .map_err(|e| format!("--sky {spec}: {e}"))
 }

@@ -169,6 +169,9 @@ fn bad_arguments_exit_2_with_a_message() {
         (&["sweep", "--out", "OUT", "--param", "direct.pcf_radius=0..2:zero"], "STEPS"),
         (&["sweep", "--out", "OUT", "--param", "direct.shadows=0..1:2"], "list its values"),
         (&["sweep", "--out", "OUT"], "--param"),
+        (&["render", "--out", "OUT", "--sky", "blue"], "not three numbers"),
+        (&["render", "--out", "OUT", "--sky", "1,1,-1"], "non-negative"),
+        (&["render", "--out", "OUT", "--sky", "Cargo.toml"], "Cargo.toml"),
     ];
     let out = temp_dir("bad-args");
     let out = out.to_string_lossy();
@@ -452,4 +455,28 @@ fn bench_scenes_lists_every_scene_with_each_technique() {
         .collect();
     assert_eq!(spheres.len(), 3, "{names:?}");
     assert!(spheres.iter().any(|&t| t > 5000), "{spheres:?}");
+}
+
+/// `--sky` (issue #18 point 2): a constant sky lights the default box through its open side
+/// and shows behind it; `--sky off` leaves the image as without the flag.
+#[test]
+fn render_with_a_sky_from_the_command_line() {
+    let out = temp_dir("sky");
+    let render = |name: &str, sky: &[&str]| {
+        let o = gi_lab()
+            .args(["render", "--size", "48x48", "--frames", "1", "--buffer", "final.hdr", "--paused"])
+            .args(sky)
+            .arg("--out")
+            .arg(out.join(name))
+            .output()
+            .expect("runs");
+        assert!(o.status.success(), "{sky:?}: {}", String::from_utf8_lossy(&o.stderr));
+        let img = image::open(out.join(name).join("final.hdr.exr")).expect("EXR").to_rgba32f();
+        img.pixels().map(|p| p.0[2] as f64).sum::<f64>()
+    };
+    let plain = render("plain", &[]);
+    let sky = render("sky", &["--sky", "0.6,0.75,1.0", "--sky-intensity", "2"]);
+    let off = render("off", &["--sky", "off"]);
+    assert!(sky > plain * 1.05, "the sky adds light: {plain} -> {sky}");
+    assert_eq!(off, plain, "--sky off: as without a sky");
 }

@@ -75,6 +75,9 @@ impl GiLabApp {
             unit_scale: session.unit_scale,
             preset: None,
             overrides: Vec::new(),
+            sky: args.scene.sky.clone(),
+            sky_intensity: args.scene.sky_intensity,
+            sky_rotation: args.scene.sky_rotation,
         };
         let mut lab = Lab::new(cc, &scene_args, settings.clone());
         if lab.is_err() && session.scene.is_some() && args.scene.scene.is_none() {
