@@ -141,6 +141,16 @@ pub fn paused_renderer(
     r
 }
 
+/// A renderer of `scene` at `size`², its default settings edited by `edit`, with the
+/// animation paused.
+pub fn scene_renderer(scene: Scene, size: u32, edit: impl FnOnce(&mut LabSettings)) -> Renderer {
+    let mut s = LabSettings::default();
+    edit(&mut s);
+    let mut r = Renderer::new(gpu(), scene, s, size, size).expect("renderer");
+    r.clock.playing = false;
+    r
+}
+
 /// A registered buffer read back, or the test fails naming it.
 pub fn read(r: &Renderer, name: &str) -> gi_render::ImageF32 {
     r.readback(name).unwrap_or_else(|e| panic!("{name}: {e}"))
@@ -208,5 +218,6 @@ pub fn soler_gather_params(
     };
     (screen, p)
 }
+pub mod images;
 pub mod meshopt_copy;
 pub mod ui_harness;

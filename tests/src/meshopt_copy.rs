@@ -18,24 +18,8 @@ fn split_glb(glb: &[u8]) -> (Value, Vec<u8>) {
 }
 
 /// A `.glb` of `json` and `bin` (both padded to 4 bytes).
-fn join_glb(json: &Value, mut bin: Vec<u8>) -> Vec<u8> {
-    let mut json = serde_json::to_vec(json).expect("JSON serialises");
-    while !json.len().is_multiple_of(4) {
-        json.push(b' ');
-    }
-    while !bin.len().is_multiple_of(4) {
-        bin.push(0);
-    }
-    let mut out = b"glTF".to_vec();
-    for x in [2, 12 + 8 + json.len() + 8 + bin.len(), json.len()] {
-        out.extend((x as u32).to_le_bytes());
-    }
-    out.extend(b"JSON");
-    out.extend(&json);
-    out.extend((bin.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(bin);
-    out
+fn join_glb(json: &Value, bin: Vec<u8>) -> Vec<u8> {
+    gi_render::scene::cornell::glb(serde_json::to_vec(json).expect("JSON serialises"), bin)
 }
 
 fn component_size(component_type: u64) -> usize {

@@ -2,14 +2,14 @@
 //! CPU twin, the shared Cornell box lit only by its ceiling quad against the path tracer in
 //! every technique, emitters that only glow, and thousands of emissive triangles.
 
-use gi_lab_tests::{gpu, read, shared_scene};
+use gi_lab_tests::images::{exposed_flip, mean, sub};
+use gi_lab_tests::{read, scene_renderer, shared_scene};
+use gi_render::ImageF32;
 use gi_render::cpu::knecht;
 use gi_render::cpu::pathtrace::{PathTracer, PtSettings};
-use gi_render::image_io::hdr_display;
-use gi_render::metrics::{auto_exposure, flip, scaled};
+use gi_render::metrics::scaled;
 use gi_render::scene::emitters::{Emitters, add_glowing_sphere};
 use gi_render::scene::{LoadOptions, Scene, load_gltf_file};
-use gi_render::{ImageF32, LabSettings, Renderer};
 use glam::Vec3;
 
 fn cornell() -> Scene {
@@ -17,40 +17,12 @@ fn cornell() -> Scene {
         .expect("the shared Cornell box loads")
 }
 
-fn renderer(scene: Scene, size: u32, edit: impl FnOnce(&mut LabSettings)) -> Renderer {
-    let mut s = LabSettings::default();
-    edit(&mut s);
-    let mut r = Renderer::new(gpu(), scene, s, size, size).expect("renderer");
-    r.clock.playing = false;
-    r
-}
-
-fn luminance(p: &[f32; 4]) -> f64 {
-    (0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]) as f64
-}
-
-fn mean(img: &ImageF32) -> f64 {
-    img.data.iter().map(luminance).sum::<f64>() / img.data.len() as f64
-}
-
-fn sub(a: &ImageF32, b: &ImageF32) -> ImageF32 {
-    let data = a.data.iter().zip(&b.data).map(|(x, y)| [x[0] - y[0], x[1] - y[1], x[2] - y[2], 1.0]).collect();
-    ImageF32 { width: a.width, height: a.height, data }
-}
-
-/// FLIP of `test` against `truth`, both at the exposure that brings the truth to middle grey
-/// (the box lit by a 1 W quad is dim).
-fn exposed_flip(test: &ImageF32, truth: &ImageF32) -> f64 {
-    let k = auto_exposure(truth);
-    flip(&hdr_display(&scaled(test, k)), &hdr_display(&scaled(truth, k))).expect("same size").0
-}
-
 #[test]
 fn emitter_direct_light_matches_its_cpu_twin() {
     // No visibility: the direct pass's emitter sum against cpu::knecht::vpl_radiance of the
     // same VPLs at every covered pixel.
     let size = 48;
-    let mut r = renderer(cornell(), size, |s| {
+    let mut r = scene_renderer(cornell(), size, |s| {
         gi_render::pipeline::Technique::DirectOnly.apply(s);
         s.apply_override("emitters.visibility=None").expect("valid");
     });
@@ -115,7 +87,7 @@ fn the_shared_cornell_box_lit_only_by_its_ceiling_quad_matches_the_path_tracer()
     let scene = cornell();
     assert!(scene.lights.is_empty(), "no punctual light, no default one");
     let mut pt = PathTracer::new(&scene, 0.0);
-    let probe = renderer(scene.clone(), size, |_| {});
+    let probe = scene_renderer(scene.clone(), size, |_| {});
     let (view_proj, eye) = (probe.view_proj(), probe.camera.position);
     drop(probe);
     let truth =
@@ -130,7 +102,7 @@ fn the_shared_cornell_box_lit_only_by_its_ceiling_quad_matches_the_path_tracer()
     let cases: [(&str, u32, f64, f64); 4] =
         [("knecht", 8, 0.095, 0.7), ("nguyen", 4, 0.097, 0.65), ("soler", 4, 0.123, 0.48), ("gautron", 6, 0.076, 0.7)];
     for (name, frames, bound, least) in cases {
-        let mut r = renderer(scene.clone(), size, |s| {
+        let mut r = scene_renderer(scene.clone(), size, |s| {
             let t = match name {
                 "knecht" => gi_render::pipeline::Technique::Knecht,
                 "nguyen" => gi_render::pipeline::Technique::Nguyen,
@@ -159,7 +131,7 @@ fn the_shared_cornell_box_lit_only_by_its_ceiling_quad_matches_the_path_tracer()
     // With emitters off the box only glows: nothing is lit, and the path tracer agrees.
     pt.set_emitter_lights(false, &scene, 0.0);
     let dark = pt.render(view_proj, eye, size, size, PtSettings { bounces: 1, spp: 4, seed: 3, ..Default::default() });
-    let mut r = renderer(scene, size, |s| s.emitters.enabled = false);
+    let mut r = scene_renderer(scene, size, |s| s.emitters.enabled = false);
     r.render_frame();
     assert!(r.emitter_stats().is_none());
     let (direct, emission, full) = (read(&r, "direct.radiance"), read(&r, "gbuffer.emission"), read(&r, "final.hdr"));
@@ -176,7 +148,7 @@ fn thousands_of_emissive_triangles_keep_the_vpl_budget() {
     let b = scene.bounds(0.0);
     let tris = add_glowing_sphere(&mut scene, b.center(), 0.08 * b.radius(), 48, 64, Vec3::splat(20.0));
     assert!(tris > 5000, "{tris} triangles");
-    let mut r = renderer(scene, 64, |_| {});
+    let mut r = scene_renderer(scene, 64, |_| {});
     r.render_frame();
     r.render_frame();
     let e = r.emitter_stats().expect("the sphere glows");
@@ -236,7 +208,7 @@ fn an_emissive_texture_shapes_the_emitters_light() {
     assert!(vpls.iter().filter(|v| v.flux.max_element() > 0.0).all(|v| v.position.x > mid - 0.07 * (hi - lo)));
 
     let pt = PathTracer::new(&scene, 0.0);
-    let mut r = renderer(scene, size, |s| gi_render::pipeline::Technique::DirectOnly.apply(s));
+    let mut r = scene_renderer(scene, size, |s| gi_render::pipeline::Technique::DirectOnly.apply(s));
     // From the middle of the box, looking up at the quad (the file's camera does not see it).
     r.camera.position = r.bounds().center();
     r.camera.pitch = 1.0;

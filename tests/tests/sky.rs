@@ -2,14 +2,12 @@
 //! constant sky (its open side faces the camera), against the path tracer in every technique;
 //! an image sky's light comes from where its image is bright.
 
-use gi_lab_tests::{default_scene, gpu, read};
+use gi_lab_tests::images::{exposed_flip, mean, sub};
+use gi_lab_tests::{default_scene, read, scene_renderer};
 use gi_render::cpu::pathtrace::{PathTracer, PtSettings};
-use gi_render::image_io::hdr_display;
-use gi_render::metrics::{auto_exposure, flip, scaled};
 use gi_render::pipeline::Technique;
 use gi_render::scene::Scene;
 use gi_render::scene::sky::{EnvMap, Sky};
-use gi_render::{ImageF32, LabSettings, Renderer};
 use glam::Vec3;
 
 /// The default box without its punctual lights, under `sky`.
@@ -21,29 +19,6 @@ fn sky_box(sky: Sky) -> Scene {
     scene.lights.clear();
     scene.sky = sky;
     scene
-}
-
-fn renderer(scene: Scene, size: u32, edit: impl FnOnce(&mut LabSettings)) -> Renderer {
-    let mut s = LabSettings::default();
-    edit(&mut s);
-    let mut r = Renderer::new(gpu(), scene, s, size, size).expect("renderer");
-    r.clock.playing = false;
-    r
-}
-
-fn mean(img: &ImageF32) -> f64 {
-    img.data.iter().map(|p| (0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]) as f64).sum::<f64>() / img.data.len() as f64
-}
-
-fn sub(a: &ImageF32, b: &ImageF32) -> ImageF32 {
-    let data = a.data.iter().zip(&b.data).map(|(x, y)| [x[0] - y[0], x[1] - y[1], x[2] - y[2], 1.0]).collect();
-    ImageF32 { width: a.width, height: a.height, data }
-}
-
-/// FLIP of `test` against `truth`, both at the truth's middle-grey exposure.
-fn exposed_flip(test: &ImageF32, truth: &ImageF32) -> f64 {
-    let k = auto_exposure(truth);
-    flip(&hdr_display(&scaled(test, k)), &hdr_display(&scaled(truth, k))).expect("same size").0
 }
 
 /// Direct light in every technique (they share stage 2) and the full image of every
@@ -60,7 +35,7 @@ fn the_default_box_open_to_a_constant_sky_matches_the_path_tracer() {
     let size = 96;
     let scene = sky_box(Sky::constant(Vec3::new(0.6, 0.75, 1.0), 1.0));
     let pt = PathTracer::new(&scene, 0.0);
-    let probe = renderer(scene.clone(), size, |_| {});
+    let probe = scene_renderer(scene.clone(), size, |_| {});
     let (view_proj, eye) = (probe.view_proj(), probe.camera.position);
     drop(probe);
     let truth =
@@ -76,7 +51,7 @@ fn the_default_box_open_to_a_constant_sky_matches_the_path_tracer() {
         (Technique::Nguyen, 0.19, 0.55),
     ];
     for (t, bound, least) in cases {
-        let mut r = renderer(scene.clone(), size, |s| {
+        let mut r = scene_renderer(scene.clone(), size, |s| {
             t.apply(s);
             s.sky.directions = 64;
             s.direct.shadow_map_size = 256;
@@ -109,7 +84,7 @@ fn the_sky_is_off_by_default_and_follows_the_scene() {
     let mut lit = sky_box(Sky::constant(Vec3::ONE, 1.0));
     lit.sky.enabled = false;
     assert_eq!(default_scene().sky, Sky::default(), "no sky unless the user turns it on");
-    let mut r = renderer(lit, 64, |s| Technique::DirectOnly.apply(s));
+    let mut r = scene_renderer(lit, 64, |s| Technique::DirectOnly.apply(s));
     r.render_frame();
     assert_eq!(mean(&read(&r, "direct.radiance")), 0.0, "no light, sky off: black");
     r.scene_mut().sky.enabled = true;
@@ -162,7 +137,7 @@ fn the_sky_is_drawn_behind_the_scene() {
     image.rotation_deg = 30.0;
     for sky in [Sky::constant(Vec3::new(0.6, 0.75, 1.0), 2.0), image] {
         let scene = sky_box(sky.clone());
-        let mut r = renderer(scene.clone(), size, |s| Technique::DirectOnly.apply(s));
+        let mut r = scene_renderer(scene.clone(), size, |s| Technique::DirectOnly.apply(s));
         // Turned aside so that half the view is sky.
         r.camera.yaw += 0.6;
         r.render_frame();

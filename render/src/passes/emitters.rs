@@ -120,6 +120,9 @@ pub struct EmitterPass {
     bounce_capacity: u32,
     /// The emitters of this frame.
     pub emitters: Emitters,
+    /// What `emitters` was collected from (see [`emitter_key`]): collected again only when
+    /// it changes (a textured emitter's triangle means cost texture lookups).
+    key: Vec<f32>,
     /// Whether this frame's ISMs were splatted (the bounce's shadow test reads them).
     splatted: bool,
     pub stats: EmitterStats,
@@ -157,6 +160,7 @@ impl EmitterPass {
             bounce_list: vpl_buffer(&ctx.device, "emitters.bounce_vpls", 2),
             bounce_capacity: 1,
             emitters: Emitters::default(),
+            key: Vec::new(),
             splatted: false,
             stats: EmitterStats::default(),
         }
@@ -243,7 +247,11 @@ impl EmitterPass {
         s: &LabSettings,
         radius: f32,
     ) -> Option<EmitterLight> {
-        self.emitters = Emitters::collect_sides(scene, state, s.emitters.two_sided);
+        let key = emitter_key(scene, state, s.emitters.two_sided);
+        if key != self.key {
+            self.emitters = Emitters::collect_sides(scene, state, s.emitters.two_sided);
+            self.key = key;
+        }
         self.splatted = false;
         self.stats = EmitterStats {
             triangles: self.emitters.triangles.len(),
@@ -374,4 +382,21 @@ impl EmitterPass {
         self.stats.bounce_share = k;
         k
     }
+}
+
+/// What the emitters of a frame depend on: the sides setting, and for every draw of an
+/// emissive material its mesh, primitive, world matrix, emission and emissive texture.
+fn emitter_key(scene: &Scene, state: &SceneState, two_sided: bool) -> Vec<f32> {
+    let mut key = vec![two_sided as u32 as f32];
+    for d in &state.draws {
+        let material = scene.meshes.get(d.mesh).and_then(|m| m.primitives.get(d.primitive)).map(|p| p.material);
+        let Some(m) = material.and_then(|i| scene.materials.get(i)) else { continue };
+        if m.emissive.max_element() <= 0.0 {
+            continue;
+        }
+        key.extend([d.mesh as f32, d.primitive as f32, m.emissive_texture.map_or(-1.0, |t| t as f32)]);
+        key.extend(m.emissive.to_array());
+        key.extend(d.world.to_cols_array());
+    }
+    key
 }

@@ -393,10 +393,12 @@ impl Renderer {
         let s = self.settings.clone();
         let p = &s.pipeline;
         let (w, h) = (self.width, self.height);
-        let state = self.frame_state();
+        // The scene at this instant, evaluated only when a pass sizes itself by it.
+        let emitters = s.emitters.enabled && self.scene.has_emitters();
+        let state = if emitters || p.uses_knecht_vpls() { self.frame_state() } else { Default::default() };
         let x = &mut self.stages;
         let mut fresh = false;
-        if s.emitters.enabled && self.scene.has_emitters() {
+        if emitters {
             let created = x.emitters.is_none();
             let e = x.emitters.get_or_insert_with(|| EmitterPass::new(&ctx));
             fresh |= e.ensure(&ctx, &self.scene, &state, &self.gpu_scene, &s) | created;

@@ -411,8 +411,12 @@ pub fn build_glb() -> Vec<u8> {
     glb(json.into_bytes(), w.bin)
 }
 
-/// Wraps a JSON document and a BIN payload into the GLB container (§4.4).
-fn glb(mut json: Vec<u8>, mut bin: Vec<u8>) -> Vec<u8> {
+/// Wraps a JSON document and a BIN payload into the GLB container (glTF 2.0 §4.4), both
+/// padded to 4 bytes (the default scene's file; the tests' hand-made and meshopt files).
+///
+/// # Panics
+/// When a chunk is 4 GiB or more (the container's sizes are 32-bit).
+pub fn glb(mut json: Vec<u8>, mut bin: Vec<u8>) -> Vec<u8> {
     while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
@@ -420,15 +424,15 @@ fn glb(mut json: Vec<u8>, mut bin: Vec<u8>) -> Vec<u8> {
         bin.push(0);
     }
     let total = 12 + 8 + json.len() + 8 + bin.len();
+    let size = |x: usize| u32::try_from(x).expect("a .glb is below 4 GiB").to_le_bytes();
     let mut out = Vec::with_capacity(total);
     out.extend_from_slice(b"glTF");
     out.extend_from_slice(&2u32.to_le_bytes());
-    for x in [total, json.len()] {
-        out.extend_from_slice(&u32::try_from(x).expect("the default scene is far below 4 GiB").to_le_bytes());
-    }
+    out.extend_from_slice(&size(total));
+    out.extend_from_slice(&size(json.len()));
     out.extend_from_slice(b"JSON");
     out.extend_from_slice(&json);
-    out.extend_from_slice(&u32::try_from(bin.len()).expect("the default scene is far below 4 GiB").to_le_bytes());
+    out.extend_from_slice(&size(bin.len()));
     out.extend_from_slice(b"BIN\0");
     out.extend_from_slice(&bin);
     out

@@ -19,6 +19,7 @@ use glam::Vec3;
 
 use super::{Light, LightKind, WorldLight};
 use crate::cpu::knecht::halton;
+use crate::cpu::tonemap::luminance;
 
 /// Where the sky's radiance comes from.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -105,10 +106,6 @@ pub struct EnvMap {
     total: f32,
 }
 
-fn luminance(c: Vec3) -> f32 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
-}
-
 impl EnvMap {
     /// Checks the texels (finite, non-negative) and builds the sampling tables.
     pub fn new(width: u32, height: u32, texels: Vec<Vec3>) -> Result<Self, String> {
@@ -131,7 +128,7 @@ impl EnvMap {
             let omega = texel_solid_angle(y as u32, width, height);
             let mut acc = 0.0f64;
             for x in 0..w {
-                acc += f64::from(luminance(texels[y * w + x]) * omega);
+                acc += f64::from(luminance(texels[y * w + x].to_array()) * omega);
                 row_cdf[y * w + x] = acc as f32;
             }
             total += acc;
@@ -211,7 +208,7 @@ impl<'a> SkySampler<'a> {
                 let (w, h) = (m.width as usize, m.height as usize);
                 let x = ((u * w as f32) as usize).min(w - 1);
                 let y = ((v * h as f32) as usize).min(h - 1);
-                luminance(m.texels[y * w + x]) / m.total
+                luminance(m.texels[y * w + x].to_array()) / m.total
             }
             Some(_) => 0.0,
         }
