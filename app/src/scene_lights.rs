@@ -248,7 +248,8 @@ pub fn apply_sky(scene: &mut Scene, def: &SkyDef, scene_file: &Path) -> Result<(
     result
 }
 
-/// Writes the scene's lights beside `scene_file` (atomically: a temporary file renamed).
+/// Writes the scene's lights beside `scene_file` atomically (a temporary file renamed over
+/// it: `gi_render::preset::write_atomic_bytes`), without a `.bak`.
 pub fn save_overrides(scene: &Scene, scene_file: &Path) -> Result<PathBuf, String> {
     let path = overrides_path(scene_file);
     let overrides = LightOverrides { lights: light_edits(scene), sky: Some(sky_def(&scene.sky, scene_file)) };
@@ -257,9 +258,10 @@ pub fn save_overrides(scene: &Scene, scene_file: &Path) -> Result<PathBuf, Strin
         "// GI Lab's lights for {} (every punctual light and the sky; the glTF is not changed)\n{text}\n",
         scene_file.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default()
     );
-    let tmp = path.with_extension("ron.tmp");
-    std::fs::write(&tmp, text).map_err(|e| format!("{}: {e}", tmp.display()))?;
-    std::fs::rename(&tmp, &path).map_err(|e| format!("{}: {e}", path.display()))?;
+    // No .bak: the file is the lab's own, rewritten on each edit, and lives in the user's
+    // scene folder.
+    gi_render::preset::write_atomic_bytes(&path, text.as_bytes(), gi_render::preset::Backup::Skip)
+        .map_err(|e| format!("{}: {e}", path.display()))?;
     Ok(path)
 }
 

@@ -90,11 +90,28 @@ pub fn hdr_display(img: &ImageF32) -> ImageF32 {
     }
 }
 
+/// Writes the buffer as an 8-bit PNG mapped by [`to_rgba8`], atomically (see
+/// [`save_atomic`]).
 pub fn save_png(path: &Path, img: &ImageF32, kind: BufferKind) -> Result<(), image::ImageError> {
-    to_rgba8(img, kind).save_with_format(path, image::ImageFormat::Png)
+    save_atomic(path, &image::DynamicImage::ImageRgba8(to_rgba8(img, kind)), image::ImageFormat::Png)
 }
 
-/// Writes 32-bit float RGBA OpenEXR.
+/// Encodes `img` in memory and writes it with [`crate::preset::write_atomic_bytes`]: a
+/// temporary file renamed over `path`, so that a crash or a kill mid-save leaves either the
+/// old or the new complete image, never a truncated one. No `.bak` is kept (captures are
+/// not edited, and each usually has a new name).
+pub fn save_atomic(
+    path: &Path,
+    img: &image::DynamicImage,
+    format: image::ImageFormat,
+) -> Result<(), image::ImageError> {
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut bytes, format)?;
+    crate::preset::write_atomic_bytes(path, bytes.get_ref(), crate::preset::Backup::Skip)
+        .map_err(image::ImageError::IoError)
+}
+
+/// Writes 32-bit float RGBA OpenEXR, atomically (see [`save_atomic`]).
 pub fn save_exr(path: &Path, img: &ImageF32) -> Result<(), image::ImageError> {
     let flat: Vec<f32> = img.data.iter().flatten().copied().collect();
     let buf: image::Rgba32FImage = image::ImageBuffer::from_raw(img.width, img.height, flat).ok_or_else(|| {
@@ -102,7 +119,7 @@ pub fn save_exr(path: &Path, img: &ImageF32) -> Result<(), image::ImageError> {
             image::error::ParameterErrorKind::DimensionMismatch,
         ))
     })?;
-    image::DynamicImage::ImageRgba32F(buf).save_with_format(path, image::ImageFormat::OpenExr)
+    save_atomic(path, &image::DynamicImage::ImageRgba32F(buf), image::ImageFormat::OpenExr)
 }
 
 /// Reads an OpenEXR (or any float image) back as f32 RGBA.

@@ -218,6 +218,7 @@ pub fn soler_gather_params(
     };
     (screen, p)
 }
+pub mod crash_safe;
 pub mod images;
 pub mod meshopt_copy;
 pub mod ui_harness;

@@ -1,5 +1,6 @@
 //! Captures: the viewport saved as PNG and EXR, recorded frame sequences, and the
-//! `--screenshot` of the window.
+//! `--screenshot` of the window. Each image is written atomically (encoded in memory, then a
+//! temporary file renamed over it), so a crash never leaves a truncated image.
 
 use std::path::{Path, PathBuf};
 
@@ -18,16 +19,16 @@ pub fn capture_stamp() -> String {
     gi_render::preset::utc_now().replace(':', "-")
 }
 
-fn save_color_image(path: &Path, img: &egui::ColorImage) {
+/// Writes a window screenshot in the format its extension names (PNG when it names none),
+/// atomically (`gi_render::image_io::save_atomic`: a kill mid-save leaves the old file or
+/// the new complete one).
+pub fn save_color_image(path: &Path, img: &egui::ColorImage) -> Result<(), String> {
     let [w, h] = img.size;
     let bytes: Vec<u8> = img.pixels.iter().flat_map(|c| c.to_array()).collect();
-    match image::RgbaImage::from_raw(w as u32, h as u32, bytes) {
-        Some(i) => match i.save(path) {
-            Ok(()) => println!("wrote screenshot {}", path.display()),
-            Err(e) => eprintln!("gi-lab: cannot write screenshot {}: {e}", path.display()),
-        },
-        None => eprintln!("gi-lab: screenshot has inconsistent size"),
-    }
+    let i = image::RgbaImage::from_raw(w as u32, h as u32, bytes).ok_or("screenshot has inconsistent size")?;
+    let format = image::ImageFormat::from_path(path).unwrap_or(image::ImageFormat::Png);
+    gi_render::image_io::save_atomic(path, &image::DynamicImage::ImageRgba8(i), format)
+        .map_err(|e| format!("cannot write screenshot {}: {e}", path.display()))
 }
 
 impl State {
@@ -98,7 +99,10 @@ impl GiLabApp {
         }
         let taken = st.screenshot.lock().ok().and_then(|mut s| s.take());
         if let Some(img) = taken {
-            save_color_image(&path, &img);
+            match save_color_image(&path, &img) {
+                Ok(()) => println!("wrote screenshot {}", path.display()),
+                Err(e) => eprintln!("gi-lab: {e}"),
+            }
             ctx.send_viewport_cmd(egui::ViewportCommand::Close);
         }
     }

@@ -120,26 +120,40 @@ impl Session {
         dir.join("session.ron")
     }
 
-    /// Loads the session; a missing file gives the default, an unreadable one is kept as
-    /// `session.ron.broken` (never deleted) and the default is used, with the reason.
+    /// Loads the session. A missing file gives the default. A file that cannot be read or
+    /// parsed is moved aside to `session.ron.corrupt` (`.corrupt.1`, `.corrupt.2`, … when
+    /// that name is taken; never deleted), and the session starts from `session.ron.bak`
+    /// (the version before the last save) when that parses, else from the defaults; the
+    /// message says which, and why.
     pub fn load(dir: &Path) -> (Self, Option<String>) {
         let path = Self::file(dir);
-        let Ok(text) = std::fs::read_to_string(&path) else { return (Self::default(), None) };
-        match ron::from_str::<Session>(&text) {
-            Ok(s) => (s, None),
-            Err(e) => {
-                let broken = dir.join("session.ron.broken");
-                let _ = std::fs::copy(&path, &broken);
-                (
-                    Self::default(),
-                    Some(format!(
-                        "the saved session {} could not be read ({e}); it was kept as {} and a new session started",
-                        path.display(),
-                        broken.display()
-                    )),
-                )
-            }
-        }
+        let error = match Self::read(&path) {
+            Ok(Some(s)) => return (s, None),
+            Ok(None) => return (Self::default(), None),
+            Err(e) => e,
+        };
+        let kept = match move_aside(&path) {
+            Ok(to) => format!("it was moved to {}", to.display()),
+            Err(e) => format!("it could not be moved aside ({e})"),
+        };
+        let bak = path.with_file_name("session.ron.bak");
+        let (session, outcome) = match Self::read(&bak) {
+            Ok(Some(s)) => (s, format!("the previous session was restored from {}", bak.display())),
+            Ok(None) => (Self::default(), "a new session started".to_string()),
+            Err(e) => (Self::default(), format!("a new session started ({e})")),
+        };
+        (session, Some(format!("the saved session could not be read ({error}); {kept} and {outcome}")))
+    }
+
+    /// Reads and parses a session file: None when it does not exist.
+    fn read(path: &Path) -> Result<Option<Self>, String> {
+        let bytes = match std::fs::read(path) {
+            Ok(b) => b,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+            Err(e) => return Err(format!("{}: {e}", path.display())),
+        };
+        let text = std::str::from_utf8(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+        ron::from_str::<Session>(text).map(Some).map_err(|e| format!("{}: {e}", path.display()))
     }
 
     pub fn to_ron(&self) -> String {
@@ -160,6 +174,18 @@ impl Session {
         list.insert(0, path.to_path_buf());
         list.truncate(10);
     }
+}
+
+/// Renames a corrupt session file to `<name>.corrupt`, or `<name>.corrupt.N` with the first
+/// free N, so that an earlier corrupt file is never overwritten; returns the new name.
+fn move_aside(path: &Path) -> std::io::Result<PathBuf> {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "session.ron".into());
+    let free = (0..1000u32)
+        .map(|i| path.with_file_name(if i == 0 { format!("{name}.corrupt") } else { format!("{name}.corrupt.{i}") }))
+        .find(|p| std::fs::symlink_metadata(p).is_err())
+        .ok_or_else(|| std::io::Error::other("too many corrupt sessions kept"))?;
+    std::fs::rename(path, &free)?;
+    Ok(free)
 }
 
 /// The default layout: settings, scene and presets as tabs on the left; the viewport with
@@ -186,4 +212,57 @@ pub fn default_layout() -> egui_tiles::Tree<Pane> {
         l.shares.set_share(bottom, 1.0);
     }
     egui_tiles::Tree::new(egui::Id::unique("gi_lab_layout"), root, tiles)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp_dir(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("gi-lab-session-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        dir
+    }
+
+    #[test]
+    fn a_corrupt_session_is_moved_aside_and_the_defaults_start() {
+        let dir = temp_dir("corrupt");
+        let garbage = b"(layout: Some(\xff\x00 not a session";
+        std::fs::write(dir.join("session.ron"), garbage).expect("write");
+        let (s, message) = Session::load(&dir);
+        assert_eq!(s, Session::default());
+        let message = message.expect("the corrupt session is reported");
+        assert!(message.contains("session.ron.corrupt") && message.contains("new session"), "{message}");
+        assert_eq!(std::fs::read(dir.join("session.ron.corrupt")).ok().as_deref(), Some(&garbage[..]));
+        assert!(!Session::file(&dir).exists(), "the corrupt file is still session.ron");
+        // A second corrupt session does not replace the first one kept.
+        std::fs::write(dir.join("session.ron"), "garbage 2").expect("write");
+        let (_, message) = Session::load(&dir);
+        assert!(message.is_some_and(|m| m.contains("session.ron.corrupt.1")));
+        assert_eq!(std::fs::read(dir.join("session.ron.corrupt")).ok().as_deref(), Some(&garbage[..]));
+        assert_eq!(std::fs::read_to_string(dir.join("session.ron.corrupt.1")).ok().as_deref(), Some("garbage 2"));
+        // No file: the defaults, silently.
+        assert_eq!(Session::load(&dir), (Session::default(), None));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_corrupt_session_restores_the_previous_one_from_the_bak() {
+        let dir = temp_dir("restore");
+        let older = Session { time_s: 1.5, render_scale: 0.25, ..Session::default() };
+        older.save(&dir).expect("save");
+        Session { time_s: 2.5, ..Session::default() }.save(&dir).expect("save");
+        assert!(dir.join("session.ron.bak").exists());
+        std::fs::write(Session::file(&dir), "(time_s: 3.5, render_scale: ").expect("truncate");
+        let (s, message) = Session::load(&dir);
+        assert_eq!(s, older);
+        let message = message.expect("the restore is reported");
+        assert!(message.contains("restored") && message.contains("session.ron.bak"), "{message}");
+        assert!(dir.join("session.ron.corrupt").exists());
+        // The next save keeps the restored .bak: there is no session.ron to copy over it.
+        s.save(&dir).expect("save");
+        assert_eq!(Session::load(&dir), (older, None));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }
