@@ -22,6 +22,27 @@ pub struct Camera {
 }
 
 impl Camera {
+    /// Why this camera cannot render (a non-finite number, a field of view outside
+    /// (0°, 180°), near plane not positive or far plane not beyond it), if it cannot: a bad
+    /// preset, session or bookmark can hold any of these.
+    pub fn problem(&self) -> Option<String> {
+        let finite = self.position.is_finite()
+            && [self.yaw, self.pitch, self.yfov, self.znear, self.zfar].iter().all(|x| x.is_finite());
+        if !finite {
+            return Some(format!(
+                "the camera has a value that is not a finite number (position {}, yaw {}, pitch {}, fov {}, near {}, far {})",
+                self.position, self.yaw, self.pitch, self.yfov, self.znear, self.zfar
+            ));
+        }
+        if !(self.yfov > 1e-4 && self.yfov < std::f32::consts::PI - 1e-4) {
+            return Some(format!("the camera's field of view {}° is outside (0°, 180°)", self.yfov.to_degrees()));
+        }
+        if !(self.znear > 0.0 && self.zfar > self.znear * (1.0 + 1e-4)) {
+            return Some(format!("the camera's near {} and far {} planes need 0 < near < far", self.znear, self.zfar));
+        }
+        None
+    }
+
     /// Unit view direction.
     pub fn forward(&self) -> Vec3 {
         let (sy, cy) = self.yaw.sin_cos();
@@ -103,5 +124,26 @@ impl Camera {
     /// Moves in camera space: x right, y up, z forward.
     pub fn fly(&mut self, local: Vec3) {
         self.position += self.right() * local.x + Vec3::Y * local.y + self.forward() * local.z;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_camera_that_cannot_render_says_why() {
+        let b = Aabb { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) };
+        let good = Camera::frame_bounds(b, 1.5);
+        assert_eq!(good.problem(), None);
+        let far = Camera { position: Vec3::splat(1e30), ..good };
+        assert_eq!(far.problem(), None, "far away is a place, not an error");
+        let nan = Camera { position: Vec3::new(0.0, f32::NAN, 0.0), ..good };
+        assert!(nan.problem().is_some_and(|p| p.contains("not a finite number")));
+        for yfov in [0.0, -1.0, 4.0, f32::INFINITY] {
+            assert!(Camera { yfov, ..good }.problem().is_some(), "fov {yfov}");
+        }
+        assert!(Camera { znear: 0.5, zfar: 0.1, ..good }.problem().is_some_and(|p| p.contains("near")));
+        assert!(Camera { znear: 0.0, ..good }.problem().is_some());
     }
 }

@@ -44,14 +44,22 @@ impl Clock {
         self.time_at(self.anim_frame - 1) as f32
     }
 
-    /// Jumps to animation time `t` (the timeline's scrubber).
+    /// Jumps to animation time `t` (the timeline's scrubber). Negative times start at 0; a
+    /// time that is not a finite number is ignored (the clock stays where it is).
     pub fn seek(&mut self, t: f64) {
+        if !t.is_finite() {
+            return;
+        }
         self.origin_s = t.max(0.0);
         self.anim_frame = 0;
     }
 
-    /// Changes the playback speed without a jump in time.
+    /// Changes the playback speed without a jump in time; a speed that is not a finite
+    /// number is ignored.
     pub fn set_speed(&mut self, speed: f64) {
+        if !speed.is_finite() {
+            return;
+        }
         let now = self.time_at(self.anim_frame);
         self.speed = speed;
         self.seek(now);
@@ -97,5 +105,9 @@ mod tests {
         c.loop_s = 1.0;
         c.tick();
         assert_eq!(c.time_s(), 0.25, "1.25 wraps to 0.25");
+        c.seek(f64::NAN);
+        c.seek(f64::INFINITY);
+        c.set_speed(f64::NAN);
+        assert_eq!((c.time_s(), c.speed), (0.25, 2.0), "non-finite seeks and speeds are ignored");
     }
 }

@@ -30,8 +30,8 @@ impl Renderer {
     pub fn render_frame(&mut self) -> Vec<PassTiming> {
         let ctx = self.ctx.clone();
         let aspect = self.width as f32 / self.height as f32;
+        self.check_camera();
 
-        // The scene at this instant.
         // The scene at this instant; the sky's directions join its lights (`passes::sky`).
         let state = self.frame_state();
         let view_proj = self.camera.view_proj(aspect);

@@ -47,6 +47,17 @@ pub enum GpuError {
     Device { adapter: String, source: wgpu::RequestDeviceError },
 }
 
+/// Resources alive on a device (see [`GpuContext::live_resources`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LiveResources {
+    pub buffers: usize,
+    pub textures: usize,
+    pub bind_groups: usize,
+    pub pipelines: usize,
+    /// Bytes the backend's memory allocator holds, where it reports them.
+    pub allocated_bytes: Option<u64>,
+}
+
 /// The device the renderer runs on.
 #[derive(Clone)]
 pub struct GpuContext {
@@ -105,6 +116,22 @@ impl GpuContext {
     /// One line naming the adapter, for status bars and reports.
     pub fn adapter_summary(&self) -> String {
         format!("{} ({:?})", self.adapter_info.name, self.adapter_info.backend)
+    }
+
+    /// What lives on the device now: wgpu's count of buffers, textures, bind groups and
+    /// pipelines, and the allocator's bytes where the backend reports them. `None` for an
+    /// adopted device (eframe owns its instance). The soak watches these for leaks.
+    pub fn live_resources(&self) -> Option<LiveResources> {
+        let report = self._instance.as_ref()?.generate_report()?;
+        let hub = report.hub_report();
+        let allocated_bytes = self.device.generate_allocator_report().map(|r| r.total_allocated_bytes);
+        Some(LiveResources {
+            buffers: hub.buffers.num_allocated,
+            textures: hub.textures.num_allocated,
+            bind_groups: hub.bind_groups.num_allocated,
+            pipelines: hub.render_pipelines.num_allocated + hub.compute_pipelines.num_allocated,
+            allocated_bytes,
+        })
     }
 
     /// Blocks until the GPU has finished all submitted work.

@@ -15,6 +15,8 @@ pub mod hcb_stats;
 pub mod reference;
 pub mod render;
 pub mod settings;
+pub mod soak;
+pub mod soak_walk;
 pub mod sweep;
 pub mod upgrade;
 
@@ -68,6 +70,10 @@ pub enum Command {
     /// Print the hierarchical coherence buffer's samples per level as Table 1 of Nguyen et
     /// al. lays them out (the preset's technique is switched to the HCB).
     HcbStats(HcbStatsArgs),
+    /// A seeded random walk over every setting, stage choice, size, camera, scene, shader
+    /// reload and animation control, counting panics, GPU errors, non-finite pixels, wrong
+    /// answers to bad input and growing memory; one summary line (exit 1 on a failure).
+    Soak(soak::SoakArgs),
     /// Rewrite presets of an older version in the current one (the loader's migration),
     /// keeping their leading comment; the old file is kept as `<name>.bak`.
     Upgrade(UpgradeArgs),
@@ -123,6 +129,7 @@ pub fn main() -> ExitCode {
         }
         Some(Command::Export(a)) => export::export(a),
         Some(Command::Upgrade(a)) => upgrade::upgrade(a),
+        Some(Command::Soak(a)) => soak::soak(a),
         Some(Command::GenAssets { out }) => gen_assets::gen_assets(out),
     };
     match result {

@@ -42,6 +42,23 @@ pub enum RenderError {
         largest_size: Option<u32>,
     },
     #[error(
+        "interleaved tiles n = {n} at {width}×{height} need a split G-buffer of {split_w}×{split_h} (whole tiles); this device allows {max}²: at n = {n} at most {largest_w}×{largest_h} fit"
+    )]
+    SplitTooLarge {
+        n: u32,
+        width: u32,
+        height: u32,
+        split_w: u32,
+        split_h: u32,
+        max: u32,
+        largest_w: u32,
+        largest_h: u32,
+    },
+    #[error(
+        "the scene does not fit this device: its {what} need {bytes} bytes in one buffer, and this device allows {max} bytes per buffer"
+    )]
+    SceneTooLarge { what: &'static str, bytes: u64, max: u64 },
+    #[error(
         "the IRSM atlas for {vpls} VPLs of {size}² needs {width}×{height} texels; this device allows {max_dim}² texels and {max_buffer} bytes per buffer: at {size}² at most {largest_vpls} VPLs fit"
     )]
     IrsmAtlasTooLarge {
@@ -133,6 +150,64 @@ pub(crate) fn check_ism_atlas(ctx: &GpuContext, settings: &LabSettings) -> Resul
         }
     }
     Ok(())
+}
+
+/// Refuses a scene whose vertex, index or instance buffer would be larger than the device
+/// allows, before anything is uploaded.
+pub(crate) fn check_scene(ctx: &GpuContext, scene: &crate::scene::Scene) -> Result<(), RenderError> {
+    let (mut vertices, mut indices) = (0u64, 0u64);
+    for p in scene.meshes.iter().flat_map(|m| &m.primitives) {
+        vertices += p.vertices.len() as u64;
+        indices += p.indices.len() as u64;
+    }
+    let draws = scene.evaluate(0.0).draws.len() as u64;
+    let max = ctx.limits.max_buffer_size;
+    let max_storage = (ctx.limits.max_storage_buffer_binding_size as u64).min(max);
+    let vertex = std::mem::size_of::<crate::scene::Vertex>() as u64;
+    let instance = std::mem::size_of::<crate::passes::InstanceUniform>() as u64;
+    for (what, bytes, max) in [
+        ("vertices", vertices * vertex, max),
+        ("triangle indices", indices * 4, max),
+        ("instances (one per drawn primitive)", draws * instance, max_storage),
+    ] {
+        if bytes > max {
+            return Err(RenderError::SceneTooLarge { what, bytes, max });
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a size at which the interleaved split G-buffer (n×n whole tiles, Knecht 002
+/// §3.4.2; `passes::knecht::interleave`) would be wider or taller than the device allows:
+/// a side just under the maximum rounds up past it.
+pub(crate) fn check_split(
+    ctx: &GpuContext,
+    settings: &LabSettings,
+    width: u32,
+    height: u32,
+) -> Result<(), RenderError> {
+    let p = &settings.pipeline;
+    if !(p.uses_knecht_vpls() && p.shading_points == crate::pipeline::ShadingPoints::InterleavedTiles) {
+        return Ok(());
+    }
+    let n = settings.interleave.n.max(1);
+    let (tw, th) = crate::passes::knecht::interleave::InterleavePass::tile(width, height, n);
+    let (split_w, split_h) = (tw as u64 * n as u64, th as u64 * n as u64);
+    let max = ctx.limits.max_texture_dimension_2d;
+    if split_w <= max as u64 && split_h <= max as u64 {
+        return Ok(());
+    }
+    let largest = max / n * n;
+    Err(RenderError::SplitTooLarge {
+        n,
+        width,
+        height,
+        split_w: split_w.min(u32::MAX as u64) as u32,
+        split_h: split_h.min(u32::MAX as u64) as u32,
+        max,
+        largest_w: width.min(largest),
+        largest_h: height.min(largest),
+    })
 }
 
 pub(crate) fn check_size(ctx: &GpuContext, width: u32, height: u32) -> Result<(), RenderError> {

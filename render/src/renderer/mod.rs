@@ -11,7 +11,7 @@ use glam::Mat4;
 
 pub use access::{default_camera, pass_of_shader, scope_output};
 pub use checks::RenderError;
-use checks::{check_ism_atlas, check_size, check_vpl_atlas};
+use checks::{check_ism_atlas, check_scene, check_size, check_split, check_vpl_atlas};
 
 use crate::buffers::{BufferRegistry, ImageF32};
 use crate::camera::Camera;
@@ -98,6 +98,10 @@ pub struct Renderer {
     pub(crate) sky_background: crate::passes::sky::SkyBackground,
     /// The pixel probe's depth reader, created on first use.
     pub(crate) depth_probe: std::sync::OnceLock<crate::passes::view::DepthProbe>,
+    /// The last camera that could render, used in place of one that cannot.
+    pub(crate) last_good_camera: Camera,
+    /// Why the camera was last replaced by `last_good_camera`, until a good one comes.
+    pub(crate) camera_problem: Option<String>,
 }
 
 impl Renderer {
@@ -117,9 +121,16 @@ impl Renderer {
         }
         check_vpl_atlas(&ctx, &settings)?;
         check_ism_atlas(&ctx, &settings)?;
+        check_split(&ctx, &settings, width, height)?;
+        check_scene(&ctx, &scene)?;
+        let mut scene = scene;
         let bounds = scene.bounds(0.0);
         let camera = default_camera(&scene, bounds, width as f32 / height as f32);
         let gpu_scene = GpuScene::new(&ctx, &scene);
+        for w in &gpu_scene.warnings {
+            log::warn!("{w}");
+        }
+        scene.warnings.extend(gpu_scene.warnings.iter().cloned());
         let gbuffer = GBufferPass::new(&ctx, &gpu_scene, width, height);
         let camera_buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame.camera"),
@@ -163,6 +174,8 @@ impl Renderer {
             sky_lights: Default::default(),
             sky_background,
             depth_probe: std::sync::OnceLock::new(),
+            last_good_camera: camera,
+            camera_problem: None,
         };
         r.register_all();
         r.ensure_passes();
@@ -253,6 +266,28 @@ impl Renderer {
         &mut self.scene
     }
 
+    /// Why the camera set last could not render (the previous good camera was used), if so.
+    pub fn camera_problem(&self) -> Option<&str> {
+        self.camera_problem.as_deref()
+    }
+
+    /// Keeps the camera if it can render, else puts the last good one back and says why.
+    pub(crate) fn check_camera(&mut self) {
+        match self.camera.problem() {
+            None => {
+                self.last_good_camera = self.camera;
+                self.camera_problem = None;
+            }
+            Some(why) => {
+                if self.camera_problem.as_deref() != Some(why.as_str()) {
+                    log::warn!("{why}; the previous camera is kept");
+                }
+                self.camera = self.last_good_camera;
+                self.camera_problem = Some(why);
+            }
+        }
+    }
+
     pub fn bounds(&self) -> Aabb {
         self.bounds
     }
@@ -270,6 +305,7 @@ impl Renderer {
         self.check_shadow_map(&settings)?;
         check_vpl_atlas(&self.ctx, &settings)?;
         check_ism_atlas(&self.ctx, &settings)?;
+        check_split(&self.ctx, &settings, self.width, self.height)?;
         let reset = self.settings.history_invalidated_by(&settings);
         let choices_changed = self.settings.pipeline != settings.pipeline;
         self.clock.time_step_s = settings.animation.time_step_s as f64;
@@ -324,6 +360,7 @@ impl Renderer {
     /// nothing.
     pub fn resize(&mut self, width: u32, height: u32) -> Result<(), RenderError> {
         check_size(&self.ctx, width, height)?;
+        check_split(&self.ctx, &self.settings, width, height)?;
         if (width, height) == (self.width, self.height) {
             return Ok(());
         }

@@ -45,6 +45,9 @@ pub struct GpuScene {
     pub double_sided: Vec<bool>,
     _material_buffers: Vec<wgpu::Buffer>,
     _textures: Vec<wgpu::Texture>,
+    /// What the upload changed to fit the device (textures downscaled), for the scene's
+    /// warnings.
+    pub warnings: Vec<String>,
 }
 
 /// Vertex buffer layout of [`Vertex`].
@@ -138,7 +141,26 @@ impl GpuScene {
             ctx,
             &super::TextureImage { name: "white".into(), width: 1, height: 1, rgba8: vec![255; 4].into() },
         );
-        let mut textures: Vec<wgpu::Texture> = scene.textures.iter().map(|t| upload_texture(ctx, t)).collect();
+        let mut warnings = Vec::new();
+        let mut textures: Vec<wgpu::Texture> = scene
+            .textures
+            .iter()
+            .map(|t| {
+                let tex = upload_texture(ctx, t);
+                if (tex.width(), tex.height()) != (t.width.max(1), t.height.max(1)) {
+                    warnings.push(format!(
+                        "texture '{}' is {}×{}, larger than this device allows ({}²): it was downscaled to {}×{}",
+                        t.name,
+                        t.width,
+                        t.height,
+                        ctx.limits.max_texture_dimension_2d,
+                        tex.width(),
+                        tex.height()
+                    ));
+                }
+                tex
+            })
+            .collect();
         let mut material_buffers = Vec::new();
         let mut material_groups = Vec::new();
         let default_material = [super::Material::default()];
@@ -199,6 +221,7 @@ impl GpuScene {
             material_groups,
             _material_buffers: material_buffers,
             _textures: textures,
+            warnings,
         }
     }
 
