@@ -33,6 +33,13 @@ pub struct AppArgs {
     /// Shader hot reload on or off (default: on in debug builds).
     #[arg(long)]
     pub hot_reload: Option<bool>,
+    /// Set by the lab when it restarts itself after the GPU device was lost: why, to show.
+    #[arg(long, hide = true)]
+    pub recovered: Option<String>,
+    /// Restart the lab (with its saved session) when the GPU device is lost; tests turn it
+    /// off to check what the lab saved and says.
+    #[arg(long = "no-restart-on-device-loss", action = clap::ArgAction::SetFalse, hide = true)]
+    pub restart_on_device_loss: bool,
 }
 
 impl Default for AppArgs {
@@ -46,6 +53,8 @@ impl Default for AppArgs {
             presets_dir: PathBuf::from("presets"),
             shaders_dir: PathBuf::from("shaders"),
             hot_reload: None,
+            recovered: None,
+            restart_on_device_loss: true,
         }
     }
 }

@@ -480,3 +480,21 @@ fn render_with_a_sky_from_the_command_line() {
     assert!(sky > plain * 1.05, "the sky adds light: {plain} -> {sky}");
     assert_eq!(off, plain, "--sky off: as without a sky");
 }
+
+#[test]
+fn a_device_lost_while_rendering_ends_the_run_with_a_clear_error() {
+    let out = temp_dir("lost");
+    // The render command destroys its device before frame 1 when told to, as a driver reset.
+    let o = gi_lab()
+        .args(["render", "--size", "32x32", "--frames", "3"])
+        .arg("--out")
+        .arg(&out)
+        .env("GI_LAB_TEST_LOSE_DEVICE_AT", "1")
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "exit 1 for a lost device: {err}");
+    assert!(err.contains("gi-lab: error: the GPU device was lost"), "{err}");
+    assert!(!err.contains("panicked"), "no panic: {err}");
+    assert!(!out.join("final.png").exists(), "no image from a lost device");
+}

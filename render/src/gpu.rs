@@ -69,6 +69,8 @@ pub struct GpuContext {
     pub limits: wgpu::Limits,
     /// Keeps the instance alive for headless contexts.
     _instance: Option<Arc<wgpu::Instance>>,
+    /// Why the device was lost, once it is (the device-lost callback writes it).
+    lost: Arc<std::sync::Mutex<Option<String>>>,
 }
 
 impl std::fmt::Debug for GpuContext {
@@ -91,6 +93,16 @@ impl GpuContext {
         let (device, queue) = pollster::block_on(adapter.request_device(&desc))
             .map_err(|source| GpuError::Device { adapter: info.name.clone(), source })?;
         log::info!("GPU: {} ({:?}, {:?})", info.name, info.backend, info.device_type);
+        let lost = watch_loss(&device);
+        // Headless runs keep wgpu's default for GPU errors (a panic: tests and CI must not
+        // pass over one), except once the device is lost: then every call fails, and the
+        // caller is told by `lost_reason` instead.
+        let gone = lost.clone();
+        device.on_uncaptured_error(Arc::new(move |e| {
+            if gone.lock().map(|l| l.is_none()).unwrap_or(true) {
+                panic!("wgpu error: {e}");
+            }
+        }));
         Ok(Self {
             features: device.features(),
             limits: device.limits(),
@@ -98,14 +110,22 @@ impl GpuContext {
             queue,
             adapter_info: info,
             _instance: Some(Arc::new(instance)),
+            lost,
         })
+    }
+
+    /// Why the device was lost (a driver reset, `destroy`), if it was: everything on it is
+    /// gone and a renderer must move to a new device (`Renderer::move_to`).
+    pub fn lost_reason(&self) -> Option<String> {
+        self.lost.lock().ok().and_then(|l| l.clone())
     }
 
     /// Adopts a device someone else opened (eframe's), checking that it has what we need.
     pub fn adopt(device: wgpu::Device, queue: wgpu::Queue, adapter_info: wgpu::AdapterInfo) -> Result<Self, GpuError> {
         let (features, limits) = (device.features(), device.limits());
         check_capabilities(&adapter_info.name, features, &limits)?;
-        Ok(Self { device, queue, adapter_info, features, limits, _instance: None })
+        let lost = watch_loss(&device);
+        Ok(Self { device, queue, adapter_info, features, limits, _instance: None, lost })
     }
 
     /// Whether per-pass GPU timestamps are available.
@@ -140,6 +160,32 @@ impl GpuContext {
             log::warn!("device poll failed: {e}");
         }
     }
+}
+
+/// Why the last device this process lost was lost (see [`device_lost_in_process`]).
+static LOST_IN_PROCESS: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
+
+/// Whether any device of this process was lost, and why: a command line run that met a lost
+/// device ends with this as its error, whatever failed after it.
+pub fn device_lost_in_process() -> Option<String> {
+    LOST_IN_PROCESS.lock().ok().and_then(|l| l.clone())
+}
+
+/// Records why `device` is lost when it is (wgpu calls the callback once).
+fn watch_loss(device: &wgpu::Device) -> Arc<std::sync::Mutex<Option<String>>> {
+    let lost = Arc::new(std::sync::Mutex::new(None));
+    let sink = lost.clone();
+    device.set_device_lost_callback(move |reason, message| {
+        log::error!("the GPU device was lost ({reason:?}): {message}");
+        let why = if message.is_empty() { format!("{reason:?}") } else { format!("{reason:?}: {message}") };
+        if let Ok(mut l) = LOST_IN_PROCESS.lock() {
+            *l = Some(why.clone());
+        }
+        if let Ok(mut l) = sink.lock() {
+            *l = Some(why);
+        }
+    });
+    lost
 }
 
 /// Picks an adapter: `WGPU_ADAPTER_NAME` (substring, case-insensitive) when set, else

@@ -132,6 +132,14 @@ pub fn main() -> ExitCode {
         Some(Command::Soak(a)) => soak::soak(a),
         Some(Command::GenAssets { out }) => gen_assets::gen_assets(out),
     };
+    // A lost device (a driver reset) makes every later GPU call fail with errors that do
+    // not say why: the loss is the error, whatever happened after it.
+    let result = match (result, gi_render::gpu::device_lost_in_process()) {
+        (r, None) => r,
+        (Ok(()), Some(why)) | (Err(_), Some(why)) => Err(CliError::failure(format!(
+            "the GPU device was lost ({why}); what this command wrote before is complete, the rest was not written. Run it again (a driver reset passes; a device lost again and again needs a driver update)"
+        ))),
+    };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

@@ -77,8 +77,17 @@ pub(super) fn render(args: &RenderArgs) -> Result<(), CliError> {
         r.buffers().get(name).map_err(|e| CliError::input(e.to_string()))?;
     }
     std::fs::create_dir_all(&args.out).map_err(|e| CliError::input(format!("--out {}: {e}", args.out.display())))?;
-    for _ in 0..args.frames {
+    // GI_LAB_TEST_LOSE_DEVICE_AT=K destroys the device before frame K, as a driver reset
+    // would (the test suite checks that the run ends with a clear error).
+    let lose_at: Option<u32> = std::env::var("GI_LAB_TEST_LOSE_DEVICE_AT").ok().and_then(|v| v.parse().ok());
+    for frame in 0..args.frames {
+        if lose_at == Some(frame) {
+            r.ctx.device.destroy();
+        }
         r.render_frame();
+        if r.ctx.lost_reason().is_some() {
+            break;
+        }
     }
     let img = r.readback("final.ldr").map_err(|e| CliError::failure(e.to_string()))?;
     let final_png = args.out.join("final.png");

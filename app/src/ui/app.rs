@@ -37,6 +37,11 @@ impl GiLabApp {
             session.camera = None;
         }
         let mut messages: Vec<String> = session_problem.into_iter().collect();
+        if let Some(why) = &args.recovered {
+            messages.push(format!(
+                "GI Lab restarted because the GPU device was lost ({why}); your session (scene, settings, camera, timeline, lights, layout) was restored"
+            ));
+        }
         let mut preset_path = session.preset_path.clone();
         let mut baseline = LabSettings::default();
         let mut settings = LabSettings::default();
@@ -165,6 +170,7 @@ impl GiLabApp {
             screenshot_requested: false,
             last_autosave: Instant::now(),
             last_saved_session: String::new(),
+            device_lost: None,
         };
         Self { tree, state }
     }
@@ -239,6 +245,56 @@ impl GiLabApp {
         }
     }
 
+    /// When the GPU device is lost (a driver reset), nothing on it can be used again, eframe's
+    /// painter included: the lab saves the session at once, says what happened, and starts
+    /// itself again with that session (a new window, device, renderer, scene upload and
+    /// textures, with the same scene, settings, camera, timeline, lights and layout); the
+    /// new window says why it restarted. Returns whether the device is lost.
+    fn handle_device_loss(&mut self, ctx: &egui::Context) -> bool {
+        if self.state.device_lost.is_some() {
+            return true;
+        }
+        let Some(why) = self.state.lab.as_ref().ok().and_then(|l| l.renderer.ctx.lost_reason()) else {
+            return false;
+        };
+        let saved = self.save_session();
+        let mut msg = format!("the GPU device was lost ({why})");
+        match &saved {
+            Ok(()) => msg += "; the session was saved",
+            Err(e) => msg += &format!("; the session could not be saved ({e})"),
+        }
+        if self.state.args.restart_on_device_loss && saved.is_ok() {
+            match self.restart(&why) {
+                Ok(()) => {
+                    msg += " and GI Lab is restarting with it";
+                    ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+                }
+                Err(e) => msg += &format!("; restarting failed ({e}): start GI Lab again to continue"),
+            }
+        }
+        log::error!("{msg}");
+        self.state.set_status(msg.clone());
+        self.state.device_lost = Some(msg);
+        true
+    }
+
+    /// Starts a new lab process on the saved session (the scene, settings and camera come
+    /// from it, not from this run's --scene, --preset or --set).
+    fn restart(&self, why: &str) -> Result<(), String> {
+        let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+        let a = &self.state.args;
+        let mut cmd = std::process::Command::new(exe);
+        if let Some(dir) = &self.state.config_dir {
+            cmd.arg("--config-dir").arg(dir);
+        }
+        cmd.arg("--presets-dir").arg(&a.presets_dir).arg("--shaders-dir").arg(&a.shaders_dir);
+        if let Some(h) = a.hot_reload {
+            cmd.arg("--hot-reload").arg(h.to_string());
+        }
+        cmd.arg("--recovered").arg(why);
+        cmd.spawn().map(|_| ()).map_err(|e| e.to_string())
+    }
+
     /// Adds a buffer viewer panel next to the first viewer (or on the right).
     pub fn add_viewer(&mut self) {
         let id = self.state.viewers.keys().max().copied().unwrap_or(0) + 1;
@@ -294,6 +350,13 @@ fn restore_scene_state(l: &mut Lab, s: &Session) {
 impl eframe::App for GiLabApp {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
+        if self.handle_device_loss(&ctx) {
+            let msg = self.state.device_lost.clone().unwrap_or_default();
+            egui::CentralPanel::default().show(ui, |ui| {
+                ui.centered_and_justified(|ui| ui.colored_label(ERROR, msg));
+            });
+            return;
+        }
         self.state.handle_dropped_files(&ctx);
         self.state.shortcuts(&ctx);
         if std::mem::take(&mut self.state.request_new_viewer) {

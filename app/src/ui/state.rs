@@ -71,6 +71,8 @@ pub struct State {
     pub(super) screenshot: Arc<Mutex<Option<Arc<egui::ColorImage>>>>,
     pub(super) screenshot_requested: bool,
     pub(super) last_autosave: Instant,
+    /// What the lab said when its GPU device was lost (it saved the session and restarts).
+    pub device_lost: Option<String>,
     pub(super) last_saved_session: String,
 }
 

@@ -266,6 +266,21 @@ impl Renderer {
         &mut self.scene
     }
 
+    /// Moves the renderer to a new device (after the old one was lost): the scene is
+    /// uploaded again with its textures and every pass is rebuilt, keeping the settings,
+    /// size, camera, clock, timing mode and interactive mode. Temporal history restarts. On
+    /// failure the renderer is unchanged.
+    pub fn move_to(&mut self, ctx: GpuContext) -> Result<(), RenderError> {
+        let mut next = Renderer::new(ctx, self.scene.clone(), self.settings.clone(), self.width, self.height)?;
+        next.camera = self.camera;
+        next.last_good_camera = self.last_good_camera;
+        next.clock = self.clock;
+        next.interactive = self.interactive;
+        next.set_timing_source(self.timing_source());
+        *self = next;
+        Ok(())
+    }
+
     /// Why the camera set last could not render (the previous good camera was used), if so.
     pub fn camera_problem(&self) -> Option<&str> {
         self.camera_problem.as_deref()
