@@ -112,7 +112,7 @@ pub fn soak(args: &SoakArgs) -> Result<(), CliError> {
         name: main_name.clone(),
         path: args.scene.scene.clone(),
         unit_scale: args.scene.unit_scale,
-        cached: Some(main_scene.clone()),
+        cached: Some(Box::new(main_scene.clone())),
     });
     if args.scene.scene.is_some() {
         scenes.push(SceneChoice::Good { name: "embedded box".into(), path: None, unit_scale: 1.0, cached: None });
@@ -140,7 +140,7 @@ pub fn soak(args: &SoakArgs) -> Result<(), CliError> {
     let mut step = 0u64;
     while step < args.frames {
         step += 1;
-        let checkpoint = step % args.check_every == 0;
+        let checkpoint = step.is_multiple_of(args.check_every);
         let errors_before = errors.lock().map(|g| g.count).unwrap_or(0);
         let result = catch_unwind(AssertUnwindSafe(|| {
             let outcome = if checkpoint {

@@ -43,7 +43,7 @@ impl Rng {
 /// A scene the walk can switch to.
 pub enum SceneChoice {
     /// A scene that must load: its file (None: the embedded box) and, once loaded, a copy.
-    Good { name: String, path: Option<PathBuf>, unit_scale: f32, cached: Option<Scene> },
+    Good { name: String, path: Option<PathBuf>, unit_scale: f32, cached: Option<Box<Scene>> },
     /// A file that must be refused with an error.
     Broken { name: String, path: PathBuf },
 }
@@ -133,7 +133,7 @@ pub fn random_value(rng: &mut Rng, meta: &FieldMeta, valid: bool) -> Value {
     if valid {
         return match meta.kind {
             FieldKind::Bool => Value::Bool(rng.chance(0.5)),
-            FieldKind::Choice(names) => Value::Choice(*rng.pick(names)),
+            FieldKind::Choice(names) => Value::Choice(names[rng.below(names.len())]),
             FieldKind::F32 => Value::F32(match rng.below(5) {
                 0 => lo as f32,
                 1 => hi as f32,
@@ -348,7 +348,7 @@ pub fn switch_scene(ctx: &GpuContext, r: &mut Renderer, choice: &mut SceneChoice
                     Some(p) => scene::load_gltf_file(p, &opts(*unit_scale)).map_err(|e| e.to_string()),
                 };
                 match loaded {
-                    Ok(s) => *cached = Some(s),
+                    Ok(s) => *cached = Some(Box::new(s)),
                     Err(e) => {
                         return Outcome {
                             action,
@@ -358,7 +358,7 @@ pub fn switch_scene(ctx: &GpuContext, r: &mut Renderer, choice: &mut SceneChoice
                     }
                 }
             }
-            let Some(scene) = cached.clone() else { return Outcome::done(action) };
+            let Some(scene) = cached.as_deref().cloned() else { return Outcome::done(action) };
             if path.as_ref().is_some_and(|p| p.ends_with("no-light.glb")) && scene.lights.is_empty() {
                 return Outcome {
                     action,

@@ -162,7 +162,7 @@ pub(crate) fn check_scene(ctx: &GpuContext, scene: &crate::scene::Scene) -> Resu
     }
     let draws = scene.evaluate(0.0).draws.len() as u64;
     let max = ctx.limits.max_buffer_size;
-    let max_storage = (ctx.limits.max_storage_buffer_binding_size as u64).min(max);
+    let max_storage = ctx.limits.max_storage_buffer_binding_size.min(max);
     let vertex = std::mem::size_of::<crate::scene::Vertex>() as u64;
     let instance = std::mem::size_of::<crate::passes::InstanceUniform>() as u64;
     for (what, bytes, max) in [
