@@ -51,8 +51,9 @@ pub struct LabSettings {
     pub sky: SkySettings,
     /// The stage choices (stages 3–7): which pass each stage runs.
     pub pipeline: PipelineSettings,
-    /// Version 1's technique, read from old presets only (see `pipeline::migrate_v1`).
-    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "crate::settings::legacy_field")]
+    /// Version 1's technique, read from old presets only (see `pipeline::migrate_v1`), never
+    /// written (it is read without `Some(..)`, so a written `Some(..)` could not be read back).
+    #[serde(skip_serializing, deserialize_with = "crate::settings::legacy_field")]
     pub indirect: Option<LegacyIndirect>,
     pub vpl: VplSettings,
     pub ism: IsmSettings,
@@ -215,26 +216,35 @@ impl LabSettings {
             };
         }
         for_each_group!(validate);
-        errors.extend(self.combination_errors());
+        let in_range = errors.iter().all(|e| e.field == "version");
+        errors.extend(self.combination_errors(in_range));
         errors
     }
 
     /// Settings that are valid one by one but not together, or not for the GPU's layouts
-    /// (DESIGN.md: combinations are refused with a reason, never by a crash).
-    fn combination_errors(&self) -> Vec<FieldError> {
+    /// (DESIGN.md: combinations are refused with a reason, never by a crash). The stage
+    /// choices' rules (`pipeline::combination_errors`) are checked when every field is in its
+    /// range (`in_range`) only: they are rules about valid values, and their arithmetic
+    /// assumes them (an `interleave.n` of 65536 overflowed n², found by the fuzzer, issue #19);
+    /// until the fields are fixed, the range errors say what is wrong.
+    fn combination_errors(&self, in_range: bool) -> Vec<FieldError> {
         let mut errors = Vec::new();
         let mut err = |field: &str, message: String| errors.push(FieldError { field: field.into(), message });
         for field in POWER_OF_TWO_FIELDS {
             let Some(Value::U32(v)) = self.get(field) else { continue };
             if !v.is_power_of_two() {
-                let (lo, hi) = (1u32 << v.ilog2(), 1u32 << (v.ilog2() + 1));
-                err(
-                    field,
-                    format!("{v} is not a power of two (the pyramid halves it down to 1 texel); use {lo} or {hi}"),
-                );
+                // The powers of two around v, in u64: 0 has none below, and above 2³¹ the next
+                // one does not fit in a u32 (found by the fuzzer, issue #19: both panicked).
+                let nearest = match v.checked_ilog2() {
+                    Some(l) => format!("use {} or {}", 1u64 << l, 2u64 << l),
+                    None => "use 1 or a larger power of two".to_string(),
+                };
+                err(field, format!("{v} is not a power of two (the pyramid halves it down to 1 texel); {nearest}"));
             }
         }
-        errors.extend(crate::pipeline::combination_errors(self));
+        if in_range {
+            errors.extend(crate::pipeline::combination_errors(self));
+        }
         errors.extend(crate::pipeline::legacy_field_errors(self));
         errors
     }
@@ -388,6 +398,66 @@ mod tests {
         assert!(s.apply_override("direct.nope=1").is_err());
         assert!(s.apply_override("garbage").is_err());
         assert_eq!(s.get("direct.pcf_radius"), Some(Value::U32(3)));
+    }
+
+    /// Found by the fuzzer (issue #19): `validate` took the logarithm of a power-of-two field
+    /// before its range was checked, and panicked on 0 (and overflowed past 2³¹).
+    #[test]
+    fn power_of_two_check_takes_any_value() {
+        for v in [0, 3, 3_000_000_000, u32::MAX] {
+            let mut s = LabSettings::default();
+            s.vpl.light_gbuffer_size = v;
+            s.ism.map_size = v;
+            let errors = s.validate();
+            for field in POWER_OF_TWO_FIELDS {
+                assert!(
+                    errors.iter().any(|e| e.field == *field && e.message.contains("power of two")),
+                    "{v}: {errors:?}"
+                );
+            }
+        }
+        let mut s = LabSettings::default();
+        s.vpl.light_gbuffer_size = 3_000_000_000;
+        let e = s.validate().into_iter().find(|e| e.message.contains("power of two")).expect("power-of-two error");
+        assert!(e.message.contains("2147483648 or 4294967296"), "{}", e.message);
+        let e = LabSettings::from_ron("(vpl: (light_gbuffer_size: 0))", "t").expect_err("0 is refused").to_string();
+        assert!(e.contains("vpl.light_gbuffer_size"), "{e}");
+    }
+
+    /// Found by the fuzzer (issue #19, in a debug build): `interleave.n` = 65536 with
+    /// interleaved tiles overflowed n² in the stage choices' rules. They run on in-range
+    /// values only; the range error names the field.
+    #[test]
+    fn combination_rules_wait_for_valid_fields() {
+        let mut s = LabSettings::default();
+        crate::pipeline::Technique::Knecht.apply(&mut s);
+        assert_eq!(s.pipeline.shading_points, crate::pipeline::ShadingPoints::InterleavedTiles);
+        s.vpl.count = 4;
+        let fields = |s: &LabSettings| s.validate().into_iter().map(|e| e.field).collect::<Vec<_>>();
+        assert!(fields(&s).contains(&"vpl.count".to_string()), "4 VPLs for 4×4 tiles: {:?}", s.validate());
+        s.interleave.n = 65536;
+        assert_eq!(fields(&s), ["interleave.n"]);
+        let text = s.to_ron();
+        let err = LabSettings::from_ron(&text, "t").expect_err("out of range").to_string();
+        assert!(err.contains("interleave.n") && !err.contains("vpl.count"), "{err}");
+    }
+
+    /// Found by the fuzzer (issue #19): a preset newer than version 2 keeps its version-1
+    /// fields (no migration), and `to_ron` wrote them as `Some(..)`, which the reader (legacy
+    /// fields are read without `Some`) refused. They are never written now.
+    #[test]
+    fn legacy_fields_are_never_written() {
+        let text = "(version: 4294967295, indirect: (technique: Hcb), ism: (visibility: Exact), \
+                    reference: (visibility: false), interleave: (filter: false), temporal: (enabled: false), \
+                    hcb: (cache: true))";
+        let s: LabSettings = ron::from_str(text).expect("the raw preset parses");
+        let s = s.migrate();
+        assert!(s.indirect.is_some() && s.hcb.cache == Some(true), "a newer version is not migrated");
+        let written = s.to_ron();
+        assert!(!written.contains("technique") && !written.contains("Some("), "{written}");
+        let back: LabSettings = ron::from_str(&written).expect("to_ron's output parses again");
+        assert_eq!(back.version, s.version);
+        assert!(back.indirect.is_none() && back.hcb.cache.is_none());
     }
 
     #[test]

@@ -290,7 +290,7 @@ macro_rules! settings_group {
             $( $(#[doc = $doc])+ pub $field: $ty, )+
             $($(
                 $(#[doc = $ldoc])+
-                #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "crate::settings::legacy_field")]
+                #[serde(skip_serializing, deserialize_with = "crate::settings::legacy_field")]
                 pub $lfield: Option<$lty>,
             )+)?
         }
