@@ -140,7 +140,7 @@ impl Loader<'_> {
     /// compressed view, its decoded bytes.
     pub(super) fn view_bytes(&self, view: usize) -> Result<&[u8], String> {
         if let Some(decoded) = self.decoded_views.get(&view) {
-            return Ok(decoded);
+            return Ok(decoded.bytes());
         }
         let v = self.root.buffer_views.get(view).ok_or_else(|| format!("buffer view {view} does not exist"))?;
         let b = v.buffer.value();

@@ -6,7 +6,8 @@
 //! A compressed view keeps its glTF meaning (the parent view's `buffer`, `byteOffset` and
 //! `byteLength` describe the *decoded* bytes, usually in a "fallback" buffer with no data);
 //! its extension names where the encoded bytes are and how to decode them. Every view is
-//! decoded once, after the buffers are loaded, and [`Loader::view_bytes`] serves the decoded
+//! decoded once, after the buffers are loaded (a stream too short for its declared `count` is
+//! refused before the destination is allocated), and [`Loader::view_bytes`] serves the decoded
 //! bytes from then on, so accessors, sparse data and images read compressed views through the
 //! same range checks as plain ones.
 
@@ -135,9 +136,46 @@ fn parse(view: usize, extension: &'static str, ext: &Value) -> Result<Compressed
     Ok(Compressed { extension, buffer, offset, length, stride, count, mode, filter })
 }
 
-/// Decodes `c` from `encoded` into `count × stride` bytes. The destination is a `u32`
-/// vector so that the filters may read it as 16-bit and 32-bit components.
-fn decode(view: usize, c: &Compressed, encoded: &[u8]) -> Result<Vec<u8>, String> {
+/// The decoded bytes of a compressed view, kept in the `u32` words they were decoded into
+/// (the filters read the destination as 16- and 32-bit components), so that serving them
+/// as bytes needs no second copy of a possibly large buffer.
+#[derive(Debug)]
+pub(super) struct Decoded {
+    words: Vec<u32>,
+    len: usize,
+}
+
+impl Decoded {
+    /// The decoded bytes, in the order the decoder wrote them.
+    pub(super) fn bytes(&self) -> &[u8] {
+        let bytes: &[u8] = bytemuck::cast_slice(&self.words);
+        bytes.get(..self.len).unwrap_or(bytes)
+    }
+}
+
+/// The fewest encoded bytes that can hold `c.count` elements: meshoptimizer's decoders refuse
+/// anything shorter, so checking it first refuses a tiny stream that declares a huge `count`
+/// before the destination is allocated. Index codec: a header byte, a byte per triangle (or
+/// per index) and the 16-byte (or 4-byte) tail. Vertex codec: a header byte, per block of up to
+/// 256 vertices at least a control byte per 4 bytes of a vertex (format version 1; version 0
+/// needs more), and a tail of at least max(byteStride, 24) bytes.
+fn min_encoded_len(c: &Compressed) -> usize {
+    match c.mode {
+        Mode::Triangles => 1 + c.count / 3 + 16,
+        Mode::Indices => c.count.saturating_add(5),
+        Mode::Attributes => min_vertex_stream_len(c.count, c.stride),
+    }
+}
+
+/// [`min_encoded_len`] of the vertex codec: `count` vertices of `stride` bytes (a multiple of
+/// 4 up to 256) in blocks of `(8192 / stride)` rounded down to 16, at most 256, vertices.
+pub(super) fn min_vertex_stream_len(count: usize, stride: usize) -> usize {
+    let block = ((8192 / stride.max(1)) & !15).clamp(16, 256);
+    count.div_ceil(block).saturating_mul(stride / 4).saturating_add(1 + stride.max(24))
+}
+
+/// Decodes `c` from `encoded` into `count × stride` bytes.
+fn decode(view: usize, c: &Compressed, encoded: &[u8]) -> Result<Decoded, String> {
     let size = c.count.checked_mul(c.stride).filter(|&s| s <= MAX_DECODED_BYTES).ok_or_else(|| {
         format!(
             "buffer view {view}: {} decodes to {} × {} bytes, more than the {} MiB GI Lab accepts per file",
@@ -147,6 +185,18 @@ fn decode(view: usize, c: &Compressed, encoded: &[u8]) -> Result<Vec<u8>, String
             MAX_DECODED_BYTES >> 20
         )
     })?;
+    let needed = min_encoded_len(c);
+    if encoded.len() < needed {
+        return Err(format!(
+            "buffer view {view}: the {} data ({} bytes, mode {:?}) is malformed: {} elements of {} bytes need at \
+             least {needed} encoded bytes (the data is truncated or the count is wrong)",
+            c.extension,
+            encoded.len(),
+            c.mode,
+            c.count,
+            c.stride
+        ));
+    }
     let mut words = vec![0u32; size.div_ceil(4)];
     let dst = words.as_mut_ptr().cast::<std::ffi::c_void>();
     // SAFETY: `words` holds at least count × stride bytes (checked above), which is what
@@ -184,9 +234,7 @@ fn decode(view: usize, c: &Compressed, encoded: &[u8]) -> Result<Vec<u8>, String
             Filter::Color => meshopt::ffi::meshopt_decodeFilterColor(dst, c.count, c.stride),
         }
     }
-    let mut bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
-    bytes.truncate(size);
-    Ok(bytes)
+    Ok(Decoded { words, len: size })
 }
 
 impl Loader<'_> {
@@ -215,7 +263,7 @@ impl Loader<'_> {
                     ))
                 })?;
             let decoded = decode(i, &c, encoded).map_err(invalid)?;
-            total = total.saturating_add(decoded.len());
+            total = total.saturating_add(decoded.len);
             if total > MAX_DECODED_BYTES {
                 return Err(invalid(format!(
                     "the compressed buffer views decode to more than the {} MiB GI Lab accepts per file",

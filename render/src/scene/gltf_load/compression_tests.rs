@@ -5,7 +5,7 @@
 use base64::Engine as _;
 use serde_json::{Value, json};
 
-use super::compression::MAX_DECODED_BYTES;
+use super::compression::{MAX_DECODED_BYTES, min_vertex_stream_len};
 use super::{LoadOptions, SceneError, load_gltf_bytes};
 
 const POSITIONS: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
@@ -162,6 +162,67 @@ fn compressed_view_fields_are_checked() {
         edit(&mut doc);
         let e = error(&doc);
         assert!(e.contains(expected), "{what}: {e}");
+    }
+}
+
+/// Found by the fuzzer (issue #19): a 37-byte vertex stream declaring 2²⁶ vertices of 12
+/// bytes (768 MiB, under the per-file limit) made the loader allocate the whole destination
+/// before the decoder refused the stream. Streams too short for their count are now refused
+/// first, for the vertex codec and both index codecs.
+#[test]
+fn counts_the_encoded_data_cannot_hold_are_refused_before_decoding() {
+    let cases: [(&str, Edit); 3] = [
+        ("2^26 vertices", |d| ext(d, 0)["count"] = json!(1u64 << 26)),
+        ("2^25 triangles", |d| ext(d, 1)["count"] = json!(3u64 << 25)),
+        ("2^27 indices", |d| {
+            ext(d, 1)["mode"] = json!("INDICES");
+            ext(d, 1)["count"] = json!(1u64 << 27);
+        }),
+    ];
+    for (what, edit) in cases {
+        let mut doc = triangle();
+        edit(&mut doc);
+        let e = error(&doc);
+        assert!(e.contains("malformed") && e.contains("need at least"), "{what}: {e}");
+    }
+}
+
+/// The lower bound of the vertex stream's length holds for what meshoptimizer's encoder
+/// writes, in both format versions, for the most and the least compressible data.
+#[test]
+fn the_vertex_stream_bound_never_refuses_real_streams() {
+    let mut state = 0x9e37_79b9_u32;
+    for stride in [4, 8, 12, 16, 20, 32, 64, 128, 252, 256] {
+        for count in [0, 1, 15, 16, 17, 255, 256, 257, 511, 2000] {
+            let zeros = vec![0u8; count * stride];
+            let noise: Vec<u8> = (0..count * stride)
+                .map(|_| {
+                    state ^= state << 13;
+                    state ^= state >> 17;
+                    state ^= state << 5;
+                    state as u8
+                })
+                .collect();
+            for (data, version) in [(&zeros, 0), (&zeros, 1), (&noise, 0), (&noise, 1)] {
+                // SAFETY: the output buffer has the encoder's own worst-case size, and `data`
+                // holds count × stride bytes.
+                let len = unsafe {
+                    let mut out = vec![0u8; meshopt::ffi::meshopt_encodeVertexBufferBound(count, stride)];
+                    meshopt::ffi::meshopt_encodeVertexBufferLevel(
+                        out.as_mut_ptr(),
+                        out.len(),
+                        data.as_ptr().cast(),
+                        count,
+                        stride,
+                        3,
+                        version,
+                    )
+                };
+                assert!(len > 0, "encoding failed");
+                let min = min_vertex_stream_len(count, stride);
+                assert!(len >= min, "stride {stride}, count {count}, version {version}: {len} < {min}");
+            }
+        }
     }
 }
 

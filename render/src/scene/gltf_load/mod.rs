@@ -236,7 +236,7 @@ struct Loader<'a> {
     base_dir: Option<&'a Path>,
     buffers: Vec<Vec<u8>>,
     /// Decoded bytes of the compressed buffer views (`compression.rs`), by view index.
-    decoded_views: HashMap<usize, Vec<u8>>,
+    decoded_views: HashMap<usize, compression::Decoded>,
     scene: Scene,
     /// glTF material (None: the default material) → index into `scene.materials`.
     material_map: HashMap<Option<usize>, usize>,
