@@ -37,7 +37,10 @@ impl TextureImage {
         if !uv.is_finite() {
             return Vec3::ZERO;
         }
-        let p = uv * Vec2::new(self.width as f32, self.height as f32) - 0.5;
+        // Wrapped into [0, 1] first: the texel index of a huge `uv` (a KHR_texture_transform
+        // offset of 2⁶³, found by the fuzzer, issue #19) overflowed `x + 1`, and `uv · size`
+        // can overflow f32. The f32 remainder is exact, so the wrap is the same.
+        let p = uv.rem_euclid(Vec2::ONE) * Vec2::new(self.width as f32, self.height as f32) - 0.5;
         let f = p.floor();
         let (x, y, t) = (f.x as i64, f.y as i64, p - f);
         let top = self.texel(x, y).lerp(self.texel(x + 1, y), t.x);
@@ -95,6 +98,13 @@ mod tests {
         // Repeat wrap across the left edge blends the last texel back in.
         assert!((t.sample_linear(Vec2::new(0.0, 0.5)).x - 0.5).abs() < 1e-6);
         assert_eq!(t.sample_linear(Vec2::NAN), Vec3::ZERO);
+        // Coordinates far outside the texture wrap like any other (the texel index of 2⁶³
+        // overflowed, found by the fuzzer, issue #19).
+        for far in [Vec2::new(0.25, 9.223_372e18), Vec2::new(-1e30, 0.5), Vec2::splat(f32::MAX)] {
+            let v = t.sample_linear(far);
+            assert!(v.is_finite() && v.max_element() <= 1.0, "{far}: {v}");
+        }
+        assert_eq!(t.sample_linear(Vec2::new(0.25 + 4096.0, 0.5)), Vec3::ZERO, "a whole number of periods away");
         let broken = TextureImage { name: "short".into(), width: 4, height: 4, rgba8: vec![255; 8].into() };
         assert_eq!(broken.sample_linear(Vec2::new(0.6, 0.6)), Vec3::ZERO, "a short image reads black");
     }
