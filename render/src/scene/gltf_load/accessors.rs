@@ -6,9 +6,10 @@ use json::validation::Checked;
 use super::container::{decode_data_uri, is_data_uri};
 use super::{Loader, SceneError, json};
 
-/// Upper bound on the elements of an accessor that has no buffer view (all zeros, §3.6.2.3),
-/// so that a hostile `count` cannot make the loader allocate without limit.
-const MAX_ZERO_ACCESSOR_ELEMENTS: usize = 1 << 22;
+/// Upper bound on the elements of the accessors that have no buffer view (all zeros,
+/// §3.6.2.3), each and all of one file together, so that a hostile `count` cannot make the
+/// loader allocate without limit.
+pub(super) const MAX_ZERO_ACCESSOR_ELEMENTS: usize = 1 << 22;
 
 // ---------------------------------------------------------------------------------------
 // Accessor data (§3.6.2)
@@ -245,10 +246,27 @@ impl Loader<'_> {
             what: what.to_string(),
             reason,
         };
+        // Checked after the data is located (a count past its data is reported as such) and
+        // before anything is allocated: every read of the file counts (see `Budget`).
+        let spend = |loader: &Self| -> Result<(), SceneError> {
+            if super::spend(&loader.budget.values, count.saturating_mul(n)) {
+                return Ok(());
+            }
+            Err(SceneError::Unsupported {
+                file: loader.file.to_string(),
+                message: format!(
+                    "accessor {index} ({what}) has {count} elements: reading it would take the file past the {} \
+                     accessor values GI Lab reads per file (an accessor is read again by every primitive that \
+                     uses it)",
+                    super::MAX_VALUES_PER_FILE
+                ),
+            })
+        };
         let mut out = match acc.buffer_view {
             Some(view) => {
                 let offset = to_usize(acc.byte_offset.map_or(0, |o| o.0));
                 let el = self.locate(index, what, view.value(), offset, count, component, n, acc.normalized, false)?;
+                spend(self)?;
                 let mut out = Vec::with_capacity(count * n); // bounded: the elements were found in the buffer
                 for i in 0..count {
                     for c in 0..n {
@@ -264,6 +282,14 @@ impl Loader<'_> {
                         if acc.sparse.is_none() { "no sparse data".to_string() } else { format!("{count} elements") }
                     )));
                 }
+                if !super::spend(&self.budget.zeros, count) {
+                    return Err(out_of_range(format!(
+                        "it has no buffer view and {count} elements, which would take the file past the \
+                         {MAX_ZERO_ACCESSOR_ELEMENTS} elements of zero-filled accessors GI Lab makes per file (an \
+                         accessor is read again by every primitive that uses it)"
+                    )));
+                }
+                spend(self)?;
                 vec![T::default(); count * n]
             }
         };

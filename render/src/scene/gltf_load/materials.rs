@@ -112,13 +112,12 @@ impl Loader<'_> {
                 (None, Some(uri)) => self.read_external(uri, &format!("image {image}"), |r| missing(uri, r))?,
                 (None, None) => return Err(self.invalid(format!("image {image} has neither a uri nor a bufferView"))),
             };
-        let decoded = image::load_from_memory(&encoded).map_err(|e| SceneError::Image {
+        let rgba = decode_image(&encoded).map_err(|reason| SceneError::Image {
             file: self.file.to_string(),
             image,
             name: name.clone(),
-            reason: e.to_string(),
+            reason,
         })?;
-        let rgba = decoded.to_rgba8();
         self.scene.textures.push(TextureImage {
             name,
             width: rgba.width(),
@@ -129,6 +128,31 @@ impl Loader<'_> {
         self.image_map.insert(image, id);
         Ok(Some(id))
     }
+}
+
+/// The most pixels the loader decodes per image: 8192 × 8192 (64 megapixels, 256 MiB as
+/// RGBA8). An image's header states its size, so without a limit a kilobyte-sized JPEG that
+/// declares 12800 × 12800 pixels made the loader allocate and fill 1.7 GB (found with the
+/// fuzzer's texture seeds, issue #19).
+pub(super) const MAX_IMAGE_PIXELS: u64 = 8192 * 8192;
+
+/// Decodes an embedded or external image to RGBA8, after checking the size its header
+/// declares against [`MAX_IMAGE_PIXELS`]; the format is sniffed from the data.
+fn decode_image(encoded: &[u8]) -> Result<image::RgbaImage, String> {
+    let reader =
+        || image::ImageReader::new(std::io::Cursor::new(encoded)).with_guessed_format().map_err(|e| e.to_string());
+    let (w, h) = reader()?.into_dimensions().map_err(|e| e.to_string())?;
+    let pixels = u64::from(w) * u64::from(h);
+    if pixels > MAX_IMAGE_PIXELS {
+        return Err(format!(
+            "its header declares {w} × {h} pixels ({} MiB as RGBA8), more than the 8192 × 8192 pixels \
+             ({} MiB) GI Lab loads per image; downscale it",
+            (pixels * 4) >> 20,
+            (MAX_IMAGE_PIXELS * 4) >> 20
+        ));
+    }
+    // `into_rgba8` keeps an RGBA8 image's buffer instead of copying it.
+    Ok(reader()?.decode().map_err(|e| e.to_string())?.into_rgba8())
 }
 
 /// The texture coordinates a texture reference reads: its set and KHR_texture_transform.

@@ -111,6 +111,21 @@ impl Loader<'_> {
                 (0..count).collect()
             }
         };
+        // The vertices this primitive builds, its own (normals given) or three per triangle,
+        // charged before the strip or fan becomes a list (three indices per triangle).
+        let list_len = match mode {
+            Mode::TriangleStrip | Mode::TriangleFan => raw_indices.len().saturating_sub(2).saturating_mul(3),
+            _ => raw_indices.len() - raw_indices.len() % 3,
+        };
+        let built = if normals.is_some() { n } else { list_len };
+        self.budget.vertices = self.budget.vertices.checked_sub(built).ok_or_else(|| SceneError::Unsupported {
+            file: self.file.to_string(),
+            message: format!(
+                "mesh '{mesh}' primitive {p} builds {built} vertices, which would take the scene past the {} vertices \
+                 GI Lab loads per file",
+                super::MAX_VERTICES_PER_FILE
+            ),
+        })?;
         let indices = match mode {
             Mode::TriangleStrip => strip_to_list(&raw_indices),
             Mode::TriangleFan => fan_to_list(&raw_indices),

@@ -248,6 +248,51 @@ struct Loader<'a> {
     light_map: HashMap<usize, usize>,
     camera_map: HashMap<usize, Option<usize>>,
     skipped: Vec<Skipped>,
+    /// What the file may still make the loader allocate (`accessors.rs`, `meshes.rs`).
+    budget: Budget,
+}
+
+/// Per-file limits on what declared counts can make the loader allocate. A count is checked
+/// against the data that holds it, but data can be read many times (every primitive that
+/// uses an accessor reads it again, strips and fans triple their indices) or not exist at all
+/// (an accessor without buffer view is zeros), so a small file could otherwise ask for any
+/// amount of memory (issue #19: a 730-byte file with four primitives on one zero-filled
+/// accessor of 2²² vertices took 1.3 GB). Real scenes stay far below: the Amazon Lumberyard
+/// Bistro (2.8 M triangles) reads about 24 M values.
+#[derive(Debug)]
+struct Budget {
+    /// Accessor values (elements × components) still to be read.
+    values: std::cell::Cell<usize>,
+    /// Elements of accessors without buffer view (zeros) still to be made.
+    zeros: std::cell::Cell<usize>,
+    /// Vertices still to be built.
+    vertices: usize,
+}
+
+/// Accessor values one file may read: 2²⁶ (256 MiB as f32).
+const MAX_VALUES_PER_FILE: usize = 1 << 26;
+/// Vertices one file may build: 2²⁴ (512 MiB of vertices).
+const MAX_VERTICES_PER_FILE: usize = 1 << 24;
+
+impl Default for Budget {
+    fn default() -> Self {
+        Self {
+            values: std::cell::Cell::new(MAX_VALUES_PER_FILE),
+            zeros: std::cell::Cell::new(accessors::MAX_ZERO_ACCESSOR_ELEMENTS),
+            vertices: MAX_VERTICES_PER_FILE,
+        }
+    }
+}
+
+/// Takes `n` from `left`; false (and nothing taken) when fewer are left.
+fn spend(left: &std::cell::Cell<usize>, n: usize) -> bool {
+    match left.get().checked_sub(n) {
+        Some(rest) => {
+            left.set(rest);
+            true
+        }
+        None => false,
+    }
 }
 
 impl<'a> Loader<'a> {
@@ -266,6 +311,7 @@ impl<'a> Loader<'a> {
             light_map: HashMap::new(),
             camera_map: HashMap::new(),
             skipped: Vec::new(),
+            budget: Budget::default(),
         }
     }
 

@@ -276,6 +276,93 @@ fn embedded_png_texture_is_decoded() {
     assert!(matches!(err, SceneError::Image { image: 0, .. }), "{err}");
 }
 
+/// Found with the fuzzer's texture seeds (issue #19): a JPEG of 8 × 4 pixels whose header
+/// says 12800 × 12800 loaded (as a grey image) after allocating 1.7 GB. Images are checked
+/// against `MAX_IMAGE_PIXELS` before they are decoded.
+#[test]
+fn images_larger_than_the_limit_are_refused_before_decoding() {
+    let mut jpeg = Vec::new();
+    image::RgbImage::from_pixel(8, 4, image::Rgb([200, 100, 50]))
+        .write_to(&mut std::io::Cursor::new(&mut jpeg), image::ImageFormat::Jpeg)
+        .expect("encode jpeg");
+    let with_jpeg = |jpeg: &[u8]| {
+        let uri = format!("data:image/jpeg;base64,{}", base64::engine::general_purpose::STANDARD.encode(jpeg));
+        let json = triangle_gltf(&data_uri(&triangle_bin([0, 1, 2]))).replacen(
+            r#""indices":1,"#,
+            r#""indices":1,"material":0,"#,
+            1,
+        );
+        let json = json.trim_end().strip_suffix('}').expect("object").to_string();
+        format!(
+            r#"{json},"materials":[{{"pbrMetallicRoughness":{{"baseColorTexture":{{"index":0}}}}}}],
+                "textures":[{{"source":0}}],"images":[{{"uri":"{uri}"}}]}}"#
+        )
+    };
+    let scene = load_str(&with_jpeg(&jpeg)).expect("the real JPEG loads");
+    assert_eq!((scene.textures[0].width, scene.textures[0].height), (8, 4));
+    // The baseline frame header (SOF0): marker, length, precision, height, width (big-endian).
+    let sof = jpeg.windows(2).position(|w| w == [0xFF, 0xC0]).expect("SOF0");
+    for (h, w) in [(12800u16, 12800u16), (65535, 65535), (8193, 8192)] {
+        let mut big = jpeg.clone();
+        big[sof + 5..sof + 7].copy_from_slice(&h.to_be_bytes());
+        big[sof + 7..sof + 9].copy_from_slice(&w.to_be_bytes());
+        let err = load_str(&with_jpeg(&big)).unwrap_err();
+        assert!(matches!(err, SceneError::Image { image: 0, .. }), "{err}");
+        assert!(err.to_string().contains(&format!("{w} × {h} pixels")) && err.to_string().contains("8192"), "{err}");
+    }
+    assert_eq!(super::materials::MAX_IMAGE_PIXELS, 8192 * 8192);
+}
+
+/// Found while fuzzing (issue #19): counts are checked against the data that holds them, but
+/// data can be read again by every primitive, or not exist (zero-filled accessors): a
+/// 730-byte file with four primitives on one zero-filled accessor of 2²² vertices took
+/// 1.3 GB. Each file has a budget of zeros, accessor values and vertices.
+#[test]
+fn per_file_budgets_bound_what_declared_counts_allocate() {
+    let tri = data_uri(&triangle_bin([0, 1, 2]));
+    let zero_filled = |primitives: usize| {
+        let prims = vec![r#"{"attributes":{"POSITION":0},"indices":1}"#; primitives].join(",");
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"nodes":[{{"mesh":0}}],"meshes":[{{"primitives":[{prims}]}}],
+                "buffers":[{{"uri":"{tri}","byteLength":44}}],
+                "bufferViews":[{{"buffer":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":6}}],
+                "accessors":[{{"componentType":5126,"count":{},"type":"VEC3",
+                               "sparse":{{"count":1,"indices":{{"bufferView":1,"componentType":5123}},"values":{{"bufferView":0}}}}}},
+                             {{"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR"}}]}}"#,
+            super::accessors::MAX_ZERO_ACCESSOR_ELEMENTS / 2
+        )
+    };
+    assert_eq!(load_str(&zero_filled(2)).expect("two halves of the zeros budget").triangle_count(), 2);
+    let err = load_str(&zero_filled(3)).unwrap_err();
+    assert!(matches!(err, SceneError::AccessorOutOfRange { accessor: 0, .. }), "{err}");
+    assert!(err.to_string().contains("zero-filled accessors GI Lab makes per file"), "{err}");
+
+    // The values and vertices budgets, made small on a loader of two one-triangle primitives.
+    let json = triangle_gltf(&tri).replacen(
+        r#""primitives":[{"attributes":{"POSITION":0},"indices":1,"mode":4}]"#,
+        r#""primitives":[{"attributes":{"POSITION":0},"indices":1},{"attributes":{"POSITION":0},"indices":1}]"#,
+        1,
+    );
+    let root: json::Root = json::deserialize::from_slice(json.as_bytes()).expect("JSON");
+    let load_mesh = |budget: Budget| {
+        let mut loader = Loader::new("budget test", &root, None);
+        loader.budget = budget;
+        loader.load_buffers(None)?;
+        loader.mesh(0)
+    };
+    assert!(load_mesh(Budget::default()).is_ok());
+    // Each primitive reads 9 position and 3 index values, and builds 3 vertices.
+    let values = Budget { values: std::cell::Cell::new(20), ..Budget::default() };
+    let err = load_mesh(values).unwrap_err();
+    assert!(matches!(&err, SceneError::Unsupported { message, .. } if message.contains("accessor values")), "{err}");
+    let vertices = Budget { vertices: 5, ..Budget::default() };
+    let err = load_mesh(vertices).unwrap_err();
+    assert!(
+        matches!(&err, SceneError::Unsupported { message, .. } if message.contains("primitive 1 builds 3 vertices")),
+        "{err}"
+    );
+}
+
 #[test]
 fn emissive_textures_are_loaded_with_the_base_colours_uvs() {
     let mut png = Vec::new();
