@@ -211,6 +211,17 @@ pub fn gltf_cases() -> Vec<Seed> {
         );
         s.push(Seed::new(format!("texture-{name}.gltf"), textured(&uri)));
     }
+    // A JPEG whose frame header declares 12800 × 12800 pixels (its data holds 8 × 4).
+    let mut jpeg = tiny_image(image::ImageFormat::Jpeg);
+    if let Some(sof) = jpeg.windows(2).position(|w| w == [0xFF, 0xC0]) {
+        for k in [5, 7] {
+            if let Some(dim) = jpeg.get_mut(sof + k..sof + k + 2) {
+                dim.copy_from_slice(&12800u16.to_be_bytes());
+            }
+        }
+    }
+    let uri = format!("data:image/jpeg;base64,{}", base64::engine::general_purpose::STANDARD.encode(jpeg));
+    s.push(Seed::new("texture-jpeg-declaring-12800x12800.gltf", textured(&uri)));
     s.push(Seed::new("meshopt.gltf", meshopt_triangle().to_string()));
     s.push(Seed::new("meshopt-khr.gltf", meshopt_triangle().to_string().replace("EXT_meshopt", "KHR_meshopt")));
     s.push(Seed::new("quantized.gltf", quantized().to_string()));

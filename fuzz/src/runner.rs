@@ -279,6 +279,8 @@ pub fn run(cfg: &Config) -> Summary {
     install_quiet_panic_hook();
     let target = cfg.target;
     let mut seeds = target.seeds(cfg.large_seeds);
+    // The inputs of past crashes are seeds too: mutations around them look for their relatives.
+    seeds.extend(corpus_dir_seeds(&crate::seeds::project_root().join("fuzz/regressions").join(target.name())));
     if let Some(dir) = &cfg.corpus_dir {
         seeds.extend(corpus_dir_seeds(dir));
     }
