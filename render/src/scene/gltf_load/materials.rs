@@ -112,18 +112,13 @@ impl Loader<'_> {
                 (None, Some(uri)) => self.read_external(uri, &format!("image {image}"), |r| missing(uri, r))?,
                 (None, None) => return Err(self.invalid(format!("image {image} has neither a uri nor a bufferView"))),
             };
-        let rgba = decode_image(&encoded).map_err(|reason| SceneError::Image {
+        let (width, height, rgba8) = decode_image(&encoded).map_err(|reason| SceneError::Image {
             file: self.file.to_string(),
             image,
             name: name.clone(),
             reason,
         })?;
-        self.scene.textures.push(TextureImage {
-            name,
-            width: rgba.width(),
-            height: rgba.height(),
-            rgba8: rgba.into_raw().into(),
-        });
+        self.scene.textures.push(TextureImage { name, width, height, rgba8 });
         let id = self.scene.textures.len() - 1;
         self.image_map.insert(image, id);
         Ok(Some(id))
@@ -136,23 +131,52 @@ impl Loader<'_> {
 /// fuzzer's texture seeds, issue #19).
 pub(super) const MAX_IMAGE_PIXELS: u64 = 8192 * 8192;
 
-/// Decodes an embedded or external image to RGBA8, after checking the size its header
-/// declares against [`MAX_IMAGE_PIXELS`]; the format is sniffed from the data.
-fn decode_image(encoded: &[u8]) -> Result<image::RgbaImage, String> {
+/// The most bytes the decoder may produce for one image, in its own format (256 MiB): an
+/// OpenEXR image of 8 × 5,373,956 pixels (within [`MAX_IMAGE_PIXELS`]) decodes to 12-byte
+/// float pixels, 516 MB (found by the fuzzer, issue #19).
+pub(super) const MAX_DECODED_IMAGE_BYTES: u64 = 256 << 20;
+
+/// Decodes an embedded or external image to RGBA8 (width, height, pixels), after checking
+/// the size its header declares against [`MAX_IMAGE_PIXELS`] and [`MAX_DECODED_IMAGE_BYTES`];
+/// the format is sniffed from the data. The RGBA8 pixels are written straight into the
+/// texture's shared buffer (no intermediate RGBA image to copy).
+fn decode_image(encoded: &[u8]) -> Result<(u32, u32, std::sync::Arc<[u8]>), String> {
+    use image::{DynamicImage, GenericImageView as _, ImageDecoder as _};
     let reader =
-        || image::ImageReader::new(std::io::Cursor::new(encoded)).with_guessed_format().map_err(|e| e.to_string());
-    let (w, h) = reader()?.into_dimensions().map_err(|e| e.to_string())?;
+        image::ImageReader::new(std::io::Cursor::new(encoded)).with_guessed_format().map_err(|e| e.to_string())?;
+    let decoder = reader.into_decoder().map_err(|e| e.to_string())?;
+    let (w, h) = decoder.dimensions();
     let pixels = u64::from(w) * u64::from(h);
-    if pixels > MAX_IMAGE_PIXELS {
+    let decoded = decoder.total_bytes();
+    if pixels > MAX_IMAGE_PIXELS || decoded > MAX_DECODED_IMAGE_BYTES {
         return Err(format!(
-            "its header declares {w} × {h} pixels ({} MiB as RGBA8), more than the 8192 × 8192 pixels \
-             ({} MiB) GI Lab loads per image; downscale it",
-            (pixels * 4) >> 20,
-            (MAX_IMAGE_PIXELS * 4) >> 20
+            "its header declares {w} × {h} pixels ({} MiB decoded), more than the 8192 × 8192 pixels and {} MiB \
+             GI Lab loads per image; downscale it",
+            decoded >> 20,
+            MAX_DECODED_IMAGE_BYTES >> 20
         ));
     }
-    // `into_rgba8` keeps an RGBA8 image's buffer instead of copying it.
-    Ok(reader()?.decode().map_err(|e| e.to_string())?.into_rgba8())
+    let img = DynamicImage::from_decoder(decoder).map_err(|e| e.to_string())?;
+    let len = usize::try_from(pixels * 4).map_err(|_| "the image is too large for this machine".to_string())?;
+    // One allocation of the final size (`repeat_n` has an exact length), then filled.
+    let mut rgba8: std::sync::Arc<[u8]> = std::iter::repeat_n(0u8, len).collect();
+    let out = std::sync::Arc::get_mut(&mut rgba8).ok_or("the texture buffer is shared")?;
+    match &img {
+        DynamicImage::ImageRgba8(src) => out.copy_from_slice(src.as_raw()),
+        DynamicImage::ImageRgb8(src) => {
+            for (o, i) in out.chunks_exact_mut(4).zip(src.as_raw().chunks_exact(3)) {
+                o[..3].copy_from_slice(i);
+                o[3] = 255;
+            }
+        }
+        // Other formats (grey, 16-bit, float) through the same per-pixel conversion as `to_rgba8`.
+        other => {
+            for (o, (_, _, p)) in out.chunks_exact_mut(4).zip(other.pixels()) {
+                o.copy_from_slice(&p.0);
+            }
+        }
+    }
+    Ok((w, h, rgba8))
 }
 
 /// The texture coordinates a texture reference reads: its set and KHR_texture_transform.

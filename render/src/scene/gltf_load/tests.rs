@@ -311,6 +311,28 @@ fn images_larger_than_the_limit_are_refused_before_decoding() {
         assert!(err.to_string().contains(&format!("{w} × {h} pixels")) && err.to_string().contains("8192"), "{err}");
     }
     assert_eq!(super::materials::MAX_IMAGE_PIXELS, 8192 * 8192);
+
+    // Found by the fuzzer: an OpenEXR image whose display window says 8 × 5,373,956 pixels
+    // (within the pixel limit) decodes to 12-byte float pixels, 516 MB. The decoded size
+    // is checked too.
+    let mut exr = Vec::new();
+    image::DynamicImage::ImageRgb32F(image::Rgb32FImage::from_pixel(8, 4, image::Rgb([0.5, 1.0, 0.25])))
+        .write_to(&mut std::io::Cursor::new(&mut exr), image::ImageFormat::OpenExr)
+        .expect("encode exr");
+    let with_exr = |exr: &[u8]| {
+        let uri = format!("data:image/x-exr;base64,{}", base64::engine::general_purpose::STANDARD.encode(exr));
+        with_jpeg(&[]).replace("data:image/jpeg;base64,", &uri)
+    };
+    let scene = load_str(&with_exr(&exr)).expect("the real EXR loads");
+    let t = &scene.textures[0];
+    assert_eq!((t.width, t.height, t.rgba8.len()), (8, 4, 8 * 4 * 4));
+    assert_eq!(t.rgba8[3], 255, "opaque");
+    // displayWindow: name, type, size 16, then xMin, yMin, xMax, yMax (little-endian i32).
+    let at = exr.windows(14).position(|w| w == b"displayWindow\0").expect("displayWindow") + 14 + 6 + 4;
+    exr[at + 12..at + 16].copy_from_slice(&5_373_955i32.to_le_bytes());
+    let err = load_str(&with_exr(&exr)).unwrap_err();
+    assert!(matches!(err, SceneError::Image { image: 0, .. }), "{err}");
+    assert!(err.to_string().contains("8 × 5373956 pixels") && err.to_string().contains("256 MiB"), "{err}");
 }
 
 /// Found while fuzzing (issue #19): counts are checked against the data that holds them, but
