@@ -118,14 +118,23 @@ impl Loader<'_> {
             _ => raw_indices.len() - raw_indices.len() % 3,
         };
         let built = if normals.is_some() { n } else { list_len };
-        self.budget.vertices = self.budget.vertices.checked_sub(built).ok_or_else(|| SceneError::Unsupported {
+        let over = |what: &str, count: usize, max: usize| SceneError::Unsupported {
             file: self.file.to_string(),
             message: format!(
-                "mesh '{mesh}' primitive {p} builds {built} vertices, which would take the scene past the {} vertices \
-                 GI Lab loads per file",
-                super::MAX_VERTICES_PER_FILE
+                "mesh '{mesh}' primitive {p} builds {count} {what}, which would take the scene past the {max} {what} \
+                 GI Lab loads per file"
             ),
-        })?;
+        };
+        self.budget.vertices = self
+            .budget
+            .vertices
+            .checked_sub(built)
+            .ok_or_else(|| over("vertices", built, super::MAX_VERTICES_PER_FILE))?;
+        self.budget.indices = self
+            .budget
+            .indices
+            .checked_sub(list_len)
+            .ok_or_else(|| over("indices", list_len, super::MAX_INDICES_PER_FILE))?;
         let indices = match mode {
             Mode::TriangleStrip => strip_to_list(&raw_indices),
             Mode::TriangleFan => fan_to_list(&raw_indices),

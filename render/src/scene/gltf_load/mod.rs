@@ -258,7 +258,8 @@ struct Loader<'a> {
 /// (an accessor without buffer view is zeros), so a small file could otherwise ask for any
 /// amount of memory (issue #19: a 730-byte file with four primitives on one zero-filled
 /// accessor of 2²² vertices took 1.3 GB). Real scenes stay far below: the Amazon Lumberyard
-/// Bistro (2.8 M triangles) reads about 24 M values.
+/// Bistro (2.8 M triangles) reads about 24 M values. Together the budgets keep what one file
+/// can make the loader hold below 512 MiB, the fuzzer's memory cap.
 #[derive(Debug)]
 struct Budget {
     /// Accessor values (elements × components) still to be read.
@@ -267,12 +268,16 @@ struct Budget {
     zeros: std::cell::Cell<usize>,
     /// Vertices still to be built.
     vertices: usize,
+    /// Triangle-list indices still to be built.
+    indices: usize,
 }
 
-/// Accessor values one file may read: 2²⁶ (256 MiB as f32).
-const MAX_VALUES_PER_FILE: usize = 1 << 26;
-/// Vertices one file may build: 2²⁴ (512 MiB of vertices).
-const MAX_VERTICES_PER_FILE: usize = 1 << 24;
+/// Accessor values one file may read: 2²⁵ (128 MiB as f32).
+const MAX_VALUES_PER_FILE: usize = 1 << 25;
+/// Vertices one file may build: 2²³ (256 MiB of vertices).
+const MAX_VERTICES_PER_FILE: usize = 1 << 23;
+/// Triangle-list indices one file may build: 2²⁵ (11 M triangles, 128 MiB).
+const MAX_INDICES_PER_FILE: usize = 1 << 25;
 
 impl Default for Budget {
     fn default() -> Self {
@@ -280,6 +285,7 @@ impl Default for Budget {
             values: std::cell::Cell::new(MAX_VALUES_PER_FILE),
             zeros: std::cell::Cell::new(accessors::MAX_ZERO_ACCESSOR_ELEMENTS),
             vertices: MAX_VERTICES_PER_FILE,
+            indices: MAX_INDICES_PER_FILE,
         }
     }
 }

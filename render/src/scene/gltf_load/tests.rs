@@ -338,7 +338,7 @@ fn images_larger_than_the_limit_are_refused_before_decoding() {
 /// Found while fuzzing (issue #19): counts are checked against the data that holds them, but
 /// data can be read again by every primitive, or not exist (zero-filled accessors): a
 /// 730-byte file with four primitives on one zero-filled accessor of 2²² vertices took
-/// 1.3 GB. Each file has a budget of zeros, accessor values and vertices.
+/// 1.3 GB. Each file has a budget of zeros, accessor values, vertices and indices.
 #[test]
 fn per_file_budgets_bound_what_declared_counts_allocate() {
     let tri = data_uri(&triangle_bin([0, 1, 2]));
@@ -377,6 +377,12 @@ fn per_file_budgets_bound_what_declared_counts_allocate() {
     let values = Budget { values: std::cell::Cell::new(20), ..Budget::default() };
     let err = load_mesh(values).unwrap_err();
     assert!(matches!(&err, SceneError::Unsupported { message, .. } if message.contains("accessor values")), "{err}");
+    let indices = Budget { indices: 5, ..Budget::default() };
+    let err = load_mesh(indices).unwrap_err();
+    assert!(
+        matches!(&err, SceneError::Unsupported { message, .. } if message.contains("primitive 1 builds 3 indices")),
+        "{err}"
+    );
     let vertices = Budget { vertices: 5, ..Budget::default() };
     let err = load_mesh(vertices).unwrap_err();
     assert!(
