@@ -89,6 +89,9 @@ fn main() -> ExitCode {
     }
     let summary = run(&cfg);
     println!("{}", summary.line());
+    if let Some(p) = &summary.largest_input {
+        println!("  the input that grew the heap most (over half the cap) is saved as {}", p.display());
+    }
     for (sig, n) in summary.signatures.iter().take(40) {
         println!("  {n:>9}  {sig}");
     }

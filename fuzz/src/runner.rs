@@ -1,7 +1,7 @@
 //! The fuzzing loop: corpus, stacked mutations, per-input time cap, caught panics, summary.
 //!
 //! Each iteration takes a corpus input (the seeds first, each once as it is; then a random
-//! one, the large seeds rarely), applies 1–8 stacked mutations and runs the target. Without
+//! one, the large or slow seeds rarely), applies 1–8 stacked mutations and runs the target. Without
 //! coverage instrumentation (stable Rust, no sanitizer runtime), the corpus grows by a cheap
 //! substitute: a mutant is kept when its outcome *signature* (the error message with its
 //! numbers removed, or what was loaded) has not been seen before, since a new message means
@@ -44,6 +44,11 @@ pub struct Config {
     pub crash_dir: PathBuf,
     /// Include the large seeds (the shared chair and hotel room scenes).
     pub large_seeds: bool,
+    /// A seed that runs longer than this is slow: it is mutated rarely (one pick in 256,
+    /// with the large seeds), and a mutant that runs longer is not kept.
+    pub slow: Duration,
+    /// Never mutate slow seeds (the CI tests, whose debug build is ~20× slower).
+    pub drop_slow_seeds: bool,
     /// Print a progress line every this often (None: silent).
     pub progress: Option<Duration>,
     /// Count the outcome signatures (what the inputs reached) for [`Summary::signatures`].
@@ -62,6 +67,8 @@ impl Config {
             corpus_dir: None,
             crash_dir: crate::seeds::project_root().join("fuzz/crashes"),
             large_seeds: true,
+            slow: Duration::from_millis(20),
+            drop_slow_seeds: false,
             progress: None,
             stats: false,
         }
@@ -93,6 +100,10 @@ pub struct Summary {
     pub corpus: usize,
     /// The largest live heap seen (0 without the counting allocator).
     pub peak_bytes: usize,
+    /// The most one input made the heap grow (0 without the counting allocator).
+    pub largest_input_bytes: usize,
+    /// That input, saved when it grew the heap by more than half the memory cap.
+    pub largest_input: Option<PathBuf>,
     /// Distinct panics by location.
     pub failures: Vec<Failure>,
     /// With [`Config::stats`]: how often each outcome signature occurred, most frequent first.
@@ -108,7 +119,7 @@ impl Summary {
     /// The one-line summary of issue #19.
     pub fn line(&self) -> String {
         format!(
-            "target {}: {} executions in {:.1} s ({:.0} execs/s), {} panics, {} hangs, {} over-cap allocations, corpus {} ({} accepted, {} rejected), peak heap {} MiB",
+            "target {}: {} executions in {:.1} s ({:.0} execs/s), {} panics, {} hangs, {} over-cap allocations, corpus {} ({} accepted, {} rejected), peak heap {} MiB (one input: +{} MiB)",
             self.target.name(),
             self.executions,
             self.elapsed.as_secs_f64(),
@@ -119,7 +130,8 @@ impl Summary {
             self.corpus,
             self.accepted,
             self.rejected,
-            self.peak_bytes >> 20
+            self.peak_bytes >> 20,
+            self.largest_input_bytes >> 20
         )
     }
 }
@@ -220,7 +232,7 @@ const MAX_KEPT_INPUT: usize = 64 << 10;
 const MAX_KEPT: usize = 4096;
 
 impl Corpus {
-    /// A large seed 1 time in 256, otherwise a small seed or a kept mutant (even odds).
+    /// A large or slow seed 1 time in 256, otherwise a small seed or a kept mutant (even odds).
     fn pick<'a>(&'a self, rng: &mut Rng) -> &'a [u8] {
         let pool = if !self.large.is_empty() && (rng.one_in(256) || self.small.len() + self.kept.len() == 0) {
             &self.large
@@ -288,13 +300,8 @@ pub fn run(cfg: &Config) -> Summary {
         Target::Gltf => crate::gltf_mutate::DICTIONARY.to_vec(),
         Target::Preset | Target::Set => crate::seeds::settings_dictionary(),
     };
-    let (large, small): (Vec<Seed>, Vec<Seed>) = seeds.iter().cloned().partition(|s| s.bytes.len() >= LARGE);
-    let mut corpus = Corpus {
-        small: small.into_iter().map(|s| s.bytes).collect(),
-        large: large.into_iter().map(|s| s.bytes).collect(),
-        kept: Vec::new(),
-        kept_bytes: 0,
-    };
+    // Filled as the seeds run (each once, first): large or slow seeds go to the rare pool.
+    let mut corpus = Corpus { small: Vec::new(), large: Vec::new(), kept: Vec::new(), kept_bytes: 0 };
     let epoch = Instant::now();
     let current = Arc::new(Current {
         input: Mutex::new(Vec::new()),
@@ -316,6 +323,7 @@ pub fn run(cfg: &Config) -> Summary {
     let (mut panics, mut accepted, mut rejected) = (0u64, 0u64, 0u64);
     let mut last_progress = Instant::now();
     let mut executions = 0;
+    let (mut peak, mut largest, mut largest_input) = (alloc::peak(), 0usize, Vec::new());
     for i in 0..cfg.iterations {
         let input: Vec<u8> = match seeds.get(i as usize) {
             Some(seed) => seed.bytes.clone(),
@@ -337,11 +345,28 @@ pub fn run(cfg: &Config) -> Summary {
             slot.extend_from_slice(&input);
         }
         alloc::set_current_input(&input);
+        let live_before = alloc::live();
+        alloc::reset_peak();
         current.started_ms.store((epoch.elapsed().as_millis() as u64).max(1), Ordering::Relaxed);
+        let started = Instant::now();
         let result = run_one(target, &input);
+        let slow = started.elapsed() > cfg.slow;
         current.started_ms.store(0, Ordering::Relaxed);
         alloc::clear_current_input();
         executions += 1;
+        let input_peak = alloc::peak();
+        peak = peak.max(input_peak);
+        if input_peak.saturating_sub(live_before) > largest {
+            largest = input_peak - live_before;
+            largest_input.clone_from(&input);
+        }
+        if (i as usize) < seeds.len() {
+            if !slow && input.len() < LARGE {
+                corpus.small.push(input.clone());
+            } else if !(slow && cfg.drop_slow_seeds) {
+                corpus.large.push(input.clone());
+            }
+        }
         match result {
             Ok((outcome, message)) => {
                 match outcome {
@@ -353,7 +378,7 @@ pub fn run(cfg: &Config) -> Summary {
                     *counts.entry(sig.clone()).or_default() += 1;
                 }
                 // A refused mutant is kept less often: most of its children fail the same way.
-                let worth = outcome == Outcome::Accepted || rng.one_in(8);
+                let worth = !slow && (outcome == Outcome::Accepted || rng.one_in(8));
                 if seen.insert(sig) && i as usize >= seeds.len() && worth {
                     corpus.keep(&mut rng, &input);
                 }
@@ -386,12 +411,16 @@ pub fn run(cfg: &Config) -> Summary {
                 executions as f64 / secs,
                 corpus.len(),
                 alloc::live() >> 20,
-                alloc::peak() >> 20
+                peak >> 20
             );
         }
     }
     current.done.store(true, Ordering::Relaxed);
     alloc::set_cap(None);
+    let largest_saved = match cfg.mem_cap {
+        Some(cap) if largest > cap / 2 => save_input(&cfg.crash_dir, target, &largest_input),
+        _ => None,
+    };
     let mut failures: Vec<Failure> = failures.into_values().collect();
     failures.sort_by_key(|f| std::cmp::Reverse(f.count));
     let mut signatures: Vec<(String, u64)> = counts.into_iter().collect();
@@ -406,7 +435,9 @@ pub fn run(cfg: &Config) -> Summary {
         accepted,
         rejected,
         corpus: corpus.len(),
-        peak_bytes: alloc::peak(),
+        peak_bytes: peak,
+        largest_input_bytes: largest,
+        largest_input: largest_saved,
         failures,
         signatures,
     }
