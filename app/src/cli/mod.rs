@@ -16,6 +16,7 @@ pub mod reference;
 pub mod render;
 pub mod settings;
 pub mod soak;
+pub mod soak_memory;
 pub mod soak_walk;
 pub mod sweep;
 pub mod upgrade;

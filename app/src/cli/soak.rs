@@ -4,8 +4,8 @@
 //! in `final.hdr`, inputs accepted that should have been refused (or refused and yet
 //! changing something), and resources that grow. Every `--check-every` frames the walk
 //! returns to its starting point (scene, settings, size, camera) and counts the device's live
-//! buffers and textures and the process's resident memory: at the same state they must not
-//! grow. One summary line at the end, with the seed and the step of the first failure so
+//! objects, its allocator's bytes and the process's resident memory: at the same state they
+//! must not grow (`soak_memory`). One summary line at the end, with the seed and the step of the first failure so
 //! that `--frames STEP --verbose` replays it.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -17,6 +17,7 @@ use clap::Args;
 use gi_render::{GpuContext, LabSettings, Renderer};
 
 use super::parse_size;
+use super::soak_memory::{Checkpoint, RssJudged, memory_verdict, rss_judged, rss_mib};
 use super::soak_walk::{self as walk, Outcome, Rng, SceneChoice};
 use crate::error::CliError;
 use crate::scene_args::{SceneArgs, load_scene, load_settings};
@@ -42,9 +43,9 @@ pub struct SoakArgs {
     /// a growth comes from.
     #[arg(long, value_delimiter = ',', value_parser = ["settings", "choices", "resize", "camera", "scene", "shader", "animation"])]
     pub actions: Vec<String>,
-    /// Report the resident memory without letting it decide the verdict (the live GPU objects
-    /// still do): for runs where a driver's own growth is known (issue #19's note: lavapipe's
-    /// resident memory rises while a renderer lives).
+    /// Report the resident memory without letting it decide the verdict (GPU memory still
+    /// does). Without it the resident memory is judged unless a probe at the start finds the
+    /// driver keeping memory per dispatch by itself (`soak_memory`: Mesa 22.3's lavapipe).
     #[arg(long)]
     pub no_rss_check: bool,
     /// Print every step (to replay a failure up to its step).
@@ -54,16 +55,6 @@ pub struct SoakArgs {
     /// a new temporary folder.
     #[arg(long)]
     pub work_dir: Option<PathBuf>,
-}
-
-/// Resources at a return to the starting state.
-#[derive(Clone, Copy, Debug)]
-struct Checkpoint {
-    frame: u64,
-    buffers: usize,
-    textures: usize,
-    bind_groups: usize,
-    rss_mib: f64,
 }
 
 #[derive(Default)]
@@ -106,6 +97,11 @@ pub fn soak(args: &SoakArgs) -> Result<(), CliError> {
             g.last = Some(e.to_string());
         }
     }));
+    // Before the renderer exists: whether the driver itself grows per dispatch.
+    let rss = rss_judged(&ctx, args.no_rss_check);
+    if let RssJudged::No(why) = &rss {
+        eprintln!("soak: resident memory is reported, not judged: {why}");
+    }
     let work_dir = match &args.work_dir {
         Some(d) => d.clone(),
         None => std::env::temp_dir().join(format!("gi-lab-soak-{}", std::process::id())),
@@ -251,6 +247,8 @@ pub fn soak(args: &SoakArgs) -> Result<(), CliError> {
                     buffers: live.buffers,
                     textures: live.textures,
                     bind_groups: live.bind_groups,
+                    pipelines: live.pipelines,
+                    allocated_bytes: live.allocated_bytes,
                     rss_mib: rss_mib(),
                 };
                 if args.verbose {
@@ -264,17 +262,13 @@ pub fn soak(args: &SoakArgs) -> Result<(), CliError> {
     if args.work_dir.is_none() {
         let _ = std::fs::remove_dir_all(&work_dir);
     }
-    let mut memory = memory_verdict(&checkpoints);
-    if args.no_rss_check && memory.2 {
-        memory.1 = true;
-        memory.0 += " (resident memory not judged: --no-rss-check)";
-    }
+    let memory = memory_verdict(&checkpoints, &rss);
     let ok = counts.panics == 0
         && counts.gpu_errors == 0
         && counts.nonfinite_frames == 0
         && counts.wrong == 0
         && !counts.device_lost
-        && memory.1;
+        && memory.flat;
     println!(
         "soak: {} seed {}, {main_name} at {w}×{h}, {step} frames in {:.0} s: {} panics, {} GPU errors, {} non-finite pixels (in {} frames), {} wrong answers, {} inputs refused with a message; {}; {}",
         if ok { "PASS" } else { "FAIL" },
@@ -286,7 +280,7 @@ pub fn soak(args: &SoakArgs) -> Result<(), CliError> {
         counts.nonfinite_frames,
         counts.wrong,
         counts.refused,
-        memory.0,
+        memory.text,
         match &failure {
             None => "no failure".to_string(),
             Some(f) => format!(
@@ -344,76 +338,6 @@ fn one_step(
     }
 }
 
-/// "memory flat (…)" or "memory GROWS (…)", whether it is flat, and whether the live
-/// objects alone are. The device's live buffers, textures and bind groups at the starting
-/// state may not rise above what they were in the first half of the run (a renderer makes
-/// a few objects on first use, such as a probe's readback, and keeps them; a leak keeps
-/// adding). The resident memory (after glibc's trim) rises for a while as the software
-/// driver's caches fill, then must level off: from the middle checkpoint to the last it may
-/// rise by at most 64 MiB or 15 %, whichever is more.
-fn memory_verdict(c: &[Checkpoint]) -> (String, bool, bool) {
-    if c.len() < 2 {
-        return (
-            "memory not checked (fewer than 2 checkpoints; raise --frames or lower --check-every)".into(),
-            true,
-            true,
-        );
-    }
-    let (a, m, z) = (c[1], c[c.len() / 2], c[c.len() - 1]);
-    let peak = c.iter().map(|x| x.rss_mib).fold(0.0, f64::max);
-    let first_half = &c[..=c.len() / 2];
-    let most = |f: fn(&Checkpoint) -> usize| first_half.iter().map(f).max().unwrap_or(0);
-    let objects_flat = c[c.len() / 2..].iter().all(|x| {
-        x.buffers <= most(|k| k.buffers)
-            && x.textures <= most(|k| k.textures)
-            && x.bind_groups <= most(|k| k.bind_groups)
-    });
-    let rss_flat = z.rss_mib <= m.rss_mib + (m.rss_mib * 0.15).max(64.0);
-    let text = format!(
-        "memory {} over {} checkpoints (frames {}–{}: buffers {}→{}, textures {}→{}, bind groups {}→{}{}; resident {:.0} MiB at frame {}, {:.0} at {}, {:.0} at {}, peak {:.0}{})",
-        if objects_flat && rss_flat { "flat" } else { "GROWS" },
-        c.len(),
-        a.frame,
-        z.frame,
-        a.buffers,
-        z.buffers,
-        a.textures,
-        z.textures,
-        a.bind_groups,
-        z.bind_groups,
-        if objects_flat { "" } else { ": objects LEAK" },
-        a.rss_mib,
-        a.frame,
-        m.rss_mib,
-        m.frame,
-        z.rss_mib,
-        z.frame,
-        peak,
-        if rss_flat { "" } else { ": resident memory GROWS" }
-    );
-    (text, objects_flat && rss_flat, objects_flat)
-}
-
-/// The process's resident memory in MiB (Linux; 0 elsewhere), after glibc has handed back
-/// the free memory it keeps (what is left is memory in use, not the allocator's reserve).
-fn rss_mib() -> f64 {
-    #[cfg(all(target_os = "linux", target_env = "gnu"))]
-    {
-        unsafe extern "C" {
-            fn malloc_trim(pad: usize) -> i32;
-        }
-        // SAFETY: malloc_trim only returns free heap memory to the system.
-        unsafe {
-            malloc_trim(0);
-        }
-    }
-    let pages = std::fs::read_to_string("/proc/self/statm")
-        .ok()
-        .and_then(|s| s.split_whitespace().nth(1).and_then(|x| x.parse::<f64>().ok()))
-        .unwrap_or(0.0);
-    pages * 4096.0 / (1024.0 * 1024.0)
-}
-
 /// Reports a failure and keeps the first.
 fn fail(failure: &mut Option<Failure>, step: u64, action: &str, what: String) {
     eprintln!("soak: step {step} ({action}): {what}");
@@ -422,29 +346,4 @@ fn fail(failure: &mut Option<Failure>, step: u64, action: &str, what: String) {
 
 fn first_line(s: &str) -> &str {
     s.lines().next().unwrap_or("")
-}
-
-#[cfg(test)]
-mod tests {
-    use super::{Checkpoint, memory_verdict};
-
-    fn at(frame: u64, buffers: usize, rss_mib: f64) -> Checkpoint {
-        Checkpoint { frame, buffers, textures: 10, bind_groups: 5, rss_mib }
-    }
-
-    #[test]
-    fn memory_that_levels_off_is_flat_and_a_leak_is_not() {
-        let levelling: Vec<_> = (1..=20).map(|i| at(i * 100, 30, 400.0 - 200.0 / i as f64)).collect();
-        assert!(memory_verdict(&levelling).1, "{}", memory_verdict(&levelling).0);
-        let leaking: Vec<_> = (1..=20).map(|i| at(i * 100, 30, 200.0 + 20.0 * i as f64)).collect();
-        let v = memory_verdict(&leaking);
-        assert!(!v.1 && v.2, "20 MiB per 100 frames is a leak, of resident memory only: {}", v.0);
-        let mut first_use = levelling.clone();
-        first_use[3].buffers += 2;
-        assert!(memory_verdict(&first_use).1, "objects made once and kept are not a leak");
-        let adding: Vec<_> = (1..=20).map(|i| at(i * 100, 30 + i as usize, 300.0)).collect();
-        let v = memory_verdict(&adding);
-        assert!(!v.1 && !v.2, "a buffer more at every return is a leak: {}", v.0);
-        assert!(memory_verdict(&levelling[..1]).0.contains("not checked"));
-    }
 }

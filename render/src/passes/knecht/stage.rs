@@ -95,6 +95,10 @@ impl KnechtVpls {
         if s.pipeline.vpl_visibility == VplVisibility::Exact {
             let e = self.exact.get_or_insert_with(|| VplVisibilityPass::new(ctx, gpu_scene));
             fresh |= e.ensure(ctx, total, s.ism.map_size);
+        } else if self.exact.take().is_some() {
+            // The exact maps are not kept for a later switch back (issue #19's soak: an
+            // atlas of ~11 MB stayed alive at the starting state after a visit to Exact).
+            fresh = true;
         }
         fresh
     }

@@ -107,6 +107,8 @@ pub struct ViewParams {
 
 /// Dynamic-offset stride of the per-view uniforms.
 const STRIDE: u64 = 256;
+/// The VPL buffers' smallest capacity (VPLs).
+const MIN_VPL_CAPACITY: u32 = 256;
 
 /// One view of one light that receives `count` VPLs starting at slot `first`.
 #[derive(Clone, Copy, Debug)]
@@ -234,7 +236,7 @@ impl VplImportancePass {
         let warp_pipeline = crate::passes::compute_pipeline(device, "vpl.warp", &m_warp, "cs_warp", &[&warp_layout]);
         let (params, params_capacity) = Self::params_buffer(device, 6);
         let (lights, light_capacity) = Self::light_buffer(device, 4);
-        let (vpls, warped) = Self::vpl_buffers(device, 256);
+        let (vpls, warped) = Self::vpl_buffers(device, MIN_VPL_CAPACITY);
         let importance = Self::importance_texture(device, size, 1);
         Self {
             views: Vec::new(),
@@ -252,7 +254,7 @@ impl VplImportancePass {
             light_capacity,
             vpls,
             warped,
-            capacity: 256,
+            capacity: MIN_VPL_CAPACITY,
             albedo_mip: VplSettings::default().albedo_mip,
             importance_bias: VplSettings::default().importance_bias,
         }
@@ -321,9 +323,13 @@ impl VplImportancePass {
     pub fn ensure(&mut self, ctx: &GpuContext, scene: &GpuScene, size: u32, views: usize, capacity: u32) -> bool {
         let device = &ctx.device;
         let mut fresh = false;
-        if capacity > self.capacity {
-            (self.vpls, self.warped) = Self::vpl_buffers(device, capacity);
-            self.capacity = capacity;
+        // Grown on demand, and shrunk once they hold more than twice what is asked, so that
+        // dragging `vpl.count` does not reallocate every step and a session that visited
+        // 4096 VPLs does not keep their buffers at 128 (issue #19's memory checks).
+        let wanted = capacity.max(MIN_VPL_CAPACITY);
+        if capacity > self.capacity || self.capacity > wanted.saturating_mul(2) {
+            (self.vpls, self.warped) = Self::vpl_buffers(device, wanted);
+            self.capacity = wanted;
         }
         if views > self.params_capacity {
             (self.params, self.params_capacity) = Self::params_buffer(device, views);
