@@ -65,3 +65,50 @@ fn app_under_xvfb_renders_a_non_uniform_screenshot() {
     assert!(config.join("session.ron").exists(), "the session was not autosaved to {}", config.display());
     let _ = std::fs::remove_dir_all(&config);
 }
+
+/// Issue #19: a device lost under a real window (destroyed at frame 8 by the test hook, as a
+/// driver reset would) ends that process after it saved the session and started a new one;
+/// the new window restores the session (a setting given to the first), says why it restarted
+/// and renders the Cornell box into its screenshot.
+#[test]
+fn a_lost_device_restarts_the_window_with_its_session() {
+    let artefacts = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("../test-artifacts");
+    std::fs::create_dir_all(&artefacts).expect("artefact folder");
+    let shot = artefacts.join("app-window-after-device-loss.png");
+    let _ = std::fs::remove_file(&shot);
+    let config = std::env::temp_dir().join(format!("gi-lab-xvfb-loss-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&config);
+    // xvfb-run ends its server when its command ends, and the first process ends as soon as
+    // the second has started: the shell waits for the second's screenshot (3 minutes at most).
+    let script = r#""$0" "$@"; code=$?; i=0; while [ ! -f "$SHOT" ] && [ $i -lt 900 ]; do sleep 0.2; i=$((i+1)); done; sleep 1; exit $code"#;
+    let o = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1280x800x24", "sh", "-c", script])
+        .arg(env!("CARGO_BIN_EXE_gi-lab"))
+        .arg("--screenshot")
+        .arg(&shot)
+        .args(["--screenshot-frames", "20", "--fresh", "--set", "direct.intensity_scale=2.5"])
+        .arg("--config-dir")
+        .arg(&config)
+        .env("SHOT", &shot)
+        .env("GI_LAB_TEST_LOSE_DEVICE_AT", "8")
+        .env("WGPU_BACKEND", std::env::var("WGPU_BACKEND").unwrap_or_else(|_| "vulkan".into()))
+        .output()
+        .expect("xvfb-run starts");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "the first window did not end cleanly after the loss: {err}");
+    assert!(err.contains("the GPU device was lost") && err.contains("GI Lab is restarting with it"), "{err}");
+    assert!(err.contains("GI Lab restarted because the GPU device was lost"), "the new window did not say why: {err}");
+    let img = image::open(&shot)
+        .unwrap_or_else(|e| panic!("the new window left no screenshot at {}: {e}; stderr: {err}", shot.display()))
+        .to_rgba8();
+    let reddish = img.pixels().filter(|p| p.0[0] > 80 && p.0[1] < 40 && p.0[2] < 40).count();
+    let greenish = img.pixels().filter(|p| p.0[1] > 60 && p.0[0] < 50 && p.0[2] < 50).count();
+    assert!(reddish > 500 && greenish > 500, "red {reddish} / green {greenish} wall pixels after the restart");
+    let session = std::fs::read_to_string(config.join("session.ron")).expect("the session was saved");
+    assert!(
+        session.contains("intensity_scale: 2.5"),
+        "the new window lost the first one's settings: {}",
+        &session[..session.len().min(400)]
+    );
+    let _ = std::fs::remove_dir_all(&config);
+}

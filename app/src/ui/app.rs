@@ -13,6 +13,9 @@ use crate::ui::ERROR;
 use crate::ui::lab::Lab;
 use crate::ui::presets::PresetState;
 use crate::ui::session::{self, Pane, Session};
+
+/// The window's test hook that destroys its GPU device at a frame (see `State::lose_device_at`).
+const LOSE_DEVICE_ENV: &str = "GI_LAB_TEST_LOSE_DEVICE_AT";
 use crate::ui::state::State;
 use crate::ui::viewer::{Viewer, ViewerState};
 
@@ -171,6 +174,7 @@ impl GiLabApp {
             last_autosave: Instant::now(),
             last_saved_session: String::new(),
             device_lost: None,
+            lose_device_at: std::env::var(LOSE_DEVICE_ENV).ok().and_then(|v| v.parse().ok()),
         };
         Self { tree, state }
     }
@@ -246,11 +250,12 @@ impl GiLabApp {
     }
 
     /// When the GPU device is lost (a driver reset), nothing on it can be used again, eframe's
-    /// painter included: the lab saves the session at once, says what happened, and starts
-    /// itself again with that session (a new window, device, renderer, scene upload and
-    /// textures, with the same scene, settings, camera, timeline, lights and layout); the
-    /// new window says why it restarted. Returns whether the device is lost.
-    fn handle_device_loss(&mut self, ctx: &egui::Context) -> bool {
+    /// painter included: the lab saves the session at once, starts itself again with that
+    /// session (a new window, device, renderer, scene upload and textures, with the same
+    /// scene, settings, camera, timeline, lights and layout) and ends this process; the new
+    /// window says why it restarted. With the restart off (the UI tests' harness, whose
+    /// painter survives), it shows what happened instead. Returns whether the device is lost.
+    fn handle_device_loss(&mut self) -> bool {
         if self.state.device_lost.is_some() {
             return true;
         }
@@ -263,13 +268,23 @@ impl GiLabApp {
             Ok(()) => msg += "; the session was saved",
             Err(e) => msg += &format!("; the session could not be saved ({e})"),
         }
-        if self.state.args.restart_on_device_loss && saved.is_ok() {
-            match self.restart(&why) {
+        if self.state.args.restart_on_device_loss {
+            // The painter shares the lost device and panics on its next paint (egui-wgpu
+            // 0.37 cannot recover), so this process ends here: a new one takes over with the
+            // saved session, or the log says why none could.
+            let restarted = match saved {
+                Ok(()) => self.restart(&why),
+                Err(_) => Err("there is no saved session to restart with".into()),
+            };
+            match restarted {
                 Ok(()) => {
-                    msg += " and GI Lab is restarting with it";
-                    ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+                    log::error!("{msg} and GI Lab is restarting with it");
+                    std::process::exit(0);
                 }
-                Err(e) => msg += &format!("; restarting failed ({e}): start GI Lab again to continue"),
+                Err(e) => {
+                    log::error!("{msg}; restarting failed ({e}): start GI Lab again to continue");
+                    std::process::exit(1);
+                }
             }
         }
         log::error!("{msg}");
@@ -291,7 +306,11 @@ impl GiLabApp {
         if let Some(h) = a.hot_reload {
             cmd.arg("--hot-reload").arg(h.to_string());
         }
-        cmd.arg("--recovered").arg(why);
+        // A scripted screenshot run still gives its screenshot, from the new window.
+        if let Some(shot) = &a.screenshot {
+            cmd.arg("--screenshot").arg(shot).arg("--screenshot-frames").arg(a.screenshot_frames.to_string());
+        }
+        cmd.arg("--recovered").arg(why).env_remove(LOSE_DEVICE_ENV);
         cmd.spawn().map(|_| ()).map_err(|e| e.to_string())
     }
 
@@ -350,13 +369,49 @@ fn restore_scene_state(l: &mut Lab, s: &Session) {
 impl eframe::App for GiLabApp {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
-        if self.handle_device_loss(&ctx) {
-            let msg = self.state.device_lost.clone().unwrap_or_default();
-            egui::CentralPanel::default().show(ui, |ui| {
-                ui.centered_and_justified(|ui| ui.colored_label(ERROR, msg));
-            });
+        if self.state.lose_device_at == Some(self.state.frames)
+            && let Ok(l) = &self.state.lab
+        {
+            l.renderer.ctx.device.destroy();
+        }
+        if self.handle_device_loss() {
+            self.device_lost_panel(ui);
             return;
         }
+        // A device can be lost in the middle of a frame (a driver reset is not announced):
+        // wgpu then panics in calls that cannot fail otherwise (a buffer made with
+        // `create_buffer_init`, a mapped range). Such a panic, with the device lost, is the
+        // loss itself: the lab saves the session and restarts as above. Any other panic
+        // goes on unwinding.
+        let frame = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.frame_ui(ui, &ctx)));
+        if let Err(panic) = frame {
+            if self.handle_device_loss() {
+                self.device_lost_panel(ui);
+                return;
+            }
+            std::panic::resume_unwind(panic);
+        }
+    }
+
+    fn on_exit(&mut self) {
+        if let Err(e) = self.save_session() {
+            log::warn!("session not saved: {e}");
+        }
+    }
+}
+
+impl GiLabApp {
+    /// What the window shows once the device is lost: the message, nothing that needs the GPU.
+    fn device_lost_panel(&self, ui: &mut egui::Ui) {
+        let msg = self.state.device_lost.clone().unwrap_or_default();
+        egui::CentralPanel::default().show(ui, |ui| {
+            ui.centered_and_justified(|ui| ui.colored_label(ERROR, msg));
+        });
+    }
+
+    /// One frame of the lab: its panels, viewers and renderer.
+    fn frame_ui(&mut self, ui: &mut egui::Ui, ctx: &egui::Context) {
+        let ctx = ctx.clone();
         self.state.handle_dropped_files(&ctx);
         self.state.shortcuts(&ctx);
         if std::mem::take(&mut self.state.request_new_viewer) {
@@ -396,11 +451,5 @@ impl eframe::App for GiLabApp {
         self.screenshot_step(&ctx);
         self.autosave();
         ctx.request_repaint();
-    }
-
-    fn on_exit(&mut self) {
-        if let Err(e) = self.save_session() {
-            log::warn!("session not saved: {e}");
-        }
     }
 }

@@ -73,6 +73,9 @@ pub struct State {
     pub(super) last_autosave: Instant,
     /// What the lab said when its GPU device was lost (it saved the session and restarts).
     pub device_lost: Option<String>,
+    /// `GI_LAB_TEST_LOSE_DEVICE_AT=K`: the window destroys its device at frame K, as a driver
+    /// reset would (for the test of the real restart, `app/tests/app_window.rs`).
+    pub(super) lose_device_at: Option<u64>,
     pub(super) last_saved_session: String,
 }
 
