@@ -441,6 +441,40 @@ fn temp_beside(path: &Path, name: &str) -> std::path::PathBuf {
     path.with_file_name(format!(".{name}.{}.{n}.tmp", std::process::id()))
 }
 
+/// Removes the temporary files of [`write_atomic`] left in `dir` by a process that was killed
+/// mid-save (named `.NAME.PID.N.tmp`): those whose process no longer runs (Linux: no
+/// `/proc/PID`) or, where that cannot be known, older than an hour. A save in progress in
+/// another process is left alone. Returns how many were removed.
+pub fn remove_stale_temps(dir: &Path) -> usize {
+    let Ok(entries) = std::fs::read_dir(dir) else { return 0 };
+    let mut removed = 0;
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let Some(pid) = temp_pid(&name) else { continue };
+        let stale = if cfg!(target_os = "linux") {
+            !Path::new(&format!("/proc/{pid}")).exists()
+        } else {
+            let age = entry.metadata().and_then(|m| m.modified()).ok().and_then(|t| t.elapsed().ok());
+            age.is_some_and(|a| a.as_secs() > 3600)
+        };
+        if stale && std::fs::remove_file(entry.path()).is_ok() {
+            removed += 1;
+        }
+    }
+    removed
+}
+
+/// The writer's process id in a temporary name of [`temp_beside`] (`.NAME.PID.N.tmp`).
+fn temp_pid(file_name: &str) -> Option<u32> {
+    let rest = file_name.strip_prefix('.')?.strip_suffix(".tmp")?;
+    let mut parts = rest.rsplitn(3, '.');
+    let n = parts.next()?;
+    let pid = parts.next()?;
+    let stem = parts.next()?;
+    (!stem.is_empty() && n.parse::<u64>().is_ok()).then_some(())?;
+    pid.parse().ok()
+}
+
 /// Writes `bytes` to a new temporary file beside `path` and flushes it to disk; the file is
 /// removed again on failure.
 fn write_temp(path: &Path, name: &str, bytes: &[u8]) -> std::io::Result<std::path::PathBuf> {
@@ -578,6 +612,28 @@ of the render resolution; `EV` are photographic stops (powers of two).\n\n";
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn temporary_files_of_dead_writers_are_removed_and_live_ones_kept() {
+        let dir = std::env::temp_dir().join(format!("gi-lab-stale-temps-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("dir");
+        let live = dir.join(format!(".session.ron.{}.3.tmp", std::process::id()));
+        // No process has this id (Linux allows at most 2^22).
+        let dead = dir.join(".session.ron.4294967.0.tmp");
+        let other = dir.join(".hidden.tmp");
+        for p in [&live, &dead, &other] {
+            std::fs::write(p, "x").expect("write");
+        }
+        assert_eq!(temp_pid(".my.preset.ron.123.7.tmp"), Some(123));
+        assert_eq!(temp_pid(".hidden.tmp"), None);
+        assert_eq!(temp_pid("session.ron"), None);
+        if cfg!(target_os = "linux") {
+            assert_eq!(remove_stale_temps(&dir), 1);
+            assert!(!dead.exists() && live.exists() && other.exists());
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 
     #[test]
     fn identifiers_are_quoted_only_in_value_position() {

@@ -5,7 +5,8 @@
 //! or pixels), the `.bak`s too; no file goes back to an older version, none is older than
 //! the last generation the loop reported complete, and the `.bak` is never newer than its
 //! file. Temporary files a kill leaves behind are hidden `.tmp` files (which no preset
-//! listing shows), and nothing else appears in the folder.
+//! listing shows), and nothing else appears in the folder; the lab's start-up cleaning
+//! (`preset::remove_stale_temps`) removes them all and nothing else.
 
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Read};
@@ -154,6 +155,17 @@ fn files_survive_sigkill_mid_save() {
     assert!(reported.is_some() && killed_mid_generation > 0, "the kills did not spread over the saves");
     for b in crash_safe::WITH_BACKUP {
         assert!(seen.contains_key(&format!("{b}.bak")), "no {b}.bak was written");
+    }
+    // Every writer is dead: the lab's start-up cleaning removes all they left, and only that.
+    let removed = gi_render::preset::remove_stale_temps(&dir);
+    let (left, _) = crash_safe::strays(&dir).expect("list the folder");
+    if cfg!(target_os = "linux") {
+        assert!(
+            left.is_empty() && removed == temps.len(),
+            "{removed} of {} temporary files removed: {left:?}",
+            temps.len()
+        );
+        assert_eq!(check_files(&dir, "after the cleaning").len(), seen.len(), "the cleaning removed a saved file");
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -98,7 +98,8 @@ pub fn compare_files_exposed(
             let [r, g, b] = gi_render::image_io::turbo(e[0]);
             *px = image::Rgba([r, g, b, 1.0].map(|x| (x * 255.0).round() as u8));
         }
-        png.save(path).map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
+        gi_render::image_io::save_atomic(path, &image::DynamicImage::ImageRgba8(png), image::ImageFormat::Png)
+            .map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
     }
     Ok(CompareReport { hdr, rmse, rel_mse, flip })
 }

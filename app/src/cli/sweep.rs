@@ -349,8 +349,12 @@ pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
     bar.finish_and_clear();
     mark_pareto(&mut results);
     let csv_path = args.out.join("sweep.csv");
-    std::fs::write(&csv_path, csv(&params, &results))
-        .map_err(|e| CliError::failure(format!("{}: {e}", csv_path.display())))?;
+    gi_render::preset::write_atomic_bytes(
+        &csv_path,
+        csv(&params, &results).as_bytes(),
+        gi_render::preset::Backup::Skip,
+    )
+    .map_err(|e| CliError::failure(format!("{}: {e}", csv_path.display())))?;
     let title = format!(
         "GI Lab sweep: {} points at {}×{}, {}",
         results.len(),
@@ -359,8 +363,8 @@ pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
         r.ctx.adapter_summary()
     );
     let plot_path = args.out.join("pareto.png");
-    pareto_plot(&title, &results)
-        .save_with_format(&plot_path, image::ImageFormat::Png)
+    let plot = image::DynamicImage::ImageRgba8(pareto_plot(&title, &results));
+    gi_render::image_io::save_atomic(&plot_path, &plot, image::ImageFormat::Png)
         .map_err(|e| CliError::failure(format!("{}: {e}", plot_path.display())))?;
     println!("wrote {} and {}", csv_path.display(), plot_path.display());
     for (i, p) in results.iter().enumerate().filter(|(_, p)| p.pareto) {

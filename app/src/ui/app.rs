@@ -13,11 +13,11 @@ use crate::ui::ERROR;
 use crate::ui::lab::Lab;
 use crate::ui::presets::PresetState;
 use crate::ui::session::{self, Pane, Session};
+use crate::ui::state::State;
+use crate::ui::viewer::{Viewer, ViewerState};
 
 /// The window's test hook that destroys its GPU device at a frame (see `State::lose_device_at`).
 const LOSE_DEVICE_ENV: &str = "GI_LAB_TEST_LOSE_DEVICE_AT";
-use crate::ui::state::State;
-use crate::ui::viewer::{Viewer, ViewerState};
 
 pub struct GiLabApp {
     pub tree: egui_tiles::Tree<Pane>,
@@ -27,6 +27,14 @@ pub struct GiLabApp {
 impl GiLabApp {
     pub fn new(cc: &eframe::CreationContext<'_>, args: AppArgs) -> Self {
         let config_dir = session::config_dir(args.config_dir.as_deref());
+        // Temporary files of saves that a kill interrupted (the saved files themselves are
+        // whole: `preset::write_atomic`).
+        for dir in config_dir.iter().chain([&args.presets_dir]) {
+            let n = gi_render::preset::remove_stale_temps(dir);
+            if n > 0 {
+                log::info!("removed {n} temporary files of interrupted saves from {}", dir.display());
+            }
+        }
         let (mut session, session_problem) = match (&config_dir, args.fresh) {
             (Some(dir), false) => Session::load(dir),
             _ => (Session::default(), None),
