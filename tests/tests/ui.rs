@@ -88,6 +88,9 @@ fn every_setting_has_a_widget_that_changes_the_renderer() {
     // Tall enough that the whole settings panel (every group, Soler's included) is on
     // screen: the reset buttons are clicked where they are drawn.
     let mut h = harness_in(&dir, egui::vec2(1400.0, 3600.0));
+    // The tall viewport at a tenth of its size: this test renders ~600 frames and asks only
+    // whether each widget reaches the renderer.
+    h.state_mut().state.session.render_scale = 0.1;
     h.run_steps(2);
     // Choices that no other value of can be applied alone from the defaults (each refused
     // with its reason): the VPL source, since the default VPL gather needs importance-warped
