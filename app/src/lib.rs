@@ -9,6 +9,7 @@
 pub mod args;
 pub mod cli;
 pub mod error;
+pub mod heap;
 pub mod plot;
 pub mod runtime_dir;
 pub mod scene_args;

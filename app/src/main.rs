@@ -1,3 +1,7 @@
+/// The heap counted, for the soak's memory checks (`gi_lab::heap`).
+#[global_allocator]
+static HEAP: gi_lab::heap::CountingAlloc = gi_lab::heap::CountingAlloc;
+
 fn main() -> std::process::ExitCode {
     // Before any thread or GPU instance exists: a private XDG_RUNTIME_DIR when none is set,
     // so that Mesa's drivers do not complain on stderr (issue #18).

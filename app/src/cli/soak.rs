@@ -249,6 +249,7 @@ pub fn soak(args: &SoakArgs) -> Result<(), CliError> {
                     bind_groups: live.bind_groups,
                     pipelines: live.pipelines,
                     allocated_bytes: live.allocated_bytes,
+                    heap_mib: crate::heap::live_bytes().map(|b| b as f64 / (1024.0 * 1024.0)),
                     rss_mib: rss_mib(),
                 };
                 if args.verbose {

@@ -3,8 +3,10 @@
 //!
 //! GPU memory is judged on every driver: wgpu's live buffers, textures, bind groups and
 //! pipelines (its hub report) and the bytes its allocator holds (its allocator report) may not
-//! rise above what they were in the first half of the run. The process's resident memory is
-//! judged too, except where the driver is seen to keep memory per dispatch by itself:
+//! rise above what they were in the first half of the run. The heap of the process's Rust
+//! code (`crate::heap`: GI Lab, wgpu, naga) must level off on every driver. The process's
+//! resident memory is judged too, except where the driver is seen to keep memory per
+//! dispatch by itself:
 //! Mesa 22.3's lavapipe compiles a new shader variant whenever it binds a pipeline whose
 //! uniforms it can inline into branch and loop conditions (`update_inline_shader_state` in
 //! lvp_execute.c), and never frees the variant it replaces. GI Lab's frame binds about a dozen
@@ -27,6 +29,10 @@ pub struct Checkpoint {
     /// Bytes wgpu's allocator holds for buffers and textures (None where the backend has no
     /// allocator report).
     pub allocated_bytes: Option<u64>,
+    /// What the process's Rust code holds on the heap (the `gi-lab` binary counts it,
+    /// `crate::heap`; None elsewhere): GI Lab's, wgpu's and naga's memory without the
+    /// driver's.
+    pub heap_mib: Option<f64>,
     pub rss_mib: f64,
 }
 
@@ -89,7 +95,23 @@ pub fn memory_verdict(c: &[Checkpoint], rss: &RssJudged) -> MemoryVerdict {
     let gpu_flat = grown.is_empty();
     let rss_flat = z.rss_mib <= m.rss_mib + (m.rss_mib * 0.15).max(64.0);
     let rss_counts = *rss == RssJudged::Yes;
-    let flat = gpu_flat && (rss_flat || !rss_counts);
+    // The heap of the Rust code is judged on every driver, as the resident memory: it may
+    // fill caches, then must level off (16 MiB or 15 % from the middle to the end).
+    let heap_flat = match (m.heap_mib, z.heap_mib) {
+        (Some(hm), Some(hz)) => hz <= hm + (hm * 0.15).max(16.0),
+        _ => true,
+    };
+    let flat = gpu_flat && heap_flat && (rss_flat || !rss_counts);
+    let heap = match (a.heap_mib, m.heap_mib, z.heap_mib) {
+        (Some(ha), Some(hm), Some(hz)) => format!(
+            "; heap {ha:.1} MiB at frame {}, {hm:.1} at {}, {hz:.1} at {}{}",
+            a.frame,
+            m.frame,
+            z.frame,
+            if heap_flat { "" } else { ": heap GROWS" }
+        ),
+        _ => String::new(),
+    };
     let bytes = match (a.allocated_bytes, z.allocated_bytes) {
         (Some(x), Some(y)) => format!(", allocator {:.1}→{:.1} MiB", mib(x), mib(y)),
         _ => String::new(),
@@ -100,7 +122,7 @@ pub fn memory_verdict(c: &[Checkpoint], rss: &RssJudged) -> MemoryVerdict {
         (RssJudged::No(why), _) => format!("; not judged: {why}"),
     };
     let text = format!(
-        "memory {} over {} checkpoints (frames {}–{}: buffers {}→{}, textures {}→{}, bind groups {}→{}, pipelines {}→{}{bytes}{}; resident {:.0} MiB at frame {}, {:.0} at {}, {:.0} at {}, peak {:.0}{rss_note})",
+        "memory {} over {} checkpoints (frames {}–{}: buffers {}→{}, textures {}→{}, bind groups {}→{}, pipelines {}→{}{bytes}{}{heap}; resident {:.0} MiB at frame {}, {:.0} at {}, {:.0} at {}, peak {:.0}{rss_note})",
         if flat { "flat" } else { "GROWS" },
         c.len(),
         a.frame,
@@ -305,6 +327,7 @@ mod tests {
             bind_groups: 5,
             pipelines: 20,
             allocated_bytes: Some(1 << 24),
+            heap_mib: Some(40.0),
             rss_mib,
         }
     }
@@ -360,5 +383,15 @@ mod tests {
         );
         let adding: Vec<_> = (1..=20).map(|i| at(i * 100, 30 + i as usize, 300.0)).collect();
         assert!(!memory_verdict(&adding, &why).flat, "a GPU leak fails whatever the driver");
+        let mut heap = leaking.clone();
+        for (i, c) in heap.iter_mut().enumerate() {
+            c.heap_mib = Some(40.0 + 2.0 * i as f64);
+        }
+        let v = memory_verdict(&heap, &why);
+        assert!(!v.flat && v.gpu_flat && v.text.contains("heap GROWS"), "2 MiB of heap per return: {}", v.text);
+        for (i, c) in heap.iter_mut().enumerate() {
+            c.heap_mib = Some(60.0 - 20.0 / (i + 1) as f64);
+        }
+        assert!(memory_verdict(&heap, &why).flat, "a heap that levels off is flat");
     }
 }
