@@ -220,5 +220,6 @@ pub fn soler_gather_params(
 }
 pub mod crash_safe;
 pub mod images;
+pub mod knecht_support;
 pub mod meshopt_copy;
 pub mod ui_harness;

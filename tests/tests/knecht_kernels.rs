@@ -1,0 +1,456 @@
+//! Knecht 002's shading, filter and confidence kernels (issue #5) against their CPU twins in
+//! `gi_render::cpu::knecht` on synthetic G-buffers, and the VPL list on the default scene.
+
+use gi_lab_tests::knecht_support::{Rng, knecht_settings, read};
+use gi_lab_tests::{default_scene, gpu};
+use gi_render::cpu::knecht::{self};
+use gi_render::pipeline::Technique;
+use gi_render::{GpuContext, Renderer};
+use glam::{Mat4, Vec2, Vec3};
+
+// ---------------------------------------------------------------------------------------
+// Shading, filter and confidence kernels against their CPU twins on synthetic G-buffers.
+
+/// f32 → IEEE 754 half bits, round to nearest (normal range and zero only: the tests'
+/// values are unit vectors and small integers).
+fn f16_bits(x: f32) -> u16 {
+    if x.abs() < 6.2e-5 {
+        return if x.is_sign_negative() { 0x8000 } else { 0 };
+    }
+    let b = x.to_bits();
+    let sign = ((b >> 16) & 0x8000) as u16;
+    let exp = ((b >> 23) & 0xff) as i32 - 127 + 15;
+    let man = b & 0x7f_ffff;
+    let mut h = ((exp as u32) << 10) | (man >> 13);
+    if man & 0x1fff > 0x1000 || (man & 0x1fff == 0x1000 && h & 1 == 1) {
+        h += 1;
+    }
+    sign | h as u16
+}
+
+/// The value an Rgba16Float texture stores for `x`.
+fn f16(x: f32) -> f32 {
+    gi_render::buffers::half_to_f32(f16_bits(x))
+}
+
+/// A sampled (and copyable) texture with the given texels: Rgba32Float, or Rgba16Float
+/// when `half` (the G-buffer's normal format, which the temporal pass copies).
+fn texture(ctx: &GpuContext, label: &str, w: u32, h: u32, data: &[[f32; 4]], half: bool) -> wgpu::Texture {
+    let format = if half { wgpu::TextureFormat::Rgba16Float } else { wgpu::TextureFormat::Rgba32Float };
+    let bytes: Vec<u8> = if half {
+        data.iter().flatten().flat_map(|&v| f16_bits(v).to_le_bytes()).collect()
+    } else {
+        bytemuck::cast_slice(data).to_vec()
+    };
+    gi_lab_tests::texture_from_bytes(ctx, label, format, (w, h), &bytes)
+}
+
+/// Views of a synthetic G-buffer (emission and depth are not read by the passes tested).
+struct SyntheticGBuffer {
+    position: wgpu::Texture,
+    normal: wgpu::Texture,
+    albedo: wgpu::Texture,
+    material: wgpu::Texture,
+    motion: wgpu::Texture,
+}
+
+impl SyntheticGBuffer {
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        ctx: &GpuContext,
+        w: u32,
+        h: u32,
+        position: &[[f32; 4]],
+        normal: &[[f32; 4]],
+        albedo: &[[f32; 4]],
+        material: &[[f32; 4]],
+        motion: &[[f32; 4]],
+    ) -> Self {
+        Self {
+            position: texture(ctx, "test.position", w, h, position, false),
+            normal: texture(ctx, "test.normal", w, h, normal, true),
+            albedo: texture(ctx, "test.albedo", w, h, albedo, false),
+            material: texture(ctx, "test.material", w, h, material, false),
+            motion: texture(ctx, "test.motion", w, h, motion, false),
+        }
+    }
+
+    fn views(&self) -> gi_render::passes::gbuffer::GBufferViews {
+        let v = |t: &wgpu::Texture| t.create_view(&Default::default());
+        gi_render::passes::gbuffer::GBufferViews {
+            position: v(&self.position),
+            normal: v(&self.normal),
+            albedo: v(&self.albedo),
+            material: v(&self.material),
+            motion: v(&self.motion),
+            emission: v(&self.albedo),
+            depth: v(&self.position),
+        }
+    }
+}
+
+#[test]
+fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
+    use gi_render::passes::knecht::interleave::{GatherVisibility, InterleavePass};
+    let ctx = gpu();
+    // An odd size, so that the last row and column of tiles are partial; n = 2 and 7 VPLs,
+    // so that the tiles hold 2, 2, 2 and 1 VPLs and the N / N_t scaling differs per tile.
+    let (w, h, n) = (30u32, 26u32, 2u32);
+    let mut rng = Rng(7);
+    let len = (w * h) as usize;
+    let (mut pos, mut nrm, mut alb, mut mat) =
+        (vec![[0.0; 4]; len], vec![[0.0; 4]; len], vec![[0.0; 4]; len], vec![[0.0; 4]; len]);
+    let mut receivers = vec![None; len];
+    for i in 0..len {
+        if rng.next_f32() < 0.1 {
+            continue; // background
+        }
+        let p = Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 0.5));
+        let nq = {
+            let u = rng.unit();
+            Vec3::new(f16(u.x), f16(u.y), f16(u.z))
+        };
+        let c = Vec3::new(rng.unorm8(), rng.unorm8(), rng.unorm8());
+        let di = rng.unorm8();
+        // SI in eighths and SP a small integer: exact in the split's half-float target.
+        let si = (rng.next_f32() * 8.0).floor() / 8.0;
+        let sp = [1.0, 8.0, 32.0, 200.0][(rng.next_f32() * 4.0) as usize % 4];
+        pos[i] = [p.x, p.y, p.z, 1.0];
+        nrm[i] = [nq.x, nq.y, nq.z, 1.0];
+        alb[i] = [c.x, c.y, c.z, di];
+        mat[i] = [si, sp, 0.0, 0.0];
+        receivers[i] = Some(knecht::Receiver { position: p, normal: nq.normalize(), albedo: c, di, si, sp });
+    }
+    let vpl_count = 7u32;
+    let mut cpu_vpls = Vec::new();
+    let mut gpu_vpls = Vec::new();
+    for k in 0..vpl_count {
+        let v = knecht::Vpl {
+            position: Vec3::new(rng.range(-1.5, 1.5), rng.range(-1.5, 1.5), rng.range(0.0, 1.5)),
+            normal: rng.unit(),
+            flux: Vec3::new(rng.range(0.5, 4.0), rng.range(0.5, 4.0), rng.range(0.5, 4.0)),
+            incident: rng.unit(),
+            albedo: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()),
+            di: rng.next_f32(),
+            si: rng.next_f32(),
+            sp: [2.0, 16.0, 64.0][k as usize % 3],
+        };
+        // VPL 5 is an empty slot (position.w = 0): it is skipped but still counted in N_t.
+        let enabled = k != 5;
+        gpu_vpls.push(gi_render::passes::reference::vpl::GpuVpl {
+            position: v.position.extend(enabled as u32 as f32),
+            normal: v.normal.extend(v.di),
+            flux: v.flux.extend(v.si),
+            incident: v.incident.extend(v.sp),
+            albedo: v.albedo.extend(0.0),
+        });
+        cpu_vpls.push(enabled.then_some(v));
+    }
+    let eye = Vec3::new(0.2, 0.1, 3.0);
+    let d_min = 0.1;
+    let camera = gi_render::passes::CameraUniform {
+        view_proj: Mat4::IDENTITY,
+        prev_view_proj: Mat4::IDENTITY,
+        inv_view_proj: Mat4::IDENTITY,
+        view: Mat4::IDENTITY,
+        position: eye.extend(1.0),
+        viewport: glam::Vec4::new(w as f32, h as f32, 1.0 / w as f32, 1.0 / h as f32),
+        params: glam::Vec4::new(0.1, 10.0, 0.0, 0.0),
+        lod: glam::Vec4::new(-1.0, 0.0, 0.0, 0.0),
+    };
+    let buffer = |label, bytes: &[u8], usage| {
+        let b = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: bytes.len() as u64,
+            usage: usage | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        ctx.queue.write_buffer(&b, 0, bytes);
+        b
+    };
+    let camera_buf = buffer("test.camera", bytemuck::bytes_of(&camera), wgpu::BufferUsages::UNIFORM);
+    let vpl_buf = buffer("test.vpls", bytemuck::cast_slice(&gpu_vpls), wgpu::BufferUsages::STORAGE);
+    let g = SyntheticGBuffer::new(&ctx, w, h, &pos, &nrm, &alb, &mat, &vec![[0.0; 4]; len]);
+    let mut pass = InterleavePass::new(&ctx, gi_render::passes::bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h, n);
+    let mut timer = gi_render::timing::GpuTimer::new(&ctx);
+    // Frame 0 with the full BRDF at the receiver, frame 1 (another slot→tile map) diffuse only.
+    let (mut lit, mut dark) = (0, 0);
+    for (frame, diffuse) in [(0u32, false), (1, true)] {
+        let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.shade") });
+        pass.shade(
+            &ctx,
+            &mut enc,
+            &mut timer,
+            &camera_buf,
+            &g.views(),
+            &vpl_buf,
+            vpl_count,
+            d_min,
+            0.0,
+            &GatherVisibility::None,
+            diffuse,
+        );
+        ctx.queue.submit([enc.finish()]);
+        let got = read(&ctx, &pass.merged);
+        let offsets = knecht::tile_offsets(vpl_count, n, frame);
+        for y in 0..h {
+            for x in 0..w {
+                let i = (y * w + x) as usize;
+                let tile = (x % n) + (y % n) * n;
+                let mut expected = Vec3::ZERO;
+                if let Some(r) = &receivers[i] {
+                    // Diffuse only: the receiver's SI is 0 (c·DI/π, as the HCB reflects).
+                    let r = knecht::Receiver { si: if diffuse { 0.0 } else { r.si }, ..*r };
+                    let slots: Vec<u32> = knecht::tile_slots(tile, vpl_count, n, &offsets).collect();
+                    let per_tile = slots.len() as u32;
+                    for k in slots {
+                        if let Some(v) = &cpu_vpls[k as usize] {
+                            expected += knecht::vpl_radiance(v, &r, eye, d_min);
+                        }
+                    }
+                    expected *= vpl_count as f32 / per_tile as f32;
+                }
+                let p = got.at(x, y);
+                let g3 = Vec3::new(p[0], p[1], p[2]);
+                let err = (g3 - expected).abs().max_element();
+                assert!(
+                    err <= 1e-5 + 2e-4 * expected.abs().max_element(),
+                    "frame {frame}, diffuse {diffuse}: pixel ({x}, {y}), tile {tile}: GPU {g3}, CPU {expected}"
+                );
+                if expected.max_element() > 1e-3 {
+                    lit += 1;
+                } else if receivers[i].is_some() {
+                    dark += 1;
+                }
+            }
+        }
+    }
+    let len = 2 * len;
+    // The inputs exercise both sides of the cosine tests.
+    assert!(lit > len / 4 && dark > len / 20, "{lit} lit and {dark} unlit foreground pixels of {len}");
+}
+
+#[test]
+fn geometry_aware_filter_on_the_gpu_equals_the_cpu() {
+    use gi_render::passes::knecht::interleave::{InterleavePass, InterleaveSettings};
+    let ctx = gpu();
+    let (w, h, n) = (27u32, 21u32, 4u32);
+    let depth_range = 10.0;
+    let mut rng = Rng(11);
+    let len = (w * h) as usize;
+    // Two surfaces meeting along a diagonal — a floor (depth 2 + a slope, normal +y) and a
+    // wall 0.3 behind it (normal +z) — with per-pixel depth jitter around α·range = 0.1,
+    // tilted normals around β, and background pixels.
+    let mut texels = Vec::with_capacity(len);
+    for y in 0..h {
+        for x in 0..w {
+            if rng.next_f32() < 0.08 {
+                texels.push(knecht::FilterTexel { value: Vec3::ZERO, depth: 0.0, normal: Vec3::Z });
+                continue;
+            }
+            let floor = x + y < 24;
+            let base = if floor { 2.0 + 0.01 * x as f32 } else { 2.3 };
+            let depth = base + rng.range(-0.08, 0.08);
+            let axis = if floor { Vec3::Y } else { Vec3::Z };
+            let normal = (axis + 0.5 * rng.range(0.0, 1.0) * rng.unit()).normalize();
+            let normal = Vec3::new(f16(normal.x), f16(normal.y), f16(normal.z));
+            let value = Vec3::new(rng.range(0.0, 2.0), rng.range(0.0, 2.0), rng.range(0.0, 2.0));
+            texels.push(knecht::FilterTexel { value, depth, normal });
+        }
+    }
+    let pos: Vec<[f32; 4]> = texels.iter().map(|t| [0.0, 0.0, 0.0, t.depth]).collect();
+    let nrm: Vec<[f32; 4]> = texels
+        .iter()
+        .map(|t| if t.depth > 0.0 { [t.normal.x, t.normal.y, t.normal.z, 1.0] } else { [0.0; 4] })
+        .collect();
+    let src: Vec<[f32; 4]> = texels.iter().map(|t| [t.value.x, t.value.y, t.value.z, 1.0]).collect();
+    let zero = vec![[0.0; 4]; len];
+    let g = SyntheticGBuffer::new(&ctx, w, h, &pos, &nrm, &zero, &zero, &zero);
+    let src_tex = texture(&ctx, "test.src", w, h, &src, false);
+    let pass = InterleavePass::new(&ctx, gi_render::passes::bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h, n);
+    let s = InterleaveSettings { n, ..Default::default() };
+    let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.filter") });
+    pass.filter(&ctx, &mut enc, None, &s, depth_range, &src_tex.create_view(&Default::default()), &g.views());
+    ctx.queue.submit([enc.finish()]);
+    let got = read(&ctx, &pass.filtered);
+    let cpu = knecht::geometry_aware_filter(&texels, w, h, n, s.alpha, s.beta, depth_range);
+    let mut partial = 0;
+    for y in 0..h {
+        for x in 0..w {
+            let i = (y * w + x) as usize;
+            let p = got.at(x, y);
+            let g3 = Vec3::new(p[0], p[1], p[2]);
+            assert!((g3 - cpu[i]).abs().max_element() <= 1e-5, "pixel ({x}, {y}): GPU {g3}, CPU {}", cpu[i]);
+            // Count pixels where the thresholds rejected some neighbours but not all.
+            if texels[i].depth > 0.0 && (cpu[i] - texels[i].value).abs().max_element() > 1e-3 {
+                partial += 1;
+            }
+        }
+    }
+    assert!(partial > len / 2, "only {partial} pixels were averaged");
+    // The thresholds matter: with α and β open the result differs near the crease.
+    let open = knecht::geometry_aware_filter(&texels, w, h, n, 1.0, -1.0, depth_range);
+    let differ = cpu.iter().zip(&open).filter(|(a, b)| (**a - **b).abs().max_element() > 1e-3).count();
+    assert!(differ > len / 4, "the thresholds rejected neighbours at only {differ} pixels");
+}
+
+#[test]
+fn confidence_and_merge_on_the_gpu_equal_eq_3_1_to_3_6_on_the_cpu() {
+    use gi_render::passes::knecht::temporal::{TemporalPass, TemporalSettings};
+    let ctx = gpu();
+    let (w, h) = (24u32, 20u32);
+    let depth_range = 9.9;
+    let mut rng = Rng(23);
+    let len = (w * h) as usize;
+    // Frame 0: depth, normal and light per pixel (some background).
+    struct Px {
+        depth: f32,
+        normal: Vec3,
+        light: Vec3,
+    }
+    let frame = |rng: &mut Rng| -> Vec<Option<Px>> {
+        (0..len)
+            .map(|_| {
+                (rng.next_f32() > 0.1).then(|| {
+                    let n = (Vec3::Z + 0.4 * rng.unit()).normalize();
+                    Px {
+                        depth: rng.range(1.0, 5.0),
+                        normal: Vec3::new(f16(n.x), f16(n.y), f16(n.z)),
+                        light: Vec3::new(rng.range(0.1, 2.0), rng.range(0.1, 2.0), rng.range(0.1, 2.0)),
+                    }
+                })
+            })
+            .collect()
+    };
+    let f0 = frame(&mut rng);
+    // Frame 1: each pixel moved a little from its frame-0 self (or is new); motion in
+    // pixels, some reaching off screen.
+    let f1: Vec<Option<Px>> = f0
+        .iter()
+        .map(|p| {
+            let keep = rng.next_f32();
+            if rng.next_f32() < 0.1 {
+                return None;
+            }
+            Some(match p {
+                Some(p) if keep < 0.8 => {
+                    let n = (p.normal + rng.range(0.0, 0.3) * rng.unit()).normalize();
+                    Px {
+                        depth: p.depth + rng.range(-0.2, 0.2),
+                        normal: Vec3::new(f16(n.x), f16(n.y), f16(n.z)),
+                        light: p.light * rng.range(0.7, 1.3),
+                    }
+                }
+                _ => Px {
+                    depth: rng.range(1.0, 5.0),
+                    normal: Vec3::Z,
+                    light: Vec3::new(rng.range(0.1, 2.0), rng.range(0.1, 2.0), rng.range(0.1, 2.0)),
+                },
+            })
+        })
+        .collect();
+    let motion: Vec<Vec2> = (0..len)
+        .map(|_| if rng.next_f32() < 0.5 { Vec2::ZERO } else { Vec2::new(rng.range(-3.0, 3.0), rng.range(-3.0, 3.0)) })
+        .collect();
+    let upload = |f: &[Option<Px>], motion: &[Vec2]| {
+        let pos: Vec<[f32; 4]> = f.iter().map(|p| [0.0, 0.0, 0.0, p.as_ref().map_or(0.0, |p| p.depth)]).collect();
+        let nrm: Vec<[f32; 4]> =
+            f.iter().map(|p| p.as_ref().map_or([0.0; 4], |p| [p.normal.x, p.normal.y, p.normal.z, 1.0])).collect();
+        let light: Vec<[f32; 4]> =
+            f.iter().map(|p| p.as_ref().map_or([0.0; 4], |p| [p.light.x, p.light.y, p.light.z, 1.0])).collect();
+        let mv: Vec<[f32; 4]> = motion.iter().map(|m| [m.x, m.y, 0.0, 0.0]).collect();
+        let zero = vec![[0.0; 4]; len];
+        (
+            SyntheticGBuffer::new(&ctx, w, h, &pos, &nrm, &zero, &zero, &mv),
+            texture(&ctx, "test.light", w, h, &light, false),
+        )
+    };
+    let s = TemporalSettings { w_pos: 10.0, ..Default::default() };
+    let mut pass = TemporalPass::new(&ctx, w, h);
+    for (f, m) in [(&f0, vec![Vec2::ZERO; len]), (&f1, motion.clone())] {
+        let (g, light) = upload(f, &m);
+        let mut enc =
+            ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.temporal") });
+        pass.run(&ctx, &mut enc, None, &s, depth_range, &light.create_view(&Default::default()), &g.views(), &g.normal);
+        ctx.queue.submit([enc.finish()]);
+    }
+    let conf = read(&ctx, &pass.confidence);
+    let hist = read(&ctx, &pass.history);
+    let weights = knecht::ConfidenceWeights {
+        c_base: s.c_base,
+        w_pos: s.w_pos,
+        w_normal: s.w_normal,
+        w_illumination: s.w_illumination,
+    };
+    let (mut zero, mut middle, mut merged) = (0, 0, 0);
+    for y in 0..h as i32 {
+        for x in 0..w as i32 {
+            let i = (y * w as i32 + x) as usize;
+            let (mut c, mut out) = (0.0, f1[i].as_ref().map_or(Vec3::ZERO, |p| p.light));
+            if let Some(p) = &f1[i] {
+                // The shader's lookup: the previous position rounded to a pixel.
+                let m = motion[i];
+                let q = (Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + m).floor();
+                let inside = q.x >= 0.0 && q.y >= 0.0 && q.x < w as f32 && q.y < h as f32;
+                if inside && let Some(prev) = &f0[(q.y as u32 * w + q.x as u32) as usize] {
+                    let input = knecht::ConfidenceInput {
+                        motion_px: m,
+                        size: Vec2::new(w as f32, h as f32),
+                        depth: p.depth,
+                        depth_prev: prev.depth,
+                        depth_range,
+                        normal: p.normal,
+                        normal_prev: prev.normal,
+                        illumination: p.light,
+                        illumination_prev: prev.light,
+                    };
+                    c = knecht::confidence(&input, &weights);
+                    out = knecht::merge(p.light, prev.light, c);
+                    merged += 1;
+                }
+            }
+            let g = conf.at(x as u32, y as u32)[0];
+            assert!((g - c).abs() <= 2e-5, "confidence at ({x}, {y}): GPU {g}, CPU {c}");
+            let hp = hist.at(x as u32, y as u32);
+            let h3 = Vec3::new(hp[0], hp[1], hp[2]);
+            assert!(
+                (h3 - out).abs().max_element() <= 1e-4 * out.max_element().max(1.0),
+                "merge at ({x}, {y}): GPU {h3}, CPU {out}"
+            );
+            let depth = f1[i].as_ref().map_or(0.0, |p| p.depth);
+            assert_eq!(hp[3], depth, "history depth at ({x}, {y})");
+            if c == 0.0 {
+                zero += 1;
+            } else if c > 0.05 && c < 0.85 {
+                middle += 1;
+            }
+        }
+    }
+    // Every branch is exercised: rejected, partial and merged pixels.
+    assert!(merged > len / 2 && zero > len / 20 && middle > len / 10, "{merged} merged, {zero} zero, {middle} between");
+}
+
+#[test]
+fn the_vpl_list_holds_every_vpl_on_the_scene_surfaces() {
+    let mut r = Renderer::new(gpu(), default_scene(), knecht_settings(), 64, 64).expect("renderer");
+    r.clock.playing = false;
+    assert!(r.vpl_list().is_none(), "no list before a frame");
+    r.render_frame();
+    let vpls = r.vpl_list().expect("instant radiosity has a VPL list");
+    assert_eq!(vpls.len(), r.settings().vpl.count as usize);
+    let b = r.bounds();
+    let slack = 1e-3 * b.radius();
+    for v in &vpls {
+        let p = v.position.truncate();
+        assert!(p.cmpge(b.min - slack).all() && p.cmple(b.max + slack).all(), "VPL at {p} outside the scene");
+        assert!((v.normal.truncate().length() - 1.0).abs() < 1e-3, "normal {:?}", v.normal);
+        assert!(v.flux.truncate().is_finite() && v.flux.truncate().min_element() >= 0.0, "flux {:?}", v.flux);
+    }
+    // The red and green walls hold VPLs whose reflected flux is red and green.
+    let reflected: Vec<Vec3> = vpls.iter().map(|v| (v.flux * v.albedo).truncate()).collect();
+    assert!(reflected.iter().any(|c| c.x > 2.0 * c.y) && reflected.iter().any(|c| c.y > 2.0 * c.x));
+    let mut s = r.settings().clone();
+    Technique::DirectOnly.apply(&mut s);
+    r.set_settings(s).expect("valid");
+    assert!(r.vpl_list().is_none(), "no list without instant radiosity");
+}
