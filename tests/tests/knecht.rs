@@ -244,6 +244,43 @@ fn an_ism_atlas_larger_than_the_device_is_refused_with_the_largest_valid_combina
     assert_eq!(r.settings(), &before, "a refused change must change nothing");
 }
 
+/// Issue #19: an interactive change of one field past the atlas limit is clamped to the
+/// largest value that fits, with the limit's message; a change of two fields, or the command
+/// line's `set_settings`, is refused.
+#[test]
+fn one_field_past_the_ism_atlas_limit_is_clamped_to_the_largest_that_fits() {
+    let mut start = knecht_settings();
+    start.vpl.count = 4096;
+    start.ism.map_size = 32;
+    start.ism.points = 262144;
+    let mut r = Renderer::new(gpu(), default_scene(), start.clone(), 64, 64).expect("4096 maps of 32² fit");
+    let mut bigger = start.clone();
+    bigger.ism.map_size = 512;
+    let note = r.set_settings_clamped(bigger).expect("clamped, not refused").expect("a note says so");
+    let size = r.settings().ism.map_size;
+    assert!(size.is_power_of_two() && (32..512).contains(&size), "map size clamped to {size}");
+    assert!(note.starts_with(&format!("ism.map_size clamped to {size}: ")) && note.contains("VPLs fit"), "{note}");
+    r.render_frame();
+    assert_eq!(r.settings().vpl.count, 4096, "only the changed field moves");
+
+    let mut more = r.settings().clone();
+    more.ism.map_size = 512;
+    more.vpl.count = 64;
+    r.set_settings(more.clone()).expect("64 maps of 512² fit");
+    more.vpl.count = 4096;
+    let note = r.set_settings_clamped(more).expect("clamped").expect("note");
+    let count = r.settings().vpl.count;
+    assert!((64..4096).contains(&count), "VPL count clamped to {count}");
+    assert!(note.starts_with(&format!("vpl.count clamped to {count}: ")), "{note}");
+
+    let before = r.settings().clone();
+    let mut both = before.clone();
+    both.vpl.count = 4096;
+    both.ism.points = 131072;
+    assert!(r.set_settings_clamped(both).is_err(), "two fields at once are refused, not guessed");
+    assert_eq!(r.settings(), &before);
+}
+
 #[test]
 fn combinations_that_cannot_work_are_refused_with_a_reason() {
     let mut s = knecht_settings();

@@ -701,3 +701,27 @@ fn gautron_settings_buffers_cache_and_records_appear_in_the_lab() {
         before.iter().zip(&after).filter(|(a, b)| a.iter().zip(b.iter()).any(|(x, y)| x.abs_diff(*y) > 40)).count();
     assert!(changed > 4 * st.count as usize, "{changed} pixels changed for {} records", st.count);
 }
+
+/// Issue #19: a setting pushed past the ISM atlas's device limit is clamped to the largest
+/// value that fits, and the settings panel says so (as a warning, the value being applied).
+#[test]
+fn a_value_past_the_atlas_limit_is_clamped_and_the_panel_says_so() {
+    let (mut h, _dir) = harness("clamp");
+    h.state_mut().state.session.render_scale = 0.1;
+    if let Ok(l) = &mut h.state_mut().state.lab {
+        l.settings.vpl.count = 4096;
+        l.settings.ism.map_size = 32;
+        l.settings.ism.points = 262144;
+        l.apply_settings();
+        assert!(l.settings_error.is_none(), "{:?}", l.settings_error);
+        l.settings.ism.map_size = 512;
+        l.apply_settings();
+    }
+    h.run_steps(2);
+    let l = h.state().state.lab.as_ref().expect("lab");
+    let size = l.renderer.settings().ism.map_size;
+    assert!(size < 512 && l.settings.ism.map_size == size, "the panel and the renderer agree on {size}");
+    let msg = l.settings_error.clone().unwrap_or_default();
+    assert!(msg.starts_with(&format!("clamped: ism.map_size clamped to {size}")), "{msg}");
+    h.get_by_label(&msg);
+}

@@ -91,13 +91,18 @@ impl Lab {
     }
 
     /// Applies the live settings; a refused change keeps the renderer's last valid settings
-    /// and says why.
+    /// and says why. A value past a device limit that names the largest fitting value (an
+    /// ISM atlas larger than a storage binding) is clamped to it, with the limit's message.
     pub fn apply_settings(&mut self) {
         if self.settings == *self.renderer.settings() {
             return;
         }
-        match self.renderer.set_settings(self.settings.clone()) {
-            Ok(_) => self.settings_error = None,
+        match self.renderer.set_settings_clamped(self.settings.clone()) {
+            Ok(None) => self.settings_error = None,
+            Ok(Some(note)) => {
+                self.settings_error = Some(format!("clamped: {note}"));
+                self.settings = self.renderer.settings().clone();
+            }
             Err(e) => {
                 self.settings_error = Some(format!("refused: {e}"));
                 self.settings = self.renderer.settings().clone();

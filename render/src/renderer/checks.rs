@@ -72,6 +72,28 @@ pub enum RenderError {
     },
 }
 
+impl RenderError {
+    /// The largest value of `field` that the device limit behind this error allows, where the
+    /// error names one (issue #19: the lab clamps a slider to it): the VPL count or map size of
+    /// an ISM atlas, the VPL count of an IRSM or exact-map atlas, the reference's batch, the
+    /// shadow map size. `settings` are the refused ones (the exact maps count every bounce).
+    pub fn largest_value(&self, field: &str, settings: &LabSettings) -> Option<crate::settings::Value> {
+        use crate::settings::Value;
+        let positive = |v: u32| (v >= 1).then_some(Value::U32(v));
+        match (self, field) {
+            (RenderError::IsmAtlasTooLarge { largest_vpls, .. }, "vpl.count") => positive(*largest_vpls),
+            (RenderError::IsmAtlasTooLarge { largest_size, .. }, "ism.map_size") => largest_size.and_then(positive),
+            (RenderError::IrsmAtlasTooLarge { largest_vpls, .. }, "vpl.count") => positive(*largest_vpls),
+            (RenderError::VplAtlasTooLarge { largest, .. }, "vpl.count") => {
+                positive(largest / settings.vpl.bounces.clamp(1, MAX_BOUNCES))
+            }
+            (RenderError::VplAtlasTooLarge { largest, .. }, "reference.vpls_per_frame") => positive(*largest),
+            (RenderError::ShadowMapTooLarge { largest, .. }, "direct.shadow_map_size") => positive(*largest),
+            _ => None,
+        }
+    }
+}
+
 /// Refuses an exact-VPL atlas larger than the device allows, naming the largest batch that fits.
 pub(crate) fn check_vpl_atlas(ctx: &GpuContext, settings: &LabSettings) -> Result<(), RenderError> {
     if !settings.pipeline.is_reference() {

@@ -335,6 +335,31 @@ impl Renderer {
         Ok(reset)
     }
 
+    /// [`Self::set_settings`] for an interactive change: when the one field that changed is
+    /// refused by a device limit that names the largest value fitting (an ISM atlas past the
+    /// device's storage binding, `RenderError::largest_value`), that value is applied instead
+    /// and the note returned says so with the limit's message. Any other refusal is returned
+    /// as it is. The command line does not clamp (`--set` refuses), so that a script gets
+    /// what it asked for or an error.
+    pub fn set_settings_clamped(&mut self, settings: LabSettings) -> Result<Option<String>, RenderError> {
+        let refused = match self.set_settings(settings.clone()) {
+            Ok(_) => return Ok(None),
+            Err(e) => e,
+        };
+        let changed: Vec<String> = LabSettings::groups()
+            .into_iter()
+            .flat_map(|(group, fields)| fields.iter().map(move |m| format!("{group}.{}", m.name)))
+            .filter(|path| self.settings.get(path) != settings.get(path))
+            .collect();
+        let [field] = changed.as_slice() else { return Err(refused) };
+        let Some(value) = refused.largest_value(field, &settings) else { return Err(refused) };
+        let mut clamped = settings;
+        if clamped.set(field, &value).is_err() || self.set_settings(clamped).is_err() {
+            return Err(refused);
+        }
+        Ok(Some(format!("{field} clamped to {value}: {refused}")))
+    }
+
     /// Forgets everything temporal: the movement buffer's previous frame, the confidence
     /// merge's history, the reference's average and Gautron's record cache.
     pub fn reset_history(&mut self) {

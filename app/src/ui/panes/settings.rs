@@ -19,7 +19,9 @@ pub(super) fn settings_ui(st: &mut State, ui: &mut egui::Ui) {
         }
     }
     if let Some(e) = &l.settings_error {
-        ui.colored_label(ERROR, e);
+        // A clamped value was applied (a warning); a refused one was not (an error).
+        let colour = if e.starts_with("clamped:") { ui.visuals().warn_fg_color } else { ERROR };
+        ui.colored_label(colour, e);
     }
     if l.settings.pipeline.uses_soler() {
         ui.separator();
