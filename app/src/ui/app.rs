@@ -393,6 +393,10 @@ impl eframe::App for GiLabApp {
         // goes on unwinding.
         let frame = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.frame_ui(ui, &ctx)));
         if let Err(panic) = frame {
+            // A poll delivers a loss the device has not reported yet.
+            if let Ok(l) = &self.state.lab {
+                let _ = l.renderer.ctx.device.poll(wgpu::PollType::Poll);
+            }
             if self.handle_device_loss() {
                 self.device_lost_panel(ui);
                 return;
