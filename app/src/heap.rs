@@ -5,17 +5,17 @@
 //! resident memory (a driver that grows by itself, `cli::soak_memory`).
 
 use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 static LIVE: AtomicUsize = AtomicUsize::new(0);
-static INSTALLED: AtomicBool = AtomicBool::new(false);
 
 /// The system allocator, counted.
 pub struct CountingAlloc;
 
-/// Bytes the Rust code of this process holds, if [`CountingAlloc`] is its global allocator.
+/// Bytes the Rust code of this process holds, if [`CountingAlloc`] is its global allocator
+/// (a process that allocates through it always holds some: none counted means not installed).
 pub fn live_bytes() -> Option<usize> {
-    INSTALLED.load(Ordering::Relaxed).then(|| LIVE.load(Ordering::Relaxed))
+    Some(LIVE.load(Ordering::Relaxed)).filter(|&b| b > 0)
 }
 
 // SAFETY: every call is forwarded to `System` with the same arguments; only counters change.
@@ -24,7 +24,6 @@ unsafe impl GlobalAlloc for CountingAlloc {
         // SAFETY: forwarded unchanged.
         let p = unsafe { System.alloc(layout) };
         if !p.is_null() {
-            INSTALLED.store(true, Ordering::Relaxed);
             LIVE.fetch_add(layout.size(), Ordering::Relaxed);
         }
         p
@@ -34,7 +33,6 @@ unsafe impl GlobalAlloc for CountingAlloc {
         // SAFETY: forwarded unchanged.
         let p = unsafe { System.alloc_zeroed(layout) };
         if !p.is_null() {
-            INSTALLED.store(true, Ordering::Relaxed);
             LIVE.fetch_add(layout.size(), Ordering::Relaxed);
         }
         p

@@ -234,43 +234,25 @@ pub fn driver_growth_mib(ctx: &GpuContext) -> f64 {
         compilation_options: Default::default(),
         cache: None,
     });
-    let texture = |label: &str, usage: wgpu::TextureUsages| {
-        d.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d { width: 16, height: 16, depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba32Float,
-            usage,
-            view_formats: &[],
-        })
-    };
-    let src = texture("soak.driver_probe.src", wgpu::TextureUsages::TEXTURE_BINDING);
-    let aux = texture("soak.driver_probe.aux", wgpu::TextureUsages::TEXTURE_BINDING);
+    use gi_render::passes::{bind_group, create_target, uniform_buffer, view};
+    let texture = |label: &str, usage| create_target(d, label, 16, 16, wgpu::TextureFormat::Rgba32Float, usage);
+    let src = texture("soak.driver_probe.src", wgpu::TextureUsages::empty());
+    let aux = texture("soak.driver_probe.aux", wgpu::TextureUsages::empty());
     let dst = texture("soak.driver_probe.dst", wgpu::TextureUsages::STORAGE_BINDING);
-    let params = d.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("soak.driver_probe.params"),
-        size: 32,
-        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
+    let params = uniform_buffer(d, "soak.driver_probe.params", 32);
     // A 4×4 window, as the interleaved filter's default.
     let values: [u32; 8] = [4, 0, 0, 0, 0.1f32.to_bits(), 0.5f32.to_bits(), 0, 0];
     let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
     ctx.queue.write_buffer(&params, 0, &bytes);
-    let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
-    let (src_v, aux_v, dst_v) = (view(&src), view(&aux), view(&dst));
-    let group = d.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("soak.driver_probe"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: params.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&src_v) },
-            wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&aux_v) },
-            wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&dst_v) },
-        ],
-    });
+    let (src_v, aux_v, dst_v) =
+        (view(&src, "soak.driver_probe.src"), view(&aux, "soak.driver_probe.aux"), view(&dst, "soak.driver_probe.dst"));
+    let tv = wgpu::BindingResource::TextureView;
+    let group = bind_group(
+        d,
+        "soak.driver_probe",
+        &pipeline.get_bind_group_layout(0),
+        vec![params.as_entire_binding(), tv(&src_v), tv(&aux_v), tv(&dst_v)],
+    );
     let dispatch = || {
         let mut e = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("soak.driver_probe") });
         {

@@ -423,9 +423,8 @@ impl GiLabApp {
 
     /// One frame of the lab: its panels, viewers and renderer.
     fn frame_ui(&mut self, ui: &mut egui::Ui, ctx: &egui::Context) {
-        let ctx = ctx.clone();
-        self.state.handle_dropped_files(&ctx);
-        self.state.shortcuts(&ctx);
+        self.state.handle_dropped_files(ctx);
+        self.state.shortcuts(ctx);
         if std::mem::take(&mut self.state.request_new_viewer) {
             self.add_viewer();
         }
@@ -457,10 +456,10 @@ impl GiLabApp {
                 }
             }
         });
-        self.state.problem_dialog(&ctx);
-        self.state.help_window(&ctx);
+        self.state.problem_dialog(ctx);
+        self.state.help_window(ctx);
         self.state.frames += 1;
-        self.screenshot_step(&ctx);
+        self.screenshot_step(ctx);
         self.autosave();
         ctx.request_repaint();
     }

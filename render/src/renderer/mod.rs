@@ -346,11 +346,8 @@ impl Renderer {
             Ok(_) => return Ok(None),
             Err(e) => e,
         };
-        let changed: Vec<String> = LabSettings::groups()
-            .into_iter()
-            .flat_map(|(group, fields)| fields.iter().map(move |m| format!("{group}.{}", m.name)))
-            .filter(|path| self.settings.get(path) != settings.get(path))
-            .collect();
+        let changed: Vec<String> =
+            LabSettings::all_paths().into_iter().filter(|path| self.settings.get(path) != settings.get(path)).collect();
         let [field] = changed.as_slice() else { return Err(refused) };
         let Some(value) = refused.largest_value(field, &settings) else { return Err(refused) };
         let mut clamped = settings;
