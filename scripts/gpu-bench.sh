@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# GI Lab's GPU benchmark: every shipped preset on the embedded default scene at 1920x1080,
+# the suites (knecht and nguyen at 1920x1080, soler at 1280x720 as its Fig. 9, gautron at
+# 64x64 for its per-pixel brute force, scenes at 1920x1080 over assets/), written as text
+# into one folder. Run it from the project root with a release build:
+#
+#   cargo build --release -p gi-lab && bash scripts/gpu-bench.sh [OUT_DIR]
+#
+# Each run has its own time limit so that one slow row cannot eat the whole budget; a row
+# that times out says so in the log. Absolute times are only meaningful on a real GPU
+# (docs/performance.md); on lavapipe compare ratios within one run.
+set -uo pipefail
+cd "$(dirname "$0")/.."
+
+BIN="${GI_LAB_BIN:-target/release/gi-lab}"
+SIZE="${GI_LAB_BENCH_SIZE:-1920x1080}"
+FRAMES="${GI_LAB_BENCH_FRAMES:-60}"
+LIMIT="${GI_LAB_BENCH_LIMIT:-90}"
+OUT="${1:-out/gpu-bench}"
+mkdir -p "$OUT"
+LOG="$OUT/gpu-bench.txt"
+: >"$LOG"
+
+if [ ! -x "$BIN" ]; then
+  echo "scripts/gpu-bench.sh: $BIN is missing: cargo build --release -p gi-lab" >&2
+  exit 1
+fi
+
+# One row: its command line, then its output (or why it stopped).
+row() {
+  local name="$1"
+  shift
+  echo "=== $name: gi-lab $*" | tee -a "$LOG"
+  local start=$SECONDS
+  timeout "$LIMIT" "$BIN" "$@" >>"$LOG" 2>&1
+  local rc=$?
+  if [ $rc -eq 124 ]; then
+    echo "(stopped after ${LIMIT} s)" | tee -a "$LOG"
+  elif [ $rc -ne 0 ]; then
+    echo "(exit status $rc)" | tee -a "$LOG"
+  fi
+  echo "--- $name: $((SECONDS - start)) s" | tee -a "$LOG"
+}
+
+{
+  echo "GI Lab GPU bench, $(date -u +%Y-%m-%dT%H:%MZ), commit $(git rev-parse --short HEAD 2>/dev/null || echo unknown)"
+  command -v nvidia-smi >/dev/null && nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader
+  uname -srm
+} | tee -a "$LOG"
+
+for p in presets/*.ron; do
+  row "preset $(basename "$p" .ron)" bench --preset "$p" --size "$SIZE" --frames "$FRAMES"
+done
+row "suite knecht" bench --suite knecht --size "$SIZE" --frames 20
+row "suite nguyen" bench --suite nguyen --size "$SIZE" --frames 20
+row "suite soler" bench --suite soler --size 1280x720 --frames 20
+row "suite scenes" bench --suite scenes --size "$SIZE" --frames 20
+row "suite gautron" bench --suite gautron --size 64x64
+echo "done: $LOG"
