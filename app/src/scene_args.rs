@@ -14,8 +14,10 @@ pub struct SceneArgs {
     /// glTF 2.0 scene (.gltf or .glb); the embedded Cornell box when omitted.
     #[arg(long)]
     pub scene: Option<PathBuf>,
-    /// Multiply the scene's coordinates by this (e.g. 0.001 for millimetres).
-    #[arg(long, default_value_t = 1.0)]
+    /// Multiply the scene's coordinates by this (e.g. 0.001 for millimetres); 0, the
+    /// default, reads the unit from the scene's extent (millimetres beyond 3,000 units,
+    /// centimetres beyond 300, else metres) and says so.
+    #[arg(long, default_value_t = 0.0)]
     pub unit_scale: f32,
     /// RON preset; the defaults when omitted.
     #[arg(long)]
@@ -40,7 +42,7 @@ impl Default for SceneArgs {
     fn default() -> Self {
         Self {
             scene: None,
-            unit_scale: 1.0,
+            unit_scale: 0.0,
             preset: None,
             overrides: Vec::new(),
             sky: None,
@@ -52,10 +54,17 @@ impl Default for SceneArgs {
 
 /// Loads the scene named by the arguments (or the embedded default).
 pub fn load_scene(args: &SceneArgs) -> Result<Scene, CliError> {
-    if !(args.unit_scale.is_finite() && args.unit_scale > 0.0) {
-        return Err(CliError::input(format!("--unit-scale {} must be a positive number", args.unit_scale)));
+    if !(args.unit_scale.is_finite() && args.unit_scale >= 0.0) {
+        return Err(CliError::input(format!(
+            "--unit-scale {} must be a positive number (or 0: read the unit from the scene)",
+            args.unit_scale
+        )));
     }
-    let opts = LoadOptions { unit_scale: args.unit_scale, ..LoadOptions::default() };
+    let opts = if args.unit_scale == 0.0 {
+        LoadOptions::default()
+    } else {
+        LoadOptions { unit_scale: args.unit_scale, detect_units: false, ..LoadOptions::default() }
+    };
     let mut scene = match &args.scene {
         None => scene::cornell::default_scene().map_err(|e| CliError::failure(format!("embedded scene: {e}")))?,
         Some(p) => scene::load_gltf_file(p, &opts).map_err(|e| CliError::input(e.to_string()))?,
@@ -83,6 +92,9 @@ pub fn load_scene(args: &SceneArgs) -> Result<Scene, CliError> {
     }
     for w in &scene.warnings {
         eprintln!("warning: {w}");
+    }
+    if let Some(v) = &scene.view {
+        eprintln!("view: {}", v.reason);
     }
     Ok(scene)
 }

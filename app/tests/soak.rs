@@ -49,8 +49,8 @@ fn a_short_soak_of_the_default_scene_finds_nothing() {
 
 #[test]
 fn a_short_soak_of_an_emissive_scene_finds_nothing() {
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes/cornell-box/CornellBox-Original.gltf");
-    assert!(scene.is_file(), "{} is missing: the tests expect ../shared/scenes (see README)", scene.display());
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/scenes/cornell-box/CornellBox-Original.gltf");
+    assert!(scene.is_file(), "{} is missing from the repository's assets/scenes/", scene.display());
     let scene = scene.display().to_string();
     assert_passes(&soak(&[
         "--scene",

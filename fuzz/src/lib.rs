@@ -6,7 +6,7 @@
 //!   splice) and token mutations for text (boundary numbers, lines, identifiers).
 //! - [`gltf_mutate`]: glTF-aware mutations that keep the GLB container valid and favour the
 //!   fields that size allocations (`count`, `byteLength`, `byteOffset`, `byteStride`).
-//! - [`seeds`] and [`hostile`]: the seed corpora (shared scenes, the loader tests' hostile
+//! - [`seeds`] and [`hostile`]: the seed corpora (the real scenes, the loader tests' hostile
 //!   files, every preset, every `--set` path).
 //! - [`targets`]: what an input is run through and the properties checked.
 //! - [`runner`]: the loop with its time cap, caught panics and summary; [`alloc`]: the

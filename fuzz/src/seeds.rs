@@ -1,6 +1,6 @@
 //! The seed corpora: the inputs the mutations start from.
 //!
-//! - glTF: the embedded default scene, the shared real-world scenes (`../shared/scenes`: the
+//! - glTF: the embedded default scene, the real-world scenes of the repository (`assets/scenes`: the
 //!   Cornell box `.gltf` with its buffer in a data URI, the chair scene turned into one GLB
 //!   with its `.bin` and JPEG textures inside, the hotel room GLB, and "lite" copies of the
 //!   two big ones whose images are a 1 × 1 PNG, so that mutations of their geometry run
@@ -40,9 +40,9 @@ pub fn project_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
-/// `../shared/scenes` next to the project, if it exists.
-pub fn shared_scenes() -> Option<PathBuf> {
-    let p = project_root().join("../shared/scenes");
+/// The real scenes of the repository (`assets/scenes`), if present.
+pub fn real_scenes() -> Option<PathBuf> {
+    let p = project_root().join("assets/scenes");
     p.is_dir().then_some(p)
 }
 
@@ -137,7 +137,7 @@ pub fn without_images(glb: &[u8]) -> Option<Vec<u8>> {
 /// the hostile cases.
 pub fn gltf_seeds(large: bool) -> Vec<Seed> {
     let mut seeds = vec![Seed::new("default-scene.glb", gi_render::scene::cornell::DEFAULT_SCENE_GLB)];
-    if let Some(shared) = shared_scenes() {
+    if let Some(shared) = real_scenes() {
         if let Ok(b) = std::fs::read(shared.join("cornell-box/CornellBox-Original.gltf")) {
             seeds.push(Seed::new("CornellBox-Original.gltf", b));
         }

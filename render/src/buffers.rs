@@ -1,4 +1,4 @@
-//! The registry of named intermediate buffers (DESIGN.md principle 6).
+//! The registry of named intermediate buffers (docs/principles.md principle 6).
 //!
 //! Every texture a pass writes is registered under a dotted name (`gbuffer.normal`,
 //! `direct.shadow_map`, `final.ldr`). The same names feed the buffer viewer, the pixel

@@ -104,10 +104,14 @@ impl Camera {
             Projection::Orthographic { .. } => 0.8,
         };
         let mut cam = Self::look_at(position, position + forward * dist, yfov, bounds);
+        // The clip planes are in the camera node's units: a unit scale above it (a file in
+        // millimetres scaled to metres) scales them too.
+        let scale = world.transform_vector3(Vec3::NEG_Z).length();
+        let scale = if scale.is_finite() && scale > 0.0 { scale } else { 1.0 };
         if let Projection::Perspective { znear, zfar, .. } = def.projection {
-            cam.znear = znear.max(1e-4);
+            cam.znear = (znear * scale).max(1e-4);
             if let Some(f) = zfar {
-                cam.zfar = f.max(cam.znear * 2.0);
+                cam.zfar = (f * scale).max(cam.znear * 2.0);
             }
         }
         cam

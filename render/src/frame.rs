@@ -1,7 +1,7 @@
-//! The whole frame, stage by stage, in the order of DESIGN.md's pipeline table. Each stage
-//! runs the pass its choice in `pipeline.*` names (`crate::pipeline`), from the typed inputs
-//! of `crate::stages` to typed outputs; no paper's logic lives here. `docs/architecture.md`
-//! lists every choice and how to add one.
+//! The whole frame, stage by stage, in the order of the pipeline table of docs/principles.md.
+//! Each stage runs the pass its choice in `pipeline.*` names (`crate::pipeline`), from the
+//! typed inputs of `crate::stages` to typed outputs; no paper's logic lives here.
+//! `docs/architecture.md` lists every choice and how to add one.
 //!
 //! | stage | choices → pass |
 //! |---|---|

@@ -1,5 +1,5 @@
 //! `LabSettings`: every pass's settings in one aggregate, saved as a RON preset
-//! (DESIGN.md principle 3). Unknown fields, wrong types and out-of-range values are
+//! (docs/principles.md principle 3). Unknown fields, wrong types and out-of-range values are
 //! reported by name; out-of-range values can be clamped on load.
 
 use std::path::Path;
@@ -222,11 +222,11 @@ impl LabSettings {
     }
 
     /// Settings that are valid one by one but not together, or not for the GPU's layouts
-    /// (DESIGN.md: combinations are refused with a reason, never by a crash). The stage
-    /// choices' rules (`pipeline::combination_errors`) are checked when every field is in its
-    /// range (`in_range`) only: they are rules about valid values, and their arithmetic
-    /// assumes them (an `interleave.n` of 65536 overflowed n², found by the fuzzer, issue #19);
-    /// until the fields are fixed, the range errors say what is wrong.
+    /// (docs/principles.md, the pipeline table: combinations are refused with a reason, never
+    /// by a crash). The stage choices' rules (`pipeline::combination_errors`) are checked when
+    /// every field is in its range (`in_range`) only: they are rules about valid values, and
+    /// their arithmetic assumes them (an `interleave.n` of 65536 overflowed n², found by the
+    /// fuzzer, issue #19); until the fields are fixed, the range errors say what is wrong.
     fn combination_errors(&self, in_range: bool) -> Vec<FieldError> {
         let mut errors = Vec::new();
         let mut err = |field: &str, message: String| errors.push(FieldError { field: field.into(), message });

@@ -1,5 +1,5 @@
 //! GI Lab's renderer: a deferred wgpu pipeline for real-time global illumination that
-//! runs with or without a window. See `../shared/DESIGN.md` for the seven-stage pipeline;
+//! runs with or without a window. See `docs/principles.md` for the seven-stage pipeline;
 //! `frame.rs` reads top to bottom as its table.
 
 pub mod buffers;

@@ -1,5 +1,5 @@
-//! The stage choices: one setting per stage of DESIGN.md's pipeline table (stages 3–7),
-//! and the named techniques that are only sets of these choices.
+//! The stage choices: one setting per stage of the pipeline table of docs/principles.md
+//! (stages 3–7), and the named techniques that are only sets of these choices.
 //!
 //! A paper is a preset of choices ([`Technique`]); after the technique picker has set them,
 //! every stage's choice can be changed on its own, and [`combination_errors`] refuses the
@@ -143,8 +143,9 @@ settings_enum! {
 }
 
 settings_group! {
-    /// The stage choices (DESIGN.md's pipeline table, stages 3–7): which pass each stage runs.
-    /// The technique picker sets them all; each can then be changed on its own.
+    /// The stage choices (the pipeline table of docs/principles.md, stages 3–7): which pass
+    /// each stage runs. The technique picker sets them all; each can then be changed on its
+    /// own.
     pub struct PipelineSettings: "pipeline" {
         /// Stage 3, VPL source (Knecht 002 §3.3/§4.4 or the reference's uniform batches).
         vpl_source: VplSource = VplSource::ImportanceWarping,

@@ -1,4 +1,4 @@
-//! Settings: the single source of truth for every tunable (DESIGN.md principle 2).
+//! Settings: the single source of truth for every tunable (docs/principles.md principle 2).
 //!
 //! Each pass declares its `Settings` struct with [`settings_group!`]: every field carries
 //! its documentation, unit, paper symbol, valid range and cost next to it. The macro
@@ -56,7 +56,7 @@ pub struct FieldMeta {
     /// Inclusive range for numbers (ignored for bool and choices).
     pub min: f64,
     pub max: f64,
-    /// Whether a change invalidates temporal history (DESIGN.md principle 5).
+    /// Whether a change invalidates temporal history (docs/principles.md principle 5).
     pub resets_history: bool,
 }
 

@@ -1,4 +1,4 @@
-//! WGSL sources and the one import mechanism (DESIGN.md principle 8).
+//! WGSL sources and the one import mechanism (docs/principles.md principle 8).
 //!
 //! Shaders live in the top-level `shaders/` folder: `common/` holds shared code, and each
 //! pass has its own folder. A line `#import common/name.wgsl` is replaced by that file

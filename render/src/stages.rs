@@ -1,5 +1,6 @@
-//! The typed data that flows between the stages of `frame.rs` (DESIGN.md's pipeline table):
-//! what every stage's passes read of the frame, and what stages 3 and 4 hand on.
+//! The typed data that flows between the stages of `frame.rs` (the pipeline table of
+//! docs/principles.md): what every stage's passes read of the frame, and what stages 3 and 4
+//! hand on.
 
 use glam::Vec4;
 

@@ -1,4 +1,4 @@
-// The buffer viewer (DESIGN.md principle 6): maps any registered texture — float, uint
+// The buffer viewer (docs/principles.md principle 6): maps any registered texture — float, uint
 // or depth, 2D or array, any level — to display colour. Raw texels are fetched with
 // textureLoad (never filtered), so every format displays safely. CPU twin:
 // `render/src/cpu/view.rs` (the tests compare the two).

@@ -77,14 +77,11 @@ pub fn default_renderer(w: u32, h: u32) -> Renderer {
     r
 }
 
-/// Path of a scene in `../shared/scenes/`, failing clearly when the folder is missing.
-pub fn shared_scene(rel: &str) -> std::path::PathBuf {
-    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes").join(rel);
-    assert!(
-        p.exists(),
-        "shared scene {} is missing: the tests expect the workspace's sibling folder ../shared/scenes (see README)",
-        p.display()
-    );
+/// Path of a real scene in the repository's `assets/scenes/` (each with its licence and
+/// attribution), failing clearly when it is missing.
+pub fn real_scene(rel: &str) -> std::path::PathBuf {
+    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/scenes").join(rel);
+    assert!(p.exists(), "real scene {} is missing from the repository's assets/scenes/", p.display());
     p
 }
 

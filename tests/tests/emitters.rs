@@ -3,7 +3,7 @@
 //! every technique, emitters that only glow, and thousands of emissive triangles.
 
 use gi_lab_tests::images::{exposed_flip, mean, sub};
-use gi_lab_tests::{read, scene_renderer, shared_scene};
+use gi_lab_tests::{read, real_scene, scene_renderer};
 use gi_render::ImageF32;
 use gi_render::cpu::knecht;
 use gi_render::cpu::pathtrace::{PathTracer, PtSettings};
@@ -13,7 +13,7 @@ use gi_render::scene::{LoadOptions, Scene, load_gltf_file};
 use glam::Vec3;
 
 fn cornell() -> Scene {
-    load_gltf_file(&shared_scene("cornell-box/CornellBox-Original.gltf"), &LoadOptions::default())
+    load_gltf_file(&real_scene("cornell-box/CornellBox-Original.gltf"), &LoadOptions::default())
         .expect("the shared Cornell box loads")
 }
 

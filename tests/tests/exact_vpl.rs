@@ -114,7 +114,7 @@ fn directional_light_vpls_stop_at_the_back_of_a_wall() {
 #[test]
 fn emitter_points_carry_the_path_traced_indirect_energy() {
     let scene = gi_render::scene::load_gltf_file(
-        &gi_lab_tests::shared_scene("cornell-box/CornellBox-Original.gltf"),
+        &gi_lab_tests::real_scene("cornell-box/CornellBox-Original.gltf"),
         &gi_render::scene::LoadOptions::default(),
     )
     .expect("the shared Cornell box loads");

@@ -590,7 +590,7 @@ fn hcb_samples_are_at_most_five_percent_of_the_pixels_at_512() {
 fn hcb_on_the_hotel_room_stays_close_to_the_per_pixel_gather() {
     use gi_render::image_io::hdr_display;
     let opts = gi_render::scene::LoadOptions { unit_scale: 0.001, ..Default::default() };
-    let path = gi_lab_tests::shared_scene("hotel-room/hotel-room.glb");
+    let path = gi_lab_tests::real_scene("hotel-room/hotel-room.glb");
     let scene = gi_render::scene::load_gltf_file(&path, &opts).expect("the hotel room loads");
     let loaded =
         gi_render::preset::load_lenient(include_str!("../../presets/nguyen-hcb.ron"), "nguyen-hcb").expect("loads");

@@ -1,6 +1,6 @@
 //! GPU passes against CPU references on the default scene (lavapipe in CI).
 
-use gi_lab_tests::{default_renderer, default_scene, gpu, shared_scene};
+use gi_lab_tests::{default_renderer, default_scene, gpu, real_scene};
 use gi_render::cpu::brdf;
 use gi_render::cpu::raycast::{Hit, TriangleSoup, primary_ray};
 use gi_render::scene::{Light, LightKind, LoadOptions, Node, Scene, SceneState, Transform};
@@ -377,7 +377,7 @@ fn bad_sizes_and_settings_are_refused_without_change() {
 
 fn render_shared(rel: &str, unit_scale: f32, tris: usize) {
     let opts = LoadOptions { unit_scale, ..LoadOptions::default() };
-    let scene = gi_render::scene::load_gltf_file(&shared_scene(rel), &opts).unwrap_or_else(|e| panic!("{rel}: {e}"));
+    let scene = gi_render::scene::load_gltf_file(&real_scene(rel), &opts).unwrap_or_else(|e| panic!("{rel}: {e}"));
     assert_eq!(scene.triangle_count(), tris, "{rel}");
     let mut r = Renderer::new(gpu(), scene, LabSettings::default(), 96, 96).expect("renderer");
     r.render_frame();
@@ -400,11 +400,9 @@ fn shared_cornell_box_renders() {
 #[test]
 fn emissive_surfaces_show_their_emission() {
     // The classic Cornell box's light is an emissive quad (factor 1) under the ceiling.
-    let scene = gi_render::scene::load_gltf_file(
-        &shared_scene("cornell-box/CornellBox-Original.gltf"),
-        &LoadOptions::default(),
-    )
-    .expect("loads");
+    let scene =
+        gi_render::scene::load_gltf_file(&real_scene("cornell-box/CornellBox-Original.gltf"), &LoadOptions::default())
+            .expect("loads");
     let mut r = Renderer::new(gpu(), scene, LabSettings::default(), 96, 96).expect("renderer");
     r.camera.orbit(0.0, 0.3); // look a little upward so that the ceiling light is in view
     r.render_frame();
@@ -519,8 +517,8 @@ fn an_exact_vpl_atlas_larger_than_the_device_is_refused_with_the_largest_valid_b
 /// mesh far above its roof (so that the bounds' top lies above the ceiling).
 fn hotel_room_with_camera_inside(roof_object: bool) -> gi_render::scene::Scene {
     use gi_render::scene::{CameraDef, Node, Projection, Transform};
-    let opts = LoadOptions { unit_scale: 0.001, add_default_light: false };
-    let mut scene = gi_render::scene::load_gltf_file(&shared_scene("hotel-room/hotel-room.glb"), &opts)
+    let opts = LoadOptions { unit_scale: 0.001, add_default_light: false, detect_units: false };
+    let mut scene = gi_render::scene::load_gltf_file(&real_scene("hotel-room/hotel-room.glb"), &opts)
         .expect("the hotel room loads");
     assert!(scene.lights.is_empty());
     let b = scene.bounds(0.0);

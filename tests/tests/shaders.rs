@@ -1,5 +1,5 @@
 //! Every WGSL file resolves its imports and validates with naga; the Rust uniform structs
-//! have the sizes of their WGSL twins (DESIGN.md principle 8).
+//! have the sizes of their WGSL twins (docs/principles.md principle 8).
 
 use gi_render::shaders::{ENTRY_MODULES, SOURCES, resolve};
 

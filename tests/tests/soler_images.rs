@@ -71,7 +71,7 @@ fn one_bounce_on_the_hotel_room_against_the_path_tracer() {
     use gi_render::cpu::pathtrace::{PathTracer, PtSettings};
     const SIZE: u32 = 128;
     let opts = gi_render::scene::LoadOptions { unit_scale: 0.001, ..Default::default() };
-    let path = gi_lab_tests::shared_scene("hotel-room/hotel-room.glb");
+    let path = gi_lab_tests::real_scene("hotel-room/hotel-room.glb");
     let mut scene = gi_render::scene::load_gltf_file(&path, &opts).expect("the hotel room loads");
     for m in &mut scene.materials {
         m.base_color_texture = None;

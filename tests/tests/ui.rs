@@ -67,7 +67,7 @@ fn opening_a_bad_scene_keeps_the_current_one_and_says_why() {
     assert!(err.contains("nonexistent"), "{err}");
     h.run_steps(2);
     assert_eq!(h.state().renderer().expect("renderer").scene().triangle_count(), before);
-    let path = gi_lab_tests::shared_scene("cornell-box/CornellBox-Original.gltf");
+    let path = gi_lab_tests::real_scene("cornell-box/CornellBox-Original.gltf");
     let ok = h.state_mut().open_scene(&path.to_string_lossy(), 1.0);
     assert!(ok.is_ok(), "{ok:?}");
     h.run_steps(2);

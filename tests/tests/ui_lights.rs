@@ -146,7 +146,7 @@ fn the_sky_is_turned_on_in_the_scene_panel_and_a_bad_image_says_why() {
 fn the_scene_panel_shows_the_emitters_and_turns_them_into_glow() {
     let (mut h, dir) = harness("emitters");
     pause(&mut h);
-    let path = gi_lab_tests::shared_scene("cornell-box/CornellBox-Original.gltf");
+    let path = gi_lab_tests::real_scene("cornell-box/CornellBox-Original.gltf");
     h.state_mut().open_scene(&path.to_string_lossy(), 1.0).expect("opens");
     pause(&mut h);
     h.get_by_label("Scene & timeline").click();

@@ -161,7 +161,10 @@ pub fn format_bench_table(b: &BenchReport) -> String {
         s += &format!("{:<16} {:>10.3} {:>10.3} {:>10.3}\n", p.pass, p.mean_ms, p.min_ms, p.max_ms);
     }
     s += &format!("{:<16} {:>10.3}\n", "total", b.total_mean_ms);
-    s += &format!("{:<16} {:>10.3}   (wall clock per render_frame call, CPU and waits included)\n", "frame wall", b.wall_mean_ms);
+    s += &format!(
+        "{:<16} {:>10.3}   (wall clock per render_frame call, CPU and waits included)\n",
+        "frame wall", b.wall_mean_ms
+    );
     if let Some(f) = b.flicker {
         s += &format!("flicker (static scene) {f:.6}\n");
     }

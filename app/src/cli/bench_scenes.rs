@@ -1,5 +1,5 @@
 //! `gi-lab bench --suite scenes` (issue #18, "Tests and measures"): for every scene in the
-//! shared scenes folder (`--scenes-dir`, by default `../shared/scenes`) and in `assets/`, its
+//! scenes folder (`--scenes-dir`, by default `assets/`, with the real scenes of `assets/scenes/`), its
 //! triangles, punctual lights (and whether the lab added the default one), emissive
 //! triangles, load time, and the mean frame time (sum of the passes) of each shipped
 //! technique preset at `--size`. Scenes whose extent exceeds 100 units are read as
@@ -62,25 +62,20 @@ fn load(path: &Path, unit_scale: f32) -> Result<gi_render::scene::Scene, CliErro
 
 /// Runs the suite.
 pub fn scenes(scenes_dir: &Path, size: (u32, u32), frames: u32) -> Result<Vec<SceneRow>, CliError> {
-    let mut files = scene_files(Path::new("assets"));
-    files.extend(scene_files(scenes_dir));
+    let files = scene_files(scenes_dir);
     if files.is_empty() {
         return Err(CliError::input(format!(
-            "no glTF scenes in assets/ or {} (run from the project root, or give --scenes-dir)",
+            "no glTF scenes below {} (run from the project root, or give --scenes-dir)",
             scenes_dir.display()
         )));
     }
     let ctx = GpuContext::headless().map_err(|e| CliError::failure(e.to_string()))?;
     let mut rows = Vec::new();
     for path in files {
-        let mut start = Instant::now();
-        let mut scene = load(&path, 1.0)?;
-        let mut unit_scale = 1.0;
-        if scene.bounds(0.0).extent().max_element() > 100.0 {
-            unit_scale = 0.001;
-            start = Instant::now();
-            scene = load(&path, unit_scale)?;
-        }
+        let start = Instant::now();
+        // The unit is read from the scene's extent, as everywhere (issue #37 point 2).
+        let scene = load(&path, 0.0)?;
+        let unit_scale = scene.units.as_ref().map_or(1.0, |u| u.0);
         let load_ms = start.elapsed().as_secs_f64() * 1e3;
         let emissive_triangles = scene
             .meshes

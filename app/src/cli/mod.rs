@@ -83,6 +83,11 @@ pub enum Command {
         /// Where to write the .glb.
         #[arg(long, default_value = "assets/cornell_box.glb")]
         out: PathBuf,
+        /// Also write the framing test cases (a box room, two rooms, a corridor, a closed
+        /// sphere, an object, a floor plan, two cameras) into this folder, each in metres and
+        /// in millimetres (`NAME-m.glb`, `NAME-mm.glb`).
+        #[arg(long)]
+        framing_cases: Option<PathBuf>,
     },
 }
 
@@ -131,7 +136,12 @@ pub fn main() -> ExitCode {
         Some(Command::Export(a)) => export::export(a),
         Some(Command::Upgrade(a)) => upgrade::upgrade(a),
         Some(Command::Soak(a)) => soak::soak(a),
-        Some(Command::GenAssets { out }) => gen_assets::gen_assets(out),
+        Some(Command::GenAssets { out, framing_cases }) => {
+            gen_assets::gen_assets(out).and_then(|_| match framing_cases {
+                Some(dir) => gen_assets::framing_cases(dir),
+                None => Ok(()),
+            })
+        }
     };
     // A lost device (a driver reset) makes every later GPU call fail with errors that do
     // not say why: the loss is the error, whatever happened after it.

@@ -331,7 +331,14 @@ impl Outcome {
 /// Loads `choice` as the lab's File → Open does; a good scene replaces the renderer (same
 /// device, settings and size), a broken one must be refused and change nothing.
 pub fn switch_scene(ctx: &GpuContext, r: &mut Renderer, choice: &mut SceneChoice) -> Outcome {
-    let opts = |s: f32| LoadOptions { unit_scale: s, ..LoadOptions::default() };
+    // 0: the unit read from the scene, as the window and the commands do.
+    let opts = |s: f32| {
+        if s == 0.0 {
+            LoadOptions::default()
+        } else {
+            LoadOptions { unit_scale: s, detect_units: false, ..LoadOptions::default() }
+        }
+    };
     match choice {
         SceneChoice::Broken { name, path } => {
             let action = format!("open broken scene {name}");

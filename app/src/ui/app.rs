@@ -111,9 +111,10 @@ impl GiLabApp {
         }
         if let Ok(l) = &mut lab {
             restore_scene_state(l, &session);
-            // A scene without lights got one: say where (issue #18).
-            if let Some(note) = l.renderer.scene().default_light_note() {
-                messages.push(note.to_string());
+            // What the lab chose for the scene: its light (issue #18), the view and the unit
+            // (issue #37).
+            if let Some(note) = crate::ui::state::scene_note(l.renderer.scene()) {
+                messages.push(note);
             }
         }
         let tree = session.layout.take().unwrap_or_else(session::default_layout);

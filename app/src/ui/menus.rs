@@ -18,6 +18,7 @@ pub const SHORTCUTS: &[(&str, &str)] = &[
     ("Ctrl+B", "add a buffer viewer"),
     ("F12", "save the viewport as PNG and EXR"),
     ("Home", "reset the camera"),
+    ("F", "frame the scene (the view it opens on: inside its largest room, or around it)"),
     ("H", "restart temporal accumulation"),
     ("Escape", "unpin all probes"),
     ("Drag / WASD QE / scroll", "orbit / fly / move (viewport)"),
@@ -72,6 +73,10 @@ impl State {
         }
         if pressed(Modifiers::NONE, Key::H) {
             l.renderer.reset_history();
+        }
+        if pressed(Modifiers::NONE, Key::F) {
+            self.frame_scene(gi_render::scene::framing::ViewPreference::Auto);
+            return;
         }
         if pressed(Modifiers::NONE, Key::Escape) {
             self.pinned.clear();
@@ -206,6 +211,24 @@ impl State {
                         w as f32 / h.max(1) as f32,
                     );
                 }
+                use gi_render::scene::framing::ViewPreference;
+                if ui
+                    .button("Frame scene (F)")
+                    .on_hover_text("the view the scene opens on, by the framing rule")
+                    .clicked()
+                {
+                    self.frame_scene(ViewPreference::Auto);
+                }
+                if ui.button("View from inside").on_hover_text("stand in the largest room, at eye height").clicked() {
+                    self.frame_scene(ViewPreference::Inside);
+                }
+                if ui
+                    .button("View from outside")
+                    .on_hover_text("a raised three-quarter view fitted to the geometry")
+                    .clicked()
+                {
+                    self.frame_scene(ViewPreference::Outside);
+                }
             });
             ui.menu_button("Scene", |ui| {
                 if ui.button("Open glTF…").clicked() {
@@ -214,7 +237,7 @@ impl State {
                 ui.menu_button("Recent scenes", |ui| {
                     for p in self.session.recent_scenes.clone() {
                         if ui.button(p.display().to_string()).clicked() {
-                            let scale = self.lab.as_ref().map(|l| l.unit_scale).unwrap_or(1.0);
+                            let scale = self.lab.as_ref().map(|l| l.unit_scale).unwrap_or(0.0);
                             if let Err(e) = self.open_scene(Some(p.clone()), scale) {
                                 self.set_status(format!("scene not opened: {e}"));
                             }
@@ -222,7 +245,7 @@ impl State {
                     }
                 });
                 if ui.button("Default scene").clicked()
-                    && let Err(e) = self.open_scene(None, 1.0)
+                    && let Err(e) = self.open_scene(None, 0.0)
                 {
                     self.set_status(format!("scene not opened: {e}"));
                 }

@@ -51,6 +51,7 @@ pub struct Session {
     /// The preset the settings came from (None: defaults / a new preset).
     pub preset_path: Option<PathBuf>,
     pub scene: Option<PathBuf>,
+    /// The scene's unit scale; 0: read from the scene's extent (issue #37 point 2).
     pub unit_scale: f32,
     pub recent_scenes: Vec<PathBuf>,
     pub recent_presets: Vec<PathBuf>,
@@ -79,7 +80,7 @@ impl Default for Session {
             settings_ron: None,
             preset_path: None,
             scene: None,
-            unit_scale: 1.0,
+            unit_scale: 0.0,
             recent_scenes: Vec::new(),
             recent_presets: Vec::new(),
             camera: None,

@@ -1,4 +1,4 @@
-//! Settings panels, generated from `LabSettings` (DESIGN.md principle 4): one collapsible
+//! Settings panels, generated from `LabSettings` (docs/principles.md principle 4): one collapsible
 //! section per stage with a widget per field chosen from the field's metadata — slider or
 //! drag value with unit and range, checkbox, combo — a tooltip (meaning, paper symbol,
 //! unit, range, cost), a reset-to-default button and a marker on fields that differ from
@@ -161,7 +161,8 @@ pub fn group_ui<S: SettingsGroup>(ui: &mut Ui, s: &mut S, preset: &S) -> bool {
     changed
 }
 
-/// Section titles of the groups, in pipeline order (DESIGN.md's stage numbers).
+/// Section titles of the groups, in pipeline order (the stage numbers of the pipeline table
+/// of docs/principles.md).
 pub fn section_title(group: &str) -> String {
     match group {
         "animation" => "Animation clock".into(),
@@ -183,7 +184,7 @@ pub fn section_title(group: &str) -> String {
     }
 }
 
-/// A technique: a named set of stage choices (DESIGN.md's pipeline table).
+/// A technique: a named set of stage choices (the pipeline table of docs/principles.md).
 pub struct Technique {
     pub name: &'static str,
     pub source: &'static str,

@@ -99,13 +99,29 @@ impl State {
                 Session::remember(&mut self.session.recent_scenes, p);
             }
             self.pass_view = None;
-            // A scene without lights got one: say where (issue #18).
-            let note = self.lab.as_ref().ok().and_then(|l| l.renderer.scene().default_light_note().map(String::from));
-            if let Some(note) = note {
+            // What the lab chose for the scene: its light (issue #18), the view and the unit
+            // (issue #37).
+            if let Some(note) = self.lab.as_ref().ok().and_then(|l| scene_note(l.renderer.scene())) {
                 self.set_status(note);
             }
         }
         r
+    }
+
+    /// Moves the camera to the view the framing rule chooses (`Auto`: the scene's camera or
+    /// the rule's choice; or inside / outside) and says which and why.
+    pub fn frame_scene(&mut self, prefer: gi_render::scene::framing::ViewPreference) {
+        let Ok(l) = &mut self.lab else { return };
+        let (w, h) = l.renderer.size();
+        let aspect = w as f32 / h.max(1) as f32;
+        let view = match prefer {
+            gi_render::scene::framing::ViewPreference::Auto => {
+                gi_render::renderer::scene_view(l.renderer.scene(), l.renderer.bounds(), aspect)
+            }
+            p => gi_render::scene::framing::choose_view(l.renderer.scene(), aspect, p),
+        };
+        l.renderer.camera = view.camera;
+        self.set_status(format!("view: {}", view.reason));
     }
 
     /// Asks for a glTF file with the platform's file dialog and opens it.
@@ -113,7 +129,7 @@ impl State {
         let picked =
             rfd::FileDialog::new().add_filter("glTF 2.0", &["gltf", "glb"]).set_title("Open scene").pick_file();
         if let Some(p) = picked {
-            let scale = self.lab.as_ref().map(|l| l.unit_scale).unwrap_or(1.0);
+            let scale = self.lab.as_ref().map(|l| l.unit_scale).unwrap_or(0.0);
             if let Err(e) = self.open_scene(Some(p), scale) {
                 self.set_status(format!("scene not opened: {e}"));
             }
@@ -303,7 +319,7 @@ impl State {
             let ext = p.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
             match ext.as_str() {
                 "gltf" | "glb" => {
-                    let scale = self.lab.as_ref().map(|l| l.unit_scale).unwrap_or(1.0);
+                    let scale = self.lab.as_ref().map(|l| l.unit_scale).unwrap_or(0.0);
                     if let Err(e) = self.open_scene(Some(p.clone()), scale) {
                         self.set_status(format!("scene not opened: {e}"));
                     }
@@ -320,4 +336,20 @@ impl State {
             }
         }
     }
+}
+
+/// The status line of a newly opened scene: the light the lab added (or the emitters that
+/// light it), the view it opens on and why, and the unit read from its extent.
+pub fn scene_note(scene: &gi_render::scene::Scene) -> Option<String> {
+    let mut parts: Vec<String> = Vec::new();
+    if let Some(n) = scene.default_light_note() {
+        parts.push(n.to_string());
+    }
+    if let Some(v) = &scene.view {
+        parts.push(format!("view: {}", v.reason));
+    }
+    if let Some((_, u)) = &scene.units {
+        parts.push(u.clone());
+    }
+    (!parts.is_empty()).then(|| parts.join(" · "))
 }

@@ -1,7 +1,8 @@
-//! CPU reference implementations of the GPU kernels (DESIGN.md principle 9): tests compare
+//! CPU reference implementations of the GPU kernels (docs/principles.md principle 9): tests compare
 //! the passes' outputs with these on small inputs.
 
 pub mod brdf;
+pub mod bvh;
 pub mod gautron;
 pub mod hcb;
 pub mod knecht;

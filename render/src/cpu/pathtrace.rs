@@ -31,14 +31,13 @@
 //! errors (sampling, visibility) show apart from the light no screen-space method has
 //! (surfaces hidden from the camera or off screen).
 
-use glam::{Mat4, Vec2, Vec3, Vec3A, Vec4Swizzles};
-use obvhs::cwbvh::CwBvh;
-use obvhs::ray::{Ray, RayHit};
+use glam::{Mat4, Vec2, Vec3, Vec4Swizzles};
 use rayon::prelude::*;
 
 use crate::buffers::ImageF32;
 use crate::cpu::brdf;
-use crate::cpu::raycast::{moller_trumbore, primary_ray};
+use crate::cpu::bvh::SceneBvh;
+use crate::cpu::raycast::primary_ray;
 use crate::scene::emitters::Emitters;
 use crate::scene::sky::{Sky, SkySampler};
 use crate::scene::{Material, Scene, TextureImage, WorldLight};
@@ -82,17 +81,9 @@ struct Viewer {
     view_proj: Mat4,
 }
 
-struct Tri {
-    v: [Vec3; 3],
-    n: [Vec3; 3],
-    uv: [Vec2; 3],
-    material: usize,
-}
-
 /// The scene prepared for ray tracing at one instant.
 pub struct PathTracer {
-    tris: Vec<Tri>,
-    bvh: CwBvh,
+    bvh: SceneBvh,
     materials: Vec<Material>,
     /// The scene's textures (shared), for emissive textures.
     textures: Vec<TextureImage>,
@@ -146,44 +137,13 @@ impl PathTracer {
     /// Prepares the scene as evaluated at `time_s`.
     pub fn new(scene: &Scene, time_s: f32) -> Self {
         let state = scene.evaluate(time_s);
-        let mut tris = Vec::new();
-        for d in &state.draws {
-            let p = &scene.meshes[d.mesh].primitives[d.primitive];
-            let nm: Mat4 = d.world.inverse().transpose();
-            for t in p.indices.chunks_exact(3) {
-                let vert = |k: usize| &p.vertices[t[k] as usize];
-                tris.push(Tri {
-                    v: [0, 1, 2].map(|k| d.world.transform_point3(Vec3::from(vert(k).position))),
-                    n: [0, 1, 2].map(|k| (nm * Vec3::from(vert(k).normal).extend(0.0)).xyz().normalize_or_zero()),
-                    uv: [0, 1, 2].map(|k| Vec2::from(vert(k).uv)),
-                    material: p.material,
-                });
-            }
-        }
-        let bvh_tris: Vec<obvhs::triangle::Triangle> = tris
-            .iter()
-            .map(|t| obvhs::triangle::Triangle { v0: t.v[0].into(), v1: t.v[1].into(), v2: t.v[2].into() })
-            .collect();
-        // obvhs's `build_cwbvh_from_tris` steps (PLOC, reinsertion, conversion), without its
-        // debug-build validation of the intermediate binary BVH, which panics when that tree
-        // is deeper than 96 (the hotel room's is 99): the traversal of the CWBVH does not
-        // need that bound.
-        let params = obvhs::BvhBuildParams::medium_build();
-        let mut bvh2 = obvhs::ploc::PlocBuilder::with_capacity(bvh_tris.len()).build(
-            params.ploc_search_distance,
-            &bvh_tris,
-            (0..bvh_tris.len() as u32).collect(),
-            params.sort_precision,
-            params.search_depth_threshold,
-        );
-        obvhs::bvh2::reinsertion::ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
-        let bvh = obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false);
+        let bvh = SceneBvh::new(scene, &state);
         let eps = scene.bounds(time_s).radius().max(1e-3) * 1e-4;
         let materials = if scene.materials.is_empty() { vec![Material::default()] } else { scene.materials.clone() };
         let emitters = Emitters::collect(scene, &state);
         let sky = scene.sky.is_lit().then(|| scene.sky.clone());
         let textures = scene.textures.clone();
-        Self { tris, bvh, materials, textures, lights: state.lights, emitters, sky, sky_background: true, eps }
+        Self { bvh, materials, textures, lights: state.lights, emitters, sky, sky_background: true, eps }
     }
 
     /// Whether emissive surfaces light the scene (`emitters.enabled`, on by default) or only
@@ -209,30 +169,8 @@ impl PathTracer {
 
     /// Closest hit in (tmin, tmax); the normal is the interpolated one, facing the ray.
     fn intersect(&self, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
-        let ray = Ray::new(Vec3A::from(o), Vec3A::from(d), tmin, tmax);
-        let mut hit = RayHit::none();
-        let tris = &self.tris;
-        let found = self.bvh.ray_traverse(ray, &mut hit, |r, id| {
-            let tri = &tris[self.bvh.primitive_indices[id] as usize];
-            match moller_trumbore(Vec3::from(r.origin), Vec3::from(r.direction), tri.v) {
-                Some((t, _, _)) if t > r.tmin && t < r.tmax => t,
-                _ => f32::INFINITY,
-            }
-        });
-        if !found {
-            return None;
-        }
-        let tri = &self.tris[self.bvh.primitive_indices[hit.primitive_id as usize] as usize];
-        let (_, u, v) = moller_trumbore(o, d, tri.v)?;
-        let mut n = (tri.n[0] * (1.0 - u - v) + tri.n[1] * u + tri.n[2] * v).normalize_or_zero();
-        if n == Vec3::ZERO {
-            n = (tri.v[1] - tri.v[0]).cross(tri.v[2] - tri.v[0]).normalize_or(Vec3::Y);
-        }
-        if n.dot(d) > 0.0 {
-            n = -n;
-        }
-        let uv = tri.uv[0] * (1.0 - u - v) + tri.uv[1] * u + tri.uv[2] * v;
-        Some(Hit { p: o + d * hit.t, n, uv, material: tri.material })
+        let h = self.bvh.intersect(o, d, tmin, tmax)?;
+        Some(Hit { p: h.p, n: h.n, uv: h.uv, material: h.material })
     }
 
     fn occluded(&self, a: Vec3, b: Vec3) -> bool {

@@ -1,4 +1,4 @@
-//! The passes, one file each (DESIGN.md principle 1), in one folder per paper beside its
+//! The passes, one file each (docs/principles.md principle 1), in one folder per paper beside its
 //! shader folders. A pass owns its pipelines, its settings and its textures, registers every
 //! texture it writes in the buffer registry, and exposes `run(..)`. `frame.rs` runs the pass
 //! each stage's choice names (see `docs/architecture.md`).

@@ -1,4 +1,4 @@
-//! The buffer viewer's colour mapping (DESIGN.md principle 6; RenderDoc's texture viewer):
+//! The buffer viewer's colour mapping (docs/principles.md principle 6; RenderDoc's texture viewer):
 //! one pass that turns any registered buffer — float, uint or depth, 2D or array, any mip
 //! level — into a display-encoded RGBA8 image. Raw texels are fetched, never filtered, so
 //! every format shows safely (egui only ever samples the RGBA8 result). Shader:

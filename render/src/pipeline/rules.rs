@@ -6,7 +6,8 @@ use crate::lab_settings::LabSettings;
 use crate::settings::FieldError;
 
 /// The stage choices that cannot work together, each with the stage that needs what
-/// (DESIGN.md: refused with a reason, never by a crash or a black image).
+/// (docs/principles.md, the pipeline table: refused with a reason, never by a crash or a
+/// black image).
 pub fn combination_errors(s: &LabSettings) -> Vec<FieldError> {
     let p = &s.pipeline;
     let mut errors = Vec::new();

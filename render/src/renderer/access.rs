@@ -348,11 +348,18 @@ fn level_indirect(k: &str) -> Option<&'static str> {
     NAMES.get(k.parse::<usize>().ok()?).copied()
 }
 
-/// The scene's first camera, else one that frames the bounds.
+/// The camera a scene opens on: its first glTF camera, else the view of
+/// [`crate::scene::framing`] (inside its largest room, or a three-quarter view fitted to its
+/// geometry), fitted to `aspect`.
 pub fn default_camera(scene: &Scene, bounds: Aabb, aspect: f32) -> Camera {
-    let state = scene.evaluate(0.0);
-    match state.cameras.first() {
-        Some(c) => Camera::from_node(c.world, &c.camera, bounds),
-        None => Camera::frame_bounds(bounds, aspect),
+    scene_view(scene, bounds, aspect).camera
+}
+
+/// The view a scene opens on and why (the status bar says it): the one the loader stored,
+/// else chosen now; an exterior view is fitted again to `aspect`.
+pub fn scene_view(scene: &Scene, bounds: Aabb, aspect: f32) -> crate::scene::framing::Framing {
+    match &scene.view {
+        Some(v) => v.for_aspect(aspect, bounds),
+        None => crate::scene::framing::choose_view(scene, aspect, Default::default()),
     }
 }

@@ -9,7 +9,7 @@ pub mod checks;
 
 use glam::Mat4;
 
-pub use access::{default_camera, pass_of_shader, scope_output};
+pub use access::{default_camera, pass_of_shader, scene_view, scope_output};
 pub use checks::RenderError;
 use checks::{check_ism_atlas, check_scene, check_size, check_split, check_vpl_atlas};
 

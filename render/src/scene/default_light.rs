@@ -1,22 +1,27 @@
-//! The light of a scene that has none (issue #18 point 3). Most GI test scenes carry no
-//! `KHR_lights_punctual` light; the lab adds one so that the first image is not black, and
-//! says so (the scene's warnings, shown in the Scene panel and the status bar):
+//! The light of a scene that has none (issues #18 point 3 and #37 point 3). Most GI test
+//! scenes carry no `KHR_lights_punctual` light; the lab adds one so that the first image is
+//! not black, and says so (the scene's warnings, shown in the Scene panel and the status bar;
+//! the Scene panel's "Remove the default light" takes it away):
 //!
-//! 1. When the scene's first glTF camera stands inside a room (rays up and down hit
-//!    something, and so do three of the four horizontal axis directions: a door or a window
-//!    may open the fourth) and sees something, a **point light in the camera's view**:
-//!    halfway from the camera to what the centre of the view sees, then halfway up to the
-//!    ceiling above that point; its intensity gives the surface in the centre of the view
-//!    about π W/m² (a white surface shows radiance ≈ 1 before exposure).
-//! 2. Otherwise a **spot light looking down** from 85 % of the bounds' height above their
-//!    centre, with a cone wide enough to reach the walls — moved under the ceiling when that
-//!    place is above one (the first surface straight down is seen from its back: a ceiling
-//!    from above, or the roof of a closed room), to 85 % of the way from the floor to it.
+//! 1. When the view the scene opens on ([`super::framing`], or its first glTF camera) stands
+//!    inside a room (rays up and down hit something, and so do three of the four horizontal
+//!    axis directions: a door or a window may open the fourth) and sees something, a **point
+//!    light under the ceiling, in the camera's view**: above the point halfway from the
+//!    camera to what the centre of the view sees, 80 % of the way up to the ceiling; its
+//!    intensity gives the surface in the centre of the view about π W/m² (a white surface
+//!    shows radiance ≈ 1 before exposure).
+//! 2. Otherwise (an object, an open layout) **a sun and the sky**: a directional light with
+//!    shadows at 45° elevation, from behind the camera and 45° to its side, of irradiance π
+//!    W/m² (a white surface facing it shows radiance 1), and a neutral constant sky of
+//!    radiance 0.25 (π/4 W/m² on an open floor).
+//!
+//! The path tracer reads the same lights and sky, so the ground truth sees them too.
 
 use glam::{Quat, Vec3};
 
+use super::framing::{ViewKind, ViewPreference, choose_view};
 use super::{Light, LightKind, Node, Scene, Transform};
-use crate::cpu::raycast::TriangleSoup;
+use crate::cpu::bvh::SceneBvh;
 
 /// The start of the warning that names the added light (the Scene panel and the status bar
 /// show it).
@@ -43,13 +48,16 @@ impl Scene {
             ));
             return;
         }
+        let view = match &self.view {
+            Some(v) => v.clone(),
+            None => choose_view(self, 16.0 / 9.0, ViewPreference::Auto),
+        };
         let state = self.evaluate(0.0);
-        let soup = TriangleSoup::new(self, &state);
-        let inside = state.cameras.first().and_then(|c| {
-            let eye = c.world.transform_point3(Vec3::ZERO);
-            let forward = c.world.transform_vector3(-Vec3::Z).normalize_or_zero();
-            light_in_view(&soup, eye, forward)
-        });
+        let bvh = SceneBvh::new(self, &state);
+        let eye = view.camera.position;
+        // The framing's interior view stands in a room by construction; a glTF camera is tested.
+        let known_inside = view.kind == ViewKind::Interior;
+        let inside = light_in_view(&bvh, eye, view.camera.forward(), known_inside);
         if let Some((pos, intensity)) = inside {
             self.push_light(
                 "default point",
@@ -57,37 +65,62 @@ impl Scene {
                 intensity,
                 Transform { translation: pos, rotation: Quat::IDENTITY, scale: Vec3::ONE },
             );
+            let whose = match view.kind {
+                ViewKind::SceneCamera { .. } => "its camera, which stands inside a room",
+                _ => "the view from inside",
+            };
             self.warnings.push(format!(
-                "{NO_LIGHTS}: added a point light in the view of its camera, which stands inside a room, at {pos:.2}"
+                "{NO_LIGHTS}: added a point light under the ceiling in the view of {whose}, at {pos:.2}"
             ));
             return;
         }
-        let b = self.bounds(0.0);
-        let ext = b.extent();
-        let c = b.center();
-        let mut pos = Vec3::new(c.x, b.min.y + 0.85 * ext.y.max(1e-3), c.z);
-        let mut moved = false;
-        if let Some(below) = under_the_ceiling(&soup, pos, ext.length().max(1e-3)) {
-            pos = below;
-            moved = true;
+        // A sun from behind the camera and 45° to its side, 45° up.
+        let f = view.camera.forward();
+        let back = Vec3::new(-f.x, 0.0, -f.z).normalize_or(Vec3::Z);
+        let side = Quat::from_rotation_y(std::f32::consts::FRAC_PI_4) * back;
+        let to_sun = (side + Vec3::Y).normalize();
+        let rotation = Quat::from_rotation_arc(Vec3::NEG_Z, -to_sun);
+        self.push_light(
+            "default sun",
+            LightKind::Directional,
+            std::f32::consts::PI,
+            Transform { translation: Vec3::ZERO, rotation, scale: Vec3::ONE },
+        );
+        let had_sky = self.sky.is_lit();
+        if !had_sky {
+            self.sky = super::sky::Sky::constant(Vec3::ONE, 0.25);
         }
-        // Under a found ceiling the floor is what lies below it; otherwise the bounds' bottom
-        // (the rule's place and cone unchanged for the scenes it served).
-        let floor =
-            if moved { soup.intersect_camera(pos, -Vec3::Y).map_or(b.min.y, |h| h.position.y) } else { b.min.y };
-        let height = (pos.y - floor).max(1e-3);
-        let half_width = 0.5 * ext.x.max(ext.z);
-        let outer = (1.5 * half_width / height).atan().clamp(0.5, 1.35);
-        // −Z rotated to −Y: the light looks straight down.
-        let rotation = Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2);
-        let kind = LightKind::Spot { inner_cone: outer * 0.6, outer_cone: outer };
-        let intensity = std::f32::consts::PI * height * height;
-        self.push_light("default spot", kind, intensity, Transform { translation: pos, rotation, scale: Vec3::ONE });
-        self.warnings.push(if moved {
-            format!("{NO_LIGHTS}: added a default spot light under the ceiling (the top of its bounds is above a surface seen from behind), at {pos:.2}")
-        } else {
-            format!("{NO_LIGHTS}: added a default spot light under the top of its bounds, at {pos:.2}")
+        self.warnings.push(format!(
+            "{NO_LIGHTS}: added a sun (45° up, from behind the camera){} for an open view",
+            if had_sky { "" } else { " and a neutral sky" }
+        ));
+    }
+
+    /// Removes the light the lab added (and the neutral sky it turned on with a sun), with
+    /// their note: the user's "Remove the default light".
+    pub fn remove_default_light(&mut self) {
+        let added_sky = self.warnings.iter().any(|w| w.starts_with(NO_LIGHTS) && w.contains("neutral sky"));
+        let keep: Vec<bool> = self.lights.iter().map(|l| !is_default_light(&l.name)).collect();
+        let mut new_index = Vec::with_capacity(keep.len());
+        let mut next = 0;
+        for k in &keep {
+            new_index.push(if *k { Some(next) } else { None });
+            if *k {
+                next += 1;
+            }
+        }
+        for n in &mut self.nodes {
+            n.light = n.light.and_then(|i| new_index.get(i).copied().flatten());
+        }
+        let mut i = 0;
+        self.lights.retain(|_| {
+            i += 1;
+            keep[i - 1]
         });
+        if added_sky {
+            self.sky.enabled = false;
+        }
+        self.warnings.retain(|w| !w.starts_with(NO_LIGHTS));
     }
 
     /// The note on the default light, when the scene got one, or on the emitters that light a
@@ -110,40 +143,31 @@ impl Scene {
     }
 }
 
+/// Whether a light of this name is one the lab added ([`Scene::ensure_light`]).
+pub fn is_default_light(name: &str) -> bool {
+    matches!(name, "default point" | "default sun" | "default spot")
+}
+
 /// A point light's place and intensity in the view of a camera at `eye` looking along
 /// `forward`, when the camera stands inside a room and sees something; None otherwise.
-fn light_in_view(soup: &TriangleSoup, eye: Vec3, forward: Vec3) -> Option<(Vec3, f32)> {
-    if forward == Vec3::ZERO {
+fn light_in_view(bvh: &SceneBvh, eye: Vec3, forward: Vec3, known_inside: bool) -> Option<(Vec3, f32)> {
+    if forward == Vec3::ZERO || !eye.is_finite() {
         return None;
     }
     // Inside a room: something above and below, and walls in at least three of the four
     // horizontal directions (a door or a window may open the fourth).
-    let hits = |d: Vec3| soup.intersect(eye, d, 0.0, f32::INFINITY).is_some();
+    let hits = |d: Vec3| bvh.intersect(eye, d, 0.0, f32::INFINITY).is_some();
     let walls = [Vec3::X, -Vec3::X, Vec3::Z, -Vec3::Z].into_iter().filter(|&d| hits(d)).count();
-    if !(hits(Vec3::Y) && hits(-Vec3::Y) && walls >= 3) {
+    let room = hits(Vec3::Y) && hits(-Vec3::Y) && walls >= 3;
+    if !(known_inside || room) {
         return None;
     }
-    let target = soup.intersect(eye, forward, 0.0, f32::INFINITY)?;
+    let target = bvh.intersect(eye, forward, 0.0, f32::INFINITY)?;
     let mid = eye + forward * (0.5 * target.t);
-    let pos = match soup.intersect(mid, Vec3::Y, 0.0, f32::INFINITY) {
-        Some(up) => mid + Vec3::Y * (0.5 * up.t),
+    let pos = match bvh.intersect(mid, Vec3::Y, 0.0, f32::INFINITY) {
+        Some(up) => mid + Vec3::Y * (0.8 * up.t),
         None => mid,
     };
-    let d = pos.distance(target.position).max(1e-3);
+    let d = pos.distance(target.p).max(1e-3);
     Some((pos, std::f32::consts::PI * d * d))
-}
-
-/// When the first surface straight down from `pos` is seen from its back (all faces hit
-/// before the front faces), `pos` is above a ceiling: a place 85 % of the way from the floor
-/// below that ceiling to it.
-fn under_the_ceiling(soup: &TriangleSoup, pos: Vec3, reach: f32) -> Option<Vec3> {
-    let any = soup.intersect(pos, -Vec3::Y, 0.0, f32::INFINITY)?;
-    let front = soup.intersect_camera(pos, -Vec3::Y).map_or(f32::INFINITY, |h| h.t);
-    if any.t >= front - 1e-4 * reach {
-        return None;
-    }
-    let ceiling = any.position.y;
-    let start = any.position - Vec3::Y * (1e-4 * reach);
-    let floor = soup.intersect_camera(start, -Vec3::Y).map_or(ceiling - 0.5 * reach, |h| h.position.y);
-    Some(Vec3::new(pos.x, floor + 0.85 * (ceiling - floor), pos.z))
 }

@@ -255,6 +255,7 @@ pub fn add_glowing_sphere(
                 position: (n * radius).to_array(),
                 normal: n.to_array(),
                 uv: [j as f32 / segments as f32, i as f32 / rings as f32],
+                tangent: [0.0; 4],
             });
         }
     }

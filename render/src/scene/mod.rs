@@ -11,6 +11,8 @@ mod animation;
 pub mod cornell;
 pub mod default_light;
 pub mod emitters;
+pub mod framing;
+pub mod framing_cases;
 mod gltf_load;
 pub mod sky;
 mod texture;
@@ -28,6 +30,10 @@ pub struct Vertex {
     pub position: [f32; 3],
     pub normal: [f32; 3],
     pub uv: [f32; 2],
+    /// Tangent (xyz, object space) and bitangent sign (w = ±1) for normal textures: from the
+    /// file's TANGENT attribute, else generated (MikkTSpace) where the material has a normal
+    /// texture; all zero where none is needed (the shaders then keep the vertex normal).
+    pub tangent: [f32; 4],
 }
 
 /// A triangle mesh primitive with one material.
@@ -215,6 +221,12 @@ pub struct Scene {
     pub warnings: Vec<String>,
     /// The sky around the scene (off unless the user turns it on; see [`sky`]).
     pub sky: sky::Sky,
+    /// The view the loader chose for a person opening the scene ([`framing`]); None: chosen
+    /// when first asked (`renderer::default_camera`).
+    pub view: Option<framing::Framing>,
+    /// The unit the loader read from the scene's extent and the factor it applied to reach
+    /// metres, with the sentence that says so (None: metres, or `--unit-scale` given).
+    pub units: Option<(f32, String)>,
 }
 
 /// A primitive to draw with its world transform, as of one instant.
@@ -401,5 +413,5 @@ impl Scene {
 
 /// Used by loaders and generators: a flat-shaded vertex.
 pub fn vertex(p: Vec3, n: Vec3, uv: Vec2) -> Vertex {
-    Vertex { position: p.into(), normal: n.into(), uv: uv.into() }
+    Vertex { position: p.into(), normal: n.into(), uv: uv.into(), tangent: [0.0; 4] }
 }

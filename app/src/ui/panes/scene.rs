@@ -11,6 +11,11 @@ pub(super) fn scene_ui(st: &mut State, ui: &mut egui::Ui) {
     for w in &l.renderer.scene().warnings {
         ui.small(format!("warning: {w}"));
     }
+    if let Some(v) = &l.renderer.scene().view {
+        ui.small(format!("view: {}", v.reason));
+    }
+    default_light_controls(l, ui);
+    scene_cameras(l, ui);
     let open = l.renderer.voxel_visibility_open_meshes();
     if !open.is_empty() {
         let names: Vec<String> = open.iter().map(|(n, e)| format!("{n} ({e} open edges)")).collect();
@@ -26,8 +31,15 @@ pub(super) fn scene_ui(st: &mut State, ui: &mut egui::Ui) {
         open_dialog = ui.button("Open glTF…").on_hover_text("or drop a .gltf / .glb file on the window").clicked();
         open_default = ui.button("Default scene").clicked();
         ui.label("unit scale");
-        ui.add(egui::DragValue::new(&mut l.unit_scale).range(1e-6..=1e6).speed(0.001))
-            .on_hover_text("multiplies the scene's coordinates (0.001 for millimetres); applies on the next open");
+        ui.add(
+            egui::DragValue::new(&mut l.unit_scale)
+                .range(0.0..=1e6)
+                .speed(0.001)
+                .custom_formatter(|v, _| if v == 0.0 { "auto".into() } else { format!("{v}") }),
+        )
+        .on_hover_text(
+            "multiplies the scene's coordinates (0.001 for millimetres); auto (0) reads the unit from the scene's extent; applies on the next open",
+        );
     });
     let mut open_typed = false;
     ui.horizontal(|ui| {
@@ -94,7 +106,7 @@ pub(super) fn scene_ui(st: &mut State, ui: &mut egui::Ui) {
     }
     if open_typed {
         let path = std::path::PathBuf::from(st.scene_path_text.trim());
-        let scale = st.lab.as_ref().map(|l| l.unit_scale).unwrap_or(1.0);
+        let scale = st.lab.as_ref().map(|l| l.unit_scale).unwrap_or(0.0);
         if let Err(e) = st.open_scene(Some(path), scale) {
             st.set_status(format!("scene not opened: {e}"));
         }
@@ -102,7 +114,7 @@ pub(super) fn scene_ui(st: &mut State, ui: &mut egui::Ui) {
     if let Some(m) = lights_message {
         st.set_status(m);
     }
-    if open_default && let Err(e) = st.open_scene(None, 1.0) {
+    if open_default && let Err(e) = st.open_scene(None, 0.0) {
         st.set_status(format!("scene not opened: {e}"));
     }
 }
@@ -152,4 +164,46 @@ fn timeline(l: &mut crate::ui::lab::Lab, ui: &mut egui::Ui) {
     if duration > 0.0 {
         ui.small(format!("the scene's animations last {duration:.2} s"));
     }
+}
+
+/// "Remove the default light": the light (and the sky) the lab added to a scene without any
+/// (issue #37 point 3) go away in one click; the path tracer reads the same scene.
+fn default_light_controls(l: &mut crate::ui::lab::Lab, ui: &mut egui::Ui) {
+    let added: Vec<usize> = l
+        .renderer
+        .scene()
+        .lights
+        .iter()
+        .enumerate()
+        .filter(|(_, li)| gi_render::scene::default_light::is_default_light(&li.name))
+        .map(|(i, _)| i)
+        .collect();
+    if added.is_empty() {
+        return;
+    }
+    if ui
+        .button("Remove the default light")
+        .on_hover_text("the light (and, for an open scene, the sky) the lab added because the scene has none")
+        .clicked()
+    {
+        l.renderer.scene_mut().remove_default_light();
+        l.renderer.reset_history();
+    }
+}
+
+/// The scene's glTF cameras: one button each (the scene opens on the first).
+fn scene_cameras(l: &mut crate::ui::lab::Lab, ui: &mut egui::Ui) {
+    let state = l.renderer.scene().evaluate(0.0);
+    if state.cameras.len() < 2 {
+        return;
+    }
+    let bounds = l.renderer.bounds();
+    ui.horizontal_wrapped(|ui| {
+        ui.label("cameras:");
+        for c in &state.cameras {
+            if ui.button(&c.camera.name).on_hover_text("look through this glTF camera").clicked() {
+                l.renderer.camera = gi_render::camera::Camera::from_node(c.world, &c.camera, bounds);
+            }
+        }
+    });
 }

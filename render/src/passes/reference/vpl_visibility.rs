@@ -1,7 +1,8 @@
-//! Stage 4, exact visibility of the VPLs (DESIGN.md "exact shadow maps (reference)"): every
-//! VPL of a batch gets five 90° depth maps — the faces of a cube oriented on its normal that
-//! cover its hemisphere — rendered from the real triangles into one `Depth32Float` atlas
-//! (`vpl.shadow_atlas`). The reference Knecht 002 §5.2 measures imperfect shadow maps against.
+//! Stage 4, exact visibility of the VPLs (docs/principles.md's pipeline table: "exact shadow
+//! maps (reference)"): every VPL of a batch gets five 90° depth maps — the faces of a cube
+//! oriented on its normal that cover its hemisphere — rendered from the real triangles into
+//! one `Depth32Float` atlas (`vpl.shadow_atlas`). The reference Knecht 002 §5.2 measures
+//! imperfect shadow maps against.
 //! Shaders: `shaders/vpl/shadow.wgsl`; the face geometry is in `shaders/common/vpl.wgsl`.
 //!
 //! Departure from a paraboloid map per VPL (the form ISMs take): a paraboloid projection

@@ -169,7 +169,12 @@ impl Loader<'_> {
         let (vertices, indices) = match &normals {
             Some(normals) => {
                 let vertices = (0..n)
-                    .map(|i| Vertex { position: vec3(&positions, i), normal: vec3(normals, i), uv: uv(i) })
+                    .map(|i| Vertex {
+                        position: vec3(&positions, i),
+                        normal: vec3(normals, i),
+                        uv: uv(i),
+                        tangent: [0.0; 4],
+                    })
                     .collect();
                 (vertices, indices)
             }
@@ -183,7 +188,12 @@ impl Loader<'_> {
                         _ => Vec3::Y,
                     };
                     for i in corners {
-                        vertices.push(Vertex { position: vec3(&positions, i), normal: normal.to_array(), uv: uv(i) });
+                        vertices.push(Vertex {
+                            position: vec3(&positions, i),
+                            normal: normal.to_array(),
+                            uv: uv(i),
+                            tangent: [0.0; 4],
+                        });
                     }
                 }
                 let count = u32::try_from(vertices.len())

@@ -56,13 +56,19 @@ pub struct LoadOptions {
     /// Factor applied to all world positions (for example 0.001 for a file in millimetres).
     /// Implemented as an extra root node with this uniform scale above the file's roots.
     pub unit_scale: f32,
-    /// Adds a default spot light (see [`Scene::ensure_light`]) when the file has no punctual light.
+    /// Adds a default light (see [`Scene::ensure_light`]) when the file has no punctual
+    /// light and no emitter, and chooses the view the scene opens on
+    /// ([`crate::scene::framing`]).
     pub add_default_light: bool,
+    /// With `unit_scale` 1: reads the unit from the scene's extent (millimetres,
+    /// centimetres; [`crate::scene::framing::detect_unit_scale`]) and scales to metres,
+    /// saying so in [`Scene::units`] and the warnings. Off when the user gave a unit scale.
+    pub detect_units: bool,
 }
 
 impl Default for LoadOptions {
     fn default() -> Self {
-        Self { unit_scale: 1.0, add_default_light: true }
+        Self { unit_scale: 1.0, add_default_light: true, detect_units: true }
     }
 }
 
@@ -176,10 +182,22 @@ fn load(bytes: &[u8], base_dir: Option<&Path>, opts: &LoadOptions, file: &str) -
 
     let skipped = std::mem::take(&mut loader.skipped);
     let mut scene = loader.scene;
-    if opts.unit_scale != 1.0 {
+    let mut unit_scale = opts.unit_scale;
+    if opts.detect_units && unit_scale == 1.0 {
+        let extent = scene.bounds(0.0).extent().max_element();
+        if let Some((scale, unit)) = crate::scene::framing::detect_unit_scale(extent) {
+            unit_scale = scale;
+            let note = format!(
+                "units: {unit} (the scene is {extent:.0} units across), scaled by {scale} to metres; --unit-scale overrides"
+            );
+            scene.warnings.push(note.clone());
+            scene.units = Some((scale, note));
+        }
+    }
+    if unit_scale != 1.0 {
         scene.nodes.push(Node {
-            name: format!("unit scale {}", opts.unit_scale),
-            transform: Transform { scale: Vec3::splat(opts.unit_scale), ..Transform::default() },
+            name: format!("unit scale {unit_scale}"),
+            transform: Transform { scale: Vec3::splat(unit_scale), ..Transform::default() },
             children: std::mem::take(&mut scene.roots),
             mesh: None,
             light: None,
@@ -198,6 +216,7 @@ fn load(bytes: &[u8], base_dir: Option<&Path>, opts: &LoadOptions, file: &str) -
         });
     }
     if opts.add_default_light {
+        scene.view = Some(crate::scene::framing::choose_view(&scene, 16.0 / 9.0, Default::default()));
         scene.ensure_light();
     }
     for w in &scene.warnings {

@@ -11,14 +11,11 @@ use super::materials::uv_transform;
 use super::meshes::{fan_to_list, strip_to_list};
 use crate::scene::{LightKind, Material};
 
-/// `../shared/scenes/<rel>` from the project root; fails (does not skip) when missing.
-fn shared_scene(rel: &str) -> PathBuf {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes").join(rel);
-    assert!(
-        path.is_file(),
-        "shared test scene {} is missing: the tests need the read-only ../shared/scenes folder next to the project",
-        path.display()
-    );
+/// `assets/scenes/<rel>` of the repository (the real scenes, each with its licence); fails
+/// (does not skip) when missing.
+fn real_scene(rel: &str) -> PathBuf {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/scenes").join(rel);
+    assert!(path.is_file(), "real scene {} is missing from the repository's assets/scenes/", path.display());
     path
 }
 
@@ -110,7 +107,7 @@ fn load_str(json: &str) -> Result<Scene, SceneError> {
 
 #[test]
 fn shared_cornell_box_loads_lit_by_its_emitter() {
-    let scene = load_gltf_file(&shared_scene("cornell-box/CornellBox-Original.gltf"), &LoadOptions::default())
+    let scene = load_gltf_file(&real_scene("cornell-box/CornellBox-Original.gltf"), &LoadOptions::default())
         .expect("CornellBox-Original loads");
     assert_eq!(scene.triangle_count(), 32);
     assert_eq!(scene.name, "CornellBox-Original");
@@ -126,7 +123,7 @@ fn shared_cornell_box_loads_lit_by_its_emitter() {
 
 #[test]
 fn shared_chair_scene_loads_with_its_sun() {
-    let scene = load_gltf_file(&shared_scene("chair-on-floor/MixedLightingExample.gltf"), &LoadOptions::default())
+    let scene = load_gltf_file(&real_scene("chair-on-floor/MixedLightingExample.gltf"), &LoadOptions::default())
         .expect("MixedLightingExample loads");
     assert_eq!(scene.triangle_count(), 40898);
     assert_eq!(scene.lights.len(), 1);
@@ -146,7 +143,7 @@ fn shared_chair_scene_loads_with_its_sun() {
 #[test]
 fn shared_hotel_room_loads_skipping_its_lines() {
     let opts = LoadOptions { unit_scale: 0.001, ..LoadOptions::default() };
-    let scene = load_gltf_file(&shared_scene("hotel-room/hotel-room.glb"), &opts).expect("hotel room loads");
+    let scene = load_gltf_file(&real_scene("hotel-room/hotel-room.glb"), &opts).expect("hotel room loads");
     assert_eq!(scene.triangle_count(), 99029);
     assert_eq!(scene.lights.len(), 1);
     assert_eq!(scene.lights[0].name, "default spot");
@@ -195,7 +192,7 @@ fn external_bin_in_scene_folder_loads_and_glb_round_trips() {
 #[test]
 fn unit_scale_scales_world_positions() {
     let json = triangle_gltf(&data_uri(&triangle_bin([0, 1, 2])));
-    let opts = LoadOptions { unit_scale: 0.5, add_default_light: false };
+    let opts = LoadOptions { unit_scale: 0.5, add_default_light: false, detect_units: false };
     let scene = load_gltf_bytes(json.as_bytes(), None, &opts).expect("loads");
     let b = scene.bounds(0.0);
     assert!((b.max - Vec3::new(0.5, 0.5, 0.0)).length() < 1e-6, "{b:?}");

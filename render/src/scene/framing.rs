@@ -1,0 +1,451 @@
+//! The view a scene without a glTF camera opens on, and the units it is in (issue #37
+//! points 1 and 2). A person who opens a closed room stands in it; one who opens an object or
+//! an open layout looks at it from a raised three-quarter view that it fills. The rule is
+//! the same everywhere (window, `render`, `bench`, `reference`, `soak`, `sweep`): every path
+//! asks [`crate::renderer::default_camera`], which reads the [`Framing`] the loader stored in
+//! the scene, or makes one.
+//!
+//! **Interior or exterior.** Points on a grid inside the bounds are probed with 48 rays
+//! each (a Fibonacci sphere). A point is *in a room* when at least 92 % of them hit
+//! something, rays straight up and down both do, and at least 80 % of the hits are front faces
+//! (a point inside a solid object, a bunny or a wall, sees back faces). The scene is an
+//! interior when its centre is in a room or at least half of the probes are; otherwise (an
+//! object, an open layout, a box open on one side) it is an exterior.
+//!
+//! **Interior view.** The room is the probe with the largest floor area (the spans to the
+//! walls along x and z), moved to the middle of those spans. The camera stands at eye
+//! height: 1.6 m above the floor in a room at least 2.4 m high, else 0.6 × its height. It
+//! looks along the longest free horizontal direction (16 tried), stepped back towards the
+//! opposite wall so that the room is in view, slightly down, with a 63° vertical field.
+//!
+//! **Exterior view.** Eight azimuths (three-quarter views, 45° apart, 22.5° off the axes) at
+//! two elevations (25° and 45°) are tried; each camera is fitted to the geometry's projected
+//! extent (its vertices, not its bounding sphere) and scored by the share of a 40 × 24 ray
+//! image that sees a surface as the G-buffer does (back faces of single-sided materials
+//! culled), weighted by the share of those surfaces that face other geometry (a box open on
+//! one side is seen through its opening, not by its outer walls), with a small preference for
+//! looking across the largest horizontal extent.
+
+use glam::{Vec2, Vec3};
+
+use super::{Aabb, Scene};
+use crate::camera::Camera;
+use crate::cpu::bvh::SceneBvh;
+
+/// What the user asked for: the rule's choice, or a side.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ViewPreference {
+    #[default]
+    Auto,
+    Inside,
+    Outside,
+}
+
+/// Which kind of view the rule chose.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViewKind {
+    /// The scene's own glTF camera (`index` of `count`).
+    SceneCamera {
+        index: usize,
+        count: usize,
+    },
+    Interior,
+    Exterior,
+}
+
+/// The room the interior camera stands in.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Room {
+    /// Floor and ceiling heights (world y).
+    pub floor: f32,
+    pub ceiling: f32,
+    /// The middle of the room at eye height.
+    pub center: Vec3,
+    /// The room's mean short and long wall-to-wall spans.
+    pub size: Vec2,
+}
+
+/// A chosen view: the camera and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Framing {
+    pub camera: Camera,
+    pub kind: ViewKind,
+    /// One sentence for the status bar: which view and why.
+    pub reason: String,
+    /// The room of an interior view.
+    pub room: Option<Room>,
+    /// Up to 4,096 world points of the geometry, to fit an exterior view to another aspect.
+    pub fit_points: Vec<Vec3>,
+}
+
+impl Framing {
+    /// The same view for another aspect: an exterior view is fitted again to its points.
+    pub fn for_aspect(&self, aspect: f32, bounds: Aabb) -> Framing {
+        let mut f = self.clone();
+        if self.kind == ViewKind::Exterior && !self.fit_points.is_empty() {
+            f.camera = fit_camera(&self.fit_points, self.camera.forward(), self.camera.yfov, aspect, usable(bounds));
+        }
+        f
+    }
+}
+
+/// Fibonacci-sphere directions.
+fn sphere_directions(n: usize) -> Vec<Vec3> {
+    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    (0..n)
+        .map(|i| {
+            let y = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
+            let r = (1.0 - y * y).max(0.0).sqrt();
+            let phi = golden * i as f32;
+            Vec3::new(r * phi.cos(), y, r * phi.sin())
+        })
+        .collect()
+}
+
+/// Whether `p` stands in a room (see the module doc).
+fn in_room(bvh: &SceneBvh, p: Vec3, dirs: &[Vec3]) -> bool {
+    let (mut hits, mut fronts) = (0usize, 0usize);
+    for &d in dirs {
+        if let Some(h) = bvh.intersect(p, d, 0.0, f32::INFINITY) {
+            hits += 1;
+            if h.front || bvh.tris[h.tri].double_sided {
+                fronts += 1;
+            }
+        }
+    }
+    let up = bvh.intersect(p, Vec3::Y, 0.0, f32::INFINITY).is_some();
+    let down = bvh.intersect(p, Vec3::NEG_Y, 0.0, f32::INFINITY).is_some();
+    up && down && hits * 100 >= dirs.len() * 92 && fronts * 100 >= hits * 80
+}
+
+/// Distance from `p` (inside `b`) along `d` to where the ray leaves `b`.
+fn exit(b: Aabb, p: Vec3, d: Vec3) -> f32 {
+    let inv = d.recip();
+    let t1 = (b.min - p) * inv;
+    let t2 = (b.max - p) * inv;
+    let far = t1.max(t2);
+    let t = far.min_element();
+    if t.is_finite() { t.max(0.0) } else { 0.0 }
+}
+
+/// Distance to the first surface along `d` (infinite when none).
+fn free(bvh: &SceneBvh, p: Vec3, d: Vec3) -> f32 {
+    bvh.intersect(p, d, 0.0, f32::INFINITY).map_or(f32::INFINITY, |h| h.t)
+}
+
+/// The bounds made usable: finite, with a positive size.
+fn usable(b: Aabb) -> Aabb {
+    if !(b.min.is_finite() && b.max.is_finite()) || b.is_empty() {
+        return Aabb { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) };
+    }
+    let pad = (b.extent().max_element() * 1e-3).max(1e-3);
+    Aabb { min: b.min - Vec3::splat(pad), max: b.max + Vec3::splat(pad) }
+}
+
+/// The view the rule chooses for `scene` at `aspect` (the scene's first glTF camera when it
+/// has one and `prefer` is `Auto`).
+pub fn choose_view(scene: &Scene, aspect: f32, prefer: ViewPreference) -> Framing {
+    let state = scene.evaluate(0.0);
+    let bounds = usable(scene.bounds(0.0));
+    if prefer == ViewPreference::Auto
+        && let Some(c) = state.cameras.first()
+    {
+        return Framing {
+            camera: Camera::from_node(c.world, &c.camera, bounds),
+            kind: ViewKind::SceneCamera { index: 0, count: state.cameras.len() },
+            reason: format!("the scene's camera '{}'", c.camera.name),
+            room: None,
+            fit_points: Vec::new(),
+        };
+    }
+    let bvh = SceneBvh::new(scene, &state);
+    let fit_points = sample_points(&bvh);
+    if bvh.tris.is_empty() {
+        return Framing {
+            camera: Camera::frame_bounds(bounds, aspect),
+            kind: ViewKind::Exterior,
+            reason: "the scene has no triangles: a view of its bounds".into(),
+            room: None,
+            fit_points,
+        };
+    }
+    let dirs = sphere_directions(48);
+    let (centre_in_room, rooms, probes) = probe_rooms(&bvh, bounds, &dirs);
+    let interior = centre_in_room || rooms.len() * 2 >= probes;
+    let want_inside = match prefer {
+        ViewPreference::Auto => interior,
+        ViewPreference::Inside => true,
+        ViewPreference::Outside => false,
+    };
+    if want_inside && let Some(f) = interior_view(&bvh, &rooms, &dirs, bounds, fit_points.clone()) {
+        let why = if prefer == ViewPreference::Inside {
+            "asked for a view from inside".to_string()
+        } else if centre_in_room {
+            "the scene encloses its centre".to_string()
+        } else {
+            format!("{} of {probes} probes of its volume stand in rooms", rooms.len())
+        };
+        return Framing { reason: format!("inside: {why}; {}", f.reason), ..f };
+    }
+    let mut f = exterior_view(&bvh, bounds, aspect, fit_points);
+    let why = match prefer {
+        ViewPreference::Outside => "asked for a view from outside".to_string(),
+        ViewPreference::Inside => "asked for a view from inside, but no point of the scene stands in a room".into(),
+        ViewPreference::Auto => "an object or an open scene (its centre is not enclosed)".into(),
+    };
+    f.reason = format!("outside: {why}; {}", f.reason);
+    f
+}
+
+/// Probes a grid of points: whether the centre is in a room, the points that are, and how
+/// many were probed.
+fn probe_rooms(bvh: &SceneBvh, b: Aabb, dirs: &[Vec3]) -> (bool, Vec<Vec3>, usize) {
+    let centre = in_room(bvh, b.center(), dirs);
+    let (nx, ny, nz) = (7, 4, 7);
+    let mut rooms = Vec::new();
+    for i in 0..nx {
+        for j in 0..ny {
+            for k in 0..nz {
+                let f =
+                    Vec3::new((i as f32 + 0.5) / nx as f32, (j as f32 + 0.5) / ny as f32, (k as f32 + 0.5) / nz as f32);
+                let p = b.min + f * b.extent();
+                if in_room(bvh, p, dirs) {
+                    rooms.push(p);
+                }
+            }
+        }
+    }
+    if centre {
+        rooms.push(b.center());
+    }
+    (centre, rooms, nx * ny * nz)
+}
+
+/// The camera inside the largest room (see the module doc), or None when no probe stands in
+/// a room.
+fn interior_view(bvh: &SceneBvh, rooms: &[Vec3], dirs: &[Vec3], b: Aabb, fit_points: Vec<Vec3>) -> Option<Framing> {
+    // A ray through a door or a window ends where it leaves the bounds.
+    let span = |p: Vec3, d: Vec3| free(bvh, p, d).min(exit(b, p, d));
+    let reach = b.extent().length();
+    // The room of each probe, from 16 horizontal rays: its floor area (the mean of the four
+    // shortest of the 8 wall-to-wall spans times the mean of the four longest, so that a
+    // door, which lengthens one or two spans, does not make a corridor the largest room) and
+    // its middle (the mean of the points the rays reach). The largest wins.
+    let best = rooms
+        .iter()
+        .map(|&p| {
+            let ends: Vec<Vec3> = (0..16)
+                .map(|i| {
+                    let a = std::f32::consts::TAU * i as f32 / 16.0;
+                    let d = Vec3::new(a.sin(), 0.0, -a.cos());
+                    p + d * span(p, d)
+                })
+                .collect();
+            let mut spans: Vec<f32> = (0..8).map(|i| ends[i].distance(ends[i + 8])).collect();
+            spans.sort_by(f32::total_cmp);
+            let (short, long) = (spans[..4].iter().sum::<f32>() / 4.0, spans[4..].iter().sum::<f32>() / 4.0);
+            let mid = ends.iter().fold(Vec3::ZERO, |s, e| s + *e) / 16.0;
+            let centre = Vec3::new(mid.x, p.y, mid.z);
+            (short * long, centre, Vec2::new(short, long), p)
+        })
+        .max_by(|a, b| a.0.total_cmp(&b.0))?;
+    let (_, mut centre, size, probe) = best;
+    // The middle of the spans may be inside furniture: keep the probe's own place then.
+    if !in_room(bvh, centre, dirs) {
+        centre = probe;
+    }
+    // Floor and ceiling: the lowest floor and the highest ceiling straight below and above
+    // the middle and four points around it (a table under the middle is not the floor).
+    let r = 0.25 * size.x;
+    let around = [Vec3::ZERO, Vec3::X * r, Vec3::NEG_X * r, Vec3::Z * r, Vec3::NEG_Z * r];
+    let (mut floor, mut ceiling) = (f32::INFINITY, f32::NEG_INFINITY);
+    for o in around {
+        let p = centre + o;
+        if !in_room(bvh, p, dirs) && o != Vec3::ZERO {
+            continue;
+        }
+        floor = floor.min(p.y - free(bvh, p, Vec3::NEG_Y));
+        ceiling = ceiling.max(p.y + free(bvh, p, Vec3::Y));
+    }
+    if !(floor.is_finite() && ceiling.is_finite()) {
+        return None;
+    }
+    let height = ceiling - floor;
+    let eye_h = if (2.1..=8.0).contains(&height) { 1.6 } else { 0.6 * height };
+    let mut eye = Vec3::new(centre.x, floor + eye_h, centre.z);
+    if !in_room(bvh, eye, dirs) {
+        eye = centre;
+    }
+    // The longest free horizontal direction that ends on a surface (a view out of a door
+    // into nothing counts half), then a step back towards the opposite wall.
+    let (dir, length, _) = (0..16)
+        .map(|i| {
+            let a = std::f32::consts::TAU * i as f32 / 16.0;
+            let d = Vec3::new(a.sin(), 0.0, -a.cos());
+            let t = free(bvh, eye, d);
+            let s = span(eye, d);
+            (d, s, if t.is_finite() { s } else { 0.5 * s })
+        })
+        .max_by(|a, b| a.2.total_cmp(&b.2))?;
+    // Back towards the opposite wall, but not through a door behind: at most half the way
+    // ahead, and only while the place stays in a room.
+    let back = span(eye, -dir);
+    let margin = (0.1 * height).max(0.05 * back);
+    let mut step = ((back - margin) * 0.8).clamp(0.0, 0.5 * length);
+    while step > 0.05 * height && !in_room(bvh, eye - dir * step, dirs) {
+        step *= 0.5;
+    }
+    let position = eye - dir * step;
+    let pitch = -8f32.to_radians();
+    let forward = Vec3::new(dir.x * pitch.cos(), pitch.sin(), dir.z * pitch.cos());
+    let target = position + forward * (length + step).min(reach).max(1e-3);
+    let mut camera = Camera::look_at(position, target, 1.1, b);
+    camera.znear = (0.01 * height).clamp(1e-3, 0.05);
+    let room = Room { floor, ceiling, center: eye, size };
+    Some(Framing {
+        camera,
+        kind: ViewKind::Interior,
+        reason: format!(
+            "camera in the largest room ({:.1} × {:.1} × {:.1}) at eye height {:.2}, looking along its longest free direction ({:.1})",
+            size.x,
+            size.y,
+            height,
+            eye.y - floor,
+            length + step
+        ),
+        room: Some(room),
+        fit_points,
+    })
+}
+
+/// Up to 4,096 vertices of the geometry, evenly strided.
+fn sample_points(bvh: &SceneBvh) -> Vec<Vec3> {
+    let n = bvh.tris.len() * 3;
+    let stride = n.div_ceil(4096).max(1);
+    (0..n).step_by(stride).map(|i| bvh.tris[i / 3].v[i % 3]).filter(|p| p.is_finite()).collect()
+}
+
+/// A camera looking along `forward` at the points, at the distance where they all fit the
+/// view of vertical field `yfov` and `aspect` (5 % margin), its target moved to the middle of
+/// their projection.
+pub fn fit_camera(points: &[Vec3], forward: Vec3, yfov: f32, aspect: f32, b: Aabb) -> Camera {
+    let f = forward.normalize_or(Vec3::NEG_Z);
+    let r = f.cross(Vec3::Y).normalize_or(Vec3::X);
+    let u = r.cross(f);
+    let ty = (yfov * 0.5).tan() * 0.95;
+    let tx = ty * aspect.max(1e-3);
+    let mut target = b.center();
+    for _ in 0..2 {
+        let need = points.iter().fold(0f32, |acc, p| {
+            let q = *p - target;
+            let (x, y, z) = (q.dot(r), q.dot(u), q.dot(f));
+            acc.max(x.abs() / tx - z).max(y.abs() / ty - z)
+        });
+        let dist = need.max(1e-3);
+        // Re-centre on the projection's middle (in the image plane through the target).
+        let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+        for p in points {
+            let q = *p - target;
+            let depth = (dist + q.dot(f)).max(1e-6);
+            let s = Vec2::new(q.dot(r), q.dot(u)) * (dist / depth);
+            lo = lo.min(s);
+            hi = hi.max(s);
+        }
+        if lo.is_finite() && hi.is_finite() {
+            let mid = 0.5 * (lo + hi);
+            target += r * mid.x + u * mid.y;
+        }
+    }
+    // A final fit at the re-centred target.
+    let need = points.iter().fold(0f32, |acc, p| {
+        let q = *p - target;
+        let (x, y, z) = (q.dot(r), q.dot(u), q.dot(f));
+        acc.max(x.abs() / tx - z).max(y.abs() / ty - z)
+    });
+    let dist = need.max(1e-3);
+    let position = target - f * dist;
+    let mut c = Camera::look_at(position, target, yfov, b);
+    c.orbit_distance = dist;
+    c
+}
+
+/// The exterior view (see the module doc).
+fn exterior_view(bvh: &SceneBvh, b: Aabb, aspect: f32, fit_points: Vec<Vec3>) -> Framing {
+    let yfov = 0.8f32;
+    let ext = b.extent();
+    let long_axis = if ext.x >= ext.z { Vec3::X } else { Vec3::Z };
+    let mut best: Option<(f32, Camera, f32, f32)> = None;
+    for elevation in [25f32, 45.0] {
+        for k in 0..8 {
+            let azimuth = (22.5 + 45.0 * k as f32).to_radians();
+            let (se, ce) = elevation.to_radians().sin_cos();
+            // The camera sits at azimuth (from +Z towards +X) and looks back at the scene.
+            let from = Vec3::new(azimuth.sin() * ce, se, azimuth.cos() * ce);
+            let cam = fit_camera(&fit_points, -from, yfov, aspect, b);
+            let (coverage, facing) = view_score(bvh, &cam, aspect);
+            let across = 1.0 - from.dot(long_axis).abs();
+            let front = if from.z > 0.0 { 0.01 } else { 0.0 };
+            let score =
+                coverage * (0.5 + 0.5 * facing) + 0.05 * across + front + if elevation < 30.0 { 0.005 } else { 0.0 };
+            if best.as_ref().is_none_or(|x| score > x.0) {
+                best = Some((score, cam, azimuth.to_degrees(), elevation));
+            }
+        }
+    }
+    let (_, camera, azimuth, elevation) = best.unwrap_or((0.0, Camera::frame_bounds(b, aspect), 0.0, 20.0));
+    let cover = coverage(bvh, &camera, aspect);
+    Framing {
+        camera,
+        kind: ViewKind::Exterior,
+        reason: format!(
+            "a three-quarter view from azimuth {azimuth:.0}° and {elevation:.0}° up, fitted to the geometry ({:.0} % of the frame)",
+            cover * 100.0
+        ),
+        room: None,
+        fit_points,
+    }
+}
+
+/// The share of a 40 × 24 ray image from `cam` that meets a surface the G-buffer draws.
+pub fn coverage(bvh: &SceneBvh, cam: &Camera, aspect: f32) -> f32 {
+    view_score(bvh, cam, aspect).0
+}
+
+/// The share of a 40 × 24 ray image from `cam` that meets a surface the G-buffer draws, and
+/// the share of those surfaces that face other geometry (a ray along their normal hits
+/// something): the inside of a box open on one side, not its outer walls.
+fn view_score(bvh: &SceneBvh, cam: &Camera, aspect: f32) -> (f32, f32) {
+    let (w, h) = (40u32, 24u32);
+    let inv = cam.view_proj(aspect).inverse();
+    let (mut hit, mut facing) = (0, 0);
+    let eps = 1e-4 * cam.orbit_distance.max(1e-3);
+    for y in 0..h {
+        for x in 0..w {
+            let (o, d) = crate::cpu::raycast::primary_ray(inv, x, y, w, h);
+            if let Some(s) = bvh.intersect_camera(o, d, 0.0, f32::INFINITY) {
+                hit += 1;
+                if bvh.intersect(s.p + s.n * eps, s.n, 0.0, f32::INFINITY).is_some() {
+                    facing += 1;
+                }
+            }
+        }
+    }
+    (hit as f32 / (w * h) as f32, facing as f32 / hit.max(1) as f32)
+}
+
+/// The scale that turns a scene of largest extent `extent` (file units) into metres, and the
+/// unit it names, when the extent says it is not in metres: beyond 3,000 units millimetres
+/// (a 10 m room is 10,000), beyond 300 centimetres (a 4 m room is 400); glTF's own unit is
+/// the metre, so anything smaller stays.
+pub fn detect_unit_scale(extent: f32) -> Option<(f32, &'static str)> {
+    if !extent.is_finite() || extent <= 0.0 {
+        return None;
+    }
+    if extent > 3000.0 {
+        Some((0.001, "millimetres"))
+    } else if extent > 300.0 {
+        Some((0.01, "centimetres"))
+    } else {
+        None
+    }
+}
