@@ -590,18 +590,18 @@ fn a_closed_room_without_lights_is_lit_where_its_camera_looks() {
     assert!(lit > 0.4, "only {lit:.3} of the view is lit");
 }
 
-/// Issue #18 (3): when something above the roof lifts the bounds' top above the ceiling, the
-/// default spot is moved under the ceiling (it would light the roof from above otherwise)
-/// — the room's floor, seen from the camera inside, is lit.
+/// Issues #18 (3) and #37 (1, 3): with something far above the roof (the bounds' top above
+/// the ceiling) and no camera, the room is still found: the view stands inside it and the
+/// default point light hangs under its ceiling — the room's floor, seen from inside, is lit.
 #[test]
-fn the_default_spot_is_moved_under_the_ceiling() {
+fn an_object_above_the_roof_does_not_move_the_light_out_of_the_room() {
     let mut scene = hotel_room_with_camera_inside(true);
-    // Without the camera rule: the spot, as a scene with an outside camera gets it.
     scene.cameras.clear();
     scene.nodes.iter_mut().for_each(|n| n.camera = None);
     scene.ensure_light();
     let note = scene.default_light_note().expect("a note").to_string();
     assert!(note.contains("under the ceiling"), "{note}");
+    assert_eq!(scene.lights[0].name, "default point");
     let ceiling_room = hotel_room_with_camera_inside(false).bounds(0.0).max.y;
     let spot = scene.nodes.iter().find(|n| n.light.is_some()).expect("light node").transform.translation;
     assert!(spot.y < ceiling_room, "the spot at {spot} is above the room's top {ceiling_room}");

@@ -58,13 +58,22 @@ impl SceneBvh {
             let flip = if d.world.determinant() < 0.0 { -1.0 } else { 1.0 };
             for t in p.indices.chunks_exact(3) {
                 let vert = |k: usize| &p.vertices[t[k] as usize];
+                // A triangle with a vertex that is not a finite number (a broken file) cannot
+                // be hit; the BVH builder refuses its box.
+                if !(0..3).all(|k| Vec3::from(vert(k).position).is_finite()) {
+                    continue;
+                }
                 let tangent = |k: usize| {
                     let tv = glam::Vec4::from(vert(k).tangent);
                     let xyz = d.world.transform_vector3(tv.xyz()).normalize_or_zero();
                     xyz.extend(tv.w * flip)
                 };
+                let v = [0, 1, 2].map(|k| d.world.transform_point3(Vec3::from(vert(k).position)));
+                if !v.iter().all(|x| x.is_finite()) {
+                    continue;
+                }
                 tris.push(BvhTri {
-                    v: [0, 1, 2].map(|k| d.world.transform_point3(Vec3::from(vert(k).position))),
+                    v,
                     n: [0, 1, 2].map(|k| (nm * Vec3::from(vert(k).normal).extend(0.0)).xyz().normalize_or_zero()),
                     t: [0, 1, 2].map(tangent),
                     uv: [0, 1, 2].map(|k| Vec2::from(vert(k).uv)),

@@ -401,6 +401,17 @@ impl Renderer {
         if (width, height) == (self.width, self.height) {
             return Ok(());
         }
+        // An exterior view nobody has moved yet is fitted again to the new shape (the window
+        // makes its renderer before it knows the viewport's size).
+        if let Some(v) = &self.scene.view
+            && v.kind == crate::scene::framing::ViewKind::Exterior
+        {
+            let bounds = self.bounds();
+            let old = v.for_aspect(self.width as f32 / self.height.max(1) as f32, bounds).camera;
+            if old == self.camera {
+                self.camera = v.for_aspect(width as f32 / height.max(1) as f32, bounds).camera;
+            }
+        }
         self.width = width;
         self.height = height;
         self.gbuffer.resize(&self.ctx, width, height);

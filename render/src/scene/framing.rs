@@ -18,13 +18,14 @@
 //! looks along the longest free horizontal direction (16 tried), stepped back towards the
 //! opposite wall so that the room is in view, slightly down, with a 63° vertical field.
 //!
-//! **Exterior view.** Eight azimuths (three-quarter views, 45° apart, 22.5° off the axes) at
-//! two elevations (25° and 45°) are tried; each camera is fitted to the geometry's projected
+//! **Exterior view.** Sixteen azimuths (22.5° apart, 11.25° off the axes: three-quarter
+//! views of every side) at three elevations (25°, 45° and 60°) are tried; each camera is fitted to the geometry's projected
 //! extent (its vertices, not its bounding sphere) and scored by the share of a 40 × 24 ray
 //! image that sees a surface as the G-buffer does (back faces of single-sided materials
-//! culled), weighted by the share of those surfaces that face other geometry (a box open on
-//! one side is seen through its opening, not by its outer walls), with a small preference for
-//! looking across the largest horizontal extent.
+//! culled) up to 70 % (past that a large floor fills any view), weighted by the share of
+//! those surfaces that face other geometry (a box open on one side is seen through its
+//! opening, not by its outer walls), with small preferences for looking across the largest
+//! horizontal extent, from the front (+z) and from low.
 
 use glam::{Vec2, Vec3};
 
@@ -63,6 +64,8 @@ pub struct Room {
     pub center: Vec3,
     /// The room's mean short and long wall-to-wall spans.
     pub size: Vec2,
+    /// The box from wall to wall along x and z (through the middle) and floor to ceiling.
+    pub bounds: Aabb,
 }
 
 /// A chosen view: the camera and why.
@@ -171,7 +174,27 @@ pub fn choose_view(scene: &Scene, aspect: f32, prefer: ViewPreference) -> Framin
     }
     let dirs = sphere_directions(48);
     let (centre_in_room, rooms, probes) = probe_rooms(&bvh, bounds, &dirs);
-    let interior = centre_in_room || rooms.len() * 2 >= probes;
+    let mut interior = centre_in_room || rooms.len() * 2 >= probes;
+    // A room that holds most of the geometry makes an interior too, whatever lies far
+    // outside it (a lamp post above the roof, a stray object).
+    let mut geometry_in_room = None;
+    if !interior && prefer == ViewPreference::Auto && !fit_points.is_empty() {
+        if let Some(f) = interior_view(&bvh, &rooms, &dirs, bounds, fit_points.clone())
+            && let Some(room) = f.room
+        {
+            let b = room.bounds;
+            let pad = 0.05 * b.extent().max_element();
+            let inside = fit_points
+                .iter()
+                .filter(|p| p.cmpge(b.min - Vec3::splat(pad)).all() && p.cmple(b.max + Vec3::splat(pad)).all())
+                .count();
+            let share = inside as f32 / fit_points.len() as f32;
+            if share >= 0.5 {
+                interior = true;
+                geometry_in_room = Some(share);
+            }
+        }
+    }
     let want_inside = match prefer {
         ViewPreference::Auto => interior,
         ViewPreference::Inside => true,
@@ -182,6 +205,8 @@ pub fn choose_view(scene: &Scene, aspect: f32, prefer: ViewPreference) -> Framin
             "asked for a view from inside".to_string()
         } else if centre_in_room {
             "the scene encloses its centre".to_string()
+        } else if let Some(share) = geometry_in_room {
+            format!("{:.0} % of its geometry lies in one room", share * 100.0)
         } else {
             format!("{} of {probes} probes of its volume stand in rooms", rooms.len())
         };
@@ -259,18 +284,26 @@ fn interior_view(bvh: &SceneBvh, rooms: &[Vec3], dirs: &[Vec3], b: Aabb, fit_poi
     let r = 0.25 * size.x;
     let around = [Vec3::ZERO, Vec3::X * r, Vec3::NEG_X * r, Vec3::Z * r, Vec3::NEG_Z * r];
     let (mut floor, mut ceiling) = (f32::INFINITY, f32::NEG_INFINITY);
+    let mut tops = Vec::new();
     for o in around {
         let p = centre + o;
+        let up = p.y + free(bvh, p, Vec3::Y);
+        tops.push(up);
         if !in_room(bvh, p, dirs) && o != Vec3::ZERO {
             continue;
         }
         floor = floor.min(p.y - free(bvh, p, Vec3::NEG_Y));
-        ceiling = ceiling.max(p.y + free(bvh, p, Vec3::Y));
+        ceiling = ceiling.max(up);
     }
     if !(floor.is_finite() && ceiling.is_finite()) {
         return None;
     }
+    // A room has a ceiling over most of it: four of the five points see one near the same
+    // height (not the top of a table with open sky around it).
     let height = ceiling - floor;
+    if tops.iter().filter(|t| t.is_finite() && (*t - ceiling).abs() <= 0.15 * height).count() < 4 {
+        return None;
+    }
     let eye_h = if (2.1..=8.0).contains(&height) { 1.6 } else { 0.6 * height };
     let mut eye = Vec3::new(centre.x, floor + eye_h, centre.z);
     if !in_room(bvh, eye, dirs) {
@@ -301,7 +334,12 @@ fn interior_view(bvh: &SceneBvh, rooms: &[Vec3], dirs: &[Vec3], b: Aabb, fit_poi
     let target = position + forward * (length + step).min(reach).max(1e-3);
     let mut camera = Camera::look_at(position, target, 1.1, b);
     camera.znear = (0.01 * height).clamp(1e-3, 0.05);
-    let room = Room { floor, ceiling, center: eye, size };
+    let along = |d: Vec3| span(eye, d);
+    let room_box = Aabb {
+        min: Vec3::new(eye.x - along(Vec3::NEG_X), floor, eye.z - along(Vec3::NEG_Z)),
+        max: Vec3::new(eye.x + along(Vec3::X), ceiling, eye.z + along(Vec3::Z)),
+    };
+    let room = Room { floor, ceiling, center: eye, size, bounds: room_box };
     Some(Framing {
         camera,
         kind: ViewKind::Interior,
@@ -326,13 +364,13 @@ fn sample_points(bvh: &SceneBvh) -> Vec<Vec3> {
 }
 
 /// A camera looking along `forward` at the points, at the distance where they all fit the
-/// view of vertical field `yfov` and `aspect` (5 % margin), its target moved to the middle of
+/// view of vertical field `yfov` and `aspect` (3 % margin), its target moved to the middle of
 /// their projection.
 pub fn fit_camera(points: &[Vec3], forward: Vec3, yfov: f32, aspect: f32, b: Aabb) -> Camera {
     let f = forward.normalize_or(Vec3::NEG_Z);
     let r = f.cross(Vec3::Y).normalize_or(Vec3::X);
     let u = r.cross(f);
-    let ty = (yfov * 0.5).tan() * 0.95;
+    let ty = (yfov * 0.5).tan() * 0.97;
     let tx = ty * aspect.max(1e-3);
     let mut target = b.center();
     for _ in 0..2 {
@@ -375,9 +413,9 @@ fn exterior_view(bvh: &SceneBvh, b: Aabb, aspect: f32, fit_points: Vec<Vec3>) ->
     let ext = b.extent();
     let long_axis = if ext.x >= ext.z { Vec3::X } else { Vec3::Z };
     let mut best: Option<(f32, Camera, f32, f32)> = None;
-    for elevation in [25f32, 45.0] {
-        for k in 0..8 {
-            let azimuth = (22.5 + 45.0 * k as f32).to_radians();
+    for elevation in [25f32, 45.0, 60.0] {
+        for k in 0..16 {
+            let azimuth = (11.25 + 22.5 * k as f32).to_radians();
             let (se, ce) = elevation.to_radians().sin_cos();
             // The camera sits at azimuth (from +Z towards +X) and looks back at the scene.
             let from = Vec3::new(azimuth.sin() * ce, se, azimuth.cos() * ce);
@@ -385,8 +423,14 @@ fn exterior_view(bvh: &SceneBvh, b: Aabb, aspect: f32, fit_points: Vec<Vec3>) ->
             let (coverage, facing) = view_score(bvh, &cam, aspect);
             let across = 1.0 - from.dot(long_axis).abs();
             let front = if from.z > 0.0 { 0.01 } else { 0.0 };
-            let score =
-                coverage * (0.5 + 0.5 * facing) + 0.05 * across + front + if elevation < 30.0 { 0.005 } else { 0.0 };
+            // Coverage counts up to 70 %: past that a large floor fills any view, and the
+            // lower, more natural elevation wins.
+            let low = match elevation as u32 {
+                25 => 0.02,
+                45 => 0.01,
+                _ => 0.0,
+            };
+            let score = coverage.min(0.7) * (0.75 + 0.25 * facing) + 0.05 * across + front + low;
             if best.as_ref().is_none_or(|x| score > x.0) {
                 best = Some((score, cam, azimuth.to_degrees(), elevation));
             }

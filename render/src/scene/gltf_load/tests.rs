@@ -146,7 +146,9 @@ fn shared_hotel_room_loads_skipping_its_lines() {
     let scene = load_gltf_file(&real_scene("hotel-room/hotel-room.glb"), &opts).expect("hotel room loads");
     assert_eq!(scene.triangle_count(), 99029);
     assert_eq!(scene.lights.len(), 1);
-    assert_eq!(scene.lights[0].name, "default spot");
+    // A closed room: it opens inside, lit by a point light under the ceiling in view (#37).
+    assert_eq!(scene.lights[0].name, "default point");
+    assert!(scene.view.as_ref().is_some_and(|v| v.kind == crate::scene::framing::ViewKind::Interior));
     assert_eq!(scene.textures.len(), 6);
     assert!(scene.warnings.iter().any(|w| w.contains("LINES")), "{:?}", scene.warnings);
     // Millimetres scaled to metres: a room a few metres wide.
