@@ -9,6 +9,7 @@
 /// Every WGSL file: (path relative to `shaders/`, source).
 pub const SOURCES: &[(&str, &str)] = &[
     ("common/camera.wgsl", include_str!("../../shaders/common/camera.wgsl")),
+    ("common/material.wgsl", include_str!("../../shaders/common/material.wgsl")),
     ("common/brdf.wgsl", include_str!("../../shaders/common/brdf.wgsl")),
     ("common/lights.wgsl", include_str!("../../shaders/common/lights.wgsl")),
     ("common/fullscreen.wgsl", include_str!("../../shaders/common/fullscreen.wgsl")),

@@ -5,6 +5,7 @@
 // Reading chosen: the thesis writes (x_s − x_prev, y_s − y_prev) but then looks up
 // I_prev(x_s + Δx, y_s + Δy); we store Δ = prev − current so that the lookup is right.
 #import common/camera.wgsl
+#import common/material.wgsl
 
 struct Instance {
     model: mat4x4<f32>,
@@ -12,27 +13,15 @@ struct Instance {
     normal_matrix: mat4x4<f32>,
 }
 
-struct Material {
-    base_color: vec4<f32>,
-    // DI, SI, SP, has_texture
-    params: vec4<f32>,
-    // metallic, roughness, 0, 0
-    extra: vec4<f32>,
-    // rgb: emitted radiance L_e (glTF emissive factor × strength), w: has emissive texture
-    emissive: vec4<f32>,
-}
-
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(1) @binding(0) var<storage, read> instances: array<Instance>;
-@group(2) @binding(0) var<uniform> material: Material;
-@group(2) @binding(1) var base_tex: texture_2d<f32>;
-@group(2) @binding(2) var base_sampler: sampler;
-@group(2) @binding(3) var emissive_tex: texture_2d<f32>;
 
 struct VsIn {
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
+    // xyz: object-space tangent, w: bitangent sign (0 0 0 0: none)
+    @location(3) tangent: vec4<f32>,
 }
 
 struct VsOut {
@@ -42,6 +31,7 @@ struct VsOut {
     @location(2) uv: vec2<f32>,
     @location(3) cur_clip: vec4<f32>,
     @location(4) prev_clip: vec4<f32>,
+    @location(5) tangent: vec4<f32>,
 }
 
 @vertex
@@ -54,6 +44,7 @@ fn vs_main(v: VsIn, @builtin(instance_index) instance: u32) -> VsOut {
     o.world = world.xyz;
     o.normal = (inst.normal_matrix * vec4<f32>(v.normal, 0.0)).xyz;
     o.uv = v.uv;
+    o.tangent = vec4<f32>((inst.model * vec4<f32>(v.tangent.xyz, 0.0)).xyz, v.tangent.w);
     o.cur_clip = o.clip;
     o.prev_clip = camera.prev_view_proj * prev_world;
     return o;
@@ -76,10 +67,6 @@ fn fs_main(i: VsOut, @builtin(front_facing) front: bool) -> FsOut {
 // The G-buffer's outputs for one fragment (also Gautron's hemisphere atlas, whose fragment
 // stage adds the object's index).
 fn gbuffer_fragment(i: VsOut, front: bool) -> FsOut {
-    var n = normalize(i.normal);
-    if (!front) {
-        n = -n;
-    }
     var color = material.base_color;
     if (material.params.w > 0.5) {
         if (camera.lod.x >= 0.0) {
@@ -88,14 +75,51 @@ fn gbuffer_fragment(i: VsOut, front: bool) -> FsOut {
             color = color * textureSample(base_tex, base_sampler, i.uv);
         }
     }
+    // glTF alphaMode MASK (§3.9.4): the cut-out part is not a surface.
+    if (material_cut(color.a)) {
+        discard;
+    }
+    // The shading normal: the interpolated one, bent by the normal texture (§3.9.3: tangent
+    // space x = tangent, y = bitangent = sign · n × t, z = n; xy × scale), then turned to the
+    // side the camera sees.
+    var n = normalize(i.normal);
+    if (material.maps.x != 0.0) {
+        var tn = textureSampleLevel(normal_tex, base_sampler, i.uv, max(camera.lod.x, 0.0)).xyz * 2.0 - 1.0;
+        tn = vec3<f32>(tn.xy * material.maps.x, tn.z);
+        let t_len = length(i.tangent.xyz);
+        if (t_len > 1e-6 && i.tangent.w != 0.0) {
+            let t = normalize(i.tangent.xyz - n * dot(n, i.tangent.xyz));
+            let b = cross(n, t) * sign(i.tangent.w);
+            let bent = t * tn.x + b * tn.y + n * tn.z;
+            if (dot(bent, bent) > 1e-12) {
+                n = normalize(bent);
+            }
+        }
+    }
+    if (!front) {
+        n = -n;
+    }
+    // Metallic-roughness texture (§3.9.2: B = metallic, G = roughness, times the factors):
+    // DI, SI and SP per fragment by `scene::Material::intensities_at`'s mapping.
+    var params = material.params;
+    var metal_rough = material.extra.xy;
+    if (material.maps.y > 0.5) {
+        let mr = textureSampleLevel(mr_tex, base_sampler, i.uv, max(camera.lod.x, 0.0));
+        let metallic = clamp(material.extra.x * mr.b, 0.0, 1.0);
+        let roughness = clamp(material.extra.y * mr.g, 0.0, 1.0);
+        let lum = dot(color.rgb, vec3<f32>(0.2126, 0.7152, 0.0722));
+        params = vec4<f32>(1.0 - metallic, 0.04 * (1.0 - metallic) + lum * metallic,
+            material_specular_power(roughness), params.w);
+        metal_rough = vec2<f32>(metallic, roughness);
+    }
     let view_pos = camera.view * vec4<f32>(i.world, 1.0);
     var o: FsOut;
     // w: linear view-space depth in scene units (distance along the view axis).
     o.position = vec4<f32>(i.world, -view_pos.z);
     // w = 1 marks covered pixels (the background keeps 0).
     o.normal = vec4<f32>(n, 1.0);
-    o.albedo = vec4<f32>(color.rgb, material.params.x);
-    o.material = vec4<f32>(material.params.y, material.params.z, material.extra.x, material.extra.y);
+    o.albedo = vec4<f32>(color.rgb, params.x);
+    o.material = vec4<f32>(params.y, params.z, metal_rough.x, metal_rough.y);
     o.motion = clip_to_pixel(i.prev_clip, camera.viewport) - clip_to_pixel(i.cur_clip, camera.viewport);
     var emission = material.emissive.rgb;
     if (material.emissive.w > 0.5) {

@@ -191,6 +191,7 @@ fn check_direct(mut r: Renderer) -> DirectCheck {
             }
             let floor = h.normal.y > 0.999 && h.position.y.abs() < 1e-3;
             let m = &r.scene().materials[h.material];
+            let m = (m.base_color.truncate(), m.diffuse_intensity(), m.specular_intensity(), m.specular_power());
             let t1 = h.normal.any_orthonormal_vector() * 0.04;
             let t2 = h.normal.cross(t1);
             let around = [Vec3::ZERO, t1, -t1, t2, -t2];

@@ -36,13 +36,14 @@ pub fn spot_falloff(cos_theta: f32, inner: f32, outer: f32) -> f32 {
 /// Unshadowed radiance that a punctual light sends from surface point `p` (normal `n`)
 /// toward `v`, and the point toward which its visibility is to be tested (the light, or far
 /// along the direction of a directional light). KHR_lights_punctual units and falloffs:
-/// I·falloff·window/d² for point and spot lights, E for directional lights.
+/// I·falloff·window/d² for point and spot lights, E for directional lights. The surface is
+/// (c, DI, SI, SP) at `p` (its textures read: [`crate::scene::Material::intensities_at`]).
 pub fn punctual_radiance(
     wl: &crate::scene::WorldLight,
     p: Vec3,
     n: Vec3,
     v: Vec3,
-    m: &crate::scene::Material,
+    (c, di, si, sp): (Vec3, f32, f32, f32),
     far: f32,
 ) -> (Vec3, Vec3) {
     use crate::scene::LightKind;
@@ -70,8 +71,7 @@ pub fn punctual_radiance(
     if ndl <= 0.0 || e <= 0.0 {
         return (Vec3::ZERO, target);
     }
-    let c = glam::Vec3::new(m.base_color.x, m.base_color.y, m.base_color.z);
-    let f = eval(n, l, v, c, m.diffuse_intensity(), m.specular_intensity(), m.specular_power());
+    let f = eval(n, l, v, c, di, si, sp);
     (f * wl.light.color * e * ndl, target)
 }
 

@@ -10,7 +10,8 @@
 //! so a path that hits an emitter after a bounce does not add its emission again (only the
 //! camera's first hit shows it); with [`PathTracer::set_emitter_lights`] off, emitters only
 //! glow (their emission at the first hit, no light). Emission is factor × emissive texture at
-//! the hit's UVs (base colour textures are not read: the materials' factors are). The scene's sky (`Scene::sky`, issue #18)
+//! the hit's UVs. Surfaces are read as the G-buffer reads them (issue #37): base colour factor ×
+//! texture, normal textures, metallic-roughness textures, alpha cutouts. The scene's sky (`Scene::sky`, issue #18)
 //! is reached the same way: one direction per vertex, ∝ cos θ for a constant sky, by the
 //! image's radiance otherwise ([`crate::scene::sky::SkySampler::sample_at`], continuously: the
 //! truth the lab's directions estimate),
@@ -99,11 +100,18 @@ pub struct PathTracer {
     eps: f32,
 }
 
+/// A surface point with its material read there (textures included), as the G-buffer has it.
 struct Hit {
     p: Vec3,
+    /// The shading normal (bent by the normal texture), facing the ray's origin.
     n: Vec3,
     uv: Vec2,
     material: usize,
+    /// Base colour c and DI, SI, SP at the point (`Material::intensities_at`).
+    c: Vec3,
+    di: f32,
+    si: f32,
+    sp: f32,
 }
 
 /// Small, fast, seedable generator (PCG32, O'Neill 2014).
@@ -167,10 +175,47 @@ impl PathTracer {
         };
     }
 
-    /// Closest hit in (tmin, tmax); the normal is the interpolated one, facing the ray.
+    fn texture(&self, t: Option<usize>) -> Option<&TextureImage> {
+        t.and_then(|t| self.textures.get(t))
+    }
+
+    /// Closest hit in (tmin, tmax), cut-outs (alphaMode MASK) passed through; the surface is
+    /// read as the G-buffer reads it: base colour factor × texture (sRGB decoded), the
+    /// normal bent by the normal texture in the MikkTSpace frame, DI, SI and SP from the
+    /// metallic-roughness texture; the normal faces the ray.
     fn intersect(&self, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
-        let h = self.bvh.intersect(o, d, tmin, tmax)?;
-        Some(Hit { p: h.p, n: h.n, uv: h.uv, material: h.material })
+        let h = self.bvh.intersect_where(o, d, tmin, tmax, |tri, _, bary| {
+            let m = &self.materials[tri.material.min(self.materials.len() - 1)];
+            let Some(cutoff) = m.alpha_cutoff else { return true };
+            let uv = tri.uv[0] * (1.0 - bary.x - bary.y) + tri.uv[1] * bary.x + tri.uv[2] * bary.y;
+            let a = m.base_color.w * self.texture(m.base_color_texture).map_or(1.0, |t| t.sample_rgba(uv, true).w);
+            a >= cutoff
+        })?;
+        let m = &self.materials[h.material.min(self.materials.len() - 1)];
+        let tri = &self.bvh.tris[h.tri];
+        let c = m.base_color.xyz() * self.texture(m.base_color_texture).map_or(Vec3::ONE, |t| t.sample_linear(h.uv));
+        let mr = self.texture(m.metallic_roughness_texture).map(|t| t.sample_rgba(h.uv, false));
+        let (di, si, sp) = m.intensities_at(c, mr);
+        let mut n = h.n;
+        if let Some(t) = self.texture(m.normal_texture) {
+            let (u, v) = (h.bary.x, h.bary.y);
+            let w = 1.0 - u - v;
+            let geo = (tri.n[0] * w + tri.n[1] * u + tri.n[2] * v).normalize_or_zero();
+            let tan = tri.t[0] * w + tri.t[1] * u + tri.t[2] * v;
+            let sign = if tri.t[0].w < 0.0 { -1.0 } else { 1.0 };
+            if geo != Vec3::ZERO && tan.xyz().length_squared() > 1e-12 && tri.t[0].w != 0.0 {
+                let tx = (tan.xyz() - geo * geo.dot(tan.xyz())).normalize_or_zero();
+                let b = geo.cross(tx) * sign;
+                let s = t.sample_rgba(h.uv, false).xyz() * 2.0 - Vec3::ONE;
+                let s = Vec3::new(s.x * m.normal_scale, s.y * m.normal_scale, s.z);
+                let bent = (tx * s.x + b * s.y + geo * s.z).normalize_or_zero();
+                if bent != Vec3::ZERO {
+                    // Turned to the side the ray comes from, as the interpolated one was.
+                    n = if geo.dot(h.n) < 0.0 { -bent } else { bent };
+                }
+            }
+        }
+        Some(Hit { p: h.p, n, uv: h.uv, material: h.material, c, di, si, sp })
     }
 
     fn occluded(&self, a: Vec3, b: Vec3) -> bool {
@@ -182,11 +227,11 @@ impl PathTracer {
     /// Direct light at a hit: every punctual light (exact, so no noise) and one point of the
     /// emitters (next-event estimation with the area density of [`Emitters::sample`]).
     fn direct(&self, h: &Hit, v: Vec3, rng: &mut Pcg) -> Vec3 {
-        let m = &self.materials[h.material.min(self.materials.len() - 1)];
         let origin = h.p + h.n * self.eps;
         let mut sum = Vec3::ZERO;
+        let surface = (h.c, h.di, h.si, h.sp);
         for wl in &self.lights {
-            let (radiance, target) = brdf::punctual_radiance(wl, h.p, h.n, v, m, 1e6);
+            let (radiance, target) = brdf::punctual_radiance(wl, h.p, h.n, v, surface, 1e6);
             if radiance != Vec3::ZERO && !self.occluded(origin, target) {
                 sum += radiance;
             }
@@ -200,9 +245,7 @@ impl PathTracer {
             let l = w / d2.sqrt().max(1e-12);
             let (cos_x, cos_y) = (h.n.dot(l), -s.normal.dot(l));
             if cos_x > 0.0 && cos_y > 0.0 && d2 > 0.0 && !self.occluded(origin, s.position) {
-                let c = m.base_color.xyz();
-                let (di, si, sp) = (m.diffuse_intensity(), m.specular_intensity(), m.specular_power());
-                let f = brdf::eval(h.n, l, v, c, di, si, sp);
+                let f = brdf::eval(h.n, l, v, h.c, h.di, h.si, h.sp);
                 sum += s.radiance * f * (cos_x * cos_y / (d2 * s.pdf_area));
             }
         }
@@ -213,9 +256,7 @@ impl PathTracer {
         {
             let cos_x = h.n.dot(l);
             if cos_x > 0.0 && self.intersect(origin, l, 0.0, f32::INFINITY).is_none() {
-                let c = m.base_color.xyz();
-                let (di, si, sp) = (m.diffuse_intensity(), m.specular_intensity(), m.specular_power());
-                sum += radiance * brdf::eval(h.n, l, v, c, di, si, sp) * (cos_x / pdf);
+                sum += radiance * brdf::eval(h.n, l, v, h.c, h.di, h.si, h.sp) * (cos_x / pdf);
             }
         }
         sum
@@ -223,9 +264,7 @@ impl PathTracer {
 
     /// Samples a direction from the BRDF mixture at a hit; returns (l, f·cos/pdf).
     fn sample_brdf(&self, h: &Hit, v: Vec3, rng: &mut Pcg) -> Option<(Vec3, Vec3)> {
-        let m = &self.materials[h.material.min(self.materials.len() - 1)];
-        let c = m.base_color.xyz();
-        let (di, si, sp) = (m.diffuse_intensity(), m.specular_intensity(), m.specular_power());
+        let (c, di, si, sp) = (h.c, h.di, h.si, h.sp);
         let wd = di * (0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z);
         let ws = si.max(0.0);
         if wd + ws <= 0.0 {

@@ -114,11 +114,14 @@ pub fn create_target(
 
 /// A depth-only render pipeline over the scene's vertices (`vs_main` of `module`, no culling,
 /// `Depth32Float` with a less-than test): the primary shadow maps and the exact VPL maps.
+/// With `cutout`, the fragment stage `fs_cutout` discards what an alpha mask cuts out (the
+/// layout then has the scene's material group at index 2).
 pub fn depth_only_pipeline(
     device: &wgpu::Device,
     label: &str,
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
+    cutout: bool,
 ) -> wgpu::RenderPipeline {
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(label),
@@ -138,7 +141,12 @@ pub fn depth_only_pipeline(
             bias: Default::default(),
         }),
         multisample: Default::default(),
-        fragment: None,
+        fragment: cutout.then(|| wgpu::FragmentState {
+            module,
+            entry_point: Some("fs_cutout"),
+            compilation_options: Default::default(),
+            targets: &[],
+        }),
         multiview_mask: None,
         cache: None,
     })

@@ -161,6 +161,8 @@ pub fn setup_lights(lights: &[WorldLight], bounds: Aabb, shadow_map_size: u32, s
 
 pub struct ShadowPass {
     pipeline: wgpu::RenderPipeline,
+    /// The same with the alpha-cutout fragment stage, for materials with alphaMode MASK.
+    cutout: wgpu::RenderPipeline,
     view_layout: wgpu::BindGroupLayout,
     view_buffer: wgpu::Buffer,
     view_capacity: usize,
@@ -182,14 +184,16 @@ impl ShadowPass {
         });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("direct.shadow.layout"),
-            bind_group_layouts: &[Some(&view_layout), Some(&scene.instance_layout)],
+            bind_group_layouts: &[Some(&view_layout), Some(&scene.instance_layout), Some(&scene.material_layout)],
             immediate_size: 0,
         });
-        let pipeline = super::depth_only_pipeline(device, "direct.shadow.pipeline", &layout, &module);
+        let pipeline = super::depth_only_pipeline(device, "direct.shadow.pipeline", &layout, &module, false);
+        let cutout = super::depth_only_pipeline(device, "direct.shadow.cutout_pipeline", &layout, &module, true);
         let (view_buffer, view_group) = Self::view_resources(device, &view_layout, 8);
         let (texture, array_view) = Self::create_texture(device, 16, 1);
         Self {
             pipeline,
+            cutout,
             view_layout,
             view_buffer,
             view_capacity: 8,
@@ -319,10 +323,9 @@ impl ShadowPass {
                 multiview_mask: None,
             });
             if layer < views.len() {
-                pass.set_pipeline(&self.pipeline);
                 pass.set_bind_group(0, &self.view_group, &[(layer as u64 * VIEW_STRIDE) as u32]);
                 pass.set_bind_group(1, &scene.instance_group, &[]);
-                scene.draw(&mut pass, state, None, None);
+                scene.draw_depth(&mut pass, state, 2, (&self.pipeline, &self.cutout));
             }
         }
     }

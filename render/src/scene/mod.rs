@@ -98,6 +98,20 @@ pub struct Material {
     /// Specular intensity SI set explicitly instead of derived from metallic (test scenes
     /// such as the white furnace need a purely Lambertian surface: Some(0)).
     pub specular_override: Option<f32>,
+    /// glTF `alphaMode` MASK: fragments whose base colour alpha (factor × texture) is below
+    /// this cutoff are cut out in every rasterisation and for every ray (BLEND is drawn as
+    /// MASK at 0.5). None: opaque.
+    pub alpha_cutoff: Option<f32>,
+    /// Index into [`Scene::textures`] of the tangent-space normal texture (linear RGB), and
+    /// its `scale` (glTF `normalTexture.scale`: x and y of the sampled normal × scale).
+    pub normal_texture: Option<usize>,
+    pub normal_scale: f32,
+    /// Index into [`Scene::textures`] of the metallic-roughness texture (linear; B = metallic,
+    /// G = roughness, multiplied into the factors).
+    pub metallic_roughness_texture: Option<usize>,
+    /// Index into [`Scene::textures`] of the occlusion texture (R, linear): loaded and
+    /// shown by the buffer viewer (`gbuffer.occlusion`), never multiplied into computed light.
+    pub occlusion_texture: Option<usize>,
 }
 
 impl Material {
@@ -117,9 +131,36 @@ impl Material {
     }
     /// Specular power SP (002 §4.2), see the type's documentation for the mapping.
     pub fn specular_power(&self) -> f32 {
-        let a = self.roughness.clamp(0.0, 1.0).powi(2).max(1e-3);
-        (2.0 / (a * a) - 2.0).clamp(1.0, 4096.0)
+        specular_power(self.roughness)
     }
+
+    /// DI, SI and SP at a point whose metallic-roughness texel is `mr` (linear; B = metallic,
+    /// G = roughness, multiplied into the factors), with base colour `c` (factor × texture),
+    /// by the mapping of the type's documentation — as `gbuffer.wgsl` computes them per
+    /// fragment.
+    pub fn intensities_at(&self, c: Vec3, mr: Option<Vec4>) -> (f32, f32, f32) {
+        let (metallic, roughness) = match mr {
+            Some(t) => ((self.metallic * t.z).clamp(0.0, 1.0), (self.roughness * t.y).clamp(0.0, 1.0)),
+            None => (self.metallic.clamp(0.0, 1.0), self.roughness.clamp(0.0, 1.0)),
+        };
+        let si = match self.specular_override {
+            Some(si) => si,
+            None => {
+                // With a metallic texture the metal's colour is the textured base colour;
+                // without one the factor's (as before textures were read).
+                let lum_of = if mr.is_some() { c } else { self.base_color.truncate() };
+                let lum = 0.2126 * lum_of.x + 0.7152 * lum_of.y + 0.0722 * lum_of.z;
+                0.04 * (1.0 - metallic) + lum * metallic
+            }
+        };
+        (1.0 - metallic, si, specular_power(roughness))
+    }
+}
+
+/// SP = 2 / α² − 2 with α = roughness², clamped to [1, 4096] (see [`Material`]).
+pub fn specular_power(roughness: f32) -> f32 {
+    let a = roughness.clamp(0.0, 1.0).powi(2).max(1e-3);
+    (2.0 / (a * a) - 2.0).clamp(1.0, 4096.0)
 }
 
 impl Default for Material {
@@ -135,6 +176,11 @@ impl Default for Material {
             sample_weight: 1.0,
             double_sided: false,
             specular_override: None,
+            alpha_cutoff: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+            metallic_roughness_texture: None,
+            occlusion_texture: None,
         }
     }
 }

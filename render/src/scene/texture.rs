@@ -48,6 +48,34 @@ impl TextureImage {
         top.lerp(bottom, t.y)
     }
 
+    /// RGBA at `uv` as the GPU reads mip 0 (repeat wrap, bilinear): RGB sRGB-decoded when
+    /// `srgb` (colours), raw in [0, 1] otherwise (normal, metallic-roughness, occlusion
+    /// data); alpha is always linear.
+    pub fn sample_rgba(&self, uv: Vec2, srgb: bool) -> glam::Vec4 {
+        if !uv.is_finite() {
+            return glam::Vec4::ZERO;
+        }
+        let p = uv.rem_euclid(Vec2::ONE) * Vec2::new(self.width as f32, self.height as f32) - 0.5;
+        let f = p.floor();
+        let (x, y, t) = (f.x as i64, f.y as i64, p - f);
+        let texel = |x: i64, y: i64| {
+            let (w, h) = (self.width.max(1) as i64, self.height.max(1) as i64);
+            let i = 4 * (y.rem_euclid(h) * w + x.rem_euclid(w)) as usize;
+            match self.rgba8.get(i..i + 4) {
+                Some(t) => {
+                    let c = |k: usize| {
+                        if srgb && k < 3 { srgb_table()[t[k] as usize] } else { t[k] as f32 / 255.0 }
+                    };
+                    glam::Vec4::new(c(0), c(1), c(2), c(3))
+                }
+                None => glam::Vec4::ZERO,
+            }
+        };
+        let top = texel(x, y).lerp(texel(x + 1, y), t.x);
+        let bottom = texel(x, y + 1).lerp(texel(x + 1, y + 1), t.x);
+        top.lerp(bottom, t.y)
+    }
+
     /// Mean linear RGB over the triangle `uv` of texture space, from a stratified set of
     /// barycentric points (about one per covered texel, 1 … 256).
     pub fn triangle_mean(&self, uv: [Vec2; 3]) -> Vec3 {

@@ -8,7 +8,7 @@ use super::{Scene, SceneState, Vertex};
 use crate::gpu::GpuContext;
 use crate::passes::InstanceUniform;
 
-/// Material uniform; WGSL twin: `Material` in `shaders/gbuffer/gbuffer.wgsl`.
+/// Material uniform; WGSL twin: `Material` in `shaders/common/material.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct MaterialUniform {
@@ -19,6 +19,9 @@ pub struct MaterialUniform {
     pub extra: [f32; 4],
     /// Emitted radiance (rgb), has emissive texture.
     pub emissive: [f32; 4],
+    /// Normal texture scale (0: none), has metallic-roughness texture, alpha cutoff (< 0:
+    /// opaque), has occlusion texture.
+    pub maps: [f32; 4],
 }
 
 /// Where one primitive lives in the shared buffers.
@@ -43,6 +46,8 @@ pub struct GpuScene {
     pub material_groups: Vec<wgpu::BindGroup>,
     /// glTF `doubleSided` per material (single-sided ones are drawn with back-face culling).
     pub double_sided: Vec<bool>,
+    /// Whether each material has an alpha cutout (alphaMode MASK or BLEND).
+    pub cutout: Vec<bool>,
     _material_buffers: Vec<wgpu::Buffer>,
     _textures: Vec<wgpu::Texture>,
     /// What the upload changed to fit the device (textures downscaled), for the scene's
@@ -125,6 +130,9 @@ impl GpuScene {
                 crate::passes::bgl::texture(1, fs, true),
                 crate::passes::bgl::sampler(2, fs, wgpu::SamplerBindingType::Filtering),
                 crate::passes::bgl::texture(3, fs, true),
+                crate::passes::bgl::texture(4, fs, true),
+                crate::passes::bgl::texture(5, fs, true),
+                crate::passes::bgl::texture(6, fs, true),
             ],
         });
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
@@ -169,6 +177,9 @@ impl GpuScene {
         for (i, m) in materials.iter().enumerate() {
             let tex = m.base_color_texture.filter(|&t| t < textures.len());
             let emissive_tex = m.emissive_texture.filter(|&t| t < textures.len());
+            let normal_tex = m.normal_texture.filter(|&t| t < textures.len());
+            let mr_tex = m.metallic_roughness_texture.filter(|&t| t < textures.len());
+            let occlusion_tex = m.occlusion_texture.filter(|&t| t < textures.len());
             let u = MaterialUniform {
                 base_color: m.base_color.to_array(),
                 params: [
@@ -179,6 +190,12 @@ impl GpuScene {
                 ],
                 extra: [m.metallic, m.roughness, 0.0, 0.0],
                 emissive: m.emissive.extend(emissive_tex.is_some() as u32 as f32).to_array(),
+                maps: [
+                    if normal_tex.is_some() { m.normal_scale } else { 0.0 },
+                    mr_tex.is_some() as u32 as f32,
+                    m.alpha_cutoff.unwrap_or(-1.0),
+                    occlusion_tex.is_some() as u32 as f32,
+                ],
             };
             let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(&format!("scene.material[{i}]")),
@@ -194,6 +211,17 @@ impl GpuScene {
                     label: Some("scene.material_emissive_texture"),
                     ..Default::default()
                 });
+            // Data textures are read through linear views of the same sRGB-stored texels.
+            let linear = |t: Option<usize>, label: &str| {
+                t.map(|t| &textures[t]).unwrap_or(&white).create_view(&wgpu::TextureViewDescriptor {
+                    label: Some(label),
+                    format: Some(wgpu::TextureFormat::Rgba8Unorm),
+                    ..Default::default()
+                })
+            };
+            let normal_view = linear(normal_tex, "scene.material_normal_texture");
+            let mr_view = linear(mr_tex, "scene.material_metallic_roughness_texture");
+            let occlusion_view = linear(occlusion_tex, "scene.material_occlusion_texture");
             material_groups.push(device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some(&format!("scene.material[{i}]")),
                 layout: &material_layout,
@@ -202,14 +230,19 @@ impl GpuScene {
                     wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&view) },
                     wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&sampler) },
                     wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&emissive_view) },
+                    wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(&normal_view) },
+                    wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(&mr_view) },
+                    wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::TextureView(&occlusion_view) },
                 ],
             }));
             material_buffers.push(buffer);
         }
         textures.push(white);
         let double_sided = materials.iter().map(|m| m.double_sided).collect();
+        let cutout = materials.iter().map(|m| m.alpha_cutoff.is_some()).collect();
         Self {
             double_sided,
+            cutout,
             vertices: vertex_buffer,
             indices: index_buffer,
             primitives,
@@ -275,6 +308,31 @@ impl GpuScene {
 }
 
 impl GpuScene {
+    /// Draws `state` into a depth-only view: opaque materials with `opaque`, alpha-masked ones
+    /// with `cutout` (its fragment stage reads the material group `material_group`).
+    pub fn draw_depth(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        state: &SceneState,
+        material_group: u32,
+        (opaque, cutout): (&wgpu::RenderPipeline, &wgpu::RenderPipeline),
+    ) {
+        pass.set_vertex_buffer(0, self.vertices.slice(..));
+        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+        for (i, d) in state.draws.iter().take(self.instance_capacity).enumerate() {
+            let Some(p) = self.primitives.get(d.mesh).and_then(|m| m.get(d.primitive)) else { continue };
+            if p.index_count == 0 {
+                continue;
+            }
+            let m = p.material.min(self.material_groups.len() - 1);
+            // Both pipelines share one layout, whose material group must be bound.
+            pass.set_pipeline(if self.cutout.get(m).copied().unwrap_or(false) { cutout } else { opaque });
+            pass.set_bind_group(material_group, &self.material_groups[m], &[]);
+            let inst = i as u32;
+            pass.draw_indexed(p.first_index..p.first_index + p.index_count, p.base_vertex, inst..inst + 1);
+        }
+    }
+
     /// The indexed draws [`Self::draw`] issues for `state`: (first index, index count, base
     /// vertex, instance), in its order.
     pub fn indexed_draws(&self, state: &SceneState) -> Vec<(u32, u32, i32, u32)> {
@@ -365,7 +423,8 @@ fn upload_texture(ctx: &GpuContext, img: &super::TextureImage) -> wgpu::Texture 
         dimension: wgpu::TextureDimension::D2,
         format: wgpu::TextureFormat::Rgba8UnormSrgb,
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
+        // Normal, metallic-roughness and occlusion maps are read through linear views.
+        view_formats: &[wgpu::TextureFormat::Rgba8Unorm],
     });
     for (mip, (cw, ch, data)) in chain.iter().enumerate() {
         ctx.queue.write_texture(

@@ -8,6 +8,7 @@
 pub mod interleave;
 pub mod irsm;
 pub mod ism;
+pub mod point_cloud;
 pub mod stage;
 pub mod temporal;
 pub mod vpl_bounce;

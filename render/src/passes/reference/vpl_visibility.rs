@@ -70,6 +70,8 @@ impl AtlasLayout {
 
 pub struct VplVisibilityPass {
     pipeline: wgpu::RenderPipeline,
+    /// The same with the alpha-cutout fragment stage, for materials with alphaMode MASK.
+    cutout: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
     faces: wgpu::Buffer,
     face_capacity: u32,
@@ -94,10 +96,13 @@ impl VplVisibilityPass {
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("vpl.shadow.layout"),
-            bind_group_layouts: &[Some(&layout), Some(&scene.instance_layout)],
+            bind_group_layouts: &[Some(&layout), Some(&scene.instance_layout), Some(&scene.material_layout)],
             immediate_size: 0,
         });
-        let pipeline = crate::passes::depth_only_pipeline(device, "vpl.shadow.pipeline", &pipeline_layout, &module);
+        let pipeline =
+            crate::passes::depth_only_pipeline(device, "vpl.shadow.pipeline", &pipeline_layout, &module, false);
+        let cutout =
+            crate::passes::depth_only_pipeline(device, "vpl.shadow.cutout_pipeline", &pipeline_layout, &module, true);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("vpl.shadow.params"),
             size: std::mem::size_of::<VisibilityParams>() as u64,
@@ -107,7 +112,7 @@ impl VplVisibilityPass {
         let layout_info = AtlasLayout::new(1, 16);
         let (atlas, atlas_view) = Self::create_atlas(device, layout_info);
         let faces = Self::face_buffer(ctx, FACES);
-        Self { pipeline, layout, faces, face_capacity: FACES, params, atlas, atlas_view, layout_info }
+        Self { pipeline, cutout, layout, faces, face_capacity: FACES, params, atlas, atlas_view, layout_info }
     }
 
     fn create_atlas(device: &wgpu::Device, l: AtlasLayout) -> (wgpu::Texture, wgpu::TextureView) {
@@ -209,7 +214,6 @@ impl VplVisibilityPass {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(1, &scene.instance_group, &[]);
         let l = self.layout_info;
         for tile in 0..vpls.min(self.face_capacity / FACES) * FACES {
@@ -217,7 +221,7 @@ impl VplVisibilityPass {
             pass.set_viewport(x as f32, y as f32, l.size as f32, l.size as f32, 0.0, 1.0);
             pass.set_scissor_rect(x, y, l.size, l.size);
             pass.set_bind_group(0, &group, &[(tile as u64 * FACE_STRIDE) as u32]);
-            scene.draw(&mut pass, state, None, None);
+            scene.draw_depth(&mut pass, state, 2, (&self.pipeline, &self.cutout));
         }
     }
 

@@ -25,12 +25,15 @@ impl Loader<'_> {
                     .get(i)
                     .ok_or_else(|| self.invalid(format!("a primitive refers to material {i}, which does not exist")))?;
                 let pbr = &m.pbr_metallic_roughness;
+                let mname = m.name.clone().unwrap_or_else(|| format!("material {i}"));
                 let (texture, base_uv) = match &pbr.base_color_texture {
-                    Some(info) => (self.texture(info.index.value())?, Some(uv_use(info))),
+                    Some(info) => {
+                        (self.texture_or_factor(info.index.value(), &mname, "base colour")?, Some(uv_use(info)))
+                    }
                     None => (None, None),
                 };
                 let (emissive_texture, emissive_uv) = match &m.emissive_texture {
-                    Some(info) => (self.texture(info.index.value())?, Some(uv_use(info))),
+                    Some(info) => (self.texture_or_factor(info.index.value(), &mname, "emissive")?, Some(uv_use(info))),
                     None => (None, None),
                 };
                 // One UV set per vertex (`Vertex::uv`): the base colour's, else the emissive
@@ -49,13 +52,71 @@ impl Loader<'_> {
                     (_, Some(e)) if emissive_texture.is_some() => e,
                     _ => UvUse::default(),
                 };
+                // The other maps read the same texture coordinates (one UV set per vertex).
+                let mut other_map = |index: usize, used: UvUse, role: &str| {
+                    let t = self.texture_or_factor(index, &mname, role)?;
+                    if t.is_some() && used != uv && (texture.is_some() || emissive_texture.is_some()) {
+                        self.warn(format!(
+                            "material '{mname}': the {role} texture uses other texture coordinates than the base colour \
+                             texture; it is read with the base colour's"
+                        ));
+                    }
+                    Ok::<_, SceneError>(t)
+                };
+                let normal = m.normal_texture.as_ref();
+                let normal_texture = match normal {
+                    Some(n) => {
+                        let t = n.extensions.as_ref().and_then(|e| e.others.get("KHR_texture_transform"));
+                        other_map(n.index.value(), json_uv_use(n.tex_coord, t), "normal")?
+                    }
+                    None => None,
+                };
+                let metallic_roughness_texture = match &pbr.metallic_roughness_texture {
+                    Some(info) => other_map(info.index.value(), uv_use(info), "metallic-roughness")?,
+                    None => None,
+                };
+                let occlusion = m.occlusion_texture.as_ref();
+                let occlusion_texture = match occlusion {
+                    Some(o) => {
+                        let t = o.extensions.as_ref().and_then(|e| e.others.get("KHR_texture_transform"));
+                        other_map(o.index.value(), json_uv_use(o.tex_coord, t), "occlusion")?
+                    }
+                    None => None,
+                };
+                let mut normal_scale = normal.map_or(1.0, |n| n.scale);
+                if !normal_scale.is_finite() {
+                    self.warn(format!(
+                        "material '{mname}': normalTexture.scale {normal_scale} is not a number; 1 is used"
+                    ));
+                    normal_scale = 1.0;
+                }
+                let alpha_cutoff = match m.alpha_mode {
+                    gltf::json::validation::Checked::Valid(gltf::json::material::AlphaMode::Mask) => {
+                        let c = m.alpha_cutoff.map_or(0.5, |c| c.0);
+                        if !(0.0..=1.0).contains(&c) {
+                            let used = if c.is_finite() { c.clamp(0.0, 1.0) } else { 0.5 };
+                            self.warn(format!("material '{mname}': alphaCutoff {c} is outside [0, 1]; {used} is used"));
+                            Some(used)
+                        } else {
+                            Some(c)
+                        }
+                    }
+                    gltf::json::validation::Checked::Valid(gltf::json::material::AlphaMode::Blend) => {
+                        self.warn(format!(
+                            "material '{mname}': alphaMode BLEND is drawn as MASK at alpha 0.5 (GI Lab has no \
+                             transparency)"
+                        ));
+                        Some(0.5)
+                    }
+                    _ => None,
+                };
                 let strength = m
                     .extensions
                     .as_ref()
                     .and_then(|e| e.emissive_strength.as_ref())
                     .map_or(1.0, |s| s.emissive_strength.0);
                 let material = Material {
-                    name: m.name.clone().unwrap_or_else(|| format!("material {i}")),
+                    name: mname.clone(),
                     base_color: Vec4::from_array(pbr.base_color_factor.0),
                     base_color_texture: texture,
                     metallic: pbr.metallic_factor.0.clamp(0.0, 1.0),
@@ -65,6 +126,11 @@ impl Loader<'_> {
                     sample_weight: 1.0,
                     double_sided: m.double_sided,
                     specular_override: None,
+                    alpha_cutoff,
+                    normal_texture,
+                    normal_scale,
+                    metallic_roughness_texture,
+                    occlusion_texture,
                 };
                 (material, uv)
             }
@@ -74,6 +140,19 @@ impl Loader<'_> {
         let id = self.scene.materials.len() - 1;
         self.material_map.insert(index, id);
         Ok(id)
+    }
+
+    /// [`Self::texture`], but an image that cannot be read or decoded (missing file, broken
+    /// data, too large) leaves the material on its factor, with a warning naming the image,
+    /// the material and the map. A reference outside the scene's folder stays an error.
+    fn texture_or_factor(&mut self, index: usize, material: &str, role: &str) -> Result<Option<usize>, SceneError> {
+        match self.texture(index) {
+            Err(e @ (SceneError::MissingImage { .. } | SceneError::Image { .. } | SceneError::BadDataUri { .. })) => {
+                self.warn(format!("material '{material}': its {role} texture is not used, the factor is: {e}"));
+                Ok(None)
+            }
+            r => r,
+        }
     }
 
     /// Loads the image of texture `index` (decoded to RGBA8; shared between textures that
@@ -195,4 +274,23 @@ pub(super) fn uv_transform(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> 
     let t = Mat3::from_translation(Vec2::from(offset));
     let r = Mat3::from_cols(Vec3::new(c, -s, 0.0), Vec3::new(s, c, 0.0), Vec3::Z);
     t * r * Mat3::from_scale(Vec2::from(scale))
+}
+
+/// The texture coordinates of a normal or occlusion texture reference, whose
+/// KHR_texture_transform gltf-json keeps untyped.
+fn json_uv_use(tex_coord: u32, transform: Option<&serde_json::Value>) -> UvUse {
+    let set = transform.and_then(|t| t.get("texCoord")).and_then(|x| x.as_u64()).map_or(tex_coord, |x| x as u32);
+    UvUse { set, transform: transform.and_then(transform_of_json) }
+}
+
+/// KHR_texture_transform's matrix from its JSON.
+fn transform_of_json(v: &serde_json::Value) -> Option<Mat3> {
+    let pair = |key: &str, default: [f32; 2]| {
+        v.get(key).and_then(|a| a.as_array()).map_or(default, |a| {
+            let x = |i: usize, d: f32| a.get(i).and_then(|x| x.as_f64()).map_or(d, |x| x as f32);
+            [x(0, default[0]), x(1, default[1])]
+        })
+    };
+    let rotation = v.get("rotation").and_then(|r| r.as_f64()).unwrap_or(0.0) as f32;
+    Some(uv_transform(pair("offset", [0.0, 0.0]), rotation, pair("scale", [1.0, 1.0])))
 }

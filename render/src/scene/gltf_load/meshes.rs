@@ -1,6 +1,6 @@
 //! Meshes and their triangle primitives (§3.7).
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use json::accessor::Type as AccessorType;
 use json::validation::Checked;
 
@@ -76,6 +76,19 @@ impl Loader<'_> {
                 Some(v)
             }
             None => None,
+        };
+        let tangents = match attribute(Semantic::Tangents) {
+            Some(i) if normals.is_some() => {
+                let v = self.read_floats(i, &what("TANGENT"), &[AccessorType::Vec4])?;
+                if v.len() / 4 != n {
+                    return Err(self.invalid(format!(
+                        "mesh '{mesh}' primitive {p}: TANGENT has {} elements but POSITION has {n}",
+                        v.len() / 4
+                    )));
+                }
+                Some(v)
+            }
+            _ => None,
         };
         let uv_name = format!("TEXCOORD_{}", uv_use.set);
         let uvs = match attribute(Semantic::TexCoords(uv_use.set)) {
@@ -201,6 +214,34 @@ impl Loader<'_> {
                 (vertices, (0..count).collect())
             }
         };
+        let mut vertices: Vec<Vertex> = vertices;
+        let wants_tangents = self.scene.materials.get(material).is_some_and(|m| m.normal_texture.is_some());
+        if wants_tangents {
+            match &tangents {
+                // The file's tangents (with normals given, one per vertex).
+                Some(t) => {
+                    let mut bad = 0;
+                    for (i, v) in vertices.iter_mut().enumerate() {
+                        let tv = Vec4::new(t[4 * i], t[4 * i + 1], t[4 * i + 2], t[4 * i + 3]);
+                        let xyz = tv.truncate();
+                        if xyz.is_finite() && xyz.length_squared() > 1e-12 {
+                            let w = if tv.w < 0.0 { -1.0 } else { 1.0 };
+                            v.tangent = xyz.normalize().extend(w).to_array();
+                        } else {
+                            bad += 1;
+                        }
+                    }
+                    if bad > 0 {
+                        self.warn(format!(
+                            "mesh '{mesh}' primitive {p}: {bad} tangents have zero length or are not numbers; MikkTSpace \
+                             tangents are used for the primitive"
+                        ));
+                        super::tangents::generate(&mut vertices, &indices);
+                    }
+                }
+                None => super::tangents::generate(&mut vertices, &indices),
+            }
+        }
         Ok(Some(Primitive { vertices, indices, material }))
     }
 }

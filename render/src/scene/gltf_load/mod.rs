@@ -22,6 +22,7 @@ mod container;
 mod materials;
 mod meshes;
 mod nodes;
+mod tangents;
 #[cfg(test)]
 mod tests;
 

@@ -270,9 +270,18 @@ fn embedded_png_texture_is_decoded() {
     assert_eq!(&t.rgba8[..4], &[10, 20, 30, 255]);
     assert_eq!(scene.materials[0].base_color_texture, Some(0));
 
+    // An undecodable image leaves the material on its factor, with a warning naming it (#37).
     let junk = format!("data:image/png;base64,{}", base64::engine::general_purpose::STANDARD.encode(b"not a png"));
-    let err = load_str(&with_image(&junk)).unwrap_err();
-    assert!(matches!(err, SceneError::Image { image: 0, .. }), "{err}");
+    let scene = load_str(&with_image(&junk)).expect("loads on the factor");
+    assert_eq!(scene.materials[0].base_color_texture, None);
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("base colour texture is not used") && w.contains("cannot decode image 0")),
+        "{:?}",
+        scene.warnings
+    );
 }
 
 /// Found with the fuzzer's texture seeds (issue #19): a JPEG of 8 × 4 pixels whose header
@@ -305,9 +314,10 @@ fn images_larger_than_the_limit_are_refused_before_decoding() {
         let mut big = jpeg.clone();
         big[sof + 5..sof + 7].copy_from_slice(&h.to_be_bytes());
         big[sof + 7..sof + 9].copy_from_slice(&w.to_be_bytes());
-        let err = load_str(&with_jpeg(&big)).unwrap_err();
-        assert!(matches!(err, SceneError::Image { image: 0, .. }), "{err}");
-        assert!(err.to_string().contains(&format!("{w} × {h} pixels")) && err.to_string().contains("8192"), "{err}");
+        let scene = load_str(&with_jpeg(&big)).expect("loads on the factor");
+        assert_eq!(scene.materials[0].base_color_texture, None);
+        let warning = scene.warnings.iter().find(|x| x.contains("cannot decode image 0")).expect("a warning");
+        assert!(warning.contains(&format!("{w} × {h} pixels")) && warning.contains("8192"), "{warning}");
     }
     assert_eq!(super::materials::MAX_IMAGE_PIXELS, 8192 * 8192);
 
@@ -329,9 +339,9 @@ fn images_larger_than_the_limit_are_refused_before_decoding() {
     // displayWindow: name, type, size 16, then xMin, yMin, xMax, yMax (little-endian i32).
     let at = exr.windows(14).position(|w| w == b"displayWindow\0").expect("displayWindow") + 14 + 6 + 4;
     exr[at + 12..at + 16].copy_from_slice(&5_373_955i32.to_le_bytes());
-    let err = load_str(&with_exr(&exr)).unwrap_err();
-    assert!(matches!(err, SceneError::Image { image: 0, .. }), "{err}");
-    assert!(err.to_string().contains("8 × 5373956 pixels") && err.to_string().contains("256 MiB"), "{err}");
+    let scene = load_str(&with_exr(&exr)).expect("loads on the factor");
+    let warning = scene.warnings.iter().find(|x| x.contains("cannot decode image 0")).expect("a warning");
+    assert!(warning.contains("8 × 5373956 pixels") && warning.contains("256 MiB"), "{warning}");
 }
 
 /// Found while fuzzing (issue #19): counts are checked against the data that holds them, but
