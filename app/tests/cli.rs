@@ -498,3 +498,30 @@ fn a_device_lost_while_rendering_ends_the_run_with_a_clear_error() {
     assert!(!err.contains("panicked"), "no panic: {err}");
     assert!(!out.join("final.png").exists(), "no image from a lost device");
 }
+
+/// Issue #37 point 5: `bench --suite quality` runs on a real scene without a reference (it
+/// traces one), and gives every technique row a frame time and its FLIP at equal time.
+#[test]
+fn the_quality_suite_runs_on_a_real_scene_and_traces_its_own_truth() {
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/scenes/cornell-box/CornellBox-Original.gltf");
+    let o = gi_lab()
+        .args(["bench", "--suite", "quality", "--scene", scene, "--size", "24x24", "--spp", "4", "--json"])
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "bench failed: {stderr}");
+    assert!(stderr.contains("path-tracing the one-bounce ground truth at 24x24, 4 spp"), "{stderr}");
+    let rows: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    let rows = rows.as_array().expect("rows");
+    let truth_rows: Vec<_> = rows.iter().filter(|r| r["against"] == "ground truth").collect();
+    assert_eq!(truth_rows.len(), 6, "{rows:?}");
+    for r in truth_rows {
+        let flip = r["flip"].as_f64().expect("FLIP");
+        assert!(flip > 0.0 && flip < 1.0, "{r}");
+        assert!(r["frame_ms"].as_f64().is_some_and(|ms| ms > 0.0), "{r}");
+        let eq = r["equal_time"].as_array().expect("equal time");
+        let frames = eq[0].as_u64().expect("frames");
+        assert!((1..=64).contains(&frames), "{r}");
+        assert!(eq[1].as_f64().is_some_and(|f| f > 0.0 && f < 1.0), "{r}");
+    }
+}

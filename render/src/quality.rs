@@ -5,7 +5,13 @@
 //! close the HCB comes to gathering at every pixel with the same VPLs. Each row
 //! renders a shipped preset on the scene, paused at animation time 0, and compares
 //! `final.hdr` with mean FLIP on the tone-mapped images (`metrics::flip`, as `gi-lab
-//! compare`). `gi-lab bench --suite quality` prints it; `tests/tests/quality.rs` bounds it.
+//! compare`). `gi-lab bench --suite quality` prints it for any scene (issue #37 point 5);
+//! `tests/tests/quality.rs` bounds it on the default scene.
+//!
+//! With [`Timing::EqualTime`] each row also gets its mean frame time (the passes' sum) and
+//! its FLIP at equal time: the frames it renders within the time the default preset
+//! (`LabSettings::default()`) takes for 16 frames (1 to 64 frames), so that a technique that
+//! converges over frames is judged by what it reaches in the same budget.
 
 use crate::image_io::hdr_display;
 use crate::passes::knecht::vpl_importance::ReceiverBrdf;
@@ -32,6 +38,21 @@ pub struct QualityRow {
     /// The issue's goal for this row on the default scene (an upper bound on FLIP); none
     /// where the issue sets none.
     pub goal: Option<f64>,
+    /// Mean frame time (ms, the passes' sum) of the row's configuration, with
+    /// [`Timing::EqualTime`].
+    pub frame_ms: Option<f64>,
+    /// Frames rendered within the default preset's time for 16 frames, and the FLIP they
+    /// reach against the ground truth, with [`Timing::EqualTime`].
+    pub equal_time: Option<(u32, f64)>,
+}
+
+/// Whether the table measures frame times and the FLIP at equal time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Timing {
+    /// FLIP only (the test's table).
+    None,
+    /// Frame times and the FLIP at equal time too (`bench --suite quality`).
+    EqualTime,
 }
 
 fn preset(text: &str, name: &str) -> Result<LabSettings, String> {
@@ -46,13 +67,38 @@ fn render(
     size: (u32, u32),
     frames: u32,
 ) -> Result<ImageF32, String> {
+    render_timed(ctx, scene, settings, size, frames).map(|(img, _)| img)
+}
+
+/// [`render`] and the mean frame time (ms, the sum of the passes' times; by the wall clock
+/// per pass where the device's timestamps cannot be trusted).
+fn render_timed(
+    ctx: &GpuContext,
+    scene: &Scene,
+    settings: LabSettings,
+    size: (u32, u32),
+    frames: u32,
+) -> Result<(ImageF32, f64), String> {
     let mut r = Renderer::new(ctx.clone(), scene.clone(), settings, size.0, size.1).map_err(|e| e.to_string())?;
+    if !crate::timing::GpuTimer::timestamps_reliable(&r.ctx) {
+        r.set_timing_source(crate::timing::TimingSource::CpuWallClock);
+    }
     r.clock.anim_frame = 0;
     r.clock.playing = false;
+    let mut total = 0.0;
     for _ in 0..frames.max(1) {
-        r.render_frame();
+        total += r.render_frame().iter().map(|t| t.ms).sum::<f64>();
     }
-    r.readback("final.hdr").map_err(|e| e.to_string())
+    let img = r.readback("final.hdr").map_err(|e| e.to_string())?;
+    Ok((img, total / frames.max(1) as f64))
+}
+
+/// The frames a configuration of `frame_ms` renders within `budget_ms` (1 to 64).
+fn frames_within(budget_ms: f64, frame_ms: f64) -> u32 {
+    if frame_ms <= 0.0 || !frame_ms.is_finite() {
+        return 1;
+    }
+    (budget_ms / frame_ms).floor().clamp(1.0, 64.0) as u32
 }
 
 fn flip(a: &ImageF32, b: &ImageF32) -> Result<f64, String> {
@@ -60,12 +106,14 @@ fn flip(a: &ImageF32, b: &ImageF32) -> Result<f64, String> {
 }
 
 /// The seven rows on `scene` at `size` against `truth` (a path-traced image of one indirect
-/// bounce at the same size and camera, `gi-lab reference --bounces 1`).
+/// bounce at the same size and camera, `gi-lab reference --bounces 1`), with frame times
+/// and the FLIP at equal time when `timing` asks.
 pub fn quality_table(
     ctx: &GpuContext,
     scene: &Scene,
     truth: &ImageF32,
     size: (u32, u32),
+    timing: Timing,
 ) -> Result<Vec<QualityRow>, String> {
     if (truth.width, truth.height) != size {
         return Err(format!(
@@ -75,7 +123,15 @@ pub fn quality_table(
     }
     let mut rows = Vec::new();
     let mut row = |configuration: &str, frames: u32, against: &str, flip: f64, goal: Option<f64>| {
-        rows.push(QualityRow { configuration: configuration.into(), frames, against: against.into(), flip, goal })
+        rows.push(QualityRow {
+            configuration: configuration.into(),
+            frames,
+            against: against.into(),
+            flip,
+            goal,
+            frame_ms: None,
+            equal_time: None,
+        })
     };
     let knecht = render(ctx, scene, preset(KNECHT, "knecht-cornell-256")?, size, 16)?;
     row("knecht-cornell-256", 16, "ground truth", flip(&knecht, truth)?, Some(0.05));
@@ -107,22 +163,75 @@ pub fn quality_table(
     // speed at the brute force's FLIP).
     let gautron = render(ctx, scene, preset(GAUTRON, "gautron-ic-splatting")?, size, 16)?;
     row("gautron-ic-splatting", 16, "ground truth", flip(&gautron, truth)?, None);
+    if timing == Timing::EqualTime {
+        equal_time(ctx, scene, truth, size, &mut rows)?;
+    }
     Ok(rows)
 }
 
-/// The table as text, with the goals and whether each row meets it.
+/// The settings of each ground-truth row, in the table's order.
+fn row_settings() -> Result<Vec<(LabSettings, u32)>, String> {
+    let exact = preset(EXACT, "exact-vpl-reference")?;
+    let batches = exact.reference.total_vpls.div_ceil(exact.reference.vpls_per_frame.max(1));
+    let mut nguyen = preset(NGUYEN, "nguyen-hcb")?;
+    nguyen.vpl.new_set_each_frame = false;
+    Ok(vec![
+        (preset(KNECHT, "knecht-cornell-256")?, 16),
+        (exact, batches),
+        (nguyen, 1),
+        (preset(SOLER, "soler-quarter-4-64")?, 16),
+        (preset(SOLER_NEAR_KNECHT_FAR, "soler-near-knecht-far")?, 16),
+        (preset(GAUTRON, "gautron-ic-splatting")?, 16),
+    ])
+}
+
+/// Frame times and the FLIP at equal time of the ground-truth rows (see the module doc).
+fn equal_time(
+    ctx: &GpuContext,
+    scene: &Scene,
+    truth: &ImageF32,
+    size: (u32, u32),
+    rows: &mut [QualityRow],
+) -> Result<(), String> {
+    let (_, default_ms) = render_timed(ctx, scene, LabSettings::default(), size, 4)?;
+    let budget = 16.0 * default_ms;
+    let truth_rows: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].against == "ground truth").collect();
+    for (i, (settings, frames)) in truth_rows.into_iter().zip(row_settings()?) {
+        let (_, ms) = render_timed(ctx, scene, settings.clone(), size, 2)?;
+        let n = frames_within(budget, ms);
+        let f = if n == frames { rows[i].flip } else { flip(&render(ctx, scene, settings, size, n)?, truth)? };
+        rows[i].frame_ms = Some(ms);
+        rows[i].equal_time = Some((n, f));
+    }
+    Ok(())
+}
+
+/// The table as text, with the goals and whether each row meets it (and, when measured, the
+/// frame time and the FLIP at equal time).
 pub fn format_table(rows: &[QualityRow]) -> String {
-    let mut s = format!("{:<36} {:>6}  {:<44} {:>8} {:>7}\n", "configuration", "frames", "against", "FLIP", "goal");
+    let timed = rows.iter().any(|r| r.frame_ms.is_some());
+    let mut s = format!("{:<36} {:>6}  {:<44} {:>8} {:>9}", "configuration", "frames", "against", "FLIP", "goal");
+    if timed {
+        s.push_str(&format!(" {:>9} {:>20}", "frame ms", "equal time: frames, FLIP"));
+    }
+    s.push('\n');
     for r in rows {
         let mark = if r.goal.is_none_or(|g| r.flip <= g) { "" } else { "  (above the goal)" };
         s.push_str(&format!(
-            "{:<36} {:>6}  {:<44} {:>8.4} {:>7}{mark}\n",
+            "{:<36} {:>6}  {:<44} {:>8.4} {:>9}",
             r.configuration,
             r.frames,
             r.against,
             r.flip,
             r.goal.map(|g| format!("≤ {g:.4}")).unwrap_or_else(|| "—".into())
         ));
+        if timed {
+            let ms = r.frame_ms.map_or("—".to_string(), |m| format!("{m:.2}"));
+            let eq = r.equal_time.map_or("—".to_string(), |(n, f)| format!("{n:>3}, {f:.4}"));
+            s.push_str(&format!(" {ms:>9} {eq:>20}"));
+        }
+        s.push_str(mark);
+        s.push('\n');
     }
     s
 }

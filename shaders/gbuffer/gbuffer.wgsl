@@ -132,6 +132,12 @@ fn gbuffer_fragment(i: VsOut, front: bool) -> FsOut {
             emission = emission * textureSample(emissive_tex, base_sampler, i.uv).rgb;
         }
     }
-    o.emission = vec4<f32>(emission, 1.0);
+    // a: the occlusion texture's R (§3.9.5), 1 without one: loaded so that it can be viewed,
+    // never multiplied into the computed light.
+    var occlusion = 1.0;
+    if (material.maps.w > 0.5) {
+        occlusion = textureSampleLevel(occlusion_tex, base_sampler, i.uv, max(camera.lod.x, 0.0)).r;
+    }
+    o.emission = vec4<f32>(emission, occlusion);
     return o;
 }

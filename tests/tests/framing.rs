@@ -85,7 +85,12 @@ fn the_interior_view_stands_at_eye_height_in_the_largest_room() {
     // Room A (x ∈ [0, 5]) is larger than room B (x ∈ [5, 8.5]); both are 2.7 m high.
     assert!((room.ceiling - room.floor - 2.7).abs() < 0.05, "{room:?}");
     assert!((view.camera.position.y - 1.6).abs() < 0.05, "eye height {}", view.camera.position.y);
-    assert!(view.camera.position.x < 5.0, "the camera stands in room A: {}", view.camera.position);
+    assert!(
+        view.camera.position.x < 5.0,
+        "the camera stands in room A: {} ({room:?}, {})",
+        view.camera.position,
+        view.reason
+    );
     let light = scene.nodes.iter().find(|n| n.light.is_some()).expect("light").transform.translation;
     assert!(light.y > 2.0 && light.y < 2.7, "the light hangs under the ceiling: {light}");
     // The corridor: looking along it.

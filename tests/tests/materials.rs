@@ -32,7 +32,10 @@ fn texture(name: &str, w: u32, h: u32, texel: impl Fn(u32, u32) -> [u8; 4]) -> T
 }
 
 /// A scene of quads (one mesh each, with its material) and one light straight above.
-fn scene(quads: Vec<((Vec<Vertex>, Vec<u32>), Material)>, textures: Vec<TextureImage>, light: LightKind) -> Scene {
+/// A mesh (vertices, triangle list) and its material.
+type Part = ((Vec<Vertex>, Vec<u32>), Material);
+
+fn scene(quads: Vec<Part>, textures: Vec<TextureImage>, light: LightKind) -> Scene {
     let mut s = Scene { name: "materials".into(), textures, ..Scene::default() };
     for (i, ((vertices, indices), m)) in quads.into_iter().enumerate() {
         s.materials.push(m);
@@ -110,19 +113,31 @@ fn a_normal_texture_bends_the_normal_by_the_closed_form() {
 }
 
 /// glTF §3.9.2: metalness from B and roughness from G, times the factors; the G-buffer's
-/// material (SI, SP, metallic, roughness) is `Material::intensities_at`'s.
+/// material (SI, SP, metallic, roughness) is `Material::intensities_at`'s. The occlusion
+/// texture (§3.9.5) is viewable in `gbuffer.emission`'s alpha and lights nothing.
 #[test]
 fn a_metallic_roughness_texture_sets_the_material_per_texel() {
     let mr = texture("mr", 4, 4, |_, _| [0, 128, 255, 255]);
+    let occlusion = texture("ao", 4, 4, |_, _| [64, 0, 0, 255]);
     let mut m = plain("metal", 0.6);
     m.specular_override = None;
     m.metallic = 1.0;
     m.roughness = 1.0;
     m.metallic_roughness_texture = Some(0);
-    let scene = scene(vec![(quad(-2.0, 2.0, -2.0, 2.0, 0.0), m.clone())], vec![mr], LightKind::Directional);
+    let scene = scene(vec![(quad(-2.0, 2.0, -2.0, 2.0, 0.0), m.clone())], vec![mr, occlusion], LightKind::Directional);
+    let mut with_ao = scene.clone();
+    with_ao.materials[0].occlusion_texture = Some(1);
     let mut r = scene_renderer(scene, 16, |s| gi_render::pipeline::Technique::DirectOnly.apply(s));
     look_down(&mut r, 2.0);
     r.render_frame();
+    let (direct, emission) = (read(&r, "direct.radiance"), read(&r, "gbuffer.emission"));
+    assert_eq!(emission.data[8 * 16 + 8][3], 1.0, "no occlusion texture: 1");
+    let mut ao = scene_renderer(with_ao, 16, |s| gi_render::pipeline::Technique::DirectOnly.apply(s));
+    look_down(&mut ao, 2.0);
+    ao.render_frame();
+    let occ = read(&ao, "gbuffer.emission").data[8 * 16 + 8][3];
+    assert!((occ - 64.0 / 255.0).abs() < 0.01, "the occlusion texel is viewable: {occ}");
+    assert_eq!(read(&ao, "direct.radiance").data, direct.data, "occlusion is not applied to computed light");
     let got = Vec4::from(read(&r, "gbuffer.material").data[8 * 16 + 8]);
     let (_, si, sp) = m.intensities_at(Vec3::splat(0.6), Some(Vec4::new(0.0, 128.0 / 255.0, 1.0, 1.0)));
     assert!((got.z - 1.0).abs() < 1e-3 && (got.w - 128.0 / 255.0).abs() < 1e-3, "metallic, roughness {got}");

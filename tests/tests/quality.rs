@@ -10,7 +10,14 @@ use gi_lab_tests::{default_scene, gpu, stored_reference};
 #[test]
 fn the_quality_table_stays_within_its_measured_bounds() {
     let truth = stored_reference("cornell_1bounce_256_2048spp.exr");
-    let rows = gi_render::quality::quality_table(&gpu(), &default_scene(), &truth, (256, 256)).expect("the table");
+    let rows = gi_render::quality::quality_table(
+        &gpu(),
+        &default_scene(),
+        &truth,
+        (256, 256),
+        gi_render::quality::Timing::None,
+    )
+    .expect("the table");
     print!("{}", gi_render::quality::format_table(&rows));
     // Measured on lavapipe: 0.048, 0.033, 0.060, 0.022 (stratified reference VPLs, tangent-
     // plane splats and the inside-surfaces push; the HCB with the paper's 1024 VPLs and

@@ -599,6 +599,8 @@ fn an_object_above_the_roof_does_not_move_the_light_out_of_the_room() {
     let mut scene = hotel_room_with_camera_inside(true);
     scene.cameras.clear();
     scene.nodes.iter_mut().for_each(|n| n.camera = None);
+    let view = gi_render::scene::framing::choose_view(&scene, 1.0, Default::default());
+    assert_eq!(view.kind, gi_render::scene::framing::ViewKind::Interior, "{}", view.reason);
     scene.ensure_light();
     let note = scene.default_light_note().expect("a note").to_string();
     assert!(note.contains("under the ceiling"), "{note}");

@@ -33,13 +33,19 @@ pub struct BenchArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Samples per pixel of the one-bounce ground truth that `--suite quality` traces when no
+    /// --reference is given.
+    #[arg(long, default_value_t = 256)]
+    pub spp: u32,
     /// Run a suite of rows instead of one configuration: `knecht` reproduces the shape of
     /// `knecht`: Knecht's Tables 5.1–5.3 (frame time against VPL count and ISM size, the
     /// temporal coherence overhead, multi-bounce against IRSM); `nguyen`: the HCB against
     /// gathering at every pixel at 1024 VPLs, with the samples' share of the pixels. Both
-    /// start from --preset. `quality`: mean FLIP of the shipped Knecht, exact-VPL and HCB
+    /// start from --preset. `quality`: on any --scene, mean FLIP of the shipped technique
     /// presets against --reference (a path-traced image of one bounce at --size, `gi-lab
-    /// reference --bounces 1`), and of the HCB against the diffuse-only gather at every pixel.
+    /// reference --bounces 1`; traced here with --spp when not given), each row's frame time
+    /// and the FLIP it reaches within the default preset's time (equal time), and the HCB
+    /// against the diffuse-only gather at every pixel.
     /// `soler`: Soler et al.'s Fig. 9 (four parameter sets with and without visibility, per
     /// part; run it at --size 1280x720).
     /// `gautron`: irradiance cache splatting from a cold cache at five accuracies against a
@@ -341,33 +347,80 @@ pub(super) fn bench(args: &BenchArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-/// `gi-lab bench --suite quality`: the quality table of `gi_render::quality` on the scene.
+/// `gi-lab bench --suite quality`: the quality table of `gi_render::quality` on any scene,
+/// against `--reference` or a one-bounce ground truth traced here at `--size` with `--spp`,
+/// with each row's frame time and its FLIP at equal time (issue #37 point 5).
 fn quality(args: &BenchArgs) -> Result<(), CliError> {
-    let reference = args.reference.as_ref().ok_or_else(|| {
-        CliError::input(format!(
-            "--suite quality needs --reference: a path-traced image of one indirect bounce of the same scene at {}x{} (`gi-lab reference --size {}x{} --spp 2048 --bounces 1 --out truth.exr`)",
-            args.size.0, args.size.1, args.size.0, args.size.1
-        ))
-    })?;
-    let (truth, _) = load_image(reference)?;
     let scene = crate::scene_args::load_scene(&args.scene)?;
+    let (truth, against) = match &args.reference {
+        Some(reference) => (load_image(reference)?.0, reference.display().to_string()),
+        None => {
+            if args.spp == 0 {
+                return Err(CliError::input("--spp must be at least 1"));
+            }
+            let settings = crate::scene_args::load_settings(&args.scene)?;
+            eprintln!(
+                "path-tracing the one-bounce ground truth at {}x{}, {} spp (give --reference to reuse one) …",
+                args.size.0, args.size.1, args.spp
+            );
+            let start = std::time::Instant::now();
+            let img = one_bounce_truth(&scene, &settings, args.size, args.spp);
+            eprintln!("traced in {:.1} s", start.elapsed().as_secs_f64());
+            (img, format!("the path tracer (1 bounce, {} spp, traced here)", args.spp))
+        }
+    };
     let ctx = gi_render::GpuContext::headless().map_err(|e| CliError::failure(e.to_string()))?;
-    let rows = gi_render::quality::quality_table(&ctx, &scene, &truth, args.size).map_err(CliError::input)?;
+    let rows =
+        gi_render::quality::quality_table(&ctx, &scene, &truth, args.size, gi_render::quality::Timing::EqualTime)
+            .map_err(CliError::input)?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&rows).map_err(|e| CliError::failure(e.to_string()))?);
     } else {
         let name =
             args.scene.scene.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| "default Cornell box".into());
         println!(
-            "GI Lab bench suite quality — {name} at {}x{}, paused at time 0, mean FLIP (tone-mapped) against {}\n",
+            "GI Lab bench suite quality — {name} at {}x{}, paused at time 0, mean FLIP (tone-mapped) against {against}; {} ({:?})\n",
             args.size.0,
             args.size.1,
-            reference.display()
+            ctx.adapter_summary(),
+            if gi_render::timing::GpuTimer::timestamps_reliable(&ctx) {
+                "GPU timestamps"
+            } else {
+                "wall clock per pass"
+            }
         );
         print!("{}", gi_render::quality::format_table(&rows));
         println!(
-            "\ngoals: issue #15's rows 1–4, issue #16's row 6 (below rows 1 and 5), for the default scene at 256x256"
+            "\nframe ms: mean of the passes' times; equal time: the frames each row renders in the default preset's time for 16 frames, and the FLIP they reach"
         );
+        if args.scene.scene.is_none() {
+            println!(
+                "goals: issue #15's rows 1–4, issue #16's row 6 (below rows 1 and 5), for the default scene at 256x256"
+            );
+        }
     }
     Ok(())
+}
+
+/// The one-bounce path-traced ground truth of `scene` at `size` from its opening view, with
+/// the emitters and the sky's background as `settings` say (as `gi-lab reference` traces it).
+pub fn one_bounce_truth(
+    scene: &gi_render::scene::Scene,
+    settings: &gi_render::LabSettings,
+    (w, h): (u32, u32),
+    spp: u32,
+) -> gi_render::ImageF32 {
+    use gi_render::cpu::pathtrace::{PathTracer, PtSettings};
+    let camera = gi_render::renderer::default_camera(scene, scene.bounds(0.0), w as f32 / h as f32);
+    let mut pt = PathTracer::new(scene, 0.0);
+    pt.use_emitter_settings(&settings.emitters, scene, 0.0);
+    pt.set_sky_background(settings.sky.background);
+    pt.render(
+        camera.view_proj(w as f32 / h as f32),
+        camera.position,
+        w,
+        h,
+        PtSettings { bounces: 1, spp, seed: 1, ..Default::default() },
+    )
+    .full
 }

@@ -10,6 +10,10 @@ use obvhs::ray::{Ray, RayHit};
 use super::raycast::moller_trumbore;
 use crate::scene::{Scene, SceneState};
 
+/// Triangles with a coordinate beyond this are left out of the BVH (no ray can meet them
+/// meaningfully in f32, and the builder's arithmetic overflows).
+pub const MAX_COORDINATE: f32 = 1e18;
+
 /// One world-space triangle with what shading needs.
 #[derive(Clone, Copy, Debug)]
 pub struct BvhTri {
@@ -69,7 +73,9 @@ impl SceneBvh {
                     xyz.extend(tv.w * flip)
                 };
                 let v = [0, 1, 2].map(|k| d.world.transform_point3(Vec3::from(vert(k).position)));
-                if !v.iter().all(|x| x.is_finite()) {
+                // Beyond 10¹⁸ the builder's box centres and their differences overflow to ∞
+                // and NaN, and obvhs's child ordering panics (found by the fuzzer, #37).
+                if !v.iter().all(|x| x.is_finite() && x.abs().max_element() < MAX_COORDINATE) {
                     continue;
                 }
                 tris.push(BvhTri {

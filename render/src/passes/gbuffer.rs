@@ -200,7 +200,7 @@ impl GBufferPass {
         reg.register(
             "gbuffer.emission",
             BufferKind::Hdr,
-            "emitted radiance L_e of the surface (glTF emissive factor × strength)",
+            "rgb: emitted radiance L_e of the surface (glTF emissive factor × strength × texture); a: the material's occlusion texture (R; 1 without one), shown only, never applied to computed light",
             &t.emission,
         );
         reg.register("gbuffer.depth", BufferKind::Depth, "hardware depth in [0, 1]", &t.depth);

@@ -8,12 +8,17 @@
 //! **Interior or exterior.** Points on a grid inside the bounds are probed with 48 rays
 //! each (a Fibonacci sphere). A point is *in a room* when at least 92 % of them hit
 //! something, rays straight up and down both do, and at least 80 % of the hits are front faces
-//! (a point inside a solid object, a bunny or a wall, sees back faces). The scene is an
-//! interior when its centre is in a room or at least half of the probes are; otherwise (an
+//! (a point inside a solid object, a bunny or a wall, sees back faces); more probes stand at
+//! the quantiles of the geometry's vertices (where the geometry is, whatever lies far
+//! outside). The scene is an interior when its centre is in a room, at least half of the grid's
+//! probes are, or the storey of the chosen room holds at least half of the geometry's vertices;
+//! otherwise (an
 //! object, an open layout, a box open on one side) it is an exterior.
 //!
-//! **Interior view.** The room is the probe with the largest floor area (the spans to the
-//! walls along x and z), moved to the middle of those spans. The camera stands at eye
+//! **Interior view.** The room is the probe with the largest floor area (wall-to-wall spans
+//! measured just under its ceiling) times ½ + the share of the geometry between its floor and
+//! ceiling (of two storeys alike, the furnished one) times 1 + ½ × how low its floor lies in the
+//! bounds (then the ground floor), moved to the middle of those spans. The camera stands at eye
 //! height: 1.6 m above the floor in a room at least 2.4 m high, else 0.6 × its height. It
 //! looks along the longest free horizontal direction (16 tried), stepped back towards the
 //! opposite wall so that the room is in view, slightly down, with a 63° vertical field.
@@ -105,16 +110,23 @@ fn sphere_directions(n: usize) -> Vec<Vec3> {
         .collect()
 }
 
-/// Whether `p` stands in a room (see the module doc).
+/// Whether `p` stands in a room (see the module doc): not on or against a surface either
+/// (its nearest hit at least 2 % of the mean distance away).
 fn in_room(bvh: &SceneBvh, p: Vec3, dirs: &[Vec3]) -> bool {
     let (mut hits, mut fronts) = (0usize, 0usize);
+    let (mut nearest, mut sum) = (f32::INFINITY, 0.0);
     for &d in dirs {
         if let Some(h) = bvh.intersect(p, d, 0.0, f32::INFINITY) {
             hits += 1;
+            nearest = nearest.min(h.t);
+            sum += h.t;
             if h.front || bvh.tris[h.tri].double_sided {
                 fronts += 1;
             }
         }
+    }
+    if hits == 0 || nearest < 0.02 * sum / hits as f32 {
+        return false;
     }
     let up = bvh.intersect(p, Vec3::Y, 0.0, f32::INFINITY).is_some();
     let down = bvh.intersect(p, Vec3::NEG_Y, 0.0, f32::INFINITY).is_some();
@@ -136,11 +148,13 @@ fn free(bvh: &SceneBvh, p: Vec3, d: Vec3) -> f32 {
     bvh.intersect(p, d, 0.0, f32::INFINITY).map_or(f32::INFINITY, |h| h.t)
 }
 
-/// The bounds made usable: finite, with a positive size.
+/// The bounds made usable: finite, within the BVH's coordinates, with a positive size.
 fn usable(b: Aabb) -> Aabb {
     if !(b.min.is_finite() && b.max.is_finite()) || b.is_empty() {
         return Aabb { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) };
     }
+    let limit = Vec3::splat(crate::cpu::bvh::MAX_COORDINATE);
+    let b = Aabb { min: b.min.clamp(-limit, limit), max: b.max.clamp(-limit, limit) };
     let pad = (b.extent().max_element() * 1e-3).max(1e-3);
     Aabb { min: b.min - Vec3::splat(pad), max: b.max + Vec3::splat(pad) }
 }
@@ -173,26 +187,23 @@ pub fn choose_view(scene: &Scene, aspect: f32, prefer: ViewPreference) -> Framin
         };
     }
     let dirs = sphere_directions(48);
-    let (centre_in_room, rooms, probes) = probe_rooms(&bvh, bounds, &dirs);
-    let mut interior = centre_in_room || rooms.len() * 2 >= probes;
+    let (centre_in_room, mut rooms, probes) = probe_rooms(&bvh, bounds, &dirs);
+    let grid_rooms = rooms.len();
+    rooms.extend(probe_where_the_geometry_is(&bvh, &fit_points, &dirs));
+    let mut interior = centre_in_room || grid_rooms * 2 >= probes;
     // A room that holds most of the geometry makes an interior too, whatever lies far
     // outside it (a lamp post above the roof, a stray object).
     let mut geometry_in_room = None;
-    if !interior && prefer == ViewPreference::Auto && !fit_points.is_empty() {
-        if let Some(f) = interior_view(&bvh, &rooms, &dirs, bounds, fit_points.clone())
-            && let Some(room) = f.room
-        {
-            let b = room.bounds;
-            let pad = 0.05 * b.extent().max_element();
-            let inside = fit_points
-                .iter()
-                .filter(|p| p.cmpge(b.min - Vec3::splat(pad)).all() && p.cmple(b.max + Vec3::splat(pad)).all())
-                .count();
-            let share = inside as f32 / fit_points.len() as f32;
-            if share >= 0.5 {
-                interior = true;
-                geometry_in_room = Some(share);
-            }
+    if !interior
+        && prefer == ViewPreference::Auto
+        && !fit_points.is_empty()
+        && let Some(f) = interior_view(&bvh, &rooms, &dirs, bounds, fit_points.clone())
+        && let Some(room) = f.room
+    {
+        let share = storey_share(&fit_points, room.floor, room.ceiling);
+        if share >= 0.5 {
+            interior = true;
+            geometry_in_room = Some(share);
         }
     }
     let want_inside = match prefer {
@@ -206,9 +217,9 @@ pub fn choose_view(scene: &Scene, aspect: f32, prefer: ViewPreference) -> Framin
         } else if centre_in_room {
             "the scene encloses its centre".to_string()
         } else if let Some(share) = geometry_in_room {
-            format!("{:.0} % of its geometry lies in one room", share * 100.0)
+            format!("{:.0} % of its geometry lies in the storey of one room", share * 100.0)
         } else {
-            format!("{} of {probes} probes of its volume stand in rooms", rooms.len())
+            format!("{grid_rooms} of {probes} probes of its volume stand in rooms")
         };
         return Framing { reason: format!("inside: {why}; {}", f.reason), ..f };
     }
@@ -246,24 +257,67 @@ fn probe_rooms(bvh: &SceneBvh, b: Aabb, dirs: &[Vec3]) -> (bool, Vec<Vec3>, usiz
     (centre, rooms, nx * ny * nz)
 }
 
+/// The share of `points` between heights `floor` and `ceiling` (5 % of the storey's height
+/// of margin).
+fn storey_share(points: &[Vec3], floor: f32, ceiling: f32) -> f32 {
+    if points.is_empty() || !(floor.is_finite() && ceiling.is_finite()) {
+        return 0.0;
+    }
+    let pad = 0.05 * (ceiling - floor).abs();
+    let inside = points.iter().filter(|p| p.y >= floor - pad && p.y <= ceiling + pad).count();
+    inside as f32 / points.len() as f32
+}
+
+/// Probes at the quantiles of the geometry's vertices along each axis (5 × 5 × 5): where
+/// the geometry is, whatever lies far outside it (a room under a tall antenna), those in a room.
+fn probe_where_the_geometry_is(bvh: &SceneBvh, points: &[Vec3], dirs: &[Vec3]) -> Vec<Vec3> {
+    if points.is_empty() {
+        return Vec::new();
+    }
+    // Midway between consecutive sextiles: a quantile itself is a vertex, often on a wall.
+    let quantiles = |axis: usize| {
+        let mut v: Vec<f32> = points.iter().map(|p| p[axis]).collect();
+        v.sort_by(f32::total_cmp);
+        let q = |f: f32| v[((f * (v.len() - 1) as f32) as usize).min(v.len() - 1)];
+        (0..5).map(|i| 0.5 * (q(i as f32 / 5.0) + q((i + 1) as f32 / 5.0))).collect::<Vec<f32>>()
+    };
+    let (xs, ys, zs) = (quantiles(0), quantiles(1), quantiles(2));
+    let mut out = Vec::new();
+    for &x in &xs {
+        for &y in &ys {
+            for &z in &zs {
+                let p = Vec3::new(x, y, z);
+                if in_room(bvh, p, dirs) {
+                    out.push(p);
+                }
+            }
+        }
+    }
+    out
+}
+
 /// The camera inside the largest room (see the module doc), or None when no probe stands in
 /// a room.
 fn interior_view(bvh: &SceneBvh, rooms: &[Vec3], dirs: &[Vec3], b: Aabb, fit_points: Vec<Vec3>) -> Option<Framing> {
     // A ray through a door or a window ends where it leaves the bounds.
     let span = |p: Vec3, d: Vec3| free(bvh, p, d).min(exit(b, p, d));
     let reach = b.extent().length();
-    // The room of each probe, from 16 horizontal rays: its floor area (the mean of the four
-    // shortest of the 8 wall-to-wall spans times the mean of the four longest, so that a
-    // door, which lengthens one or two spans, does not make a corridor the largest room) and
-    // its middle (the mean of the points the rays reach). The largest wins.
+    // The room of each probe, from 16 horizontal rays just under its ceiling (above the
+    // furniture and the door lintels, so that neither shortens nor lengthens the room): its
+    // floor area (the mean of the four shortest of the 8 wall-to-wall spans times the mean
+    // of the four longest, so that an opening that lengthens one or two spans does not make
+    // a corridor the largest room) and its middle (the mean of the points the rays reach).
+    // The largest wins.
     let best = rooms
         .iter()
         .map(|&p| {
+            let (up, down) = (free(bvh, p, Vec3::Y), free(bvh, p, Vec3::NEG_Y));
+            let q = if up.is_finite() && down.is_finite() { p + Vec3::Y * (up - 0.08 * (up + down)) } else { p };
             let ends: Vec<Vec3> = (0..16)
                 .map(|i| {
                     let a = std::f32::consts::TAU * i as f32 / 16.0;
                     let d = Vec3::new(a.sin(), 0.0, -a.cos());
-                    p + d * span(p, d)
+                    q + d * span(q, d)
                 })
                 .collect();
             let mut spans: Vec<f32> = (0..8).map(|i| ends[i].distance(ends[i + 8])).collect();
@@ -271,7 +325,13 @@ fn interior_view(bvh: &SceneBvh, rooms: &[Vec3], dirs: &[Vec3], b: Aabb, fit_poi
             let (short, long) = (spans[..4].iter().sum::<f32>() / 4.0, spans[4..].iter().sum::<f32>() / 4.0);
             let mid = ends.iter().fold(Vec3::ZERO, |s, e| s + *e) / 16.0;
             let centre = Vec3::new(mid.x, p.y, mid.z);
-            (short * long, centre, Vec2::new(short, long), p)
+            // The share of the geometry's points between the probe's floor and ceiling: of
+            // two storeys alike, the furnished one.
+            let share = storey_share(&fit_points, p.y - down, p.y + up);
+            // And of two storeys alike, the lower: the one a person walks in on.
+            let height = (p.y - down - b.min.y) / b.extent().y.max(1e-6);
+            let ground = 1.0 + 0.5 * (1.0 - height.clamp(0.0, 1.0));
+            ((short * long) * (0.5 + share) * ground, centre, Vec2::new(short, long), p)
         })
         .max_by(|a, b| a.0.total_cmp(&b.0))?;
     let (_, mut centre, size, probe) = best;
@@ -491,5 +551,79 @@ pub fn detect_unit_scale(extent: f32) -> Option<(f32, &'static str)> {
         Some((0.01, "centimetres"))
     } else {
         None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Mesh, Node, Primitive, Transform, vertex};
+
+    /// A scene of one mesh made of these triangles (no lights, no cameras).
+    fn scene_of(points: &[Vec3]) -> Scene {
+        let vertices = points.iter().map(|p| vertex(*p, Vec3::Y, Vec2::ZERO)).collect::<Vec<_>>();
+        let indices = (0..vertices.len() as u32).collect();
+        Scene {
+            meshes: vec![Mesh { name: "m".into(), primitives: vec![Primitive { vertices, indices, material: 0 }] }],
+            materials: vec![crate::scene::Material::default()],
+            nodes: vec![Node {
+                name: "m".into(),
+                transform: Transform::default(),
+                children: vec![],
+                mesh: Some(0),
+                light: None,
+                camera: None,
+            }],
+            roots: vec![0],
+            ..Scene::default()
+        }
+    }
+
+    fn usable_camera(f: &Framing) {
+        assert_eq!(f.camera.problem(), None, "{:?}: {}", f.camera, f.reason);
+    }
+
+    /// Bad input (issue #37): degenerate bounds, NaN, huge coordinates and an empty scene give
+    /// a usable view and say why, never a panic.
+    #[test]
+    fn degenerate_scenes_still_get_a_usable_view() {
+        let one_point = scene_of(&[Vec3::splat(2.0); 3]);
+        usable_camera(&choose_view(&one_point, 1.5, ViewPreference::Auto));
+        let nan = scene_of(&[Vec3::ZERO, Vec3::new(f32::NAN, 0.0, 0.0), Vec3::Z, Vec3::ZERO, Vec3::X, Vec3::Z]);
+        usable_camera(&choose_view(&nan, 1.5, ViewPreference::Auto));
+        let huge = scene_of(&[Vec3::ZERO, Vec3::new(1e9, 0.0, 0.0), Vec3::new(0.0, 0.0, 1e9)]);
+        for p in [ViewPreference::Auto, ViewPreference::Inside, ViewPreference::Outside] {
+            usable_camera(&choose_view(&huge, 1.5, p));
+        }
+        let empty = Scene::default();
+        let f = choose_view(&empty, 1.5, ViewPreference::Auto);
+        usable_camera(&f);
+        assert!(f.reason.contains("no triangles"), "{}", f.reason);
+        assert_eq!(detect_unit_scale(f32::NAN), None);
+        assert_eq!(detect_unit_scale(1e9), Some((0.001, "millimetres")));
+    }
+
+    /// The exterior fit: every vertex projects inside the frame, and the geometry spans most
+    /// of it in one direction.
+    #[test]
+    fn the_exterior_fit_keeps_every_point_in_the_frame() {
+        let pts: Vec<Vec3> =
+            (0..200).map(|i| Vec3::new((i % 20) as f32, ((i / 20) % 3) as f32, (i / 60) as f32)).collect();
+        let b = {
+            let mut b = Aabb::EMPTY;
+            pts.iter().for_each(|p| b.grow(*p));
+            b
+        };
+        let cam = fit_camera(&pts, Vec3::new(-0.5, -0.5, -0.7), 0.8, 1.6, b);
+        let vp = cam.view_proj(1.6);
+        let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+        for p in &pts {
+            let c = vp.project_point3(*p);
+            assert!(c.x.abs() <= 1.0 && c.y.abs() <= 1.0, "{p} projects to {c}");
+            lo = lo.min(c.truncate());
+            hi = hi.max(c.truncate());
+        }
+        let span = hi - lo;
+        assert!(span.x > 1.8 || span.y > 1.8, "the geometry spans {span} of the 2 × 2 frame");
     }
 }

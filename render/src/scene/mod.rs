@@ -110,7 +110,8 @@ pub struct Material {
     /// G = roughness, multiplied into the factors).
     pub metallic_roughness_texture: Option<usize>,
     /// Index into [`Scene::textures`] of the occlusion texture (R, linear): loaded and
-    /// shown by the buffer viewer (`gbuffer.occlusion`), never multiplied into computed light.
+    /// shown by the buffer viewer (the alpha of `gbuffer.emission`), never multiplied into
+    /// computed light.
     pub occlusion_texture: Option<usize>,
 }
 

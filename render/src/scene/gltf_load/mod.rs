@@ -19,6 +19,8 @@ mod compression;
 #[cfg(test)]
 mod compression_tests;
 mod container;
+#[cfg(test)]
+mod material_tests;
 mod materials;
 mod meshes;
 mod nodes;

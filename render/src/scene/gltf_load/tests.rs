@@ -131,7 +131,15 @@ fn shared_chair_scene_loads_with_its_sun() {
     assert_eq!(scene.lights[0].intensity, 2049.0);
     // Base colour images of the materials in use: fabric (Mango Velvet), label, wood (brown
     // and black share one image). Peacock Velvet is only a KHR_materials_variants alternative.
-    assert_eq!(scene.textures.len(), 3);
+    let mut base: Vec<usize> = scene.materials.iter().filter_map(|m| m.base_color_texture).collect();
+    base.sort();
+    base.dedup();
+    assert_eq!(base.len(), 3);
+    // With the packed occlusion-metallic-roughness images of the wood and the occlusion
+    // images (#37; the only normal map belongs to the unused Peacock variant).
+    assert!(scene.materials.iter().any(|m| m.metallic_roughness_texture.is_some()));
+    assert!(scene.materials.iter().any(|m| m.occlusion_texture.is_some()));
+    assert_eq!(scene.textures.len(), 5);
     assert!(!scene.materials.iter().any(|m| m.name.contains("Peacock")));
     for t in &scene.textures {
         assert_eq!(t.rgba8.len(), (t.width * t.height * 4) as usize, "{}", t.name);
