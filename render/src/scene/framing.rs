@@ -30,7 +30,7 @@
 //! culled) up to 70 % (past that a large floor fills any view), weighted by the share of
 //! those surfaces that face other geometry (a box open on one side is seen through its
 //! opening, not by its outer walls), with small preferences for looking across the largest
-//! horizontal extent, from the front (+z) and from low.
+//! horizontal extent, from the front (+z: glTF's assets face +z) and from low.
 
 use glam::{Vec2, Vec3};
 
@@ -369,15 +369,18 @@ fn interior_view(bvh: &SceneBvh, rooms: &[Vec3], dirs: &[Vec3], b: Aabb, fit_poi
     if !in_room(bvh, eye, dirs) {
         eye = centre;
     }
-    // The longest free horizontal direction that ends on a surface (a view out of a door
-    // into nothing counts half), then a step back towards the opposite wall.
+    // The room's longest free horizontal direction, measured just under the ceiling (above
+    // the furniture and the door lintels, so that a door does not lengthen it: looking along
+    // it shows the room, not the corridor behind a door), then a step back towards the
+    // opposite wall.
+    let top = Vec3::new(eye.x, ceiling - 0.08 * height, eye.z);
     let (dir, length, _) = (0..16)
         .map(|i| {
             let a = std::f32::consts::TAU * i as f32 / 16.0;
             let d = Vec3::new(a.sin(), 0.0, -a.cos());
-            let t = free(bvh, eye, d);
-            let s = span(eye, d);
-            (d, s, if t.is_finite() { s } else { 0.5 * s })
+            let t = free(bvh, top, d);
+            let s = span(top, d);
+            (d, span(eye, d).min(s), if t.is_finite() { s } else { 0.5 * s })
         })
         .max_by(|a, b| a.2.total_cmp(&b.2))?;
     // Back towards the opposite wall, but not through a door behind: at most half the way
@@ -482,7 +485,8 @@ fn exterior_view(bvh: &SceneBvh, b: Aabb, aspect: f32, fit_points: Vec<Vec3>) ->
             let cam = fit_camera(&fit_points, -from, yfov, aspect, b);
             let (coverage, facing) = view_score(bvh, &cam, aspect);
             let across = 1.0 - from.dot(long_axis).abs();
-            let front = if from.z > 0.0 { 0.01 } else { 0.0 };
+            // glTF: "the front of a glTF asset faces +Z" (§3.4): seen from the front.
+            let front = 0.06 * from.z.max(0.0);
             // Coverage counts up to 70 %: past that a large floor fills any view, and the
             // lower, more natural elevation wins.
             let low = match elevation as u32 {

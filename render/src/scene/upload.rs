@@ -287,13 +287,8 @@ impl GpuScene {
         material_group: Option<u32>,
         pipelines: Option<(&wgpu::RenderPipeline, &wgpu::RenderPipeline)>,
     ) {
-        pass.set_vertex_buffer(0, self.vertices.slice(..));
-        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
-        for (i, d) in state.draws.iter().take(self.instance_capacity).enumerate() {
-            let Some(p) = self.primitives.get(d.mesh).and_then(|m| m.get(d.primitive)) else { continue };
-            if p.index_count == 0 {
-                continue;
-            }
+        self.bind_geometry(pass);
+        for (inst, p) in self.primitives_of(state) {
             if let Some((single, double)) = pipelines {
                 let ds = self.double_sided.get(p.material).copied().unwrap_or(true);
                 pass.set_pipeline(if ds { double } else { single });
@@ -301,13 +296,27 @@ impl GpuScene {
             if let Some(g) = material_group {
                 pass.set_bind_group(g, &self.material_groups[p.material.min(self.material_groups.len() - 1)], &[]);
             }
-            let inst = i as u32;
             pass.draw_indexed(p.first_index..p.first_index + p.index_count, p.base_vertex, inst..inst + 1);
         }
     }
 }
 
 impl GpuScene {
+    /// Binds the shared vertex and index buffers.
+    fn bind_geometry(&self, pass: &mut wgpu::RenderPass<'_>) {
+        pass.set_vertex_buffer(0, self.vertices.slice(..));
+        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+    }
+
+    /// The non-empty primitives `state` draws, with their instance index, in draw order (the
+    /// order of every draw method and of [`Self::indexed_draws`]).
+    fn primitives_of<'a>(&'a self, state: &'a SceneState) -> impl Iterator<Item = (u32, &'a GpuPrimitive)> + 'a {
+        state.draws.iter().take(self.instance_capacity).enumerate().filter_map(|(i, d)| {
+            let p = self.primitives.get(d.mesh).and_then(|m| m.get(d.primitive))?;
+            (p.index_count > 0).then_some((i as u32, p))
+        })
+    }
+
     /// Draws `state` into a depth-only view: opaque materials with `opaque`, alpha-masked ones
     /// with `cutout` (its fragment stage reads the material group `material_group`).
     pub fn draw_depth(
@@ -317,18 +326,12 @@ impl GpuScene {
         material_group: u32,
         (opaque, cutout): (&wgpu::RenderPipeline, &wgpu::RenderPipeline),
     ) {
-        pass.set_vertex_buffer(0, self.vertices.slice(..));
-        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
-        for (i, d) in state.draws.iter().take(self.instance_capacity).enumerate() {
-            let Some(p) = self.primitives.get(d.mesh).and_then(|m| m.get(d.primitive)) else { continue };
-            if p.index_count == 0 {
-                continue;
-            }
+        self.bind_geometry(pass);
+        for (inst, p) in self.primitives_of(state) {
             let m = p.material.min(self.material_groups.len() - 1);
             // Both pipelines share one layout, whose material group must be bound.
             pass.set_pipeline(if self.cutout.get(m).copied().unwrap_or(false) { cutout } else { opaque });
             pass.set_bind_group(material_group, &self.material_groups[m], &[]);
-            let inst = i as u32;
             pass.draw_indexed(p.first_index..p.first_index + p.index_count, p.base_vertex, inst..inst + 1);
         }
     }
@@ -336,16 +339,7 @@ impl GpuScene {
     /// The indexed draws [`Self::draw`] issues for `state`: (first index, index count, base
     /// vertex, instance), in its order.
     pub fn indexed_draws(&self, state: &SceneState) -> Vec<(u32, u32, i32, u32)> {
-        state
-            .draws
-            .iter()
-            .take(self.instance_capacity)
-            .enumerate()
-            .filter_map(|(i, d)| {
-                let p = self.primitives.get(d.mesh).and_then(|m| m.get(d.primitive))?;
-                (p.index_count > 0).then_some((p.first_index, p.index_count, p.base_vertex, i as u32))
-            })
-            .collect()
+        self.primitives_of(state).map(|(i, p)| (p.first_index, p.index_count, p.base_vertex, i)).collect()
     }
 
     /// [`Self::draw`] with indirect draws: draw k of [`Self::indexed_draws`] reads its
@@ -359,14 +353,9 @@ impl GpuScene {
         (single, double): (&wgpu::RenderPipeline, &wgpu::RenderPipeline),
         args: &wgpu::Buffer,
     ) {
-        pass.set_vertex_buffer(0, self.vertices.slice(..));
-        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+        self.bind_geometry(pass);
         let mut k = 0u64;
-        for d in state.draws.iter().take(self.instance_capacity) {
-            let Some(p) = self.primitives.get(d.mesh).and_then(|m| m.get(d.primitive)) else { continue };
-            if p.index_count == 0 {
-                continue;
-            }
+        for (_, p) in self.primitives_of(state) {
             let ds = self.double_sided.get(p.material).copied().unwrap_or(true);
             pass.set_pipeline(if ds { double } else { single });
             pass.set_bind_group(
