@@ -7,8 +7,10 @@
 // slope across the texel (voxel_toggle_depth; a setting, 0 = the paper's centre depth), so that
 // a column turns solid only behind the whole texel's surface. The viewport maps the G-buffer's pixels onto the level's texels
 // (1/2^k), so that the grid's columns are the level's texels. CPU twin:
-// cpu::soler::voxelize_column.
+// cpu::soler::voxelize_column. What an alpha mask cuts out (glTF alphaMode MASK) toggles
+// nothing: it is not a surface (issue #37).
 #import common/camera.wgsl
+#import common/material.wgsl
 #import soler/voxel_common.wgsl
 
 struct Instance {
@@ -19,8 +21,8 @@ struct Instance {
 
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(1) @binding(0) var<storage, read> instances: array<Instance>;
-@group(2) @binding(0) var<uniform> params: VoxelParams;
-@group(2) @binding(1) var<storage, read_write> grid: array<atomic<u32>>;
+@group(3) @binding(0) var<uniform> params: VoxelParams;
+@group(3) @binding(1) var<storage, read_write> grid: array<atomic<u32>>;
 
 struct VsIn {
     @location(0) position: vec3<f32>,
@@ -34,6 +36,7 @@ struct VsOut {
     @location(0) depth: f32,
     @location(1) world: vec3<f32>,
     @location(2) normal: vec3<f32>,
+    @location(3) uv: vec2<f32>,
 }
 
 @vertex
@@ -44,6 +47,7 @@ fn vs_voxelize(v: VsIn, @builtin(instance_index) instance: u32) -> VsOut {
     o.depth = o.clip.w;
     o.world = world.xyz;
     o.normal = (instances[instance].normal_matrix * vec4<f32>(v.normal, 0.0)).xyz;
+    o.uv = v.uv;
     return o;
 }
 
@@ -51,6 +55,9 @@ fn vs_voxelize(v: VsIn, @builtin(instance_index) instance: u32) -> VsOut {
 fn fs_voxelize(in: VsOut) -> @location(0) vec4<f32> {
     // The depth's change across one grid texel (the viewport's pixels are the grid's texels).
     let slope = fwidth(in.depth);
+    if (material_cut(material_alpha(in.uv))) {
+        discard;
+    }
     let x = u32(in.clip.x);
     let y = u32(in.clip.y);
     if (x < params.grid.x && y < params.grid.y) {

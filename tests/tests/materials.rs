@@ -273,3 +273,27 @@ fn textured_real_scenes_agree_with_the_path_tracer_in_direct_light() {
         assert!(flip < before, "{rel}: reading the textures brings the truth closer ({flip} vs {before})");
     }
 }
+
+/// Soler's solid voxelization (004 §4) skips what an alpha mask cuts out: with every material
+/// cut out entirely, no column toggles; as shipped, the default box fills its grid.
+#[test]
+fn cut_out_surfaces_do_not_voxelize() {
+    let grid = |cut: bool| {
+        let mut scene = gi_lab_tests::default_scene();
+        if cut {
+            for m in &mut scene.materials {
+                m.alpha_cutoff = Some(1.5);
+            }
+        }
+        let mut r = scene_renderer(scene, 32, |s| {
+            gi_render::pipeline::Technique::Soler.apply(s);
+            s.soler.visibility = true;
+        });
+        r.render_frame();
+        read(&r, "soler.voxels.2")
+    };
+    let solid = |img: &gi_render::ImageF32| img.data.iter().filter(|p| p.iter().take(3).any(|c| *c != 0.0)).count();
+    let (full, cut) = (grid(false), grid(true));
+    assert!(solid(&full) > 10, "the default box voxelizes: {} columns", solid(&full));
+    assert_eq!(solid(&cut), 0, "cut-out surfaces toggle nothing");
+}

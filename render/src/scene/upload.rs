@@ -55,6 +55,25 @@ pub struct GpuScene {
     pub warnings: Vec<String>,
 }
 
+/// The layout of a material's bind group (`shaders/common/material.wgsl`); a pass that makes
+/// its own pipelines before it sees the scene makes an equal one (WebGPU: bind groups of equal
+/// layouts are interchangeable).
+pub fn material_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
+    let fs = wgpu::ShaderStages::FRAGMENT;
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries: &[
+            crate::passes::bgl::uniform(0, fs),
+            crate::passes::bgl::texture(1, fs, true),
+            crate::passes::bgl::sampler(2, fs, wgpu::SamplerBindingType::Filtering),
+            crate::passes::bgl::texture(3, fs, true),
+            crate::passes::bgl::texture(4, fs, true),
+            crate::passes::bgl::texture(5, fs, true),
+            crate::passes::bgl::texture(6, fs, true),
+        ],
+    })
+}
+
 /// Vertex buffer layout of [`Vertex`].
 pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 4] =
     wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4];
@@ -122,19 +141,7 @@ impl GpuScene {
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: instances.as_entire_binding() }],
         });
 
-        let fs = wgpu::ShaderStages::FRAGMENT;
-        let material_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("scene.material"),
-            entries: &[
-                crate::passes::bgl::uniform(0, fs),
-                crate::passes::bgl::texture(1, fs, true),
-                crate::passes::bgl::sampler(2, fs, wgpu::SamplerBindingType::Filtering),
-                crate::passes::bgl::texture(3, fs, true),
-                crate::passes::bgl::texture(4, fs, true),
-                crate::passes::bgl::texture(5, fs, true),
-                crate::passes::bgl::texture(6, fs, true),
-            ],
-        });
+        let material_layout = material_layout(device, "scene.material");
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("scene.material_sampler"),
             address_mode_u: wgpu::AddressMode::Repeat,

@@ -83,9 +83,16 @@ impl SolerVoxels {
             ],
         );
         let module = crate::shaders::create_module(device, "soler/voxelize.wgsl");
+        // The scene's materials (group 2): alpha cutouts toggle nothing.
+        let material_layout = crate::scene::upload::material_layout(device, "soler.voxelize.material");
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("soler.voxelize.layout"),
-            bind_group_layouts: &[Some(&camera_layout), Some(&instance_layout), Some(&grid_layout)],
+            bind_group_layouts: &[
+                Some(&camera_layout),
+                Some(&instance_layout),
+                Some(&material_layout),
+                Some(&grid_layout),
+            ],
             immediate_size: 0,
         });
         let voxelize = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -279,8 +286,8 @@ impl SolerVoxels {
             pass.set_pipeline(&self.voxelize);
             pass.set_bind_group(0, &camera_group, &[]);
             pass.set_bind_group(1, &scene.instance_group, &[]);
-            pass.set_bind_group(2, &grid_group, &[0]);
-            scene.draw(&mut pass, state, None, None);
+            pass.set_bind_group(3, &grid_group, &[0]);
+            scene.draw(&mut pass, state, Some(2), None);
         }
         let n = self.grids.len();
         for (i, g) in self.grids.iter().enumerate() {
