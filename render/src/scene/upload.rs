@@ -361,8 +361,7 @@ impl GpuScene {
         args: &wgpu::Buffer,
     ) {
         self.bind_geometry(pass);
-        let mut k = 0u64;
-        for (_, p) in self.primitives_of(state) {
+        for (k, (_, p)) in self.primitives_of(state).enumerate() {
             let ds = self.double_sided.get(p.material).copied().unwrap_or(true);
             pass.set_pipeline(if ds { double } else { single });
             pass.set_bind_group(
@@ -370,8 +369,7 @@ impl GpuScene {
                 &self.material_groups[p.material.min(self.material_groups.len() - 1)],
                 &[],
             );
-            pass.draw_indexed_indirect(args, k * 20);
-            k += 1;
+            pass.draw_indexed_indirect(args, k as u64 * 20);
         }
     }
 }
