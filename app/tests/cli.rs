@@ -414,7 +414,7 @@ fn no_runtime_dir_complaint_without_xdg_runtime_dir() {
     assert_eq!(std::fs::metadata(&dir).expect("exists").permissions().mode() & 0o777, 0o700);
 }
 
-/// `bench --suite scenes` lists the project's scene and every shared scene with a frame time
+/// `bench --suite scenes` lists the project's scene and every real scene with a frame time
 /// for each technique preset (issue #18).
 #[test]
 fn bench_scenes_lists_every_scene_with_each_technique() {
@@ -438,7 +438,7 @@ fn bench_scenes_lists_every_scene_with_each_technique() {
             assert!(ms > 0.0, "{r}");
         }
     }
-    // The shared Cornell box has an emissive quad and no punctual light: the quad lights it,
+    // The real Cornell box has an emissive quad and no punctual light: the quad lights it,
     // no default light is added.
     let cornell = rows
         .iter()

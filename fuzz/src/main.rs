@@ -46,7 +46,7 @@ struct Args {
     /// Where failing inputs are written.
     #[arg(long)]
     crashes: Option<PathBuf>,
-    /// Leave out the large seeds (the shared chair and hotel room scenes).
+    /// Leave out the large seeds (the real chair and hotel room scenes).
     #[arg(long)]
     no_large: bool,
     /// Run these files once each (no mutation) and report what each does.

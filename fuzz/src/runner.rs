@@ -42,7 +42,7 @@ pub struct Config {
     pub corpus_dir: Option<PathBuf>,
     /// Where failing inputs are written.
     pub crash_dir: PathBuf,
-    /// Include the large seeds (the shared chair and hotel room scenes).
+    /// Include the large seeds (the real chair and hotel room scenes).
     pub large_seeds: bool,
     /// A seed that runs longer than this is slow: it is mutated rarely (one pick in 256,
     /// with the large seeds), and a mutant that runs longer is not kept.

@@ -132,8 +132,8 @@ pub fn without_images(glb: &[u8]) -> Option<Vec<u8>> {
     Some(gi_render::scene::cornell::glb(serde_json::to_vec(&doc).ok()?, bin))
 }
 
-/// The glTF seeds. `large`: include the seeds of [`LARGE`] bytes or more (the shared chair
-/// and hotel room scenes); the small ones are the default scene, the shared Cornell box and
+/// The glTF seeds. `large`: include the seeds of [`LARGE`] bytes or more (the real chair
+/// and hotel room scenes); the small ones are the default scene, the real Cornell box and
 /// the hostile cases.
 pub fn gltf_seeds(large: bool) -> Vec<Seed> {
     let mut seeds = vec![Seed::new("default-scene.glb", gi_render::scene::cornell::DEFAULT_SCENE_GLB)];

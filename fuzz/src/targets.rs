@@ -63,7 +63,7 @@ impl Target {
         Self::ALL.into_iter().find(|t| t.name() == name)
     }
 
-    /// The seed corpus (`large`: include the big shared scenes, glTF only).
+    /// The seed corpus (`large`: include the big real scenes, glTF only).
     pub fn seeds(self, large: bool) -> Vec<Seed> {
         match self {
             Target::Gltf => crate::seeds::gltf_seeds(large),

@@ -2,8 +2,8 @@
 //! and every saved regression input run through its target.
 //!
 //! `cargo test --workspace` builds these in the debug profile on 2 cores, so the glTF corpus
-//! is the small seeds only (the default scene, the shared Cornell box and the hostile cases):
-//! the shared chair and hotel room scenes take 20–70 ms each to load in release and several
+//! is the small seeds only (the default scene, the real Cornell box and the hostile cases):
+//! the real chair and hotel room scenes take 20–70 ms each to load in release and several
 //! times that in debug, and would make the 10,000 executions several times slower; seeds that
 //! take over 50 ms (a regression input that builds 4 M vertices) run once and are not
 //! mutated. The release runs of a million executions per target (`fuzz/README.md`) include

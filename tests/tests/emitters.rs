@@ -1,5 +1,5 @@
 //! Emissive surfaces as lights (issue #18 point 1): the emitter VPLs' direct light against its
-//! CPU twin, the shared Cornell box lit only by its ceiling quad against the path tracer in
+//! CPU twin, the real Cornell box lit only by its ceiling quad against the path tracer in
 //! every technique, emitters that only glow, and thousands of emissive triangles.
 
 use gi_lab_tests::images::{exposed_flip, mean, sub};
@@ -175,7 +175,7 @@ fn thousands_of_emissive_triangles_keep_the_vpl_budget() {
 }
 
 /// An emissive texture shapes the emitter's light (issue #18 point 1: emission = factor ×
-/// texture × strength): the shared Cornell box's ceiling quad with a texture black on its
+/// texture × strength): the real Cornell box's ceiling quad with a texture black on its
 /// −x half emits half the power, from its +x half only, and the lab's direct light (emitter
 /// VPLs, imperfect shadow maps) matches the path tracer's, which reads the same texels at its
 /// hits and light samples. Measured on lavapipe at 64² (PT 256 spp), looking up at the quad:
@@ -215,7 +215,7 @@ fn an_emissive_texture_shapes_the_emitters_light() {
         (Emitters::collect(&plain, &plain.evaluate(0.0)), Emitters::collect(&scene, &scene.evaluate(0.0)));
     let share = e_tex.luminance_power() / e_plain.luminance_power();
     assert!((share - 0.5).abs() < 0.05, "half the quad is black: {share} of the power");
-    // World x of the quad is the node's x (the shared box has identity node transforms).
+    // World x of the quad is the node's x (the real box has identity node transforms).
     let vpls = e_tex.vpls(256, 0);
     assert!(vpls.iter().filter(|v| v.flux.max_element() > 0.0).all(|v| v.position.x > mid - 0.07 * (hi - lo)));
 

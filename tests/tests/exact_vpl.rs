@@ -108,7 +108,7 @@ fn directional_light_vpls_stop_at_the_back_of_a_wall() {
     check("directional from above", scene);
 }
 
-/// The shared Cornell box lit only by its emissive ceiling quad (issue #18): the reference's
+/// The real Cornell box lit only by its emissive ceiling quad (issue #18): the reference's
 /// first bounce comes from `reference.emitter_points` (16) points of the quad, five views
 /// each, so 80 batches take every view once.
 #[test]
@@ -117,7 +117,7 @@ fn emitter_points_carry_the_path_traced_indirect_energy() {
         &gi_lab_tests::real_scene("cornell-box/CornellBox-Original.gltf"),
         &gi_render::scene::LoadOptions::default(),
     )
-    .expect("the shared Cornell box loads");
+    .expect("the real Cornell box loads");
     assert!(scene.lights.is_empty(), "lit by its quad alone");
     check_batches("emitters", scene, 80);
 }

@@ -139,7 +139,7 @@ fn the_sky_is_turned_on_in_the_scene_panel_and_a_bad_image_says_why() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
-/// The emitter lines of the Scene panel (issue #18 point 1): the shared Cornell box lit by its
+/// The emitter lines of the Scene panel (issue #18 point 1): the real Cornell box lit by its
 /// ceiling quad shows its emitters' triangles and power; turned off, the emitters only glow
 /// and the box is dark.
 #[test]

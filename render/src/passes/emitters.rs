@@ -365,7 +365,7 @@ impl EmitterPass {
             vpls: k,
             // Always ∝ contribution: the thesis' strongest sample is the nearest one, and from an
             // emitter under the ceiling that put every VPL on the top of the tallest object
-            // (measured on the shared Cornell box).
+            // (measured on the real Cornell box).
             selection: crate::passes::knecht::vpl_bounce::BounceSelection::Proportional,
             visibility: test,
             eye_offset: s.ism.eye_offset * radius,

@@ -4,7 +4,7 @@
 //! - A Lambertian emitter of radiance L_e and area A emits the power Φ = π · L_e · A from each
 //!   side it emits on: the side its vertex normals face, and with `emitters.two_sided` the
 //!   back too when its material is `doubleSided` (off by default: exporters mark most
-//!   materials double-sided, and a light panel just under a ceiling — the shared Cornell
+//!   materials double-sided, and a light panel just under a ceiling — the real Cornell
 //!   box's — would pour half its power into the gap, measured ≈ 30 % of that box's first
 //!   bounce, as noisy light leaking from a 1 cm slit). Its radiant intensity toward ω is L_e · A · cos θ, which is the intensity
 //!   Φ · cos θ / π of a diffuse VPL of flux Φ: **an emitter sample is a VPL** with f = 1/π.
@@ -44,6 +44,22 @@ pub struct EmitterTriangle {
     /// Emissive texture (index into [`Emitters::textures`]), its UVs at the corners and the
     /// factor it multiplies; None: `radiance` everywhere.
     pub texture: Option<(usize, [Vec2; 3], Vec3)>,
+    /// An alpha cutout (glTF alphaMode MASK, issue #37): where it is cut out nothing emits
+    /// (`radiance` is then the mean over the triangle, the cut part counted as dark).
+    pub cutout: Option<Cutout>,
+}
+
+/// The alpha mask of an emitting triangle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cutout {
+    /// The base colour texture (index into [`Emitters::textures`]) and its UVs at the corners.
+    pub texture: usize,
+    pub uv: [Vec2; 3],
+    /// The base colour's alpha factor and the material's cutoff.
+    pub factor: f32,
+    pub cutoff: f32,
+    /// The radiance where the surface is kept, for an emitter without an emissive texture.
+    pub kept: Vec3,
 }
 
 impl EmitterTriangle {
@@ -109,13 +125,23 @@ impl Emitters {
             if luminance(m.emissive) <= 0.0 {
                 continue;
             }
-            let texture = m.emissive_texture.and_then(|t| {
+            // A material cut out everywhere (its alpha factor below the cutoff, no texture)
+            // emits nothing.
+            if let Some(cutoff) = m.alpha_cutoff
+                && m.base_color_texture.is_none()
+                && m.base_color.w < cutoff
+            {
+                continue;
+            }
+            let mut texture_index = |t: usize| {
                 let image = scene.textures.get(t)?;
                 Some(*texture_map.entry(t).or_insert_with(|| {
                     textures.push(image.clone());
                     textures.len() - 1
                 }))
-            });
+            };
+            let texture = m.emissive_texture.and_then(&mut texture_index);
+            let mask = m.alpha_cutoff.and_then(|c| Some((m.base_color_texture.and_then(&mut texture_index)?, c)));
             let nm: Mat4 = d.world.inverse().transpose();
             for t in p.indices.chunks_exact(3) {
                 let Some(vs) = t.iter().map(|&i| p.vertices.get(i as usize)).collect::<Option<Vec<_>>>() else {
@@ -133,17 +159,25 @@ impl Emitters {
                     normal = -normal;
                 }
                 let sides = if two_sided && m.double_sided { 2 } else { 1 };
-                let (radiance, texture) = match texture {
-                    Some(ti) => {
-                        let uv = [0, 1, 2].map(|k| Vec2::from(vs[k].uv));
-                        (m.emissive * textures[ti].triangle_mean(uv), Some((ti, uv, m.emissive)))
-                    }
+                let uv = [0, 1, 2].map(|k| Vec2::from(vs[k].uv));
+                let (mut radiance, texture) = match texture {
+                    Some(ti) => (m.emissive * textures[ti].triangle_mean(uv), Some((ti, uv, m.emissive))),
                     None => (m.emissive, None),
                 };
+                let cutout = mask.map(|(texture, cutoff)| Cutout {
+                    texture,
+                    uv,
+                    factor: m.base_color.w,
+                    cutoff,
+                    kept: radiance,
+                });
+                if let Some(c) = cutout {
+                    radiance *= textures[c.texture].triangle_coverage(uv, c.factor, c.cutoff);
+                }
                 if luminance(radiance) <= 0.0 {
                     continue;
                 }
-                triangles.push(EmitterTriangle { v, normal, radiance, area, sides, texture });
+                triangles.push(EmitterTriangle { v, normal, radiance, area, sides, texture, cutout });
             }
         }
         Self { textures, ..Self::from_triangles(triangles) }
@@ -205,12 +239,21 @@ impl Emitters {
         let (b1, b2) = (1.0 - s, u[2] * s);
         let position = t.v[0] * b1 + t.v[1] * b2 + t.v[2] * (1.0 - b1 - b2);
         let pdf_area = p_tri / (t.area * t.sides as f32);
-        let radiance = match t.texture.and_then(|(i, uv, factor)| Some((self.textures.get(i)?, uv, factor))) {
+        let mut radiance = match t.texture.and_then(|(i, uv, factor)| Some((self.textures.get(i)?, uv, factor))) {
             Some((image, uv, factor)) => {
                 factor * image.sample_linear(uv[0] * b1 + uv[1] * b2 + uv[2] * (1.0 - b1 - b2))
             }
             None => t.radiance,
         };
+        if let Some((c, image)) = t.cutout.and_then(|c| Some((c, self.textures.get(c.texture)?))) {
+            let at = c.uv[0] * b1 + c.uv[1] * b2 + c.uv[2] * (1.0 - b1 - b2);
+            if c.factor * image.sample_rgba(at, true).w < c.cutoff {
+                radiance = Vec3::ZERO;
+            } else if t.texture.is_none() {
+                // Untextured emission: the kept part emits the full factor.
+                radiance = c.kept;
+            }
+        }
         Some(EmitterSample { position, normal, radiance, pdf_area })
     }
 
@@ -304,8 +347,8 @@ mod tests {
         let (a, b, c, d) = (Vec3::ZERO, Vec3::X, Vec3::new(1.0, 0.0, 2.0), Vec3::new(0.0, 0.0, 2.0));
         let n = Vec3::NEG_Y;
         vec![
-            EmitterTriangle { v: [a, b, c], normal: n, radiance, area: 1.0, sides, texture: None },
-            EmitterTriangle { v: [a, c, d], normal: n, radiance, area: 1.0, sides, texture: None },
+            EmitterTriangle { v: [a, b, c], normal: n, radiance, area: 1.0, sides, texture: None, cutout: None },
+            EmitterTriangle { v: [a, c, d], normal: n, radiance, area: 1.0, sides, texture: None, cutout: None },
         ]
     }
 
@@ -377,6 +420,32 @@ mod tests {
         // Inside the white half the flux is the factor's colour.
         let v = lit.iter().find(|v| v.position.x > 0.7).expect("a sample well inside");
         assert!((v.flux / v.flux.x - factor / factor.x).length() < 1e-4);
+    }
+
+    /// Issue #37: an emitter with an alpha mask (clear for u < ½) emits from its kept half
+    /// only, with the full factor there and half the power.
+    #[test]
+    fn cut_out_emitters_emit_only_where_they_are_kept() {
+        let rgba8: Vec<u8> =
+            (0..32 * 32).flat_map(|i| if i % 32 < 16 { [255, 255, 255, 0] } else { [255; 4] }).collect();
+        let mask = TextureImage { name: "mask".into(), width: 32, height: 32, rgba8: rgba8.into() };
+        let radiance = Vec3::new(2.0, 1.0, 0.5);
+        let uv = |p: Vec3| Vec2::new(p.x, p.z * 0.5);
+        let tris: Vec<EmitterTriangle> = quad(radiance, 1)
+            .into_iter()
+            .map(|t| {
+                let c = Cutout { texture: 0, uv: t.v.map(uv), factor: 1.0, cutoff: 0.5, kept: radiance };
+                EmitterTriangle { radiance: radiance * mask.triangle_coverage(c.uv, 1.0, 0.5), cutout: Some(c), ..t }
+            })
+            .collect();
+        let e = Emitters { textures: vec![mask], ..Emitters::from_triangles(tris) };
+        let full = radiance * std::f32::consts::PI * 2.0;
+        assert!((e.power - 0.5 * full).length() < 0.03 * full.length(), "{} vs half of {full}", e.power);
+        let vpls = e.vpls(512, 0);
+        let lit: Vec<&EmitterVpl> = vpls.iter().filter(|v| v.flux.max_element() > 0.0).collect();
+        assert!(lit.iter().all(|v| v.position.x > 0.45 || v.position.x < 1.0 / 32.0), "only where it is kept");
+        let sum: Vec3 = vpls.iter().map(|v| v.flux).sum();
+        assert!((sum - 0.5 * full).length() < 0.04 * full.length(), "{sum} vs {}", 0.5 * full);
     }
 
     #[test]

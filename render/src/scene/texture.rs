@@ -79,11 +79,24 @@ impl TextureImage {
     /// Mean linear RGB over the triangle `uv` of texture space, from a stratified set of
     /// barycentric points (about one per covered texel, 1 … 256).
     pub fn triangle_mean(&self, uv: [Vec2; 3]) -> Vec3 {
+        let points = self.triangle_points(uv);
+        points.iter().map(|p| self.sample_linear(*p)).sum::<Vec3>() / points.len().max(1) as f32
+    }
+
+    /// The share of the triangle `uv` whose alpha (× `factor`) reaches `cutoff` (glTF
+    /// alphaMode MASK), over the same points as [`Self::triangle_mean`].
+    pub fn triangle_coverage(&self, uv: [Vec2; 3], factor: f32, cutoff: f32) -> f32 {
+        let points = self.triangle_points(uv);
+        let kept = points.iter().filter(|p| factor * self.sample_rgba(**p, true).w >= cutoff).count();
+        kept as f32 / points.len().max(1) as f32
+    }
+
+    /// A stratified set of points of the triangle `uv` of texture space: the centroids of the
+    /// n² sub-triangles of its regular subdivision (about one per covered texel, 1 … 256).
+    fn triangle_points(&self, uv: [Vec2; 3]) -> Vec<Vec2> {
         let texels = 0.5 * (uv[1] - uv[0]).perp_dot(uv[2] - uv[0]).abs() * self.width as f32 * self.height as f32;
-        let n = (texels.sqrt().ceil() as u32).clamp(1, 16);
-        let mut sum = Vec3::ZERO;
-        let mut count = 0;
-        // n² sub-triangles of the triangle's regular subdivision, each sampled at its centroid.
+        let n = if texels.is_finite() { (texels.sqrt().ceil() as u32).clamp(1, 16) } else { 1 };
+        let mut out = Vec::with_capacity((n * n) as usize);
         for i in 0..n {
             for j in 0..n - i {
                 let (a, b) = (i as f32, j as f32);
@@ -95,12 +108,11 @@ impl TextureImage {
                 for c in cells {
                     let (s, t) =
                         ((c[0].0 + c[1].0 + c[2].0) / (3.0 * n as f32), (c[0].1 + c[1].1 + c[2].1) / (3.0 * n as f32));
-                    sum += self.sample_linear(uv[0] + (uv[1] - uv[0]) * s + (uv[2] - uv[0]) * t);
-                    count += 1;
+                    out.push(uv[0] + (uv[1] - uv[0]) * s + (uv[2] - uv[0]) * t);
                 }
             }
         }
-        sum / count.max(1) as f32
+        out
     }
 }
 
