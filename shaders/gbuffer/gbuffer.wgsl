@@ -64,6 +64,15 @@ fn fs_main(i: VsOut, @builtin(front_facing) front: bool) -> FsOut {
     return gbuffer_fragment(i, front);
 }
 
+// A data map (normal, metallic-roughness, occlusion) at the fragment, filtered as the base
+// colour is: by the camera's footprint, or at the light view's level.
+fn sample_map(t: texture_2d<f32>, uv: vec2<f32>) -> vec4<f32> {
+    if (camera.lod.x >= 0.0) {
+        return textureSampleLevel(t, base_sampler, uv, camera.lod.x);
+    }
+    return textureSample(t, base_sampler, uv);
+}
+
 // The G-buffer's outputs for one fragment (also Gautron's hemisphere atlas, whose fragment
 // stage adds the object's index).
 fn gbuffer_fragment(i: VsOut, front: bool) -> FsOut {
@@ -84,7 +93,7 @@ fn gbuffer_fragment(i: VsOut, front: bool) -> FsOut {
     // side the camera sees.
     var n = normalize(i.normal);
     if (material.maps.x != 0.0) {
-        var tn = textureSampleLevel(normal_tex, base_sampler, i.uv, max(camera.lod.x, 0.0)).xyz * 2.0 - 1.0;
+        var tn = sample_map(normal_tex, i.uv).xyz * 2.0 - 1.0;
         tn = vec3<f32>(tn.xy * material.maps.x, tn.z);
         let t_len = length(i.tangent.xyz);
         if (t_len > 1e-6 && i.tangent.w != 0.0) {
@@ -104,7 +113,7 @@ fn gbuffer_fragment(i: VsOut, front: bool) -> FsOut {
     var params = material.params;
     var metal_rough = material.extra.xy;
     if (material.maps.y > 0.5) {
-        let mr = textureSampleLevel(mr_tex, base_sampler, i.uv, max(camera.lod.x, 0.0));
+        let mr = sample_map(mr_tex, i.uv);
         let metallic = clamp(material.extra.x * mr.b, 0.0, 1.0);
         let roughness = clamp(material.extra.y * mr.g, 0.0, 1.0);
         let lum = dot(color.rgb, vec3<f32>(0.2126, 0.7152, 0.0722));
@@ -136,7 +145,7 @@ fn gbuffer_fragment(i: VsOut, front: bool) -> FsOut {
     // never multiplied into the computed light.
     var occlusion = 1.0;
     if (material.maps.w > 0.5) {
-        occlusion = textureSampleLevel(occlusion_tex, base_sampler, i.uv, max(camera.lod.x, 0.0)).r;
+        occlusion = sample_map(occlusion_tex, i.uv).r;
     }
     o.emission = vec4<f32>(emission, occlusion);
     return o;
