@@ -115,11 +115,12 @@ fn the_exterior_view_is_fitted_and_lit_by_sun_and_sky() {
 }
 
 /// The command line (`scene_args::load_scene`, unit scale 0 = read from the scene) and the
-/// window (the lab opening the same file) choose the same camera.
+/// window (the lab opening the same file) choose the same camera, for every case (in
+/// millimetres: the unit is read the same way too).
 #[test]
 fn window_and_command_line_choose_the_same_view() {
     let dir = gi_lab_tests::ui_harness::temp_dir("framing");
-    for name in ["two-rooms", "object"] {
+    for name in framing_cases::CASES {
         let path = dir.join(format!("{name}-mm.glb"));
         std::fs::write(&path, framing_cases::case_glb(name, 1000.0).expect("case")).expect("write");
         let args = gi_lab::scene_args::SceneArgs { scene: Some(path.clone()), ..Default::default() };
