@@ -144,3 +144,29 @@ fn window_and_command_line_choose_the_same_view() {
         assert!(status.contains("view:") && status.contains("units:"), "{name}: status {status}");
     }
 }
+
+/// The Scene panel's "Remove the default light" (issue #37 point 3): one click takes away
+/// the sun and the sky the lab added to an open scene, in the renderer the window draws.
+#[test]
+fn one_click_in_the_scene_panel_removes_the_default_light() {
+    use egui_kittest::kittest::Queryable;
+    let dir = gi_lab_tests::ui_harness::temp_dir("framing-remove-light");
+    let path = dir.join("object-m.glb");
+    std::fs::write(&path, framing_cases::case_glb("object", 1.0).expect("case")).expect("write");
+    let mut h = gi_lab_tests::ui_harness::harness_in(&dir, egui::vec2(1200.0, 900.0));
+    h.run_steps(2);
+    h.state_mut().open_scene(&path.to_string_lossy(), 0.0).expect("the window opens it");
+    h.run_steps(2);
+    {
+        let scene = h.state().renderer().expect("renderer").scene();
+        assert!(scene.lights.iter().any(|l| l.name == "default sun") && scene.sky.enabled);
+    }
+    h.get_by_label("Scene & timeline").click();
+    h.run_steps(2);
+    h.get_by_label("Remove the default light").click();
+    h.run_steps(2);
+    let scene = h.state().renderer().expect("renderer").scene();
+    assert!(scene.lights.is_empty(), "{:?}", scene.lights);
+    assert!(!scene.sky.enabled && scene.default_light_note().is_none());
+    assert!(h.query_by_label("Remove the default light").is_none(), "the button goes with the light");
+}
