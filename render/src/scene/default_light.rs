@@ -19,7 +19,7 @@
 
 use glam::{Quat, Vec3};
 
-use super::framing::{ViewKind, ViewPreference, choose_view};
+use super::framing::{ViewKind, ViewPreference, choose_view_with};
 use super::{Light, LightKind, Node, Scene, Transform};
 use crate::cpu::bvh::SceneBvh;
 
@@ -35,6 +35,11 @@ impl Scene {
     /// are lights (`passes::emitters`): a scene with them gets no default light, and a note
     /// says what lights it.
     pub fn ensure_light(&mut self) {
+        self.ensure_light_with(None);
+    }
+
+    /// [`Self::ensure_light`] over a BVH of the scene at time 0 that the caller already has.
+    pub fn ensure_light_with(&mut self, bvh: Option<&SceneBvh>) {
         if !self.lights.is_empty() {
             return;
         }
@@ -48,16 +53,22 @@ impl Scene {
             ));
             return;
         }
+        let built;
+        let bvh = match bvh {
+            Some(b) => b,
+            None => {
+                built = SceneBvh::new(self, &self.evaluate(0.0));
+                &built
+            }
+        };
         let view = match &self.view {
             Some(v) => v.clone(),
-            None => choose_view(self, 16.0 / 9.0, ViewPreference::Auto),
+            None => choose_view_with(self, 16.0 / 9.0, ViewPreference::Auto, Some(bvh)),
         };
-        let state = self.evaluate(0.0);
-        let bvh = SceneBvh::new(self, &state);
         let eye = view.camera.position;
         // The framing's interior view stands in a room by construction; a glTF camera is tested.
         let known_inside = view.kind == ViewKind::Interior;
-        let inside = light_in_view(&bvh, eye, view.camera.forward(), known_inside);
+        let inside = light_in_view(bvh, eye, view.camera.forward(), known_inside);
         if let Some((pos, intensity)) = inside {
             self.push_light(
                 "default point",

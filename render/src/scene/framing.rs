@@ -162,6 +162,12 @@ fn usable(b: Aabb) -> Aabb {
 /// The view the rule chooses for `scene` at `aspect` (the scene's first glTF camera when it
 /// has one and `prefer` is `Auto`).
 pub fn choose_view(scene: &Scene, aspect: f32, prefer: ViewPreference) -> Framing {
+    choose_view_with(scene, aspect, prefer, None)
+}
+
+/// [`choose_view`] over a BVH of the scene at time 0 that the caller already has (the
+/// loader builds one for the view and the default light).
+pub fn choose_view_with(scene: &Scene, aspect: f32, prefer: ViewPreference, bvh: Option<&SceneBvh>) -> Framing {
     let state = scene.evaluate(0.0);
     let bounds = usable(scene.bounds(0.0));
     if prefer == ViewPreference::Auto
@@ -175,8 +181,15 @@ pub fn choose_view(scene: &Scene, aspect: f32, prefer: ViewPreference) -> Framin
             fit_points: Vec::new(),
         };
     }
-    let bvh = SceneBvh::new(scene, &state);
-    let fit_points = sample_points(&bvh);
+    let built;
+    let bvh = match bvh {
+        Some(b) => b,
+        None => {
+            built = SceneBvh::new(scene, &state);
+            &built
+        }
+    };
+    let fit_points = sample_points(bvh);
     if bvh.tris.is_empty() {
         return Framing {
             camera: Camera::frame_bounds(bounds, aspect),
@@ -187,9 +200,9 @@ pub fn choose_view(scene: &Scene, aspect: f32, prefer: ViewPreference) -> Framin
         };
     }
     let dirs = sphere_directions(48);
-    let (centre_in_room, mut rooms, probes) = probe_rooms(&bvh, bounds, &dirs);
+    let (centre_in_room, mut rooms, probes) = probe_rooms(bvh, bounds, &dirs);
     let grid_rooms = rooms.len();
-    rooms.extend(probe_where_the_geometry_is(&bvh, &fit_points, &dirs));
+    rooms.extend(probe_where_the_geometry_is(bvh, &fit_points, &dirs));
     let mut interior = centre_in_room || grid_rooms * 2 >= probes;
     // A room that holds most of the geometry makes an interior too, whatever lies far
     // outside it (a lamp post above the roof, a stray object).
@@ -197,7 +210,7 @@ pub fn choose_view(scene: &Scene, aspect: f32, prefer: ViewPreference) -> Framin
     if !interior
         && prefer == ViewPreference::Auto
         && !fit_points.is_empty()
-        && let Some(f) = interior_view(&bvh, &rooms, &dirs, bounds, fit_points.clone())
+        && let Some(f) = interior_view(bvh, &rooms, &dirs, bounds, fit_points.clone())
         && let Some(room) = f.room
     {
         let share = storey_share(&fit_points, room.floor, room.ceiling);
@@ -211,7 +224,7 @@ pub fn choose_view(scene: &Scene, aspect: f32, prefer: ViewPreference) -> Framin
         ViewPreference::Inside => true,
         ViewPreference::Outside => false,
     };
-    if want_inside && let Some(f) = interior_view(&bvh, &rooms, &dirs, bounds, fit_points.clone()) {
+    if want_inside && let Some(f) = interior_view(bvh, &rooms, &dirs, bounds, fit_points.clone()) {
         let why = if prefer == ViewPreference::Inside {
             "asked for a view from inside".to_string()
         } else if centre_in_room {
@@ -223,7 +236,7 @@ pub fn choose_view(scene: &Scene, aspect: f32, prefer: ViewPreference) -> Framin
         };
         return Framing { reason: format!("inside: {why}; {}", f.reason), ..f };
     }
-    let mut f = exterior_view(&bvh, bounds, aspect, fit_points);
+    let mut f = exterior_view(bvh, bounds, aspect, fit_points);
     let why = match prefer {
         ViewPreference::Outside => "asked for a view from outside".to_string(),
         ViewPreference::Inside => "asked for a view from inside, but no point of the scene stands in a room".into(),
@@ -435,14 +448,18 @@ pub fn fit_camera(points: &[Vec3], forward: Vec3, yfov: f32, aspect: f32, b: Aab
     let u = r.cross(f);
     let ty = (yfov * 0.5).tan() * 0.97;
     let tx = ty * aspect.max(1e-3);
-    let mut target = b.center();
-    for _ in 0..2 {
+    // The distance from `target` at which every point is in the frame.
+    let distance = |target: Vec3| {
         let need = points.iter().fold(0f32, |acc, p| {
             let q = *p - target;
             let (x, y, z) = (q.dot(r), q.dot(u), q.dot(f));
             acc.max(x.abs() / tx - z).max(y.abs() / ty - z)
         });
-        let dist = need.max(1e-3);
+        need.max(1e-3)
+    };
+    let mut target = b.center();
+    for _ in 0..2 {
+        let dist = distance(target);
         // Re-centre on the projection's middle (in the image plane through the target).
         let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
         for p in points {
@@ -458,12 +475,7 @@ pub fn fit_camera(points: &[Vec3], forward: Vec3, yfov: f32, aspect: f32, b: Aab
         }
     }
     // A final fit at the re-centred target.
-    let need = points.iter().fold(0f32, |acc, p| {
-        let q = *p - target;
-        let (x, y, z) = (q.dot(r), q.dot(u), q.dot(f));
-        acc.max(x.abs() / tx - z).max(y.abs() / ty - z)
-    });
-    let dist = need.max(1e-3);
+    let dist = distance(target);
     let position = target - f * dist;
     let mut c = Camera::look_at(position, target, yfov, b);
     c.orbit_distance = dist;
@@ -475,7 +487,7 @@ fn exterior_view(bvh: &SceneBvh, b: Aabb, aspect: f32, fit_points: Vec<Vec3>) ->
     let yfov = 0.8f32;
     let ext = b.extent();
     let long_axis = if ext.x >= ext.z { Vec3::X } else { Vec3::Z };
-    let mut best: Option<(f32, Camera, f32, f32)> = None;
+    let mut best: Option<(f32, Camera, f32, f32, f32)> = None;
     for elevation in [25f32, 45.0, 60.0] {
         for k in 0..16 {
             let azimuth = (11.25 + 22.5 * k as f32).to_radians();
@@ -496,12 +508,17 @@ fn exterior_view(bvh: &SceneBvh, b: Aabb, aspect: f32, fit_points: Vec<Vec3>) ->
             };
             let score = coverage.min(0.7) * (0.75 + 0.25 * facing) + 0.05 * across + front + low;
             if best.as_ref().is_none_or(|x| score > x.0) {
-                best = Some((score, cam, azimuth.to_degrees(), elevation));
+                best = Some((score, cam, azimuth.to_degrees(), elevation, coverage));
             }
         }
     }
-    let (_, camera, azimuth, elevation) = best.unwrap_or((0.0, Camera::frame_bounds(b, aspect), 0.0, 20.0));
-    let cover = coverage(bvh, &camera, aspect);
+    let (_, camera, azimuth, elevation, cover) = match best {
+        Some(x) => x,
+        None => {
+            let camera = Camera::frame_bounds(b, aspect);
+            (0.0, camera, 0.0, 20.0, coverage(bvh, &camera, aspect))
+        }
+    };
     Framing {
         camera,
         kind: ViewKind::Exterior,

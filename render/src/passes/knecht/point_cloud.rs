@@ -118,10 +118,11 @@ impl PointCloud {
         let mut rng = SplitMix(0x5EED);
         // A point where an alpha mask cuts the surface out is no point: the next sample
         // is drawn instead (at most 4 × `count` samples, for a scene that is mostly cut out).
-        let (mut i, mut accepted) = (0u32, 0u32);
-        while accepted < count && i < count.saturating_mul(4) {
-            i += 1;
-            let i = i - 1;
+        let mut accepted = 0u32;
+        for i in 0..count.saturating_mul(4) {
+            if accepted == count {
+                break;
+            }
             let (u, s, t) = match placement {
                 PointPlacement::Halton => (halton(i + 1, 2), halton(i + 1, 3), halton(i + 1, 5)),
                 PointPlacement::Random => (rng.next_f32(), rng.next_f32(), rng.next_f32()),
