@@ -5,6 +5,8 @@
 //! probe, captures, the CLI (`gi-lab render --buffer NAME`) and the tests, which read any
 //! of them back to the CPU as f32 RGBA whatever its format.
 
+use crate::counters::prelude::*;
+
 use std::collections::BTreeMap;
 
 use crate::gpu::GpuContext;
@@ -131,7 +133,8 @@ pub struct ProbeValue {
 impl BufferRegistry {
     /// The raw value of every registered buffer at each of `pixels` (coordinates in a
     /// `frame_size` image; buffers of another size are read at the same relative position).
-    /// One copy per buffer and point, one map: cheap enough to run every frame.
+    /// One copy per buffer and point, one map; blocks (the window reads the probe without
+    /// waiting, through `crate::readback`).
     pub fn probe(
         &self,
         ctx: &GpuContext,
@@ -139,7 +142,26 @@ impl BufferRegistry {
         frame_size: (u32, u32),
         pixels: &[(u32, u32)],
     ) -> Result<Vec<Vec<ProbeValue>>, BufferError> {
-        const STRIDE: u64 = 256;
+        let plan = self.probe_plan(frame_size, pixels)?;
+        if plan.bytes() == 0 {
+            return Ok(vec![Vec::new(); pixels.len()]);
+        }
+        let buffer = ctx.device.counted_buffer(&wgpu::BufferDescriptor {
+            label: Some("buffers.probe"),
+            size: plan.bytes(),
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut enc =
+            ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("buffers.probe") });
+        plan.record(ctx, &mut enc, depth_probe, &buffer);
+        ctx.submit([enc.finish()]);
+        let bytes = map_read(ctx, &buffer).map_err(|message| BufferError::Map { name: "probe".into(), message })?;
+        Ok(plan.decode(&bytes))
+    }
+
+    /// What a probe of `pixels` copies and how its bytes decode (see [`Self::probe`]).
+    pub fn probe_plan(&self, frame_size: (u32, u32), pixels: &[(u32, u32)]) -> Result<ProbePlan, BufferError> {
         let max = crate::passes::view::PROBE_MAX_POINTS;
         if pixels.len() > max {
             return Err(BufferError::Range {
@@ -149,59 +171,79 @@ impl BufferRegistry {
                 want: pixels.len() as u32,
             });
         }
-        let readable: Vec<(&BufferEntry, u32, TexelDecoder)> =
-            self.entries.values().filter_map(|e| decoder(e.texture.format()).map(|(bpp, d)| (e, bpp, d))).collect();
-        let count = (readable.len() * pixels.len()) as u64;
-        if count == 0 {
-            return Ok(vec![Vec::new(); pixels.len()]);
-        }
-        let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("buffers.probe"),
-            size: count * STRIDE,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        // Depth values land here first (one f32 per depth buffer and point).
-        let depth_values = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("buffers.probe_depth"),
-            size: count * 4,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        let mut enc =
-            ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("buffers.probe") });
+        let readable: Vec<(String, wgpu::Texture, u32, TexelDecoder)> = self
+            .entries
+            .values()
+            .filter_map(|e| decoder(e.texture.format()).map(|(bpp, d)| (e.name.clone(), e.texture.clone(), bpp, d)))
+            .collect();
         let (fw, fh) = (frame_size.0.max(1), frame_size.1.max(1));
-        let n = readable.len();
         // texels[pi * n + bi]
-        let mut texels = Vec::with_capacity(count as usize);
+        let mut texels = Vec::with_capacity(readable.len() * pixels.len());
         for &(px, py) in pixels {
-            for (e, _, _) in &readable {
-                let t = &e.texture;
+            for (_, t, _, _) in &readable {
                 let x = ((px.min(fw - 1) as u64 * t.width() as u64) / fw as u64) as u32;
                 let y = ((py.min(fh - 1) as u64 * t.height() as u64) / fh as u64) as u32;
                 texels.push((x, y));
             }
         }
-        for (bi, (e, _, _)) in readable.iter().enumerate() {
-            let t = &e.texture;
+        Ok(ProbePlan { readable, points: pixels.len(), texels })
+    }
+}
+
+/// A probe's copies and decoding, recorded into any encoder ([`BufferRegistry::probe_plan`]).
+pub struct ProbePlan {
+    readable: Vec<(String, wgpu::Texture, u32, TexelDecoder)>,
+    points: usize,
+    texels: Vec<(u32, u32)>,
+}
+
+impl ProbePlan {
+    const STRIDE: u64 = 256;
+
+    /// Bytes of the staging buffer the copies land in.
+    pub fn bytes(&self) -> u64 {
+        (self.readable.len() * self.points) as u64 * Self::STRIDE
+    }
+
+    /// Records the copies into `enc`, landing in `staging` (COPY_DST, at least [`Self::bytes`]).
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        enc: &mut wgpu::CommandEncoder,
+        depth_probe: &crate::passes::view::DepthProbe,
+        staging: &wgpu::Buffer,
+    ) {
+        let n = self.readable.len();
+        let count = (n * self.points) as u64;
+        let has_depth = self.readable.iter().any(|(_, t, _, _)| t.format().is_depth_stencil_format());
+        // Depth values land here first (one f32 per depth buffer and point).
+        let depth_values = has_depth.then(|| {
+            ctx.device.counted_buffer(&wgpu::BufferDescriptor {
+                label: Some("buffers.probe_depth"),
+                size: count * 4,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            })
+        });
+        for (bi, (_, t, _, _)) in self.readable.iter().enumerate() {
             let slot = |pi: usize| (pi * n + bi) as u64;
-            if t.format().is_depth_stencil_format() {
-                let mine: Vec<(u32, u32)> = (0..pixels.len()).map(|pi| texels[slot(pi) as usize]).collect();
-                let first = (bi * pixels.len()) as u32;
-                depth_probe.record(ctx, &mut enc, t, &mine, &depth_values, first);
-                for pi in 0..pixels.len() {
+            if let Some(depth_values) = depth_values.as_ref().filter(|_| t.format().is_depth_stencil_format()) {
+                let mine: Vec<(u32, u32)> = (0..self.points).map(|pi| self.texels[slot(pi) as usize]).collect();
+                let first = (bi * self.points) as u32;
+                depth_probe.record(ctx, enc, t, &mine, depth_values, first);
+                for pi in 0..self.points {
                     enc.copy_buffer_to_buffer(
-                        &depth_values,
+                        depth_values,
                         (first as u64 + pi as u64) * 4,
-                        &buffer,
-                        slot(pi) * STRIDE,
+                        staging,
+                        slot(pi) * Self::STRIDE,
                         4,
                     );
                 }
                 continue;
             }
-            for pi in 0..pixels.len() {
-                let (x, y) = texels[slot(pi) as usize];
+            for pi in 0..self.points {
+                let (x, y) = self.texels[slot(pi) as usize];
                 enc.copy_texture_to_buffer(
                     wgpu::TexelCopyTextureInfo {
                         texture: t,
@@ -210,9 +252,9 @@ impl BufferRegistry {
                         aspect: wgpu::TextureAspect::All,
                     },
                     wgpu::TexelCopyBufferInfo {
-                        buffer: &buffer,
+                        buffer: staging,
                         layout: wgpu::TexelCopyBufferLayout {
-                            offset: slot(pi) * STRIDE,
+                            offset: slot(pi) * Self::STRIDE,
                             bytes_per_row: None,
                             rows_per_image: None,
                         },
@@ -221,64 +263,91 @@ impl BufferRegistry {
                 );
             }
         }
-        ctx.queue.submit([enc.finish()]);
-        let bytes = map_read(ctx, &buffer).map_err(|message| BufferError::Map { name: "probe".into(), message })?;
-        Ok((0..pixels.len())
+    }
+
+    /// The values per point, every buffer's in name order.
+    pub fn decode(&self, bytes: &[u8]) -> Vec<Vec<ProbeValue>> {
+        let n = self.readable.len();
+        (0..self.points)
             .map(|pi| {
-                readable
+                self.readable
                     .iter()
                     .enumerate()
-                    .map(|(bi, (e, bpp, decode))| {
+                    .map(|(bi, (name, _, bpp, decode))| {
                         let k = pi * n + bi;
-                        let o = k * STRIDE as usize;
-                        ProbeValue {
-                            name: e.name.clone(),
-                            texel: texels[k],
-                            value: decode(&bytes[o..o + *bpp as usize]),
-                        }
+                        let o = k * Self::STRIDE as usize;
+                        let value = bytes.get(o..o + *bpp as usize).map_or([f32::NAN; 4], decode);
+                        ProbeValue { name: name.clone(), texel: self.texels[k], value }
                     })
                     .collect()
             })
-            .collect())
+            .collect()
     }
 }
 
 impl BufferRegistry {
     /// The raw values of chosen texels: each (buffer, x, y) in that buffer's own texels
-    /// (clamped to its size). One copy per texel, one map.
+    /// (clamped to its size). One copy per texel, one map; blocks.
     pub fn read_texels(&self, ctx: &GpuContext, points: &[(&str, u32, u32)]) -> Result<Vec<[f32; 4]>, BufferError> {
-        const STRIDE: u64 = 256;
         if points.is_empty() {
             return Ok(Vec::new());
         }
-        let mut decoders = Vec::with_capacity(points.len());
-        let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        let plan = self.texel_plan(points)?;
+        let buffer = ctx.device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("buffers.read_texels"),
-            size: points.len() as u64 * STRIDE,
+            size: plan.bytes(),
             usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
             mapped_at_creation: false,
         });
         let mut enc =
             ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("buffers.read_texels") });
-        for (i, &(name, x, y)) in points.iter().enumerate() {
+        plan.record(&mut enc, &buffer);
+        ctx.submit([enc.finish()]);
+        let bytes = map_read(ctx, &buffer).map_err(|message| BufferError::Map { name: "texels".into(), message })?;
+        Ok(plan.decode(&bytes))
+    }
+
+    /// What [`Self::read_texels`] copies and how its bytes decode.
+    pub fn texel_plan(&self, points: &[(&str, u32, u32)]) -> Result<TexelPlan, BufferError> {
+        let mut texels = Vec::with_capacity(points.len());
+        for &(name, x, y) in points {
             let t = &self.get(name)?.texture;
             let format = t.format();
             let (bpp, decode) = match decoder(format) {
                 Some(d) if !format.is_depth_stencil_format() => d,
                 _ => return Err(BufferError::Format { name: name.into(), format }),
             };
-            decoders.push((bpp as usize, decode));
+            texels.push((t.clone(), x.min(t.width() - 1), y.min(t.height() - 1), bpp as usize, decode));
+        }
+        Ok(TexelPlan { texels })
+    }
+}
+
+/// Single texels' copies and decoding, recorded into any encoder ([`BufferRegistry::texel_plan`]).
+pub struct TexelPlan {
+    texels: Vec<(wgpu::Texture, u32, u32, usize, TexelDecoder)>,
+}
+
+impl TexelPlan {
+    const STRIDE: u64 = 256;
+
+    pub fn bytes(&self) -> u64 {
+        self.texels.len().max(1) as u64 * Self::STRIDE
+    }
+
+    pub fn record(&self, enc: &mut wgpu::CommandEncoder, staging: &wgpu::Buffer) {
+        for (i, (t, x, y, _, _)) in self.texels.iter().enumerate() {
             enc.copy_texture_to_buffer(
                 wgpu::TexelCopyTextureInfo {
                     texture: t,
                     mip_level: 0,
-                    origin: wgpu::Origin3d { x: x.min(t.width() - 1), y: y.min(t.height() - 1), z: 0 },
+                    origin: wgpu::Origin3d { x: *x, y: *y, z: 0 },
                     aspect: wgpu::TextureAspect::All,
                 },
                 wgpu::TexelCopyBufferInfo {
-                    buffer: &buffer,
+                    buffer: staging,
                     layout: wgpu::TexelCopyBufferLayout {
-                        offset: i as u64 * STRIDE,
+                        offset: i as u64 * Self::STRIDE,
                         bytes_per_row: None,
                         rows_per_image: None,
                     },
@@ -286,13 +355,15 @@ impl BufferRegistry {
                 wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
             );
         }
-        ctx.queue.submit([enc.finish()]);
-        let bytes = map_read(ctx, &buffer).map_err(|message| BufferError::Map { name: "texels".into(), message })?;
-        Ok(decoders
+    }
+
+    pub fn decode(&self, bytes: &[u8]) -> Vec<[f32; 4]> {
+        let stride = Self::STRIDE as usize;
+        self.texels
             .iter()
             .enumerate()
-            .map(|(i, (bpp, decode))| decode(&bytes[i * STRIDE as usize..i * STRIDE as usize + bpp]))
-            .collect())
+            .map(|(i, (_, _, _, bpp, decode))| bytes.get(i * stride..i * stride + bpp).map_or([f32::NAN; 4], decode))
+            .collect()
     }
 }
 
@@ -340,7 +411,7 @@ pub fn half_to_f32(h: u16) -> f32 {
     }
 }
 
-/// Copies one layer / mip of a texture to the CPU and decodes it.
+/// Copies one layer / mip of a texture to the CPU and decodes it; blocks.
 pub fn read_texture(
     ctx: &GpuContext,
     name: &str,
@@ -348,60 +419,102 @@ pub fn read_texture(
     layer: u32,
     mip: u32,
 ) -> Result<ImageF32, BufferError> {
-    let format = texture.format();
-    let (bpp, decode) = decoder(format).ok_or(BufferError::Format { name: name.into(), format })?;
-    if layer >= texture.depth_or_array_layers() {
-        return Err(BufferError::Range {
-            name: name.into(),
-            what: "layer",
-            have: texture.depth_or_array_layers(),
-            want: layer,
-        });
-    }
-    if mip >= texture.mip_level_count() {
-        return Err(BufferError::Range {
-            name: name.into(),
-            what: "level",
-            have: texture.mip_level_count(),
-            want: mip,
-        });
-    }
-    let width = (texture.width() >> mip).max(1);
-    let height = (texture.height() >> mip).max(1);
-    let row = width * bpp;
-    let padded = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-    let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+    let plan = TexturePlan::new(name, texture, layer, mip)?;
+    let buffer = ctx.device.counted_buffer(&wgpu::BufferDescriptor {
         label: Some("buffers.readback"),
-        size: (padded * height) as u64,
+        size: plan.bytes(),
         usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
         mapped_at_creation: false,
     });
     let mut enc =
         ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("buffers.readback") });
-    let aspect =
-        if format.is_depth_stencil_format() { wgpu::TextureAspect::DepthOnly } else { wgpu::TextureAspect::All };
-    enc.copy_texture_to_buffer(
-        wgpu::TexelCopyTextureInfo { texture, mip_level: mip, origin: wgpu::Origin3d { x: 0, y: 0, z: layer }, aspect },
-        wgpu::TexelCopyBufferInfo {
-            buffer: &buffer,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(padded),
-                rows_per_image: Some(height),
-            },
-        },
-        wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-    );
-    ctx.queue.submit([enc.finish()]);
+    plan.record(&mut enc, &buffer);
+    ctx.submit([enc.finish()]);
     let bytes = map_read(ctx, &buffer).map_err(|message| BufferError::Map { name: name.into(), message })?;
-    let mut img = ImageF32::new(width, height);
-    for y in 0..height {
-        for x in 0..width {
-            let o = (y * padded + x * bpp) as usize;
-            img.data[(y * width + x) as usize] = decode(&bytes[o..o + bpp as usize]);
+    Ok(plan.decode(&bytes))
+}
+
+/// The copy of one layer / mip of a texture and its decoding, recorded into any encoder.
+pub struct TexturePlan {
+    texture: wgpu::Texture,
+    layer: u32,
+    mip: u32,
+    width: u32,
+    height: u32,
+    bpp: u32,
+    padded: u32,
+    decode: TexelDecoder,
+}
+
+impl TexturePlan {
+    pub fn new(name: &str, texture: &wgpu::Texture, layer: u32, mip: u32) -> Result<Self, BufferError> {
+        let format = texture.format();
+        let (bpp, decode) = decoder(format).ok_or(BufferError::Format { name: name.into(), format })?;
+        if layer >= texture.depth_or_array_layers() {
+            return Err(BufferError::Range {
+                name: name.into(),
+                what: "layer",
+                have: texture.depth_or_array_layers(),
+                want: layer,
+            });
         }
+        if mip >= texture.mip_level_count() {
+            return Err(BufferError::Range {
+                name: name.into(),
+                what: "level",
+                have: texture.mip_level_count(),
+                want: mip,
+            });
+        }
+        let width = (texture.width() >> mip).max(1);
+        let height = (texture.height() >> mip).max(1);
+        let row = width * bpp;
+        let padded = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        Ok(Self { texture: texture.clone(), layer, mip, width, height, bpp, padded, decode })
     }
-    Ok(img)
+
+    /// Bytes of the staging buffer the copy lands in.
+    pub fn bytes(&self) -> u64 {
+        (self.padded * self.height) as u64
+    }
+
+    /// Records the copy into `enc`, landing in `staging` (COPY_DST, at least [`Self::bytes`]).
+    pub fn record(&self, enc: &mut wgpu::CommandEncoder, staging: &wgpu::Buffer) {
+        let format = self.texture.format();
+        let aspect =
+            if format.is_depth_stencil_format() { wgpu::TextureAspect::DepthOnly } else { wgpu::TextureAspect::All };
+        enc.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture: &self.texture,
+                mip_level: self.mip,
+                origin: wgpu::Origin3d { x: 0, y: 0, z: self.layer },
+                aspect,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: staging,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(self.padded),
+                    rows_per_image: Some(self.height),
+                },
+            },
+            wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 },
+        );
+    }
+
+    pub fn decode(&self, bytes: &[u8]) -> ImageF32 {
+        let (width, height, bpp) = (self.width, self.height, self.bpp);
+        let mut img = ImageF32::new(width, height);
+        for y in 0..height {
+            for x in 0..width {
+                let o = (y * self.padded + x * bpp) as usize;
+                if let Some(b) = bytes.get(o..o + bpp as usize) {
+                    img.data[(y * width + x) as usize] = (self.decode)(b);
+                }
+            }
+        }
+        img
+    }
 }
 
 /// Maps a MAP_READ buffer, waits, and copies its contents out.
@@ -410,7 +523,7 @@ pub fn map_read(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, Stri
     buffer.slice(..).map_async(wgpu::MapMode::Read, move |r| {
         let _ = tx.send(r);
     });
-    ctx.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| e.to_string())?;
+    ctx.wait()?;
     rx.recv().map_err(|e| e.to_string())?.map_err(|e| e.to_string())?;
     let data = buffer.slice(..).get_mapped_range().map_err(|e| e.to_string())?.to_vec();
     buffer.unmap();
@@ -420,7 +533,7 @@ pub fn map_read(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, Stri
 /// Copies the first `bytes` of a GPU buffer (which needs COPY_SRC) to the CPU; blocks.
 pub fn read_storage(ctx: &GpuContext, src: &wgpu::Buffer, bytes: u64) -> Result<Vec<u8>, String> {
     let bytes = bytes.min(src.size());
-    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+    let staging = ctx.device.counted_buffer(&wgpu::BufferDescriptor {
         label: Some("readback.storage"),
         size: bytes.max(4),
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
@@ -429,7 +542,7 @@ pub fn read_storage(ctx: &GpuContext, src: &wgpu::Buffer, bytes: u64) -> Result<
     let mut enc =
         ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("readback.storage.copy") });
     enc.copy_buffer_to_buffer(src, 0, &staging, 0, bytes & !3);
-    ctx.queue.submit([enc.finish()]);
+    ctx.submit([enc.finish()]);
     let mut data = map_read(ctx, &staging)?;
     data.truncate(bytes as usize);
     Ok(data)

@@ -29,6 +29,7 @@ impl Renderer {
     /// or in interactive mode the newest available).
     pub fn render_frame(&mut self) -> Vec<PassTiming> {
         let ctx = self.ctx.clone();
+        ctx.make_current();
         let aspect = self.width as f32 / self.height as f32;
         self.check_camera();
 
@@ -98,7 +99,6 @@ impl Renderer {
             camera_buffer: &self.camera_buffer,
             camera: &self.camera,
             gbuffer: &self.gbuffer.targets.views,
-            normal_texture: &self.gbuffer.targets.normal,
             radius: self.bounds.radius(),
             center: self.bounds.center(),
             height: self.height,
@@ -111,6 +111,13 @@ impl Renderer {
         };
         let indirect = indirect_light(&f, &mut self.stages, &mut enc, &mut self.timer, view_proj);
         let near_field = near_field_light(&f, &mut self.stages, &mut enc, &mut self.timer);
+        // The temporal histories ping-pong: the registry names this frame's.
+        if let Some(t) = &self.stages.temporal {
+            t.register(&mut self.registry);
+        }
+        if let Some(t) = self.stages.soler.as_ref().and_then(|s| s.temporal.as_ref()) {
+            t.register(&mut self.registry);
+        }
 
         // Stage 7: compose direct + indirect and tone map.
         self.sky_background.update(&ctx, &self.scene.sky, self.settings.sky.background);
@@ -122,10 +129,22 @@ impl Renderer {
         self.timer.scope(&ctx, &mut enc, "compose.luminance", |e, slot| compose.luminance(&ctx, e, slot, ts));
         self.timer.scope(&ctx, &mut enc, "compose.tonemap", |e, slot| compose.tonemap(&ctx, e, slot, ts));
 
+        // The read-backs asked for since the last frame, copied in this frame's encoder.
+        let readbacks = self.readbacks.get_mut().unwrap_or_else(|p| p.into_inner());
+        if readbacks.pending() > 0 {
+            crate::counters::traffic::begin_scope("readback");
+            let probe = self.depth_probe.get_or_init(|| crate::passes::view::DepthProbe::new(&ctx));
+            let size = (self.width, self.height);
+            readbacks.record(&ctx, &mut enc, &self.registry, probe, size, self.clock.frame);
+            crate::counters::traffic::end_scope();
+        }
         self.timer.resolve(&ctx, &mut enc);
-        ctx.queue.submit([enc.finish()]);
+        ctx.submit([enc.finish()]);
+        readbacks.start_maps();
         let timings = self.timer.collect(&ctx, !self.interactive).to_vec();
 
+        self.traffic = crate::counters::traffic::end_frame();
+        crate::counters::reuse::end_frame();
         self.prev = Some(PrevFrame { view_proj, models: state.draws.iter().map(|d| d.world).collect() });
         self.clock.tick();
         timings
@@ -321,10 +340,8 @@ fn temporal(
         Temporal::ConfidenceMerge => {
             let t = x.temporal.as_mut()?;
             let (ctx, s, depth_range) = (f.ctx, &f.settings.temporal, f.depth_range());
-            timer.scope(ctx, enc, "temporal", |e, slot| {
-                t.run(ctx, e, slot, s, depth_range, &src, f.gbuffer, f.normal_texture)
-            });
-            crate::passes::view(&t.history, "temporal.history")
+            timer.scope(ctx, enc, "temporal", |e, slot| t.run(ctx, e, slot, s, depth_range, &src, f.gbuffer));
+            crate::passes::view(t.history(), "temporal.history")
         }
     })
 }

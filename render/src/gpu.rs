@@ -71,7 +71,13 @@ pub struct GpuContext {
     _instance: Option<Arc<wgpu::Instance>>,
     /// Why the device was lost, once it is (the device-lost callback writes it).
     lost: Arc<std::sync::Mutex<Option<String>>>,
+    /// This context's number in the process: wgpu hashes handles by their id, which another
+    /// instance reuses, so the object cache and the traffic table key by it too
+    /// (`counters::set_context`).
+    nonce: u64,
 }
+
+static CONTEXTS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
 
 impl std::fmt::Debug for GpuContext {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -103,7 +109,10 @@ impl GpuContext {
                 panic!("wgpu error: {e}");
             }
         }));
+        let nonce = CONTEXTS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        crate::counters::set_context(nonce);
         Ok(Self {
+            nonce,
             features: device.features(),
             limits: device.limits(),
             device,
@@ -125,7 +134,9 @@ impl GpuContext {
         let (features, limits) = (device.features(), device.limits());
         check_capabilities(&adapter_info.name, features, &limits)?;
         let lost = watch_loss(&device);
-        Ok(Self { device, queue, adapter_info, features, limits, _instance: None, lost })
+        let nonce = CONTEXTS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        crate::counters::set_context(nonce);
+        Ok(Self { device, queue, adapter_info, features, limits, _instance: None, lost, nonce })
     }
 
     /// Whether per-pass GPU timestamps are available.
@@ -154,11 +165,31 @@ impl GpuContext {
         })
     }
 
+    /// Makes this context the one whose objects this thread creates next (keys of the object
+    /// cache and the traffic table, `crate::counters`). Renderers call it before they record.
+    pub fn make_current(&self) {
+        crate::counters::set_context(self.nonce);
+    }
+
     /// Blocks until the GPU has finished all submitted work.
     pub fn wait_idle(&self) {
-        if let Err(e) = self.device.poll(wgpu::PollType::wait_indefinitely()) {
+        if let Err(e) = self.wait() {
             log::warn!("device poll failed: {e}");
         }
+    }
+
+    /// Blocks until the GPU has finished all submitted work. The one blocking wait of
+    /// `gi-render`: every wait goes through it and is counted (`crate::counters`), so that
+    /// a frame that waits is seen (the window's frames must not, issue #38).
+    pub fn wait(&self) -> Result<(), String> {
+        crate::counters::note_wait();
+        self.device.poll(wgpu::PollType::wait_indefinitely()).map(|_| ()).map_err(|e| e.to_string())
+    }
+
+    /// Submits command buffers to the queue, counted (`crate::counters`).
+    pub fn submit<I: IntoIterator<Item = wgpu::CommandBuffer>>(&self, buffers: I) -> wgpu::SubmissionIndex {
+        crate::counters::note_submit();
+        self.queue.submit(buffers)
     }
 }
 

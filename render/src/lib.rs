@@ -5,6 +5,7 @@
 pub mod buffers;
 pub mod camera;
 pub mod clock;
+pub mod counters;
 pub mod cpu;
 pub mod frame;
 pub mod gpu;
@@ -15,6 +16,7 @@ pub mod passes;
 pub mod pipeline;
 pub mod preset;
 pub mod quality;
+pub mod readback;
 pub mod renderer;
 pub mod scene;
 pub mod settings;

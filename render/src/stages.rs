@@ -24,8 +24,6 @@ pub struct FrameInputs<'a> {
     pub camera_buffer: &'a wgpu::Buffer,
     pub camera: &'a Camera,
     pub gbuffer: &'a GBufferViews,
-    /// The G-buffer's normal texture (copied by the confidence merge as next frame's history).
-    pub normal_texture: &'a wgpu::Texture,
     /// The scene's bounding radius (scene-relative offsets and clip planes).
     pub radius: f32,
     /// The centre of the scene's bounds.

@@ -2,12 +2,14 @@
 //! has them, and otherwise by CPU wall time around a separately submitted and awaited
 //! command buffer per scope (slower, but honest). Later passes only add a scope.
 
+use crate::counters::prelude::*;
+
 use std::time::Instant;
 
 use crate::gpu::GpuContext;
 
 /// Most scopes per frame.
-const MAX_SCOPES: u32 = 64;
+const MAX_SCOPES: u32 = 256;
 
 /// Time one pass took in the last measured frame.
 #[derive(Clone, Debug, PartialEq)]
@@ -22,6 +24,9 @@ pub struct PassTiming {
 pub enum TimingSource {
     GpuTimestamps,
     CpuWallClock,
+    /// No per-pass times: the device has no timestamps and the renderer may not wait for the
+    /// GPU (the window, issue #38); `gi-lab bench` times the passes by the wall clock.
+    Off,
 }
 
 /// Query indices of one scope; hand them to the pass descriptors.
@@ -58,6 +63,9 @@ pub struct GpuTimer {
     names: Vec<String>,
     cpu_ms: Vec<f64>,
     last: Vec<PassTiming>,
+    /// Never wait for the GPU (interactive mode): without timestamps no pass is timed, and a
+    /// frame whose timestamp slot would have to wait goes untimed.
+    no_wait: bool,
 }
 
 /// Frames whose timestamps may be in flight at once in the non-blocking mode.
@@ -71,6 +79,8 @@ struct GpuQueries {
     ring: Vec<RingSlot>,
     /// Ring slot of the frame being recorded.
     current: usize,
+    /// This frame found no free slot and is not timed.
+    skip: bool,
     period_ns: f32,
 }
 
@@ -103,12 +113,12 @@ impl GpuTimer {
         let gpu = (ctx.has_timestamps() && !force_cpu).then(|| {
             let count = MAX_SCOPES * 2;
             GpuQueries {
-                set: ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+                set: ctx.device.counted_query_set(&wgpu::QuerySetDescriptor {
                     label: Some("timing.queries"),
                     ty: wgpu::QueryType::Timestamp,
                     count,
                 }),
-                resolve: ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                resolve: ctx.device.counted_buffer(&wgpu::BufferDescriptor {
                     label: Some("timing.resolve"),
                     size: count as u64 * 8,
                     usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
@@ -116,7 +126,7 @@ impl GpuTimer {
                 }),
                 ring: (0..RING)
                     .map(|_| RingSlot {
-                        buffer: ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                        buffer: ctx.device.counted_buffer(&wgpu::BufferDescriptor {
                             label: Some("timing.readback"),
                             size: count as u64 * 8,
                             usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
@@ -127,14 +137,24 @@ impl GpuTimer {
                     })
                     .collect(),
                 current: 0,
+                skip: false,
                 period_ns: ctx.queue.get_timestamp_period(),
             }
         });
-        Self { gpu, names: Vec::new(), cpu_ms: Vec::new(), last: Vec::new() }
+        Self { gpu, names: Vec::new(), cpu_ms: Vec::new(), last: Vec::new(), no_wait: false }
     }
 
     pub fn source(&self) -> TimingSource {
-        if self.gpu.is_some() { TimingSource::GpuTimestamps } else { TimingSource::CpuWallClock }
+        match (&self.gpu, self.no_wait) {
+            (Some(_), _) => TimingSource::GpuTimestamps,
+            (None, false) => TimingSource::CpuWallClock,
+            (None, true) => TimingSource::Off,
+        }
+    }
+
+    /// Interactive mode: never wait for the GPU (see [`TimingSource::Off`]).
+    pub fn set_no_wait(&mut self, no_wait: bool) {
+        self.no_wait = no_wait;
     }
 
     /// Timings of the last collected frame, in pass order.
@@ -154,20 +174,35 @@ impl GpuTimer {
     ) -> R {
         let index = self.names.len() as u32;
         self.names.push(name.to_string());
+        crate::counters::traffic::begin_scope(name);
+        let r = self.scope_inner(ctx, encoder, name, index, f);
+        crate::counters::traffic::end_scope();
+        r
+    }
+
+    fn scope_inner<R>(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        name: &str,
+        index: u32,
+        f: impl FnOnce(&mut wgpu::CommandEncoder, Option<Slot<'_>>) -> R,
+    ) -> R {
         match &self.gpu {
             Some(q) if index < MAX_SCOPES => f(encoder, Some(Slot { query_set: &q.set, begin: index * 2 })),
             Some(_) => {
                 log::warn!("more than {MAX_SCOPES} timing scopes; '{name}' is not timed");
                 f(encoder, None)
             }
+            None if self.no_wait => f(encoder, None),
             None => {
                 let pending = std::mem::replace(encoder, new_encoder(ctx));
-                ctx.queue.submit([pending.finish()]);
+                ctx.submit([pending.finish()]);
                 ctx.wait_idle();
                 let start = Instant::now();
                 let mut own = new_encoder(ctx);
                 let r = f(&mut own, None);
-                ctx.queue.submit([own.finish()]);
+                ctx.submit([own.finish()]);
                 ctx.wait_idle();
                 self.cpu_ms.push(start.elapsed().as_secs_f64() * 1e3);
                 r
@@ -175,30 +210,22 @@ impl GpuTimer {
         }
     }
 
-    /// Adds the query resolve to the frame's encoder (call once after the last scope). In
-    /// the non-blocking mode, when every readback buffer is still in flight, this waits for
-    /// the oldest.
-    pub fn resolve(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder) {
+    /// Adds the query resolve to the frame's encoder (call once after the last scope). When
+    /// every read-back slot is still in flight (the non-blocking mode, on a GPU more than
+    /// [`RING`] frames behind), this frame goes untimed rather than waiting.
+    pub fn resolve(&mut self, _ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder) {
         let Some(q) = &mut self.gpu else { return };
         let free = (0..RING).map(|k| (q.current + k) % RING).find(|&i| q.ring[i].mapped.is_none());
-        let slot = match free {
-            Some(i) => i,
-            None => {
-                // All in flight: wait for the GPU and take the oldest (slots are mapped in
-                // ring order, so the oldest is the one after the newest, i.e. `current`).
-                ctx.wait_idle();
-                let oldest = q.current;
-                if let Some(t) = read_slot(q, oldest) {
-                    self.last = t;
-                }
-                oldest
-            }
+        let Some(slot) = free else {
+            q.skip = true;
+            return;
         };
+        q.skip = false;
         q.current = slot;
         let n = (self.names.len() as u32).min(MAX_SCOPES) * 2;
         if n > 0 {
             encoder.resolve_query_set(&q.set, 0..n, &q.resolve, 0);
-            encoder.copy_buffer_to_buffer(&q.resolve, 0, &q.ring[slot].buffer, 0, n as u64 * 8);
+            encoder.counted_copy_buffer(&q.resolve, 0, &q.ring[slot].buffer, 0, n as u64 * 8);
         }
     }
 
@@ -210,10 +237,25 @@ impl GpuTimer {
         let names = std::mem::take(&mut self.names);
         let cpu = std::mem::take(&mut self.cpu_ms);
         let Some(q) = &mut self.gpu else {
+            // Without timestamps in the non-blocking mode nothing was timed (`TimingSource::Off`).
             self.last = names.into_iter().zip(cpu).map(|(name, ms)| PassTiming { name, ms }).collect();
             return &self.last;
         };
         let slot = q.current;
+        if std::mem::take(&mut q.skip) {
+            // Untimed (see `resolve`): only take in what has arrived.
+            if let Err(e) = ctx.device.poll(wgpu::PollType::Poll) {
+                log::warn!("device poll failed: {e}");
+            }
+            for k in 0..RING {
+                let i = (slot + k) % RING;
+                let done = q.ring[i].mapped.as_ref().is_some_and(|m| m.load(std::sync::atomic::Ordering::Acquire));
+                if done && let Some(t) = read_slot(q, i) {
+                    self.last = t;
+                }
+            }
+            return &self.last;
+        }
         let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
         let f = flag.clone();
         q.ring[slot].names = names;
@@ -225,8 +267,12 @@ impl GpuTimer {
         });
         q.ring[slot].mapped = Some(flag);
         q.current = (slot + 1) % RING;
-        let poll = if block { wgpu::PollType::wait_indefinitely() } else { wgpu::PollType::Poll };
-        if let Err(e) = ctx.device.poll(poll) {
+        let polled = if block {
+            ctx.wait()
+        } else {
+            ctx.device.poll(wgpu::PollType::Poll).map(|_| ()).map_err(|e| e.to_string())
+        };
+        if let Err(e) = polled {
             log::warn!("device poll failed: {e}");
         }
         // Oldest first, so that the newest arrived frame wins.

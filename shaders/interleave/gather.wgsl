@@ -34,18 +34,14 @@ struct GatherParams {
 @group(0) @binding(9) var out_accum: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(10) var<storage, read> tile_offsets: array<u32>;
 
-@compute @workgroup_size(TILE, TILE, 1)
-fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let size = textureDimensions(out_accum);
-    if (gid.x >= size.x || gid.y >= size.y) {
-        return;
-    }
-    let px = vec2<i32>(gid.xy);
+// The light of split pixel `sp`'s tile's VPLs at the pixel `px` of the bound textures (the
+// split G-buffer at sp itself, or the G-buffer at sp's source pixel).
+fn gather_at(px: vec2<i32>, sp: vec2<u32>) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
     let nrm = textureLoad(s_normal, px, 0);
     let n = params.split.x;
     let count = params.split.w;
-    let t2 = gid.xy / params.split.yz;
+    let t2 = sp / params.split.yz;
     let tile = t2.x + t2.y * n;
     let stride = n * n;
     if (nrm.w > 0.5) {
@@ -77,5 +73,35 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
             sum = sum * (f32(count) / f32(per_tile));
         }
     }
-    textureStore(out_accum, px, vec4<f32>(sum, 1.0));
+    return sum;
+}
+
+// The thesis' layout: s_* are the split G-buffer, out_accum the split accumulation buffer.
+@compute @workgroup_size(TILE, TILE, 1)
+fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let size = textureDimensions(out_accum);
+    if (gid.x >= size.x || gid.y >= size.y) {
+        return;
+    }
+    textureStore(out_accum, vec2<i32>(gid.xy), vec4<f32>(gather_at(vec2<i32>(gid.xy), gid.xy), 1.0));
+}
+
+// Fused (issue #38): s_* are the G-buffer and out_accum the merged light; each split pixel
+// (the same dispatch and tiles as cs_gather, so a workgroup still shares its tile's VPLs)
+// reads and writes its source pixel (a·n + i, b·n + j), which is what split, gather and
+// merge give, without the split copies.
+@compute @workgroup_size(TILE, TILE, 1)
+fn cs_gather_fused(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let n = params.split.x;
+    let tile = params.split.yz;
+    if (gid.x >= tile.x * n || gid.y >= tile.y * n) {
+        return;
+    }
+    let a = gid.xy % tile;
+    let p = a * n + gid.xy / tile;
+    let size = textureDimensions(out_accum);
+    if (p.x >= size.x || p.y >= size.y) {
+        return;
+    }
+    textureStore(out_accum, vec2<i32>(p), vec4<f32>(gather_at(vec2<i32>(p), gid.xy), 1.0));
 }

@@ -33,6 +33,8 @@ struct TemporalParams {
 @group(0) @binding(11) var out_warped: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(12) var out_mask: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(13) var out_a: texture_storage_2d<r32float, write>;
+// This frame's normals, next frame's prev_normal (ping-pong: no copy, issue #38).
+@group(0) @binding(14) var out_normal: texture_storage_2d<rgba16float, write>;
 
 @compute @workgroup_size(8, 8, 1)
 fn cs_temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -87,4 +89,5 @@ fn cs_temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
     textureStore(out_warped, gid.xy, warped);
     textureStore(out_mask, gid.xy, mask);
     textureStore(out_a, gid.xy, vec4<f32>(a, 0.0, 0.0, 0.0));
+    textureStore(out_normal, gid.xy, nrm);
 }

@@ -27,6 +27,8 @@ struct ConfidenceParams {
 @group(0) @binding(6) var history_prev: texture_2d<f32>;
 @group(0) @binding(7) var confidence_out: texture_storage_2d<r32float, write>;
 @group(0) @binding(8) var history_out: texture_storage_2d<rgba32float, write>;
+// This frame's normals, next frame's prev_normal (ping-pong: no copy, issue #38).
+@group(0) @binding(9) var normal_out: texture_storage_2d<rgba16float, write>;
 
 fn confidence(motion: vec2<f32>, size: vec2<f32>, d: f32, d_prev: f32, n: vec3<f32>, n_prev: vec3<f32>, i_new: vec3<f32>, i_prev: vec3<f32>) -> f32 {
     let w = params.weights;
@@ -64,6 +66,7 @@ fn cs_confidence(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
     textureStore(confidence_out, p, vec4<f32>(c, 0.0, 0.0, 0.0));
+    textureStore(normal_out, p, nrm);
     var depth = 0.0;
     if (nrm.w > 0.5) {
         depth = d;

@@ -171,7 +171,8 @@ fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
     let camera_buf = buffer("test.camera", bytemuck::bytes_of(&camera), wgpu::BufferUsages::UNIFORM);
     let vpl_buf = buffer("test.vpls", bytemuck::cast_slice(&gpu_vpls), wgpu::BufferUsages::STORAGE);
     let g = SyntheticGBuffer::new(&ctx, w, h, &pos, &nrm, &alb, &mat, &vec![[0.0; 4]; len]);
-    let mut pass = InterleavePass::new(&ctx, gi_render::passes::bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h, n);
+    let mut pass =
+        InterleavePass::new(&ctx, gi_render::passes::bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h, n, false);
     let mut timer = gi_render::timing::GpuTimer::new(&ctx);
     // Frame 0 with the full BRDF at the receiver, frame 1 (another slot→tile map) diffuse only.
     let (mut lit, mut dark) = (0, 0);
@@ -267,7 +268,8 @@ fn geometry_aware_filter_on_the_gpu_equals_the_cpu() {
     let zero = vec![[0.0; 4]; len];
     let g = SyntheticGBuffer::new(&ctx, w, h, &pos, &nrm, &zero, &zero, &zero);
     let src_tex = texture(&ctx, "test.src", w, h, &src, false);
-    let pass = InterleavePass::new(&ctx, gi_render::passes::bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h, n);
+    let pass =
+        InterleavePass::new(&ctx, gi_render::passes::bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h, n, false);
     let s = InterleaveSettings { n, ..Default::default() };
     let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.filter") });
     pass.filter(&ctx, &mut enc, None, &s, depth_range, &src_tex.create_view(&Default::default()), &g.views());
@@ -371,11 +373,11 @@ fn confidence_and_merge_on_the_gpu_equal_eq_3_1_to_3_6_on_the_cpu() {
         let (g, light) = upload(f, &m);
         let mut enc =
             ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.temporal") });
-        pass.run(&ctx, &mut enc, None, &s, depth_range, &light.create_view(&Default::default()), &g.views(), &g.normal);
+        pass.run(&ctx, &mut enc, None, &s, depth_range, &light.create_view(&Default::default()), &g.views());
         ctx.queue.submit([enc.finish()]);
     }
     let conf = read(&ctx, &pass.confidence);
-    let hist = read(&ctx, &pass.history);
+    let hist = read(&ctx, pass.history());
     let weights = knecht::ConfidenceWeights {
         c_base: s.c_base,
         w_pos: s.w_pos,

@@ -79,6 +79,8 @@ pub struct PassStats {
     pub mean_ms: f64,
     pub min_ms: f64,
     pub max_ms: f64,
+    /// Mean bytes the pass binds per frame (`gi_render::counters::traffic`).
+    pub traffic_bytes: f64,
 }
 
 #[derive(Debug, Clone, serde::Serialize)]
@@ -95,6 +97,17 @@ pub struct BenchReport {
     /// and whatever waiting for the GPU the frame does (its timing read-back included), so
     /// `wall_mean_ms − total_mean_ms` is roughly the time the frame is not on the GPU.
     pub wall_mean_ms: f64,
+    /// Times per measured frame that the CPU waited for the GPU (`gi_render::counters`). The
+    /// command line waits once a frame for that frame's timings; the window never does.
+    pub blocking_waits_per_frame: f64,
+    /// Queue submissions per measured frame.
+    pub submits_per_frame: f64,
+    /// Buffers, textures, views, bind groups, samplers and query sets created per measured
+    /// frame (0 in a lean steady state).
+    pub objects_created_per_frame: f64,
+    /// Bytes read and written per measured frame: per pass, the bytes of every resource it
+    /// binds, from their formats and sizes (`gi_render::counters::traffic`), summed.
+    pub traffic_bytes_per_frame: f64,
     /// Temporal flicker of final.hdr with the animation paused and the camera still
     /// (`metrics::flicker`); None when not measured.
     pub flicker: Option<f64>,
@@ -115,8 +128,17 @@ pub fn bench_run(r: &mut Renderer, frames: u32, scene_name: &str) -> BenchReport
     let mut names: Vec<String> = Vec::new();
     let mut samples: Vec<Vec<f64>> = Vec::new();
     let started = std::time::Instant::now();
+    let counted = gi_render::counters::now();
+    let mut traffic: Vec<(String, u64)> = Vec::new();
     for _ in 0..frames {
-        for t in r.render_frame() {
+        let timings = r.render_frame();
+        for (pass, bytes) in r.traffic() {
+            match traffic.iter_mut().find(|(n, _)| n == pass) {
+                Some(t) => t.1 += bytes,
+                None => traffic.push((pass.clone(), *bytes)),
+            }
+        }
+        for t in timings {
             let i = match names.iter().position(|n| *n == t.name) {
                 Some(i) => i,
                 None => {
@@ -132,13 +154,16 @@ pub fn bench_run(r: &mut Renderer, frames: u32, scene_name: &str) -> BenchReport
         .into_iter()
         .zip(samples)
         .map(|(pass, s)| PassStats {
-            pass,
             mean_ms: s.iter().sum::<f64>() / s.len().max(1) as f64,
             min_ms: s.iter().copied().fold(f64::INFINITY, f64::min),
             max_ms: s.iter().copied().fold(0.0, f64::max),
+            traffic_bytes: traffic.iter().find(|(n, _)| *n == pass).map_or(0.0, |t| t.1 as f64 / frames.max(1) as f64),
+            pass,
         })
         .collect();
     let wall_mean_ms = started.elapsed().as_secs_f64() * 1e3 / frames.max(1) as f64;
+    let counts = gi_render::counters::now() - counted;
+    let per_frame = |n: u64| n as f64 / frames.max(1) as f64;
     let (width, height) = r.size();
     BenchReport {
         adapter: r.ctx.adapter_summary(),
@@ -149,6 +174,10 @@ pub fn bench_run(r: &mut Renderer, frames: u32, scene_name: &str) -> BenchReport
         frames,
         total_mean_ms: passes.iter().map(|p| p.mean_ms).sum(),
         wall_mean_ms,
+        blocking_waits_per_frame: per_frame(counts.blocking_waits),
+        submits_per_frame: per_frame(counts.submits),
+        objects_created_per_frame: per_frame(counts.objects_created),
+        traffic_bytes_per_frame: per_frame(counts.traffic_bytes),
         passes,
         flicker: None,
         flip: None,
@@ -162,14 +191,19 @@ pub fn format_bench_table(b: &BenchReport) -> String {
         "GI Lab bench — {} at {}×{}, {} frames, {} ({})\n",
         b.scene, b.width, b.height, b.frames, b.adapter, b.timing_source
     );
-    s += &format!("{:<16} {:>10} {:>10} {:>10}\n", "pass", "mean ms", "min ms", "max ms");
+    s += &format!("{:<16} {:>10} {:>10} {:>10} {:>10}\n", "pass", "mean ms", "min ms", "max ms", "MB bound");
     for p in &b.passes {
-        s += &format!("{:<16} {:>10.3} {:>10.3} {:>10.3}\n", p.pass, p.mean_ms, p.min_ms, p.max_ms);
+        let mb = p.traffic_bytes / 1e6;
+        s += &format!("{:<16} {:>10.3} {:>10.3} {:>10.3} {:>10.1}\n", p.pass, p.mean_ms, p.min_ms, p.max_ms, mb);
     }
-    s += &format!("{:<16} {:>10.3}\n", "total", b.total_mean_ms);
+    s += &format!("{:<16} {:>10.3} {:>32.1}\n", "total", b.total_mean_ms, b.traffic_bytes_per_frame / 1e6);
     s += &format!(
         "{:<16} {:>10.3}   (wall clock per render_frame call, CPU and waits included)\n",
         "frame wall", b.wall_mean_ms
+    );
+    s += &format!(
+        "per frame: {:.1} blocking waits, {:.1} submits, {:.1} GPU objects created\n",
+        b.blocking_waits_per_frame, b.submits_per_frame, b.objects_created_per_frame
     );
     if let Some(f) = b.flicker {
         s += &format!("flicker (static scene) {f:.6}\n");

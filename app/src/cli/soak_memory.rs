@@ -264,7 +264,7 @@ pub fn driver_growth_mib(ctx: &GpuContext) -> f64 {
             pass.set_bind_group(0, &group, &[]);
             pass.dispatch_workgroups(2, 2, 1);
         }
-        ctx.queue.submit([e.finish()]);
+        ctx.submit([e.finish()]);
         ctx.wait_idle();
     };
     // The first dispatches compile what any driver compiles once.

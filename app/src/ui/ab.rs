@@ -5,6 +5,7 @@
 //! the two images (with mean FLIP and RMSE). Difference and FLIP are computed on the CPU
 //! from read-back images, a few times a second.
 
+use gi_render::readback::{Readback, Readout};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -50,6 +51,8 @@ pub struct Ab {
     texture_b: Option<(egui::TextureId, (u32, u32))>,
     compared: Option<egui::TextureHandle>,
     last_compare: Option<Instant>,
+    /// The frames (A's, B's) of the last images compared.
+    compared_frames: Option<(u64, u64)>,
     /// Mean FLIP and RMSE (of final.hdr) of the last comparison.
     pub metrics: Option<(f64, f64)>,
     pub error: Option<String>,
@@ -71,6 +74,7 @@ impl Ab {
             texture_b: None,
             compared: None,
             last_compare: None,
+            compared_frames: None,
             metrics: None,
             error: None,
         })
@@ -125,11 +129,15 @@ impl Ab {
 
     /// The difference or FLIP image of A and B (refreshed at most every 400 ms).
     pub fn compared(&mut self, ctx: &egui::Context, a: &Renderer) -> Option<egui::TextureId> {
+        // Asked for at most every 400 ms; taken in as soon as the pair arrives.
         let due = self.last_compare.is_none_or(|t| t.elapsed() > Duration::from_millis(400));
         if due {
             self.last_compare = Some(Instant::now());
-            match self.compare(a) {
-                Ok(img) => {
+        }
+        {
+            match self.compare(a, due) {
+                None => {}
+                Some(Ok(img)) => {
                     let opts = egui::TextureOptions::NEAREST;
                     match &mut self.compared {
                         Some(h) => h.set(img, opts),
@@ -137,23 +145,48 @@ impl Ab {
                     }
                     self.error = None;
                 }
-                Err(e) => self.error = Some(e),
+                Some(Err(e)) => self.error = Some(e),
             }
         }
         self.compared.as_ref().map(|h| h.id())
     }
 
-    fn compare(&mut self, a: &Renderer) -> Result<egui::ColorImage, String> {
-        let (ah, bh) = (
-            a.readback("final.hdr").map_err(|e| e.to_string())?,
-            self.b.readback("final.hdr").map_err(|e| e.to_string())?,
-        );
-        let (al, bl) = (
-            a.readback("final.ldr").map_err(|e| e.to_string())?,
-            self.b.readback("final.ldr").map_err(|e| e.to_string())?,
-        );
-        let rmse = gi_render::metrics::rmse(&ah, &bh).map_err(|e| e.to_string())?;
-        let (mean, map) = gi_render::metrics::flip(&al, &bl).map_err(|e| e.to_string())?;
+    /// Asks both renderers for their final images (copied in their next frames, read without
+    /// waiting, issue #38) and compares the newest pair that has arrived; None while waiting.
+    fn compare(&mut self, a: &Renderer, ask: bool) -> Option<Result<egui::ColorImage, String>> {
+        let image = |r: &Renderer, name: &str| -> Option<Result<(u64, gi_render::ImageF32), String>> {
+            let (key, what) = (format!("ab.{name}"), Readback::Image { name: name.into(), layer: 0, mip: 0 });
+            let got = if ask { r.read_later(&key, what, 0)? } else { r.read_latest(&key)? };
+            Some(match &got.data {
+                Ok(Readout::Image(img)) => Ok((got.frame, img.clone())),
+                Ok(_) => Err(format!("{name}: not an image")),
+                Err(e) => Err(e.clone()),
+            })
+        };
+        let (ah, bh, al, bl) =
+            (image(a, "final.hdr"), image(&self.b, "final.hdr"), image(a, "final.ldr"), image(&self.b, "final.ldr"));
+        let four = (|| Ok::<_, String>(Some((ah.transpose()?, bh.transpose()?, al.transpose()?, bl.transpose()?))))();
+        let ((fa, ah), (fb, bh), (_, al), (_, bl)) = match four {
+            Ok(Some((Some(ah), Some(bh), Some(al), Some(bl)))) => (ah, bh, al, bl),
+            Ok(_) => return None,
+            Err(e) => return Some(Err(e)),
+        };
+        if self.compared_frames == Some((fa, fb)) {
+            return None;
+        }
+        self.compared_frames = Some((fa, fb));
+        Some(self.compare_images(&ah, &bh, &al, &bl))
+    }
+
+    fn compare_images(
+        &mut self,
+        ah: &gi_render::ImageF32,
+        bh: &gi_render::ImageF32,
+        al: &gi_render::ImageF32,
+        bl: &gi_render::ImageF32,
+    ) -> Result<egui::ColorImage, String> {
+        let rmse = gi_render::metrics::rmse(ah, bh).map_err(|e| e.to_string())?;
+        let (mean, map) = gi_render::metrics::flip(al, bl).map_err(|e| e.to_string())?;
         self.metrics = Some((mean, rmse));
         let (w, h) = (al.width as usize, al.height as usize);
         let pixels: Vec<egui::Color32> = match self.view {

@@ -158,6 +158,7 @@ impl GiLabApp {
             hover_values: Vec::new(),
             pinned,
             probe_history: history,
+            probe_frame: 0,
             timing_history: VecDeque::new(),
             hovered_pass: None,
             viewport_px: (640, 480),

@@ -8,6 +8,7 @@ use std::time::Instant;
 
 use gi_render::buffers::ProbeValue;
 use gi_render::passes::view::ViewPipeline;
+use gi_render::readback::{Readback, Readout};
 use gi_render::timing::PassTiming;
 
 use crate::args::AppArgs;
@@ -34,6 +35,8 @@ pub struct State {
     pub pinned: Vec<PinnedProbe>,
     /// Per pinned probe: the chosen buffer's value over the last frames.
     pub probe_history: Vec<VecDeque<[f32; 4]>>,
+    /// The frame of the last probe values taken in (they arrive without waiting, late).
+    pub probe_frame: u64,
     pub timing_history: VecDeque<Vec<PassTiming>>,
     /// The pass whose row the pointer is over in the timings panel.
     pub hovered_pass: Option<String>,
@@ -201,14 +204,29 @@ impl State {
         points.truncate(gi_render::passes::view::PROBE_MAX_POINTS);
         let (fw, fh) = l.renderer.size();
         let points: Vec<(u32, u32)> = points.into_iter().map(|(x, y)| (x.min(fw - 1), y.min(fh - 1))).collect();
-        if !points.is_empty() {
-            match l.renderer.probe(&points) {
-                Ok(mut values) => {
-                    if self.hover.is_some() {
-                        self.hover_values = values.remove(0);
-                    } else {
-                        self.hover_values.clear();
+        // Read without waiting (issue #38): the values arrive a frame or two late; the tag says
+        // which points they are, so that a pin added or removed meanwhile is not misread.
+        let tag = |hover: bool| probe_tag(hover, self.pinned.iter().map(|p| p.pixel));
+        let arrived = if points.is_empty() {
+            l.renderer.read_latest("probe")
+        } else {
+            l.renderer.read_later("probe", Readback::Probe(points), tag(self.hover.is_some()))
+        };
+        match arrived.as_deref().map(|a| (a.frame, a.tag, &a.data)) {
+            Some((frame, t, Ok(Readout::Probe(values)))) if frame != self.probe_frame => {
+                self.probe_frame = frame;
+                let had_hover = t == tag(true);
+                let pins_same = had_hover || t == tag(false);
+                let mut values = values.iter();
+                self.hover_values = match (had_hover, self.hover.is_some()) {
+                    (true, true) => values.next().cloned().unwrap_or_default(),
+                    (true, false) => {
+                        values.next();
+                        Vec::new()
                     }
+                    _ => Vec::new(),
+                };
+                if pins_same {
                     self.probe_history.resize_with(self.pinned.len(), VecDeque::new);
                     for ((p, h), vals) in self.pinned.iter().zip(&mut self.probe_history).zip(values) {
                         let v = vals.iter().find(|v| v.name == p.buffer).map(|v| v.value).unwrap_or([f32::NAN; 4]);
@@ -218,9 +236,14 @@ impl State {
                         }
                     }
                 }
-                Err(e) => self.status = Some((format!("probe: {e}"), Instant::now())),
             }
-        } else {
+            Some((frame, _, Err(e))) if frame != self.probe_frame => {
+                self.probe_frame = frame;
+                self.status = Some((format!("probe: {e}"), Instant::now()));
+            }
+            _ => {}
+        }
+        if self.hover.is_none() {
             self.hover_values.clear();
         }
         let pipeline = self.view_pipeline.get_or_insert_with(|| ViewPipeline::new(&l.renderer.ctx)).clone();
@@ -352,4 +375,16 @@ pub fn scene_note(scene: &gi_render::scene::Scene) -> Option<String> {
         parts.push(u.clone());
     }
     (!parts.is_empty()).then(|| parts.join(" · "))
+}
+
+/// Which points a probe read-back was asked for: whether the hovered pixel came first, and
+/// the pinned pixels.
+fn probe_tag(hover: bool, pins: impl Iterator<Item = (u32, u32)>) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    hover.hash(&mut h);
+    for p in pins {
+        p.hash(&mut h);
+    }
+    h.finish()
 }

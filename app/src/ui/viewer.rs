@@ -5,6 +5,7 @@
 //! negative overlay, layer and level pickers — with nearest-neighbour zoom and pan.
 //! Several viewers may be open at once; each owns its GPU view and egui texture.
 
+use gi_render::readback::{Readback, Readout};
 use std::time::{Duration, Instant};
 
 use gi_render::buffers::ProbeValue;
@@ -71,13 +72,24 @@ pub struct Viewer {
     slot: Option<(egui::TextureId, (u32, u32))>,
     pub error: Option<String>,
     last_auto: Option<Instant>,
+    /// The frame of the last auto-range read-back taken in (it arrives late, without waiting).
+    range_frame: Option<u64>,
     /// Buffer size of the last render (texels of the shown level).
     size: (u32, u32),
 }
 
 impl Viewer {
     pub fn new(state: ViewerState) -> Self {
-        Self { state, gpu: None, texture: None, slot: None, error: None, last_auto: None, size: (0, 0) }
+        Self {
+            state,
+            gpu: None,
+            texture: None,
+            slot: None,
+            error: None,
+            last_auto: None,
+            range_frame: None,
+            size: (0, 0),
+        }
     }
 
     /// Switches to another buffer with the first view that suits its kind.
@@ -105,19 +117,29 @@ impl Viewer {
         let t = &entry.texture;
         self.state.view.layer = self.state.view.layer.min(t.depth_or_array_layers() - 1);
         self.state.view.level = self.state.view.level.min(t.mip_level_count() - 1);
-        if self.state.range_mode != RangeMode::Manual
-            && self.last_auto.is_none_or(|at| at.elapsed() > Duration::from_millis(500))
-        {
-            self.last_auto = Some(Instant::now());
-            let p = if self.state.range_mode == RangeMode::MinMax { 0.0 } else { self.state.percentile.max(0.01) };
-            match renderer.buffers().readback(&renderer.ctx, &entry.name, self.state.view.layer, self.state.view.level)
+        // Auto-range from a read-back copied in the frame and read without waiting (issue #38):
+        // asked for every 500 ms, applied when it arrives.
+        if self.state.range_mode != RangeMode::Manual {
+            let (layer, level) = (self.state.view.layer, self.state.view.level);
+            let key = format!("viewer.range:{}@{layer}.{level}", entry.name);
+            if self.last_auto.is_none_or(|at| at.elapsed() > Duration::from_millis(500)) {
+                self.last_auto = Some(Instant::now());
+                renderer.read_later(&key, Readback::Image { name: entry.name.clone(), layer, mip: level }, 0);
+            }
+            if let Some(a) = renderer.read_latest(&key)
+                && self.range_frame != Some(a.frame)
             {
-                Ok(img) => {
-                    if let Some(r) = gi_render::cpu::view::auto_range(&self.state.view, &img, p) {
-                        self.state.view.range = if r[1] > r[0] { r } else { [r[0], r[0] + 1e-6] };
+                self.range_frame = Some(a.frame);
+                let p = if self.state.range_mode == RangeMode::MinMax { 0.0 } else { self.state.percentile.max(0.01) };
+                match &a.data {
+                    Ok(Readout::Image(img)) => {
+                        if let Some(r) = gi_render::cpu::view::auto_range(&self.state.view, img, p) {
+                            self.state.view.range = if r[1] > r[0] { r } else { [r[0], r[0] + 1e-6] };
+                        }
                     }
+                    Ok(_) => {}
+                    Err(e) => self.error = Some(e.clone()),
                 }
-                Err(e) => self.error = Some(e.to_string()),
             }
         }
         let gpu = self.gpu.get_or_insert_with(|| BufferView::new(&renderer.ctx, pipeline.clone()));

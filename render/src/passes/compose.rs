@@ -3,6 +3,8 @@
 //! `shaders/compose/luminance.wgsl` (log-average luminance L̄w, Reinhard Eq. 1).
 //! Writes `final.hdr` (linear radiance) and `final.ldr` (tone-mapped, sRGB-encoded 8-bit).
 
+use crate::counters::prelude::*;
+
 use glam::Vec4;
 
 use crate::buffers::{BufferKind, BufferRegistry};
@@ -102,13 +104,13 @@ impl ComposePass {
         let luminance_tiles =
             super::compute_pipeline(device, "compose.luminance_tiles", &lum_module, "cs_partial", &[&lum_layout]);
         let luminance = super::compute_pipeline(device, "compose.luminance", &lum_module, "cs_final", &[&lum_layout]);
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
+        let params = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("compose.params"),
             size: std::mem::size_of::<ToneParams>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let log_average = device.create_buffer(&wgpu::BufferDescriptor {
+        let log_average = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("compose.log_average"),
             size: 16,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
@@ -144,7 +146,7 @@ impl ComposePass {
 
     fn tile_buffer(ctx: &GpuContext, width: u32, height: u32) -> wgpu::Buffer {
         let tiles = width.div_ceil(LUMINANCE_TILE.0) as u64 * height.div_ceil(LUMINANCE_TILE.1) as u64;
-        ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        ctx.device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("compose.luminance_tiles"),
             size: tiles * 8,
             usage: wgpu::BufferUsages::STORAGE,
@@ -155,7 +157,7 @@ impl ComposePass {
     fn targets(ctx: &GpuContext, width: u32, height: u32) -> (wgpu::Texture, wgpu::Texture) {
         let st = wgpu::TextureUsages::STORAGE_BINDING;
         let hdr = super::create_target(&ctx.device, "final.hdr", width, height, HDR_FORMAT, st);
-        let ldr = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        let ldr = ctx.device.counted_texture(&wgpu::TextureDescriptor {
             label: Some("final.ldr"),
             size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
             mip_level_count: 1,
@@ -202,7 +204,7 @@ impl ComposePass {
         let sky_view = super::view(&sky.texture, "sky.background.image");
         let hdr_view = super::view(&self.hdr, "final.hdr");
         let tv = wgpu::BindingResource::TextureView;
-        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("compose.inputs"),
             layout: &self.layout0,
             entries: &[
@@ -230,7 +232,7 @@ impl ComposePass {
         settings: &TonemapSettings,
     ) {
         let hdr_view = super::view(&self.hdr, "final.hdr");
-        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("compose.luminance"),
             layout: &self.lum_layout,
             entries: &[
@@ -244,7 +246,7 @@ impl ComposePass {
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
         if settings.auto_exposure {
-            pass.set_bind_group(0, &group, &[]);
+            pass.set_group(0, &group, &[]);
             pass.set_pipeline(&self.luminance_tiles);
             let (tw, th) = LUMINANCE_TILE;
             pass.dispatch_workgroups(self.hdr.width().div_ceil(tw), self.hdr.height().div_ceil(th), 1);
@@ -273,7 +275,7 @@ impl ComposePass {
         let hdr_view = super::view(&self.hdr, "final.hdr");
         let ldr_view = super::view(&self.ldr, "final.ldr");
         let tv = wgpu::BindingResource::TextureView;
-        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("compose.tonemap"),
             layout: &self.layout1,
             entries: &[
@@ -308,7 +310,7 @@ impl ComposePass {
         });
         if groups.0 > 0 && groups.1 > 0 {
             pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, group, &[]);
+            pass.set_group(0, group, &[]);
             pass.dispatch_workgroups(groups.0, groups.1, 1);
         }
     }

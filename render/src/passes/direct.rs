@@ -8,6 +8,8 @@
 //! `emitters.visibility`). The surface's own emission L_e is not part of it: the compose adds
 //! `gbuffer.emission` (so no gather takes an emitter for a sender besides its VPLs).
 
+use crate::counters::prelude::*;
+
 use glam::Vec4;
 
 use super::gbuffer::GBufferViews;
@@ -121,14 +123,14 @@ impl DirectPass {
             "cs_atlas",
             &[&layout0, &layout1, &layout2],
         );
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
+        let params = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("direct.params"),
             size: std::mem::size_of::<DirectParams>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let storage = |label, size| {
-            device.create_buffer(&wgpu::BufferDescriptor {
+            device.counted_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
                 size,
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
@@ -137,7 +139,7 @@ impl DirectPass {
         };
         let lights = storage("direct.lights", 8 * std::mem::size_of::<super::shadow::GpuLight>() as u64);
         let matrices = storage("direct.light_view_proj", 8 * 64);
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+        let sampler = device.counted_sampler(&wgpu::SamplerDescriptor {
             label: Some("direct.shadow_sampler"),
             mag_filter: wgpu::FilterMode::Linear,
             min_filter: wgpu::FilterMode::Linear,
@@ -227,7 +229,7 @@ impl DirectPass {
         let light_size = std::mem::size_of::<super::shadow::GpuLight>() as u64;
         if lights.lights.len() > self.light_capacity {
             self.light_capacity = lights.lights.len().next_power_of_two();
-            self.lights = device.create_buffer(&wgpu::BufferDescriptor {
+            self.lights = device.counted_buffer(&wgpu::BufferDescriptor {
                 label: Some("direct.lights"),
                 size: self.light_capacity as u64 * light_size,
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
@@ -236,7 +238,7 @@ impl DirectPass {
         }
         if lights.views.len() > self.matrix_capacity {
             self.matrix_capacity = lights.views.len().next_power_of_two();
-            self.matrices = device.create_buffer(&wgpu::BufferDescriptor {
+            self.matrices = device.counted_buffer(&wgpu::BufferDescriptor {
                 label: Some("direct.light_view_proj"),
                 size: self.matrix_capacity as u64 * 64,
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
@@ -247,7 +249,7 @@ impl DirectPass {
         if !lights.views.is_empty() {
             ctx.queue.write_buffer(&self.matrices, 0, bytemuck::cast_slice(&lights.views));
         }
-        let group0 = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let group0 = device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("direct.inputs"),
             layout: &self.layout0,
             entries: &[
@@ -273,7 +275,7 @@ impl DirectPass {
             ],
         });
         let tv = wgpu::BindingResource::TextureView;
-        let group1 = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let group1 = device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("direct.gbuffer"),
             layout: &self.layout1,
             entries: &[
@@ -289,8 +291,8 @@ impl DirectPass {
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &group0, &[]);
-        pass.set_bind_group(1, &group1, &[]);
+        pass.set_group(0, &group0, &[]);
+        pass.set_group(1, &group1, &[]);
         let (w, h) = (self.radiance.width(), self.radiance.height());
         pass.dispatch_workgroups(w.div_ceil(super::TILE), h.div_ceil(super::TILE), 1);
         drop(pass);
@@ -316,7 +318,7 @@ impl DirectPass {
         let Some(group0) = &self.group0 else { return };
         let device = &ctx.device;
         let tv = wgpu::BindingResource::TextureView;
-        let group1 = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let group1 = device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("direct.atlas_gbuffer"),
             layout: &self.layout1,
             entries: &[
@@ -338,9 +340,9 @@ impl DirectPass {
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
         pass.set_pipeline(&self.atlas_pipeline);
-        pass.set_bind_group(0, group0, &[]);
-        pass.set_bind_group(1, &group1, &[]);
-        pass.set_bind_group(2, &group2, &[]);
+        pass.set_group(0, group0, &[]);
+        pass.set_group(1, &group1, &[]);
+        pass.set_group(2, &group2, &[]);
         pass.dispatch_workgroups(size.0.div_ceil(super::TILE), size.1.div_ceil(super::TILE), 1);
     }
 }

@@ -26,6 +26,8 @@
 //! `direct.radiance`; the compose adds it (`gbuffer.emission`), so no gather takes it for a
 //! sender a second time. `emitters.enabled` off: emitters only glow.
 
+use crate::counters::prelude::*;
+
 use glam::Vec4;
 
 use crate::buffers::{BufferKind, BufferRegistry};
@@ -141,7 +143,7 @@ pub fn gpu_vpl(v: &EmitterVpl) -> GpuVpl {
 }
 
 fn vpl_buffer(device: &wgpu::Device, label: &str, slots: u32) -> wgpu::Buffer {
-    device.create_buffer(&wgpu::BufferDescriptor {
+    device.counted_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
         size: slots.max(1) as u64 * std::mem::size_of::<GpuVpl>() as u64,
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
@@ -378,7 +380,7 @@ impl EmitterPass {
         let bounce = &self.bounce;
         timer.scope(ctx, enc, "emitters.bounce", |e, slot| bounce.run(e, slot, &group, 1, k));
         let size = std::mem::size_of::<GpuVpl>() as u64;
-        enc.copy_buffer_to_buffer(&self.bounce_list, k as u64 * size, dest, first as u64 * size, k as u64 * size);
+        enc.counted_copy_buffer(&self.bounce_list, k as u64 * size, dest, first as u64 * size, k as u64 * size);
         self.stats.bounce_share = k;
         k
     }

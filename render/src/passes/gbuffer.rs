@@ -8,6 +8,8 @@
 //! has no emitters; `gbuffer.emission` carries glTF emission so that emissive surfaces
 //! (the classic Cornell box's light quad) show in the direct light.
 
+use crate::counters::prelude::*;
+
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::scene::SceneState;
@@ -233,8 +235,8 @@ impl GBufferPass {
         let label = format!("{}.pass", self.name);
         let mut pass = self.targets.begin_clear_pass(encoder, &label, slot.and_then(|s| s.render(first, last)));
         pass.set_pipeline(&self.double_sided);
-        pass.set_bind_group(0, camera_group, &[]);
-        pass.set_bind_group(1, &scene.instance_group, &[]);
+        pass.set_group(0, camera_group, &[]);
+        pass.set_group(1, &scene.instance_group, &[]);
         let single = if self.cull_single_sided { &self.single_sided } else { &self.double_sided };
         scene.draw(&mut pass, state, Some(2), Some((single, &self.double_sided)));
     }
@@ -260,7 +262,7 @@ impl GBuffer {
                 },
             })
         };
-        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        encoder.begin_counted_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(label),
             color_attachments: &[
                 clear(&v.position),

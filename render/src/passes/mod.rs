@@ -11,6 +11,8 @@
 //! | `reference/` | Knecht 002 §5.2 (the baseline) | VPL source uniform batches, visibility exact, running average | `vpl/{sample,shadow,gather}` |
 //! | `soler/` | Soler et al. 004 | shading points mip levels, screen-space ring gather, joint bilateral upsampling | `soler/` |
 
+use crate::counters::prelude::*;
+
 pub mod compose;
 pub mod direct;
 pub mod emitters;
@@ -53,7 +55,7 @@ pub struct InstanceUniform {
 
 /// An unmapped buffer of `size` bytes.
 pub fn buffer(device: &wgpu::Device, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
-    device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
+    device.counted_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
 }
 
 /// A uniform buffer of `size` bytes written with `queue.write_buffer`.
@@ -100,7 +102,7 @@ pub fn create_target(
     format: wgpu::TextureFormat,
     extra_usage: wgpu::TextureUsages,
 ) -> wgpu::Texture {
-    device.create_texture(&wgpu::TextureDescriptor {
+    device.counted_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
         mip_level_count: 1,
@@ -154,7 +156,7 @@ pub fn depth_only_pipeline(
 
 /// Default view of a texture, labelled.
 pub fn view(texture: &wgpu::Texture, label: &str) -> wgpu::TextureView {
-    texture.create_view(&wgpu::TextureViewDescriptor { label: Some(label), ..Default::default() })
+    texture.counted_view(&wgpu::TextureViewDescriptor { label: Some(label), ..Default::default() })
 }
 
 /// A compute pipeline over one resolved shader module.
@@ -193,7 +195,7 @@ pub fn bind_group(
         .enumerate()
         .map(|(k, resource)| wgpu::BindGroupEntry { binding: k as u32, resource })
         .collect();
-    device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(label), layout, entries: &entries })
+    device.counted_bind_group(&wgpu::BindGroupDescriptor { label: Some(label), layout, entries: &entries })
 }
 
 /// The first `size` bytes of `buffer`, bound with a dynamic offset (one slot of
@@ -219,7 +221,7 @@ pub fn dispatch_2d(
 ) {
     let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(label), timestamp_writes });
     pass.set_pipeline(pipeline);
-    pass.set_bind_group(0, group, offsets);
+    pass.set_group(0, group, offsets);
     pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);
 }
 

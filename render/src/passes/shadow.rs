@@ -4,6 +4,8 @@
 //! `Depth32Float` array texture, registered as `direct.shadow_map`.
 //! Shader: `shaders/shadow/shadow.wgsl`.
 
+use crate::counters::prelude::*;
+
 use glam::{Mat4, Vec3, Vec4};
 
 use crate::buffers::{BufferKind, BufferRegistry};
@@ -210,13 +212,13 @@ impl ShadowPass {
         layout: &wgpu::BindGroupLayout,
         capacity: usize,
     ) -> (wgpu::Buffer, wgpu::BindGroup) {
-        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        let buffer = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("direct.shadow.views"),
             size: VIEW_STRIDE * capacity as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let group = device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("direct.shadow.views"),
             layout,
             entries: &[wgpu::BindGroupEntry {
@@ -232,7 +234,7 @@ impl ShadowPass {
     }
 
     fn create_texture(device: &wgpu::Device, size: u32, layers: u32) -> (wgpu::Texture, wgpu::TextureView) {
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
+        let texture = device.counted_texture(&wgpu::TextureDescriptor {
             label: Some("direct.shadow_map"),
             size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: layers },
             mip_level_count: 1,
@@ -244,7 +246,7 @@ impl ShadowPass {
                 | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],
         });
-        let view = texture.create_view(&wgpu::TextureViewDescriptor {
+        let view = texture.counted_view(&wgpu::TextureViewDescriptor {
             label: Some("direct.shadow_map.array"),
             dimension: Some(wgpu::TextureViewDimension::D2Array),
             array_layer_count: Some(layers),
@@ -303,14 +305,14 @@ impl ShadowPass {
         ctx.queue.write_buffer(&self.view_buffer, 0, &data);
         let count = views.len().max(1);
         for layer in 0..count {
-            let view = self.texture.create_view(&wgpu::TextureViewDescriptor {
+            let view = self.texture.counted_view(&wgpu::TextureViewDescriptor {
                 label: Some("direct.shadow_map.layer"),
                 dimension: Some(wgpu::TextureViewDimension::D2),
                 base_array_layer: layer as u32,
                 array_layer_count: Some(1),
                 ..Default::default()
             });
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            let mut pass = encoder.begin_counted_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("direct.shadow.pass"),
                 color_attachments: &[],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
@@ -323,8 +325,8 @@ impl ShadowPass {
                 multiview_mask: None,
             });
             if layer < views.len() {
-                pass.set_bind_group(0, &self.view_group, &[(layer as u64 * VIEW_STRIDE) as u32]);
-                pass.set_bind_group(1, &scene.instance_group, &[]);
+                pass.set_group(0, &self.view_group, &[(layer as u64 * VIEW_STRIDE) as u32]);
+                pass.set_group(1, &scene.instance_group, &[]);
                 scene.draw_depth(&mut pass, state, 2, (&self.pipeline, &self.cutout));
             }
         }

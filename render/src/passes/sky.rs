@@ -10,6 +10,8 @@
 //! in the scene overrides file); how finely the lab samples it is this group. Where the scene
 //! leaves the screen empty, stage 7 draws the sky ([`SkyBackground`], `sky.background`).
 
+use crate::counters::prelude::*;
+
 use crate::scene::WorldLight;
 use crate::scene::sky::Sky;
 use crate::settings_group;
@@ -85,7 +87,7 @@ pub struct SkyBackground {
 
 impl SkyBackground {
     pub fn new(device: &wgpu::Device) -> Self {
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
+        let params = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("sky.background.params"),
             size: std::mem::size_of::<SkyParams>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
@@ -96,7 +98,7 @@ impl SkyBackground {
     }
 
     fn texture(device: &wgpu::Device, width: u32, height: u32) -> wgpu::Texture {
-        device.create_texture(&wgpu::TextureDescriptor {
+        device.counted_texture(&wgpu::TextureDescriptor {
             label: Some("sky.background.image"),
             size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
             mip_level_count: 1,

@@ -7,6 +7,8 @@
 //! The pass is not part of the frame: each viewer owns a [`BufferView`] (its own uniform
 //! and output) and runs it after the frame on the buffer it shows.
 
+use crate::counters::prelude::*;
+
 use std::sync::Arc;
 
 use glam::{UVec4, Vec4};
@@ -239,7 +241,7 @@ impl ViewPipeline {
             cache: None,
         });
         let dummy = |label: &str, format, layers| {
-            let t = device.create_texture(&wgpu::TextureDescriptor {
+            let t = device.counted_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
                 size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: layers },
                 mip_level_count: 1,
@@ -250,7 +252,7 @@ impl ViewPipeline {
                 view_formats: &[],
             });
             let dimension = if layers > 1 { arr } else { d2 };
-            t.create_view(&wgpu::TextureViewDescriptor {
+            t.counted_view(&wgpu::TextureViewDescriptor {
                 label: Some(label),
                 dimension: Some(dimension),
                 ..Default::default()
@@ -288,7 +290,7 @@ pub struct BufferView {
 
 impl BufferView {
     pub fn new(ctx: &GpuContext, shared: Arc<ViewPipeline>) -> Self {
-        let params = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        let params = ctx.device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("view.params"),
             size: std::mem::size_of::<ViewParams>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
@@ -328,7 +330,7 @@ impl BufferView {
         let (w, h) = ((t.width() >> settings.level).max(1), (t.height() >> settings.level).max(1));
         let recreated = self.output.as_ref().is_none_or(|o| o.width() != w || o.height() != h);
         if recreated {
-            self.output = Some(ctx.device.create_texture(&wgpu::TextureDescriptor {
+            self.output = Some(ctx.device.counted_texture(&wgpu::TextureDescriptor {
                 label: Some("view.output"),
                 size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
                 mip_level_count: 1,
@@ -348,7 +350,7 @@ impl BufferView {
         } else {
             wgpu::TextureAspect::All
         };
-        let src_view = t.create_view(&wgpu::TextureViewDescriptor {
+        let src_view = t.counted_view(&wgpu::TextureViewDescriptor {
             label: Some("view.source"),
             dimension: Some(source.dimension()),
             aspect,
@@ -361,17 +363,17 @@ impl BufferView {
             entries.push(wgpu::BindGroupEntry { binding, resource: wgpu::BindingResource::TextureView(view) });
         }
         entries.push(wgpu::BindGroupEntry { binding: 7, resource: self.shared.colormaps.as_entire_binding() });
-        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("view.inputs"),
             layout: &self.shared.layout,
             entries: &entries,
         });
         let out_view =
-            output.create_view(&wgpu::TextureViewDescriptor { label: Some("view.output"), ..Default::default() });
+            output.counted_view(&wgpu::TextureViewDescriptor { label: Some("view.output"), ..Default::default() });
         let mut enc =
             ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("view.encoder") });
         {
-            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            let mut pass = enc.begin_counted_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("view.pass"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                     view: &out_view,
@@ -388,10 +390,10 @@ impl BufferView {
                 multiview_mask: None,
             });
             pass.set_pipeline(&self.shared.pipeline);
-            pass.set_bind_group(0, &group, &[]);
+            pass.set_group(0, &group, &[]);
             pass.draw(0..3, 0..1);
         }
-        ctx.queue.submit([enc.finish()]);
+        ctx.submit([enc.finish()]);
         Ok(recreated)
     }
 }
@@ -433,7 +435,7 @@ impl DepthProbe {
         let pipeline = super::compute_pipeline(device, "probe.depth", &module, "probe_depth", &[&layout]);
         let dummy = |label: &str, layers: u32, dimension| {
             device
-                .create_texture(&wgpu::TextureDescriptor {
+                .counted_texture(&wgpu::TextureDescriptor {
                     label: Some(label),
                     size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: layers },
                     mip_level_count: 1,
@@ -443,7 +445,7 @@ impl DepthProbe {
                     usage: wgpu::TextureUsages::TEXTURE_BINDING,
                     view_formats: &[],
                 })
-                .create_view(&wgpu::TextureViewDescriptor {
+                .counted_view(&wgpu::TextureViewDescriptor {
                     label: Some(label),
                     dimension: Some(dimension),
                     ..Default::default()
@@ -484,14 +486,14 @@ impl DepthProbe {
             },
         );
         let dimension = if array { wgpu::TextureViewDimension::D2Array } else { wgpu::TextureViewDimension::D2 };
-        let view = t.create_view(&wgpu::TextureViewDescriptor {
+        let view = t.counted_view(&wgpu::TextureViewDescriptor {
             label: Some("probe.source"),
             dimension: Some(dimension),
             aspect: wgpu::TextureAspect::DepthOnly,
             ..Default::default()
         });
         let (v2, va) = if array { (&self.dummy_2d, &view) } else { (&view, &self.dummy_array) };
-        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("probe.inputs"),
             layout: &self.layout,
             entries: &[
@@ -504,7 +506,7 @@ impl DepthProbe {
         let mut pass = encoder
             .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("probe.depth"), timestamp_writes: None });
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &group, &[]);
+        pass.set_group(0, &group, &[]);
         pass.dispatch_workgroups(1, 1, 1);
     }
 }

@@ -1,6 +1,11 @@
 //! Reading the renderer's results back (timings, buffers, statistics, probes) and the
 //! shader hot reload.
 
+use std::sync::Arc;
+
+use crate::counters::prelude::*;
+use crate::readback::{Arrived, Readback, Readout};
+
 use glam::Mat4;
 
 use super::Renderer;
@@ -67,7 +72,7 @@ impl Renderer {
         }
         if let Some(g) = gbuffer {
             self.gbuffer = g;
-            self.camera_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            self.camera_group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("frame.camera"),
                 layout: &self.gbuffer.camera_layout,
                 entries: &[wgpu::BindGroupEntry { binding: 0, resource: self.camera_buffer.as_entire_binding() }],
@@ -144,6 +149,7 @@ impl Renderer {
     /// the wall clock where the device has none).
     pub fn set_timing_source(&mut self, source: crate::timing::TimingSource) {
         self.timer = GpuTimer::with_source(&self.ctx, source);
+        self.timer.set_no_wait(self.interactive);
     }
 
     pub fn buffers(&self) -> &BufferRegistry {
@@ -170,6 +176,22 @@ impl Renderer {
     /// filled slot. None when no VPL source runs or no frame was rendered with it. Blocks
     /// until the list is on the CPU.
     pub fn vpl_list(&self) -> Option<Vec<crate::passes::reference::vpl::GpuVpl>> {
+        let (buffer, bytes) = self.vpl_source()?;
+        Some(decode_vpls(&crate::buffers::read_storage(&self.ctx, &buffer, bytes).ok()?))
+    }
+
+    /// [`Self::vpl_list`] of a frame or two ago, without waiting (the window's overlay).
+    pub fn vpl_list_later(&self) -> Option<Vec<crate::passes::reference::vpl::GpuVpl>> {
+        let source = self.vpl_source()?;
+        let a = self.read_later("vpl.list", Readback::Storage(vec![source]), 0)?;
+        match &a.data {
+            Ok(Readout::Bytes(parts)) => Some(decode_vpls(parts.first()?)),
+            _ => None,
+        }
+    }
+
+    /// The buffer of the last frame's VPLs and its filled bytes.
+    fn vpl_source(&self) -> Option<(wgpu::Buffer, u64)> {
         let (buffer, count) = if self.settings.pipeline.uses_knecht_vpls() {
             let k = self.stages.knecht.as_ref()?;
             if k.frames == 0 {
@@ -187,13 +209,7 @@ impl Renderer {
             return None;
         };
         let size = std::mem::size_of::<crate::passes::reference::vpl::GpuVpl>() as u64;
-        let bytes = crate::buffers::read_storage(&self.ctx, buffer, count as u64 * size).ok()?;
-        Some(
-            bytemuck::pod_collect_to_vec::<u8, crate::passes::reference::vpl::GpuVpl>(&bytes)
-                .into_iter()
-                .filter(|v| v.position.w > 0.5)
-                .collect(),
-        )
+        Some((buffer.clone(), count as u64 * size))
     }
 
     pub fn readback(&self, name: &str) -> Result<ImageF32, BufferError> {
@@ -206,6 +222,57 @@ impl Renderer {
     pub fn probe(&self, pixels: &[(u32, u32)]) -> Result<Vec<Vec<crate::buffers::ProbeValue>>, BufferError> {
         let probe = self.depth_probe.get_or_init(|| crate::passes::view::DepthProbe::new(&self.ctx));
         self.registry.probe(&self.ctx, probe, self.size(), pixels)
+    }
+
+    /// The last frame's memory traffic per pass, in bytes, in pass order
+    /// (`counters::traffic`: what each pass binds, from the formats and sizes).
+    pub fn traffic(&self) -> &[(String, u64)] {
+        &self.traffic
+    }
+
+    /// Asks for `what` under `key` (with the caller's `tag`), copied at the end of the next
+    /// frame, and returns the newest copy of `key` that has arrived; never waits
+    /// (`crate::readback`).
+    pub fn read_later(&self, key: &str, what: Readback, tag: u64) -> Option<Arc<Arrived>> {
+        self.readbacks.lock().ok()?.request(key, what, tag)
+    }
+
+    /// The newest arrived copy of `key`, without asking for another.
+    pub fn read_latest(&self, key: &str) -> Option<Arc<Arrived>> {
+        self.readbacks.lock().ok()?.latest(key)
+    }
+
+    /// Drops `key`'s read-backs (its pane or overlay closed).
+    pub fn read_forget(&self, key: &str) {
+        if let Ok(mut r) = self.readbacks.lock() {
+            r.forget(key);
+        }
+    }
+
+    /// [`Self::hcb_stats`] without waiting: the statistics of a frame or two ago, None
+    /// until they arrive (the window's panes and overlay).
+    pub fn hcb_stats_later(&self) -> Option<HcbStats> {
+        let h = self.stages.hcb.as_ref()?;
+        let a = self.read_later("hcb.stats", Readback::Storage(h.stats_sources()), 0)?;
+        match &a.data {
+            Ok(Readout::Bytes(parts)) => h.stats_from(parts, self.settings.hcb.d_max(self.bounds.radius())),
+            _ => None,
+        }
+    }
+
+    /// Gautron's cache counters (and with `records` its records) of a frame or two ago,
+    /// without waiting; None until they arrive or without a Gautron stage.
+    pub fn gautron_state_later(
+        &self,
+        records: bool,
+    ) -> Option<(crate::passes::gautron::CacheState, Option<Vec<crate::passes::gautron::GpuRecord>>)> {
+        let g = self.stages.gautron.as_ref()?;
+        let key = if records { "gautron.records" } else { "gautron.state" };
+        let a = self.read_later(key, Readback::Storage(g.state_sources(records)), 0)?;
+        match &a.data {
+            Ok(Readout::Bytes(parts)) => crate::passes::gautron::stage::GautronStage::state_from(parts),
+            _ => None,
+        }
     }
 
     pub fn final_ldr(&self) -> &wgpu::Texture {
@@ -301,7 +368,9 @@ pub fn scope_output(scope: &str) -> Option<&'static str> {
         s if s.starts_with("ism.splat.") || s.starts_with("vpl.bounce.") => "ism.atlas",
         "ism.pull_push" => "ism.atlas_pulled",
         "interleave.split" => "interleave.split.albedo",
-        "interleave.gather" => "indirect.accum",
+        // The fused gather (default) writes the merged light; with `interleave.split_passes`
+        // its output is `indirect.accum`, which the merge turns into this.
+        "interleave.gather" => "indirect.merged",
         "interleave.merge" => "indirect.merged",
         "temporal" => "temporal.confidence",
         "interleave.filter" => "indirect.filtered",
@@ -362,4 +431,13 @@ pub fn scene_view(scene: &Scene, bounds: Aabb, aspect: f32) -> crate::scene::fra
         Some(v) => v.for_aspect(aspect, bounds),
         None => crate::scene::framing::choose_view(scene, aspect, Default::default()),
     }
+}
+
+/// The filled VPL slots of a `vpl.list` read-back.
+fn decode_vpls(bytes: &[u8]) -> Vec<crate::passes::reference::vpl::GpuVpl> {
+    let size = std::mem::size_of::<crate::passes::reference::vpl::GpuVpl>();
+    bytemuck::pod_collect_to_vec::<u8, crate::passes::reference::vpl::GpuVpl>(&bytes[..bytes.len() / size * size])
+        .into_iter()
+        .filter(|v| v.position.w > 0.5)
+        .collect()
 }

@@ -2,6 +2,8 @@
 //! (created when a choice selects them, dropped when none does). `frame.rs` renders a frame
 //! with them; `checks` refuses what the device cannot hold; `access` reads results back.
 
+use crate::counters::prelude::*;
+
 mod access;
 mod soler_samples;
 pub use soler_samples::{SolerReceiver, SolerSample};
@@ -102,6 +104,10 @@ pub struct Renderer {
     pub(crate) last_good_camera: Camera,
     /// Why the camera was last replaced by `last_good_camera`, until a good one comes.
     pub(crate) camera_problem: Option<String>,
+    /// Read-backs copied in the frame's encoder and read without waiting (the window's).
+    pub(crate) readbacks: std::sync::Mutex<crate::readback::Readbacks>,
+    /// The last frame's bytes per pass (`counters::traffic`).
+    pub(crate) traffic: Vec<(String, u64)>,
 }
 
 impl Renderer {
@@ -115,6 +121,7 @@ impl Renderer {
         height: u32,
     ) -> Result<Self, RenderError> {
         check_size(&ctx, width, height)?;
+        ctx.make_current();
         let errors = settings.validate();
         if !errors.is_empty() {
             return Err(RenderError::Settings(errors));
@@ -132,13 +139,13 @@ impl Renderer {
         }
         scene.warnings.extend(gpu_scene.warnings.iter().cloned());
         let gbuffer = GBufferPass::new(&ctx, &gpu_scene, width, height);
-        let camera_buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        let camera_buffer = ctx.device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("frame.camera"),
             size: std::mem::size_of::<CameraUniform>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let camera_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let camera_group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("frame.camera"),
             layout: &gbuffer.camera_layout,
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: camera_buffer.as_entire_binding() }],
@@ -176,6 +183,8 @@ impl Renderer {
             depth_probe: std::sync::OnceLock::new(),
             last_good_camera: camera,
             camera_problem: None,
+            readbacks: Default::default(),
+            traffic: Vec::new(),
         };
         r.register_all();
         r.ensure_passes();
@@ -275,7 +284,7 @@ impl Renderer {
         next.camera = self.camera;
         next.last_good_camera = self.last_good_camera;
         next.clock = self.clock;
-        next.interactive = self.interactive;
+        next.set_interactive(self.interactive);
         next.set_timing_source(self.timing_source());
         *self = next;
         Ok(())
@@ -462,6 +471,7 @@ impl Renderer {
     /// frame's own timings are returned.
     pub fn set_interactive(&mut self, interactive: bool) {
         self.interactive = interactive;
+        self.timer.set_no_wait(interactive);
     }
 
     /// The scene at this instant, with the sky's directions among its lights (`passes::sky`).
@@ -474,6 +484,7 @@ impl Renderer {
     /// Creates, resizes or drops the passes of stages 3–7 for the current stage choices, so
     /// that their buffers are registered before the first frame.
     pub(crate) fn ensure_passes(&mut self) {
+        self.ctx.make_current();
         let ctx = self.ctx.clone();
         let s = self.settings.clone();
         let p = &s.pipeline;
@@ -514,8 +525,9 @@ impl Renderer {
             Some(n) => {
                 let created = x.interleave.is_none();
                 let camera_entry = bgl::uniform(0, wgpu::ShaderStages::COMPUTE);
-                let i = x.interleave.get_or_insert_with(|| InterleavePass::new(&ctx, camera_entry, w, h, n));
-                fresh |= i.ensure(&ctx, w, h, n) | created;
+                let split = s.interleave.split_passes;
+                let i = x.interleave.get_or_insert_with(|| InterleavePass::new(&ctx, camera_entry, w, h, n, split));
+                fresh |= i.ensure(&ctx, w, h, n, split) | created;
             }
             None => fresh |= x.interleave.take().is_some(),
         }

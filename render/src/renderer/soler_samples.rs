@@ -35,11 +35,64 @@ pub struct SolerReceiver {
     pub samples: Vec<SolerSample>,
 }
 
+/// Reads texels (name, x, y) for stage 0 (receivers) or 1 (samples); Ok(None): not there yet.
+type TexelReader<'a> = dyn FnMut(&[(&str, u32, u32)], usize) -> Result<Option<Vec<[f32; 4]>>, String> + 'a;
+
 impl Renderer {
     /// The ring samples behind G-buffer pixel `pixel` at each gathered level of the last
     /// rendered frame (Fig. 3 right); an error when no screen-space gather runs or nothing has
     /// been rendered. Levels whose receiver texel is background are left out.
     pub fn soler_samples(&self, pixel: (u32, u32)) -> Result<Vec<SolerReceiver>, String> {
+        let frame = self.clock.frame.saturating_sub(1);
+        let mut read = |points: &[(&str, u32, u32)], _: usize| {
+            self.registry.read_texels(&self.ctx, points).map(Some).map_err(|e| e.to_string())
+        };
+        self.soler_samples_with(pixel, frame, &mut read).map(|r| r.unwrap_or_default())
+    }
+
+    /// [`Self::soler_samples`] without waiting (the window's overlay): its two reads (the
+    /// receivers, then their samples) are copied in later frames and taken in as they arrive,
+    /// so the overlay follows the pixel a few frames late. Ok(None) while waiting.
+    pub fn soler_samples_later(&self, pixel: (u32, u32)) -> Result<Option<Vec<SolerReceiver>>, String> {
+        use crate::readback::{Readback, Readout};
+        let tag = |points: &[(&str, u32, u32)]| {
+            use std::hash::{Hash, Hasher};
+            let mut h = std::collections::hash_map::DefaultHasher::new();
+            points.hash(&mut h);
+            h.finish()
+        };
+        // The frame of the receivers' read sets the ring's rotation of the samples.
+        let mut frame = None;
+        let mut read = |points: &[(&str, u32, u32)], stage: usize| -> Result<Option<Vec<[f32; 4]>>, String> {
+            let what = Readback::Texels(points.iter().map(|&(n, x, y)| (n.to_string(), x, y)).collect());
+            let Some(a) = self.read_later(&format!("soler.samples.{stage}"), what, tag(points)) else {
+                return Ok(None);
+            };
+            if a.tag != tag(points) || frame.is_some_and(|f| a.frame < f) {
+                return Ok(None);
+            }
+            frame.get_or_insert(a.frame);
+            match &a.data {
+                Ok(Readout::Texels(v)) => Ok(Some(v.clone())),
+                Ok(_) => Ok(None),
+                Err(e) => Err(e.clone()),
+            }
+        };
+        let Some(last) = self.read_latest("soler.samples.0") else {
+            // Nothing asked yet: ask for the receivers.
+            return self.soler_samples_with(pixel, self.clock.frame, &mut read);
+        };
+        self.soler_samples_with(pixel, last.frame, &mut read)
+    }
+
+    /// The samples behind `pixel` as rendered in `frame`, reading texels with `read` (its
+    /// second argument: 0 for the receivers, 1 for their samples; Ok(None): not yet there).
+    fn soler_samples_with(
+        &self,
+        pixel: (u32, u32),
+        frame: u64,
+        read: &mut TexelReader<'_>,
+    ) -> Result<Option<Vec<SolerReceiver>>, String> {
         let s = &self.settings.soler;
         let p = &self.settings.pipeline;
         if !p.uses_soler() || self.stages.soler.is_none() {
@@ -48,7 +101,7 @@ impl Renderer {
         if self.clock.frame == 0 {
             return Err("no frame rendered yet".into());
         }
-        let frame = (self.clock.frame - 1) as u32;
+        let frame = frame as u32;
         let (w, h) = self.size();
         let levels: Vec<u32> = s.gathered_levels().collect();
         let size_of = |k: u32| -> (u32, u32) {
@@ -76,7 +129,7 @@ impl Renderer {
             let (x, y) = texel_of(k);
             points.extend(all_names[i].iter().map(|n| (n.as_str(), x, y)));
         }
-        let v = self.registry.read_texels(&self.ctx, &points).map_err(|e| e.to_string())?;
+        let Some(v) = read(&points, 0)? else { return Ok(None) };
         let texel = |p: [f32; 4], n: [f32; 4], m: [f32; 4]| -> Texel {
             if n[3] < 0.5 {
                 return Texel::default();
@@ -156,23 +209,29 @@ impl Renderer {
                 points.push((all_names[pd.names][1].as_str(), qx, qy));
             }
         }
-        let senders = self.registry.read_texels(&self.ctx, &points).map_err(|e| e.to_string())?;
+        let Some(senders) = read(&points, 1)? else { return Ok(None) };
         let mut at = 0;
-        Ok(pending
-            .into_iter()
-            .map(|pd| {
-                let samples = pd
-                    .offsets
-                    .iter()
-                    .map(|&(qx, qy)| {
-                        let sender = texel(senders[at], senders[at + 1], [0.0; 4]);
-                        at += 2;
-                        let lit = sender.valid() && soler::facing(&pd.receiver, &sender, near_cut).is_some();
-                        SolerSample { level: pd.level, pixel: (Vec2::new(qx as f32, qy as f32) + 0.5) * pd.scale, lit }
-                    })
-                    .collect();
-                SolerReceiver { level: pd.level, footprint: pd.footprint, glossy: pd.glossy, samples }
-            })
-            .collect())
+        Ok(Some(
+            pending
+                .into_iter()
+                .map(|pd| {
+                    let samples = pd
+                        .offsets
+                        .iter()
+                        .map(|&(qx, qy)| {
+                            let sender = texel(senders[at], senders[at + 1], [0.0; 4]);
+                            at += 2;
+                            let lit = sender.valid() && soler::facing(&pd.receiver, &sender, near_cut).is_some();
+                            SolerSample {
+                                level: pd.level,
+                                pixel: (Vec2::new(qx as f32, qy as f32) + 0.5) * pd.scale,
+                                lit,
+                            }
+                        })
+                        .collect();
+                    SolerReceiver { level: pd.level, footprint: pd.footprint, glossy: pd.glossy, samples }
+                })
+                .collect(),
+        ))
     }
 }

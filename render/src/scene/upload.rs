@@ -2,6 +2,8 @@
 //! and bind group per material (base colour and emissive textures with a CPU-built mip chain), and a
 //! storage buffer of per-draw transforms rewritten every frame.
 
+use crate::counters::prelude::*;
+
 use glam::Mat4;
 
 use super::{Scene, SceneState, Vertex};
@@ -88,7 +90,6 @@ pub fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
 
 impl GpuScene {
     pub fn new(ctx: &GpuContext, scene: &Scene) -> Self {
-        use wgpu::util::DeviceExt;
         let device = &ctx.device;
         let mut vertices: Vec<Vertex> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
@@ -113,19 +114,19 @@ impl GpuScene {
         if indices.is_empty() {
             indices.extend_from_slice(&[0, 0, 0]);
         }
-        let vertex_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        let vertex_buffer = device.counted_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("scene.vertices"),
             contents: bytemuck::cast_slice(&vertices),
             usage: wgpu::BufferUsages::VERTEX,
         });
-        let index_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        let index_buffer = device.counted_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("scene.indices"),
             contents: bytemuck::cast_slice(&indices),
             usage: wgpu::BufferUsages::INDEX,
         });
 
         let draw_count = scene.evaluate(0.0).draws.len().max(1);
-        let instances = device.create_buffer(&wgpu::BufferDescriptor {
+        let instances = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("scene.instances"),
             size: (draw_count * std::mem::size_of::<InstanceUniform>()) as u64,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
@@ -135,14 +136,14 @@ impl GpuScene {
             label: Some("scene.instances"),
             entries: &[crate::passes::bgl::storage(0, wgpu::ShaderStages::VERTEX, true)],
         });
-        let instance_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let instance_group = device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("scene.instances"),
             layout: &instance_layout,
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: instances.as_entire_binding() }],
         });
 
         let material_layout = material_layout(device, "scene.material");
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+        let sampler = device.counted_sampler(&wgpu::SamplerDescriptor {
             label: Some("scene.material_sampler"),
             address_mode_u: wgpu::AddressMode::Repeat,
             address_mode_v: wgpu::AddressMode::Repeat,
@@ -204,23 +205,23 @@ impl GpuScene {
                     occlusion_tex.is_some() as u32 as f32,
                 ],
             };
-            let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            let buffer = device.counted_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(&format!("scene.material[{i}]")),
                 contents: bytemuck::bytes_of(&u),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
-            let view = tex.map(|t| &textures[t]).unwrap_or(&white).create_view(&wgpu::TextureViewDescriptor {
+            let view = tex.map(|t| &textures[t]).unwrap_or(&white).counted_view(&wgpu::TextureViewDescriptor {
                 label: Some("scene.material_texture"),
                 ..Default::default()
             });
             let emissive_view =
-                emissive_tex.map(|t| &textures[t]).unwrap_or(&white).create_view(&wgpu::TextureViewDescriptor {
+                emissive_tex.map(|t| &textures[t]).unwrap_or(&white).counted_view(&wgpu::TextureViewDescriptor {
                     label: Some("scene.material_emissive_texture"),
                     ..Default::default()
                 });
             // Data textures are read through linear views of the same sRGB-stored texels.
             let linear = |t: Option<usize>, label: &str| {
-                t.map(|t| &textures[t]).unwrap_or(&white).create_view(&wgpu::TextureViewDescriptor {
+                t.map(|t| &textures[t]).unwrap_or(&white).counted_view(&wgpu::TextureViewDescriptor {
                     label: Some(label),
                     format: Some(wgpu::TextureFormat::Rgba8Unorm),
                     ..Default::default()
@@ -229,7 +230,7 @@ impl GpuScene {
             let normal_view = linear(normal_tex, "scene.material_normal_texture");
             let mr_view = linear(mr_tex, "scene.material_metallic_roughness_texture");
             let occlusion_view = linear(occlusion_tex, "scene.material_occlusion_texture");
-            material_groups.push(device.create_bind_group(&wgpu::BindGroupDescriptor {
+            material_groups.push(device.counted_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some(&format!("scene.material[{i}]")),
                 layout: &material_layout,
                 entries: &[
@@ -301,7 +302,7 @@ impl GpuScene {
                 pass.set_pipeline(if ds { double } else { single });
             }
             if let Some(g) = material_group {
-                pass.set_bind_group(g, &self.material_groups[p.material.min(self.material_groups.len() - 1)], &[]);
+                pass.set_group(g, &self.material_groups[p.material.min(self.material_groups.len() - 1)], &[]);
             }
             pass.draw_indexed(p.first_index..p.first_index + p.index_count, p.base_vertex, inst..inst + 1);
         }
@@ -338,7 +339,7 @@ impl GpuScene {
             let m = p.material.min(self.material_groups.len() - 1);
             // Both pipelines share one layout, whose material group must be bound.
             pass.set_pipeline(if self.cutout.get(m).copied().unwrap_or(false) { cutout } else { opaque });
-            pass.set_bind_group(material_group, &self.material_groups[m], &[]);
+            pass.set_group(material_group, &self.material_groups[m], &[]);
             pass.draw_indexed(p.first_index..p.first_index + p.index_count, p.base_vertex, inst..inst + 1);
         }
     }
@@ -364,11 +365,7 @@ impl GpuScene {
         for (k, (_, p)) in self.primitives_of(state).enumerate() {
             let ds = self.double_sided.get(p.material).copied().unwrap_or(true);
             pass.set_pipeline(if ds { double } else { single });
-            pass.set_bind_group(
-                material_group,
-                &self.material_groups[p.material.min(self.material_groups.len() - 1)],
-                &[],
-            );
+            pass.set_group(material_group, &self.material_groups[p.material.min(self.material_groups.len() - 1)], &[]);
             pass.draw_indexed_indirect(args, k as u64 * 20);
         }
     }
@@ -409,7 +406,7 @@ fn upload_texture(ctx: &GpuContext, img: &super::TextureImage) -> wgpu::Texture 
     }
     chain.retain(|(cw, ch, _)| *cw <= max_dim && *ch <= max_dim);
     let (bw, bh, _) = chain[0];
-    let tex = ctx.device.create_texture(&wgpu::TextureDescriptor {
+    let tex = ctx.device.counted_texture(&wgpu::TextureDescriptor {
         label: Some(&format!("scene.texture.{}", img.name)),
         size: wgpu::Extent3d { width: bw, height: bh, depth_or_array_layers: 1 },
         mip_level_count: chain.len() as u32,

@@ -41,7 +41,7 @@ pub(super) fn settings_ui(st: &mut State, ui: &mut egui::Ui) {
         ui.separator();
         egui::CollapsingHeader::new("HCB statistics (Nguyen Table 1)").id_salt("hcb_stats").default_open(true).show(
             ui,
-            |ui| match l.renderer.hcb_stats() {
+            |ui| match l.renderer.hcb_stats_later() {
                 Some(stats) => hcb_stats_ui(ui, &stats, l.renderer.size()),
                 None => {
                     ui.small("no HCB frame rendered yet");
@@ -134,7 +134,7 @@ pub fn soler_reach_ui(ui: &mut egui::Ui, s: &gi_render::passes::soler::SolerSett
 /// The record cache's counters of the last frame (Gautron et al. 003, "Results"), and a
 /// warning when it is full while pixels still lack a record.
 pub fn gautron_cache_ui(ui: &mut egui::Ui, r: &gi_render::Renderer, s: &gi_render::LabSettings) {
-    let Some(st) = r.gautron().and_then(|g| g.read_state(&r.ctx)) else {
+    let Some((st, _)) = r.gautron_state_later(false) else {
         ui.small("no Gautron frame rendered yet");
         return;
     };

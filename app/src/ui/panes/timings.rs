@@ -16,6 +16,9 @@ pub(super) fn timings_ui(st: &mut State, ui: &mut egui::Ui) {
                 ui.colored_label(ui.visuals().warn_fg_color, "software device: its timestamps land in later passes, so per-pass times are unreliable here; `gi-lab bench` times each pass by the wall clock")
                     .on_hover_text("lavapipe writes a timestamp where the pass is recorded, not where its work runs");
             }
+            if l.renderer.timing_source() == gi_render::timing::TimingSource::Off {
+                ui.colored_label(ui.visuals().warn_fg_color, "this device has no GPU timestamps: the window does not time passes, because timing without them means waiting for the GPU after every pass; `gi-lab bench` times each pass by the wall clock");
+            }
             egui::Grid::new("timings").num_columns(2).striped(true).show(ui, |ui| {
                 let mut total = 0.0;
                 for t in l.renderer.timings() {

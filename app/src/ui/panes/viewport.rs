@@ -102,7 +102,7 @@ fn vpl_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
             egui::Color32::WHITE,
         )
     };
-    let Some(vpls) = l.renderer.vpl_list() else {
+    let Some(vpls) = l.renderer.vpl_list_later() else {
         note("VPL overlay: pick a VPL gather (instant radiosity or the exact-VPL reference) to see its VPLs".into());
         return;
     };
@@ -137,7 +137,7 @@ fn hcb_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
         painter.rect_filled(plate, 3.0, egui::Color32::from_black_alpha(200));
         painter.galley(pos, galley, egui::Color32::WHITE);
     };
-    let Some(stats) = l.renderer.hcb_stats() else {
+    let Some(stats) = l.renderer.hcb_stats_later() else {
         text("HCB samples: pick the hierarchical coherence buffer (Nguyen) to see its samples".into());
         return;
     };
@@ -149,8 +149,17 @@ fn hcb_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
     }
     // Covered pixels that no sample reached (hcb.irradiance's a = 0): magenta, never
     // silently black.
+    // Read without waiting (issue #38): both images of one frame, a frame or two late.
+    let image = |name: &str| {
+        let what = gi_render::readback::Readback::Image { name: name.into(), layer: 0, mip: 0 };
+        l.renderer.read_later(&format!("overlay.{name}"), what, 0)
+    };
+    let (light, normal) = (image("hcb.irradiance"), image("gbuffer.normal"));
+    use gi_render::readback::Readout::Image;
     if stats.uncovered > 0
-        && let (Ok(light), Ok(normal)) = (l.renderer.readback("hcb.irradiance"), l.renderer.readback("gbuffer.normal"))
+        && let (Some(a), Some(b)) = (&light, &normal)
+        && a.frame == b.frame
+        && let (Ok(Image(light)), Ok(Image(normal))) = (&a.data, &b.data)
     {
         for (i, (e, n)) in light.data.iter().zip(&normal.data).enumerate() {
             if e[3] == 0.0 && n[3] > 0.5 {
@@ -177,10 +186,7 @@ fn records_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
         painter.galley(pos, galley, egui::Color32::WHITE);
     };
     let r = &l.renderer;
-    let records = r.gautron().and_then(|g| {
-        let st = g.read_state(&r.ctx)?;
-        g.read_records(&r.ctx, st.count)
-    });
+    let records = r.gautron_state_later(true).and_then(|(_, records)| records);
     let Some(records) =
         records.filter(|_| l.settings.pipeline.shading_points == gi_render::pipeline::ShadingPoints::IrradianceRecords)
     else {
@@ -246,8 +252,9 @@ fn soler_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
         text("Soler samples: hover the image (or pin a probe) to see the samples behind a pixel".into());
         return;
     };
-    let receivers = match l.renderer.soler_samples(pixel) {
-        Ok(r) => r,
+    let receivers = match l.renderer.soler_samples_later(pixel) {
+        Ok(Some(r)) => r,
+        Ok(None) => return text("Soler samples: reading the pixel's levels…".into()),
         Err(e) => return text(format!("Soler samples: {e}")),
     };
     let (w, h) = l.renderer.size();

@@ -6,6 +6,8 @@
 //! (`gi-lab bench --suite gautron` prints both). The chunking kernels are
 //! `shaders/gautron/at_samples.wgsl`; the orchestration is `GautronStage::gather_at_samples`.
 
+use crate::counters::prelude::*;
+
 use crate::gpu::GpuContext;
 use crate::passes::{bgl, bind_group};
 
@@ -98,14 +100,14 @@ impl AtSamplesPass {
     /// Chunk `k`'s samples into the slots' records (and the raster's instance counts).
     pub fn begin(&self, pass: &mut wgpu::ComputePass<'_>, group: &wgpu::BindGroup, k: u32) {
         pass.set_pipeline(&self.begin);
-        pass.set_bind_group(0, group, &[(k as u64 * CHUNK_STRIDE) as u32]);
+        pass.set_group(0, group, &[(k as u64 * CHUNK_STRIDE) as u32]);
         pass.dispatch_workgroups(1, 1, 1);
     }
 
     /// Chunk `k`'s records' irradiance into its samples' light.
     pub fn store(&self, pass: &mut wgpu::ComputePass<'_>, group: &wgpu::BindGroup, k: u32, slots: u32) {
         pass.set_pipeline(&self.store);
-        pass.set_bind_group(0, group, &[(k as u64 * CHUNK_STRIDE) as u32]);
+        pass.set_group(0, group, &[(k as u64 * CHUNK_STRIDE) as u32]);
         pass.dispatch_workgroups(slots.div_ceil(64), 1, 1);
     }
 }

@@ -7,6 +7,8 @@
 //! distance with the per-texel table of `cpu::gautron::HemisphereTable`. Shaders
 //! `gautron/hemisphere.wgsl`, `gautron/reduce.wgsl`.
 
+use crate::counters::prelude::*;
+
 use super::{GautronSettings, atlas_grid};
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::cpu::gautron::HemisphereTable;
@@ -212,8 +214,8 @@ impl HemispherePass {
         );
         let mut pass =
             self.atlas.begin_clear_pass(enc, "gautron.hemisphere.pass", slot.and_then(|s| s.render(true, false)));
-        pass.set_bind_group(0, &group, &[]);
-        pass.set_bind_group(1, &scene.instance_group, &[]);
+        pass.set_group(0, &group, &[]);
+        pass.set_group(1, &scene.instance_group, &[]);
         scene.draw_indirect(&mut pass, state, 2, (&self.single_sided, &self.double_sided), args);
     }
 
@@ -262,7 +264,7 @@ impl HemispherePass {
             timestamp_writes: slot.and_then(|s| s.compute(false, true)),
         });
         pass.set_pipeline(&self.reduce);
-        pass.set_bind_group(0, &group, &[]);
+        pass.set_group(0, &group, &[]);
         pass.dispatch_workgroups(slots, 1, 1);
     }
 

@@ -4,6 +4,8 @@
 //! E = RGB / A and the diffuse reflection c·DI·E/π. Shaders `gautron/splat.wgsl`,
 //! `gautron/resolve.wgsl`; twin `cpu::gautron::{sphere_ndc_rect, accumulate}`.
 
+use crate::counters::prelude::*;
+
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::passes::gbuffer::GBufferViews;
@@ -184,7 +186,7 @@ impl SplatPass {
                 ops: wgpu::Operations { load, store: wgpu::StoreOp::Store },
             })
         };
-        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+        let mut pass = enc.begin_counted_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("gautron.splat.pass"),
             color_attachments: &[att(&self.views[0]), att(&self.views[1])],
             depth_stencil_attachment: None,
@@ -193,7 +195,7 @@ impl SplatPass {
             multiview_mask: None,
         });
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &group, &[]);
+        pass.set_group(0, &group, &[]);
         pass.draw_indirect(args, 0);
     }
 

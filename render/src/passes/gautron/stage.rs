@@ -6,6 +6,8 @@
 //! made or splatted in does not change the image ("Algorithm: Summary": no order
 //! constraint): the blending adds, and the creation lists its candidates in tile order.
 
+use crate::counters::prelude::*;
+
 use std::hash::{Hash, Hasher};
 
 use super::at_samples::AtSamplesPass;
@@ -58,6 +60,8 @@ pub struct GautronStage {
     vpl_records: Option<VplRecordPass>,
     /// The hemispheres at the HCB's samples (GI Lab's mix; made when first used).
     at_samples: Option<AtSamplesPass>,
+    /// The HCB's sample count of a recent frame, for the mix's chunks (read without waiting).
+    sample_count: Option<crate::readback::LateCount>,
     candidates: wgpu::ComputePipeline,
     compact: wgpu::ComputePipeline,
     cameras_pipeline: wgpu::ComputePipeline,
@@ -154,6 +158,7 @@ impl GautronStage {
             splat: SplatPass::new(ctx, w, h),
             vpl_records: None,
             at_samples: None,
+            sample_count: None,
             candidates: pipeline("cs_candidates"),
             compact: pipeline("cs_compact"),
             cameras_pipeline: pipeline("cs_cameras"),
@@ -382,13 +387,13 @@ impl GautronStage {
                 });
                 if let Some(cull) = cull {
                     pass.set_pipeline(cull);
-                    pass.set_bind_group(0, g0, &[0]);
-                    pass.set_bind_group(1, g1, &[]);
+                    pass.set_group(0, g0, &[0]);
+                    pass.set_group(1, g1, &[]);
                     pass.dispatch_workgroups(1, 1, 1);
                 }
                 pass.set_pipeline(begin);
-                pass.set_bind_group(0, g0, &[0]);
-                pass.set_bind_group(1, g1, &[]);
+                pass.set_group(0, g0, &[0]);
+                pass.set_group(1, g1, &[]);
                 pass.dispatch_workgroups(1, 1, 1);
             }
             splat.splat(ctx, e, slot, true, &self.params, camera, records, f.gbuffer, &self.splat_args)
@@ -400,8 +405,8 @@ impl GautronStage {
                     label: Some("gautron.create"),
                     timestamp_writes: slot.and_then(|s| s.compute(true, true)),
                 });
-                pass.set_bind_group(0, g0, &offset);
-                pass.set_bind_group(1, g1, &[]);
+                pass.set_group(0, g0, &offset);
+                pass.set_group(1, g1, &[]);
                 pass.set_pipeline(&self.candidates);
                 pass.dispatch_workgroups(tiles.0, tiles.1, 1);
                 pass.set_pipeline(&self.compact);
@@ -417,8 +422,8 @@ impl GautronStage {
                         label: Some("gautron.neighbours"),
                         timestamp_writes: None,
                     });
-                    pass.set_bind_group(0, g0, &offset);
-                    pass.set_bind_group(1, g1, &[]);
+                    pass.set_group(0, g0, &offset);
+                    pass.set_group(1, g1, &[]);
                     pass.set_pipeline(&self.clamp_cached);
                     pass.dispatch_workgroups(s.capacity.max(1).div_ceil(64), 1, 1);
                     pass.set_pipeline(&self.clamp_new);
@@ -438,9 +443,13 @@ impl GautronStage {
     /// GI Lab's mix with Nguyen et al.: a hemisphere at each of the HCB's samples (`list`,
     /// `counter` from `HcbStage::sample_buffers`), in chunks of the round's slots; each
     /// sample's irradiance goes to its `light`, and `args` gets the HCB splat's indirect
-    /// arguments. The chunks are counted on the CPU: the frame's commands so far are
-    /// submitted and the sample count read back (one stall per frame; the mix is a lab
-    /// comparison, not a shipping path). No cache: the records are scratch.
+    /// arguments. The CPU records the chunks, so it needs a bound on the sample count: the
+    /// count of a frame or two ago, read without waiting (`readback::LateCount`), with 25 %
+    /// and one chunk of headroom (the chunks past this frame's count draw and dispatch
+    /// nothing: their sizes come from the GPU's count). Only while no count has arrived yet
+    /// (the stage's first frames) are the commands so far submitted and the count read back,
+    /// a wait (issue #38). A frame whose count outgrows the bound (a cut to a far busier view)
+    /// leaves its excess samples unlit for that one frame. No cache: the records are scratch.
     pub fn gather_at_samples(
         &mut self,
         f: &FrameInputs,
@@ -452,14 +461,22 @@ impl GautronStage {
         let slots = self.prepare(f);
         self.cache_key = None;
         ctx.queue.write_buffer(&self.state, 0, bytemuck::bytes_of(&CacheState::default()));
-        let done = std::mem::replace(
-            enc,
-            ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame.after_hcb") }),
-        );
-        ctx.queue.submit([done.finish()]);
-        let words = read_storage(ctx, counter, 4)?;
         let list_len = list.size() / super::at_samples::HCB_SAMPLE_BYTES;
-        let n = (bytemuck::pod_read_unaligned::<u32>(&words[..4]) as u64).min(list_len) as u32;
+        let late =
+            self.sample_count.get_or_insert_with(|| crate::readback::LateCount::new(ctx, "gautron.sample_count"));
+        let n = match late.update(enc, counter) {
+            Some(recent) => (recent as u64 + recent as u64 / 4 + slots as u64).min(list_len) as u32,
+            None => {
+                let done = std::mem::replace(
+                    enc,
+                    ctx.device
+                        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame.after_hcb") }),
+                );
+                ctx.submit([done.finish()]);
+                let words = read_storage(ctx, counter, 4)?;
+                (bytemuck::pod_read_unaligned::<u32>(&words[..4]) as u64).min(list_len) as u32
+            }
+        };
         let chunks = n.div_ceil(slots).max(1);
         self.at_samples.get_or_insert_with(|| AtSamplesPass::new(ctx)).ensure_chunks(ctx, chunks);
         let pass = self.at_samples.as_ref().ok_or("no chunk pass")?;
@@ -477,8 +494,8 @@ impl GautronStage {
                     timestamp_writes: slot.and_then(|s| s.compute(true, true)),
                 });
                 pass.begin(&mut c, &group, k);
-                c.set_bind_group(0, g0, &[0]);
-                c.set_bind_group(1, g1, &[]);
+                c.set_group(0, g0, &[0]);
+                c.set_group(1, g1, &[]);
                 c.set_pipeline(&self.cameras_pipeline);
                 c.dispatch_workgroups(slots.div_ceil(64), 1, 1);
             });
@@ -622,6 +639,27 @@ impl GautronStage {
     pub fn read_state(&self, ctx: &GpuContext) -> Option<CacheState> {
         let b = read_storage(ctx, &self.state, std::mem::size_of::<CacheState>() as u64).ok()?;
         Some(bytemuck::pod_read_unaligned(&b))
+    }
+
+    /// The buffers (and bytes) of the cache's counters and its whole record array, for a
+    /// read-back without waiting (`Renderer::gautron_records_later`).
+    pub fn state_sources(&self, with_records: bool) -> Vec<(wgpu::Buffer, u64)> {
+        let mut v = vec![(self.state.clone(), std::mem::size_of::<CacheState>() as u64)];
+        if with_records {
+            v.push((self.records.clone(), self.records.size()));
+        }
+        v
+    }
+
+    /// The counters (and the first `count` records, when read) from [`Self::state_sources`]'s bytes.
+    pub fn state_from(parts: &[Vec<u8>]) -> Option<(CacheState, Option<Vec<GpuRecord>>)> {
+        let state: CacheState = bytemuck::pod_read_unaligned(parts.first()?.get(..std::mem::size_of::<CacheState>())?);
+        let records = parts.get(1).map(|b| {
+            let n = (state.count as usize * RECORD_BYTES as usize)
+                .min(b.len() / RECORD_BYTES as usize * RECORD_BYTES as usize);
+            bytemuck::pod_collect_to_vec(&b[..n])
+        });
+        Some((state, records))
     }
 
     /// The first `count` records (blocks).

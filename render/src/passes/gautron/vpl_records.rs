@@ -6,6 +6,8 @@
 //! `shaders/gautron/vpl_records.wgsl` (CPU twin `cpu::gautron::vpl_record`, where the ⚠
 //! reading of H is documented).
 
+use crate::counters::prelude::*;
+
 use glam::Vec4;
 
 use crate::gpu::GpuContext;
@@ -111,7 +113,7 @@ impl VplRecordPass {
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &group, &[]);
+        pass.set_group(0, &group, &[]);
         pass.dispatch_workgroups(slots.div_ceil(64), 1, 1);
     }
 }

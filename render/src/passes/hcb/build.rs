@@ -1,5 +1,7 @@
 //! Stage 5 of the HCB (Nguyen et al. §3): the levels, masks and samples (see the module above).
 
+use crate::counters::prelude::*;
+
 use bytemuck::Zeroable;
 
 use super::{GpuHcbSample, HcbFrame, HcbLevel, HcbParams, MAX_LEVELS, STRIDE};
@@ -247,7 +249,7 @@ impl HcbPass {
             size: std::num::NonZeroU64::new(std::mem::size_of::<HcbParams>() as u64),
         });
         let [normal, mask_out, mask_in, samples, position, cache, group] = views;
-        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("hcb.samples.inputs"),
             layout: &self.sample_layout,
             entries: &[
@@ -288,7 +290,7 @@ impl HcbPass {
             timestamp_writes: None,
         });
         pass.set_pipeline(&self.clear_pipeline);
-        pass.set_bind_group(0, &group, &[(slot * STRIDE) as u32]);
+        pass.set_group(0, &group, &[(slot * STRIDE) as u32]);
         pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
     }
 
@@ -336,7 +338,7 @@ impl HcbPass {
                         d: &wgpu::TextureView,
                         weights: &wgpu::TextureView,
                         marks: &wgpu::TextureView| {
-            ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("hcb.level.inputs"),
                 layout: &self.io_layout,
                 entries: &[
@@ -389,25 +391,25 @@ impl HcbPass {
         let offset = |k: usize| [(k as u64 * STRIDE) as u32];
         for (k, l) in self.levels.iter().enumerate() {
             pass.set_pipeline(if k == 0 { &self.base_pipeline } else { &self.build_pipeline });
-            pass.set_bind_group(0, &io_groups[k], &offset(k));
+            pass.set_group(0, &io_groups[k], &offset(k));
             let (gx, gy) = groups(l.width, l.height);
             pass.dispatch_workgroups(gx, gy, 1);
         }
         pass.set_pipeline(&self.mask_pipeline);
         for k in (1..n as usize).rev() {
-            pass.set_bind_group(0, &mask_groups[k - 1], &offset(k));
+            pass.set_group(0, &mask_groups[k - 1], &offset(k));
             let (gx, gy) = groups(self.levels[k - 1].width, self.levels[k - 1].height);
             pass.dispatch_workgroups(gx, gy, 1);
         }
         if cache.is_none() {
             pass.set_pipeline(&self.clear_pipeline);
-            pass.set_bind_group(0, &level_groups[0], &offset(n as usize));
+            pass.set_group(0, &level_groups[0], &offset(n as usize));
             let (gx, gy) = groups(self.width, self.height);
             pass.dispatch_workgroups(gx, gy, 1);
         }
         pass.set_pipeline(&self.samples_pipeline);
         for (k, l) in self.levels.iter().enumerate() {
-            pass.set_bind_group(0, &level_groups[k], &offset(k));
+            pass.set_group(0, &level_groups[k], &offset(k));
             let (gx, gy) = groups(l.width, l.height);
             pass.dispatch_workgroups(gx, gy, 1);
         }

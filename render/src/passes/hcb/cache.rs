@@ -8,6 +8,8 @@
 //! `shaders/hcb/{cache,cache_removal}.wgsl`; CPU twins `cpu::hcb::{validate, advance_counter,
 //! recompute_pattern, supplementary_base}`.
 
+use crate::counters::prelude::*;
+
 use glam::Vec4;
 
 use crate::buffers::{BufferKind, BufferRegistry};
@@ -248,7 +250,7 @@ impl HcbCachePass {
             storage | wgpu::TextureUsages::RENDER_ATTACHMENT,
         );
         let group = crate::passes::create_target(device, "hcb.recompute_group", w, h, CACHE_FORMAT, storage);
-        let depth = device.create_texture(&wgpu::TextureDescriptor {
+        let depth = device.counted_texture(&wgpu::TextureDescriptor {
             label: Some("hcb.cache.depth"),
             size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
             mip_level_count: 1,
@@ -354,7 +356,7 @@ impl HcbCachePass {
         hcb.clear_marks(ctx, encoder, &group_view);
         let samples_view = crate::passes::view(&hcb.samples, "hcb.samples");
         let tv = wgpu::BindingResource::TextureView;
-        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("hcb.cache.inputs"),
             layout: &self.layout,
             entries: &[
@@ -372,12 +374,12 @@ impl HcbCachePass {
                 wgpu::BindGroupEntry { binding: 11, resource: self.queue.as_entire_binding() },
             ],
         });
-        let args_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let args_group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("hcb.cache.args"),
             layout: &self.args_layout,
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: self.args.as_entire_binding() }],
         });
-        let removal_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let removal_group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("hcb.cache.removal.inputs"),
             layout: &self.removal_layout,
             entries: &[
@@ -392,8 +394,8 @@ impl HcbCachePass {
                 timestamp_writes: slot.and_then(|s| s.compute(true, false)),
             });
             pass.set_pipeline(&self.args_pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            pass.set_bind_group(1, &args_group, &[]);
+            pass.set_group(0, &group, &[]);
+            pass.set_group(1, &args_group, &[]);
             pass.dispatch_workgroups(1, 1, 1);
         }
         {
@@ -402,13 +404,13 @@ impl HcbCachePass {
                 timestamp_writes: None,
             });
             pass.set_pipeline(&self.validate_pipeline);
-            pass.set_bind_group(0, &group, &[]);
+            pass.set_group(0, &group, &[]);
             pass.dispatch_workgroups_indirect(&self.args, 16);
         }
         {
             let cache = crate::passes::view(&self.cache, "hcb.cache");
             let depth = crate::passes::view(&self.depth, "hcb.cache.depth");
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            let mut pass = encoder.begin_counted_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("hcb.cache.removal"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                     view: &cache,
@@ -429,7 +431,7 @@ impl HcbCachePass {
                 multiview_mask: None,
             });
             pass.set_pipeline(&self.removal_pipeline);
-            pass.set_bind_group(0, &removal_group, &[]);
+            pass.set_group(0, &removal_group, &[]);
             pass.draw_indirect(&self.args, 0);
         }
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -437,7 +439,7 @@ impl HcbCachePass {
             timestamp_writes: slot.and_then(|s| s.compute(false, true)),
         });
         pass.set_pipeline(&self.compact_pipeline);
-        pass.set_bind_group(0, &group, &[]);
+        pass.set_group(0, &group, &[]);
         pass.dispatch_workgroups_indirect(&self.args, 16);
     }
 }

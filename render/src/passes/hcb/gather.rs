@@ -1,5 +1,7 @@
 //! Stage 6 of the HCB (Nguyen et al. §4.1): gathering the VPLs at the samples.
 
+use crate::counters::prelude::*;
+
 use glam::Vec4;
 
 use super::build::HcbPass;
@@ -122,7 +124,7 @@ impl HcbGatherPass {
         ctx.queue.write_buffer(params, 0, bytemuck::bytes_of(&p));
         let tv = wgpu::BindingResource::TextureView;
         let group = |args: &wgpu::Buffer| {
-            ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("hcb.gather.inputs"),
                 layout: &self.layout,
                 entries: &[
@@ -142,10 +144,10 @@ impl HcbGatherPass {
             label: Some("hcb.gather"),
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
-        pass.set_bind_group(0, &args_group, &[]);
+        pass.set_group(0, &args_group, &[]);
         pass.set_pipeline(&self.args_pipeline);
         pass.dispatch_workgroups(1, 1, 1);
-        pass.set_bind_group(0, &gather_group, &[]);
+        pass.set_group(0, &gather_group, &[]);
         pass.set_pipeline(&self.gather_pipeline);
         pass.dispatch_workgroups_indirect(&self.args, 16);
     }

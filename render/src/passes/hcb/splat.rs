@@ -1,5 +1,7 @@
 //! Stage 6 of the HCB (Nguyen et al. §4.2–4.3): coherence-weighted splatting and Eq. 11.
 
+use crate::counters::prelude::*;
+
 use super::{HcbFrame, HcbParams};
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
@@ -213,7 +215,7 @@ impl HcbSplatPass {
         let params = &self.params[new_only as usize];
         ctx.queue.write_buffer(params, 0, bytemuck::bytes_of(&f.params([new_only as u32, 0, 0, 0])));
         let tv = wgpu::BindingResource::TextureView;
-        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("hcb.splat.inputs"),
             layout: &self.splat_layout,
             entries: &[
@@ -227,7 +229,7 @@ impl HcbSplatPass {
         });
         let accum = crate::passes::view(&self.weight_sum, "hcb.weight_sum");
         let load = if new_only { wgpu::LoadOp::Load } else { wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT) };
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        let mut pass = encoder.begin_counted_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("hcb.splat"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                 view: &accum,
@@ -241,7 +243,7 @@ impl HcbSplatPass {
             multiview_mask: None,
         });
         pass.set_pipeline(&self.splat_pipeline);
-        pass.set_bind_group(0, &group, &[]);
+        pass.set_group(0, &group, &[]);
         pass.draw_indirect(draw_args.0, draw_args.1);
     }
 
@@ -258,7 +260,7 @@ impl HcbSplatPass {
         let accum = crate::passes::view(&self.weight_sum, "hcb.weight_sum");
         let out = crate::passes::view(&self.irradiance, "hcb.irradiance");
         let radiance = crate::passes::view(&self.indirect, "hcb.indirect");
-        let ngroup = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let ngroup = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("hcb.normalize.inputs"),
             layout: &self.normalize_layout,
             entries: &[
@@ -276,7 +278,7 @@ impl HcbSplatPass {
             timestamp_writes: slot.and_then(|s| s.compute(false, true)),
         });
         pass.set_pipeline(&self.normalize_pipeline);
-        pass.set_bind_group(0, &ngroup, &[]);
+        pass.set_group(0, &ngroup, &[]);
         pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
     }
 }

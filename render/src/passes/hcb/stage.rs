@@ -240,22 +240,37 @@ impl HcbStage {
     /// The statistics of the last frame (Table 1; blocks until the data is on the CPU).
     pub fn stats(&self, ctx: &GpuContext, d_max: f32) -> Option<HcbStats> {
         use crate::buffers::read_storage;
-        let count: Vec<u32> =
-            bytemuck::pod_collect_to_vec(&read_storage(ctx, &self.build.counter, super::COUNTER_BYTES).ok()?);
-        let n = count[0].min(self.build.list_capacity) as u64;
+        let parts: Vec<Vec<u8>> =
+            self.stats_sources().iter().map(|(b, n)| read_storage(ctx, b, *n).ok()).collect::<Option<_>>()?;
+        self.stats_from(&parts, d_max)
+    }
+
+    /// The buffers (and bytes) the statistics are made of: the counters, the whole sample
+    /// list and the uncovered-pixel count, for a read-back without waiting
+    /// (`Renderer::hcb_stats_later`).
+    pub fn stats_sources(&self) -> Vec<(wgpu::Buffer, u64)> {
         let size = std::mem::size_of::<GpuHcbSample>() as u64;
-        let list: Vec<GpuHcbSample> = if n == 0 {
-            Vec::new()
-        } else {
-            bytemuck::pod_collect_to_vec(&read_storage(ctx, &self.build.list, n * size).ok()?)
-        };
+        vec![
+            (self.build.counter.clone(), super::COUNTER_BYTES),
+            (self.build.list.clone(), self.build.list_capacity as u64 * size),
+            (self.splat.uncovered.clone(), 16),
+        ]
+    }
+
+    /// The statistics from the bytes of [`Self::stats_sources`].
+    pub fn stats_from(&self, parts: &[Vec<u8>], d_max: f32) -> Option<HcbStats> {
+        let [counter, list_bytes, uncovered] = parts else { return None };
+        let count: Vec<u32> = bytemuck::pod_collect_to_vec(counter);
+        let size = std::mem::size_of::<GpuHcbSample>();
+        let n = (*count.first()?).min(self.build.list_capacity) as usize;
+        let list: Vec<GpuHcbSample> = bytemuck::pod_collect_to_vec(list_bytes.get(..n * size)?);
         let mut per_level = vec![0u32; self.build.levels.len()];
         for smp in &list {
             if let Some(c) = per_level.get_mut(smp.level() as usize) {
                 *c += 1;
             }
         }
-        let uncovered: Vec<u32> = bytemuck::pod_collect_to_vec(&read_storage(ctx, &self.splat.uncovered, 16).ok()?);
+        let uncovered: Vec<u32> = bytemuck::pod_collect_to_vec(uncovered);
         Some(HcbStats {
             samples: list
                 .iter()
@@ -266,7 +281,7 @@ impl HcbStage {
                 .collect(),
             samples_per_level: per_level,
             texels_per_level: self.build.levels.iter().map(|l| l.width * l.height).collect(),
-            uncovered: uncovered[0],
+            uncovered: *uncovered.first()?,
             cache: self.cache.as_ref().map(|_| CacheCounts::from_words(&count)),
             list,
             d_max,

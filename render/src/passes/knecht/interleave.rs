@@ -9,6 +9,8 @@
 //! one draw call shades all VPLs; here one compute dispatch over the split G-buffer does
 //! the same, each thread looping over its tile's VPLs.
 
+use crate::counters::prelude::*;
+
 use glam::Vec4;
 
 use crate::buffers::{BufferKind, BufferRegistry};
@@ -30,6 +32,12 @@ settings_group! {
         /// Normal threshold: neighbours whose normal's dot product with the centre's is below β are not averaged.
         beta: f32 = 0.8,
         unit "", symbol "β", range -1.0..=1.0, cost "free", history false;
+        /// The thesis' three passes (§3.4.1): split the G-buffer into tiles, gather in the
+        /// split layout, merge back; off: one pass that gathers each split pixel's tile at its
+        /// own pixel, the same light without the split copies (issue #38). On to inspect
+        /// `interleave.split.*` and `indirect.accum`.
+        split_passes: bool = false,
+        unit "", symbol "", range 0..=1, cost "three passes and the split G-buffer's traffic (≈ 3× the fused pass's)", history false;
     }
     legacy {
         /// Version 1: the filter on or off; now `pipeline.reconstruction = GeometryAwareFilter`.
@@ -134,15 +142,18 @@ pub struct InterleavePass {
     n: u32,
     width: u32,
     height: u32,
-    split: Split,
+    split: Option<Split>,
     pub merged: wgpu::Texture,
     pub filtered: wgpu::Texture,
+    /// `interleave.split_passes`: the split textures exist only then.
+    split_passes: bool,
     split_layout: wgpu::BindGroupLayout,
     gather_layout: wgpu::BindGroupLayout,
     merge_layout: wgpu::BindGroupLayout,
     filter_layout: wgpu::BindGroupLayout,
     split_pipeline: wgpu::ComputePipeline,
     gather_pipeline: wgpu::ComputePipeline,
+    fused_pipeline: wgpu::ComputePipeline,
     merge_pipeline: wgpu::ComputePipeline,
     filter_pipeline: wgpu::ComputePipeline,
     split_params: wgpu::Buffer,
@@ -157,7 +168,14 @@ pub struct InterleavePass {
 }
 
 impl InterleavePass {
-    pub fn new(ctx: &GpuContext, camera: wgpu::BindGroupLayoutEntry, width: u32, height: u32, n: u32) -> Self {
+    pub fn new(
+        ctx: &GpuContext,
+        camera: wgpu::BindGroupLayoutEntry,
+        width: u32,
+        height: u32,
+        n: u32,
+        split_passes: bool,
+    ) -> Self {
         let device = &ctx.device;
         let cs = wgpu::ShaderStages::COMPUTE;
         let t = |b| bgl::texture(b, cs, false);
@@ -213,11 +231,19 @@ impl InterleavePass {
             "cs_split",
             &[&split_layout],
         );
+        let gather_module = module("interleave/gather.wgsl");
         let gather_pipeline = crate::passes::compute_pipeline(
             device,
             "interleave.gather",
-            &module("interleave/gather.wgsl"),
+            &gather_module,
             "cs_gather",
+            &[&gather_layout],
+        );
+        let fused_pipeline = crate::passes::compute_pipeline(
+            device,
+            "interleave.gather_fused",
+            &gather_module,
+            "cs_gather_fused",
             &[&gather_layout],
         );
         let merge_pipeline = crate::passes::compute_pipeline(
@@ -235,7 +261,7 @@ impl InterleavePass {
             &[&filter_layout],
         );
         let uniform = |label, size| {
-            device.create_buffer(&wgpu::BufferDescriptor {
+            device.counted_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
                 size,
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
@@ -246,7 +272,7 @@ impl InterleavePass {
         let gather_params = uniform("interleave.gather.params", std::mem::size_of::<GatherParams>() as u64);
         let filter_params = uniform("interleave.filter.params", std::mem::size_of::<FilterParams>() as u64);
         let (dummy_ism, dummy_exact) = no_visibility_atlases(device, "interleave");
-        let (split, merged, filtered) = Self::targets(device, width, height, n);
+        let (split, merged, filtered) = Self::targets(device, width, height, n, split_passes);
         Self {
             n,
             width,
@@ -254,12 +280,14 @@ impl InterleavePass {
             split,
             merged,
             filtered,
+            split_passes,
             split_layout,
             gather_layout,
             merge_layout,
             filter_layout,
             split_pipeline,
             gather_pipeline,
+            fused_pipeline,
             merge_pipeline,
             filter_pipeline,
             split_params,
@@ -273,7 +301,7 @@ impl InterleavePass {
     }
 
     fn offsets_buffer(device: &wgpu::Device, blocks: u32) -> wgpu::Buffer {
-        device.create_buffer(&wgpu::BufferDescriptor {
+        device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("interleave.tile_offsets"),
             size: blocks.max(1) as u64 * 4,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
@@ -286,36 +314,59 @@ impl InterleavePass {
         (width.div_ceil(n.max(1)), height.div_ceil(n.max(1)))
     }
 
-    fn targets(device: &wgpu::Device, width: u32, height: u32, n: u32) -> (Split, wgpu::Texture, wgpu::Texture) {
+    fn targets(
+        device: &wgpu::Device,
+        width: u32,
+        height: u32,
+        n: u32,
+        split_passes: bool,
+    ) -> (Option<Split>, wgpu::Texture, wgpu::Texture) {
         let (tw, th) = Self::tile(width, height, n);
         let (sw, sh) = (tw * n.max(1), th * n.max(1));
         let st = wgpu::TextureUsages::STORAGE_BINDING;
         let t = |label, w, h, f| crate::passes::create_target(device, label, w, h, f, st);
-        let split = Split {
+        let split = split_passes.then(|| Split {
             position: t("interleave.split.position", sw, sh, POSITION_FORMAT),
             normal: t("interleave.split.normal", sw, sh, NORMAL_FORMAT),
             albedo: t("interleave.split.albedo", sw, sh, ALBEDO_FORMAT),
             material: t("interleave.split.material", sw, sh, MATERIAL_FORMAT),
             accum: t("indirect.accum", sw, sh, wgpu::TextureFormat::Rgba32Float),
-        };
+        });
         let merged = t("indirect.merged", width, height, wgpu::TextureFormat::Rgba32Float);
         let filtered = t("indirect.filtered", width, height, wgpu::TextureFormat::Rgba32Float);
         (split, merged, filtered)
     }
 
     /// Resizes for `width`×`height` and n; returns whether textures were recreated.
-    pub fn ensure(&mut self, ctx: &GpuContext, width: u32, height: u32, n: u32) -> bool {
-        if (width, height, n) == (self.width, self.height, self.n) {
+    pub fn ensure(&mut self, ctx: &GpuContext, width: u32, height: u32, n: u32, split_passes: bool) -> bool {
+        if (width, height, n, split_passes) == (self.width, self.height, self.n, self.split_passes) {
             return false;
         }
-        (self.split, self.merged, self.filtered) = Self::targets(&ctx.device, width, height, n);
-        (self.width, self.height, self.n) = (width, height, n);
+        (self.split, self.merged, self.filtered) = Self::targets(&ctx.device, width, height, n, split_passes);
+        (self.width, self.height, self.n, self.split_passes) = (width, height, n, split_passes);
         true
     }
 
     pub fn register(&self, reg: &mut BufferRegistry) {
-        let s = &self.split;
         let n = self.n;
+        if let Some(s) = &self.split {
+            Self::register_split(reg, s, n);
+        }
+        reg.register(
+            "indirect.merged",
+            BufferKind::Hdr,
+            "the accumulation buffer merged back to image layout (each pixel lit by one tile's VPLs)",
+            &self.merged,
+        );
+        reg.register(
+            "indirect.filtered",
+            BufferKind::Hdr,
+            "indirect light after the geometry-aware n×n filter (Knecht §3.4.1); the confidence merge follows",
+            &self.filtered,
+        );
+    }
+
+    fn register_split(reg: &mut BufferRegistry, s: &Split, n: u32) {
         reg.register(
             "interleave.split.albedo",
             BufferKind::Albedo,
@@ -330,18 +381,6 @@ impl InterleavePass {
             BufferKind::Hdr,
             "indirect light of each tile's VPLs in the split layout, scaled to all VPLs (Knecht Fig. 3.4)",
             &s.accum,
-        );
-        reg.register(
-            "indirect.merged",
-            BufferKind::Hdr,
-            "the accumulation buffer merged back to image layout (each pixel lit by one tile's VPLs)",
-            &self.merged,
-        );
-        reg.register(
-            "indirect.filtered",
-            BufferKind::Hdr,
-            "indirect light after the geometry-aware n×n filter (Knecht §3.4.1); the confidence merge follows",
-            &self.filtered,
         );
     }
 
@@ -383,8 +422,49 @@ impl InterleavePass {
         if !offsets.is_empty() {
             ctx.queue.write_buffer(&self.tile_offsets, 0, bytemuck::cast_slice(&offsets));
         }
-        let s = &self.split;
         let v = |t: &wgpu::Texture, l: &str| crate::passes::view(t, l);
+        let merged_v = v(&self.merged, "indirect.merged");
+        let tv = wgpu::BindingResource::TextureView;
+        let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
+        // The gather reads the split G-buffer (three passes) or the G-buffer itself at each
+        // split pixel's source pixel (fused) and writes the split accumulation buffer or the
+        // merged light.
+        let gather_group = |p: [&wgpu::TextureView; 4], out: &wgpu::TextureView| {
+            let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
+            let tv = wgpu::BindingResource::TextureView;
+            ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("interleave.gather.inputs"),
+                layout: &self.gather_layout,
+                entries: &[
+                    entry(0, camera.as_entire_binding()),
+                    entry(1, self.gather_params.as_entire_binding()),
+                    entry(2, vpls.as_entire_binding()),
+                    entry(3, tv(atlas_ism)),
+                    entry(4, tv(atlas_exact)),
+                    entry(5, tv(p[0])),
+                    entry(6, tv(p[1])),
+                    entry(7, tv(p[2])),
+                    entry(8, tv(p[3])),
+                    entry(9, tv(out)),
+                    entry(10, self.tile_offsets.as_entire_binding()),
+                ],
+            })
+        };
+        let (sw, sh) = (tw * n, th * n);
+        let tile = crate::passes::TILE;
+        let Some(s) = self.split.as_ref().filter(|_| self.split_passes) else {
+            let group = gather_group([&g.position, &g.normal, &g.albedo, &g.material], &merged_v);
+            timer.scope(ctx, encoder, "interleave.gather", |e, slot| {
+                let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("interleave.gather_fused"),
+                    timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+                });
+                pass.set_pipeline(&self.fused_pipeline);
+                pass.set_group(0, &group, &[]);
+                pass.dispatch_workgroups(sw.div_ceil(tile), sh.div_ceil(tile), 1);
+            });
+            return;
+        };
         let (sp_v, sn_v, sa_v, sm_v, acc_v) = (
             v(&s.position, "interleave.split.position"),
             v(&s.normal, "interleave.split.normal"),
@@ -392,10 +472,7 @@ impl InterleavePass {
             v(&s.material, "interleave.split.material"),
             v(&s.accum, "indirect.accum"),
         );
-        let merged_v = v(&self.merged, "indirect.merged");
-        let tv = wgpu::BindingResource::TextureView;
-        let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
-        let split_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let split_group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("interleave.split.inputs"),
             layout: &self.split_layout,
             entries: &[
@@ -410,37 +487,19 @@ impl InterleavePass {
                 entry(8, tv(&sm_v)),
             ],
         });
-        let gather_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("interleave.gather.inputs"),
-            layout: &self.gather_layout,
-            entries: &[
-                entry(0, camera.as_entire_binding()),
-                entry(1, self.gather_params.as_entire_binding()),
-                entry(2, vpls.as_entire_binding()),
-                entry(3, tv(atlas_ism)),
-                entry(4, tv(atlas_exact)),
-                entry(5, tv(&sp_v)),
-                entry(6, tv(&sn_v)),
-                entry(7, tv(&sa_v)),
-                entry(8, tv(&sm_v)),
-                entry(9, tv(&acc_v)),
-                entry(10, self.tile_offsets.as_entire_binding()),
-            ],
-        });
-        let merge_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let gather_group = gather_group([&sp_v, &sn_v, &sa_v, &sm_v], &acc_v);
+        let merge_group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("interleave.merge.inputs"),
             layout: &self.merge_layout,
             entries: &[entry(0, self.split_params.as_entire_binding()), entry(1, tv(&acc_v)), entry(2, tv(&merged_v))],
         });
-        let (sw, sh) = (tw * n, th * n);
-        let tile = crate::passes::TILE;
         timer.scope(ctx, encoder, "interleave.split", |e, slot| {
             let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("interleave.split"),
                 timestamp_writes: slot.and_then(|s| s.compute(true, true)),
             });
             pass.set_pipeline(&self.split_pipeline);
-            pass.set_bind_group(0, &split_group, &[]);
+            pass.set_group(0, &split_group, &[]);
             pass.dispatch_workgroups(sw.div_ceil(tile), sh.div_ceil(tile), 1);
         });
         timer.scope(ctx, encoder, "interleave.gather", |e, slot| {
@@ -449,7 +508,7 @@ impl InterleavePass {
                 timestamp_writes: slot.and_then(|s| s.compute(true, true)),
             });
             pass.set_pipeline(&self.gather_pipeline);
-            pass.set_bind_group(0, &gather_group, &[]);
+            pass.set_group(0, &gather_group, &[]);
             pass.dispatch_workgroups(sw.div_ceil(tile), sh.div_ceil(tile), 1);
         });
         timer.scope(ctx, encoder, "interleave.merge", |e, slot| {
@@ -458,7 +517,7 @@ impl InterleavePass {
                 timestamp_writes: slot.and_then(|s| s.compute(true, true)),
             });
             pass.set_pipeline(&self.merge_pipeline);
-            pass.set_bind_group(0, &merge_group, &[]);
+            pass.set_group(0, &merge_group, &[]);
             pass.dispatch_workgroups(self.width.div_ceil(tile), self.height.div_ceil(tile), 1);
         });
     }
@@ -481,7 +540,7 @@ impl InterleavePass {
         ctx.queue.write_buffer(&self.filter_params, 0, bytemuck::bytes_of(&fp));
         let dst = crate::passes::view(&self.filtered, "indirect.filtered");
         let tv = wgpu::BindingResource::TextureView;
-        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("interleave.filter.inputs"),
             layout: &self.filter_layout,
             entries: &[
@@ -497,7 +556,7 @@ impl InterleavePass {
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
         pass.set_pipeline(&self.filter_pipeline);
-        pass.set_bind_group(0, &group, &[]);
+        pass.set_group(0, &group, &[]);
         pass.dispatch_workgroups(
             self.width.div_ceil(crate::passes::TILE),
             self.height.div_ceil(crate::passes::TILE),

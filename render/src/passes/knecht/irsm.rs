@@ -6,6 +6,8 @@
 //! `cpu::knecht::irsm_pick`). Table 5.3 of the thesis compares its time with §3.6.1's
 //! ([`crate::passes::knecht::vpl_bounce`]); `gi-lab bench --suite knecht` reproduces it.
 
+use crate::counters::prelude::*;
+
 use glam::Vec4;
 
 use crate::gpu::GpuContext;
@@ -219,7 +221,7 @@ impl IrsmPass {
         );
         ctx.queue.write_buffer(&self.splat_params, 0, &splat);
         ctx.queue.write_buffer(&self.params, 0, &irsm);
-        let splat = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let splat = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("irsm.splat.inputs"),
             layout: &self.splat_layout,
             entries: &entries(vec![
@@ -232,7 +234,7 @@ impl IrsmPass {
             ]),
         });
         let illumination = crate::passes::view(&self.illumination, "irsm.illumination");
-        let sample = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let sample = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("irsm.sample.inputs"),
             layout: &self.sample_layout,
             entries: &entries(vec![
@@ -270,12 +272,12 @@ impl IrsmPass {
         });
         let offset = [((bounce.clamp(1, MAX_BOUNCES - 1) - 1) as u64 * STRIDE) as u32];
         let groups = points.div_ceil(64);
-        pass.set_bind_group(0, &job.splat, &offset);
+        pass.set_group(0, &job.splat, &offset);
         pass.set_pipeline(&self.splat_pipeline);
         pass.dispatch_workgroups(groups.min(65535), groups.div_ceil(65535), 1);
         pass.set_pipeline(&self.owner_pipeline);
         pass.dispatch_workgroups(groups.min(65535), groups.div_ceil(65535), 1);
-        pass.set_bind_group(0, &job.sample, &offset);
+        pass.set_group(0, &job.sample, &offset);
         pass.set_pipeline(&self.cdf_pipeline);
         pass.dispatch_workgroups(vpls, 1, 1);
         pass.set_pipeline(&self.sample_pipeline);

@@ -11,6 +11,8 @@
 //! object-space position and normal with the draw it belongs to, so that it follows the
 //! object's animation (our scenes animate rigidly, where the two are the same).
 
+use crate::counters::prelude::*;
+
 use glam::Vec4;
 
 use crate::buffers::{BufferKind, BufferRegistry};
@@ -308,19 +310,19 @@ impl IsmPass {
             crate::passes::compute_pipeline(device, "ism.resolve", &m_resolve, "cs_resolve", &[&resolve_layout]);
         let pull_pipeline = crate::passes::compute_pipeline(device, "ism.pull", &m_pp, "cs_pull", &[&pull_layout]);
         let push_pipeline = crate::passes::compute_pipeline(device, "ism.push", &m_pp, "cs_push", &[&push_layout]);
-        let splat_params = device.create_buffer(&wgpu::BufferDescriptor {
+        let splat_params = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("ism.splat.params"),
             size: LEVEL_STRIDE * MAX_BOUNCES as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let level_params = device.create_buffer(&wgpu::BufferDescriptor {
+        let level_params = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("ism.pull_push.params"),
             size: LEVEL_STRIDE * 16,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let no_owner = device.create_buffer(&wgpu::BufferDescriptor {
+        let no_owner = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("ism.no_owner"),
             size: 4,
             usage: wgpu::BufferUsages::STORAGE,
@@ -354,15 +356,14 @@ impl IsmPass {
     }
 
     fn point_buffers(device: &wgpu::Device, cloud: &PointCloud) -> (wgpu::Buffer, wgpu::Buffer) {
-        use wgpu::util::DeviceExt;
         let zero = [GpuPoint { position: [0.0; 3], draw: 0, normal: [0.0; 3], material: 0 }];
-        let points = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        let points = device.counted_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("ism.points"),
             contents: bytemuck::cast_slice(if cloud.gpu.is_empty() { &zero } else { &cloud.gpu }),
             usage: wgpu::BufferUsages::STORAGE,
         });
         let zero = [GpuPointSurface { albedo: [0.0; 4], material: [0.0; 4] }];
-        let surfaces = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        let surfaces = device.counted_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("ism.point_surfaces"),
             contents: bytemuck::cast_slice(if cloud.surfaces.is_empty() { &zero } else { &cloud.surfaces }),
             usage: wgpu::BufferUsages::STORAGE,
@@ -372,7 +373,7 @@ impl IsmPass {
 
     fn targets(device: &wgpu::Device, l: IsmLayout, levels: u32) -> (wgpu::Buffer, wgpu::Texture, wgpu::Texture) {
         let (w, h) = (l.width() as u32, l.height() as u32);
-        let depth = device.create_buffer(&wgpu::BufferDescriptor {
+        let depth = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("ism.splat_depth"),
             size: 4 * w as u64 * h as u64,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
@@ -386,7 +387,7 @@ impl IsmPass {
             wgpu::TextureFormat::R32Float,
             wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST,
         );
-        let pulled = device.create_texture(&wgpu::TextureDescriptor {
+        let pulled = device.counted_texture(&wgpu::TextureDescriptor {
             label: Some("ism.atlas_pulled"),
             size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
             mip_level_count: levels + 1,
@@ -480,7 +481,7 @@ impl IsmPass {
             offset: 0,
             size: std::num::NonZeroU64::new(std::mem::size_of::<SplatParams>() as u64),
         });
-        let splat = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let splat = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("ism.splat.inputs"),
             layout: &self.splat_layout,
             entries: &[
@@ -493,7 +494,7 @@ impl IsmPass {
             ],
         });
         let atlas_view = crate::passes::view(&self.atlas, "ism.atlas");
-        let resolve = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let resolve = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("ism.resolve.inputs"),
             layout: &self.resolve_layout,
             entries: &[
@@ -515,7 +516,7 @@ impl IsmPass {
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
         pass.set_pipeline(&self.splat_pipeline);
-        pass.set_bind_group(0, &job.splat, &[(bounce.min(MAX_BOUNCES - 1) as u64 * LEVEL_STRIDE) as u32]);
+        pass.set_group(0, &job.splat, &[(bounce.min(MAX_BOUNCES - 1) as u64 * LEVEL_STRIDE) as u32]);
         let groups = (self.cloud.gpu.len() as u32).div_ceil(64);
         pass.dispatch_workgroups(groups.min(65535), groups.div_ceil(65535), 1);
     }
@@ -538,14 +539,14 @@ impl IsmPass {
                 timestamp_writes: None,
             });
             pass.set_pipeline(&self.resolve_pipeline);
-            pass.set_bind_group(0, &job.resolve, &[]);
+            pass.set_group(0, &job.resolve, &[]);
             pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
         }
         self.pull_push(ctx, encoder, slot, s, extent);
     }
 
     fn level_view(&self, level: u32) -> wgpu::TextureView {
-        self.pulled.create_view(&wgpu::TextureViewDescriptor {
+        self.pulled.counted_view(&wgpu::TextureViewDescriptor {
             label: Some("ism.atlas_pulled.level"),
             base_mip_level: level,
             mip_level_count: Some(1),
@@ -565,7 +566,7 @@ impl IsmPass {
     ) {
         let l = self.layout_info;
         let (w, h) = (l.width() as u32, l.height() as u32);
-        encoder.copy_texture_to_texture(
+        encoder.counted_copy_texture(
             self.atlas.as_image_copy(),
             self.pulled.as_image_copy(),
             wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
@@ -591,7 +592,7 @@ impl IsmPass {
                 data[o..o + std::mem::size_of::<LevelParams>()].copy_from_slice(bytemuck::bytes_of(&p));
             }
             let (fine, coarse) = (self.level_view(level), self.level_view(level + 1));
-            pulls.push(ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            pulls.push(ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("ism.pull.inputs"),
                 layout: &self.pull_layout,
                 entries: &[
@@ -600,7 +601,7 @@ impl IsmPass {
                     wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&coarse) },
                 ],
             }));
-            pushes.push(ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            pushes.push(ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("ism.push.inputs"),
                 layout: &self.push_layout,
                 entries: &[
@@ -618,13 +619,13 @@ impl IsmPass {
         pass.set_pipeline(&self.pull_pipeline);
         for (level, g) in pulls.iter().enumerate() {
             let (cw, ch) = ((w >> (level + 1)).max(1), (h >> (level + 1)).max(1));
-            pass.set_bind_group(0, g, &[(2 * level as u64 * LEVEL_STRIDE) as u32]);
+            pass.set_group(0, g, &[(2 * level as u64 * LEVEL_STRIDE) as u32]);
             pass.dispatch_workgroups(cw.div_ceil(8), ch.div_ceil(8), 1);
         }
         pass.set_pipeline(&self.push_pipeline);
         for (level, g) in pushes.iter().enumerate().rev() {
             let (fw, fh) = ((w >> level).max(1), (h >> level).max(1));
-            pass.set_bind_group(0, g, &[((2 * level as u64 + 1) * LEVEL_STRIDE) as u32]);
+            pass.set_group(0, g, &[((2 * level as u64 + 1) * LEVEL_STRIDE) as u32]);
             pass.dispatch_workgroups(fw.div_ceil(8), fh.div_ceil(8), 1);
         }
     }

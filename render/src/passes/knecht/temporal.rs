@@ -4,9 +4,12 @@
 //! of Eq. 3.6 (`temporal.history`, rgb = light, a = depth). Shader:
 //! `shaders/temporal/confidence.wgsl`; CPU twin: `cpu::knecht::confidence`.
 //!
-//! History is double-buffered by copy: the pass writes `temporal.history`, which is then
-//! copied to the texture the next frame reads, and the G-buffer normals are copied to
-//! `temporal.prev_normal` (the thesis double-buffers the normals in the G-buffer).
+//! History and normals ping-pong between two textures each, with no copy (issue #38): the
+//! pass reads last frame's pair and writes this frame's, the G-buffer normals included as it
+//! reads them (the thesis double-buffers the normals in the G-buffer). The registry names
+//! the pair just written (`temporal.history`, `temporal.prev_normal`).
+
+use crate::counters::prelude::*;
 
 use glam::Vec4;
 
@@ -76,9 +79,12 @@ pub struct TemporalPass {
     width: u32,
     height: u32,
     pub confidence: wgpu::Texture,
-    pub history: wgpu::Texture,
-    history_prev: wgpu::Texture,
-    prev_normal: wgpu::Texture,
+    /// Ping-pong pairs (issue #38: no copies): `history[current]` is this frame's merged
+    /// light and next frame's I_prev; `normals[current]` this frame's G-buffer normals, which
+    /// the pass writes as it reads them, and next frame's n_prev.
+    history: [wgpu::Texture; 2],
+    normals: [wgpu::Texture; 2],
+    current: usize,
     /// Whether the previous-frame textures hold a frame.
     valid: bool,
     layout: wgpu::BindGroupLayout,
@@ -103,38 +109,46 @@ impl TemporalPass {
                 t(6),
                 bgl::storage_texture(7, wgpu::TextureFormat::R32Float),
                 bgl::storage_texture(8, wgpu::TextureFormat::Rgba32Float),
+                bgl::storage_texture(9, NORMAL_FORMAT),
             ],
         });
         let module = crate::shaders::create_module(device, "temporal/confidence.wgsl");
         let pipeline =
             crate::passes::compute_pipeline(device, "temporal.confidence", &module, "cs_confidence", &[&layout]);
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
+        let params = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("temporal.params"),
             size: std::mem::size_of::<ConfidenceParams>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let (confidence, history, history_prev, prev_normal) = Self::targets(device, width, height);
-        Self { width, height, confidence, history, history_prev, prev_normal, valid: false, layout, pipeline, params }
+        let (confidence, history, normals) = Self::targets(device, width, height);
+        Self { width, height, confidence, history, normals, current: 0, valid: false, layout, pipeline, params }
     }
 
-    fn targets(device: &wgpu::Device, w: u32, h: u32) -> (wgpu::Texture, wgpu::Texture, wgpu::Texture, wgpu::Texture) {
+    #[allow(clippy::type_complexity)]
+    fn targets(device: &wgpu::Device, w: u32, h: u32) -> (wgpu::Texture, [wgpu::Texture; 2], [wgpu::Texture; 2]) {
         let st = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST;
         let t = |label, f| crate::passes::create_target(device, label, w, h, f, st);
         (
             t("temporal.confidence", wgpu::TextureFormat::R32Float),
-            t("temporal.history", wgpu::TextureFormat::Rgba32Float),
-            t("temporal.history_prev", wgpu::TextureFormat::Rgba32Float),
-            t("temporal.prev_normal", NORMAL_FORMAT),
+            [
+                t("temporal.history.0", wgpu::TextureFormat::Rgba32Float),
+                t("temporal.history.1", wgpu::TextureFormat::Rgba32Float),
+            ],
+            [t("temporal.prev_normal.0", NORMAL_FORMAT), t("temporal.prev_normal.1", NORMAL_FORMAT)],
         )
+    }
+
+    /// This frame's merged light (`temporal.history`).
+    pub fn history(&self) -> &wgpu::Texture {
+        &self.history[self.current]
     }
 
     pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) -> bool {
         if (width, height) == (self.width, self.height) {
             return false;
         }
-        (self.confidence, self.history, self.history_prev, self.prev_normal) =
-            Self::targets(&ctx.device, width, height);
+        (self.confidence, self.history, self.normals) = Self::targets(&ctx.device, width, height);
         (self.width, self.height) = (width, height);
         self.valid = false;
         true
@@ -156,13 +170,13 @@ impl TemporalPass {
             "temporal.history",
             BufferKind::Hdr,
             "indirect light after the confidence merge (Eq. 3.6) in rgb, view depth in a: what compose adds, and next frame's I_prev",
-            &self.history,
+            self.history(),
         );
         reg.register(
             "temporal.prev_normal",
             BufferKind::Direction,
-            "the previous frame's G-buffer normals (n_prev of Eq. 3.2)",
-            &self.prev_normal,
+            "the last frame's G-buffer normals, next frame's n_prev (Eq. 3.2)",
+            &self.normals[self.current],
         );
     }
 
@@ -179,7 +193,6 @@ impl TemporalPass {
         depth_range: f32,
         current: &wgpu::TextureView,
         g: &GBufferViews,
-        normal: &wgpu::Texture,
     ) {
         let p = ConfidenceParams {
             weights: Vec4::new(s.c_base, s.w_pos, s.w_normal, s.w_illumination),
@@ -188,15 +201,17 @@ impl TemporalPass {
         };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
         let v = |t: &wgpu::Texture, l: &str| crate::passes::view(t, l);
-        let (prev_n, hist_prev, conf, hist) = (
-            v(&self.prev_normal, "temporal.prev_normal"),
-            v(&self.history_prev, "temporal.history_prev"),
+        let (read, write) = (self.current, 1 - self.current);
+        let (prev_n, hist_prev, conf, hist, normal_out) = (
+            v(&self.normals[read], "temporal.prev_normal"),
+            v(&self.history[read], "temporal.history_prev"),
             v(&self.confidence, "temporal.confidence"),
-            v(&self.history, "temporal.history"),
+            v(&self.history[write], "temporal.history"),
+            v(&self.normals[write], "temporal.normal_out"),
         );
         let tv = wgpu::BindingResource::TextureView;
         let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
-        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("temporal.confidence.inputs"),
             layout: &self.layout,
             entries: &[
@@ -209,6 +224,7 @@ impl TemporalPass {
                 entry(6, tv(&hist_prev)),
                 entry(7, tv(&conf)),
                 entry(8, tv(&hist)),
+                entry(9, tv(&normal_out)),
             ],
         });
         {
@@ -217,16 +233,14 @@ impl TemporalPass {
                 timestamp_writes: slot.and_then(|s| s.compute(true, true)),
             });
             pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &group, &[]);
+            pass.set_group(0, &group, &[]);
             pass.dispatch_workgroups(
                 self.width.div_ceil(crate::passes::TILE),
                 self.height.div_ceil(crate::passes::TILE),
                 1,
             );
         }
-        let size = wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 };
-        encoder.copy_texture_to_texture(self.history.as_image_copy(), self.history_prev.as_image_copy(), size);
-        encoder.copy_texture_to_texture(normal.as_image_copy(), self.prev_normal.as_image_copy(), size);
+        self.current = write;
         self.valid = true;
     }
 }

@@ -8,6 +8,8 @@
 //! so the gather shades all B·N VPLs (each bounce's set estimates that bounce's light, and
 //! the bounces add up).
 
+use crate::counters::prelude::*;
+
 use glam::Vec4;
 
 use crate::gpu::GpuContext;
@@ -130,7 +132,7 @@ impl VplBouncePass {
             .collect();
         let data = crate::passes::strided_bytes(STRIDE, MAX_BOUNCES as usize, &params);
         ctx.queue.write_buffer(&self.params, 0, &data);
-        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("vpl.bounce.inputs"),
             layout: &self.layout,
             entries: &[
@@ -169,7 +171,7 @@ impl VplBouncePass {
         });
         pass.set_pipeline(&self.pipeline);
         let b = bounce.clamp(1, MAX_BOUNCES - 1);
-        pass.set_bind_group(0, group, &[((b - 1) as u64 * STRIDE) as u32]);
+        pass.set_group(0, group, &[((b - 1) as u64 * STRIDE) as u32]);
         pass.dispatch_workgroups(vpls, 1, 1);
     }
 }

@@ -9,6 +9,8 @@
 //! thesis samples one spot light; point lights' cube maps were not importance-sampled there
 //! (§4.4.3) — here every face is, and gets its share of the light's budget by solid angle.
 
+use crate::counters::prelude::*;
+
 use glam::Vec4;
 
 use crate::buffers::{BufferKind, BufferRegistry};
@@ -261,7 +263,7 @@ impl VplImportancePass {
     }
 
     fn params_buffer(device: &wgpu::Device, views: usize) -> (wgpu::Buffer, usize) {
-        let b = device.create_buffer(&wgpu::BufferDescriptor {
+        let b = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("vpl.importance.params"),
             size: STRIDE * views as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
@@ -271,7 +273,7 @@ impl VplImportancePass {
     }
 
     fn light_buffer(device: &wgpu::Device, n: usize) -> (wgpu::Buffer, usize) {
-        let b = device.create_buffer(&wgpu::BufferDescriptor {
+        let b = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("vpl.importance.lights"),
             size: (std::mem::size_of::<GpuLight>() * n) as u64,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
@@ -282,13 +284,13 @@ impl VplImportancePass {
 
     fn vpl_buffers(device: &wgpu::Device, n: u32) -> (wgpu::Buffer, wgpu::Buffer) {
         let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
-        let vpls = device.create_buffer(&wgpu::BufferDescriptor {
+        let vpls = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("vpl.list"),
             size: std::mem::size_of::<GpuVpl>() as u64 * n as u64,
             usage,
             mapped_at_creation: false,
         });
-        let warped = device.create_buffer(&wgpu::BufferDescriptor {
+        let warped = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("vpl.warped"),
             size: 16 * n as u64,
             usage,
@@ -303,7 +305,7 @@ impl VplImportancePass {
     }
 
     fn importance_texture(device: &wgpu::Device, size: u32, layers: u32) -> wgpu::Texture {
-        device.create_texture(&wgpu::TextureDescriptor {
+        device.counted_texture(&wgpu::TextureDescriptor {
             label: Some("vpl.importance"),
             size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: layers },
             mip_level_count: Self::levels(size),
@@ -342,13 +344,13 @@ impl VplImportancePass {
             let k = self.views.len();
             let name = if k == 0 { "vpl.light_gbuffer".to_string() } else { format!("vpl.light_gbuffer.{k}") };
             let gbuffer = GBufferPass::light_view(ctx, scene, size, name.clone());
-            let camera = device.create_buffer(&wgpu::BufferDescriptor {
+            let camera = device.counted_buffer(&wgpu::BufferDescriptor {
                 label: Some(&format!("{name}.camera")),
                 size: std::mem::size_of::<CameraUniform>() as u64,
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
-            let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            let group = device.counted_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some(&format!("{name}.camera")),
                 layout: &gbuffer.camera_layout,
                 entries: &[wgpu::BindGroupEntry { binding: 0, resource: camera.as_entire_binding() }],
@@ -468,7 +470,7 @@ impl VplImportancePass {
     }
 
     fn mip_view(&self, level: u32, label: &str) -> wgpu::TextureView {
-        self.importance.create_view(&wgpu::TextureViewDescriptor {
+        self.importance.counted_view(&wgpu::TextureViewDescriptor {
             label: Some(label),
             dimension: Some(wgpu::TextureViewDimension::D2Array),
             base_mip_level: level,
@@ -497,7 +499,7 @@ impl VplImportancePass {
             .take(if importance { views } else { 0 })
             .map(|v| {
                 let t = &v.gbuffer.targets.views;
-                ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("vpl.importance.inputs"),
                     layout: &self.importance_layout,
                     entries: &self
@@ -512,7 +514,7 @@ impl VplImportancePass {
             .map(|l| {
                 let finer = self.mip_view(l - 1, "vpl.importance.finer");
                 let coarser = self.mip_view(l, "vpl.importance.coarser");
-                ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("vpl.importance.reduce"),
                     layout: &self.reduce_layout,
                     entries: &[
@@ -528,13 +530,13 @@ impl VplImportancePass {
         });
         pass.set_pipeline(&self.importance_pipeline);
         for (k, g) in imp_groups.iter().enumerate() {
-            pass.set_bind_group(0, g, &[(k as u64 * STRIDE) as u32]);
+            pass.set_group(0, g, &[(k as u64 * STRIDE) as u32]);
             pass.dispatch_workgroups(size.div_ceil(8), size.div_ceil(8), 1);
         }
         pass.set_pipeline(&self.reduce_pipeline);
         for (l, g) in reduce_groups.iter().enumerate() {
             let s = (size >> (l + 1)).max(1);
-            pass.set_bind_group(0, g, &[]);
+            pass.set_group(0, g, &[]);
             pass.dispatch_workgroups(s.div_ceil(8), s.div_ceil(8), views.max(1) as u32);
         }
     }
@@ -549,7 +551,7 @@ impl VplImportancePass {
         jobs: &[ViewJob],
     ) {
         let tv = wgpu::BindingResource::TextureView;
-        let full = self.importance.create_view(&wgpu::TextureViewDescriptor {
+        let full = self.importance.counted_view(&wgpu::TextureViewDescriptor {
             label: Some("vpl.importance.pyramid"),
             dimension: Some(wgpu::TextureViewDimension::D2Array),
             ..Default::default()
@@ -560,7 +562,7 @@ impl VplImportancePass {
             .take(jobs.len())
             .map(|v| {
                 let t = &v.gbuffer.targets.views;
-                ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("vpl.warp.inputs"),
                     layout: &self.warp_layout,
                     entries: &self
@@ -584,7 +586,7 @@ impl VplImportancePass {
             if job.count == 0 {
                 continue;
             }
-            pass.set_bind_group(0, g, &[(k as u64 * STRIDE) as u32]);
+            pass.set_group(0, g, &[(k as u64 * STRIDE) as u32]);
             pass.dispatch_workgroups(job.count.div_ceil(64), 1, 1);
         }
     }

@@ -12,6 +12,8 @@
 //! placement (hierarchical warping, Knecht §3.3 and §4.4) replaces the uniform sampling
 //! with the Knecht issue (#5).
 
+use crate::counters::prelude::*;
+
 use glam::{Mat4, Vec3, Vec4};
 
 use crate::gpu::GpuContext;
@@ -112,13 +114,13 @@ impl VplSamplePass {
         let device = &ctx.device;
         let cs = wgpu::ShaderStages::COMPUTE;
         let light_gbuffer = GBufferPass::light_view(ctx, scene, size, "vpl.light_gbuffer");
-        let camera_buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        let camera_buffer = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("vpl.light_gbuffer.camera"),
             size: std::mem::size_of::<CameraUniform>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let camera_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let camera_group = device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("vpl.light_gbuffer.camera"),
             layout: &light_gbuffer.camera_layout,
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: camera_buffer.as_entire_binding() }],
@@ -137,7 +139,7 @@ impl VplSamplePass {
             ],
         });
         let pipeline = crate::passes::compute_pipeline(device, "vpl.sample", &module, "cs_main", &[&layout]);
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
+        let params = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("vpl.sample.params"),
             size: std::mem::size_of::<SampleParams>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
@@ -161,7 +163,7 @@ impl VplSamplePass {
     }
 
     fn light_buffer(device: &wgpu::Device, capacity: usize) -> (wgpu::Buffer, usize) {
-        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        let buffer = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("vpl.sample.lights"),
             size: (std::mem::size_of::<GpuLight>() * capacity) as u64,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
@@ -171,7 +173,7 @@ impl VplSamplePass {
     }
 
     fn vpl_buffer(device: &wgpu::Device, capacity: u32) -> wgpu::Buffer {
-        device.create_buffer(&wgpu::BufferDescriptor {
+        device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("vpl.list"),
             size: (std::mem::size_of::<GpuVpl>() as u64) * capacity.max(1) as u64,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
@@ -256,7 +258,7 @@ impl VplSamplePass {
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         let t = &self.light_gbuffer.targets.views;
         let tv = wgpu::BindingResource::TextureView;
-        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("vpl.sample.inputs"),
             layout: &self.layout,
             entries: &[
@@ -274,7 +276,7 @@ impl VplSamplePass {
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &group, &[]);
+        pass.set_group(0, &group, &[]);
         pass.dispatch_workgroups(count.div_ceil(64), 1, 1);
     }
 }

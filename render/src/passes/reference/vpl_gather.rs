@@ -4,6 +4,8 @@
 //! and averages the batches into `indirect.accum` (batch k has weight 1/(k+1)), which the
 //! compose pass adds to the direct light.
 
+use crate::counters::prelude::*;
+
 use glam::Vec4;
 
 use crate::buffers::{BufferKind, BufferRegistry};
@@ -61,7 +63,7 @@ impl VplGatherPass {
             ],
         });
         let pipeline = crate::passes::compute_pipeline(device, "indirect.gather", &module, "cs_main", &[&layout]);
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
+        let params = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("indirect.gather.params"),
             size: std::mem::size_of::<GatherParams>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
@@ -128,7 +130,7 @@ impl VplGatherPass {
         let accum = crate::passes::view(&self.accum, "indirect.accum");
         let prev = crate::passes::view(&self.accum_prev, "indirect.accum_prev");
         let tv = wgpu::BindingResource::TextureView;
-        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("indirect.gather.inputs"),
             layout: &self.layout,
             entries: &[
@@ -151,14 +153,14 @@ impl VplGatherPass {
                 timestamp_writes: slot.and_then(|s| s.compute(true, true)),
             });
             pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &group, &[]);
+            pass.set_group(0, &group, &[]);
             pass.dispatch_workgroups(
                 self.width.div_ceil(crate::passes::TILE),
                 self.height.div_ceil(crate::passes::TILE),
                 1,
             );
         }
-        encoder.copy_texture_to_texture(
+        encoder.counted_copy_texture(
             self.accum.as_image_copy(),
             self.accum_prev.as_image_copy(),
             wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 },

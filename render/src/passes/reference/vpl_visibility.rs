@@ -8,6 +8,8 @@
 //! Departure from a paraboloid map per VPL (the form ISMs take): a paraboloid projection
 //! bends straight triangle edges, so large triangles render wrong; cube faces are exact.
 
+use crate::counters::prelude::*;
+
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::passes::knecht::interleave::GatherVisibility;
@@ -103,7 +105,7 @@ impl VplVisibilityPass {
             crate::passes::depth_only_pipeline(device, "vpl.shadow.pipeline", &pipeline_layout, &module, false);
         let cutout =
             crate::passes::depth_only_pipeline(device, "vpl.shadow.cutout_pipeline", &pipeline_layout, &module, true);
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
+        let params = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("vpl.shadow.params"),
             size: std::mem::size_of::<VisibilityParams>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
@@ -130,7 +132,7 @@ impl VplVisibilityPass {
 
     /// One 256-byte uniform slot per face: (VPL, face, tile, 0).
     fn face_buffer(ctx: &GpuContext, tiles: u32) -> wgpu::Buffer {
-        let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        let buffer = ctx.device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("vpl.shadow.faces"),
             size: FACE_STRIDE * tiles as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
@@ -186,7 +188,7 @@ impl VplVisibilityPass {
         params: VisibilityParams,
     ) {
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("vpl.shadow.inputs"),
             layout: &self.layout,
             entries: &[
@@ -202,7 +204,7 @@ impl VplVisibilityPass {
                 wgpu::BindGroupEntry { binding: 2, resource: vpl_list.as_entire_binding() },
             ],
         });
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        let mut pass = encoder.begin_counted_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("vpl.shadow.pass"),
             color_attachments: &[],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
@@ -214,13 +216,13 @@ impl VplVisibilityPass {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_bind_group(1, &scene.instance_group, &[]);
+        pass.set_group(1, &scene.instance_group, &[]);
         let l = self.layout_info;
         for tile in 0..vpls.min(self.face_capacity / FACES) * FACES {
             let (x, y) = ((tile % l.cols) * l.size, (tile / l.cols) * l.size);
             pass.set_viewport(x as f32, y as f32, l.size as f32, l.size as f32, 0.0, 1.0);
             pass.set_scissor_rect(x, y, l.size, l.size);
-            pass.set_bind_group(0, &group, &[(tile as u64 * FACE_STRIDE) as u32]);
+            pass.set_group(0, &group, &[(tile as u64 * FACE_STRIDE) as u32]);
             scene.draw_depth(&mut pass, state, 2, (&self.pipeline, &self.cutout));
         }
     }

@@ -6,6 +6,8 @@
 //! bounce gathers the diffuse light only, 004 §5.3) and added to the sum. With one bounce
 //! nothing here runs.
 
+use crate::counters::prelude::*;
+
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::passes::bgl;
@@ -106,7 +108,7 @@ impl SolerBounces {
         let pairs = [(Some(light), self.light.get(b)), (specular, self.specular.get(b))];
         for (from, to) in pairs {
             if let (Some(from), Some(to)) = (from, to) {
-                encoder.copy_texture_to_texture(from.as_image_copy(), to.as_image_copy(), to.size());
+                encoder.counted_copy_texture(from.as_image_copy(), to.as_image_copy(), to.size());
             }
         }
     }

@@ -5,6 +5,8 @@
 //! receiver (`shaders/soler/hcb_gather.wgsl`, one dispatch per level; CPU twin
 //! `cpu::soler::gather_at`), and the HCB's coherence splatting spreads the result.
 
+use crate::counters::prelude::*;
+
 use super::gather::{GatherParams, LevelInputs};
 use crate::gpu::GpuContext;
 use crate::passes::bgl;
@@ -92,8 +94,8 @@ impl SolerHcbGather {
                 timestamp_writes: slot.as_ref().and_then(|s| s.compute(true, false)),
             });
             pass.set_pipeline(&self.args_pipeline);
-            pass.set_bind_group(0, first, &[0]);
-            pass.set_bind_group(1, &args_group, &[]);
+            pass.set_group(0, first, &[0]);
+            pass.set_group(1, &args_group, &[]);
             pass.dispatch_workgroups(1, 1, 1);
         }
         let n = groups.len();
@@ -103,7 +105,7 @@ impl SolerHcbGather {
                 timestamp_writes: slot.as_ref().and_then(|s| s.compute(false, i + 1 == n)),
             });
             pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, g, &[(i as u64 * super::STRIDE) as u32]);
+            pass.set_group(0, g, &[(i as u64 * super::STRIDE) as u32]);
             // Words 4–6 of the HCB's arguments: the dispatch over every sample.
             pass.dispatch_workgroups_indirect(args, 16);
         }

@@ -148,8 +148,8 @@ impl SolerStage {
         let indirect = crate::passes::view(&self.upsample.indirect, "soler.indirect");
         match &mut self.temporal {
             Some(t) => {
-                let (camera, normal) = (f.camera_buffer, f.normal_texture);
-                timer.scope(ctx, enc, "soler.temporal", |e, slot| t.run(ctx, e, slot, s, camera, &indirect, g, normal));
+                let camera = f.camera_buffer;
+                timer.scope(ctx, enc, "soler.temporal", |e, slot| t.run(ctx, e, slot, s, camera, &indirect, g));
                 crate::passes::view(&t.filtered, "soler.temporal")
             }
             None => indirect,

@@ -39,13 +39,16 @@ pub struct SolerTemporal {
     size: (u32, u32),
     /// F_i.
     pub filtered: wgpu::Texture,
-    pub history: wgpu::Texture,
-    history_prev: wgpu::Texture,
-    prev_normal: wgpu::Texture,
+    /// Ping-pong pairs (issue #38: no copies): `history[current]` and `normals[current]` were
+    /// written by the last frame (its history and G-buffer normals); the next frame reads them
+    /// and writes the other pair.
+    history: [wgpu::Texture; 2],
+    normals: [wgpu::Texture; 2],
+    current: usize,
     pub warped: wgpu::Texture,
     pub rejection: wgpu::Texture,
     pub a: wgpu::Texture,
-    /// Whether `history_prev` holds a frame.
+    /// Whether the last pair holds a frame.
     valid: bool,
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::ComputePipeline,
@@ -54,9 +57,8 @@ pub struct SolerTemporal {
 
 struct Targets {
     filtered: wgpu::Texture,
-    history: wgpu::Texture,
-    history_prev: wgpu::Texture,
-    prev_normal: wgpu::Texture,
+    history: [wgpu::Texture; 2],
+    normals: [wgpu::Texture; 2],
     warped: wgpu::Texture,
     rejection: wgpu::Texture,
     a: wgpu::Texture,
@@ -68,9 +70,8 @@ fn targets(device: &wgpu::Device, (w, h): (u32, u32)) -> Targets {
     let rgba = wgpu::TextureFormat::Rgba32Float;
     Targets {
         filtered: t("soler.temporal", rgba),
-        history: t("soler.temporal.history", rgba),
-        history_prev: t("soler.temporal.history_prev", rgba),
-        prev_normal: t("soler.temporal.prev_normal", NORMAL_FORMAT),
+        history: [t("soler.temporal.history.0", rgba), t("soler.temporal.history.1", rgba)],
+        normals: [t("soler.temporal.prev_normal.0", NORMAL_FORMAT), t("soler.temporal.prev_normal.1", NORMAL_FORMAT)],
         warped: t("soler.temporal.warped", rgba),
         rejection: t("soler.temporal.rejection", rgba),
         a: t("soler.temporal.a", wgpu::TextureFormat::R32Float),
@@ -86,6 +87,7 @@ impl SolerTemporal {
         entries.extend((2..=8).map(|b| bgl::texture(b, cs, false)));
         entries.extend((9..=12).map(|b| bgl::storage_texture(b, rgba)));
         entries.push(bgl::storage_texture(13, wgpu::TextureFormat::R32Float));
+        entries.push(bgl::storage_texture(14, NORMAL_FORMAT));
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("soler.temporal.inputs"),
             entries: &entries,
@@ -102,8 +104,8 @@ impl SolerTemporal {
             size,
             filtered: t.filtered,
             history: t.history,
-            history_prev: t.history_prev,
-            prev_normal: t.prev_normal,
+            normals: t.normals,
+            current: 0,
             warped: t.warped,
             rejection: t.rejection,
             a: t.a,
@@ -120,8 +122,7 @@ impl SolerTemporal {
             return false;
         }
         let t = targets(&ctx.device, size);
-        (self.filtered, self.history, self.history_prev, self.prev_normal) =
-            (t.filtered, t.history, t.history_prev, t.prev_normal);
+        (self.filtered, self.history, self.normals) = (t.filtered, t.history, t.normals);
         (self.warped, self.rejection, self.a) = (t.warped, t.rejection, t.a);
         self.size = size;
         self.valid = false;
@@ -163,7 +164,7 @@ impl SolerTemporal {
                 "soler.temporal.history",
                 BufferKind::Hdr,
                 "Soler Eq. 6's history for the next frame: F_i or I_i (soler.temporal_history), view depth in a",
-                &self.history,
+                &self.history[self.current],
             ),
         ];
         for (name, kind, doc, t) in entries {
@@ -182,30 +183,29 @@ impl SolerTemporal {
         camera: &wgpu::Buffer,
         current: &wgpu::TextureView,
         g: &GBufferViews,
-        normal: &wgpu::Texture,
     ) {
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&TemporalParams::of(s, self.valid)));
         let v = |t: &wgpu::Texture| crate::passes::view(t, "soler.temporal.view");
-        let (prev_n, hist_prev, filtered, hist, warped, rejection, a) = (
-            v(&self.prev_normal),
-            v(&self.history_prev),
+        let (read, write) = (self.current, 1 - self.current);
+        let (prev_n, hist_prev, filtered, hist, warped, rejection, a, normal_out) = (
+            v(&self.normals[read]),
+            v(&self.history[read]),
             v(&self.filtered),
-            v(&self.history),
+            v(&self.history[write]),
             v(&self.warped),
             v(&self.rejection),
             v(&self.a),
+            v(&self.normals[write]),
         );
         let tv = wgpu::BindingResource::TextureView;
         let mut resources = vec![self.params.as_entire_binding(), camera.as_entire_binding()];
         let views = [current, &g.position, &g.normal, &g.motion, &g.material, &prev_n, &hist_prev];
         resources.extend(views.map(tv));
-        resources.extend([&filtered, &hist, &warped, &rejection, &a].map(tv));
+        resources.extend([&filtered, &hist, &warped, &rejection, &a, &normal_out].map(tv));
         let group = crate::passes::bind_group(&ctx.device, "soler.temporal.inputs", &self.layout, resources);
         let stamps = slot.and_then(|s| s.compute(true, true));
         crate::passes::dispatch_2d(encoder, "soler.temporal", &self.pipeline, &group, &[], stamps, self.size);
-        let size = wgpu::Extent3d { width: self.size.0, height: self.size.1, depth_or_array_layers: 1 };
-        encoder.copy_texture_to_texture(self.history.as_image_copy(), self.history_prev.as_image_copy(), size);
-        encoder.copy_texture_to_texture(normal.as_image_copy(), self.prev_normal.as_image_copy(), size);
+        self.current = write;
         self.valid = true;
     }
 }

@@ -12,6 +12,8 @@
 //! of single walls seen from inside is one: the half-space behind each wall counts as solid,
 //! which leaves the room's inside right).
 
+use crate::counters::prelude::*;
+
 use super::STRIDE;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
@@ -263,7 +265,7 @@ impl SolerVoxels {
         );
         let target_view = crate::passes::view(target, "soler.voxelize.target");
         {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            let mut pass = encoder.begin_counted_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("soler.voxelize"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                     view: &target_view,
@@ -284,9 +286,9 @@ impl SolerVoxels {
             let (vw, vh) = (gbuffer_size.0 as f32 * scale, gbuffer_size.1 as f32 * scale);
             pass.set_viewport(0.0, 0.0, vw.min(first.width as f32), vh.min(first.height as f32), 0.0, 1.0);
             pass.set_pipeline(&self.voxelize);
-            pass.set_bind_group(0, &camera_group, &[]);
-            pass.set_bind_group(1, &scene.instance_group, &[]);
-            pass.set_bind_group(3, &grid_group, &[0]);
+            pass.set_group(0, &camera_group, &[]);
+            pass.set_group(1, &scene.instance_group, &[]);
+            pass.set_group(3, &grid_group, &[0]);
             scene.draw(&mut pass, state, Some(2), None);
         }
         let n = self.grids.len();
