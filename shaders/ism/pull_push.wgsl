@@ -11,7 +11,8 @@ struct LevelParams {
     // x: threshold of this level (t · 2^l, scene units); y (push): 1 to replace texels behind
     // only inside a surface
     threshold: vec4<f32>,
-    // x: side of one map at the coarse level (texels)
+    // x: side of one map at the coarse level (texels); y: the first texel row this dispatch
+    // writes at its level (only the rows of some maps, `IsmPass::finish_maps`)
     tile: vec4<u32>,
 }
 
@@ -20,8 +21,9 @@ struct LevelParams {
 @group(0) @binding(2) var dst: texture_storage_2d<r32float, write>;
 
 @compute @workgroup_size(8, 8, 1)
-fn cs_pull(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn cs_pull(@builtin(global_invocation_id) id: vec3<u32>) {
     let size = textureDimensions(dst);
+    let gid = vec2<u32>(id.x, id.y + lp.tile.y);
     if (gid.x >= size.x || gid.y >= size.y) {
         return;
     }
@@ -91,8 +93,9 @@ fn coarse_at(x: u32, y: u32, threshold: f32) -> vec2<f32> {
 }
 
 @compute @workgroup_size(8, 8, 1)
-fn cs_push(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn cs_push(@builtin(global_invocation_id) id: vec3<u32>) {
     let size = textureDimensions(fine);
+    let gid = vec2<u32>(id.x, id.y + lp.tile.y);
     if (gid.x >= size.x || gid.y >= size.y) {
         return;
     }

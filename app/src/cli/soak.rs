@@ -240,6 +240,9 @@ pub fn soak(args: &SoakArgs) -> Result<(), CliError> {
             break;
         }
         if checkpoint {
+            // The reuse cache holds what the last frames used (bounded by construction,
+            // `gi_render::counters::reuse`); the checkpoint counts what the renderer keeps.
+            gi_render::counters::reuse::clear();
             ctx.wait_idle();
             if let Some(live) = ctx.live_resources() {
                 let c = Checkpoint {

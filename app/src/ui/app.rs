@@ -35,10 +35,16 @@ impl GiLabApp {
                 log::info!("removed {n} temporary files of interrupted saves from {}", dir.display());
             }
         }
+        let saved = matches!((&config_dir, args.fresh), (Some(dir), false) if Session::file(dir).exists());
         let (mut session, session_problem) = match (&config_dir, args.fresh) {
             (Some(dir), false) => Session::load(dir),
             _ => (Session::default(), None),
         };
+        // The render scale counts physical pixels; a new session renders one pixel per point
+        // (issue #38: a 2× display would otherwise render four times the pixels).
+        if !saved {
+            session.render_scale = session::default_render_scale() / cc.egui_ctx.pixels_per_point().max(0.5);
+        }
         // Command-line choices win over the restored session.
         if args.scene.scene.is_some() {
             session.scene = args.scene.scene.clone();

@@ -154,3 +154,13 @@ pub fn cached() -> (usize, usize) {
         (c.views.len(), c.groups.len())
     })
 }
+
+/// Drops every cached view and bind group of this thread (memory checkpoints: what stays
+/// alive then is what the renderers hold themselves).
+pub fn clear() {
+    CACHE.with(|c| {
+        let mut c = c.borrow_mut();
+        c.views.clear();
+        c.groups.clear();
+    });
+}

@@ -192,6 +192,10 @@ impl Renderer {
     }
 
     pub(crate) fn register_all(&mut self) {
+        // Passes or targets changed: the views and bind groups cached for the old ones would
+        // keep their memory for a few frames more (`counters::reuse`); leaving a stage choice
+        // or resizing gives it back at once. The others are made again on next use.
+        crate::counters::reuse::clear();
         self.registry = BufferRegistry::default();
         self.gbuffer.register(&mut self.registry);
         self.shadow.register(&mut self.registry);

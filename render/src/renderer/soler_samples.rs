@@ -61,17 +61,14 @@ impl Renderer {
             points.hash(&mut h);
             h.finish()
         };
-        // The frame of the receivers' read sets the ring's rotation of the samples.
-        let mut frame = None;
         let mut read = |points: &[(&str, u32, u32)], stage: usize| -> Result<Option<Vec<[f32; 4]>>, String> {
             let what = Readback::Texels(points.iter().map(|&(n, x, y)| (n.to_string(), x, y)).collect());
             let Some(a) = self.read_later(&format!("soler.samples.{stage}"), what, tag(points)) else {
                 return Ok(None);
             };
-            if a.tag != tag(points) || frame.is_some_and(|f| a.frame < f) {
+            if a.tag != tag(points) {
                 return Ok(None);
             }
-            frame.get_or_insert(a.frame);
             match &a.data {
                 Ok(Readout::Texels(v)) => Ok(Some(v.clone())),
                 Ok(_) => Ok(None),

@@ -42,6 +42,8 @@ pub struct GpuScene {
     pub primitives: Vec<Vec<GpuPrimitive>>,
     pub instances: wgpu::Buffer,
     pub instance_capacity: usize,
+    /// What `instances` holds (written only when the frame's transforms differ).
+    uploaded: std::sync::Mutex<Vec<crate::passes::InstanceUniform>>,
     pub instance_layout: wgpu::BindGroupLayout,
     pub instance_group: wgpu::BindGroup,
     pub material_layout: wgpu::BindGroupLayout,
@@ -256,6 +258,7 @@ impl GpuScene {
             primitives,
             instances,
             instance_capacity: draw_count,
+            uploaded: Default::default(),
             instance_layout,
             instance_group,
             material_layout,
@@ -280,8 +283,11 @@ impl GpuScene {
                 normal_matrix: d.world.inverse().transpose(),
             })
             .collect();
-        if !data.is_empty() {
+        // Static scenes upload their transforms once (issue #38): only a change is written.
+        let mut last = self.uploaded.lock().unwrap_or_else(|p| p.into_inner());
+        if !data.is_empty() && *last != data {
             ctx.queue.write_buffer(&self.instances, 0, bytemuck::cast_slice(&data));
+            *last = data;
         }
     }
 

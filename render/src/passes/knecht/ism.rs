@@ -228,6 +228,8 @@ pub struct LevelParams {
 }
 
 const LEVEL_STRIDE: u64 = 256;
+/// Uniform slots of one pull-push call: pull and push of up to 8 levels.
+const LEVEL_SLOTS: u64 = 16;
 
 /// What a frame's ISMs are made from.
 #[derive(Clone, Copy, Debug)]
@@ -278,7 +280,7 @@ impl IsmPass {
         let splat_layout = splat_layout(device, "ism.splat.inputs");
         let resolve_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("ism.resolve.inputs"),
-            entries: &[bgl::storage(0, cs, true), bgl::storage_texture(1, r32)],
+            entries: &[bgl::storage(0, cs, true), bgl::storage_texture(1, r32), bgl::uniform_dynamic(2, cs)],
         });
         let pull_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("ism.pull.inputs"),
@@ -318,7 +320,7 @@ impl IsmPass {
         });
         let level_params = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("ism.pull_push.params"),
-            size: LEVEL_STRIDE * 16,
+            size: LEVEL_STRIDE * LEVEL_SLOTS * (MAX_BOUNCES as u64 + 1),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -494,12 +496,19 @@ impl IsmPass {
             ],
         });
         let atlas_view = crate::passes::view(&self.atlas, "ism.atlas");
+        // The resolve reads its first row from the level-0 push slot of its call.
+        let rows = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &self.level_params,
+            offset: 0,
+            size: std::num::NonZeroU64::new(std::mem::size_of::<LevelParams>() as u64),
+        });
         let resolve = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("ism.resolve.inputs"),
             layout: &self.resolve_layout,
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: self.depth.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&atlas_view) },
+                wgpu::BindGroupEntry { binding: 2, resource: rows },
             ],
         });
         IsmJob { splat, resolve }
@@ -521,7 +530,7 @@ impl IsmPass {
         pass.dispatch_workgroups(groups.min(65535), groups.div_ceil(65535), 1);
     }
 
-    /// Resolves the splatted distances into `ism.atlas` and runs pull-push.
+    /// Resolves the splatted distances into `ism.atlas` and runs pull-push, over the whole atlas.
     pub fn finish(
         &self,
         ctx: &GpuContext,
@@ -531,18 +540,46 @@ impl IsmPass {
         s: &IsmSettings,
         extent: f32,
     ) {
+        let all = self.layout_info.cols * self.layout_info.rows;
+        self.finish_maps(ctx, encoder, slot, job, s, extent, 0..all, 0);
+    }
+
+    /// [`Self::finish`] over the rows of the atlas that hold maps `maps` (issue #38: each extra
+    /// bounce's shadow test needs the maps splatted since the last pull-push, not the whole
+    /// atlas again). Maps are independent (pull and push stay inside a map), so a row done
+    /// twice comes out the same. `call` (0 … MAX_BOUNCES) picks this call's uniform slots: every
+    /// call of a frame needs its own, as all are written before the submission.
+    #[allow(clippy::too_many_arguments)]
+    pub fn finish_maps(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<Slot<'_>>,
+        job: &IsmJob,
+        s: &IsmSettings,
+        extent: f32,
+        maps: std::ops::Range<u32>,
+        call: u32,
+    ) {
         let l = self.layout_info;
-        let (w, h) = (l.width() as u32, l.height() as u32);
+        let rows = (maps.start / l.cols).min(l.rows)..maps.end.div_ceil(l.cols).min(l.rows);
+        if rows.is_empty() {
+            return;
+        }
+        let call = call.min(MAX_BOUNCES);
+        let (y0, y1) = (rows.start * l.size, rows.end * l.size);
+        let w = l.width() as u32;
+        self.write_levels(ctx, s, extent, y0, call);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("ism.resolve"),
                 timestamp_writes: None,
             });
             pass.set_pipeline(&self.resolve_pipeline);
-            pass.set_group(0, &job.resolve, &[]);
-            pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+            pass.set_group(0, &job.resolve, &[Self::level_offset(call, 1)]);
+            pass.dispatch_workgroups(w.div_ceil(8), (y1 - y0).div_ceil(8), 1);
         }
-        self.pull_push(ctx, encoder, slot, s, extent);
+        self.pull_push_rows(ctx, encoder, slot, y0..y1, call);
     }
 
     fn level_view(&self, level: u32) -> wgpu::TextureView {
@@ -554,8 +591,35 @@ impl IsmPass {
         })
     }
 
+    /// Dynamic offset of uniform slot `k` of call `call`.
+    fn level_offset(call: u32, k: u64) -> u32 {
+        ((call as u64 * LEVEL_SLOTS + k) * LEVEL_STRIDE) as u32
+    }
+
+    /// Writes call `call`'s level uniforms: slot 2·level the pull threshold, slot 2·level + 1
+    /// the push threshold and rule; `tile.y` the first texel row of the level the slot writes
+    /// (level 0 row `y0` scaled down).
+    fn write_levels(&self, ctx: &GpuContext, s: &IsmSettings, extent: f32, y0: u32, call: u32) {
+        let l = self.layout_info;
+        let mut data = vec![0u8; (LEVEL_STRIDE * LEVEL_SLOTS) as usize];
+        let inside = (s.push_behind == PushBehind::InsideSurfaces) as u32 as f32;
+        // Level 0's push slot exists even without levels: the resolve reads its row.
+        for level in 0..self.levels.max(1) {
+            let scale = (1u32 << level) as f32 * extent;
+            for (k, t, rule, target) in [(0, s.pull_threshold, 0.0, level + 1), (1, s.push_threshold, inside, level)] {
+                let p = LevelParams {
+                    threshold: Vec4::new(t * scale, rule, 0.0, 0.0),
+                    tile: [(l.size >> (level + 1)).max(1), y0 >> target, 0, 0],
+                };
+                let o = ((2 * level + k) as u64 * LEVEL_STRIDE) as usize;
+                data[o..o + std::mem::size_of::<LevelParams>()].copy_from_slice(bytemuck::bytes_of(&p));
+            }
+        }
+        ctx.queue.write_buffer(&self.level_params, call as u64 * LEVEL_SLOTS * LEVEL_STRIDE, &data);
+    }
+
     /// Copies `ism.atlas` into level 0 of `ism.atlas_pulled` and runs pull-push on it
-    /// (thresholds are fractions of `extent`).
+    /// (thresholds are fractions of `extent`), over the whole atlas.
     pub fn pull_push(
         &self,
         ctx: &GpuContext,
@@ -564,14 +628,37 @@ impl IsmPass {
         s: &IsmSettings,
         extent: f32,
     ) {
+        let h = self.layout_info.height() as u32;
+        self.write_levels(ctx, s, extent, 0, 0);
+        self.pull_push_rows(ctx, encoder, slot, 0..h, 0);
+    }
+
+    /// Pull-push over level-0 texel rows `rows` (whole maps), with call `call`'s uniforms.
+    fn pull_push_rows(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<Slot<'_>>,
+        rows: std::ops::Range<u32>,
+        call: u32,
+    ) {
         let l = self.layout_info;
-        let (w, h) = (l.width() as u32, l.height() as u32);
+        let w = l.width() as u32;
         encoder.counted_copy_texture(
-            self.atlas.as_image_copy(),
-            self.pulled.as_image_copy(),
-            wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+            wgpu::TexelCopyTextureInfo {
+                texture: &self.atlas,
+                mip_level: 0,
+                origin: wgpu::Origin3d { x: 0, y: rows.start, z: 0 },
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::TexelCopyTextureInfo {
+                texture: &self.pulled,
+                mip_level: 0,
+                origin: wgpu::Origin3d { x: 0, y: rows.start, z: 0 },
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::Extent3d { width: w, height: rows.end - rows.start, depth_or_array_layers: 1 },
         );
-        let mut data = vec![0u8; (LEVEL_STRIDE * 16) as usize];
         let mut pulls = Vec::new();
         let mut pushes = Vec::new();
         let dynamic = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
@@ -580,17 +667,6 @@ impl IsmPass {
             size: std::num::NonZeroU64::new(std::mem::size_of::<LevelParams>() as u64),
         });
         for level in 0..self.levels {
-            let scale = (1u32 << level) as f32 * extent;
-            // Slot 2·level: pull threshold; slot 2·level + 1: push threshold and rule.
-            let inside = (s.push_behind == PushBehind::InsideSurfaces) as u32 as f32;
-            for (k, t, rule) in [(0, s.pull_threshold, 0.0), (1, s.push_threshold, inside)] {
-                let p = LevelParams {
-                    threshold: Vec4::new(t * scale, rule, 0.0, 0.0),
-                    tile: [(l.size >> (level + 1)).max(1), 0, 0, 0],
-                };
-                let o = ((2 * level + k) as u64 * LEVEL_STRIDE) as usize;
-                data[o..o + std::mem::size_of::<LevelParams>()].copy_from_slice(bytemuck::bytes_of(&p));
-            }
             let (fine, coarse) = (self.level_view(level), self.level_view(level + 1));
             pulls.push(ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("ism.pull.inputs"),
@@ -611,22 +687,24 @@ impl IsmPass {
                 ],
             }));
         }
-        ctx.queue.write_buffer(&self.level_params, 0, &data);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("ism.pull_push"),
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
+        let span = |level: u32| ((rows.end >> level) - (rows.start >> level)).max(1);
         pass.set_pipeline(&self.pull_pipeline);
         for (level, g) in pulls.iter().enumerate() {
-            let (cw, ch) = ((w >> (level + 1)).max(1), (h >> (level + 1)).max(1));
-            pass.set_group(0, g, &[(2 * level as u64 * LEVEL_STRIDE) as u32]);
-            pass.dispatch_workgroups(cw.div_ceil(8), ch.div_ceil(8), 1);
+            let level = level as u32;
+            let cw = (w >> (level + 1)).max(1);
+            pass.set_group(0, g, &[Self::level_offset(call, 2 * level as u64)]);
+            pass.dispatch_workgroups(cw.div_ceil(8), span(level + 1).div_ceil(8), 1);
         }
         pass.set_pipeline(&self.push_pipeline);
         for (level, g) in pushes.iter().enumerate().rev() {
-            let (fw, fh) = ((w >> level).max(1), (h >> level).max(1));
-            pass.set_group(0, g, &[((2 * level as u64 + 1) * LEVEL_STRIDE) as u32]);
-            pass.dispatch_workgroups(fw.div_ceil(8), fh.div_ceil(8), 1);
+            let level = level as u32;
+            let fw = (w >> level).max(1);
+            pass.set_group(0, g, &[Self::level_offset(call, 2 * level as u64 + 1)]);
+            pass.dispatch_workgroups(fw.div_ceil(8), span(level).div_ceil(8), 1);
         }
     }
 

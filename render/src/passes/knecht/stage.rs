@@ -34,6 +34,9 @@ pub struct KnechtVpls {
     pub frames: u32,
     /// This frame's ISM job (from stage 3 to stage 4).
     job: Option<IsmJob>,
+    /// Maps of this frame's atlas already resolved and pull-pushed by the bounces' shadow
+    /// tests (stage 4 does the rest).
+    pulled_maps: u32,
 }
 
 /// The pass that makes a frame's further bounces, with its bind groups.
@@ -61,6 +64,7 @@ impl KnechtVpls {
             irsm: None,
             exact: None,
             frames: 0,
+            pulled_maps: 0,
             job: None,
         }
     }
@@ -172,6 +176,7 @@ impl KnechtVpls {
 
         let eye_offset = Self::eye_offset(s, f.vpl_radius());
         let splats = ism_splats(s);
+        self.pulled_maps = 0;
         let instances = &f.gpu_scene.instances;
         self.job = (splats || bounces > 1).then(|| {
             let frame = IsmFrame { vpls: n_vpls, bounces, eye_offset, extent: 2.0 * f.vpl_radius() };
@@ -209,11 +214,15 @@ impl KnechtVpls {
                 let pulled = splats && s.ism.bounce_test == BounceShadowTest::PulledMaps;
                 let extent = 2.0 * f.vpl_radius();
                 for b in 1..bounces {
-                    // The pulled maps of bounces 0 … b − 1 for bounce b's shadow test.
+                    // The pulled maps of bounces 0 … b − 1 for bounce b's shadow test: those of
+                    // bounces before b − 1 were pulled for bounce b − 1's, so only bounce
+                    // b − 1's maps are resolved and pulled here (issue #38).
                     if pulled && matches!(make, Bounces::PointCloud(..)) {
+                        let maps = (b - 1) * n_vpls..b * n_vpls;
                         timer.scope(ctx, enc, &format!("ism.pull_push.{b}"), |e, slot| {
-                            ism.finish(ctx, e, slot, job, &s.ism, extent)
+                            ism.finish_maps(ctx, e, slot, job, &s.ism, extent, maps, b)
                         });
+                        self.pulled_maps = b * n_vpls;
                     }
                     timer.scope(ctx, enc, &format!("vpl.bounce.{b}"), |e, slot| match &make {
                         Bounces::PointCloud(pass, group) => pass.run(e, slot, group, b, n_vpls),
@@ -256,7 +265,11 @@ impl KnechtVpls {
             VplVisibility::Imperfect => {
                 let (ism, job) = (&self.ism, self.job.as_ref()?);
                 let extent = 2.0 * f.vpl_radius();
-                timer.scope(ctx, enc, "ism.pull_push", |e, slot| ism.finish(ctx, e, slot, job, &s.ism, extent));
+                // The maps the bounces' shadow tests left (all of them without bounces).
+                let maps = self.pulled_maps..vpls.count.max(self.pulled_maps);
+                timer.scope(ctx, enc, "ism.pull_push", |e, slot| {
+                    ism.finish_maps(ctx, e, slot, job, &s.ism, extent, maps, 0)
+                });
                 let l = self.ism.layout_info;
                 Visibility::Ism {
                     atlas: self.ism.shading_view(),
