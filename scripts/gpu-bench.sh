@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
-# GI Lab's GPU benchmark: every shipped preset on the embedded default scene at 1920x1080,
+# GI Lab's GPU benchmark: every shipped preset on the embedded default scene at 1920x1080
+# (also summed up as one Markdown table, gpu-bench.md: GPU and wall time, the per-frame
+# counters of issue #38 and the heaviest pass),
 # the suites (knecht and nguyen at 1920x1080, soler at 1280x720 as its Fig. 9, gautron at
 # 64x64 for its per-pixel brute force, scenes at 1920x1080 over assets/), written as text
 # into one folder. Run it from the project root with a release build:
@@ -48,12 +50,29 @@ row() {
   uname -srm
 } | tee -a "$LOG"
 
+TABLE="$OUT/gpu-bench.md"
+{
+  echo "| preset ($SIZE) | GPU ms | wall ms | blocking waits / frame | submits / frame | objects created / frame | MB bound / frame | heaviest pass (ms) |"
+  echo "|---|---:|---:|---:|---:|---:|---:|---|"
+} >"$TABLE"
 for p in presets/*.ron; do
-  row "preset $(basename "$p" .ron)" bench --preset "$p" --size "$SIZE" --frames "$FRAMES"
+  name="$(basename "$p" .ron)"
+  row "preset $name" bench --preset "$p" --size "$SIZE" --frames "$FRAMES"
+  # One Markdown row from the bench's table: its total, wall clock, counters and heaviest pass.
+  awk -v name="$name" '
+    /^=== preset / { mine = ($3 == name ":") }
+    mine && /^GI Lab bench/ { table = 1; next }
+    mine && table && /^pass / { next }
+    mine && table && /^total / { gpu = $2; mb = $3; table = 0; next }
+    mine && table && NF >= 5 { if ($2 + 0 > top_ms) { top_ms = $2 + 0; top = $1 } }
+    mine && /^frame wall/ { wall = $3 }
+    mine && /^per frame:/ { waits = $3; submits = $6; objects = $8 }
+    END { if (gpu != "") printf "| %s | %s | %s | %s | %s | %s | %s | %s %.2f |\n", name, gpu, wall, waits, submits, objects, mb, top, top_ms }
+  ' "$LOG" >>"$TABLE"
 done
 row "suite knecht" bench --suite knecht --size "$SIZE" --frames 20
 row "suite nguyen" bench --suite nguyen --size "$SIZE" --frames 20
 row "suite soler" bench --suite soler --size 1280x720 --frames 20
 row "suite scenes" bench --suite scenes --size "$SIZE" --frames 20
 row "suite gautron" bench --suite gautron --size 64x64
-echo "done: $LOG"
+echo "done: $LOG and $TABLE"

@@ -138,16 +138,25 @@ pub fn bench_run(r: &mut Renderer, frames: u32, scene_name: &str) -> BenchReport
                 None => traffic.push((pass.clone(), *bytes)),
             }
         }
+        // A pass that runs several times a frame (Gautron's rounds and chunks, the bounces'
+        // pull-pushes) is one sample per frame: the sum of its scopes.
+        let mut frame: Vec<(String, f64)> = Vec::new();
         for t in timings {
-            let i = match names.iter().position(|n| *n == t.name) {
+            match frame.iter_mut().find(|(n, _)| *n == t.name) {
+                Some(f) => f.1 += t.ms,
+                None => frame.push((t.name, t.ms)),
+            }
+        }
+        for (name, ms) in frame {
+            let i = match names.iter().position(|n| *n == name) {
                 Some(i) => i,
                 None => {
-                    names.push(t.name.clone());
+                    names.push(name);
                     samples.push(Vec::new());
                     names.len() - 1
                 }
             };
-            samples[i].push(t.ms);
+            samples[i].push(ms);
         }
     }
     let passes: Vec<PassStats> = names

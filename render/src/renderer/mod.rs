@@ -108,6 +108,8 @@ pub struct Renderer {
     pub(crate) readbacks: std::sync::Mutex<crate::readback::Readbacks>,
     /// The last frame's bytes per pass (`counters::traffic`).
     pub(crate) traffic: Vec<(String, u64)>,
+    /// The Soler samples overlay's last complete answer (`soler_samples_later`).
+    pub(crate) soler_overlay: std::sync::Mutex<Option<((u32, u32), Vec<SolerReceiver>)>>,
 }
 
 impl Renderer {
@@ -185,6 +187,7 @@ impl Renderer {
             camera_problem: None,
             readbacks: Default::default(),
             traffic: Vec::new(),
+            soler_overlay: Default::default(),
         };
         r.register_all();
         r.ensure_passes();

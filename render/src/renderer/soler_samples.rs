@@ -50,9 +50,11 @@ impl Renderer {
         self.soler_samples_with(pixel, frame, &mut read).map(|r| r.unwrap_or_default())
     }
 
-    /// [`Self::soler_samples`] without waiting (the window's overlay): its two reads (the
-    /// receivers, then their samples) are copied in later frames and taken in as they arrive,
-    /// so the overlay follows the pixel a few frames late. Ok(None) while waiting.
+    /// [`Self::soler_samples`] without waiting (the window's overlay). Its two reads (the
+    /// receivers, then the samples their rotation picks) are copied in later frames and taken
+    /// in as they arrive: the receivers' read is kept until the samples' read of the same
+    /// frame has come (the rings rotate every frame), then the answer is kept and the next
+    /// cycle starts. Until the first answer for `pixel`, Ok(None).
     pub fn soler_samples_later(&self, pixel: (u32, u32)) -> Result<Option<Vec<SolerReceiver>>, String> {
         use crate::readback::{Readback, Readout};
         let tag = |points: &[(&str, u32, u32)]| {
@@ -62,24 +64,28 @@ impl Renderer {
             h.finish()
         };
         let mut read = |points: &[(&str, u32, u32)], stage: usize| -> Result<Option<Vec<[f32; 4]>>, String> {
-            let what = Readback::Texels(points.iter().map(|&(n, x, y)| (n.to_string(), x, y)).collect());
-            let Some(a) = self.read_later(&format!("soler.samples.{stage}"), what, tag(points)) else {
-                return Ok(None);
+            let key = format!("soler.samples.{stage}");
+            let what = || Readback::Texels(points.iter().map(|&(n, x, y)| (n.to_string(), x, y)).collect());
+            // The receivers: the arrived read while it is of these points, else ask again.
+            let got = match self.read_latest(&key) {
+                Some(a) if stage == 0 && a.tag == tag(points) => Some(a),
+                _ => self.read_later(&key, what(), tag(points)),
             };
-            if a.tag != tag(points) {
-                return Ok(None);
-            }
-            match &a.data {
-                Ok(Readout::Texels(v)) => Ok(Some(v.clone())),
-                Ok(_) => Ok(None),
-                Err(e) => Err(e.clone()),
+            match got.filter(|a| a.tag == tag(points)).as_deref().map(|a| &a.data) {
+                Some(Ok(Readout::Texels(v))) => Ok(Some(v.clone())),
+                Some(Err(e)) => Err(e.clone()),
+                _ => Ok(None),
             }
         };
-        let Some(last) = self.read_latest("soler.samples.0") else {
-            // Nothing asked yet: ask for the receivers.
-            return self.soler_samples_with(pixel, self.clock.frame, &mut read);
-        };
-        self.soler_samples_with(pixel, last.frame, &mut read)
+        let frame = self.read_latest("soler.samples.0").map_or(self.clock.frame, |a| a.frame);
+        let done = self.soler_samples_with(pixel, frame, &mut read)?;
+        let mut last = self.soler_overlay.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(r) = done {
+            // This cycle is complete: keep its answer, and start the next with fresh receivers.
+            *last = Some((pixel, r));
+            self.read_forget("soler.samples.0");
+        }
+        Ok(last.as_ref().filter(|(p, _)| *p == pixel).map(|(_, r)| r.clone()))
     }
 
     /// The samples behind `pixel` as rendered in `frame`, reading texels with `read` (its
