@@ -63,6 +63,9 @@ pub(crate) struct StagePasses {
     pub gautron: Option<GautronStage>,
 }
 
+/// A pixel and the Soler samples behind it (the overlay's last complete answer).
+pub(crate) type SolerAnswer = ((u32, u32), Vec<SolerReceiver>);
+
 /// What the previous frame used, for the movement buffer (Knecht 002 §3.5.1).
 pub(crate) struct PrevFrame {
     pub view_proj: Mat4,
@@ -109,7 +112,7 @@ pub struct Renderer {
     /// The last frame's bytes per pass (`counters::traffic`).
     pub(crate) traffic: Vec<(String, u64)>,
     /// The Soler samples overlay's last complete answer (`soler_samples_later`).
-    pub(crate) soler_overlay: std::sync::Mutex<Option<((u32, u32), Vec<SolerReceiver>)>>,
+    pub(crate) soler_overlay: std::sync::Mutex<Option<SolerAnswer>>,
 }
 
 impl Renderer {
