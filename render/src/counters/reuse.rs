@@ -20,8 +20,8 @@ pub const DROP_AFTER_FRAMES: u64 = 3;
 #[derive(Default)]
 struct Cache {
     frame: u64,
-    views: HashMap<u64, (wgpu::TextureView, u64)>,
-    groups: HashMap<u64, (wgpu::BindGroup, u64)>,
+    views: Table<wgpu::TextureView>,
+    groups: Table<wgpu::BindGroup>,
 }
 
 thread_local! {
@@ -95,44 +95,45 @@ pub(crate) fn group_key(d: &wgpu::BindGroupDescriptor) -> Option<u64> {
     Some(h.finish())
 }
 
-/// The cached view for `key`, if any (marked as used this frame).
-pub(crate) fn cached_view(key: u64) -> Option<wgpu::TextureView> {
+type Table<T> = HashMap<u64, (T, u64)>;
+
+/// The object cached under `key` in the table `pick` chooses, marked as used this frame.
+fn cached<T: Clone>(key: u64, pick: fn(&mut Cache) -> &mut Table<T>) -> Option<T> {
     CACHE.with(|c| {
         let mut c = c.borrow_mut();
         let frame = c.frame;
-        c.views.get_mut(&key).map(|(v, used)| {
+        pick(&mut c).get_mut(&key).map(|(v, used)| {
             *used = frame;
             v.clone()
         })
     })
 }
 
-pub(crate) fn keep_view(key: u64, v: &wgpu::TextureView) {
+/// Caches `v` under `key` in the table `pick` chooses.
+fn keep<T: Clone>(key: u64, v: &T, pick: fn(&mut Cache) -> &mut Table<T>) {
     CACHE.with(|c| {
         let mut c = c.borrow_mut();
         let frame = c.frame;
-        c.views.insert(key, (v.clone(), frame));
+        pick(&mut c).insert(key, (v.clone(), frame));
     });
+}
+
+/// The cached view for `key`, if any (marked as used this frame).
+pub(crate) fn cached_view(key: u64) -> Option<wgpu::TextureView> {
+    cached(key, |c| &mut c.views)
+}
+
+pub(crate) fn keep_view(key: u64, v: &wgpu::TextureView) {
+    keep(key, v, |c| &mut c.views)
 }
 
 /// The cached bind group for `key`, if any (marked as used this frame).
 pub(crate) fn cached_group(key: u64) -> Option<wgpu::BindGroup> {
-    CACHE.with(|c| {
-        let mut c = c.borrow_mut();
-        let frame = c.frame;
-        c.groups.get_mut(&key).map(|(g, used)| {
-            *used = frame;
-            g.clone()
-        })
-    })
+    cached(key, |c| &mut c.groups)
 }
 
 pub(crate) fn keep_group(key: u64, g: &wgpu::BindGroup) {
-    CACHE.with(|c| {
-        let mut c = c.borrow_mut();
-        let frame = c.frame;
-        c.groups.insert(key, (g.clone(), frame));
-    });
+    keep(key, g, |c| &mut c.groups)
 }
 
 /// Ends a frame: drops what no request used for [`DROP_AFTER_FRAMES`] frames.
