@@ -98,7 +98,7 @@ pub(crate) fn group_key(d: &wgpu::BindGroupDescriptor) -> Option<u64> {
 type Table<T> = HashMap<u64, (T, u64)>;
 
 /// The object cached under `key` in the table `pick` chooses, marked as used this frame.
-fn cached<T: Clone>(key: u64, pick: fn(&mut Cache) -> &mut Table<T>) -> Option<T> {
+fn lookup<T: Clone>(key: u64, pick: fn(&mut Cache) -> &mut Table<T>) -> Option<T> {
     CACHE.with(|c| {
         let mut c = c.borrow_mut();
         let frame = c.frame;
@@ -120,7 +120,7 @@ fn keep<T: Clone>(key: u64, v: &T, pick: fn(&mut Cache) -> &mut Table<T>) {
 
 /// The cached view for `key`, if any (marked as used this frame).
 pub(crate) fn cached_view(key: u64) -> Option<wgpu::TextureView> {
-    cached(key, |c| &mut c.views)
+    lookup(key, |c| &mut c.views)
 }
 
 pub(crate) fn keep_view(key: u64, v: &wgpu::TextureView) {
@@ -129,7 +129,7 @@ pub(crate) fn keep_view(key: u64, v: &wgpu::TextureView) {
 
 /// The cached bind group for `key`, if any (marked as used this frame).
 pub(crate) fn cached_group(key: u64) -> Option<wgpu::BindGroup> {
-    cached(key, |c| &mut c.groups)
+    lookup(key, |c| &mut c.groups)
 }
 
 pub(crate) fn keep_group(key: u64, g: &wgpu::BindGroup) {
