@@ -31,4 +31,8 @@ if [ ${#need[@]} -gt 0 ]; then
   fi
 fi
 
+# A whole-suite run from scratch gains nothing from incremental compilation, whose caches
+# would add about a gigabyte to target/ (CI's disk is small: docs/performance.md, "Build
+# size"); set CARGO_INCREMENTAL=1 to keep them.
+export CARGO_INCREMENTAL="${CARGO_INCREMENTAL:-0}"
 cargo test --workspace "$@"
