@@ -73,3 +73,21 @@ pub fn show_in_viewer(h: &mut Harness<'static, GiLabApp>, name: &str) {
     assert_eq!(v.state.buffer, name);
     assert!(v.error.is_none(), "{name}: {:?}", v.error);
 }
+
+/// Runs frames until `done` holds (at most `max`, then one more): the window reads the GPU
+/// without waiting (issue #38), so probes, statistics, overlays and A/B metrics arrive a
+/// frame or a few later, more under load.
+pub fn run_until(h: &mut Harness<'static, GiLabApp>, max: usize, done: impl Fn(&GiLabApp) -> bool) {
+    for _ in 0..max {
+        h.run_steps(1);
+        if done(h.state()) {
+            break;
+        }
+    }
+    h.run_steps(1);
+}
+
+/// Whether the read-back `key` of the lab's renderer has arrived.
+pub fn arrived(app: &GiLabApp, key: &str) -> bool {
+    app.state.lab.as_ref().is_ok_and(|l| l.renderer.read_latest(key).is_some_and(|a| a.data.is_ok()))
+}

@@ -10,7 +10,9 @@ use gi_lab::ui::app::GiLabApp;
 use gi_render::LabSettings;
 use gi_render::settings::{FieldKind, Value};
 
-use gi_lab_tests::ui_harness::{args_in, harness, harness_in, harness_with, pause, show_in_viewer, temp_dir};
+use gi_lab_tests::ui_harness::{
+    args_in, arrived, harness, harness_in, harness_with, pause, run_until, show_in_viewer, temp_dir,
+};
 
 #[test]
 fn app_renders_into_a_viewport_the_panels_do_not_cover() {
@@ -230,13 +232,7 @@ fn probe_shows_the_values_of_a_cpu_readback() {
     h.run_steps(3);
     h.get_by_label("Probes").click();
     h.hover_at(pos);
-    for _ in 0..20 {
-        h.run_steps(1);
-        if !h.state().state.hover_values.is_empty() {
-            break;
-        }
-    }
-    h.run_steps(1);
+    run_until(&mut h, 30, |a| !a.state.hover_values.is_empty());
     let st = &h.state().state;
     let l = st.lab.as_ref().expect("lab");
     assert!(!st.hover_values.is_empty(), "the probe read nothing at {pos:?}");
@@ -396,7 +392,7 @@ fn the_ab_split_renders_both_sides() {
     assert!(left < 2.0 && right > 8.0, "A (unlit) left {left:.1} should be black, B (lit) right {right:.1} lit");
     // The FLIP view measures the two.
     h.state_mut().state.ab.as_mut().expect("ab").view = gi_lab::ui::ab::AbView::Flip;
-    h.run_steps(2);
+    run_until(&mut h, 30, |a| a.state.ab.as_ref().is_some_and(|a| a.metrics.is_some()));
     let (flip, rmse) = h.state().state.ab.as_ref().and_then(|a| a.metrics).expect("FLIP and RMSE computed");
     assert!(flip > 0.1 && rmse > 0.0, "FLIP {flip}, RMSE {rmse}");
 }
@@ -502,7 +498,7 @@ fn the_hcb_samples_overlay_draws_white_dots_and_table_1() {
     };
     let (before, _) = white(&mut h);
     h.state_mut().state.show_hcb_samples = true;
-    h.run_steps(2);
+    run_until(&mut h, 30, |a| arrived(a, "hcb.stats"));
     let (after, image) = white(&mut h);
     let _ = image.save(std::env::temp_dir().join("gi_lab_hcb_overlay.png"));
     let stats = h.state().state.lab.as_ref().ok().and_then(|l| l.renderer.hcb_stats()).expect("HCB statistics");
@@ -526,6 +522,7 @@ fn the_settings_pane_shows_table_1_and_the_cache_counts_for_the_hcb() {
         l.apply_settings();
     }
     h.run_steps(4);
+    run_until(&mut h, 30, |a| arrived(a, "hcb.stats"));
     let _ = h.render().map(|i| i.save(std::env::temp_dir().join("gi_lab_hcb_table_1.png")));
     let stats = h.state().state.lab.as_ref().ok().and_then(|l| l.renderer.hcb_stats()).expect("HCB statistics");
     h.get_by_label("HCB statistics (Nguyen Table 1)");
@@ -636,7 +633,12 @@ fn the_soler_samples_overlay_draws_the_rings_behind_a_pixel() {
     let before = cyan(&mut h);
     h.state_mut().state.show_soler_samples = true;
     // The overlay reads the receivers, then their samples, each a frame or two late.
-    h.run_steps(10);
+    run_until(&mut h, 40, |a| {
+        a.state
+            .lab
+            .as_ref()
+            .is_ok_and(|l| l.renderer.soler_samples_later(a.state.pinned[0].pixel).is_ok_and(|r| r.is_some()))
+    });
     let after = cyan(&mut h);
     let _ = h.render().map(|i| i.save(std::env::temp_dir().join("gi_lab_soler_overlay.png")));
     // (The legend is painted text, not a widget: the renderer's replay stands for it.)
@@ -707,7 +709,7 @@ fn gautron_settings_buffers_cache_and_records_appear_in_the_lab() {
     };
     let (before, _) = viewport(&mut h);
     h.state_mut().state.show_gautron_records = true;
-    h.run_steps(2);
+    run_until(&mut h, 30, |a| arrived(a, "gautron.records"));
     let (after, image) = viewport(&mut h);
     let _ = image.save(std::env::temp_dir().join("gi_lab_gautron_records.png"));
     let changed =

@@ -6,7 +6,7 @@
 use egui_kittest::Harness;
 use gi_lab::ui::app::GiLabApp;
 use gi_lab::ui::session::PinnedProbe;
-use gi_lab_tests::ui_harness::{harness, pause, show_in_viewer};
+use gi_lab_tests::ui_harness::{arrived, harness, pause, run_until, show_in_viewer};
 use gi_render::pipeline::Technique;
 
 fn waits_over(h: &mut Harness<'static, GiLabApp>, steps: usize) -> u64 {
@@ -56,8 +56,20 @@ fn no_frame_of_the_window_waits_for_the_gpu_with_every_readback_on() {
             t.apply(&mut l.settings);
             l.apply_settings();
         }
-        // Warm-up: the technique's passes are made, its first read-backs arrive.
-        h.run_steps(6);
+        // Warm-up: the technique's passes are made, its first read-backs arrive (a few frames
+        // late, more under load).
+        let overlay = match t {
+            Technique::Knecht | Technique::ExactVpl => "vpl.list",
+            Technique::NguyenCached => "hcb.stats",
+            Technique::Soler => "soler.samples.1",
+            _ => "gautron.records",
+        };
+        run_until(&mut h, 40, |a| {
+            arrived(a, overlay)
+                && arrived(a, "ab.final.ldr")
+                && !a.state.hover_values.is_empty()
+                && a.state.ab.as_ref().is_some_and(|ab| ab.metrics.is_some())
+        });
         let waits = waits_over(&mut h, 8);
         assert_eq!(waits, 0, "{t:?}: the window waited for the GPU {waits} times in 8 frames");
 
