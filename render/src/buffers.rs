@@ -146,17 +146,8 @@ impl BufferRegistry {
         if plan.bytes() == 0 {
             return Ok(vec![Vec::new(); pixels.len()]);
         }
-        let buffer = ctx.device.counted_buffer(&wgpu::BufferDescriptor {
-            label: Some("buffers.probe"),
-            size: plan.bytes(),
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        let mut enc =
-            ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("buffers.probe") });
-        plan.record(ctx, &mut enc, depth_probe, &buffer);
-        ctx.submit([enc.finish()]);
-        let bytes = map_read(ctx, &buffer).map_err(|message| BufferError::Map { name: "probe".into(), message })?;
+        let bytes = copy_and_read(ctx, "buffers.probe", plan.bytes(), |enc, b| plan.record(ctx, enc, depth_probe, b))
+            .map_err(|message| BufferError::Map { name: "probe".into(), message })?;
         Ok(plan.decode(&bytes))
     }
 
@@ -293,17 +284,8 @@ impl BufferRegistry {
             return Ok(Vec::new());
         }
         let plan = self.texel_plan(points)?;
-        let buffer = ctx.device.counted_buffer(&wgpu::BufferDescriptor {
-            label: Some("buffers.read_texels"),
-            size: plan.bytes(),
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        let mut enc =
-            ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("buffers.read_texels") });
-        plan.record(&mut enc, &buffer);
-        ctx.submit([enc.finish()]);
-        let bytes = map_read(ctx, &buffer).map_err(|message| BufferError::Map { name: "texels".into(), message })?;
+        let bytes = copy_and_read(ctx, "buffers.read_texels", plan.bytes(), |enc, b| plan.record(enc, b))
+            .map_err(|message| BufferError::Map { name: "texels".into(), message })?;
         Ok(plan.decode(&bytes))
     }
 
@@ -420,17 +402,8 @@ pub fn read_texture(
     mip: u32,
 ) -> Result<ImageF32, BufferError> {
     let plan = TexturePlan::new(name, texture, layer, mip)?;
-    let buffer = ctx.device.counted_buffer(&wgpu::BufferDescriptor {
-        label: Some("buffers.readback"),
-        size: plan.bytes(),
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
-    let mut enc =
-        ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("buffers.readback") });
-    plan.record(&mut enc, &buffer);
-    ctx.submit([enc.finish()]);
-    let bytes = map_read(ctx, &buffer).map_err(|message| BufferError::Map { name: name.into(), message })?;
+    let bytes = copy_and_read(ctx, "buffers.readback", plan.bytes(), |enc, b| plan.record(enc, b))
+        .map_err(|message| BufferError::Map { name: name.into(), message })?;
     Ok(plan.decode(&bytes))
 }
 
@@ -517,6 +490,27 @@ impl TexturePlan {
     }
 }
 
+/// The blocking read-backs' common path: a staging buffer of `bytes`, the copies `record`
+/// makes into it in their own submission, and the wait for them (the window reads without
+/// waiting instead, through `crate::readback`).
+fn copy_and_read(
+    ctx: &GpuContext,
+    label: &str,
+    bytes: u64,
+    record: impl FnOnce(&mut wgpu::CommandEncoder, &wgpu::Buffer),
+) -> Result<Vec<u8>, String> {
+    let staging = ctx.device.counted_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: bytes,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) });
+    record(&mut enc, &staging);
+    ctx.submit([enc.finish()]);
+    map_read(ctx, &staging)
+}
+
 /// Maps a MAP_READ buffer, waits, and copies its contents out.
 pub fn map_read(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, String> {
     let (tx, rx) = std::sync::mpsc::channel();
@@ -533,17 +527,9 @@ pub fn map_read(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, Stri
 /// Copies the first `bytes` of a GPU buffer (which needs COPY_SRC) to the CPU; blocks.
 pub fn read_storage(ctx: &GpuContext, src: &wgpu::Buffer, bytes: u64) -> Result<Vec<u8>, String> {
     let bytes = bytes.min(src.size());
-    let staging = ctx.device.counted_buffer(&wgpu::BufferDescriptor {
-        label: Some("readback.storage"),
-        size: bytes.max(4),
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut enc =
-        ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("readback.storage.copy") });
-    enc.copy_buffer_to_buffer(src, 0, &staging, 0, bytes & !3);
-    ctx.submit([enc.finish()]);
-    let mut data = map_read(ctx, &staging)?;
+    let mut data = copy_and_read(ctx, "readback.storage", bytes.max(4), |enc, b| {
+        enc.copy_buffer_to_buffer(src, 0, b, 0, bytes & !3)
+    })?;
     data.truncate(bytes as usize);
     Ok(data)
 }

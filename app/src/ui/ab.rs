@@ -154,28 +154,26 @@ impl Ab {
     /// Asks both renderers for their final images (copied in their next frames, read without
     /// waiting, issue #38) and compares the newest pair that has arrived; None while waiting.
     fn compare(&mut self, a: &Renderer, ask: bool) -> Option<Result<egui::ColorImage, String>> {
-        let image = |r: &Renderer, name: &str| -> Option<Result<(u64, gi_render::ImageF32), String>> {
+        let arrived = |r: &Renderer, name: &str| {
             let (key, what) = (format!("ab.{name}"), Readback::Image { name: name.into(), layer: 0, mip: 0 });
-            let got = if ask { r.read_later(&key, what, 0)? } else { r.read_latest(&key)? };
-            Some(match &got.data {
-                Ok(Readout::Image(img)) => Ok((got.frame, img.clone())),
-                Ok(_) => Err(format!("{name}: not an image")),
-                Err(e) => Err(e.clone()),
-            })
+            if ask { r.read_later(&key, what, 0) } else { r.read_latest(&key) }
         };
-        let (ah, bh, al, bl) =
-            (image(a, "final.hdr"), image(&self.b, "final.hdr"), image(a, "final.ldr"), image(&self.b, "final.ldr"));
-        let four = (|| Ok::<_, String>(Some((ah.transpose()?, bh.transpose()?, al.transpose()?, bl.transpose()?))))();
-        let ((fa, ah), (fb, bh), (_, al), (_, bl)) = match four {
-            Ok(Some((Some(ah), Some(bh), Some(al), Some(bl)))) => (ah, bh, al, bl),
-            Ok(_) => return None,
-            Err(e) => return Some(Err(e)),
-        };
-        if self.compared_frames == Some((fa, fb)) {
+        let (ah, bh) = (arrived(a, "final.hdr")?, arrived(&self.b, "final.hdr")?);
+        let (al, bl) = (arrived(a, "final.ldr")?, arrived(&self.b, "final.ldr")?);
+        // Only a pair not compared yet is decoded (the images stay in their read-backs).
+        if self.compared_frames == Some((ah.frame, bh.frame)) {
             return None;
         }
-        self.compared_frames = Some((fa, fb));
-        Some(self.compare_images(&ah, &bh, &al, &bl))
+        fn image(x: &gi_render::readback::Arrived) -> Result<&gi_render::ImageF32, String> {
+            match &x.data {
+                Ok(Readout::Image(img)) => Ok(img),
+                Ok(_) => Err("a read-back is not an image".to_string()),
+                Err(e) => Err(e.clone()),
+            }
+        }
+        let four = (|| Ok::<_, String>((image(&ah)?, image(&bh)?, image(&al)?, image(&bl)?)))();
+        self.compared_frames = Some((ah.frame, bh.frame));
+        Some(four.and_then(|(ah, bh, al, bl)| self.compare_images(ah, bh, al, bl)))
     }
 
     fn compare_images(

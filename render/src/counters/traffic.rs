@@ -168,18 +168,17 @@ pub(crate) fn end_frame() -> Vec<(String, u64)> {
 }
 
 fn charge_group(group: &wgpu::BindGroup) {
+    let k = key(group);
     LEDGER.with(|l| {
         let mut l = l.borrow_mut();
-        let frame = l.frame;
-        let parts = match l.groups.get_mut(&key(group)) {
-            Some((parts, used)) => {
-                *used = frame;
-                parts.clone()
+        let Ledger { frame, groups, seen, bytes, .. } = &mut *l;
+        if let Some((parts, used)) = groups.get_mut(&k) {
+            *used = *frame;
+            for &(resource, b) in parts.iter() {
+                if seen.insert(resource) {
+                    *bytes += b;
+                }
             }
-            None => return,
-        };
-        for (k, b) in parts {
-            charge(&mut l, k, b);
         }
     });
 }
