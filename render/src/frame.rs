@@ -121,13 +121,17 @@ impl Renderer {
 
         // Stage 7: compose direct + indirect and tone map.
         self.sky_background.update(&ctx, &self.scene.sky, self.settings.sky.background);
-        let (compose, ts, emission) = (&self.compose, &self.settings.tonemap, &self.gbuffer.targets.views.emission);
+        // The compose tone maps with the previous frame's exposure; a separate tone-mapping
+        // pass runs only when there is none yet (the first frame of automatic exposure).
+        let (compose, ts, emission) = (&mut self.compose, &self.settings.tonemap, &self.gbuffer.targets.views.emission);
         let sky = (&self.sky_background, &self.camera_buffer, &self.gbuffer.targets.views.normal);
         self.timer.scope(&ctx, &mut enc, "compose", |e, slot| {
-            compose.compose(&ctx, e, slot, emission, &direct_view, indirect.as_ref(), near_field.as_ref(), sky)
+            compose.compose(&ctx, e, slot, ts, emission, &direct_view, indirect.as_ref(), near_field.as_ref(), sky)
         });
         self.timer.scope(&ctx, &mut enc, "compose.luminance", |e, slot| compose.luminance(&ctx, e, slot, ts));
-        self.timer.scope(&ctx, &mut enc, "compose.tonemap", |e, slot| compose.tonemap(&ctx, e, slot, ts));
+        if !compose.tone_mapped() {
+            self.timer.scope(&ctx, &mut enc, "compose.tonemap", |e, slot| compose.tonemap(&ctx, e, slot, ts));
+        }
 
         // The read-backs asked for since the last frame, copied in this frame's encoder.
         let readbacks = self.readbacks.get_mut().unwrap_or_else(|p| p.into_inner());

@@ -19,6 +19,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("compose/luminance.wgsl", include_str!("../../shaders/compose/luminance.wgsl")),
     ("compose/compose.wgsl", include_str!("../../shaders/compose/compose.wgsl")),
     ("compose/tonemap.wgsl", include_str!("../../shaders/compose/tonemap.wgsl")),
+    ("compose/reinhard.wgsl", include_str!("../../shaders/compose/reinhard.wgsl")),
     ("common/random.wgsl", include_str!("../../shaders/common/random.wgsl")),
     ("common/vpl.wgsl", include_str!("../../shaders/common/vpl.wgsl")),
     ("vpl/sample.wgsl", include_str!("../../shaders/vpl/sample.wgsl")),

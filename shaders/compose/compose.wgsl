@@ -8,6 +8,7 @@
 // scene::sky::SkySampler::radiance reads (nearest, no filtering) or the constant colour.
 #import common/fullscreen.wgsl
 #import common/camera.wgsl
+#import compose/reinhard.wgsl
 
 struct SkyParams {
     // rgb: constant radiance or image scale; w: 0 none, 1 constant, 2 image
@@ -25,6 +26,17 @@ struct SkyParams {
 @group(0) @binding(7) var sky_image: texture_2d<f32>;
 @group(0) @binding(8) var<uniform> camera: Camera;
 @group(0) @binding(9) var gbuffer_normal: texture_2d<f32>;
+// x: 2^EV, y: key a, z: L_white, w: 0 no tone mapping here (compose/tonemap.wgsl follows),
+// 1 manual exposure, 2 automatic with the previous frame's L̄w
+@group(0) @binding(10) var<uniform> tone: vec4<f32>;
+@group(0) @binding(11) var<storage, read> log_average: array<f32>;
+@group(0) @binding(12) var out_ldr: texture_storage_2d<rgba8unorm, write>;
+// Per tile: Σ round(log(δ + Lw) · LOG_SCALE), then the count of pixels with Lw > 0.
+@group(0) @binding(13) var<storage, read_write> partials: array<atomic<i32>>;
+
+// Fixed-point steps per unit of log(δ + Lw) (compose/luminance.wgsl divides by it): with
+// |log| < 25 a tile of TILE² pixels sums to less than 2^31.
+const LOG_SCALE: f32 = 1048576.0;
 
 const PI: f32 = 3.14159265358979;
 
@@ -51,7 +63,7 @@ fn pixel_ray(px: vec2<u32>, size: vec2<u32>) -> vec3<f32> {
 }
 
 @compute @workgroup_size(TILE, TILE, 1)
-fn cs_compose(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn cs_compose(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let size = textureDimensions(out_hdr);
     if (gid.x >= size.x || gid.y >= size.y) {
         return;
@@ -62,5 +74,14 @@ fn cs_compose(@builtin(global_invocation_id) gid: vec3<u32>) {
         c = c + sky_radiance(pixel_ray(gid.xy, size));
     }
     textureStore(out_hdr, px, vec4<f32>(c, 1.0));
+    if (tone.w > 0.5) {
+        let t = vec4<f32>(tone.xyz, select(0.0, 1.0, tone.w > 1.5));
+        textureStore(out_ldr, px, vec4<f32>(reinhard(c, t, log_average[0]), 1.0));
+    }
+    let lw = luminance_of(max(c, vec3<f32>(0.0)));
+    if (lw > 0.0) {
+        let tile = 2u * (wg.y * groups.x + wg.x);
+        atomicAdd(&partials[tile], i32(round(log(1e-4 + lw) * LOG_SCALE)));
+        atomicAdd(&partials[tile + 1u], 1);
+    }
 }
-

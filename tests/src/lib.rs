@@ -22,7 +22,7 @@ pub fn default_scene() -> Scene {
 }
 
 /// The passes of a frame with the default settings (instant radiosity with ISMs and
-/// temporal coherence, Knecht), in order.
+/// temporal coherence, Knecht), in order, after the first frame (see [`first_frame`]).
 pub const DEFAULT_PASSES: &[&str] = &[
     "gbuffer",
     "direct.shadow",
@@ -37,12 +37,19 @@ pub const DEFAULT_PASSES: &[&str] = &[
     "temporal",
     "compose",
     "compose.luminance",
-    "compose.tonemap",
 ];
 
-/// The passes of a frame of direct light only (`pipeline.gather = None`).
-pub const DIRECT_PASSES: &[&str] =
-    &["gbuffer", "direct.shadow", "direct", "compose", "compose.luminance", "compose.tonemap"];
+/// The passes of a frame of direct light only (`pipeline.gather = None`), after the first.
+pub const DIRECT_PASSES: &[&str] = &["gbuffer", "direct.shadow", "direct", "compose", "compose.luminance"];
+
+/// The passes of the first frame (or the first after `reset_history`) with automatic
+/// exposure: `passes` and a tone-mapping pass of its own, since the compose tone maps with
+/// the previous frame's log-average luminance and there is none yet.
+pub fn first_frame(passes: &[&'static str]) -> Vec<&'static str> {
+    let mut v = passes.to_vec();
+    v.push("compose.tonemap");
+    v
+}
 
 /// The default renderer with direct light only (`pipeline.gather = None`): deterministic
 /// from frame to frame, for tests of the direct light and the frame's machinery.

@@ -327,7 +327,7 @@ fn every_registered_buffer_reads_back() {
     let mut r = default_renderer(64, 48);
     let timings = r.render_frame();
     let names: Vec<_> = timings.iter().map(|t| t.name.as_str()).collect();
-    assert_eq!(names, gi_lab_tests::DEFAULT_PASSES);
+    assert_eq!(names, gi_lab_tests::first_frame(gi_lab_tests::DEFAULT_PASSES));
     for t in &timings {
         assert!(t.ms.is_finite() && t.ms >= 0.0, "{}: {} ms", t.name, t.ms);
     }
@@ -462,7 +462,9 @@ fn interactive_mode_reports_timings_without_waiting_for_each_frame() {
         let t = r.render_frame();
         if !t.is_empty() {
             let names: Vec<_> = t.iter().map(|p| p.name.as_str()).collect();
-            assert_eq!(names, gi_lab_tests::DEFAULT_PASSES);
+            // The first frame's timings (when they are the newest) have its own tone mapping.
+            let first = gi_lab_tests::first_frame(gi_lab_tests::DEFAULT_PASSES);
+            assert!(names == gi_lab_tests::DEFAULT_PASSES || names == first, "{names:?}");
             seen += 1;
         }
     }

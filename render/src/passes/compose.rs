@@ -1,7 +1,11 @@
 //! Stage 7, composition and tone mapping (Knecht 002 §4.6 with Reinhard et al. [RSSF02]).
-//! Shaders: `shaders/compose/compose.wgsl`, `shaders/compose/tonemap.wgsl` and
-//! `shaders/compose/luminance.wgsl` (log-average luminance L̄w, Reinhard Eq. 1).
-//! Writes `final.hdr` (linear radiance) and `final.ldr` (tone-mapped, sRGB-encoded 8-bit).
+//! Shaders: `shaders/compose/compose.wgsl` (composes, tone maps with the previous frame's
+//! exposure and reduces its tiles' log-luminance), `shaders/compose/luminance.wgsl` (the
+//! log-average L̄w, Reinhard Eq. 1, for the next frame) and `shaders/compose/tonemap.wgsl`
+//! (a tone-mapping pass of its own, only on the first frame of automatic exposure, whose L̄w
+//! is not known before its compose: docs/architecture.md, "Read-backs, waits and what a
+//! frame costs"). Writes `final.hdr` (linear radiance) and `final.ldr` (tone-mapped,
+//! sRGB-encoded 8-bit).
 
 use crate::counters::prelude::*;
 
@@ -37,20 +41,21 @@ pub struct ToneParams {
     pub tone: Vec4,
 }
 
-/// Pixels per workgroup of the log-average's first pass (`TILE_W`, `TILE_H` in
-/// `shaders/compose/luminance.wgsl`).
-pub const LUMINANCE_TILE: (u32, u32) = (64, 16);
-
 pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub const LDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
 pub struct ComposePass {
     compose: wgpu::ComputePipeline,
     tonemap: wgpu::ComputePipeline,
-    luminance_tiles: wgpu::ComputePipeline,
     luminance: wgpu::ComputePipeline,
-    /// (Σ log(δ + Lw), count) per 16×16 tile.
+    /// (Σ log(δ + Lw) in fixed point, count) per compose workgroup (TILE² pixels), i32.
     tiles: wgpu::Buffer,
+    /// The compose's tone-mapping uniform (`tone` in compose.wgsl).
+    compose_tone: wgpu::Buffer,
+    /// Whether `log_average` holds the previous frame's L̄w (automatic exposure ran then).
+    exposure_known: bool,
+    /// Whether this frame's compose tone-mapped final.ldr (else `tonemap` does).
+    tone_mapped: bool,
     layout0: wgpu::BindGroupLayout,
     layout1: wgpu::BindGroupLayout,
     lum_layout: wgpu::BindGroupLayout,
@@ -80,6 +85,10 @@ impl ComposePass {
                 super::bgl::texture(7, cs, false),
                 super::bgl::uniform(8, cs),
                 super::bgl::texture(9, cs, false),
+                super::bgl::uniform(10, cs),
+                super::bgl::storage(11, cs, true),
+                super::bgl::storage_texture(12, LDR_FORMAT),
+                super::bgl::storage(13, cs, false),
             ],
         });
         let layout1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -93,20 +102,20 @@ impl ComposePass {
         });
         let lum_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("compose.luminance"),
-            entries: &[
-                super::bgl::texture(0, cs, false),
-                super::bgl::storage(1, cs, false),
-                super::bgl::storage(2, cs, false),
-            ],
+            entries: &[super::bgl::storage(1, cs, false), super::bgl::storage(2, cs, false)],
         });
         let compose = super::compute_pipeline(device, "compose.compose", &module, "cs_compose", &[&layout0]);
         let tonemap = super::compute_pipeline(device, "compose.tonemap", &tone_module, "cs_tonemap", &[&layout1]);
-        let luminance_tiles =
-            super::compute_pipeline(device, "compose.luminance_tiles", &lum_module, "cs_partial", &[&lum_layout]);
         let luminance = super::compute_pipeline(device, "compose.luminance", &lum_module, "cs_final", &[&lum_layout]);
         let params = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("compose.params"),
             size: std::mem::size_of::<ToneParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let compose_tone = device.counted_buffer(&wgpu::BufferDescriptor {
+            label: Some("compose.tone"),
+            size: 16,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -130,9 +139,11 @@ impl ComposePass {
         Self {
             compose,
             tonemap,
-            luminance_tiles,
             luminance,
             tiles,
+            compose_tone,
+            exposure_known: false,
+            tone_mapped: false,
             layout0,
             layout1,
             lum_layout,
@@ -145,11 +156,11 @@ impl ComposePass {
     }
 
     fn tile_buffer(ctx: &GpuContext, width: u32, height: u32) -> wgpu::Buffer {
-        let tiles = width.div_ceil(LUMINANCE_TILE.0) as u64 * height.div_ceil(LUMINANCE_TILE.1) as u64;
+        let tiles = width.div_ceil(super::TILE) as u64 * height.div_ceil(super::TILE) as u64;
         ctx.device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("compose.luminance_tiles"),
             size: tiles * 8,
-            usage: wgpu::BufferUsages::STORAGE,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         })
     }
@@ -188,21 +199,34 @@ impl ComposePass {
 
     /// final.hdr = emission + direct + indirect + near field, and the sky where the G-buffer
     /// is empty (`sky`: its parameters and image, `camera`: the camera uniform for the rays,
-    /// `normal`: the G-buffer's coverage).
+    /// `normal`: the G-buffer's coverage); final.ldr tone-mapped in the same pass unless
+    /// automatic exposure has no previous L̄w yet (then `tonemap` does it after `luminance`).
     #[allow(clippy::too_many_arguments)]
     pub fn compose(
-        &self,
+        &mut self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         slot: Option<crate::timing::Slot<'_>>,
+        settings: &TonemapSettings,
         emission: &wgpu::TextureView,
         direct: &wgpu::TextureView,
         indirect: Option<&wgpu::TextureView>,
         near_field: Option<&wgpu::TextureView>,
         (sky, camera, normal): (&super::sky::SkyBackground, &wgpu::Buffer, &wgpu::TextureView),
     ) {
+        let mode = match (settings.auto_exposure, self.exposure_known) {
+            (false, _) => 1.0,
+            (true, true) => 2.0,
+            (true, false) => 0.0,
+        };
+        self.tone_mapped = mode > 0.0;
+        // Known next frame when this frame's luminance pass computes it.
+        self.exposure_known = settings.auto_exposure;
+        let [x, y, z, _] = tone_vector(settings).to_array();
+        ctx.queue.write_buffer(&self.compose_tone, 0, bytemuck::bytes_of(&Vec4::new(x, y, z, mode)));
         let sky_view = super::view(&sky.texture, "sky.background.image");
         let hdr_view = super::view(&self.hdr, "final.hdr");
+        let ldr_view = super::view(&self.ldr, "final.ldr");
         let tv = wgpu::BindingResource::TextureView;
         let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("compose.inputs"),
@@ -217,13 +241,19 @@ impl ComposePass {
                 wgpu::BindGroupEntry { binding: 7, resource: tv(&sky_view) },
                 wgpu::BindGroupEntry { binding: 8, resource: camera.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 9, resource: tv(normal) },
+                wgpu::BindGroupEntry { binding: 10, resource: self.compose_tone.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 11, resource: self.log_average.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 12, resource: tv(&ldr_view) },
+                wgpu::BindGroupEntry { binding: 13, resource: self.tiles.as_entire_binding() },
             ],
         });
+        // The tiles' sums are atomic additions: they start from zero.
+        encoder.clear_buffer(&self.tiles, 0, None);
         self.dispatch(encoder, slot, "compose.compose", &self.compose, &group, self.screen_groups());
     }
 
-    /// The log-average luminance of final.hdr, when automatic exposure is on (the pass is
-    /// empty otherwise, so that its timing row stays).
+    /// The log-average luminance of final.hdr from the compose's tiles, when automatic
+    /// exposure is on (the pass is empty otherwise, so that its timing row stays).
     pub fn luminance(
         &self,
         ctx: &GpuContext,
@@ -231,12 +261,10 @@ impl ComposePass {
         slot: Option<crate::timing::Slot<'_>>,
         settings: &TonemapSettings,
     ) {
-        let hdr_view = super::view(&self.hdr, "final.hdr");
         let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("compose.luminance"),
             layout: &self.lum_layout,
             entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&hdr_view) },
                 wgpu::BindGroupEntry { binding: 1, resource: self.log_average.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 2, resource: self.tiles.as_entire_binding() },
             ],
@@ -247,15 +275,18 @@ impl ComposePass {
         });
         if settings.auto_exposure {
             pass.set_group(0, &group, &[]);
-            pass.set_pipeline(&self.luminance_tiles);
-            let (tw, th) = LUMINANCE_TILE;
-            pass.dispatch_workgroups(self.hdr.width().div_ceil(tw), self.hdr.height().div_ceil(th), 1);
             pass.set_pipeline(&self.luminance);
             pass.dispatch_workgroups(1, 1, 1);
         }
     }
 
-    /// Reinhard tone mapping of final.hdr into final.ldr.
+    /// Whether this frame's compose tone-mapped final.ldr; if not, `tonemap` must run after
+    /// `luminance`.
+    pub fn tone_mapped(&self) -> bool {
+        self.tone_mapped
+    }
+
+    /// Reinhard tone mapping of final.hdr into final.ldr, as a pass of its own (see `compose`).
     pub fn tonemap(
         &self,
         ctx: &GpuContext,
@@ -263,14 +294,7 @@ impl ComposePass {
         slot: Option<crate::timing::Slot<'_>>,
         settings: &TonemapSettings,
     ) {
-        let p = ToneParams {
-            tone: Vec4::new(
-                settings.exposure_ev.exp2(),
-                settings.key,
-                settings.white_point,
-                settings.auto_exposure as u32 as f32,
-            ),
-        };
+        let p = ToneParams { tone: tone_vector(settings) };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
         let hdr_view = super::view(&self.hdr, "final.hdr");
         let ldr_view = super::view(&self.ldr, "final.ldr");
@@ -286,6 +310,12 @@ impl ComposePass {
             ],
         });
         self.dispatch(encoder, slot, "compose.tonemap", &self.tonemap, &group, self.screen_groups());
+    }
+
+    /// Forgets the last L̄w (a new scene or camera): the next automatic-exposure frame tone
+    /// maps after its own log-average.
+    pub fn forget_exposure(&mut self) {
+        self.exposure_known = false;
     }
 
     fn screen_groups(&self) -> (u32, u32) {
@@ -314,4 +344,9 @@ impl ComposePass {
             pass.dispatch_workgroups(groups.0, groups.1, 1);
         }
     }
+}
+
+/// (2^EV, key a, L_white, automatic exposure 1 or manual 0): `tone` of reinhard.wgsl.
+fn tone_vector(settings: &TonemapSettings) -> Vec4 {
+    Vec4::new(settings.exposure_ev.exp2(), settings.key, settings.white_point, settings.auto_exposure as u32 as f32)
 }

@@ -377,7 +377,7 @@ impl Renderer {
     }
 
     /// Forgets everything temporal: the movement buffer's previous frame, the confidence
-    /// merge's history, the reference's average and Gautron's record cache.
+    /// merge's history, the reference's average, the exposure of the last frame and Gautron's record cache.
     pub fn reset_history(&mut self) {
         self.reset_history_but_records();
         if let Some(x) = &mut self.stages.gautron {
@@ -390,6 +390,7 @@ impl Renderer {
     /// a settings change or a light edit.
     pub fn reset_history_but_records(&mut self) {
         self.prev = None;
+        self.compose.forget_exposure();
         if let Some(x) = &mut self.stages.reference {
             x.batches = 0;
         }
