@@ -393,6 +393,57 @@ pub fn half_to_f32(h: u16) -> f32 {
     }
 }
 
+/// f32 → IEEE 754 binary16 bits, rounded to nearest even as a GPU stores a float into an
+/// `Rgba16Float` texel (subnormals included; beyond the range: infinity).
+pub fn f32_to_half(x: f32) -> u16 {
+    let b = x.to_bits();
+    let sign = ((b >> 16) & 0x8000) as u16;
+    let exp = ((b >> 23) & 0xff) as i32;
+    let man = b & 0x7f_ffff;
+    if exp == 0xff {
+        return sign | 0x7c00 | if man != 0 { 0x200 } else { 0 };
+    }
+    // The value as an integer multiple of 2^-24 (half's smallest subnormal) when small, or
+    // with its exponent rebased to half's bias.
+    let e = exp - 127 + 15;
+    if e >= 31 {
+        return sign | 0x7c00;
+    }
+    let (mantissa, shift) = if e <= 0 {
+        // Subnormal half: the implicit bit joins the mantissa, shifted right by 1 − e more.
+        if e < -10 {
+            return sign;
+        }
+        (man | 0x80_0000, (14 - e) as u32)
+    } else {
+        (man, 13)
+    };
+    let mut h = if e <= 0 { mantissa >> shift } else { ((e as u32) << 10) | (mantissa >> shift) };
+    let rest = mantissa & ((1 << shift) - 1);
+    let half_way = 1 << (shift - 1);
+    if rest > half_way || (rest == half_way && h & 1 == 1) {
+        // A carry out of the mantissa raises the exponent, as it should.
+        h += 1;
+    }
+    sign | h as u16
+}
+
+/// The value an `Rgba16Float` texel stores for `x`.
+pub fn round_to_half(x: f32) -> f32 {
+    half_to_f32(f32_to_half(x))
+}
+
+/// The spacing of binary16 values at `x` (one unit in the last place): what a GPU's store of
+/// `x` into an `Rgba16Float` texel may change it by, since Vulkan lets the conversion round
+/// to nearest or toward zero (lavapipe truncates).
+pub fn half_step(x: f32) -> f32 {
+    let a = x.abs();
+    if a < 2f32.powi(-14) {
+        return 2f32.powi(-24);
+    }
+    2f32.powi(a.log2().floor() as i32 - 10)
+}
+
 /// Copies one layer / mip of a texture to the CPU and decodes it; blocks.
 pub fn read_texture(
     ctx: &GpuContext,
@@ -536,7 +587,7 @@ pub fn read_storage(ctx: &GpuContext, src: &wgpu::Buffer, bytes: u64) -> Result<
 
 #[cfg(test)]
 mod tests {
-    use super::half_to_f32;
+    use super::{f32_to_half, half_step, half_to_f32, round_to_half};
 
     #[test]
     fn half_conversion() {
@@ -546,5 +597,34 @@ mod tests {
         assert!((half_to_f32(0x3555) - 0.333_251_95).abs() < 1e-6);
         assert!(half_to_f32(0x7c00).is_infinite());
         assert!(half_to_f32(0x7e00).is_nan());
+    }
+
+    #[test]
+    fn rounding_to_half_is_to_nearest_even() {
+        // Every finite half value (normal and subnormal, both signs) is its own rounding.
+        for h in 0..=u16::MAX {
+            let v = half_to_f32(h);
+            if v.is_finite() {
+                assert_eq!(f32_to_half(v), if v == 0.0 && h == 0x8000 { 0x8000 } else { h }, "{h:#06x} ({v})");
+            }
+        }
+        // Between two neighbours: nearest; half way: the even one.
+        let (a, b) = (half_to_f32(0x3c00), half_to_f32(0x3c01));
+        assert_eq!(round_to_half(a + 0.4 * (b - a)), a);
+        assert_eq!(round_to_half(a + 0.6 * (b - a)), b);
+        assert_eq!(f32_to_half(a + 0.5 * (b - a)), 0x3c00);
+        let c = half_to_f32(0x3c02);
+        assert_eq!(f32_to_half(b + 0.5 * (c - b)), 0x3c02);
+        // Subnormals, the largest finite value and overflow.
+        assert_eq!(round_to_half(1e-7), half_to_f32(2));
+        assert_eq!(round_to_half(65519.0), 65504.0);
+        assert!(round_to_half(65520.0).is_infinite());
+        assert_eq!(round_to_half(1e-9), 0.0);
+        assert_eq!(round_to_half(1.2), half_to_f32(0x3ccd));
+        // The spacing is the distance to the next half value up.
+        for h in [0x0001u16, 0x03ff, 0x0400, 0x3c00, 0x3ccd, 0x7bfe] {
+            let v = half_to_f32(h);
+            assert_eq!(half_step(v), half_to_f32(h + 1) - v, "{h:#06x}");
+        }
     }
 }

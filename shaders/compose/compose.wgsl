@@ -19,7 +19,7 @@ struct SkyParams {
 
 @group(0) @binding(1) var direct: texture_2d<f32>;
 @group(0) @binding(2) var indirect: texture_2d<f32>;
-@group(0) @binding(3) var out_hdr: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(3) var out_hdr: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(4) var near_field: texture_2d<f32>;
 @group(0) @binding(5) var emission: texture_2d<f32>;
 @group(0) @binding(6) var<uniform> sky: SkyParams;

@@ -37,7 +37,7 @@ struct Params {
 @group(1) @binding(1) var g_normal: texture_2d<f32>;
 @group(1) @binding(2) var g_albedo: texture_2d<f32>;
 @group(1) @binding(3) var g_material: texture_2d<f32>;
-@group(1) @binding(4) var out_radiance: texture_storage_2d<rgba32float, write>;
+@group(1) @binding(4) var out_radiance: texture_storage_2d<rgba16float, write>;
 
 // Picks the cube face of a point light from the major axis of the light-to-surface vector
 // (faces ordered +X, −X, +Y, −Y, +Z, −Z as in passes/shadow.rs).

@@ -11,26 +11,9 @@ use glam::{Mat4, Vec2, Vec3};
 // ---------------------------------------------------------------------------------------
 // Shading, filter and confidence kernels against their CPU twins on synthetic G-buffers.
 
-/// f32 → IEEE 754 half bits, round to nearest (normal range and zero only: the tests'
-/// values are unit vectors and small integers).
-fn f16_bits(x: f32) -> u16 {
-    if x.abs() < 6.2e-5 {
-        return if x.is_sign_negative() { 0x8000 } else { 0 };
-    }
-    let b = x.to_bits();
-    let sign = ((b >> 16) & 0x8000) as u16;
-    let exp = ((b >> 23) & 0xff) as i32 - 127 + 15;
-    let man = b & 0x7f_ffff;
-    let mut h = ((exp as u32) << 10) | (man >> 13);
-    if man & 0x1fff > 0x1000 || (man & 0x1fff == 0x1000 && h & 1 == 1) {
-        h += 1;
-    }
-    sign | h as u16
-}
-
 /// The value an Rgba16Float texture stores for `x`.
 fn f16(x: f32) -> f32 {
-    gi_render::buffers::half_to_f32(f16_bits(x))
+    gi_render::buffers::round_to_half(x)
 }
 
 /// A sampled (and copyable) texture with the given texels: Rgba32Float, or Rgba16Float
@@ -38,7 +21,7 @@ fn f16(x: f32) -> f32 {
 fn texture(ctx: &GpuContext, label: &str, w: u32, h: u32, data: &[[f32; 4]], half: bool) -> wgpu::Texture {
     let format = if half { wgpu::TextureFormat::Rgba16Float } else { wgpu::TextureFormat::Rgba32Float };
     let bytes: Vec<u8> = if half {
-        data.iter().flatten().flat_map(|&v| f16_bits(v).to_le_bytes()).collect()
+        data.iter().flatten().flat_map(|&v| gi_render::buffers::f32_to_half(v).to_le_bytes()).collect()
     } else {
         bytemuck::cast_slice(data).to_vec()
     };

@@ -152,7 +152,12 @@ fn the_sky_is_drawn_behind_the_scene() {
             background += 1;
             let (x, y) = (i as u32 % size, i as u32 / size);
             let expected = sampler.radiance(primary_ray(inv, x, y, size, size).1);
-            if (Vec3::new(c[0], c[1], c[2]) - expected).abs().max_element() > 1e-4 * expected.max_element().max(1.0) {
+            // final.hdr holds half floats, stored by rounding to nearest or toward zero (the
+            // device's choice): one step of that format besides the kernel's own tolerance.
+            let step = gi_render::buffers::half_step(expected.max_element());
+            if (Vec3::new(c[0], c[1], c[2]) - expected).abs().max_element()
+                > 1e-4 * expected.max_element().max(1.0) + step
+            {
                 wrong += 1;
             }
         }

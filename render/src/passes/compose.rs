@@ -41,8 +41,11 @@ pub struct ToneParams {
     pub tone: Vec4,
 }
 
-pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// Half floats, as `direct::RADIANCE_FORMAT` (the tone map reads the full-precision sum).
+pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const LDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+/// The 1×1 black texture bound when a stage gives no light (16 zero bytes).
+const NO_INDIRECT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 pub struct ComposePass {
     compose: wgpu::ComputePipeline,
@@ -125,8 +128,14 @@ impl ComposePass {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
-        let black_tex =
-            super::create_target(device, "compose.no_indirect", 1, 1, HDR_FORMAT, wgpu::TextureUsages::COPY_DST);
+        let black_tex = super::create_target(
+            device,
+            "compose.no_indirect",
+            1,
+            1,
+            NO_INDIRECT_FORMAT,
+            wgpu::TextureUsages::COPY_DST,
+        );
         ctx.queue.write_texture(
             black_tex.as_image_copy(),
             &[0u8; 16],
