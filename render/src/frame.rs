@@ -118,6 +118,9 @@ impl Renderer {
         if let Some(t) = self.stages.soler.as_ref().and_then(|s| s.temporal.as_ref()) {
             t.register(&mut self.registry);
         }
+        if let Some(g) = &self.stages.gautron {
+            g.register_sums(&mut self.registry);
+        }
 
         // Stage 7: compose direct + indirect and tone map.
         self.sky_background.update(&ctx, &self.scene.sky, self.settings.sky.background);

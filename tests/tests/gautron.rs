@@ -3,7 +3,7 @@
 
 use gi_lab_tests::{paused_renderer, read, stored_reference, v3};
 use gi_render::cpu::gautron::{self, HemisphereTable, Record};
-use gi_render::passes::gautron::GpuRecord;
+use gi_render::passes::gautron::{GpuRecord, SplatMethod};
 use gi_render::pipeline::Technique;
 use glam::Vec3;
 
@@ -118,13 +118,20 @@ fn hemisphere_reduction_matches_the_cpu_twin() {
 }
 
 /// The splat's sums at every pixel equal the CPU twin's accumulation of the same records
-/// (Ward's weight, the threshold 1/a, the clamp and both gradients).
+/// (Ward's weight, the threshold 1/a, the clamp and both gradients), for both splat methods.
 #[test]
 fn the_splat_matches_the_cpu_accumulation() {
+    for method in [SplatMethod::Blend, SplatMethod::Binned] {
+        splat_matches_the_cpu_accumulation(method);
+    }
+}
+
+fn splat_matches_the_cpu_accumulation(method: SplatMethod) {
     // Neighbour clamping shrinks cached records after they were splatted this frame.
     let mut r = paused_renderer(64, Technique::Gautron, |s| {
         s.gautron.records_per_round = 32;
         s.gautron.neighbour_clamping = false;
+        s.gautron.splat = method;
     });
     r.render_frame();
     r.render_frame();
@@ -145,13 +152,42 @@ fn the_splat_matches_the_cpu_accumulation() {
             let (p, n) = (v3(position.at(x, y)), v3(nrm).normalize());
             let (sum, w) = gautron::accumulate(&records, p, n, s.accuracy, s.weight_clamp, true, true);
             let gpu = accum.at(x, y);
-            assert!((gpu[3] - w).abs() <= 1e-3 * w.max(1.0), "({x}, {y}): Σw {} vs {w}", gpu[3]);
-            assert!(close(v3(gpu), sum, sum.max_element().max(1e-6), 2e-3), "({x}, {y}): Σ w·E {:?} vs {sum:?}", gpu);
+            assert!((gpu[3] - w).abs() <= 1e-3 * w.max(1.0), "{method:?} ({x}, {y}): Σw {} vs {w}", gpu[3]);
+            let near = close(v3(gpu), sum, sum.max_element().max(1e-6), 2e-3);
+            assert!(near, "{method:?} ({x}, {y}): Σ w·E {:?} vs {sum:?}", gpu);
             compared += 1;
             covered += (w >= 1.0 / s.accuracy) as u32;
         }
     }
-    assert!(compared > 3000 && covered > compared / 2, "{compared} pixels, {covered} covered");
+    assert!(compared > 3000 && covered > compared / 2, "{method:?}: {compared} pixels, {covered} covered");
+}
+
+/// The binned splat (compute, GI Lab) gives the blended quads' sums (the text) bit for bit:
+/// the same records added in the same order at every pixel, over frames of creation rounds
+/// (any difference would also change which records the rounds make).
+#[test]
+fn the_binned_splat_equals_the_blended_quads() {
+    let run = |method| {
+        let mut r = paused_renderer(72, Technique::Gautron, |s| {
+            s.gautron.records_per_round = 48;
+            s.gautron.splat = method;
+        });
+        for _ in 0..3 {
+            r.render_frame();
+        }
+        let count = r.gautron().unwrap().read_state(&r.ctx).unwrap().count;
+        (read(&r, "gautron.accum"), read(&r, "gautron.accum.plain"), read(&r, "final.hdr"), count)
+    };
+    let (blend, binned) = (run(SplatMethod::Blend), run(SplatMethod::Binned));
+    assert!(blend.3 > 40, "only {} records", blend.3);
+    assert_eq!(blend.3, binned.3, "record counts");
+    let bits = |i: &gi_render::ImageF32| i.data.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+    for (name, a, b) in
+        [("accum", &blend.0, &binned.0), ("accum.plain", &blend.1, &binned.1), ("final.hdr", &blend.2, &binned.2)]
+    {
+        let differ = bits(a).iter().zip(bits(b)).filter(|(x, y)| **x != *y).count();
+        assert_eq!(differ, 0, "gautron.{name}: {differ} channels differ");
+    }
 }
 
 /// "No order constraint for image traversal" (003, "Algorithm: Summary"): the splatted image

@@ -67,6 +67,21 @@ settings_enum! {
     default Refresh
 }
 
+settings_enum! {
+    /// How the records' weighted irradiance is summed at the pixels ("From Octree to
+    /// Splatting": "Principle"); both give the same sums, in the same order.
+    pub enum SplatMethod {
+        /// One quad per record, added by blending into float targets (the text's
+        /// `GL_ONE, GL_ONE`): the cost is the quads' overdraw.
+        Blend = "blended quads (the text)",
+        /// The records binned into 64-pixel squares in compute, each pixel summing the
+        /// records of its square (GI Lab, issue #38: no overdraw nor blending; on lavapipe
+        /// about 5× slower than the blending, docs/performance.md).
+        Binned = "binned in compute (GI Lab)",
+    }
+    default Blend
+}
+
 settings_group! {
     /// Gautron et al.'s irradiance cache splatting (003): records, their hemispheres, the
     /// splatting of Ward's weights and the cache across frames.
@@ -134,6 +149,9 @@ settings_group! {
         /// What becomes of the records a moving object or a light change invalidates.
         invalidation: Invalidation = Invalidation::Refresh,
         unit "", symbol "", range 0..=1, cost "refresh: one hemisphere per stale record", history false;
+        /// How the splat sums the records at the pixels.
+        splat: SplatMethod = SplatMethod::Blend,
+        unit "", symbol "", range 0..=1, cost "blend: the quads' overdraw; binned: one pass over the screen per splat", history false;
     }
 }
 

@@ -1,88 +1,96 @@
 //! Irradiance splatting and its resolve (Gautron et al. 003, "From Octree to Splatting":
-//! "Principle"): each record's bounding quad, Ward's weight per covered pixel, RGB = w·E and
-//! A = w added by the blending (`GL_ONE, GL_ONE` in the text) into float targets, then
-//! E = RGB / A and the diffuse reflection c·DI·E/π. Shaders `gautron/splat.wgsl`,
+//! "Principle"): each record's bounding rectangle, Ward's weight per covered pixel, RGB = w·E
+//! and A = w added into float targets (the text's additive blending, here binned into
+//! 64-pixel squares and summed per pixel in compute, in the blending's order: see
+//! `gautron/splat.wgsl`), then E = RGB / A and the diffuse reflection c·DI·E/π. Shaders `gautron/splat.wgsl`,
 //! `gautron/resolve.wgsl`; twin `cpu::gautron::{sphere_ndc_rect, accumulate}`.
+
+use std::cell::Cell;
 
 use crate::counters::prelude::*;
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
+use crate::passes::gautron::SplatMethod;
 use crate::passes::gbuffer::GBufferViews;
 use crate::passes::{bgl, bind_group, create_target, view};
 
 pub const ACCUM_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
+/// Side in pixels of the squares the records are binned into (a multiple of the 8×8
+/// accumulation workgroup).
+pub const BIN: u32 = 64;
+
+/// Rust twin of `TileParams` in `shaders/gautron/splat.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct TileParams {
+    /// Squares across and down, mask words per square, `BIN`.
+    pub bins: [u32; 4],
+    /// x: 1 to add to the previous sums, 0 to start from zero.
+    pub mode: [u32; 4],
+}
+
 pub struct SplatPass {
-    pipeline: wgpu::RenderPipeline,
+    /// Blend: one quad per record.
+    raster: wgpu::RenderPipeline,
+    raster_layout: wgpu::BindGroupLayout,
+    /// Binned: the bins, then the sums.
+    bin: wgpu::ComputePipeline,
+    accumulate: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
     resolve: wgpu::ComputePipeline,
     resolve_layout: wgpu::BindGroupLayout,
-    /// Σ w·E (rgb, with the gradients as set) and Σ w (a): `gautron.accum`.
-    pub accum: wgpu::Texture,
+    /// `TileParams` to start from zero (0) and to add (1).
+    tile_params: [wgpu::Buffer; 2],
+    /// One bit per record per square (cleared before each splat).
+    mask: wgpu::Buffer,
+    /// Each record's rectangle in NDC.
+    rects: wgpu::Buffer,
+    /// (squares across, down, words per square) the mask and `tile_params` are sized for.
+    bins: (u32, u32, u32),
+    /// Σ w·E (rgb, with the gradients as set) and Σ w (a), a ping-pong pair:
+    /// `gautron.accum` is `accum[current]`.
+    accum: [wgpu::Texture; 2],
     /// The same without any gradient: `gautron.accum.plain`.
-    pub accum_plain: wgpu::Texture,
+    accum_plain: [wgpu::Texture; 2],
+    /// Which of the pairs holds the latest sums.
+    current: Cell<usize>,
     /// The reflected indirect light the compose adds: `gautron.indirect`.
     pub indirect: wgpu::Texture,
     /// E = RGB / A (a: the coverage Σ w): `gautron.irradiance`.
     pub irradiance: wgpu::Texture,
     /// E without gradients: `gautron.irradiance.plain`.
     pub plain: wgpu::Texture,
-    views: [wgpu::TextureView; 5],
 }
 
 impl SplatPass {
     pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
         let device = &ctx.device;
         let module = crate::shaders::create_module(device, "gautron/splat.wgsl");
-        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let cs = wgpu::ShaderStages::COMPUTE;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("gautron.splat"),
             entries: &[
-                bgl::uniform(0, vf),
-                bgl::uniform(1, vf),
-                bgl::storage(2, vf, true),
-                bgl::texture(3, wgpu::ShaderStages::FRAGMENT, false),
-                bgl::texture(4, wgpu::ShaderStages::FRAGMENT, false),
+                bgl::uniform(0, cs),
+                bgl::uniform(1, cs),
+                bgl::storage(2, cs, true),
+                bgl::texture(3, cs, false),
+                bgl::texture(4, cs, false),
+                bgl::uniform(5, cs),
+                bgl::storage(6, cs, true),
+                bgl::storage(7, cs, false),
+                bgl::storage(8, cs, false),
+                bgl::texture(9, cs, false),
+                bgl::texture(10, cs, false),
+                bgl::storage_texture(11, ACCUM_FORMAT),
+                bgl::storage_texture(12, ACCUM_FORMAT),
             ],
         });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("gautron.splat.layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let additive = wgpu::BlendComponent {
-            src_factor: wgpu::BlendFactor::One,
-            dst_factor: wgpu::BlendFactor::One,
-            operation: wgpu::BlendOperation::Add,
-        };
-        let target = Some(wgpu::ColorTargetState {
-            format: ACCUM_FORMAT,
-            blend: Some(wgpu::BlendState { color: additive, alpha: additive }),
-            write_mask: wgpu::ColorWrites::ALL,
-        });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("gautron.splat.pipeline"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_splat"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_splat"),
-                compilation_options: Default::default(),
-                targets: &[target.clone(), target],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        let cs = wgpu::ShaderStages::COMPUTE;
+        let (raster, raster_layout) = raster_pipeline(device, &module);
+        let bin = crate::passes::compute_pipeline(device, "gautron.splat.bin", &module, "cs_bin", &[&layout]);
+        let accumulate =
+            crate::passes::compute_pipeline(device, "gautron.splat.accumulate", &module, "cs_accumulate", &[&layout]);
         let resolve_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("gautron.resolve"),
             entries: &[
@@ -102,33 +110,68 @@ impl SplatPass {
             "cs_resolve",
             &[&resolve_layout],
         );
-        let (accum, accum_plain, indirect, irradiance, plain, views) = targets(device, width, height);
-        Self { pipeline, layout, resolve, resolve_layout, accum, accum_plain, indirect, irradiance, plain, views }
+        let (accum, accum_plain, indirect, irradiance, plain) = targets(device, width, height);
+        let tile_params = [
+            crate::passes::uniform_buffer(device, "gautron.splat.tiles.clear", 32),
+            crate::passes::uniform_buffer(device, "gautron.splat.tiles.add", 32),
+        ];
+        let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+        let mut pass = Self {
+            raster,
+            raster_layout,
+            bin,
+            accumulate,
+            layout,
+            resolve,
+            resolve_layout,
+            tile_params,
+            mask: crate::passes::buffer(device, "gautron.splat.mask", 4, storage),
+            rects: crate::passes::buffer(device, "gautron.splat.rects", 16, storage),
+            bins: (0, 0, 0),
+            accum,
+            accum_plain,
+            current: Cell::new(0),
+            indirect,
+            irradiance,
+            plain,
+        };
+        pass.ensure_bins(ctx, 1);
+        pass
     }
 
     /// Recreates the targets for a new size; true when it did.
     pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) -> bool {
-        if (self.accum.width(), self.accum.height()) == (width, height) {
+        if (self.accum[0].width(), self.accum[0].height()) == (width, height) {
             return false;
         }
-        let (a, ap, i, e, p, v) = targets(&ctx.device, width, height);
-        (self.accum, self.accum_plain, self.indirect, self.irradiance, self.plain, self.views) = (a, ap, i, e, p, v);
+        (self.accum, self.accum_plain, self.indirect, self.irradiance, self.plain) =
+            targets(&ctx.device, width, height);
+        self.current.set(0);
+        let records = self.rects.size() / 16;
+        self.ensure_bins(ctx, records as u32);
         true
     }
 
+    /// Sizes the bins' mask and the rectangles for `capacity` records at the current size.
+    pub fn ensure_bins(&mut self, ctx: &GpuContext, capacity: u32) {
+        let (w, h) = (self.accum[0].width(), self.accum[0].height());
+        let bins = (w.div_ceil(BIN), h.div_ceil(BIN), capacity.max(1).div_ceil(32));
+        if bins == self.bins && self.rects.size() / 16 == capacity.max(1) as u64 {
+            return;
+        }
+        self.bins = bins;
+        let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+        let words = bins.0 as u64 * bins.1 as u64 * bins.2 as u64;
+        self.mask = crate::passes::buffer(&ctx.device, "gautron.splat.mask", words * 4, storage);
+        self.rects = crate::passes::buffer(&ctx.device, "gautron.splat.rects", capacity.max(1) as u64 * 16, storage);
+        for (mode, buffer) in self.tile_params.iter().enumerate() {
+            let p = TileParams { bins: [bins.0, bins.1, bins.2, BIN], mode: [mode as u32, 0, 0, 0] };
+            ctx.queue.write_buffer(buffer, 0, bytemuck::bytes_of(&p));
+        }
+    }
+
     pub fn register(&self, reg: &mut BufferRegistry) {
-        reg.register(
-            "gautron.accum",
-            BufferKind::Data,
-            "the splat's sums: rgb = Σ w_k·E_k (extrapolated by the gradients as set), a = the coverage Σ w_k (a pixel is covered from 1/a up)",
-            &self.accum,
-        );
-        reg.register(
-            "gautron.accum.plain",
-            BufferKind::Data,
-            "the splat's sums without gradients: rgb = Σ w_k·E_k, a = Σ w_k",
-            &self.accum_plain,
-        );
+        self.register_sums(reg);
         reg.register(
             "gautron.irradiance",
             BufferKind::Hdr,
@@ -149,14 +192,32 @@ impl SplatPass {
         );
     }
 
-    /// Splats `instances` (the indirect draw in `args`: records first … first + count) into
-    /// the accumulators, clearing them first when `clear`.
+    /// Registers the latest sums of the ping-pong pairs (after each frame's splats).
+    pub fn register_sums(&self, reg: &mut BufferRegistry) {
+        reg.register(
+            "gautron.accum",
+            BufferKind::Data,
+            "the splat's sums: rgb = Σ w_k·E_k (extrapolated by the gradients as set), a = the coverage Σ w_k (a pixel is covered from 1/a up)",
+            &self.accum[self.current.get()],
+        );
+        reg.register(
+            "gautron.accum.plain",
+            BufferKind::Data,
+            "the splat's sums without gradients: rgb = Σ w_k·E_k, a = Σ w_k",
+            &self.accum_plain[self.current.get()],
+        );
+    }
+
+    /// Splats the records the creation's draw arguments `args` name (first … first + count)
+    /// into the accumulators: from zero when `clear`, else added to the latest sums (Binned
+    /// writes them into the other texture of each pair, which becomes the latest).
     #[allow(clippy::too_many_arguments)]
     pub fn splat(
         &self,
         ctx: &GpuContext,
         enc: &mut wgpu::CommandEncoder,
         slot: Option<crate::timing::Slot<'_>>,
+        method: SplatMethod,
         clear: bool,
         params: &wgpu::Buffer,
         camera: &wgpu::Buffer,
@@ -165,6 +226,15 @@ impl SplatPass {
         args: &wgpu::Buffer,
     ) {
         let tv = wgpu::BindingResource::TextureView;
+        if method == SplatMethod::Blend {
+            self.blend(ctx, enc, slot, clear, [params, camera, records], g, args);
+            return;
+        }
+        let (src, dst) = if clear { (1, 0) } else { (self.current.get(), 1 - self.current.get()) };
+        let v = |t: &wgpu::Texture, name: &str| view(t, name);
+        let (prev, prev_plain) =
+            (v(&self.accum[src], "gautron.accum"), v(&self.accum_plain[src], "gautron.accum.plain"));
+        let (out, out_plain) = (v(&self.accum[dst], "gautron.accum"), v(&self.accum_plain[dst], "gautron.accum.plain"));
         let group = bind_group(
             &ctx.device,
             "gautron.splat",
@@ -175,8 +245,61 @@ impl SplatPass {
                 records.as_entire_binding(),
                 tv(&g.position),
                 tv(&g.normal),
+                self.tile_params[usize::from(!clear)].as_entire_binding(),
+                args.as_entire_binding(),
+                self.mask.as_entire_binding(),
+                self.rects.as_entire_binding(),
+                tv(&prev),
+                tv(&prev_plain),
+                tv(&out),
+                tv(&out_plain),
             ],
         );
+        enc.clear_buffer(&self.mask, 0, None);
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("gautron.splat"),
+            timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+        });
+        pass.set_group(0, &group, &[]);
+        pass.set_pipeline(&self.bin);
+        pass.dispatch_workgroups(((self.rects.size() / 16) as u32).div_ceil(64), 1, 1);
+        pass.set_pipeline(&self.accumulate);
+        let (w, h) = (self.accum[0].width(), self.accum[0].height());
+        pass.dispatch_workgroups(w.div_ceil(16), h.div_ceil(16), 1);
+        self.current.set(dst);
+    }
+
+    /// Blend: the quads into the latest sums (cleared first when `clear`).
+    #[allow(clippy::too_many_arguments)]
+    fn blend(
+        &self,
+        ctx: &GpuContext,
+        enc: &mut wgpu::CommandEncoder,
+        slot: Option<crate::timing::Slot<'_>>,
+        clear: bool,
+        [params, camera, records]: [&wgpu::Buffer; 3],
+        g: &GBufferViews,
+        args: &wgpu::Buffer,
+    ) {
+        if clear {
+            self.current.set(0);
+        }
+        let c = self.current.get();
+        let tv = wgpu::BindingResource::TextureView;
+        let group = bind_group(
+            &ctx.device,
+            "gautron.splat.blend",
+            &self.raster_layout,
+            vec![
+                params.as_entire_binding(),
+                camera.as_entire_binding(),
+                records.as_entire_binding(),
+                tv(&g.position),
+                tv(&g.normal),
+            ],
+        );
+        let (out, out_plain) =
+            (view(&self.accum[c], "gautron.accum"), view(&self.accum_plain[c], "gautron.accum.plain"));
         let load = if clear { wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT) } else { wgpu::LoadOp::Load };
         let att = |view| {
             Some(wgpu::RenderPassColorAttachment {
@@ -188,13 +311,13 @@ impl SplatPass {
         };
         let mut pass = enc.begin_counted_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("gautron.splat.pass"),
-            color_attachments: &[att(&self.views[0]), att(&self.views[1])],
+            color_attachments: &[att(&out), att(&out_plain)],
             depth_stencil_attachment: None,
             timestamp_writes: slot.and_then(|s| s.render(true, true)),
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipeline(&self.raster);
         pass.set_group(0, &group, &[]);
         pass.draw_indirect(args, 0);
     }
@@ -208,14 +331,21 @@ impl SplatPass {
         albedo: &wgpu::TextureView,
     ) {
         let tv = wgpu::BindingResource::TextureView;
-        let v = &self.views;
+        let c = self.current.get();
+        let (accum, accum_plain) =
+            (view(&self.accum[c], "gautron.accum"), view(&self.accum_plain[c], "gautron.accum.plain"));
+        let (indirect, irradiance, plain) = (
+            view(&self.indirect, "gautron.indirect"),
+            view(&self.irradiance, "gautron.irradiance"),
+            view(&self.plain, "gautron.irradiance.plain"),
+        );
         let group = bind_group(
             &ctx.device,
             "gautron.resolve",
             &self.resolve_layout,
-            vec![tv(&v[0]), tv(&v[1]), tv(albedo), tv(&v[2]), tv(&v[3]), tv(&v[4])],
+            vec![tv(&accum), tv(&accum_plain), tv(albedo), tv(&indirect), tv(&irradiance), tv(&plain)],
         );
-        let size = (self.accum.width(), self.accum.height());
+        let size = (self.accum[0].width(), self.accum[0].height());
         crate::passes::dispatch_2d(
             enc,
             "gautron.resolve",
@@ -231,27 +361,83 @@ impl SplatPass {
         view(&self.indirect, "gautron.indirect")
     }
 
-    pub fn accum_view(&self) -> &wgpu::TextureView {
-        &self.views[0]
+    /// The latest sums (`gautron.accum`), as the creation's coverage test reads them.
+    pub fn accum_view(&self) -> wgpu::TextureView {
+        view(&self.accum[self.current.get()], "gautron.accum")
     }
 }
 
-type Targets = (wgpu::Texture, wgpu::Texture, wgpu::Texture, wgpu::Texture, wgpu::Texture, [wgpu::TextureView; 5]);
+type Targets = ([wgpu::Texture; 2], [wgpu::Texture; 2], wgpu::Texture, wgpu::Texture, wgpu::Texture);
 
 fn targets(device: &wgpu::Device, width: u32, height: u32) -> Targets {
-    let rt = wgpu::TextureUsages::RENDER_ATTACHMENT;
     let st = wgpu::TextureUsages::STORAGE_BINDING;
-    let accum = create_target(device, "gautron.accum", width, height, ACCUM_FORMAT, rt);
-    let accum_plain = create_target(device, "gautron.accum.plain", width, height, ACCUM_FORMAT, rt);
+    // Blend draws into them, Binned writes them.
+    let rt = wgpu::TextureUsages::RENDER_ATTACHMENT | st;
+    let pair = |name: &str| {
+        [
+            create_target(device, name, width, height, ACCUM_FORMAT, rt),
+            create_target(device, name, width, height, ACCUM_FORMAT, rt),
+        ]
+    };
+    let accum = pair("gautron.accum");
+    let accum_plain = pair("gautron.accum.plain");
     let indirect = create_target(device, "gautron.indirect", width, height, ACCUM_FORMAT, st);
     let irradiance = create_target(device, "gautron.irradiance", width, height, ACCUM_FORMAT, st);
     let plain = create_target(device, "gautron.irradiance.plain", width, height, ACCUM_FORMAT, st);
-    let views = [
-        view(&accum, "gautron.accum"),
-        view(&accum_plain, "gautron.accum.plain"),
-        view(&indirect, "gautron.indirect"),
-        view(&irradiance, "gautron.irradiance"),
-        view(&plain, "gautron.irradiance.plain"),
-    ];
-    (accum, accum_plain, indirect, irradiance, plain, views)
+    (accum, accum_plain, indirect, irradiance, plain)
+}
+
+/// Blend's pipeline: the quads of `vs_splat`, `fs_splat`'s two outputs added by blending.
+fn raster_pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+) -> (wgpu::RenderPipeline, wgpu::BindGroupLayout) {
+    let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("gautron.splat.blend"),
+        entries: &[
+            bgl::uniform(0, vf),
+            bgl::uniform(1, vf),
+            bgl::storage(2, vf, true),
+            bgl::texture(3, wgpu::ShaderStages::FRAGMENT, false),
+            bgl::texture(4, wgpu::ShaderStages::FRAGMENT, false),
+        ],
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("gautron.splat.blend.layout"),
+        bind_group_layouts: &[Some(&layout)],
+        immediate_size: 0,
+    });
+    let additive = wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Add,
+    };
+    let target = Some(wgpu::ColorTargetState {
+        format: ACCUM_FORMAT,
+        blend: Some(wgpu::BlendState { color: additive, alpha: additive }),
+        write_mask: wgpu::ColorWrites::ALL,
+    });
+    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("gautron.splat.blend.pipeline"),
+        layout: Some(&pipeline_layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some("vs_splat"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: None,
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some("fs_splat"),
+            compilation_options: Default::default(),
+            targets: &[target.clone(), target],
+        }),
+        multiview_mask: None,
+        cache: None,
+    });
+    (pipeline, layout)
 }

@@ -234,6 +234,7 @@ impl GautronStage {
             self.slots = buffer(device, "gautron.slots", slots * 4, storage);
             self.cameras = buffer(device, "gautron.cameras", slots * 144, storage);
             self.viewers = buffer(device, "gautron.viewers", slots * 16, storage);
+            self.splat.ensure_bins(ctx, sizes.0);
             fresh = true;
         }
         if fresh {
@@ -241,6 +242,11 @@ impl GautronStage {
             self.lights_key = None;
         }
         fresh
+    }
+
+    /// Registers the splat's latest sums (a ping-pong pair: after each frame).
+    pub fn register_sums(&self, reg: &mut BufferRegistry) {
+        self.splat.register_sums(reg);
     }
 
     pub fn register(&self, reg: &mut BufferRegistry) {
@@ -373,7 +379,7 @@ impl GautronStage {
         if let Some(m) = &maintain {
             ctx.queue.write_buffer(&self.maintain_params, 0, bytemuck::bytes_of(m));
         }
-        let (g0, g1) = &self.create_groups(f);
+        let g0 = &self.create_group(f);
         let tile = s.creation_tile_px.max(1);
         let tiles = (f.gbuffer_size.0.div_ceil(tile), f.gbuffer_size.1.div_ceil(tile));
         let (splat, records, camera) = (&self.splat, &self.records, f.camera_buffer);
@@ -385,6 +391,7 @@ impl GautronStage {
                     label: Some("gautron.begin"),
                     timestamp_writes: None,
                 });
+                let g1 = &self.gbuffer_group(f);
                 if let Some(cull) = cull {
                     pass.set_pipeline(cull);
                     pass.set_group(0, g0, &[0]);
@@ -396,10 +403,12 @@ impl GautronStage {
                 pass.set_group(1, g1, &[]);
                 pass.dispatch_workgroups(1, 1, 1);
             }
-            splat.splat(ctx, e, slot, true, &self.params, camera, records, f.gbuffer, &self.splat_args)
+            splat.splat(ctx, e, slot, s.splat, true, &self.params, camera, records, f.gbuffer, &self.splat_args)
         });
         for k in 0..s.rounds.min(MAX_ROUNDS as u32) {
             let offset = [(k as u64 * ROUND_STRIDE) as u32];
+            // The coverage of the latest sums (the splat's ping-pong pair alternates).
+            let g1 = &self.gbuffer_group(f);
             timer.scope(ctx, enc, "gautron.create", |e, slot| {
                 let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("gautron.create"),
@@ -433,7 +442,7 @@ impl GautronStage {
                 }
             });
             timer.scope(ctx, enc, "gautron.splat", |e, slot| {
-                splat.splat(ctx, e, slot, false, &self.params, camera, records, f.gbuffer, &self.splat_args)
+                splat.splat(ctx, e, slot, s.splat, false, &self.params, camera, records, f.gbuffer, &self.splat_args)
             });
         }
         timer.scope(ctx, enc, "gautron.resolve", |e, slot| splat.resolve(ctx, e, slot, &f.gbuffer.albedo));
@@ -486,7 +495,7 @@ impl GautronStage {
             &self.raster_args_binding(),
             (counter, list, args),
         );
-        let (g0, g1) = &self.create_groups(f);
+        let (g0, g1) = (&self.create_group(f), &self.gbuffer_group(f));
         for k in 0..chunks {
             timer.scope(ctx, enc, "gautron.create", |e, slot| {
                 let mut c = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -520,9 +529,9 @@ impl GautronStage {
         }
     }
 
-    fn create_groups(&self, f: &FrameInputs) -> (wgpu::BindGroup, wgpu::BindGroup) {
+    fn create_group(&self, f: &FrameInputs) -> wgpu::BindGroup {
         let device = &f.ctx.device;
-        let g0 = bind_group(
+        bind_group(
             device,
             "gautron.create",
             &self.layout0,
@@ -541,16 +550,19 @@ impl GautronStage {
                 self.maintain_params.as_entire_binding(),
                 self.moved.as_entire_binding(),
             ],
-        );
+        )
+    }
+
+    /// The creation's G-buffer group with the splat's latest sums (its coverage).
+    fn gbuffer_group(&self, f: &FrameInputs) -> wgpu::BindGroup {
         let tv = wgpu::BindingResource::TextureView;
         let mask_view = view(&self.candidate_mask, "gautron.candidates");
-        let g1 = bind_group(
-            device,
+        bind_group(
+            &f.ctx.device,
             "gautron.create.gbuffer",
             &self.layout1,
-            vec![tv(&f.gbuffer.position), tv(&f.gbuffer.normal), tv(self.splat.accum_view()), tv(&mask_view)],
-        );
-        (g0, g1)
+            vec![tv(&f.gbuffer.position), tv(&f.gbuffer.normal), tv(&self.splat.accum_view()), tv(&mask_view)],
+        )
     }
 
     /// A hash of what every record depends on: the record settings that change a record
