@@ -58,7 +58,7 @@ impl Renderer {
         let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
 
         // The passes the stage choices name (stage 2's emitters, stages 3–7).
-        self.ensure_passes();
+        self.ensure_passes_for(Some(&state));
 
         // Stage 1: G-buffer and movement buffer.
         let (gbuffer, camera_group, gpu_scene) = (&self.gbuffer, &self.camera_group, &self.gpu_scene);

@@ -495,6 +495,12 @@ impl Renderer {
     /// Creates, resizes or drops the passes of stages 3–7 for the current stage choices, so
     /// that their buffers are registered before the first frame.
     pub(crate) fn ensure_passes(&mut self) {
+        self.ensure_passes_for(None);
+    }
+
+    /// [`Self::ensure_passes`] with the scene at this instant when the caller has it (the
+    /// frame: so that the scene is not evaluated twice per frame, issue #38).
+    pub(crate) fn ensure_passes_for(&mut self, frame_state: Option<&crate::scene::SceneState>) {
         self.ctx.make_current();
         let ctx = self.ctx.clone();
         let s = self.settings.clone();
@@ -502,7 +508,14 @@ impl Renderer {
         let (w, h) = (self.width, self.height);
         // The scene at this instant, evaluated only when a pass sizes itself by it.
         let emitters = s.emitters.enabled && self.scene.has_emitters();
-        let state = if emitters || p.uses_knecht_vpls() { self.frame_state() } else { Default::default() };
+        let evaluated;
+        let state = match frame_state {
+            Some(state) => state,
+            None => {
+                evaluated = if emitters || p.uses_knecht_vpls() { self.frame_state() } else { Default::default() };
+                &evaluated
+            }
+        };
         let x = &mut self.stages;
         let mut fresh = false;
         if emitters {
