@@ -71,7 +71,17 @@ fn the_same_seed_replays_the_same_steps() {
     let steps = |seed: &str| -> Vec<String> {
         let o = soak(&["--frames", "40", "--seed", seed, "--size", "32x32", "--verbose"]);
         assert!(o.status.success(), "{}", summary(&o));
-        String::from_utf8_lossy(&o.stdout).lines().filter(|l| l.starts_with("step ")).map(String::from).collect()
+        // The soak's scratch folder is named by its process id: the same walk from another
+        // process names another folder.
+        let scratch = |l: &str| match l.find("gi-lab-soak-") {
+            Some(i) => {
+                let rest = &l[i + "gi-lab-soak-".len()..];
+                let digits = rest.len() - rest.trim_start_matches(|c: char| c.is_ascii_digit()).len();
+                format!("{}gi-lab-soak-PID{}", &l[..i], &rest[digits..])
+            }
+            None => l.to_string(),
+        };
+        String::from_utf8_lossy(&o.stdout).lines().filter(|l| l.starts_with("step ")).map(scratch).collect()
     };
     let (a, b, c) = (steps("5"), steps("5"), steps("6"));
     assert_eq!(a.len(), 40, "one line per step");

@@ -29,7 +29,15 @@ const FLAG_NEGATIVE: u32 = 8u;
 // tables; uploaded from `cpu::view::COLORMAP_TABLES`, the one copy of the data).
 @group(0) @binding(7) var<storage, read> colormaps: array<vec4<f32>>;
 
+// The auto-range's statistics (cs_range_*, issue #38: the range is reduced on the GPU and
+// 16 KB are read back instead of the whole texture): [0] the smallest and [1] the largest
+// order key of the finite values the mode shows, [2] their count, [3] unused, then a
+// histogram of RANGE_BINS bins over [min key, max key] (key − min key shifted right until
+// the span fits). CPU twin and decoding: cpu::view::{order_key, range_from_stats}.
+@group(0) @binding(8) var<storage, read_write> range_stats: array<atomic<u32>>;
+
 const LUT_SIZE: u32 = 65u;
+const RANGE_BINS: u32 = 4096u;
 
 // Map index: 0 grey, 1 viridis, 2 turbo, 3 inferno. The result is display-encoded (sRGB).
 fn colormap(map: u32, t: f32) -> vec3<f32> {
@@ -134,4 +142,99 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
         rgb = colormap(params.modes.z, normalise(s * scale));
     }
     return vec4<f32>(rgb, 1.0);
+}
+
+// ---- Auto-range on the GPU -----------------------------------------------------------
+
+// A u32 that orders as the float does (negative values reversed below the positive ones).
+fn order_key(x: f32) -> u32 {
+    let b = bitcast<u32>(x);
+    return select(b ^ 0x80000000u, ~b, (b & 0x80000000u) != 0u);
+}
+
+// The size of the source's level.
+fn source_size() -> vec2<i32> {
+    let level = i32(params.source.y);
+    switch params.modes.w >> 8u {
+        case 1u: { return vec2<i32>(textureDimensions(src_float_array, level)); }
+        case 2u: { return vec2<i32>(textureDimensions(src_uint, level)); }
+        case 3u: { return vec2<i32>(textureDimensions(src_uint_array, level)); }
+        case 4u: { return vec2<i32>(textureDimensions(src_depth, level)); }
+        case 5u: { return vec2<i32>(textureDimensions(src_depth_array, level)); }
+        default: { return vec2<i32>(textureDimensions(src_float, level)); }
+    }
+}
+
+// The values the mode shows at p (xyz, the first n of them), as cpu::view::auto_range takes
+// them: RGB its three, one channel, or the length of xyz.
+fn shown_values(p: vec2<i32>) -> vec4<f32> {
+    let v = raw_value(p);
+    switch params.modes.x {
+        case 1u: { return vec4<f32>(v[min(params.modes.y, 3u)], 0.0, 0.0, 1.0); }
+        case 2u: { return vec4<f32>(length(v.xyz), 0.0, 0.0, 1.0); }
+        default: { return vec4<f32>(v.xyz, 3.0); }
+    }
+}
+
+fn finite(x: f32) -> bool {
+    return (bitcast<u32>(x) & 0x7f800000u) != 0x7f800000u;
+}
+
+@compute @workgroup_size(256, 1, 1)
+fn cs_range_clear(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if (gid.x < arrayLength(&range_stats)) {
+        atomicStore(&range_stats[gid.x], select(0u, 0xffffffffu, gid.x == 0u));
+    }
+}
+
+var<workgroup> wg_min: atomic<u32>;
+var<workgroup> wg_max: atomic<u32>;
+var<workgroup> wg_count: atomic<u32>;
+
+@compute @workgroup_size(8, 8, 1)
+fn cs_range_minmax(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    if (li == 0u) {
+        atomicStore(&wg_min, 0xffffffffu);
+        atomicStore(&wg_max, 0u);
+        atomicStore(&wg_count, 0u);
+    }
+    workgroupBarrier();
+    let p = vec2<i32>(gid.xy);
+    let size = source_size();
+    if (p.x < size.x && p.y < size.y) {
+        let v = shown_values(p);
+        for (var i = 0u; i < u32(v.w); i = i + 1u) {
+            if (finite(v[i])) {
+                let k = order_key(v[i]);
+                atomicMin(&wg_min, k);
+                atomicMax(&wg_max, k);
+                atomicAdd(&wg_count, 1u);
+            }
+        }
+    }
+    workgroupBarrier();
+    if (li == 0u && atomicLoad(&wg_count) > 0u) {
+        atomicMin(&range_stats[0], atomicLoad(&wg_min));
+        atomicMax(&range_stats[1], atomicLoad(&wg_max));
+        atomicAdd(&range_stats[2], atomicLoad(&wg_count));
+    }
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn cs_range_histogram(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let p = vec2<i32>(gid.xy);
+    let size = source_size();
+    let lo = atomicLoad(&range_stats[0]);
+    let hi = atomicLoad(&range_stats[1]);
+    if (p.x >= size.x || p.y >= size.y || hi < lo) {
+        return;
+    }
+    let bits = 32u - countLeadingZeros(hi - lo);
+    let shift = select(0u, bits - 12u, bits > 12u);
+    let v = shown_values(p);
+    for (var i = 0u; i < u32(v.w); i = i + 1u) {
+        if (finite(v[i])) {
+            atomicAdd(&range_stats[4u + ((order_key(v[i]) - lo) >> shift)], 1u);
+        }
+    }
 }

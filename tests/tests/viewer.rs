@@ -10,7 +10,7 @@ use gi_render::{GpuContext, ImageF32};
 /// Renders the view of `entry` and checks every texel against the CPU twin applied to a
 /// readback of the source; returns the number of texels compared.
 fn check_view(ctx: &GpuContext, view: &mut BufferView, entry: &BufferEntry, s: &ViewSettings) -> usize {
-    view.render(ctx, entry, s).unwrap_or_else(|e| panic!("{}: {e}", entry.name));
+    view.render(ctx, entry, s, false).unwrap_or_else(|e| panic!("{}: {e}", entry.name));
     let out = read_texture(ctx, "view.output", view.output().expect("output exists"), 0, 0).expect("readback");
     let src = read_texture(ctx, &entry.name, &entry.texture, s.layer, s.level).expect("source readback");
     assert_eq!((out.width, out.height), (src.width, src.height), "{}: output has the level's size", entry.name);
@@ -67,6 +67,65 @@ fn view_of_every_kind_of_buffer_matches_the_cpu_twin() {
     for (name, s) in cases {
         let entry = r.buffers().get(name).expect("registered").clone();
         assert!(check_view(&ctx, &mut view, &entry, &s) > 0);
+    }
+}
+
+/// The auto-range reduced on the GPU (the view pass's min, max and histogram) gives the CPU's
+/// `auto_range` of a read-back of the same buffer: min–max exactly, a percentile range within
+/// one histogram bin (never narrower), in every mode and for float, depth and array buffers,
+/// non-finite values left out.
+#[test]
+fn the_gpu_auto_range_matches_the_cpu() {
+    use gi_render::cpu::view::{RANGE_STATS_BYTES, auto_range, order_key, range_from_stats};
+    let mut r = default_renderer(64, 48);
+    for _ in 0..3 {
+        r.render_frame();
+    }
+    let ctx = r.ctx.clone();
+    let mut view = BufferView::new(&ctx, ViewPipeline::new(&ctx));
+    let texels: Vec<[f32; 4]> = (0..40)
+        .map(|i| [i as f32 * 0.25 - 2.0, if i == 7 { f32::NAN } else { 1.0 / (i as f32 + 1.0) }, 3.0, 1.0])
+        .collect();
+    let bytes: Vec<u8> = texels.iter().flatten().flat_map(|f| f.to_le_bytes()).collect();
+    let synthetic = BufferEntry {
+        name: "tests.values".into(),
+        description: String::new(),
+        kind: BufferKind::Data,
+        texture: texture_with(&ctx, wgpu::TextureFormat::Rgba32Float, &bytes, 40),
+    };
+    let entry = |name: &str| r.buffers().get(name).expect("registered").clone();
+    let cases: Vec<(BufferEntry, ViewSettings)> = vec![
+        (entry("final.hdr"), ViewSettings { exposure_ev: 1.0, ..Default::default() }),
+        (entry("gbuffer.position"), ViewSettings { mode: ViewMode::Channel, channel: 3, ..Default::default() }),
+        (entry("gbuffer.normal"), ViewSettings { mode: ViewMode::Length, ..Default::default() }),
+        (entry("gbuffer.depth"), ViewSettings::for_kind(BufferKind::Depth)),
+        (entry("direct.shadow_map"), ViewSettings { layer: 0, ..ViewSettings::for_kind(BufferKind::Depth) }),
+        (synthetic.clone(), ViewSettings { mode: ViewMode::Channel, channel: 1, ..Default::default() }),
+        (synthetic, ViewSettings::default()),
+    ];
+    for (e, s) in cases {
+        view.render(&ctx, &e, &s, true).unwrap_or_else(|err| panic!("{}: {err}", e.name));
+        let bytes = gi_render::buffers::read_storage(&ctx, view.range_stats(), RANGE_STATS_BYTES).expect("stats");
+        let words: Vec<u32> = bytes.chunks_exact(4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]])).collect();
+        let img = read_texture(&ctx, &e.name, &e.texture, s.layer, s.level).expect("readback");
+        // Min–max exactly, but a length, which the GPU's length() may round differently by
+        // an ulp or two.
+        let ulps = if s.mode == ViewMode::Length { 4 } else { 0 };
+        let (got, want) = (range_from_stats(&words, s.exposure_ev, 0.0), auto_range(&s, &img, 0.0));
+        let (got, want) = (got.expect("finite values"), want.expect("finite values"));
+        for i in 0..2 {
+            let d = order_key(got[i]).abs_diff(order_key(want[i]));
+            assert!(d <= ulps, "{} {:?} min–max: GPU {got:?} vs CPU {want:?}", e.name, s.mode);
+        }
+        let bin = 1u32 << (32 - (words[1] - words[0]).leading_zeros()).saturating_sub(12);
+        for p in [1.0, 5.0] {
+            let scale = s.exposure_ev.exp2();
+            let [lo, hi] = auto_range(&s, &img, p).expect("finite values").map(|v| v / scale);
+            let [glo, ghi] = range_from_stats(&words, s.exposure_ev, p).expect("stats").map(|v| v / scale);
+            let (k, gk) = ([order_key(lo), order_key(hi)], [order_key(glo), order_key(ghi)]);
+            assert!(gk[0] <= k[0] && k[0] - gk[0] < bin, "{} {:?} {p} %: low {glo} vs {lo}", e.name, s.mode);
+            assert!(gk[1] >= k[1] && gk[1] - k[1] < bin, "{} {:?} {p} %: high {ghi} vs {hi}", e.name, s.mode);
+        }
     }
 }
 

@@ -117,23 +117,26 @@ impl Viewer {
         let t = &entry.texture;
         self.state.view.layer = self.state.view.layer.min(t.depth_or_array_layers() - 1);
         self.state.view.level = self.state.view.level.min(t.mip_level_count() - 1);
-        // Auto-range from a read-back copied in the frame and read without waiting (issue #38):
-        // asked for every 500 ms, applied when it arrives.
+        // Auto-range reduced on the GPU by the view pass (min, max and a histogram of the
+        // values shown) and read back without waiting, 16 KB (issue #38): asked for every
+        // 500 ms, applied when it arrives.
+        let mut ask_range = false;
         if self.state.range_mode != RangeMode::Manual {
             let (layer, level) = (self.state.view.layer, self.state.view.level);
             let key = format!("viewer.range:{}@{layer}.{level}", entry.name);
-            if self.last_auto.is_none_or(|at| at.elapsed() > Duration::from_millis(500)) {
-                self.last_auto = Some(Instant::now());
-                renderer.read_later(&key, Readback::Image { name: entry.name.clone(), layer, mip: level }, 0);
-            }
             if let Some(a) = renderer.read_latest(&key)
                 && self.range_frame != Some(a.frame)
             {
                 self.range_frame = Some(a.frame);
                 let p = if self.state.range_mode == RangeMode::MinMax { 0.0 } else { self.state.percentile.max(0.01) };
                 match &a.data {
-                    Ok(Readout::Image(img)) => {
-                        if let Some(r) = gi_render::cpu::view::auto_range(&self.state.view, img, p) {
+                    Ok(Readout::Bytes(parts)) => {
+                        let words: Vec<u32> = parts
+                            .first()
+                            .map(|b| b.chunks_exact(4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]])).collect())
+                            .unwrap_or_default();
+                        let ev = self.state.view.exposure_ev;
+                        if let Some(r) = gi_render::cpu::view::range_from_stats(&words, ev, p) {
                             self.state.view.range = if r[1] > r[0] { r } else { [r[0], r[0] + 1e-6] };
                         }
                     }
@@ -141,9 +144,17 @@ impl Viewer {
                     Err(e) => self.error = Some(e.clone()),
                 }
             }
+            if self.last_auto.is_none_or(|at| at.elapsed() > Duration::from_millis(500)) {
+                self.last_auto = Some(Instant::now());
+                ask_range = true;
+                if let Some(gpu) = &self.gpu {
+                    let stats = (gpu.range_stats().clone(), gi_render::cpu::view::RANGE_STATS_BYTES);
+                    renderer.read_later(&key, Readback::Storage(vec![stats]), 0);
+                }
+            }
         }
         let gpu = self.gpu.get_or_insert_with(|| BufferView::new(&renderer.ctx, pipeline.clone()));
-        match gpu.render(&renderer.ctx, entry, &self.state.view) {
+        match gpu.render(&renderer.ctx, entry, &self.state.view, ask_range) {
             Ok(recreated) => {
                 self.error = None;
                 let Some(out) = gpu.output() else { return };
@@ -152,6 +163,12 @@ impl Viewer {
             }
             Err(e) => self.error = Some(e.to_string()),
         }
+    }
+
+    /// The frame whose auto-range statistics the range was last set from (None before any
+    /// arrived).
+    pub fn auto_range_frame(&self) -> Option<u64> {
+        self.range_frame
     }
 
     /// Drops the GPU view (after a shader reload it is rebuilt with the new pipeline).

@@ -286,6 +286,57 @@ pub fn map_texel(s: &ViewSettings, v: [f32; 4]) -> [f32; 3] {
     }
 }
 
+/// Bins of the GPU auto-range's histogram (`RANGE_BINS` in `shaders/view/view.wgsl`).
+pub const RANGE_BINS: usize = 4096;
+/// Bytes of the GPU auto-range's statistics: min key, max key, count, unused, the bins.
+pub const RANGE_STATS_BYTES: u64 = (4 + RANGE_BINS as u64) * 4;
+
+/// A u32 that orders as the float does (`order_key` in view.wgsl).
+pub fn order_key(x: f32) -> u32 {
+    let b = x.to_bits();
+    if b & 0x8000_0000 != 0 { !b } else { b ^ 0x8000_0000 }
+}
+
+/// The float of an order key.
+pub fn from_order_key(k: u32) -> f32 {
+    f32::from_bits(if k & 0x8000_0000 != 0 { k ^ 0x8000_0000 } else { !k })
+}
+
+/// The range [`auto_range`] gives, from the GPU's statistics of the same values (the
+/// viewer's `cs_range_*`; `words` as read back, `RANGE_STATS_BYTES`): min–max exactly; a
+/// percentile range to within one bin of the histogram, widened (the low end is its bin's
+/// lower edge, the high end its bin's upper edge). None when no value is finite.
+pub fn range_from_stats(words: &[u32], exposure_ev: f32, percentile: f32) -> Option<[f32; 2]> {
+    let (lo, hi, count) = (*words.first()?, *words.get(1)?, *words.get(2)? as u64);
+    if count == 0 || hi < lo {
+        return None;
+    }
+    let scale = exposure_ev.exp2();
+    if percentile <= 0.0 {
+        return Some([from_order_key(lo) * scale, from_order_key(hi) * scale]);
+    }
+    let bins = words.get(4..4 + RANGE_BINS)?;
+    let bits = 32 - (hi - lo).leading_zeros();
+    let shift = bits.saturating_sub(12);
+    let p = percentile.clamp(0.0, 49.9) / 100.0;
+    let rank = |q: f32| ((count - 1) as f32 * q).round() as u64;
+    // The bin holding the value of rank r in ascending order.
+    let bin_of = |r: u64| {
+        let mut seen = 0u64;
+        for (b, n) in bins.iter().enumerate() {
+            seen += *n as u64;
+            if seen > r {
+                return b as u32;
+            }
+        }
+        (RANGE_BINS - 1) as u32
+    };
+    let (b_lo, b_hi) = (bin_of(rank(p)), bin_of(rank(1.0 - p)));
+    let low = lo + (b_lo << shift);
+    let high = (lo as u64 + ((b_hi as u64 + 1) << shift) - 1).min(hi as u64) as u32;
+    Some([from_order_key(low) * scale, from_order_key(high) * scale])
+}
+
 /// The range that auto min–max or a percentile range gives for the values the mode shows
 /// (finite values only). `percentile` = 0 gives min–max; p gives the [p, 100 − p] % range.
 pub fn auto_range(s: &ViewSettings, img: &crate::ImageF32, percentile: f32) -> Option<[f32; 2]> {
@@ -323,6 +374,46 @@ mod tests {
 
     /// The tables reproduce the maps' published anchor colours (matplotlib's viridis and
     /// inferno hex values at 0, ½, 1; Turbo's table at 0, ½, 1).
+    #[test]
+    fn order_keys_order_as_the_floats() {
+        let xs = [f32::NEG_INFINITY, -1e30, -2.0, -1.0, -1e-30, -0.0, 0.0, 1e-30, 0.5, 1.0, 3.0, 1e30, f32::INFINITY];
+        for w in xs.windows(2) {
+            assert!(order_key(w[0]) <= order_key(w[1]), "{} {}", w[0], w[1]);
+        }
+        for x in xs {
+            assert_eq!(from_order_key(order_key(x)).to_bits(), x.to_bits());
+        }
+    }
+
+    /// The statistics a GPU would make of some values give auto_range's min–max exactly
+    /// and its percentile range within one bin.
+    #[test]
+    fn stats_give_the_auto_range() {
+        let values: Vec<f32> = (0..5000).map(|i| ((i * 7919) % 5000) as f32 * 0.01 - 3.0).chain([1e6, -1e5]).collect();
+        let keys: Vec<u32> = values.iter().map(|v| order_key(*v)).collect();
+        let (lo, hi) = (*keys.iter().min().unwrap(), *keys.iter().max().unwrap());
+        let shift = (32 - (hi - lo).leading_zeros()).saturating_sub(12);
+        let mut words = vec![0u32; 4 + RANGE_BINS];
+        (words[0], words[1], words[2]) = (lo, hi, keys.len() as u32);
+        for k in &keys {
+            words[4 + ((k - lo) >> shift) as usize] += 1;
+        }
+        let img = crate::ImageF32 {
+            width: values.len() as u32,
+            height: 1,
+            data: values.iter().map(|v| [*v, 0.0, 0.0, 1.0]).collect(),
+        };
+        let s = ViewSettings { mode: ViewMode::Channel, channel: 0, exposure_ev: 1.0, ..ViewSettings::default() };
+        assert_eq!(range_from_stats(&words, 1.0, 0.0), auto_range(&s, &img, 0.0));
+        let exact = auto_range(&s, &img, 1.0).unwrap();
+        let got = range_from_stats(&words, 1.0, 1.0).unwrap();
+        let bin = 1u32 << shift;
+        assert!(got[0] <= exact[0] && order_key(exact[0] / 2.0) - order_key(got[0] / 2.0) < bin, "{got:?} {exact:?}");
+        assert!(got[1] >= exact[1] && order_key(got[1] / 2.0) - order_key(exact[1] / 2.0) < bin, "{got:?} {exact:?}");
+        // The outliers stay out of the 1 % range.
+        assert!(got[1] < 100.0 && got[0] > -100.0, "{got:?}");
+    }
+
     #[test]
     fn colormaps_match_published_anchors() {
         let hex = |h: u32| [(h >> 16) as f32 / 255.0, ((h >> 8) & 255) as f32 / 255.0, (h & 255) as f32 / 255.0];

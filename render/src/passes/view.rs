@@ -183,6 +183,8 @@ pub const VIEW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 /// by every viewer.
 pub struct ViewPipeline {
     pipeline: wgpu::RenderPipeline,
+    /// The auto-range's reduction (`cs_range_*` in view.wgsl): clear, min–max, histogram.
+    range: [wgpu::ComputePipeline; 3],
     layout: wgpu::BindGroupLayout,
     dummies: Vec<wgpu::TextureView>,
     colormaps: wgpu::Buffer,
@@ -191,7 +193,7 @@ pub struct ViewPipeline {
 impl ViewPipeline {
     pub fn new(ctx: &GpuContext) -> Arc<Self> {
         let device = &ctx.device;
-        let fs = wgpu::ShaderStages::FRAGMENT;
+        let fs = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
         let tex = |binding, sample_type, view_dimension| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: fs,
@@ -211,9 +213,12 @@ impl ViewPipeline {
                 tex(5, wgpu::TextureSampleType::Depth, d2),
                 tex(6, wgpu::TextureSampleType::Depth, arr),
                 super::bgl::storage(7, fs, true),
+                super::bgl::storage(8, wgpu::ShaderStages::COMPUTE, false),
             ],
         });
         let module = crate::shaders::create_module(device, "view/view.wgsl");
+        let range = ["cs_range_clear", "cs_range_minmax", "cs_range_histogram"]
+            .map(|entry| super::compute_pipeline(device, &format!("view.{entry}"), &module, entry, &[&layout]));
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("view.pipeline_layout"),
             bind_group_layouts: &[Some(&layout)],
@@ -277,15 +282,17 @@ impl ViewPipeline {
                 usage: wgpu::BufferUsages::STORAGE,
             },
         );
-        Arc::new(Self { pipeline, layout, dummies, colormaps })
+        Arc::new(Self { pipeline, range, layout, dummies, colormaps })
     }
 }
 
-/// One viewer's state on the GPU: its uniform and its output image.
+/// One viewer's state on the GPU: its uniform, its output image and its auto-range
+/// statistics.
 pub struct BufferView {
     shared: Arc<ViewPipeline>,
     params: wgpu::Buffer,
     output: Option<wgpu::Texture>,
+    range_stats: wgpu::Buffer,
 }
 
 impl BufferView {
@@ -296,7 +303,20 @@ impl BufferView {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Self { shared, params, output: None }
+        let range_stats = ctx.device.counted_buffer(&wgpu::BufferDescriptor {
+            label: Some("view.range_stats"),
+            size: crate::cpu::view::RANGE_STATS_BYTES,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        Self { shared, params, output: None, range_stats }
+    }
+
+    /// The auto-range's statistics of the last [`BufferView::render`] asked for them
+    /// (`cpu::view::RANGE_STATS_BYTES`, decoded by `cpu::view::range_from_stats`): read it
+    /// back, without waiting, with `Readback::Storage`.
+    pub fn range_stats(&self) -> &wgpu::Buffer {
+        &self.range_stats
     }
 
     /// The last output (None before the first [`BufferView::render`]).
@@ -305,13 +325,16 @@ impl BufferView {
     }
 
     /// Maps `entry` (its `settings.layer` and `settings.level`) to colour; the output has
-    /// the size of that level. Returns whether the output texture was (re)created, so that
-    /// a UI can re-point its texture handle.
+    /// the size of that level. With `range`, also reduces the values the mode shows into
+    /// [`BufferView::range_stats`] (min, max and a histogram, for the auto-range). Returns
+    /// whether the output texture was (re)created, so that a UI can re-point its texture
+    /// handle.
     pub fn render(
         &mut self,
         ctx: &GpuContext,
         entry: &BufferEntry,
         settings: &ViewSettings,
+        range: bool,
     ) -> Result<bool, BufferError> {
         let t = &entry.texture;
         let name = entry.name.clone();
@@ -363,6 +386,7 @@ impl BufferView {
             entries.push(wgpu::BindGroupEntry { binding, resource: wgpu::BindingResource::TextureView(view) });
         }
         entries.push(wgpu::BindGroupEntry { binding: 7, resource: self.shared.colormaps.as_entire_binding() });
+        entries.push(wgpu::BindGroupEntry { binding: 8, resource: self.range_stats.as_entire_binding() });
         let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("view.inputs"),
             layout: &self.shared.layout,
@@ -372,6 +396,18 @@ impl BufferView {
             output.counted_view(&wgpu::TextureViewDescriptor { label: Some("view.output"), ..Default::default() });
         let mut enc =
             ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("view.encoder") });
+        if range {
+            let mut pass = enc
+                .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("view.range"), timestamp_writes: None });
+            pass.set_group(0, &group, &[]);
+            let [clear, minmax, histogram] = &self.shared.range;
+            pass.set_pipeline(clear);
+            pass.dispatch_workgroups(((crate::cpu::view::RANGE_STATS_BYTES / 4) as u32).div_ceil(256), 1, 1);
+            for pipeline in [minmax, histogram] {
+                pass.set_pipeline(pipeline);
+                pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+            }
+        }
         {
             let mut pass = enc.begin_counted_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("view.pass"),

@@ -521,15 +521,15 @@ impl Renderer {
         if emitters {
             let created = x.emitters.is_none();
             let e = x.emitters.get_or_insert_with(|| EmitterPass::new(&ctx));
-            fresh |= e.ensure(&ctx, &self.scene, &state, &self.gpu_scene, &s) | created;
+            fresh |= e.ensure(&ctx, &self.scene, state, &self.gpu_scene, &s) | created;
         } else {
             fresh |= x.emitters.take().is_some();
         }
         if p.uses_knecht_vpls() {
-            let views = light_view_list(&state, self.bounds).len();
+            let views = light_view_list(state, self.bounds).len();
             let created = x.knecht.is_none();
             let k = x.knecht.get_or_insert_with(|| KnechtVpls::new(&ctx, &s));
-            fresh |= k.ensure(&ctx, &self.scene, &state, &self.gpu_scene, &s, views) | created;
+            fresh |= k.ensure(&ctx, &self.scene, state, &self.gpu_scene, &s, views) | created;
         } else {
             fresh |= x.knecht.take().is_some();
         }
