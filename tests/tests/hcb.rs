@@ -553,6 +553,27 @@ fn hcb_splatting_stays_close_to_gathering_at_every_pixel_with_few_samples() {
     assert!(stats.uncovered * 1000 <= covered, "{} covered pixels no sample reached", stats.uncovered);
 }
 
+/// The GPU lists the covered pixels no sample reached: exactly the pixels with geometry whose
+/// `hcb.irradiance` has a = 0 (what the overlay draws instead of reading two whole images).
+#[test]
+fn the_uncovered_pixels_are_listed_on_the_gpu() {
+    // At 256² the default box has a pixel no sample reaches (`gi-lab hcb-stats`).
+    let mut r = hcb_renderer(256, |_| {});
+    r.render_frame();
+    let stats = r.hcb_stats().expect("HCB statistics");
+    let (light, normal) = (r.readback("hcb.irradiance").expect("light"), r.readback("gbuffer.normal").expect("normal"));
+    let mut want: Vec<[u32; 2]> = (0..light.data.len())
+        .filter(|&i| light.data[i][3] == 0.0 && normal.data[i][3] > 0.5)
+        .map(|i| [i as u32 % light.width, i as u32 / light.width])
+        .collect();
+    let mut got = stats.uncovered_pixels.clone();
+    want.sort();
+    got.sort();
+    assert!(stats.uncovered > 0, "no uncovered pixel to list");
+    assert_eq!(stats.uncovered as usize, want.len());
+    assert_eq!(got, want);
+}
+
 #[test]
 fn hcb_samples_are_at_most_five_percent_of_the_pixels_at_512() {
     let mut r = hcb_renderer(512, |_| {});

@@ -148,25 +148,9 @@ fn hcb_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
         painter.circle_filled(at(x, y), 1.0 + 0.5 * level as f32, egui::Color32::WHITE);
     }
     // Covered pixels that no sample reached (hcb.irradiance's a = 0): magenta, never
-    // silently black.
-    // Read without waiting (issue #38): both images of one frame, a frame or two late.
-    let image = |name: &str| {
-        let what = gi_render::readback::Readback::Image { name: name.into(), layer: 0, mip: 0 };
-        l.renderer.read_later(&format!("overlay.{name}"), what, 0)
-    };
-    let (light, normal) = (image("hcb.irradiance"), image("gbuffer.normal"));
-    use gi_render::readback::Readout::Image;
-    if stats.uncovered > 0
-        && let (Some(a), Some(b)) = (&light, &normal)
-        && a.frame == b.frame
-        && let (Ok(Image(light)), Ok(Image(normal))) = (&a.data, &b.data)
-    {
-        for (i, (e, n)) in light.data.iter().zip(&normal.data).enumerate() {
-            if e[3] == 0.0 && n[3] > 0.5 {
-                let (x, y) = (i as u32 % light.width, i as u32 / light.width);
-                painter.circle_filled(at(x, y), 2.0, egui::Color32::from_rgb(255, 0, 255));
-            }
-        }
+    // silently black. Listed by the GPU (issue #38: no whole images read back).
+    for &[x, y] in &stats.uncovered_pixels {
+        painter.circle_filled(at(x, y), 2.0, egui::Color32::from_rgb(255, 0, 255));
     }
     text(stats.summary(w * h));
 }

@@ -17,7 +17,8 @@ pub struct HcbSplatPass {
     pub irradiance: wgpu::Texture,
     /// `hcb.indirect`: the indirect light the compose adds, c·DI/π × the splatted irradiance.
     pub indirect: wgpu::Texture,
-    /// Covered pixels that no sample reached (one u32).
+    /// Covered pixels that no sample reached: the count (one u32 of four), then the first
+    /// [`UNCOVERED_LIST`] of them as x | y << 16.
     pub uncovered: wgpu::Buffer,
     splat_layout: wgpu::BindGroupLayout,
     normalize_layout: wgpu::BindGroupLayout,
@@ -28,6 +29,11 @@ pub struct HcbSplatPass {
     width: u32,
     height: u32,
 }
+
+/// Most uncovered pixels `hcb/normalize.wgsl` lists (the count goes on).
+pub const UNCOVERED_LIST: u32 = 65536;
+/// Bytes of [`HcbSplatPass::uncovered`].
+pub const UNCOVERED_BYTES: u64 = 16 + UNCOVERED_LIST as u64 * 4;
 
 /// Format of `hcb.weight_sum` (additive blending of f32 needs FLOAT32_BLENDABLE, which the
 /// renderer requires).
@@ -107,7 +113,7 @@ impl HcbSplatPass {
         let uncovered = crate::passes::buffer(
             device,
             "hcb.uncovered",
-            16,
+            UNCOVERED_BYTES,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
         );
         let (weight_sum, irradiance, indirect) = Self::targets(device, width, height);
@@ -272,7 +278,8 @@ impl HcbSplatPass {
                 wgpu::BindGroupEntry { binding: 5, resource: tv(&radiance) },
             ],
         });
-        encoder.clear_buffer(&self.uncovered, 0, None);
+        // The count only: the list is written up to it.
+        encoder.clear_buffer(&self.uncovered, 0, Some(16));
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("hcb.normalize"),
             timestamp_writes: slot.and_then(|s| s.compute(false, true)),

@@ -34,6 +34,8 @@ pub struct HcbStats {
     pub texels_per_level: Vec<u32>,
     /// Covered pixels that no sample's splat reached.
     pub uncovered: u32,
+    /// The first `splat::UNCOVERED_LIST` of them, (x, y), in no particular order.
+    pub uncovered_pixels: Vec<[u32; 2]>,
     /// The cache's counts of the frame (§5), None without the cache.
     pub cache: Option<CacheCounts>,
     /// The sample list itself (cached samples first, then the new ones).
@@ -253,7 +255,7 @@ impl HcbStage {
         vec![
             (self.build.counter.clone(), super::COUNTER_BYTES),
             (self.build.list.clone(), self.build.list_capacity as u64 * size),
-            (self.splat.uncovered.clone(), 16),
+            (self.splat.uncovered.clone(), super::splat::UNCOVERED_BYTES),
         ]
     }
 
@@ -271,6 +273,8 @@ impl HcbStage {
             }
         }
         let uncovered: Vec<u32> = bytemuck::pod_collect_to_vec(uncovered);
+        let listed = (*uncovered.first()?).min(super::splat::UNCOVERED_LIST) as usize;
+        let uncovered_pixels = uncovered.get(4..4 + listed)?.iter().map(|p| [p & 0xffff, p >> 16]).collect();
         Some(HcbStats {
             samples: list
                 .iter()
@@ -282,6 +286,7 @@ impl HcbStage {
             samples_per_level: per_level,
             texels_per_level: self.build.levels.iter().map(|l| l.width * l.height).collect(),
             uncovered: *uncovered.first()?,
+            uncovered_pixels,
             cache: self.cache.as_ref().map(|_| CacheCounts::from_words(&count)),
             list,
             d_max,
