@@ -15,7 +15,7 @@ struct FilterParams {
 @group(0) @binding(1) var src: texture_2d<f32>;
 @group(0) @binding(2) var g_position: texture_2d<f32>;
 @group(0) @binding(3) var g_normal: texture_2d<f32>;
-@group(0) @binding(4) var dst: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(4) var dst: texture_storage_2d<rgba16float, write>;
 
 @compute @workgroup_size(TILE, TILE, 1)
 fn cs_filter(@builtin(global_invocation_id) gid: vec3<u32>) {

@@ -31,7 +31,7 @@ struct GatherParams {
 @group(0) @binding(6) var s_normal: texture_2d<f32>;
 @group(0) @binding(7) var s_albedo: texture_2d<f32>;
 @group(0) @binding(8) var s_material: texture_2d<f32>;
-@group(0) @binding(9) var out_accum: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(9) var out_accum: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(10) var<storage, read> tile_offsets: array<u32>;
 
 // The light of split pixel `sp`'s tile's VPLs at the pixel `px` of the bound textures (the

@@ -9,7 +9,7 @@ struct SplitParams {
 
 @group(0) @binding(0) var<uniform> params: SplitParams;
 @group(0) @binding(1) var split: texture_2d<f32>;
-@group(0) @binding(2) var merged: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(2) var merged: texture_storage_2d<rgba16float, write>;
 
 @compute @workgroup_size(TILE, TILE, 1)
 fn cs_merge(@builtin(global_invocation_id) gid: vec3<u32>) {

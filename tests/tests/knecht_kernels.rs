@@ -197,8 +197,12 @@ fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
                 let p = got.at(x, y);
                 let g3 = Vec3::new(p[0], p[1], p[2]);
                 let err = (g3 - expected).abs().max_element();
+                // indirect.merged holds half floats, stored rounding to nearest or toward
+                // zero (the device's choice): one step of that format besides the kernel's
+                // own tolerance.
+                let step = gi_render::buffers::half_step(expected.abs().max_element());
                 assert!(
-                    err <= 1e-5 + 2e-4 * expected.abs().max_element(),
+                    err <= 1e-5 + 2e-4 * expected.abs().max_element() + step,
                     "frame {frame}, diffuse {diffuse}: pixel ({x}, {y}), tile {tile}: GPU {g3}, CPU {expected}"
                 );
                 if expected.max_element() > 1e-3 {
@@ -265,7 +269,10 @@ fn geometry_aware_filter_on_the_gpu_equals_the_cpu() {
             let i = (y * w + x) as usize;
             let p = got.at(x, y);
             let g3 = Vec3::new(p[0], p[1], p[2]);
-            assert!((g3 - cpu[i]).abs().max_element() <= 1e-5, "pixel ({x}, {y}): GPU {g3}, CPU {}", cpu[i]);
+            // indirect.filtered holds half floats: one step of that format besides 1e-5.
+            let step = gi_render::buffers::half_step(cpu[i].abs().max_element());
+            let err = (g3 - cpu[i]).abs().max_element();
+            assert!(err <= 1e-5 + step, "pixel ({x}, {y}): GPU {g3}, CPU {}", cpu[i]);
             // Count pixels where the thresholds rejected some neighbours but not all.
             if texels[i].depth > 0.0 && (cpu[i] - texels[i].value).abs().max_element() > 1e-3 {
                 partial += 1;

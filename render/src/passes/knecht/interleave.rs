@@ -45,6 +45,12 @@ settings_group! {
     }
 }
 
+/// Format of the gathered and filtered light (`indirect.accum`, `indirect.merged`,
+/// `indirect.filtered`): half floats, as `direct::RADIANCE_FORMAT` (issue #38; the kernel
+/// tests allow one half step besides their own tolerance, since Vulkan lets a store round to
+/// nearest or toward zero).
+pub const LIGHT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
 /// Uniform of split and merge; WGSL twin: `SplitParams`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -205,23 +211,17 @@ impl InterleavePass {
                 t(6),
                 t(7),
                 t(8),
-                bgl::storage_texture(9, wgpu::TextureFormat::Rgba32Float),
+                bgl::storage_texture(9, LIGHT_FORMAT),
                 bgl::storage(10, cs, true),
             ],
         });
         let merge_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("interleave.merge.inputs"),
-            entries: &[bgl::uniform(0, cs), t(1), bgl::storage_texture(2, wgpu::TextureFormat::Rgba32Float)],
+            entries: &[bgl::uniform(0, cs), t(1), bgl::storage_texture(2, LIGHT_FORMAT)],
         });
         let filter_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("interleave.filter.inputs"),
-            entries: &[
-                bgl::uniform(0, cs),
-                t(1),
-                t(2),
-                t(3),
-                bgl::storage_texture(4, wgpu::TextureFormat::Rgba32Float),
-            ],
+            entries: &[bgl::uniform(0, cs), t(1), t(2), t(3), bgl::storage_texture(4, LIGHT_FORMAT)],
         });
         let module = |p| crate::shaders::create_module(device, p);
         let split_pipeline = crate::passes::compute_pipeline(
@@ -330,10 +330,10 @@ impl InterleavePass {
             normal: t("interleave.split.normal", sw, sh, NORMAL_FORMAT),
             albedo: t("interleave.split.albedo", sw, sh, ALBEDO_FORMAT),
             material: t("interleave.split.material", sw, sh, MATERIAL_FORMAT),
-            accum: t("indirect.accum", sw, sh, wgpu::TextureFormat::Rgba32Float),
+            accum: t("indirect.accum", sw, sh, LIGHT_FORMAT),
         });
-        let merged = t("indirect.merged", width, height, wgpu::TextureFormat::Rgba32Float);
-        let filtered = t("indirect.filtered", width, height, wgpu::TextureFormat::Rgba32Float);
+        let merged = t("indirect.merged", width, height, LIGHT_FORMAT);
+        let filtered = t("indirect.filtered", width, height, LIGHT_FORMAT);
         (split, merged, filtered)
     }
 
