@@ -52,8 +52,8 @@ row() {
 
 TABLE="$OUT/gpu-bench.md"
 {
-  echo "| preset ($SIZE) | GPU ms | wall ms | blocking waits / frame | submits / frame | objects created / frame | MB bound / frame | heaviest pass (ms) |"
-  echo "|---|---:|---:|---:|---:|---:|---:|---|"
+  echo "| preset ($SIZE) | GPU ms | wall ms | window frame ms | blocking waits / frame | submits / frame | objects created / frame | MB bound / frame | heaviest pass (ms) |"
+  echo "|---|---:|---:|---:|---:|---:|---:|---:|---|"
 } >"$TABLE"
 # One preset (or a variant of it: NAME+VARIANT with extra --set arguments), as a table row.
 preset_row() {
@@ -68,8 +68,9 @@ preset_row() {
     mine && table && /^total / { gpu = $2; mb = $3; table = 0; next }
     mine && table && NF >= 5 { if ($2 + 0 > top_ms) { top_ms = $2 + 0; top = $1 } }
     mine && /^frame wall/ { wall = $3 }
+    mine && /^window frame/ { window = $3 }
     mine && /^per frame:/ { waits = $3; submits = $6; objects = $8 }
-    END { if (gpu != "") printf "| %s | %s | %s | %s | %s | %s | %s | %s %.2f |\n", name, gpu, wall, waits, submits, objects, mb, top, top_ms }
+    END { if (gpu != "") printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s %.2f |\n", name, gpu, wall, window, waits, submits, objects, mb, top, top_ms }
   ' "$LOG" >>"$TABLE"
 }
 for p in presets/*.ron; do
