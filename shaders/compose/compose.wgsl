@@ -34,9 +34,11 @@ struct SkyParams {
 // Per tile: Σ round(log(δ + Lw) · LOG_SCALE), then the count of pixels with Lw > 0.
 @group(0) @binding(13) var<storage, read_write> partials: array<atomic<i32>>;
 
-// Fixed-point steps per unit of log(δ + Lw) (compose/luminance.wgsl divides by it): with
-// |log| < 25 a tile of TILE² pixels sums to less than 2^31.
+// Fixed-point steps per unit of log(δ + Lw) (compose/luminance.wgsl divides by it), and the
+// largest |log| summed (Lw up to e^30 ≈ 10^13; δ keeps it above −9.3): a tile of TILE²
+// pixels then sums to less than 64 · 30 · 2^20 < 2^31, no overflow.
 const LOG_SCALE: f32 = 1048576.0;
+const LOG_LIMIT: f32 = 30.0;
 
 const PI: f32 = 3.14159265358979;
 
@@ -81,7 +83,8 @@ fn cs_compose(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(workgroup_
     let lw = luminance_of(max(c, vec3<f32>(0.0)));
     if (lw > 0.0) {
         let tile = 2u * (wg.y * groups.x + wg.x);
-        atomicAdd(&partials[tile], i32(round(log(1e-4 + lw) * LOG_SCALE)));
+        let l = clamp(log(1e-4 + lw), -LOG_LIMIT, LOG_LIMIT);
+        atomicAdd(&partials[tile], i32(round(l * LOG_SCALE)));
         atomicAdd(&partials[tile + 1u], 1);
     }
 }

@@ -10,13 +10,15 @@ pub fn luminance(c: [f32; 3]) -> f32 {
     0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
 }
 
-/// L̄w = exp(mean log(δ + Lw)) over pixels with Lw > 0 (1 when there are none).
+/// L̄w = exp(mean log(δ + Lw)) over pixels with Lw > 0 (1 when there are none), each log
+/// clamped to ±30 (Lw ≤ e^30 ≈ 10^13) as the GPU's sums are.
 pub fn log_average(hdr: &ImageF32) -> f32 {
     let (mut sum, mut n) = (0.0f64, 0u64);
     for p in &hdr.data {
         let lw = luminance([p[0].max(0.0), p[1].max(0.0), p[2].max(0.0)]);
         if lw > 0.0 {
-            sum += (1e-4 + lw as f64).ln();
+            // ±30 as the GPU's fixed-point sums clamp it (compose.wgsl, LOG_LIMIT).
+            sum += (1e-4 + lw as f64).ln().clamp(-30.0, 30.0);
             n += 1;
         }
     }
