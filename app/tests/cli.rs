@@ -200,6 +200,14 @@ fn buffers_lists_registered_names_and_bench_prints_every_pass() {
     for p in ["vpl.sample", "ism.splat", "interleave.gather", "interleave.filter", "temporal"] {
         assert!(passes.contains(&p), "the default technique's pass {p} is missing from {passes:?}");
     }
+    // Issue #38's per-frame counters, and the window's frame: one submit, no GPU object made
+    // in a steady frame, bytes bound, and a frame time.
+    let number = |k: &str| v[k].as_f64().unwrap_or_else(|| panic!("bench --json lacks {k}: {v}"));
+    assert!(number("blocking_waits_per_frame") >= 1.0, "the command line waits for each frame's timings");
+    assert!(number("submits_per_frame") >= 1.0);
+    assert_eq!(number("objects_created_per_frame"), 0.0);
+    assert!(number("traffic_bytes_per_frame") > 32.0 * 32.0 * 16.0);
+    assert!(number("window_frame_ms") > 0.0);
     let o = gi_lab()
         .args(["bench", "--size", "64x64", "--frames", "2", "--json", "--set", "pipeline.gather=None"])
         .output()
