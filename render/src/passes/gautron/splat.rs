@@ -69,23 +69,20 @@ impl SplatPass {
         let device = &ctx.device;
         let module = crate::shaders::create_module(device, "gautron/splat.wgsl");
         let cs = wgpu::ShaderStages::COMPUTE;
+        let mut entries = input_entries(cs, cs).to_vec();
+        entries.extend([
+            bgl::uniform(5, cs),
+            bgl::storage(6, cs, true),
+            bgl::storage(7, cs, false),
+            bgl::storage(8, cs, false),
+            bgl::texture(9, cs, false),
+            bgl::texture(10, cs, false),
+            bgl::storage_texture(11, ACCUM_FORMAT),
+            bgl::storage_texture(12, ACCUM_FORMAT),
+        ]);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("gautron.splat"),
-            entries: &[
-                bgl::uniform(0, cs),
-                bgl::uniform(1, cs),
-                bgl::storage(2, cs, true),
-                bgl::texture(3, cs, false),
-                bgl::texture(4, cs, false),
-                bgl::uniform(5, cs),
-                bgl::storage(6, cs, true),
-                bgl::storage(7, cs, false),
-                bgl::storage(8, cs, false),
-                bgl::texture(9, cs, false),
-                bgl::texture(10, cs, false),
-                bgl::storage_texture(11, ACCUM_FORMAT),
-                bgl::storage_texture(12, ACCUM_FORMAT),
-            ],
+            entries: &entries,
         });
         let (raster, raster_layout) = raster_pipeline(device, &module);
         let bin = crate::passes::compute_pipeline(device, "gautron.splat.bin", &module, "cs_bin", &[&layout]);
@@ -239,21 +236,19 @@ impl SplatPass {
             &ctx.device,
             "gautron.splat",
             &self.layout,
-            vec![
-                params.as_entire_binding(),
-                camera.as_entire_binding(),
-                records.as_entire_binding(),
-                tv(&g.position),
-                tv(&g.normal),
-                self.tile_params[usize::from(!clear)].as_entire_binding(),
-                args.as_entire_binding(),
-                self.mask.as_entire_binding(),
-                self.rects.as_entire_binding(),
-                tv(&prev),
-                tv(&prev_plain),
-                tv(&out),
-                tv(&out_plain),
-            ],
+            inputs([params, camera, records], g)
+                .into_iter()
+                .chain([
+                    self.tile_params[usize::from(!clear)].as_entire_binding(),
+                    args.as_entire_binding(),
+                    self.mask.as_entire_binding(),
+                    self.rects.as_entire_binding(),
+                    tv(&prev),
+                    tv(&prev_plain),
+                    tv(&out),
+                    tv(&out_plain),
+                ])
+                .collect(),
         );
         enc.clear_buffer(&self.mask, 0, None);
         let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -285,18 +280,11 @@ impl SplatPass {
             self.current.set(0);
         }
         let c = self.current.get();
-        let tv = wgpu::BindingResource::TextureView;
         let group = bind_group(
             &ctx.device,
             "gautron.splat.blend",
             &self.raster_layout,
-            vec![
-                params.as_entire_binding(),
-                camera.as_entire_binding(),
-                records.as_entire_binding(),
-                tv(&g.position),
-                tv(&g.normal),
-            ],
+            inputs([params, camera, records], g).to_vec(),
         );
         let (out, out_plain) =
             (view(&self.accum[c], "gautron.accum"), view(&self.accum_plain[c], "gautron.accum.plain"));
@@ -392,16 +380,9 @@ fn raster_pipeline(
     device: &wgpu::Device,
     module: &wgpu::ShaderModule,
 ) -> (wgpu::RenderPipeline, wgpu::BindGroupLayout) {
-    let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("gautron.splat.blend"),
-        entries: &[
-            bgl::uniform(0, vf),
-            bgl::uniform(1, vf),
-            bgl::storage(2, vf, true),
-            bgl::texture(3, wgpu::ShaderStages::FRAGMENT, false),
-            bgl::texture(4, wgpu::ShaderStages::FRAGMENT, false),
-        ],
+        entries: &input_entries(wgpu::ShaderStages::VERTEX_FRAGMENT, wgpu::ShaderStages::FRAGMENT),
     });
     let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("gautron.splat.blend.layout"),
@@ -440,4 +421,28 @@ fn raster_pipeline(
         cache: None,
     });
     (pipeline, layout)
+}
+
+/// Bindings 0–4 of both methods' layouts: the splat's uniform, the camera and the records
+/// (visible to `buffers`), the G-buffer's position and normal (visible to `textures`).
+fn input_entries(buffers: wgpu::ShaderStages, textures: wgpu::ShaderStages) -> [wgpu::BindGroupLayoutEntry; 5] {
+    [
+        bgl::uniform(0, buffers),
+        bgl::uniform(1, buffers),
+        bgl::storage(2, buffers, true),
+        bgl::texture(3, textures, false),
+        bgl::texture(4, textures, false),
+    ]
+}
+
+/// The resources of [`input_entries`]: (params, camera, records) and the G-buffer.
+fn inputs<'a>([params, camera, records]: [&'a wgpu::Buffer; 3], g: &'a GBufferViews) -> [wgpu::BindingResource<'a>; 5] {
+    let tv = wgpu::BindingResource::TextureView;
+    [
+        params.as_entire_binding(),
+        camera.as_entire_binding(),
+        records.as_entire_binding(),
+        tv(&g.position),
+        tv(&g.normal),
+    ]
 }
