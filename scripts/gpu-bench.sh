@@ -76,10 +76,11 @@ preset_row() {
 for p in presets/*.ron; do
   preset_row "$(basename "$p" .ron)" "$p"
 done
-# Gautron's splat binned in compute (issue #38) against the blended quads above: the default
-# follows what these rows show.
-preset_row gautron-ic-splatting+binned presets/gautron-ic-splatting.ron --set gautron.splat=Binned
-preset_row gautron-vpl-records+binned presets/gautron-vpl-records.ron --set gautron.splat=Binned
+# The splats as the papers' blended quads, against the default above (`Auto`: binned in
+# compute on a GPU, issue #38).
+preset_row gautron-ic-splatting+blend presets/gautron-ic-splatting.ron --set gautron.splat=Blend
+preset_row nguyen-hcb+blend presets/nguyen-hcb.ron --set hcb.splat=Blend
+preset_row nguyen-hcb-cached+blend presets/nguyen-hcb-cached.ron --set hcb.splat=Blend
 row "suite knecht" bench --suite knecht --size "$SIZE" --frames 20
 row "suite nguyen" bench --suite nguyen --size "$SIZE" --frames 20
 row "suite soler" bench --suite soler --size 1280x720 --frames 20

@@ -121,6 +121,9 @@ impl Renderer {
         if let Some(g) = &self.stages.gautron {
             g.register_sums(&mut self.registry);
         }
+        if let Some(h) = &self.stages.hcb {
+            h.register_sums(&mut self.registry);
+        }
 
         // Stage 7: compose direct + indirect and tone map.
         self.sky_background.update(&ctx, &self.scene.sky, self.settings.sky.background);

@@ -29,6 +29,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("common/ism.wgsl", include_str!("../../shaders/common/ism.wgsl")),
     ("common/bounce.wgsl", include_str!("../../shaders/common/bounce.wgsl")),
     ("common/reproject.wgsl", include_str!("../../shaders/common/reproject.wgsl")),
+    ("common/bins.wgsl", include_str!("../../shaders/common/bins.wgsl")),
     ("vpl/importance.wgsl", include_str!("../../shaders/vpl/importance.wgsl")),
     ("vpl/reduce.wgsl", include_str!("../../shaders/vpl/reduce.wgsl")),
     ("vpl/warp.wgsl", include_str!("../../shaders/vpl/warp.wgsl")),

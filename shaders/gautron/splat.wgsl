@@ -9,41 +9,26 @@
 //
 // `gautron.splat`: Blend, the text's way: vs_splat/fs_splat draw one quad per record, added by
 // blending (GL_ONE, GL_ONE). Binned, GI Lab's (issue #38: the quads' overdraw into 128-bit
-// blended targets is the splat's cost on a GPU): cs_bin marks each record in a bit mask of every BIN² pixel square its rectangle overlaps;
-// cs_accumulate (an 8×8 workgroup inside one square) keeps the records whose rectangle
-// overlaps its pixels, then each pixel adds them in increasing record index, the order in
-// which the blending added the instances, so that the sums are the same. A later round adds
-// its new records to the previous sums (read from the other texture of a ping-pong pair).
+// blended targets is the splat's cost on a GPU): cs_bin marks each record in the squares its
+// rectangle overlaps, cs_accumulate adds each pixel's records in increasing index, the order
+// in which the blending added the instances, so that the sums are the same
+// (common/bins.wgsl). A later round adds its new records to the previous sums (read from the
+// other texture of a ping-pong pair).
 #import gautron/common.wgsl
 #import common/camera.wgsl
-
-// Rust twin: passes::gautron::splat::TileParams.
-struct TileParams {
-    // x: squares across, y: squares down, z: mask words per square (capacity / 32), w: BIN
-    bins: vec4<u32>,
-    // x: 1 to add to the sums read from prev_* (a later round), 0 to start from zero
-    mode: vec4<u32>,
-}
-
-// Most mask words per square: `gautron.capacity` ≤ 65,536 records.
-const MAX_WORDS: u32 = 2048u;
+#import common/bins.wgsl
 
 @group(0) @binding(0) var<uniform> params: GautronParams;
 @group(0) @binding(1) var<uniform> camera: Camera;
 @group(0) @binding(2) var<storage, read> records: array<Record>;
 @group(0) @binding(3) var g_position: texture_2d<f32>;
 @group(0) @binding(4) var g_normal: texture_2d<f32>;
-@group(0) @binding(5) var<uniform> tiles: TileParams;
 // The draw arguments the creation writes: (6, count, 0, first record).
-@group(0) @binding(6) var<storage, read> args: array<u32, 4>;
-// Per square, one bit per record: bit k of word k / 32.
-@group(0) @binding(7) var<storage, read_write> mask: array<atomic<u32>>;
-// Per record, its rectangle in NDC (x0, y0, x1, y1; empty when x0 > x1).
-@group(0) @binding(8) var<storage, read_write> rects: array<vec4<f32>>;
-@group(0) @binding(9) var prev_weighted: texture_2d<f32>;
-@group(0) @binding(10) var prev_plain: texture_2d<f32>;
-@group(0) @binding(11) var out_weighted: texture_storage_2d<rgba32float, write>;
-@group(0) @binding(12) var out_plain: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(5) var<storage, read> args: array<u32, 4>;
+@group(0) @binding(6) var prev_weighted: texture_2d<f32>;
+@group(0) @binding(7) var prev_plain: texture_2d<f32>;
+@group(0) @binding(8) var out_weighted: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(9) var out_plain: texture_storage_2d<rgba32float, write>;
 
 // The NDC interval [lo, hi] of a circle (centre (c, d) with d the distance in front of the
 // eye, radius ρ) seen from the eye along one axis; scale is P00 or P11.
@@ -135,78 +120,32 @@ fn centre_ndc(x: f32, y: f32) -> vec2<f32> {
     return vec2<f32>((x + 0.5) * camera.viewport.z * 2.0 - 1.0, 1.0 - (y + 0.5) * camera.viewport.w * 2.0);
 }
 
+// Binned: record args[3] + j into the squares of its rectangle.
 @compute @workgroup_size(64, 1, 1)
 fn cs_bin(@builtin(global_invocation_id) gid: vec3<u32>) {
     let index = args[3] + gid.x;
-    if (gid.x >= args[1] || index >= arrayLength(&records)) {
+    if (gid.x >= min(args[1], bins_capacity()) || index >= arrayLength(&records)) {
         return;
     }
-    let r = splat_rect(records[index]);
-    rects[index] = r;
-    if (r.x > r.z || r.y > r.w) {
-        return;
-    }
-    // The pixels whose centres may lie inside, one pixel wider on each side (conservative).
-    let size = camera.viewport.xy;
-    let x0 = (r.x + 1.0) * 0.5 * size.x - 1.5;
-    let x1 = (r.z + 1.0) * 0.5 * size.x + 0.5;
-    let y0 = (1.0 - r.w) * 0.5 * size.y - 1.5;
-    let y1 = (1.0 - r.y) * 0.5 * size.y + 0.5;
-    let last = vec2<f32>(size - 1.0);
-    let lo = vec2<u32>(clamp(vec2<f32>(x0, y0), vec2<f32>(0.0), last)) / tiles.bins.w;
-    let hi = vec2<u32>(clamp(vec2<f32>(x1, y1), vec2<f32>(0.0), last)) / tiles.bins.w;
-    let word = index / 32u;
-    let bit = 1u << (index % 32u);
-    for (var by = lo.y; by <= min(hi.y, tiles.bins.y - 1u); by = by + 1u) {
-        for (var bx = lo.x; bx <= min(hi.x, tiles.bins.x - 1u); bx = bx + 1u) {
-            atomicOr(&mask[(by * tiles.bins.x + bx) * tiles.bins.z + word], bit);
-        }
-    }
+    bins_mark(gid.x, splat_rect(records[index]), camera.viewport.xy);
 }
 
-// The square's records that overlap this workgroup's pixels, and which of those words are
-// not empty (one bit per word).
-var<workgroup> kept: array<u32, MAX_WORDS>;
-var<workgroup> summary: array<atomic<u32>, 64>;
-
+// Binned: each pixel adds the records of its square that reach it, in increasing index.
 @compute @workgroup_size(16, 16, 1)
 fn cs_accumulate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
     let size = textureDimensions(out_weighted);
     let origin = wg.xy * 16u;
-    let square = (origin.y / tiles.bins.w) * tiles.bins.x + origin.x / tiles.bins.w;
-    // Only the words of this splat's records (the creation's arguments: first + count).
-    let words = min(min(tiles.bins.z, MAX_WORDS), (args[3] + args[1] + 31u) / 32u);
     // The NDC range of the workgroup's pixel centres (y: top is the larger).
     let a = centre_ndc(f32(origin.x), f32(origin.y));
     let b = centre_ndc(f32(origin.x + 15u), f32(origin.y + 15u));
-    if (li < 64u) {
-        atomicStore(&summary[li], 0u);
-    }
-    workgroupBarrier();
-    for (var w = li; w < words; w = w + 256u) {
-        var m = atomicLoad(&mask[square * tiles.bins.z + w]);
-        var keep = 0u;
-        while (m != 0u) {
-            let j = firstTrailingBit(m);
-            m = m & (m - 1u);
-            let r = rects[w * 32u + j];
-            if (r.x <= b.x && r.z >= a.x && r.y <= a.y && r.w >= b.y) {
-                keep = keep | (1u << j);
-            }
-        }
-        kept[w] = keep;
-        if (keep != 0u) {
-            atomicOr(&summary[w / 32u], 1u << (w % 32u));
-        }
-    }
-    workgroupBarrier();
+    let words = bins_collect(li, origin, args[1], a, b);
     if (gid.x >= size.x || gid.y >= size.y) {
         return;
     }
     let px = vec2<i32>(gid.xy);
     var weighted = vec4<f32>(0.0);
     var plain = vec4<f32>(0.0);
-    if (tiles.mode.x == 1u) {
+    if (bin_params.mode.x == 1u) {
         weighted = textureLoad(prev_weighted, px, 0);
         plain = textureLoad(prev_plain, px, 0);
     }
@@ -217,29 +156,16 @@ fn cs_accumulate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_i
         let c = centre_ndc(f32(gid.x), f32(gid.y));
         let rotational = params.weight.z > 0.5;
         let translational = params.weight.w > 0.5;
-        for (var s = 0u; s < (words + 31u) / 32u; s = s + 1u) {
-            var sw = atomicLoad(&summary[s]);
-            while (sw != 0u) {
-                let w = s * 32u + firstTrailingBit(sw);
-                sw = sw & (sw - 1u);
-                var m = kept[w];
-                while (m != 0u) {
-                    let index = w * 32u + firstTrailingBit(m);
-                    m = m & (m - 1u);
-                    let r = rects[index];
-                    if (c.x < r.x || c.x > r.z || c.y < r.y || c.y > r.w) {
-                        continue;
-                    }
-                    let rec = records[index];
-                    let wk = ward_weight(rec, p, n, params.weight.y);
-                    if (wk <= 1.0 / params.weight.x) {
-                        continue;
-                    }
-                    let e = extrapolate(rec, p, n, rotational, translational);
-                    weighted = weighted + vec4<f32>(wk * e, wk);
-                    plain = plain + vec4<f32>(wk * rec.irradiance.rgb, wk);
-                }
+        var cursor = bins_start(words);
+        for (var j = bins_next(&cursor, c); j != BIN_NONE; j = bins_next(&cursor, c)) {
+            let rec = records[args[3] + j];
+            let wk = ward_weight(rec, p, n, params.weight.y);
+            if (wk <= 1.0 / params.weight.x) {
+                continue;
             }
+            let e = extrapolate(rec, p, n, rotational, translational);
+            weighted = weighted + vec4<f32>(wk * e, wk);
+            plain = plain + vec4<f32>(wk * rec.irradiance.rgb, wk);
         }
     }
     textureStore(out_weighted, px, weighted);

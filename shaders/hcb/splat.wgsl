@@ -4,8 +4,16 @@
 // times the sample's light in rgb and the weight in alpha, summed by additive blending
 // (`hcb.weight_sum`). cs_normalize then divides (Eq. 11). CPU twin: cpu::hcb::{coherence_errors,
 // weight}.
+//
+// `hcb.splat`: Blend, the paper's way: vs_splat/fs_splat, one quad per sample. Binned, GI
+// Lab's (issue #38: the quads' overdraw into a 128-bit blended target is the HCB's cost on a
+// GPU): cs_bin marks each sample in the 64-pixel squares its quad overlaps, cs_accumulate adds
+// each pixel's samples in increasing index, the blending's order, so that the sums are the
+// same (common/bins.wgsl). Samples beyond the bins' 65,536 are drawn as quads after them
+// (cs_bin writes their draw's arguments into `rest`).
 #import common/camera.wgsl
 #import hcb/common.wgsl
+#import common/bins.wgsl
 
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(0) @binding(1) var<uniform> hp: HcbParams;
@@ -14,6 +22,12 @@
 @group(0) @binding(4) var g_normal: texture_2d<f32>;
 // the sample counter: word 1 is where the new samples start (§5.2; hp.level.x = 1)
 @group(0) @binding(5) var<storage, read> counter: array<u32>;
+// Binned only: the splat's draw arguments (hcb_args: word 1 the count of every sample, word 9
+// of the new ones), the sums to add to (hp.level.x = 1), the sums, the remainder's draw.
+@group(0) @binding(6) var<storage, read> args: array<u32>;
+@group(0) @binding(7) var prev_sum: texture_2d<f32>;
+@group(0) @binding(8) var out_sum: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(9) var<storage, read_write> rest: array<u32, 4>;
 
 struct VsOut {
     @builtin(position) clip: vec4<f32>,
@@ -25,36 +39,32 @@ fn vs_splat(@builtin(vertex_index) v: u32, @builtin(instance_index) instance: u3
     var out: VsOut;
     let i = instance + select(0u, counter[1], hp.level.x == 1u);
     out.index = i;
-    let s = samples[i];
-    let corner = quad_corner(v);
+    let rect = splat_rect(samples[i]);
+    out.clip = vec4<f32>(select(rect.xy, rect.zw, quad_corner(v) > vec2<f32>(0.0)), 0.5, 1.0);
+    return out;
+}
+
+// The sample's quad in NDC (x0, y0, x1, y1): the whole screen when its sphere holds the eye.
+// Half-size: the tangent of the sphere's angular radius at its view depth (r / √(d² − r²),
+// larger than at its distance), stretched by distance / depth for its off-axis ellipse, in
+// pixels, plus one.
+fn splat_rect(s: HcbSample) -> vec4<f32> {
     let depth = -(camera.view * vec4<f32>(s.position.xyz, 1.0)).z;
     let c = camera.view_proj * vec4<f32>(s.position.xyz, 1.0);
     if (depth <= s.position.w || c.w <= 0.0) {
-        // The sphere holds the eye: the whole screen.
-        out.clip = vec4<f32>(corner, 0.5, 1.0);
-        return out;
+        return vec4<f32>(-1.0, -1.0, 1.0, 1.0);
     }
-    // Half-size: the tangent of the sphere's angular radius at its view depth (r / √(d² − r²),
-    // larger than at its distance), stretched by distance / depth for its off-axis ellipse,
-    // in pixels, plus one.
     let r = s.position.w / sqrt(depth * depth - s.position.w * s.position.w);
     let stretch = length(s.position.xyz - camera.position.xyz) / depth;
     let half_px = r * stretch / hp.thresholds.w + 1.0;
     let half = vec2<f32>(half_px * 2.0 * camera.viewport.z, half_px * 2.0 * camera.viewport.w);
-    out.clip = vec4<f32>(c.xy / c.w + corner * half, 0.5, 1.0);
-    return out;
+    let centre = c.xy / c.w;
+    return vec4<f32>(centre - half, centre + half);
 }
 
-@fragment
-fn fs_splat(in: VsOut) -> @location(0) vec4<f32> {
-    let px = vec2<i32>(in.clip.xy);
-    let nb = textureLoad(g_normal, px, 0);
-    if (nb.w < 0.5) {
-        discard;
-    }
-    let b = textureLoad(g_position, px, 0).xyz;
-    let n_b = normalize(nb.xyz);
-    let s = samples[in.index];
+// Sample s's splat at the pixel whose visible point is b with normal n_b: rgb w·E, a w
+// (Eq. 10); a = −1 where b is not coherent to s (Eq. 9).
+fn splat_value(s: HcbSample, b: vec3<f32>, n_b: vec3<f32>) -> vec4<f32> {
     let a = s.position.xyz;
     let n_a = s.normal.xyz;
     let d = b - a;
@@ -71,8 +81,81 @@ fn fs_splat(in: VsOut) -> @location(0) vec4<f32> {
         }
     }
     if (max(e1, max(e2, e3)) > 1.0) {
-        discard;
+        return vec4<f32>(0.0, 0.0, 0.0, -1.0);
     }
     let w = (1.0 - e1) * (1.0 - e2) * (1.0 - e3);
     return vec4<f32>(w * s.light.rgb, w);
+}
+
+@fragment
+fn fs_splat(in: VsOut) -> @location(0) vec4<f32> {
+    let px = vec2<i32>(in.clip.xy);
+    let nb = textureLoad(g_normal, px, 0);
+    if (nb.w < 0.5) {
+        discard;
+    }
+    let v = splat_value(samples[in.index], textureLoad(g_position, px, 0).xyz, normalize(nb.xyz));
+    if (v.a < 0.0) {
+        discard;
+    }
+    return v;
+}
+
+// The samples of this splat: (first index, count).
+fn splat_range() -> vec2<u32> {
+    let new_only = hp.level.x == 1u;
+    return vec2<u32>(select(0u, counter[1], new_only), args[select(1u, 9u, new_only)]);
+}
+
+// NDC of pixel centre (x, y) (y down in pixels, up in NDC).
+fn centre_ndc(x: f32, y: f32) -> vec2<f32> {
+    return vec2<f32>((x + 0.5) * camera.viewport.z * 2.0 - 1.0, 1.0 - (y + 0.5) * camera.viewport.w * 2.0);
+}
+
+// Binned: sample first + j into the squares of its quad; the samples beyond the bins'
+// capacity into the remainder's draw (first instance: the capacity).
+@compute @workgroup_size(64, 1, 1)
+fn cs_bin(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let range = splat_range();
+    let binned = min(range.y, bins_capacity());
+    if (gid.x == 0u) {
+        rest = array<u32, 4>(6u, range.y - binned, 0u, bins_capacity());
+    }
+    if (gid.x >= binned) {
+        return;
+    }
+    bins_mark(gid.x, splat_rect(samples[range.x + gid.x]), camera.viewport.xy);
+}
+
+// Binned: each pixel adds the samples of its square that reach it, in increasing index.
+@compute @workgroup_size(16, 16, 1)
+fn cs_accumulate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    let size = textureDimensions(out_sum);
+    let range = splat_range();
+    let origin = wg.xy * 16u;
+    let lo = centre_ndc(f32(origin.x), f32(origin.y));
+    let hi = centre_ndc(f32(origin.x + 15u), f32(origin.y + 15u));
+    let words = bins_collect(li, origin, range.y, lo, hi);
+    if (gid.x >= size.x || gid.y >= size.y) {
+        return;
+    }
+    let px = vec2<i32>(gid.xy);
+    var sum = vec4<f32>(0.0);
+    if (bin_params.mode.x == 1u) {
+        sum = textureLoad(prev_sum, px, 0);
+    }
+    let nb = textureLoad(g_normal, px, 0);
+    if (nb.w >= 0.5) {
+        let b = textureLoad(g_position, px, 0).xyz;
+        let n_b = normalize(nb.xyz);
+        let c = centre_ndc(f32(gid.x), f32(gid.y));
+        var cursor = bins_start(words);
+        for (var j = bins_next(&cursor, c); j != BIN_NONE; j = bins_next(&cursor, c)) {
+            let v = splat_value(samples[range.x + j], b, n_b);
+            if (v.a >= 0.0) {
+                sum = sum + v;
+            }
+        }
+    }
+    textureStore(out_sum, px, sum);
 }

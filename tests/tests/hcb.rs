@@ -6,6 +6,7 @@
 use gi_lab_tests::{default_renderer, gpu, texture_from_bytes};
 use gi_render::GpuContext;
 use gi_render::cpu::hcb::{self, Level, Sample, Thresholds};
+use gi_render::passes::bins::SplatMethod;
 use gi_render::passes::hcb::{GpuHcbSample, HcbFrame, HcbPass};
 use glam::Vec3;
 
@@ -371,8 +372,10 @@ fn splat_scene(w: u32, h: u32) -> (gi_render::passes::CameraUniform, Vec<[f32; 4
     (camera, pos, nrm, pixel_scale)
 }
 
-/// Splats `samples` over the G-buffer on the GPU; returns `hcb.weight_sum`, `hcb.irradiance`
-/// and the uncovered count.
+/// Splats `samples` over the G-buffer on the GPU by `method` (binned into at most `bins`
+/// items, the rest drawn as quads); returns `hcb.weight_sum`, `hcb.irradiance` and the
+/// uncovered count.
+#[allow(clippy::too_many_arguments)]
 fn gpu_splat(
     w: u32,
     h: u32,
@@ -381,6 +384,7 @@ fn gpu_splat(
     camera: &gi_render::passes::CameraUniform,
     samples: &[GpuHcbSample],
     frame: HcbFrame,
+    (method, bins): (SplatMethod, u32),
 ) -> (Vec<[f32; 4]>, Vec<[f32; 4]>, u32) {
     use gi_render::passes::hcb::HcbSplatPass;
     use wgpu::util::DeviceExt;
@@ -391,19 +395,24 @@ fn gpu_splat(
     };
     let cam = buf("test.camera", bytemuck::bytes_of(camera), wgpu::BufferUsages::UNIFORM);
     let list = buf("test.samples", bytemuck::cast_slice(samples), wgpu::BufferUsages::STORAGE);
-    let args =
-        buf("test.args", bytemuck::cast_slice(&[6u32, samples.len() as u32, 0, 0]), wgpu::BufferUsages::INDIRECT);
+    let args = buf(
+        "test.args",
+        bytemuck::cast_slice(&[6u32, samples.len() as u32, 0, 0]),
+        wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::STORAGE,
+    );
     let counter = buf("test.counter", &[0u8; 32], wgpu::BufferUsages::STORAGE);
-    let pass = HcbSplatPass::new(&ctx, gi_render::passes::bgl::uniform(0, wgpu::ShaderStages::VERTEX), w, h);
+    let mut pass = HcbSplatPass::new(&ctx, gi_render::passes::bgl::uniform(0, wgpu::ShaderStages::VERTEX), w, h);
+    pass.limit_bins(&ctx, bins);
     let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.splat") });
     let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
     let white = upload(&ctx, "test.albedo", w, h, &vec![[1.0; 4]; (w * h) as usize]);
-    pass.run(&ctx, &mut enc, None, &cam, (&view(&p), &view(&n), &view(&white)), (&list, &counter), &args, frame);
+    let g = (&view(&p), &view(&n), &view(&white));
+    pass.run(&ctx, &mut enc, None, &cam, g, (&list, &counter), &args, frame, method);
     ctx.queue.submit([enc.finish()]);
     let read = |t: &wgpu::Texture| gi_render::buffers::read_texture(&ctx, "hcb", t, 0, 0).expect("read").data;
     let uncovered: Vec<u32> =
         bytemuck::pod_collect_to_vec(&gi_render::buffers::read_storage(&ctx, &pass.uncovered, 16).expect("count"));
-    (read(&pass.weight_sum), read(&pass.irradiance), uncovered[0])
+    (read(pass.weight_sum()), read(&pass.irradiance), uncovered[0])
 }
 
 fn splat_samples(w: u32, pos: &[[f32; 4]], nrm: &[[f32; 4]], light: impl Fn(usize) -> Vec3) -> Vec<GpuHcbSample> {
@@ -433,6 +442,12 @@ fn splat_samples(w: u32, pos: &[[f32; 4]], nrm: &[[f32; 4]], light: impl Fn(usiz
 
 #[test]
 fn splat_weights_on_the_gpu_equal_eq_8_and_10_on_the_cpu() {
+    for method in [SplatMethod::Blend, SplatMethod::Binned] {
+        splat_weights_match_the_cpu(method);
+    }
+}
+
+fn splat_weights_match_the_cpu(method: SplatMethod) {
     let (w, h) = (48, 36);
     let (camera, pos, nrm, pixel_scale) = splat_scene(w, h);
     let t = Thresholds {
@@ -444,7 +459,7 @@ fn splat_weights_on_the_gpu_equal_eq_8_and_10_on_the_cpu() {
     let frame = HcbFrame::new(t, Vec3::ZERO, pixel_scale);
     let samples = splat_samples(w, &pos, &nrm, |k| Vec3::new(1.0 + k as f32, 0.5, 2.0 - 0.2 * k as f32));
     assert!(samples.len() >= 6, "the picked pixels are covered");
-    let (sum, light, uncovered) = gpu_splat(w, h, &pos, &nrm, &camera, &samples, frame);
+    let (sum, light, uncovered) = gpu_splat(w, h, &pos, &nrm, &camera, &samples, frame, (method, w * h));
     let (mut reached, mut rejected) = (0, 0);
     let mut covered_unreached = 0;
     for i in 0..(w * h) as usize {
@@ -499,7 +514,7 @@ fn splatting_a_constant_light_gives_that_constant_wherever_a_sample_reaches() {
     let frame = HcbFrame::new(t, Vec3::ZERO, pixel_scale);
     let e = Vec3::new(0.7, 0.25, 1.5);
     let samples = splat_samples(w, &pos, &nrm, |_| e);
-    let (sum, light, _) = gpu_splat(w, h, &pos, &nrm, &camera, &samples, frame);
+    let (sum, light, _) = gpu_splat(w, h, &pos, &nrm, &camera, &samples, frame, (SplatMethod::Blend, w * h));
     let mut lit = 0;
     for i in 0..(w * h) as usize {
         if sum[i][3] > 0.0 {
@@ -508,6 +523,43 @@ fn splatting_a_constant_light_gives_that_constant_wherever_a_sample_reaches() {
         }
     }
     assert!(lit > 200, "{lit} pixels reached");
+}
+
+/// The splat binned in compute (GI Lab, issue #38) gives the blended quads' sums (the paper's
+/// additive blending) bit for bit: the same samples added in the same order at every pixel,
+/// also when the bins hold fewer samples than the splat has and the rest are drawn as quads.
+#[test]
+fn the_binned_splat_equals_the_blended_quads() {
+    let (w, h) = (48, 36);
+    let (camera, pos, nrm, pixel_scale) = splat_scene(w, h);
+    let t = Thresholds { cos_theta_max: 0.9, cos_gamma_max: 0.2, d_max: 10.0, spread_incomplete: false };
+    let frame = HcbFrame::new(t, Vec3::ZERO, pixel_scale);
+    // A sample every 11th covered pixel, of radii 0.05 to 0.6: overlapping splats of many sizes.
+    let samples: Vec<GpuHcbSample> = (0..(w * h) as usize)
+        .filter(|&i| nrm[i][3] > 0.5 && i % 11 == 0)
+        .enumerate()
+        .map(|(k, i)| GpuHcbSample {
+            position: glam::Vec4::new(pos[i][0], pos[i][1], pos[i][2], 0.05 + 0.05 * (k % 12) as f32),
+            normal: glam::Vec4::new(nrm[i][0], nrm[i][1], nrm[i][2], 1.0),
+            texel: [i as u32 % w, i as u32 / w, 0, 0],
+            light: Vec3::new(0.3 + 0.1 * (k % 7) as f32, 1.0 / (1.0 + k as f32), 0.01 * k as f32).extend(1.0),
+        })
+        .collect();
+    assert!(samples.len() > 100, "{} samples", samples.len());
+    let run = |method| gpu_splat(w, h, &pos, &nrm, &camera, &samples, frame, method);
+    let blend = run((SplatMethod::Blend, w * h));
+    let bits = |v: &[[f32; 4]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+    let reached = blend.0.iter().filter(|p| p[3] > 0.0).count();
+    assert!(reached > 1000, "{reached} pixels reached");
+    // All samples binned, then 32 binned and the rest as quads.
+    for bins in [w * h, 32] {
+        let binned = run((SplatMethod::Binned, bins));
+        for (name, a, b) in [("weight_sum", &blend.0, &binned.0), ("irradiance", &blend.1, &binned.1)] {
+            let differ = bits(a).iter().zip(bits(b)).filter(|(x, y)| **x != *y).count();
+            assert_eq!(differ, 0, "hcb.{name} with {bins} binned: {differ} channels differ");
+        }
+        assert_eq!(blend.2, binned.2, "uncovered pixels");
+    }
 }
 
 /// The `nguyen-hcb` preset on the default scene at `size`², paused, with `edit`.

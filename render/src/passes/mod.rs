@@ -13,6 +13,7 @@
 
 use crate::counters::prelude::*;
 
+pub mod bins;
 pub mod compose;
 pub mod direct;
 pub mod emitters;

@@ -11,6 +11,8 @@ use glam::{Mat4, Vec4};
 
 use crate::{settings_enum, settings_group};
 
+pub use crate::passes::bins::SplatMethod;
+
 pub mod at_samples;
 pub mod hemisphere;
 pub mod splat;
@@ -65,21 +67,6 @@ settings_enum! {
         Refresh = "refresh in place",
     }
     default Refresh
-}
-
-settings_enum! {
-    /// How the records' weighted irradiance is summed at the pixels ("From Octree to
-    /// Splatting": "Principle"); both give the same sums, in the same order.
-    pub enum SplatMethod {
-        /// One quad per record, added by blending into float targets (the text's
-        /// `GL_ONE, GL_ONE`): the cost is the quads' overdraw.
-        Blend = "blended quads (the text)",
-        /// The records binned into 64-pixel squares in compute, each pixel summing the
-        /// records of its square (GI Lab, issue #38: no overdraw nor blending; on lavapipe
-        /// about 5× slower than the blending, docs/performance.md).
-        Binned = "binned in compute (GI Lab)",
-    }
-    default Blend
 }
 
 settings_group! {
@@ -150,8 +137,8 @@ settings_group! {
         invalidation: Invalidation = Invalidation::Refresh,
         unit "", symbol "", range 0..=1, cost "refresh: one hemisphere per stale record", history false;
         /// How the splat sums the records at the pixels.
-        splat: SplatMethod = SplatMethod::Blend,
-        unit "", symbol "", range 0..=1, cost "blend: the quads' overdraw; binned: one pass over the screen per splat", history false;
+        splat: SplatMethod = SplatMethod::Auto,
+        unit "", symbol "", range 0..=2, cost "blend: the quads' overdraw; binned: one pass over the screen per splat", history false;
     }
 }
 

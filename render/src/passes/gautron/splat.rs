@@ -1,8 +1,8 @@
 //! Irradiance splatting and its resolve (Gautron et al. 003, "From Octree to Splatting":
 //! "Principle"): each record's bounding rectangle, Ward's weight per covered pixel, RGB = w·E
-//! and A = w added into float targets (the text's additive blending, here binned into
-//! 64-pixel squares and summed per pixel in compute, in the blending's order: see
-//! `gautron/splat.wgsl`), then E = RGB / A and the diffuse reflection c·DI·E/π. Shaders `gautron/splat.wgsl`,
+//! and A = w added into float targets (the text's additive blending, or binned into 64-pixel
+//! squares and summed per pixel in compute, in the blending's order: `passes::bins`), then
+//! E = RGB / A and the diffuse reflection c·DI·E/π. Shaders `gautron/splat.wgsl`,
 //! `gautron/resolve.wgsl`; twin `cpu::gautron::{sphere_ndc_rect, accumulate}`.
 
 use std::cell::Cell;
@@ -11,25 +11,11 @@ use crate::counters::prelude::*;
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::passes::gautron::SplatMethod;
+use crate::passes::bins::{Bins, SplatMethod};
 use crate::passes::gbuffer::GBufferViews;
 use crate::passes::{bgl, bind_group, create_target, view};
 
 pub const ACCUM_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
-
-/// Side in pixels of the squares the records are binned into (a multiple of the 8×8
-/// accumulation workgroup).
-pub const BIN: u32 = 64;
-
-/// Rust twin of `TileParams` in `shaders/gautron/splat.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct TileParams {
-    /// Squares across and down, mask words per square, `BIN`.
-    pub bins: [u32; 4],
-    /// x: 1 to add to the previous sums, 0 to start from zero.
-    pub mode: [u32; 4],
-}
 
 pub struct SplatPass {
     /// Blend: one quad per record.
@@ -39,16 +25,11 @@ pub struct SplatPass {
     bin: wgpu::ComputePipeline,
     accumulate: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
+    bins: Bins,
+    /// Records the bins are sized for.
+    capacity: u32,
     resolve: wgpu::ComputePipeline,
     resolve_layout: wgpu::BindGroupLayout,
-    /// `TileParams` to start from zero (0) and to add (1).
-    tile_params: [wgpu::Buffer; 2],
-    /// One bit per record per square (cleared before each splat).
-    mask: wgpu::Buffer,
-    /// Each record's rectangle in NDC.
-    rects: wgpu::Buffer,
-    /// (squares across, down, words per square) the mask and `tile_params` are sized for.
-    bins: (u32, u32, u32),
     /// Σ w·E (rgb, with the gradients as set) and Σ w (a), a ping-pong pair:
     /// `gautron.accum` is `accum[current]`.
     accum: [wgpu::Texture; 2],
@@ -71,23 +52,22 @@ impl SplatPass {
         let cs = wgpu::ShaderStages::COMPUTE;
         let mut entries = input_entries(cs, cs).to_vec();
         entries.extend([
-            bgl::uniform(5, cs),
-            bgl::storage(6, cs, true),
-            bgl::storage(7, cs, false),
-            bgl::storage(8, cs, false),
-            bgl::texture(9, cs, false),
-            bgl::texture(10, cs, false),
-            bgl::storage_texture(11, ACCUM_FORMAT),
-            bgl::storage_texture(12, ACCUM_FORMAT),
+            bgl::storage(5, cs, true),
+            bgl::texture(6, cs, false),
+            bgl::texture(7, cs, false),
+            bgl::storage_texture(8, ACCUM_FORMAT),
+            bgl::storage_texture(9, ACCUM_FORMAT),
         ]);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("gautron.splat"),
             entries: &entries,
         });
         let (raster, raster_layout) = raster_pipeline(device, &module);
-        let bin = crate::passes::compute_pipeline(device, "gautron.splat.bin", &module, "cs_bin", &[&layout]);
+        let bins = Bins::new(ctx, "gautron.splat.bins");
+        let layouts = [&layout, bins.layout()];
+        let bin = crate::passes::compute_pipeline(device, "gautron.splat.bin", &module, "cs_bin", &layouts);
         let accumulate =
-            crate::passes::compute_pipeline(device, "gautron.splat.accumulate", &module, "cs_accumulate", &[&layout]);
+            crate::passes::compute_pipeline(device, "gautron.splat.accumulate", &module, "cs_accumulate", &layouts);
         let resolve_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("gautron.resolve"),
             entries: &[
@@ -108,23 +88,16 @@ impl SplatPass {
             &[&resolve_layout],
         );
         let (accum, accum_plain, indirect, irradiance, plain) = targets(device, width, height);
-        let tile_params = [
-            crate::passes::uniform_buffer(device, "gautron.splat.tiles.clear", 32),
-            crate::passes::uniform_buffer(device, "gautron.splat.tiles.add", 32),
-        ];
-        let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
         let mut pass = Self {
             raster,
             raster_layout,
             bin,
             accumulate,
             layout,
+            bins,
+            capacity: 1,
             resolve,
             resolve_layout,
-            tile_params,
-            mask: crate::passes::buffer(device, "gautron.splat.mask", 4, storage),
-            rects: crate::passes::buffer(device, "gautron.splat.rects", 16, storage),
-            bins: (0, 0, 0),
             accum,
             accum_plain,
             current: Cell::new(0),
@@ -144,27 +117,14 @@ impl SplatPass {
         (self.accum, self.accum_plain, self.indirect, self.irradiance, self.plain) =
             targets(&ctx.device, width, height);
         self.current.set(0);
-        let records = self.rects.size() / 16;
-        self.ensure_bins(ctx, records as u32);
+        self.bins.ensure(ctx, width, height, self.capacity);
         true
     }
 
-    /// Sizes the bins' mask and the rectangles for `capacity` records at the current size.
+    /// Sizes the bins for `capacity` records at the current size.
     pub fn ensure_bins(&mut self, ctx: &GpuContext, capacity: u32) {
-        let (w, h) = (self.accum[0].width(), self.accum[0].height());
-        let bins = (w.div_ceil(BIN), h.div_ceil(BIN), capacity.max(1).div_ceil(32));
-        if bins == self.bins && self.rects.size() / 16 == capacity.max(1) as u64 {
-            return;
-        }
-        self.bins = bins;
-        let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
-        let words = bins.0 as u64 * bins.1 as u64 * bins.2 as u64;
-        self.mask = crate::passes::buffer(&ctx.device, "gautron.splat.mask", words * 4, storage);
-        self.rects = crate::passes::buffer(&ctx.device, "gautron.splat.rects", capacity.max(1) as u64 * 16, storage);
-        for (mode, buffer) in self.tile_params.iter().enumerate() {
-            let p = TileParams { bins: [bins.0, bins.1, bins.2, BIN], mode: [mode as u32, 0, 0, 0] };
-            ctx.queue.write_buffer(buffer, 0, bytemuck::bytes_of(&p));
-        }
+        self.capacity = capacity.max(1);
+        self.bins.ensure(ctx, self.accum[0].width(), self.accum[0].height(), self.capacity);
     }
 
     pub fn register(&self, reg: &mut BufferRegistry) {
@@ -223,7 +183,7 @@ impl SplatPass {
         args: &wgpu::Buffer,
     ) {
         let tv = wgpu::BindingResource::TextureView;
-        if method == SplatMethod::Blend {
+        if method.on(ctx) == SplatMethod::Blend {
             self.blend(ctx, enc, slot, clear, [params, camera, records], g, args);
             return;
         }
@@ -238,29 +198,12 @@ impl SplatPass {
             &self.layout,
             inputs([params, camera, records], g)
                 .into_iter()
-                .chain([
-                    self.tile_params[usize::from(!clear)].as_entire_binding(),
-                    args.as_entire_binding(),
-                    self.mask.as_entire_binding(),
-                    self.rects.as_entire_binding(),
-                    tv(&prev),
-                    tv(&prev_plain),
-                    tv(&out),
-                    tv(&out_plain),
-                ])
+                .chain([args.as_entire_binding(), tv(&prev), tv(&prev_plain), tv(&out), tv(&out_plain)])
                 .collect(),
         );
-        enc.clear_buffer(&self.mask, 0, None);
-        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("gautron.splat"),
-            timestamp_writes: slot.and_then(|s| s.compute(true, true)),
-        });
-        pass.set_group(0, &group, &[]);
-        pass.set_pipeline(&self.bin);
-        pass.dispatch_workgroups(((self.rects.size() / 16) as u32).div_ceil(64), 1, 1);
-        pass.set_pipeline(&self.accumulate);
-        let (w, h) = (self.accum[0].width(), self.accum[0].height());
-        pass.dispatch_workgroups(w.div_ceil(16), h.div_ceil(16), 1);
+        let size = (self.accum[0].width(), self.accum[0].height());
+        let timestamps = slot.and_then(|s| s.compute(true, true));
+        self.bins.splat(ctx, enc, "gautron.splat", timestamps, (&self.bin, &self.accumulate), &group, !clear, size);
         self.current.set(dst);
     }
 

@@ -13,6 +13,7 @@
 use glam::Vec4;
 
 use crate::cpu::hcb::Thresholds;
+use crate::passes::bins::SplatMethod;
 use crate::{settings_enum, settings_group};
 
 pub mod build;
@@ -74,6 +75,10 @@ settings_group! {
         /// get larger footprints, so distance coherence (Eq. 1) holds across more of them.
         footprint_min_cos: f32 = 0.01,
         unit "", symbol "", range 0.0001..=1.0, cost "free", history false;
+        /// How the splat sums the samples at the pixels (§4.3's additive blending of one quad
+        /// per sample, or binned in compute: the same sums).
+        splat: SplatMethod = SplatMethod::Auto,
+        unit "", symbol "", range 0..=2, cost "blend: the quads' overdraw; binned: one pass over the screen per splat", history false;
     }
     legacy {
         /// Version 1: the sample cache on or off; now `pipeline.temporal = HcbSampleCache`.

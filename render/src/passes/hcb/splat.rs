@@ -1,19 +1,25 @@
 //! Stage 6 of the HCB (Nguyen et al. §4.2–4.3): coherence-weighted splatting and Eq. 11.
 
+use std::cell::Cell;
+
 use crate::counters::prelude::*;
 
 use super::{HcbFrame, HcbParams};
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::passes::bgl;
+use crate::passes::bins::{Bins, SplatMethod};
 use crate::timing::Slot;
 
 /// Stage 6 of the HCB (Nguyen et al. §4.2–4.3): the samples' coherence-weighted splats
 /// (`hcb.weight_sum`: rgb Σ w E, a Σ w) and their normalisation (Eq. 11, `hcb.irradiance`;
-/// a = 0 where a covered pixel got no weight, counted in `uncovered`). Shaders
-/// `shaders/hcb/{splat,normalize}.wgsl`.
+/// a = 0 where a covered pixel got no weight, counted in `uncovered`), as blended quads (the
+/// paper) or binned in compute (`passes::bins`). Shaders `shaders/hcb/{splat,normalize}.wgsl`.
 pub struct HcbSplatPass {
-    pub weight_sum: wgpu::Texture,
+    /// A ping-pong pair (the binned splat of the new samples adds to the other one's sums):
+    /// `hcb.weight_sum` is `weight_sum[current]`.
+    weight_sum: [wgpu::Texture; 2],
+    current: Cell<usize>,
     pub irradiance: wgpu::Texture,
     /// `hcb.indirect`: the indirect light the compose adds, c·DI/π × the splatted irradiance.
     pub indirect: wgpu::Texture,
@@ -24,6 +30,12 @@ pub struct HcbSplatPass {
     normalize_layout: wgpu::BindGroupLayout,
     splat_pipeline: wgpu::RenderPipeline,
     normalize_pipeline: wgpu::ComputePipeline,
+    /// Binned: bind group 0 of `bin` and `accumulate`, the bins, the remainder's draw.
+    binned_layout: wgpu::BindGroupLayout,
+    bin: wgpu::ComputePipeline,
+    accumulate: wgpu::ComputePipeline,
+    bins: Bins,
+    rest: wgpu::Buffer,
     /// The uniforms of the splat of every sample and of the new samples only (§5.2).
     params: [wgpu::Buffer; 2],
     width: u32,
@@ -105,6 +117,33 @@ impl HcbSplatPass {
         });
         let normalize_pipeline =
             crate::passes::compute_pipeline(device, "hcb.normalize", &m_norm, "cs_normalize", &[&normalize_layout]);
+        let binned_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("hcb.splat.binned"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry { visibility: cs, ..camera_entry },
+                bgl::uniform(1, cs),
+                bgl::storage(2, cs, true),
+                bgl::texture(3, cs, false),
+                bgl::texture(4, cs, false),
+                bgl::storage(5, cs, true),
+                bgl::storage(6, cs, true),
+                bgl::texture(7, cs, false),
+                bgl::storage_texture(8, ACCUM_FORMAT),
+                bgl::storage(9, cs, false),
+            ],
+        });
+        let mut bins = Bins::new(ctx, "hcb.splat.bins");
+        bins.ensure(ctx, width, height, width.max(1) * height.max(1));
+        let layouts = [&binned_layout, bins.layout()];
+        let bin = crate::passes::compute_pipeline(device, "hcb.splat.bin", &m_splat, "cs_bin", &layouts);
+        let accumulate =
+            crate::passes::compute_pipeline(device, "hcb.splat.accumulate", &m_splat, "cs_accumulate", &layouts);
+        let rest = crate::passes::buffer(
+            device,
+            "hcb.splat.rest",
+            16,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+        );
         let size = std::mem::size_of::<HcbParams>() as u64;
         let params = [
             crate::passes::uniform_buffer(device, "hcb.splat.params", size),
@@ -119,6 +158,7 @@ impl HcbSplatPass {
         let (weight_sum, irradiance, indirect) = Self::targets(device, width, height);
         Self {
             weight_sum,
+            current: Cell::new(0),
             irradiance,
             indirect,
             uncovered,
@@ -126,22 +166,25 @@ impl HcbSplatPass {
             normalize_layout,
             splat_pipeline,
             normalize_pipeline,
+            binned_layout,
+            bin,
+            accumulate,
+            bins,
+            rest,
             params,
             width,
             height,
         }
     }
 
-    fn targets(device: &wgpu::Device, width: u32, height: u32) -> (wgpu::Texture, wgpu::Texture, wgpu::Texture) {
+    fn targets(device: &wgpu::Device, width: u32, height: u32) -> ([wgpu::Texture; 2], wgpu::Texture, wgpu::Texture) {
         let (w, h) = (width.max(1), height.max(1));
-        let weight_sum = crate::passes::create_target(
-            device,
-            "hcb.weight_sum",
-            w,
-            h,
-            ACCUM_FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT,
-        );
+        // Blend draws into them, Binned writes them.
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::STORAGE_BINDING;
+        let weight_sum = [
+            crate::passes::create_target(device, "hcb.weight_sum", w, h, ACCUM_FORMAT, usage),
+            crate::passes::create_target(device, "hcb.weight_sum", w, h, ACCUM_FORMAT, usage),
+        ];
         let storage = wgpu::TextureUsages::STORAGE_BINDING;
         let irradiance =
             crate::passes::create_target(device, "hcb.irradiance", w, h, wgpu::TextureFormat::Rgba32Float, storage);
@@ -156,17 +199,40 @@ impl HcbSplatPass {
             return false;
         }
         (self.weight_sum, self.irradiance, self.indirect) = Self::targets(&ctx.device, width, height);
+        self.current.set(0);
+        self.bins.ensure(ctx, width, height, width.max(1) * height.max(1));
         (self.width, self.height) = (width, height);
         true
     }
 
-    pub fn register(&self, reg: &mut BufferRegistry) {
+    /// Registers the latest sums of the ping-pong pair (after each frame's splats).
+    pub fn register_sums(&self, reg: &mut BufferRegistry) {
         reg.register(
             "hcb.weight_sum",
             BufferKind::Data,
             "HCB splatting (Nguyen §4.3): rgb Σ w·E and a Σ w over the samples coherent to each pixel (Eq. 10)",
-            &self.weight_sum,
+            &self.weight_sum[self.current.get()],
         );
+    }
+
+    /// The texture of the latest sums.
+    pub fn weight_sum(&self) -> &wgpu::Texture {
+        &self.weight_sum[self.current.get()]
+    }
+
+    /// Bins at most `items` samples (at least 32), drawing the rest as quads after them:
+    /// for tests of the remainder, which otherwise needs more than 65,536 samples.
+    pub fn limit_bins(&mut self, ctx: &GpuContext, items: u32) {
+        self.bins.ensure(ctx, self.width, self.height, items.min(self.width.max(1) * self.height.max(1)));
+    }
+
+    /// The latest sums (`hcb.weight_sum`), as the cache's build reads them.
+    pub fn weight_sum_view(&self) -> wgpu::TextureView {
+        crate::passes::view(&self.weight_sum[self.current.get()], "hcb.weight_sum")
+    }
+
+    pub fn register(&self, reg: &mut BufferRegistry) {
+        self.register_sums(reg);
         reg.register(
             "hcb.irradiance",
             BufferKind::Data,
@@ -194,16 +260,18 @@ impl HcbSplatPass {
         samples: (&wgpu::Buffer, &wgpu::Buffer),
         draw_args: &wgpu::Buffer,
         f: HcbFrame,
+        method: SplatMethod,
     ) {
-        self.splat(ctx, encoder, slot, camera, g, samples, (draw_args, 0), false, false, f);
+        self.splat(ctx, encoder, slot, camera, g, samples, (draw_args, 0), false, false, f, method);
         self.normalize(ctx, encoder, slot, g);
     }
 
     /// Adds the splats of the samples of `samples` = (list, counter) to `hcb.weight_sum`
-    /// (instance count from `draw_args` = (buffer, offset of a `DrawIndirectArgs`)): all of
-    /// them onto a cleared target, or with `new_only` the ones after the cached samples
-    /// (counter word 1, §5.2) onto what the cached ones left. `slot`'s scope begins here and
-    /// ends here with `ends_scope`, else with [`Self::normalize`].
+    /// (instance count from `draw_args` = (buffer, offset of a `DrawIndirectArgs`): 0 for
+    /// every sample, 32 for the new ones): all of them onto zero sums, or with `new_only` the
+    /// ones after the cached samples (counter word 1, §5.2) onto what the cached ones left.
+    /// `slot`'s scope begins here and ends here with `ends_scope`, else with
+    /// [`Self::normalize`].
     #[allow(clippy::too_many_arguments)]
     pub fn splat(
         &self,
@@ -217,24 +285,64 @@ impl HcbSplatPass {
         new_only: bool,
         ends_scope: bool,
         f: HcbFrame,
+        method: SplatMethod,
     ) {
         let params = &self.params[new_only as usize];
         ctx.queue.write_buffer(params, 0, bytemuck::bytes_of(&f.params([new_only as u32, 0, 0, 0])));
         let tv = wgpu::BindingResource::TextureView;
-        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("hcb.splat.inputs"),
-            layout: &self.splat_layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: camera.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: params.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: samples.0.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: tv(g.0) },
-                wgpu::BindGroupEntry { binding: 4, resource: tv(g.1) },
-                wgpu::BindGroupEntry { binding: 5, resource: samples.1.as_entire_binding() },
-            ],
-        });
-        let accum = crate::passes::view(&self.weight_sum, "hcb.weight_sum");
-        let load = if new_only { wgpu::LoadOp::Load } else { wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT) };
+        let inputs = [
+            camera.as_entire_binding(),
+            params.as_entire_binding(),
+            samples.0.as_entire_binding(),
+            tv(g.0),
+            tv(g.1),
+            samples.1.as_entire_binding(),
+        ];
+        let group = crate::passes::bind_group(&ctx.device, "hcb.splat.inputs", &self.splat_layout, inputs.to_vec());
+        if method.on(ctx) == SplatMethod::Blend {
+            if !new_only {
+                self.current.set(0);
+            }
+            let load = if new_only { wgpu::LoadOp::Load } else { wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT) };
+            let timestamps = slot.as_ref().and_then(|s| s.render(true, ends_scope));
+            self.quads(encoder, &group, load, timestamps, draw_args);
+            return;
+        }
+        let (src, dst) = if new_only { (self.current.get(), 1 - self.current.get()) } else { (1, 0) };
+        let prev = crate::passes::view(&self.weight_sum[src], "hcb.weight_sum");
+        let out = crate::passes::view(&self.weight_sum[dst], "hcb.weight_sum");
+        let binned = crate::passes::bind_group(
+            &ctx.device,
+            "hcb.splat.binned",
+            &self.binned_layout,
+            inputs
+                .into_iter()
+                .chain([draw_args.0.as_entire_binding(), tv(&prev), tv(&out), self.rest.as_entire_binding()])
+                .collect(),
+        );
+        // Samples beyond the bins (more than 65,536 at this size): their quads after them.
+        let remainder = self.width as u64 * self.height as u64 > self.bins.capacity() as u64;
+        let timestamps = slot.as_ref().and_then(|s| s.compute(true, ends_scope && !remainder));
+        let pipelines = (&self.bin, &self.accumulate);
+        let size = (self.width, self.height);
+        self.bins.splat(ctx, encoder, "hcb.splat", timestamps, pipelines, &binned, new_only, size);
+        self.current.set(dst);
+        if remainder {
+            let timestamps = slot.as_ref().and_then(|s| s.render(false, ends_scope));
+            self.quads(encoder, &group, wgpu::LoadOp::Load, timestamps, (&self.rest, 0));
+        }
+    }
+
+    /// Blend: the quads of `args` added into the latest sums.
+    fn quads(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        group: &wgpu::BindGroup,
+        load: wgpu::LoadOp<wgpu::Color>,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+        args: (&wgpu::Buffer, u64),
+    ) {
+        let accum = crate::passes::view(&self.weight_sum[self.current.get()], "hcb.weight_sum");
         let mut pass = encoder.begin_counted_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("hcb.splat"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -244,13 +352,13 @@ impl HcbSplatPass {
                 ops: wgpu::Operations { load, store: wgpu::StoreOp::Store },
             })],
             depth_stencil_attachment: None,
-            timestamp_writes: slot.as_ref().and_then(|s| s.render(true, ends_scope)),
+            timestamp_writes,
             occlusion_query_set: None,
             multiview_mask: None,
         });
         pass.set_pipeline(&self.splat_pipeline);
-        pass.set_group(0, &group, &[]);
-        pass.draw_indirect(draw_args.0, draw_args.1);
+        pass.set_group(0, group, &[]);
+        pass.draw_indirect(args.0, args.1);
     }
 
     /// Eq. 11 over `hcb.weight_sum`: `hcb.irradiance`, `hcb.indirect` and the uncovered count
@@ -263,7 +371,7 @@ impl HcbSplatPass {
         g: (&wgpu::TextureView, &wgpu::TextureView, &wgpu::TextureView),
     ) {
         let tv = wgpu::BindingResource::TextureView;
-        let accum = crate::passes::view(&self.weight_sum, "hcb.weight_sum");
+        let accum = crate::passes::view(&self.weight_sum[self.current.get()], "hcb.weight_sum");
         let out = crate::passes::view(&self.irradiance, "hcb.irradiance");
         let radiance = crate::passes::view(&self.indirect, "hcb.indirect");
         let ngroup = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {

@@ -96,6 +96,11 @@ impl HcbStage {
         fresh
     }
 
+    /// Registers the latest splat sums (the ping-pong pair's; after each frame's splats).
+    pub fn register_sums(&self, reg: &mut crate::buffers::BufferRegistry) {
+        self.splat.register_sums(reg);
+    }
+
     pub fn register(&self, reg: &mut crate::buffers::BufferRegistry) {
         self.build.register(reg);
         self.splat.register(reg);
@@ -171,9 +176,9 @@ impl HcbStage {
         self.run_gather(f, enc, timer, "hcb.cache.recompute", light, GatherSet::Recompute(&c.queue));
         let (splat, args) = (&self.splat, &self.gather.args);
         timer.scope(ctx, enc, "hcb.cache.splat", |e, slot| {
-            splat.splat(ctx, e, slot, camera, g3, samples, (args, 0), false, true, hf)
+            splat.splat(ctx, e, slot, camera, g3, samples, (args, 0), false, true, hf, s.splat)
         });
-        let weight_sum = crate::passes::view(&self.splat.weight_sum, "hcb.weight_sum");
+        let weight_sum = self.splat.weight_sum_view();
         let views = c.views();
         let build = &self.build;
         timer.scope(ctx, enc, "hcb.build", |e, slot| {
@@ -197,13 +202,13 @@ impl HcbStage {
         let samples = (&self.build.list, &self.build.counter);
         let set = if self.cache.is_some() { GatherSet::New } else { GatherSet::All };
         self.run_gather(f, enc, timer, "hcb.gather", light, set);
-        let (splat, args) = (&self.splat, &self.gather.args);
+        let (splat, args, method) = (&self.splat, &self.gather.args, f.settings.hcb.splat);
         timer.scope(ctx, enc, "hcb.splat", |e, slot| {
             if self.cache.is_some() {
-                splat.splat(ctx, e, slot, camera, g3, samples, (args, 32), true, false, hf);
+                splat.splat(ctx, e, slot, camera, g3, samples, (args, 32), true, false, hf, method);
                 splat.normalize(ctx, e, slot, g3);
             } else {
-                splat.run(ctx, e, slot, camera, g3, samples, args, hf);
+                splat.run(ctx, e, slot, camera, g3, samples, args, hf, method);
             }
         });
         crate::passes::view(&self.splat.indirect, "hcb.indirect")
@@ -234,8 +239,8 @@ impl HcbStage {
         let (ctx, g, hf) = (f.ctx, f.gbuffer, Self::frame(f));
         let (camera, g3) = (f.camera_buffer, (&g.position, &g.normal, &g.albedo));
         let samples = (&self.build.list, &self.build.counter);
-        let (splat, args) = (&self.splat, &self.gather.args);
-        timer.scope(ctx, enc, "hcb.splat", |e, slot| splat.run(ctx, e, slot, camera, g3, samples, args, hf));
+        let (splat, args, method) = (&self.splat, &self.gather.args, f.settings.hcb.splat);
+        timer.scope(ctx, enc, "hcb.splat", |e, slot| splat.run(ctx, e, slot, camera, g3, samples, args, hf, method));
         crate::passes::view(&self.splat.indirect, "hcb.indirect")
     }
 
