@@ -8,6 +8,10 @@
 // of this dispatch and of the splat draws. With the cache the gather runs twice: over the
 // samples due for recomputation (§5.3, their slots compacted in `queue`, so that the work is
 // dense) and over the new ones (§5.2, the end of the list).
+// On a GPU, cs_gather: one workgroup per sample, its 64 invocations over every 64th VPL,
+// summed in shared memory (issue #38: with one invocation per sample looping over all VPLs,
+// a gather of few samples, the cache's usual case, took as long as one 1,024-VPL loop). On a
+// CPU renderer, whose barriers are dear, cs_gather_serial: one invocation per sample.
 #import common/ism.wgsl
 #import hcb/common.wgsl
 
@@ -31,8 +35,10 @@ struct HcbGatherParams {
 @group(0) @binding(3) var exact_atlas: texture_depth_2d;
 @group(0) @binding(4) var<storage, read> counter: array<u32>;
 @group(0) @binding(5) var<storage, read_write> list: array<HcbSample>;
-// draw-indirect (vertices 6, instances, 0, 0), dispatch-indirect (x, y, 1), a spare word,
-// draw-indirect of the samples after the cached ones (counter word 1, §5.2)
+// draw-indirect (vertices 6, instances, 0, 0), dispatch-indirect (x, y, 1) of 64-wide
+// workgroups over the samples, a spare word, draw-indirect of the samples after the cached
+// ones (counter word 1, §5.2), dispatch-indirect (x, y, 1) of one workgroup per gathered
+// sample, a spare word
 @group(0) @binding(6) var<storage, read_write> args: array<u32>;
 // the list slots of the samples to recompute (counter word 2 of them; mode 1)
 @group(0) @binding(7) var<storage, read> queue: array<u32>;
@@ -77,23 +83,22 @@ fn cs_args() {
     for (var i = 0u; i < 12u; i = i + 1u) {
         args[i] = words[i];
     }
+    // One workgroup per sample, x within the 65535 limit.
+    let n = gather_count();
+    args[12] = min(n, 65535u);
+    args[13] = max((n + 65534u) / 65535u, 1u);
+    args[14] = 1u;
+    args[15] = 0u;
 }
 
-@compute @workgroup_size(64, 1, 1)
-fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let j = gid.x + gid.y * 65535u * 64u;
-    if (j >= gather_count()) {
-        return;
-    }
-    let i = gather_slot(j);
-    if (i >= sample_count()) {
-        return;
-    }
-    let s = list[i];
-    let x = s.position.xyz;
-    let nx = normalize(s.normal.xyz);
+// Each invocation's share of the sample's irradiance.
+var<workgroup> partial: array<vec3<f32>, 64>;
+
+// The sample's irradiance from VPLs first, first + step, … (Knecht 002 Eq. 4.7–4.8 times the
+// visibility).
+fn gather_vpls(x: vec3<f32>, nx: vec3<f32>, first: u32, step: u32) -> vec3<f32> {
     var e = vec3<f32>(0.0);
-    for (var k = 0u; k < params.counts.x; k = k + 1u) {
+    for (var k = first; k < params.counts.x; k = k + step) {
         let vpl = vpls[k];
         if (vpl.position.w < 0.5) {
             continue;
@@ -104,5 +109,45 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         e = e + irradiance * gather_visibility(params.counts.y, ism_atlas, exact_atlas, k, vpl, x, nx, params.counts.z, params.counts.w, params.shade.yzw);
     }
-    list[i].light = vec4<f32>(e, 1.0);
+    return e;
+}
+
+// GPU: one workgroup per sample (dispatch words 12–14).
+@compute @workgroup_size(64, 1, 1)
+fn cs_gather(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    let j = wg.x + wg.y * 65535u;
+    // Uniform per workgroup: every invocation returns or none does (the barriers below).
+    if (j >= gather_count()) {
+        return;
+    }
+    let i = gather_slot(j);
+    if (i >= sample_count()) {
+        return;
+    }
+    let s = list[i];
+    partial[li] = gather_vpls(s.position.xyz, normalize(s.normal.xyz), li, 64u);
+    for (var stride = 32u; stride > 0u; stride = stride >> 1u) {
+        workgroupBarrier();
+        if (li < stride) {
+            partial[li] = partial[li] + partial[li + stride];
+        }
+    }
+    if (li == 0u) {
+        list[i].light = vec4<f32>(partial[0], 1.0);
+    }
+}
+
+// CPU renderer: one invocation per sample (dispatch words 4–6).
+@compute @workgroup_size(64, 1, 1)
+fn cs_gather_serial(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let j = gid.x + gid.y * 65535u * 64u;
+    if (j >= gather_count()) {
+        return;
+    }
+    let i = gather_slot(j);
+    if (i >= sample_count()) {
+        return;
+    }
+    let s = list[i];
+    list[i].light = vec4<f32>(gather_vpls(s.position.xyz, normalize(s.normal.xyz), 0u, 1u), 1.0);
 }

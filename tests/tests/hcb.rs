@@ -562,6 +562,38 @@ fn the_binned_splat_equals_the_blended_quads() {
     }
 }
 
+/// The gather at the samples runs a workgroup per sample on a GPU (its 64 invocations over
+/// every 64th VPL, summed in shared memory) and an invocation per sample on a CPU renderer:
+/// both give the same light to float rounding, per frame and with the cache.
+#[test]
+fn the_gather_per_workgroup_equals_the_gather_per_invocation() {
+    for cached in [false, true] {
+        let run = |wide: bool| {
+            let mut r = hcb_renderer(96, |s| {
+                s.vpl.count = 256;
+                if cached {
+                    s.pipeline.temporal = gi_render::pipeline::Temporal::HcbSampleCache;
+                }
+            });
+            r.hcb_mut().expect("the HCB runs").gather.wide = wide;
+            for _ in 0..3 {
+                r.render_frame();
+            }
+            gi_lab_tests::read(&r, "hcb.indirect").data
+        };
+        let (serial, wide) = (run(false), run(true));
+        let lit = serial.iter().filter(|p| p[0] + p[1] + p[2] > 1e-4).count();
+        assert!(lit > 4000, "{lit} pixels lit");
+        let worst = serial
+            .iter()
+            .flatten()
+            .zip(wide.iter().flatten())
+            .map(|(a, b)| (a - b).abs() / a.abs().max(1e-3))
+            .fold(0.0f32, f32::max);
+        assert!(worst <= 1e-4, "cache {cached}: relative difference {worst}");
+    }
+}
+
 /// The `nguyen-hcb` preset on the default scene at `size`², paused, with `edit`.
 fn hcb_renderer(size: u32, edit: impl FnOnce(&mut gi_render::LabSettings)) -> gi_render::Renderer {
     let loaded =

@@ -136,6 +136,12 @@ impl Renderer {
         self.stages.gautron.as_ref()
     }
 
+    /// The HCB's passes, when its samples are the shading points (tests choose the gather's
+    /// shape, `HcbGatherPass::wide`).
+    pub fn hcb_mut(&mut self) -> Option<&mut crate::passes::hcb::stage::HcbStage> {
+        self.stages.hcb.as_mut()
+    }
+
     /// Timings of the last frame.
     pub fn timings(&self) -> &[PassTiming] {
         self.timer.last()

@@ -37,12 +37,18 @@ pub enum GatherSet<'a> {
 
 /// Stage 5 of the HCB technique (Nguyen et al. §4.1): the irradiance the VPLs send each
 /// sample of the list (`shaders/hcb/gather.wgsl`), and the indirect arguments of this
-/// dispatch and of the splat draws (`args`: 4 draw words for every sample, 3 dispatch words,
-/// one spare, 4 draw words for the samples after the cached ones, §5.2).
+/// dispatch and of the splat draws (`args`: 4 draw words for every sample, 3 dispatch words of
+/// 64 samples per workgroup, one spare, 4 draw words for the samples after the cached ones,
+/// §5.2, 3 dispatch words of a workgroup per sample, one spare).
 pub struct HcbGatherPass {
     layout: wgpu::BindGroupLayout,
     args_pipeline: wgpu::ComputePipeline,
-    gather_pipeline: wgpu::ComputePipeline,
+    /// A workgroup per sample (`cs_gather`) and an invocation per sample (`cs_gather_serial`).
+    wide_pipeline: wgpu::ComputePipeline,
+    serial_pipeline: wgpu::ComputePipeline,
+    /// Whether the gather runs a workgroup per sample: on a GPU, not on a CPU renderer (whose
+    /// workgroup barriers are dear); tests set it to check both on one device.
+    pub wide: bool,
     /// The uniforms of the gathers of every sample / the new samples, and of the recomputed
     /// ones (both run in a cached frame).
     params: [wgpu::Buffer; 2],
@@ -75,7 +81,10 @@ impl HcbGatherPass {
         });
         let module = crate::shaders::create_module(device, "hcb/gather.wgsl");
         let args_pipeline = crate::passes::compute_pipeline(device, "hcb.gather.args", &module, "cs_args", &[&layout]);
-        let gather_pipeline = crate::passes::compute_pipeline(device, "hcb.gather", &module, "cs_gather", &[&layout]);
+        let wide_pipeline = crate::passes::compute_pipeline(device, "hcb.gather", &module, "cs_gather", &[&layout]);
+        let serial_pipeline =
+            crate::passes::compute_pipeline(device, "hcb.gather.serial", &module, "cs_gather_serial", &[&layout]);
+        let wide = ctx.adapter_info.device_type != wgpu::DeviceType::Cpu;
         let size = std::mem::size_of::<HcbGatherParams>() as u64;
         let params = [
             crate::passes::uniform_buffer(device, "hcb.gather.params", size),
@@ -85,12 +94,24 @@ impl HcbGatherPass {
         let args = crate::passes::buffer(
             device,
             "hcb.indirect_args",
-            48,
+            64,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC,
         );
-        let no_args = crate::passes::buffer(device, "hcb.no_args", 48, wgpu::BufferUsages::STORAGE);
+        let no_args = crate::passes::buffer(device, "hcb.no_args", 64, wgpu::BufferUsages::STORAGE);
         let (no_ism, no_exact) = crate::passes::knecht::interleave::no_visibility_atlases(device, "hcb.gather");
-        Self { layout, args_pipeline, gather_pipeline, params, args, no_args, no_queue, no_ism, no_exact }
+        Self {
+            layout,
+            args_pipeline,
+            wide_pipeline,
+            serial_pipeline,
+            wide,
+            params,
+            args,
+            no_args,
+            no_queue,
+            no_ism,
+            no_exact,
+        }
     }
 
     /// Gathers at the samples `set` of `hcb`'s list from `vpl_count` VPLs with `vis`.
@@ -148,7 +169,9 @@ impl HcbGatherPass {
         pass.set_pipeline(&self.args_pipeline);
         pass.dispatch_workgroups(1, 1, 1);
         pass.set_group(0, &gather_group, &[]);
-        pass.set_pipeline(&self.gather_pipeline);
-        pass.dispatch_workgroups_indirect(&self.args, 16);
+        // The dispatch words: 12–14 (a workgroup per sample) or 4–6 (64 samples per workgroup).
+        let (pipeline, offset) = if self.wide { (&self.wide_pipeline, 48) } else { (&self.serial_pipeline, 16) };
+        pass.set_pipeline(pipeline);
+        pass.dispatch_workgroups_indirect(&self.args, offset);
     }
 }
