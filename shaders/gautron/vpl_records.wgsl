@@ -16,6 +16,10 @@
 //   reduction's.
 // The record sees every draw (`seen` all ones): any moved object invalidates it. CPU twin of
 // the sums: cpu::gautron::vpl_record.
+// On a GPU, cs_vpl_records: one workgroup per slot, its 64 invocations over every 64th VPL,
+// the sums added in shared memory (issue #38: one invocation per slot looping over all VPLs
+// took as long as one whole loop, however few the slots). On a CPU renderer, whose barriers
+// are dear, cs_vpl_records_serial: one invocation per slot.
 #import gautron/common.wgsl
 #import common/ism.wgsl
 
@@ -43,15 +47,33 @@ fn irradiance(vpl: Vpl, x: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return vpl_irradiance(vpl, x, n, vparams.shade.x, vparams.misc.x);
 }
 
-@compute @workgroup_size(64, 1, 1)
-fn cs_vpl_records(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let s = gid.x;
-    if (s >= state.new_count + state.refresh) {
-        return;
+// The sums over a record's VPLs: E, the four translated and four rotated sums of the
+// gradients' differences, and H's numerator and denominator.
+struct VplSums {
+    e: vec3<f32>,
+    dt: array<vec3<f32>, 4>,
+    dr: array<vec3<f32>, 4>,
+    h: vec2<f32>,
+}
+
+fn no_sums() -> VplSums {
+    let z = vec3<f32>(0.0);
+    return VplSums(z, array<vec3<f32>, 4>(z, z, z, z), array<vec3<f32>, 4>(z, z, z, z), vec2<f32>(0.0));
+}
+
+fn add_sums(a: VplSums, b: VplSums) -> VplSums {
+    var s = a;
+    s.e = a.e + b.e;
+    for (var i = 0u; i < 4u; i = i + 1u) {
+        s.dt[i] = a.dt[i] + b.dt[i];
+        s.dr[i] = a.dr[i] + b.dr[i];
     }
-    let cam = cameras[s];
-    let index = u32(cam.n.w);
-    var rec = records[index];
+    s.h = a.h + b.h;
+    return s;
+}
+
+// Slot s's sums over VPLs first, first + step, ….
+fn slot_sums(cam: HemisphereCamera, first: u32, step: u32) -> VplSums {
     let x = cam.position.xyz;
     let n = cam.n.xyz;
     let t = cam.t.xyz;
@@ -63,12 +85,8 @@ fn cs_vpl_records(@builtin(global_invocation_id) gid: vec3<u32>) {
     let nt_ = normalize(n + er * b);
     let nb = normalize(n + er * t);
     let nb_ = normalize(n - er * t);
-    var e = vec3<f32>(0.0);
-    var dt = array<vec3<f32>, 4>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
-    var dr = array<vec3<f32>, 4>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
-    var h_num = 0.0;
-    var h_den = 0.0;
-    for (var k = 0u; k < vparams.counts.x; k = k + 1u) {
+    var s = no_sums();
+    for (var k = first; k < vparams.counts.x; k = k + step) {
         let vpl = vpls[k];
         if (vpl.position.w < 0.5) {
             continue;
@@ -78,38 +96,80 @@ fn cs_vpl_records(@builtin(global_invocation_id) gid: vec3<u32>) {
             continue;
         }
         let ek = irradiance(vpl, x, n) * v;
-        e = e + ek;
+        s.e = s.e + ek;
         let l = dot(ek, vec3<f32>(0.2126, 0.7152, 0.0722));
         if (l > 0.0) {
-            h_num = h_num + l;
-            h_den = h_den + l / max(distance(vpl.position.xyz, x), 1e-6);
+            s.h = s.h + vec2<f32>(l, l / max(distance(vpl.position.xyz, x), 1e-6));
         }
-        dt[0] = dt[0] + irradiance(vpl, x + et * t, n) * v;
-        dt[1] = dt[1] + irradiance(vpl, x - et * t, n) * v;
-        dt[2] = dt[2] + irradiance(vpl, x + et * b, n) * v;
-        dt[3] = dt[3] + irradiance(vpl, x - et * b, n) * v;
-        dr[0] = dr[0] + irradiance(vpl, x, nt) * v;
-        dr[1] = dr[1] + irradiance(vpl, x, nt_) * v;
-        dr[2] = dr[2] + irradiance(vpl, x, nb) * v;
-        dr[3] = dr[3] + irradiance(vpl, x, nb_) * v;
+        s.dt[0] = s.dt[0] + irradiance(vpl, x + et * t, n) * v;
+        s.dt[1] = s.dt[1] + irradiance(vpl, x - et * t, n) * v;
+        s.dt[2] = s.dt[2] + irradiance(vpl, x + et * b, n) * v;
+        s.dt[3] = s.dt[3] + irradiance(vpl, x - et * b, n) * v;
+        s.dr[0] = s.dr[0] + irradiance(vpl, x, nt) * v;
+        s.dr[1] = s.dr[1] + irradiance(vpl, x, nt_) * v;
+        s.dr[2] = s.dr[2] + irradiance(vpl, x, nb) * v;
+        s.dr[3] = s.dr[3] + irradiance(vpl, x, nb_) * v;
     }
-    rec.irradiance = vec4<f32>(e, rec.irradiance.w);
-    let gt = (dt[0] - dt[1]) / (2.0 * et);
-    let gb = (dt[2] - dt[3]) / (2.0 * et);
-    let rt = (dr[0] - dr[1]) / (2.0 * er);
-    let rb = (dr[2] - dr[3]) / (2.0 * er);
+    return s;
+}
+
+// The record of slot `cam` from its sums: E, the gradients, H and R_k.
+fn store_record(cam: HemisphereCamera, s: VplSums) {
+    let index = u32(cam.n.w);
+    var rec = records[index];
+    let t = cam.t.xyz;
+    let b = cam.b.xyz;
+    let et = vparams.misc.y;
+    let er = vparams.misc.z;
+    rec.irradiance = vec4<f32>(s.e, rec.irradiance.w);
+    let gt = (s.dt[0] - s.dt[1]) / (2.0 * et);
+    let gb = (s.dt[2] - s.dt[3]) / (2.0 * et);
+    let rt = (s.dr[0] - s.dr[1]) / (2.0 * er);
+    let rb = (s.dr[2] - s.dr[3]) / (2.0 * er);
     for (var c = 0u; c < 3u; c = c + 1u) {
         rec.trans[c] = vec4<f32>(t * gt[c] + b * gb[c], 0.0);
         rec.rot[c] = vec4<f32>(t * rt[c] + b * rb[c], 0.0);
     }
     // no VPL seen: H is unbounded (R_k takes the upper clamps), as the reduction's
     var h = 1e30;
-    if (h_den > 0.0) {
-        h = h_num / h_den;
+    if (s.h.y > 0.0) {
+        h = s.h.x / s.h.y;
     }
     rec.position.w = clamped_radius(params, h, rec);
     rec.normal.w = h;
     rec.pixel.w = RECORD_VALID;
     rec.seen = vec4<u32>(0xffffffffu);
     records[index] = rec;
+}
+
+var<workgroup> partial: array<VplSums, 64>;
+
+// GPU: one workgroup per slot.
+@compute @workgroup_size(64, 1, 1)
+fn cs_vpl_records(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    // Uniform per workgroup: every invocation returns or none does (the barriers below).
+    if (wg.x >= state.new_count + state.refresh) {
+        return;
+    }
+    let cam = cameras[wg.x];
+    partial[li] = slot_sums(cam, li, 64u);
+    for (var stride = 32u; stride > 0u; stride = stride >> 1u) {
+        workgroupBarrier();
+        if (li < stride) {
+            partial[li] = add_sums(partial[li], partial[li + stride]);
+        }
+    }
+    if (li == 0u) {
+        store_record(cam, partial[0]);
+    }
+}
+
+// CPU renderer: one invocation per slot.
+@compute @workgroup_size(64, 1, 1)
+fn cs_vpl_records_serial(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if (gid.x >= state.new_count + state.refresh) {
+        return;
+    }
+    let cam = cameras[gid.x];
+    store_record(cam, slot_sums(cam, 0u, 1u));
 }

@@ -22,14 +22,25 @@ fn records(r: &gi_render::Renderer) -> Vec<GpuRecord> {
 }
 
 /// Records lit by the VPLs (no visibility, so that the CPU needs no shadow maps): every
-/// record's E, H and both gradients equal the twin's sums over the frame's VPLs; and the
-/// gradients predict a neighbour's irradiance better than its own E_k alone.
+/// record's E, H and both gradients equal the twin's sums over the frame's VPLs, lit a
+/// workgroup per record (a GPU's way) or an invocation per record (a CPU renderer's); and
+/// the gradients predict a neighbour's irradiance better than its own E_k alone.
 #[test]
 fn vpl_lit_records_match_the_cpu_twin() {
+    for wide in [false, true] {
+        vpl_lit_records_match_the_cpu_twin_with(wide);
+    }
+}
+
+fn vpl_lit_records_match_the_cpu_twin_with(wide: bool) {
     let mut r = paused_renderer(96, Technique::GautronVplRecords, |s| {
         s.pipeline.vpl_visibility = VplVisibility::None;
         (s.gautron.rounds, s.gautron.records_per_round) = (2, 64);
     });
+    // The first frame makes the pass; the records are made again, lit the chosen way.
+    r.render_frame();
+    r.gautron_mut().and_then(|g| g.vpl_records_mut()).expect("the VPL-lit records").wide = wide;
+    r.reset_history();
     r.render_frame();
     let vpls: Vec<Vpl> = r
         .vpl_list()

@@ -136,6 +136,12 @@ impl Renderer {
         self.stages.gautron.as_ref()
     }
 
+    /// Gautron et al.'s passes, to change (tests choose how the VPL-lit records are lit,
+    /// `VplRecordPass::wide`).
+    pub fn gautron_mut(&mut self) -> Option<&mut crate::passes::gautron::stage::GautronStage> {
+        self.stages.gautron.as_mut()
+    }
+
     /// The HCB's passes, when its samples are the shading points (tests choose the gather's
     /// shape, `HcbGatherPass::wide`).
     pub fn hcb_mut(&mut self) -> Option<&mut crate::passes::hcb::stage::HcbStage> {

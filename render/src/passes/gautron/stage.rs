@@ -245,6 +245,11 @@ impl GautronStage {
     }
 
     /// Registers the splat's latest sums (a ping-pong pair: after each frame).
+    /// The pass that lights the records with VPLs (GI Lab's mix), once a frame has made it.
+    pub fn vpl_records_mut(&mut self) -> Option<&mut VplRecordPass> {
+        self.vpl_records.as_mut()
+    }
+
     pub fn register_sums(&self, reg: &mut BufferRegistry) {
         self.splat.register_sums(reg);
     }

@@ -36,7 +36,13 @@ pub const EPS_R: f32 = 1e-2;
 
 pub struct VplRecordPass {
     layout: wgpu::BindGroupLayout,
-    pipeline: wgpu::ComputePipeline,
+    /// A workgroup per slot (`cs_vpl_records`) and an invocation per slot
+    /// (`cs_vpl_records_serial`).
+    wide_pipeline: wgpu::ComputePipeline,
+    serial_pipeline: wgpu::ComputePipeline,
+    /// Whether a workgroup lights each slot: on a GPU, not on a CPU renderer (whose workgroup
+    /// barriers are dear); tests set it to check both on one device.
+    pub wide: bool,
     params: wgpu::Buffer,
     no_ism: wgpu::TextureView,
     no_exact: wgpu::TextureView,
@@ -60,8 +66,16 @@ impl VplRecordPass {
             ],
         });
         let module = crate::shaders::create_module(device, "gautron/vpl_records.wgsl");
-        let pipeline =
+        let wide_pipeline =
             crate::passes::compute_pipeline(device, "gautron.vpl_records", &module, "cs_vpl_records", &[&layout]);
+        let serial_pipeline = crate::passes::compute_pipeline(
+            device,
+            "gautron.vpl_records.serial",
+            &module,
+            "cs_vpl_records_serial",
+            &[&layout],
+        );
+        let wide = ctx.adapter_info.device_type != wgpu::DeviceType::Cpu;
         let params = crate::passes::uniform_buffer(
             device,
             "gautron.vpl_records.params",
@@ -69,7 +83,7 @@ impl VplRecordPass {
         );
         let (no_ism, no_exact) =
             crate::passes::knecht::interleave::no_visibility_atlases(device, "gautron.vpl_records");
-        Self { layout, pipeline, params, no_ism, no_exact }
+        Self { layout, wide_pipeline, serial_pipeline, wide, params, no_ism, no_exact }
     }
 
     /// Lights the records of the round's slots (`cameras` says which) with `light`.
@@ -112,8 +126,13 @@ impl VplRecordPass {
             label: Some("gautron.vpl_records"),
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
-        pass.set_pipeline(&self.pipeline);
         pass.set_group(0, &group, &[]);
-        pass.dispatch_workgroups(slots.div_ceil(64), 1, 1);
+        if self.wide {
+            pass.set_pipeline(&self.wide_pipeline);
+            pass.dispatch_workgroups(slots.max(1), 1, 1);
+        } else {
+            pass.set_pipeline(&self.serial_pipeline);
+            pass.dispatch_workgroups(slots.div_ceil(64), 1, 1);
+        }
     }
 }
