@@ -1,10 +1,13 @@
 // Record creation where the coverage is insufficient (Gautron et al. 003, "Algorithm": the
 // text scans the image on the CPU; here every round runs on the GPU): `cs_candidates` finds,
 // per creation tile, the under-covered pixel nearest the tile's centre (covered: the splatted
-// Σ w_k ≥ 1/a, i.e. some record passes Ward's test); `cs_compact` lists them in tile order up
-// to the round's budget and the capacity (one workgroup: the same set, in the same order,
-// whatever order the GPU ran the tiles in), then fills the rest of the budget with stale
-// records to compute again (round robin from a cursor); `cs_cameras` sets up each slot's
+// Σ w_k ≥ 1/a, i.e. some record passes Ward's test); `cs_count`, `cs_compact` and
+// `cs_scatter` list them in tile order up to the round's budget and the capacity (the same
+// set, in the same order, whatever order the GPU ran the tiles in: each chunk of 256 tiles
+// counts its candidates, one workgroup turns the counts into the chunks' offsets, and each
+// chunk writes its candidates from its offset; issue #38: one workgroup used to scan every
+// tile in turn), `cs_compact` then fills the rest of the budget with stale records to
+// compute again (round robin from a cursor); `cs_cameras` sets up each slot's
 // hemisphere camera. `cs_maintain` runs once per frame before the first splat: the reuse
 // policy and the invalidation by moved objects and changed lights. Twin:
 // cpu::gautron::candidates.
@@ -34,7 +37,8 @@ struct MovedObject {
 
 
 struct RoundParams {
-    // x: round index, yzw unused
+    // x: round index, y: creation tiles (the candidates; then each chunk of 256 tiles' count
+    // and offset follow in `candidates`), zw unused
     round: vec4<u32>,
 }
 
@@ -111,7 +115,7 @@ var<workgroup> taken: u32;
 var<workgroup> furthest: atomic<u32>;
 var<workgroup> stale_left: atomic<u32>;
 
-// The inclusive prefix sum of the 256 threads' flags into `scan` (Hillis–Steele; every
+// The inclusive prefix sum of the 256 threads' values into `scan` (Hillis–Steele; every
 // thread of the workgroup calls it).
 fn scan_flags(li: u32, flag: u32) {
     scan[li] = flag;
@@ -127,11 +131,56 @@ fn scan_flags(li: u32, flag: u32) {
     }
 }
 
-// One workgroup: the candidates in tile order (a prefix sum per chunk of 256 tiles) up to
-// the budget and the capacity; then the counters and the indirect draws of the round.
+// The candidates of the creation tiles, then per chunk of 256 tiles its count, then its offset.
+fn tile_count() -> u32 {
+    return round.round.y;
+}
+
+fn chunk_count() -> u32 {
+    return (tile_count() + 255u) / 256u;
+}
+
+var<workgroup> chunk_total: atomic<u32>;
+
+// One workgroup per chunk of 256 tiles: how many of them have a candidate.
+@compute @workgroup_size(256, 1, 1)
+fn cs_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    if (li == 0u) {
+        atomicStore(&chunk_total, 0u);
+    }
+    workgroupBarrier();
+    let t = wg.x * 256u + li;
+    if (t < tile_count() && candidates[t] != NONE) {
+        atomicAdd(&chunk_total, 1u);
+    }
+    workgroupBarrier();
+    if (li == 0u) {
+        candidates[tile_count() + wg.x] = atomicLoad(&chunk_total);
+    }
+}
+
+// One workgroup per chunk: its candidates, in tile order, into the slots from the chunk's
+// offset, up to the round's new records (`state.new_count`, set by cs_compact).
+@compute @workgroup_size(256, 1, 1)
+fn cs_scatter(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    let t = wg.x * 256u + li;
+    var flag = 0u;
+    if (t < tile_count() && candidates[t] != NONE) {
+        flag = 1u;
+    }
+    scan_flags(li, flag);
+    let slot = candidates[tile_count() + chunk_count() + wg.x] + scan[li] - flag;
+    if (flag == 1u && slot < state.new_count) {
+        slots[slot] = candidates[t];
+    }
+}
+
+// One workgroup: the chunks' offsets (a prefix sum of their counts) and the round's new
+// records up to the budget and the capacity (cs_scatter writes them); then the stale records
+// to compute again, the counters and the indirect draws of the round.
 @compute @workgroup_size(256, 1, 1)
 fn cs_compact(@builtin(local_invocation_index) li: u32) {
-    let tiles = arrayLength(&candidates);
+    let chunks = chunk_count();
     let budget = u32(params.creation.y);
     let capacity = u32(params.creation.z);
     let base = state.count;
@@ -140,17 +189,16 @@ fn cs_compact(@builtin(local_invocation_index) li: u32) {
         taken = 0u;
     }
     workgroupBarrier();
-    for (var start = 0u; start < tiles; start = start + 256u) {
-        let t = start + li;
-        var flag = 0u;
-        if (t < tiles && candidates[t] != NONE) {
-            flag = 1u;
+    for (var start = 0u; start < chunks; start = start + 256u) {
+        let c = start + li;
+        var n = 0u;
+        if (c < chunks) {
+            n = candidates[tile_count() + c];
         }
-        scan_flags(li, flag);
+        scan_flags(li, n);
         let before = taken;
-        let slot = before + scan[li] - flag;
-        if (flag == 1u && slot < room) {
-            slots[slot] = candidates[t];
+        if (c < chunks) {
+            candidates[tile_count() + chunks + c] = before + scan[li] - n;
         }
         let total = scan[255];
         workgroupBarrier();

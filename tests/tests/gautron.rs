@@ -217,6 +217,29 @@ fn the_splat_does_not_depend_on_record_order() {
     assert!(worst < 1e-4, "{worst}");
 }
 
+/// The first creation round of a cold cache makes its records at the CPU twin's candidates
+/// (`cpu::gautron::candidates`), in tile order, cut at the round's budget: at 160² with 8-px
+/// tiles (400 tiles: two chunks of 256 for the GPU's count, offsets and scatter), a budget
+/// that ends in the second chunk, and one that keeps every candidate.
+#[test]
+fn the_first_round_makes_the_cpu_twins_candidates_in_tile_order() {
+    for budget in [300u32, 1000] {
+        let mut r = paused_renderer(160, Technique::Gautron, |s| {
+            (s.gautron.rounds, s.gautron.records_per_round, s.gautron.creation_tile_px) = (1, budget, 8);
+        });
+        r.render_frame();
+        let normal = read(&r, "gbuffer.normal");
+        let valid: Vec<bool> = normal.data.iter().map(|n| n[3] > 0.5).collect();
+        let a = r.settings().gautron.accuracy;
+        let want = gi_render::cpu::gautron::candidates(&vec![0.0; 160 * 160], &valid, 160, 160, 8, a, budget);
+        let g = r.gautron().unwrap();
+        let records = g.read_records(&r.ctx, g.read_state(&r.ctx).unwrap().count).unwrap();
+        let got: Vec<(u32, u32)> = records.iter().map(|k| (k.pixel.x as u32, k.pixel.y as u32)).collect();
+        assert!(want.len() > 256, "{} candidates", want.len());
+        assert_eq!(got, want, "budget {budget}");
+    }
+}
+
 /// Creation: once a frame makes no record, every pixel with geometry is covered (some record
 /// passes Ward's test, Σ w ≥ 1/a); a warm frame makes none; without the record cache every
 /// frame starts cold (what a change invalidates: tests/gautron_cache.rs).

@@ -63,7 +63,11 @@ pub struct GautronStage {
     /// The HCB's sample count of a recent frame, for the mix's chunks (read without waiting).
     sample_count: Option<crate::readback::LateCount>,
     candidates: wgpu::ComputePipeline,
+    /// The candidates listed in tile order: per chunk of 256 tiles a count, the chunks'
+    /// offsets, each chunk's candidates from its offset (`gautron/create.wgsl`).
+    count: wgpu::ComputePipeline,
     compact: wgpu::ComputePipeline,
+    scatter: wgpu::ComputePipeline,
     cameras_pipeline: wgpu::ComputePipeline,
     begin: wgpu::ComputePipeline,
     maintain: wgpu::ComputePipeline,
@@ -160,7 +164,9 @@ impl GautronStage {
             at_samples: None,
             sample_count: None,
             candidates: pipeline("cs_candidates"),
+            count: pipeline("cs_count"),
             compact: pipeline("cs_compact"),
+            scatter: pipeline("cs_scatter"),
             cameras_pipeline: pipeline("cs_cameras"),
             begin: pipeline("cs_begin"),
             maintain: pipeline("cs_maintain"),
@@ -203,12 +209,6 @@ impl GautronStage {
             local_bounds: Default::default(),
             sizes: (0, 0, 0),
         };
-        let rounds: Vec<[u32; 4]> = (0..MAX_ROUNDS as u32).map(|k| [k, 0, 0, 0]).collect();
-        ctx.queue.write_buffer(
-            &stage.rounds,
-            0,
-            &crate::passes::strided_bytes(ROUND_STRIDE, MAX_ROUNDS as usize, &rounds),
-        );
         stage.ensure(ctx, s, w, h);
         stage
     }
@@ -230,7 +230,12 @@ impl GautronStage {
             let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
             let (capacity, slots, tiles) = (sizes.0 as u64, sizes.1 as u64, sizes.2 as u64);
             self.records = buffer(device, "gautron.records", capacity * RECORD_BYTES, storage);
-            self.candidate_list = buffer(device, "gautron.candidate_list", tiles * 4, storage);
+            // The tiles' candidates, then per chunk of 256 tiles its count and its offset.
+            let chunks = tiles.div_ceil(256);
+            self.candidate_list = buffer(device, "gautron.candidate_list", (tiles + 2 * chunks) * 4, storage);
+            let rounds: Vec<[u32; 4]> = (0..MAX_ROUNDS as u32).map(|k| [k, sizes.2, 0, 0]).collect();
+            let bytes = crate::passes::strided_bytes(ROUND_STRIDE, MAX_ROUNDS as usize, &rounds);
+            ctx.queue.write_buffer(&self.rounds, 0, &bytes);
             self.slots = buffer(device, "gautron.slots", slots * 4, storage);
             self.cameras = buffer(device, "gautron.cameras", slots * 144, storage);
             self.viewers = buffer(device, "gautron.viewers", slots * 16, storage);
@@ -244,12 +249,12 @@ impl GautronStage {
         fresh
     }
 
-    /// Registers the splat's latest sums (a ping-pong pair: after each frame).
     /// The pass that lights the records with VPLs (GI Lab's mix), once a frame has made it.
     pub fn vpl_records_mut(&mut self) -> Option<&mut VplRecordPass> {
         self.vpl_records.as_mut()
     }
 
+    /// Registers the splat's latest sums (a ping-pong pair: after each frame).
     pub fn register_sums(&self, reg: &mut BufferRegistry) {
         self.splat.register_sums(reg);
     }
@@ -423,8 +428,13 @@ impl GautronStage {
                 pass.set_group(1, g1, &[]);
                 pass.set_pipeline(&self.candidates);
                 pass.dispatch_workgroups(tiles.0, tiles.1, 1);
+                let chunks = (tiles.0 * tiles.1).div_ceil(256);
+                pass.set_pipeline(&self.count);
+                pass.dispatch_workgroups(chunks, 1, 1);
                 pass.set_pipeline(&self.compact);
                 pass.dispatch_workgroups(1, 1, 1);
+                pass.set_pipeline(&self.scatter);
+                pass.dispatch_workgroups(chunks, 1, 1);
                 pass.set_pipeline(&self.cameras_pipeline);
                 pass.dispatch_workgroups(slots.div_ceil(64), 1, 1);
             });
