@@ -28,10 +28,12 @@ struct TemporalParams {
 @group(0) @binding(6) var g_material: texture_2d<f32>;
 @group(0) @binding(7) var prev_normal: texture_2d<f32>;
 @group(0) @binding(8) var history_prev: texture_2d<f32>;
-@group(0) @binding(9) var out_filtered: texture_storage_2d<rgba32float, write>;
+// F and W as half floats, the history (depth in a) as floats, the rejection flags as bytes
+// (passes::soler::temporal::{LIGHT_FORMAT, MASK_FORMAT}).
+@group(0) @binding(9) var out_filtered: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(10) var out_history: texture_storage_2d<rgba32float, write>;
-@group(0) @binding(11) var out_warped: texture_storage_2d<rgba32float, write>;
-@group(0) @binding(12) var out_mask: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(11) var out_warped: texture_storage_2d<rgba16float, write>;
+@group(0) @binding(12) var out_mask: texture_storage_2d<rgba8unorm, write>;
 @group(0) @binding(13) var out_a: texture_storage_2d<r32float, write>;
 // This frame's normals, next frame's prev_normal (ping-pong: no copy, issue #38).
 @group(0) @binding(14) var out_normal: texture_storage_2d<rgba16float, write>;

@@ -64,16 +64,23 @@ struct Targets {
     a: wgpu::Texture,
 }
 
+/// `soler.temporal` (F, which the compose adds) and `soler.temporal.warped` (W, a debug view):
+/// light as half floats, as Knecht's filtered light (issue #38; a step of 2⁻¹⁰ to 2⁻¹¹
+/// relative). The history keeps `Rgba32Float` for the linear depth in its alpha.
+pub const LIGHT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// `soler.temporal.rejection`: three 0/1 flags.
+pub const MASK_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+
 fn targets(device: &wgpu::Device, (w, h): (u32, u32)) -> Targets {
     let st = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::COPY_DST;
     let t = |label, f| crate::passes::create_target(device, label, w, h, f, st);
     let rgba = wgpu::TextureFormat::Rgba32Float;
     Targets {
-        filtered: t("soler.temporal", rgba),
+        filtered: t("soler.temporal", LIGHT_FORMAT),
         history: [t("soler.temporal.history.0", rgba), t("soler.temporal.history.1", rgba)],
         normals: [t("soler.temporal.prev_normal.0", NORMAL_FORMAT), t("soler.temporal.prev_normal.1", NORMAL_FORMAT)],
-        warped: t("soler.temporal.warped", rgba),
-        rejection: t("soler.temporal.rejection", rgba),
+        warped: t("soler.temporal.warped", LIGHT_FORMAT),
+        rejection: t("soler.temporal.rejection", MASK_FORMAT),
         a: t("soler.temporal.a", wgpu::TextureFormat::R32Float),
     }
 }
@@ -82,10 +89,14 @@ impl SolerTemporal {
     pub fn new(ctx: &GpuContext, size: (u32, u32)) -> Self {
         let device = &ctx.device;
         let cs = wgpu::ShaderStages::COMPUTE;
-        let rgba = wgpu::TextureFormat::Rgba32Float;
         let mut entries = vec![bgl::uniform(0, cs), bgl::uniform(1, cs)];
         entries.extend((2..=8).map(|b| bgl::texture(b, cs, false)));
-        entries.extend((9..=12).map(|b| bgl::storage_texture(b, rgba)));
+        entries.extend([
+            bgl::storage_texture(9, LIGHT_FORMAT),
+            bgl::storage_texture(10, wgpu::TextureFormat::Rgba32Float),
+            bgl::storage_texture(11, LIGHT_FORMAT),
+            bgl::storage_texture(12, MASK_FORMAT),
+        ]);
         entries.push(bgl::storage_texture(13, wgpu::TextureFormat::R32Float));
         entries.push(bgl::storage_texture(14, NORMAL_FORMAT));
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
