@@ -117,15 +117,22 @@ fn cs_reduce(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
             part[o + 14u + c * 3u + d] = trans[c][d];
         }
     }
-    workgroupBarrier();
+    // The 64 invocations' terms summed in a tree (issue #38: one invocation used to add all
+    // 64 × 23 in turn).
+    for (var stride = 32u; stride > 0u; stride = stride >> 1u) {
+        workgroupBarrier();
+        if (li < stride) {
+            for (var q = 0u; q < TERMS; q = q + 1u) {
+                part[o + q] = part[o + q] + part[(li + stride) * TERMS + q];
+            }
+        }
+    }
     if (li != 0u) {
         return;
     }
     var sum: array<f32, 23>;
-    for (var t = 0u; t < 64u; t = t + 1u) {
-        for (var q = 0u; q < TERMS; q = q + 1u) {
-            sum[q] = sum[q] + part[t * TERMS + q];
-        }
+    for (var q = 0u; q < TERMS; q = q + 1u) {
+        sum[q] = part[q];
     }
     let frame = mat3x3<f32>(cam.t.xyz, cam.b.xyz, cam.n.xyz);
     let index = u32(cam.n.w);
