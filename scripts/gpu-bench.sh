@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # GI Lab's GPU benchmark: every shipped preset on the embedded default scene at 1920x1080
 # (also summed up as one Markdown table, gpu-bench.md: GPU and wall time, the per-frame
-# counters of issue #38 and the heaviest pass),
+# counters of issue #38 and the heaviest pass), the papers' blended splats beside the default
+# (binned on a GPU), the default preset at 960x540 and 3840x2160 (how the passes scale),
 # the suites (knecht and nguyen at 1920x1080, soler at 1280x720 as its Fig. 9, gautron at
 # 64x64 for its per-pixel brute force, scenes at 1920x1080 over assets/), written as text
 # into one folder. Run it from the project root with a release build:
@@ -81,6 +82,10 @@ done
 preset_row gautron-ic-splatting+blend presets/gautron-ic-splatting.ron --set gautron.splat=Blend
 preset_row nguyen-hcb+blend presets/nguyen-hcb.ron --set hcb.splat=Blend
 preset_row nguyen-hcb-cached+blend presets/nguyen-hcb-cached.ron --set hcb.splat=Blend
+# The default preset at a quarter and four times the pixels: how each pass scales with the
+# image (on the H100/H200 the G-buffer is linear in the pixels: their raster is the limit).
+row "scaling 960x540" bench --preset presets/default.ron --size 960x540 --frames 30 --flicker-frames 0 --afterglow-frames 0
+row "scaling 3840x2160" bench --preset presets/default.ron --size 3840x2160 --frames 30 --flicker-frames 0 --afterglow-frames 0
 row "suite knecht" bench --suite knecht --size "$SIZE" --frames 20
 row "suite nguyen" bench --suite nguyen --size "$SIZE" --frames 20
 row "suite soler" bench --suite soler --size 1280x720 --frames 20
