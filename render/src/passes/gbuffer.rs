@@ -19,7 +19,10 @@ pub const POSITION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Floa
 pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 pub const MATERIAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
-pub const MOTION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
+/// The movement buffer (Knecht 002 §3.5.1) in pixels: half floats (issue #38), a step of
+/// 1/256 px below 4 px of motion and 1/32 px at 32–64 px, far below what the histories'
+/// bilinear lookups resolve.
+pub const MOTION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
 pub const EMISSION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
