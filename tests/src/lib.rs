@@ -96,6 +96,27 @@ pub fn stored_reference(file: &str) -> gi_render::ImageF32 {
     gi_render::image_io::load_float_image(&path).unwrap_or_else(|e| panic!("tests/data/{file}: {e}"))
 }
 
+/// An `Rgba32Float` texture of `w`×`h` texels (a synthetic G-buffer target).
+pub fn upload_rgba32f(ctx: &GpuContext, label: &str, w: u32, h: u32, data: &[[f32; 4]]) -> wgpu::Texture {
+    texture_from_bytes(ctx, label, wgpu::TextureFormat::Rgba32Float, (w, h), bytemuck::cast_slice(data))
+}
+
+/// A synthetic G-buffer of `w`×`h` for the HCB's tests from a function of the pixel:
+/// (position, normal); position.w = the view depth −z (a camera at the origin looking down
+/// −z); None for the background.
+pub fn hcb_gbuffer(
+    w: u32,
+    h: u32,
+    f: impl Fn(u32, u32) -> Option<(glam::Vec3, glam::Vec3)>,
+) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
+    (0..w * h)
+        .map(|i| match f(i % w, i / w) {
+            Some((p, n)) => ([p.x, p.y, p.z, -p.z], [n.x, n.y, n.z, 1.0]),
+            None => ([0.0; 4], [0.0; 4]),
+        })
+        .unzip()
+}
+
 /// A sampled, copyable 2D texture of `format` filled with `bytes` (tightly packed rows).
 pub fn texture_from_bytes(
     ctx: &GpuContext,
