@@ -208,6 +208,26 @@ fn buffers_lists_registered_names_and_bench_prints_every_pass() {
     assert_eq!(number("objects_created_per_frame"), 0.0);
     assert!(number("traffic_bytes_per_frame") > 32.0 * 32.0 * 16.0);
     assert!(number("window_frame_ms") > 0.0);
+    // The default technique has no device-dependent pass.
+    assert_eq!(v["device_choices"], serde_json::json!([]), "device choices of the default");
+    // The HCB's splat and gather are chosen by the device (binned and a workgroup per
+    // sample on a GPU, the quads and an invocation per sample on a CPU renderer).
+    let o = gi_lab()
+        .args(["bench", "--size", "32x32", "--frames", "1", "--json", "--preset"])
+        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/../presets/nguyen-hcb.ron"))
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("bench --json prints JSON");
+    let choices: Vec<&str> =
+        v["device_choices"].as_array().expect("device_choices").iter().filter_map(|c| c.as_str()).collect();
+    let cpu = v["adapter"].as_str().is_some_and(|a| a.contains("llvmpipe") || a.contains("SwiftShader"));
+    let want = if cpu {
+        ["hcb.splat Auto → Blend", "HCB gather: an invocation per sample"]
+    } else {
+        ["hcb.splat Auto → Binned", "HCB gather: a workgroup per sample"]
+    };
+    assert_eq!(choices, want, "{v}");
     let o = gi_lab()
         .args(["bench", "--size", "64x64", "--frames", "2", "--json", "--set", "pipeline.gather=None"])
         .output()

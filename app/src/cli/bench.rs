@@ -124,6 +124,10 @@ pub struct BenchReport {
     /// after the first light's intensity is halved (`metrics::afterglow`); None when not
     /// measured or when it did not settle.
     pub afterglow_frames: Option<usize>,
+    /// What this device ran where a GPU and a CPU renderer run different passes with the same
+    /// result (the splats' `Auto`, the gathers' shape: docs/architecture.md), e.g.
+    /// "hcb.splat Auto → Binned".
+    pub device_choices: Vec<String>,
 }
 
 /// Renders warm-up and measured frames and aggregates the per-pass times.
@@ -181,6 +185,7 @@ pub fn bench_run(r: &mut Renderer, frames: u32, scene_name: &str) -> BenchReport
 
     let per_frame = |n: u64| n as f64 / frames.max(1) as f64;
     let (width, height) = r.size();
+    let device_choices = device_choices(r);
     BenchReport {
         adapter: r.ctx.adapter_summary(),
         timing_source: format!("{:?}", r.timing_source()),
@@ -200,7 +205,31 @@ pub fn bench_run(r: &mut Renderer, frames: u32, scene_name: &str) -> BenchReport
         flip: None,
         rmse: None,
         afterglow_frames: None,
+        device_choices,
     }
+}
+
+/// The device-dependent choices of the stages `r` runs (see [`BenchReport::device_choices`]).
+fn device_choices(r: &mut Renderer) -> Vec<String> {
+    let shape = |wide: bool, item: &str| {
+        if wide { format!("a workgroup per {item}") } else { format!("an invocation per {item}") }
+    };
+    let hcb_wide = r.hcb_mut().map(|h| h.gather.wide);
+    let records_wide = r.gautron_mut().and_then(|g| g.vpl_records_mut().map(|p| p.wide));
+    let has_gautron = r.gautron().is_some();
+    let s = r.settings();
+    let mut v = Vec::new();
+    if let Some(wide) = hcb_wide {
+        v.push(format!("hcb.splat {:?} → {:?}", s.hcb.splat, s.hcb.splat.on(&r.ctx)));
+        v.push(format!("HCB gather: {}", shape(wide, "sample")));
+    }
+    if has_gautron {
+        v.push(format!("gautron.splat {:?} → {:?}", s.gautron.splat, s.gautron.splat.on(&r.ctx)));
+    }
+    if let Some(wide) = records_wide {
+        v.push(format!("VPL-lit records: {}", shape(wide, "record")));
+    }
+    v
 }
 
 /// Mean wall-clock ms of `frames` frames as the window renders them: interactive mode (no
@@ -244,6 +273,9 @@ pub fn format_bench_table(b: &BenchReport) -> String {
         "per frame: {:.1} blocking waits, {:.1} submits, {:.1} GPU objects created\n",
         b.blocking_waits_per_frame, b.submits_per_frame, b.objects_created_per_frame
     );
+    if !b.device_choices.is_empty() {
+        s += &format!("on this device: {}\n", b.device_choices.join("; "));
+    }
     if let Some(f) = b.flicker {
         s += &format!("flicker (static scene) {f:.6}\n");
     }
