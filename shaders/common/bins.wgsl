@@ -62,11 +62,19 @@ fn bins_mark(j: u32, r: vec4<f32>, size: vec2<f32>) {
 var<workgroup> bin_kept: array<u32, BIN_MAX_WORDS>;
 var<workgroup> bin_summary: array<atomic<u32>, 64>;
 
+// NDC of the centre of pixel p (y down in pixels, up in NDC) on a screen of 1 / `inv_size`
+// pixels (the camera's viewport.zw).
+fn bin_centre_ndc(p: vec2<u32>, inv_size: vec2<f32>) -> vec2<f32> {
+    return vec2<f32>((f32(p.x) + 0.5) * inv_size.x * 2.0 - 1.0, 1.0 - (f32(p.y) + 0.5) * inv_size.y * 2.0);
+}
+
 // Collects the items j < `end` of the square holding pixel `origin` whose rectangle overlaps
-// the NDC box from `a` (the top-left pixel centre) to `b` (the bottom-right one). Every
-// invocation of the 16 × 16 workgroup calls it (it has barriers); it returns the words to
-// walk.
-fn bins_collect(li: u32, origin: vec2<u32>, end: u32, a: vec2<f32>, b: vec2<f32>) -> u32 {
+// the 16 × 16 pixels from `origin` (their centres' NDC box; `inv_size` as bin_centre_ndc's).
+// Every invocation of the workgroup calls it (it has barriers); it returns the words to walk.
+fn bins_collect(li: u32, origin: vec2<u32>, end: u32, inv_size: vec2<f32>) -> u32 {
+    // The NDC range of the workgroup's pixel centres (y: top is the larger).
+    let a = bin_centre_ndc(origin, inv_size);
+    let b = bin_centre_ndc(origin + vec2<u32>(15u), inv_size);
     let square = (origin.y / bin_params.bins.w) * bin_params.bins.x + origin.x / bin_params.bins.w;
     let words = min(min(bin_params.bins.z, BIN_MAX_WORDS), (end + 31u) / 32u);
     if (li < 64u) {

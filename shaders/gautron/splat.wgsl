@@ -115,11 +115,6 @@ fn fs_splat(i: SplatOut) -> SplatTargets {
     return o;
 }
 
-// NDC of pixel centre (x, y) (y down in pixels, up in NDC).
-fn centre_ndc(x: f32, y: f32) -> vec2<f32> {
-    return vec2<f32>((x + 0.5) * camera.viewport.z * 2.0 - 1.0, 1.0 - (y + 0.5) * camera.viewport.w * 2.0);
-}
-
 // Binned: record args[3] + j into the squares of its rectangle.
 @compute @workgroup_size(64, 1, 1)
 fn cs_bin(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -135,10 +130,7 @@ fn cs_bin(@builtin(global_invocation_id) gid: vec3<u32>) {
 fn cs_accumulate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
     let size = textureDimensions(out_weighted);
     let origin = wg.xy * 16u;
-    // The NDC range of the workgroup's pixel centres (y: top is the larger).
-    let a = centre_ndc(f32(origin.x), f32(origin.y));
-    let b = centre_ndc(f32(origin.x + 15u), f32(origin.y + 15u));
-    let words = bins_collect(li, origin, args[1], a, b);
+    let words = bins_collect(li, origin, args[1], camera.viewport.zw);
     if (gid.x >= size.x || gid.y >= size.y) {
         return;
     }
@@ -153,7 +145,7 @@ fn cs_accumulate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_i
     if (nrm.w >= 0.5) {
         let p = textureLoad(g_position, px, 0).xyz;
         let n = normalize(nrm.xyz);
-        let c = centre_ndc(f32(gid.x), f32(gid.y));
+        let c = bin_centre_ndc(gid.xy, camera.viewport.zw);
         let rotational = params.weight.z > 0.5;
         let translational = params.weight.w > 0.5;
         var cursor = bins_start(words);

@@ -112,16 +112,26 @@ fn gather_vpls(x: vec3<f32>, nx: vec3<f32>, first: u32, step: u32) -> vec3<f32> 
     return e;
 }
 
-// GPU: one workgroup per sample (dispatch words 12–14).
-@compute @workgroup_size(64, 1, 1)
-fn cs_gather(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let j = wg.x + wg.y * 65535u;
-    // Uniform per workgroup: every invocation returns or none does (the barriers below).
+const NO_SAMPLE: u32 = 0xffffffffu;
+
+// The list slot of the j-th sample this dispatch gathers, or NO_SAMPLE past them.
+fn gathered(j: u32) -> u32 {
     if (j >= gather_count()) {
-        return;
+        return NO_SAMPLE;
     }
     let i = gather_slot(j);
     if (i >= sample_count()) {
+        return NO_SAMPLE;
+    }
+    return i;
+}
+
+// GPU: one workgroup per sample (dispatch words 12–14).
+@compute @workgroup_size(64, 1, 1)
+fn cs_gather(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    // Uniform per workgroup: every invocation returns or none does (the barriers below).
+    let i = gathered(wg.x + wg.y * 65535u);
+    if (i == NO_SAMPLE) {
         return;
     }
     let s = list[i];
@@ -140,12 +150,8 @@ fn cs_gather(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
 // CPU renderer: one invocation per sample (dispatch words 4–6).
 @compute @workgroup_size(64, 1, 1)
 fn cs_gather_serial(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let j = gid.x + gid.y * 65535u * 64u;
-    if (j >= gather_count()) {
-        return;
-    }
-    let i = gather_slot(j);
-    if (i >= sample_count()) {
+    let i = gathered(gid.x + gid.y * 65535u * 64u);
+    if (i == NO_SAMPLE) {
         return;
     }
     let s = list[i];

@@ -107,11 +107,6 @@ fn splat_range() -> vec2<u32> {
     return vec2<u32>(select(0u, counter[1], new_only), args[select(1u, 9u, new_only)]);
 }
 
-// NDC of pixel centre (x, y) (y down in pixels, up in NDC).
-fn centre_ndc(x: f32, y: f32) -> vec2<f32> {
-    return vec2<f32>((x + 0.5) * camera.viewport.z * 2.0 - 1.0, 1.0 - (y + 0.5) * camera.viewport.w * 2.0);
-}
-
 // Binned: sample first + j into the squares of its quad; the samples beyond the bins'
 // capacity into the remainder's draw (first instance: the capacity).
 @compute @workgroup_size(64, 1, 1)
@@ -133,9 +128,7 @@ fn cs_accumulate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_i
     let size = textureDimensions(out_sum);
     let range = splat_range();
     let origin = wg.xy * 16u;
-    let lo = centre_ndc(f32(origin.x), f32(origin.y));
-    let hi = centre_ndc(f32(origin.x + 15u), f32(origin.y + 15u));
-    let words = bins_collect(li, origin, range.y, lo, hi);
+    let words = bins_collect(li, origin, range.y, camera.viewport.zw);
     if (gid.x >= size.x || gid.y >= size.y) {
         return;
     }
@@ -148,7 +141,7 @@ fn cs_accumulate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_i
     if (nb.w >= 0.5) {
         let b = textureLoad(g_position, px, 0).xyz;
         let n_b = normalize(nb.xyz);
-        let c = centre_ndc(f32(gid.x), f32(gid.y));
+        let c = bin_centre_ndc(gid.xy, camera.viewport.zw);
         var cursor = bins_start(words);
         for (var j = bins_next(&cursor, c); j != BIN_NONE; j = bins_next(&cursor, c)) {
             let v = splat_value(samples[range.x + j], b, n_b);

@@ -96,6 +96,12 @@ pub fn stored_reference(file: &str) -> gi_render::ImageF32 {
     gi_render::image_io::load_float_image(&path).unwrap_or_else(|e| panic!("tests/data/{file}: {e}"))
 }
 
+/// The largest |a − b| / max(|a|, 10⁻³) over the channels of two images of the same size (two
+/// runs that should agree to float rounding).
+pub fn max_relative_difference(a: &[[f32; 4]], b: &[[f32; 4]]) -> f32 {
+    a.iter().flatten().zip(b.iter().flatten()).map(|(x, y)| (x - y).abs() / x.abs().max(1e-3)).fold(0.0, f32::max)
+}
+
 /// An `Rgba32Float` texture of `w`×`h` texels (a synthetic G-buffer target).
 pub fn upload_rgba32f(ctx: &GpuContext, label: &str, w: u32, h: u32, data: &[[f32; 4]]) -> wgpu::Texture {
     texture_from_bytes(ctx, label, wgpu::TextureFormat::Rgba32Float, (w, h), bytemuck::cast_slice(data))

@@ -345,12 +345,7 @@ fn the_gather_per_workgroup_equals_the_gather_per_invocation() {
         let (serial, wide) = (run(false), run(true));
         let lit = serial.iter().filter(|p| p[0] + p[1] + p[2] > 1e-4).count();
         assert!(lit > 4000, "{lit} pixels lit");
-        let worst = serial
-            .iter()
-            .flatten()
-            .zip(wide.iter().flatten())
-            .map(|(a, b)| (a - b).abs() / a.abs().max(1e-3))
-            .fold(0.0f32, f32::max);
+        let worst = gi_lab_tests::max_relative_difference(&serial, &wide);
         assert!(worst <= 1e-4, "cache {cached}: relative difference {worst}");
     }
 }

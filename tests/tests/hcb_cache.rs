@@ -185,12 +185,7 @@ fn the_binned_splat_equals_the_blended_quads_in_the_renderer() {
             ("hcb.indirect", &blend.2, &binned.2),
             ("final.hdr", &blend.3, &binned.3),
         ] {
-            let worst = a
-                .iter()
-                .flatten()
-                .zip(b.iter().flatten())
-                .map(|(x, y)| (x - y).abs() / x.abs().max(1e-3))
-                .fold(0.0f32, f32::max);
+            let worst = gi_lab_tests::max_relative_difference(a, b);
             assert!(worst <= 1e-5, "cache {cache}, {name}: relative difference {worst}");
         }
     }
