@@ -191,6 +191,8 @@ impl GiLabApp {
             last_saved_session: String::new(),
             device_lost: None,
             lose_device_at: std::env::var(LOSE_DEVICE_ENV).ok().and_then(|v| v.parse().ok()),
+            history: Default::default(),
+            show_history_request: false,
         };
         Self { tree, state }
     }
@@ -330,6 +332,30 @@ impl GiLabApp {
         cmd.spawn().map(|_| ()).map_err(|e| e.to_string())
     }
 
+    /// Shows the History pane: its tab when it is in the layout, else a new tab beside the
+    /// GPU timings (layouts saved before it existed have none).
+    pub fn show_history_pane(&mut self) {
+        let tile = match self.tree.tiles.find_pane(&Pane::History) {
+            Some(t) => t,
+            None => {
+                let pane = self.tree.tiles.insert_pane(Pane::History);
+                let parent = self
+                    .tree
+                    .tiles
+                    .find_pane(&Pane::Timings)
+                    .and_then(|t| self.tree.tiles.parent_of(t))
+                    .or(self.tree.root());
+                if let Some(parent) = parent
+                    && let Some(egui_tiles::Tile::Container(c)) = self.tree.tiles.get_mut(parent)
+                {
+                    c.add_child(pane);
+                }
+                pane
+            }
+        };
+        self.tree.make_active(|id, _| id == tile);
+    }
+
     /// Adds a buffer viewer panel next to the first viewer (or on the right).
     pub fn add_viewer(&mut self) {
         let id = self.state.viewers.keys().max().copied().unwrap_or(0) + 1;
@@ -467,6 +493,13 @@ impl GiLabApp {
         self.state.problem_dialog(ctx);
         self.state.help_window(ctx);
         self.state.frames += 1;
+        // An edit becomes an undo step once its gesture ends (a drag released, a typed value
+        // left): a slider drag is one step.
+        let idle = !ctx.input(|i| i.pointer.any_down()) && !ctx.egui_wants_keyboard_input();
+        self.state.record_history(idle);
+        if std::mem::take(&mut self.state.show_history_request) {
+            self.show_history_pane();
+        }
         self.screenshot_step(ctx);
         self.autosave();
         ctx.request_repaint();

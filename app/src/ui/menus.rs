@@ -9,6 +9,8 @@ use crate::ui::state::State;
 pub const SHORTCUTS: &[(&str, &str)] = &[
     ("Space", "play / pause the animation"),
     ("Period (.)", "step one frame (paused)"),
+    ("Ctrl+Z", "undo the last edit"),
+    ("Ctrl+Shift+Z / Ctrl+Y", "redo"),
     ("Ctrl+N", "new preset (defaults)"),
     ("Ctrl+O", "open a preset"),
     ("Ctrl+S", "save the preset"),
@@ -55,6 +57,12 @@ impl State {
         }
         if typing {
             return;
+        }
+        // Text fields have their own undo: these act only when no field is focused.
+        if pressed(ctrl_shift, Key::Z) || pressed(Modifiers::COMMAND, Key::Y) {
+            self.redo();
+        } else if pressed(Modifiers::COMMAND, Key::Z) {
+            self.undo();
         }
         let Ok(l) = &mut self.lab else { return };
         if pressed(Modifiers::NONE, Key::Space) {
@@ -136,6 +144,26 @@ impl State {
                 ui.separator();
                 if ui.button("Quit").clicked() {
                     ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+                }
+            });
+            ui.menu_button("Edit", |ui| {
+                let undo = self.history.undo_name().map(|n| format!("Undo {n}"));
+                if ui
+                    .add_enabled(undo.is_some(), egui::Button::new(undo.unwrap_or_else(|| "Undo".into())).shortcut_text("Ctrl+Z"))
+                    .clicked()
+                {
+                    self.undo();
+                }
+                let redo = self.history.redo_name().map(|n| format!("Redo {n}"));
+                if ui
+                    .add_enabled(redo.is_some(), egui::Button::new(redo.unwrap_or_else(|| "Redo".into())).shortcut_text("Ctrl+Shift+Z"))
+                    .clicked()
+                {
+                    self.redo();
+                }
+                ui.separator();
+                if ui.button("History").on_hover_text("every edit of this session; click one to go back to it").clicked() {
+                    self.show_history_request = true;
                 }
             });
             ui.menu_button("View", |ui| {

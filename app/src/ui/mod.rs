@@ -8,6 +8,7 @@
 pub mod ab;
 pub mod app;
 pub mod capture;
+pub mod history;
 pub mod hot_reload;
 pub mod lab;
 pub mod menus;

@@ -125,7 +125,8 @@ impl State {
             std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
         }
         settings.save(path).map_err(|e| e.to_string())?;
-        self.preset.path = Some(path.to_path_buf());
+        let old = self.preset.path.replace(path.to_path_buf());
+        self.history.saved(old.as_deref(), path, &settings);
         self.preset.baseline = settings;
         Session::remember(&mut self.session.recent_presets, path);
         self.set_status(format!("saved {}", path.display()));

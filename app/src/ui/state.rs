@@ -80,6 +80,10 @@ pub struct State {
     /// reset would (for the test of the real restart, `app/tests/app_window.rs`).
     pub(super) lose_device_at: Option<u64>,
     pub(super) last_saved_session: String,
+    /// Undo and redo (issue #39 point 1).
+    pub history: crate::ui::history::History,
+    /// Edit → History asked for the History pane (the app owns the layout).
+    pub show_history_request: bool,
 }
 
 impl State {
