@@ -182,6 +182,7 @@ impl GiLabApp {
             show_hcb_samples: false,
             show_soler_samples: false,
             show_gautron_records: false,
+            show_lights: true,
             ab: None,
             request_new_viewer: false,
             request_reset_layout: false,

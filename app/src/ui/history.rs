@@ -184,10 +184,8 @@ fn describe_lights(a: &LightsState, b: &LightsState) -> String {
     match differing.as_slice() {
         [] if !same_sky(&a.sky, &b.sky) => "edit the sky".into(),
         [] => "lights".into(),
-        [(x, y)] if x.translation != y.translation || x.rotation != y.rotation => {
-            let aim = matches!(y.def.as_ref().map(|d| d.kind), Some(crate::scene_lights::LightKindDef::Directional));
-            format!("{} light {}", if aim { "aim" } else { "move" }, light_name(y))
-        }
+        [(x, y)] if x.translation != y.translation => format!("move light {}", light_name(y)),
+        [(x, y)] if x.rotation != y.rotation => format!("aim light {}", light_name(y)),
         [(_, y)] => format!("edit light {}", light_name(y)),
         many => format!("edit {} lights", many.len()),
     }

@@ -24,6 +24,10 @@ pub struct Lab {
     pub scene_name: String,
     pub scene_path: Option<PathBuf>,
     pub unit_scale: f32,
+    /// The light (its node) selected in the viewport or the Scene panel (issue #39 point 2).
+    pub selected_light: Option<usize>,
+    /// The selection changed in the viewport: the Scene panel opens that light's section.
+    pub reveal_selected: bool,
 }
 
 impl Lab {
@@ -64,6 +68,8 @@ impl Lab {
             scene_name,
             scene_path: scene.scene.clone(),
             unit_scale: scene.unit_scale,
+            selected_light: None,
+            reveal_selected: false,
         })
     }
 
@@ -85,6 +91,7 @@ impl Lab {
         self.scene_name = name;
         self.scene_path = path;
         self.unit_scale = unit_scale;
+        self.selected_light = None;
         // The new renderer has new textures: make the next frame re-point egui's texture.
         self.texture = self.texture.map(|(id, _)| (id, (0, 0)));
         Ok(())

@@ -22,7 +22,8 @@ pub const SHORTCUTS: &[(&str, &str)] = &[
     ("Home", "reset the camera"),
     ("F", "frame the scene (the view it opens on: inside its largest room, or around it)"),
     ("H", "restart temporal accumulation"),
-    ("Escape", "unpin all probes"),
+    ("Escape", "unpin all probes, deselect the light"),
+    ("Ctrl (while dragging a light)", "snap the move to the grid, the aim to 15°"),
     ("Drag / WASD QE / scroll", "orbit / fly / move (viewport)"),
     ("Click", "pin a probe (viewport, viewers)"),
 ];
@@ -89,6 +90,9 @@ impl State {
         if pressed(Modifiers::NONE, Key::Escape) {
             self.pinned.clear();
             self.probe_history.clear();
+            if let Ok(l) = &mut self.lab {
+                l.selected_light = None;
+            }
         }
     }
 
@@ -185,6 +189,10 @@ impl State {
                 {
                     self.set_status(e);
                 }
+                ui.checkbox(&mut self.show_lights, "Lights in the viewport").on_hover_text(
+                    "every light over the image (icon, spot cones, directions, ranges); click one to select it, \
+                     drag its arrows to move it or its yellow handle to aim it (Ctrl: snap)",
+                );
                 ui.checkbox(&mut self.show_vpls, "VPL overlay (vpl.list)").on_hover_text(
                     "instant radiosity's VPLs as dots over the viewport, coloured by their reflected flux \
                      (the brightest at full colour); reads the list back every frame",

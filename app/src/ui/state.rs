@@ -66,6 +66,9 @@ pub struct State {
     /// View → Gautron records overlay: the irradiance records as dots coloured by E_k with
     /// their influence circles a·R_k (003, "From Octree to Splatting").
     pub show_gautron_records: bool,
+    /// View → Lights in the viewport: every light drawn over the image, the selected one
+    /// with its move and aim handles (issue #39 point 2).
+    pub show_lights: bool,
     /// The A/B comparison, when one runs.
     pub ab: Option<crate::ui::ab::Ab>,
     pub hot: crate::ui::hot_reload::HotReload,

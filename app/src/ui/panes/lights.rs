@@ -32,14 +32,21 @@ pub(super) fn light_controls(l: &mut Lab, ui: &mut egui::Ui) -> Option<String> {
     }
     let mut remove = None;
     let mut duplicate = None;
+    // The light selected in the viewport: its section opens (once) and scrolls into view; a
+    // click on a section's header selects its light there.
+    let (selected, reveal) = (l.selected_light, std::mem::take(&mut l.reveal_selected));
+    let mut clicked = None;
     for (k, &ni) in light_nodes.iter().enumerate() {
         let scene = l.renderer.scene_mut();
         let Some(li) = scene.nodes[ni].light else { continue };
         let name = scene.lights[li].name.clone();
         let directional = matches!(scene.lights[li].kind, gi_render::scene::LightKind::Directional);
-        egui::CollapsingHeader::new(format!("Light {k}: {name}")).id_salt(("light", ni)).default_open(k == 0).show(
-            ui,
-            |ui| {
+        let reveal_this = reveal && selected == Some(ni);
+        let section = egui::CollapsingHeader::new(format!("Light {k}: {name}"))
+            .id_salt(("light", ni))
+            .default_open(k == 0)
+            .open(reveal_this.then_some(true))
+            .show(ui, |ui| {
                 let tr = &mut scene.nodes[ni].transform;
                 if directional {
                     // A directional light has no position: edit where it shines from.
@@ -114,8 +121,16 @@ pub(super) fn light_controls(l: &mut Lab, ui: &mut egui::Ui) -> Option<String> {
                         remove = Some(ni);
                     }
                 });
-            },
-        );
+            });
+        if reveal_this {
+            section.header_response.scroll_to_me(Some(egui::Align::TOP));
+        }
+        if section.header_response.clicked() {
+            clicked = Some(ni);
+        }
+    }
+    if clicked.is_some() {
+        l.selected_light = clicked;
     }
     if let Some(ni) = duplicate {
         scene_lights::duplicate_light(l.renderer.scene_mut(), ni, r);

@@ -3,6 +3,7 @@
 //! layout is part of the session.
 
 mod history;
+mod light_gizmo;
 mod lights;
 mod presets;
 mod probes;

@@ -30,6 +30,13 @@ pub(super) fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
     if st.show_gautron_records {
         records_overlay(st, ui, rect);
     }
+    // The lights and their handles, on top of the image's response (they take its clicks
+    // and drags where they are).
+    if st.show_lights
+        && let Ok(l) = &mut st.lab
+    {
+        super::light_gizmo::light_gizmos(l, ui, rect);
+    }
     if !st.hot.errors.is_empty() {
         // The compile error stays on screen until the file is fixed.
         let text: Vec<String> = st.hot.errors.iter().map(|(f, e)| format!("{f}: {e}")).collect();
