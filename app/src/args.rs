@@ -40,6 +40,10 @@ pub struct AppArgs {
     /// off to check what the lab saved and says.
     #[arg(long = "no-restart-on-device-loss", action = clap::ArgAction::SetFalse, hide = true)]
     pub restart_on_device_loss: bool,
+    /// Lower the render scale while dragging to keep View → target frame rate (issue #39);
+    /// tests turn it off so that their render sizes stay fixed.
+    #[arg(long = "no-adaptive-scale", action = clap::ArgAction::SetFalse)]
+    pub adaptive_scale: bool,
 }
 
 impl Default for AppArgs {
@@ -55,6 +59,7 @@ impl Default for AppArgs {
             hot_reload: None,
             recovered: None,
             restart_on_device_loss: true,
+            adaptive_scale: true,
         }
     }
 }

@@ -18,7 +18,14 @@ pub fn temp_dir(name: &str) -> PathBuf {
 /// Arguments that keep the app's session and presets in `dir` (never the user's).
 pub fn args_in(dir: &std::path::Path, fresh: bool) -> AppArgs {
     let _ = std::fs::create_dir_all(dir.join("presets"));
-    AppArgs { config_dir: Some(dir.join("config")), presets_dir: dir.join("presets"), fresh, ..AppArgs::default() }
+    AppArgs {
+        config_dir: Some(dir.join("config")),
+        presets_dir: dir.join("presets"),
+        fresh,
+        // Fixed render sizes: the adaptive scale's own test turns it on.
+        adaptive_scale: false,
+        ..AppArgs::default()
+    }
 }
 
 /// The app with `args` in a harness of `size` points.

@@ -193,6 +193,8 @@ impl GiLabApp {
             device_lost: None,
             lose_device_at: std::env::var(LOSE_DEVICE_ENV).ok().and_then(|v| v.parse().ok()),
             history: Default::default(),
+            adaptive: Default::default(),
+            interacting: false,
             show_history_request: false,
         };
         Self { tree, state }
@@ -469,6 +471,14 @@ impl GiLabApp {
                 self.state.viewers.entry(id).or_insert_with(|| Viewer::new(ViewerState::default()));
             }
         }
+        self.state.interacting = ctx.input(|i| {
+            let flying = [egui::Key::W, egui::Key::A, egui::Key::S, egui::Key::D, egui::Key::Q, egui::Key::E]
+                .iter()
+                .any(|k| i.key_down(*k));
+            i.pointer.any_down()
+                || i.smooth_scroll_delta != egui::Vec2::ZERO
+                || (flying && !ctx.egui_wants_keyboard_input())
+        });
         self.state.frame();
         // The panels set the hovered pixel again while they are drawn.
         self.state.hover = None;

@@ -218,6 +218,11 @@ impl State {
                     ui.add(egui::Slider::new(&mut self.session.render_scale, 0.1..=2.0).step_by(0.05))
                         .on_hover_text("render resolution relative to the viewport's physical pixels; a new session starts at 1 / the display's scale (one pixel per point)");
                 });
+                ui.horizontal(|ui| {
+                    ui.label("target frame rate");
+                    ui.add(egui::DragValue::new(&mut self.session.target_fps).range(0.0..=120.0).speed(0.5).suffix(" fps"))
+                        .on_hover_text("while you drag or fly, the render scale is lowered until a frame takes at most 1 / this; it comes back a moment after you stop, so that the temporal passes converge at full scale; 0: off");
+                });
                 ui.menu_button("A/B compare", |ui| {
                     if ui.button("with the exact-VPL reference").clicked() {
                         self.start_ab(crate::ui::ab::AbSource::Reference);
@@ -321,6 +326,13 @@ impl State {
                     self.viewport_px.0, self.viewport_px.1, self.session.render_scale
                 ))
                 .on_hover_text("View > render scale changes the render resolution");
+                if self.adaptive.factor < 1.0 {
+                    ui.colored_label(egui::Color32::from_rgb(255, 200, 80), format!("× {:.2} while dragging", self.adaptive.factor))
+                        .on_hover_text(format!(
+                            "the render scale is lowered to keep {} fps while you drag (View > target frame rate); the full scale comes back when you stop",
+                            self.session.target_fps
+                        ));
+                }
                 ui.separator();
                 ui.label(format!("frame {:.1} ms · GPU {:.2} ms ({:?})", l.frame_ms, gpu, l.renderer.timing_source()));
                 ui.separator();

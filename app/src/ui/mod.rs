@@ -6,6 +6,7 @@
 //! Camera: drag to orbit, WASD/QE to fly, scroll to move forward/back; click to pin a probe.
 
 pub mod ab;
+pub mod adaptive;
 pub mod app;
 pub mod capture;
 pub mod history;

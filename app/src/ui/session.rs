@@ -67,6 +67,9 @@ pub struct Session {
     pub probes: Vec<PinnedProbe>,
     /// Render resolution relative to the viewport's pixels.
     pub render_scale: f32,
+    /// Frames per second the window keeps while the user drags, by lowering the render
+    /// scale (`crate::ui::adaptive`); 0: off.
+    pub target_fps: f32,
     pub playing: bool,
     pub speed: f64,
     pub loop_s: f64,
@@ -92,6 +95,7 @@ impl Default for Session {
             viewers: Vec::new(),
             probes: Vec::new(),
             render_scale: default_render_scale(),
+            target_fps: 15.0,
             playing: true,
             speed: 1.0,
             loop_s: 0.0,

@@ -83,6 +83,10 @@ pub struct State {
     /// reset would (for the test of the real restart, `app/tests/app_window.rs`).
     pub(super) lose_device_at: Option<u64>,
     pub(super) last_saved_session: String,
+    /// The render scale's factor while the user drags (issue #39 point 3).
+    pub adaptive: crate::ui::adaptive::AdaptiveScale,
+    /// A gesture is under way this frame (a button held, a scroll, flying keys).
+    pub interacting: bool,
     /// Undo and redo (issue #39 point 1).
     pub history: crate::ui::history::History,
     /// Edit → History asked for the History pane (the app owns the layout).
@@ -182,7 +186,13 @@ impl State {
     /// Renders this frame, probes, and updates the viewers.
     pub(super) fn frame(&mut self) {
         self.hot_reload();
-        let scale = self.session.render_scale.clamp(0.1, 2.0);
+        let last_ms = self.lab.as_ref().map(|l| l.frame_ms).unwrap_or(0.0);
+        let factor = if self.args.adaptive_scale && self.render_size_override.is_none() {
+            self.adaptive.update(self.interacting, last_ms, self.session.target_fps, Instant::now())
+        } else {
+            1.0
+        };
+        let scale = self.session.render_scale.clamp(0.1, 2.0) * factor;
         let (vw, vh) = self.viewport_px;
         let target = self
             .render_size_override
