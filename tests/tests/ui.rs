@@ -103,8 +103,8 @@ fn every_setting_has_a_widget_that_changes_the_renderer() {
     for (group, fields) in LabSettings::groups() {
         let first = format!("{group}.{}", fields[0].name);
         if h.query_by_label(&first).is_none() {
-            // A section that starts collapsed: open it.
-            h.get_by_label(&gi_lab::ui::settings_ui::section_title(group)).click();
+            // A section that starts collapsed (or folded with why it cannot act): open it.
+            h.get_by_label_contains(&gi_lab::ui::settings_ui::section_title(group)).click();
             h.run_steps(2);
         }
         for m in fields {
@@ -113,6 +113,9 @@ fn every_setting_has_a_widget_that_changes_the_renderer() {
             assert!(before.is_some(), "{path}: no value");
             let node = h.query_by_label(&path);
             assert!(node.is_some(), "{path} has no widget in the settings panel");
+            // Labels wrap in a narrow panel: the panel can be taller than the window.
+            h.get_by_label(&path).scroll_to_me();
+            h.run_steps(1);
             match m.kind {
                 FieldKind::Bool => h.get_by_label(&path).click(),
                 FieldKind::Choice(names) => {
@@ -465,12 +468,23 @@ fn every_settings_text_has_glyphs() {
     for (k, what) in gi_lab::ui::menus::SHORTCUTS {
         texts.push(format!("{k} {what}"));
     }
+    // The papers' symbols, and the history's and labels' own texts.
+    texts.push(gi_lab::ui::PAPER_SYMBOLS.to_string());
+    for path in LabSettings::all_paths() {
+        texts.push(gi_lab::ui::settings_ui::label_of(&path));
+    }
+    // The app's fonts first (they take effect from the next frame), then the texts.
+    let installed = std::cell::Cell::new(false);
     let mut h = Harness::new_ui(move |ui| {
+        if !installed.replace(true) {
+            gi_lab::ui::install_fonts(ui.ctx());
+            return;
+        }
         for t in &texts {
             ui.label(t);
         }
     });
-    h.run_steps(1);
+    h.run_steps(2);
 }
 
 #[test]

@@ -15,9 +15,8 @@ fn a_drag_lowers_the_render_scale_and_its_end_restores_it() {
     // Every frame of the software renderer misses 200 fps: the scale must go down.
     h.state_mut().state.session.target_fps = 200.0;
     h.run_steps(3);
-    let size = |h: &egui_kittest::Harness<'static, gi_lab::ui::app::GiLabApp>| {
-        h.state().renderer().expect("renderer").size()
-    };
+    let size =
+        |h: &egui_kittest::Harness<'static, gi_lab::ui::app::GiLabApp>| h.state().renderer().expect("renderer").size();
     let full = size(&h);
     let centre = h.state().state.viewport_rect.center();
     h.drag_at(centre);

@@ -26,6 +26,7 @@ pub struct GiLabApp {
 
 impl GiLabApp {
     pub fn new(cc: &eframe::CreationContext<'_>, args: AppArgs) -> Self {
+        crate::ui::install_fonts(&cc.egui_ctx);
         let config_dir = session::config_dir(args.config_dir.as_deref());
         // Temporary files of saves that a kill interrupted (the saved files themselves are
         // whole: `preset::write_atomic`).
@@ -193,6 +194,7 @@ impl GiLabApp {
             device_lost: None,
             lose_device_at: std::env::var(LOSE_DEVICE_ENV).ok().and_then(|v| v.parse().ok()),
             history: Default::default(),
+            settings_search: String::new(),
             adaptive: Default::default(),
             interacting: false,
             show_history_request: false,

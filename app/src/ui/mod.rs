@@ -12,6 +12,7 @@ pub mod capture;
 pub mod history;
 pub mod hot_reload;
 pub mod lab;
+pub mod labels;
 pub mod menus;
 pub mod panes;
 pub mod presets;
@@ -24,6 +25,25 @@ use std::sync::Arc;
 
 use crate::args::AppArgs;
 use app::GiLabApp;
+
+/// The papers' symbols that the settings, tooltips and panes write (the glyph test draws
+/// them with [`install_fonts`]' fonts).
+pub const PAPER_SYMBOLS: &str = "∇ ∝ ‖ θ γ σ ρ ω Φ Ω π α β ε δ λ μ τ → ← ↔ ≤ ≥ ≈ ≠ ± × · ∑ ∫ √ ∞ ° ² ³ ⁻¹ ⁰¹²³⁴⁵⁶⁷⁸⁹ ₀₁₂₃₄₅₆₇₈₉ ₖ ₙ ᵢ ⱼ θ_max γ_max d_max";
+
+/// egui's fonts, then DejaVu Sans (`assets/fonts/`, Bitstream Vera licence beside it) for
+/// every glyph they lack: the Greek letters, operators, arrows and sub- and superscripts of
+/// the papers' symbols ([`PAPER_SYMBOLS`]), so that labels can write ∇, ∝ or ‖ as the papers do.
+pub fn install_fonts(ctx: &egui::Context) {
+    let mut fonts = egui::FontDefinitions::default();
+    fonts.font_data.insert(
+        "dejavu-sans".into(),
+        Arc::new(egui::FontData::from_static(include_bytes!("../../../assets/fonts/DejaVuSans.ttf"))),
+    );
+    for family in [egui::FontFamily::Proportional, egui::FontFamily::Monospace] {
+        fonts.families.entry(family).or_default().push("dejavu-sans".into());
+    }
+    ctx.set_fonts(fonts);
+}
 
 pub const ERROR: egui::Color32 = egui::Color32::from_rgb(255, 120, 80);
 

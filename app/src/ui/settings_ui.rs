@@ -15,6 +15,21 @@ use gi_render::settings::{FieldKind, FieldMeta, SettingsGroup, Value};
 /// Colour of the "differs from the preset" marker.
 pub const CHANGED: egui::Color32 = egui::Color32::from_rgb(255, 176, 64);
 
+/// The label of the field at `path`: its words and the paper's symbol ("splat radius d_max");
+/// the unit is in the value box, the path in the tooltip.
+pub fn label_of(path: &str) -> String {
+    let (group, name) = path.split_once('.').unwrap_or(("", path));
+    let meta = LabSettings::groups()
+        .into_iter()
+        .find(|(g, _)| *g == group)
+        .and_then(|(_, fields)| fields.iter().find(|m| m.name == name));
+    let words = crate::ui::labels::words(path).map(str::to_string).unwrap_or_else(|| name.replace('_', " "));
+    match meta {
+        Some(m) if !m.symbol.is_empty() => format!("{words} {}", m.symbol),
+        _ => words,
+    }
+}
+
 pub fn tooltip(m: &FieldMeta) -> String {
     let mut t = m.doc.split('\n').map(str::trim).collect::<Vec<_>>().join(" ").trim().to_string();
     if !m.symbol.is_empty() {
@@ -42,8 +57,24 @@ fn unit_suffix(m: &FieldMeta) -> String {
     if m.unit.is_empty() { String::new() } else { format!(" {}", m.unit) }
 }
 
-/// The widget of one value; returns its response (changed when the value changed).
-fn value_widget(ui: &mut Ui, path: &str, m: &FieldMeta, v: &mut Value) -> egui::Response {
+/// Width of the value box a slider draws for `v` (its text and unit, with the box's margin).
+fn value_box_width(ui: &Ui, m: &FieldMeta, v: &Value) -> f32 {
+    let text = match v {
+        Value::F32(x) => format!("{x:.3}{}", unit_suffix(m)),
+        Value::U32(x) => format!("{x}{}", unit_suffix(m)),
+        _ => return 0.0,
+    };
+    let font = egui::TextStyle::Button.resolve(ui.style());
+    ui.painter().layout_no_wrap(text, font, egui::Color32::WHITE).size().x + 2.0 * ui.spacing().button_padding.x
+}
+
+/// The widget of one value in `room` points; returns its response (changed when the value
+/// changed). The slider's rail takes what the value box leaves, so that the value and its
+/// unit are never cut; a choice's box fits the room and shortens its text with "…" (the
+/// whole text in its list and tooltip).
+fn value_widget(ui: &mut Ui, path: &str, m: &FieldMeta, v: &mut Value, room: f32) -> egui::Response {
+    let rail = (room - value_box_width(ui, m, v) - ui.spacing().item_spacing.x - 4.0).clamp(24.0, 95.0);
+    ui.spacing_mut().slider_width = rail;
     match v {
         Value::F32(x) => {
             ui.add(egui::Slider::new(x, m.min as f32..=m.max as f32).logarithmic(logarithmic(m)).suffix(unit_suffix(m)))
@@ -83,8 +114,12 @@ fn value_widget(ui: &mut Ui, path: &str, m: &FieldMeta, v: &mut Value) -> egui::
             };
             let mut changed = false;
             let mut r = egui::ComboBox::from_id_salt(path)
+                .width((room - 8.0).max(60.0))
+                .truncate()
                 .selected_text(label_of(c))
                 .show_ui(ui, |ui| {
+                    // The list shows every choice whole (only the closed box shortens).
+                    ui.style_mut().wrap_mode = Some(egui::TextWrapMode::Extend);
                     for n in names.iter() {
                         changed |= ui.selectable_value(c, *n, label_of(n)).changed();
                     }
@@ -108,18 +143,29 @@ fn dot(ui: &mut Ui, colour: Option<egui::Color32>, hover: &str) {
 }
 
 /// One row of a settings grid. Returns whether the value changed.
-fn field_row(ui: &mut Ui, path: &str, m: &FieldMeta, value: &mut Value, default: &Value, preset: &Value) -> bool {
-    let tip = tooltip(m);
+/// `label_width`: the most the label takes (it wraps beyond); `row_width`: the whole row's.
+#[allow(clippy::too_many_arguments)]
+fn field_row(
+    ui: &mut Ui,
+    path: &str,
+    m: &FieldMeta,
+    value: &mut Value,
+    default: &Value,
+    preset: &Value,
+    label_width: f32,
+    row_width: f32,
+) -> bool {
+    let tip = format!("{path}\n{}", tooltip(m));
     let differs = value != preset;
+    let label_start = ui.cursor().min.x;
     ui.horizontal(|ui| {
+        ui.set_max_width(label_width);
         dot(
             ui,
             differs.then_some(CHANGED),
             &format!("differs from the loaded preset (preset: {preset}{})", unit_suffix(m)),
         );
-        let name = m.name.replace('_', " ");
-        let text = if m.symbol.is_empty() { name } else { format!("{name} ({})", m.symbol) };
-        ui.label(text).on_hover_text(&tip);
+        ui.add(egui::Label::new(label_of(path)).wrap()).on_hover_text(&tip);
     });
     let mut changed = false;
     ui.horizontal(|ui| {
@@ -133,7 +179,9 @@ fn field_row(ui: &mut Ui, path: &str, m: &FieldMeta, value: &mut Value, default:
             *value = default.clone();
             changed = true;
         }
-        changed |= value_widget(ui, path, m, value).accessible_name(path).on_hover_text(&tip).changed();
+        // What is left of the row after the label column and the reset button.
+        let room = row_width - (ui.cursor().min.x - label_start);
+        changed |= value_widget(ui, path, m, value, room).accessible_name(path).on_hover_text(&tip).changed();
     });
     ui.end_row();
     changed
@@ -141,15 +189,57 @@ fn field_row(ui: &mut Ui, path: &str, m: &FieldMeta, value: &mut Value, default:
 
 /// The generic panel of one settings group: every field of `S`, from its metadata.
 pub fn group_ui<S: SettingsGroup>(ui: &mut Ui, s: &mut S, preset: &S) -> bool {
+    group_ui_filtered(ui, s, preset, "")
+}
+
+/// The paper a group's settings come from (the search finds them by its author's name).
+pub fn group_paper(group: &str) -> &'static str {
+    match group {
+        "vpl" | "ism" | "interleave" | "temporal" | "reference" => "Knecht",
+        "hcb" => "Nguyen",
+        "soler" => "Soler",
+        "gautron" => "Gautron",
+        "tonemap" => "Reinhard",
+        _ => "",
+    }
+}
+
+/// Whether the field at `path` matches the settings search `query` (lower case): its path,
+/// words, symbol, documentation, section or paper.
+pub fn matches_search(path: &str, m: &FieldMeta, query: &str) -> bool {
+    if query.is_empty() {
+        return true;
+    }
+    let group = path.split_once('.').map(|(g, _)| g).unwrap_or("");
+    [
+        path.to_string(),
+        label_of(path),
+        m.symbol.to_string(),
+        m.doc.to_string(),
+        section_title(group),
+        group_paper(group).to_string(),
+    ]
+    .iter()
+    .any(|t| t.to_lowercase().contains(query))
+}
+
+/// [`group_ui`] showing only the fields that match `query` (lower case; empty: all).
+pub fn group_ui_filtered<S: SettingsGroup>(ui: &mut Ui, s: &mut S, preset: &S, query: &str) -> bool {
     let d = S::default();
     let mut changed = false;
+    // Less the scroll bar, which floats over the panel's right edge.
+    let row_width = ui.available_width() - 2.0 * ui.spacing().scroll.bar_width - 4.0;
+    let label_width = (0.42 * row_width).max(90.0);
     egui::Grid::new(("settings", S::GROUP)).num_columns(2).striped(true).show(ui, |ui| {
         for m in S::fields() {
             let path = format!("{}.{}", S::GROUP, m.name);
+            if !matches_search(&path, m, query) {
+                continue;
+            }
             let (Some(mut v), Some(dv), Some(pv)) = (s.get(m.name), d.get(m.name), preset.get(m.name)) else {
                 continue;
             };
-            if field_row(ui, &path, m, &mut v, &dv, &pv) {
+            if field_row(ui, &path, m, &mut v, &dv, &pv, label_width, row_width) {
                 // Widgets keep values in range; a failure here would be a metadata bug.
                 if let Err(e) = s.set(m.name, &v) {
                     log::error!("{path}: {e}");
@@ -286,38 +376,79 @@ pub fn technique_picker(ui: &mut Ui, s: &mut LabSettings) -> bool {
     let mut changed = false;
     ui.horizontal(|ui| {
         ui.label("Technique");
-        egui::ComboBox::from_id_salt("technique_picker").selected_text(current).show_ui(ui, |ui| {
-            for t in TECHNIQUES {
-                if ui.selectable_label((t.is)(s), t.name).on_hover_text(t.source).clicked() {
-                    (t.apply)(s);
-                    changed = true;
+        let room = ui.available_width() - 2.0 * ui.spacing().scroll.bar_width - 4.0;
+        egui::ComboBox::from_id_salt("technique_picker")
+            .width(room.max(80.0))
+            .truncate()
+            .selected_text(current)
+            .show_ui(ui, |ui| {
+                ui.style_mut().wrap_mode = Some(egui::TextWrapMode::Extend);
+                for t in TECHNIQUES {
+                    if ui.selectable_label((t.is)(s), t.name).on_hover_text(t.source).clicked() {
+                        (t.apply)(s);
+                        changed = true;
+                    }
                 }
-            }
-        });
+            });
     });
     changed
 }
 
+/// What the panel knows beyond the settings: the search and the groups that cannot act on
+/// this scene, with why.
+#[derive(Default)]
+pub struct PanelContext {
+    /// The search box's text (any case; empty: every field).
+    pub search: String,
+    /// (group, why) of the groups that cannot act on this scene ("no emissive surfaces in
+    /// this scene"): they fold into one line that says so.
+    pub idle_groups: Vec<(&'static str, String)>,
+}
+
 /// The whole settings panel: technique picker, then one section per group. `preset` is
 /// the loaded preset (for the markers). Returns whether anything changed.
-pub fn lab_settings_ui(ui: &mut Ui, s: &mut LabSettings, preset: &LabSettings) -> bool {
-    ui.spacing_mut().slider_width = 95.0;
+pub fn lab_settings_ui(ui: &mut Ui, s: &mut LabSettings, preset: &LabSettings, cx: &PanelContext) -> bool {
     /// Visits the groups in use (`in_use`) or the others.
     struct Sections<'a> {
         ui: &'a mut Ui,
         changed: bool,
         pipeline: gi_render::pipeline::PipelineSettings,
         in_use: bool,
+        query: String,
+        idle: &'a [(&'static str, String)],
     }
     impl GroupVisitor for Sections<'_> {
         fn visit<S: SettingsGroup>(&mut self, s: &mut S, preset: &S) {
             let group = S::GROUP;
+            if !self.query.is_empty() {
+                // Searching: every group with a matching field, open, whether in use or not.
+                if !self.in_use
+                    || !S::fields().iter().any(|m| matches_search(&format!("{group}.{}", m.name), m, &self.query))
+                {
+                    return;
+                }
+                let changed = &mut self.changed;
+                egui::CollapsingHeader::new(section_title(group))
+                    .id_salt(("search", group))
+                    .open(Some(true))
+                    .show(self.ui, |ui| *changed |= group_ui_filtered(ui, s, preset, &self.query));
+                return;
+            }
             if self.pipeline.group_in_use(group) != self.in_use {
                 return;
             }
             let mut title = egui::RichText::new(section_title(group));
             if s != preset {
                 title = title.color(CHANGED);
+            }
+            if let Some((_, why)) = self.idle.iter().find(|(g, _)| *g == group) {
+                // Cannot act on this scene: one line that says why, folded (still editable).
+                let changed = &mut self.changed;
+                egui::CollapsingHeader::new(egui::RichText::new(format!("{} — {why}", section_title(group))).weak())
+                    .id_salt(("idle", group))
+                    .default_open(false)
+                    .show(self.ui, |ui| *changed |= group_ui(ui, s, preset));
+                return;
             }
             // Sections of stages no choice runs stay folded, their titles greyed.
             let open =
@@ -336,14 +467,19 @@ pub fn lab_settings_ui(ui: &mut Ui, s: &mut LabSettings, preset: &LabSettings) -
     // The stage choices and the settings that act on the image first; the settings of
     // stages no choice uses folded under "not in use".
     let pipeline = s.pipeline.clone();
-    let mut v = Sections { ui, changed: false, pipeline: pipeline.clone(), in_use: true };
+    let query = cx.search.trim().to_lowercase();
+    let idle = &cx.idle_groups;
+    let mut v = Sections { ui, changed: false, pipeline: pipeline.clone(), in_use: true, query: query.clone(), idle };
     s.visit_groups(preset, &mut v);
     let mut changed = changed | v.changed;
+    if !query.is_empty() {
+        return changed;
+    }
     egui::CollapsingHeader::new("Not in use (stages the current choices do not run)")
         .id_salt("not_in_use")
         .default_open(true)
         .show(ui, |ui| {
-            let mut v = Sections { ui, changed: false, pipeline, in_use: false };
+            let mut v = Sections { ui, changed: false, pipeline, in_use: false, query, idle };
             s.visit_groups(preset, &mut v);
             changed |= v.changed;
         });

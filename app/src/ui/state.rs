@@ -87,6 +87,8 @@ pub struct State {
     pub adaptive: crate::ui::adaptive::AdaptiveScale,
     /// A gesture is under way this frame (a button held, a scroll, flying keys).
     pub interacting: bool,
+    /// The settings panel's search text (issue #39 point 4).
+    pub settings_search: String,
     /// Undo and redo (issue #39 point 1).
     pub history: crate::ui::history::History,
     /// Edit → History asked for the History pane (the app owns the layout).

@@ -5,7 +5,22 @@ use crate::ui::state::State;
 
 pub(super) fn settings_ui(st: &mut State, ui: &mut egui::Ui) {
     let Ok(l) = &mut st.lab else { return };
-    let changed = crate::ui::settings_ui::lab_settings_ui(ui, &mut l.settings, &st.preset.baseline);
+    ui.horizontal(|ui| {
+        ui.add(
+            egui::TextEdit::singleline(&mut st.settings_search)
+                .hint_text("search: name, symbol (θ_max), paper (Nguyen)…")
+                .desired_width(ui.available_width() - 30.0),
+        )
+        .accessible_name("settings search");
+        if !st.settings_search.is_empty() && ui.small_button("×").on_hover_text("clear the search").clicked() {
+            st.settings_search.clear();
+        }
+    });
+    let cx = crate::ui::settings_ui::PanelContext {
+        search: st.settings_search.clone(),
+        idle_groups: idle_groups(&l.renderer),
+    };
+    let changed = crate::ui::settings_ui::lab_settings_ui(ui, &mut l.settings, &st.preset.baseline, &cx);
     if changed {
         l.apply_settings();
     }
@@ -49,6 +64,21 @@ pub(super) fn settings_ui(st: &mut State, ui: &mut egui::Ui) {
             },
         );
     }
+}
+
+/// The groups that cannot act on the open scene, with why (issue #39 point 4).
+fn idle_groups(r: &gi_render::Renderer) -> Vec<(&'static str, String)> {
+    let scene = r.scene();
+    let mut idle = Vec::new();
+    if !scene.has_emitters() {
+        idle.push(("emitters", "none in this scene".to_string()));
+    }
+    if !scene.sky.enabled {
+        idle.push(("sky", "off (Scene panel)".to_string()));
+    } else if !scene.sky.is_lit() {
+        idle.push(("sky", "dark (Scene panel)".to_string()));
+    }
+    idle
 }
 
 /// Table 1 of Nguyen et al. for the last frame: per level its resolution, the samples and
