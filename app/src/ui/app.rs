@@ -473,13 +473,13 @@ impl GiLabApp {
                 self.state.viewers.entry(id).or_insert_with(|| Viewer::new(ViewerState::default()));
             }
         }
+        // (Outside `input`: it holds the context's lock.)
+        let typing = ctx.egui_wants_keyboard_input();
         self.state.interacting = ctx.input(|i| {
             let flying = [egui::Key::W, egui::Key::A, egui::Key::S, egui::Key::D, egui::Key::Q, egui::Key::E]
                 .iter()
                 .any(|k| i.key_down(*k));
-            i.pointer.any_down()
-                || i.smooth_scroll_delta != egui::Vec2::ZERO
-                || (flying && !ctx.egui_wants_keyboard_input())
+            i.pointer.any_down() || i.smooth_scroll_delta != egui::Vec2::ZERO || (flying && !typing)
         });
         self.state.frame();
         // The panels set the hovered pixel again while they are drawn.
