@@ -164,3 +164,68 @@ fn a_preset_save_is_not_a_step_and_undo_keeps_the_file_saved() {
     assert!(!h.state().state.unsaved(), "redo gives the saved settings back");
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// The other kinds of edit, each undone to the state before it: a technique pick, a light
+/// duplicated and one removed, the sky turned on, a revert of the preset, and a scene opened.
+#[test]
+fn every_kind_of_edit_is_undone() {
+    let (mut h, dir) = harness("history_all");
+    pause(&mut h);
+    h.run_steps(3);
+    let mut states = vec![(settings(&h), lights(&h))];
+    let mut expect_step = |h: &mut Harness<'static, GiLabApp>, prefix: &str| {
+        h.run_steps(3);
+        let (names, cursor) = steps(h);
+        assert!(names[cursor].starts_with(prefix), "the step is named '{prefix}…': {names:?}");
+        states.push((settings(h), lights(h)));
+    };
+    // A technique.
+    if let Ok(l) = &mut h.state_mut().state.lab {
+        // What the technique picker does.
+        gi_render::pipeline::Technique::Nguyen.apply(&mut l.settings);
+        l.apply_settings();
+    }
+    expect_step(&mut h, "pipeline.");
+    // Lights: duplicate, then remove the first.
+    h.get_by_label("Scene & timeline").click();
+    h.run_steps(2);
+    h.get_by_label("duplicate light 0").click();
+    expect_step(&mut h, "add light");
+    h.get_by_label("remove light 0").click();
+    expect_step(&mut h, "remove light");
+    // The sky.
+    h.get_by_label("Sky light").click();
+    h.run_steps(2);
+    h.get_by_label("sky lights the scene").click();
+    expect_step(&mut h, "edit the sky");
+    assert!(h.state().renderer().expect("renderer").scene().sky.enabled);
+    // A preset edited, then reverted.
+    let preset = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../presets/soler-quarter-4-64.ron"));
+    h.state_mut().state.open_preset(preset);
+    expect_step(&mut h, "open preset");
+    if let Ok(l) = &mut h.state_mut().state.lab {
+        l.settings.soler.levels = 3;
+        l.apply_settings();
+    }
+    expect_step(&mut h, "soler.levels");
+    h.state_mut().state.revert_preset();
+    expect_step(&mut h, "revert the preset");
+    // A scene.
+    let glb = dir.join("box.glb");
+    gi_render::scene::cornell::write_glb(&glb).expect("writes the default scene");
+    h.state_mut().open_scene(&glb.to_string_lossy(), 1.0).expect("opens");
+    expect_step(&mut h, "open scene box.glb");
+
+    // Undo each, newest first: each gives the state before it back.
+    let n = states.len();
+    for k in (0..n - 1).rev() {
+        undo(&mut h);
+        let (s, l) = (settings(&h), lights(&h));
+        assert!(s == states[k].0, "undo to step {k}: the settings differ");
+        assert_eq!(l, states[k].1, "undo to step {k}: the lights differ");
+    }
+    let r = h.state().renderer().expect("renderer");
+    assert!(!r.scene().sky.enabled, "the sky is off again");
+    assert_eq!(h.state().state.lab.as_ref().expect("lab").scene_path, None, "the default scene again");
+    let _ = std::fs::remove_dir_all(dir);
+}
