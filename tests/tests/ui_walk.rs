@@ -312,6 +312,9 @@ fn walk(seed: u64, steps: usize) {
     let dir = temp_dir(&format!("walk-{seed}"));
     gi_render::scene::cornell::write_glb(&dir.join("good.glb")).expect("a good scene");
     std::fs::write(dir.join("broken.glb"), b"glTF\x02\0\0\0 this is not a scene").expect("a broken scene");
+    // A click can land on a menu that opened over its target: whatever the window writes
+    // beside itself (captures, recordings) goes into the walk's folder, not the repository.
+    std::env::set_current_dir(&dir).expect("the walk's folder");
     let mut h = harness_in(&dir, egui::vec2(1400.0, 1000.0));
     pause(&mut h);
     h.run_steps(3);
@@ -359,6 +362,7 @@ fn walk(seed: u64, steps: usize) {
             );
         }
     }
+    let _ = std::env::set_current_dir(std::env::temp_dir());
     let _ = std::fs::remove_dir_all(dir);
 }
 
