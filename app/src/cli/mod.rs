@@ -3,10 +3,6 @@
 //! says what is wrong; a missing GPU exits with code 1 and says how to install lavapipe.
 
 pub mod bench;
-pub mod bench_gautron;
-pub mod bench_scenes;
-pub mod bench_soler;
-pub mod bench_suites;
 pub mod buffers;
 pub mod compare;
 pub mod export;

@@ -323,7 +323,7 @@ pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
     for (pt, s) in points.iter().zip(settings) {
         r.set_settings(s).map_err(|e| CliError::input(format!("point {pt:?}: {e}")))?;
         r.reset_history();
-        let report = super::bench::bench_run(&mut r, args.frames, "sweep");
+        let report = super::bench::run::bench_run(&mut r, args.frames, "sweep");
         let hdr = r.readback("final.hdr").map_err(|e| CliError::failure(e.to_string()))?;
         let metric = |e: gi_render::metrics::MetricError| CliError::input(format!("reference: {e}"));
         let rmse = gi_render::metrics::rmse(&hdr, &reference).map_err(metric)?;
@@ -331,7 +331,7 @@ pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
             gi_render::metrics::flip(&gi_render::image_io::hdr_display(&hdr), &display_ref).map_err(metric)?;
         r.set_flip_map(&map);
         let flicker = if args.flicker_frames >= 2 {
-            Some(super::bench::measure_flicker(&mut r, args.flicker_frames)?)
+            Some(super::bench::run::measure_flicker(&mut r, args.flicker_frames)?)
         } else {
             None
         };

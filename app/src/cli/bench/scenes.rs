@@ -16,10 +16,10 @@ use crate::error::CliError;
 
 /// The technique presets of the table's columns.
 const PRESETS: [(&str, &str); 4] = [
-    ("knecht", include_str!("../../../presets/knecht-cornell-256.ron")),
-    ("nguyen", include_str!("../../../presets/nguyen-hcb.ron")),
-    ("soler", include_str!("../../../presets/soler-quarter-4-64.ron")),
-    ("gautron", include_str!("../../../presets/gautron-ic-splatting.ron")),
+    ("knecht", include_str!("../../../../presets/knecht-cornell-256.ron")),
+    ("nguyen", include_str!("../../../../presets/nguyen-hcb.ron")),
+    ("soler", include_str!("../../../../presets/soler-quarter-4-64.ron")),
+    ("gautron", include_str!("../../../../presets/gautron-ic-splatting.ron")),
 ];
 
 /// One scene's row.
@@ -156,7 +156,7 @@ fn frame_ms(
         r.set_timing_source(gi_render::timing::TimingSource::CpuWallClock);
     }
     r.clock.playing = false;
-    Ok(super::bench::bench_run(&mut r, frames.max(1), "").total_mean_ms)
+    Ok(super::run::bench_run(&mut r, frames.max(1), "").total_mean_ms)
 }
 
 /// The table.

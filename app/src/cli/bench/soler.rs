@@ -11,7 +11,7 @@ use gi_render::Renderer;
 use gi_render::passes::soler::StartResolution;
 use gi_render::pipeline::{Technique, Temporal};
 
-use super::bench::{BenchReport, bench_run};
+use super::run::{BenchReport, bench_run};
 use crate::error::CliError;
 
 /// One row of Fig. 9: the parameter set and its parts (per pass the fastest frame, in ms).

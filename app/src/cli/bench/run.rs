@@ -1,76 +1,14 @@
-//! `gi-lab bench`: per-pass times of rendered frames, with flicker, afterglow and quality
-//! against a reference; `--suite` runs the suites of `bench_suites`.
+//! The measurement engine of `gi-lab bench`, its suites, `sweep` and `study`: renders
+//! warm-up and measured frames and aggregates per-pass times, bound bytes and the frame's
+//! waits; measures flicker, afterglow and quality against a reference; traces the one-bounce
+//! truth. It uses no suite and no command.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use clap::Args;
 use gi_render::Renderer;
 
-use super::compare::load_image;
-use super::{parse_size, renderer};
+use crate::cli::compare::load_image;
 use crate::error::CliError;
-use crate::scene_args::SceneArgs;
-
-#[derive(Args, Debug)]
-pub struct BenchArgs {
-    #[command(flatten)]
-    pub scene: SceneArgs,
-    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
-    pub size: (u32, u32),
-    /// Measured frames (after 3 warm-up frames).
-    #[arg(long, default_value_t = 30)]
-    pub frames: u32,
-    /// Frames of the paused scene over which temporal flicker is measured (0: skip).
-    #[arg(long, default_value_t = 8)]
-    pub flicker_frames: u32,
-    /// Frames over which the afterglow of a sudden light change is measured (0: skip).
-    #[arg(long, default_value_t = 12)]
-    pub afterglow_frames: u32,
-    /// A ground-truth EXR of the same scene, camera and size at animation time 0 (`gi-lab
-    /// reference`): adds FLIP and RMSE of final.hdr at time 0 against it.
-    #[arg(long)]
-    pub reference: Option<PathBuf>,
-    /// Print JSON instead of a table.
-    #[arg(long)]
-    pub json: bool,
-    /// Samples per pixel of the one-bounce ground truth that `--suite quality` traces when no
-    /// --reference is given.
-    #[arg(long, default_value_t = 256)]
-    pub spp: u32,
-    /// Run a suite of rows instead of one configuration: `knecht` reproduces the shape of
-    /// `knecht`: Knecht's Tables 5.1–5.3 (frame time against VPL count and ISM size, the
-    /// temporal coherence overhead, multi-bounce against IRSM); `nguyen`: the HCB against
-    /// gathering at every pixel at 1024 VPLs, with the samples' share of the pixels. Both
-    /// start from --preset. `quality`: on any --scene, mean FLIP of the shipped technique
-    /// presets against --reference (a path-traced image of one bounce at --size, `gi-lab
-    /// reference --bounces 1`; traced here with --spp when not given), each row's frame time
-    /// and the FLIP it reaches within the default preset's time (equal time), and the HCB
-    /// against the diffuse-only gather at every pixel.
-    /// `soler`: Soler et al.'s Fig. 9 (four parameter sets with and without visibility, per
-    /// part; run it at --size 1280x720).
-    /// `gautron`: irradiance cache splatting from a cold cache at five accuracies against a
-    /// hemisphere at every pixel (records, time per record, cold and warm frames, FLIP, the
-    /// speedup; run it at --size 64x64; --reference: the one-bounce truth, else traced).
-    /// `scenes`: every scene below --scenes-dir (default assets/; triangles, lights, emitters, load
-    /// time, the frame time of each technique preset; run it at --size 256x256).
-    #[arg(long, value_enum)]
-    pub suite: Option<BenchSuite>,
-    /// The scenes of `--suite scenes` (every .gltf/.glb below it; by default the project's
-    /// own `assets/`, which holds the real scenes of `assets/scenes/`).
-    #[arg(long, default_value = "assets")]
-    pub scenes_dir: PathBuf,
-}
-
-/// Benchmark suites of `gi-lab bench --suite`.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BenchSuite {
-    Knecht,
-    Nguyen,
-    Quality,
-    Soler,
-    Gautron,
-    Scenes,
-}
 
 /// Per-pass statistics of a benchmark run.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -235,7 +173,7 @@ fn device_choices(r: &mut Renderer) -> Vec<String> {
 /// Mean wall-clock ms of `frames` frames as the window renders them: interactive mode (no
 /// per-pass timing, no waits), after one frame to settle the mode, the GPU drained once at
 /// the end.
-fn window_frames(r: &mut Renderer, frames: u32) -> f64 {
+pub fn window_frames(r: &mut Renderer, frames: u32) -> f64 {
     r.set_interactive(true);
     r.render_frame();
     r.ctx.wait_idle();
@@ -362,157 +300,6 @@ pub fn quality_against(r: &mut Renderer, reference: &Path) -> Result<(f64, f64),
     Ok((flip, rmse))
 }
 
-pub(super) fn bench(args: &BenchArgs) -> Result<(), CliError> {
-    if args.frames == 0 {
-        return Err(CliError::input("--frames must be at least 1"));
-    }
-    if let Some(BenchSuite::Quality) = args.suite {
-        return quality(args);
-    }
-    if let Some(BenchSuite::Scenes) = args.suite {
-        let rows = super::bench_scenes::scenes(&args.scenes_dir, args.size, args.frames)?;
-        if args.json {
-            println!("{}", serde_json::to_string_pretty(&rows).map_err(|e| CliError::failure(e.to_string()))?);
-        } else {
-            print!("{}", super::bench_scenes::format(&rows, args.size, args.frames));
-        }
-        return Ok(());
-    }
-    let mut r = renderer(&args.scene, args.size)?;
-    if !gi_render::timing::GpuTimer::timestamps_reliable(&r.ctx) {
-        // A software device's timestamps land in the wrong passes: time each pass by the
-        // wall clock instead (each scope is submitted and awaited on its own).
-        r.set_timing_source(gi_render::timing::TimingSource::CpuWallClock);
-    }
-    let name =
-        args.scene.scene.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| "default Cornell box".into());
-    if let Some(BenchSuite::Knecht) = args.suite {
-        let report = super::bench_suites::knecht(&mut r, args.frames, &name)?;
-        if args.json {
-            println!("{}", serde_json::to_string_pretty(&report).map_err(|e| CliError::failure(e.to_string()))?);
-        } else {
-            print!("{}", super::bench_suites::format(&report));
-        }
-        return Ok(());
-    }
-    if let Some(BenchSuite::Soler) = args.suite {
-        let report = super::bench_soler::soler(&mut r, args.frames)?;
-        if args.json {
-            println!("{}", serde_json::to_string_pretty(&report).map_err(|e| CliError::failure(e.to_string()))?);
-        } else {
-            print!("{}", super::bench_soler::format(&report));
-        }
-        return Ok(());
-    }
-    if let Some(BenchSuite::Gautron) = args.suite {
-        let truth = match &args.reference {
-            Some(p) => Some((load_image(p)?.0, p.display().to_string())),
-            None => None,
-        };
-        let report = super::bench_gautron::gautron(&mut r, truth)?;
-        if args.json {
-            println!("{}", serde_json::to_string_pretty(&report).map_err(|e| CliError::failure(e.to_string()))?);
-        } else {
-            print!("{}", super::bench_gautron::format(&report));
-        }
-        return Ok(());
-    }
-    if let Some(BenchSuite::Nguyen) = args.suite {
-        let report = super::bench_suites::nguyen(&mut r, args.frames, &name)?;
-        if args.json {
-            println!("{}", serde_json::to_string_pretty(&report).map_err(|e| CliError::failure(e.to_string()))?);
-        } else {
-            print!("{}", super::bench_suites::format_nguyen(&report));
-        }
-        return Ok(());
-    }
-    let mut report = bench_run(&mut r, args.frames, &name);
-    report.window_frame_ms = Some(window_frames(&mut r, args.frames));
-    if args.flicker_frames == 1 {
-        return Err(CliError::input("--flicker-frames must be 0 or at least 2"));
-    }
-    if args.flicker_frames >= 2 {
-        report.flicker = Some(measure_flicker(&mut r, args.flicker_frames)?);
-    }
-    if args.afterglow_frames > 0 && args.afterglow_frames < 4 {
-        return Err(CliError::input("--afterglow-frames must be 0 or at least 4"));
-    }
-    if args.afterglow_frames >= 4 {
-        report.afterglow_frames = measure_afterglow(&mut r, args.afterglow_frames)?;
-    }
-    if let Some(reference) = &args.reference {
-        let (flip, rmse) = quality_against(&mut r, reference)?;
-        report.flip = Some(flip);
-        report.rmse = Some(rmse);
-    }
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report).map_err(|e| CliError::failure(e.to_string()))?);
-    } else {
-        print!("{}", format_bench_table(&report));
-    }
-    Ok(())
-}
-
-/// `gi-lab bench --suite quality`: the quality table of `gi_render::quality` on any scene,
-/// against `--reference` or a one-bounce ground truth traced here at `--size` with `--spp`,
-/// with each row's frame time and its FLIP at equal time (issue #37 point 5).
-fn quality(args: &BenchArgs) -> Result<(), CliError> {
-    let scene = crate::scene_args::load_scene(&args.scene)?;
-    let (truth, against) = match &args.reference {
-        Some(reference) => (load_image(reference)?.0, reference.display().to_string()),
-        None => {
-            if args.spp == 0 {
-                return Err(CliError::input("--spp must be at least 1"));
-            }
-            let settings = crate::scene_args::load_settings(&args.scene)?;
-            eprintln!(
-                "path-tracing the one-bounce ground truth at {}x{}, {} spp (give --reference to reuse one) …",
-                args.size.0, args.size.1, args.spp
-            );
-            let start = std::time::Instant::now();
-            let img = one_bounce_truth(&scene, &settings, args.size, args.spp);
-            eprintln!("traced in {:.1} s", start.elapsed().as_secs_f64());
-            (img, format!("the path tracer (1 bounce, {} spp, traced here)", args.spp))
-        }
-    };
-    let ctx = gi_render::GpuContext::headless().map_err(|e| CliError::failure(e.to_string()))?;
-    let mut rows =
-        gi_render::quality::quality_table(&ctx, &scene, &truth, args.size, gi_render::quality::Timing::EqualTime)
-            .map_err(CliError::input)?;
-    // The goals were set for the default scene as it ships: elsewhere they mean nothing.
-    let default_scene = args.scene.scene.is_none() && args.scene.sky.is_none();
-    if !default_scene {
-        rows.iter_mut().for_each(|r| r.goal = None);
-    }
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&rows).map_err(|e| CliError::failure(e.to_string()))?);
-    } else {
-        let name =
-            args.scene.scene.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| "default Cornell box".into());
-        println!(
-            "GI Lab bench suite quality — {name} at {}x{}, paused at time 0, mean FLIP (tone-mapped) against {against}; {} ({})\n",
-            args.size.0,
-            args.size.1,
-            ctx.adapter_summary(),
-            if gi_render::timing::GpuTimer::timestamps_reliable(&ctx) {
-                "GPU timestamps"
-            } else {
-                "wall clock per pass"
-            }
-        );
-        print!("{}", gi_render::quality::format_table(&rows));
-        println!(
-            "\nframe ms: mean of the passes' times; equal time: the frames each row renders in the default preset's time for 16 frames, and the FLIP they reach"
-        );
-        if default_scene {
-            println!(
-                "goals: issue #15's rows 1–4, issue #16's row 6 (below rows 1 and 5), for the default scene at 256x256"
-            );
-        }
-    }
-    Ok(())
-}
-
 /// The one-bounce path-traced ground truth of `scene` at `size` from its opening view, with
 /// the emitters and the sky's background as `settings` say (as `gi-lab reference` traces it).
 pub fn one_bounce_truth(
@@ -534,4 +321,11 @@ pub fn one_bounce_truth(
         PtSettings { bounces: 1, spp, seed: 1, ..Default::default() },
     )
     .full
+}
+
+/// Sum over the passes whose names start with one of `prefixes` of each pass's fastest frame:
+/// the least disturbed measurement (a CPU device's per-pass wall clock varies several-fold
+/// between frames with the machine's other work).
+pub fn focus(report: &BenchReport, prefixes: &[&str]) -> f64 {
+    report.passes.iter().filter(|p| prefixes.iter().any(|f| p.pass.starts_with(f))).map(|p| p.min_ms).sum()
 }
