@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs GI Lab's whole test suite. On a machine without a GPU it installs Mesa's software
-# Vulkan driver (lavapipe) and Xvfb when it may (root with apt-get), otherwise it says how.
+# Vulkan driver (lavapipe), Xvfb, Chromium and GNU parallel when it may (root with apt-get), otherwise it says how.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -17,6 +17,9 @@ if ! ls /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json >/dev/null 2>&1 
   need+=(mesa-vulkan-drivers libvulkan1)
 fi
 command -v xvfb-run >/dev/null 2>&1 || need+=(xvfb xauth)
+# `gi-lab study`'s tests: its page in a headless browser, its shards run by GNU parallel.
+command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || need+=(chromium)
+command -v parallel >/dev/null 2>&1 || need+=(parallel)
 
 if [ ${#need[@]} -gt 0 ]; then
   if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then

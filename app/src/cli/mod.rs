@@ -11,9 +11,11 @@ pub mod hcb_stats;
 pub mod reference;
 pub mod render;
 pub mod settings;
+pub mod shard;
 pub mod soak;
 pub mod soak_memory;
 pub mod soak_walk;
+pub mod study;
 pub mod sweep;
 pub mod upgrade;
 
@@ -61,6 +63,12 @@ pub enum Command {
     /// Render every combination of swept settings; write sweep.csv (settings, per-pass ms,
     /// FLIP, RMSE, flicker) and pareto.png (quality against time).
     Sweep(sweep::SweepArgs),
+    /// Scenes × presets (× swept settings) against a path-traced truth per scene: writes
+    /// DIR/index.html (image grids with FLIP maps, tables, time per pass, error against time,
+    /// the equal-time and equal-error winners), results.csv and results.json. `--shard I/N`
+    /// renders a share, `--merge DIR` joins the shards, `--emit-jobs slurm|parallel` writes
+    /// the script that runs them.
+    Study(study::StudyArgs),
     /// Export a preset for engines: JSON or RON with schema id and provenance (GI Lab
     /// version, scene, camera, date); see docs/preset-schema.md.
     Export(ExportArgs),
@@ -125,6 +133,7 @@ pub fn main() -> ExitCode {
         Some(Command::Reference(a)) => reference::reference(a),
         Some(Command::HcbStats(a)) => hcb_stats::hcb_stats(a),
         Some(Command::Sweep(a)) => sweep::sweep(a),
+        Some(Command::Study(a)) => study::study(a),
         Some(Command::Settings) => {
             settings::settings();
             Ok(())

@@ -130,13 +130,22 @@ pub struct PointResult {
 
 /// Marks the points no other point beats in both time and FLIP.
 pub fn mark_pareto(points: &mut [PointResult]) {
-    let snapshot: Vec<(f64, f64)> = points.iter().map(|p| (p.total_ms, p.flip)).collect();
-    for (i, p) in points.iter_mut().enumerate() {
-        p.pareto = !snapshot
-            .iter()
-            .enumerate()
-            .any(|(j, &(t, f))| j != i && t <= p.total_ms && f <= p.flip && (t < p.total_ms || f < p.flip));
+    let flags = pareto_flags(&points.iter().map(|p| (p.total_ms, p.flip)).collect::<Vec<_>>());
+    for (p, f) in points.iter_mut().zip(flags) {
+        p.pareto = f;
     }
+}
+
+/// For each (time, error) point, whether no other point is at least as good in both and
+/// better in one (the Pareto front; equal points are all on it).
+pub fn pareto_flags(points: &[(f64, f64)]) -> Vec<bool> {
+    points
+        .iter()
+        .enumerate()
+        .map(|(i, &(ti, fi))| {
+            !points.iter().enumerate().any(|(j, &(t, f))| j != i && t <= ti && f <= fi && (t < ti || f < fi))
+        })
+        .collect()
 }
 
 pub fn csv(params: &[Param], points: &[PointResult]) -> String {

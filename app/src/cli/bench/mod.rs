@@ -17,12 +17,12 @@ pub mod soler;
 
 use std::path::PathBuf;
 
-use clap::Args;
 use super::compare::load_image;
 use super::{parse_size, renderer};
-use run::{bench_run, format_bench_table, measure_afterglow, measure_flicker, quality_against, window_frames};
 use crate::error::CliError;
 use crate::scene_args::SceneArgs;
+use clap::Args;
+use run::{bench_run, format_bench_table, measure_afterglow, measure_flicker, quality_against, window_frames};
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -175,4 +175,3 @@ pub(crate) fn bench(args: &BenchArgs) -> Result<(), CliError> {
     }
     Ok(())
 }
-

@@ -64,4 +64,3 @@ pub fn quality(args: &BenchArgs) -> Result<(), CliError> {
     }
     Ok(())
 }
-

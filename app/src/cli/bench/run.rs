@@ -10,6 +10,15 @@ use gi_render::Renderer;
 use crate::cli::compare::load_image;
 use crate::error::CliError;
 
+/// The shipped technique presets, one per paper, that `bench --suite scenes` and `gi-lab
+/// study` compare when no preset is named: (name, RON text).
+pub const TECHNIQUE_PRESETS: [(&str, &str); 4] = [
+    ("knecht", include_str!("../../../../presets/knecht-cornell-256.ron")),
+    ("nguyen", include_str!("../../../../presets/nguyen-hcb.ron")),
+    ("soler", include_str!("../../../../presets/soler-quarter-4-64.ron")),
+    ("gautron", include_str!("../../../../presets/gautron-ic-splatting.ron")),
+];
+
 /// Per-pass statistics of a benchmark run.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct PassStats {

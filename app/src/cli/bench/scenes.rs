@@ -14,14 +14,6 @@ use gi_render::{GpuContext, LabSettings, Renderer};
 
 use crate::error::CliError;
 
-/// The technique presets of the table's columns.
-const PRESETS: [(&str, &str); 4] = [
-    ("knecht", include_str!("../../../../presets/knecht-cornell-256.ron")),
-    ("nguyen", include_str!("../../../../presets/nguyen-hcb.ron")),
-    ("soler", include_str!("../../../../presets/soler-quarter-4-64.ron")),
-    ("gautron", include_str!("../../../../presets/gautron-ic-splatting.ron")),
-];
-
 /// One scene's row.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct SceneRow {
@@ -135,7 +127,7 @@ fn preset_times(
     frames: u32,
 ) -> Result<Vec<PresetTime>, CliError> {
     let mut out = Vec::new();
-    for (name, text) in PRESETS {
+    for (name, text) in super::run::TECHNIQUE_PRESETS {
         let settings = gi_render::preset::load_lenient(text, name)
             .map(|l| l.settings)
             .map_err(|e| CliError::failure(format!("preset {name}: {e}")))?;
@@ -166,7 +158,7 @@ pub fn format(rows: &[SceneRow], size: (u32, u32), frames: u32) -> String {
         size.0, size.1
     );
     s += &format!("{:<62} {:>9} {:>7} {:>9} {:>8}", "scene", "triangles", "lights", "emissive", "load ms");
-    for (name, _) in PRESETS {
+    for (name, _) in super::run::TECHNIQUE_PRESETS {
         s += &format!(" {name:>9}");
     }
     s += "\n";

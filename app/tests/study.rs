@@ -1,0 +1,380 @@
+//! `gi-lab study` as a user runs it (issue #40 points 2 and 3): at 64² on two shipped scenes
+//! and three presets, the page and its files exist and every number and name on the page is
+//! results.json's; the page renders in headless Chromium with its images loaded; the study
+//! split in three shards by GNU parallel (and by a Slurm job array, through a stand-in
+//! `sbatch` that runs the array's tasks here) merges into the single run's rows.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
+
+use serde_json::Value;
+
+fn gi_lab() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_gi-lab"));
+    c.env("WGPU_BACKEND", std::env::var("WGPU_BACKEND").unwrap_or_else(|_| "vulkan".into()));
+    c
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("gi-lab-study-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("temp dir");
+    d
+}
+
+fn repo(p: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(p).display().to_string()
+}
+
+/// The study's arguments: two shipped scenes, three presets, a two-point sweep, 64².
+fn study_args() -> Vec<String> {
+    let mut v: Vec<String> = Vec::new();
+    for s in ["assets/cornell_box.glb", "assets/scenes/chair-on-floor/MixedLightingExample.gltf"] {
+        v.extend(["--scene".into(), repo(s)]);
+    }
+    for p in ["presets/knecht-cornell-256.ron", "presets/soler-quarter-4-64.ron", "presets/gautron-ic-splatting.ron"] {
+        v.extend(["--preset".into(), repo(p)]);
+    }
+    for a in
+        ["--param", "direct.pcf_radius=0,2", "--size", "64x64", "--frames", "2", "--flicker-frames", "2", "--spp", "8"]
+    {
+        v.push(a.into());
+    }
+    v
+}
+
+/// The unsharded study, run once for the tests of this file.
+fn single() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let out = temp_dir("single");
+        let o = gi_lab().arg("study").args(study_args()).arg("--out").arg(&out).output().expect("runs");
+        assert!(o.status.success(), "study failed: {}", String::from_utf8_lossy(&o.stderr));
+        out
+    })
+}
+
+fn json(dir: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("results.json")).expect("results.json")).expect("JSON")
+}
+
+/// The value at a dotted path (`scenes.0.rows.2.flip`).
+fn at<'a>(v: &'a Value, path: &str) -> &'a Value {
+    path.split('.').fold(v, |v, k| match k.parse::<usize>() {
+        Ok(i) if v.is_array() => &v[i],
+        _ => &v[k],
+    })
+}
+
+/// The `data-json` spans of the page: (path, text).
+fn spans(html: &str) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    let mut rest = html;
+    while let Some(i) = rest.find("<span data-json=\"") {
+        rest = &rest[i + 17..];
+        let q = rest.find('"').expect("closing quote");
+        let path = rest[..q].to_string();
+        let gt = rest.find('>').expect("tag end");
+        let end = rest.find("</span>").expect("closing span");
+        out.push((path, rest[gt + 1..end].to_string()));
+        rest = &rest[end..];
+    }
+    out
+}
+
+fn unescape(s: &str) -> String {
+    s.replace("&lt;", "<").replace("&gt;", ">").replace("&quot;", "\"").replace("&amp;", "&")
+}
+
+#[test]
+fn the_page_and_its_files_exist_and_every_number_on_it_is_results_json() {
+    let dir = single();
+    let v = json(dir);
+    let html = std::fs::read_to_string(dir.join("index.html")).expect("index.html");
+    // Files: every image the JSON names, the plots, the CSV.
+    let scenes = v["scenes"].as_array().expect("scenes");
+    assert_eq!(scenes.len(), 2);
+    for s in scenes {
+        let rows = s["rows"].as_array().expect("rows");
+        assert_eq!(rows.len(), 6, "three presets × two sweep points");
+        let truth = s["truth"]["image"].as_str().expect("truth image");
+        let mut files = vec![truth.to_string()];
+        for r in rows {
+            files.push(r["image"].as_str().expect("image").into());
+            files.push(r["flip_map"].as_str().expect("flip map").into());
+            assert!(html.contains(&format!("src=\"{}\"", r["image"].as_str().expect("image"))), "the page shows {r}");
+        }
+        let slug = s["info"]["slug"].as_str().expect("slug");
+        files.push(format!("plots/{slug}-error-time.svg"));
+        files.push(format!("plots/{slug}-passes.svg"));
+        for f in files {
+            let p = dir.join(&f);
+            assert!(p.is_file() && std::fs::metadata(&p).expect("meta").len() > 0, "{f} is missing or empty");
+        }
+        assert!(s["front"].as_array().is_some_and(|f| !f.is_empty()), "a Pareto front");
+        assert!(s["equal_time"]["row"].is_number() && s["equal_error"]["row"].is_number(), "both winners");
+    }
+    let svg = std::fs::read_to_string(
+        dir.join("plots").join(format!("{}-error-time.svg", scenes[0]["info"]["slug"].as_str().expect("slug"))),
+    )
+    .expect("svg");
+    assert_eq!(svg.matches("<circle cx").count(), 6 + 3, "a point per job and a legend dot per preset");
+    // Every number and name on the page is results.json's value at the span's path.
+    let spans = spans(&html);
+    assert!(spans.len() > 100, "the page prints its numbers from the JSON ({} spans)", spans.len());
+    for (path, text) in &spans {
+        let value = at(&v, path);
+        let text = unescape(text);
+        match value {
+            Value::Number(x) => {
+                let x = x.as_f64().expect("f64");
+                let decimals = text.split_once('.').map_or(0, |(_, d)| d.len());
+                let shown: f64 = text.parse().unwrap_or_else(|_| panic!("{path}: '{text}' is not a number"));
+                assert!(
+                    (x - shown).abs() <= 0.5 * 10f64.powi(-(decimals as i32)) + 1e-12,
+                    "{path}: page {text}, JSON {x}"
+                );
+            }
+            Value::String(s) => assert_eq!(*s, text, "{path}"),
+            other => panic!("{path}: the page shows '{text}' where the JSON has {other}"),
+        }
+    }
+    // And no number on the page comes from anywhere else: with the spans, tags, style and
+    // script removed, the text holds no digit.
+    let mut text = html.clone();
+    for cut in [("<style>", "</style>"), ("<script>", "</script>")] {
+        if let (Some(a), Some(b)) = (text.find(cut.0), text.find(cut.1)) {
+            text.replace_range(a..b + cut.1.len(), "");
+        }
+    }
+    while let Some(a) = text.find("<span data-json=") {
+        let b = a + text[a..].find("</span>").expect("closing span") + 7;
+        text.replace_range(a..b, "");
+    }
+    let mut visible = String::new();
+    let mut in_tag = false;
+    for c in text.chars() {
+        match c {
+            '<' => in_tag = true,
+            '>' => in_tag = false,
+            _ if !in_tag => visible.push(c),
+            _ => {}
+        }
+    }
+    let digits: Vec<&str> = visible.lines().filter(|l| l.chars().any(|c| c.is_ascii_digit())).collect();
+    assert!(digits.is_empty(), "numbers on the page that are not from results.json: {digits:?}");
+    // The CSV: a row per scene × preset × point, its first two columns scene and preset, its
+    // numbers the JSON's.
+    let csv = std::fs::read_to_string(dir.join("results.csv")).expect("results.csv");
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    assert_eq!(&header[..3], ["scene", "preset", "point"]);
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 12);
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap_or_else(|| panic!("column {name}"));
+    let mut k = 0;
+    for s in scenes {
+        for r in s["rows"].as_array().expect("rows") {
+            assert_eq!(rows[k][col("scene")], s["info"]["name"].as_str().expect("name"));
+            for c in ["flip", "rmse", "frame_ms"] {
+                let x: f64 = rows[k][col(c)].parse().expect("number");
+                assert_eq!(x, r[c].as_f64().expect("f64"), "row {k} {c}");
+            }
+            k += 1;
+        }
+    }
+}
+
+fn chromium() -> &'static str {
+    for c in ["chromium", "chromium-browser", "google-chrome"] {
+        if Command::new(c).arg("--version").output().is_ok_and(|o| o.status.success()) {
+            return c;
+        }
+    }
+    panic!(
+        "no headless Chromium: install it with `sudo apt-get install -y --no-install-recommends chromium` (scripts/test.sh does so as root)"
+    );
+}
+
+fn browser(extra: &[&str], page: &Path) -> std::process::Output {
+    let profile = temp_dir("chromium-profile");
+    Command::new(chromium())
+        .args(["--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars", "--virtual-time-budget=5000"])
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .args(extra)
+        .arg(format!("file://{}", page.display()))
+        .output()
+        .expect("chromium runs")
+}
+
+#[test]
+fn the_page_renders_in_headless_chromium_with_every_image_loaded() {
+    let dir = single();
+    let page = dir.join("index.html");
+    let dom = browser(&["--dump-dom"], &page);
+    let dom = String::from_utf8_lossy(&dom.stdout);
+    let attr = |name: &str| -> Option<usize> {
+        let i = dom.find(&format!("{name}=\""))? + name.len() + 2;
+        dom[i..].split('"').next()?.parse().ok()
+    };
+    // Per scene: the truth, two images per job, two plots.
+    let expected = 2 * (1 + 2 * 6 + 2);
+    assert_eq!(attr("data-images-broken"), Some(0), "broken images on the page");
+    assert_eq!(attr("data-images-loaded"), Some(expected), "images loaded");
+    let shot = dir.join("chromium.png");
+    let o = browser(&["--window-size=1300,1400", &format!("--screenshot={}", shot.display())], &page);
+    assert!(shot.is_file(), "no screenshot: {}", String::from_utf8_lossy(&o.stderr));
+    let img = image::open(&shot).expect("PNG").to_rgb8();
+    // The image cells are not blank: the first scene's figures hold the rendered Cornell box,
+    // whose red and green walls no page colour has, and FLIP maps.
+    let (mut red, mut green, mut purple) = (0, 0, 0);
+    for p in img.pixels() {
+        let [r, g, b] = p.0.map(i32::from);
+        // FLIP's maps in inferno: dark purple to orange.
+        if b > g + 40 && r > g + 20 {
+            purple += 1;
+        }
+        if r > g + 25 && r > b + 25 {
+            red += 1;
+        }
+        if g > r + 25 && g > b + 25 {
+            green += 1;
+        }
+    }
+    assert!(
+        red > 300 && green > 300 && purple > 300,
+        "the screenshot shows no rendered images or FLIP maps (red {red}, green {green}, purple {purple} pixels)"
+    );
+}
+
+/// The columns of a results.csv that do not depend on the machine's speed, row by row.
+fn deterministic_rows(dir: &Path) -> Vec<Vec<String>> {
+    let csv = std::fs::read_to_string(dir.join("results.csv")).expect("results.csv");
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    // Times (and what is derived from them: the front) differ from run to run.
+    let keep: Vec<usize> = (0..header.len())
+        .filter(|&i| !(header[i].ends_with("_ms") || header[i] == "pareto" || header[i] == "machine"))
+        .collect();
+    let mut rows = vec![keep.iter().map(|&i| header[i].to_string()).collect()];
+    rows.extend(lines.map(|l| {
+        let cells: Vec<&str> = l.split(',').collect();
+        keep.iter().map(|&i| cells[i].to_string()).collect()
+    }));
+    rows
+}
+
+fn assert_merged_equals_single(merged: &Path) {
+    let single = single();
+    assert_eq!(deterministic_rows(merged), deterministic_rows(single), "the merged rows differ from the single run's");
+    let (a, b) = (json(merged), json(single));
+    assert_eq!(a["spec"], b["spec"]);
+    assert_eq!(
+        a["command"].as_str().map(|c| c.replace(&merged.display().to_string(), "DIR")),
+        b["command"].as_str().map(|c| c.replace(&single.display().to_string(), "DIR"))
+    );
+    for (sa, sb) in a["scenes"].as_array().expect("scenes").iter().zip(b["scenes"].as_array().expect("scenes")) {
+        for (ra, rb) in sa["rows"].as_array().expect("rows").iter().zip(sb["rows"].as_array().expect("rows")) {
+            assert_eq!(ra["job"], rb["job"]);
+            let (ia, ib) =
+                (merged.join(ra["image"].as_str().expect("img")), single.join(rb["image"].as_str().expect("img")));
+            assert_eq!(
+                std::fs::read(&ia).expect("merged image"),
+                std::fs::read(&ib).expect("single image"),
+                "{}",
+                ia.display()
+            );
+        }
+    }
+    assert!(merged.join("index.html").is_file());
+}
+
+#[test]
+fn three_shards_run_by_gnu_parallel_merge_into_the_single_runs_rows() {
+    let out = temp_dir("parallel");
+    let o = gi_lab()
+        .arg("study")
+        .args(study_args())
+        .arg("--out")
+        .arg(&out)
+        .args(["--emit-jobs", "parallel", "--shards", "3"])
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let script = out.join("study.parallel");
+    let text = std::fs::read_to_string(&script).expect("study.parallel");
+    assert!(text.contains("parallel ") && text.contains("--merge"), "{text}");
+    if Command::new("parallel").arg("--version").output().is_err() {
+        panic!(
+            "GNU parallel is missing: install it with `sudo apt-get install -y parallel` (scripts/test.sh does so as root)"
+        );
+    }
+    let o = Command::new("bash").arg(&script).output().expect("bash runs");
+    assert!(
+        o.status.success(),
+        "the parallel study failed: {}\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    for i in 1..=3 {
+        assert!(out.join(format!("shard-{i}/shard.json")).is_file(), "shard {i}");
+    }
+    assert_merged_equals_single(&out);
+}
+
+#[test]
+fn a_slurm_job_array_script_submits_its_shards_and_the_merge() {
+    let out = temp_dir("slurm");
+    let o = gi_lab()
+        .arg("study")
+        .args(study_args())
+        .arg("--out")
+        .arg(&out)
+        .args(["--emit-jobs", "slurm", "--shards", "2"])
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let script = out.join("study.slurm");
+    let text = std::fs::read_to_string(&script).expect("study.slurm");
+    assert!(text.contains("#SBATCH --array=1-2"), "{text}");
+    // A stand-in sbatch: `--parsable SCRIPT` runs the array's tasks one after the other (as
+    // Slurm would, with SLURM_ARRAY_TASK_ID set), `--wrap CMD` runs the dependent merge.
+    let bin = temp_dir("slurm-bin");
+    let sbatch = bin.join("sbatch");
+    std::fs::write(
+        &sbatch,
+        "#!/usr/bin/env bash\nset -e\nif [ \"$1\" = --parsable ]; then\n  n=$(sed -n 's/^#SBATCH --array=1-//p' \"$2\")\n  for i in $(seq 1 \"$n\"); do SLURM_ARRAY_TASK_ID=$i bash \"$2\" >&2; done\n  echo 4242\nelse\n  for a in \"$@\"; do case \"$a\" in --dependency=afterok:4242) dep=1;; esac; done\n  [ \"${dep:-}\" = 1 ] || { echo 'the merge must depend on the array' >&2; exit 3; }\n  while [ \"$1\" != --wrap ]; do shift; done\n  bash -c \"$2\"\nfi\n",
+    )
+    .expect("write sbatch");
+    Command::new("chmod").arg("+x").arg(&sbatch).status().expect("chmod");
+    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
+    let o = Command::new("bash").arg(&script).env("PATH", path).output().expect("bash runs");
+    assert!(
+        o.status.success(),
+        "the Slurm script failed: {}\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(String::from_utf8_lossy(&o.stdout).contains("submitted the job array 4242"));
+    assert_merged_equals_single(&out);
+}
+
+#[test]
+fn a_merge_with_a_missing_shard_says_which_and_writes_nothing() {
+    let out = temp_dir("missing");
+    let o = gi_lab()
+        .arg("study")
+        .args(study_args())
+        .arg("--out")
+        .arg(&out)
+        .args(["--shard", "2/3"])
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = gi_lab().arg("study").arg("--merge").arg(&out).output().expect("runs");
+    assert_eq!(o.status.code(), Some(2), "a missing shard is the user's input");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("shard(s) 1, 3 of 3 are missing"), "{err}");
+    assert!(!out.join("index.html").exists() && !out.join("results.csv").exists());
+}
