@@ -17,6 +17,7 @@ pub mod soak_memory;
 pub mod soak_walk;
 pub mod study;
 pub mod sweep;
+pub mod sweep_run;
 pub mod upgrade;
 
 use std::path::PathBuf;

@@ -5,8 +5,8 @@
 use std::path::PathBuf;
 
 use clap::Args;
+use gi_render::LabSettings;
 use gi_render::settings::{FieldKind, Value};
-use gi_render::{LabSettings, Renderer};
 
 use crate::error::CliError;
 use crate::plot::{Anchor, Canvas, tick_label, ticks};
@@ -19,7 +19,7 @@ pub struct SweepArgs {
     /// A swept setting: `GROUP.FIELD=FROM..TO:STEPS` (numbers, evenly spaced, STEPS ≥ 1;
     /// whole numbers for integer fields) or `GROUP.FIELD=A,B,C` (any values). Repeatable:
     /// every combination is rendered.
-    #[arg(long = "param", value_name = "GROUP.FIELD=FROM..TO:STEPS", required = true)]
+    #[arg(long = "param", value_name = "GROUP.FIELD=FROM..TO:STEPS", required_unless_present = "merge")]
     pub params: Vec<String>,
     #[arg(long, default_value = "256x256", value_parser = super::parse_size)]
     pub size: (u32, u32),
@@ -39,8 +39,15 @@ pub struct SweepArgs {
     #[arg(long, default_value_t = 64)]
     pub reference_spp: u32,
     /// Output folder (created): sweep.csv, pareto.png and, when path-traced, reference.exr.
-    #[arg(long)]
-    pub out: PathBuf,
+    #[arg(long, required_unless_present = "merge")]
+    pub out: Option<PathBuf>,
+    /// Render only share I of N of the points (a deterministic, contiguous split) into
+    /// OUT/shard-I/; `--merge OUT` joins the shards.
+    #[arg(long, value_parser = super::shard::parse_shard, value_name = "I/N")]
+    pub shard: Option<super::shard::Shard>,
+    /// Join OUT/shard-*/ into OUT's sweep.csv and pareto.png (as an unsharded run writes them).
+    #[arg(long, value_name = "DIR", conflicts_with = "shard")]
+    pub merge: Option<PathBuf>,
 }
 
 /// One swept setting and its values.
@@ -117,9 +124,12 @@ pub fn grid(params: &[Param]) -> Vec<Vec<(String, Value)>> {
 }
 
 /// The measurements of one point.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PointResult {
-    pub assignments: Vec<(String, Value)>,
+    /// The point's place in the grid (the CSV's `point`).
+    pub index: usize,
+    /// The swept settings' values, as the CSV prints them.
+    pub assignments: Vec<(String, String)>,
     pub passes: Vec<(String, f64)>,
     pub total_ms: f64,
     pub flip: f64,
@@ -148,7 +158,7 @@ pub fn pareto_flags(points: &[(f64, f64)]) -> Vec<bool> {
         .collect()
 }
 
-pub fn csv(params: &[Param], points: &[PointResult]) -> String {
+pub fn csv(params: &[String], points: &[PointResult]) -> String {
     let mut passes: Vec<String> = Vec::new();
     for p in points {
         for (name, _) in &p.passes {
@@ -159,14 +169,14 @@ pub fn csv(params: &[Param], points: &[PointResult]) -> String {
     }
     let mut s = String::from("point");
     for p in params {
-        s += &format!(",{}", p.path);
+        s += &format!(",{p}");
     }
     for name in &passes {
         s += &format!(",{name}_ms");
     }
     s += ",total_ms,flip,rmse,flicker,pareto\n";
-    for (i, p) in points.iter().enumerate() {
-        s += &i.to_string();
+    for p in points {
+        s += &p.index.to_string();
         for (_, v) in &p.assignments {
             s += &format!(",{v}");
         }
@@ -260,127 +270,8 @@ pub fn pareto_plot(title: &str, points: &[PointResult]) -> image::RgbaImage {
     c.img
 }
 
-/// Path-traces the ground truth of `scene` at time 0 for the renderer's camera.
-fn path_trace(r: &Renderer, spp: u32, bounces: u32) -> gi_render::ImageF32 {
-    use gi_render::cpu::pathtrace::{PathTracer, PtSettings};
-    let (w, h) = r.size();
-    let pt = PathTracer::new(r.scene(), 0.0);
-    pt.render(r.view_proj(), r.camera.position, w, h, PtSettings { bounces, spp, seed: 1, ..Default::default() }).full
-}
-
 pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
-    if args.frames == 0 {
-        return Err(CliError::input("--frames must be at least 1"));
-    }
-    if args.flicker_frames == 1 {
-        return Err(CliError::input("--flicker-frames must be 0 or at least 2"));
-    }
-    let params: Vec<Param> =
-        args.params.iter().map(|s| parse_param(s)).collect::<Result<_, _>>().map_err(CliError::input)?;
-    let base = crate::scene_args::load_settings(&args.scene)?;
-    let points = grid(&params);
-    // Every point is checked before anything renders.
-    let mut settings = Vec::with_capacity(points.len());
-    for pt in &points {
-        let mut s = base.clone();
-        for (path, v) in pt {
-            s.set(path, v).map_err(CliError::input)?;
-        }
-        let errors = s.validate();
-        if !errors.is_empty() {
-            let list: Vec<String> = errors.iter().map(|e| e.to_string()).collect();
-            return Err(CliError::input(format!("point {pt:?} is invalid: {}", list.join("; "))));
-        }
-        settings.push(s);
-    }
-    std::fs::create_dir_all(&args.out).map_err(|e| CliError::input(format!("--out {}: {e}", args.out.display())))?;
-    let mut r = super::renderer(&args.scene, args.size)?;
-    r.clock.playing = false;
-    r.clock.anim_frame = 0;
-
-    let reference = match &args.reference {
-        Some(path) => super::compare::load_image(path)?.0,
-        None => {
-            use gi_render::pipeline::{Gather, ShadingPoints};
-            let p = &base.pipeline;
-            let bounces = if p.gather == Gather::None {
-                0
-            } else if p.uses_knecht_vpls() && p.shading_points != ShadingPoints::HcbSamples {
-                base.vpl.bounces
-            } else {
-                1
-            };
-            eprintln!(
-                "path-tracing the ground truth: {}×{}, {} spp, {bounces} bounce(s) …",
-                args.size.0, args.size.1, args.reference_spp
-            );
-            let img = path_trace(&r, args.reference_spp.max(1), bounces);
-            let path = args.out.join("reference.exr");
-            gi_render::image_io::save_exr(&path, &img)
-                .map_err(|e| CliError::failure(format!("{}: {e}", path.display())))?;
-            img
-        }
-    };
-
-    let bar = indicatif::ProgressBar::new(points.len() as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} points, {elapsed} elapsed, ETA {eta} {msg}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    let display_ref = gi_render::image_io::hdr_display(&reference);
-    let mut results = Vec::with_capacity(points.len());
-    for (pt, s) in points.iter().zip(settings) {
-        r.set_settings(s).map_err(|e| CliError::input(format!("point {pt:?}: {e}")))?;
-        r.reset_history();
-        let report = super::bench::run::bench_run(&mut r, args.frames, "sweep");
-        let hdr = r.readback("final.hdr").map_err(|e| CliError::failure(e.to_string()))?;
-        let metric = |e: gi_render::metrics::MetricError| CliError::input(format!("reference: {e}"));
-        let rmse = gi_render::metrics::rmse(&hdr, &reference).map_err(metric)?;
-        let (flip, map) =
-            gi_render::metrics::flip(&gi_render::image_io::hdr_display(&hdr), &display_ref).map_err(metric)?;
-        r.set_flip_map(&map);
-        let flicker = if args.flicker_frames >= 2 {
-            Some(super::bench::run::measure_flicker(&mut r, args.flicker_frames)?)
-        } else {
-            None
-        };
-        results.push(PointResult {
-            assignments: pt.clone(),
-            passes: report.passes.iter().map(|p| (p.pass.clone(), p.mean_ms)).collect(),
-            total_ms: report.total_mean_ms,
-            flip,
-            rmse,
-            flicker,
-            pareto: false,
-        });
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
-    mark_pareto(&mut results);
-    let csv_path = args.out.join("sweep.csv");
-    gi_render::preset::write_atomic_bytes(
-        &csv_path,
-        csv(&params, &results).as_bytes(),
-        gi_render::preset::Backup::Skip,
-    )
-    .map_err(|e| CliError::failure(format!("{}: {e}", csv_path.display())))?;
-    let title = format!(
-        "GI Lab sweep: {} points at {}×{}, {}",
-        results.len(),
-        args.size.0,
-        args.size.1,
-        r.ctx.adapter_summary()
-    );
-    let plot_path = args.out.join("pareto.png");
-    let plot = image::DynamicImage::ImageRgba8(pareto_plot(&title, &results));
-    gi_render::image_io::save_atomic(&plot_path, &plot, image::ImageFormat::Png)
-        .map_err(|e| CliError::failure(format!("{}: {e}", plot_path.display())))?;
-    println!("wrote {} and {}", csv_path.display(), plot_path.display());
-    for (i, p) in results.iter().enumerate().filter(|(_, p)| p.pareto) {
-        let settings: Vec<String> = p.assignments.iter().map(|(n, v)| format!("{n}={v}")).collect();
-        println!("pareto #{i}: {:.3} ms, FLIP {:.4} — {}", p.total_ms, p.flip, settings.join(", "));
-    }
-    Ok(())
+    super::sweep_run::sweep(args)
 }
 
 #[cfg(test)]
@@ -418,6 +309,7 @@ mod tests {
     #[test]
     fn pareto_front_keeps_exactly_the_undominated_points() {
         let pt = |t: f64, f: f64| PointResult {
+            index: 0,
             assignments: Vec::new(),
             passes: Vec::new(),
             total_ms: t,

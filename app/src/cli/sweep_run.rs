@@ -1,0 +1,245 @@
+//! Running `gi-lab sweep`: every point (or a shard's share of them, `--shard I/N`) rendered on
+//! a renderer of its own and measured against the reference, then `sweep.csv` and
+//! `pareto.png`; `--merge DIR` joins the shards' `sweep.json` into the same files.
+
+use std::path::{Path, PathBuf};
+
+use gi_render::{GpuContext, LabSettings, Renderer};
+use serde::{Deserialize, Serialize};
+
+use super::shard::{Shard, check_complete, shard_dirs};
+use super::sweep::{Param, PointResult, SweepArgs, csv, grid, mark_pareto, pareto_plot, parse_param};
+use crate::error::CliError;
+
+/// What one shard measured: `DIR/shard-I/sweep.json`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct SweepShard {
+    /// The sweep's arguments but where it writes and its share: shards of one sweep agree.
+    pub spec: String,
+    pub shard: Shard,
+    /// Points in the whole sweep.
+    pub points: usize,
+    pub params: Vec<String>,
+    pub size: (u32, u32),
+    pub adapter: String,
+    pub rows: Vec<PointResult>,
+}
+
+fn spec_of(args: &SweepArgs) -> String {
+    let mut a = args.clone();
+    a.out = None;
+    a.shard = None;
+    a.merge = None;
+    format!("{a:?}")
+}
+
+/// Path-traces the ground truth of `scene` at time 0 for the renderer's camera.
+fn path_trace(r: &Renderer, spp: u32, bounces: u32) -> gi_render::ImageF32 {
+    use gi_render::cpu::pathtrace::{PathTracer, PtSettings};
+    let (w, h) = r.size();
+    let pt = PathTracer::new(r.scene(), 0.0);
+    pt.render(r.view_proj(), r.camera.position, w, h, PtSettings { bounces, spp, seed: 1, ..Default::default() }).full
+}
+
+fn write(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
+    gi_render::preset::write_atomic_bytes(path, bytes, gi_render::preset::Backup::Skip)
+        .map_err(|e| CliError::failure(format!("{}: {e}", path.display())))
+}
+
+pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
+    if let Some(dir) = &args.merge {
+        return merge(dir);
+    }
+    let Some(out) = args.out.clone() else { return Err(CliError::input("--out DIR is required (or --merge DIR)")) };
+    if args.frames == 0 {
+        return Err(CliError::input("--frames must be at least 1"));
+    }
+    if args.flicker_frames == 1 {
+        return Err(CliError::input("--flicker-frames must be 0 or at least 2"));
+    }
+    let params: Vec<Param> =
+        args.params.iter().map(|s| parse_param(s)).collect::<Result<_, _>>().map_err(CliError::input)?;
+    let base = crate::scene_args::load_settings(&args.scene)?;
+    let points = grid(&params);
+    // Every point is checked before anything renders.
+    let mut settings = Vec::with_capacity(points.len());
+    for pt in &points {
+        let mut s = base.clone();
+        for (path, v) in pt {
+            s.set(path, v).map_err(CliError::input)?;
+        }
+        let errors = s.validate();
+        if !errors.is_empty() {
+            let list: Vec<String> = errors.iter().map(|e| e.to_string()).collect();
+            return Err(CliError::input(format!("point {pt:?} is invalid: {}", list.join("; "))));
+        }
+        settings.push(s);
+    }
+    let shard = args.shard.unwrap_or(Shard { index: 1, count: 1 });
+    let dir = if args.shard.is_some() { shard.dir(&out) } else { out.clone() };
+    std::fs::create_dir_all(&dir).map_err(|e| CliError::input(format!("--out {}: {e}", dir.display())))?;
+    let scene = crate::scene_args::load_scene(&args.scene)?;
+    let ctx = GpuContext::headless().map_err(|e| CliError::failure(e.to_string()))?;
+    // Each point renders on a renderer of its own: a renderer's frame count (its sample
+    // patterns' seeds) and caches would make a point's result depend on the points before it,
+    // and so on how the sweep is split.
+    let fresh = |s: LabSettings| -> Result<Renderer, CliError> {
+        let mut r = Renderer::new(ctx.clone(), scene.clone(), s, args.size.0, args.size.1)
+            .map_err(|e| CliError::input(e.to_string()))?;
+        if !gi_render::timing::GpuTimer::timestamps_reliable(&r.ctx) {
+            r.set_timing_source(gi_render::timing::TimingSource::CpuWallClock);
+        }
+        r.clock.playing = false;
+        r.clock.anim_frame = 0;
+        Ok(r)
+    };
+    let first = fresh(base.clone())?;
+    let reference = match &args.reference {
+        Some(path) => super::compare::load_image(path)?.0,
+        None => {
+            use gi_render::pipeline::{Gather, ShadingPoints};
+            let p = &base.pipeline;
+            let bounces = if p.gather == Gather::None {
+                0
+            } else if p.uses_knecht_vpls() && p.shading_points != ShadingPoints::HcbSamples {
+                base.vpl.bounces
+            } else {
+                1
+            };
+            eprintln!(
+                "path-tracing the ground truth: {}×{}, {} spp, {bounces} bounce(s) …",
+                args.size.0, args.size.1, args.reference_spp
+            );
+            let img = path_trace(&first, args.reference_spp.max(1), bounces);
+            // Every shard traces the same image (seed 1) and writes it to the sweep's folder.
+            let path = out.join("reference.exr");
+            gi_render::image_io::save_exr(&path, &img)
+                .map_err(|e| CliError::failure(format!("{}: {e}", path.display())))?;
+            img
+        }
+    };
+    let adapter = first.ctx.adapter_summary();
+    drop(first);
+    let range = shard.range(points.len());
+    let bar = indicatif::ProgressBar::new(range.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} points, {elapsed} elapsed, ETA {eta} {msg}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let display_ref = gi_render::image_io::hdr_display(&reference);
+    let mut results = Vec::with_capacity(range.len());
+    for i in range {
+        let pt = &points[i];
+        let mut r = fresh(settings[i].clone()).map_err(|e| CliError::input(format!("point {pt:?}: {}", e.message)))?;
+        let report = super::bench::run::bench_run(&mut r, args.frames, "sweep");
+        let hdr = r.readback("final.hdr").map_err(|e| CliError::failure(e.to_string()))?;
+        let metric = |e: gi_render::metrics::MetricError| CliError::input(format!("reference: {e}"));
+        let rmse = gi_render::metrics::rmse(&hdr, &reference).map_err(metric)?;
+        let (flip, _) =
+            gi_render::metrics::flip(&gi_render::image_io::hdr_display(&hdr), &display_ref).map_err(metric)?;
+        let flicker = if args.flicker_frames >= 2 {
+            Some(super::bench::run::measure_flicker(&mut r, args.flicker_frames)?)
+        } else {
+            None
+        };
+        results.push(PointResult {
+            index: i,
+            assignments: pt.iter().map(|(p, v)| (p.clone(), v.to_string())).collect(),
+            passes: report.passes.iter().map(|p| (p.pass.clone(), p.mean_ms)).collect(),
+            total_ms: report.total_mean_ms,
+            flip,
+            rmse,
+            flicker,
+            pareto: false,
+        });
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let part = SweepShard {
+        spec: spec_of(args),
+        shard,
+        points: points.len(),
+        params: params.iter().map(|p| p.path.clone()).collect(),
+        size: args.size,
+        adapter,
+        rows: results,
+    };
+    if args.shard.is_some() {
+        let path = dir.join("sweep.json");
+        let text = serde_json::to_string_pretty(&part).map_err(|e| CliError::failure(e.to_string()))?;
+        write(&path, text.as_bytes())?;
+        println!(
+            "shard {}/{}: {} of {} points in {}; join the shards with: gi-lab sweep --merge {}",
+            shard.index,
+            shard.count,
+            part.rows.len(),
+            part.points,
+            dir.display(),
+            out.display()
+        );
+        return Ok(());
+    }
+    finish(&out, vec![part])
+}
+
+/// Joins the parts of one sweep (checked: one spec, every point once) and writes sweep.csv
+/// and pareto.png into `out`.
+fn finish(out: &Path, parts: Vec<SweepShard>) -> Result<(), CliError> {
+    let first = parts.first().ok_or_else(|| CliError::input("no shard to join"))?.clone();
+    let mut results: Vec<PointResult> = Vec::new();
+    for p in &parts {
+        if p.spec != first.spec || p.points != first.points {
+            return Err(CliError::input(format!(
+                "shard {}/{} belongs to another sweep (its arguments differ from shard {}/{}'s)",
+                p.shard.index, p.shard.count, first.shard.index, first.shard.count
+            )));
+        }
+        results.extend(p.rows.iter().cloned());
+    }
+    results.sort_by_key(|p| p.index);
+    if results.iter().map(|p| p.index).collect::<Vec<_>>() != (0..first.points).collect::<Vec<_>>() {
+        return Err(CliError::input(format!(
+            "the shards hold {} points of {}: a shard is missing, repeated or unfinished",
+            results.len(),
+            first.points
+        )));
+    }
+    mark_pareto(&mut results);
+    let csv_path = out.join("sweep.csv");
+    write(&csv_path, csv(&first.params, &results).as_bytes())?;
+    let mut adapters: Vec<&str> = parts.iter().map(|p| p.adapter.as_str()).collect();
+    adapters.dedup();
+    let title = format!(
+        "GI Lab sweep: {} points at {}×{}, {}",
+        results.len(),
+        first.size.0,
+        first.size.1,
+        adapters.join(" + ")
+    );
+    let plot_path = out.join("pareto.png");
+    let plot = image::DynamicImage::ImageRgba8(pareto_plot(&title, &results));
+    gi_render::image_io::save_atomic(&plot_path, &plot, image::ImageFormat::Png)
+        .map_err(|e| CliError::failure(format!("{}: {e}", plot_path.display())))?;
+    println!("wrote {} and {}", csv_path.display(), plot_path.display());
+    for p in results.iter().filter(|p| p.pareto) {
+        let settings: Vec<String> = p.assignments.iter().map(|(n, v)| format!("{n}={v}")).collect();
+        println!("pareto #{}: {:.3} ms, FLIP {:.4} — {}", p.index, p.total_ms, p.flip, settings.join(", "));
+    }
+    Ok(())
+}
+
+/// `gi-lab sweep --merge DIR`.
+fn merge(dir: &PathBuf) -> Result<(), CliError> {
+    let found = shard_dirs(dir, "sweep.json").map_err(CliError::input)?;
+    let mut parts = Vec::new();
+    for (_, d) in &found {
+        let path = d.join("sweep.json");
+        let text = std::fs::read_to_string(&path).map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
+        let part: SweepShard = serde_json::from_str(&text)
+            .map_err(|e| CliError::input(format!("{}: not a sweep shard: {e}", path.display())))?;
+        parts.push(part);
+    }
+    let shards: Vec<(u32, Shard)> = parts.iter().map(|p| (p.shard.index, p.shard)).collect();
+    check_complete(dir, &shards).map_err(CliError::input)?;
+    finish(dir, parts)
+}
