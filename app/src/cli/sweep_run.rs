@@ -2,7 +2,7 @@
 //! a renderer of its own and measured against the reference, then `sweep.csv` and
 //! `pareto.png`; `--merge DIR` joins the shards' `sweep.json` into the same files.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use gi_render::{GpuContext, LabSettings, Renderer};
 use serde::{Deserialize, Serialize};
@@ -229,7 +229,7 @@ fn finish(out: &Path, parts: Vec<SweepShard>) -> Result<(), CliError> {
 }
 
 /// `gi-lab sweep --merge DIR`.
-fn merge(dir: &PathBuf) -> Result<(), CliError> {
+fn merge(dir: &Path) -> Result<(), CliError> {
     let found = shard_dirs(dir, "sweep.json").map_err(CliError::input)?;
     let mut parts = Vec::new();
     for (_, d) in &found {
