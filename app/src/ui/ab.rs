@@ -89,41 +89,12 @@ impl Ab {
     /// Renders B in step with A: same size, camera, light edits and animation time. Call
     /// before A renders (the clock is copied before it ticks).
     pub fn render(&mut self, a: &Renderer) {
-        let (w, h) = a.size();
-        if let Err(e) = self.b.resize(w, h) {
-            self.error = Some(e.to_string());
-            return;
-        }
-        self.b.camera = a.camera;
-        self.b.clock = a.clock;
-        let (src, dst) = (a.scene(), self.b.scene_mut());
-        let mut lights_moved = false;
-        // Lights added or removed in the lab (issue #18): B takes A's whole light set.
-        let lit = |s: &gi_render::scene::Scene| s.nodes.iter().map(|n| n.light.is_some()).collect::<Vec<_>>();
-        if src.nodes.len() != dst.nodes.len() || lit(src) != lit(dst) || src.lights.len() != dst.lights.len() {
-            dst.nodes = src.nodes.clone();
-            dst.roots = src.roots.clone();
-            dst.lights = src.lights.clone();
-            lights_moved = true;
-        }
-        for (i, n) in src.nodes.iter().enumerate() {
-            if let (Some(li), Some(d)) = (n.light, dst.nodes.get_mut(i)) {
-                if d.transform != n.transform {
-                    d.transform = n.transform;
-                    lights_moved = true;
-                }
-                if let (Some(sl), Some(dl)) = (src.lights.get(li), dst.lights.get_mut(li))
-                    && dl != sl
-                {
-                    *dl = sl.clone();
-                    lights_moved = true;
-                }
+        match follow(a, &mut self.b) {
+            Ok(()) => {
+                self.b.render_frame();
             }
+            Err(e) => self.error = Some(e),
         }
-        if lights_moved {
-            self.b.reset_history();
-        }
-        self.b.render_frame();
     }
 
     /// B's final image as an egui texture.
@@ -202,6 +173,44 @@ impl Ab {
             rs.renderer.write().free_texture(&id);
         }
     }
+}
+
+/// Puts `b` in step with `a`: the same size, camera, animation time and lights (the lab's
+/// light edits, added and removed lights); a change of lights restarts b's temporal history.
+/// Used by A/B and by the comparison grid's cells.
+pub fn follow(a: &Renderer, b: &mut Renderer) -> Result<(), String> {
+    let (w, h) = a.size();
+    b.resize(w, h).map_err(|e| e.to_string())?;
+    b.camera = a.camera;
+    b.clock = a.clock;
+    let (src, dst) = (a.scene(), b.scene_mut());
+    let mut lights_moved = false;
+    // Lights added or removed in the lab (issue #18): b takes a's whole light set.
+    let lit = |s: &gi_render::scene::Scene| s.nodes.iter().map(|n| n.light.is_some()).collect::<Vec<_>>();
+    if src.nodes.len() != dst.nodes.len() || lit(src) != lit(dst) || src.lights.len() != dst.lights.len() {
+        dst.nodes = src.nodes.clone();
+        dst.roots = src.roots.clone();
+        dst.lights = src.lights.clone();
+        lights_moved = true;
+    }
+    for (i, n) in src.nodes.iter().enumerate() {
+        if let (Some(li), Some(d)) = (n.light, dst.nodes.get_mut(i)) {
+            if d.transform != n.transform {
+                d.transform = n.transform;
+                lights_moved = true;
+            }
+            if let (Some(sl), Some(dl)) = (src.lights.get(li), dst.lights.get_mut(li))
+                && dl != sl
+            {
+                *dl = sl.clone();
+                lights_moved = true;
+            }
+        }
+    }
+    if lights_moved {
+        b.reset_history();
+    }
+    Ok(())
 }
 
 /// One comparison: mean FLIP and RMSE, and the image the view shows.

@@ -185,6 +185,7 @@ impl GiLabApp {
             show_gautron_records: false,
             show_lights: true,
             ab: None,
+            grid: None,
             request_new_viewer: false,
             request_reset_layout: false,
             screenshot: Arc::new(Mutex::new(None)),

@@ -223,6 +223,19 @@ impl State {
                     ui.add(egui::DragValue::new(&mut self.session.target_fps).range(0.0..=120.0).speed(0.5).suffix(" fps"))
                         .on_hover_text("while you drag or fly, the render scale is lowered until a frame takes at most 1 / this; it comes back a moment after you stop, so that the temporal passes converge at full scale; 0: off");
                 });
+                let grid_open = self.grid.is_some();
+                if ui
+                    .selectable_label(grid_open, "Compare grid")
+                    .on_hover_text("the live settings beside presets, frozen settings and the path-traced truth, cell by cell")
+                    .clicked()
+                {
+                    if grid_open {
+                        self.stop_grid();
+                    } else {
+                        self.start_grid();
+                    }
+                    ui.close();
+                }
                 ui.menu_button("A/B compare", |ui| {
                     if ui.button("with the exact-VPL reference").clicked() {
                         self.start_ab(crate::ui::ab::AbSource::Reference);

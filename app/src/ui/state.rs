@@ -71,6 +71,8 @@ pub struct State {
     pub show_lights: bool,
     /// The A/B comparison, when one runs.
     pub ab: Option<crate::ui::ab::Ab>,
+    /// The comparison grid, when open (View → Compare grid; issue #40 point 1).
+    pub grid: Option<crate::ui::grid::Grid>,
     pub hot: crate::ui::hot_reload::HotReload,
     pub request_new_viewer: bool,
     pub request_reset_layout: bool,
@@ -109,6 +111,7 @@ impl State {
         if r.is_ok() {
             // B renders the old scene: the comparison ends with it.
             self.stop_ab();
+            self.stop_grid();
             self.session.lights.clear();
             self.session.lights_complete = false;
             if let Some(p) = &path {
@@ -208,7 +211,18 @@ impl State {
                 // B first: it takes A's clock before A's frame advances it.
                 ab.render(&l.renderer);
             }
+            let started = Instant::now();
             l.renderer.render_frame();
+            if let Some(g) = &mut self.grid {
+                // The cells render in turn in what the frame budget leaves after the live frame.
+                let fps = self.session.target_fps;
+                let budget = if fps > 0.0 {
+                    std::time::Duration::from_secs_f32(1.0 / fps).saturating_sub(started.elapsed())
+                } else {
+                    std::time::Duration::MAX
+                };
+                g.render(&l.renderer, &l.settings, budget);
+            }
             let now = Instant::now();
             l.frame_ms = (now - l.last_frame).as_secs_f32() * 1e3;
             l.last_frame = now;
@@ -319,6 +333,7 @@ impl State {
     /// Starts an A/B comparison of the live settings with `source`.
     pub fn start_ab(&mut self, source: crate::ui::ab::AbSource) {
         self.stop_ab();
+        self.stop_grid();
         let Ok(l) = &self.lab else { return };
         match crate::ui::ab::Ab::start(&l.renderer, &l.settings, source) {
             Ok(ab) => self.ab = Some(ab),

@@ -2,6 +2,7 @@
 //! GPU timings, probes and buffer viewers. Panels can be dragged, tabbed and resized; the
 //! layout is part of the session.
 
+mod grid;
 mod history;
 mod light_gizmo;
 mod lights;

@@ -6,6 +6,10 @@ use crate::ui::state::State;
 
 pub(super) fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
     let rect = ui.available_rect_before_wrap();
+    if st.grid.is_some() {
+        super::grid::grid_ui(st, ui, rect);
+        return;
+    }
     st.viewport_rect = rect;
     let ppp = ui.ctx().pixels_per_point();
     st.viewport_px = ((rect.width() * ppp).round().max(0.0) as u32, (rect.height() * ppp).round().max(0.0) as u32);
@@ -339,7 +343,7 @@ fn ab_overlay(st: &mut State, ui: &mut egui::Ui, rect: egui::Rect) {
     }
 }
 
-fn navigate(l: &mut crate::ui::lab::Lab, ui: &egui::Ui, response: &egui::Response) {
+pub(super) fn navigate(l: &mut crate::ui::lab::Lab, ui: &egui::Ui, response: &egui::Response) {
     let r = l.renderer.bounds().radius();
     let cam = &mut l.renderer.camera;
     if response.dragged_by(egui::PointerButton::Primary) {
