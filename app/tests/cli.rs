@@ -613,3 +613,36 @@ fn the_quality_suite_runs_on_a_real_scene_and_traces_its_own_truth() {
         assert!(eq[1].as_f64().is_some_and(|f| f > 0.0 && f < 1.0), "{r}");
     }
 }
+
+/// Shadow maps the device cannot hold (four point lights at 8192²: 24 layers, 6 GiB) render
+/// smaller instead of failing, and the renderer says so; the random walk through the window
+/// found the GPU validation error this gave before.
+#[test]
+fn shadow_maps_too_large_for_the_device_render_smaller_and_say_so() {
+    let scene = gi_render::scene::cornell::default_scene().expect("scene");
+    let mut settings = gi_render::LabSettings::default();
+    settings.direct.shadow_map_size = 8192;
+    let ctx = gi_render::GpuContext::headless().expect(
+        "no GPU adapter: install Mesa's software Vulkan driver with `sudo apt-get install -y mesa-vulkan-drivers libvulkan1`",
+    );
+    let mut r = gi_render::Renderer::new(ctx, scene, settings, 64, 48).expect("renderer");
+    r.render_frame();
+    assert_eq!(r.shadow_note(), None, "one light at 8192² fits");
+    let radius = r.bounds().radius();
+    for _ in 0..4 {
+        let c = r.camera;
+        gi_lab::scene_lights::add_light(
+            r.scene_mut(),
+            gi_lab::scene_lights::NewLight::Point,
+            c.position,
+            c.forward(),
+            radius,
+        );
+    }
+    r.render_frame();
+    let note = r.shadow_note().expect("the atlas did not fit: a note says so").to_string();
+    assert!(note.contains("8192²") && note.contains("do not fit this device"), "{note}");
+    let hdr = r.readback("final.hdr").expect("final.hdr");
+    assert!(hdr.data.iter().all(|p| p.iter().all(|c| c.is_finite())), "the frame renders");
+    assert!(hdr.data.iter().any(|p| p[0] > 0.0), "and is lit");
+}

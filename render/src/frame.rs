@@ -66,11 +66,16 @@ impl Renderer {
 
         // Stage 2: shadow maps, the emitters' VPLs and their visibility, direct light.
         let ds = self.settings.direct.clone();
-        let lights = setup_lights(&state.lights, self.bounds, ds.shadow_map_size, ds.shadows);
+        let mut lights = setup_lights(&state.lights, self.bounds, ds.shadow_map_size, ds.shadows);
         let size = ds.shadow_map_size.min(ctx.limits.max_texture_dimension_2d);
         let layers = (lights.views.len() as u32).clamp(1, ctx.limits.max_texture_array_layers);
         if self.shadow.ensure(&ctx, size, layers) {
             self.shadow.register(&mut self.registry);
+        }
+        if self.shadow.size != ds.shadow_map_size {
+            // Layers made smaller to fit the device: a texel covers more of the world.
+            let k = ds.shadow_map_size as f32 / self.shadow.size as f32;
+            lights.lights.iter_mut().for_each(|l| l.shadow.x *= k);
         }
         let shadow = &self.shadow;
         self.timer.scope(&ctx, &mut enc, "direct.shadow", |e, slot| {

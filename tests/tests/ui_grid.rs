@@ -113,7 +113,9 @@ fn cells_are_added_removed_share_the_camera_and_compare_with_the_truth() {
     assert!(msg.contains("nguyen-hcb not added") && msg.contains("MiB"), "{msg}");
     h.get_by_label_contains("not added");
     if let Ok(path) = std::env::var("GI_LAB_SCREENSHOT") {
-        run_until(&mut h, 400, |app| app.state.grid.as_ref().and_then(|g| g.truth.as_ref()).is_some_and(|t| t.spp >= 24));
+        run_until(&mut h, 400, |app| {
+            app.state.grid.as_ref().and_then(|g| g.truth.as_ref()).is_some_and(|t| t.spp >= 24)
+        });
         h.run_steps(20);
         let image = h.render().expect("the harness renders");
         image.save(path).expect("screenshot");

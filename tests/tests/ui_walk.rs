@@ -94,7 +94,17 @@ fn check(h: &Harness<'static, GiLabApp>) -> Result<(), String> {
     let st = &h.state().state;
     let l = st.lab.as_ref().map_err(|e| format!("the renderer is gone: {e}"))?;
     if let Some(e) = l.gpu_error.lock().ok().and_then(|e| e.clone()) {
-        return Err(format!("GPU error: {e}"));
+        // What ran besides the live renderer, to say where the error came from.
+        let grid = st.grid.as_ref().map(|g| {
+            let cells: Vec<&str> = g.cells.iter().map(|c| c.name.as_str()).collect();
+            format!("open with cells {cells:?}, truth {}", g.truth.is_some())
+        });
+        return Err(format!(
+            "GPU error: {e}\n(compare grid {}, A/B {}, {} lights)",
+            grid.unwrap_or_else(|| "closed".into()),
+            if st.ab.is_some() { "on" } else { "off" },
+            l.renderer.scene().lights.len()
+        ));
     }
     let bad = l.settings.validate();
     if !bad.is_empty() {

@@ -172,8 +172,13 @@ pub struct ShadowPass {
     pub texture: wgpu::Texture,
     /// D2Array view for sampling.
     pub array_view: wgpu::TextureView,
-    size: u32,
+    /// The layer size in use, and the size asked for (they differ when the atlas at the
+    /// asked size did not fit the device).
+    pub size: u32,
+    requested: u32,
     layers: u32,
+    /// Why the layers are smaller than asked, when they are.
+    pub fitted: Option<String>,
 }
 
 impl ShadowPass {
@@ -203,7 +208,9 @@ impl ShadowPass {
             texture,
             array_view,
             size: 16,
+            requested: 16,
             layers: 1,
+            fitted: None,
         }
     }
 
@@ -256,15 +263,41 @@ impl ShadowPass {
     }
 
     /// Makes sure the atlas has `size`² texels and `layers` layers. Returns whether the
-    /// texture was recreated (the registry entry must then be refreshed).
+    /// texture was recreated (the registry entry must then be refreshed). An atlas the device
+    /// cannot allocate (a few large point lights at 8192² need gigabytes) is made with layers
+    /// half as large, and again, down to 64²: the frame renders with coarser shadows instead
+    /// of failing, and [`Self::fitted`] says so (the window shows it under the settings).
     pub fn ensure(&mut self, ctx: &GpuContext, size: u32, layers: u32) -> bool {
         let layers = layers.max(1);
         let mut changed = false;
-        if size != self.size || layers != self.layers {
-            let (t, v) = Self::create_texture(&ctx.device, size, layers);
-            self.texture = t;
-            self.array_view = v;
-            self.size = size;
+        if size != self.requested || layers != self.layers {
+            let mut s = size;
+            loop {
+                let oom = ctx.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+                let invalid = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+                let (t, v) = Self::create_texture(&ctx.device, s, layers);
+                let failed = [pollster::block_on(invalid.pop()), pollster::block_on(oom.pop())];
+                let failed = failed.into_iter().flatten().next();
+                if failed.is_none() || s <= 64 {
+                    if let Some(e) = failed {
+                        log::error!("the shadow maps do not fit this device even at 64²: {e}");
+                    }
+                    self.texture = t;
+                    self.array_view = v;
+                    break;
+                }
+                s /= 2;
+            }
+            let gib = |s: u32| s as f64 * s as f64 * 4.0 * layers as f64 / (1u64 << 30) as f64;
+            self.fitted = (s != size).then(|| {
+                format!(
+                    "shadow maps: {layers} layers of {size}² ({:.1} GiB) do not fit this device; they render at {s}² ({:.2} GiB)",
+                    gib(size),
+                    gib(s)
+                )
+            });
+            self.size = s;
+            self.requested = size;
             self.layers = layers;
             changed = true;
         }

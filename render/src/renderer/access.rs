@@ -176,6 +176,12 @@ impl Renderer {
         self.stages.hcb.as_ref()?.stats(&self.ctx, self.settings.hcb.d_max(self.bounds.radius()))
     }
 
+    /// Why the shadow maps render at a smaller size than `direct.shadow_map_size` asks: the
+    /// atlas at that size did not fit the device (None when they render as asked).
+    pub fn shadow_note(&self) -> Option<&str> {
+        self.shadow.fitted.as_deref()
+    }
+
     /// The emitters of the last frame (issue #18): emissive triangles, their power, the VPLs on
     /// them and stage 3's share for their first bounce. None while emitters are off or the
     /// scene has none.

@@ -127,6 +127,9 @@ pub fn error_against_time(study: &Study, si: usize) -> String {
             );
         }
         for r in &pts {
+            let label =
+                if study.params.is_empty() { preset.name.clone() } else { format!("{} p{}", preset.name, r.point) };
+            o += &text(x(r.frame_ms) + 8.0, y(r.flip) - 6.0, 10.0, "start", &label);
             let ring = if r.pareto { " stroke=\"#d62728\" stroke-width=\"2\"" } else { "" };
             o += &format!(
                 "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"5\" fill=\"{}\"{ring}><title>{}</title></circle>\n",

@@ -142,9 +142,7 @@ fn view_combo(ui: &mut egui::Ui, name: &str, shown: &mut Shown, buffers: &[Strin
             }
         });
     // Its accessible name says whose view it picks (the window's tests find it by that).
-    combo
-        .response
-        .widget_info(|| egui::WidgetInfo::labeled(egui::Role::ComboBox, true, format!("view of {name}")));
+    combo.response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::ComboBox, true, format!("view of {name}")));
     if shown.view != before {
         shown.buffer = None;
         shown.buffer_frame = 0;

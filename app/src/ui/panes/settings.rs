@@ -33,6 +33,9 @@ pub(super) fn settings_ui(st: &mut State, ui: &mut egui::Ui) {
             ui.small("The accumulation restarts whenever the camera, a light or an animated object moves: pause the animation (Space) to let it converge.");
         }
     }
+    if let Some(note) = l.renderer.shadow_note() {
+        ui.colored_label(ui.visuals().warn_fg_color, note);
+    }
     if let Some(e) = &l.settings_error {
         // A clamped value was applied (a warning); a refused one was not (an error).
         let colour = if e.starts_with("clamped:") { ui.visuals().warn_fg_color } else { ERROR };
