@@ -364,8 +364,9 @@ fn walk(seed: u64, steps: usize) {
             }
             base = end;
             dropped = h.state().state.history.dropped();
+            let grid = h.state().state.grid.as_ref().map(|g| (g.cells.len(), g.truth.is_some()));
             eprintln!(
-                "walk seed {seed}: {} steps in {:.0} s, history {} steps",
+                "walk seed {seed}: {} steps in {:.0} s, history {} steps, compare grid {grid:?}",
                 step + 1,
                 started.elapsed().as_secs_f32(),
                 h.state().state.history.steps().0.len()

@@ -103,13 +103,19 @@ struct TruthJob {
 }
 
 /// The truth's spp at which refining stops.
-pub const TRUTH_MAX_SPP: u32 = 4096;
+pub const TRUTH_MAX_SPP: u32 = 1024;
 
 impl Truth {
     pub fn start(bounces: u32) -> Self {
         let (jobs, job_rx) = std::sync::mpsc::channel::<TruthJob>();
         let (tx, results) = std::sync::mpsc::channel();
+        // Half the cores at most: the renderers (and, on a software device, the GPU itself)
+        // keep the rest, so the window stays responsive while the truth refines.
+        let threads = std::thread::available_parallelism().map_or(1, |n| (n.get() / 2).max(1));
+        let pool =
+            rayon::ThreadPoolBuilder::new().num_threads(threads).thread_name(|i| format!("grid-truth-{i}")).build();
         let _ = std::thread::Builder::new().name("grid-truth".into()).spawn(move || {
+            let Ok(pool) = pool else { return };
             let mut next = job_rx.recv().ok();
             while let Some(job) = next.take() {
                 let mut pt = gi_render::cpu::pathtrace::PathTracer::new(&job.scene, job.time);
@@ -138,7 +144,7 @@ impl Truth {
                         seed: 1,
                         ..Default::default()
                     };
-                    acc.add_pass(&pt, job.view_proj, job.eye, settings);
+                    pool.install(|| acc.add_pass(&pt, job.view_proj, job.eye, settings));
                     spp += batch;
                     if tx.send((job.generation, spp, Arc::new(acc.images().full))).is_err() {
                         return;
