@@ -20,6 +20,16 @@ fn srgb_encode(c: f32) -> f32 {
     if c <= 0.003_130_8 { c * 12.92 } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 }
 }
 
+/// A FLIP error map (`metrics::flip`, error in the red channel) in the inferno colour map
+/// (black: no visible difference, yellow: large), as the study, the grid and A/B show it.
+pub fn error_map_rgba8(map: &ImageF32) -> image::RgbaImage {
+    image::RgbaImage::from_fn(map.width, map.height, |x, y| {
+        let e = map.data[(y * map.width + x) as usize][0];
+        let c = crate::cpu::view::colormap(crate::passes::view::Colormap::Inferno, e);
+        image::Rgba([(c[0] * 255.0).round() as u8, (c[1] * 255.0).round() as u8, (c[2] * 255.0).round() as u8, 255])
+    })
+}
+
 /// Maps a buffer to 8-bit RGBA for viewing, by its kind:
 /// LDR as is; albedo clamped; directions as 0.5 + 0.5·n; HDR with x/(1+x) and sRGB;
 /// depth with min–max over finite values < 1 in turbo false colour; motion as

@@ -194,6 +194,17 @@ impl LabSettings {
         Self::groups().into_iter().find(|(g, _)| *g == group)?.1.iter().find(|m| m.name == field)
     }
 
+    /// Every setting whose value differs from `base`'s: (path, value here, value in `base`).
+    pub fn differences(&self, base: &LabSettings) -> Vec<(String, Value, Value)> {
+        Self::all_paths()
+            .into_iter()
+            .filter_map(|p| {
+                let (a, b) = (self.get(&p)?, base.get(&p)?);
+                (a != b).then_some((p, a, b))
+            })
+            .collect()
+    }
+
     pub fn all_paths() -> Vec<String> {
         Self::groups()
             .into_iter()

@@ -316,6 +316,11 @@ impl Technique {
         s.pipeline = self.choices(&s.pipeline);
     }
 
+    /// The technique in words (as the picker shows it).
+    pub fn label(self) -> &'static str {
+        Self::LABELS[Self::ALL.iter().position(|x| *x == self).unwrap_or(0)]
+    }
+
     /// The technique whose choices `p` are, if any (a mix of stages is none of them).
     pub fn of(p: &PipelineSettings) -> Option<Technique> {
         if p.gather == Gather::None {

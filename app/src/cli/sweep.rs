@@ -123,6 +123,25 @@ pub fn grid(params: &[Param]) -> Vec<Vec<(String, Value)>> {
     points
 }
 
+/// `base` with each point's settings, every one checked (the first invalid point is the error).
+pub fn settings_at(base: &LabSettings, points: &[Vec<(String, Value)>]) -> Result<Vec<LabSettings>, String> {
+    points
+        .iter()
+        .map(|pt| {
+            let mut s = base.clone();
+            for (path, v) in pt {
+                s.set(path, v)?;
+            }
+            let errors = s.validate();
+            if !errors.is_empty() {
+                let list: Vec<String> = errors.iter().map(|e| e.to_string()).collect();
+                return Err(format!("point {pt:?} is invalid: {}", list.join("; ")));
+            }
+            Ok(s)
+        })
+        .collect()
+}
+
 /// The measurements of one point.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PointResult {

@@ -8,7 +8,7 @@ use gi_render::{GpuContext, LabSettings, Renderer};
 use serde::{Deserialize, Serialize};
 
 use super::shard::{Shard, check_complete, shard_dirs};
-use super::sweep::{Param, PointResult, SweepArgs, csv, grid, mark_pareto, pareto_plot, parse_param};
+use super::sweep::{Param, PointResult, SweepArgs, csv, grid, mark_pareto, pareto_plot, parse_param, settings_at};
 use crate::error::CliError;
 
 /// What one shard measured: `DIR/shard-I/sweep.json`.
@@ -62,19 +62,7 @@ pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
     let base = crate::scene_args::load_settings(&args.scene)?;
     let points = grid(&params);
     // Every point is checked before anything renders.
-    let mut settings = Vec::with_capacity(points.len());
-    for pt in &points {
-        let mut s = base.clone();
-        for (path, v) in pt {
-            s.set(path, v).map_err(CliError::input)?;
-        }
-        let errors = s.validate();
-        if !errors.is_empty() {
-            let list: Vec<String> = errors.iter().map(|e| e.to_string()).collect();
-            return Err(CliError::input(format!("point {pt:?} is invalid: {}", list.join("; "))));
-        }
-        settings.push(s);
-    }
+    let settings = settings_at(&base, &points).map_err(CliError::input)?;
     let shard = args.shard.unwrap_or(Shard { index: 1, count: 1 });
     let dir = if args.shard.is_some() { shard.dir(&out) } else { out.clone() };
     std::fs::create_dir_all(&dir).map_err(|e| CliError::input(format!("--out {}: {e}", dir.display())))?;
@@ -83,15 +71,8 @@ pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
     // Each point renders on a renderer of its own: a renderer's frame count (its sample
     // patterns' seeds) and caches would make a point's result depend on the points before it,
     // and so on how the sweep is split.
-    let fresh = |s: LabSettings| -> Result<Renderer, CliError> {
-        let mut r = Renderer::new(ctx.clone(), scene.clone(), s, args.size.0, args.size.1)
-            .map_err(|e| CliError::input(e.to_string()))?;
-        if !gi_render::timing::GpuTimer::timestamps_reliable(&r.ctx) {
-            r.set_timing_source(gi_render::timing::TimingSource::CpuWallClock);
-        }
-        r.clock.playing = false;
-        r.clock.anim_frame = 0;
-        Ok(r)
+    let fresh = |s: LabSettings| {
+        super::bench::run::measuring_renderer(&ctx, &scene, s, args.size).map_err(|e| CliError::input(e.to_string()))
     };
     let first = fresh(base.clone())?;
     let reference = match &args.reference {

@@ -243,22 +243,15 @@ impl Default for Grid {
 
 /// The technique of `s` in words.
 pub fn technique_of(s: &LabSettings) -> String {
-    use gi_render::pipeline::Technique;
-    match Technique::of(&s.pipeline) {
-        Some(t) => Technique::LABELS[Technique::ALL.iter().position(|x| *x == t).unwrap_or(0)].to_string(),
+    match gi_render::pipeline::Technique::of(&s.pipeline) {
+        Some(t) => t.label().to_string(),
         None => "a mix of stages".into(),
     }
 }
 
 /// The settings of `s` that differ from `base`, as `path = value`.
 pub fn differs(s: &LabSettings, base: &LabSettings) -> Vec<String> {
-    LabSettings::all_paths()
-        .into_iter()
-        .filter_map(|p| {
-            let (a, b) = (s.get(&p)?, base.get(&p)?);
-            (a != b).then(|| format!("{p} = {a}"))
-        })
-        .collect()
+    s.differences(base).into_iter().map(|(p, a, _)| format!("{p} = {a}")).collect()
 }
 
 fn allocated(live: &Renderer) -> Option<u64> {
@@ -448,13 +441,6 @@ impl Grid {
 fn flip_against(img: &ImageF32, truth: &ImageF32) -> Result<(f64, egui::ColorImage), String> {
     let display = gi_render::image_io::hdr_display;
     let (mean, map) = gi_render::metrics::flip(&display(img), &display(truth)).map_err(|e| e.to_string())?;
-    let pixels = map
-        .data
-        .iter()
-        .map(|p| {
-            let c = gi_render::cpu::view::colormap(gi_render::passes::view::Colormap::Inferno, p[0]);
-            egui::Color32::from_rgb((c[0] * 255.0) as u8, (c[1] * 255.0) as u8, (c[2] * 255.0) as u8)
-        })
-        .collect();
-    Ok((mean, egui::ColorImage::new([map.width as usize, map.height as usize], pixels)))
+    let rgba = gi_render::image_io::error_map_rgba8(&map);
+    Ok((mean, egui::ColorImage::from_rgba_unmultiplied([map.width as usize, map.height as usize], rgba.as_raw())))
 }

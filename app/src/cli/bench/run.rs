@@ -77,6 +77,26 @@ pub struct BenchReport {
     pub device_choices: Vec<String>,
 }
 
+/// A renderer of its own for one measurement: paused at the start of the animation, and
+/// timed by the wall clock per pass on a device whose timestamps land in the wrong passes.
+/// Each job of a study, point of a sweep and row of the scenes suite gets one, so that its
+/// result does not depend on what a renderer rendered before (its frame count seeds the
+/// sample patterns).
+pub fn measuring_renderer(
+    ctx: &gi_render::GpuContext,
+    scene: &gi_render::scene::Scene,
+    settings: gi_render::LabSettings,
+    (w, h): (u32, u32),
+) -> Result<Renderer, gi_render::renderer::RenderError> {
+    let mut r = Renderer::new(ctx.clone(), scene.clone(), settings, w, h)?;
+    if !gi_render::timing::GpuTimer::timestamps_reliable(&r.ctx) {
+        r.set_timing_source(gi_render::timing::TimingSource::CpuWallClock);
+    }
+    r.clock.playing = false;
+    r.clock.anim_frame = 0;
+    Ok(r)
+}
+
 /// Renders warm-up and measured frames and aggregates the per-pass times.
 pub fn bench_run(r: &mut Renderer, frames: u32, scene_name: &str) -> BenchReport {
     for _ in 0..3 {

@@ -10,7 +10,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use gi_render::{GpuContext, LabSettings, Renderer};
+use gi_render::{GpuContext, LabSettings};
 
 use crate::error::CliError;
 
@@ -143,11 +143,7 @@ fn frame_ms(
     size: (u32, u32),
     frames: u32,
 ) -> Result<f64, String> {
-    let mut r = Renderer::new(ctx.clone(), scene.clone(), settings, size.0, size.1).map_err(|e| e.to_string())?;
-    if !gi_render::timing::GpuTimer::timestamps_reliable(&r.ctx) {
-        r.set_timing_source(gi_render::timing::TimingSource::CpuWallClock);
-    }
-    r.clock.playing = false;
+    let mut r = super::run::measuring_renderer(ctx, scene, settings, size).map_err(|e| e.to_string())?;
     Ok(super::run::bench_run(&mut r, frames.max(1), "").total_mean_ms)
 }
 

@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{JobEngine, StudyArgs};
 use crate::cli::shard::shell_word;
-use crate::cli::sweep::{Param, grid, parse_param};
+use crate::cli::sweep::{Param, grid, parse_param, settings_at};
 use crate::error::CliError;
 
 /// What a study renders and measures: every argument but where it writes and which share it
@@ -188,23 +188,15 @@ fn stem(path: &str) -> String {
 
 /// The technique of `s` in words.
 pub fn technique_of(s: &LabSettings) -> String {
-    use gi_render::pipeline::Technique;
-    match Technique::of(&s.pipeline) {
-        Some(t) => Technique::LABELS[Technique::ALL.iter().position(|x| *x == t).unwrap_or(0)].to_string(),
+    match gi_render::pipeline::Technique::of(&s.pipeline) {
+        Some(t) => t.label().to_string(),
         None => "a mix of stages (see the settings)".into(),
     }
 }
 
 /// The settings of `s` that differ from the defaults.
 pub fn diff_from_defaults(s: &LabSettings) -> Vec<String> {
-    let d = LabSettings::default();
-    LabSettings::all_paths()
-        .into_iter()
-        .filter_map(|p| {
-            let (a, b) = (s.get(&p)?, d.get(&p)?);
-            (a != b).then(|| format!("{p} = {a} (default {b})"))
-        })
-        .collect()
+    s.differences(&LabSettings::default()).into_iter().map(|(p, a, b)| format!("{p} = {a} (default {b})")).collect()
 }
 
 impl Plan {
@@ -241,17 +233,7 @@ impl Plan {
                 s.apply_override(o).map_err(|e| CliError::input(format!("--set {o}: {e}")))?;
             }
             // Every point of every preset is checked before anything renders.
-            for pt in &points {
-                let mut t = s.clone();
-                for (path, v) in pt {
-                    t.set(path, v).map_err(CliError::input)?;
-                }
-                let errors = t.validate();
-                if !errors.is_empty() {
-                    let list: Vec<String> = errors.iter().map(|e| e.to_string()).collect();
-                    return Err(CliError::input(format!("preset {name} at {pt:?} is invalid: {}", list.join("; "))));
-                }
-            }
+            settings_at(&s, &points).map_err(|e| CliError::input(format!("preset {name}: {e}")))?;
             let taken: Vec<String> = presets.iter().map(|p: &PresetInfo| p.slug.clone()).collect();
             presets.push(PresetInfo {
                 slug: slug(&name, &taken),

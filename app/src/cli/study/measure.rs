@@ -5,13 +5,11 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use gi_render::cpu::view::colormap;
-use gi_render::passes::view::Colormap;
 use gi_render::{ImageF32, LabSettings, Renderer};
 
 use super::jobs::{Plan, Spec};
 use super::results::{Machine, Part, Row, TruthInfo};
-use crate::cli::bench::run::{bench_run, measure_flicker};
+use crate::cli::bench::run::{bench_run, measure_flicker, measuring_renderer};
 use crate::cli::shard::Shard;
 use crate::error::CliError;
 use crate::scene_args::SceneArgs;
@@ -107,15 +105,6 @@ fn save_png(path: &Path, img: image::RgbaImage) -> Result<(), CliError> {
         .map_err(|e| CliError::failure(format!("{}: {e}", path.display())))
 }
 
-/// FLIP's error map in the inferno colour map (black: no visible difference).
-fn flip_png(map: &ImageF32) -> image::RgbaImage {
-    image::RgbaImage::from_fn(map.width, map.height, |x, y| {
-        let e = map.data[(y * map.width + x) as usize][0];
-        let c = colormap(Colormap::Inferno, e);
-        image::Rgba([(c[0] * 255.0).round() as u8, (c[1] * 255.0).round() as u8, (c[2] * 255.0).round() as u8, 255])
-    })
-}
-
 /// Renders the jobs of `shard` into `dir` (`img/SCENE/…`); the truth cache is `out/truth-cache`,
 /// shared by the shards of one output folder.
 pub fn run(spec: &Spec, plan: &Plan, shard: Shard, out: &Path, dir: &Path) -> Result<Part, CliError> {
@@ -150,15 +139,9 @@ pub fn run(spec: &Spec, plan: &Plan, shard: Shard, out: &Path, dir: &Path) -> Re
         // Each job renders on a renderer of its own, made for it: a renderer carries its frame
         // count (the seeds of its sample patterns) and caches from job to job, and a job must
         // measure the same on whichever shard runs it, first or after others.
-        let fresh = |settings: LabSettings| -> Result<Renderer, CliError> {
-            let mut r = Renderer::new(ctx.clone(), scene.clone(), settings, spec.size.0, spec.size.1)
-                .map_err(|e| CliError::input(format!("{}: {e}", info.name)))?;
-            if !gi_render::timing::GpuTimer::timestamps_reliable(&r.ctx) {
-                r.set_timing_source(gi_render::timing::TimingSource::CpuWallClock);
-            }
-            r.clock.playing = false;
-            r.clock.anim_frame = 0;
-            Ok(r)
+        let fresh = |settings: LabSettings| {
+            measuring_renderer(&ctx, &scene, settings, spec.size)
+                .map_err(|e| CliError::input(format!("{}: {e}", info.name)))
         };
         let r = fresh(plan.settings(plan.jobs[scene_jobs[0]]))?;
         machine_seen.get_or_insert_with(|| machine(&r));
@@ -186,7 +169,7 @@ pub fn run(spec: &Spec, plan: &Plan, shard: Shard, out: &Path, dir: &Path) -> Re
             let stem = format!("img/{}/{}", info.slug, plan.job_slug(job));
             let (image, flip_map) = (format!("{stem}.png"), format!("{stem}-flip.png"));
             save_png(&dir.join(&image), gi_render::image_io::to_rgba8(&hdr, gi_render::buffers::BufferKind::Hdr))?;
-            save_png(&dir.join(&flip_map), flip_png(&map))?;
+            save_png(&dir.join(&flip_map), gi_render::image_io::error_map_rgba8(&map))?;
             rows.push(Row {
                 job: j,
                 scene: job.scene,

@@ -148,26 +148,19 @@ pub fn error_against_time(study: &Study, si: usize) -> String {
         ly += 20.0;
     }
     ly += 8.0;
-    o += &format!(
-        "<line x1=\"{:.1}\" y1=\"{ly:.1}\" x2=\"{:.1}\" y2=\"{ly:.1}\" stroke=\"#d62728\" stroke-width=\"2\"/>\n",
-        right + 12.0,
-        right + 28.0
-    );
-    o += &text(right + 30.0, ly + 4.0, 12.0, "start", "Pareto front");
-    ly += 20.0;
-    o += &format!(
-        "<line x1=\"{:.1}\" y1=\"{ly:.1}\" x2=\"{:.1}\" y2=\"{ly:.1}\" stroke=\"#888\" stroke-dasharray=\"5 4\"/>\n",
-        right + 12.0,
-        right + 28.0
-    );
-    o += &text(right + 30.0, ly + 4.0, 12.0, "start", "frame budget");
-    ly += 20.0;
-    o += &format!(
-        "<line x1=\"{:.1}\" y1=\"{ly:.1}\" x2=\"{:.1}\" y2=\"{ly:.1}\" stroke=\"#888\" stroke-dasharray=\"2 3\"/>\n",
-        right + 12.0,
-        right + 28.0
-    );
-    o += &text(right + 30.0, ly + 4.0, 12.0, "start", "error target");
+    for (stroke, label) in [
+        ("stroke=\"#d62728\" stroke-width=\"2\"", "Pareto front"),
+        ("stroke=\"#888\" stroke-dasharray=\"5 4\"", "frame budget"),
+        ("stroke=\"#888\" stroke-dasharray=\"2 3\"", "error target"),
+    ] {
+        o += &format!(
+            "<line x1=\"{:.1}\" y1=\"{ly:.1}\" x2=\"{:.1}\" y2=\"{ly:.1}\" {stroke}/>\n",
+            right + 12.0,
+            right + 28.0
+        );
+        o += &text(right + 30.0, ly + 4.0, 12.0, "start", label);
+        ly += 20.0;
+    }
     o += "</svg>\n";
     o
 }

@@ -11,20 +11,8 @@ use crate::ui::state::State;
 
 const CAPTION: f32 = 62.0;
 
-fn preset_files(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
-    let mut v: Vec<std::path::PathBuf> = std::fs::read_dir(dir)
-        .map(|rd| {
-            rd.filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.extension().is_some_and(|x| x == "ron") && !p.to_string_lossy().ends_with(".export.ron"))
-                .collect()
-        })
-        .unwrap_or_default();
-    v.sort();
-    v
-}
-
 fn toolbar(st: &mut State, ui: &mut egui::Ui) {
-    let presets = preset_files(&st.args.presets_dir);
+    let presets = super::presets::preset_files(&st.args.presets_dir);
     let Ok(l) = &st.lab else { return };
     let Some(g) = &mut st.grid else { return };
     let mut close = false;

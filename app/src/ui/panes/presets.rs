@@ -8,7 +8,7 @@ use crate::ui::ERROR;
 use crate::ui::state::State;
 
 /// The folder of `presets_dir`'s .ron files, sorted.
-fn preset_files(dir: &std::path::Path) -> Vec<PathBuf> {
+pub(super) fn preset_files(dir: &std::path::Path) -> Vec<PathBuf> {
     let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
         .map(|rd| {
             rd.filter_map(|e| e.ok().map(|e| e.path()))
