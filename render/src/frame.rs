@@ -111,6 +111,7 @@ impl Renderer {
             frame: self.clock.frame as u32,
             direct: &self.direct,
             direct_radiance: &direct_view,
+            direct_diffuse: self.direct.diffuse.as_ref().map(|(_, v)| v),
             lights: state.lights.iter().map(gpu_light).collect(),
             views: light_view_list(&state, self.bounds),
         };

@@ -254,6 +254,19 @@ impl LabSettings {
             }
         }
         if in_range {
+            // Gautron et al. 003 "Irradiance Interpolation": a record contributes where w_k >
+            // 1/a; clamped to w_max ≤ 1/a none ever does, no pixel is covered and the creation
+            // fills the cache (issue #41).
+            let (a, w_max) = (self.gautron.accuracy, self.gautron.weight_clamp);
+            if w_max <= 1.0 / a {
+                let least = 1.0 / a;
+                err(
+                    "gautron.weight_clamp",
+                    format!(
+                        "{w_max} ≤ 1/a = {least:.3} (a = gautron.accuracy = {a}): no record's clamped weight passes w > 1/a, so no pixel is ever covered; use more than {least:.3}"
+                    ),
+                );
+            }
             errors.extend(crate::pipeline::combination_errors(self));
         }
         errors.extend(crate::pipeline::legacy_field_errors(self));
@@ -383,6 +396,19 @@ mod tests {
         let changed = s.clamp_all();
         assert_eq!(changed.len(), 3);
         assert_eq!(s.direct.pcf_radius, 4);
+        assert!(s.validate().is_empty(), "{:?}", s.validate());
+    }
+
+    #[test]
+    fn a_weight_clamp_no_record_can_pass_is_refused() {
+        let mut s = LabSettings::default();
+        s.gautron.accuracy = 0.5;
+        s.gautron.weight_clamp = 2.0;
+        let errors = s.validate();
+        assert_eq!(errors.len(), 1, "{errors:?}");
+        assert_eq!(errors[0].field, "gautron.weight_clamp");
+        assert!(errors[0].message.contains("1/a = 2.000"), "{}", errors[0].message);
+        s.gautron.weight_clamp = 2.01;
         assert!(s.validate().is_empty(), "{:?}", s.validate());
     }
 

@@ -37,12 +37,23 @@ pub struct FrameInputs<'a> {
     pub direct: &'a crate::passes::direct::DirectPass,
     /// Stage 2's direct light (`direct.radiance`), the first bounce's source.
     pub direct_radiance: &'a wgpu::TextureView,
+    /// Its diffuse part (`direct.diffuse`), when a stage asked for it (`soler.sender`).
+    pub direct_diffuse: Option<&'a wgpu::TextureView>,
     /// Every light of the frame on the GPU, and the light views with their light's index.
     pub lights: Vec<GpuLight>,
     pub views: Vec<(u32, LightView)>,
 }
 
 impl FrameInputs<'_> {
+    /// The radiance Soler et al.'s first bounce gathers (`soler.sender`): the direct light's
+    /// diffuse part (004 §5.3) or the whole of it toward the camera.
+    pub fn sender_radiance(&self) -> &wgpu::TextureView {
+        match (self.settings.soler.sender, self.direct_diffuse) {
+            (crate::passes::soler::Sender::Diffuse, Some(d)) => d,
+            _ => self.direct_radiance,
+        }
+    }
+
     /// The depth range of the thesis' linear depth (Knecht 002 Eq. 4.2).
     pub fn depth_range(&self) -> f32 {
         self.camera.zfar - self.camera.znear

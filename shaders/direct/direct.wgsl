@@ -93,9 +93,18 @@ fn shadow_visibility(light: Light, p: vec3<f32>, n: vec3<f32>, l: vec3<f32>) -> 
     return sum / count;
 }
 
+// What the lights give a point: the radiance reflected toward the viewer by the whole BRDF,
+// and the irradiance E (the diffuse part's c·DI/π · E is what a diffuse sender re-emits,
+// Soler et al. 004 §5.3).
+struct Reflected {
+    radiance: vec3<f32>,
+    irradiance: vec3<f32>,
+}
+
 // The light of every emitter VPL reflected toward v at p.
-fn reflected_emitters(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, alb: vec4<f32>, mat: vec4<f32>) -> vec3<f32> {
+fn reflected_emitters(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, alb: vec4<f32>, mat: vec4<f32>) -> Reflected {
     var radiance = vec3<f32>(0.0);
+    var irradiance = vec3<f32>(0.0);
     let ec = params.emitter_counts;
     let count = min(ec.x, arrayLength(&emitter_vpls));
     for (var k = 0u; k < count; k = k + 1u) {
@@ -110,13 +119,16 @@ fn reflected_emitters(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, alb: vec4<f32>, 
         }
         let l = normalize(vpl.position.xyz - p);
         radiance = radiance + brdf_eval(n, l, v, alb.rgb, alb.a, mat.x, mat.y) * e * vis;
+        irradiance = irradiance + e * vis;
     }
-    return radiance;
+    return Reflected(radiance, irradiance);
 }
 
 // The light of every punctual light and emitter VPL reflected toward v at p.
-fn reflected_direct(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, alb: vec4<f32>, mat: vec4<f32>) -> vec3<f32> {
-    var radiance = reflected_emitters(p, n, v, alb, mat);
+fn reflected_direct(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, alb: vec4<f32>, mat: vec4<f32>) -> Reflected {
+    let emitted = reflected_emitters(p, n, v, alb, mat);
+    var radiance = emitted.radiance;
+    var irradiance = emitted.irradiance;
     let count = arrayLength(&lights);
     for (var i = 0u; i < count; i = i + 1u) {
         let light = lights[i];
@@ -141,8 +153,9 @@ fn reflected_direct(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, alb: vec4<f32>, ma
         let vis = shadow_visibility(light, p, n, l);
         let e = light.color.rgb * params.light.x * irradiance_scale * ndl * vis;
         radiance = radiance + brdf_eval(n, l, v, alb.rgb, alb.a, mat.x, mat.y) * e;
+        irradiance = irradiance + e;
     }
-    return radiance;
+    return Reflected(radiance, irradiance);
 }
 
 @compute @workgroup_size(TILE, TILE, 1)
@@ -162,8 +175,36 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let alb = textureLoad(g_albedo, px, 0);
     let mat = textureLoad(g_material, px, 0);
     let v = normalize(camera.position.xyz - p);
-    let radiance = reflected_direct(p, n, v, alb, mat);
+    let radiance = reflected_direct(p, n, v, alb, mat).radiance;
     textureStore(out_radiance, px, vec4<f32>(radiance, 1.0));
+}
+
+// cs_main, and the diffuse part of the same light, c·DI/π · E, into out_diffuse: what Soler
+// et al.'s gather takes as the senders' radiance under §5.3's "diffuse approximation of this
+// light" (`soler.sender`).
+@group(2) @binding(2) var out_diffuse: texture_storage_2d<rgba16float, write>;
+
+@compute @workgroup_size(TILE, TILE, 1)
+fn cs_main_diffuse(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let size = textureDimensions(out_radiance);
+    if (gid.x >= size.x || gid.y >= size.y) {
+        return;
+    }
+    let px = vec2<i32>(gid.xy);
+    let nrm = textureLoad(g_normal, px, 0);
+    if (nrm.w < 0.5) {
+        textureStore(out_radiance, px, vec4<f32>(0.0));
+        textureStore(out_diffuse, px, vec4<f32>(0.0));
+        return;
+    }
+    let p = textureLoad(g_position, px, 0).xyz;
+    let n = normalize(nrm.xyz);
+    let alb = textureLoad(g_albedo, px, 0);
+    let mat = textureLoad(g_material, px, 0);
+    let v = normalize(camera.position.xyz - p);
+    let r = reflected_direct(p, n, v, alb, mat);
+    textureStore(out_radiance, px, vec4<f32>(r.radiance, 1.0));
+    textureStore(out_diffuse, px, vec4<f32>(alb.rgb * alb.a / PI * r.irradiance, 1.0));
 }
 
 // An atlas of G-buffer tiles, each seen from its own viewpoint: the hemispheres of Gautron
@@ -197,6 +238,6 @@ fn cs_atlas(@builtin(global_invocation_id) gid: vec3<u32>) {
     let alb = textureLoad(g_albedo, px, 0);
     let mat = textureLoad(g_material, px, 0);
     let v = normalize(viewer.xyz - p);
-    let radiance = reflected_direct(p, n, v, alb, mat);
+    let radiance = reflected_direct(p, n, v, alb, mat).radiance;
     textureStore(out_radiance, px, vec4<f32>(radiance, 1.0));
 }

@@ -62,6 +62,8 @@ struct GautronParams {
     creation: vec4<f32>,
     // x: frame, y: projection's P00, z: P11, w: half the G-buffer's height
     misc: vec4<f32>,
+    // x: the "in front" test's tolerance × R_k (f32 max: no test)
+    rules: vec4<f32>,
 }
 
 // A record's hemisphere camera ("Simple plane sampling"), written by create.wgsl, read by
@@ -79,12 +81,13 @@ struct HemisphereCamera {
 }
 
 // Ward's weight ("Weighting Function", Ward 1988): 1 / (‖P − P_k‖/R_k + √(1 − n·n_k)),
-// clamped to w_max (⚠ unbounded at P = P_k); 0 when the record lies in front of P by Ward's
-// test (P − P_k)·(n + n_k)/2 < −0.05 R_k. Twin: cpu::gautron::weight.
+// clamped to w_max (⚠[gautron.weight-clamp] unbounded at P = P_k); 0 when the record lies in
+// front of P by Ward's test (P − P_k)·(n + n_k)/2 < −tol·R_k (not in 003; tol =
+// params.rules.x, f32 max: no test). Twin: cpu::gautron::weight.
 fn ward_weight(rec: Record, p: vec3<f32>, n: vec3<f32>, w_max: f32) -> f32 {
     let d = p - rec.position.xyz;
     let r = max(rec.position.w, 1e-20);
-    if (dot(d, n + rec.normal.xyz) * 0.5 < -0.05 * r) {
+    if (dot(d, n + rec.normal.xyz) * 0.5 < -params.rules.x * r) {
         return 0.0;
     }
     let denom = length(d) / r + sqrt(max(0.0, 1.0 - dot(n, rec.normal.xyz)));

@@ -71,6 +71,6 @@ fn fs_hemisphere(i: HemiIn, @builtin(front_facing) front: bool) -> FsOut {
     v.prev_clip = i.prev_clip;
     var o = gbuffer_fragment(v, front);
     // x: the scene draw's index (exact in f32 below 2²⁴)
-    o.motion = vec2<f32>(f32(i.object), 0.0);
+    o.motion = vec4<f32>(f32(i.object), 0.0, 0.0, 0.0);
     return o;
 }

@@ -4,6 +4,9 @@
 // previous frame, from the previous camera and the previous object transform.
 // Reading chosen: the thesis writes (x_s − x_prev, y_s − y_prev) but then looks up
 // I_prev(x_s + Δx, y_s + Δy); we store Δ = prev − current so that the lookup is right.
+// z holds the point's linear depth in the previous frame (previous camera, previous object
+// transform): Soler et al.'s W "accounts for both the camera and the moving object" (004 §4),
+// so the temporal filter compares the history's depth with this one.
 #import common/camera.wgsl
 #import common/material.wgsl
 
@@ -55,7 +58,7 @@ struct FsOut {
     @location(1) normal: vec4<f32>,
     @location(2) albedo: vec4<f32>,
     @location(3) material: vec4<f32>,
-    @location(4) motion: vec2<f32>,
+    @location(4) motion: vec4<f32>,
     @location(5) emission: vec4<f32>,
 }
 
@@ -129,7 +132,8 @@ fn gbuffer_fragment(i: VsOut, front: bool) -> FsOut {
     o.normal = vec4<f32>(n, 1.0);
     o.albedo = vec4<f32>(color.rgb, params.x);
     o.material = vec4<f32>(params.y, params.z, metal_rough.x, metal_rough.y);
-    o.motion = clip_to_pixel(i.prev_clip, camera.viewport) - clip_to_pixel(i.cur_clip, camera.viewport);
+    let m = clip_to_pixel(i.prev_clip, camera.viewport) - clip_to_pixel(i.cur_clip, camera.viewport);
+    o.motion = vec4<f32>(m, i.prev_clip.w, 1.0);
     var emission = material.emissive.rgb;
     if (material.emissive.w > 0.5) {
         // The camera filters by its footprint like the base colour; the light views read mip

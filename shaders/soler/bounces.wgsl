@@ -21,6 +21,9 @@ struct BounceParams {
 @group(0) @binding(7) var specular2: texture_2d<f32>;
 @group(0) @binding(8) var specular3: texture_2d<f32>;
 @group(0) @binding(9) var specular4: texture_2d<f32>;
+// The specular part of out_sum alone (what Eq. 6 keeps out of its irradiance blend,
+// passes::soler::TemporalQuantity::Irradiance); written when params.count.y != 0.
+@group(0) @binding(10) var out_specular: texture_storage_2d<rgba32float, write>;
 
 @compute @workgroup_size(8, 8, 1)
 fn cs_sum(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -41,16 +44,18 @@ fn cs_sum(@builtin(global_invocation_id) gid: vec3<u32>) {
         sum = sum + textureLoad(bounce4, p, 0).rgb;
     }
     if (params.count.y != 0u) {
-        sum = sum + textureLoad(specular1, p, 0).rgb;
+        var spec = textureLoad(specular1, p, 0).rgb;
         if (n > 1u) {
-            sum = sum + textureLoad(specular2, p, 0).rgb;
+            spec = spec + textureLoad(specular2, p, 0).rgb;
         }
         if (n > 2u) {
-            sum = sum + textureLoad(specular3, p, 0).rgb;
+            spec = spec + textureLoad(specular3, p, 0).rgb;
         }
         if (n > 3u) {
-            sum = sum + textureLoad(specular4, p, 0).rgb;
+            spec = spec + textureLoad(specular4, p, 0).rgb;
         }
+        sum = sum + spec;
+        textureStore(out_specular, gid.xy, vec4<f32>(spec, 1.0));
     }
     textureStore(out_sum, gid.xy, vec4<f32>(sum, 1.0));
 }

@@ -3,9 +3,16 @@
 // movement buffer (camera and object motion): the pixel was at q = p + m(p) in the previous
 // frame (nearest texel). The history is rejected (a = 0) where q is off screen or was
 // background, where the depth stored at q differs from the point's depth in the previous
-// camera (w of prev_view_proj · x) by more than τ_z of it, or where n · n_prev(q) < τ_n.
+// frame by more than τ_z of it, or where n · n_prev(q) < τ_n. That depth is the movement
+// buffer's z, with the previous camera and the previous object transform (⚠[soler.temporal-object-motion]:
+// W "accounts for both the camera and the moving object"; projecting the current position with
+// the previous camera alone rejected every moving object's history).
 // a adapts to motion, a · m½ / (m½ + |m|), and to glossiness, ÷ (1 + k_g · SI · √SP).
-// H is F_{i−1} or I_{i−1} (a setting: the paper prints I_{i−1}). Outputs: F (`soler.temporal`),
+// H is F_{i−1} or I_{i−1} (a setting: the paper prints I_{i−1}). What is blended (reject.w,
+// ⚠[soler.temporal-order]): the radiance as it comes, or, as Fig. 4 orders it, the irradiance
+// before the albedo multiply: I_i is demodulated, E_i = (I_i − S_i) / (c·DI/π) per channel
+// (S_i the glossy light added into it, 0 where the albedo is), the blend runs on E and the
+// history keeps E, and F = c·DI/π · F_E + S_i. Outputs: F (`soler.temporal`),
 // the next history (rgb, depth in a), W(H) (a: 1 where q holds a surface), the rejection mask
 // (r depth, g normal, b no history) and the effective a. CPU twin: cpu::soler_temporal::blend.
 #import common/camera.wgsl
@@ -15,7 +22,8 @@
 struct TemporalParams {
     // x: a, y: m½ (px/frame), z: k_g, w: 1 when the history holds a frame
     blend: vec4<f32>,
-    // x: τ_z, y: τ_n, z: 1 when the history keeps I_{i−1} (else F_{i−1}), w: unused
+    // x: τ_z, y: τ_n, z: 1 when the history keeps I_{i−1} (else F_{i−1}); w: what is blended:
+    // 0 the radiance, 1 the irradiance, 2 the irradiance less the glossy light `specular`
     reject: vec4<f32>,
 }
 
@@ -37,6 +45,11 @@ struct TemporalParams {
 @group(0) @binding(13) var out_a: texture_storage_2d<r32float, write>;
 // This frame's normals, next frame's prev_normal (ping-pong: no copy, issue #38).
 @group(0) @binding(14) var out_normal: texture_storage_2d<rgba16float, write>;
+@group(0) @binding(15) var g_albedo: texture_2d<f32>;
+// The glossy light added into `current` (reject.w = 2).
+@group(0) @binding(16) var specular: texture_2d<f32>;
+
+const INV_PI: f32 = 0.318309886183791;
 
 @compute @workgroup_size(8, 8, 1)
 fn cs_temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -45,7 +58,19 @@ fn cs_temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let p = vec2<i32>(gid.xy);
-    let i_new = textureLoad(current, p, 0).rgb;
+    let radiance = textureLoad(current, p, 0).rgb;
+    // The albedo k = c·DI/π and the glossy light s that turn the blended quantity into
+    // radiance: k·x + s (k = 1, s = 0 when the radiance itself is blended).
+    var k = vec3<f32>(1.0);
+    var s = vec3<f32>(0.0);
+    if (params.reject.w > 0.5) {
+        let alb = textureLoad(g_albedo, p, 0);
+        k = alb.rgb * alb.a * INV_PI;
+        if (params.reject.w > 1.5) {
+            s = textureLoad(specular, p, 0).rgb;
+        }
+    }
+    let i_new = select(vec3<f32>(0.0), max(radiance - s, vec3<f32>(0.0)) / k, k > vec3<f32>(0.0));
     let nrm = textureLoad(g_normal, p, 0);
     let pos = textureLoad(g_position, p, 0);
     var a = 0.0;
@@ -60,7 +85,7 @@ fn cs_temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
             if (pn.w > 0.5 && h.a > 0.0) {
                 warped = vec4<f32>(h.rgb, 1.0);
                 mask.z = 0.0;
-                let z_prev = (camera.prev_view_proj * vec4<f32>(pos.xyz, 1.0)).w;
+                let z_prev = textureLoad(g_motion, p, 0).z;
                 if (abs(h.a - z_prev) > params.reject.x * max(z_prev, 1e-6)) {
                     mask.x = 1.0;
                 }
@@ -78,7 +103,7 @@ fn cs_temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
     let f = a * warped.rgb + (1.0 - a) * i_new;
-    textureStore(out_filtered, gid.xy, vec4<f32>(f, 1.0));
+    textureStore(out_filtered, gid.xy, vec4<f32>(k * f + s, 1.0));
     var keep = f;
     if (params.reject.z > 0.5) {
         keep = i_new;

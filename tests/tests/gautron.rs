@@ -150,7 +150,7 @@ fn splat_matches_the_cpu_accumulation(method: SplatMethod) {
                 continue;
             }
             let (p, n) = (v3(position.at(x, y)), v3(nrm).normalize());
-            let (sum, w) = gautron::accumulate(&records, p, n, s.accuracy, s.weight_clamp, true, true);
+            let (sum, w) = gautron::accumulate(&records, p, n, &gautron::Interpolation::of(&s));
             let gpu = accum.at(x, y);
             assert!((gpu[3] - w).abs() <= 1e-3 * w.max(1.0), "{method:?} ({x}, {y}): Σw {} vs {w}", gpu[3]);
             let near = close(v3(gpu), sum, sum.max_element().max(1e-6), 2e-3);

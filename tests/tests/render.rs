@@ -135,6 +135,7 @@ fn movement_buffer_reprojects_static_pixels_and_flags_moving_ones() {
     let t = r.clock.time_s();
     r.render_frame();
     let motion = r.readback("gbuffer.motion").expect("motion");
+    let position = r.readback("gbuffer.position").expect("position");
     let state = r.scene().evaluate(t);
     let soup = TriangleSoup::new(r.scene(), &state);
     let (mut moving, mut moving_ok, mut still) = (0, 0, 0);
@@ -154,6 +155,9 @@ fn movement_buffer_reprojects_static_pixels_and_flags_moving_ones() {
                 }
             } else if !name.contains("short") {
                 assert!(len < 1e-3, "static pixel ({x},{y}) on '{name}' moved by {len} px");
+                // z: the depth in the previous frame, the current one where nothing moved.
+                let (z_prev, z) = (m[2], position.at(x, y)[3]);
+                assert!((z_prev - z).abs() <= 1e-3 * z, "static pixel ({x},{y}): previous depth {z_prev} vs {z}");
                 still += 1;
             }
         }

@@ -55,6 +55,44 @@ fn the_near_field_gather_matches_the_cpu_with_its_cut() {
     gpu_matches_cpu(Technique::SolerNearKnechtFar, 0.3, 1, false);
 }
 
+/// 004 §5.3's diffuse approximation (`soler.sender`, issue #41): the senders emit c·DI/π · E,
+/// the direct light's diffuse part. The default box's one light gives E its colour at every
+/// texel, so the diffuse light over c·DI/π has the same chroma everywhere, while the whole
+/// direct light's (with its untinted specular part) does not on the coloured walls; the
+/// diffuse part never exceeds the whole.
+#[test]
+fn the_senders_emit_the_diffuse_part_of_the_direct_light() {
+    let mut r = paused_renderer(64, Technique::Soler, |_| {});
+    r.render_frame();
+    let (radiance, diffuse) = (read(&r, "direct.radiance"), read(&r, "direct.diffuse"));
+    let albedo = read(&r, "gbuffer.albedo");
+    let (mut grey, mut tinted_whole) = (0, 0);
+    // The chroma of the one light's colour: E over its own largest channel.
+    let mut chroma: Option<Vec3> = None;
+    for i in 0..radiance.data.len() {
+        let (l, d) = (v3(radiance.data[i]), v3(diffuse.data[i]));
+        let tol = 2e-3 * l.max_element() + 1e-6;
+        assert!(d.cmple(l + Vec3::splat(tol)).all(), "texel {i}: diffuse {d} above the whole {l}");
+        let k = v3(albedo.data[i]) * albedo.data[i][3] / std::f32::consts::PI;
+        if k.min_element() > 0.01 && d.max_element() > 1e-3 {
+            let (e, e_whole) = (d / k, l / k);
+            let c = *chroma.get_or_insert(e / e.max_element());
+            let off = |e: Vec3| (e / e.max_element() - c).abs().max_element();
+            assert!(off(e) < 0.02, "texel {i}: E = {e} is not the light's colour {c}");
+            grey += 1;
+            tinted_whole += (off(e_whole) > 0.02) as u32;
+        }
+    }
+    assert!(grey > 1000, "{grey} texels compared");
+    assert!(tinted_whole > 0, "the whole direct light should hold a specular part somewhere");
+    // The view-dependent sender gathers the whole direct light; no diffuse buffer is kept.
+    let mut s = r.settings().clone();
+    s.soler.sender = gi_render::passes::soler::Sender::ViewDependent;
+    r.set_settings(s).expect("valid settings");
+    r.render_frame();
+    assert!(r.readback("direct.diffuse").is_err(), "direct.diffuse kept without a diffuse sender");
+}
+
 /// The last bounce of the frame (with `alternate`, frame 1's: bounce 2) against the CPU.
 fn gpu_matches_cpu(technique: Technique, near_field_distance: f32, bounces: u32, alternate: bool) {
     const SIZE: u32 = 64;
@@ -82,8 +120,9 @@ fn gpu_matches_cpu(technique: Technique, near_field_distance: f32, bounces: u32,
         depth: s.vote_sigma_depth,
         power: s.vote_power.then_some((r.camera.position, s.min_cos_beta)),
     };
-    // The light the last bounce gathered: the direct light, or the bounce before's.
-    let input = if bounces == 1 { "direct.radiance".to_string() } else { format!("soler.bounce.{}", bounces - 1) };
+    // The light the last bounce gathered: the direct light's diffuse part (`soler.sender`), or the
+    // bounce before's.
+    let input = if bounces == 1 { "direct.diffuse".to_string() } else { format!("soler.bounce.{}", bounces - 1) };
     let mut levels = vec![soler_level(&r, 0, &input)];
     // Voting (Eq. 5): each GPU level against the CPU's vote of the GPU level below it.
     for k in 1..=s.gathered_levels().end - 1 {

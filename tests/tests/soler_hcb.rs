@@ -23,7 +23,7 @@ fn the_gather_at_hcb_samples_matches_the_cpu() {
     r.render_frame();
     let s = r.settings().soler.clone();
     let stats = r.hcb_stats().expect("the HCB's samples");
-    let levels: Vec<(u32, Level)> = s.gathered_levels().map(|k| (k, soler_level(&r, k, "direct.radiance"))).collect();
+    let levels: Vec<(u32, Level)> = s.gathered_levels().map(|k| (k, soler_level(&r, k, "direct.diffuse"))).collect();
     let (eye, forward) = (r.camera.position, r.camera.forward());
     let mut bad = 0;
     let mut lit = 0;

@@ -4,7 +4,7 @@
 
 use gi_lab_tests::{paused_renderer, read};
 use gi_render::cpu::soler_temporal::{BlendInputs, BlendParams, blend};
-use gi_render::passes::soler::TemporalHistory;
+use gi_render::passes::soler::{TemporalHistory, TemporalQuantity};
 use gi_render::pipeline::{Technique, Temporal};
 use gi_render::{ImageF32, LabSettings, Renderer};
 use glam::Vec3;
@@ -43,7 +43,9 @@ fn the_warped_blend_matches_the_cpu_on_a_moving_scene() {
         reject_depth: s.reject_depth,
         reject_normal: s.reject_normal,
         raw_history: s.temporal_history == TemporalHistory::Raw,
+        irradiance: s.temporal_quantity == TemporalQuantity::Irradiance,
     };
+    assert!(p.irradiance && s.glossy_reflection, "the default blends the irradiance, less the glossy light");
     let (current, position, normal, motion, material) = (
         read(&r, "soler.indirect"),
         read(&r, "gbuffer.position"),
@@ -51,6 +53,7 @@ fn the_warped_blend_matches_the_cpu_on_a_moving_scene() {
         read(&r, "gbuffer.motion"),
         read(&r, "gbuffer.material"),
     );
+    let (albedo, specular) = (read(&r, "gbuffer.albedo"), read(&r, "soler.specular.accum.0"));
     let x = BlendInputs {
         current: &current,
         position: &position,
@@ -59,8 +62,8 @@ fn the_warped_blend_matches_the_cpu_on_a_moving_scene() {
         material: &material,
         prev_normal: &prev_normal,
         history: Some(&history),
-        // The camera stands still: the previous view-projection is this frame's.
-        prev_view_proj: r.camera.view_proj(1.0),
+        albedo: &albedo,
+        specular: Some(&specular),
     };
     let cpu = blend(p, &x);
     let (filtered, a, rejection, warped, next) = (

@@ -320,13 +320,43 @@ pub struct Record {
     pub trans: [Vec3; 3],
 }
 
+/// How the records are blended at a point ("Irradiance Interpolation"), from
+/// `GautronSettings` (`Interpolation::of`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Interpolation {
+    /// Ward's accuracy a: a record contributes where w_k > 1/a.
+    pub a: f32,
+    /// The clamp of Ward's weight, unbounded at P = P_k.
+    pub w_max: f32,
+    /// Ward's "in front" test's tolerance × R_k (⚠[gautron.in-front-tolerance]); None: no
+    /// test, as 003 prints the interpolation.
+    pub in_front: Option<f32>,
+    pub rotational: bool,
+    pub translational: bool,
+}
+
+impl Interpolation {
+    /// The interpolation the settings ask for.
+    pub fn of(s: &crate::passes::gautron::GautronSettings) -> Self {
+        Self {
+            a: s.accuracy,
+            w_max: s.weight_clamp,
+            in_front: s.in_front_test.then_some(s.in_front_tolerance),
+            rotational: s.rotational_gradient,
+            translational: s.translational_gradient,
+        }
+    }
+}
+
 /// Ward's weight ("Simplified Weighting Function", Ward 1988) 1/(‖P−P_k‖/R_k + √(1 − n·n_k))
-/// (1 − n·n_k clamped at 0 under the root), clamped to `w_max` (⚠ unbounded at P = P_k; ⚠ the
-/// "Weighting Function" slide's √(‖P−P_k‖² + …) without R_k is not used). 0 when the record is
-/// behind P by Ward's "in front" test: (P − P_k)·(n + n_k)/2 < −0.05·R_k.
-pub fn weight(rec: &Record, p: Vec3, n: Vec3, w_max: f32) -> f32 {
+/// (1 − n·n_k clamped at 0 under the root), clamped to `w_max` (⚠[gautron.weight-clamp]
+/// unbounded at P = P_k; ⚠[gautron.weight-with-radius] the "Weighting Function" slide's
+/// √(‖P−P_k‖² + …) without R_k is not used). 0 when the record lies in front of P by Ward's
+/// "in front" test (Ward 1988, not in 003): (P − P_k)·(n + n_k)/2 < −tol·R_k, `in_front` =
+/// Some(tol); None: no test.
+pub fn weight(rec: &Record, p: Vec3, n: Vec3, w_max: f32, in_front: Option<f32>) -> f32 {
     let d = p - rec.p;
-    if d.dot((n + rec.n) * 0.5) < -0.05 * rec.r {
+    if in_front.is_some_and(|tol| d.dot((n + rec.n) * 0.5) < -tol * rec.r) {
         return 0.0;
     }
     let denom = d.length() / rec.r + (1.0 - n.dot(rec.n)).max(0.0).sqrt();
@@ -357,22 +387,14 @@ pub fn extrapolate(rec: &Record, p: Vec3, n: Vec3, rotational: bool, translation
 /// (⚠ the text's set S = {w_k > 1/a} and its creation test "W < a": one reading for both, a
 /// point is covered iff some record passes, i.e. Σ w_k ≥ 1/a; otherwise the sum is exactly 0).
 /// The irradiance estimate is the first over the second.
-pub fn accumulate(
-    records: &[Record],
-    p: Vec3,
-    n: Vec3,
-    a: f32,
-    w_max: f32,
-    rotational: bool,
-    translational: bool,
-) -> (Vec3, f32) {
-    let threshold = 1.0 / a;
+pub fn accumulate(records: &[Record], p: Vec3, n: Vec3, i: &Interpolation) -> (Vec3, f32) {
+    let threshold = 1.0 / i.a;
     let mut sum = Vec3::ZERO;
     let mut wsum = 0.0;
     for rec in records {
-        let w = weight(rec, p, n, w_max);
+        let w = weight(rec, p, n, i.w_max, i.in_front);
         if w > threshold {
-            sum += extrapolate(rec, p, n, rotational, translational) * w;
+            sum += extrapolate(rec, p, n, i.rotational, i.translational) * w;
             wsum += w;
         }
     }

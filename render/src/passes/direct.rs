@@ -80,6 +80,12 @@ pub struct DirectPass {
     sampler: wgpu::Sampler,
     pub radiance: wgpu::Texture,
     radiance_view: wgpu::TextureView,
+    /// `cs_main_diffuse`: the same light, and its diffuse part c·DI/π·E into `diffuse`.
+    diffuse_pipeline: wgpu::ComputePipeline,
+    diffuse_layout: wgpu::BindGroupLayout,
+    /// `direct.diffuse`, while a stage asks for it (`ensure_diffuse`): Soler et al.'s senders
+    /// under 004 §5.3's diffuse approximation (`soler.sender`).
+    pub diffuse: Option<(wgpu::Texture, wgpu::TextureView)>,
     /// Stand-ins for the emitter VPLs and their atlases when there are none.
     no_emitters: wgpu::Buffer,
     no_ism: wgpu::TextureView,
@@ -127,6 +133,17 @@ impl DirectPass {
             "cs_atlas",
             &[&layout0, &layout1, &layout2],
         );
+        let diffuse_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("direct.diffuse"),
+            entries: &[super::bgl::storage_texture(2, RADIANCE_FORMAT)],
+        });
+        let diffuse_pipeline = super::compute_pipeline(
+            device,
+            "direct.diffuse_pipeline",
+            &module,
+            "cs_main_diffuse",
+            &[&layout0, &layout1, &diffuse_layout],
+        );
         let params = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("direct.params"),
             size: std::mem::size_of::<DirectParams>() as u64,
@@ -150,7 +167,7 @@ impl DirectPass {
             compare: Some(wgpu::CompareFunction::LessEqual),
             ..Default::default()
         });
-        let (radiance, radiance_view) = Self::target(ctx, width, height);
+        let (radiance, radiance_view) = Self::target(ctx, "direct.radiance", width, height);
         let no_emitters = storage("direct.no_emitters", std::mem::size_of::<super::reference::vpl::GpuVpl>() as u64);
         let (no_ism, no_exact) = super::knecht::interleave::no_visibility_atlases(device, "direct.emitters");
         Self {
@@ -171,24 +188,46 @@ impl DirectPass {
             sampler,
             radiance,
             radiance_view,
+            diffuse_pipeline,
+            diffuse_layout,
+            diffuse: None,
         }
     }
 
-    fn target(ctx: &GpuContext, width: u32, height: u32) -> (wgpu::Texture, wgpu::TextureView) {
+    fn target(ctx: &GpuContext, name: &str, width: u32, height: u32) -> (wgpu::Texture, wgpu::TextureView) {
         let t = super::create_target(
             &ctx.device,
-            "direct.radiance",
+            name,
             width,
             height,
             RADIANCE_FORMAT,
             wgpu::TextureUsages::STORAGE_BINDING,
         );
-        let v = super::view(&t, "direct.radiance");
+        let v = super::view(&t, name);
         (t, v)
     }
 
     pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) {
-        (self.radiance, self.radiance_view) = Self::target(ctx, width, height);
+        (self.radiance, self.radiance_view) = Self::target(ctx, "direct.radiance", width, height);
+        if self.diffuse.is_some() {
+            self.diffuse = Some(Self::target(ctx, "direct.diffuse", width, height));
+        }
+    }
+
+    /// Creates or drops `direct.diffuse` (`wanted`: a stage gathers diffuse senders); true
+    /// when it was created or dropped (the buffer registry must be rebuilt).
+    pub fn ensure_diffuse(&mut self, ctx: &GpuContext, wanted: bool) -> bool {
+        match (&self.diffuse, wanted) {
+            (None, true) => {
+                self.diffuse = Some(Self::target(ctx, "direct.diffuse", self.radiance.width(), self.radiance.height()));
+                true
+            }
+            (Some(_), false) => {
+                self.diffuse = None;
+                true
+            }
+            _ => false,
+        }
     }
 
     pub fn register(&self, reg: &mut BufferRegistry) {
@@ -198,6 +237,14 @@ impl DirectPass {
             "outgoing radiance from the punctual lights and the emitter VPLs (W/(m²·sr)); the surface's own emission is gbuffer.emission",
             &self.radiance,
         );
+        if let Some((t, _)) = &self.diffuse {
+            reg.register(
+                "direct.diffuse",
+                BufferKind::Hdr,
+                "the direct light's diffuse part c·DI/π · E (W/(m²·sr)): the light Soler et al.'s senders emit under 004 §5.3's diffuse approximation (soler.sender)",
+                t,
+            );
+        }
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -294,9 +341,19 @@ impl DirectPass {
             label: Some("direct.pass"),
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
-        pass.set_pipeline(&self.pipeline);
+        let diffuse = self.diffuse.as_ref().map(|(_, v)| {
+            device.counted_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("direct.diffuse"),
+                layout: &self.diffuse_layout,
+                entries: &[wgpu::BindGroupEntry { binding: 2, resource: tv(v) }],
+            })
+        });
+        pass.set_pipeline(if diffuse.is_some() { &self.diffuse_pipeline } else { &self.pipeline });
         pass.set_group(0, &group0, &[]);
         pass.set_group(1, &group1, &[]);
+        if let Some(g) = &diffuse {
+            pass.set_group(2, g, &[]);
+        }
         let (w, h) = (self.radiance.width(), self.radiance.height());
         pass.dispatch_workgroups(w.div_ceil(super::TILE), h.div_ceil(super::TILE), 1);
         drop(pass);

@@ -21,8 +21,10 @@ pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 pub const MATERIAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 /// The movement buffer (Knecht 002 §3.5.1) in pixels: half floats (issue #38), a step of
 /// 1/256 px below 4 px of motion and 1/32 px at 32–64 px, far below what the histories'
-/// bilinear lookups resolve.
-pub const MOTION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
+/// bilinear lookups resolve; z: the point's linear depth in the previous frame with the
+/// previous object transform (relative step 4.9e-4; Soler et al.'s temporal rejection, 004
+/// §4, issue #41), w: 1 on covered pixels.
+pub const MOTION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const EMISSION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
@@ -199,7 +201,7 @@ impl GBufferPass {
         reg.register(
             "gbuffer.motion",
             BufferKind::Motion,
-            "movement buffer: offset in pixels from each pixel to its position in the previous frame (Knecht §3.5.1)",
+            "movement buffer: xy the offset in pixels from each pixel to its position in the previous frame (Knecht §3.5.1), z its linear depth in the previous frame",
             &t.motion,
         );
         reg.register(

@@ -590,6 +590,8 @@ impl Renderer {
         } else {
             fresh |= x.gautron.take().is_some();
         }
+        let diffuse = p.uses_soler() && s.soler.sender == crate::passes::soler::Sender::Diffuse;
+        fresh |= self.direct.ensure_diffuse(&ctx, diffuse);
         if fresh {
             self.register_all();
         }

@@ -108,16 +108,24 @@ settings_group! {
         /// Records the cache can hold (creation stops when full).
         capacity: u32 = 16384,
         unit "records", symbol "", range 16..=65536, cost "memory 176 B per record", history true;
-        /// Lower clamp of R_k projected on the screen at the record's depth.
+        /// Clamp R_k (⚠[gautron.r-clamps] not in 003, which uses R_k = H as computed; Tabellion
+        /// and Lamorlette 2004, Křivánek et al. 2006): to `r_min_scene` … `r_max_scene` of the
+        /// scene's radius, then to `r_min_px` … `r_max_px` on the screen at the record's depth.
+        /// Off: R_k = H (a record that sees no surface covers every point its normal allows).
+        r_clamps: bool = true,
+        unit "", symbol "", range 0..=1, cost "free (off: records near corners shrink to points, over open space cover the screen)", history true;
+        /// Lower clamp of R_k projected on the screen at the record's depth (not in 003).
         r_min_px: f32 = 20.0,
         unit "px", symbol "R_min", range 0.0..=1000.0, cost "free (larger: fewer records)", history true;
-        /// Upper clamp of R_k projected on the screen at the record's depth.
+        /// Upper clamp of R_k projected on the screen at the record's depth (not in 003).
         r_max_px: f32 = 150.0,
         unit "px", symbol "R_max", range 1.0..=4000.0, cost "free (smaller: more records)", history true;
-        /// Lower clamp of R_k in scene units, as a fraction of the scene's bounding radius.
+        /// Lower clamp of R_k in scene units, as a fraction of the scene's bounding radius (not in
+        /// 003).
         r_min_scene: f32 = 0.005,
         unit "× radius", symbol "", range 0.0..=10.0, cost "free", history true;
-        /// Upper clamp of R_k in scene units, as a fraction of the scene's bounding radius.
+        /// Upper clamp of R_k in scene units, as a fraction of the scene's bounding radius (not in
+        /// 003).
         r_max_scene: f32 = 1.0,
         unit "× radius", symbol "", range 0.0001..=100.0, cost "free", history true;
         /// Neighbour clamping (Křivánek et al. 2006; not in 003): each new record's R_k and
@@ -126,9 +134,21 @@ settings_group! {
         /// do not spread over it. Applies to the records made from now on.
         neighbour_clamping: bool = true,
         unit "", symbol "", range 0..=1, cost "new records × cached records distance tests per round", history false;
-        /// Ward's weight is unbounded at P = P_k: it is clamped to this before blending.
+        /// Ward's weight is unbounded at P = P_k: it is clamped to this before blending
+        /// (⚠[gautron.weight-clamp] not in 003). It must exceed 1/a, or no record passes.
         weight_clamp: f32 = 100.0,
         unit "", symbol "w_max", range 1.0..=1.0e6, cost "free", history false;
+        /// Ward's "in front" test (Ward 1988; not in 003, whose interpolation takes every record
+        /// whose weight passes): a record lying in front of P, (P − P_k)·(n + n_k)/2 <
+        /// −tol·R_k, does not contribute (its hemisphere saw P's surroundings from the other
+        /// side of a fold).
+        in_front_test: bool = true,
+        unit "", symbol "", range 0..=1, cost "free", history false;
+        /// The "in front" test's tolerance tol in units of R_k (⚠[gautron.in-front-tolerance]
+        /// GI Lab's 0.05; Ward's test has 0: a record a hair in front of a flat receiver,
+        /// through the hemisphere camera's near-plane offset, would then drop out).
+        in_front_tolerance: f32 = 0.05,
+        unit "× R_k", symbol "tol", range 0.0..=1.0, cost "free", history false;
         /// What becomes of the records between frames with stage 7's record cache (without
         /// it every frame starts from an empty cache: the cold-cache cost).
         reuse: ReusePolicy = ReusePolicy::KeepAll,
@@ -224,6 +244,8 @@ pub struct GautronParams {
     pub creation: Vec4,
     /// x: frame, y: P00, z: P11, w: half the G-buffer's height.
     pub misc: Vec4,
+    /// x: the "in front" test's tolerance × R_k (`f32::MAX`: no test); y, z, w: unused.
+    pub rules: Vec4,
 }
 
 /// A record's hemisphere camera; WGSL twin: `HemisphereCamera` (create, hemisphere, reduce).

@@ -299,9 +299,13 @@ impl GautronStage {
                 (s.aperture_deg.to_radians() * 0.5).tan(),
                 r * 1e-4,
             ),
-            clamps: glam::Vec4::new(s.r_min_scene * r, s.r_max_scene * r, s.r_min_px, s.r_max_px),
+            clamps: match s.r_clamps {
+                true => glam::Vec4::new(s.r_min_scene * r, s.r_max_scene * r, s.r_min_px, s.r_max_px),
+                false => glam::Vec4::new(0.0, f32::MAX, 0.0, f32::MAX),
+            },
             creation: glam::Vec4::new(s.creation_tile_px as f32, slots as f32, s.capacity as f32, 4.0 * r),
             misc: glam::Vec4::new(f.frame as f32, proj.x_axis.x, proj.y_axis.y, f.gbuffer_size.1 as f32 * 0.5),
+            rules: glam::Vec4::new(if s.in_front_test { s.in_front_tolerance } else { f32::MAX }, 0.0, 0.0, 0.0),
         };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         ctx.queue.write_buffer(&self.atlas_params, 0, bytemuck::cast_slice(&[s.hemisphere_resolution, per_row, 0, 0]));

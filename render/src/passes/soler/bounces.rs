@@ -26,10 +26,15 @@ pub struct SolerBounces {
     pub light: Vec<wgpu::Texture>,
     /// `soler.bounce.b.specular` for b = 1 … n with the glossy reflection (else empty).
     pub specular: Vec<wgpu::Texture>,
+    /// `soler.bounces.specular`: the sum of `specular`, the part of `soler.indirect` that
+    /// Eq. 6 leaves out of its irradiance blend (None without the glossy reflection).
+    pub specular_sum: Option<wgpu::Texture>,
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::ComputePipeline,
     params: wgpu::Buffer,
     dummy: wgpu::Texture,
+    /// Stand-in for `specular_sum` without the glossy reflection (never read).
+    no_sum: wgpu::Texture,
 }
 
 impl SolerBounces {
@@ -40,6 +45,7 @@ impl SolerBounces {
         entries.extend((1..=4).map(|b| bgl::texture(b, cs, false)));
         entries.push(bgl::storage_texture(5, wgpu::TextureFormat::Rgba32Float));
         entries.extend((6..=9).map(|b| bgl::texture(b, cs, false)));
+        entries.push(bgl::storage_texture(10, wgpu::TextureFormat::Rgba32Float));
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("soler.bounces.inputs"),
             entries: &entries,
@@ -56,7 +62,15 @@ impl SolerBounces {
             wgpu::TextureFormat::Rgba32Float,
             wgpu::TextureUsages::empty(),
         );
-        Self { light: Vec::new(), specular: Vec::new(), layout, pipeline, params, dummy }
+        let no_sum = crate::passes::create_target(
+            device,
+            "soler.bounces.no_specular",
+            1,
+            1,
+            wgpu::TextureFormat::Rgba32Float,
+            wgpu::TextureUsages::STORAGE_BINDING,
+        );
+        Self { light: Vec::new(), specular: Vec::new(), specular_sum: None, layout, pipeline, params, dummy, no_sum }
     }
 
     /// One texture per bounce at the G-buffer's `size` (none for one bounce), and one for
@@ -74,10 +88,22 @@ impl SolerBounces {
         let make = |name: &str| crate::passes::create_target(&ctx.device, name, size.0, size.1, rgba, usage);
         self.light = (1..=n).map(|b| make(&format!("soler.bounce.{b}"))).collect();
         self.specular = (1..=ns).map(|b| make(&format!("soler.bounce.{b}.specular"))).collect();
+        self.specular_sum = (ns > 0).then(|| {
+            let st = wgpu::TextureUsages::STORAGE_BINDING;
+            crate::passes::create_target(&ctx.device, "soler.bounces.specular", size.0, size.1, rgba, st)
+        });
         true
     }
 
     pub fn register(&self, reg: &mut BufferRegistry) {
+        if let Some(t) = &self.specular_sum {
+            reg.register(
+                "soler.bounces.specular",
+                BufferKind::Hdr,
+                "Soler multi-bounce with the glossy reflection: the sum of every bounce's specular light, the part of soler.indirect Eq. 6 leaves out of its irradiance blend",
+                t,
+            );
+        }
         for (i, t) in self.light.iter().enumerate() {
             reg.register(
                 &format!("soler.bounce.{}", i + 1),
@@ -134,6 +160,8 @@ impl SolerBounces {
         resources.extend(views.iter().map(tv));
         resources.push(tv(&out_view));
         resources.extend(spec_views.iter().map(tv));
+        let sum_view = view(self.specular_sum.as_ref().unwrap_or(&self.no_sum));
+        resources.push(tv(&sum_view));
         let group = crate::passes::bind_group(&ctx.device, "soler.bounces.inputs", &self.layout, resources);
         let stamps = slot.and_then(|s| s.compute(true, true));
         crate::passes::dispatch_2d(

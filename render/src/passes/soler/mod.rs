@@ -86,6 +86,38 @@ settings_enum! {
     default Filtered
 }
 
+settings_enum! {
+    /// The radiance the first bounce's senders emit (004 §5.3: "as we're using a simple
+    /// G-Buffer to represent the input illumination … we are limited to a diffuse
+    /// approximation of this light").
+    pub enum Sender {
+        /// The direct light's diffuse part c·DI/π · E (`direct.diffuse`): every sender emits
+        /// alike in all directions, as the text's G-buffer of direct illumination assumes and
+        /// as the later bounces already do.
+        Diffuse = "diffuse (c·DI/π·E, §5.3)",
+        /// The direct light toward the camera through the whole BRDF (`direct.radiance`): a
+        /// highlight seen by the camera is re-emitted to every receiver.
+        ViewDependent = "view-dependent (toward the camera)",
+    }
+    default Diffuse
+}
+
+settings_enum! {
+    /// What Eq. 6 blends (004 §4 "Temporal filtering" and Fig. 4: "the newly computed values
+    /// are averaged with the values of the previous frame … The obtained illumination is
+    /// multiplied by the albedo buffer").
+    pub enum TemporalQuantity {
+        /// The gathered irradiance, before the albedo multiply (Fig. 4): the history is
+        /// demodulated by the albedo c·DI/π of its own pixel and modulated by the current
+        /// pixel's, so textures do not smear; the glossy light is added after, unfiltered.
+        Irradiance = "irradiance, before the albedo (Fig. 4)",
+        /// The reflected radiance after the albedo multiply and the glossy light (GI Lab
+        /// before issue #41): textures and highlights are blended with the warped history.
+        Radiance = "radiance, after the albedo and glossy light",
+    }
+    default Irradiance
+}
+
 settings_group! {
     /// Soler et al.'s screen-space indirect illumination (004 §3–4): the mip levels, the ring
     /// of samples and the upsampling. Defaults: the paper's typical setting (4 levels,
@@ -125,6 +157,10 @@ settings_group! {
         /// The geometry term of each sample (004 §3, Eq. 1 or Eq. 4).
         form_factor: FormFactor = FormFactor::PointToDisc,
         unit "", symbol "", range 0..=1, cost "free", history false;
+        /// The senders' radiance on the first bounce (⚠[soler.sender-diffuse] 004 §5.3's
+        /// diffuse approximation by default; the view-dependent light as an option).
+        sender: Sender = Sender::Diffuse,
+        unit "", symbol "", range 0..=1, cost "diffuse: a second output of the direct light (8 bytes per pixel)", history false;
         /// Smallest cos β in Eq. 2's cos α / cos β (our bound: a grazing texel would stand for
         /// an unbounded area).
         min_cos_beta: f32 = 0.1,
@@ -203,6 +239,10 @@ settings_group! {
         unit "cos", symbol "τ_n", range -1.0..=1.0, cost "free", history false;
         /// What the history holds: F_{i−1} (the filtered result) or I_{i−1} (Eq. 6 as printed).
         temporal_history: TemporalHistory = TemporalHistory::Filtered,
+        unit "", symbol "", range 0..=1, cost "free", history true;
+        /// What Eq. 6 blends (⚠[soler.temporal-order] Fig. 4's irradiance by default; the
+        /// radiance after the albedo multiply as an option).
+        temporal_quantity: TemporalQuantity = TemporalQuantity::Irradiance,
         unit "", symbol "", range 0..=1, cost "free", history true;
         /// Split distance of `pipeline.near_field`, in units of the scene's bounding radius:
         /// the screen-space gather takes senders closer than it, the VPL gather the others.

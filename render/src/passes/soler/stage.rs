@@ -99,6 +99,16 @@ impl SolerStage {
         }
     }
 
+    /// The glossy light added into `soler.indirect` (every bounce's with several), None
+    /// without the glossy reflection: what Eq. 6's irradiance blend leaves out.
+    pub fn indirect_specular(&self, s: &SolerSettings) -> Option<&wgpu::Texture> {
+        match (s.glossy_reflection, self.bounces.light.is_empty()) {
+            (false, _) => None,
+            (true, true) => self.specular_light(),
+            (true, false) => self.bounces.specular_sum.as_ref(),
+        }
+    }
+
     /// Forgets the temporal filter's history.
     pub fn reset(&mut self) {
         if let Some(t) = &mut self.temporal {
@@ -136,7 +146,7 @@ impl SolerStage {
             self.bounces.light.iter().map(|t| crate::passes::view(t, "soler.bounce")).collect();
         for (j, &b) in bounces.iter().enumerate() {
             // Bounce b + 1 gathers the light of bounce b (the direct light for the first).
-            let radiance = if b == 0 { f.direct_radiance } else { &bounce_views[b as usize - 1] };
+            let radiance = if b == 0 { f.sender_radiance() } else { &bounce_views[b as usize - 1] };
             let prefix = if b == 0 { "soler".to_string() } else { format!("soler.bounce{}", b + 1) };
             self.bounce(f, enc, timer, &prefix, radiance, &grids[j], (j, &all));
             self.bounces.keep(enc, &self.upsample.indirect, self.specular_light(), b as usize);
@@ -146,10 +156,11 @@ impl SolerStage {
             timer.scope(ctx, enc, "soler.bounces", |e, slot| bounces.sum(ctx, e, slot, out));
         }
         let indirect = crate::passes::view(&self.upsample.indirect, "soler.indirect");
+        let specular = self.indirect_specular(s).map(|t| crate::passes::view(t, "soler.indirect.specular"));
         match &mut self.temporal {
             Some(t) => {
-                let camera = f.camera_buffer;
-                timer.scope(ctx, enc, "soler.temporal", |e, slot| t.run(ctx, e, slot, s, camera, &indirect, g));
+                let (camera, spec) = (f.camera_buffer, specular.as_ref());
+                timer.scope(ctx, enc, "soler.temporal", |e, slot| t.run(ctx, e, slot, s, camera, (&indirect, spec), g));
                 crate::passes::view(&t.filtered, "soler.temporal")
             }
             None => indirect,
@@ -201,9 +212,9 @@ impl SolerStage {
         let voxel_params = self.voxelize(f, enc, timer);
         let levels: Vec<(u32, (u32, u32))> = s.gathered_levels().map(|k| (k, all[k as usize])).collect();
         self.gather.write_params(ctx, &levels, gather_base(f), std::slice::from_ref(&voxel_params));
-        self.vote(f, enc, timer, "soler.pyramid", f.direct_radiance);
+        self.vote(f, enc, timer, "soler.pyramid", f.sender_radiance());
         let lv = self.level_views();
-        let inputs = self.level_inputs(f, f.direct_radiance, &lv, &voxel_params, &all);
+        let inputs = self.level_inputs(f, f.sender_radiance(), &lv, &voxel_params, &all);
         let params = &self.gather.params;
         timer.scope(ctx, enc, "soler.hcb_gather", |e, slot| self.hcb_gather.run(ctx, e, slot, params, &inputs, hcb));
     }

@@ -9,7 +9,7 @@
 //! `soler.temporal_history` says, depth in a). The history and the normals are
 //! double-buffered by copy, as in `knecht::temporal`.
 
-use super::{SolerSettings, TemporalHistory};
+use super::{SolerSettings, TemporalHistory, TemporalQuantity};
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::passes::bgl;
@@ -22,15 +22,26 @@ use crate::timing::Slot;
 pub struct TemporalParams {
     /// a, m½, k_g, 1 when the history holds a frame.
     pub blend: [f32; 4],
-    /// τ_z, τ_n, 1 when the history keeps I_{i−1}, unused.
+    /// τ_z, τ_n, 1 when the history keeps I_{i−1}; what is blended: 0 the radiance, 1 the
+    /// irradiance (Fig. 4), 2 the irradiance with glossy light to leave out.
     pub reject: [f32; 4],
 }
 
 impl TemporalParams {
-    pub fn of(s: &SolerSettings, valid: bool) -> Self {
+    /// `specular`: a glossy light was added into the current light (`SolerStage::indirect_specular`).
+    pub fn of(s: &SolerSettings, valid: bool, specular: bool) -> Self {
+        let quantity = match s.temporal_quantity {
+            TemporalQuantity::Radiance => 0.0,
+            TemporalQuantity::Irradiance => 1.0 + specular as u32 as f32,
+        };
         Self {
             blend: [s.temporal_a, s.temporal_motion_px, s.temporal_gloss, valid as u32 as f32],
-            reject: [s.reject_depth, s.reject_normal, (s.temporal_history == TemporalHistory::Raw) as u32 as f32, 0.0],
+            reject: [
+                s.reject_depth,
+                s.reject_normal,
+                (s.temporal_history == TemporalHistory::Raw) as u32 as f32,
+                quantity,
+            ],
         }
     }
 }
@@ -53,6 +64,8 @@ pub struct SolerTemporal {
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::ComputePipeline,
     params: wgpu::Buffer,
+    /// Stand-in for the glossy light when there is none (never read).
+    no_specular: wgpu::Texture,
 }
 
 struct Targets {
@@ -99,6 +112,7 @@ impl SolerTemporal {
         ]);
         entries.push(bgl::storage_texture(13, wgpu::TextureFormat::R32Float));
         entries.push(bgl::storage_texture(14, NORMAL_FORMAT));
+        entries.extend([bgl::texture(15, cs, false), bgl::texture(16, cs, false)]);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("soler.temporal.inputs"),
             entries: &entries,
@@ -111,7 +125,10 @@ impl SolerTemporal {
             std::mem::size_of::<TemporalParams>() as u64,
         );
         let t = targets(device, size);
+        let none = wgpu::TextureUsages::empty();
+        let no_specular = crate::passes::create_target(device, "soler.temporal.no_specular", 1, 1, LIGHT_FORMAT, none);
         Self {
+            no_specular,
             size,
             filtered: t.filtered,
             history: t.history,
@@ -183,7 +200,8 @@ impl SolerTemporal {
         }
     }
 
-    /// Blends `current` (I_i) with the warped history into `soler.temporal`.
+    /// Blends `current` (I_i, and the glossy light added into it) with the warped history
+    /// into `soler.temporal`.
     #[allow(clippy::too_many_arguments)]
     pub fn run(
         &mut self,
@@ -192,10 +210,12 @@ impl SolerTemporal {
         slot: Option<Slot<'_>>,
         s: &SolerSettings,
         camera: &wgpu::Buffer,
-        current: &wgpu::TextureView,
+        (current, specular): (&wgpu::TextureView, Option<&wgpu::TextureView>),
         g: &GBufferViews,
     ) {
-        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&TemporalParams::of(s, self.valid)));
+        let params = TemporalParams::of(s, self.valid, specular.is_some());
+        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        let no_specular = crate::passes::view(&self.no_specular, "soler.temporal.no_specular");
         let v = |t: &wgpu::Texture| crate::passes::view(t, "soler.temporal.view");
         let (read, write) = (self.current, 1 - self.current);
         let (prev_n, hist_prev, filtered, hist, warped, rejection, a, normal_out) = (
@@ -213,6 +233,7 @@ impl SolerTemporal {
         let views = [current, &g.position, &g.normal, &g.motion, &g.material, &prev_n, &hist_prev];
         resources.extend(views.map(tv));
         resources.extend([&filtered, &hist, &warped, &rejection, &a, &normal_out].map(tv));
+        resources.extend([&g.albedo, specular.unwrap_or(&no_specular)].map(tv));
         let group = crate::passes::bind_group(&ctx.device, "soler.temporal.inputs", &self.layout, resources);
         let stamps = slot.and_then(|s| s.compute(true, true));
         crate::passes::dispatch_2d(encoder, "soler.temporal", &self.pipeline, &group, &[], stamps, self.size);
