@@ -4,6 +4,7 @@
 use gi_lab_tests::{paused_renderer, read, stored_reference, v3};
 use gi_render::cpu::gautron::{self, HemisphereTable, Record};
 use gi_render::passes::gautron::{GpuRecord, SplatMethod};
+use gi_render::LabSettings;
 use gi_render::pipeline::Technique;
 use glam::Vec3;
 
@@ -122,22 +123,42 @@ fn hemisphere_reduction_matches_the_cpu_twin() {
 #[test]
 fn the_splat_matches_the_cpu_accumulation() {
     for method in [SplatMethod::Blend, SplatMethod::Binned] {
-        splat_matches_the_cpu_accumulation(method);
+        splat_matches_the_cpu_accumulation(method, |_| {});
     }
 }
 
-fn splat_matches_the_cpu_accumulation(method: SplatMethod) {
+/// Without GI Lab's additions to 003 (issue #41 point 8): R_k = H unclamped, and Ward's "in
+/// front" test off, or with another tolerance; the splat still equals the CPU twin's sums.
+#[test]
+fn the_splat_follows_the_text_without_the_clamps_and_the_in_front_test() {
+    let records = splat_matches_the_cpu_accumulation(SplatMethod::Auto, |s| {
+        s.gautron.r_clamps = false;
+        s.gautron.in_front_test = false;
+    });
+    // R_k (position.w) is H (normal.w) wherever H is finite: no clamp touched it.
+    let finite: Vec<&GpuRecord> = records.iter().filter(|r| r.normal.w.is_finite()).collect();
+    assert!(finite.len() > 20);
+    for rec in finite {
+        assert!((rec.position.w - rec.normal.w).abs() <= 1e-6 * rec.normal.w, "R {} vs H {}", rec.position.w, rec.normal.w);
+    }
+    splat_matches_the_cpu_accumulation(SplatMethod::Auto, |s| s.gautron.in_front_tolerance = 0.3);
+}
+
+/// `edit` changes the settings; returns the records splatted.
+fn splat_matches_the_cpu_accumulation(method: SplatMethod, edit: impl FnOnce(&mut LabSettings)) -> Vec<GpuRecord> {
     // Neighbour clamping shrinks cached records after they were splatted this frame.
     let mut r = paused_renderer(64, Technique::Gautron, |s| {
         s.gautron.records_per_round = 32;
         s.gautron.neighbour_clamping = false;
         s.gautron.splat = method;
+        edit(s);
     });
     r.render_frame();
     r.render_frame();
     let g = r.gautron().unwrap();
     let st = g.read_state(&r.ctx).unwrap();
-    let records: Vec<Record> = g.read_records(&r.ctx, st.count).unwrap().iter().map(GpuRecord::to_cpu).collect();
+    let gpu_records = g.read_records(&r.ctx, st.count).unwrap();
+    let records: Vec<Record> = gpu_records.iter().map(GpuRecord::to_cpu).collect();
     assert!(records.len() > 20, "{st:?}");
     let (accum, position, normal) =
         (read(&r, "gautron.accum"), read(&r, "gbuffer.position"), read(&r, "gbuffer.normal"));
@@ -160,6 +181,7 @@ fn splat_matches_the_cpu_accumulation(method: SplatMethod) {
         }
     }
     assert!(compared > 3000 && covered > compared / 2, "{method:?}: {compared} pixels, {covered} covered");
+    gpu_records
 }
 
 /// The binned splat (compute, GI Lab) gives the blended quads' sums (the text) bit for bit:
