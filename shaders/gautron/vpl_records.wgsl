@@ -5,10 +5,11 @@
 // - E_k = Σ_i V_i · Φ_i f_i cos θ_i cos θ_x / max(d_i², d_min²) over the VPLs of stage 3
 //   with stage 4's visibility V_i (ISM, exact maps or none), as the HCB's gather at its
 //   samples (hcb/gather.wgsl; Knecht 002 Eq. 4.7–4.8);
-// - ⚠ H (Ward's harmonic mean distance to the surfaces seen, "Irradiance Caching") from the
-//   VPLs: H = Σ_i ℓ_i / Σ_i (ℓ_i / d_i), the harmonic mean of the visible VPLs' distances
-//   weighted by the luminance ℓ_i each sends (a hemisphere's texels weigh every direction by
-//   its solid angle; the VPLs stand for the lit surfaces only). R_k then takes the clamps.
+// - ⚠[gautron.vpl-record-h] H (Ward's harmonic mean distance to the surfaces seen, "Irradiance
+//   Caching") from the VPLs: H = Σ_i ℓ_i / Σ_i (ℓ_i / d_i), the harmonic mean of the visible
+//   VPLs' distances weighted by the luminance ℓ_i each sends (a hemisphere's texels weigh every
+//   direction by its solid angle; the VPLs stand for the lit surfaces only). R_k then takes the
+//   clamps.
 // - the gradients ∇_r, ∇_t ("Irradiance Interpolation"; Křivánek's forms integrate over
 //   the hemisphere's texels, which do not exist here) by central differences of the same
 //   sum with each VPL's visibility held at P_k: the normal turned by ±ε about t and b, the

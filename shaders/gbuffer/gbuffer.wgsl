@@ -2,7 +2,7 @@
 // intensity DI, specular intensity SI and power SP, and the movement buffer m_buf of
 // §3.5.1: the screen-space offset from each pixel to where its surface point was in the
 // previous frame, from the previous camera and the previous object transform.
-// Reading chosen: the thesis writes (x_s − x_prev, y_s − y_prev) but then looks up
+// ⚠[knecht.movement-sign] Reading chosen: the thesis writes (x_s − x_prev, y_s − y_prev) but then looks up
 // I_prev(x_s + Δx, y_s + Δy); we store Δ = prev − current so that the lookup is right.
 // z holds the point's linear depth in the previous frame (previous camera, previous object
 // transform): Soler et al.'s W "accounts for both the camera and the moving object" (004 §4),

@@ -2,12 +2,13 @@
 // the irradiance the VPLs send it — Φ · f_y(ω_in, y→x) · cos θ_y · cos θ_x / max(d², d_min²)
 // (Knecht 002 Eq. 4.7–4.8, the VPLs of stage 3) times their visibility (ISM, exact maps or
 // none, as the interleaved gather). The cost scales with the samples, not the pixels.
-// Irradiance, not radiance, is gathered and splatted: each pixel then reflects it with its
-// own colour (c·DI/π), so that texture detail survives the interpolation (the receiver's
-// glossy lobe is not included). cs_args turns the sample count into the indirect arguments
-// of this dispatch and of the splat draws. With the cache the gather runs twice: over the
-// samples due for recomputation (§5.3, their slots compacted in `queue`, so that the work is
-// dense) and over the new ones (§5.2, the end of the list).
+// ⚠[nguyen.irradiance-samples] Irradiance, not radiance, is gathered and splatted (§4.1 says
+// only that "the result of indirect lighting is stored at each sample"): each pixel then
+// reflects it with its own colour (c·DI/π), so that texture detail survives the interpolation
+// (the receiver's glossy lobe is not included). cs_args turns the sample count into the
+// indirect arguments of this dispatch and of the splat draws. With the cache the gather runs
+// twice: over the samples due for recomputation (§5.3, their slots compacted in `queue`, so
+// that the work is dense) and over the new ones (§5.2, the end of the list).
 // On a GPU, cs_gather: one workgroup per sample, its 64 invocations over every 64th VPL,
 // summed in shared memory (issue #38: with one invocation per sample looping over all VPLs,
 // a gather of few samples, the cache's usual case, took as long as one 1,024-VPL loop). On a

@@ -2,13 +2,14 @@
 //   importance = lightIntensity · (surfaceColor · lightColor) · (0.5 + SP),
 // and its mip pyramid (each level the average of its 2×2 children) that hierarchical
 // warping descends (vpl/warp.wgsl). Readings chosen:
-// - lightIntensity · lightColor is the flux the light sends through the texel
-//   (common/light_view.wgsl), so that the importance is proportional to the VPL's power;
-// - surfaceColor is the reflectance c·DI + SI (a black glossy surface still reflects), and
-//   the product with the light colour is the mean over r, g, b;
-// - SP is the thesis' 8-bit normalised power; ours is a Blinn-Phong exponent 1…4096, so
-//   SP' = saturate(log2(SP) / 12) enters as (b + SP'), b = `vpl.importance_bias` (0.5 as
-//   the thesis).
+// - ⚠[knecht.importance-flux] lightIntensity · lightColor is the flux the light sends through
+//   the texel (common/light_view.wgsl), so that the importance is proportional to the VPL's
+//   power;
+// - ⚠[knecht.importance-reflectance] surfaceColor is the reflectance c·DI + SI (a black glossy
+//   surface still reflects), and the product with the light colour is the mean over r, g, b;
+// - ⚠[knecht.importance-power] SP is the thesis' 8-bit normalised power; ours is a Blinn-Phong
+//   exponent 1…4096, so SP' = saturate(log2(SP) / 12) enters as (b + SP'),
+//   b = `vpl.importance_bias` (0.5 as the thesis).
 // Surfaces facing away from the light and the background have importance 0.
 // CPU twin of the pyramid: cpu::knecht::Pyramid.
 #import common/light_view.wgsl

@@ -2,9 +2,9 @@
 //! (`cpu::gautron`) and the path tracer.
 
 use gi_lab_tests::{paused_renderer, read, stored_reference, v3};
+use gi_render::LabSettings;
 use gi_render::cpu::gautron::{self, HemisphereTable, Record};
 use gi_render::passes::gautron::{GpuRecord, SplatMethod};
-use gi_render::LabSettings;
 use gi_render::pipeline::Technique;
 use glam::Vec3;
 
@@ -139,7 +139,12 @@ fn the_splat_follows_the_text_without_the_clamps_and_the_in_front_test() {
     let finite: Vec<&GpuRecord> = records.iter().filter(|r| r.normal.w.is_finite()).collect();
     assert!(finite.len() > 20);
     for rec in finite {
-        assert!((rec.position.w - rec.normal.w).abs() <= 1e-6 * rec.normal.w, "R {} vs H {}", rec.position.w, rec.normal.w);
+        assert!(
+            (rec.position.w - rec.normal.w).abs() <= 1e-6 * rec.normal.w,
+            "R {} vs H {}",
+            rec.position.w,
+            rec.normal.w
+        );
     }
     splat_matches_the_cpu_accumulation(SplatMethod::Auto, |s| s.gautron.in_front_tolerance = 0.3);
 }

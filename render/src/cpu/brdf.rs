@@ -1,10 +1,10 @@
 //! The one BRDF of GI Lab, used by the GPU passes (`shaders/common/brdf.wgsl`) and by
 //! every CPU reference.
 //!
-//! Knecht's thesis (002 Eq. 4.9) shades a point with colour c, diffuse intensity DI,
-//! specular intensity SI and specular power SP as `c·DI + SI·max(0, n·h)^SP`. We use the
-//! energy-normalised form of the same lobes, so that radiance is in physical units and a
-//! white Lambertian surface reflects exactly what it receives:
+//! Knecht's thesis (002 Eq. 4.9) shades a point with colour c, diffuse intensity DI, specular
+//! intensity SI and specular power SP as `c·DI + SI·max(0, n·h)^SP`. ⚠[knecht.brdf-normalised]
+//! We use the energy-normalised form of the same lobes, so that radiance is in physical units
+//! and a white Lambertian surface reflects exactly what it receives:
 //!
 //! ```text
 //! f(l, v) = c · DI / π  +  SI · (SP + 8) / (8π) · max(0, n·h)^SP,    h = normalize(l + v)

@@ -13,23 +13,23 @@
 //! - The creation ("Algorithm": records are made where the splatted coverage is
 //!   insufficient): [`candidates`], one pixel per screen tile and round.
 //!
-//! Readings chosen where the text is inconsistent (⚠; also in the items' docs):
-//! - ⚠ "Simple plane sampling" prints Ω_p = A·cos θ / d² with d "the distance between the point
+//! Readings chosen where the text is inconsistent (each tagged with its id, docs/readings.md; also in the items' docs):
+//! - ⚠[gautron.texel-solid-angle] "Simple plane sampling" prints Ω_p = A·cos θ / d² with d "the distance between the point
 //!   of interest and the image plane". For a plane at distance d the solid angle of a small
 //!   texel of area A is A·cos θ / r² with r = d / cos θ the distance to the *texel*, i.e.
 //!   A·cos³ θ / d². We use Ω_p = A / (1 + x² + y²)^{3/2} (d = 1); the tests check that Σ Ω_p is
 //!   the pyramid's exact solid angle.
-//! - ⚠ The compensation Ω_border = Ω_p + cos θ_border · δφ is a solid angle, but irradiance
+//! - ⚠[gautron.border-cosine] The compensation Ω_border = Ω_p + cos θ_border · δφ is a solid angle, but irradiance
 //!   needs cosine-weighted measure; [`BorderCompensation`] selects the reading (`Paper`: the
 //!   band's solid angle reflected with the border texel's own cosine, `CosineWeighted`: the
 //!   band's own cosines, cos² θ_b / 2 · δφ). θ_border is taken per boundary edge, at the
 //!   edge's middle (the text's "largest θ covered by the aperture" varies along the edge).
-//! - ⚠ "Weighting Function" prints w = 1/(√(‖P−P_k‖² + √(1 − n·n_k))) with no R_k; the next
+//! - ⚠[gautron.weight-with-radius] "Weighting Function" prints w = 1/(√(‖P−P_k‖² + √(1 − n·n_k))) with no R_k; the next
 //!   slide ("Simplified Weighting Function") and Ward 1988 have ‖P−P_k‖/R_k + √(1 − n·n_k): we
 //!   use that one, clamped to `w_max` (it is unbounded at P = P_k).
-//! - ⚠ "Irradiance Interpolation" takes S = {k : w_k > 1/a} while "Algorithm"'s creation test
+//! - ⚠[gautron.coverage-test] "Irradiance Interpolation" takes S = {k : w_k > 1/a} while "Algorithm"'s creation test
 //!   is "W < a": one reading for both, a point is covered iff some record passes w_k > 1/a.
-//! - ⚠ "Algorithm"'s TransformVertex offsets the centre by ±a·H in view x, y before the
+//! - ⚠[gautron.splat-bounds] "Algorithm"'s TransformVertex offsets the centre by ±a·H in view x, y before the
 //!   projection: that square is too small, slightly on the optical axis (the silhouette's
 //!   half-width is ρ/√(w² − ρ²), not ρ/w, at depth w) and badly off it (the perspective
 //!   stretches the projection outward). We bound the sphere exactly from its tangent planes
@@ -70,7 +70,7 @@ pub fn frame(n: Vec3) -> (Vec3, Vec3) {
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct TexelTerms {
     /// xyz: unit direction through the texel centre in the local frame (x along t, y along b,
-    /// z along n); w: its solid angle Ω_p = A / (1 + x² + y²)^{3/2} (⚠ not the printed
+    /// z along n); w: its solid angle Ω_p = A / (1 + x² + y²)^{3/2} (⚠[gautron.texel-solid-angle] not the printed
     /// A·cos θ / d², see the module docs).
     pub dir: [f32; 4],
     /// x: the band's irradiance weight for the chosen compensation (0 for interior texels or
@@ -366,7 +366,7 @@ pub fn weight(rec: &Record, p: Vec3, n: Vec3, w_max: f32, in_front: Option<f32>)
 
 /// A record's contribution at (P, n) ("Irradiance Interpolation"):
 /// E_k + (n_k × n)·∇_r E_k + (P − P_k)·∇_t E_k per channel, each gradient on or off, clamped to
-/// ≥ 0 per channel (a gradient extrapolated far can turn negative).
+/// ≥ 0 per channel (a gradient extrapolated far can turn negative) (⚠[gautron.non-negative-extrapolation]).
 pub fn extrapolate(rec: &Record, p: Vec3, n: Vec3, rotational: bool, translational: bool) -> Vec3 {
     let axis = rec.n.cross(n);
     let d = p - rec.p;
@@ -384,7 +384,7 @@ pub fn extrapolate(rec: &Record, p: Vec3, n: Vec3, rotational: bool, translation
 
 /// The splat's accumulation at one point ("Principle": the RGB of the blended splats is
 /// Σ w_k E'_k, their alpha Σ w_k): (Σ w_k E'_k, Σ w_k) over the records with w_k > 1/a
-/// (⚠ the text's set S = {w_k > 1/a} and its creation test "W < a": one reading for both, a
+/// (⚠[gautron.coverage-test] the text's set S = {w_k > 1/a} and its creation test "W < a": one reading for both, a
 /// point is covered iff some record passes, i.e. Σ w_k ≥ 1/a; otherwise the sum is exactly 0).
 /// The irradiance estimate is the first over the second.
 pub fn accumulate(records: &[Record], p: Vec3, n: Vec3, i: &Interpolation) -> (Vec3, f32) {
@@ -407,7 +407,7 @@ pub fn accumulate(records: &[Record], p: Vec3, n: Vec3, i: &Interpolation) -> (V
 /// behind it (then the splat covers the whole screen).
 ///
 /// "Principle" splats "a quadrilateral tightly enclosing the splatted sphere" (of radius a·R_k
-/// where the simplified weight passes, "Simplified Weighting Function"); ⚠ "Algorithm"'s
+/// where the simplified weight passes, "Simplified Weighting Function"); ⚠[gautron.splat-bounds] "Algorithm"'s
 /// TransformVertex (centre ± a·H before the projection) is too small: ρ/w instead of
 /// ρ/√(w² − ρ²) on the axis, and off the axis it misses the perspective's stretching.
 /// Exact bounds: the values of x_v/(−z_v) are constant on the planes x + k z = 0 through the
@@ -596,7 +596,7 @@ pub fn vpl_irradiance(vpl: &crate::cpu::knecht::Vpl, x: Vec3, n: Vec3, d_min: f3
 /// `shaders/gautron/vpl_records.wgsl`), in the record's frame (t, b, n):
 ///
 /// - E = Σ V_i E_i(P, n), with `visibility(i)` ∈ [0, 1] held at P for every term;
-/// - ⚠ H = Σ ℓ_i / Σ (ℓ_i / d_i), ℓ_i the luminance of V_i E_i(P, n): the harmonic mean of the
+/// - ⚠[gautron.vpl-record-h] H = Σ ℓ_i / Σ (ℓ_i / d_i), ℓ_i the luminance of V_i E_i(P, n): the harmonic mean of the
 ///   visible VPLs' distances weighted by what each sends (∞ when none sends anything);
 /// - ∇_t = t·D_t + b·D_b with D_u = (E(P + ε_t u) − E(P − ε_t u)) / 2ε_t, and ∇_r = t·R_t +
 ///   b·R_b with R_u the central difference of E over n turned by ±ε_r about u (about t: n ∓

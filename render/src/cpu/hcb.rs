@@ -4,20 +4,21 @@
 //! tested against these on synthetic G-buffers.
 //!
 //! Readings of the paper, where it leaves room:
-//! - Pose coherence, Eq. 3: its first line detects backward lighting (âb·n_a ≤ 0 or
-//!   b̂a·n_b ≤ 0, the two not facing each other), and only then does the second restrict the
-//!   angle, |âb·n_a| ≤ cos γ_max (âb normalised). This is how Eq. 8 uses the same terms — the
-//!   pose error is ρ √|âb·n_a| / √cos γ_max with ρ = 1 exactly when the first line holds — so
-//!   Algorithm 1 and the splat weights agree: two points facing each other are pose-coherent
-//!   (the normal test judges them), a step between parallel planes is not.
-//! - Distance coherence, Eq. 1, is tested on the accumulated distance R'_c = ‖a − c‖ + R_c
-//!   (§3.5) — the conservative bound of a's distance to every texel that c stands for, as
-//!   Eq. 6 is for the normals: c is coherent to a only if R'_c ≤ d_max.
-//! - Background texels (normal w = 0 in the G-buffer) have coherence 0, and a 3×3 block
-//!   with a texel outside the level is incoherent (it would stand for pixels that do not
-//!   exist).
-//! - Level k has ⌈w/2⌉ × ⌈h/2⌉ texels of level k − 1; texel (x, y) covers the 3×3 block
-//!   centred at (2x, 2y) and is the G-buffer pixel (2^k x, 2^k y).
+//! - ⚠[nguyen.pose-test] Pose coherence, Eq. 3: its first line detects backward lighting
+//!   (âb·n_a ≤ 0 or b̂a·n_b ≤ 0, the two not facing each other), and only then does the second
+//!   restrict the angle, |âb·n_a| ≤ cos γ_max (âb normalised). This is how Eq. 8 uses the same
+//!   terms — the pose error is ρ √|âb·n_a| / √cos γ_max with ρ = 1 exactly when the first line
+//!   holds — so Algorithm 1 and the splat weights agree: two points facing each other are
+//!   pose-coherent (the normal test judges them), a step between parallel planes is not.
+//! - ⚠[nguyen.distance-accumulated] Distance coherence, Eq. 1, is tested on the accumulated
+//!   distance R'_c = ‖a − c‖ + R_c (§3.5) — the conservative bound of a's distance to every
+//!   texel that c stands for, as Eq. 6 is for the normals: c is coherent to a only if R'_c ≤
+//!   d_max.
+//! - ⚠[nguyen.incoherent-edges] Background texels (normal w = 0 in the G-buffer) have coherence
+//!   0, and a 3×3 block with a texel outside the level is incoherent (it would stand for pixels
+//!   that do not exist).
+//! - ⚠[nguyen.level-size] Level k has ⌈w/2⌉ × ⌈h/2⌉ texels of level k − 1; texel (x, y) covers
+//!   the 3×3 block centred at (2x, 2y) and is the G-buffer pixel (2^k x, 2^k y).
 
 use glam::Vec3;
 
@@ -233,14 +234,15 @@ pub fn supplementary_base(mut base: Level, incomplete: &[bool]) -> Level {
 /// §5.3's 4×4 index pattern (Fig. 8a): the recompute phase of a new sample at texel (x, y)
 /// of its level is `pattern[y mod 4][x mod 4]`.
 ///
-/// Departures, both measured on the default scene: (1) the paper tiles the sample buffer at
-/// G-buffer resolution, where every sample above level 1 (at pixels that are multiples of 4)
-/// would fall on one cell, so we tile each level's texels; (2) a randomly shuffled pattern
-/// let the lines of level-0 samples along borders and silhouettes fall on few phases (groups
-/// of 838 to 1441 samples at 256²), so the 16 cells hold 4·L1 + L2 for two orthogonal Latin
-/// squares over GF(4) — L1 = x ⊕ y, L2 = x ⊕ 2y — with the symbols scrambled by a fixed
-/// random relabelling: every row, column and diagonal of the tile then holds each of the
-/// four phases of period 4 once, and the values modulo 2, 8 and 16 stay balanced too.
+/// Departures, both measured on the default scene: (1) ⚠[nguyen.pattern-per-level] the paper
+/// tiles the sample buffer at G-buffer resolution, where every sample above level 1 (at pixels
+/// that are multiples of 4) would fall on one cell, so we tile each level's texels; (2)
+/// ⚠[nguyen.pattern-latin] a randomly shuffled pattern let the lines of level-0 samples along
+/// borders and silhouettes fall on few phases (groups of 838 to 1441 samples at 256²), so the
+/// 16 cells hold 4·L1 + L2 for two orthogonal Latin squares over GF(4) — L1 = x ⊕ y, L2 = x
+/// ⊕ 2y — with the symbols scrambled by a fixed random relabelling: every row, column and
+/// diagonal of the tile then holds each of the four phases of period 4 once, and the values
+/// modulo 2, 8 and 16 stay balanced too.
 pub fn recompute_pattern(period: u32) -> [[u32; 4]; 4] {
     // Multiplication by 2 in GF(4) = {0, 1, a, a + 1} with a² = a + 1.
     const TIMES_2: [u32; 4] = [0, 2, 3, 1];

@@ -374,16 +374,17 @@ pub fn vpl_radiance(vpl: &Vpl, x: &Receiver, eye: Vec3, d_min: f32) -> Vec3 {
 }
 
 /// The per-frame slot→tile map of interleaved sampling (Knecht §3.4.1; twin of the loop in
-/// `shaders/interleave/gather.wgsl`). Slots are cut into blocks of n² consecutive slots;
-/// in block b, tile t takes slot b·n² + (t + o_b) mod n². One VPL per block per tile keeps
-/// every tile a representative subset: consecutive slots hold consecutive Halton indices,
-/// which lie in different strips of the light view (the radical inverse's leading digits
-/// are the index's trailing ones), and the offsets o_b of every n² consecutive blocks are a
-/// permutation of 0…n², so each tile takes each of the n² strips once per n² blocks. The
-/// offsets are reshuffled every frame (seeded by `frame`), so that a tile's share — and the
-/// n×n pattern it would leave — changes from frame to frame. The old map, tile = slot mod
-/// n², gave tile t the same strip every frame (the 4×4 block pattern of issue #15).
-/// Returns one offset per block (⌈count / n²⌉ of them).
+/// `shaders/interleave/gather.wgsl`; ⚠[knecht.interleave-shuffle] the thesis does not say which
+/// VPL shades which tile). Slots are cut into blocks of n² consecutive slots; in block b, tile
+/// t takes slot b·n² + (t + o_b) mod n². One VPL per block per tile keeps every tile a
+/// representative subset: consecutive slots hold consecutive Halton indices, which lie in
+/// different strips of the light view (the radical inverse's leading digits are the index's
+/// trailing ones), and the offsets o_b of every n² consecutive blocks are a permutation of
+/// 0…n², so each tile takes each of the n² strips once per n² blocks. The offsets are
+/// reshuffled every frame (seeded by `frame`), so that a tile's share — and the n×n pattern it
+/// would leave — changes from frame to frame. The old map, tile = slot mod n², gave tile t the
+/// same strip every frame (the 4×4 block pattern of issue #15). Returns one offset per block
+/// (⌈count / n²⌉ of them).
 pub fn tile_offsets(count: u32, n: u32, frame: u32) -> Vec<u32> {
     let stride = (n.max(1) * n.max(1)) as usize;
     let blocks = (count as usize).div_ceil(stride);
@@ -497,14 +498,14 @@ pub struct ConfidenceInput {
 
 /// Confidence in the previous frame's indirect light, Knecht 002 Eq. 3.1–3.4:
 ///
-/// - Eq. 3.1, Δpos = ‖(Δx, Δy, Δd) · w_pos‖ with the screen movement in fractions of the
-///   image (Δx/width, Δy/height) and the depth in the thesis' linear depth (Eq. 4.2, view
-///   depth / (z_far − z_near)) — our reading of its screen and depth units, so that w_pos
-///   does not depend on the resolution;
+/// - Eq. 3.1, Δpos = ‖(Δx, Δy, Δd) · w_pos‖ with the screen movement in fractions of the image
+///   (Δx/width, Δy/height) and the depth in the thesis' linear depth (Eq. 4.2, view depth /
+///   (z_far − z_near)) — ⚠[knecht.confidence-units] our reading of its screen and depth units,
+///   so that w_pos does not depend on the resolution;
 /// - Eq. 3.2, Δnormal = (1 − n·n_prev) · w_normal;
-/// - Eq. 3.3, Δillumination = saturate(‖I_new − I_prev‖³) · w_illumination with the
-///   difference relative to the larger of the two magnitudes (the thesis' light values
-///   were display-referred; ours are radiance in any unit);
+/// - Eq. 3.3, Δillumination = saturate(‖I_new − I_prev‖³) · w_illumination with the difference
+///   relative to the larger of the two magnitudes (⚠[knecht.confidence-relative]; the thesis'
+///   light values were display-referred; ours are radiance in any unit);
 /// - Eq. 3.4, confidence = c_base · saturate(1 − max(Δpos, Δnormal, Δillumination)).
 pub fn confidence(i: &ConfidenceInput, w: &ConfidenceWeights) -> f32 {
     let rel_depth = (i.depth - i.depth_prev) / i.depth_range.max(1e-6);

@@ -97,11 +97,11 @@ pub fn select_bounce(samples: &[(u32, f32)], selection: Selection) -> Option<(u3
 /// out of `sum` (Knecht §3.6.1): Φ = Φ_s · ΣC / C_s, ω_in toward the source VPL, and the
 /// sample's own material (DI_s, SI_s, SP_s).
 ///
-/// The thesis sets SI = SI_s · SI_v, "necessary to get correct specular light bounces"; that
-/// holds for VPLs whose flux is the diffuse colour alone. Here Φ_s = Φ_v · f_v · G already
-/// went through the source's whole BRDF, glossy lobe included (Eq. 4.8), so the new VPL
-/// reflects it with the sample's BRDF only; the product would apply SI_v twice. Energy is
-/// conserved along a chain: the light the new VPL sends is what the sample's surface
+/// ⚠[knecht.bounce-si] The thesis sets SI = SI_s · SI_v, "necessary to get correct specular
+/// light bounces"; that holds for VPLs whose flux is the diffuse colour alone. Here Φ_s = Φ_v ·
+/// f_v · G already went through the source's whole BRDF, glossy lobe included (Eq. 4.8), so the
+/// new VPL reflects it with the sample's BRDF only; the product would apply SI_v twice. Energy
+/// is conserved along a chain: the light the new VPL sends is what the sample's surface
 /// reflects, f_s · E_s (test: `bounce_vpl_reflects_with_the_samples_own_brdf`).
 pub fn bounce_vpl(source: &Vpl, sample: &BounceSample, flux: Vec3, c: f32, sum: f32) -> Vpl {
     let s = &sample.surface;

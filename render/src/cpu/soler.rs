@@ -5,23 +5,26 @@
 //! `shaders/soler/{vote,gather,upsample}.wgsl`; tests compare them texel by texel.
 //!
 //! Readings chosen where the text is garbled or silent (also in `docs/preset-schema.md`):
-//! - Eq. 3 prints `4 tan f_h tan f_v`; Eq. 2's half angles `4 tan(f_h/2) tan(f_v/2)` are the
-//!   area of the screen rectangle at unit depth, so we use those.
-//! - Eq. 4 (point-to-disc) is the *form factor* F = R² cosθ / (r² + R²): for r ≫ R it tends to
-//!   cosθ cosθ' ds / (π r²), 1/π of Eq. 1's kernel. Eq. 1 carries the BRDF ρ (ρ_d/π for a
-//!   diffuse receiver), so the kernel that replaces Eq. 1's is π F; the receiver then reflects
-//!   E = Σ L_i π F_i as c·DI/π · E. [`kernel`] returns π F (or Eq. 1's kernel).
-//! - Eq. 5's g₃ takes z_j − z_i in scene units; we divide by z_i (relative depth) so that σ₃
-//!   does not depend on the scene's scale. The L1 neighbourhood of a sub-pixel reaches one
-//!   texel outside its 2×2 block (the apron); texels outside the image or on the background
-//!   take no part. The winner's position, depth and normal go down (no averaging); radiance
-//!   goes down as the mean over the block's texels inside the image (background counts as
-//!   black), so that a coarse texel emits the power of its sub-pixels.
-//! - The ring (Fig. 3): the first (finest) gathered level samples the full disc of radius r,
-//!   every other level the annulus r/2 … r, both in the level's own texels; N samples on a
-//!   Vogel spiral (radius √ of the area fraction, golden-angle steps) rotated per texel and
-//!   frame, each standing for 1/N of the area. The factor 2^{2k} of §4 is in Eq. 2's W, H:
-//!   they are the level's size.
+//! - ⚠[soler.eq3-half-angles] Eq. 3 prints `4 tan f_h tan f_v`; Eq. 2's half angles
+//!   `4 tan(f_h/2) tan(f_v/2)` are the area of the screen rectangle at unit depth, so we use
+//!   those.
+//! - ⚠[soler.form-factor-pi] Eq. 4 (point-to-disc) is the *form factor*
+//!   F = R² cosθ / (r² + R²): for r ≫ R it tends to cosθ cosθ' ds / (π r²), 1/π of Eq. 1's
+//!   kernel. Eq. 1 carries the BRDF ρ (ρ_d/π for a diffuse receiver), so the kernel that
+//!   replaces Eq. 1's is π F; the receiver then reflects E = Σ L_i π F_i as c·DI/π · E.
+//!   [`kernel`] returns π F (or Eq. 1's kernel).
+//! - ⚠[soler.vote-depth-relative] Eq. 5's g₃ takes z_j − z_i in scene units; we divide by z_i
+//!   (relative depth) so that σ₃ does not depend on the scene's scale. ⚠[soler.vote-apron] The
+//!   L1 neighbourhood of a sub-pixel reaches one texel outside its 2×2 block (the apron);
+//!   texels outside the image or on the background take no part. The winner's position, depth
+//!   and normal go down (no averaging); radiance goes down as the mean over the block's texels
+//!   inside the image (background counts as black), so that a coarse texel emits the power of
+//!   its sub-pixels.
+//! - ⚠[soler.ring-spiral] The ring (Fig. 3): the first (finest) gathered level samples the full
+//!   disc of radius r, every other level the annulus r/2 … r, both in the level's own texels; N
+//!   samples on a Vogel spiral (radius √ of the area fraction, golden-angle steps) rotated per
+//!   texel and frame, each standing for 1/N of the area. ⚠[soler.level-scale] The factor 2^{2k}
+//!   of §4 is in Eq. 2's W, H: they are the level's size.
 
 use glam::{Vec2, Vec3};
 
@@ -68,7 +71,8 @@ impl Level {
     }
 }
 
-/// The σ of the voting filter's three gaussians (Eq. 5; the paper gives none).
+/// The σ of the voting filter's three gaussians (Eq. 5; ⚠[soler.vote-sigmas] the paper gives
+/// none).
 #[derive(Clone, Copy, Debug)]
 pub struct VoteSigmas {
     /// g₁ on the texel distance |p_i − p_j| (0 or 1 in the L1 neighbourhood), texels.
@@ -496,7 +500,8 @@ pub fn facing(rx: &Texel, s: &Texel, near_cut: f32) -> Option<(Vec3, f32, f32, f
     (cos_t > 0.0 && cos_tp > 0.0).then_some((w, r2, cos_t, cos_tp))
 }
 
-/// The σ of the upsampling's range weights (joint bilateral upsampling, Kopf et al.).
+/// The σ of the upsampling's range weights (joint bilateral upsampling, Kopf et al.;
+/// ⚠[soler.upsample-weights] 004 §4 gives no weights).
 #[derive(Clone, Copy, Debug)]
 pub struct UpsampleSigmas {
     /// On the relative depth difference (z_c − z) / z.
@@ -519,11 +524,11 @@ pub fn coarse_footprint(x: u32, y: u32) -> [((i64, i64), f32); 4] {
     ]
 }
 
-/// Joint bilateral upsampling of `coarse_light` (one value per texel of `coarse`) at fine
-/// texel `fine`, (x, y): bilinear × depth × normal weights over the four coarse texels,
-/// background texels excluded. When every weight vanishes (a thin feature no coarse texel
-/// resembles), the most similar valid coarse texel of the four (depth × normal weight
-/// alone) gives its light; with none valid, zero. Light never comes from the background.
+/// Joint bilateral upsampling of `coarse_light` (one value per texel of `coarse`) at fine texel
+/// `fine`, (x, y): bilinear × depth × normal weights over the four coarse texels, background
+/// texels excluded. ⚠[soler.upsample-fallback] When every weight vanishes (a thin feature no
+/// coarse texel resembles), the most similar valid coarse texel of the four (depth × normal
+/// weight alone) gives its light; with none valid, zero. Light never comes from the background.
 pub fn upsample(coarse: &Level, coarse_light: &[Vec3], fine: &Texel, x: u32, y: u32, s: UpsampleSigmas) -> Vec3 {
     if !fine.valid() {
         return Vec3::ZERO;

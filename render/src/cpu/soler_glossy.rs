@@ -8,18 +8,18 @@
 //! f(θ) = α + exp(−s (θ_r − θ)² / 2π)
 //! ```
 //!
-//! where θ_r is the screen-space angle of the projected lobe (the mirror direction of the
-//! view vector, projected at the receiver) and α = 0.1 in the paper. Readings (⚠ the text
-//! calls the gaussian's *variance* "inversely proportional to the square root of the exponent
-//! s of the lobe", while the formula's variance is π/s):
+//! where θ_r is the screen-space angle of the projected lobe (the mirror direction of the view
+//! vector, projected at the receiver) and α = 0.1 in the paper. Readings
+//! (⚠[soler.glossy-variance] the text calls the gaussian's *variance* "inversely proportional
+//! to the square root of the exponent s of the lobe", while the formula's variance is π/s):
 //! - s is the lobe's exponent, as the text says: the receiver's specular power SP, times a
 //!   setting k (1: the formula as printed; 0.25 by default, measured better: a lobe spreads
 //!   wider on screen than in space). The gaussian's standard deviation √(π/s) is then what
 //!   goes as 1/√SP (Ramamoorthi's angular-frequency estimate of a Phong lobe, which the
 //!   paper cites): we read the text's "variance" as the standard deviation;
-//! - θ − θ_r is wrapped to [−π, π], and the pdf over that interval is p(θ) = f(θ) / Z;
-//!   each sample stands for the screen area dP / (2π p(θ)) instead of dP, so the estimate of
-//!   both the irradiance and the glossy reflection stays unbiased;
+//! - ⚠[soler.glossy-pdf-weight] θ − θ_r is wrapped to [−π, π], and the pdf over that interval
+//!   is p(θ) = f(θ) / Z; each sample stands for the screen area dP / (2π p(θ)) instead of dP,
+//!   so the estimate of both the irradiance and the glossy reflection stays unbiased;
 //! - angles are drawn by inverting the CDF at the Vogel spiral's own angle (as a fraction
 //!   of the turn from θ_r − π), so the spiral's stratification carries over; where the lobe
 //!   projects to a point (mirror direction along the view ray), the receiver's SP is below

@@ -7,7 +7,7 @@
 //! (÷ (1 + k_g · SI · √SP)). Blended is the radiance, or the irradiance before the albedo
 //! multiply as Fig. 4 orders it (⚠[soler.temporal-order]; `BlendParams::irradiance`).
 //!
-//! Readings (⚠ in the issue): the paper gives no value of a nor its adaptation, only that it
+//! Readings (⚠[soler.temporal-a], ⚠[soler.temporal-history]): the paper gives no value of a nor its adaptation, only that it
 //! depends on speed and shininess; it does not say whether H is I_{i−1} (as printed) or
 //! F_{i−1}: both are offered (`soler.temporal_history`, default F_{i−1}, whose flicker is
 //! lower; measured in tests/soler_temporal.rs).

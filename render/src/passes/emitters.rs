@@ -18,9 +18,10 @@
 //!    emitters their share of `vpl.count` by power (as it splits the budget between light
 //!    views), and [`EmitterPass::bounce_into`] makes that many VPLs on the surfaces the
 //!    emitters light with Knecht's point-cloud bounce (002 §3.6.1, `vpl/bounce.wgsl`, tested
-//!    against the ISMs of the emitter VPLs; the sample chosen ∝ its contribution, §6.1 — the
-//!    thesis' strongest sample would put every VPL next to the emitter). Its sources are the first k emitter VPLs with
-//!    flux Φ/k: the Halton prefix, so their ISMs are maps 0 … k − 1 of the atlas.
+//!    against the ISMs of the emitter VPLs; ⚠[knecht.emitter-bounce] the sample chosen ∝ its
+//!    contribution, §6.1 — the thesis' strongest sample would put every VPL next to the
+//!    emitter). Its sources are the first k emitter VPLs with flux Φ/k: the Halton prefix, so
+//!    their ISMs are maps 0 … k − 1 of the atlas.
 //!
 //! With emitters as lights the surface's own emission is no longer part of
 //! `direct.radiance`; the compose adds it (`gbuffer.emission`), so no gather takes it for a

@@ -1,7 +1,7 @@
 //! Stage 1, the camera G-buffer (Knecht 002 §4.2, movement buffer §3.5.1).
 //! Shader: `shaders/gbuffer/gbuffer.wgsl`.
 //!
-//! Departure from the thesis' four 32-bit targets: we keep full precision (world position
+//! ⚠[knecht.gbuffer-precision] Departure from the thesis' four 32-bit targets: we keep full precision (world position
 //! in `Rgba32Float`, normals in `Rgba16Float`) instead of packing normal.z into the sign of
 //! SI (Eq. 4.1), because a lab must show exact values; the linear depth of Eq. 4.2 is kept
 //! unnormalised in `gbuffer.position.w` (view-space distance in scene units). The thesis

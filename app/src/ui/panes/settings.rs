@@ -132,10 +132,10 @@ pub fn hcb_stats_ui(ui: &mut egui::Ui, stats: &gi_render::passes::hcb::stage::Hc
 }
 
 /// Soler et al.'s rings (004 §4, Fig. 3) for the settings and the render size: per gathered
-/// level its resolution and the ring it samples, in its own texels and in G-buffer pixels,
-/// and the reach of the coarsest ring against the image (⚠ the paper's "r so that the whole
-/// screen is sampled" does not hold for every setting: 4 levels of r = 40 from a quarter
-/// reach 1280 px, but the first level only from a full start).
+/// level its resolution and the ring it samples, in its own texels and in G-buffer pixels, and
+/// the reach of the coarsest ring against the image (⚠[soler.ring-reach] the paper's "r so that
+/// the whole screen is sampled" does not hold for every setting: 4 levels of r = 40 from a
+/// quarter reach 1280 px, but the first level only from a full start).
 pub fn soler_reach_ui(ui: &mut egui::Ui, s: &gi_render::passes::soler::SolerSettings, size: (u32, u32)) {
     let r = s.radius_px;
     egui::Grid::new("soler_rings").num_columns(4).striped(true).show(ui, |ui| {

@@ -85,7 +85,8 @@ settings_group! {
         /// quotes 86 % of the directions, the square sees 83.1 % of a uniform sky's irradiance).
         aperture_deg: f32 = 126.87,
         unit "°", symbol "", range 60.0..=170.0, cost "free (wider: coarser pixels)", history true;
-        /// How the directions outside the aperture are compensated ("Simple plane sampling").
+        /// How the directions outside the aperture are compensated ("Simple plane sampling";
+        /// ⚠[gautron.border-cosine]).
         border_compensation: BorderCompensation = BorderCompensation::CosineWeighted,
         unit "", symbol "", range 0..=2, cost "free", history true;
         /// Extrapolate with the rotational gradient of E_k (Ward and Heckbert 1992, as
@@ -102,7 +103,8 @@ settings_group! {
         /// Creation rounds per frame: splat, find the under-covered pixels, create, repeat.
         rounds: u32 = 4,
         unit "rounds", symbol "K", range 1..=32, cost "one splat and one creation pass each", history true;
-        /// Side of the tiles in which the creation picks one under-covered pixel per round.
+        /// Side of the tiles in which the creation picks one under-covered pixel per round
+        /// (⚠[gautron.creation-per-tile]).
         creation_tile_px: u32 = 8,
         unit "px", symbol "", range 2..=64, cost "smaller: more candidates per round", history true;
         /// Records the cache can hold (creation stops when full).
@@ -128,7 +130,7 @@ settings_group! {
         /// 003).
         r_max_scene: f32 = 1.0,
         unit "× radius", symbol "", range 0.0001..=100.0, cost "free", history true;
-        /// Neighbour clamping (Křivánek et al. 2006; not in 003): each new record's R_k and
+        /// Neighbour clamping (⚠[gautron.neighbour-clamping] Křivánek et al. 2006; not in 003): each new record's R_k and
         /// its overlapping neighbours' are clamped to R_j + |P_k − P_j| (the harmonic mean
         /// distance's triangle inequality), so that records near geometry a neighbour saw
         /// do not spread over it. Applies to the records made from now on.
@@ -153,7 +155,8 @@ settings_group! {
         /// it every frame starts from an empty cache: the cold-cache cost).
         reuse: ReusePolicy = ReusePolicy::KeepAll,
         unit "", symbol "", range 0..=1, cost "free", history true;
-        /// What becomes of the records a moving object or a light change invalidates.
+        /// What becomes of the records a moving object or a light change invalidates
+        /// (⚠[gautron.invalidation]).
         invalidation: Invalidation = Invalidation::Refresh,
         unit "", symbol "", range 0..=1, cost "refresh: one hemisphere per stale record", history false;
         /// How the splat sums the records at the pixels.

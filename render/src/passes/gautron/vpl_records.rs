@@ -3,8 +3,8 @@
 //! instead of their rasterized hemispheres (`pipeline.shading_points = IrradianceRecords`
 //! with `pipeline.gather = Vpl`). The creation, the clamps, the splatting and the cache are
 //! Gautron's; only the record's E, H and gradients come from the VPL sums of
-//! `shaders/gautron/vpl_records.wgsl` (CPU twin `cpu::gautron::vpl_record`, where the ⚠
-//! reading of H is documented).
+//! `shaders/gautron/vpl_records.wgsl` (CPU twin `cpu::gautron::vpl_record`, where the
+//! ⚠[gautron.vpl-record-h] reading of H is documented).
 
 use crate::counters::prelude::*;
 

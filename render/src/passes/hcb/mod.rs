@@ -28,8 +28,9 @@ pub use splat::HcbSplatPass;
 
 settings_group! {
     /// The hierarchical coherence buffer (stages 5–6 of the HCB technique; Nguyen et al. 000
-    /// §3–4): where indirect light is gathered and how it is splatted. The paper gives no
-    /// values; the defaults were chosen on the default scene (see presets/nguyen-hcb.ron).
+    /// §3–4): where indirect light is gathered and how it is splatted. ⚠[nguyen.thresholds] The
+    /// paper gives no values; the defaults were chosen on the default scene (see
+    /// presets/nguyen-hcb.ron).
     pub struct HcbSettings: "hcb" {
         /// Largest normal divergence inside a coherent group (Eq. 2, combined by Eq. 6–7).
         theta_max_deg: f32 = 20.0,
@@ -38,15 +39,16 @@ settings_group! {
         gamma_max_deg: f32 = 70.0,
         unit "°", symbol "γ_max", range 1.0..=90.0, cost "smaller: fewer samples, light leaks across steps", history false;
         /// Largest radius of a coherent group (Eq. 1 on the accumulated distance, §3.5), in
-        /// scene units; 0 picks it from the scene: 0.1 × its bounding radius (0.17 on the
-        /// default Cornell box, 0.61 on the hotel room).
+        /// scene units; ⚠[nguyen.d-max] 0 picks it from the scene: 0.1 × its bounding radius
+        /// (0.17 on the default Cornell box, 0.61 on the hotel room).
         d_max_m: f32 = 0.0,
         unit "m", symbol "d_max", range 0.0..=100.0, cost "larger: fewer samples, coarser light", history false;
         /// HCB levels including the G-buffer's (1: every pixel is a sample, the per-pixel gather).
         levels: u32 = 7,
         unit "levels", symbol "", range 1..=12, cost "one pass per level; more levels, larger groups", history false;
         /// A cached sample is invalid when the G-buffer point it lands on is farther than
-        /// this (§5.1's distance threshold).
+        /// this (§5.1's distance threshold; ⚠[nguyen.cache-thresholds] §5 gives no value for it,
+        /// `cache_normal_deg`, `surplus_quad_px` or `incomplete_weight`).
         cache_distance_m: f32 = 0.05,
         unit "m", symbol "", range 0.0001..=10.0, cost "larger: fewer samples renewed, light may stick to moved surfaces", history false;
         /// A cached sample is invalid when the G-buffer normal it lands on diverges by more
@@ -70,9 +72,10 @@ settings_group! {
         recompute_period: u32 = 4,
         unit "frames", symbol "", range 1..=16, cost "smaller: more samples gathered per frame, light follows changes sooner", history false;
         /// The smallest |cos| between a pixel's normal and the direction to the eye in its
-        /// footprint a^w = depth · pixel size / √|cos| (§3.5's back-projected area; our clamp:
-        /// the paper does not say how grazing pixels stay finite). Smaller: grazing pixels
-        /// get larger footprints, so distance coherence (Eq. 1) holds across more of them.
+        /// footprint a^w = depth · pixel size / √|cos| (§3.5's back-projected area;
+        /// ⚠[nguyen.footprint-clamp] our clamp: the paper does not say how grazing pixels stay
+        /// finite). Smaller: grazing pixels get larger footprints, so distance coherence
+        /// (Eq. 1) holds across more of them.
         footprint_min_cos: f32 = 0.01,
         unit "", symbol "", range 0.0001..=1.0, cost "free", history false;
         /// How the splat sums the samples at the pixels (§4.3's additive blending of one quad

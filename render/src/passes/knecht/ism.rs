@@ -106,13 +106,15 @@ settings_group! {
         push_threshold: f32 = 0.05,
         unit "× extent", symbol "t_push", range 0.0..=1.0, cost "free", history false;
         /// Shadow test bias: the receiver counts as lit if its distance less this fraction of
-        /// it is at most the stored distance.
+        /// it is at most the stored distance (⚠[knecht.ism-depth-bias] the thesis gives no
+        /// bias).
         depth_bias: f32 = 0.05,
         unit "× distance", symbol "", range 0.0..=0.5, cost "free", history false;
-        /// Receiver offset along its normal before the shadow test, in texels of the map at
-        /// the receiver's distance: a slope-aware bias against the receiving surface's own
-        /// splats, which reach k texels around each point and on grazing surfaces are nearer
-        /// the VPL than the receiver (our addition; the thesis names only the depth bias).
+        /// Receiver offset along its normal before the shadow test, in texels of the map at the
+        /// receiver's distance: a slope-aware bias against the receiving surface's own splats,
+        /// which reach k texels around each point and on grazing surfaces are nearer the VPL
+        /// than the receiver (⚠[knecht.ism-normal-offset] our addition; the thesis names no
+        /// bias).
         normal_offset: f32 = 3.0,
         unit "texels", symbol "", range 0.0..=8.0, cost "free", history false;
         /// Scale of each point's splat (1: the disc of the point's area share).
@@ -123,23 +125,26 @@ settings_group! {
         unit "texels", symbol "", range 0..=16, cost "up to (2k+1)² atomics per point", history false;
         /// Lift of each ISM's eye above its VPL along the VPL's normal, as a fraction of the
         /// scene's bounding radius, so that the surface the VPL lies on does not shadow it
-        /// (our addition; the thesis does not say how self-shadowing at the VPL is avoided).
+        /// (⚠[knecht.ism-eye-offset] our addition; the thesis does not say how self-shadowing
+        /// at the VPL is avoided).
         eye_offset: f32 = 0.005,
         unit "× scene radius", symbol "", range 0.0..=0.1, cost "free", history false;
-        /// The further bounces' shadow test (§3.6.1): the raw splats, or the pulled maps
-        /// with the gather's bias and normal offset.
+        /// The further bounces' shadow test (§3.6.1, ⚠[knecht.bounce-shadow-test] "a simple
+        /// shadow test with the ISM"): the raw splats, or the pulled maps with the gather's
+        /// bias and normal offset.
         bounce_test: BounceShadowTest = BounceShadowTest::PulledMaps,
         unit "", symbol "", range 0..=1, cost "pulled maps: one resolve and pull-push of the atlas per extra bounce", history false;
-        /// Which texels the push phase replaces besides holes. The defaults of this and of
-        /// `splat_depth` depart from the thesis (issue #15): with 131,072 points they took
-        /// the default configuration from mean FLIP 0.097 to 0.064 against the one-bounce
-        /// path tracer (256², 16 frames), and `knecht-cornell-256` from 0.062 to 0.047 —
-        /// the thesis' push grows every indirect shadow by up to 2^levels texels, and box
-        /// splats shadow slanted surfaces unless large biases, which leak, are used.
-        /// `presets/ritschel-ism.ron` keeps the original ISMs.
+        /// Which texels the push phase replaces besides holes (⚠[knecht.push-inside-surfaces]).
+        /// The defaults of this and of `splat_depth` depart from the thesis (issue #15): with
+        /// 131,072 points they took the default configuration from mean FLIP 0.097 to 0.064
+        /// against the one-bounce path tracer (256², 16 frames), and `knecht-cornell-256` from
+        /// 0.062 to 0.047 — the thesis' push grows every indirect shadow by up to 2^levels
+        /// texels, and box splats shadow slanted surfaces unless large biases, which leak, are
+        /// used. `presets/ritschel-ism.ron` keeps the original ISMs.
         push_behind: PushBehind = PushBehind::InsideSurfaces,
         unit "", symbol "", range 0..=1, cost "free", history false;
-        /// What a splat writes: the point's distance, or its tangent plane's.
+        /// What a splat writes: the point's distance, or its tangent plane's
+        /// (⚠[knecht.splat-tangent-plane]; the thesis splats a box of the point's distance).
         splat_depth: SplatDepth = SplatDepth::TangentPlane,
         unit "", symbol "", range 0..=1, cost "one ray–plane intersection per splatted texel", history false;
     }

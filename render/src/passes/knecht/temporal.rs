@@ -42,10 +42,10 @@ settings_group! {
         c_base: f32 = 0.9,
         unit "", symbol "c_base", range 0.0..=1.0, cost "free", history false;
         /// Weight of the position change (Eq. 3.1; screen movement as a fraction of the image,
-        /// depth change in units of z_far − z_near as the thesis' linear depth, Eq. 4.2). The
-        /// thesis gives no value; 300 drops the confidence to 0 for a surface that moves 1/300
-        /// of the image per frame, and was tuned on the default scene's sliding sphere
-        /// (tests/knecht_quality.rs: low on the sphere, high elsewhere).
+        /// depth change in units of z_far − z_near as the thesis' linear depth, Eq. 4.2).
+        /// ⚠[knecht.w-pos] The thesis gives no value; 300 drops the confidence to 0 for a
+        /// surface that moves 1/300 of the image per frame, and was tuned on the default
+        /// scene's sliding sphere (tests/knecht_quality.rs: low on the sphere, high elsewhere).
         w_pos: f32 = 300.0,
         unit "", symbol "w_pos", range 0.0..=1000.0, cost "free", history false;
         /// Weight of the normal change (Eq. 3.2).
@@ -55,7 +55,7 @@ settings_group! {
         w_illumination: f32 = 1.0,
         unit "", symbol "w_illumination", range 0.0..=100.0, cost "free", history false;
         /// Whether the geometry-aware filter runs before the merge (GI Lab) or after it (the
-        /// thesis, §4 steps 11–12); only with both chosen.
+        /// thesis, §4 steps 11–12; ⚠[knecht.merge-order]); only with both chosen.
         order: MergeOrder = MergeOrder::FilterThenMerge,
         unit "", symbol "", range 0..=1, cost "free", history true;
     }

@@ -54,16 +54,20 @@ settings_group! {
         /// Side of each light view's G-buffer and importance map (a power of two).
         light_gbuffer_size: u32 = 256,
         unit "px", symbol "", range 16..=2048, cost "one G-buffer render and one pyramid per light view", history false;
-        /// Split the VPL budget over lights by their power; off splits it equally.
+        /// Split the VPL budget over lights by their power; off splits it equally
+        /// (⚠[knecht.budget-split]: the thesis samples one light, §4.4, and does not
+        /// importance-sample a point light's cube faces, §4.4.3).
         split_by_power: bool = true,
         unit "", symbol "", range 0..=1, cost "free", history false;
-        /// Distance clamp of the geometry term, 1 / max(d², d_min²) (Eq. 4.7; the thesis
-        /// clamps at 1 scene unit). Larger values remove the bright spots near VPLs and bias.
+        /// Distance clamp of the geometry term, 1 / max(d², d_min²) (Eq. 4.7;
+        /// ⚠[knecht.distance-clamp] the thesis clamps at 1 scene unit). Larger values remove
+        /// the bright spots near VPLs and bias.
         min_distance_m: f32 = 0.1,
         unit "m", symbol "d_min", range 0.0..=10.0, cost "free", history false;
-        /// Mip level of the surfaces' colour texture in the light G-buffer (§4.3, render
-        /// target 0: the thesis blurs the colour VPLs carry by a predefined mip level and
-        /// gives no value; 4 averages 16×16 texels). Untextured surfaces are unaffected.
+        /// Mip level of the surfaces' colour texture in the light G-buffer (§4.3, render target
+        /// 0: ⚠[knecht.albedo-mip] the thesis blurs the colour VPLs carry by a predefined mip
+        /// level and gives no value; 4 averages 16×16 texels). Untextured surfaces are
+        /// unaffected.
         albedo_mip: f32 = 4.0,
         unit "mip level", symbol "", range 0.0..=12.0, cost "free", history false;
         /// Light bounces (§3.6): 1 is the VPLs on the lit surfaces; each further bounce turns

@@ -147,7 +147,7 @@ settings_group! {
         /// the paper's z_j − z_i divided by z_i, independent of the scene's scale).
         vote_sigma_depth: f32 = 0.05,
         unit "× z", symbol "σ₃", range 0.0001..=10.0, cost "free", history false;
-        /// Radiance goes down the pyramid so that a coarse texel emits its block's power: the
+        /// ⚠[soler.vote-radiance-power] Radiance goes down the pyramid so that a coarse texel emits its block's power: the
         /// sub-pixels' radiance weighted by their Eq. 2 areas, over the winner's (on); off:
         /// the block's plain mean, and the coarse texel, whose Eq. 2 area is the winner's (the
         /// less grazing sub-pixel, as a rule), emits less than its block (measured on the
@@ -161,7 +161,7 @@ settings_group! {
         /// diffuse approximation by default; the view-dependent light as an option).
         sender: Sender = Sender::Diffuse,
         unit "", symbol "", range 0..=1, cost "diffuse: a second output of the direct light (8 bytes per pixel)", history false;
-        /// Smallest cos β in Eq. 2's cos α / cos β (our bound: a grazing texel would stand for
+        /// Smallest cos β in Eq. 2's cos α / cos β (⚠[soler.min-cos-beta] our bound: a grazing texel would stand for
         /// an unbounded area).
         min_cos_beta: f32 = 0.1,
         unit "", symbol "cos β_min", range 0.001..=1.0, cost "free", history false;
@@ -201,7 +201,7 @@ settings_group! {
         /// α of f(θ): the share of the samples kept away from the lobe (the paper: 0.1).
         glossy_alpha: f32 = 0.1,
         unit "", symbol "α", range 0.001..=10.0, cost "free", history false;
-        /// k in s = k·SP: s is "the exponent of the lobe" (the receiver's specular power SP),
+        /// ⚠[soler.glossy-variance] k in s = k·SP: s is "the exponent of the lobe" (the receiver's specular power SP),
         /// k = 1 the formula as printed; the gaussian's standard deviation √(π/s) goes as
         /// 1/√SP (our reading of the text's "variance … inversely proportional to the square
         /// root of the exponent"). Default 0.25: the lobe's screen-space spread is wider than
@@ -209,26 +209,26 @@ settings_group! {
         /// SP 30 against uniform angles; k = 1 gave ÷1.11 and ÷1.19).
         glossy_sharpness: f32 = 0.25,
         unit "× SP", symbol "s", range 0.001..=100.0, cost "free", history false;
-        /// Receivers with a specular power SP below this are sampled uniformly (their lobe is
+        /// ⚠[soler.glossy-min-power] Receivers with a specular power SP below this are sampled uniformly (their lobe is
         /// too wide to be worth concentrating the samples).
         glossy_min_power: f32 = 16.0,
         unit "SP", symbol "SP_min", range 0.0..=4096.0, cost "free", history false;
         /// a of Eq. 6, F_i = a·W(history) + (1 − a)·I_i: the warped history's weight where it
-        /// is accepted and nothing moves (`pipeline.temporal = WarpedBlend`; the paper gives no
+        /// is accepted and nothing moves (`pipeline.temporal = WarpedBlend`; ⚠[soler.temporal-a] the paper gives no
         /// value).
         temporal_a: f32 = 0.85,
         unit "", symbol "a", range 0.0..=0.99, cost "free (one pass at the G-buffer's resolution)", history false;
-        /// Adaptation of a to motion (004 §4: "adapting a to the moving speed"): a is scaled
+        /// ⚠[soler.temporal-motion] Adaptation of a to motion (004 §4: "adapting a to the moving speed"): a is scaled
         /// by m½ / (m½ + |m|), |m| the movement buffer's length, so it halves at m½ pixels
         /// per frame.
         temporal_motion_px: f32 = 4.0,
         unit "px/frame", symbol "m½", range 0.01..=1000.0, cost "free", history false;
-        /// Adaptation of a to glossiness (004 §4 and §5.3: ghosting on shiny surfaces): a is
+        /// ⚠[soler.temporal-gloss] Adaptation of a to glossiness (004 §4 and §5.3: ghosting on shiny surfaces): a is
         /// divided by 1 + k_g · SI · √SP (the lobe's width goes as 1/√SP, Ramamoorthi's
         /// frequency estimate the paper cites); 0: no adaptation.
         temporal_gloss: f32 = 0.05,
         unit "", symbol "k_g", range 0.0..=10.0, cost "free", history false;
-        /// Rejection on depth: the history is dropped where the stored depth at the warped
+        /// ⚠[soler.temporal-reject] Rejection on depth: the history is dropped where the stored depth at the warped
         /// position differs from the point's depth in the previous camera by more than this
         /// fraction of it.
         reject_depth: f32 = 0.05,
@@ -237,7 +237,7 @@ settings_group! {
         /// is below this.
         reject_normal: f32 = 0.9,
         unit "cos", symbol "τ_n", range -1.0..=1.0, cost "free", history false;
-        /// What the history holds: F_{i−1} (the filtered result) or I_{i−1} (Eq. 6 as printed).
+        /// ⚠[soler.temporal-history] What the history holds: F_{i−1} (the filtered result) or I_{i−1} (Eq. 6 as printed).
         temporal_history: TemporalHistory = TemporalHistory::Filtered,
         unit "", symbol "", range 0..=1, cost "free", history true;
         /// What Eq. 6 blends (⚠[soler.temporal-order] Fig. 4's irradiance by default; the
@@ -264,7 +264,7 @@ settings_group! {
         /// axis (1: the farthest point of its bounding sphere).
         voxel_depth_to: f32 = 1.0,
         unit "× extent", symbol "z₁", range 0.0..=1.0, cost "free", history false;
-        /// Slope bias of the voxelization: a surface facing the viewer toggles its column at
+        /// ⚠[soler.voxel-slope-bias] Slope bias of the voxelization: a surface facing the viewer toggles its column at
         /// its depth moved back by b × its depth change across the texel (|∂z/∂x| + |∂z/∂y|;
         /// ½: the texel's farthest corner), so that a column turns solid only behind the whole
         /// texel's surface; 0: the paper's toggle at the texel centre's depth, which hides
@@ -274,7 +274,7 @@ settings_group! {
         /// The slope bias's cap, in slices (an edge-on surface's slope is unbounded).
         voxel_slope_cap: f32 = 8.0,
         unit "slices", symbol "", range 0.0..=128.0, cost "free", history false;
-        /// Texels of the march skipped at both ends (the start/end bias: the receiver and the
+        /// ⚠[soler.march-bias] Texels of the march skipped at both ends (the start/end bias: the receiver and the
         /// sender sit on the voxels of their own surfaces).
         march_bias_px: f32 = 1.5,
         unit "texels", symbol "", range 0.0..=16.0, cost "free", history false;

@@ -1,11 +1,13 @@
-//! Visibility of Soler et al.'s gather (004 §4 "Visibility", after Eisemann & Décoret's
-//! solid voxelization): the scene drawn from the camera into a grid of one column of
-//! `voxel_slices` bits per texel of the first gathered level, every fragment toggling its
-//! column from its slice to the back (`shaders/soler/voxelize.wgsl`, atomicXor from the
-//! fragment stage: WebGPU has no logic-op blending), a surface that faces the viewer toggling
-//! at its depth moved back by its slope across the texel (`voxel_slope_bias`); each coarser gathered level's grid is the
-//! AND of the four columns below (`voxel_down.wgsl`); the gather marches each sample's path
-//! through its level's grid (`gather.wgsl`). CPU twin: `cpu::soler::{voxelize_column, and_down,
+//! Visibility of Soler et al.'s gather (004 §4 "Visibility", after Eisemann & Décoret's solid
+//! voxelization): the scene drawn from the camera into a grid of one column of `voxel_slices`
+//! bits per texel of the first gathered level (⚠[soler.voxel-grid] 004 §4's grid has the
+//! screen's size; the depth range the slices divide, the scene's bounding sphere along the view
+//! axis, is ours), every fragment toggling its column from its slice to the back
+//! (`shaders/soler/voxelize.wgsl`, atomicXor from the fragment stage: WebGPU has no logic-op
+//! blending), a surface that faces the viewer toggling at its depth moved back by its slope
+//! across the texel (`voxel_slope_bias`); each coarser gathered level's grid is the AND of the
+//! four columns below (`voxel_down.wgsl`); the gather marches each sample's path through its
+//! level's grid (`gather.wgsl`). CPU twin: `cpu::soler::{voxelize_column, and_down,
 //! march_visible}`. The viewer's image of each grid is `soler.voxels.k` (`voxel_view.wgsl`).
 //!
 //! Solid voxelization needs closed meshes; [`open_meshes`] names those that are not (a room
