@@ -18,8 +18,15 @@
 //!   goes as 1/√SP (Ramamoorthi's angular-frequency estimate of a Phong lobe, which the
 //!   paper cites): we read the text's "variance" as the standard deviation;
 //! - ⚠[soler.glossy-pdf-weight] θ − θ_r is wrapped to [−π, π], and the pdf over that interval
-//!   is p(θ) = f(θ) / Z; each sample stands for the screen area dP / (2π p(θ)) instead of dP,
-//!   so the estimate of both the irradiance and the glossy reflection stays unbiased;
+//!   is p(θ) = f(θ) / Z; each sample stands for the screen area dP / (2π p(θ)) instead of dP.
+//!   With Eq. 1's point-to-point kernel, linear in the area, the estimate of both the
+//!   irradiance and the glossy reflection stays unbiased. With Eq. 4's point-to-disc kernel
+//!   (the default) the area enters R² = cos θ' dA / π inside R² / (r² + R²), a concave
+//!   function: by Jensen's inequality the weighted estimate is biased low, most where R ~ r
+//!   (the nearest samples of the first levels), little where R ≪ r (measured in
+//!   `tests::the_disc_kernel_biases_the_weighted_area_low_where_the_disc_reaches_the_receiver`
+//!   for one sender distance, s = 20, α = 0.1: −0.9 % at R = r/10, −20.5 % at R = r, −9.9 % at
+//!   R = 3r);
 //! - angles are drawn by inverting the CDF at the Vogel spiral's own angle (as a fraction
 //!   of the turn from θ_r − π), so the spiral's stratification carries over; where the lobe
 //!   projects to a point (mirror direction along the view ray), the receiver's SP is below
@@ -272,5 +279,43 @@ mod tests {
         assert!(receiver_lobe(&g, p, Vec3::Y, eye, Vec2::new(0.5, 8.0), tan_half).is_none(), "SP below the minimum");
         let (_, s) = receiver_lobe(&g, p, Vec3::Y, eye, Vec2::new(0.5, 64.0), tan_half).expect("glossy");
         assert!((s - 64.0).abs() < 1e-5);
+    }
+
+    /// Issue #41 point 5: the 1/pdf weight of the warped angles on the sample's area keeps
+    /// the point-to-point kernel (linear in the area) unbiased, but the point-to-disc kernel
+    /// (concave in it) is biased low where the disc's radius R reaches the distance r.
+    /// Expectation over the warped angles (a fine stratification of the spiral's angle) of a
+    /// constant sender at one distance, against the same kernel with the unweighted area.
+    #[test]
+    fn the_disc_kernel_biases_the_weighted_area_low_where_the_disc_reaches_the_receiver() {
+        use crate::cpu::soler::kernel;
+        let (alpha, s, theta_r) = (0.1f32, 20.0f32, 0.7f32);
+        let n = 200_000;
+        let expectation = |ds: f32, r2: f32, disc: bool| -> f64 {
+            (0..n)
+                .map(|i| {
+                    let phi = (i as f32 + 0.5) / n as f32 * 2.0 * PI;
+                    let (_, w) = warp(phi, Some((theta_r, s)), alpha);
+                    kernel(0.8, 0.9, ds * w, r2, disc) as f64
+                })
+                .sum::<f64>()
+                / n as f64
+        };
+        let mut biases = Vec::new();
+        for ratio in [0.1f32, 1.0, 3.0] {
+            // R² = cos θ' ds / π = (ratio · r)², r = 1.
+            let ds = (ratio * ratio) * PI / 0.9;
+            let exact_disc = kernel(0.8, 0.9, ds, 1.0, true) as f64;
+            let exact_point = kernel(0.8, 0.9, ds, 1.0, false) as f64;
+            let disc = expectation(ds, 1.0, true) / exact_disc - 1.0;
+            let point = expectation(ds, 1.0, false) / exact_point - 1.0;
+            println!("R = {ratio} r: point to disc {:+.2} %, point to point {:+.3} %", 100.0 * disc, 100.0 * point);
+            assert!(point.abs() < 2e-3, "the point-to-point kernel stays unbiased: {point}");
+            biases.push(disc);
+        }
+        // Measured: −0.9 % at R = r/10, −20.5 % at R = r, −9.9 % at R = 3r (where the disc
+        // covers the receiver's view the kernel saturates and the weight matters less).
+        assert!(biases[0] < 0.0 && biases[0] > -0.015, "far samples: nearly unbiased: {biases:?}");
+        assert!(biases[1] < -0.1 && biases[1] < biases[2] && biases[2] < 0.0, "biased low, most at R ~ r: {biases:?}");
     }
 }

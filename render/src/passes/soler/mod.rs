@@ -195,7 +195,10 @@ settings_group! {
         unit "", symbol "f_s", range 0..=1, cost "a second upsampling chain and the lobe per sample", history false;
         /// Importance sampling of glossy receivers: the angle of each ring sample is drawn in
         /// proportion to f(θ) = α + exp(−s (θ_r − θ)² / 2π) around the projected mirror
-        /// direction θ_r and weighted by 1/pdf (unbiased); off: uniform angles.
+        /// direction θ_r, each sample's area weighted by 1/pdf (unbiased with the
+        /// point-to-point kernel; ⚠[soler.glossy-pdf-weight] biased low with the point-to-disc
+        /// kernel where the disc reaches the receiver, −20 % at R = r: `cpu::soler_glossy`);
+        /// off: uniform angles.
         glossy_sampling: bool = true,
         unit "", symbol "", range 0..=1, cost "an erf and an inverse erf per sample of a glossy receiver", history false;
         /// α of f(θ): the share of the samples kept away from the lobe (the paper: 0.1).
