@@ -104,3 +104,48 @@ fn cs_vote(@builtin(global_invocation_id) gid: vec3<u32>) {
     textureStore(out_winner, gid.xy, vec4<f32>(f32(best), 0.0, 0.0, 0.0));
     textureStore(out_material, gid.xy, material);
 }
+
+// The radiance alone, with the winners of the vote already made this frame (004 §5.3:
+// "successive bounces of indirect illumination share the mipmapping of G-Buffers"): a later
+// bounce's light goes down the same levels, the block's (power-weighted) mean over the
+// winner's Eq. 2 area, without voting again. The same values as cs_vote's radiance.
+@group(0) @binding(10) var in_winner: texture_2d<f32>;
+@group(0) @binding(11) var coarse_position: texture_2d<f32>;
+@group(0) @binding(12) var coarse_normal: texture_2d<f32>;
+
+@compute @workgroup_size(8, 8, 1)
+fn cs_vote_radiance(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let out_size = textureDimensions(out_radiance);
+    if (gid.x >= out_size.x || gid.y >= out_size.y) {
+        return;
+    }
+    let size = textureDimensions(fine_position);
+    var sum = vec3<f32>(0.0);
+    var count = 0.0;
+    for (var i = 0; i < 4; i = i + 1) {
+        let p = vec2<i32>(2 * i32(gid.x) + i % 2, 2 * i32(gid.y) + i / 2);
+        if (!inside(p, size)) {
+            continue;
+        }
+        count = count + 1.0;
+        if (!valid(p, size)) {
+            continue;
+        }
+        var weight = 1.0;
+        if (params.power.w >= 0.0) {
+            weight = area_factor(textureLoad(fine_position, p, 0), textureLoad(fine_normal, p, 0).xyz, params.power.xyz, params.power.w);
+        }
+        sum = sum + textureLoad(fine_radiance, p, 0).rgb * weight;
+    }
+    var radiance = vec4<f32>(0.0);
+    if (textureLoad(in_winner, vec2<i32>(gid.xy), 0).x >= 0.0) {
+        var winner_area = 1.0;
+        if (params.power.w >= 0.0) {
+            let position = textureLoad(coarse_position, vec2<i32>(gid.xy), 0);
+            let normal = textureLoad(coarse_normal, vec2<i32>(gid.xy), 0).xyz;
+            winner_area = max(area_factor(position, normal, params.power.xyz, params.power.w), 1e-20);
+        }
+        radiance = vec4<f32>(sum / (max(count, 1.0) * winner_area), 1.0);
+    }
+    textureStore(out_radiance, gid.xy, radiance);
+}

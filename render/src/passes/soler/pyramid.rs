@@ -4,6 +4,7 @@
 //! `cpu::soler::vote_level`). Level 0 is the G-buffer itself.
 
 use crate::buffers::{BufferKind, BufferRegistry};
+use crate::counters::prelude::*;
 use crate::gpu::GpuContext;
 use crate::passes::bgl;
 use crate::timing::Slot;
@@ -40,6 +41,9 @@ pub struct SolerPyramid {
     pub levels: Vec<PyramidLevel>,
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::ComputePipeline,
+    /// `cs_vote_radiance`: a later bounce's radiance down the winners of this frame's vote.
+    radiance_layout: wgpu::BindGroupLayout,
+    radiance_pipeline: wgpu::ComputePipeline,
     params: wgpu::Buffer,
 }
 
@@ -76,9 +80,30 @@ impl SolerPyramid {
         });
         let module = crate::shaders::create_module(device, "soler/vote.wgsl");
         let pipeline = crate::passes::compute_pipeline(device, "soler.vote", &module, "cs_vote", &[&layout]);
+        let radiance_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("soler.vote_radiance.inputs"),
+            entries: &[
+                bgl::uniform(0, cs),
+                bgl::texture(1, cs, false),
+                bgl::texture(2, cs, false),
+                bgl::texture(3, cs, false),
+                bgl::storage_texture(6, rgba),
+                bgl::texture(10, cs, false),
+                bgl::texture(11, cs, false),
+                bgl::texture(12, cs, false),
+            ],
+        });
+        let radiance_pipeline = crate::passes::compute_pipeline(
+            device,
+            "soler.vote_radiance",
+            &module,
+            "cs_vote_radiance",
+            &[&radiance_layout],
+        );
         let params =
             crate::passes::uniform_buffer(device, "soler.vote.params", std::mem::size_of::<VoteParams>() as u64);
-        Self { levels: Self::targets(device, width, height, top), layout, pipeline, params }
+        let levels = Self::targets(device, width, height, top);
+        Self { levels, layout, pipeline, radiance_layout, radiance_pipeline, params }
     }
 
     fn targets(device: &wgpu::Device, width: u32, height: u32, top: u32) -> Vec<PyramidLevel> {
@@ -189,6 +214,54 @@ impl SolerPyramid {
             let l = &self.levels[i];
             let stamps = slot.as_ref().and_then(|s| s.compute(i == 0, i + 1 == n));
             crate::passes::dispatch_2d(encoder, "soler.vote", &self.pipeline, &group, &[], stamps, (l.width, l.height));
+        }
+    }
+
+    /// Takes `radiance` (a later bounce's light) down levels 1 … top through the winners of
+    /// the vote [`Self::run`] made this frame (004 §5.3: the bounces share the G-buffer's
+    /// mipmapping); the levels' geometry stays as voted, and the vote's σ and power
+    /// (`VoteParams`, the same for the whole frame) are reused.
+    pub fn run_radiance(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<Slot<'_>>,
+        (position, normal): (&wgpu::TextureView, &wgpu::TextureView),
+        radiance: &wgpu::TextureView,
+    ) {
+        let view = |t: &wgpu::Texture| crate::passes::view(t, "soler.level.view");
+        let views: Vec<[wgpu::TextureView; 4]> = self
+            .levels
+            .iter()
+            .map(|l| [view(&l.position), view(&l.normal), view(&l.radiance), view(&l.winner)])
+            .collect();
+        let n = self.levels.len();
+        let tv = wgpu::BindingResource::TextureView;
+        for (i, out) in views.iter().enumerate() {
+            let (fp, fnorm, fr) = if i == 0 {
+                (position, normal, radiance)
+            } else {
+                (&views[i - 1][0], &views[i - 1][1], &views[i - 1][2])
+            };
+            let entries = [(1, fp), (2, fnorm), (3, fr), (6, &out[2]), (10, &out[3]), (11, &out[0]), (12, &out[1])];
+            let mut list = vec![wgpu::BindGroupEntry { binding: 0, resource: self.params.as_entire_binding() }];
+            list.extend(entries.map(|(binding, v)| wgpu::BindGroupEntry { binding, resource: tv(v) }));
+            let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("soler.vote_radiance.inputs"),
+                layout: &self.radiance_layout,
+                entries: &list,
+            });
+            let l = &self.levels[i];
+            let stamps = slot.as_ref().and_then(|s| s.compute(i == 0, i + 1 == n));
+            crate::passes::dispatch_2d(
+                encoder,
+                "soler.vote_radiance",
+                &self.radiance_pipeline,
+                &group,
+                &[],
+                stamps,
+                (l.width, l.height),
+            );
         }
     }
 }

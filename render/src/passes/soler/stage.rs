@@ -300,7 +300,15 @@ impl SolerStage {
         let s = &f.settings.soler;
         let ctx = f.ctx;
         let g = f.gbuffer;
-        self.vote(f, enc, timer, &format!("{prefix}.pyramid"), radiance);
+        if j == 0 {
+            self.vote(f, enc, timer, &format!("{prefix}.pyramid"), radiance);
+        } else if !self.pyramid.levels.is_empty() {
+            // 004 §5.3: the bounces share the mipmapping of the G-buffer; only their light
+            // goes down the levels again, through the winners of the frame's first vote.
+            timer.scope(ctx, enc, &format!("{prefix}.pyramid"), |e, slot| {
+                self.pyramid.run_radiance(ctx, e, slot, (&g.position, &g.normal), radiance)
+            });
+        }
         let view = |t: &wgpu::Texture| crate::passes::view(t, "soler.level.view");
         let lv = self.level_views();
         let level_views = |k: u32| -> [&wgpu::TextureView; 4] {
