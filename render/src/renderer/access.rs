@@ -29,7 +29,14 @@ impl Renderer {
     /// without visibility.
     pub fn soler_voxel_bits(&self, i: usize) -> Option<Result<VoxelBits, String>> {
         let v = &self.stages.soler.as_ref()?.voxels;
-        let g = v.grids.get(i)?;
+        self.soler_voxel_level_bits(v.gathered().get(i)?.level)
+    }
+
+    /// The bits of Soler's voxel grid of pyramid level `level` (0: the screen's, with
+    /// `soler.voxel_resolution = Screen`), read back for tests; None without that grid.
+    pub fn soler_voxel_level_bits(&self, level: u32) -> Option<Result<VoxelBits, String>> {
+        let v = &self.stages.soler.as_ref()?.voxels;
+        let g = v.grids.iter().find(|g| g.level == level)?;
         let bytes = (g.width * g.height * v.words) as u64 * 4;
         Some(crate::buffers::read_storage(&self.ctx, &g.buffer, bytes).map(|b| {
             let bits = b.chunks_exact(4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]])).collect();

@@ -87,6 +87,20 @@ settings_enum! {
 }
 
 settings_enum! {
+    /// Where the voxel grid is built (004 §4 "Visibility": "we voxelize the scene at the
+    /// resolution of the screen … the mipmapped voxel buffers are computed by AND-ing").
+    pub enum VoxelResolution {
+        /// At the G-buffer's resolution, ANDed down level by level to the gathered ones: a
+        /// coarse voxel is solid where all the screen's voxels below it are (the text).
+        Screen = "the screen's, ANDed down (004 §4)",
+        /// At the first gathered level's resolution (a coarse texel records only the surfaces
+        /// that cross its centre's ray: cheaper, and not conservative).
+        FirstLevel = "the first gathered level's",
+    }
+    default Screen
+}
+
+settings_enum! {
     /// The radiance the first bounce's senders emit (004 §5.3: "as we're using a simple
     /// G-Buffer to represent the input illumination … we are limited to a diffuse
     /// approximation of this light").
@@ -256,7 +270,12 @@ settings_group! {
         /// marched through the grid of its level; off: every sample is visible (v_i = 1).
         visibility: bool = false,
         unit "", symbol "v_i", range 0..=1, cost "one voxelization of the scene, an AND per coarser level and a march of up to r steps per sample (the paper: 5.9×)", history false;
-        /// Depth slices of the voxel grid (004 §4: 128 bits per pixel column).
+        /// Where the voxel grid is built (⚠[soler.voxel-grid] the screen's by default, as the
+        /// text; the first gathered level's as an option).
+        voxel_resolution: VoxelResolution = VoxelResolution::Screen,
+        unit "", symbol "", range 0..=1, cost "screen: the voxelization at full resolution, 16 bytes per pixel, and an AND per level below the first gathered", history false;
+        /// Depth slices of the voxel grid (004 §4: a grid "128 in depth and equal to the size
+        /// of the screen in x and y").
         voxel_slices: u32 = 128,
         unit "slices", symbol "", range 32..=128, cost "memory: slices/8 bytes per texel of the first level", history false;
         /// Front of the grid's depth range, as a fraction of the scene's extent along the

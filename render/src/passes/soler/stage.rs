@@ -65,7 +65,14 @@ impl SolerStage {
         let a = self.pyramid.ensure(ctx, width, height, top);
         let b = self.gather.ensure(ctx, &gathered);
         let c = self.upsample.ensure(ctx, &all[..top as usize], all[0], s.glossy_reflection);
-        let d = self.voxels.ensure(ctx, &gathered, s.voxel_words(), s.visibility)
+        // The voxel grids: from the screen's (004 §4) or the first gathered level's, up.
+        let from = match s.voxel_resolution {
+            super::VoxelResolution::Screen => 0,
+            super::VoxelResolution::FirstLevel => s.gathered_levels().start,
+        };
+        let grid_levels: Vec<(u32, (u32, u32))> = (from..=top).map(|k| (k, all[k as usize])).collect();
+        let first = (s.gathered_levels().start - from) as usize;
+        let d = self.voxels.ensure(ctx, &grid_levels, first, s.voxel_words(), s.visibility)
             | self.bounces.ensure(ctx, s.bounces, all[0], s.glossy_reflection);
         let e = match (&mut self.temporal, temporal) {
             (Some(t), true) => t.ensure(ctx, all[0]),
@@ -192,7 +199,8 @@ impl SolerStage {
                 self.voxels.run(f.ctx, e, slot, cam, scene, state, &voxel_params, f.gbuffer_size)
             });
         }
-        voxel_params
+        // The gather marches the gathered levels' grids only.
+        voxel_params.get(self.voxels.first_gathered..).unwrap_or_default().to_vec()
     }
 
     /// GI Lab's mix with Nguyen et al. (`shading_points = HcbSamples`): the pyramid of the
@@ -274,7 +282,7 @@ impl SolerStage {
                         [&v[0], &v[1], &v[2], &v[3]]
                     }
                 };
-                let (grid, voxels) = match (self.voxels.grids.get(i), grids.get(i)) {
+                let (grid, voxels) = match (self.voxels.gathered().get(i), grids.get(i)) {
                     (Some(g), Some(p)) => (&g.buffer, *p),
                     _ => (&self.voxels.empty, VoxelParams::default()),
                 };

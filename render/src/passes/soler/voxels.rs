@@ -1,12 +1,14 @@
 //! Visibility of Soler et al.'s gather (004 §4 "Visibility", after Eisemann & Décoret's solid
 //! voxelization): the scene drawn from the camera into a grid of one column of `voxel_slices`
-//! bits per texel of the first gathered level (⚠[soler.voxel-grid] 004 §4's grid has the
-//! screen's size; the depth range the slices divide, the scene's bounding sphere along the view
-//! axis, is ours), every fragment toggling its column from its slice to the back
+//! bits per pixel of the screen, as 004 §4 does, or per texel of the first gathered level
+//! (`soler.voxel_resolution`; ⚠[soler.voxel-grid] the depth range the slices divide, the
+//! scene's bounding sphere along the view axis, is ours), every fragment toggling its column
+//! from its slice to the back
 //! (`shaders/soler/voxelize.wgsl`, atomicXor from the fragment stage: WebGPU has no logic-op
 //! blending), a surface that faces the viewer toggling at its depth moved back by its slope
-//! across the texel (`voxel_slope_bias`); each coarser gathered level's grid is the AND of the
-//! four columns below (`voxel_down.wgsl`); the gather marches each sample's path through its
+//! across the texel (`voxel_slope_bias`); each coarser level's grid is the AND of the four
+//! columns below (`voxel_down.wgsl`), from the screen's grid down to the gathered levels'
+//! (those below the first gathered level are not marched); the gather marches each sample's path through its
 //! level's grid (`gather.wgsl`). CPU twin: `cpu::soler::{voxelize_column, and_down,
 //! march_visible}`. The viewer's image of each grid is `soler.voxels.k` (`voxel_view.wgsl`).
 //!
@@ -50,7 +52,11 @@ pub struct VoxelGrid {
 }
 
 pub struct SolerVoxels {
+    /// The grids from the voxelized level up: the screen's (level 0) or the first gathered
+    /// level's, then one per level to the top.
     pub grids: Vec<VoxelGrid>,
+    /// Index in `grids` of the first gathered level's grid.
+    pub first_gathered: usize,
     pub words: u32,
     /// Bound in place of a grid when visibility is off.
     pub empty: wgpu::Buffer,
@@ -148,6 +154,7 @@ impl SolerVoxels {
         let empty = crate::passes::buffer(device, "soler.voxels.empty", 16, wgpu::BufferUsages::STORAGE);
         Self {
             grids: Vec::new(),
+            first_gathered: 0,
             words: 0,
             empty,
             target: None,
@@ -162,17 +169,27 @@ impl SolerVoxels {
         }
     }
 
-    /// Grids for the gathered `levels` (level, size) with `words` per column, or none when
-    /// visibility is off; true when replaced.
-    pub fn ensure(&mut self, ctx: &GpuContext, levels: &[(u32, (u32, u32))], words: u32, on: bool) -> bool {
+    /// Grids for `levels` (level, size: the voxelized level and every one above it to the
+    /// top), `first_gathered` the index of the first gathered one among them, with `words` per
+    /// column, or none when visibility is off; true when replaced.
+    pub fn ensure(
+        &mut self,
+        ctx: &GpuContext,
+        levels: &[(u32, (u32, u32))],
+        first_gathered: usize,
+        words: u32,
+        on: bool,
+    ) -> bool {
         let want: Vec<(u32, u32, u32)> =
             if on { levels.iter().map(|&(k, (w, h))| (k, w, h)).collect() } else { vec![] };
         let have: Vec<(u32, u32, u32)> = self.grids.iter().map(|g| (g.level, g.width, g.height)).collect();
         if have == want && (self.words == words || !on) {
+            self.first_gathered = first_gathered;
             return false;
         }
         let device = &ctx.device;
         self.words = words;
+        self.first_gathered = first_gathered;
         self.grids = want
             .iter()
             .map(|&(k, w, h)| {
@@ -205,6 +222,11 @@ impl SolerVoxels {
             )
         });
         true
+    }
+
+    /// The gathered levels' grids, the ones the gather marches.
+    pub fn gathered(&self) -> &[VoxelGrid] {
+        &self.grids[self.first_gathered.min(self.grids.len())..]
     }
 
     pub fn register(&self, reg: &mut BufferRegistry) {
