@@ -38,7 +38,7 @@ struct MovedObject {
 
 struct RoundParams {
     // x: round index, y: creation tiles (the candidates; then each chunk of 256 tiles' count
-    // and offset follow in `candidates`), zw unused
+    // and offset follow in `candidates`), z: the round's tile side in pixels, w unused
     round: vec4<u32>,
 }
 
@@ -73,7 +73,7 @@ fn cs_candidates(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation
     }
     workgroupBarrier();
     let size = textureDimensions(g_normal);
-    let tile = u32(params.creation.x);
+    let tile = round.round.z;
     let origin = wg.xy * tile;
     let centre = vec2<f32>(f32(tile) - 1.0) * 0.5;
     let threshold = 1.0 / params.weight.x;

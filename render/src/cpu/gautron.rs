@@ -482,6 +482,37 @@ pub fn candidates(
     out
 }
 
+/// The text's creation order ("Algorithm": for each pixel in turn, if W < a make a record
+/// and splat it before the next pixel), the reference the GPU's batched rounds are compared
+/// with (issue #41 point 7): the pixels in scanline order, each with its surface point
+/// (`points`, None: background) and the radius a record made there would get (`radius`,
+/// R_k after the clamps, from the same H the GPU's hemisphere sees); a record is made where
+/// the records made so far leave the coverage Σ w below 1/a (`accumulate`'s reading). Returns
+/// the pixels of the records made, in order.
+pub fn sequential_scan(
+    points: &[Option<(Vec3, Vec3)>],
+    radius: &[f32],
+    width: u32,
+    interp: &Interpolation,
+) -> Vec<(u32, u32)> {
+    assert_eq!(points.len(), radius.len(), "one radius per pixel");
+    let threshold = 1.0 / interp.a;
+    let mut records: Vec<Record> = Vec::new();
+    let mut made = Vec::new();
+    for (k, point) in points.iter().enumerate() {
+        let Some((p, n)) = *point else { continue };
+        let w: f32 =
+            records.iter().map(|r| weight(r, p, n, interp.w_max, interp.in_front)).filter(|&w| w > threshold).sum();
+        if w >= threshold || !radius[k].is_finite() || radius[k] <= 0.0 {
+            continue;
+        }
+        let zero = [Vec3::ZERO; 3];
+        records.push(Record { p, n, r: radius[k], e: Vec3::ZERO, rot: zero, trans: zero });
+        made.push((k as u32 % width, k as u32 / width));
+    }
+    made
+}
+
 /// What the record cache does with a record when something changed (stage 7, the cache
 /// across frames; GPU twin `fate` in `shaders/gautron/create.wgsl`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -5,6 +5,7 @@ pub mod brdf;
 pub mod bvh;
 pub mod gautron;
 pub mod hcb;
+pub mod irradiance_cache;
 pub mod knecht;
 pub mod knecht_bounce;
 pub mod pathtrace;

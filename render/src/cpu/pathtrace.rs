@@ -358,6 +358,42 @@ impl PathTracer {
         acc.add_pass(self, view_proj, eye, settings);
         acc.images()
     }
+
+    /// The first surface along a ray (every face, as a path's camera ray meets it), read as
+    /// the G-buffer reads it; for the CPU irradiance cache ([`crate::cpu::irradiance_cache`]).
+    pub fn surface(&self, o: Vec3, d: Vec3) -> Option<SurfacePoint> {
+        let h = self.intersect(o, d, 0.0, f32::INFINITY)?;
+        Some(SurfacePoint { p: h.p, n: h.n, albedo: h.c * h.di })
+    }
+
+    /// The light that the first surface along a ray sends back toward the ray's origin when
+    /// lit directly, as a path's vertex after the first bounce is lit (next-event estimation:
+    /// every punctual light, one emitter point and one sky direction, with shadow rays; its
+    /// own emission left out, emitters being lights), and the surface's distance; None when
+    /// the ray leaves the scene (an escaping bounce adds nothing). `seed` and `stream` seed
+    /// the emitter's and the sky's random numbers. The radiance a record's hemisphere ray
+    /// gathers in the CPU irradiance cache (one bounce, as `trace`'s `bounces: 1`).
+    pub fn reflected_direct(&self, o: Vec3, d: Vec3, seed: u64, stream: u64) -> Option<(f32, Vec3)> {
+        let h = self.intersect(o, d, 0.0, f32::INFINITY)?;
+        let mut rng = Pcg::new(seed, stream);
+        Some(((h.p - o).length(), self.direct(&h, -d, &mut rng)))
+    }
+
+    /// The offset of secondary rays from their surface (relative to the scene's size).
+    pub fn ray_offset(&self) -> f32 {
+        self.eps
+    }
+}
+
+/// A surface point for the CPU irradiance cache ([`PathTracer::surface`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfacePoint {
+    pub p: Vec3,
+    /// The shading normal, facing the ray's origin.
+    pub n: Vec3,
+    /// The diffuse reflectance c·DI (base colour × diffuse intensity): the lab's resolve
+    /// reflects irradiance E as c·DI·E/π.
+    pub albedo: Vec3,
 }
 
 /// The path tracer's images (averages over all samples so far).

@@ -13,6 +13,11 @@
 //! the VPLs (every pass of stages 3–7 timed, the VPLs' and ISMs' included) and a hemisphere
 //! at each of the HCB's samples (one frame: no cache), with the accuracy row nearest in time
 //! to the latter (Nguyen's samples against Gautron's records at equal time).
+//!
+//! Last, the text's own comparison (003 "Results: Comparison with Radiance"): a CPU irradiance
+//! cache, Radiance's way (ray-traced hemispheres made one after the other, octree lookups),
+//! against the GPU cache at equal FLIP, and both across a short camera walk
+//! ([`super::gautron_cpu`]).
 
 use gi_render::Renderer;
 use gi_render::metrics::flip;
@@ -53,6 +58,8 @@ pub struct GautronReport {
     pub rows: Vec<GautronRow>,
     /// The mixes: records lit by VPLs, hemispheres at the HCB's samples.
     pub mixes: Vec<MixRow>,
+    /// The text's comparison: a CPU irradiance cache against the GPU cache.
+    pub cpu_cache: super::gautron_cpu::CpuComparison,
 }
 
 /// One of GI Lab's mixes with Gautron et al.
@@ -76,7 +83,7 @@ fn indirect_pass(name: &str) -> bool {
 
 /// Renders from an empty cache until a frame makes no record (at most 256 frames), then one
 /// warm frame; returns the row (FLIPs and speedup filled in later) and the final image.
-fn cold_to_covered(r: &mut Renderer, accuracy: f32) -> Result<(GautronRow, ImageF32), CliError> {
+pub(super) fn cold_to_covered(r: &mut Renderer, accuracy: f32) -> Result<(GautronRow, ImageF32), CliError> {
     let fail = |e: String| CliError::failure(e);
     r.reset_history();
     let gautron = |t: &[gi_render::timing::PassTiming], keep: &dyn Fn(&str) -> bool| {
@@ -113,7 +120,7 @@ fn cold_to_covered(r: &mut Renderer, accuracy: f32) -> Result<(GautronRow, Image
     Ok((row, image))
 }
 
-fn flip_of(a: &ImageF32, b: &ImageF32) -> Result<f64, CliError> {
+pub(super) fn flip_of(a: &ImageF32, b: &ImageF32) -> Result<f64, CliError> {
     flip(&hdr_display(a), &hdr_display(b)).map(|(f, _)| f).map_err(|e| CliError::input(e.to_string()))
 }
 
@@ -160,6 +167,7 @@ pub fn gautron(r: &mut Renderer, truth: Option<(ImageF32, String)>) -> Result<Ga
     let per_round = (width * height).div_ceil(4).min(1024);
     let rounds = (width * height).div_ceil(per_round).min(32);
     (g.creation_tile_px, g.records_per_round, g.rounds, g.capacity) = (2, per_round, rounds, 65536);
+    g.creation_schedule = gi_render::passes::gautron::CreationSchedule::Fixed;
     set(r, brute)?;
     let (mut brute_force, brute_image) = cold_to_covered(r, 0.02)?;
     brute_force.flip_vs_truth = flip_of(&brute_image, &truth)?;
@@ -221,11 +229,12 @@ pub fn gautron(r: &mut Renderer, truth: Option<(ImageF32, String)>) -> Result<Ga
         flip_vs_brute_force: flip_of(&image, &brute_image)?,
         flip_vs_truth: flip_of(&image, &truth)?,
     });
+    let cpu_cache = super::gautron_cpu::cpu_comparison(r, &base, &truth)?;
     let adapter = r.ctx.adapter_summary();
     let timing_source = format!("{:?}", r.timing_source());
     set(r, original)?;
     r.clock = clock;
-    Ok(GautronReport { adapter, timing_source, width, height, truth: truth_name, brute_force, rows, mixes })
+    Ok(GautronReport { adapter, timing_source, width, height, truth: truth_name, brute_force, rows, mixes, cpu_cache })
 }
 
 /// The goal on the rows: the cheapest row whose FLIP against the truth is within 10 % of the
@@ -308,5 +317,6 @@ pub fn format(report: &GautronReport) -> String {
             report.brute_force.flip_vs_truth
         ),
     };
+    s += &super::gautron_cpu::format(&report.cpu_cache);
     s
 }

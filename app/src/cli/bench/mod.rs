@@ -8,6 +8,7 @@
 //! reaches a suite or this file.
 
 pub mod gautron;
+pub mod gautron_cpu;
 pub mod knecht;
 pub mod nguyen;
 pub mod quality;
@@ -63,7 +64,9 @@ pub struct BenchArgs {
     /// part; run it at --size 1280x720).
     /// `gautron`: irradiance cache splatting from a cold cache at five accuracies against a
     /// hemisphere at every pixel (records, time per record, cold and warm frames, FLIP, the
-    /// speedup; run it at --size 64x64; --reference: the one-bounce truth, else traced).
+    /// speedup; run it at --size 64x64; --reference: the one-bounce truth, else traced), then
+    /// the text's comparison: a CPU irradiance cache (ray-traced hemispheres, octree lookups)
+    /// against the GPU cache at four accuracies, at equal FLIP and over a short camera walk.
     /// `scenes`: every scene below --scenes-dir (default assets/; triangles, lights, emitters, load
     /// time, the frame time of each technique preset; run it at --size 256x256).
     #[arg(long, value_enum)]

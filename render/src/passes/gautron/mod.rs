@@ -69,6 +69,27 @@ settings_enum! {
     default Refresh
 }
 
+settings_enum! {
+    /// The creation tiles of a frame's rounds (⚠[gautron.creation-per-tile]: "Algorithm" tests
+    /// the pixels one by one and splats each new record before testing the next; the GPU takes
+    /// one candidate per tile and round).
+    pub enum CreationSchedule {
+        /// Coarse to fine: round k of K uses tiles of `creation_tile_px` × 2^(K−1−k) pixels
+        /// (at most 64), so the first rounds place sparse records whose splats cover the open
+        /// areas, and the finer rounds add records only where those leave pixels uncovered:
+        /// the spacing follows the local a·R_k, as the sequential scan's does.
+        CoarseToFine = "coarse to fine",
+        /// Every round uses `creation_tile_px`: one record per tile wherever a tile has an
+        /// uncovered pixel, so the tile size, not a·R_k, sets the density (GI Lab before issue
+        /// #41).
+        Fixed = "one tile size",
+    }
+    default CoarseToFine
+}
+
+/// Largest creation tile side (the candidates' key packs the index in the tile in 12 bits).
+pub const MAX_CREATION_TILE: u32 = 64;
+
 settings_group! {
     /// Gautron et al.'s irradiance cache splatting (003): records, their hemispheres, the
     /// splatting of Ward's weights and the cache across frames.
@@ -107,6 +128,9 @@ settings_group! {
         /// (⚠[gautron.creation-per-tile]).
         creation_tile_px: u32 = 8,
         unit "px", symbol "", range 2..=64, cost "smaller: more candidates per round", history true;
+        /// The tiles of the frame's rounds: coarse to fine, or one size.
+        creation_schedule: CreationSchedule = CreationSchedule::CoarseToFine,
+        unit "", symbol "", range 0..=1, cost "coarse to fine: fewer records where they are large", history true;
         /// Records the cache can hold (creation stops when full).
         capacity: u32 = 16384,
         unit "records", symbol "", range 16..=65536, cost "memory 176 B per record", history true;
@@ -162,6 +186,21 @@ settings_group! {
         /// How the splat sums the records at the pixels.
         splat: SplatMethod = SplatMethod::Auto,
         unit "", symbol "", range 0..=2, cost "blend: the quads' overdraw; binned: one pass over the screen per splat", history false;
+    }
+}
+
+impl GautronSettings {
+    /// The creation tile of round `k` of the frame's `gautron.rounds`.
+    pub fn round_tile(&self, k: u32) -> u32 {
+        let base = self.creation_tile_px.clamp(1, MAX_CREATION_TILE);
+        let rounds = self.rounds.max(1);
+        match self.creation_schedule {
+            CreationSchedule::Fixed => base,
+            CreationSchedule::CoarseToFine => {
+                let up = rounds.saturating_sub(1).saturating_sub(k).min(6);
+                (base << up).min(MAX_CREATION_TILE).max(base)
+            }
+        }
     }
 }
 

@@ -233,9 +233,6 @@ impl GautronStage {
             // The tiles' candidates, then per chunk of 256 tiles its count and its offset.
             let chunks = tiles.div_ceil(256);
             self.candidate_list = buffer(device, "gautron.candidate_list", (tiles + 2 * chunks) * 4, storage);
-            let rounds: Vec<[u32; 4]> = (0..MAX_ROUNDS as u32).map(|k| [k, sizes.2, 0, 0]).collect();
-            let bytes = crate::passes::strided_bytes(ROUND_STRIDE, MAX_ROUNDS as usize, &rounds);
-            ctx.queue.write_buffer(&self.rounds, 0, &bytes);
             self.slots = buffer(device, "gautron.slots", slots * 4, storage);
             self.cameras = buffer(device, "gautron.cameras", slots * 144, storage);
             self.viewers = buffer(device, "gautron.viewers", slots * 16, storage);
@@ -394,8 +391,21 @@ impl GautronStage {
             ctx.queue.write_buffer(&self.maintain_params, 0, bytemuck::bytes_of(m));
         }
         let g0 = &self.create_group(f);
-        let tile = s.creation_tile_px.max(1);
-        let tiles = (f.gbuffer_size.0.div_ceil(tile), f.gbuffer_size.1.div_ceil(tile));
+        // Each round's tiles (`GautronSettings::round_tile`), into the rounds' uniforms.
+        let round_tiles: Vec<(u32, u32)> = (0..MAX_ROUNDS as u32)
+            .map(|k| {
+                let tile = s.round_tile(k);
+                (f.gbuffer_size.0.div_ceil(tile), f.gbuffer_size.1.div_ceil(tile))
+            })
+            .collect();
+        let rounds: Vec<[u32; 4]> = (0..MAX_ROUNDS as u32)
+            .map(|k| [k, round_tiles[k as usize].0 * round_tiles[k as usize].1, s.round_tile(k), 0])
+            .collect();
+        ctx.queue.write_buffer(
+            &self.rounds,
+            0,
+            &crate::passes::strided_bytes(ROUND_STRIDE, MAX_ROUNDS as usize, &rounds),
+        );
         let (splat, records, camera) = (&self.splat, &self.records, f.camera_buffer);
         // Every cached record, once (after the reuse policy and the invalidation).
         let (begin, cull) = (&self.begin, maintain.is_some().then_some(&self.maintain));
@@ -421,6 +431,7 @@ impl GautronStage {
         });
         for k in 0..s.rounds.min(MAX_ROUNDS as u32) {
             let offset = [(k as u64 * ROUND_STRIDE) as u32];
+            let tiles = round_tiles[k as usize];
             // The coverage of the latest sums (the splat's ping-pong pair alternates).
             let g1 = &self.gbuffer_group(f);
             timer.scope(ctx, enc, "gautron.create", |e, slot| {
