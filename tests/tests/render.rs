@@ -179,9 +179,15 @@ struct DirectCheck {
 /// lights: floor pixels that every light reaches unoccluded (also 4 cm around, away from
 /// penumbrae) within 2 %, and pixels that no light reaches (robustly occluded, though
 /// unshadowed they would be bright) below 2 % of their unshadowed value.
-fn check_direct(mut r: Renderer) -> DirectCheck {
+fn check_direct(r: Renderer) -> DirectCheck {
+    check_direct_buffer(r, "direct.radiance", false)
+}
+
+/// [`check_direct`] on `buffer`, which holds the whole reflected light or (`diffuse`) only its
+/// diffuse part c·DI/π · E (the analytic sum then with SI = 0).
+fn check_direct_buffer(mut r: Renderer, buffer: &str, diffuse: bool) -> DirectCheck {
     r.render_frame();
-    let radiance = r.readback("direct.radiance").expect("radiance");
+    let radiance = r.readback(buffer).unwrap_or_else(|e| panic!("{buffer}: {e}"));
     let state = r.scene().evaluate(0.0);
     let soup = TriangleSoup::new(r.scene(), &state);
     let far = r.bounds().radius() * 10.0;
@@ -195,7 +201,8 @@ fn check_direct(mut r: Renderer) -> DirectCheck {
             }
             let floor = h.normal.y > 0.999 && h.position.y.abs() < 1e-3;
             let m = &r.scene().materials[h.material];
-            let m = (m.base_color.truncate(), m.diffuse_intensity(), m.specular_intensity(), m.specular_power());
+            let si = if diffuse { 0.0 } else { m.specular_intensity() };
+            let m = (m.base_color.truncate(), m.diffuse_intensity(), si, m.specular_power());
             let t1 = h.normal.any_orthonormal_vector() * 0.04;
             let t2 = h.normal.cross(t1);
             let around = [Vec3::ZERO, t1, -t1, t2, -t2];
@@ -251,6 +258,19 @@ fn check_direct(mut r: Renderer) -> DirectCheck {
         }
     }
     c
+}
+
+/// Soler et al.'s senders under 004 §5.3's diffuse approximation (`soler.sender`, issue #41):
+/// `direct.diffuse` is the analytic direct light with the specular term left out, within
+/// 2 % on the lit floor, dark where every light is occluded.
+#[test]
+fn the_diffuse_direct_light_matches_the_analytic_diffuse_part() {
+    let mut s = LabSettings::default();
+    gi_render::pipeline::Technique::Soler.apply(&mut s);
+    let r = Renderer::new(gpu(), default_scene(), s, N, N).expect("renderer");
+    let c = check_direct_buffer(r, "direct.diffuse", true);
+    println!("diffuse part: {} lit floor pixels within {:.3} %, {} shadowed", c.lit, c.worst_rel * 100.0, c.shadowed);
+    assert!(c.lit > 50 && c.shadowed > 10, "{} lit, {} shadowed", c.lit, c.shadowed);
 }
 
 #[test]
