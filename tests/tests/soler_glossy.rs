@@ -162,3 +162,25 @@ fn the_sample_overlay_replays_the_rings_of_a_pixel() {
     k.render_frame();
     assert!(k.soler_samples((4, 4)).is_err());
 }
+
+/// With several bounces and the glossy reflection, `soler.bounces.specular` is the sum of every
+/// bounce's glossy light, and `soler.indirect` the bounces' diffuse light plus it: what Eq. 6's
+/// irradiance blend subtracts before demodulating (issue #41 point 3).
+#[test]
+fn the_bounces_glossy_sum_is_the_part_of_the_indirect_light_left_out_of_the_blend() {
+    let r = glossy_renderer(0.3, |s| {
+        s.soler.bounces = 2;
+        s.soler.glossy_sampling = false;
+    });
+    let (sum, indirect) = (read(&r, "soler.bounces.specular"), read(&r, "soler.indirect"));
+    let (s1, s2) = (read(&r, "soler.bounce.1.specular"), read(&r, "soler.bounce.2.specular"));
+    let (l1, l2) = (read(&r, "soler.bounce.1"), read(&r, "soler.bounce.2"));
+    let mut glossy = 0.0;
+    for i in 0..sum.len() {
+        let tol = 1e-6 + 1e-5 * indirect[i].length();
+        assert!((sum[i] - (s1[i] + s2[i])).length() <= tol, "texel {i}: the sum of the bounces' glossy light");
+        assert!((indirect[i] - (l1[i] + l2[i] + sum[i])).length() <= tol, "texel {i}: diffuse + glossy");
+        glossy += sum[i].length();
+    }
+    assert!(glossy > 0.0, "no glossy light on glossy white surfaces");
+}
