@@ -294,9 +294,9 @@ fn creation_covers_every_pixel_and_the_cache_keeps_its_records() {
 }
 
 /// One bounce on the default scene against the path tracer: FLIP below the bound measured
-/// with one tile size (0.0546 at 256², covered after a few frames, near the brute force's
-/// 0.0542), and the gradients lower the error at equal records. (The default coarse-to-fine
-/// rounds: 638 records instead of 968, FLIP 0.0580, RMSE with and without the gradients
+/// with the default settings, one tile size (0.0546 at 256², covered after a few frames, near
+/// the brute force's 0.0542), and the gradients lower the error at equal records. (Coarse-to-
+/// fine rounds: 638 records instead of 968, FLIP 0.0580, RMSE with and without the gradients
 /// 0.01335 and 0.01451.)
 #[test]
 fn irradiance_cache_splatting_against_the_path_tracer() {
