@@ -12,7 +12,9 @@
 // ⚠[soler.temporal-order]): the radiance as it comes, or, as Fig. 4 orders it, the irradiance
 // before the albedo multiply: I_i is demodulated, E_i = (I_i − S_i) / (c·DI/π) per channel
 // (S_i the glossy light added into it, 0 where the albedo is), the blend runs on E and the
-// history keeps E, and F = c·DI/π · F_E + S_i. Outputs: F (`soler.temporal`),
+// history keeps E; the glossy light has its own history, blended by the same a (adapted to
+// the glossiness, as the text adapts it against ghosting on shiny surfaces), and F = c·DI/π ·
+// F_E + F_S. Outputs: F (`soler.temporal`),
 // the next history (rgb, depth in a), W(H) (a: 1 where q holds a surface), the rejection mask
 // (r depth, g normal, b no history) and the effective a. CPU twin: cpu::soler_temporal::blend.
 #import common/camera.wgsl
@@ -48,6 +50,10 @@ struct TemporalParams {
 @group(0) @binding(15) var g_albedo: texture_2d<f32>;
 // The glossy light added into `current` (reject.w = 2).
 @group(0) @binding(16) var specular: texture_2d<f32>;
+// The glossy light's history (F_S or S as the history keeps F or I), read at the warped texel
+// and written for the next frame (ping-pong, like out_history).
+@group(0) @binding(17) var spec_history_prev: texture_2d<f32>;
+@group(0) @binding(18) var out_spec_history: texture_storage_2d<rgba16float, write>;
 
 const INV_PI: f32 = 0.318309886183791;
 
@@ -75,6 +81,7 @@ fn cs_temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
     let pos = textureLoad(g_position, p, 0);
     var a = 0.0;
     var warped = vec4<f32>(0.0);
+    var warped_s = vec3<f32>(0.0);
     var mask = vec4<f32>(0.0, 0.0, 1.0, 1.0);
     if (params.blend.w > 0.5 && nrm.w > 0.5) {
         let motion = textureLoad(g_motion, p, 0).xy;
@@ -84,6 +91,7 @@ fn cs_temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
             let h = textureLoad(history_prev, q, 0);
             if (pn.w > 0.5 && h.a > 0.0) {
                 warped = vec4<f32>(h.rgb, 1.0);
+                warped_s = textureLoad(spec_history_prev, q, 0).rgb;
                 mask.z = 0.0;
                 let z_prev = textureLoad(g_motion, p, 0).z;
                 if (abs(h.a - z_prev) > params.reject.x * max(z_prev, 1e-6)) {
@@ -103,7 +111,13 @@ fn cs_temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
     let f = a * warped.rgb + (1.0 - a) * i_new;
-    textureStore(out_filtered, gid.xy, vec4<f32>(k * f + s, 1.0));
+    let f_s = a * warped_s + (1.0 - a) * s;
+    textureStore(out_filtered, gid.xy, vec4<f32>(k * f + f_s, 1.0));
+    var keep_s = f_s;
+    if (params.reject.z > 0.5) {
+        keep_s = s;
+    }
+    textureStore(out_spec_history, gid.xy, vec4<f32>(keep_s, 1.0));
     var keep = f;
     if (params.reject.z > 0.5) {
         keep = i_new;

@@ -31,7 +31,11 @@ fn the_quality_table_stays_within_its_measured_bounds() {
     // 0.2419 with the power-preserving vote (`soler.vote_power`); the near/far mix 0.0454,
     // 0.0449 with it; its goal is to beat both Knecht's row and Soler's.
     // Issue #17's row: Gautron's records measured 0.0546 (a hemisphere per pixel: 0.0542).
-    let bounds = [0.05, 0.035, 0.062, 0.03, 0.255, 0.05, 0.06];
+    // Issue #41 made soler-quarter-4-64 Fig. 9's configuration as the text gives it: glossy
+    // reflection off (Fig. 9 times the diffuse pipeline) and the senders' diffuse light
+    // (§5.3): 0.2419 → 0.2584 (0.2515 with the view-dependent senders; the truth's senders
+    // reflect specularly too). Its bound follows the measurement, as the others do.
+    let bounds = [0.05, 0.035, 0.062, 0.03, 0.265, 0.05, 0.06];
     assert_eq!(rows.len(), bounds.len());
     for (row, bound) in rows.iter().zip(bounds) {
         assert!(row.flip > 0.0, "{}: FLIP 0 means nothing was compared", row.configuration);

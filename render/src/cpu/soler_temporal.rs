@@ -5,7 +5,8 @@
 //! previous camera, previous object transform) by more than τ_z of it or
 //! where n · n_prev < τ_n, and a adapted to motion (× m½ / (m½ + |m|)) and glossiness
 //! (÷ (1 + k_g · SI · √SP)). Blended is the radiance, or the irradiance before the albedo
-//! multiply as Fig. 4 orders it (⚠[soler.temporal-order]; `BlendParams::irradiance`).
+//! multiply as Fig. 4 orders it (⚠[soler.temporal-order]; `BlendParams::irradiance`), the
+//! glossy light then blended apart with its own history and the same a.
 //!
 //! Readings (⚠[soler.temporal-a], ⚠[soler.temporal-history]): the paper gives no value of a nor its adaptation, only that it
 //! depends on speed and shininess; it does not say whether H is I_{i−1} (as printed) or
@@ -45,6 +46,8 @@ pub struct BlendInputs<'a> {
     pub albedo: &'a ImageF32,
     /// The glossy light added into `current`, if any.
     pub specular: Option<&'a ImageF32>,
+    /// The previous frame's glossy history (irradiance blend); None: black.
+    pub specular_history: Option<&'a ImageF32>,
     /// x SI, y SP.
     pub material: &'a ImageF32,
     /// The previous frame's normals.
@@ -65,6 +68,8 @@ pub struct BlendOutputs {
     pub rejection: Vec<[bool; 3]>,
     /// `soler.temporal.a`.
     pub a: Vec<f32>,
+    /// `soler.temporal.specular_history`: F_S or S.
+    pub specular_history: Vec<Vec3>,
 }
 
 fn xyz(v: [f32; 4]) -> Vec3 {
@@ -81,6 +86,7 @@ pub fn blend(p: BlendParams, x: &BlendInputs) -> BlendOutputs {
         warped: Vec::with_capacity(n),
         rejection: Vec::with_capacity(n),
         a: Vec::with_capacity(n),
+        specular_history: Vec::with_capacity(n),
     };
     for i in 0..n {
         let (px, py) = ((i as i32) % w, (i as i32) / w);
@@ -97,6 +103,7 @@ pub fn blend(p: BlendParams, x: &BlendInputs) -> BlendOutputs {
         let pos = x.position.data[i];
         let mut a = 0.0;
         let mut warped = Vec4::ZERO;
+        let mut warped_s = Vec3::ZERO;
         let mut mask = [false, false, true];
         if let Some(hist) = x.history.filter(|_| nrm[3] > 0.5) {
             let m = Vec2::new(x.motion.data[i][0], x.motion.data[i][1]);
@@ -107,6 +114,7 @@ pub fn blend(p: BlendParams, x: &BlendInputs) -> BlendOutputs {
                 let (pn, hv) = (x.prev_normal.data[j], hist.data[j]);
                 if pn[3] > 0.5 && hv[3] > 0.0 {
                     warped = Vec4::new(hv[0], hv[1], hv[2], 1.0);
+                    warped_s = x.specular_history.map_or(Vec3::ZERO, |t| xyz(t.data[j]));
                     mask[2] = false;
                     let z_prev = x.motion.data[i][2];
                     mask[0] = (hv[3] - z_prev).abs() > p.reject_depth * z_prev.max(1e-6);
@@ -124,7 +132,9 @@ pub fn blend(p: BlendParams, x: &BlendInputs) -> BlendOutputs {
         let f = a * warped.truncate() + (1.0 - a) * i_new;
         let keep = if p.raw_history { i_new } else { f };
         let depth = if nrm[3] > 0.5 { pos[3] } else { 0.0 };
-        out.filtered.push(k * f + s);
+        let f_s = a * warped_s + (1.0 - a) * s;
+        out.filtered.push(k * f + f_s);
+        out.specular_history.push(if p.raw_history { s } else { f_s });
         out.history.push(keep.extend(depth));
         out.warped.push(warped);
         out.rejection.push(mask);
@@ -178,6 +188,7 @@ mod tests {
             history: with_history.then_some(&v[5]),
             albedo: &v[6],
             specular: None,
+            specular_history: None,
         };
         blend(p, &x)
     }
@@ -204,6 +215,8 @@ mod tests {
         let mut v = still(0.3, 0.5);
         let spec = img(4, 4, [0.1, 0.1, 0.1, 1.0]);
         v.push(spec);
+        // The glossy history 0.3: F_S = 0.8 · 0.3 + 0.2 · 0.1.
+        v.push(img(4, 4, [0.3, 0.3, 0.3, 1.0]));
         let p = BlendParams { irradiance: true, ..params() };
         let x = BlendInputs {
             current: &v[0],
@@ -215,17 +228,19 @@ mod tests {
             history: Some(&v[5]),
             albedo: &v[6],
             specular: Some(&v[7]),
+            specular_history: Some(&v[8]),
         };
         let o = blend(p, &x);
         let k = 0.5 / std::f32::consts::PI;
         let e = 0.2 / k;
-        let expect = k * (0.8 * 0.5 + 0.2 * e) + 0.1;
+        let expect = k * (0.8 * 0.5 + 0.2 * e) + (0.8 * 0.3 + 0.2 * 0.1);
         assert!((o.filtered[5].x - expect).abs() < 1e-6, "{} vs {expect}", o.filtered[5].x);
         assert!((o.history[5].x - (0.8 * 0.5 + 0.2 * e)).abs() < 1e-6, "the history keeps the irradiance");
-        // A black albedo has no irradiance to blend: the glossy light alone passes.
+        // A black albedo has no irradiance to blend: the filtered glossy light alone passes.
+        assert!((o.specular_history[5].x - 0.26).abs() < 1e-6, "the glossy history keeps F_S");
         let black = img(4, 4, [0.0, 0.0, 0.0, 1.0]);
         let o = blend(p, &BlendInputs { albedo: &black, ..x });
-        assert!((o.filtered[5].x - 0.1).abs() < 1e-6, "{}", o.filtered[5].x);
+        assert!((o.filtered[5].x - 0.26).abs() < 1e-6, "{}", o.filtered[5].x);
     }
 
     #[test]
@@ -261,6 +276,7 @@ mod tests {
             history: Some(&v[5]),
             albedo: &v[6],
             specular: None,
+            specular_history: None,
         };
         let o = blend(params(), &x);
         assert_eq!(o.rejection[5], [false, true, false]);

@@ -123,7 +123,8 @@ settings_enum! {
     pub enum TemporalQuantity {
         /// The gathered irradiance, before the albedo multiply (Fig. 4): the history is
         /// demodulated by the albedo c·DI/π of its own pixel and modulated by the current
-        /// pixel's, so textures do not smear; the glossy light is added after, unfiltered.
+        /// pixel's, so textures do not smear; the glossy light is blended apart, with its own
+        /// history and the same a (adapted to glossiness, 004 §4).
         Irradiance = "irradiance, before the albedo (Fig. 4)",
         /// The reflected radiance after the albedo multiply and the glossy light (GI Lab
         /// before issue #41): textures and highlights are blended with the warped history.

@@ -55,6 +55,8 @@ pub struct SolerTemporal {
     /// and writes the other pair.
     history: [wgpu::Texture; 2],
     normals: [wgpu::Texture; 2],
+    /// The glossy light's history pair (irradiance blend with the glossy reflection).
+    spec_history: [wgpu::Texture; 2],
     current: usize,
     pub warped: wgpu::Texture,
     pub rejection: wgpu::Texture,
@@ -71,6 +73,7 @@ pub struct SolerTemporal {
 struct Targets {
     filtered: wgpu::Texture,
     history: [wgpu::Texture; 2],
+    spec_history: [wgpu::Texture; 2],
     normals: [wgpu::Texture; 2],
     warped: wgpu::Texture,
     rejection: wgpu::Texture,
@@ -91,6 +94,10 @@ fn targets(device: &wgpu::Device, (w, h): (u32, u32)) -> Targets {
     Targets {
         filtered: t("soler.temporal", LIGHT_FORMAT),
         history: [t("soler.temporal.history.0", rgba), t("soler.temporal.history.1", rgba)],
+        spec_history: [
+            t("soler.temporal.specular_history.0", LIGHT_FORMAT),
+            t("soler.temporal.specular_history.1", LIGHT_FORMAT),
+        ],
         normals: [t("soler.temporal.prev_normal.0", NORMAL_FORMAT), t("soler.temporal.prev_normal.1", NORMAL_FORMAT)],
         warped: t("soler.temporal.warped", LIGHT_FORMAT),
         rejection: t("soler.temporal.rejection", MASK_FORMAT),
@@ -112,7 +119,8 @@ impl SolerTemporal {
         ]);
         entries.push(bgl::storage_texture(13, wgpu::TextureFormat::R32Float));
         entries.push(bgl::storage_texture(14, NORMAL_FORMAT));
-        entries.extend([bgl::texture(15, cs, false), bgl::texture(16, cs, false)]);
+        entries.extend([bgl::texture(15, cs, false), bgl::texture(16, cs, false), bgl::texture(17, cs, false)]);
+        entries.push(bgl::storage_texture(18, LIGHT_FORMAT));
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("soler.temporal.inputs"),
             entries: &entries,
@@ -133,6 +141,7 @@ impl SolerTemporal {
             filtered: t.filtered,
             history: t.history,
             normals: t.normals,
+            spec_history: t.spec_history,
             current: 0,
             warped: t.warped,
             rejection: t.rejection,
@@ -151,6 +160,7 @@ impl SolerTemporal {
         }
         let t = targets(&ctx.device, size);
         (self.filtered, self.history, self.normals) = (t.filtered, t.history, t.normals);
+        self.spec_history = t.spec_history;
         (self.warped, self.rejection, self.a) = (t.warped, t.rejection, t.a);
         self.size = size;
         self.valid = false;
@@ -163,7 +173,13 @@ impl SolerTemporal {
     }
 
     pub fn register(&self, reg: &mut BufferRegistry) {
-        let entries: [(&str, BufferKind, &str, &wgpu::Texture); 5] = [
+        let entries: [(&str, BufferKind, &str, &wgpu::Texture); 6] = [
+            (
+                "soler.temporal.specular_history",
+                BufferKind::Hdr,
+                "Soler Eq. 6's history of the glossy light for the next frame (irradiance blend, soler.temporal_quantity): F_S or S",
+                &self.spec_history[self.current],
+            ),
             (
                 "soler.temporal",
                 BufferKind::Hdr,
@@ -233,7 +249,8 @@ impl SolerTemporal {
         let views = [current, &g.position, &g.normal, &g.motion, &g.material, &prev_n, &hist_prev];
         resources.extend(views.map(tv));
         resources.extend([&filtered, &hist, &warped, &rejection, &a, &normal_out].map(tv));
-        resources.extend([&g.albedo, specular.unwrap_or(&no_specular)].map(tv));
+        let (spec_prev, spec_out) = (v(&self.spec_history[read]), v(&self.spec_history[write]));
+        resources.extend([&g.albedo, specular.unwrap_or(&no_specular), &spec_prev, &spec_out].map(tv));
         let group = crate::passes::bind_group(&ctx.device, "soler.temporal.inputs", &self.layout, resources);
         let stamps = slot.and_then(|s| s.compute(true, true));
         crate::passes::dispatch_2d(encoder, "soler.temporal", &self.pipeline, &group, &[], stamps, self.size);
