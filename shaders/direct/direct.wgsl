@@ -158,6 +158,25 @@ fn reflected_direct(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, alb: vec4<f32>, ma
     return Reflected(radiance, irradiance);
 }
 
+// The direct light at G-buffer texel px reflected toward `viewer`: the whole radiance and its
+// diffuse part c·DI/π · E, alpha 1; both 0 where the texel holds no surface.
+struct Shaded {
+    radiance: vec4<f32>,
+    diffuse: vec4<f32>,
+}
+
+fn shade_texel(px: vec2<i32>, viewer: vec3<f32>) -> Shaded {
+    let nrm = textureLoad(g_normal, px, 0);
+    if (nrm.w < 0.5) {
+        return Shaded(vec4<f32>(0.0), vec4<f32>(0.0));
+    }
+    let p = textureLoad(g_position, px, 0).xyz;
+    let alb = textureLoad(g_albedo, px, 0);
+    let mat = textureLoad(g_material, px, 0);
+    let r = reflected_direct(p, normalize(nrm.xyz), normalize(viewer - p), alb, mat);
+    return Shaded(vec4<f32>(r.radiance, 1.0), vec4<f32>(alb.rgb * alb.a / PI * r.irradiance, 1.0));
+}
+
 @compute @workgroup_size(TILE, TILE, 1)
 fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let size = textureDimensions(out_radiance);
@@ -165,18 +184,7 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let px = vec2<i32>(gid.xy);
-    let nrm = textureLoad(g_normal, px, 0);
-    if (nrm.w < 0.5) {
-        textureStore(out_radiance, px, vec4<f32>(0.0));
-        return;
-    }
-    let p = textureLoad(g_position, px, 0).xyz;
-    let n = normalize(nrm.xyz);
-    let alb = textureLoad(g_albedo, px, 0);
-    let mat = textureLoad(g_material, px, 0);
-    let v = normalize(camera.position.xyz - p);
-    let radiance = reflected_direct(p, n, v, alb, mat).radiance;
-    textureStore(out_radiance, px, vec4<f32>(radiance, 1.0));
+    textureStore(out_radiance, px, shade_texel(px, camera.position.xyz).radiance);
 }
 
 // cs_main, and the diffuse part of the same light, c·DI/π · E, into out_diffuse: what Soler
@@ -191,20 +199,9 @@ fn cs_main_diffuse(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let px = vec2<i32>(gid.xy);
-    let nrm = textureLoad(g_normal, px, 0);
-    if (nrm.w < 0.5) {
-        textureStore(out_radiance, px, vec4<f32>(0.0));
-        textureStore(out_diffuse, px, vec4<f32>(0.0));
-        return;
-    }
-    let p = textureLoad(g_position, px, 0).xyz;
-    let n = normalize(nrm.xyz);
-    let alb = textureLoad(g_albedo, px, 0);
-    let mat = textureLoad(g_material, px, 0);
-    let v = normalize(camera.position.xyz - p);
-    let r = reflected_direct(p, n, v, alb, mat);
-    textureStore(out_radiance, px, vec4<f32>(r.radiance, 1.0));
-    textureStore(out_diffuse, px, vec4<f32>(alb.rgb * alb.a / PI * r.irradiance, 1.0));
+    let s = shade_texel(px, camera.position.xyz);
+    textureStore(out_radiance, px, s.radiance);
+    textureStore(out_diffuse, px, s.diffuse);
 }
 
 // An atlas of G-buffer tiles, each seen from its own viewpoint: the hemispheres of Gautron
@@ -228,16 +225,9 @@ fn cs_atlas(@builtin(global_invocation_id) gid: vec3<u32>) {
     let px = vec2<i32>(gid.xy);
     let cell = gid.xy / atlas.tile.x;
     let viewer = viewers[min(cell.y * atlas.tile.y + cell.x, arrayLength(&viewers) - 1u)];
-    let nrm = textureLoad(g_normal, px, 0);
-    if (nrm.w < 0.5 || viewer.w < 0.5) {
+    if (viewer.w < 0.5) {
         textureStore(out_radiance, px, vec4<f32>(0.0));
         return;
     }
-    let p = textureLoad(g_position, px, 0).xyz;
-    let n = normalize(nrm.xyz);
-    let alb = textureLoad(g_albedo, px, 0);
-    let mat = textureLoad(g_material, px, 0);
-    let v = normalize(viewer.xyz - p);
-    let radiance = reflected_direct(p, n, v, alb, mat).radiance;
-    textureStore(out_radiance, px, vec4<f32>(radiance, 1.0));
+    textureStore(out_radiance, px, shade_texel(px, viewer.xyz).radiance);
 }

@@ -52,6 +52,26 @@ fn score(p: vec2<i32>, size: vec2<u32>) -> f32 {
     return s;
 }
 
+// A sub-pixel's radiance as it enters the block's sum: weighted by its Eq. 2 area with
+// `vote_power` (power.w ≥ 0), else as it is.
+fn weighted_radiance(p: vec2<i32>) -> vec3<f32> {
+    var weight = 1.0;
+    if (params.power.w >= 0.0) {
+        weight = area_factor(textureLoad(fine_position, p, 0), textureLoad(fine_normal, p, 0).xyz, params.power.xyz, params.power.w);
+    }
+    return textureLoad(fine_radiance, p, 0).rgb * weight;
+}
+
+// The coarse texel's radiance: the block's sum over its `count` sub-pixels, over the winner's
+// Eq. 2 area with `vote_power`.
+fn block_radiance(sum: vec3<f32>, count: f32, position: vec4<f32>, normal: vec3<f32>) -> vec4<f32> {
+    var winner_area = 1.0;
+    if (params.power.w >= 0.0) {
+        winner_area = max(area_factor(position, normal, params.power.xyz, params.power.w), 1e-20);
+    }
+    return vec4<f32>(sum / (max(count, 1.0) * winner_area), 1.0);
+}
+
 @compute @workgroup_size(8, 8, 1)
 fn cs_vote(@builtin(global_invocation_id) gid: vec3<u32>) {
     let out_size = textureDimensions(out_position);
@@ -72,11 +92,7 @@ fn cs_vote(@builtin(global_invocation_id) gid: vec3<u32>) {
         if (!valid(p, size)) {
             continue;
         }
-        var weight = 1.0;
-        if (params.power.w >= 0.0) {
-            weight = area_factor(textureLoad(fine_position, p, 0), textureLoad(fine_normal, p, 0).xyz, params.power.xyz, params.power.w);
-        }
-        sum = sum + textureLoad(fine_radiance, p, 0).rgb * weight;
+        sum = sum + weighted_radiance(p);
         let s = score(p, size);
         if (best < 0 || s > best_score) {
             best = i;
@@ -91,11 +107,7 @@ fn cs_vote(@builtin(global_invocation_id) gid: vec3<u32>) {
         let p = vec2<i32>(2 * i32(gid.x) + best % 2, 2 * i32(gid.y) + best / 2);
         position = textureLoad(fine_position, p, 0);
         normal = vec4<f32>(textureLoad(fine_normal, p, 0).xyz, 1.0);
-        var winner_area = 1.0;
-        if (params.power.w >= 0.0) {
-            winner_area = max(area_factor(position, normal.xyz, params.power.xyz, params.power.w), 1e-20);
-        }
-        radiance = vec4<f32>(sum / (max(count, 1.0) * winner_area), 1.0);
+        radiance = block_radiance(sum, count, position, normal.xyz);
         material = textureLoad(fine_material, p, 0);
     }
     textureStore(out_position, gid.xy, position);
@@ -131,21 +143,12 @@ fn cs_vote_radiance(@builtin(global_invocation_id) gid: vec3<u32>) {
         if (!valid(p, size)) {
             continue;
         }
-        var weight = 1.0;
-        if (params.power.w >= 0.0) {
-            weight = area_factor(textureLoad(fine_position, p, 0), textureLoad(fine_normal, p, 0).xyz, params.power.xyz, params.power.w);
-        }
-        sum = sum + textureLoad(fine_radiance, p, 0).rgb * weight;
+        sum = sum + weighted_radiance(p);
     }
     var radiance = vec4<f32>(0.0);
-    if (textureLoad(in_winner, vec2<i32>(gid.xy), 0).x >= 0.0) {
-        var winner_area = 1.0;
-        if (params.power.w >= 0.0) {
-            let position = textureLoad(coarse_position, vec2<i32>(gid.xy), 0);
-            let normal = textureLoad(coarse_normal, vec2<i32>(gid.xy), 0).xyz;
-            winner_area = max(area_factor(position, normal, params.power.xyz, params.power.w), 1e-20);
-        }
-        radiance = vec4<f32>(sum / (max(count, 1.0) * winner_area), 1.0);
+    let c = vec2<i32>(gid.xy);
+    if (textureLoad(in_winner, c, 0).x >= 0.0) {
+        radiance = block_radiance(sum, count, textureLoad(coarse_position, c, 0), textureLoad(coarse_normal, c, 0).xyz);
     }
     textureStore(out_radiance, gid.xy, radiance);
 }

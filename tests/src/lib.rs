@@ -252,3 +252,15 @@ pub mod images;
 pub mod knecht_support;
 pub mod meshopt_copy;
 pub mod ui_harness;
+
+/// A square grey checkerboard base-colour texture of `size` texels, cells of `cell` texels,
+/// white and `dark` (sRGB byte) in turn.
+pub fn checker_texture(size: u32, cell: u32, dark: u8) -> gi_render::scene::TextureImage {
+    let rgba8: Vec<u8> = (0..size * size)
+        .flat_map(|i| {
+            let v = if ((i % size) / cell + (i / size) / cell).is_multiple_of(2) { 255 } else { dark };
+            [v, v, v, 255]
+        })
+        .collect();
+    gi_render::scene::TextureImage { name: "checker".into(), width: size, height: size, rgba8: rgba8.into() }
+}

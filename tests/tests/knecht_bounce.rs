@@ -355,18 +355,7 @@ fn irsm_bounce_on_the_gpu_samples_the_texels_the_cpu_picks() {
 #[test]
 fn the_light_gbuffer_blurs_the_surface_colour_by_the_albedo_mip_level() {
     let mut scene = default_scene();
-    let rgba8: Vec<u8> = (0..64 * 64)
-        .flat_map(|i| {
-            let v = if (i % 64 + i / 64) % 2 == 0 { 255 } else { 0 };
-            [v, v, v, 255]
-        })
-        .collect();
-    scene.textures.push(gi_render::scene::TextureImage {
-        name: "checker".into(),
-        width: 64,
-        height: 64,
-        rgba8: rgba8.into(),
-    });
+    scene.textures.push(gi_lab_tests::checker_texture(64, 1, 0));
     let t = scene.textures.len() - 1;
     for m in &mut scene.materials {
         m.base_color_texture = Some(t);

@@ -162,18 +162,7 @@ fn the_near_field_is_filtered_when_the_far_field_is() {
 /// the history still carries of where the pixels were.
 fn lag_after_a_pan(quantity: TemporalQuantity) -> f64 {
     let mut scene = gi_lab_tests::default_scene();
-    let rgba8: Vec<u8> = (0..64 * 64)
-        .flat_map(|i| {
-            let v = if ((i % 64) / 8 + (i / 64) / 8) % 2 == 0 { 255 } else { 137 };
-            [v, v, v, 255]
-        })
-        .collect();
-    scene.textures.push(gi_render::scene::TextureImage {
-        name: "checker".into(),
-        width: 64,
-        height: 64,
-        rgba8: rgba8.into(),
-    });
+    scene.textures.push(gi_lab_tests::checker_texture(64, 8, 137));
     let t = scene.textures.len() - 1;
     for m in &mut scene.materials {
         m.base_color_texture = Some(t);
