@@ -279,13 +279,18 @@ fn indirect_light(
     let merge_first = p.reconstruction == Reconstruction::GeometryAwareFilter
         && p.temporal == Temporal::ConfidenceMerge
         && f.settings.temporal.order == MergeOrder::MergeThenFilter;
-    Some(if merge_first {
+    let last = if merge_first {
         let merged = temporal(f, x, enc, timer, gathered)?;
         reconstruct(f, x, enc, timer, merged)?
     } else {
         let reconstructed = reconstruct(f, x, enc, timer, gathered)?;
         temporal(f, x, enc, timer, reconstructed)?
-    })
+    };
+    // A pinned pixel's replay (issue #42), after the chain that lit it.
+    if x.explain_pixel.is_some() && p.vpl_source == VplSource::ImportanceWarping {
+        crate::renderer::explain::explain_vpl_gather(f, x, enc, &vpls, &vis, &last);
+    }
+    Some(last)
 }
 
 /// Stage 6's near field (`pipeline.near_field`): Soler's screen-space gather of the senders

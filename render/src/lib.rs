@@ -7,6 +7,7 @@ pub mod camera;
 pub mod clock;
 pub mod counters;
 pub mod cpu;
+pub mod explain;
 pub mod frame;
 pub mod gpu;
 pub mod image_io;

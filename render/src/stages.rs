@@ -89,6 +89,9 @@ pub struct VplSet {
     /// Senders closer than this are the near field's (`pipeline.near_field`): the gather
     /// skips them. 0: no near field.
     pub near_cut: f32,
+    /// Where the slots come from, for explaining a pixel: (first slot, count, source) ranges
+    /// ("light 0", "emitters", "bounce 1"); empty where the source does not say.
+    pub sources: Vec<(u32, u32, String)>,
 }
 
 /// Stage 4's output: the visibility the gather reads.

@@ -31,6 +31,14 @@ fn ism_texel_angle(cos_theta: f32, size: u32) -> f32 {
 // distance from the VPL's eye, less `bias` × that distance, is tested against the stored
 // distance at its paraboloid texel.
 fn ism_visibility(atlas: texture_2d<f32>, i: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, offset: f32, cols: u32, size: u32, bias: f32, normal_offset: f32) -> f32 {
+    let t = ism_depths(atlas, i, vpl, x, nx, offset, cols, size, bias, normal_offset);
+    return select(0.0, 1.0, t.x >= 0.0 && t.y <= t.x);
+}
+
+// The comparison behind ism_visibility: (the pulled distance stored at x's texel, x's biased
+// distance d·(1 − bias)); (−1, d) when x lies behind the map's hemisphere. Explaining a pixel
+// (interleave/explain.wgsl) shows both.
+fn ism_depths(atlas: texture_2d<f32>, i: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, offset: f32, cols: u32, size: u32, bias: f32, normal_offset: f32) -> vec2<f32> {
     let eye = ism_eye(vpl, offset);
     let w0 = x - eye;
     let d0 = length(w0);
@@ -40,12 +48,12 @@ fn ism_visibility(atlas: texture_2d<f32>, i: u32, vpl: Vpl, x: vec3<f32>, nx: ve
     let tbn = vpl_basis(vpl.normal.xyz);
     let q = vec3<f32>(dot(w, tbn[0]), dot(w, tbn[1]), dot(w, tbn[2])) / max(d, 1e-9);
     if (q.z < 0.0) {
-        return 0.0;
+        return vec2<f32>(-1.0, d);
     }
     let uv = paraboloid_project(q);
     let t = min(vec2<u32>(uv * f32(size)), vec2<u32>(size - 1u));
     let stored = textureLoad(atlas, vpl_tile_origin(i, cols, size) + t, 0).r;
-    return select(0.0, 1.0, d * (1.0 - bias) <= stored);
+    return vec2<f32>(stored, d * (1.0 - bias));
 }
 
 // Visibility of x (normal nx) from VPL k as a gather chooses it: `mode` 0 none, 1 the ISM
@@ -59,4 +67,16 @@ fn gather_visibility(mode: u32, ism: texture_2d<f32>, exact: texture_depth_2d, k
         return vpl_exact_visibility(exact, k, vpl, x, nx, p, cols, size, 1.0, 1.0);
     }
     return 1.0;
+}
+
+// gather_visibility's test in full: (visibility, the stored depth, the receiver's depth) in
+// the map's own unit (the ISM's distance, the exact face's [0, 1] depth; 0, 0 without a map).
+fn gather_test(mode: u32, ism: texture_2d<f32>, exact: texture_depth_2d, k: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, cols: u32, size: u32, p: vec3<f32>) -> vec3<f32> {
+    var t = vec2<f32>(0.0);
+    if (mode == 1u) {
+        t = ism_depths(ism, k, vpl, x, nx, p.x, cols, size, p.y, p.z);
+    } else if (mode == 2u) {
+        t = vpl_exact_depths(exact, k, vpl, x, nx, p, cols, size, 1.0, 1.0);
+    }
+    return vec3<f32>(gather_visibility(mode, ism, exact, k, vpl, x, nx, cols, size, p), t);
 }

@@ -113,6 +113,14 @@ fn vpl_radiance(vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, eye: vec3<f32>, c: vec3<f
 // exact maps): one depth comparison in the face that sees x. Biases are world offsets of the
 // receiver in texels of that face at the receiver's distance. clip = (near, far, eye offset).
 fn vpl_exact_visibility(atlas: texture_depth_2d, i: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, clip: vec3<f32>, cols: u32, size: u32, depth_bias: f32, normal_offset: f32) -> f32 {
+    let t = vpl_exact_depths(atlas, i, vpl, x, nx, clip, cols, size, depth_bias, normal_offset);
+    return select(0.0, 1.0, t.x >= 0.0 && t.y <= t.x);
+}
+
+// The comparison behind vpl_exact_visibility: (the depth stored in the face's texel, the
+// receiver's biased depth), both in the face's [0, 1] depth; (−1, 1) when x lies behind the
+// face's eye. Explaining a pixel (interleave/explain.wgsl) shows both.
+fn vpl_exact_depths(atlas: texture_depth_2d, i: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, clip: vec3<f32>, cols: u32, size: u32, depth_bias: f32, normal_offset: f32) -> vec2<f32> {
     let n = vpl.normal.xyz;
     let eye = vpl.position.xyz + n * clip.z;
     let d = distance(x, eye);
@@ -123,12 +131,11 @@ fn vpl_exact_visibility(atlas: texture_depth_2d, i: u32, vpl: Vpl, x: vec3<f32>,
     let face = vpl_face_of(tbn, p - eye);
     let c = vpl_face_clip(eye, vpl_face_axes(tbn, face), p, clip.x, clip.y);
     if (c.w <= 0.0) {
-        return 0.0;
+        return vec2<f32>(-1.0, 1.0);
     }
     let ndc = c.xyz / c.w;
     let origin = vpl_tile_origin(i * VPL_FACES + face, cols, size);
     let uv = clamp(vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5), vec2<f32>(0.0), vec2<f32>(1.0));
     let t = min(vec2<u32>(uv * f32(size)), vec2<u32>(size - 1u));
-    let stored = textureLoad(atlas, origin + t, 0);
-    return select(0.0, 1.0, ndc.z <= stored);
+    return vec2<f32>(textureLoad(atlas, origin + t, 0), ndc.z);
 }

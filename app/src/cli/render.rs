@@ -27,9 +27,24 @@ pub struct RenderArgs {
     /// picks array layer K (e.g. `direct.shadow_map@2`).
     #[arg(long = "buffer")]
     pub buffers: Vec<String>,
+    /// Explain pixel X,Y of the last frame (issue #42): print where its indirect light comes
+    /// from (every contributor, its share, weights and rejections, and the sum checked
+    /// against the buffers) and write explain.csv into the output folder.
+    #[arg(long, value_parser = parse_pixel)]
+    pub explain: Option<(u32, u32)>,
+    /// Rows of the explanation to print (0: all).
+    #[arg(long, default_value_t = 24)]
+    pub explain_rows: usize,
     /// Output folder (created).
     #[arg(long)]
     pub out: PathBuf,
+}
+
+/// `X,Y` as a pixel.
+pub fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
+    let (x, y) = s.split_once(',').ok_or_else(|| format!("'{s}': expected X,Y (e.g. 120,80)"))?;
+    let n = |v: &str| v.trim().parse::<u32>().map_err(|_| format!("'{s}': '{v}' is not a pixel coordinate"));
+    Ok((n(x)?, n(y)?))
 }
 
 /// Splits `NAME@LAYER` into the buffer name and the array layer (0 without `@`).
@@ -76,6 +91,18 @@ pub(super) fn render(args: &RenderArgs) -> Result<(), CliError> {
         let (name, _) = parse_buffer_spec(b)?;
         r.buffers().get(name).map_err(|e| CliError::input(e.to_string()))?;
     }
+    if let Some((x, y)) = args.explain {
+        if x >= args.size.0 || y >= args.size.1 {
+            return Err(CliError::input(format!(
+                "--explain {x},{y}: outside the {}x{} image",
+                args.size.0, args.size.1
+            )));
+        }
+        if let Some(why) = r.explain_unsupported() {
+            return Err(CliError::input(format!("--explain: {why}")));
+        }
+        r.set_explain(Some((x, y)));
+    }
     std::fs::create_dir_all(&args.out).map_err(|e| CliError::input(format!("--out {}: {e}", args.out.display())))?;
     // GI_LAB_TEST_LOSE_DEVICE_AT=K destroys the device before frame K, as a driver reset
     // would (the test suite checks that the run ends with a clear error).
@@ -98,6 +125,13 @@ pub(super) fn render(args: &RenderArgs) -> Result<(), CliError> {
         for f in write_buffer(&r, b, &args.out)? {
             println!("wrote {}", f.display());
         }
+    }
+    if args.explain.is_some() {
+        let e = r.explanation().map_err(|e| CliError::failure(format!("--explain: {e}")))?;
+        print!("{}", e.to_text(args.explain_rows));
+        let csv = args.out.join("explain.csv");
+        std::fs::write(&csv, e.to_csv()).map_err(|e| CliError::failure(format!("{}: {e}", csv.display())))?;
+        println!("wrote {}", csv.display());
     }
     Ok(())
 }

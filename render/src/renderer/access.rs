@@ -74,6 +74,9 @@ impl Renderer {
             .contains(&"direct")
             .then(|| DirectPass::new(&ctx, bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h));
         let compose = passes.contains(&"compose").then(|| ComposePass::new(&ctx, w, h));
+        let explain = passes.contains(&"explain").then(|| {
+            crate::passes::knecht::explain::VplExplainPass::new(&ctx, bgl::uniform(0, wgpu::ShaderStages::COMPUTE))
+        });
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(e.to_string());
         }
@@ -93,6 +96,9 @@ impl Renderer {
         }
         if let Some(p) = compose {
             self.compose = p;
+        }
+        if let Some(p) = explain {
+            self.stages.explain_vpl = Some(p);
         }
         if passes.contains(&"exact_vpl") {
             let old = self.stages.reference.take();
@@ -363,6 +369,7 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         | "soler/ring.wgsl"
         | "soler/hcb_gather.wgsl"
         | "soler/voxel_common.wgsl" => "soler",
+        "interleave/explain.wgsl" => "explain",
         "gautron/create.wgsl"
         | "gautron/hemisphere.wgsl"
         | "gautron/reduce.wgsl"

@@ -5,6 +5,7 @@
 use crate::counters::prelude::*;
 
 mod access;
+pub(crate) mod explain;
 mod soler_samples;
 pub use soler_samples::{SolerReceiver, SolerSample};
 pub mod checks;
@@ -61,6 +62,10 @@ pub(crate) struct StagePasses {
     pub soler: Option<SolerStage>,
     /// Irradiance records, their hemispheres, the splatting and the record cache (Gautron).
     pub gautron: Option<GautronStage>,
+    /// The pinned pixel to explain (issue #42), and the replay of the VPL gather at tiles or
+    /// pixels (created when a pixel is first explained).
+    pub explain_pixel: Option<(u32, u32)>,
+    pub explain_vpl: Option<crate::passes::knecht::explain::VplExplainPass>,
 }
 
 /// A pixel and the Soler samples behind it (the overlay's last complete answer).

@@ -309,6 +309,21 @@ impl InterleavePass {
         })
     }
 
+    /// Tiles per side (`interleave.n`) of the textures as they are.
+    pub fn n(&self) -> u32 {
+        self.n
+    }
+
+    /// The gather's uniform as the last `shade` wrote it (`GatherParams`).
+    pub fn gather_params(&self) -> &wgpu::Buffer {
+        &self.gather_params
+    }
+
+    /// The slot→tile offsets of the last `shade` (`cpu::knecht::tile_offsets`).
+    pub fn tile_offsets(&self) -> &wgpu::Buffer {
+        &self.tile_offsets
+    }
+
     /// Tile size of an n×n split of `width`×`height`.
     pub fn tile(width: u32, height: u32, n: u32) -> (u32, u32) {
         (width.div_ceil(n.max(1)), height.div_ceil(n.max(1)))

@@ -5,6 +5,7 @@
 //! stages 3–4 for the frame. Shaders: `shaders/vpl/{importance,reduce,warp,bounce,irsm}.wgsl`,
 //! `shaders/ism/`, `shaders/interleave/`, `shaders/temporal/`.
 
+pub mod explain;
 pub mod interleave;
 pub mod irsm;
 pub mod ism;

@@ -152,6 +152,10 @@ impl KnechtVpls {
                 job
             })
             .collect();
+        // The slots' sources: bounce 0 by light view (then the emitters), one range per
+        // further bounce.
+        let mut sources: Vec<(u32, u32, String)> =
+            jobs.iter().map(|j| (j.first, j.count, format!("light {}, bounce 0", j.light_index))).collect();
         let halton_first = 1 + if s.vpl.new_set_each_frame { self.frames.wrapping_mul(s.vpl.count) } else { 0 };
         if f.lights.is_empty() {
             // No light: no VPL slot is written, so the list is cleared.
@@ -167,6 +171,7 @@ impl KnechtVpls {
         if let Some(e) = emitters {
             let (scene, list, r) = (f.gpu_scene, &self.vpl.vpls, f.vpl_radius());
             let written = e.bounce_into(ctx, enc, timer, scene, s, r, emitter_share, s.vpl.count, list, first);
+            sources.push((first, written, "emitters, bounce 0".into()));
             // Slots the emitters could not fill (more than their VPLs) stay empty.
             let (used, size) = (first + written, std::mem::size_of::<crate::passes::reference::vpl::GpuVpl>() as u64);
             if used < n_vpls {
@@ -237,11 +242,13 @@ impl KnechtVpls {
             }
         }
         self.frames = self.frames.wrapping_add(1);
+        sources.extend((1..bounces).map(|b| (b * n_vpls, n_vpls, format!("bounce {b}"))));
         VplSet {
             list: self.vpl.vpls.clone(),
             count: n_vpls * bounces,
             min_distance: s.vpl.min_distance_m,
             near_cut: f.near_field_cut(),
+            sources,
         }
     }
 

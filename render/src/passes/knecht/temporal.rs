@@ -144,6 +144,11 @@ impl TemporalPass {
         &self.history[self.current]
     }
 
+    /// The history this frame's merge read (last frame's `temporal.history`).
+    pub fn history_prev(&self) -> &wgpu::Texture {
+        &self.history[1 - self.current]
+    }
+
     pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) -> bool {
         if (width, height) == (self.width, self.height) {
             return false;

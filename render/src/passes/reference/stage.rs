@@ -122,6 +122,7 @@ impl ReferenceVpls {
             count: n,
             min_distance: rs.min_distance_m,
             near_cut: f.near_field_cut(),
+            sources: Vec::new(),
         })
     }
 

@@ -1,0 +1,278 @@
+// Explain a pixel (issue #42) for the VPL gather at tiles or at every pixel (Knecht 002
+// §3.4.1, §4.5) and what follows it: the geometry-aware filter (§3.4.1, Eq. 4.2) and the
+// confidence merge (§3.5, Eq. 3.6). It replays gather.wgsl's sum term by term with the
+// frame's own inputs (VPL list, visibility maps, tile offsets, G-buffer), after the frame's
+// passes and in its encoder, and writes every term with what made it: the Rust side
+// (passes::knecht::explain) turns them into the pixel's contributions and checks their sum
+// against the buffers the frame wrote.
+//
+// Every VPL slot k reached pixel p through one pixel q of the filter's window: the one whose
+// interleaving tile holds k (without the filter the window is p alone, and the slots of other
+// tiles do not reach p).
+#import common/camera.wgsl
+#import common/ism.wgsl
+#import common/reproject.wgsl
+
+struct GatherParams {
+    split: vec4<u32>,
+    vis: vec4<u32>,
+    shade: vec4<f32>,
+    near: vec4<f32>,
+}
+
+struct ExplainParams {
+    // x, y: the pixel p; z: the filter's window side (n with the filter, else 1); w: 1 when
+    // the confidence merge ran (temporal.confidence and the histories are bound)
+    pixel: vec4<u32>,
+    // x: α · (z_far − z_near), y: β (interleave/filter.wgsl)
+    thresholds: vec4<f32>,
+}
+
+// One VPL slot's term (passes::knecht::explain::GpuTerm).
+struct Term {
+    // x: slot k; y: flags (EXPLAIN_*); z: the pixel q it reached p through (x | y << 16);
+    // w: its interleaving tile
+    slot: vec4<u32>,
+    // rgb: its light at q, visibility and the tile's N / N_t included (what gather.wgsl adds);
+    // a: visibility
+    light: vec4<f32>,
+    // rgb: the same without visibility; a: geometry term cos θ_x cos θ_y / max(d², d_min²)
+    unshadowed: vec4<f32>,
+    // x: f_y, the VPL's BRDF toward q (luminance); y: f_x, q's BRDF toward the eye
+    // (luminance); z: the map's stored depth; w: the receiver's depth in the map
+    detail: vec4<f32>,
+}
+
+// One pixel of the window (passes::knecht::explain::GpuWindow).
+struct WindowPixel {
+    // x, y: the pixel (i32 as u32; outside the image: −1); z: flags (EXPLAIN_W_*); w: tile
+    pixel: vec4<u32>,
+    // rgb: indirect.merged at q (the gather's output); a: q's VPL count N_t
+    merged: vec4<f32>,
+    // rgb: the history the confidence merge read for q; a: q's confidence c
+    history: vec4<f32>,
+    // rgb: the temporal history written at q (the merge's output); a: 0
+    out: vec4<f32>,
+}
+
+// Header: [0] the pixel's final indirect value (rgb; a: 1 when the G-buffer is empty there);
+// [1] indirect.filtered at p; [2] N, N_t, n, window.
+struct Header {
+    final_value: vec4<f32>,
+    filtered: vec4<f32>,
+    counts: vec4<u32>,
+    pad: vec4<u32>,
+}
+
+const EXPLAIN_EMPTY: u32 = 1u;        // an empty slot (no VPL)
+const EXPLAIN_OUTSIDE: u32 = 2u;      // its tile's pixel of the window is not p's (no filter) or outside the image
+const EXPLAIN_FACING: u32 = 4u;       // q faces away from it or it faces away from q
+const EXPLAIN_NEAR: u32 = 8u;         // closer than the near field's cut
+const EXPLAIN_OCCLUDED: u32 = 16u;    // the visibility map hides q
+const EXPLAIN_FILTERED: u32 = 32u;    // q is not on p's surface: the filter leaves it out
+const EXPLAIN_CLAMPED: u32 = 64u;     // d < d_min: the geometry term is clamped
+const EXPLAIN_BACKGROUND: u32 = 128u; // q has no surface
+
+const EXPLAIN_W_INSIDE: u32 = 1u;
+const EXPLAIN_W_ACCEPTED: u32 = 2u;
+const EXPLAIN_W_SURFACE: u32 = 4u;
+
+@group(0) @binding(0) var<uniform> camera: Camera;
+@group(0) @binding(1) var<uniform> params: GatherParams;
+@group(0) @binding(2) var<storage, read> vpls: array<Vpl>;
+@group(0) @binding(3) var ism_atlas: texture_2d<f32>;
+@group(0) @binding(4) var exact_atlas: texture_depth_2d;
+@group(0) @binding(5) var g_position: texture_2d<f32>;
+@group(0) @binding(6) var g_normal: texture_2d<f32>;
+@group(0) @binding(7) var g_albedo: texture_2d<f32>;
+@group(0) @binding(8) var g_material: texture_2d<f32>;
+@group(0) @binding(9) var<storage, read> tile_offsets: array<u32>;
+@group(0) @binding(10) var<uniform> explain: ExplainParams;
+@group(0) @binding(11) var merged: texture_2d<f32>;
+@group(0) @binding(12) var filtered: texture_2d<f32>;
+@group(0) @binding(13) var confidence: texture_2d<f32>;
+@group(0) @binding(14) var history_prev: texture_2d<f32>;
+@group(0) @binding(15) var history_out: texture_2d<f32>;
+@group(0) @binding(16) var g_motion: texture_2d<f32>;
+@group(0) @binding(17) var final_light: texture_2d<f32>;
+@group(0) @binding(18) var<storage, read_write> header: Header;
+@group(0) @binding(19) var<storage, read_write> window: array<WindowPixel, 64>;
+@group(0) @binding(20) var<storage, read_write> terms: array<Term>;
+
+fn tile_of(q: vec2<i32>) -> u32 {
+    let n = params.split.x;
+    return u32(q.x) % n + (u32(q.y) % n) * n;
+}
+
+// The pixel of p's window whose tile is t.
+fn window_pixel(t: u32) -> vec2<i32> {
+    let n = i32(params.split.x);
+    let w = i32(explain.pixel.z);
+    let lo = -(w / 2);
+    let p = vec2<i32>(explain.pixel.xy);
+    for (var dy = lo; dy < lo + w; dy = dy + 1) {
+        for (var dx = lo; dx < lo + w; dx = dx + 1) {
+            let q = p + vec2<i32>(dx, dy);
+            // Tiles of negative coordinates wrap as the unsigned ones do not: keep q ≥ 0.
+            if (q.x >= 0 && q.y >= 0 && tile_of(q) == t) {
+                return q;
+            }
+        }
+    }
+    return vec2<i32>(-1, -1);
+}
+
+// The filter's test of q against p (interleave/filter.wgsl).
+fn accepted(p: vec2<i32>, q: vec2<i32>) -> bool {
+    let size = vec2<i32>(textureDimensions(g_normal));
+    if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) {
+        return false;
+    }
+    if (explain.pixel.z <= 1u) {
+        return all(p == q);
+    }
+    let cn = textureLoad(g_normal, p, 0);
+    let qn = textureLoad(g_normal, q, 0);
+    let cd = textureLoad(g_position, p, 0).w;
+    let qd = textureLoad(g_position, q, 0).w;
+    return qn.w >= 0.5 && abs(qd - cd) <= explain.thresholds.x && dot(qn.xyz, cn.xyz) >= explain.thresholds.y;
+}
+
+// The VPL count of tile t (gather.wgsl's per_tile).
+fn per_tile(t: u32) -> u32 {
+    let count = params.split.w;
+    let stride = params.split.x * params.split.x;
+    let blocks = (count + stride - 1u) / stride;
+    var k = 0u;
+    for (var b = 0u; b < blocks; b = b + 1u) {
+        if (b * stride + (t + tile_offsets[b]) % stride < count) {
+            k = k + 1u;
+        }
+    }
+    return k;
+}
+
+// The pixel's header and its window, one invocation per window pixel.
+@compute @workgroup_size(64, 1, 1)
+fn cs_explain_pixel(@builtin(local_invocation_index) i: u32) {
+    let p = vec2<i32>(explain.pixel.xy);
+    let w = explain.pixel.z;
+    let size = textureDimensions(g_normal);
+    if (i == 0u) {
+        let empty = select(0.0, 1.0, textureLoad(g_normal, p, 0).w < 0.5);
+        header.final_value = vec4<f32>(textureLoad(final_light, p, 0).rgb, empty);
+        header.filtered = textureLoad(filtered, p, 0);
+        header.counts = vec4<u32>(params.split.w, per_tile(tile_of(p)), params.split.x, w);
+    }
+    if (i >= w * w) {
+        return;
+    }
+    let lo = -i32(w / 2u);
+    let q = p + vec2<i32>(lo + i32(i % w), lo + i32(i / w));
+    var out: WindowPixel;
+    out.pixel = vec4<u32>(u32(q.x), u32(q.y), 0u, 0u);
+    let inside = q.x >= 0 && q.y >= 0 && q.x < i32(size.x) && q.y < i32(size.y);
+    if (inside) {
+        let t = tile_of(q);
+        var flags = EXPLAIN_W_INSIDE;
+        if (accepted(p, q)) {
+            flags = flags | EXPLAIN_W_ACCEPTED;
+        }
+        if (textureLoad(g_normal, q, 0).w >= 0.5) {
+            flags = flags | EXPLAIN_W_SURFACE;
+        }
+        out.pixel.z = flags;
+        out.pixel.w = t;
+        out.merged = vec4<f32>(textureLoad(merged, q, 0).rgb, f32(per_tile(t)));
+        if (explain.pixel.w == 1u) {
+            let c = textureLoad(confidence, q, 0).r;
+            var h = vec3<f32>(0.0);
+            if (c > 0.0) {
+                let prev = previous_texel(q, textureLoad(g_motion, q, 0).xy, size);
+                h = textureLoad(history_prev, prev, 0).rgb;
+            }
+            out.history = vec4<f32>(h, c);
+            out.out = vec4<f32>(textureLoad(history_out, q, 0).rgb, 0.0);
+        }
+    }
+    window[i] = out;
+}
+
+// Every VPL slot's term at the pixel of the window that its tile reached.
+@compute @workgroup_size(64, 1, 1)
+fn cs_explain_vpls(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let k = gid.x;
+    let count = params.split.w;
+    if (k >= count) {
+        return;
+    }
+    let n = params.split.x;
+    let stride = n * n;
+    let b = k / stride;
+    let t = ((k % stride) + stride - tile_offsets[b] % stride) % stride;
+    var term: Term;
+    term.slot = vec4<u32>(k, 0u, 0xffffffffu, t);
+    let vpl = vpls[k];
+    let q = window_pixel(t);
+    let p = vec2<i32>(explain.pixel.xy);
+    var flags = 0u;
+    if (vpl.position.w < 0.5) {
+        flags = flags | EXPLAIN_EMPTY;
+    }
+    let size = vec2<i32>(textureDimensions(g_normal));
+    if (q.x < 0 || q.x >= size.x || q.y >= size.y) {
+        term.slot.y = flags | EXPLAIN_OUTSIDE;
+        terms[k] = term;
+        return;
+    }
+    term.slot.z = u32(q.x) | (u32(q.y) << 16u);
+    if (!accepted(p, q)) {
+        flags = flags | EXPLAIN_FILTERED;
+    }
+    let nrm = textureLoad(g_normal, q, 0);
+    if (nrm.w < 0.5) {
+        term.slot.y = flags | EXPLAIN_BACKGROUND;
+        terms[k] = term;
+        return;
+    }
+    if ((flags & EXPLAIN_EMPTY) != 0u) {
+        term.slot.y = flags;
+        terms[k] = term;
+        return;
+    }
+    let x = textureLoad(g_position, q, 0).xyz;
+    let nx = normalize(nrm.xyz);
+    let alb = textureLoad(g_albedo, q, 0);
+    let mat = textureLoad(g_material, q, 0);
+    let m = vec3<f32>(alb.a, select(mat.x, 0.0, params.vis.w == 1u), mat.y);
+    let scale = f32(count) / f32(max(per_tile(t), 1u));
+    let l = vpl_radiance(vpl, x, nx, camera.position.xyz, alb.rgb, m, params.shade.x, params.near.x);
+    let w = vpl.position.xyz - x;
+    let d2 = dot(w, w);
+    let dir = w * inverseSqrt(max(d2, 1e-12));
+    let cos_x = dot(nx, dir);
+    let cos_y = -dot(vpl.normal.xyz, dir);
+    if (d2 < params.near.x) {
+        flags = flags | EXPLAIN_NEAR;
+    } else if (cos_x <= 0.0 || cos_y <= 0.0) {
+        flags = flags | EXPLAIN_FACING;
+    }
+    if (d2 < params.shade.x) {
+        flags = flags | EXPLAIN_CLAMPED;
+    }
+    let lum = vec3<f32>(0.2126, 0.7152, 0.0722);
+    let f_y = brdf_eval(vpl.normal.xyz, vpl.incident.xyz, -dir, vpl.albedo.rgb, vpl.normal.w, vpl.flux.a, vpl.incident.w);
+    let f_x = brdf_eval(nx, dir, normalize(camera.position.xyz - x), alb.rgb, m.x, m.y, m.z);
+    var test = vec3<f32>(1.0, 0.0, 0.0);
+    if (max(l.r, max(l.g, l.b)) > 0.0) {
+        test = gather_test(params.vis.x, ism_atlas, exact_atlas, k, vpl, x, nx, params.vis.y, params.vis.z, params.shade.yzw);
+        if (test.x < 0.5) {
+            flags = flags | EXPLAIN_OCCLUDED;
+        }
+    }
+    term.slot.y = flags;
+    term.light = vec4<f32>(l * test.x * scale, test.x);
+    term.unshadowed = vec4<f32>(l * scale, max(cos_x, 0.0) * max(cos_y, 0.0) / max(d2, params.shade.x));
+    term.detail = vec4<f32>(dot(f_y, lum), dot(f_x, lum), test.y, test.z);
+    terms[k] = term;
+}
