@@ -8,6 +8,18 @@
 
 use glam::Vec3;
 
+/// A technique's replay of the pinned pixel: what to read back after the frame, and how to
+/// decode it. Each technique's pass implements it (`passes::knecht::explain::VplExplainPass`,
+/// …); `Renderer::explanation` reads its parts blocking, `Renderer::explanation_later`
+/// without waiting.
+pub trait Replay {
+    /// The storage buffers to read back, each with the bytes wanted (None before a run).
+    fn parts(&self) -> Option<Vec<(wgpu::Buffer, u64)>>;
+    /// The explanation from the parts' bytes, in `parts`' order (None when they do not
+    /// match the run, e.g. read back across a settings change).
+    fn decode(&self, parts: &[Vec<u8>]) -> Option<Explanation>;
+}
+
 /// Why a contributor gives the pixel nothing (or less than its own light).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Rejection {

@@ -3,10 +3,9 @@
 //! `frame.rs`), and `explanation` (blocking: the command line, tests) or `explanation_later`
 //! (the window, without waiting) decode it (`crate::explain`).
 
-use crate::explain::Explanation;
-use crate::passes::knecht::explain::{ChainInfo, ExplainInputs, VplExplainPass, decode};
+use crate::explain::{Explanation, Replay};
+use crate::passes::knecht::explain::{ChainInfo, ExplainInputs, VplExplainPass};
 use crate::passes::knecht::temporal::MergeOrder;
-use crate::passes::reference::vpl::GpuVpl;
 use crate::pipeline::{Gather, NearField, Reconstruction, ShadingPoints, Temporal, VplSource};
 use crate::readback::{Readback, Readout};
 use crate::renderer::{Renderer, StagePasses};
@@ -127,18 +126,22 @@ impl Renderer {
         })
     }
 
+    /// The replay of the current stage choices, once a frame ran with a pinned pixel.
+    fn replay(&self) -> Result<&dyn Replay, String> {
+        let none = || "no frame was rendered with a pinned pixel".to_string();
+        Ok(self.stages.explain_vpl.as_ref().ok_or_else(none)?)
+    }
+
     /// The pinned pixel's explanation from the last frame; blocks until it is on the CPU.
     pub fn explanation(&self) -> Result<Explanation, String> {
         if let Some(why) = self.explain_unsupported() {
             return Err(why);
         }
-        let (pass, vpls) = self.explain_sources()?;
-        let info = pass.info.as_ref().ok_or("no frame was rendered with a pinned pixel")?;
-        let read = |b: &wgpu::Buffer, n| crate::buffers::read_storage(&self.ctx, b, n);
-        let bytes = read(&pass.out, pass.bytes())?;
-        let list = read(&vpls.0, vpls.1)?;
-        decode(info, &bytes, &bytemuck::pod_collect_to_vec::<u8, GpuVpl>(&list))
-            .ok_or_else(|| "the replay's output did not match its frame".into())
+        let replay = self.replay()?;
+        let parts = replay.parts().ok_or("no frame was rendered with a pinned pixel")?;
+        let bytes =
+            parts.iter().map(|(b, n)| crate::buffers::read_storage(&self.ctx, b, *n)).collect::<Result<Vec<_>, _>>()?;
+        replay.decode(&bytes).ok_or_else(|| "the replay's output did not match its frame".into())
     }
 
     /// [`Self::explanation`] of a frame or two ago, without waiting (the window): None until
@@ -147,28 +150,17 @@ impl Renderer {
         if let Some(why) = self.explain_unsupported() {
             return Some(Err(why));
         }
-        let (pass, vpls) = match self.explain_sources() {
-            Ok(s) => s,
+        let replay = match self.replay() {
+            Ok(r) => r,
             Err(e) => return Some(Err(e)),
         };
-        let info = pass.info.as_ref()?;
-        let a = self.read_later(KEY, Readback::Storage(vec![(pass.out.clone(), pass.bytes()), vpls]), 0)?;
+        let a = self.read_later(KEY, Readback::Storage(replay.parts()?), 0)?;
         match &a.data {
-            Ok(Readout::Bytes(parts)) if parts.len() == 2 => {
-                let list = bytemuck::pod_collect_to_vec::<u8, GpuVpl>(&parts[1]);
-                Some(decode(info, &parts[0], &list).ok_or_else(|| "the replay's output did not match its frame".into()))
+            Ok(Readout::Bytes(parts)) => {
+                Some(replay.decode(parts).ok_or_else(|| "the replay's output did not match its frame".into()))
             }
             Ok(_) => None,
             Err(e) => Some(Err(e.clone())),
         }
-    }
-
-    /// The replay pass and the VPL list's buffer with the bytes of its gathered slots.
-    fn explain_sources(&self) -> Result<(&VplExplainPass, (wgpu::Buffer, u64)), String> {
-        let pass = self.stages.explain_vpl.as_ref().ok_or("no frame was rendered with a pinned pixel")?;
-        let k = self.stages.knecht.as_ref().ok_or("no VPL source runs")?;
-        let count = pass.info.as_ref().map(|i| i.count).unwrap_or(0) as u64;
-        let bytes = (count * std::mem::size_of::<GpuVpl>() as u64).min(k.vpl.vpls.size());
-        Ok((pass, (k.vpl.vpls.clone(), bytes)))
     }
 }

@@ -116,6 +116,21 @@ pub struct VplExplainPass {
     dummy_exact: wgpu::TextureView,
     /// The last run's chain, and its slot count.
     pub info: Option<ChainInfo>,
+    /// The last run's VPL list.
+    vpls: Option<wgpu::Buffer>,
+}
+
+impl crate::explain::Replay for VplExplainPass {
+    fn parts(&self) -> Option<Vec<(wgpu::Buffer, u64)>> {
+        let (info, vpls) = (self.info.as_ref()?, self.vpls.as_ref()?);
+        let list = (info.count as u64 * std::mem::size_of::<GpuVpl>() as u64).min(vpls.size());
+        Some(vec![(self.out.clone(), self.bytes()), (vpls.clone(), list)])
+    }
+
+    fn decode(&self, parts: &[Vec<u8>]) -> Option<Explanation> {
+        let [out, list] = parts else { return None };
+        decode(self.info.as_ref()?, out, &bytemuck::pod_collect_to_vec::<u8, GpuVpl>(list))
+    }
 }
 
 impl VplExplainPass {
@@ -177,6 +192,7 @@ impl VplExplainPass {
             dummy_ism,
             dummy_exact,
             info: None,
+            vpls: None,
         }
     }
 
@@ -270,6 +286,7 @@ impl VplExplainPass {
         }
         drop(pass);
         self.info = Some(info);
+        self.vpls = Some(inp.vpls.clone());
     }
 }
 
