@@ -211,6 +211,14 @@ impl Renderer {
         Some(decode_vpls(&crate::buffers::read_storage(&self.ctx, &buffer, bytes).ok()?))
     }
 
+    /// Every slot of the last frame's VPL list, empty ones included (slot k at index k, as the
+    /// gather and the explanations number them). Blocks.
+    pub fn vpl_slots(&self) -> Option<Vec<crate::passes::reference::vpl::GpuVpl>> {
+        let (buffer, bytes) = self.vpl_source()?;
+        let raw = crate::buffers::read_storage(&self.ctx, &buffer, bytes).ok()?;
+        Some(bytemuck::pod_collect_to_vec(&raw))
+    }
+
     /// [`Self::vpl_list`] of a frame or two ago, without waiting (the window's overlay).
     pub fn vpl_list_later(&self) -> Option<Vec<crate::passes::reference::vpl::GpuVpl>> {
         let source = self.vpl_source()?;

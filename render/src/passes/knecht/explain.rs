@@ -355,6 +355,8 @@ pub fn decode(info: &ChainInfo, bytes: &[u8], vpls: &[GpuVpl]) -> Option<Explana
             None
         };
         let w = at(q).map(weight).unwrap_or(0.0);
+        // The tile's N / N_t (gather.wgsl's scale; the window pixel's merged.a is its N_t).
+        let scale = at(q).map(|x| info.count as f32 / x.merged.w.max(1.0)).unwrap_or(0.0);
         if flags & (OUTSIDE | BACKGROUND) == 0 {
             match per_pixel.iter_mut().find(|(x, _)| *x == q) {
                 Some((_, s)) => *s += v3(t.light),
@@ -367,6 +369,7 @@ pub fn decode(info: &ChainInfo, bytes: &[u8], vpls: &[GpuVpl]) -> Option<Explana
             ("f_y", t.detail.x),
             ("f_x", t.detail.y),
             ("V", t.light.w),
+            ("N/N_t", scale),
             ("unshadowed (lum)", crate::explain::luminance(v3(t.unshadowed))),
         ];
         if t.detail.z != 0.0 || t.detail.w != 0.0 {
