@@ -44,6 +44,17 @@ pub struct AppArgs {
     /// tests turn it off so that their render sizes stay fixed.
     #[arg(long = "no-adaptive-scale", action = clap::ArgAction::SetFalse)]
     pub adaptive_scale: bool,
+    /// Explain pixel X,Y of the render from the start (issue #42; as right-click → Explain
+    /// this pixel): the Explain pane and its overlay show where its indirect light comes from.
+    #[arg(long, value_parser = parse_pixel)]
+    pub explain: Option<(u32, u32)>,
+}
+
+/// `X,Y` as a pixel.
+pub fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
+    let (x, y) = s.split_once(',').ok_or_else(|| format!("'{s}': expected X,Y (e.g. 120,80)"))?;
+    let n = |v: &str| v.trim().parse::<u32>().map_err(|_| format!("'{s}': '{v}' is not a pixel coordinate"));
+    Ok((n(x)?, n(y)?))
 }
 
 impl Default for AppArgs {
@@ -60,6 +71,7 @@ impl Default for AppArgs {
             recovered: None,
             restart_on_device_loss: true,
             adaptive_scale: true,
+            explain: None,
         }
     }
 }

@@ -30,7 +30,7 @@ pub struct RenderArgs {
     /// Explain pixel X,Y of the last frame (issue #42): print where its indirect light comes
     /// from (every contributor, its share, weights and rejections, and the sum checked
     /// against the buffers) and write explain.csv into the output folder.
-    #[arg(long, value_parser = parse_pixel)]
+    #[arg(long, value_parser = crate::args::parse_pixel)]
     pub explain: Option<(u32, u32)>,
     /// Rows of the explanation to print (0: all).
     #[arg(long, default_value_t = 24)]
@@ -38,13 +38,6 @@ pub struct RenderArgs {
     /// Output folder (created).
     #[arg(long)]
     pub out: PathBuf,
-}
-
-/// `X,Y` as a pixel.
-pub fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
-    let (x, y) = s.split_once(',').ok_or_else(|| format!("'{s}': expected X,Y (e.g. 120,80)"))?;
-    let n = |v: &str| v.trim().parse::<u32>().map_err(|_| format!("'{s}': '{v}' is not a pixel coordinate"));
-    Ok((n(x)?, n(y)?))
 }
 
 /// Splits `NAME@LAYER` into the buffer name and the array layer (0 without `@`).

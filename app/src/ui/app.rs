@@ -26,6 +26,7 @@ pub struct GiLabApp {
 
 impl GiLabApp {
     pub fn new(cc: &eframe::CreationContext<'_>, args: AppArgs) -> Self {
+        let explain = args.explain;
         crate::ui::install_fonts(&cc.egui_ctx);
         let config_dir = session::config_dir(args.config_dir.as_deref());
         // Temporary files of saves that a kill interrupted (the saved files themselves are
@@ -199,6 +200,9 @@ impl GiLabApp {
             adaptive: Default::default(),
             interacting: false,
             show_history_request: false,
+            explain: explain.map(crate::ui::explain::ExplainView::new),
+            context_pixel: None,
+            show_explain_request: explain.is_some(),
         };
         Self { tree, state }
     }
@@ -338,13 +342,13 @@ impl GiLabApp {
         cmd.spawn().map(|_| ()).map_err(|e| e.to_string())
     }
 
-    /// Shows the History pane: its tab when it is in the layout, else a new tab beside the
-    /// GPU timings (layouts saved before it existed have none).
-    pub fn show_history_pane(&mut self) {
-        let tile = match self.tree.tiles.find_pane(&Pane::History) {
+    /// Shows `pane` (History, Explain): its tab when it is in the layout, else a new tab
+    /// beside the GPU timings (layouts saved before it existed have none).
+    pub fn show_pane(&mut self, pane: Pane) {
+        let tile = match self.tree.tiles.find_pane(&pane) {
             Some(t) => t,
             None => {
-                let pane = self.tree.tiles.insert_pane(Pane::History);
+                let pane = self.tree.tiles.insert_pane(pane);
                 let parent = self
                     .tree
                     .tiles
@@ -512,7 +516,10 @@ impl GiLabApp {
         let idle = !ctx.input(|i| i.pointer.any_down()) && !ctx.egui_wants_keyboard_input();
         self.state.record_history(idle);
         if std::mem::take(&mut self.state.show_history_request) {
-            self.show_history_pane();
+            self.show_pane(Pane::History);
+        }
+        if std::mem::take(&mut self.state.show_explain_request) {
+            self.show_pane(Pane::Explain);
         }
         self.screenshot_step(ctx);
         self.autosave();

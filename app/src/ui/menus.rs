@@ -26,6 +26,10 @@ pub const SHORTCUTS: &[(&str, &str)] = &[
     ("Ctrl (while dragging a light)", "snap the move to the grid, the aim to 15°"),
     ("Drag / WASD QE / scroll", "orbit / fly / move (viewport)"),
     ("Click", "pin a probe (viewport, viewers)"),
+    (
+        "X / right-click → Explain",
+        "explain the pixel under the pointer: where its indirect light comes from (viewport)",
+    ),
 ];
 
 impl State {

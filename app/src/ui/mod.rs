@@ -9,6 +9,7 @@ pub mod ab;
 pub mod adaptive;
 pub mod app;
 pub mod capture;
+pub mod explain;
 pub mod grid;
 pub mod history;
 pub mod hot_reload;

@@ -22,6 +22,8 @@ pub enum Pane {
     Probe,
     /// The undo history (issue #39).
     History,
+    /// The pinned pixel explained (issue #42).
+    Explain,
     /// A buffer viewer; the number keys its state in [`Session::viewers`].
     Viewer(u32),
 }
@@ -203,8 +205,12 @@ pub fn default_layout() -> egui_tiles::Tree<Pane> {
         vec![tiles.insert_pane(Pane::Settings), tiles.insert_pane(Pane::Scene), tiles.insert_pane(Pane::Presets)];
     let left = tiles.insert_tab_tile(left);
     let viewport = tiles.insert_pane(Pane::Viewport);
-    let bottom =
-        vec![tiles.insert_pane(Pane::Timings), tiles.insert_pane(Pane::Probe), tiles.insert_pane(Pane::History)];
+    let bottom = vec![
+        tiles.insert_pane(Pane::Timings),
+        tiles.insert_pane(Pane::Probe),
+        tiles.insert_pane(Pane::Explain),
+        tiles.insert_pane(Pane::History),
+    ];
     let bottom = tiles.insert_tab_tile(bottom);
     let middle = tiles.insert_vertical_tile(vec![viewport, bottom]);
     let viewer = tiles.insert_pane(Pane::Viewer(1));

@@ -95,6 +95,12 @@ pub struct State {
     pub history: crate::ui::history::History,
     /// Edit → History asked for the History pane (the app owns the layout).
     pub show_history_request: bool,
+    /// The pinned pixel explained (issue #42), when one is.
+    pub explain: Option<crate::ui::explain::ExplainView>,
+    /// The pixel under the pointer when the viewport's context menu opened.
+    pub context_pixel: Option<(u32, u32)>,
+    /// An explain pin asked for the Explain pane.
+    pub show_explain_request: bool,
 }
 
 impl State {
@@ -211,8 +217,10 @@ impl State {
                 // B first: it takes A's clock before A's frame advances it.
                 ab.render(&l.renderer);
             }
+            crate::ui::explain::before_frame(&mut self.explain, &mut l.renderer);
             let started = Instant::now();
             l.renderer.render_frame();
+            crate::ui::explain::after_frame(&mut self.explain, &l.renderer);
             if let Some(g) = &mut self.grid {
                 // The cells render in turn in what the frame budget leaves after the live frame.
                 let fps = self.session.target_fps;
@@ -355,6 +363,17 @@ impl State {
         let buffer = self.viewers.values().next().map(|v| v.state.buffer.clone()).unwrap_or_else(|| "final.hdr".into());
         self.pinned.push(PinnedProbe { pixel, buffer, channel: 0 });
         self.probe_history.push(VecDeque::new());
+    }
+
+    /// Explains `pixel` (frame pixels): pins it and shows the Explain pane.
+    pub fn explain_pixel(&mut self, pixel: (u32, u32)) {
+        let keep = self.explain.as_ref().map(|v| (v.show_rejected, v.overlay));
+        let mut v = crate::ui::explain::ExplainView::new(pixel);
+        if let Some((rejected, overlay)) = keep {
+            (v.show_rejected, v.overlay) = (rejected, overlay);
+        }
+        self.explain = Some(v);
+        self.show_explain_request = true;
     }
 
     pub fn add_bookmark(&mut self) {

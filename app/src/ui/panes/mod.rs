@@ -2,6 +2,7 @@
 //! GPU timings, probes and buffer viewers. Panels can be dragged, tabbed and resized; the
 //! layout is part of the session.
 
+mod explain;
 mod grid;
 mod history;
 mod light_gizmo;
@@ -39,6 +40,7 @@ impl egui_tiles::Behavior<Pane> for Behavior<'_> {
             Pane::Timings => "GPU timings".into(),
             Pane::Probe => "Probes".into(),
             Pane::History => "History".into(),
+            Pane::Explain => "Explain".into(),
             Pane::Viewer(id) => {
                 let name = self.state.viewers.get(id).map(|v| v.state.buffer.as_str()).unwrap_or("?");
                 format!("Viewer {id}: {name}").into()
@@ -56,6 +58,7 @@ impl egui_tiles::Behavior<Pane> for Behavior<'_> {
             Pane::Timings => timings_ui(st, ui),
             Pane::Probe => scrolled(ui, "probe", |ui| probe_ui(st, ui)),
             Pane::History => scrolled(ui, "history", |ui| history::history_ui(st, ui)),
+            Pane::Explain => explain::explain_ui(st, ui),
             Pane::Viewer(id) => viewer_ui(st, ui, *id),
         }
         egui_tiles::UiResponse::None

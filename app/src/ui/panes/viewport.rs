@@ -34,6 +34,11 @@ pub(super) fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
     if st.show_gautron_records {
         records_overlay(st, ui, rect);
     }
+    if let (Some(v), Ok(l)) = (&st.explain, &st.lab)
+        && v.overlay
+    {
+        super::explain::explain_overlay(v, ui, rect, (w, h), l.renderer.view_proj());
+    }
     // The lights and their handles, on top of the image's response (they take its clicks
     // and drags where they are).
     if st.show_lights
@@ -78,6 +83,35 @@ pub(super) fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
         && let Some(p) = st.hover
     {
         st.pin_probe(p);
+    }
+    // Explain a pixel (issue #42): the context menu, or X over the image.
+    if response.secondary_clicked() {
+        st.context_pixel = st.hover;
+    }
+    response.context_menu(|ui| {
+        let Some(p) = st.context_pixel else {
+            ui.weak("no pixel under the pointer");
+            return;
+        };
+        if ui.button(format!("Explain this pixel ({}, {})", p.0, p.1)).clicked() {
+            st.explain_pixel(p);
+            ui.close();
+        }
+        if ui.button("Pin a probe here").clicked() {
+            st.pin_probe(p);
+            ui.close();
+        }
+        if st.explain.is_some() && ui.button("Stop explaining").clicked() {
+            st.explain = None;
+            ui.close();
+        }
+    });
+    if response.hovered()
+        && !ui.ctx().egui_wants_keyboard_input()
+        && ui.input_mut(|i| i.consume_key(egui::Modifiers::NONE, egui::Key::X))
+        && let Some(p) = st.hover
+    {
+        st.explain_pixel(p);
     }
     // Pinned probes as numbered rings.
     for (k, p) in st.pinned.iter().enumerate() {
