@@ -1,7 +1,9 @@
 //! Explain a pixel (issue #42): where a pixel's indirect light comes from, as the stage
 //! choices made it. A GPU pass replays the pixel's gather with the frame's own inputs, after
 //! the frame's passes and in its encoder (`passes::knecht::explain` for the VPL gather at
-//! tiles or pixels, its filter and its confidence merge); this module holds what every
+//! tiles or pixels, its filter and its confidence merge; `passes::gautron::explain` for
+//! Gautron's splatted irradiance records; `passes::hcb::explain` for the HCB's coherence
+//! splatting, Nguyen et al. §4.2–4.3); this module holds what every
 //! technique's replay decodes into: the contributions, largest first, the rejected ones with
 //! why, and the checks of their sum against the buffers the frame wrote
 //! (docs/architecture.md, "Explain a pixel").
@@ -33,6 +35,18 @@ pub enum Rejection {
     Filter,
     /// Its tile's pixel of the filter's window lies outside the image or on the background.
     Outside,
+    /// An irradiance record whose splat's bound (the screen bound of its sphere a·R_k) does
+    /// not hold the pixel.
+    OutsideBound,
+    /// An irradiance record lying in front of the pixel's point by Ward's test (its weight is 0).
+    InFront,
+    /// An irradiance record whose Ward weight at the pixel is at most 1/a (the splat discards it).
+    WeightBelowCutoff,
+    /// An irradiance record whose hemisphere is being computed (it splats nothing yet).
+    Pending,
+    /// An HCB sample whose splat's quad holds the pixel, to which the pixel is not coherent
+    /// (Nguyen et al. §4.2, Eq. 9: an error of Eq. 8 above 1; the splat adds nothing).
+    Incoherent,
 }
 
 impl Rejection {
@@ -43,6 +57,11 @@ impl Rejection {
             Rejection::NearField => "near field's",
             Rejection::Filter => "filter: other surface",
             Rejection::Outside => "window: outside or background",
+            Rejection::OutsideBound => "outside its splat's bound",
+            Rejection::InFront => "in front of P (Ward's test)",
+            Rejection::WeightBelowCutoff => "w ≤ 1/a (Ward's weight)",
+            Rejection::Pending => "being computed",
+            Rejection::Incoherent => "incoherent (Eq. 9)",
         }
     }
 }
@@ -209,7 +228,7 @@ impl Explanation {
         let accepted = self.contributions.iter().filter(|c| c.rejected.is_none()).count();
         out.push_str(&format!("  {} contributors, {} rejected\n", accepted, self.contributions.len() - accepted));
         out.push_str(&format!(
-            "  {:<12} {:<28} {:>8} {:>36} {:>9}  {}\n",
+            "  {:<16} {:<36} {:>8} {:>36} {:>9}  {}\n",
             "name", "source", "share", "value (rgb)", "weight", "rejected / fields"
         ));
         let shown = if rows == 0 { self.contributions.len() } else { rows.min(self.contributions.len()) };
@@ -219,7 +238,7 @@ impl Explanation {
                 fields.insert(0, format!("via ({x}, {y})"));
             }
             out.push_str(&format!(
-                "  {:<12} {:<28} {:>7.2}% ({:.4e}, {:.4e}, {:.4e}) {:>9.4}  {}{}\n",
+                "  {:<16} {:<36} {:>7.2}% ({:.4e}, {:.4e}, {:.4e}) {:>9.4}  {}{}\n",
                 c.name,
                 c.source,
                 100.0 * self.share(c),

@@ -191,9 +191,13 @@ fn indirect_light(
             if let Err(e) = gautron.gather_at_samples(f, enc, timer, hcb.sample_buffers()) {
                 log::warn!("gautron: the HCB's sample count could not be read: {e}");
             }
-            return Some(hcb.splat_only(f, enc, timer));
+            let view = hcb.splat_only(f, enc, timer);
+            crate::renderer::explain::explain_hcb(f, x, enc, &view);
+            return Some(view);
         }
-        return Some(x.gautron.as_mut()?.run(f, enc, timer, None));
+        let view = x.gautron.as_mut()?.run(f, enc, timer, None);
+        crate::renderer::explain::explain_gautron(f, x, enc, &view);
+        return Some(view);
     }
     // Soler et al.'s screen-space choices: mip levels (stage 5), the ring gather and the
     // joint bilateral upsampling (stage 6), and the warped blend of Eq. 6 (stage 7) when
@@ -205,9 +209,13 @@ fn indirect_light(
             let (hcb, soler) = (x.hcb.as_ref()?, x.soler.as_ref()?);
             hcb.build_only(f, enc, timer);
             soler.gather_at_samples(f, enc, timer, hcb.sample_buffers());
-            return Some(hcb.splat_only(f, enc, timer));
+            let view = hcb.splat_only(f, enc, timer);
+            crate::renderer::explain::explain_hcb(f, x, enc, &view);
+            return Some(view);
         }
-        return Some(x.soler.as_mut()?.run(f, enc, timer));
+        let view = x.soler.as_mut()?.run(f, enc, timer);
+        crate::renderer::explain::explain_soler(f, x, enc);
+        return Some(view);
     }
 
     // Stage 3: VPLs.
@@ -235,7 +243,9 @@ fn indirect_light(
     // GI Lab's mix with Gautron et al.: irradiance records lit by the VPLs (stages 5–7 are
     // Gautron's creation, splatting and cache).
     if p.shading_points == ShadingPoints::IrradianceRecords {
-        return Some(x.gautron.as_mut()?.run(f, enc, timer, Some(light)));
+        let view = x.gautron.as_mut()?.run(f, enc, timer, Some(light));
+        crate::renderer::explain::explain_gautron(f, x, enc, &view);
+        return Some(view);
     }
 
     // Stage 5: shading points (the HCB sample cache, stage 7's choice, acts in the selection:
@@ -252,7 +262,13 @@ fn indirect_light(
     // Stage 6: the VPL gather at the shading points, then the reconstruction.
     let gathered = match (p.vpl_source, p.shading_points) {
         // The reference's gather folds the batch into its running average (stage 7).
-        (VplSource::UniformBatches, _) => x.reference.as_mut()?.gather(f, enc, timer, &vpls, &vis),
+        (VplSource::UniformBatches, _) => {
+            // A pinned pixel's replay reads the average before the gather folds the batch in.
+            crate::renderer::explain::explain_reference(f, x, enc, &vpls, true);
+            let average = x.reference.as_mut()?.gather(f, enc, timer, &vpls, &vis);
+            crate::renderer::explain::explain_reference(f, x, enc, &vpls, false);
+            average
+        }
         (_, ShadingPoints::HcbSamples) => x.hcb.as_ref()?.gather_and_splat(f, enc, timer, light),
         _ => {
             let i = x.interleave.as_mut()?;
@@ -290,6 +306,12 @@ fn indirect_light(
     if x.explain_pixel.is_some() && p.vpl_source == VplSource::ImportanceWarping {
         crate::renderer::explain::explain_vpl_gather(f, x, enc, &vpls, &vis, &last);
     }
+    // The HCB's: its reconstruction (coherence splatting) ran in gather_and_splat and its
+    // temporal choice is none, the sample cache (stages 5–6) or the confidence merge, so
+    // `last` is `hcb.indirect` or `temporal.history`.
+    if p.shading_points == ShadingPoints::HcbSamples {
+        crate::renderer::explain::explain_hcb(f, x, enc, &last);
+    }
     Some(last)
 }
 
@@ -307,7 +329,9 @@ fn near_field_light(
     if p.gather != Gather::Vpl || !p.uses_soler() {
         return None;
     }
-    Some(x.soler.as_mut()?.run(f, enc, timer))
+    let view = x.soler.as_mut()?.run(f, enc, timer);
+    crate::renderer::explain::explain_soler(f, x, enc);
+    Some(view)
 }
 
 /// Stage 6's reconstruction of the gathered light. Coherence splatting ran with the gather at

@@ -1,5 +1,6 @@
-// Gautron, Křivánek et al. 003: the irradiance record and Ward's weight, shared by the
-// creation, the hemisphere reduction, the splat and the resolve. CPU twin: cpu::gautron.
+// Gautron, Křivánek et al. 003: the irradiance record, Ward's weight, the extrapolation and
+// the splat's bound, shared by the creation, the hemisphere reduction, the splat and the
+// pixel's replay (explain.wgsl). CPU twin: cpu::gautron.
 
 // One irradiance record ("Irradiance Caching": position, normal, irradiance, gradients,
 // harmonic mean distance). Rust twin: passes::gautron::GpuRecord (160 bytes).
@@ -80,18 +81,48 @@ struct HemisphereCamera {
     tile: vec4<f32>,
 }
 
+// Ward's weight's parts (Gautron et al. 2005, "Radiance cache splatting", "From Octree to
+// Splatting": Ward's weight; Ward 1988's "Weighting Function", which the 2005 text prints
+// without an equation number): x: ‖P − P_k‖/R_k, y: √(1 − n·n_k), z: (P − P_k)·(n + n_k)/2
+// and w: −tol·R_k, the two sides of Ward's "in front" test (tol = params.rules.x). ward_weight
+// and the pixel's replay (explain.wgsl) both read them: one implementation.
+fn ward_terms(rec: Record, p: vec3<f32>, n: vec3<f32>) -> vec4<f32> {
+    let d = p - rec.position.xyz;
+    let r = max(rec.position.w, 1e-20);
+    return vec4<f32>(
+        length(d) / r,
+        sqrt(max(0.0, 1.0 - dot(n, rec.normal.xyz))),
+        dot(d, n + rec.normal.xyz) * 0.5,
+        -params.rules.x * r,
+    );
+}
+
 // Ward's weight ("Weighting Function", Ward 1988): 1 / (‖P − P_k‖/R_k + √(1 − n·n_k)),
 // clamped to w_max (⚠[gautron.weight-clamp] unbounded at P = P_k); 0 when the record lies in
 // front of P by Ward's test (P − P_k)·(n + n_k)/2 < −tol·R_k (not in 003; tol =
 // params.rules.x, f32 max: no test). Twin: cpu::gautron::weight.
 fn ward_weight(rec: Record, p: vec3<f32>, n: vec3<f32>, w_max: f32) -> f32 {
-    let d = p - rec.position.xyz;
-    let r = max(rec.position.w, 1e-20);
-    if (dot(d, n + rec.normal.xyz) * 0.5 < -params.rules.x * r) {
+    let t = ward_terms(rec, p, n);
+    if (t.z < t.w) {
         return 0.0;
     }
-    let denom = length(d) / r + sqrt(max(0.0, 1.0 - dot(n, rec.normal.xyz)));
-    return 1.0 / max(denom, 1.0 / w_max);
+    return 1.0 / max(t.x + t.y, 1.0 / w_max);
+}
+
+// The rotational gradient's term (n_k × n)·∇_r E_k per channel (Gautron et al. 2005, "Radiance
+// cache splatting", "From Octree to Splatting": E_k extrapolated by its gradients; Ward and
+// Heckbert 1992). Twin: the rotational part of cpu::gautron::extrapolate.
+fn rotational_term(rec: Record, n: vec3<f32>) -> vec3<f32> {
+    let axis = cross(rec.normal.xyz, n);
+    return vec3<f32>(dot(axis, rec.rot[0].xyz), dot(axis, rec.rot[1].xyz), dot(axis, rec.rot[2].xyz));
+}
+
+// The translational gradient's term (P − P_k)·∇_t E_k per channel (Gautron et al. 2005,
+// "Radiance cache splatting", "From Octree to Splatting"; Křivánek et al. 2005). Twin: the
+// translational part of cpu::gautron::extrapolate.
+fn translational_term(rec: Record, p: vec3<f32>) -> vec3<f32> {
+    let d = p - rec.position.xyz;
+    return vec3<f32>(dot(d, rec.trans[0].xyz), dot(d, rec.trans[1].xyz), dot(d, rec.trans[2].xyz));
 }
 
 // E_k + (n_k × n)·∇_r + (P − P_k)·∇_t per channel ("Irradiance Interpolation"), each gradient
@@ -99,14 +130,51 @@ fn ward_weight(rec: Record, p: vec3<f32>, n: vec3<f32>, w_max: f32) -> f32 {
 fn extrapolate(rec: Record, p: vec3<f32>, n: vec3<f32>, rotational: bool, translational: bool) -> vec3<f32> {
     var e = rec.irradiance.rgb;
     if (rotational) {
-        let axis = cross(rec.normal.xyz, n);
-        e = e + vec3<f32>(dot(axis, rec.rot[0].xyz), dot(axis, rec.rot[1].xyz), dot(axis, rec.rot[2].xyz));
+        e = e + rotational_term(rec, n);
     }
     if (translational) {
-        let d = p - rec.position.xyz;
-        e = e + vec3<f32>(dot(d, rec.trans[0].xyz), dot(d, rec.trans[1].xyz), dot(d, rec.trans[2].xyz));
+        e = e + translational_term(rec, p);
     }
     return max(e, vec3<f32>(0.0));
+}
+
+// The NDC interval [lo, hi] of a circle (centre (c, d) with d the distance in front of the
+// eye, radius ρ) seen from the eye along one axis; scale is P00 or P11 (Gautron et al. 2005,
+// "Radiance cache splatting", "From Octree to Splatting": the quad "tightly enclosing the
+// splatted sphere"; twin: cpu::gautron::sphere_ndc_rect).
+fn tangent_interval(c: f32, d: f32, rho: f32, scale: f32) -> vec2<f32> {
+    let k = d * d - rho * rho;
+    let root = sqrt(max(c * c + k, 0.0));
+    let lo = (c * d - rho * root) / k;
+    let hi = (c * d + rho * root) / k;
+    return vec2<f32>(lo, hi) * scale;
+}
+
+// A record's splat rectangle in NDC (x0, y0, x1, y1) seen by a camera of `view`, near plane
+// `near` and `viewport` (width, height) px: the screen bound of its sphere of radius a·R_k
+// (Gautron et al. 2005, "Radiance cache splatting", "From Octree to Splatting", the sphere
+// inside which the simplified weight exceeds 1/a); the whole screen when the sphere reaches the
+// near plane; an empty one while its hemisphere is being computed. The splat and the pixel's
+// replay (explain.wgsl) both call it. Twin: cpu::gautron::sphere_ndc_rect.
+fn splat_bound(rec: Record, view: mat4x4<f32>, near: f32, viewport: vec2<f32>) -> vec4<f32> {
+    if (rec.pixel.w < 0.5) {
+        return vec4<f32>(1.0, 1.0, -1.0, -1.0);
+    }
+    let rho = params.weight.x * rec.position.w;
+    let c = (view * vec4<f32>(rec.position.xyz, 1.0)).xyz;
+    let d = -c.z;
+    var rect = vec4<f32>(-1.0, -1.0, 1.0, 1.0);
+    if (d - rho > near) {
+        let x = tangent_interval(c.x, d, rho, params.misc.y);
+        let y = tangent_interval(c.y, d, rho, params.misc.z);
+        // half a pixel more on every side: a sphere smaller than a pixel (R_k clamped to
+        // ~1 px, the brute force of the bench) still reaches its own pixel's centre despite
+        // the rounding of its position
+        let half_px = vec2<f32>(1.0) / viewport;
+        rect = vec4<f32>(x.x - half_px.x, y.x - half_px.y, x.y + half_px.x, y.y + half_px.y);
+        rect = vec4<f32>(max(rect.xy, vec2<f32>(-1.0)), min(rect.zw, vec2<f32>(1.0)));
+    }
+    return rect;
 }
 
 // The hemisphere camera's tangent frame (t, b) of a normal, t × b = n. Twin: cpu::gautron::frame.

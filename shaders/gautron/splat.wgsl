@@ -30,37 +30,10 @@
 @group(0) @binding(8) var out_weighted: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(9) var out_plain: texture_storage_2d<rgba32float, write>;
 
-// The NDC interval [lo, hi] of a circle (centre (c, d) with d the distance in front of the
-// eye, radius ρ) seen from the eye along one axis; scale is P00 or P11.
-fn tangent_interval(c: f32, d: f32, rho: f32, scale: f32) -> vec2<f32> {
-    let k = d * d - rho * rho;
-    let root = sqrt(max(c * c + k, 0.0));
-    let lo = (c * d - rho * root) / k;
-    let hi = (c * d + rho * root) / k;
-    return vec2<f32>(lo, hi) * scale;
-}
-
 // The record's rectangle in NDC (x0, y0, x1, y1), or an empty one while its hemisphere is
-// being computed.
+// being computed (gautron/common.wgsl's splat_bound with this frame's camera).
 fn splat_rect(rec: Record) -> vec4<f32> {
-    if (rec.pixel.w < 0.5) {
-        return vec4<f32>(1.0, 1.0, -1.0, -1.0);
-    }
-    let rho = params.weight.x * rec.position.w;
-    let c = (camera.view * vec4<f32>(rec.position.xyz, 1.0)).xyz;
-    let d = -c.z;
-    var rect = vec4<f32>(-1.0, -1.0, 1.0, 1.0);
-    if (d - rho > camera.params.x) {
-        let x = tangent_interval(c.x, d, rho, params.misc.y);
-        let y = tangent_interval(c.y, d, rho, params.misc.z);
-        // half a pixel more on every side: a sphere smaller than a pixel (R_k clamped to
-        // ~1 px, the brute force of the bench) still reaches its own pixel's centre despite
-        // the rounding of its position
-        let half_px = vec2<f32>(1.0) / camera.viewport.xy;
-        rect = vec4<f32>(x.x - half_px.x, y.x - half_px.y, x.y + half_px.x, y.y + half_px.y);
-        rect = vec4<f32>(max(rect.xy, vec2<f32>(-1.0)), min(rect.zw, vec2<f32>(1.0)));
-    }
-    return rect;
+    return splat_bound(rec, camera.view, camera.params.x, camera.viewport.xy);
 }
 
 struct SplatOut {

@@ -44,47 +44,10 @@ fn vs_splat(@builtin(vertex_index) v: u32, @builtin(instance_index) instance: u3
     return out;
 }
 
-// The sample's quad in NDC (x0, y0, x1, y1): the whole screen when its sphere holds the eye.
-// Half-size: the tangent of the sphere's angular radius at its view depth (r / √(d² − r²),
-// larger than at its distance), stretched by distance / depth for its off-axis ellipse, in
-// pixels, plus one.
+// The sample's quad in NDC (x0, y0, x1, y1): hcb/common.wgsl's splat_quad with this frame's
+// camera.
 fn splat_rect(s: HcbSample) -> vec4<f32> {
-    let depth = -(camera.view * vec4<f32>(s.position.xyz, 1.0)).z;
-    let c = camera.view_proj * vec4<f32>(s.position.xyz, 1.0);
-    if (depth <= s.position.w || c.w <= 0.0) {
-        return vec4<f32>(-1.0, -1.0, 1.0, 1.0);
-    }
-    let r = s.position.w / sqrt(depth * depth - s.position.w * s.position.w);
-    let stretch = length(s.position.xyz - camera.position.xyz) / depth;
-    let half_px = r * stretch / hp.thresholds.w + 1.0;
-    let half = vec2<f32>(half_px * 2.0 * camera.viewport.z, half_px * 2.0 * camera.viewport.w);
-    let centre = c.xy / c.w;
-    return vec4<f32>(centre - half, centre + half);
-}
-
-// Sample s's splat at the pixel whose visible point is b with normal n_b: rgb w·E, a w
-// (Eq. 10); a = −1 where b is not coherent to s (Eq. 9).
-fn splat_value(s: HcbSample, b: vec3<f32>, n_b: vec3<f32>) -> vec4<f32> {
-    let a = s.position.xyz;
-    let n_a = s.normal.xyz;
-    let d = b - a;
-    let len = length(d);
-    let e1 = len / max(s.position.w, 1e-12);
-    // 1 − n_a·n_b as ½‖n_a − n_b‖² (unit normals): exact 0 for equal normals.
-    let dn = n_a - n_b;
-    let e2 = sqrt(0.5 * dot(dn, dn)) / sqrt(max(1.0 - hp.thresholds.x, 1e-12));
-    var e3 = 0.0;
-    if (len > 0.0) {
-        let ab = d / len;
-        if (dot(ab, n_a) <= 0.0 || dot(-ab, n_b) <= 0.0) {
-            e3 = sqrt(abs(dot(ab, n_a))) / sqrt(max(hp.thresholds.y, 1e-12));
-        }
-    }
-    if (max(e1, max(e2, e3)) > 1.0) {
-        return vec4<f32>(0.0, 0.0, 0.0, -1.0);
-    }
-    let w = (1.0 - e1) * (1.0 - e2) * (1.0 - e3);
-    return vec4<f32>(w * s.light.rgb, w);
+    return splat_quad(s, camera.view, camera.view_proj, camera.position.xyz, camera.viewport.zw, hp.thresholds.w);
 }
 
 @fragment
@@ -94,7 +57,7 @@ fn fs_splat(in: VsOut) -> @location(0) vec4<f32> {
     if (nb.w < 0.5) {
         discard;
     }
-    let v = splat_value(samples[in.index], textureLoad(g_position, px, 0).xyz, normalize(nb.xyz));
+    let v = splat_value(samples[in.index], textureLoad(g_position, px, 0).xyz, normalize(nb.xyz), hp.thresholds);
     if (v.a < 0.0) {
         discard;
     }
@@ -144,7 +107,7 @@ fn cs_accumulate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_i
         let c = bin_centre_ndc(gid.xy, camera.viewport.zw);
         var cursor = bins_start(words);
         for (var j = bins_next(&cursor, c); j != BIN_NONE; j = bins_next(&cursor, c)) {
-            let v = splat_value(samples[range.x + j], b, n_b);
+            let v = splat_value(samples[range.x + j], b, n_b, hp.thresholds);
             if (v.a >= 0.0) {
                 sum = sum + v;
             }

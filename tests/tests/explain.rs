@@ -45,7 +45,14 @@ fn assert_sums(e: &Explanation) {
         e.to_text(8)
     );
     for c in &e.checks {
-        assert!(c.relative_error() <= SUM_TOLERANCE, "pixel {:?}: {} ({})\n{}", e.pixel, c.what, c.relative_error(), e.to_text(8));
+        assert!(
+            c.relative_error() <= SUM_TOLERANCE,
+            "pixel {:?}: {} ({})\n{}",
+            e.pixel,
+            c.what,
+            c.relative_error(),
+            e.to_text(8)
+        );
     }
     assert!(luminance(e.value) > 0.0, "pixel {:?} has no indirect light:\n{}", e.pixel, e.to_text(8));
 }
@@ -54,7 +61,7 @@ fn assert_sums(e: &Explanation) {
 fn assert_cpu_twin(r: &Renderer, e: &Explanation) {
     let slots = r.vpl_slots().expect("the VPL list");
     let s = r.settings();
-    let d_min = s.vpl.min_distance_m;
+    let d_min = if e.buffer == "indirect.accum" { s.reference.min_distance_m } else { s.vpl.min_distance_m };
     let eye = r.camera.position;
     let mut compared = 0;
     for c in e.contributions.iter().filter(|c| c.name.starts_with("VPL ")) {
@@ -73,7 +80,8 @@ fn assert_cpu_twin(r: &Renderer, e: &Explanation) {
         let q = c.via.unwrap_or(e.pixel);
         let probe = r.probe(&[q]).expect("probe");
         let at = |name: &str| probe[0].iter().find(|v| v.name == name).unwrap_or_else(|| panic!("{name}")).value;
-        let (pos, nrm, alb, mat) = (at("gbuffer.position"), at("gbuffer.normal"), at("gbuffer.albedo"), at("gbuffer.material"));
+        let (pos, nrm, alb, mat) =
+            (at("gbuffer.position"), at("gbuffer.normal"), at("gbuffer.albedo"), at("gbuffer.material"));
         let x = Receiver {
             position: Vec3::new(pos[0], pos[1], pos[2]),
             normal: Vec3::new(nrm[0], nrm[1], nrm[2]).normalize(),
@@ -82,7 +90,17 @@ fn assert_cpu_twin(r: &Renderer, e: &Explanation) {
             si: mat[0],
             sp: mat[1],
         };
-        let cpu = vpl_radiance(&vpl, &x, eye, d_min) * field(c, "N/N_t");
+        // The tile's N / N_t (1 for the reference, which gathers every VPL of its batch).
+        let scale = c.fields.iter().find(|(k, _)| *k == "N/N_t").map(|(_, v)| *v).unwrap_or(1.0);
+        let cpu = vpl_radiance(&vpl, &x, eye, d_min) * scale;
+        if c.rejected == Some(Rejection::NearField) {
+            // Closer than the cut: the near field's; the far field's gather adds nothing.
+            assert_eq!(field(c, "unshadowed (lum)"), 0.0, "{}", c.name);
+            let cut = r.settings().soler.near_field_split(r.bounds().radius());
+            assert!((vpl.position - x.position).length() < cut * 1.0001, "{} is beyond the cut", c.name);
+            compared += 1;
+            continue;
+        }
         let gpu_unshadowed = field(c, "unshadowed (lum)");
         let scale = luminance(cpu).abs().max(1e-6);
         assert!(
@@ -190,7 +208,11 @@ fn a_shadowed_pixel_lists_the_vpls_the_exact_maps_hide_as_a_ray_cast_does() {
         agree += (blocked == (c.rejected == Some(Rejection::Occluded))) as u32;
         total += 1;
     }
-    eprintln!("pixel {:?}: {} occluded; the exact maps and the ray cast agree on {agree} of {total} VPLs", e.pixel, occluded(e));
+    eprintln!(
+        "pixel {:?}: {} occluded; the exact maps and the ray cast agree on {agree} of {total} VPLs",
+        e.pixel,
+        occluded(e)
+    );
     assert!(agree as f32 >= 0.9 * total as f32, "the exact maps and the ray cast agree on {agree} of {total} VPLs");
     // The occluded VPLs' depths are in the fields: the receiver lies beyond the stored depth.
     for c in e.contributions.iter().filter(|c| c.rejected == Some(Rejection::Occluded)) {
@@ -199,10 +221,45 @@ fn a_shadowed_pixel_lists_the_vpls_the_exact_maps_hide_as_a_ray_cast_does() {
 }
 
 #[test]
+fn the_exact_vpl_reference_splits_the_pixel_into_its_batch_and_the_previous_average() {
+    let mut r = paused_renderer(64, Technique::ExactVpl, |s| s.reference.vpls_per_frame = 64);
+    for _ in 0..2 {
+        r.render_frame();
+    }
+    for p in PIXELS {
+        let e = explain(&mut r, p, 1);
+        assert_eq!(e.buffer, "indirect.accum");
+        assert_sums(&e);
+        assert_cpu_twin(&r, &e);
+        let prev = e.contributions.iter().find(|c| c.name == "previous batches").expect("the average's share");
+        let k = field(prev, "batches");
+        assert!(k >= 2.0 && (prev.weight - k / (k + 1.0)).abs() < 1e-6, "{}", e.to_text(4));
+    }
+}
+
+#[test]
+fn the_near_far_mix_explains_both_fields_against_the_sum_of_their_buffers() {
+    let mut r = paused_renderer(64, Technique::SolerNearKnechtFar, |s| s.vpl.count = 128);
+    for _ in 0..2 {
+        r.render_frame();
+    }
+    // The back wall's corner with the floor and the floor by the blocks: senders nearby.
+    for p in [(32, 44), (20, 50), (44, 48)] {
+        let e = explain(&mut r, p, 1);
+        assert_eq!(e.buffer, "temporal.history + soler.temporal");
+        assert_sums(&e);
+        assert_cpu_twin(&r, &e);
+        assert!(e.contributions.iter().any(|c| c.name.starts_with("near: level ")), "{}", e.to_text(4));
+        assert!(e.checks.iter().any(|c| c.buffer == "soler.indirect"));
+    }
+}
+
+#[test]
 fn explaining_what_is_not_written_yet_says_so() {
-    let mut r = paused_renderer(32, Technique::Soler, |_| {});
+    // Soler's later bounces: their levels' light is not kept.
+    let mut r = paused_renderer(32, Technique::Soler, |s| s.soler.bounces = 2);
     r.set_explain(Some((4, 4)));
     r.render_frame();
-    let err = r.explanation().expect_err("Soler's gather has no replay yet");
-    assert!(err.contains("not yet"), "{err}");
+    let err = r.explanation().expect_err("Soler's second bounce has no replay yet");
+    assert!(err.contains("one bounce"), "{err}");
 }

@@ -62,6 +62,14 @@ impl Renderer {
         passes.retain(|p| *p != "instant_radiosity" || self.stages.knecht.is_some());
         passes.retain(|p| *p != "soler" || self.stages.soler.is_some());
         passes.retain(|p| *p != "gautron" || self.stages.gautron.is_some());
+        // The replays of a pinned pixel exist once a pixel was explained.
+        let x = &self.stages;
+        let replays = x.explain_vpl.is_some()
+            || x.explain_gautron.is_some()
+            || x.explain_hcb.is_some()
+            || x.explain_soler.is_some()
+            || x.explain_reference.is_some();
+        passes.retain(|p| *p != "explain" || replays);
         if passes.is_empty() {
             return Ok(passes);
         }
@@ -74,9 +82,17 @@ impl Renderer {
             .contains(&"direct")
             .then(|| DirectPass::new(&ctx, bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h));
         let compose = passes.contains(&"compose").then(|| ComposePass::new(&ctx, w, h));
-        let explain = passes.contains(&"explain").then(|| {
+        let explain = (passes.contains(&"explain") && self.stages.explain_vpl.is_some()).then(|| {
             crate::passes::knecht::explain::VplExplainPass::new(&ctx, bgl::uniform(0, wgpu::ShaderStages::COMPUTE))
         });
+        let explain_gautron = (passes.contains(&"explain") && self.stages.explain_gautron.is_some())
+            .then(|| crate::passes::gautron::explain::GautronExplainPass::new(&ctx));
+        let explain_soler = (passes.contains(&"explain") && self.stages.explain_soler.is_some())
+            .then(|| crate::passes::soler::explain::SolerExplainPass::new(&ctx));
+        let explain_reference = (passes.contains(&"explain") && self.stages.explain_reference.is_some())
+            .then(|| crate::passes::reference::explain::ReferenceExplainPass::new(&ctx));
+        let explain_hcb = (passes.contains(&"explain") && self.stages.explain_hcb.is_some())
+            .then(|| crate::passes::hcb::explain::HcbExplainPass::new(&ctx));
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(e.to_string());
         }
@@ -99,6 +115,18 @@ impl Renderer {
         }
         if let Some(p) = explain {
             self.stages.explain_vpl = Some(p);
+        }
+        if let Some(p) = explain_soler {
+            self.stages.explain_soler = Some(p);
+        }
+        if let Some(p) = explain_reference {
+            self.stages.explain_reference = Some(p);
+        }
+        if let Some(p) = explain_gautron {
+            self.stages.explain_gautron = Some(p);
+        }
+        if let Some(p) = explain_hcb {
+            self.stages.explain_hcb = Some(p);
         }
         if passes.contains(&"exact_vpl") {
             let old = self.stages.reference.take();
@@ -367,6 +395,7 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         "soler/vote.wgsl"
         | "soler/gather.wgsl"
         | "soler/upsample.wgsl"
+        | "soler/jbu.wgsl"
         | "soler/resolve.wgsl"
         | "soler/voxelize.wgsl"
         | "soler/voxel_down.wgsl"
@@ -377,7 +406,11 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         | "soler/ring.wgsl"
         | "soler/hcb_gather.wgsl"
         | "soler/voxel_common.wgsl" => "soler",
-        "interleave/explain.wgsl" => "explain",
+        "interleave/explain.wgsl"
+        | "gautron/explain.wgsl"
+        | "soler/explain.wgsl"
+        | "hcb/explain.wgsl"
+        | "vpl/explain.wgsl" => "explain",
         "gautron/create.wgsl"
         | "gautron/hemisphere.wgsl"
         | "gautron/reduce.wgsl"

@@ -1,9 +1,10 @@
 //! Explain a pixel (issue #42): the renderer's side. `set_explain` pins a pixel; every frame
-//! then replays its gather after the passes that lit it (`explain_vpl_gather`, called by
-//! `frame.rs`), and `explanation` (blocking: the command line, tests) or `explanation_later`
-//! (the window, without waiting) decode it (`crate::explain`).
+//! then replays its gather after the passes that lit it (`explain_vpl_gather` and
+//! `explain_gautron`, called by `frame.rs`), and `explanation` (blocking: the command line,
+//! tests) or `explanation_later` (the window, without waiting) decode it (`crate::explain`).
 
 use crate::explain::{Explanation, Replay};
+use crate::passes::gautron::explain::{GautronExplainPass, GautronInfo};
 use crate::passes::knecht::explain::{ChainInfo, ExplainInputs, VplExplainPass};
 use crate::passes::knecht::temporal::MergeOrder;
 use crate::pipeline::{Gather, NearField, Reconstruction, ShadingPoints, Temporal, VplSource};
@@ -62,12 +63,212 @@ pub(crate) fn explain_vpl_gather(
         vpls: &vpls.list,
         vis,
         filter: filter.then(|| (s.interleave.alpha * f.depth_range(), s.interleave.beta)),
-        temporal: temporal.and_then(|_| x.temporal.as_ref()),
+        temporal: temporal.and(x.temporal.as_ref()),
         last,
     };
     let camera = crate::passes::bgl::uniform(0, wgpu::ShaderStages::COMPUTE);
     let pass = x.explain_vpl.get_or_insert_with(|| VplExplainPass::new(f.ctx, camera));
     pass.run(f.ctx, enc, &inputs, info);
+}
+
+/// Records the replay of the pinned pixel's splat of Gautron's irradiance records (lit by
+/// their hemispheres or, GI Lab's mix, by the VPLs; `passes::gautron::explain`), after the
+/// stage's last splat and its resolve wrote `indirect` (`gautron.indirect`).
+pub(crate) fn explain_gautron(
+    f: &FrameInputs,
+    x: &mut StagePasses,
+    enc: &mut wgpu::CommandEncoder,
+    indirect: &wgpu::TextureView,
+) {
+    let Some(pixel) = x.explain_pixel else { return };
+    if f.settings.pipeline.shading_points != ShadingPoints::IrradianceRecords {
+        return;
+    }
+    let (w, h) = f.gbuffer_size;
+    if pixel.0 >= w || pixel.1 >= h {
+        return;
+    }
+    let Some(stage) = x.gautron.as_ref() else { return };
+    let s = &f.settings.gautron;
+    let info = GautronInfo {
+        pixel,
+        accuracy: s.accuracy,
+        weight_clamp: s.weight_clamp,
+        rotational: s.rotational_gradient,
+        translational: s.translational_gradient,
+        neighbour_clamping: s.neighbour_clamping,
+        frame: f.frame,
+        technique: gautron_words(f),
+    };
+    let pass = x.explain_gautron.get_or_insert_with(|| GautronExplainPass::new(f.ctx));
+    pass.run(f, enc, stage, indirect, info);
+}
+
+/// Records the replay of the pinned pixel's coherence splatting of the HCB's samples (Nguyen
+/// et al. §4.2–4.3, Eq. 8–11; `passes::hcb::explain`), lit by the VPL gather at the samples
+/// or, GI Lab's mixes, by Soler's ring gather or Gautron's hemispheres there, after the chain
+/// wrote `last`: `hcb.indirect`, or `temporal.history` when the confidence merge follows (the
+/// sample cache, stage 7's other choice, acts in stages 5–6, before the splat's sums).
+pub(crate) fn explain_hcb(
+    f: &FrameInputs,
+    x: &mut StagePasses,
+    enc: &mut wgpu::CommandEncoder,
+    last: &wgpu::TextureView,
+) {
+    let p = &f.settings.pipeline;
+    let Some(pixel) = x.explain_pixel else { return };
+    if p.shading_points != ShadingPoints::HcbSamples {
+        return;
+    }
+    let (w, h) = f.gbuffer_size;
+    if pixel.0 >= w || pixel.1 >= h {
+        return;
+    }
+    let Some(stage) = x.hcb.as_ref() else { return };
+    let merge = p.temporal == Temporal::ConfidenceMerge;
+    let temporal = match (merge, x.temporal.as_ref()) {
+        (false, _) => None,
+        (true, Some(t)) => Some(t),
+        (true, None) => return,
+    };
+    let info = crate::passes::hcb::explain::HcbInfo {
+        pixel,
+        cache: p.temporal == Temporal::HcbSampleCache,
+        merge,
+        buffer: if merge { "temporal.history" } else { "hcb.indirect" }.into(),
+        technique: hcb_words(f),
+    };
+    let pass = x.explain_hcb.get_or_insert_with(|| crate::passes::hcb::explain::HcbExplainPass::new(f.ctx));
+    pass.run(f, enc, stage, temporal, last, info);
+}
+
+/// The HCB's stage choices, in words.
+fn hcb_words(f: &FrameInputs) -> String {
+    let p = &f.settings.pipeline;
+    let s = &f.settings.hcb;
+    let light = match p.gather {
+        Gather::ScreenSpace => "Soler's ring gather at the samples (GI Lab's mix)".to_string(),
+        Gather::Hemispheres => "Gautron's hemispheres at the samples (GI Lab's mix)".to_string(),
+        _ => format!("{:?} VPLs with {:?} visibility", p.vpl_source, p.vpl_visibility),
+    };
+    let temporal = match p.temporal {
+        Temporal::HcbSampleCache => "sample cache (§5)",
+        Temporal::ConfidenceMerge => "confidence merge",
+        _ => "no cache",
+    };
+    let near = if p.gather == Gather::Vpl && p.near_field == NearField::ScreenSpace {
+        ", far field (the near field's below)"
+    } else {
+        ""
+    };
+    format!(
+        "HCB samples (Nguyen) lit by {light}, coherence splatting (θ_max = {}°, γ_max = {}°, {:?} splat), \
+         {temporal}{near}",
+        s.theta_max_deg, s.gamma_max_deg, s.splat
+    )
+}
+
+/// The exact-VPL reference's replay (`passes::reference::explain`): `before` the gather, the
+/// average it folds into; after it, the batch's terms and what it wrote.
+pub(crate) fn explain_reference(
+    f: &FrameInputs,
+    x: &mut StagePasses,
+    enc: &mut wgpu::CommandEncoder,
+    vpls: &VplSet,
+    before: bool,
+) {
+    use crate::passes::reference::explain::{ReferenceExplainPass, ReferenceInputs, ReferenceRun};
+    let Some(pixel) = x.explain_pixel else { return };
+    let (w, h) = f.gbuffer_size;
+    let Some(reference) = x.reference.as_ref() else { return };
+    if pixel.0 >= w || pixel.1 >= h {
+        return;
+    }
+    let inputs = ReferenceInputs {
+        camera: f.camera_buffer,
+        g: f.gbuffer,
+        gather: &reference.gather,
+        vpls: &vpls.list,
+        atlas: &reference.visibility.atlas_view,
+    };
+    let pass = x.explain_reference.get_or_insert_with(|| ReferenceExplainPass::new(f.ctx));
+    if before {
+        let rs = &f.settings.reference;
+        let run = ReferenceRun {
+            pixel,
+            count: vpls.count,
+            batch: reference.batches,
+            technique: format!(
+                "exact-VPL reference: batches of {} VPLs with {:?} visibility, averaged (batch k weighs 1/(k+1))",
+                rs.vpls_per_frame, f.settings.pipeline.vpl_visibility
+            ),
+        };
+        pass.run_before(f.ctx, enc, &inputs, run);
+    } else {
+        pass.run_after(f.ctx, enc, &inputs);
+    }
+}
+
+/// Records the replay of Soler et al.'s levels and upsampling at the pinned pixel
+/// (`passes::soler::explain`), after the stage's passes.
+pub(crate) fn explain_soler(f: &FrameInputs, x: &mut StagePasses, enc: &mut wgpu::CommandEncoder) {
+    let Some(pixel) = x.explain_pixel else { return };
+    let (w, h) = f.gbuffer_size;
+    if pixel.0 >= w || pixel.1 >= h || soler_unsupported(&f.settings.soler).is_some() {
+        return;
+    }
+    let Some(stage) = x.soler.as_ref() else { return };
+    let s = &f.settings.soler;
+    let inputs = crate::passes::soler::explain::inputs(stage, f, pixel);
+    let info = crate::passes::soler::explain::SolerChain {
+        pixel,
+        levels: inputs.levels.len() as u32,
+        gathered: s.gathered_levels(),
+        temporal: inputs.temporal.is_some(),
+        irradiance_blend: s.temporal_quantity != crate::passes::soler::TemporalQuantity::Radiance,
+        technique: format!(
+            "{}screen-space mip levels (Soler): levels {}…{} gathered with {} samples of r = {} texels, joint bilateral upsampling{}",
+            if f.settings.pipeline.gather == Gather::Vpl { "near field: " } else { "" },
+            s.gathered_levels().start,
+            s.gathered_levels().end - 1,
+            s.samples,
+            s.radius_px,
+            if inputs.temporal.is_some() { ", Eq. 6's warped blend" } else { "" }
+        ),
+        samples: s.samples,
+    };
+    let pass = x.explain_soler.get_or_insert_with(|| crate::passes::soler::explain::SolerExplainPass::new(f.ctx));
+    pass.run(f.ctx, enc, &inputs, info);
+}
+
+/// Why Soler's replay cannot explain these settings yet (None: it can).
+fn soler_unsupported(s: &crate::passes::soler::SolerSettings) -> Option<&'static str> {
+    if s.bounces > 1 {
+        Some("Soler's replay explains one bounce; the later bounces' level light is not kept")
+    } else {
+        None
+    }
+}
+
+/// Gautron's stage choices, in words.
+fn gautron_words(f: &FrameInputs) -> String {
+    let p = &f.settings.pipeline;
+    let s = &f.settings.gautron;
+    let light = match p.gather {
+        Gather::Vpl => format!(
+            "irradiance records lit by {:?} VPLs with {:?} visibility (GI Lab's mix)",
+            p.vpl_source, p.vpl_visibility
+        ),
+        _ => "irradiance records lit by their hemispheres".into(),
+    };
+    let cache = match p.temporal {
+        Temporal::RecordCache => "record cache",
+        _ => "no cache",
+    };
+    format!(
+        "{light}, Ward-weight splatting (a = {}, w_max = {}, {:?} splat), {cache}",
+        s.accuracy, s.weight_clamp, s.splat
+    )
 }
 
 /// The stage choices of a VPL gather chain, in words.
@@ -91,9 +292,53 @@ fn chain_words(f: &FrameInputs) -> String {
         ));
     }
     if p.near_field == NearField::ScreenSpace {
-        words.push("far field only (the near field's screen-space light is not explained)".into());
+        words.push("far field (the near field's below)".into());
     }
     words.join(", ")
+}
+
+/// GI Lab's near/far mix (`pipeline.near_field = ScreenSpace`): the VPL gather's far field and
+/// Soler's near field, added by the compose; one explanation of both, checked against the sum
+/// of the two buffers.
+struct NearFar<'a> {
+    far: &'a dyn Replay,
+    near: &'a dyn Replay,
+}
+
+impl<T: Replay + ?Sized> Replay for &T {
+    fn parts(&self) -> Option<Vec<(wgpu::Buffer, u64)>> {
+        (**self).parts()
+    }
+
+    fn decode(&self, parts: &[Vec<u8>]) -> Option<Explanation> {
+        (**self).decode(parts)
+    }
+}
+
+impl Replay for NearFar<'_> {
+    fn parts(&self) -> Option<Vec<(wgpu::Buffer, u64)>> {
+        let mut parts = self.far.parts()?;
+        parts.extend(self.near.parts()?);
+        Some(parts)
+    }
+
+    fn decode(&self, parts: &[Vec<u8>]) -> Option<Explanation> {
+        let n = self.far.parts()?.len();
+        let mut far = self.far.decode(parts.get(..n)?)?;
+        let near = self.near.decode(parts.get(n..)?)?;
+        far.checks.push(near.total_check());
+        far.checks.extend(near.checks);
+        far.contributions.extend(near.contributions.into_iter().map(|mut c| {
+            c.name = format!("near: {}", c.name);
+            c
+        }));
+        far.notes.extend(near.notes);
+        far.technique = format!("{}; {}", far.technique, near.technique);
+        far.buffer = format!("{} + {}", far.buffer, near.buffer);
+        far.value += near.value;
+        far.sort();
+        Some(far)
+    }
 }
 
 impl Renderer {
@@ -116,10 +361,36 @@ impl Renderer {
         let vpl_gather = p.gather == Gather::Vpl
             && p.vpl_source == VplSource::ImportanceWarping
             && matches!(p.shading_points, ShadingPoints::EveryPixel | ShadingPoints::InterleavedTiles);
-        (!vpl_gather).then(|| {
+        // Gautron's irradiance records, lit by their hemispheres or by the VPLs (GI Lab's mix).
+        let gautron = p.shading_points == ShadingPoints::IrradianceRecords
+            && p.reconstruction == Reconstruction::WeightSplatting
+            && (p.gather == Gather::Hemispheres
+                || (p.gather == Gather::Vpl && p.vpl_source == VplSource::ImportanceWarping));
+        // The exact-VPL reference, while it still gathers batches.
+        let reference = p.vpl_source == VplSource::UniformBatches;
+        if reference && self.stages.reference.as_ref().is_some_and(|r| r.complete(&self.settings.reference)) {
+            return Some(
+                "the exact-VPL reference's average is complete: it gathers no more batches to replay \
+                 (H restarts it)"
+                    .into(),
+            );
+        }
+        // Soler et al.'s levels (one bounce).
+        let soler = p.gather == Gather::ScreenSpace && p.shading_points == ShadingPoints::MipLevels;
+        if soler && let Some(why) = soler_unsupported(&self.settings.soler) {
+            return Some(why.to_string());
+        }
+        // The HCB's coherence splatting, whatever lit its samples (the VPL gather at the
+        // samples, Soler's ring gather or Gautron's hemispheres there: GI Lab's mixes).
+        let hcb = p.shading_points == ShadingPoints::HcbSamples
+            && p.reconstruction == Reconstruction::CoherenceSplatting
+            && p.gather != Gather::None;
+        (!vpl_gather && !gautron && !soler && !hcb && !reference).then(|| {
             format!(
                 "explaining a pixel is written for instant radiosity's VPL gather at every pixel or at \
-                 interleaved tiles (with its filter and confidence merge); not yet for {:?} VPLs gathered \
+                 interleaved tiles (with its filter and confidence merge) and for Gautron's splatted \
+                 irradiance records (lit by hemispheres or VPLs) and for the HCB's coherence splatting; \
+                 not yet for {:?} VPLs gathered \
                  by {:?} at {:?} ({:?}, {:?})",
                 p.vpl_source, p.gather, p.shading_points, p.reconstruction, p.temporal
             )
@@ -127,8 +398,31 @@ impl Renderer {
     }
 
     /// The replay of the current stage choices, once a frame ran with a pinned pixel.
-    fn replay(&self) -> Result<&dyn Replay, String> {
+    fn replay(&self) -> Result<Box<dyn Replay + '_>, String> {
+        let far = self.far_replay()?;
+        let p = &self.settings.pipeline;
+        if p.gather == Gather::Vpl && p.near_field == NearField::ScreenSpace {
+            let near = self.stages.explain_soler.as_ref().ok_or("the near field was not replayed yet")?;
+            return Ok(Box::new(NearFar { far, near }));
+        }
+        Ok(Box::new(far))
+    }
+
+    /// The replay of the stage choices' (far-field) light.
+    fn far_replay(&self) -> Result<&dyn Replay, String> {
         let none = || "no frame was rendered with a pinned pixel".to_string();
+        if self.settings.pipeline.shading_points == ShadingPoints::IrradianceRecords {
+            return Ok(self.stages.explain_gautron.as_ref().ok_or_else(none)?);
+        }
+        if self.settings.pipeline.shading_points == ShadingPoints::HcbSamples {
+            return Ok(self.stages.explain_hcb.as_ref().ok_or_else(none)?);
+        }
+        if self.settings.pipeline.vpl_source == VplSource::UniformBatches {
+            return Ok(self.stages.explain_reference.as_ref().ok_or_else(none)?);
+        }
+        if self.settings.pipeline.shading_points == ShadingPoints::MipLevels {
+            return Ok(self.stages.explain_soler.as_ref().ok_or_else(none)?);
+        }
         Ok(self.stages.explain_vpl.as_ref().ok_or_else(none)?)
     }
 
@@ -156,9 +450,9 @@ impl Renderer {
         };
         let a = self.read_later(KEY, Readback::Storage(replay.parts()?), 0)?;
         match &a.data {
-            Ok(Readout::Bytes(parts)) => {
-                Some(replay.decode(parts).ok_or_else(|| "the replay's output did not match its frame".into()))
-            }
+            // A copy made before the pixel or the choices changed does not decode: wait for the
+            // next.
+            Ok(Readout::Bytes(parts)) => replay.decode(parts).map(Ok),
             Ok(_) => None,
             Err(e) => Some(Err(e.clone())),
         }

@@ -66,6 +66,16 @@ pub(crate) struct StagePasses {
     /// pixels (created when a pixel is first explained).
     pub explain_pixel: Option<(u32, u32)>,
     pub explain_vpl: Option<crate::passes::knecht::explain::VplExplainPass>,
+    /// The replay of Soler et al.'s levels and upsampling.
+    pub explain_soler: Option<crate::passes::soler::explain::SolerExplainPass>,
+    /// The replay of the exact-VPL reference's batch.
+    pub explain_reference: Option<crate::passes::reference::explain::ReferenceExplainPass>,
+    /// The replay of Gautron's splat of irradiance records (created when a pixel is first
+    /// explained with them).
+    pub explain_gautron: Option<crate::passes::gautron::explain::GautronExplainPass>,
+    /// The replay of the HCB's coherence splatting (Nguyen et al. §4.2–4.3; created when a
+    /// pixel is first explained with HCB samples).
+    pub explain_hcb: Option<crate::passes::hcb::explain::HcbExplainPass>,
 }
 
 /// A pixel and the Soler samples behind it (the overlay's last complete answer).

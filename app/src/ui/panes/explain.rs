@@ -146,6 +146,7 @@ pub(super) fn explain_overlay(
     rect: egui::Rect,
     size: (u32, u32),
     view_proj: glam::Mat4,
+    camera_right: glam::Vec3,
 ) {
     let painter = ui.painter_at(rect);
     let to_screen = |p: (u32, u32)| {
@@ -182,6 +183,15 @@ pub(super) fn explain_overlay(
         painter.circle(pos, 2.0 + 6.0 * s.sqrt(), colour, egui::Stroke::new(1.0, egui::Color32::BLACK));
         if hovered {
             painter.circle_stroke(pos, 12.0, egui::Stroke::new(2.0, egui::Color32::WHITE));
+        }
+        // A record's sphere of influence a·R_k (Gautron), as the splat bounds it.
+        if let Some((_, r)) = c.fields.iter().find(|(k, _)| *k == "a·R_k") {
+            let edge = view_proj * (p + camera_right * *r).extend(1.0);
+            if edge.w > 0.0 {
+                let e = edge.truncate() / edge.w;
+                let radius = ((e.x - ndc.x) * 0.5 * rect.width()).abs();
+                painter.circle_stroke(pos, radius, egui::Stroke::new(1.0, colour.gamma_multiply(0.8)));
+            }
         }
     }
     // The filter's window: the pixels the VPLs came through.

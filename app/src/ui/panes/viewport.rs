@@ -37,7 +37,7 @@ pub(super) fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
     if let (Some(v), Ok(l)) = (&st.explain, &st.lab)
         && v.overlay
     {
-        super::explain::explain_overlay(v, ui, rect, (w, h), l.renderer.view_proj());
+        super::explain::explain_overlay(v, ui, rect, (w, h), l.renderer.view_proj(), l.renderer.camera.right());
     }
     // The lights and their handles, on top of the image's response (they take its clicks
     // and drags where they are).

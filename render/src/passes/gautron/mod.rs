@@ -14,6 +14,7 @@ use crate::{settings_enum, settings_group};
 pub use crate::passes::bins::SplatMethod;
 
 pub mod at_samples;
+pub mod explain;
 pub mod hemisphere;
 pub mod splat;
 pub mod stage;

@@ -106,6 +106,11 @@ pub struct GautronStage {
 }
 
 impl GautronStage {
+    /// The stage's uniform (`GautronParams`) as this frame wrote it.
+    pub fn params(&self) -> &wgpu::Buffer {
+        &self.params
+    }
+
     pub fn new(
         ctx: &GpuContext,
         f_scene: &crate::scene::upload::GpuScene,

@@ -7,8 +7,8 @@
 //!
 //! The folder holds the HCB's passes: `build` (levels, masks, samples; stage 5), `gather`
 //! (the VPLs at the samples; stage 6), `splat` (coherence-weighted splatting and Eq. 11;
-//! stage 6's reconstruction), `cache` (the sample cache of §5; stage 7) and `stage`, which
-//! runs them for the frame.
+//! stage 6's reconstruction), `cache` (the sample cache of §5; stage 7), `stage`, which
+//! runs them for the frame, and `explain`, the replay of a pinned pixel's splat (issue #42).
 
 use glam::Vec4;
 
@@ -18,6 +18,7 @@ use crate::{settings_enum, settings_group};
 
 pub mod build;
 pub mod cache;
+pub mod explain;
 pub mod gather;
 pub mod splat;
 pub mod stage;
@@ -216,7 +217,9 @@ impl HcbFrame {
         }
     }
 
-    fn params(&self, level: [u32; 4]) -> HcbParams {
+    /// The passes' uniform for `level` (the splat's and, with [0; 4], the pixel's replay's:
+    /// `explain::HcbExplainPass`).
+    pub(crate) fn params(&self, level: [u32; 4]) -> HcbParams {
         let t = self.thresholds;
         HcbParams {
             thresholds: Vec4::new(t.cos_theta_max, t.cos_gamma_max, t.d_max, self.pixel_scale),

@@ -109,7 +109,8 @@ impl HcbStage {
         }
     }
 
-    fn frame(f: &FrameInputs) -> HcbFrame {
+    /// The frame's constants of the HCB's passes (the splat's thresholds among them).
+    pub(crate) fn frame(f: &FrameInputs) -> HcbFrame {
         let s = &f.settings.hcb;
         HcbFrame {
             thresholds: s.thresholds(f.radius),

@@ -343,14 +343,15 @@ pub fn decode(info: &ChainInfo, bytes: &[u8], vpls: &[GpuVpl]) -> Option<Explana
         let vpl = vpls.get(k as usize)?;
         let rejected = if flags & (OUTSIDE | BACKGROUND) != 0 {
             Some(Rejection::Outside)
-        } else if flags & FILTERED != 0 {
-            Some(Rejection::Filter)
         } else if flags & NEAR != 0 {
             Some(Rejection::NearField)
         } else if flags & FACING != 0 {
             Some(Rejection::Facing)
         } else if flags & OCCLUDED != 0 {
             Some(Rejection::Occluded)
+        } else if flags & FILTERED != 0 {
+            // Its term at q counts, but the filter leaves q out of the pixel's average.
+            Some(Rejection::Filter)
         } else {
             None
         };

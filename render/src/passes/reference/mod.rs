@@ -3,6 +3,7 @@
 //! visibility) and the full-BRDF gather folded into a running average (`vpl_gather`).
 //! Shaders: `shaders/vpl/{sample,shadow,gather}.wgsl`.
 
+pub mod explain;
 pub mod stage;
 pub mod vpl;
 pub mod vpl_gather;

@@ -63,6 +63,12 @@ impl ReferenceVpls {
         self.gather.register(reg);
     }
 
+    /// Whether the running average has every batch `reference.total_vpls` asks for (it then
+    /// gathers no more until something changes or the history is reset).
+    pub fn complete(&self, rs: &crate::passes::reference::vpl::ReferenceSettings) -> bool {
+        self.batches > 0 && self.batches >= rs.total_vpls.div_ceil(rs.vpls_per_frame.max(1))
+    }
+
     /// The running average (`indirect.accum`).
     pub fn average(&self) -> wgpu::TextureView {
         crate::passes::view(&self.gather.accum, "indirect.accum")

@@ -112,6 +112,11 @@ impl VplGatherPass {
         );
     }
 
+    /// The gather's uniform as the last `run` wrote it (`GatherParams`).
+    pub fn params(&self) -> &wgpu::Buffer {
+        &self.params
+    }
+
     /// Gathers one batch and folds it into the average with weight `params.batch.w`.
     #[allow(clippy::too_many_arguments)]
     pub fn run(

@@ -27,6 +27,7 @@
 use crate::{settings_enum, settings_group};
 
 pub mod bounces;
+pub mod explain;
 pub mod gather;
 pub mod hcb_gather;
 pub mod pyramid;

@@ -106,6 +106,11 @@ fn targets(device: &wgpu::Device, (w, h): (u32, u32)) -> Targets {
 }
 
 impl SolerTemporal {
+    /// The glossy light's history the last blend read (last frame's).
+    pub fn spec_history_prev(&self) -> &wgpu::Texture {
+        &self.spec_history[1 - self.current]
+    }
+
     pub fn new(ctx: &GpuContext, size: (u32, u32)) -> Self {
         let device = &ctx.device;
         let cs = wgpu::ShaderStages::COMPUTE;

@@ -1,0 +1,403 @@
+//! Explain a pixel (issue #42) for Gautron et al.'s irradiance cache splatting (003, "From
+//! Octree to Splatting": "Principle"; Gautron et al. 2005, "Radiance cache splatting"), with
+//! the records lit by their hemispheres or by VPLs (GI Lab's mix). `shaders/gautron/explain.wgsl`
+//! replays the splat at the pinned pixel record by record through the splat's own functions
+//! (`gautron/common.wgsl`), after the frame's passes and in its encoder, and reads what the
+//! frame wrote there; [`decode`] turns it into the pixel's contributions (each record's share
+//! of the resolved c·DI·E/π), the records near it that the splat rejects, and the checks of the
+//! sums against `gautron.accum` and `gautron.indirect` (`crate::explain`). CPU twin of each
+//! weight: `cpu::gautron::weight` (tests/explain_gautron.rs).
+
+use glam::{Vec3, Vec4};
+
+use super::stage::GautronStage;
+use crate::explain::{Check, Contribution, Explanation, Rejection, luminance};
+use crate::gpu::GpuContext;
+use crate::passes::{bgl, bind_group, view};
+use crate::stages::FrameInputs;
+
+/// Flags of a listed record (`EXPLAIN_*` in the shader).
+pub const COVERS: u32 = 1;
+pub const PENDING: u32 = 2;
+pub const IN_FRONT: u32 = 4;
+pub const BELOW: u32 = 8;
+
+/// Byte offsets of the output buffer's parts (storage bindings start at multiples of 256):
+/// the header, the counters, the listed records.
+const COUNTERS_OFFSET: u64 = 256;
+const ENTRIES_OFFSET: u64 = 512;
+/// Most records listed (those whose bound holds the pixel or that lie within 2·a·R_k of it;
+/// a few dozen at the shipped accuracy).
+pub const MAX_LISTED: u64 = 2048;
+
+/// WGSL twin: `ExplainParams`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+struct ExplainParams {
+    pixel: [u32; 4],
+}
+
+/// What the frame wrote at the pixel; WGSL twin: `Header`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuHeader {
+    /// x, y: the pixel; z: the cache's capacity; w: its records.
+    pub pixel: [u32; 4],
+    /// `gautron.accum` (rgb Σ w·E, a Σ w).
+    pub accum: Vec4,
+    /// `gautron.indirect`.
+    pub indirect: Vec4,
+    /// `gautron.irradiance` (E, a: Σ w).
+    pub irradiance: Vec4,
+    /// rgb: c·DI as the resolve reads it; a: 1 on the background.
+    pub albedo: Vec4,
+    /// xyz: P.
+    pub point: Vec4,
+    /// xyz: n.
+    pub normal: Vec4,
+    /// Made this frame, computed again this frame, stale, records.
+    pub state: [u32; 4],
+    /// xy: the pixel's centre in NDC.
+    pub ndc: Vec4,
+}
+
+/// One listed record; WGSL twin: `Entry`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuEntry {
+    /// x: the record's index, y: flags.
+    pub index: [u32; 4],
+    /// x: w clamped, y: w before the clamp, z: ‖P − P_k‖/R_k, w: √(1 − n·n_k).
+    pub weight: Vec4,
+    /// rgb: E_k(P) with the gradients as set; a: the "in front" test's margin.
+    pub e: Vec4,
+    /// rgb: (n_k × n)·∇_r E_k.
+    pub rot: Vec4,
+    /// rgb: (P − P_k)·∇_t E_k.
+    pub trans: Vec4,
+    /// The record's own `GpuRecord::{position, normal, irradiance, pixel}`.
+    pub position: Vec4,
+    pub normal: Vec4,
+    pub irradiance: Vec4,
+    pub pixel: Vec4,
+}
+
+impl GpuEntry {
+    /// Whether the splat added it at the pixel.
+    pub fn accepted(&self) -> bool {
+        let flags = self.index[1];
+        flags & COVERS != 0 && flags & (PENDING | IN_FRONT | BELOW) == 0
+    }
+}
+
+/// What the frame's splat was, for [`decode`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct GautronInfo {
+    pub pixel: (u32, u32),
+    /// Ward's accuracy a and the weight's clamp w_max.
+    pub accuracy: f32,
+    pub weight_clamp: f32,
+    pub rotational: bool,
+    pub translational: bool,
+    pub neighbour_clamping: bool,
+    /// The frame's index (`GpuRecord::irradiance.w` of the records computed in it).
+    pub frame: u32,
+    pub technique: String,
+}
+
+pub struct GautronExplainPass {
+    layout: wgpu::BindGroupLayout,
+    pixel_pipeline: wgpu::ComputePipeline,
+    records_pipeline: wgpu::ComputePipeline,
+    explain: wgpu::Buffer,
+    /// Header, counters and the listed records.
+    pub out: wgpu::Buffer,
+    /// The last run's splat.
+    pub info: Option<GautronInfo>,
+}
+
+impl crate::explain::Replay for GautronExplainPass {
+    fn parts(&self) -> Option<Vec<(wgpu::Buffer, u64)>> {
+        self.info.as_ref()?;
+        Some(vec![(self.out.clone(), self.out.size())])
+    }
+
+    fn decode(&self, parts: &[Vec<u8>]) -> Option<Explanation> {
+        let [out] = parts else { return None };
+        decode(self.info.as_ref()?, out)
+    }
+}
+
+impl GautronExplainPass {
+    pub fn new(ctx: &GpuContext) -> Self {
+        let device = &ctx.device;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let t = |b| bgl::texture(b, cs, false);
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("explain.gautron.inputs"),
+            entries: &[
+                bgl::uniform(0, cs),
+                bgl::uniform(1, cs),
+                bgl::storage(2, cs, true),
+                bgl::storage(3, cs, true),
+                t(4),
+                t(5),
+                t(6),
+                t(7),
+                t(8),
+                t(9),
+                bgl::uniform(10, cs),
+                bgl::storage(11, cs, false),
+                bgl::storage(12, cs, false),
+                bgl::storage(13, cs, false),
+            ],
+        });
+        let module = crate::shaders::create_module(device, "gautron/explain.wgsl");
+        let pipeline = |label, entry| crate::passes::compute_pipeline(device, label, &module, entry, &[&layout]);
+        Self {
+            pixel_pipeline: pipeline("explain.gautron.pixel", "cs_explain_pixel"),
+            records_pipeline: pipeline("explain.gautron.records", "cs_explain_records"),
+            layout,
+            explain: crate::passes::uniform_buffer(
+                device,
+                "explain.gautron.pixel",
+                std::mem::size_of::<ExplainParams>() as u64,
+            ),
+            out: crate::passes::buffer(
+                device,
+                "explain.gautron.out",
+                ENTRIES_OFFSET + MAX_LISTED * std::mem::size_of::<GpuEntry>() as u64,
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            ),
+            info: None,
+        }
+    }
+
+    /// Records the replay of `info.pixel` into `enc`, after the stage's last splat and resolve
+    /// (`indirect` is the resolve's output, `gautron.indirect`).
+    pub fn run(
+        &mut self,
+        f: &FrameInputs,
+        enc: &mut wgpu::CommandEncoder,
+        stage: &GautronStage,
+        indirect: &wgpu::TextureView,
+        info: GautronInfo,
+    ) {
+        let ctx = f.ctx;
+        let p = ExplainParams { pixel: [info.pixel.0, info.pixel.1, 0, 0] };
+        ctx.queue.write_buffer(&self.explain, 0, bytemuck::bytes_of(&p));
+        enc.clear_buffer(&self.out, 0, Some(ENTRIES_OFFSET));
+        let tv = wgpu::BindingResource::TextureView;
+        let part = |offset: u64, size: Option<u64>| {
+            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: &self.out,
+                offset,
+                size: size.and_then(wgpu::BufferSize::new),
+            })
+        };
+        let (accum, irradiance) = (stage.splat.accum_view(), view(&stage.splat.irradiance, "gautron.irradiance"));
+        let g = f.gbuffer;
+        let group = bind_group(
+            &ctx.device,
+            "explain.gautron.inputs",
+            &self.layout,
+            vec![
+                stage.params().as_entire_binding(),
+                f.camera_buffer.as_entire_binding(),
+                stage.records.as_entire_binding(),
+                stage.state.as_entire_binding(),
+                tv(&g.position),
+                tv(&g.normal),
+                tv(&g.albedo),
+                tv(&accum),
+                tv(indirect),
+                tv(&irradiance),
+                self.explain.as_entire_binding(),
+                part(0, Some(std::mem::size_of::<GpuHeader>() as u64)),
+                part(COUNTERS_OFFSET, Some(16)),
+                part(ENTRIES_OFFSET, None),
+            ],
+        );
+        let records = (stage.records.size() / super::RECORD_BYTES).max(1);
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("explain.gautron"),
+            timestamp_writes: None,
+        });
+        pass.set_bind_group(0, &group, &[]);
+        pass.set_pipeline(&self.pixel_pipeline);
+        pass.dispatch_workgroups(1, 1, 1);
+        pass.set_pipeline(&self.records_pipeline);
+        pass.dispatch_workgroups(records.div_ceil(64) as u32, 1, 1);
+        drop(pass);
+        self.info = Some(info);
+    }
+}
+
+/// Why the splat left a listed record out, None when it added it.
+pub fn rejection(e: &GpuEntry) -> Option<Rejection> {
+    let flags = e.index[1];
+    if flags & PENDING != 0 {
+        Some(Rejection::Pending)
+    } else if flags & COVERS == 0 {
+        Some(Rejection::OutsideBound)
+    } else if flags & IN_FRONT != 0 {
+        Some(Rejection::InFront)
+    } else if flags & BELOW != 0 {
+        Some(Rejection::WeightBelowCutoff)
+    } else {
+        None
+    }
+}
+
+/// The words of a record's state (`GpuRecord::pixel.w`).
+fn state_word(state: f32) -> &'static str {
+    match state.round() as i32 {
+        0 => "being computed",
+        1 => "fresh",
+        _ => "stale",
+    }
+}
+
+/// The pixel's explanation from the pass's output (`bytes`, the whole output buffer).
+pub fn decode(info: &GautronInfo, bytes: &[u8]) -> Option<Explanation> {
+    let header: GpuHeader = bytemuck::pod_read_unaligned(bytes.get(..std::mem::size_of::<GpuHeader>())?);
+    let counters: [u32; 4] =
+        bytemuck::pod_read_unaligned(bytes.get(COUNTERS_OFFSET as usize..COUNTERS_OFFSET as usize + 16)?);
+    if (header.pixel[0], header.pixel[1]) != info.pixel {
+        return None;
+    }
+    let size = std::mem::size_of::<GpuEntry>();
+    let listed = (counters[0] as u64).min(MAX_LISTED) as usize;
+    let start = ENTRIES_OFFSET as usize;
+    let mut entries: Vec<GpuEntry> = bytemuck::pod_collect_to_vec(bytes.get(start..start + listed * size)?);
+    // The splat adds the records in increasing index (the blending's order, and the bins').
+    entries.sort_by_key(|e| e.index[0]);
+    let v3 = |v: Vec4| v.truncate();
+    let c_di = v3(header.albedo) * std::f32::consts::FRAC_1_PI;
+    let accepted: Vec<&GpuEntry> = entries.iter().filter(|e| e.accepted()).collect();
+    let (mut sum_we, mut sum_w) = (Vec3::ZERO, 0.0f32);
+    for e in &accepted {
+        sum_we += e.weight.x * v3(e.e);
+        sum_w += e.weight.x;
+    }
+    let mut rejected: Vec<&GpuEntry> = entries.iter().filter(|e| !e.accepted()).collect();
+    rejected.sort_by(|a, b| b.weight.y.total_cmp(&a.weight.y));
+    let [made, refreshed, stale, count] = header.state;
+    // A record computed in this frame below the frame's new ones was computed again in place
+    // (`gautron.invalidation` Refresh): the splat added its old E.
+    let again = |e: &GpuEntry| e.irradiance.w as u32 == info.frame && e.index[0] < count.saturating_sub(made);
+    let row = |e: &GpuEntry| {
+        let rejected = rejection(e);
+        let share = if rejected.is_none() && sum_w > 0.0 { e.weight.x / sum_w } else { 0.0 };
+        // The replay's clamp at 1e30 stands for none: P = P_k, n = n_k gives 1/0.
+        let unclamped = if e.weight.y >= 1e30 { f32::INFINITY } else { e.weight.y };
+        let mut fields = vec![("w", unclamped), ("w clamped", e.weight.x), ("E (lum)", luminance(v3(e.e)))];
+        if info.rotational {
+            fields.push(("∇r term (lum)", luminance(v3(e.rot))));
+        }
+        if info.translational {
+            fields.push(("∇t term (lum)", luminance(v3(e.trans))));
+        }
+        fields.extend([
+            ("R_k", e.position.w),
+            ("a·R_k", info.accuracy * e.position.w),
+            ("H", e.normal.w),
+            ("‖P−P_k‖/R_k", e.weight.z),
+            ("√(1−n·n_k)", e.weight.w),
+        ]);
+        Contribution {
+            name: format!("record {}", e.index[0]),
+            source: format!(
+                "made at ({}, {}) in frame {}, {}{}",
+                e.pixel.x as u32,
+                e.pixel.y as u32,
+                e.irradiance.w as u32,
+                state_word(e.pixel.w),
+                if again(e) { ", recomputed" } else { "" }
+            ),
+            position: Some(v3(e.position)),
+            // c·DI/π · w_k·E_k(P) / Σ w: its share of the resolve's c·DI/π · RGB / A
+            value: if share > 0.0 { c_di * (e.weight.x * v3(e.e)) / sum_w } else { Vec3::ZERO },
+            weight: share,
+            rejected,
+            via: None,
+            fields,
+        }
+    };
+    let contributions: Vec<Contribution> = accepted.iter().chain(&rejected).map(|e| row(e)).collect();
+    let accum = header.accum;
+    let resolved = if accum.w > 0.0 { c_di * (v3(accum) / accum.w) } else { Vec3::ZERO };
+    let checks = vec![
+        Check {
+            what: format!("Σ w_k·E_k(P) over the {} records the splat adds", accepted.len()),
+            sum: sum_we,
+            buffer: "gautron.accum (rgb)".into(),
+            value: v3(accum),
+        },
+        Check {
+            what: "Σ w_k".into(),
+            sum: Vec3::splat(sum_w),
+            buffer: "gautron.accum (a)".into(),
+            value: Vec3::splat(accum.w),
+        },
+        Check {
+            what: "c·DI/π · RGB / A of gautron.accum (the resolve)".into(),
+            sum: resolved,
+            buffer: "gautron.indirect".into(),
+            value: v3(header.indirect),
+        },
+    ];
+    let mut notes = Vec::new();
+    if header.albedo.w > 0.5 {
+        notes.push("the G-buffer is empty at the pixel: no record splats there".into());
+    }
+    notes.push(format!(
+        "{count} records in the cache (of {}); {} bounds hold the pixel, {} of them pass w > 1/a = {:.4} (a = {}, w clamped at {}); {} more listed within 2·a·R_k",
+        header.pixel[2],
+        counters[1],
+        counters[2],
+        1.0 / info.accuracy,
+        info.accuracy,
+        info.weight_clamp,
+        entries.len() - entries.iter().filter(|e| e.index[1] & COVERS != 0).count(),
+    ));
+    let e = if sum_w > 0.0 { sum_we / sum_w } else { Vec3::ZERO };
+    notes.push(format!(
+        "Σ w = {sum_w:.4} (covered from 1/a); E = Σ w·E / Σ w = ({:.4e}, {:.4e}, {:.4e}); c·DI/π = ({:.4}, {:.4}, {:.4}); gautron.irradiance = ({:.4e}, {:.4e}, {:.4e})",
+        e.x, e.y, e.z, c_di.x, c_di.y, c_di.z, header.irradiance.x, header.irradiance.y, header.irradiance.z
+    ));
+    notes.push(format!(
+        "gradients: rotational {}, translational {} (E = E_k + the terms that are on, clamped at 0)",
+        if info.rotational { "on" } else { "off" },
+        if info.translational { "on" } else { "off" }
+    ));
+    if made > 0 || refreshed > 0 {
+        let mut why =
+            format!("this frame made {made} records and computed {refreshed} stale ones again ({stale} wait)");
+        if refreshed > 0 {
+            why.push_str("; a record computed again (\"recomputed\") was splatted with its old E");
+        }
+        if made > 0 && info.neighbour_clamping {
+            why.push_str("; neighbour clamping may have shrunk a cached record's R_k after its splat");
+        }
+        why.push_str(
+            "; the replay reads the records as the frame left them, so the checks may differ (a frame \
+             that makes none and computes none again replays exactly)",
+        );
+        notes.push(why);
+    }
+    if counters[0] as u64 > MAX_LISTED {
+        notes.push(format!("{} records not listed (the list holds {MAX_LISTED})", counters[0] as u64 - MAX_LISTED));
+    }
+    let mut e = Explanation {
+        pixel: info.pixel,
+        technique: info.technique.clone(),
+        contributions,
+        buffer: "gautron.indirect".into(),
+        value: v3(header.indirect),
+        checks,
+        notes,
+    };
+    e.sort();
+    Some(e)
+}
