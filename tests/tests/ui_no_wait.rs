@@ -40,6 +40,8 @@ fn no_frame_of_the_window_waits_for_the_gpu_with_every_readback_on() {
         st.show_hcb_samples = true;
         st.show_soler_samples = true;
         st.show_gautron_records = true;
+        // A pixel explained (issue #42).
+        st.explain = Some(gi_lab::ui::explain::ExplainView::new((30, 40)));
         // A/B with its FLIP view.
         st.start_ab(gi_lab::ui::ab::AbSource::Frozen);
         st.ab.as_mut().expect("A/B starts").view = gi_lab::ui::ab::AbView::Flip;
@@ -56,6 +58,9 @@ fn no_frame_of_the_window_waits_for_the_gpu_with_every_readback_on() {
             t.apply(&mut l.settings);
             l.apply_settings();
         }
+        if let Some(v) = &mut h.state_mut().state.explain {
+            v.latest = None;
+        }
         // Warm-up: the technique's passes are made, its first read-backs arrive (a few frames
         // late, more under load).
         let overlay = match t {
@@ -70,6 +75,7 @@ fn no_frame_of_the_window_waits_for_the_gpu_with_every_readback_on() {
                 && a.state.viewers.values().next().is_some_and(|v| v.auto_range_frame().is_some())
                 && !a.state.hover_values.is_empty()
                 && a.state.ab.as_ref().is_some_and(|ab| ab.metrics.is_some())
+                && a.state.explain.as_ref().is_some_and(|v| v.latest.is_some())
         });
         let waits = waits_over(&mut h, 8);
         assert_eq!(waits, 0, "{t:?}: the window waited for the GPU {waits} times in 8 frames");
@@ -88,6 +94,12 @@ fn no_frame_of_the_window_waits_for_the_gpu_with_every_readback_on() {
             "{t:?}: the viewer's auto-range"
         );
         assert!(arrived("ab.final.hdr") && arrived("ab.final.ldr"), "{t:?}: A/B's images");
+        match st.explain.as_ref().and_then(|v| v.latest.as_ref()) {
+            Some(Ok(e)) => assert!(!e.contributions.is_empty(), "{t:?}: the explanation lists nothing"),
+            // The reference's average may complete within the frames: nothing left to replay.
+            Some(Err(e)) if t == Technique::ExactVpl && e.contains("complete") => {}
+            other => panic!("{t:?}: the pixel's explanation did not arrive: {other:?}"),
+        }
         assert!(st.ab.as_ref().is_some_and(|a| a.metrics.is_some()), "{t:?}: A/B's FLIP and RMSE");
         match t {
             Technique::Knecht | Technique::ExactVpl => assert!(arrived("vpl.list"), "{t:?}: the VPL overlay"),

@@ -12,8 +12,11 @@ use crate::readback::{Readback, Readout};
 use crate::renderer::{Renderer, StagePasses};
 use crate::stages::{FrameInputs, Visibility, VplSet};
 
-/// The read-back key of the explanation.
-const KEY: &str = "explain";
+/// The read-back key of the explanation: one per stage choices, so that a copy made before
+/// the choices changed is never decoded by another technique's replay.
+fn key(p: &crate::pipeline::PipelineSettings) -> String {
+    format!("explain.{:?}.{:?}.{:?}.{:?}", p.vpl_source, p.shading_points, p.gather, p.near_field)
+}
 
 /// Records the replay of the pinned pixel's VPL gather at tiles or pixels, with its filter and
 /// confidence merge (`passes::knecht::explain`), after the frame's chain wrote `last`.
@@ -346,7 +349,7 @@ impl Renderer {
     /// its gather.
     pub fn set_explain(&mut self, pixel: Option<(u32, u32)>) {
         if pixel.is_none() {
-            self.read_forget(KEY);
+            self.read_forget(&key(&self.settings.pipeline));
         }
         self.stages.explain_pixel = pixel;
     }
@@ -448,7 +451,7 @@ impl Renderer {
             Ok(r) => r,
             Err(e) => return Some(Err(e)),
         };
-        let a = self.read_later(KEY, Readback::Storage(replay.parts()?), 0)?;
+        let a = self.read_later(&key(&self.settings.pipeline), Readback::Storage(replay.parts()?), 0)?;
         match &a.data {
             // A copy made before the pixel or the choices changed does not decode: wait for the
             // next.

@@ -154,8 +154,11 @@ impl KnechtVpls {
             .collect();
         // The slots' sources: bounce 0 by light view (then the emitters), one range per
         // further bounce.
-        let mut sources: Vec<(u32, u32, String)> =
-            jobs.iter().map(|j| (j.first, j.count, format!("light {}, bounce 0", j.light_index))).collect();
+        let light_name = |i: u32| f.state.lights.get(i as usize).map(|l| l.light.name.as_str()).unwrap_or("");
+        let mut sources: Vec<(u32, u32, String)> = jobs
+            .iter()
+            .map(|j| (j.first, j.count, format!("light {} '{}', bounce 0", j.light_index, light_name(j.light_index))))
+            .collect();
         let halton_first = 1 + if s.vpl.new_set_each_frame { self.frames.wrapping_mul(s.vpl.count) } else { 0 };
         if f.lights.is_empty() {
             // No light: no VPL slot is written, so the list is cleared.
