@@ -239,6 +239,7 @@ pub(crate) fn explain_soler(f: &FrameInputs, x: &mut StagePasses, enc: &mut wgpu
             if inputs.temporal.is_some() { ", Eq. 6's warped blend" } else { "" }
         ),
         samples: s.samples,
+        radius: s.radius_px,
     };
     let pass = x.explain_soler.get_or_insert_with(|| crate::passes::soler::explain::SolerExplainPass::new(f.ctx));
     pass.run(f.ctx, enc, &inputs, info);

@@ -194,6 +194,36 @@ pub(super) fn explain_overlay(
             }
         }
     }
+    // Soler's rings: per level, the ring its heaviest texel gathered (r · 2^k pixels).
+    let mut rings: Vec<(f32, &Contribution)> = Vec::new();
+    for c in e.contributions.iter().filter(|c| c.rejected.is_none()) {
+        let Some((_, level)) = c.fields.iter().find(|(k, _)| *k == "level") else { continue };
+        match rings.iter_mut().find(|(l, _)| l == level) {
+            Some(r) if e.share(r.1) < e.share(c) => r.1 = c,
+            Some(_) => {}
+            None => rings.push((*level, c)),
+        }
+    }
+    for (level, c) in rings {
+        let (Some(p), Some((_, radius))) = (c.position, c.fields.iter().find(|(k, _)| *k == "ring radius (px)")) else {
+            continue;
+        };
+        let clip = view_proj * p.extend(1.0);
+        if clip.w <= 0.0 {
+            continue;
+        }
+        let ndc = clip.truncate() / clip.w;
+        let pos = rect.min + egui::vec2((ndc.x * 0.5 + 0.5) * rect.width(), (0.5 - ndc.y * 0.5) * rect.height());
+        let colour = egui::Color32::from_rgb(80, 200 - (30.0 * level.min(5.0)) as u8, 255);
+        painter.circle_stroke(pos, radius * rect.width() / size.0 as f32, egui::Stroke::new(1.0, colour));
+        painter.text(
+            pos + egui::vec2(0.0, -radius * rect.width() / size.0 as f32),
+            egui::Align2::CENTER_BOTTOM,
+            format!("level {level}"),
+            egui::FontId::proportional(11.0),
+            colour,
+        );
+    }
     // The filter's window: the pixels the VPLs came through.
     for c in &e.contributions {
         if let Some(q) = c.via {

@@ -93,6 +93,8 @@ pub struct SolerChain {
     pub irradiance_blend: bool,
     pub technique: String,
     pub samples: u32,
+    /// The ring's radius r in level texels (`soler.radius_px`).
+    pub radius: f32,
 }
 
 pub struct SolerExplainPass {
@@ -346,6 +348,8 @@ pub fn decode(info: &SolerChain, bytes: &[u8]) -> Option<Explanation> {
                     ("hidden by voxels (lum)", crate::explain::luminance(v3(e.occlusion))),
                     ("visible fraction", e.occlusion.w),
                     ("S glossy (lum)", crate::explain::luminance(spec)),
+                    // The ring this texel gathered, in full-resolution pixels (r · 2^k).
+                    ("ring radius (px)", info.radius * (1u32 << k.min(30)) as f32),
                 ],
             });
         }
