@@ -168,9 +168,19 @@ fn soler_s_gather_at_the_samples_sums_to_its_buffers() {
     let mut r = paused_renderer(64, Technique::SolerAtHcbSamples, |_| {});
     for p in PIXELS {
         let e = explain(&mut r, p, 1);
-        eprintln!("{}", e.to_text(4));
         assert_eq!(e.buffer, "hcb.indirect");
         assert!(e.technique.contains("Soler"), "{}", e.technique);
+        assert_sums(&e);
+        assert_cpu_twin(&r, &e);
+    }
+}
+
+#[test]
+fn gautron_s_hemispheres_at_the_samples_sum_to_their_buffers() {
+    let mut r = paused_renderer(64, Technique::GautronAtHcbSamples, |_| {});
+    for p in PIXELS {
+        let e = explain(&mut r, p, 1);
+        assert_eq!(e.buffer, "hcb.indirect");
         assert_sums(&e);
         assert_cpu_twin(&r, &e);
     }
