@@ -1,7 +1,10 @@
 //! Explain a pixel (issue #42): the renderer's side. `set_explain` pins a pixel; every frame
-//! then replays its gather after the passes that lit it (`explain_vpl_gather` and
-//! `explain_gautron`, called by `frame.rs`), and `explanation` (blocking: the command line,
-//! tests) or `explanation_later` (the window, without waiting) decode it (`crate::explain`).
+//! then replays its gather after the passes that lit it (`explain_vpl_gather`,
+//! `explain_reference`, `explain_hcb`, `explain_gautron`, `explain_soler`, called by
+//! `frame.rs` after their stages), and `explanation` (blocking: the command line, tests) or
+//! `explanation_later` (the window, without waiting) decode it (`crate::explain`); the
+//! near/far mix joins the far field's replay with Soler's (`NearFar`). Tests:
+//! `tests/tests/explain/`.
 
 use crate::explain::{Explanation, Replay};
 use crate::passes::gautron::explain::{GautronExplainPass, GautronInfo};

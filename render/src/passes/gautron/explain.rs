@@ -6,7 +6,7 @@
 //! frame wrote there; [`decode`] turns it into the pixel's contributions (each record's share
 //! of the resolved c·DI·E/π), the records near it that the splat rejects, and the checks of the
 //! sums against `gautron.accum` and `gautron.indirect` (`crate::explain`). CPU twin of each
-//! weight: `cpu::gautron::weight` (tests/explain_gautron.rs).
+//! weight: `cpu::gautron::weight` (tests/explain/gautron.rs).
 
 use glam::{Vec3, Vec4};
 

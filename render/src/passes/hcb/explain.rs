@@ -9,7 +9,7 @@
 //! the pixel's contributions (each coherent sample's share w_s·E_s / Σ w × c·DI/π), the
 //! samples whose quad holds the pixel but which fail Eq. 9, and the checks of the sums
 //! against `hcb.weight_sum`, `hcb.irradiance` and the stage's output `hcb.indirect`
-//! (`crate::explain`). CPU twin of each weight: `cpu::hcb::weight` (tests/explain_hcb.rs).
+//! (`crate::explain`). CPU twin of each weight: `cpu::hcb::weight` (tests/explain/hcb.rs).
 
 use crate::counters::prelude::*;
 

@@ -4,7 +4,7 @@
 //! replays every VPL slot's term at the pixel of the filter's window that its tile reached,
 //! with the frame's own inputs, and reads the buffers the frame wrote there; [`decode`] turns
 //! that into the pixel's contributions and checks (`crate::explain`). CPU twin of each term:
-//! `cpu::knecht::vpl_radiance` (tests/explain.rs).
+//! `cpu::knecht::vpl_radiance` (tests/explain/vpl.rs).
 
 use crate::counters::prelude::*;
 

@@ -81,8 +81,10 @@ fn check(r: &gi_render::Renderer, e: &Explanation) {
 
 #[test]
 fn levels_sum_to_the_upsampled_light_and_their_weights_are_the_cpu_twins() {
-    let presets =
-        [include_str!("../../presets/soler-quarter-4-64.ron"), include_str!("../../presets/soler-as-printed.ron")];
+    let presets = [
+        include_str!("../../../presets/soler-quarter-4-64.ron"),
+        include_str!("../../../presets/soler-as-printed.ron"),
+    ];
     for (i, text) in presets.into_iter().enumerate() {
         let s = gi_render::preset::load_lenient(text, "soler").expect("loads").settings;
         let mut r = paused_renderer(64, Technique::Soler, |x| *x = s.clone());

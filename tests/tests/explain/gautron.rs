@@ -163,8 +163,12 @@ fn sphere_pixels(r: &Renderer, size: u32) -> Vec<(u32, u32)> {
 #[test]
 fn hemisphere_lit_records_explain_the_floor_and_a_wall_corner() {
     let size = 96;
-    let mut r =
-        preset_renderer(include_str!("../../presets/gautron-ic-splatting.ron"), "gautron-ic-splatting", size, |_| {});
+    let mut r = preset_renderer(
+        include_str!("../../../presets/gautron-ic-splatting.ron"),
+        "gautron-ic-splatting",
+        size,
+        |_| {},
+    );
     assert!(r.explain_unsupported().is_none(), "{:?}", r.explain_unsupported());
     r.set_explain(Some((0, 0)));
     r.render_frame();
@@ -215,7 +219,7 @@ fn hemisphere_lit_records_explain_the_floor_and_a_wall_corner() {
 fn vpl_lit_records_explain_a_floor_pixel() {
     let size = 64;
     let mut r =
-        preset_renderer(include_str!("../../presets/gautron-vpl-records.ron"), "gautron-vpl-records", size, |_| {});
+        preset_renderer(include_str!("../../../presets/gautron-vpl-records.ron"), "gautron-vpl-records", size, |_| {});
     assert!(r.explain_unsupported().is_none(), "{:?}", r.explain_unsupported());
     r.set_explain(Some((0, 0)));
     r.render_frame();
@@ -232,7 +236,7 @@ fn vpl_lit_records_explain_a_floor_pixel() {
 fn both_splat_methods_are_replayed() {
     for method in [SplatMethod::Blend, SplatMethod::Binned] {
         let size = 64;
-        let text = include_str!("../../presets/gautron-ic-splatting.ron");
+        let text = include_str!("../../../presets/gautron-ic-splatting.ron");
         let mut r = preset_renderer(text, "gautron-ic-splatting", size, |s| s.gautron.splat = method);
         r.set_explain(Some((0, 0)));
         r.render_frame();
