@@ -15,7 +15,7 @@
 #import common/bins.wgsl
 
 struct ExplainParams {
-    // x, y: the pixel p
+    // x, y: the pixel p; z: the splats' snapshots (0: none, the records as the frame left them)
     pixel: vec4<u32>,
 }
 
@@ -87,6 +87,25 @@ const EXPLAIN_NO_CLAMP: f32 = 1e30;
 // x: records listed, y: records whose bound holds p, z: records the splat added at p
 @group(0) @binding(12) var<storage, read_write> counters: array<atomic<u32>, 4>;
 @group(0) @binding(13) var<storage, read_write> listed: array<Entry>;
+// The records as each splat of the frame read them (passes::gautron::explain::Snapshots):
+// snapshot s holds the whole cache right after splat s (the cached records' splat, then each
+// round's), and the cache's counters then (word 0 of each 256-byte slot: the record count).
+@group(0) @binding(14) var<storage, read> snap_records: array<Record>;
+@group(0) @binding(15) var<storage, read> snap_states: array<vec4<u32>>;
+
+// Record k as the splat that added it read it: the first snapshot whose count holds k (a
+// cached record computed again in a round, or clamped by a later round's neighbours, was
+// splatted before that); without snapshots, the record as the frame left it.
+fn splatted_record(k: u32) -> Record {
+    let n = explain.pixel.z;
+    let capacity = arrayLength(&records);
+    for (var s = 0u; s < n; s = s + 1u) {
+        if (k < snap_states[s * 16u].x) {
+            return snap_records[s * capacity + k];
+        }
+    }
+    return records[k];
+}
 
 // What the frame wrote at p (Gautron et al. 2005, "Radiance cache splatting", "From Octree to
 // Splatting": the sums RGB, A and the resolve's RGB / A).
@@ -123,7 +142,7 @@ fn cs_explain_records(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let p = textureLoad(g_position, px, 0).xyz;
     let n = normalize(nrm.xyz);
-    let rec = records[k];
+    let rec = splatted_record(k);
     let a = params.weight.x;
     let rect = splat_bound(rec, camera.view, camera.params.x, camera.viewport.xy);
     let c = bin_centre_ndc(explain.pixel.xy, camera.viewport.zw);

@@ -94,6 +94,14 @@ pub(crate) fn explain_gautron(
     if pixel.0 >= w || pixel.1 >= h {
         return;
     }
+    // From the next frame on, the stage keeps the cache as each of its splats read it.
+    if let Some(g) = x.gautron.as_mut() {
+        let slots = f.settings.gautron.rounds + 1;
+        let size = g.records.size();
+        if !g.snapshots.as_ref().is_some_and(|s| s.capacity == size && s.slots >= slots) {
+            g.snapshots = Some(crate::passes::gautron::explain::Snapshots::new(f.ctx, size, slots));
+        }
+    }
     let Some(stage) = x.gautron.as_ref() else { return };
     let s = &f.settings.gautron;
     let info = GautronInfo {
@@ -104,6 +112,7 @@ pub(crate) fn explain_gautron(
         translational: s.translational_gradient,
         neighbour_clamping: s.neighbour_clamping,
         frame: f.frame,
+        snapshots: false,
         technique: gautron_words(f),
     };
     let pass = x.explain_gautron.get_or_insert_with(|| GautronExplainPass::new(f.ctx));
@@ -353,6 +362,9 @@ impl Renderer {
     /// its gather.
     pub fn set_explain(&mut self, pixel: Option<(u32, u32)>) {
         if pixel.is_none() {
+            if let Some(g) = self.stages.gautron.as_mut() {
+                g.snapshots = None;
+            }
             self.read_forget(&key(&self.settings.pipeline));
         }
         self.stages.explain_pixel = pixel;

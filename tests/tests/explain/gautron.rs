@@ -246,3 +246,34 @@ fn both_splat_methods_are_replayed() {
         assert_explained(&r, &e);
     }
 }
+
+/// Under animation the rounds make records, compute stale ones again in place and clamp the
+/// cached ones by their new neighbours, after the cached records' splat: the replay reads each
+/// record as the splat that added it read it (`gautron::explain::Snapshots`), so the sums hold
+/// on every frame, not only on frames where the cache stands still.
+#[test]
+fn frames_that_change_the_cache_replay_their_records_as_the_splats_read_them() {
+    let size = 64;
+    let text = include_str!("../../../presets/gautron-ic-splatting.ron");
+    let mut r = preset_renderer(text, "gautron-ic-splatting", size, |_| {});
+    r.set_explain(Some((0, 0)));
+    r.render_frame();
+    let floor = floor_pixel(&r, size);
+    r.set_explain(Some(floor));
+    r.render_frame();
+    // The sphere moves: the records it leaves go stale and are computed again.
+    r.clock.playing = true;
+    let mut changed = 0;
+    for frame in 0..6 {
+        r.render_frame();
+        let st = r.gautron().expect("Gautron's stage").read_state(&r.ctx).expect("the cache's counters");
+        changed += (st.made > 0 || st.refreshed > 0) as u32;
+        let e = r.explanation().unwrap_or_else(|e| panic!("frame {frame}: {e}"));
+        let added = e.contributions.iter().filter(|c| c.rejected.is_none()).count();
+        let tol = sum_tolerance(added);
+        for c in std::iter::once(e.total_check()).chain(e.checks.iter().cloned()) {
+            assert!(c.relative_error() <= tol, "frame {frame}: {}: {}\n{}", c.what, c.relative_error(), e.to_text(0));
+        }
+    }
+    assert!(changed > 0, "no frame changed the cache: the test shows nothing");
+}

@@ -102,6 +102,8 @@ pub struct GautronInfo {
     pub neighbour_clamping: bool,
     /// The frame's index (`GpuRecord::irradiance.w` of the records computed in it).
     pub frame: u32,
+    /// The replay read the cache as each splat did (`Snapshots`), not as the frame left it.
+    pub snapshots: bool,
     pub technique: String,
 }
 
@@ -110,6 +112,8 @@ pub struct GautronExplainPass {
     pixel_pipeline: wgpu::ComputePipeline,
     records_pipeline: wgpu::ComputePipeline,
     explain: wgpu::Buffer,
+    /// Stands in for the snapshots' counters when there are none (never read).
+    no_states: wgpu::Buffer,
     /// Header, counters and the listed records.
     pub out: wgpu::Buffer,
     /// The last run's splat.
@@ -150,6 +154,8 @@ impl GautronExplainPass {
                 bgl::storage(11, cs, false),
                 bgl::storage(12, cs, false),
                 bgl::storage(13, cs, false),
+                bgl::storage(14, cs, true),
+                bgl::storage(15, cs, true),
             ],
         });
         let module = crate::shaders::create_module(device, "gautron/explain.wgsl");
@@ -169,6 +175,7 @@ impl GautronExplainPass {
                 ENTRIES_OFFSET + MAX_LISTED * std::mem::size_of::<GpuEntry>() as u64,
                 wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             ),
+            no_states: crate::passes::buffer(device, "explain.gautron.no_snapshots", 256, wgpu::BufferUsages::STORAGE),
             info: None,
         }
     }
@@ -184,7 +191,10 @@ impl GautronExplainPass {
         info: GautronInfo,
     ) {
         let ctx = f.ctx;
-        let p = ExplainParams { pixel: [info.pixel.0, info.pixel.1, 0, 0] };
+        let snapshots = stage.snapshots.as_ref().filter(|s| s.taken > 0 && s.capacity == stage.records.size());
+        let taken = snapshots.map(|s| s.taken).unwrap_or(0);
+        let p = ExplainParams { pixel: [info.pixel.0, info.pixel.1, taken, 0] };
+        let info = GautronInfo { snapshots: taken > 0, ..info };
         ctx.queue.write_buffer(&self.explain, 0, bytemuck::bytes_of(&p));
         enc.clear_buffer(&self.out, 0, Some(ENTRIES_OFFSET));
         let tv = wgpu::BindingResource::TextureView;
@@ -216,6 +226,8 @@ impl GautronExplainPass {
                 part(0, Some(std::mem::size_of::<GpuHeader>() as u64)),
                 part(COUNTERS_OFFSET, Some(16)),
                 part(ENTRIES_OFFSET, None),
+                snapshots.map_or(stage.records.as_entire_binding(), |s| s.records.as_entire_binding()),
+                snapshots.map_or(self.no_states.as_entire_binding(), |s| s.states.as_entire_binding()),
             ],
         );
         let records = (stage.records.size() / super::RECORD_BYTES).max(1);
@@ -230,6 +242,47 @@ impl GautronExplainPass {
         pass.dispatch_workgroups(records.div_ceil(64) as u32, 1, 1);
         drop(pass);
         self.info = Some(info);
+    }
+}
+
+/// The cache as each splat of a frame read it (the cached records' splat, then each round's),
+/// taken while a pixel is explained: a cached record computed again in a round, or whose R_k
+/// a later round's neighbour clamping shrank, was splatted before that, and the replay must
+/// weigh it as the splat did.
+pub struct Snapshots {
+    /// `slots` copies of the records buffer, one after the other.
+    pub records: wgpu::Buffer,
+    /// The cache's counters after each splat, 256 bytes apart.
+    pub states: wgpu::Buffer,
+    /// The records buffer's size (one snapshot).
+    pub capacity: u64,
+    pub slots: u32,
+    /// Snapshots taken this frame.
+    pub taken: u32,
+}
+
+impl Snapshots {
+    /// Room for `slots` snapshots of a `records` buffer of `capacity` bytes.
+    pub fn new(ctx: &GpuContext, capacity: u64, slots: u32) -> Self {
+        let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+        let buffer = |label, size| crate::passes::buffer(&ctx.device, label, size, usage);
+        Self {
+            records: buffer("explain.gautron.snapshot_records", capacity * slots as u64),
+            states: buffer("explain.gautron.snapshot_states", 256 * slots as u64),
+            capacity,
+            slots,
+            taken: 0,
+        }
+    }
+
+    /// The snapshot after splat `k` of the frame (0: the cached records'; k ≥ 1: round k − 1's).
+    pub fn take(&mut self, enc: &mut wgpu::CommandEncoder, records: &wgpu::Buffer, state: &wgpu::Buffer, k: u32) {
+        if k >= self.slots || records.size() != self.capacity {
+            return;
+        }
+        enc.copy_buffer_to_buffer(records, 0, &self.records, k as u64 * self.capacity, self.capacity);
+        enc.copy_buffer_to_buffer(state, 0, &self.states, k as u64 * 256, state.size().min(256) & !3);
+        self.taken = k + 1;
     }
 }
 
@@ -285,7 +338,10 @@ pub fn decode(info: &GautronInfo, bytes: &[u8]) -> Option<Explanation> {
     let [made, refreshed, stale, count] = header.state;
     // A record computed in this frame below the frame's new ones was computed again in place
     // (`gautron.invalidation` Refresh): the splat added its old E.
-    let again = |e: &GpuEntry| e.irradiance.w as u32 == info.frame && e.index[0] < count.saturating_sub(made);
+    // (With the snapshots the replay reads such a record as the splat did: nothing to mark.)
+    let again = |e: &GpuEntry| {
+        !info.snapshots && e.irradiance.w as u32 == info.frame && e.index[0] < count.saturating_sub(made)
+    };
     let row = |e: &GpuEntry| {
         let rejected = rejection(e);
         let share = if rejected.is_none() && sum_w > 0.0 { e.weight.x / sum_w } else { 0.0 };
@@ -371,7 +427,12 @@ pub fn decode(info: &GautronInfo, bytes: &[u8]) -> Option<Explanation> {
         if info.rotational { "on" } else { "off" },
         if info.translational { "on" } else { "off" }
     ));
-    if made > 0 || refreshed > 0 {
+    if (made > 0 || refreshed > 0) && info.snapshots {
+        notes.push(format!(
+            "this frame made {made} records and computed {refreshed} stale ones again ({stale} wait); each record is \
+             replayed as the splat that added it read it (the cache copied after each splat)"
+        ));
+    } else if made > 0 || refreshed > 0 {
         let mut why =
             format!("this frame made {made} records and computed {refreshed} stale ones again ({stale} wait)");
         if refreshed > 0 {

@@ -84,6 +84,8 @@ pub struct GautronStage {
     candidate_list: wgpu::Buffer,
     slots: wgpu::Buffer,
     pub records: wgpu::Buffer,
+    /// The cache as each splat of the frame read it, while a pixel is explained (issue #42).
+    pub snapshots: Option<super::explain::Snapshots>,
     cameras: wgpu::Buffer,
     viewers: wgpu::Buffer,
     atlas_params: wgpu::Buffer,
@@ -163,6 +165,7 @@ impl GautronStage {
         let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
         let indirect = storage | wgpu::BufferUsages::INDIRECT;
         let mut stage = Self {
+            snapshots: None,
             hemisphere: HemispherePass::new(ctx, f_scene, s),
             splat: SplatPass::new(ctx, w, h),
             vpl_records: None,
@@ -434,6 +437,10 @@ impl GautronStage {
             }
             splat.splat(ctx, e, slot, s.splat, true, &self.params, camera, records, f.gbuffer, &self.splat_args)
         });
+        if let Some(snap) = &mut self.snapshots {
+            snap.taken = 0;
+            snap.take(enc, records, &self.state, 0);
+        }
         for k in 0..s.rounds.min(MAX_ROUNDS as u32) {
             let offset = [(k as u64 * ROUND_STRIDE) as u32];
             let tiles = round_tiles[k as usize];
@@ -479,6 +486,9 @@ impl GautronStage {
             timer.scope(ctx, enc, "gautron.splat", |e, slot| {
                 splat.splat(ctx, e, slot, s.splat, false, &self.params, camera, records, f.gbuffer, &self.splat_args)
             });
+            if let Some(snap) = &mut self.snapshots {
+                snap.take(enc, records, &self.state, k + 1);
+            }
         }
         timer.scope(ctx, enc, "gautron.resolve", |e, slot| splat.resolve(ctx, e, slot, &f.gbuffer.albedo));
         splat.indirect_view()
