@@ -114,6 +114,7 @@ impl Renderer {
             direct_diffuse: self.direct.diffuse.as_ref().map(|(_, v)| v),
             lights: state.lights.iter().map(gpu_light).collect(),
             views: light_view_list(&state, self.bounds),
+            explain_pixel: self.stages.explain_pixel,
         };
         let indirect = indirect_light(&f, &mut self.stages, &mut enc, &mut self.timer, view_proj);
         let near_field = near_field_light(&f, &mut self.stages, &mut enc, &mut self.timer);
@@ -213,9 +214,7 @@ fn indirect_light(
             crate::renderer::explain::explain_hcb(f, x, enc, &view);
             return Some(view);
         }
-        let view = x.soler.as_mut()?.run(f, enc, timer);
-        crate::renderer::explain::explain_soler(f, x, enc);
-        return Some(view);
+        return Some(x.soler.as_mut()?.run(f, enc, timer));
     }
 
     // Stage 3: VPLs.
@@ -329,9 +328,7 @@ fn near_field_light(
     if p.gather != Gather::Vpl || !p.uses_soler() {
         return None;
     }
-    let view = x.soler.as_mut()?.run(f, enc, timer);
-    crate::renderer::explain::explain_soler(f, x, enc);
-    Some(view)
+    Some(x.soler.as_mut()?.run(f, enc, timer))
 }
 
 /// Stage 6's reconstruction of the gathered light. Coherence splatting ran with the gather at

@@ -42,6 +42,9 @@ pub struct FrameInputs<'a> {
     /// Every light of the frame on the GPU, and the light views with their light's index.
     pub lights: Vec<GpuLight>,
     pub views: Vec<(u32, LightView)>,
+    /// The pixel being explained (issue #42), when one is: stages that replay inside their
+    /// run (Soler's, bounce by bounce) read it here.
+    pub explain_pixel: Option<(u32, u32)>,
 }
 
 impl FrameInputs<'_> {

@@ -4,17 +4,20 @@
 // texels t of w_k(t) · E_k(t), with w_k(t) the product of the upsampling weights along every
 // path from t down to p (soler/jbu.wgsl, the same function the upsampling runs) and E_k(t)
 // the level's own gathered irradiance (the ring samples' sum, soler/gather.wgsl), beside the
-// light the voxel visibility removed there. Replayed after the frame's passes, level by level
+// light the voxel visibility removed there. Replayed after each bounce's passes (004 §4
+// "Multi-bounce": the levels' light is the bounce's until the next one gathers), level by level
 // from the G-buffer up: each dispatch takes level k's texels and weights, reads their own
-// light and spreads the weights to level k + 1. Rust side: passes::soler::explain.
+// light and spreads the weights to level k + 1; every bounce has its own region of texels.
+// Rust side: passes::soler::explain.
 #import soler/common.wgsl
 #import soler/jbu.wgsl
 #import common/reproject.wgsl
 
 // Rust twin: passes::soler::explain::StepParams.
 struct StepParams {
-    // x: level k; y: 1 when level k has its own gathered light; z: 1 for the top level (no
-    // coarser level to spread to); w: 0
+    // x: level k; y: 1 when level k has its own gathered light (cs_explain_kept: 1 when the
+    // kept bounce has a glossy part); z: 1 for the top level (no coarser level to spread to);
+    // w: the bounce (0 … 3)
     level: vec4<u32>,
     // x: σ depth, y: σ normal (soler.upsample_sigma_*)
     sigma: vec4<f32>,
@@ -41,8 +44,8 @@ struct Entry {
 struct Header {
     // x, y: the pixel
     pixel: vec4<u32>,
-    // Texels per level (16 levels at most).
-    counts: array<u32, 16>,
+    // Texels per bounce and level (4 bounces × 16 levels at most).
+    counts: array<u32, 64>,
     // soler.indirect at p (the resolved radiance before the temporal filter)
     indirect: vec4<f32>,
     // the stage's output at p (soler.temporal with the filter, else soler.indirect)
@@ -53,9 +56,13 @@ struct Header {
     albedo: vec4<f32>,
     // rgb: the glossy light's warped history W_S at p (0 where the history was not taken)
     spec_history: vec4<f32>,
+    // Per bounce: rgb its kept light at p (soler.bounce.b, with its glossy part), when this
+    // frame did not gather it (alternating bounces)
+    kept: array<vec4<f32>, 4>,
 }
 
 const MAX_PER_LEVEL: u32 = 64u;
+const MAX_LEVELS: u32 = 16u;
 const INV_PI: f32 = 0.318309886183791;
 
 @group(0) @binding(0) var<uniform> step: StepParams;
@@ -76,10 +83,15 @@ const INV_PI: f32 = 0.318309886183791;
 @group(0) @binding(15) var g_motion: texture_2d<f32>;
 @group(0) @binding(16) var spec_history_prev: texture_2d<f32>;
 
-// Adds weight w of texel q to level k's list (one entry per texel).
-fn spread(k: u32, q: vec2<i32>, w: f32) {
-    let base = k * MAX_PER_LEVEL;
-    let n = header.counts[k];
+// The list of bounce b's level k: its count's index, and its first entry's.
+fn list(b: u32, k: u32) -> u32 {
+    return b * MAX_LEVELS + k;
+}
+
+// Adds weight w of texel q to level k's list of bounce b (one entry per texel).
+fn spread(b: u32, k: u32, q: vec2<i32>, w: f32) {
+    let base = list(b, k) * MAX_PER_LEVEL;
+    let n = header.counts[list(b, k)];
     let t = vec2<u32>(q);
     for (var i = 0u; i < n; i = i + 1u) {
         if (all(entries[base + i].texel.xy == t)) {
@@ -92,7 +104,7 @@ fn spread(k: u32, q: vec2<i32>, w: f32) {
         e.texel = vec4<u32>(t, k, 0u);
         e.weight = vec4<f32>(w, 0.0, 0.0, 0.0);
         entries[base + n] = e;
-        header.counts[k] = n + 1u;
+        header.counts[list(b, k)] = n + 1u;
     }
 }
 
@@ -120,8 +132,9 @@ fn cs_explain_pixel() {
 @compute @workgroup_size(1, 1, 1)
 fn cs_explain_step() {
     let k = step.level.x;
-    let base = k * MAX_PER_LEVEL;
-    let n = header.counts[k];
+    let b = step.level.w;
+    let base = list(b, k) * MAX_PER_LEVEL;
+    let n = header.counts[list(b, k)];
     for (var i = 0u; i < n; i = i + 1u) {
         var e = entries[base + i];
         let t = vec2<i32>(e.texel.xy);
@@ -141,11 +154,23 @@ fn cs_explain_step() {
         if (j.wsum > 1e-6) {
             for (var c = 0; c < 4; c = c + 1) {
                 if (j.w[c] > 0.0) {
-                    spread(k + 1u, j.q[c], e.weight.x * j.w[c] / j.wsum);
+                    spread(b, k + 1u, j.q[c], e.weight.x * j.w[c] / j.wsum);
                 }
             }
         } else if (j.best >= 0) {
-            spread(k + 1u, j.q[j.best], e.weight.x);
+            spread(b, k + 1u, j.q[j.best], e.weight.x);
         }
     }
+}
+
+// A bounce this frame did not gather (alternating bounces): its kept light at p, with its
+// glossy part (soler/bounces.wgsl adds both), bound as fine_light and fine_specular.
+@compute @workgroup_size(1, 1, 1)
+fn cs_explain_kept() {
+    let p = vec2<i32>(header.pixel.xy);
+    var kept = textureLoad(fine_light, p, 0).rgb;
+    if (step.level.y == 1u) {
+        kept = kept + textureLoad(fine_specular, p, 0).rgb;
+    }
+    header.kept[step.level.w] = vec4<f32>(kept, 1.0);
 }

@@ -67,7 +67,7 @@ impl Renderer {
         let replays = x.explain_vpl.is_some()
             || x.explain_gautron.is_some()
             || x.explain_hcb.is_some()
-            || x.explain_soler.is_some()
+            || x.soler.as_ref().is_some_and(|s| s.explain.is_some())
             || x.explain_reference.is_some();
         passes.retain(|p| *p != "explain" || replays);
         if passes.is_empty() {
@@ -87,8 +87,9 @@ impl Renderer {
         });
         let explain_gautron = (passes.contains(&"explain") && self.stages.explain_gautron.is_some())
             .then(|| crate::passes::gautron::explain::GautronExplainPass::new(&ctx));
-        let explain_soler = (passes.contains(&"explain") && self.stages.explain_soler.is_some())
-            .then(|| crate::passes::soler::explain::SolerExplainPass::new(&ctx));
+        let explain_soler = (passes.contains(&"explain")
+            && self.stages.soler.as_ref().is_some_and(|s| s.explain.is_some()))
+        .then(|| crate::passes::soler::explain::SolerExplainPass::new(&ctx));
         let explain_reference = (passes.contains(&"explain") && self.stages.explain_reference.is_some())
             .then(|| crate::passes::reference::explain::ReferenceExplainPass::new(&ctx));
         let explain_hcb = (passes.contains(&"explain") && self.stages.explain_hcb.is_some())
@@ -116,8 +117,8 @@ impl Renderer {
         if let Some(p) = explain {
             self.stages.explain_vpl = Some(p);
         }
-        if let Some(p) = explain_soler {
-            self.stages.explain_soler = Some(p);
+        if let (Some(p), Some(st)) = (explain_soler, self.stages.soler.as_mut()) {
+            st.explain = Some(p);
         }
         if let Some(p) = explain_reference {
             self.stages.explain_reference = Some(p);

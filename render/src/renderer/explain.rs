@@ -1,7 +1,7 @@
 //! Explain a pixel (issue #42): the renderer's side. `set_explain` pins a pixel; every frame
 //! then replays its gather after the passes that lit it (`explain_vpl_gather`,
-//! `explain_reference`, `explain_hcb`, `explain_gautron`, `explain_soler`, called by
-//! `frame.rs` after their stages), and `explanation` (blocking: the command line, tests) or
+//! `explain_reference`, `explain_hcb`, `explain_gautron`, called by `frame.rs` after their
+//! stages; Soler's stage replays inside its run, bounce by bounce), and `explanation` (blocking: the command line, tests) or
 //! `explanation_later` (the window, without waiting) decode it (`crate::explain`); the
 //! near/far mix joins the far field's replay with Soler's (`NearFar`). Tests:
 //! `tests/tests/explain/`.
@@ -224,48 +224,6 @@ pub(crate) fn explain_reference(
     }
 }
 
-/// Records the replay of Soler et al.'s levels and upsampling at the pinned pixel
-/// (`passes::soler::explain`), after the stage's passes.
-pub(crate) fn explain_soler(f: &FrameInputs, x: &mut StagePasses, enc: &mut wgpu::CommandEncoder) {
-    let Some(pixel) = x.explain_pixel else { return };
-    let (w, h) = f.gbuffer_size;
-    if pixel.0 >= w || pixel.1 >= h || soler_unsupported(&f.settings.soler).is_some() {
-        return;
-    }
-    let Some(stage) = x.soler.as_ref() else { return };
-    let s = &f.settings.soler;
-    let inputs = crate::passes::soler::explain::inputs(stage, f, pixel);
-    let info = crate::passes::soler::explain::SolerChain {
-        pixel,
-        levels: inputs.levels.len() as u32,
-        gathered: s.gathered_levels(),
-        temporal: inputs.temporal.is_some(),
-        irradiance_blend: s.temporal_quantity != crate::passes::soler::TemporalQuantity::Radiance,
-        technique: format!(
-            "{}screen-space mip levels (Soler): levels {}…{} gathered with {} samples of r = {} texels, joint bilateral upsampling{}",
-            if f.settings.pipeline.gather == Gather::Vpl { "near field: " } else { "" },
-            s.gathered_levels().start,
-            s.gathered_levels().end - 1,
-            s.samples,
-            s.radius_px,
-            if inputs.temporal.is_some() { ", Eq. 6's warped blend" } else { "" }
-        ),
-        samples: s.samples,
-        radius: s.radius_px,
-    };
-    let pass = x.explain_soler.get_or_insert_with(|| crate::passes::soler::explain::SolerExplainPass::new(f.ctx));
-    pass.run(f.ctx, enc, &inputs, info);
-}
-
-/// Why Soler's replay cannot explain these settings yet (None: it can).
-fn soler_unsupported(s: &crate::passes::soler::SolerSettings) -> Option<&'static str> {
-    if s.bounces > 1 {
-        Some("Soler's replay explains one bounce; the later bounces' level light is not kept")
-    } else {
-        None
-    }
-}
-
 /// Gautron's stage choices, in words.
 fn gautron_words(f: &FrameInputs) -> String {
     let p = &f.settings.pipeline;
@@ -396,9 +354,6 @@ impl Renderer {
         }
         // Soler et al.'s levels (one bounce).
         let soler = p.gather == Gather::ScreenSpace && p.shading_points == ShadingPoints::MipLevels;
-        if soler && let Some(why) = soler_unsupported(&self.settings.soler) {
-            return Some(why.to_string());
-        }
         // The HCB's coherence splatting, whatever lit its samples (the VPL gather at the
         // samples, Soler's ring gather or Gautron's hemispheres there: GI Lab's mixes).
         let hcb = p.shading_points == ShadingPoints::HcbSamples
@@ -421,10 +376,15 @@ impl Renderer {
         let far = self.far_replay()?;
         let p = &self.settings.pipeline;
         if p.gather == Gather::Vpl && p.near_field == NearField::ScreenSpace {
-            let near = self.stages.explain_soler.as_ref().ok_or("the near field was not replayed yet")?;
+            let near = self.soler_replay().ok_or("the near field was not replayed yet")?;
             return Ok(Box::new(NearFar { far, near }));
         }
         Ok(Box::new(far))
+    }
+
+    /// Soler's replay, which the stage runs bounce by bounce (`SolerStage::explain`).
+    fn soler_replay(&self) -> Option<&crate::passes::soler::explain::SolerExplainPass> {
+        self.stages.soler.as_ref()?.explain.as_ref()
     }
 
     /// The replay of the stage choices' (far-field) light.
@@ -440,7 +400,7 @@ impl Renderer {
             return Ok(self.stages.explain_reference.as_ref().ok_or_else(none)?);
         }
         if self.settings.pipeline.shading_points == ShadingPoints::MipLevels {
-            return Ok(self.stages.explain_soler.as_ref().ok_or_else(none)?);
+            return Ok(self.soler_replay().ok_or_else(none)?);
         }
         Ok(self.stages.explain_vpl.as_ref().ok_or_else(none)?)
     }

@@ -66,8 +66,6 @@ pub(crate) struct StagePasses {
     /// pixels (created when a pixel is first explained).
     pub explain_pixel: Option<(u32, u32)>,
     pub explain_vpl: Option<crate::passes::knecht::explain::VplExplainPass>,
-    /// The replay of Soler et al.'s levels and upsampling.
-    pub explain_soler: Option<crate::passes::soler::explain::SolerExplainPass>,
     /// The replay of the exact-VPL reference's batch.
     pub explain_reference: Option<crate::passes::reference::explain::ReferenceExplainPass>,
     /// The replay of Gautron's splat of irradiance records (created when a pixel is first

@@ -103,3 +103,40 @@ fn levels_sum_to_the_upsampled_light_and_their_weights_are_the_cpu_twins() {
         }
     }
 }
+
+/// 004 §4 "Multi-bounce": the stage replays each bounce right after gathering it, so every
+/// bounce's levels are listed and their sum is `soler.indirect`; with alternating bounces the
+/// bounces this frame did not gather are read from what was kept.
+#[test]
+fn every_bounce_is_listed_and_the_kept_ones_with_alternating_bounces() {
+    for alternate in [false, true] {
+        let text = include_str!("../../../presets/soler-quarter-4-64.ron");
+        let s = gi_render::preset::load_lenient(text, "soler").expect("loads").settings;
+        let mut r = paused_renderer(64, Technique::Soler, |x| {
+            *x = s.clone();
+            x.soler.bounces = 3;
+            x.soler.alternate_bounces = alternate;
+        });
+        for p in [(32, 56), (6, 30)] {
+            r.set_explain(Some(p));
+            for _ in 0..4 {
+                r.render_frame();
+            }
+            let e = r.explanation().unwrap_or_else(|e| panic!("pixel {p:?}: {e}"));
+            let total = e.total_check();
+            assert!(total.relative_error() <= SUM_TOLERANCE, "{}", e.to_text(6));
+            for c in &e.checks {
+                assert!(c.relative_error() <= 1e-5, "{}: {}\n{}", c.what, c.relative_error(), e.to_text(6));
+            }
+            let bounce = |b: u32| {
+                e.contributions
+                    .iter()
+                    .filter(|c| c.fields.iter().any(|(k, v)| *k == "bounce" && *v == b as f32))
+                    .count()
+            };
+            assert!((1..=3).all(|b| bounce(b) > 0), "every bounce is listed:\n{}", e.to_text(0));
+            let kept = e.contributions.iter().filter(|c| c.name.ends_with("(kept)")).count();
+            assert_eq!(kept, if alternate { 2 } else { 0 }, "{}", e.to_text(0));
+        }
+    }
+}

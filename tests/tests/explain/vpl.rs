@@ -256,10 +256,15 @@ fn the_near_far_mix_explains_both_fields_against_the_sum_of_their_buffers() {
 
 #[test]
 fn explaining_what_is_not_written_yet_says_so() {
-    // Soler's later bounces: their levels' light is not kept.
-    let mut r = paused_renderer(32, Technique::Soler, |s| s.soler.bounces = 2);
-    r.set_explain(Some((4, 4)));
-    r.render_frame();
-    let err = r.explanation().expect_err("Soler's second bounce has no replay yet");
-    assert!(err.contains("one bounce"), "{err}");
+    // A complete exact-VPL average gathers no batch: nothing to replay, and it says why.
+    let mut r = paused_renderer(32, Technique::ExactVpl, |s| {
+        s.reference.vpls_per_frame = 64;
+        s.reference.total_vpls = 128;
+    });
+    r.set_explain(Some((16, 28)));
+    for _ in 0..3 {
+        r.render_frame();
+    }
+    let err = r.explanation().expect_err("the average is complete");
+    assert!(err.contains("complete"), "{err}");
 }

@@ -4,8 +4,9 @@
 //! texel's own gathered irradiance (the ring samples' sum) and the light the voxel visibility
 //! removed there; [`decode`] makes the contributions: per level and texel, w · E · c·DI/π,
 //! scaled by Eq. 6's 1 − a, and the warped history's a · c·DI/π · W (or a · W when the
-//! radiance is blended). Written for one bounce without the glossy reflection
-//! (`Renderer::explain_unsupported` says so otherwise).
+//! radiance is blended). The stage replays each bounce right after gathering it (the levels'
+//! light is that bounce's until the next one), and with alternating bounces reads the bounces
+//! it did not gather this frame from what it kept (`SolerStage::run`).
 
 use crate::counters::prelude::*;
 
@@ -17,9 +18,11 @@ use crate::passes::bgl;
 
 /// Texels per level the replay follows (`MAX_PER_LEVEL` in the shader).
 const MAX_PER_LEVEL: u64 = 64;
-/// Levels at most (the header's counts).
+/// Levels at most per bounce.
 const MAX_LEVELS: u64 = 16;
-const ENTRIES_OFFSET: u64 = 256;
+/// Bounces at most (`gather::MAX_BOUNCES`).
+const MAX_BOUNCES: u64 = 4;
+const ENTRIES_OFFSET: u64 = 512;
 /// Uniform slots are 256 bytes apart (dynamic offsets).
 const STRIDE: u64 = 256;
 
@@ -48,12 +51,13 @@ pub struct GpuEntry {
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuHeader {
     pub pixel: [u32; 4],
-    pub counts: [u32; 16],
+    pub counts: [u32; 64],
     pub indirect: Vec4,
     pub last: Vec4,
     pub history: Vec4,
     pub albedo: Vec4,
     pub spec_history: Vec4,
+    pub kept: [Vec4; 4],
 }
 
 /// One level of the chain: its position and normal, and (gathered levels) its own light and
@@ -86,6 +90,9 @@ pub struct SolerExplainInputs<'a> {
 #[derive(Clone, Debug, PartialEq)]
 pub struct SolerChain {
     pub pixel: (u32, u32),
+    /// Bounces n, and those this frame gathered (the others are read from what was kept).
+    pub bounces: u32,
+    pub gathered_bounces: Vec<u32>,
     pub levels: u32,
     pub gathered: std::ops::Range<u32>,
     pub temporal: bool,
@@ -101,6 +108,7 @@ pub struct SolerExplainPass {
     layout: wgpu::BindGroupLayout,
     pixel_pipeline: wgpu::ComputePipeline,
     step_pipeline: wgpu::ComputePipeline,
+    kept_pipeline: wgpu::ComputePipeline,
     params: wgpu::Buffer,
     pub out: wgpu::Buffer,
     dummy: wgpu::TextureView,
@@ -136,8 +144,13 @@ impl SolerExplainPass {
         Self {
             pixel_pipeline: pipeline("explain.soler.pixel", "cs_explain_pixel"),
             step_pipeline: pipeline("explain.soler.step", "cs_explain_step"),
+            kept_pipeline: pipeline("explain.soler.kept", "cs_explain_kept"),
             layout,
-            params: crate::passes::uniform_buffer(device, "explain.soler.params", STRIDE * MAX_LEVELS),
+            params: crate::passes::uniform_buffer(
+                device,
+                "explain.soler.params",
+                STRIDE * (MAX_BOUNCES * MAX_LEVELS + MAX_BOUNCES),
+            ),
             out: device.counted_buffer(&wgpu::BufferDescriptor {
                 label: Some("explain.soler.out"),
                 size: Self::bytes_of(),
@@ -150,102 +163,127 @@ impl SolerExplainPass {
     }
 
     fn bytes_of() -> u64 {
-        ENTRIES_OFFSET + MAX_LEVELS * MAX_PER_LEVEL * std::mem::size_of::<GpuEntry>() as u64
+        ENTRIES_OFFSET + MAX_BOUNCES * MAX_LEVELS * MAX_PER_LEVEL * std::mem::size_of::<GpuEntry>() as u64
     }
 
-    /// Records the replay into `enc`, after the stage's passes.
-    pub fn run(
-        &mut self,
-        ctx: &GpuContext,
-        enc: &mut wgpu::CommandEncoder,
-        inp: &SolerExplainInputs,
-        info: SolerChain,
-    ) {
-        let n = inp.levels.len().min(MAX_LEVELS as usize);
-        if n == 0 {
-            return;
-        }
-        // The start: level 0's texel p with weight 1, every other level empty.
+    /// Starts the frame's replay: every bounce's list holds pixel p at level 0 with weight 1;
+    /// the uniforms of every step (bounce b, level k: slot b·16 + k; the kept bounce b: slot
+    /// 64 + b).
+    pub fn begin(&mut self, ctx: &GpuContext, levels: &[LevelViews], sigma: [f32; 2], info: SolerChain) {
+        let n = levels.len().min(MAX_LEVELS as usize);
         let mut header: GpuHeader = bytemuck::Zeroable::zeroed();
-        header.pixel = [inp.pixel.0, inp.pixel.1, 0, 0];
-        header.counts[0] = 1;
-        let first = GpuEntry {
-            texel: [inp.pixel.0, inp.pixel.1, 0, 0],
-            weight: Vec4::new(1.0, 0.0, 0.0, 0.0),
-            own: Vec4::ZERO,
-            occlusion: Vec4::ZERO,
-            position: Vec4::ZERO,
-            spec: Vec4::ZERO,
-        };
+        header.pixel = [info.pixel.0, info.pixel.1, 0, 0];
+        for b in 0..MAX_BOUNCES as usize {
+            header.counts[b * MAX_LEVELS as usize] = 1;
+            let first = GpuEntry {
+                texel: [info.pixel.0, info.pixel.1, 0, 0],
+                weight: Vec4::new(1.0, 0.0, 0.0, 0.0),
+                own: Vec4::ZERO,
+                occlusion: Vec4::ZERO,
+                position: Vec4::ZERO,
+                spec: Vec4::ZERO,
+            };
+            let at = ENTRIES_OFFSET + (b as u64 * MAX_LEVELS * MAX_PER_LEVEL) * std::mem::size_of::<GpuEntry>() as u64;
+            ctx.queue.write_buffer(&self.out, at, bytemuck::bytes_of(&first));
+        }
         ctx.queue.write_buffer(&self.out, 0, bytemuck::bytes_of(&header));
-        ctx.queue.write_buffer(&self.out, ENTRIES_OFFSET, bytemuck::bytes_of(&first));
-        let params: Vec<StepParams> = (0..n)
-            .map(|k| StepParams {
-                level: [k as u32, inp.levels[k].own.is_some() as u32, (k + 1 == n) as u32, 0],
-                sigma: [inp.sigma[0], inp.sigma[1], 0.0, 0.0],
-            })
-            .collect();
+        let mut params: Vec<StepParams> = Vec::new();
+        for b in 0..MAX_BOUNCES as u32 {
+            params.extend((0..MAX_LEVELS as usize).map(|k| StepParams {
+                level: [k as u32, levels.get(k).is_some_and(|l| l.own.is_some()) as u32, (k + 1 >= n) as u32, b],
+                sigma: [sigma[0], sigma[1], 0.0, 0.0],
+            }));
+        }
+        let spec = levels.iter().any(|l| l.spec.is_some()) as u32;
+        params.extend((0..MAX_BOUNCES as u32).map(|b| StepParams { level: [0, spec, 1, b], sigma: [0.0; 4] }));
         ctx.queue.write_buffer(&self.params, 0, &crate::passes::strided_bytes(STRIDE, params.len(), &params));
+        self.info = Some(info);
+    }
+
+    /// A bind group of the layout: level `l` and the one above it (`coarse`), `light` and
+    /// `spec` as the level's own light, and the frame's buffers at the pixel.
+    fn group(
+        &self,
+        ctx: &GpuContext,
+        inp: &SolerExplainInputs,
+        (l, coarse): (&LevelViews, &LevelViews),
+        (light, occlusion, spec): (&wgpu::TextureView, &wgpu::TextureView, &wgpu::TextureView),
+    ) -> wgpu::BindGroup {
         let (w, a) = inp.temporal.as_ref().map(|(w, a)| (w, a)).unwrap_or((&self.dummy, &self.dummy));
+        let views = [
+            &l.position,
+            &l.normal,
+            light,
+            occlusion,
+            &coarse.position,
+            &coarse.normal,
+            &inp.indirect,
+            &inp.last,
+            w,
+            a,
+            inp.albedo,
+        ];
+        let mut resources = vec![crate::passes::dynamic_slot(&self.params, std::mem::size_of::<StepParams>())];
+        resources.extend(views.into_iter().map(wgpu::BindingResource::TextureView));
+        resources.push(wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &self.out,
+            offset: 0,
+            size: wgpu::BufferSize::new(std::mem::size_of::<GpuHeader>() as u64),
+        }));
+        resources.push(wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &self.out,
+            offset: ENTRIES_OFFSET,
+            size: None,
+        }));
+        let spec_history = inp.spec_history.as_ref().unwrap_or(&self.dummy);
+        resources.extend([spec, inp.motion, spec_history].map(wgpu::BindingResource::TextureView));
+        crate::passes::bind_group(&ctx.device, "explain.soler.inputs", &self.layout, resources)
+    }
+
+    /// One dispatch of `pipeline`, alone in its pass (each reads what the one before wrote).
+    fn dispatch(enc: &mut wgpu::CommandEncoder, pipeline: &wgpu::ComputePipeline, group: &wgpu::BindGroup, slot: u64) {
+        let mut pass = enc
+            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("explain.soler"), timestamp_writes: None });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, group, &[(slot * STRIDE) as u32]);
+        pass.dispatch_workgroups(1, 1, 1);
+    }
+
+    /// Bounce `b`, right after the stage gathered and upsampled it: its levels' texels, their
+    /// weights and own light.
+    pub fn bounce(&self, ctx: &GpuContext, enc: &mut wgpu::CommandEncoder, inp: &SolerExplainInputs, b: u32) {
+        let n = inp.levels.len().min(MAX_LEVELS as usize);
         for k in 0..n {
             let l = &inp.levels[k];
             let coarse = inp.levels.get(k + 1).unwrap_or(l);
             let (own, occlusion) = l.own.as_ref().map(|(o, c)| (o, c)).unwrap_or((&self.dummy, &self.dummy));
-            let views = [
-                &l.position,
-                &l.normal,
-                own,
-                occlusion,
-                &coarse.position,
-                &coarse.normal,
-                &inp.indirect,
-                &inp.last,
-                w,
-                a,
-                inp.albedo,
-            ];
-            let mut resources = vec![crate::passes::dynamic_slot(&self.params, std::mem::size_of::<StepParams>())];
-            resources.extend(views.into_iter().map(wgpu::BindingResource::TextureView));
-            resources.push(wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                buffer: &self.out,
-                offset: 0,
-                size: wgpu::BufferSize::new(std::mem::size_of::<GpuHeader>() as u64),
-            }));
-            resources.push(wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                buffer: &self.out,
-                offset: ENTRIES_OFFSET,
-                size: None,
-            }));
             let spec = l.spec.as_ref().unwrap_or(&self.dummy);
-            let spec_history = inp.spec_history.as_ref().unwrap_or(&self.dummy);
-            resources.extend([spec, inp.motion, spec_history].map(wgpu::BindingResource::TextureView));
-            let group = crate::passes::bind_group(&ctx.device, "explain.soler.inputs", &self.layout, resources);
-            let offset = [(k as u64 * STRIDE) as u32];
-            // One pass per dispatch: each reads what the one before wrote.
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("explain.soler"),
-                timestamp_writes: None,
-            });
-            pass.set_bind_group(0, &group, &offset);
-            if k == 0 {
-                pass.set_pipeline(&self.pixel_pipeline);
-                pass.dispatch_workgroups(1, 1, 1);
-                drop(pass);
-                pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("explain.soler"),
-                    timestamp_writes: None,
-                });
-                pass.set_bind_group(0, &group, &offset);
-            }
-            pass.set_pipeline(&self.step_pipeline);
-            pass.dispatch_workgroups(1, 1, 1);
+            let group = self.group(ctx, inp, (l, coarse), (own, occlusion, spec));
+            Self::dispatch(enc, &self.step_pipeline, &group, b as u64 * MAX_LEVELS + k as u64);
         }
-        self.info = Some(info);
+    }
+
+    /// After the stage: the pixel's buffers, and the bounces it kept (`kept`: bounce, its light
+    /// and glossy light) but did not gather this frame.
+    pub fn finish(
+        &self,
+        ctx: &GpuContext,
+        enc: &mut wgpu::CommandEncoder,
+        inp: &SolerExplainInputs,
+        kept: &[(u32, wgpu::TextureView, Option<wgpu::TextureView>)],
+    ) {
+        let Some(l) = inp.levels.first() else { return };
+        let group = self.group(ctx, inp, (l, l), (&self.dummy, &self.dummy, &self.dummy));
+        Self::dispatch(enc, &self.pixel_pipeline, &group, 0);
+        for (b, light, spec) in kept {
+            let group = self.group(ctx, inp, (l, l), (light, &self.dummy, spec.as_ref().unwrap_or(&self.dummy)));
+            Self::dispatch(enc, &self.kept_pipeline, &group, MAX_BOUNCES * MAX_LEVELS + *b as u64);
+        }
     }
 }
 
-/// The replay's inputs from the stage as its last `run` left it (one bounce: the gathered
-/// levels' light is the first bounce's).
+/// The replay's inputs from the stage as it stands (after a bounce: the levels' light is that
+/// bounce's).
 pub fn inputs<'a>(
     stage: &super::stage::SolerStage,
     f: &'a crate::stages::FrameInputs,
@@ -287,6 +325,38 @@ pub fn inputs<'a>(
     }
 }
 
+/// What decode needs of this frame's stage (`bounces`: the bounces it gathers).
+pub fn chain(f: &crate::stages::FrameInputs, pixel: (u32, u32), bounces: &[u32], temporal: bool) -> SolerChain {
+    let s = &f.settings.soler;
+    let n = s.bounces.clamp(1, MAX_BOUNCES as u32);
+    SolerChain {
+        pixel,
+        bounces: n,
+        gathered_bounces: bounces.to_vec(),
+        levels: s.gathered_levels().end,
+        gathered: s.gathered_levels(),
+        temporal,
+        irradiance_blend: s.temporal_quantity != super::TemporalQuantity::Radiance,
+        technique: format!(
+            "{}screen-space mip levels (Soler): levels {}…{} gathered with {} samples of r = {} texels, joint \
+             bilateral upsampling{}{}",
+            if f.settings.pipeline.gather == crate::pipeline::Gather::Vpl { "near field: " } else { "" },
+            s.gathered_levels().start,
+            s.gathered_levels().end - 1,
+            s.samples,
+            s.radius_px,
+            match (n, s.alternate_bounces) {
+                (1, _) => String::new(),
+                (n, false) => format!(", {n} bounces"),
+                (n, true) => format!(", {n} bounces, one gathered per frame in turn"),
+            },
+            if temporal { ", Eq. 6's warped blend" } else { "" }
+        ),
+        samples: s.samples,
+        radius: s.radius_px,
+    }
+}
+
 impl Replay for SolerExplainPass {
     fn parts(&self) -> Option<Vec<(wgpu::Buffer, u64)>> {
         self.info.as_ref()?;
@@ -306,7 +376,7 @@ pub fn decode(info: &SolerChain, bytes: &[u8]) -> Option<Explanation> {
     }
     let size = std::mem::size_of::<GpuEntry>();
     let entries: Vec<GpuEntry> = bytemuck::pod_collect_to_vec(
-        bytes.get(ENTRIES_OFFSET as usize..)?.get(..(MAX_LEVELS * MAX_PER_LEVEL) as usize * size)?,
+        bytes.get(ENTRIES_OFFSET as usize..)?.get(..(MAX_BOUNCES * MAX_LEVELS * MAX_PER_LEVEL) as usize * size)?,
     );
     let v3 = |v: Vec4| v.truncate();
     let k_p = v3(header.albedo);
@@ -314,45 +384,73 @@ pub fn decode(info: &SolerChain, bytes: &[u8]) -> Option<Explanation> {
     let mut contributions = Vec::new();
     let mut gathered_sum = Vec3::ZERO;
     let mut notes = Vec::new();
-    for k in 0..info.levels.min(MAX_LEVELS as u32) {
-        let n = header.counts[k as usize] as usize;
-        if n as u64 >= MAX_PER_LEVEL {
-            notes.push(format!(
-                "level {k}: more than {MAX_PER_LEVEL} texels reach the pixel; the replay follows the first"
-            ));
-        }
-        if !info.gathered.contains(&k) {
-            continue;
-        }
-        let base = k as usize * MAX_PER_LEVEL as usize;
-        for e in entries.get(base..base + n)? {
-            let w = e.weight.x;
-            let own = v3(e.own);
-            let spec = v3(e.spec);
-            gathered_sum += (own * k_p + spec) * w;
-            if w <= 0.0 {
+    let several = info.bounces > 1;
+    for &b in &info.gathered_bounces {
+        for k in 0..info.levels.min(MAX_LEVELS as u32) {
+            let list = (b as u64 * MAX_LEVELS + k as u64) as usize;
+            let n = header.counts[list] as usize;
+            if n as u64 >= MAX_PER_LEVEL {
+                notes.push(format!(
+                    "level {k}: more than {MAX_PER_LEVEL} texels reach the pixel; the replay follows the first"
+                ));
+            }
+            if !info.gathered.contains(&k) {
                 continue;
             }
-            contributions.push(Contribution {
-                name: format!("level {k} ({}, {})", e.texel[0], e.texel[1]),
-                source: format!("ring gather of level {k} ({} samples)", info.samples),
-                position: Some(v3(e.position)),
-                value: (own * k_p + spec) * w * (1.0 - a),
-                weight: w * (1.0 - a),
-                rejected: None,
-                via: None,
-                fields: vec![
-                    ("level", k as f32),
-                    ("w (upsampling)", w),
-                    ("E (lum)", crate::explain::luminance(own)),
-                    ("hidden by voxels (lum)", crate::explain::luminance(v3(e.occlusion))),
-                    ("visible fraction", e.occlusion.w),
-                    ("S glossy (lum)", crate::explain::luminance(spec)),
-                    // The ring this texel gathered, in full-resolution pixels (r · 2^k).
-                    ("ring radius (px)", info.radius * (1u32 << k.min(30)) as f32),
-                ],
-            });
+            let base = list * MAX_PER_LEVEL as usize;
+            for e in entries.get(base..base + n)? {
+                let w = e.weight.x;
+                let own = v3(e.own);
+                let spec = v3(e.spec);
+                gathered_sum += (own * k_p + spec) * w;
+                if w <= 0.0 {
+                    continue;
+                }
+                let bounce = if several { format!("bounce {} ", b + 1) } else { String::new() };
+                contributions.push(Contribution {
+                    name: format!("{bounce}level {k} ({}, {})", e.texel[0], e.texel[1]),
+                    source: format!(
+                        "ring gather of level {k} ({} samples){}",
+                        info.samples,
+                        match b {
+                            0 => String::new(),
+                            _ => format!(", of bounce {b}'s light"),
+                        }
+                    ),
+                    position: Some(v3(e.position)),
+                    value: (own * k_p + spec) * w * (1.0 - a),
+                    weight: w * (1.0 - a),
+                    rejected: None,
+                    via: None,
+                    fields: vec![
+                        ("level", k as f32),
+                        ("bounce", (b + 1) as f32),
+                        ("w (upsampling)", w),
+                        ("E (lum)", crate::explain::luminance(own)),
+                        ("hidden by voxels (lum)", crate::explain::luminance(v3(e.occlusion))),
+                        ("visible fraction", e.occlusion.w),
+                        ("S glossy (lum)", crate::explain::luminance(spec)),
+                        // The ring this texel gathered, in full-resolution pixels (r · 2^k).
+                        ("ring radius (px)", info.radius * (1u32 << k.min(30)) as f32),
+                    ],
+                });
+            }
         }
+    }
+    // The bounces this frame did not gather (alternating bounces): their kept light.
+    for b in (0..info.bounces.min(MAX_BOUNCES as u32)).filter(|b| !info.gathered_bounces.contains(b)) {
+        let kept = v3(header.kept[b as usize]);
+        gathered_sum += kept;
+        contributions.push(Contribution {
+            name: format!("bounce {} (kept)", b + 1),
+            source: "gathered in an earlier frame (alternating bounces, §5.3)".into(),
+            position: None,
+            value: kept * (1.0 - a),
+            weight: 1.0 - a,
+            rejected: None,
+            via: None,
+            fields: vec![("bounce", (b + 1) as f32)],
+        });
     }
     if info.temporal {
         let history =
@@ -371,7 +469,11 @@ pub fn decode(info: &SolerChain, bytes: &[u8]) -> Option<Explanation> {
     }
     notes.push("each level's E is the sum of its ring samples (soler.level.k.indirect); the light its voxel visibility removed is 'hidden by voxels'".into());
     let checks = vec![Check {
-        what: "Σ levels w · (E · c·DI/π + S)".into(),
+        what: if several {
+            "Σ bounces and levels w · (E · c·DI/π + S)".into()
+        } else {
+            "Σ levels w · (E · c·DI/π + S)".into()
+        },
         sum: gathered_sum,
         buffer: "soler.indirect".into(),
         value: v3(header.indirect),

@@ -30,6 +30,8 @@ pub struct SolerStage {
     /// The scene's meshes that are not closed, with their open edges (solid voxelization's
     /// visibility is wrong behind them; `voxels::open_meshes`).
     pub open_meshes: Vec<(String, usize)>,
+    /// The replay of a pinned pixel (issue #42), bounce by bounce (created when one is).
+    pub explain: Option<super::explain::SolerExplainPass>,
 }
 
 /// Level sizes 0 (the G-buffer) … top.
@@ -51,6 +53,7 @@ impl SolerStage {
             hcb_gather: SolerHcbGather::new(ctx),
             temporal: None,
             open_meshes: Vec::new(),
+            explain: None,
         };
         stage.ensure(ctx, s, width, height, temporal);
         stage
@@ -151,11 +154,23 @@ impl SolerStage {
         self.gather.write_params(ctx, &levels, base, &grids);
         let bounce_views: Vec<wgpu::TextureView> =
             self.bounces.light.iter().map(|t| crate::passes::view(t, "soler.bounce")).collect();
+        // A pinned pixel's replay (issue #42): after each bounce, while its light is the levels'.
+        let explain = f.explain_pixel.filter(|p| p.0 < f.gbuffer_size.0 && p.1 < f.gbuffer_size.1);
+        let mut replay = explain.map(|px| {
+            let mut ex = self.explain.take().unwrap_or_else(|| super::explain::SolerExplainPass::new(ctx));
+            let levels = super::explain::inputs(self, f, px).levels;
+            let sigma = [s.upsample_sigma_depth, s.upsample_sigma_normal];
+            ex.begin(ctx, &levels, sigma, super::explain::chain(f, px, &bounces, self.temporal.is_some()));
+            (px, ex)
+        });
         for (j, &b) in bounces.iter().enumerate() {
             // Bounce b + 1 gathers the light of bounce b (the direct light for the first).
             let radiance = if b == 0 { f.sender_radiance() } else { &bounce_views[b as usize - 1] };
             let prefix = if b == 0 { "soler".to_string() } else { format!("soler.bounce{}", b + 1) };
             self.bounce(f, enc, timer, &prefix, radiance, &grids[j], (j, &all));
+            if let Some((px, ex)) = &replay {
+                ex.bounce(ctx, enc, &super::explain::inputs(self, f, *px), b);
+            }
             self.bounces.keep(enc, &self.upsample.indirect, self.specular_light(), b as usize);
         }
         if !self.bounces.light.is_empty() {
@@ -164,14 +179,25 @@ impl SolerStage {
         }
         let indirect = crate::passes::view(&self.upsample.indirect, "soler.indirect");
         let specular = self.indirect_specular(s).map(|t| crate::passes::view(t, "soler.indirect.specular"));
-        match &mut self.temporal {
+        let out = match &mut self.temporal {
             Some(t) => {
                 let (camera, spec) = (f.camera_buffer, specular.as_ref());
                 timer.scope(ctx, enc, "soler.temporal", |e, slot| t.run(ctx, e, slot, s, camera, (&indirect, spec), g));
                 crate::passes::view(&t.filtered, "soler.temporal")
             }
             None => indirect,
+        };
+        if let Some((px, ex)) = replay.take() {
+            // The bounces this frame did not gather (alternating bounces) are what was kept.
+            let view = |t: &wgpu::Texture| crate::passes::view(t, "soler.bounce");
+            let kept: Vec<(u32, wgpu::TextureView, Option<wgpu::TextureView>)> = (0..self.bounces.light.len() as u32)
+                .filter(|b| !bounces.contains(b))
+                .map(|b| (b, view(&self.bounces.light[b as usize]), self.bounces.specular.get(b as usize).map(view)))
+                .collect();
+            ex.finish(ctx, enc, &super::explain::inputs(self, f, px), &kept);
+            self.explain = Some(ex);
         }
+        out
     }
 
     /// The voxel grids of the frame (004 §4 "Visibility"), built when visibility is on; their
