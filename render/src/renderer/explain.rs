@@ -335,6 +335,9 @@ impl Renderer {
     /// Why the current stage choices cannot be explained yet (None: they can).
     pub fn explain_unsupported(&self) -> Option<String> {
         let p = &self.settings.pipeline;
+        if p.gather == Gather::None {
+            return Some("direct light only (gather: none): the pixel has no indirect light to explain".into());
+        }
         let vpl_gather = p.gather == Gather::Vpl
             && p.vpl_source == VplSource::ImportanceWarping
             && matches!(p.shading_points, ShadingPoints::EveryPixel | ShadingPoints::InterleavedTiles);
@@ -352,7 +355,7 @@ impl Renderer {
                     .into(),
             );
         }
-        // Soler et al.'s levels (one bounce).
+        // Soler et al.'s levels, every bounce.
         let soler = p.gather == Gather::ScreenSpace && p.shading_points == ShadingPoints::MipLevels;
         // The HCB's coherence splatting, whatever lit its samples (the VPL gather at the
         // samples, Soler's ring gather or Gautron's hemispheres there: GI Lab's mixes).
@@ -361,11 +364,9 @@ impl Renderer {
             && p.gather != Gather::None;
         (!vpl_gather && !gautron && !soler && !hcb && !reference).then(|| {
             format!(
-                "explaining a pixel is written for instant radiosity's VPL gather at every pixel or at \
-                 interleaved tiles (with its filter and confidence merge) and for Gautron's splatted \
-                 irradiance records (lit by hemispheres or VPLs) and for the HCB's coherence splatting; \
-                 not yet for {:?} VPLs gathered \
-                 by {:?} at {:?} ({:?}, {:?})",
+                "explaining a pixel is written for the VPL gather at every pixel or interleaved tiles, \
+                 the exact-VPL reference, the HCB's samples, Gautron's records and Soler's levels (and \
+                 their mixes); not for {:?} VPLs gathered by {:?} at {:?} ({:?}, {:?})",
                 p.vpl_source, p.gather, p.shading_points, p.reconstruction, p.temporal
             )
         })
