@@ -58,6 +58,8 @@ struct Entry {
     errors: vec4<f32>,
     // rgb: its gathered light E_s (irradiance), a: 1 once gathered
     light: vec4<f32>,
+    // its splat's quad in NDC (x0, y0, x1, y1: splat_quad), for the overlay
+    quad: vec4<f32>,
 }
 
 const EXPLAIN_COHERENT: u32 = 1u;   // p is coherent to it (Eq. 9): it adds to p's sums
@@ -164,6 +166,6 @@ fn cs_explain_samples(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let slot = atomicAdd(&tally[0], 1u);
     if (slot < arrayLength(&entries)) {
-        entries[slot] = Entry(vec4<u32>(i, flags, s.texel.z, s.texel.w), s.position, vec4<f32>(e, v.a), s.light);
+        entries[slot] = Entry(vec4<u32>(i, flags, s.texel.z, s.texel.w), s.position, vec4<f32>(e, v.a), s.light, r);
     }
 }

@@ -7,3 +7,38 @@ mod hcb;
 mod soler;
 mod vpl;
 mod window;
+
+/// The byte size of WGSL struct `name` in shader `entry` (as `gi_render::shaders` resolves it).
+fn wgsl_size(entry: &str, name: &str) -> usize {
+    let src = gi_render::shaders::resolve(entry).expect("resolves");
+    let module = naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+    module
+        .types
+        .iter()
+        .find_map(|(_, t)| match (&t.name, &t.inner) {
+            (Some(n), naga::TypeInner::Struct { span, .. }) if n == name => Some(*span as usize),
+            _ => None,
+        })
+        .unwrap_or_else(|| panic!("{entry}: struct {name} not found"))
+}
+
+/// Every replay's output structs have their WGSL twins' sizes (the decode reads them by size).
+#[test]
+fn the_replays_structs_have_the_sizes_of_their_wgsl_twins() {
+    use gi_render::passes::{gautron, knecht, reference, soler};
+    use std::mem::size_of;
+    let pairs = [
+        ("interleave/explain.wgsl", "Term", size_of::<knecht::explain::GpuTerm>()),
+        ("interleave/explain.wgsl", "WindowPixel", size_of::<knecht::explain::GpuWindow>()),
+        ("interleave/explain.wgsl", "Header", size_of::<knecht::explain::GpuHeader>()),
+        ("soler/explain.wgsl", "Entry", size_of::<soler::explain::GpuEntry>()),
+        ("soler/explain.wgsl", "Header", size_of::<soler::explain::GpuHeader>()),
+        ("vpl/explain.wgsl", "Term", size_of::<reference::explain::GpuTerm>()),
+        ("vpl/explain.wgsl", "Header", size_of::<reference::explain::GpuHeader>()),
+        ("gautron/explain.wgsl", "Entry", size_of::<gautron::explain::GpuEntry>()),
+        ("gautron/explain.wgsl", "Header", size_of::<gautron::explain::GpuHeader>()),
+    ];
+    for (entry, name, rust) in pairs {
+        assert_eq!(wgsl_size(entry, name), rust, "{entry}: {name}");
+    }
+}

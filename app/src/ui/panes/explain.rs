@@ -184,6 +184,20 @@ pub(super) fn explain_overlay(
         if hovered {
             painter.circle_stroke(pos, 12.0, egui::Stroke::new(2.0, egui::Color32::WHITE));
         }
+        // A sample's splat quad (the HCB), as the splat draws it.
+        let field = |name: &str| c.fields.iter().find(|(k, _)| *k == name).map(|(_, v)| *v);
+        if let (Some(x0), Some(y0), Some(x1), Some(y1)) =
+            (field("quad x0 (NDC)"), field("quad y0 (NDC)"), field("quad x1 (NDC)"), field("quad y1 (NDC)"))
+        {
+            let to =
+                |x: f32, y: f32| rect.min + egui::vec2((x * 0.5 + 0.5) * rect.width(), (0.5 - y * 0.5) * rect.height());
+            painter.rect_stroke(
+                egui::Rect::from_two_pos(to(x0, y0), to(x1, y1)),
+                0.0,
+                egui::Stroke::new(1.0, colour.gamma_multiply(0.8)),
+                egui::StrokeKind::Middle,
+            );
+        }
         // A record's sphere of influence a·R_k (Gautron), as the splat bounds it.
         if let Some((_, r)) = c.fields.iter().find(|(k, _)| *k == "a·R_k") {
             let edge = view_proj * (p + camera_right * *r).extend(1.0);

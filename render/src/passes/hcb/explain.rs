@@ -86,6 +86,8 @@ pub struct GpuEntry {
     pub errors: Vec4,
     /// rgb: E_s; a: 1 once gathered.
     pub light: Vec4,
+    /// Its splat's quad in NDC (x0, y0, x1, y1), for the overlay.
+    pub quad: Vec4,
 }
 
 /// What the frame's HCB chain was, for [`decode`].
@@ -351,6 +353,11 @@ pub fn decode(info: &HcbInfo, bytes: &[u8]) -> Option<Explanation> {
                 (LIGHT, luminance(v3(e.light))),
                 (LEVEL, (e.index[2] & 0xff) as f32),
                 ("a^w", e.position.w),
+                // The splat's quad in NDC (the overlay draws it).
+                ("quad x0 (NDC)", e.quad.x),
+                ("quad y0 (NDC)", e.quad.y),
+                ("quad x1 (NDC)", e.quad.z),
+                ("quad y1 (NDC)", e.quad.w),
             ];
             if e.light.w < 0.5 {
                 fields.push(("not gathered", 1.0));
