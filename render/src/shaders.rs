@@ -70,6 +70,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("soler/bounces.wgsl", include_str!("../../shaders/soler/bounces.wgsl")),
     ("soler/glossy.wgsl", include_str!("../../shaders/soler/glossy.wgsl")),
     ("soler/ring.wgsl", include_str!("../../shaders/soler/ring.wgsl")),
+    ("soler/ring_texel.wgsl", include_str!("../../shaders/soler/ring_texel.wgsl")),
     ("soler/hcb_gather.wgsl", include_str!("../../shaders/soler/hcb_gather.wgsl")),
     ("gautron/common.wgsl", include_str!("../../shaders/gautron/common.wgsl")),
     ("gautron/create.wgsl", include_str!("../../shaders/gautron/create.wgsl")),

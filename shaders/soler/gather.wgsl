@@ -22,6 +22,7 @@
 #import common/random.wgsl
 
 #import soler/ring.wgsl
+#import soler/ring_texel.wgsl
 
 @group(0) @binding(0) var<uniform> params: GatherParams;
 @group(0) @binding(1) var level_position: texture_2d<f32>;
@@ -48,55 +49,25 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
         textureStore(out_specular, gid.xy, vec4<f32>(0.0));
         return;
     }
-    let px4 = textureLoad(level_position, x, 0);
-    let px = px4.xyz;
+    let r = ring_receiver(x);
     var hidden = vec3<f32>(0.0);
     var lit = 0u;
     var seen = 0u;
-    let n = nx.xyz;
-    let count = params.counts.x;
-    let inner = ring_inner();
-    let dp = ring_area(inner);
-    let rot = rotation(gid.xy);
     var e = vec3<f32>(0.0);
-    // The glossy reflection: the receiver's lobe (cpu::soler_glossy::receiver_lobe).
-    let flags = u32(params.gloss.w);
-    let glossy = (flags & 1u) != 0u;
-    let mat = textureLoad(level_material, x, 0).xy;
-    var lobe = vec2<f32>(0.0);
-    var warped = false;
-    if ((flags & 2u) != 0u && mat.x > 0.0 && mat.y >= params.gloss.z) {
-        let a = params.right.xyz;
-        let l = gloss_lobe_angle(px, n, params.eye.xyz, a, params.up.xyz, params.forward.xyz, params.screen.xy);
-        warped = l.y > 0.0;
-        lobe = vec2<f32>(l.x, params.gloss.y * max(mat.y, 0.0));
-    }
-    let v = normalize(params.eye.xyz - px);
     var spec = vec3<f32>(0.0);
-    for (var i = 0u; i < count; i = i + 1u) {
-        let pw = gloss_warp(rot + f32(i) * GOLDEN_ANGLE, lobe, warped, params.gloss.x);
-        let o = ring_offset(i, inner, pw.x);
-        if (o.x == 0 && o.y == 0) {
+    for (var i = 0u; i < params.counts.x; i = i + 1u) {
+        let t = ring_term(x, r, i);
+        if (!t.lit) {
             continue;
         }
-        let q = x + o;
-        let sq = sender(q, px, n);
-        if (!sq.lit) {
-            continue;
-        }
-        let w = sq.w;
-        let ds = surface_area(sq.position, sq.normal, dp * pw.y);
-        let light = textureLoad(level_radiance, q, 0).rgb * kernel(sq.cos_t, sq.cos_tp, ds, sq.r2);
         lit = lit + 1u;
-        if (params.voxels.grid.x > 0u && !visible(x, px4.w, q, sq.position.w)) {
-            hidden = hidden + light;
+        if (!t.visible) {
+            hidden = hidden + t.light;
             continue;
         }
         seen = seen + 1u;
-        e = e + light;
-        if (glossy) {
-            spec = spec + light * gloss_specular(n, w, v, mat.x, mat.y);
-        }
+        e = e + t.light;
+        spec = spec + t.spec;
     }
     textureStore(out_light, gid.xy, vec4<f32>(e, 1.0));
     textureStore(out_occlusion, gid.xy, vec4<f32>(hidden, f32(seen) / f32(max(lit, 1u))));

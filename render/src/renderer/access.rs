@@ -405,6 +405,7 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         | "soler/bounces.wgsl"
         | "soler/glossy.wgsl"
         | "soler/ring.wgsl"
+        | "soler/ring_texel.wgsl"
         | "soler/hcb_gather.wgsl"
         | "soler/voxel_common.wgsl" => "soler",
         "interleave/explain.wgsl"
