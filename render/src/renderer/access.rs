@@ -411,6 +411,7 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         "interleave/explain.wgsl"
         | "gautron/explain.wgsl"
         | "soler/explain.wgsl"
+        | "soler/explain_ring.wgsl"
         | "hcb/explain.wgsl"
         | "vpl/explain.wgsl" => "explain",
         "gautron/create.wgsl"

@@ -33,6 +33,7 @@ fn the_replays_structs_have_the_sizes_of_their_wgsl_twins() {
         ("interleave/explain.wgsl", "Header", size_of::<knecht::explain::GpuHeader>()),
         ("soler/explain.wgsl", "Entry", size_of::<soler::explain::GpuEntry>()),
         ("soler/explain.wgsl", "Header", size_of::<soler::explain::GpuHeader>()),
+        ("soler/explain_ring.wgsl", "RingOut", size_of::<soler::explain::GpuRingTerm>()),
         ("vpl/explain.wgsl", "Term", size_of::<reference::explain::GpuTerm>()),
         ("vpl/explain.wgsl", "Header", size_of::<reference::explain::GpuHeader>()),
         ("gautron/explain.wgsl", "Entry", size_of::<gautron::explain::GpuEntry>()),

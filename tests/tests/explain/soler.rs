@@ -59,10 +59,21 @@ fn check(r: &gi_render::Renderer, e: &Explanation) {
     let sigmas = UpsampleSigmas { depth: s.upsample_sigma_depth, normal: s.upsample_sigma_normal };
     let chain = cpu_chain(&levels, e.pixel, sigmas);
     let mut compared = 0;
-    for c in e.contributions.iter().filter(|c| c.name.starts_with("level ")) {
-        let k = field(c, "level") as u32;
+    // A texel's row ("level k (x, y)"), or one of its ring samples' ("level k (x, y) #i"): the
+    // heaviest texel of each level is listed sample by sample.
+    let texel_of = |c: &gi_render::explain::Contribution| {
         let coords = c.name.split(['(', ')', ',']).filter_map(|t| t.trim().parse::<u32>().ok()).collect::<Vec<_>>();
-        let t = (coords[0], coords[1]);
+        (field(c, "level") as u32, (coords[0], coords[1]))
+    };
+    let mut rings = std::collections::BTreeSet::new();
+    for c in e.contributions.iter().filter(|c| c.name.starts_with("level ") && c.name.contains('#')) {
+        let (k, t) = texel_of(c);
+        let cpu = chain[k as usize].get(&t).copied().unwrap_or(0.0);
+        assert!((field(c, "w (upsampling)") - cpu).abs() <= 1e-4 * cpu.max(1e-3), "ring of level {k} texel {t:?}");
+        rings.insert((k, t));
+    }
+    for c in e.contributions.iter().filter(|c| c.name.starts_with("level ") && !c.name.contains('#')) {
+        let (k, t) = texel_of(c);
         let cpu = chain[k as usize].get(&t).copied().unwrap_or(0.0);
         let gpu = field(c, "w (upsampling)");
         assert!((gpu - cpu).abs() <= 1e-4 * cpu.max(1e-3), "level {k} texel {t:?}: GPU weight {gpu}, CPU twin {cpu}");
@@ -71,11 +82,18 @@ fn check(r: &gi_render::Renderer, e: &Explanation) {
         assert!((field(c, "E (lum)") - e_k).abs() <= 1e-6 * e_k.max(1.0), "level {k} texel {t:?}: E");
         compared += 1;
     }
-    // Every texel the CPU chain reaches on a gathered level is listed.
+    // Every texel the CPU chain reaches on a gathered level is listed, alone or by its ring's
+    // samples (those with lit samples: a ring with none lists no sample).
     for k in s.gathered_levels() {
-        let listed = e.contributions.iter().filter(|c| c.name.starts_with(&format!("level {k} "))).count();
-        assert_eq!(listed, chain[k as usize].values().filter(|&&w| w > 0.0).count(), "level {k}");
+        let prefix = format!("level {k} ");
+        let alone = e.contributions.iter().filter(|c| c.name.starts_with(&prefix) && !c.name.contains('#')).count();
+        let by_ring = rings.iter().filter(|(l, _)| *l == k).count();
+        let reached = chain[k as usize].values().filter(|&&w| w > 0.0).count();
+        assert_eq!(alone + by_ring, reached, "level {k}: {alone} texels and {by_ring} rings listed");
     }
+    // The heaviest texels' rings: their visible samples sum to the texel's own light.
+    let ring_checks: Vec<_> = e.checks.iter().filter(|c| c.what.starts_with("Σ visible ring samples")).collect();
+    assert!(!ring_checks.is_empty(), "{}", e.to_text(0));
     assert!(compared > 0);
 }
 

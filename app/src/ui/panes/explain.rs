@@ -210,7 +210,8 @@ pub(super) fn explain_overlay(
     }
     // Soler's rings: per level, the ring its heaviest texel gathered (r · 2^k pixels).
     let mut rings: Vec<(f32, &Contribution)> = Vec::new();
-    for c in e.contributions.iter().filter(|c| c.rejected.is_none()) {
+    // (A ring sample's position is its sender's: only the level texels' rows centre a ring.)
+    for c in e.contributions.iter().filter(|c| c.rejected.is_none() && !c.name.contains('#')) {
         let Some((_, level)) = c.fields.iter().find(|(k, _)| *k == "level") else { continue };
         match rings.iter_mut().find(|(l, _)| l == level) {
             Some(r) if e.share(r.1) < e.share(c) => r.1 = c,

@@ -12,7 +12,7 @@ use crate::counters::prelude::*;
 
 use glam::{Vec3, Vec4};
 
-use crate::explain::{Check, Contribution, Explanation, Replay};
+use crate::explain::{Check, Contribution, Explanation, Rejection, Replay};
 use crate::gpu::GpuContext;
 use crate::passes::bgl;
 
@@ -32,6 +32,46 @@ const STRIDE: u64 = 256;
 struct StepParams {
     level: [u32; 4],
     sigma: [f32; 4],
+}
+
+/// Ring samples listed per texel (`MAX_RING` in `soler/explain_ring.wgsl`).
+const MAX_RING: u64 = 256;
+
+/// WGSL twin: `RingParams`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+struct RingParams {
+    list: [u32; 4],
+}
+
+/// One ring sample; WGSL twin: `RingOut`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuRingTerm {
+    pub sender: Vec4,
+    pub light: Vec4,
+    pub position: Vec4,
+    pub spec: Vec4,
+}
+
+/// The ring of one list's heaviest texel; WGSL twin: `RingSlot`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuRingHead {
+    pub texel: [u32; 4],
+}
+
+/// A gathered level of the bounce just gathered, as its gather read it (the ring replay's
+/// inputs): the list (bounce · 16 + level), its views, its voxel grid and the gather's uniform
+/// slot.
+pub struct RingInputs<'a> {
+    pub list: u32,
+    pub position: &'a wgpu::TextureView,
+    pub normal: &'a wgpu::TextureView,
+    pub radiance: &'a wgpu::TextureView,
+    pub material: &'a wgpu::TextureView,
+    pub grid: &'a wgpu::Buffer,
+    pub slot: u32,
 }
 
 /// WGSL twin: `Entry`.
@@ -109,6 +149,11 @@ pub struct SolerExplainPass {
     pixel_pipeline: wgpu::ComputePipeline,
     step_pipeline: wgpu::ComputePipeline,
     kept_pipeline: wgpu::ComputePipeline,
+    ring_layout: wgpu::BindGroupLayout,
+    ring_pipeline: wgpu::ComputePipeline,
+    ring_params: wgpu::Buffer,
+    /// Per list, the ring of its heaviest texel (`GpuRingHead` then `MAX_RING` terms).
+    pub rings: wgpu::Buffer,
     params: wgpu::Buffer,
     pub out: wgpu::Buffer,
     dummy: wgpu::TextureView,
@@ -128,6 +173,29 @@ impl SolerExplainPass {
             label: Some("explain.soler.inputs"),
             entries: &entries,
         });
+        let ring_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("explain.soler.ring.inputs"),
+            entries: &[
+                bgl::uniform_dynamic(0, cs),
+                bgl::texture(1, cs, false),
+                bgl::texture(2, cs, false),
+                bgl::texture(3, cs, false),
+                bgl::storage(4, cs, true),
+                bgl::texture(5, cs, false),
+                bgl::uniform_dynamic(6, cs),
+                bgl::storage(7, cs, true),
+                bgl::storage(8, cs, true),
+                bgl::storage(9, cs, false),
+            ],
+        });
+        let ring_module = crate::shaders::create_module(device, "soler/explain_ring.wgsl");
+        let ring_pipeline = crate::passes::compute_pipeline(
+            device,
+            "explain.soler.ring",
+            &ring_module,
+            "cs_explain_ring",
+            &[&ring_layout],
+        );
         let module = crate::shaders::create_module(device, "soler/explain.wgsl");
         let pipeline = |label, entry| crate::passes::compute_pipeline(device, label, &module, entry, &[&layout]);
         let dummy = crate::passes::view(
@@ -145,6 +213,19 @@ impl SolerExplainPass {
             pixel_pipeline: pipeline("explain.soler.pixel", "cs_explain_pixel"),
             step_pipeline: pipeline("explain.soler.step", "cs_explain_step"),
             kept_pipeline: pipeline("explain.soler.kept", "cs_explain_kept"),
+            ring_layout,
+            ring_pipeline,
+            ring_params: crate::passes::uniform_buffer(
+                device,
+                "explain.soler.ring.params",
+                STRIDE * MAX_BOUNCES * MAX_LEVELS,
+            ),
+            rings: crate::passes::buffer(
+                device,
+                "explain.soler.rings",
+                Self::ring_bytes(),
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            ),
             layout,
             params: crate::passes::uniform_buffer(
                 device,
@@ -160,6 +241,15 @@ impl SolerExplainPass {
             dummy,
             info: None,
         }
+    }
+
+    /// One list's ring slot, and all of them.
+    fn ring_slot() -> u64 {
+        (std::mem::size_of::<GpuRingHead>() + MAX_RING as usize * std::mem::size_of::<GpuRingTerm>()) as u64
+    }
+
+    fn ring_bytes() -> u64 {
+        MAX_BOUNCES * MAX_LEVELS * Self::ring_slot()
     }
 
     fn bytes_of() -> u64 {
@@ -197,6 +287,13 @@ impl SolerExplainPass {
         let spec = levels.iter().any(|l| l.spec.is_some()) as u32;
         params.extend((0..MAX_BOUNCES as u32).map(|b| StepParams { level: [0, spec, 1, b], sigma: [0.0; 4] }));
         ctx.queue.write_buffer(&self.params, 0, &crate::passes::strided_bytes(STRIDE, params.len(), &params));
+        let rings: Vec<RingParams> = (0..(MAX_BOUNCES * MAX_LEVELS) as u32)
+            .map(|list| {
+                let k = list % MAX_LEVELS as u32;
+                RingParams { list: [list, info.gathered.contains(&k) as u32, 0, 0] }
+            })
+            .collect();
+        ctx.queue.write_buffer(&self.ring_params, 0, &crate::passes::strided_bytes(STRIDE, rings.len(), &rings));
         self.info = Some(info);
     }
 
@@ -251,7 +348,14 @@ impl SolerExplainPass {
 
     /// Bounce `b`, right after the stage gathered and upsampled it: its levels' texels, their
     /// weights and own light.
-    pub fn bounce(&self, ctx: &GpuContext, enc: &mut wgpu::CommandEncoder, inp: &SolerExplainInputs, b: u32) {
+    pub fn bounce(
+        &self,
+        ctx: &GpuContext,
+        enc: &mut wgpu::CommandEncoder,
+        inp: &SolerExplainInputs,
+        b: u32,
+        (rings, gather_params): (&[RingInputs], &wgpu::Buffer),
+    ) {
         let n = inp.levels.len().min(MAX_LEVELS as usize);
         for k in 0..n {
             let l = &inp.levels[k];
@@ -260,6 +364,38 @@ impl SolerExplainPass {
             let spec = l.spec.as_ref().unwrap_or(&self.dummy);
             let group = self.group(ctx, inp, (l, coarse), (own, occlusion, spec));
             Self::dispatch(enc, &self.step_pipeline, &group, b as u64 * MAX_LEVELS + k as u64);
+        }
+        // The heaviest texel of each gathered level gathers its ring again, sample by sample.
+        let part = |offset: u64, size: Option<u64>| {
+            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: &self.out,
+                offset,
+                size: size.and_then(wgpu::BufferSize::new),
+            })
+        };
+        for r in rings {
+            let tv = wgpu::BindingResource::TextureView;
+            let resources = vec![
+                crate::passes::dynamic_slot(gather_params, std::mem::size_of::<super::gather::GatherParams>()),
+                tv(r.position),
+                tv(r.normal),
+                tv(r.radiance),
+                r.grid.as_entire_binding(),
+                tv(r.material),
+                crate::passes::dynamic_slot(&self.ring_params, std::mem::size_of::<RingParams>()),
+                part(0, Some(std::mem::size_of::<GpuHeader>() as u64)),
+                part(ENTRIES_OFFSET, None),
+                self.rings.as_entire_binding(),
+            ];
+            let group =
+                crate::passes::bind_group(&ctx.device, "explain.soler.ring.inputs", &self.ring_layout, resources);
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("explain.soler.ring"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.ring_pipeline);
+            pass.set_bind_group(0, &group, &[(r.slot as u64 * STRIDE) as u32, (r.list as u64 * STRIDE) as u32]);
+            pass.dispatch_workgroups(1, 1, 1);
         }
     }
 
@@ -360,16 +496,17 @@ pub fn chain(f: &crate::stages::FrameInputs, pixel: (u32, u32), bounces: &[u32],
 impl Replay for SolerExplainPass {
     fn parts(&self) -> Option<Vec<(wgpu::Buffer, u64)>> {
         self.info.as_ref()?;
-        Some(vec![(self.out.clone(), Self::bytes_of())])
+        Some(vec![(self.out.clone(), Self::bytes_of()), (self.rings.clone(), Self::ring_bytes())])
     }
 
     fn decode(&self, parts: &[Vec<u8>]) -> Option<Explanation> {
-        decode(self.info.as_ref()?, parts.first()?)
+        let [out, rings] = parts else { return None };
+        decode(self.info.as_ref()?, out, rings)
     }
 }
 
 /// The pixel's explanation from the replay's output.
-pub fn decode(info: &SolerChain, bytes: &[u8]) -> Option<Explanation> {
+pub fn decode(info: &SolerChain, bytes: &[u8], rings: &[u8]) -> Option<Explanation> {
     let header: GpuHeader = bytemuck::pod_read_unaligned(bytes.get(..std::mem::size_of::<GpuHeader>())?);
     if (header.pixel[0], header.pixel[1]) != info.pixel {
         return None;
@@ -382,6 +519,7 @@ pub fn decode(info: &SolerChain, bytes: &[u8]) -> Option<Explanation> {
     let k_p = v3(header.albedo);
     let a = if info.temporal { header.history.w } else { 0.0 };
     let mut contributions = Vec::new();
+    let mut checks = Vec::new();
     let mut gathered_sum = Vec3::ZERO;
     let mut notes = Vec::new();
     let several = info.bounces > 1;
@@ -398,6 +536,8 @@ pub fn decode(info: &SolerChain, bytes: &[u8]) -> Option<Explanation> {
                 continue;
             }
             let base = list * MAX_PER_LEVEL as usize;
+            let bounce = if several { format!("bounce {} ", b + 1) } else { String::new() };
+            let ring = ring_of(rings, list)?;
             for e in entries.get(base..base + n)? {
                 let w = e.weight.x;
                 let own = v3(e.own);
@@ -406,7 +546,20 @@ pub fn decode(info: &SolerChain, bytes: &[u8]) -> Option<Explanation> {
                 if w <= 0.0 {
                     continue;
                 }
-                let bounce = if several { format!("bounce {} ", b + 1) } else { String::new() };
+                // The heaviest texel's ring, sample by sample, in place of its sum.
+                if let Some((head, terms)) = &ring
+                    && head.texel[2] == 1
+                    && (head.texel[0], head.texel[1]) == (e.texel[0], e.texel[1])
+                    && head.texel[3] as u64 <= MAX_RING
+                {
+                    let (rows, check) = ring_rows(&bounce, k, e, terms, (k_p, a, info.radius));
+                    checks.push(check);
+                    // A ring with no lit sample lists none: the texel's own row says so.
+                    if !rows.is_empty() {
+                        contributions.extend(rows);
+                        continue;
+                    }
+                }
                 contributions.push(Contribution {
                     name: format!("{bounce}level {k} ({}, {})", e.texel[0], e.texel[1]),
                     source: format!(
@@ -468,16 +621,19 @@ pub fn decode(info: &SolerChain, bytes: &[u8]) -> Option<Explanation> {
         notes.push(format!("Eq. 6: a = {a:.4} at the pixel (the history's share; this frame's levels weigh 1 − a)"));
     }
     notes.push("each level's E is the sum of its ring samples (soler.level.k.indirect); the light its voxel visibility removed is 'hidden by voxels'".into());
-    let checks = vec![Check {
-        what: if several {
-            "Σ bounces and levels w · (E · c·DI/π + S)".into()
-        } else {
-            "Σ levels w · (E · c·DI/π + S)".into()
+    checks.insert(
+        0,
+        Check {
+            what: if several {
+                "Σ bounces and levels w · (E · c·DI/π + S)".into()
+            } else {
+                "Σ levels w · (E · c·DI/π + S)".into()
+            },
+            sum: gathered_sum,
+            buffer: "soler.indirect".into(),
+            value: v3(header.indirect),
         },
-        sum: gathered_sum,
-        buffer: "soler.indirect".into(),
-        value: v3(header.indirect),
-    }];
+    );
     let mut e = Explanation {
         pixel: info.pixel,
         technique: info.technique.clone(),
@@ -489,4 +645,72 @@ pub fn decode(info: &SolerChain, bytes: &[u8]) -> Option<Explanation> {
     };
     e.sort();
     Some(e)
+}
+
+/// List `list`'s ring slot: its head and its sample terms (None when the bytes are short).
+fn ring_of(rings: &[u8], list: usize) -> Option<Option<(GpuRingHead, Vec<GpuRingTerm>)>> {
+    let slot = SolerExplainPass::ring_slot() as usize;
+    let bytes = rings.get(list * slot..(list + 1) * slot)?;
+    let head: GpuRingHead = bytemuck::pod_read_unaligned(bytes.get(..16)?);
+    if head.texel[2] != 1 {
+        return Some(None);
+    }
+    let n = (head.texel[3] as usize).min(MAX_RING as usize);
+    let size = std::mem::size_of::<GpuRingTerm>();
+    let terms = bytemuck::pod_collect_to_vec(bytes.get(16..16 + n * size)?);
+    Some(Some((head, terms)))
+}
+
+/// The rows of a texel's ring samples (the visible ones with their share, those the voxels
+/// hid as occluded; samples that do not count, off the level or on a sender facing away, are
+/// left out), and the check of their sum against the texel's own light.
+fn ring_rows(
+    bounce: &str,
+    k: u32,
+    e: &GpuEntry,
+    terms: &[GpuRingTerm],
+    (k_p, a, radius): (Vec3, f32, f32),
+) -> (Vec<Contribution>, Check) {
+    let (x, y) = (e.texel[0], e.texel[1]);
+    let w = e.weight.x;
+    let mut sum = Vec3::ZERO;
+    let mut rows = Vec::new();
+    let (mut lit, mut hidden) = (0u32, 0u32);
+    for (i, t) in terms.iter().enumerate() {
+        if t.sender.z < 0.5 {
+            continue;
+        }
+        lit += 1;
+        let visible = t.sender.w > 0.5;
+        let light = t.light.truncate();
+        let spec = t.spec.truncate();
+        if visible {
+            sum += light;
+        } else {
+            hidden += 1;
+        }
+        rows.push(Contribution {
+            name: format!("{bounce}level {k} ({x}, {y}) #{i}"),
+            source: format!("ring sample {i} of level {k} texel ({x}, {y}), from ({}, {})", t.sender.x, t.sender.y),
+            position: Some(t.position.truncate()),
+            value: if visible { (light * k_p + spec) * w * (1.0 - a) } else { Vec3::ZERO },
+            weight: w * (1.0 - a),
+            rejected: (!visible).then_some(Rejection::Occluded),
+            via: None,
+            fields: vec![
+                ("level", k as f32),
+                ("w (upsampling)", w),
+                ("L·K (lum)", crate::explain::luminance(light)),
+                ("S glossy (lum)", crate::explain::luminance(spec)),
+                ("ring radius (px)", radius * (1u32 << k.min(30)) as f32),
+            ],
+        });
+    }
+    let check = Check {
+        what: format!("Σ visible ring samples of level {k} ({x}, {y}) ({lit} lit, {hidden} hidden by voxels)"),
+        sum,
+        buffer: format!("soler.level.{k}.indirect"),
+        value: e.own.truncate(),
+    };
+    (rows, check)
 }

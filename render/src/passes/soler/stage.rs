@@ -169,7 +169,24 @@ impl SolerStage {
             let prefix = if b == 0 { "soler".to_string() } else { format!("soler.bounce{}", b + 1) };
             self.bounce(f, enc, timer, &prefix, radiance, &grids[j], (j, &all));
             if let Some((px, ex)) = &replay {
-                ex.bounce(ctx, enc, &super::explain::inputs(self, f, *px), b);
+                // Each gathered level as this bounce's gather read it (its ring replayed).
+                let lv = self.level_views();
+                let ins = self.level_inputs(f, radiance, &lv, &grids[j], &all);
+                let n = ins.len();
+                let rings: Vec<super::explain::RingInputs> = ins
+                    .iter()
+                    .enumerate()
+                    .map(|(i, l)| super::explain::RingInputs {
+                        list: b * 16 + l.level,
+                        position: l.position,
+                        normal: l.normal,
+                        radiance: l.radiance,
+                        material: l.material,
+                        grid: l.grid,
+                        slot: (j * n + i) as u32,
+                    })
+                    .collect();
+                ex.bounce(ctx, enc, &super::explain::inputs(self, f, *px), b, (&rings, &self.gather.params));
             }
             self.bounces.keep(enc, &self.upsample.indirect, self.specular_light(), b as usize);
         }
