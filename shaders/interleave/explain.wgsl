@@ -12,13 +12,8 @@
 #import common/camera.wgsl
 #import common/ism.wgsl
 #import common/reproject.wgsl
-
-struct GatherParams {
-    split: vec4<u32>,
-    vis: vec4<u32>,
-    shade: vec4<f32>,
-    near: vec4<f32>,
-}
+#import common/vpl_explain.wgsl
+#import interleave/params.wgsl
 
 struct ExplainParams {
     // x, y: the pixel p; z: the filter's window side (n with the filter, else 1); w: 1 when
@@ -26,21 +21,6 @@ struct ExplainParams {
     pixel: vec4<u32>,
     // x: α · (z_far − z_near), y: β (interleave/filter.wgsl)
     thresholds: vec4<f32>,
-}
-
-// One VPL slot's term (passes::knecht::explain::GpuTerm).
-struct Term {
-    // x: slot k; y: flags (EXPLAIN_*); z: the pixel q it reached p through (x | y << 16);
-    // w: its interleaving tile
-    slot: vec4<u32>,
-    // rgb: its light at q, visibility and the tile's N / N_t included (what gather.wgsl adds);
-    // a: visibility
-    light: vec4<f32>,
-    // rgb: the same without visibility; a: geometry term cos θ_x cos θ_y / max(d², d_min²)
-    unshadowed: vec4<f32>,
-    // x: f_y, the VPL's BRDF toward q (luminance); y: f_x, q's BRDF toward the eye
-    // (luminance); z: the map's stored depth; w: the receiver's depth in the map
-    detail: vec4<f32>,
 }
 
 // One pixel of the window (passes::knecht::explain::GpuWindow).
@@ -63,15 +43,6 @@ struct Header {
     counts: vec4<u32>,
     pad: vec4<u32>,
 }
-
-const EXPLAIN_EMPTY: u32 = 1u;        // an empty slot (no VPL)
-const EXPLAIN_OUTSIDE: u32 = 2u;      // its tile's pixel of the window is not p's (no filter) or outside the image
-const EXPLAIN_FACING: u32 = 4u;       // q faces away from it or it faces away from q
-const EXPLAIN_NEAR: u32 = 8u;         // closer than the near field's cut
-const EXPLAIN_OCCLUDED: u32 = 16u;    // the visibility map hides q
-const EXPLAIN_FILTERED: u32 = 32u;    // q is not on p's surface: the filter leaves it out
-const EXPLAIN_CLAMPED: u32 = 64u;     // d < d_min: the geometry term is clamped
-const EXPLAIN_BACKGROUND: u32 = 128u; // q has no surface
 
 const EXPLAIN_W_INSIDE: u32 = 1u;
 const EXPLAIN_W_ACCEPTED: u32 = 2u;
@@ -97,7 +68,7 @@ const EXPLAIN_W_SURFACE: u32 = 4u;
 @group(0) @binding(17) var final_light: texture_2d<f32>;
 @group(0) @binding(18) var<storage, read_write> header: Header;
 @group(0) @binding(19) var<storage, read_write> window: array<WindowPixel, 64>;
-@group(0) @binding(20) var<storage, read_write> terms: array<Term>;
+@group(0) @binding(20) var<storage, read_write> terms: array<VplTerm>;
 
 fn tile_of(q: vec2<i32>) -> u32 {
     let n = params.split.x;
@@ -210,7 +181,7 @@ fn cs_explain_vpls(@builtin(global_invocation_id) gid: vec3<u32>) {
     let stride = n * n;
     let b = k / stride;
     let t = ((k % stride) + stride - tile_offsets[b] % stride) % stride;
-    var term: Term;
+    var term: VplTerm;
     term.slot = vec4<u32>(k, 0u, 0xffffffffu, t);
     let vpl = vpls[k];
     let q = window_pixel(t);
@@ -244,35 +215,15 @@ fn cs_explain_vpls(@builtin(global_invocation_id) gid: vec3<u32>) {
     let nx = normalize(nrm.xyz);
     let alb = textureLoad(g_albedo, q, 0);
     let mat = textureLoad(g_material, q, 0);
-    let m = vec3<f32>(alb.a, select(mat.x, 0.0, params.vis.w == 1u), mat.y);
     let scale = f32(count) / f32(max(per_tile(t), 1u));
-    let l = vpl_radiance(vpl, x, nx, camera.position.xyz, alb.rgb, m, params.shade.x, params.near.x);
-    let w = vpl.position.xyz - x;
-    let d2 = dot(w, w);
-    let dir = w * inverseSqrt(max(d2, 1e-12));
-    let cos_x = dot(nx, dir);
-    let cos_y = -dot(vpl.normal.xyz, dir);
-    if (d2 < params.near.x) {
-        flags = flags | EXPLAIN_NEAR;
-    } else if (cos_x <= 0.0 || cos_y <= 0.0) {
-        flags = flags | EXPLAIN_FACING;
-    }
-    if (d2 < params.shade.x) {
-        flags = flags | EXPLAIN_CLAMPED;
-    }
-    let lum = vec3<f32>(0.2126, 0.7152, 0.0722);
-    let f_y = brdf_eval(vpl.normal.xyz, vpl.incident.xyz, -dir, vpl.albedo.rgb, vpl.normal.w, vpl.flux.a, vpl.incident.w);
-    let f_x = brdf_eval(nx, dir, normalize(camera.position.xyz - x), alb.rgb, m.x, m.y, m.z);
+    let m = vec3<f32>(alb.a, select(mat.x, 0.0, params.vis.w == 1u), mat.y);
+    let seen = vpl_term(vpl, x, nx, camera.position.xyz, alb.rgb, m, params.shade.x, params.near.x);
     var test = vec3<f32>(1.0, 0.0, 0.0);
-    if (max(l.r, max(l.g, l.b)) > 0.0) {
+    if (max(seen.unshadowed.r, max(seen.unshadowed.g, seen.unshadowed.b)) > 0.0) {
         test = gather_test(params.vis.x, ism_atlas, exact_atlas, k, vpl, x, nx, params.vis.y, params.vis.z, params.shade.yzw);
-        if (test.x < 0.5) {
-            flags = flags | EXPLAIN_OCCLUDED;
-        }
     }
-    term.slot.y = flags;
-    term.light = vec4<f32>(l * test.x * scale, test.x);
-    term.unshadowed = vec4<f32>(l * scale, max(cos_x, 0.0) * max(cos_y, 0.0) / max(d2, params.shade.x));
-    term.detail = vec4<f32>(dot(f_y, lum), dot(f_x, lum), test.y, test.z);
+    let slot = term.slot;
+    term = vpl_term_seen(seen, test, scale);
+    term.slot = vec4<u32>(slot.x, flags | term.slot.y, slot.z, slot.w);
     terms[k] = term;
 }

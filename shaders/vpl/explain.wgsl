@@ -7,14 +7,8 @@
 #import common/camera.wgsl
 #import common/brdf.wgsl
 #import common/vpl.wgsl
-
-// The gather's own uniform (vpl/gather.wgsl `Params`).
-struct Params {
-    batch: vec4<f32>,
-    clip: vec4<f32>,
-    bias: vec4<f32>,
-    near: vec4<f32>,
-}
+#import common/vpl_explain.wgsl
+#import vpl/gather_params.wgsl
 
 struct Header {
     // x, y: the pixel; z: the batch's VPL count
@@ -25,18 +19,6 @@ struct Header {
     raw: vec4<f32>,
     // rgb: indirect.accum at p after it; a: the batch's weight 1/(k+1)
     accum: vec4<f32>,
-}
-
-// One VPL's term (passes::reference::explain::GpuTerm; the flags as knecht's).
-struct Term {
-    // x: slot; y: flags (1 empty, 4 facing, 8 near field, 16 occluded, 64 d_min clamp)
-    slot: vec4<u32>,
-    // rgb: its light at p with visibility; a: visibility
-    light: vec4<f32>,
-    // rgb: without visibility; a: the geometry term
-    unshadowed: vec4<f32>,
-    // x: f_y (lum), y: f_x (lum), z: the face's stored depth, w: the receiver's
-    detail: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> camera: Camera;
@@ -50,7 +32,7 @@ struct Term {
 @group(0) @binding(8) var accum: texture_2d<f32>;
 @group(0) @binding(9) var raw: texture_2d<f32>;
 @group(0) @binding(10) var<storage, read_write> header: Header;
-@group(0) @binding(11) var<storage, read_write> terms: array<Term>;
+@group(0) @binding(11) var<storage, read_write> terms: array<VplTerm>;
 
 @compute @workgroup_size(1, 1, 1)
 fn cs_explain_before() {
@@ -71,14 +53,13 @@ fn cs_explain_terms(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (i >= u32(params.batch.x)) {
         return;
     }
-    var term: Term;
-    term.slot = vec4<u32>(i, 0u, 0u, 0u);
     let p = vec2<i32>(header.pixel.xy);
     let nrm = textureLoad(g_normal, p, 0);
     let vpl = vpls[i];
     if (vpl.position.w < 0.5 || nrm.w < 0.5) {
-        term.slot.y = 1u;
-        terms[i] = term;
+        var empty: VplTerm;
+        empty.slot = vec4<u32>(i, EXPLAIN_EMPTY, 0u, 0u);
+        terms[i] = empty;
         return;
     }
     let x = textureLoad(g_position, p, 0).xyz;
@@ -87,39 +68,16 @@ fn cs_explain_terms(@builtin(global_invocation_id) gid: vec3<u32>) {
     let mat = textureLoad(g_material, p, 0);
     let dmin2 = params.clip.w * params.clip.w;
     let si = select(mat.x, 0.0, params.bias.w > 0.5);
-    let m = vec3<f32>(alb.a, si, mat.y);
-    let l = vpl_radiance(vpl, x, nx, camera.position.xyz, alb.rgb, m, dmin2, params.near.x);
-    let w = vpl.position.xyz - x;
-    let d2 = dot(w, w);
-    let dir = w * inverseSqrt(max(d2, 1e-12));
-    let cos_x = dot(nx, dir);
-    let cos_y = -dot(vpl.normal.xyz, dir);
-    var flags = 0u;
-    if (d2 < params.near.x) {
-        flags = flags | 8u;
-    } else if (cos_x <= 0.0 || cos_y <= 0.0) {
-        flags = flags | 4u;
-    }
-    if (d2 < dmin2) {
-        flags = flags | 64u;
-    }
-    var vis = 1.0;
-    var depths = vec2<f32>(0.0);
+    let seen = vpl_term(vpl, x, nx, camera.position.xyz, alb.rgb, vec3<f32>(alb.a, si, mat.y), dmin2, params.near.x);
+    // The gather's exact test, with the reference's own biases (vpl/gather.wgsl).
+    var test = vec3<f32>(1.0, 0.0, 0.0);
     if (params.bias.z > 0.5) {
         let cols = u32(params.batch.y);
         let size = u32(params.batch.z);
-        vis = vpl_exact_visibility(atlas, i, vpl, x, nx, params.clip.xyz, cols, size, params.bias.x, params.bias.y);
-        depths = vpl_exact_depths(atlas, i, vpl, x, nx, params.clip.xyz, cols, size, params.bias.x, params.bias.y);
-        if (vis <= 0.0 && max(l.r, max(l.g, l.b)) > 0.0) {
-            flags = flags | 16u;
-        }
+        let vis = vpl_exact_visibility(atlas, i, vpl, x, nx, params.clip.xyz, cols, size, params.bias.x, params.bias.y);
+        test = vec3<f32>(select(0.0, 1.0, vis > 0.0), vpl_exact_depths(atlas, i, vpl, x, nx, params.clip.xyz, cols, size, params.bias.x, params.bias.y));
     }
-    let lum = vec3<f32>(0.2126, 0.7152, 0.0722);
-    let f_y = brdf_eval(vpl.normal.xyz, vpl.incident.xyz, -dir, vpl.albedo.rgb, vpl.normal.w, vpl.flux.a, vpl.incident.w);
-    let f_x = brdf_eval(nx, dir, normalize(camera.position.xyz - x), alb.rgb, m.x, m.y, m.z);
-    term.slot.y = flags;
-    term.light = vec4<f32>(l * select(0.0, 1.0, vis > 0.0), vis);
-    term.unshadowed = vec4<f32>(l, max(cos_x, 0.0) * max(cos_y, 0.0) / max(d2, dmin2));
-    term.detail = vec4<f32>(dot(f_y, lum), dot(f_x, lum), depths);
+    var term = vpl_term_seen(seen, test, 1.0);
+    term.slot.x = i;
     terms[i] = term;
 }

@@ -8,18 +8,7 @@
 #import common/brdf.wgsl
 #import common/vpl.wgsl
 #import common/fullscreen.wgsl
-
-struct Params {
-    // x: VPL count of the batch, y: atlas columns, z: tile size, w: weight of this batch 1/(k+1)
-    batch: vec4<f32>,
-    // x: near, y: far, z: eye offset along the VPL normal, w: d_min (scene units)
-    clip: vec4<f32>,
-    // x: depth bias (texels), y: normal offset (texels), z: visibility on (1) / off (0),
-    // w: receiver BRDF diffuse only (1: SI = 0) or full (0)
-    bias: vec4<f32>,
-    // x: the near field's cut² (senders closer are left to it; 0: none)
-    near: vec4<f32>,
-}
+#import vpl/gather_params.wgsl
 
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(0) @binding(1) var<uniform> params: Params;

@@ -209,6 +209,12 @@ pub fn dynamic_slot(buffer: &wgpu::Buffer, size: usize) -> wgpu::BindingResource
     })
 }
 
+/// `size` bytes of `buffer` from `offset` (None: to its end), as one binding of a buffer
+/// that holds several parts (the explain replays' headers and lists).
+pub fn buffer_part(buffer: &wgpu::Buffer, offset: u64, size: Option<u64>) -> wgpu::BindingResource<'_> {
+    wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer, offset, size: size.and_then(wgpu::BufferSize::new) })
+}
+
 /// One compute pass of `pipeline` over `group` (with `offsets`), 8×8 workgroups covering
 /// `size` texels.
 pub fn dispatch_2d(

@@ -198,13 +198,7 @@ impl GautronExplainPass {
         ctx.queue.write_buffer(&self.explain, 0, bytemuck::bytes_of(&p));
         enc.clear_buffer(&self.out, 0, Some(ENTRIES_OFFSET));
         let tv = wgpu::BindingResource::TextureView;
-        let part = |offset: u64, size: Option<u64>| {
-            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                buffer: &self.out,
-                offset,
-                size: size.and_then(wgpu::BufferSize::new),
-            })
-        };
+        let part = |offset, size| crate::passes::buffer_part(&self.out, offset, size);
         let (accum, irradiance) = (stage.splat.accum_view(), view(&stage.splat.irradiance, "gautron.irradiance"));
         let g = f.gbuffer;
         let group = bind_group(

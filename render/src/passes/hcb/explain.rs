@@ -238,13 +238,7 @@ impl HcbExplainPass {
         let p = ExplainParams { pixel: [info.pixel.0, info.pixel.1, info.cache as u32, temporal.is_some() as u32] };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
         let tv = wgpu::BindingResource::TextureView;
-        let part = |offset: u64, size: Option<u64>| {
-            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                buffer: &self.out,
-                offset,
-                size: size.and_then(wgpu::BufferSize::new),
-            })
-        };
+        let part = |offset, size| crate::passes::buffer_part(&self.out, offset, size);
         let g = f.gbuffer;
         let weight_sum = stage.splat.weight_sum_view();
         let irradiance = view(&stage.splat.irradiance, "hcb.irradiance");

@@ -18,7 +18,7 @@ use crate::passes::knecht::interleave::{GatherVisibility, InterleavePass};
 use crate::passes::knecht::temporal::{MergeOrder, TemporalPass};
 use crate::passes::reference::vpl::GpuVpl;
 
-/// Flags of a term (`EXPLAIN_*` in the shader).
+/// Flags of a term (`EXPLAIN_*` in `shaders/common/vpl_explain.wgsl`).
 pub const EMPTY: u32 = 1;
 pub const OUTSIDE: u32 = 2;
 pub const FACING: u32 = 4;
@@ -44,7 +44,7 @@ struct ExplainParams {
     thresholds: Vec4,
 }
 
-/// One VPL slot's term; WGSL twin: `Term`.
+/// One VPL slot's term; WGSL twin: `VplTerm` (`shaders/common/vpl_explain.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuTerm {
@@ -241,13 +241,7 @@ impl VplExplainPass {
         };
         let tv = wgpu::BindingResource::TextureView;
         let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
-        let part = |offset: u64, size: Option<u64>| {
-            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                buffer: &self.out,
-                offset,
-                size: size.and_then(wgpu::BufferSize::new),
-            })
-        };
+        let part = |offset, size| crate::passes::buffer_part(&self.out, offset, size);
         let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("explain.vpl.inputs"),
             layout: &self.layout,
@@ -288,6 +282,43 @@ impl VplExplainPass {
         self.info = Some(info);
         self.vpls = Some(inp.vpls.clone());
     }
+}
+
+/// Why a VPL's term adds nothing, from the flags `common/vpl_explain.wgsl` sets at the
+/// receiver (None: it adds its light).
+pub fn term_rejection(flags: u32) -> Option<Rejection> {
+    if flags & NEAR != 0 {
+        Some(Rejection::NearField)
+    } else if flags & FACING != 0 {
+        Some(Rejection::Facing)
+    } else if flags & OCCLUDED != 0 {
+        Some(Rejection::Occluded)
+    } else {
+        None
+    }
+}
+
+/// What made a VPL's term (`vpl_term` in `common/vpl_explain.wgsl`): its flux, the geometry
+/// term, both BRDFs, the visibility with the map's depths, its light without visibility and
+/// the d_min clamp.
+pub fn term_fields(vpl: &GpuVpl, t: &GpuTerm) -> Vec<(&'static str, f32)> {
+    let v3 = |v: Vec4| v.truncate();
+    let mut fields = vec![
+        ("Φ (lum)", crate::explain::luminance(v3(vpl.flux))),
+        ("G", t.unshadowed.w),
+        ("f_y", t.detail.x),
+        ("f_x", t.detail.y),
+        ("V", t.light.w),
+        ("unshadowed (lum)", crate::explain::luminance(v3(t.unshadowed))),
+    ];
+    if t.detail.z != 0.0 || t.detail.w != 0.0 {
+        fields.push(("map depth", t.detail.z));
+        fields.push(("receiver depth", t.detail.w));
+    }
+    if t.slot[1] & CLAMPED != 0 {
+        fields.push(("d_min clamp", 1.0));
+    }
+    fields
 }
 
 /// The source of slot `k` (`ChainInfo::sources`).
@@ -343,17 +374,9 @@ pub fn decode(info: &ChainInfo, bytes: &[u8], vpls: &[GpuVpl]) -> Option<Explana
         let vpl = vpls.get(k as usize)?;
         let rejected = if flags & (OUTSIDE | BACKGROUND) != 0 {
             Some(Rejection::Outside)
-        } else if flags & NEAR != 0 {
-            Some(Rejection::NearField)
-        } else if flags & FACING != 0 {
-            Some(Rejection::Facing)
-        } else if flags & OCCLUDED != 0 {
-            Some(Rejection::Occluded)
-        } else if flags & FILTERED != 0 {
-            // Its term at q counts, but the filter leaves q out of the pixel's average.
-            Some(Rejection::Filter)
         } else {
-            None
+            // A term the filter leaves out still counts at q: its own reason first.
+            term_rejection(flags).or((flags & FILTERED != 0).then_some(Rejection::Filter))
         };
         let w = at(q).map(weight).unwrap_or(0.0);
         // The tile's N / N_t (gather.wgsl's scale; the window pixel's merged.a is its N_t).
@@ -364,22 +387,8 @@ pub fn decode(info: &ChainInfo, bytes: &[u8], vpls: &[GpuVpl]) -> Option<Explana
                 None => per_pixel.push((q, v3(t.light))),
             }
         }
-        let mut fields = vec![
-            ("Φ (lum)", crate::explain::luminance(v3(vpl.flux))),
-            ("G", t.unshadowed.w),
-            ("f_y", t.detail.x),
-            ("f_x", t.detail.y),
-            ("V", t.light.w),
-            ("N/N_t", scale),
-            ("unshadowed (lum)", crate::explain::luminance(v3(t.unshadowed))),
-        ];
-        if t.detail.z != 0.0 || t.detail.w != 0.0 {
-            fields.push(("map depth", t.detail.z));
-            fields.push(("receiver depth", t.detail.w));
-        }
-        if flags & CLAMPED != 0 {
-            fields.push(("d_min clamp", 1.0));
-        }
+        let mut fields = term_fields(vpl, t);
+        fields.insert(5, ("N/N_t", scale));
         contributions.push(Contribution {
             name: format!("VPL {k}"),
             source: source_of(&info.sources, k),

@@ -8,10 +8,11 @@ use crate::counters::prelude::*;
 
 use glam::{Vec3, Vec4};
 
-use crate::explain::{Check, Contribution, Explanation, Rejection, Replay};
+use crate::explain::{Check, Contribution, Explanation, Replay};
 use crate::gpu::GpuContext;
 use crate::passes::bgl;
 use crate::passes::gbuffer::GBufferViews;
+use crate::passes::knecht::explain::{EMPTY, term_fields, term_rejection};
 use crate::passes::reference::vpl::GpuVpl;
 use crate::passes::reference::vpl_gather::VplGatherPass;
 
@@ -27,15 +28,8 @@ pub struct GpuHeader {
     pub accum: Vec4,
 }
 
-/// WGSL twin: `Term`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GpuTerm {
-    pub slot: [u32; 4],
-    pub light: Vec4,
-    pub unshadowed: Vec4,
-    pub detail: Vec4,
-}
+/// One VPL's term: the VPL gather's replay's (`common/vpl_explain.wgsl`).
+pub use crate::passes::knecht::explain::GpuTerm;
 
 /// What decode needs of the run.
 #[derive(Clone, Debug, PartialEq)]
@@ -115,13 +109,7 @@ impl ReferenceExplainPass {
         let accum = crate::passes::view(&inp.gather.accum, "indirect.accum");
         let tv = wgpu::BindingResource::TextureView;
         let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
-        let part = |offset: u64, size: Option<u64>| {
-            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                buffer: &self.out,
-                offset,
-                size: size.and_then(wgpu::BufferSize::new),
-            })
-        };
+        let part = |offset, size| crate::passes::buffer_part(&self.out, offset, size);
         ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("explain.reference.inputs"),
             layout: &self.layout,
@@ -212,36 +200,14 @@ pub fn decode(info: &ReferenceRun, bytes: &[u8], vpls: &[GpuVpl]) -> Option<Expl
     let mut sum = Vec3::ZERO;
     for t in &terms {
         let flags = t.slot[1];
-        if flags & 1 != 0 {
+        if flags & EMPTY != 0 {
             continue;
         }
         let k = t.slot[0];
         let vpl = vpls.get(k as usize)?;
         sum += v3(t.light);
-        let rejected = if flags & 8 != 0 {
-            Some(Rejection::NearField)
-        } else if flags & 4 != 0 {
-            Some(Rejection::Facing)
-        } else if flags & 16 != 0 {
-            Some(Rejection::Occluded)
-        } else {
-            None
-        };
-        let mut fields = vec![
-            ("Φ (lum)", crate::explain::luminance(v3(vpl.flux))),
-            ("G", t.unshadowed.w),
-            ("f_y", t.detail.x),
-            ("f_x", t.detail.y),
-            ("V", t.light.w),
-            ("unshadowed (lum)", crate::explain::luminance(v3(t.unshadowed))),
-        ];
-        if t.detail.z != 0.0 || t.detail.w != 0.0 {
-            fields.push(("map depth", t.detail.z));
-            fields.push(("receiver depth", t.detail.w));
-        }
-        if flags & 64 != 0 {
-            fields.push(("d_min clamp", 1.0));
-        }
+        let rejected = term_rejection(flags);
+        let fields = term_fields(vpl, t);
         contributions.push(Contribution {
             name: format!("VPL {k}"),
             source: format!("batch {}", info.batch),

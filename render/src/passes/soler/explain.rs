@@ -61,19 +61,6 @@ pub struct GpuRingHead {
     pub texel: [u32; 4],
 }
 
-/// A gathered level of the bounce just gathered, as its gather read it (the ring replay's
-/// inputs): the list (bounce · 16 + level), its views, its voxel grid and the gather's uniform
-/// slot.
-pub struct RingInputs<'a> {
-    pub list: u32,
-    pub position: &'a wgpu::TextureView,
-    pub normal: &'a wgpu::TextureView,
-    pub radiance: &'a wgpu::TextureView,
-    pub material: &'a wgpu::TextureView,
-    pub grid: &'a wgpu::Buffer,
-    pub slot: u32,
-}
-
 /// WGSL twin: `Entry`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -322,16 +309,8 @@ impl SolerExplainPass {
         ];
         let mut resources = vec![crate::passes::dynamic_slot(&self.params, std::mem::size_of::<StepParams>())];
         resources.extend(views.into_iter().map(wgpu::BindingResource::TextureView));
-        resources.push(wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-            buffer: &self.out,
-            offset: 0,
-            size: wgpu::BufferSize::new(std::mem::size_of::<GpuHeader>() as u64),
-        }));
-        resources.push(wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-            buffer: &self.out,
-            offset: ENTRIES_OFFSET,
-            size: None,
-        }));
+        resources.push(crate::passes::buffer_part(&self.out, 0, Some(std::mem::size_of::<GpuHeader>() as u64)));
+        resources.push(crate::passes::buffer_part(&self.out, ENTRIES_OFFSET, None));
         let spec_history = inp.spec_history.as_ref().unwrap_or(&self.dummy);
         resources.extend([spec, inp.motion, spec_history].map(wgpu::BindingResource::TextureView));
         crate::passes::bind_group(&ctx.device, "explain.soler.inputs", &self.layout, resources)
@@ -354,7 +333,7 @@ impl SolerExplainPass {
         enc: &mut wgpu::CommandEncoder,
         inp: &SolerExplainInputs,
         b: u32,
-        (rings, gather_params): (&[RingInputs], &wgpu::Buffer),
+        (levels, j, gather_params): (&[super::gather::LevelInputs], u32, &wgpu::Buffer),
     ) {
         let n = inp.levels.len().min(MAX_LEVELS as usize);
         for k in 0..n {
@@ -366,14 +345,12 @@ impl SolerExplainPass {
             Self::dispatch(enc, &self.step_pipeline, &group, b as u64 * MAX_LEVELS + k as u64);
         }
         // The heaviest texel of each gathered level gathers its ring again, sample by sample.
-        let part = |offset: u64, size: Option<u64>| {
-            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                buffer: &self.out,
-                offset,
-                size: size.and_then(wgpu::BufferSize::new),
-            })
-        };
-        for r in rings {
+        let part = |offset, size| crate::passes::buffer_part(&self.out, offset, size);
+        // Level i of bounce gathered j read the gather's uniform slot j · n + i
+        // (`SolerGather::write_params`); its list is b · 16 + its level.
+        for (i, r) in levels.iter().enumerate() {
+            let slot = j as u64 * levels.len() as u64 + i as u64;
+            let list = b as u64 * MAX_LEVELS + r.level as u64;
             let tv = wgpu::BindingResource::TextureView;
             let resources = vec![
                 crate::passes::dynamic_slot(gather_params, std::mem::size_of::<super::gather::GatherParams>()),
@@ -394,7 +371,7 @@ impl SolerExplainPass {
                 timestamp_writes: None,
             });
             pass.set_pipeline(&self.ring_pipeline);
-            pass.set_bind_group(0, &group, &[(r.slot as u64 * STRIDE) as u32, (r.list as u64 * STRIDE) as u32]);
+            pass.set_bind_group(0, &group, &[(slot * STRIDE) as u32, (list * STRIDE) as u32]);
             pass.dispatch_workgroups(1, 1, 1);
         }
     }

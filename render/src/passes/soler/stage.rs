@@ -172,21 +172,8 @@ impl SolerStage {
                 // Each gathered level as this bounce's gather read it (its ring replayed).
                 let lv = self.level_views();
                 let ins = self.level_inputs(f, radiance, &lv, &grids[j], &all);
-                let n = ins.len();
-                let rings: Vec<super::explain::RingInputs> = ins
-                    .iter()
-                    .enumerate()
-                    .map(|(i, l)| super::explain::RingInputs {
-                        list: b * 16 + l.level,
-                        position: l.position,
-                        normal: l.normal,
-                        radiance: l.radiance,
-                        material: l.material,
-                        grid: l.grid,
-                        slot: (j * n + i) as u32,
-                    })
-                    .collect();
-                ex.bounce(ctx, enc, &super::explain::inputs(self, f, *px), b, (&rings, &self.gather.params));
+                let gathered = (&ins[..], j as u32, &self.gather.params);
+                ex.bounce(ctx, enc, &super::explain::inputs(self, f, *px), b, gathered);
             }
             self.bounces.keep(enc, &self.upsample.indirect, self.specular_light(), b as usize);
         }
