@@ -110,7 +110,7 @@ fn cs_compact(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
     if (slot < arrayLength(&list)) {
-        list[slot] = HcbSample(s.position, s.normal, vec4<u32>(px >> vec2<u32>(level), level | (c << 8u), s.texel.w), light);
+        list[slot] = HcbSample(s.position, s.normal, vec4<u32>(px >> vec2<u32>(level), level | (c << 8u), s.texel.w), light, s.dir);
     }
     textureStore(samples_out, px, vec4<f32>(f32(level + 1u), 0.0, 0.0, 0.0));
     textureStore(group_out, px, vec4<f32>(f32(c + 1u), 0.0, 0.0, 0.0));

@@ -16,8 +16,8 @@ struct HcbParams {
     // supplementary G-buffer (§5.2: n^w = ±1 from the splatted weight), w: 1 to spread the
     // sign of incomplete texels upward (Fig. 7d)
     level: vec4<u32>,
-    // x: incomplete weight threshold (§5.2), y: unused, z: the footprint's clamp of |cos|
-    // (`hcb.footprint_min_cos`, base.wgsl)
+    // x: incomplete weight threshold (§5.2), y: 1 for the glossy receiver (`hcb.receiver`,
+    // normalize.wgsl), z: the footprint's clamp of |cos| (`hcb.footprint_min_cos`, base.wgsl)
     cache: vec4<f32>,
     // §5.3's 4×4 index pattern: the recompute phase of a new sample at texel (x, y) of its level
     pattern: array<vec4<u32>, 4>,
@@ -35,6 +35,10 @@ struct HcbSample {
     // rgb: the light gathered at the sample (irradiance), a: 1 once gathered, 0 until then
     // (new, or due for recomputation)
     light: vec4<f32>,
+    // xyz: Σ lum(E_k) ω_k over the VPLs' irradiance E_k from directions ω_k (issue #51: the
+    // receiver's specular lobe is lit from its direction; common/receiver.wgsl), 0 when the
+    // gather that lit the sample keeps no direction
+    dir: vec4<f32>,
 }
 
 // Indirect arguments of a quad draw over `instances` samples (6 vertices) and of a dispatch
@@ -123,6 +127,11 @@ fn splat_value(s: HcbSample, b: vec3<f32>, n_b: vec3<f32>, thresholds: vec4<f32>
     }
     let w = (1.0 - e.x) * (1.0 - e.y) * (1.0 - e.z);
     return vec4<f32>(w * s.light.rgb, w);
+}
+
+// What sample s adds to the direction sums with its splat `v` (splat_value's): w·Σ lum(E_k) ω_k.
+fn splat_direction(s: HcbSample, v: vec4<f32>) -> vec4<f32> {
+    return vec4<f32>(max(v.a, 0.0) * s.dir.xyz, 0.0);
 }
 
 // Sample s's splat quad in NDC (x0, y0, x1, y1) (§4.3: a screen quad bounding its sphere of

@@ -5,7 +5,8 @@
 // ⚠[nguyen.irradiance-samples] Irradiance, not radiance, is gathered and splatted (§4.1 says
 // only that "the result of indirect lighting is stored at each sample"): each pixel then
 // reflects it with its own colour (c·DI/π), so that texture detail survives the interpolation
-// (the receiver's glossy lobe is not included). cs_args turns the sample count into the
+// (the receiver's glossy lobe is lit from the mean direction kept beside it, `dir`:
+// ⚠[nguyen.glossy-receiver], common/receiver.wgsl). cs_args turns the sample count into the
 // indirect arguments of this dispatch and of the splat draws. With the cache the gather runs
 // twice: over the samples due for recomputation (§5.3, their slots compacted in `queue`, so
 // that the work is dense) and over the new ones (§5.2, the end of the list).
@@ -92,13 +93,20 @@ fn cs_args() {
     args[15] = 0u;
 }
 
-// Each invocation's share of the sample's irradiance.
+// Each invocation's share of the sample's irradiance and of its direction sum.
 var<workgroup> partial: array<vec3<f32>, 64>;
+var<workgroup> partial_dir: array<vec3<f32>, 64>;
 
 // The sample's irradiance from VPLs first, first + step, … (Knecht 002 Eq. 4.7–4.8 times the
-// visibility).
-fn gather_vpls(x: vec3<f32>, nx: vec3<f32>, first: u32, step: u32) -> vec3<f32> {
+// visibility), and Σ lum(E_k) ω_k, the direction sum of the glossy receiver.
+struct Gathered {
+    e: vec3<f32>,
+    dir: vec3<f32>,
+}
+
+fn gather_vpls(x: vec3<f32>, nx: vec3<f32>, first: u32, step: u32) -> Gathered {
     var e = vec3<f32>(0.0);
+    var dir = vec3<f32>(0.0);
     for (var k = first; k < params.counts.x; k = k + step) {
         let vpl = vpls[k];
         if (vpl.position.w < 0.5) {
@@ -108,9 +116,11 @@ fn gather_vpls(x: vec3<f32>, nx: vec3<f32>, first: u32, step: u32) -> vec3<f32> 
         if (max(irradiance.r, max(irradiance.g, irradiance.b)) <= 0.0) {
             continue;
         }
-        e = e + irradiance * gather_visibility(params.counts.y, ism_atlas, exact_atlas, k, vpl, x, nx, params.counts.z, params.counts.w, params.shade.yzw);
+        let seen = irradiance * gather_visibility(params.counts.y, ism_atlas, exact_atlas, k, vpl, x, nx, params.counts.z, params.counts.w, params.shade.yzw);
+        e = e + seen;
+        dir = dir + dot(seen, vec3<f32>(0.2126, 0.7152, 0.0722)) * normalize(vpl.position.xyz - x);
     }
-    return e;
+    return Gathered(e, dir);
 }
 
 const NO_SAMPLE: u32 = 0xffffffffu;
@@ -136,15 +146,19 @@ fn cs_gather(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
         return;
     }
     let s = list[i];
-    partial[li] = gather_vpls(s.position.xyz, normalize(s.normal.xyz), li, 64u);
+    let g = gather_vpls(s.position.xyz, normalize(s.normal.xyz), li, 64u);
+    partial[li] = g.e;
+    partial_dir[li] = g.dir;
     for (var stride = 32u; stride > 0u; stride = stride >> 1u) {
         workgroupBarrier();
         if (li < stride) {
             partial[li] = partial[li] + partial[li + stride];
+            partial_dir[li] = partial_dir[li] + partial_dir[li + stride];
         }
     }
     if (li == 0u) {
         list[i].light = vec4<f32>(partial[0], 1.0);
+        list[i].dir = vec4<f32>(partial_dir[0], 0.0);
     }
 }
 
@@ -156,5 +170,7 @@ fn cs_gather_serial(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let s = list[i];
-    list[i].light = vec4<f32>(gather_vpls(s.position.xyz, normalize(s.normal.xyz), 0u, 1u), 1.0);
+    let g = gather_vpls(s.position.xyz, normalize(s.normal.xyz), 0u, 1u);
+    list[i].light = vec4<f32>(g.e, 1.0);
+    list[i].dir = vec4<f32>(g.dir, 0.0);
 }

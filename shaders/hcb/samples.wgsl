@@ -86,6 +86,6 @@ fn cs_samples(@builtin(global_invocation_id) gid: vec3<u32>) {
     let slot = atomicAdd(&counter[0], 1u);
     if (slot < arrayLength(&list)) {
         let texel = vec4<u32>(gid.xy, k | (phase << 8u), pack_pixel(pixel));
-        list[slot] = HcbSample(textureLoad(level_position, gid.xy, 0), nrm, texel, vec4<f32>(0.0));
+        list[slot] = HcbSample(textureLoad(level_position, gid.xy, 0), nrm, texel, vec4<f32>(0.0), vec4<f32>(0.0));
     }
 }

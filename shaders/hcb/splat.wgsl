@@ -2,7 +2,8 @@
 // draws a screen quad bounding its sphere (centre a, radius a^w); every pixel b under it
 // gets, when b is coherent to a (Eq. 9: the error of Eq. 8 at most 1), the weight of Eq. 10
 // times the sample's light in rgb and the weight in alpha, summed by additive blending
-// (`hcb.weight_sum`). cs_normalize then divides (Eq. 11). CPU twin: cpu::hcb::{coherence_errors,
+// (`hcb.weight_sum`); beside it, the weighted direction sums of the glossy receiver
+// (`hcb.weight_sum.direction`: xyz Σ w·Σ lum(E_k) ω_k). cs_normalize then divides (Eq. 11). CPU twin: cpu::hcb::{coherence_errors,
 // weight}.
 //
 // `hcb.splat`: Blend, the paper's way: vs_splat/fs_splat, one quad per sample. Binned, GI
@@ -28,6 +29,8 @@
 @group(0) @binding(7) var prev_sum: texture_2d<f32>;
 @group(0) @binding(8) var out_sum: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(9) var<storage, read_write> rest: array<u32, 4>;
+@group(0) @binding(10) var prev_dir: texture_2d<f32>;
+@group(0) @binding(11) var out_dir: texture_storage_2d<rgba32float, write>;
 
 struct VsOut {
     @builtin(position) clip: vec4<f32>,
@@ -50,18 +53,24 @@ fn splat_rect(s: HcbSample) -> vec4<f32> {
     return splat_quad(s, camera.view, camera.view_proj, camera.position.xyz, camera.viewport.zw, hp.thresholds.w);
 }
 
+struct FsOut {
+    @location(0) sum: vec4<f32>,
+    @location(1) dir: vec4<f32>,
+}
+
 @fragment
-fn fs_splat(in: VsOut) -> @location(0) vec4<f32> {
+fn fs_splat(in: VsOut) -> FsOut {
     let px = vec2<i32>(in.clip.xy);
     let nb = textureLoad(g_normal, px, 0);
     if (nb.w < 0.5) {
         discard;
     }
-    let v = splat_value(samples[in.index], textureLoad(g_position, px, 0).xyz, normalize(nb.xyz), hp.thresholds);
+    let s = samples[in.index];
+    let v = splat_value(s, textureLoad(g_position, px, 0).xyz, normalize(nb.xyz), hp.thresholds);
     if (v.a < 0.0) {
         discard;
     }
-    return v;
+    return FsOut(v, splat_direction(s, v));
 }
 
 // The samples of this splat: (first index, count).
@@ -97,8 +106,10 @@ fn cs_accumulate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_i
     }
     let px = vec2<i32>(gid.xy);
     var sum = vec4<f32>(0.0);
+    var dir = vec4<f32>(0.0);
     if (bin_params.mode.x == 1u) {
         sum = textureLoad(prev_sum, px, 0);
+        dir = textureLoad(prev_dir, px, 0);
     }
     let nb = textureLoad(g_normal, px, 0);
     if (nb.w >= 0.5) {
@@ -107,11 +118,14 @@ fn cs_accumulate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_i
         let c = bin_centre_ndc(gid.xy, camera.viewport.zw);
         var cursor = bins_start(words);
         for (var j = bins_next(&cursor, c); j != BIN_NONE; j = bins_next(&cursor, c)) {
-            let v = splat_value(samples[range.x + j], b, n_b, hp.thresholds);
+            let s = samples[range.x + j];
+            let v = splat_value(s, b, n_b, hp.thresholds);
             if (v.a >= 0.0) {
                 sum = sum + v;
+                dir = dir + splat_direction(s, v);
             }
         }
     }
     textureStore(out_sum, px, sum);
+    textureStore(out_dir, px, dir);
 }

@@ -24,6 +24,52 @@ pub fn eval(n: Vec3, l: Vec3, v: Vec3, albedo: Vec3, di: f32, si: f32, sp: f32) 
     albedo * di / std::f32::consts::PI + Vec3::splat(spec)
 }
 
+/// The sharpness κ of a von Mises–Fisher lobe whose mean resultant length is `r` (Banerjee et
+/// al.'s approximation κ ≈ r(3 − r²)/(1 − r²)), r clamped below 0.999.
+pub fn receiver_sharpness(r: f32) -> f32 {
+    let q = r.clamp(0.0, 0.999);
+    q * (3.0 - q * q) / (1.0 - q * q)
+}
+
+/// How a pixel reflects the irradiance `e` that a technique interpolated to it, given the
+/// irradiance's luminance-weighted mean incident direction `d` = Σ lum(E_k) ω_k / Σ lum(E_k)
+/// (|d| = r ≤ 1: 1 for light from one direction, 2/3 for a uniform hemisphere). WGSL twin:
+/// `receive_irradiance` in `shaders/common/receiver.wgsl`.
+///
+/// The readings ⚠[nguyen.glossy-receiver] and ⚠[gautron.glossy-receiver]: the HCB (000 §4.1) and Gautron's records (003) reflect irradiance
+/// diffusely, c·DI/π·E, so a glossy receiver loses its indirect specular light (issue #51:
+/// the chair's dark wood, whose look is its specular lobe). GI Lab keeps the irradiance's
+/// dominant direction beside it and adds the specular lobe lit from that direction:
+/// `SI·(SP' + 8)/(8π)·(n·h)^SP'·E`, h = normalize(l + v), l = d/|d|, where the lobe is widened by
+/// the spread of the light: modelling the incident light as a von Mises–Fisher lobe of
+/// sharpness κ (from r), whose angle in the half-vector is half the light's, 1/SP' = 1/SP +
+/// 1/(4κ). Light from one direction (r → 1) gives the exact reflection f(l, v)·E; the diffuse
+/// term is always exact. `glossy` false is the papers' diffuse-only receiver.
+#[allow(clippy::too_many_arguments)]
+pub fn receive_irradiance(
+    e: Vec3,
+    d: Vec3,
+    n: Vec3,
+    v: Vec3,
+    albedo: Vec3,
+    di: f32,
+    si: f32,
+    sp: f32,
+    glossy: bool,
+) -> Vec3 {
+    let diffuse = albedo * di / std::f32::consts::PI * e;
+    let r = d.length();
+    if !glossy || si <= 0.0 || r <= 1e-4 {
+        return diffuse;
+    }
+    let l = d / r;
+    let kappa = receiver_sharpness(r);
+    let sp_eff = 1.0 / (1.0 / sp.max(1e-3) + 1.0 / (4.0 * kappa).max(1e-3));
+    let ndh = n.dot((l + v).normalize_or_zero()).max(0.0);
+    let spec = si * (sp_eff + 8.0) / (8.0 * std::f32::consts::PI) * ndh.powf(sp_eff);
+    diffuse + spec * e
+}
+
 /// KHR_lights_punctual spot falloff t² with t = saturate((cos θ − cos θ_outer) /
 /// (cos θ_inner − cos θ_outer)); `cos_theta` is between the spot axis and the direction
 /// from the light to the surface.

@@ -21,6 +21,7 @@ pub mod gautron;
 pub mod gbuffer;
 pub mod hcb;
 pub mod knecht;
+pub mod receiver;
 pub mod reference;
 pub mod shadow;
 pub mod sky;

@@ -14,6 +14,7 @@ use glam::Vec4;
 
 use crate::cpu::hcb::Thresholds;
 use crate::passes::bins::SplatMethod;
+use crate::passes::receiver::IrradianceReceiver;
 use crate::{settings_enum, settings_group};
 
 pub mod build;
@@ -83,6 +84,13 @@ settings_group! {
         /// per sample, or binned in compute: the same sums).
         splat: SplatMethod = SplatMethod::Auto,
         unit "", symbol "", range 0..=2, cost "blend: the quads' overdraw; binned: one pass over the screen per splat", history false;
+        /// How each pixel reflects its splatted irradiance (Eq. 11): ⚠[nguyen.glossy-receiver]
+        /// the paper's pixels reflect it diffusely, c·DI/π·E (§4.1), so glossy surfaces lose
+        /// their indirect specular light; GI Lab's gather keeps the VPLs' mean incident
+        /// direction beside each sample's irradiance, splats it with the same weights and lights
+        /// the receiver's specular lobe from it (`cpu::brdf::receive_irradiance`).
+        receiver: IrradianceReceiver = IrradianceReceiver::Glossy,
+        unit "", symbol "f_x", range 0..=1, cost "a direction per sample and a second splat target (16 B a pixel)", history false;
     }
     legacy {
         /// Version 1: the sample cache on or off; now `pipeline.temporal = HcbSampleCache`.
@@ -137,7 +145,8 @@ pub struct HcbParams {
     /// 1 for the top level, level index, 1 for the supplementary G-buffer of the cache
     /// (§5.2: the base gets ±1 from the splatted weight), 1 to spread the sign (Fig. 7d).
     pub level: [u32; 4],
-    /// x: the incomplete weight threshold (§5.2), y: the recompute period (§5.3); z, w: 0.
+    /// x: the incomplete weight threshold (§5.2), y: 1 for the glossy receiver
+    /// (`hcb.receiver`), z: the footprint's clamp of |cos|, w: 0.
     pub cache: Vec4,
     /// §5.3's 4×4 index pattern: the recompute phase of a new sample at texel (x, y) of its level
     /// is `pattern[y mod 4][x mod 4]`.
@@ -157,6 +166,9 @@ pub struct GpuHcbSample {
     pub texel: [u32; 4],
     /// Gathered light (rgb); a: 1 once gathered, 0 until then (new, or due for recomputation).
     pub light: Vec4,
+    /// xyz: Σ lum(E_k) ω_k, the direction sum of the glossy receiver (issue #51); 0 when the
+    /// gather keeps no direction.
+    pub dir: Vec4,
 }
 
 impl GpuHcbSample {
@@ -202,6 +214,8 @@ pub struct HcbFrame {
     pub incomplete_weight: f32,
     /// The footprint's clamp of |cos| (`hcb.footprint_min_cos`).
     pub footprint_min_cos: f32,
+    /// How Eq. 11's pixels reflect their irradiance (`hcb.receiver`).
+    pub receiver: IrradianceReceiver,
 }
 
 impl HcbFrame {
@@ -214,6 +228,7 @@ impl HcbFrame {
             pattern: crate::cpu::hcb::recompute_pattern(4),
             incomplete_weight: 0.0,
             footprint_min_cos: HcbSettings::default().footprint_min_cos,
+            receiver: IrradianceReceiver::Glossy,
         }
     }
 
@@ -225,7 +240,7 @@ impl HcbFrame {
             thresholds: Vec4::new(t.cos_theta_max, t.cos_gamma_max, t.d_max, self.pixel_scale),
             eye: self.eye.extend(1.0),
             level,
-            cache: Vec4::new(self.incomplete_weight, 0.0, self.footprint_min_cos, 0.0),
+            cache: Vec4::new(self.incomplete_weight, self.receiver.flag(), self.footprint_min_cos, 0.0),
             pattern: self.pattern,
         }
     }

@@ -11,6 +11,9 @@ use crate::passes::bgl;
 use crate::passes::bins::{Bins, SplatMethod};
 use crate::timing::Slot;
 
+/// The G-buffer's position, normal, albedo and material views, as the splat and Eq. 11 read them.
+pub type GViews<'a> = (&'a wgpu::TextureView, &'a wgpu::TextureView, &'a wgpu::TextureView, &'a wgpu::TextureView);
+
 /// Stage 6 of the HCB (Nguyen et al. §4.2–4.3): the samples' coherence-weighted splats
 /// (`hcb.weight_sum`: rgb Σ w E, a Σ w) and their normalisation (Eq. 11, `hcb.irradiance`;
 /// a = 0 where a covered pixel got no weight, counted in `uncovered`), as blended quads (the
@@ -19,6 +22,9 @@ pub struct HcbSplatPass {
     /// A ping-pong pair (the binned splat of the new samples adds to the other one's sums):
     /// `hcb.weight_sum` is `weight_sum[current]`.
     weight_sum: [wgpu::Texture; 2],
+    /// Beside each of `weight_sum`: xyz Σ w·Σ lum(E_k) ω_k, the glossy receiver's direction
+    /// sums (`hcb.weight_sum.direction`).
+    weight_dir: [wgpu::Texture; 2],
     current: Cell<usize>,
     pub irradiance: wgpu::Texture,
     /// `hcb.indirect`: the indirect light the compose adds, c·DI/π × the splatted irradiance.
@@ -76,6 +82,10 @@ impl HcbSplatPass {
                 bgl::storage(3, cs, false),
                 bgl::texture(4, cs, false),
                 bgl::storage_texture(5, wgpu::TextureFormat::Rgba32Float),
+                bgl::texture(6, cs, false),
+                bgl::texture(7, cs, false),
+                bgl::texture(8, cs, false),
+                bgl::uniform(9, cs),
             ],
         });
         let m_splat = crate::shaders::create_module(device, "hcb/splat.wgsl");
@@ -106,11 +116,18 @@ impl HcbSplatPass {
                 module: &m_splat,
                 entry_point: Some("fs_splat"),
                 compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: ACCUM_FORMAT,
-                    blend: Some(wgpu::BlendState { color: add, alpha: add }),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
+                targets: &[
+                    Some(wgpu::ColorTargetState {
+                        format: ACCUM_FORMAT,
+                        blend: Some(wgpu::BlendState { color: add, alpha: add }),
+                        write_mask: wgpu::ColorWrites::ALL,
+                    }),
+                    Some(wgpu::ColorTargetState {
+                        format: ACCUM_FORMAT,
+                        blend: Some(wgpu::BlendState { color: add, alpha: add }),
+                        write_mask: wgpu::ColorWrites::ALL,
+                    }),
+                ],
             }),
             multiview_mask: None,
             cache: None,
@@ -130,6 +147,8 @@ impl HcbSplatPass {
                 bgl::texture(7, cs, false),
                 bgl::storage_texture(8, ACCUM_FORMAT),
                 bgl::storage(9, cs, false),
+                bgl::texture(10, cs, false),
+                bgl::storage_texture(11, ACCUM_FORMAT),
             ],
         });
         let mut bins = Bins::new(ctx, "hcb.splat.bins");
@@ -155,9 +174,10 @@ impl HcbSplatPass {
             UNCOVERED_BYTES,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
         );
-        let (weight_sum, irradiance, indirect) = Self::targets(device, width, height);
+        let (weight_sum, weight_dir, irradiance, indirect) = Self::targets(device, width, height);
         Self {
             weight_sum,
+            weight_dir,
             current: Cell::new(0),
             irradiance,
             indirect,
@@ -177,7 +197,12 @@ impl HcbSplatPass {
         }
     }
 
-    fn targets(device: &wgpu::Device, width: u32, height: u32) -> ([wgpu::Texture; 2], wgpu::Texture, wgpu::Texture) {
+    #[allow(clippy::type_complexity)]
+    fn targets(
+        device: &wgpu::Device,
+        width: u32,
+        height: u32,
+    ) -> ([wgpu::Texture; 2], [wgpu::Texture; 2], wgpu::Texture, wgpu::Texture) {
         let (w, h) = (width.max(1), height.max(1));
         // Blend draws into them, Binned writes them.
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::STORAGE_BINDING;
@@ -185,12 +210,16 @@ impl HcbSplatPass {
             crate::passes::create_target(device, "hcb.weight_sum", w, h, ACCUM_FORMAT, usage),
             crate::passes::create_target(device, "hcb.weight_sum", w, h, ACCUM_FORMAT, usage),
         ];
+        let weight_dir = [
+            crate::passes::create_target(device, "hcb.weight_sum.direction", w, h, ACCUM_FORMAT, usage),
+            crate::passes::create_target(device, "hcb.weight_sum.direction", w, h, ACCUM_FORMAT, usage),
+        ];
         let storage = wgpu::TextureUsages::STORAGE_BINDING;
         let irradiance =
             crate::passes::create_target(device, "hcb.irradiance", w, h, wgpu::TextureFormat::Rgba32Float, storage);
         let indirect =
             crate::passes::create_target(device, "hcb.indirect", w, h, wgpu::TextureFormat::Rgba32Float, storage);
-        (weight_sum, irradiance, indirect)
+        (weight_sum, weight_dir, irradiance, indirect)
     }
 
     /// Resizes the targets. Returns whether they were recreated.
@@ -198,7 +227,7 @@ impl HcbSplatPass {
         if (self.width, self.height) == (width, height) {
             return false;
         }
-        (self.weight_sum, self.irradiance, self.indirect) = Self::targets(&ctx.device, width, height);
+        (self.weight_sum, self.weight_dir, self.irradiance, self.indirect) = Self::targets(&ctx.device, width, height);
         self.current.set(0);
         self.bins.ensure(ctx, width, height, width.max(1) * height.max(1));
         (self.width, self.height) = (width, height);
@@ -212,6 +241,12 @@ impl HcbSplatPass {
             BufferKind::Data,
             "HCB splatting (Nguyen §4.3): rgb Σ w·E and a Σ w over the samples coherent to each pixel (Eq. 10)",
             &self.weight_sum[self.current.get()],
+        );
+        reg.register(
+            "hcb.weight_sum.direction",
+            BufferKind::Data,
+            "HCB splatting, the glossy receiver's direction sums (issue #51): xyz Σ w·Σ lum(E_k) ω_k over the samples coherent to each pixel",
+            &self.weight_dir[self.current.get()],
         );
     }
 
@@ -242,7 +277,7 @@ impl HcbSplatPass {
         reg.register(
             "hcb.indirect",
             BufferKind::Hdr,
-            "HCB indirect light: each pixel's diffuse reflection c·DI/π of the splatted irradiance; a = 0 where no sample reached it",
+            "HCB indirect light: each pixel's reflection of the splatted irradiance (c·DI/π, and the specular lobe from its mean direction with hcb.receiver = Glossy); a = 0 where no sample reached it",
             &self.indirect,
         );
     }
@@ -256,7 +291,7 @@ impl HcbSplatPass {
         encoder: &mut wgpu::CommandEncoder,
         slot: Option<Slot<'_>>,
         camera: &wgpu::Buffer,
-        g: (&wgpu::TextureView, &wgpu::TextureView, &wgpu::TextureView),
+        g: GViews<'_>,
         samples: (&wgpu::Buffer, &wgpu::Buffer),
         draw_args: &wgpu::Buffer,
         f: HcbFrame,
@@ -279,7 +314,7 @@ impl HcbSplatPass {
         encoder: &mut wgpu::CommandEncoder,
         slot: Option<Slot<'_>>,
         camera: &wgpu::Buffer,
-        g: (&wgpu::TextureView, &wgpu::TextureView, &wgpu::TextureView),
+        g: GViews<'_>,
         samples: (&wgpu::Buffer, &wgpu::Buffer),
         draw_args: (&wgpu::Buffer, u64),
         new_only: bool,
@@ -311,13 +346,22 @@ impl HcbSplatPass {
         let (src, dst) = if new_only { (self.current.get(), 1 - self.current.get()) } else { (1, 0) };
         let prev = crate::passes::view(&self.weight_sum[src], "hcb.weight_sum");
         let out = crate::passes::view(&self.weight_sum[dst], "hcb.weight_sum");
+        let prev_dir = crate::passes::view(&self.weight_dir[src], "hcb.weight_sum.direction");
+        let out_dir = crate::passes::view(&self.weight_dir[dst], "hcb.weight_sum.direction");
         let binned = crate::passes::bind_group(
             &ctx.device,
             "hcb.splat.binned",
             &self.binned_layout,
             inputs
                 .into_iter()
-                .chain([draw_args.0.as_entire_binding(), tv(&prev), tv(&out), self.rest.as_entire_binding()])
+                .chain([
+                    draw_args.0.as_entire_binding(),
+                    tv(&prev),
+                    tv(&out),
+                    self.rest.as_entire_binding(),
+                    tv(&prev_dir),
+                    tv(&out_dir),
+                ])
                 .collect(),
         );
         // Samples beyond the bins (more than 65,536 at this size): their quads after them.
@@ -343,14 +387,18 @@ impl HcbSplatPass {
         args: (&wgpu::Buffer, u64),
     ) {
         let accum = crate::passes::view(&self.weight_sum[self.current.get()], "hcb.weight_sum");
-        let mut pass = encoder.begin_counted_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("hcb.splat"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &accum,
+        let dir = crate::passes::view(&self.weight_dir[self.current.get()], "hcb.weight_sum.direction");
+        let attachment = |view| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations { load, store: wgpu::StoreOp::Store },
-            })],
+            })
+        };
+        let mut pass = encoder.begin_counted_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("hcb.splat"),
+            color_attachments: &[attachment(&accum), attachment(&dir)],
             depth_stencil_attachment: None,
             timestamp_writes,
             occlusion_query_set: None,
@@ -368,10 +416,11 @@ impl HcbSplatPass {
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         slot: Option<Slot<'_>>,
-        g: (&wgpu::TextureView, &wgpu::TextureView, &wgpu::TextureView),
+        g: GViews<'_>,
     ) {
         let tv = wgpu::BindingResource::TextureView;
         let accum = crate::passes::view(&self.weight_sum[self.current.get()], "hcb.weight_sum");
+        let accum_dir = crate::passes::view(&self.weight_dir[self.current.get()], "hcb.weight_sum.direction");
         let out = crate::passes::view(&self.irradiance, "hcb.irradiance");
         let radiance = crate::passes::view(&self.indirect, "hcb.indirect");
         let ngroup = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
@@ -384,6 +433,10 @@ impl HcbSplatPass {
                 wgpu::BindGroupEntry { binding: 3, resource: self.uncovered.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 4, resource: tv(g.2) },
                 wgpu::BindGroupEntry { binding: 5, resource: tv(&radiance) },
+                wgpu::BindGroupEntry { binding: 6, resource: tv(&accum_dir) },
+                wgpu::BindGroupEntry { binding: 7, resource: tv(g.0) },
+                wgpu::BindGroupEntry { binding: 8, resource: tv(g.3) },
+                wgpu::BindGroupEntry { binding: 9, resource: self.params[0].as_entire_binding() },
             ],
         });
         // The count only: the list is written up to it.

@@ -119,6 +119,7 @@ impl HcbStage {
             pattern: crate::cpu::hcb::recompute_pattern(s.recompute_period),
             incomplete_weight: s.incomplete_weight,
             footprint_min_cos: s.footprint_min_cos,
+            receiver: s.receiver,
         }
     }
 
@@ -169,7 +170,7 @@ impl HcbStage {
             quad_px: s.surplus_quad_px,
             period: s.recompute_period,
         };
-        let (camera, g3) = (f.camera_buffer, (&g.position, &g.normal, &g.albedo));
+        let (camera, g3) = (f.camera_buffer, (&g.position, &g.normal, &g.albedo, &g.material));
         let samples = (&self.build.list, &self.build.counter);
         timer.scope(ctx, enc, "hcb.cache.update", |e, slot| {
             c.update(ctx, e, slot, camera, (&g.position, &g.normal), &self.build, cf)
@@ -199,7 +200,7 @@ impl HcbStage {
     ) -> wgpu::TextureView {
         let (ctx, g) = (f.ctx, f.gbuffer);
         let hf = Self::frame(f);
-        let (camera, g3) = (f.camera_buffer, (&g.position, &g.normal, &g.albedo));
+        let (camera, g3) = (f.camera_buffer, (&g.position, &g.normal, &g.albedo, &g.material));
         let samples = (&self.build.list, &self.build.counter);
         let set = if self.cache.is_some() { GatherSet::New } else { GatherSet::All };
         self.run_gather(f, enc, timer, "hcb.gather", light, set);
@@ -238,7 +239,7 @@ impl HcbStage {
         timer: &mut GpuTimer,
     ) -> wgpu::TextureView {
         let (ctx, g, hf) = (f.ctx, f.gbuffer, Self::frame(f));
-        let (camera, g3) = (f.camera_buffer, (&g.position, &g.normal, &g.albedo));
+        let (camera, g3) = (f.camera_buffer, (&g.position, &g.normal, &g.albedo, &g.material));
         let samples = (&self.build.list, &self.build.counter);
         let (splat, args, method) = (&self.splat, &self.gather.args, f.settings.hcb.splat);
         timer.scope(ctx, enc, "hcb.splat", |e, slot| splat.run(ctx, e, slot, camera, g3, samples, args, hf, method));
