@@ -83,4 +83,5 @@ fn cs_samples_store(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     list[c.x + s].light = vec4<f32>(records[s].irradiance.rgb, 1.0);
+    list[c.x + s].dir = records[s].dir;
 }

@@ -21,6 +21,9 @@ struct Record {
     // the scene draws its hemisphere saw, as 128 bits: bit (draw mod 128) (the record
     // cache's invalidation when objects move)
     seen: vec4<u32>,
+    // xyz: Σ lum(L) cosθ Ω ω over the hemisphere's texels (world space; the border band not
+    // included), the direction sum of the glossy receiver (issue #51, common/receiver.wgsl)
+    dir: vec4<f32>,
 }
 
 const RECORD_VALID: f32 = 1.0;
@@ -63,7 +66,8 @@ struct GautronParams {
     creation: vec4<f32>,
     // x: frame, y: projection's P00, z: P11, w: half the G-buffer's height
     misc: vec4<f32>,
-    // x: the "in front" test's tolerance × R_k (f32 max: no test)
+    // x: the "in front" test's tolerance × R_k (f32 max: no test), y: 1 for the glossy
+    // receiver (`gautron.receiver`, resolve.wgsl)
     rules: vec4<f32>,
 }
 

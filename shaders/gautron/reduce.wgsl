@@ -31,8 +31,8 @@ struct TexelTerms {
 @group(0) @binding(8) var object: texture_2d<f32>;
 
 const FAR: f32 = 1e30;
-const TERMS: u32 = 23u;
-var<workgroup> part: array<f32, 1472>;
+const TERMS: u32 = 26u;
+var<workgroup> part: array<f32, 1664>;
 var<workgroup> seen_bits: array<atomic<u32>, 4>;
 
 struct Seen {
@@ -80,6 +80,7 @@ fn cs_reduce(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
     var h_den = 0.0;
     var rot = mat3x3<f32>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
     var trans = mat3x3<f32>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
+    var dir = vec3<f32>(0.0);
     for (var k = li; k < n_px * n_px; k = k + 64u) {
         let i = k % n_px;
         let j = k / n_px;
@@ -91,6 +92,7 @@ fn cs_reduce(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
         }
         let c_omega = tt.dir.z * tt.dir.w;
         e = e + a.light * (c_omega + tt.band.x);
+        dir = dir + dot(a.light, vec3<f32>(0.2126, 0.7152, 0.0722)) * c_omega * tt.dir.xyz;
         h_num = h_num + c_omega;
         if (a.r < FAR * 0.5) {
             h_den = h_den + c_omega / a.r;
@@ -117,6 +119,9 @@ fn cs_reduce(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
             part[o + 14u + c * 3u + d] = trans[c][d];
         }
     }
+    part[o + 23u] = dir.x;
+    part[o + 24u] = dir.y;
+    part[o + 25u] = dir.z;
     // The 64 invocations' terms summed in a tree (issue #38: one invocation used to add all
     // 64 × 23 in turn).
     for (var stride = 32u; stride > 0u; stride = stride >> 1u) {
@@ -130,7 +135,7 @@ fn cs_reduce(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
     if (li != 0u) {
         return;
     }
-    var sum: array<f32, 23>;
+    var sum: array<f32, 26>;
     for (var q = 0u; q < TERMS; q = q + 1u) {
         sum[q] = part[q];
     }
@@ -138,6 +143,7 @@ fn cs_reduce(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
     let index = u32(cam.n.w);
     var rec = records[index];
     rec.irradiance = vec4<f32>(sum[0], sum[1], sum[2], rec.irradiance.w);
+    rec.dir = vec4<f32>(frame * vec3<f32>(sum[23], sum[24], sum[25]), 0.0);
     for (var c = 0u; c < 3u; c = c + 1u) {
         let rl = vec3<f32>(sum[5u + c * 3u], sum[6u + c * 3u], sum[7u + c * 3u]);
         let tl = vec3<f32>(sum[14u + c * 3u], sum[15u + c * 3u], sum[16u + c * 3u]);

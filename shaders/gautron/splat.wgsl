@@ -5,7 +5,7 @@
 // only on the view axis), the whole screen when the sphere reaches the near plane. At every
 // covered pixel Ward's full weight is evaluated at the visible point, kept above 1/a, and
 // RGB = w·E_k(extrapolated), A = w are added (target 0 with the gradients as set, target 1
-// without any). Twin: cpu::gautron::{sphere_ndc_rect, accumulate}.
+// without any; target 2 the glossy receiver's direction sums, w·dir_k, issue #51). Twin: cpu::gautron::{sphere_ndc_rect, accumulate}.
 //
 // `gautron.splat`: Blend, the text's way: vs_splat/fs_splat draw one quad per record, added by
 // blending (GL_ONE, GL_ONE). Binned, GI Lab's (issue #38: the quads' overdraw into 128-bit
@@ -29,6 +29,8 @@
 @group(0) @binding(7) var prev_plain: texture_2d<f32>;
 @group(0) @binding(8) var out_weighted: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(9) var out_plain: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(10) var prev_dir: texture_2d<f32>;
+@group(0) @binding(11) var out_dir: texture_storage_2d<rgba32float, write>;
 
 // The record's rectangle in NDC (x0, y0, x1, y1), or an empty one while its hemisphere is
 // being computed (gautron/common.wgsl's splat_bound with this frame's camera).
@@ -64,6 +66,7 @@ fn vs_splat(@builtin(vertex_index) vi: u32, @builtin(instance_index) index: u32)
 struct SplatTargets {
     @location(0) weighted: vec4<f32>,
     @location(1) plain: vec4<f32>,
+    @location(2) dir: vec4<f32>,
 }
 
 // Blend: Ward's weight at the visible point, discarded below 1/a.
@@ -85,6 +88,7 @@ fn fs_splat(i: SplatOut) -> SplatTargets {
     let e = extrapolate(rec, p, n, params.weight.z > 0.5, params.weight.w > 0.5);
     o.weighted = vec4<f32>(w * e, w);
     o.plain = vec4<f32>(w * rec.irradiance.rgb, w);
+    o.dir = vec4<f32>(w * rec.dir.xyz, 0.0);
     return o;
 }
 
@@ -110,9 +114,11 @@ fn cs_accumulate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_i
     let px = vec2<i32>(gid.xy);
     var weighted = vec4<f32>(0.0);
     var plain = vec4<f32>(0.0);
+    var dir = vec4<f32>(0.0);
     if (bin_params.mode.x == 1u) {
         weighted = textureLoad(prev_weighted, px, 0);
         plain = textureLoad(prev_plain, px, 0);
+        dir = textureLoad(prev_dir, px, 0);
     }
     let nrm = textureLoad(g_normal, px, 0);
     if (nrm.w >= 0.5) {
@@ -131,8 +137,10 @@ fn cs_accumulate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_i
             let e = extrapolate(rec, p, n, rotational, translational);
             weighted = weighted + vec4<f32>(wk * e, wk);
             plain = plain + vec4<f32>(wk * rec.irradiance.rgb, wk);
+            dir = dir + vec4<f32>(wk * rec.dir.xyz, 0.0);
         }
     }
     textureStore(out_weighted, px, weighted);
     textureStore(out_plain, px, plain);
+    textureStore(out_dir, px, dir);
 }

@@ -55,11 +55,13 @@ struct VplSums {
     dt: array<vec3<f32>, 4>,
     dr: array<vec3<f32>, 4>,
     h: vec2<f32>,
+    // Σ lum(E_k) ω_k, the glossy receiver's direction sum (the record's `dir`)
+    dir: vec3<f32>,
 }
 
 fn no_sums() -> VplSums {
     let z = vec3<f32>(0.0);
-    return VplSums(z, array<vec3<f32>, 4>(z, z, z, z), array<vec3<f32>, 4>(z, z, z, z), vec2<f32>(0.0));
+    return VplSums(z, array<vec3<f32>, 4>(z, z, z, z), array<vec3<f32>, 4>(z, z, z, z), vec2<f32>(0.0), z);
 }
 
 fn add_sums(a: VplSums, b: VplSums) -> VplSums {
@@ -70,6 +72,7 @@ fn add_sums(a: VplSums, b: VplSums) -> VplSums {
         s.dr[i] = a.dr[i] + b.dr[i];
     }
     s.h = a.h + b.h;
+    s.dir = a.dir + b.dir;
     return s;
 }
 
@@ -101,6 +104,7 @@ fn slot_sums(cam: HemisphereCamera, first: u32, step: u32) -> VplSums {
         let l = dot(ek, vec3<f32>(0.2126, 0.7152, 0.0722));
         if (l > 0.0) {
             s.h = s.h + vec2<f32>(l, l / max(distance(vpl.position.xyz, x), 1e-6));
+            s.dir = s.dir + l * normalize(vpl.position.xyz - x);
         }
         s.dt[0] = s.dt[0] + irradiance(vpl, x + et * t, n) * v;
         s.dt[1] = s.dt[1] + irradiance(vpl, x - et * t, n) * v;
@@ -123,6 +127,7 @@ fn store_record(cam: HemisphereCamera, s: VplSums) {
     let et = vparams.misc.y;
     let er = vparams.misc.z;
     rec.irradiance = vec4<f32>(s.e, rec.irradiance.w);
+    rec.dir = vec4<f32>(s.dir, 0.0);
     let gt = (s.dt[0] - s.dt[1]) / (2.0 * et);
     let gb = (s.dt[2] - s.dt[3]) / (2.0 * et);
     let rt = (s.dr[0] - s.dr[1]) / (2.0 * er);

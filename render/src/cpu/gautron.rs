@@ -208,6 +208,9 @@ impl HemisphereTable {
     }
 }
 
+/// Rec. 709 luminance weights (the shaders' dot with (0.2126, 0.7152, 0.0722)).
+const LUMA: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
+
 /// A record's terms from its hemisphere ("Irradiance Caching": position, normal, irradiance,
 /// gradients, harmonic mean distance).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -219,6 +222,9 @@ pub struct RecordTerms {
     pub rot: [Vec3; 3],
     /// ∇_t E per colour channel (world space).
     pub trans: [Vec3; 3],
+    /// Σ lum(L) cos θ Ω ω (world space): the direction sum of the glossy receiver
+    /// (`cpu::brdf::receive_irradiance`; the border band is not included).
+    pub dir: Vec3,
 }
 
 /// `radiance[k]` (rgb) is the radiance arriving from texel k (0 for the background),
@@ -271,10 +277,12 @@ pub fn reduce_in_frame(
     let (mut all, mut hit) = (0.0f32, 0.0f32);
     let mut rot = [Vec3::ZERO; 3];
     let mut trans = [Vec3::ZERO; 3];
+    let mut dir = Vec3::ZERO;
     for (k, tx) in table.texels.iter().enumerate() {
         let l = radiance[k];
         let [dx, dy, c, omega] = tx.dir;
         e += l * (c * omega + tx.band[0]);
+        dir += l.dot(LUMA) * c * omega * to_world(dx, dy, c);
         all += c * omega;
         if distance[k].is_finite() {
             hit += c * omega / distance[k];
@@ -302,7 +310,7 @@ pub fn reduce_in_frame(
         }
     }
     let h = if hit > 0.0 { all / hit } else { f32::INFINITY };
-    RecordTerms { e, h, rot, trans }
+    RecordTerms { e, h, rot, trans, dir }
 }
 
 /// An irradiance record as the splat reads it ("Irradiance Caching", "Irradiance
@@ -648,6 +656,7 @@ pub fn vpl_record(
     let mut e = Vec3::ZERO;
     let (mut h_num, mut h_den) = (0.0f32, 0.0f32);
     let mut d = [Vec3::ZERO; 8];
+    let mut dir = Vec3::ZERO;
     for (i, vpl) in vpls.iter().enumerate() {
         let v = visibility(i);
         if v <= 0.0 {
@@ -660,6 +669,7 @@ pub fn vpl_record(
         if l > 0.0 {
             h_num += l;
             h_den += l / vpl.position.distance(p).max(1e-6);
+            dir += l * (vpl.position - p).normalize_or_zero();
         }
         let terms = [
             at(p + eps_t * t, n),
@@ -683,5 +693,6 @@ pub fn vpl_record(
         h: if h_den > 0.0 { h_num / h_den } else { f32::INFINITY },
         rot: [channel(rt, rb, 0), channel(rt, rb, 1), channel(rt, rb, 2)],
         trans: [channel(gt, gb, 0), channel(gt, gb, 1), channel(gt, gb, 2)],
+        dir,
     }
 }

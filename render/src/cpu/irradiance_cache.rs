@@ -111,12 +111,14 @@ pub fn hemisphere(scene: &dyn CacheScene, p: Vec3, nrm: Vec3, m: u32, n: u32, se
     let (mu, nu) = (m as usize, n as usize);
     let mut radiance = vec![Vec3::ZERO; mu * nu];
     let mut dist = vec![f32::INFINITY; mu * nu];
+    let mut dirs = vec![Vec3::ZERO; mu * nu];
     for j in 0..mu {
         for k in 0..nu {
             let u1 = (j as f32 + jitter.f()) / mf;
             let phi = std::f32::consts::TAU * (k as f32 + jitter.f()) / nf;
             let (st, ct) = (u1.sqrt(), (1.0 - u1).max(0.0).sqrt());
             let d = local(st * phi.cos(), st * phi.sin(), ct).normalize();
+            dirs[j * nu + k] = d;
             let stream = (seed << 20) ^ (j * nu + k) as u64;
             if let Some((r, l)) = scene.reflected(origin, d, seed, stream) {
                 radiance[j * nu + k] = l;
@@ -166,7 +168,10 @@ pub fn hemisphere(scene: &dyn CacheScene, p: Vec3, nrm: Vec3, m: u32, n: u32, se
             }
         }
     }
-    (RecordTerms { e, h, rot, trans }, u64::from(m) * u64::from(n))
+    // Each cell stands for the same cosine-weighted solid angle π/(mn).
+    let dir =
+        radiance.iter().zip(&dirs).map(|(l, d)| *d * l.dot(Vec3::new(0.2126, 0.7152, 0.0722))).sum::<Vec3>() * cell;
+    (RecordTerms { e, h, rot, trans, dir }, u64::from(m) * u64::from(n))
 }
 
 /// A loose octree over spheres ("The records are then stored in an octree"): record i's sphere

@@ -9,6 +9,7 @@
 
 use glam::{Mat4, Vec4};
 
+use crate::passes::receiver::IrradianceReceiver;
 use crate::{settings_enum, settings_group};
 
 pub use crate::passes::bins::SplatMethod;
@@ -190,6 +191,14 @@ settings_group! {
         /// How the splat sums the records at the pixels.
         splat: SplatMethod = SplatMethod::Auto,
         unit "", symbol "", range 0..=2, cost "blend: the quads' overdraw; binned: one pass over the screen per splat", history false;
+        /// How each pixel reflects the splatted irradiance: ⚠[gautron.glossy-receiver] the
+        /// text reflects it diffusely (its records hold irradiance), so glossy surfaces lose
+        /// their indirect specular light; GI Lab keeps each record's mean incident direction
+        /// (Σ lum(L) cos θ Ω ω over its hemisphere, or over its VPLs), splats it with Ward's
+        /// weights and lights the receiver's specular lobe from it
+        /// (`cpu::brdf::receive_irradiance`).
+        receiver: IrradianceReceiver = IrradianceReceiver::Glossy,
+        unit "", symbol "f_x", range 0..=1, cost "3 more reduction terms per record, a third splat target (16 B a pixel)", history false;
     }
 }
 
@@ -227,6 +236,9 @@ pub struct GpuRecord {
     pub pixel: Vec4,
     /// The scene draws its hemisphere saw: bit (draw mod 128) of the 128.
     pub seen: [u32; 4],
+    /// xyz: Σ lum(L) cos θ Ω ω over the hemisphere (world space), the glossy receiver's
+    /// direction sum (issue #51; `cpu::gautron::RecordTerms::dir`).
+    pub dir: Vec4,
 }
 
 impl GpuRecord {

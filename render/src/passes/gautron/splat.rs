@@ -35,6 +35,8 @@ pub struct SplatPass {
     accum: [wgpu::Texture; 2],
     /// The same without any gradient: `gautron.accum.plain`.
     accum_plain: [wgpu::Texture; 2],
+    /// xyz Σ w·dir_k, the glossy receiver's direction sums: `gautron.accum.direction`.
+    accum_dir: [wgpu::Texture; 2],
     /// Which of the pairs holds the latest sums.
     current: Cell<usize>,
     /// The reflected indirect light the compose adds: `gautron.indirect`.
@@ -57,6 +59,8 @@ impl SplatPass {
             bgl::texture(7, cs, false),
             bgl::storage_texture(8, ACCUM_FORMAT),
             bgl::storage_texture(9, ACCUM_FORMAT),
+            bgl::texture(10, cs, false),
+            bgl::storage_texture(11, ACCUM_FORMAT),
         ]);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("gautron.splat"),
@@ -77,6 +81,12 @@ impl SplatPass {
                 bgl::storage_texture(3, ACCUM_FORMAT),
                 bgl::storage_texture(4, ACCUM_FORMAT),
                 bgl::storage_texture(5, ACCUM_FORMAT),
+                bgl::texture(6, cs, false),
+                bgl::texture(7, cs, false),
+                bgl::texture(8, cs, false),
+                bgl::texture(9, cs, false),
+                bgl::uniform(10, cs),
+                bgl::uniform(11, cs),
             ],
         });
         let resolve_module = crate::shaders::create_module(device, "gautron/resolve.wgsl");
@@ -87,7 +97,7 @@ impl SplatPass {
             "cs_resolve",
             &[&resolve_layout],
         );
-        let (accum, accum_plain, indirect, irradiance, plain) = targets(device, width, height);
+        let (accum, accum_plain, accum_dir, indirect, irradiance, plain) = targets(device, width, height);
         let mut pass = Self {
             raster,
             raster_layout,
@@ -100,6 +110,7 @@ impl SplatPass {
             resolve_layout,
             accum,
             accum_plain,
+            accum_dir,
             current: Cell::new(0),
             indirect,
             irradiance,
@@ -114,7 +125,7 @@ impl SplatPass {
         if (self.accum[0].width(), self.accum[0].height()) == (width, height) {
             return false;
         }
-        (self.accum, self.accum_plain, self.indirect, self.irradiance, self.plain) =
+        (self.accum, self.accum_plain, self.accum_dir, self.indirect, self.irradiance, self.plain) =
             targets(&ctx.device, width, height);
         self.current.set(0);
         self.bins.ensure(ctx, width, height, self.capacity);
@@ -144,7 +155,7 @@ impl SplatPass {
         reg.register(
             "gautron.indirect",
             BufferKind::Hdr,
-            "indirect light reflected from the interpolated irradiance, c·DI·E/π",
+            "indirect light reflected from the interpolated irradiance: c·DI·E/π, and the specular lobe from its mean direction with gautron.receiver = Glossy",
             &self.indirect,
         );
     }
@@ -162,6 +173,12 @@ impl SplatPass {
             BufferKind::Data,
             "the splat's sums without gradients: rgb = Σ w_k·E_k, a = Σ w_k",
             &self.accum_plain[self.current.get()],
+        );
+        reg.register(
+            "gautron.accum.direction",
+            BufferKind::Data,
+            "the splat's direction sums of the glossy receiver (issue #51): xyz = Σ w_k·Σ lum(L) cos θ Ω ω over record k's hemisphere",
+            &self.accum_dir[self.current.get()],
         );
     }
 
@@ -192,13 +209,23 @@ impl SplatPass {
         let (prev, prev_plain) =
             (v(&self.accum[src], "gautron.accum"), v(&self.accum_plain[src], "gautron.accum.plain"));
         let (out, out_plain) = (v(&self.accum[dst], "gautron.accum"), v(&self.accum_plain[dst], "gautron.accum.plain"));
+        let (prev_dir, out_dir) =
+            (v(&self.accum_dir[src], "gautron.accum.direction"), v(&self.accum_dir[dst], "gautron.accum.direction"));
         let group = bind_group(
             &ctx.device,
             "gautron.splat",
             &self.layout,
             inputs([params, camera, records], g)
                 .into_iter()
-                .chain([args.as_entire_binding(), tv(&prev), tv(&prev_plain), tv(&out), tv(&out_plain)])
+                .chain([
+                    args.as_entire_binding(),
+                    tv(&prev),
+                    tv(&prev_plain),
+                    tv(&out),
+                    tv(&out_plain),
+                    tv(&prev_dir),
+                    tv(&out_dir),
+                ])
                 .collect(),
         );
         let size = (self.accum[0].width(), self.accum[0].height());
@@ -231,6 +258,7 @@ impl SplatPass {
         );
         let (out, out_plain) =
             (view(&self.accum[c], "gautron.accum"), view(&self.accum_plain[c], "gautron.accum.plain"));
+        let out_dir = view(&self.accum_dir[c], "gautron.accum.direction");
         let load = if clear { wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT) } else { wgpu::LoadOp::Load };
         let att = |view| {
             Some(wgpu::RenderPassColorAttachment {
@@ -242,7 +270,7 @@ impl SplatPass {
         };
         let mut pass = enc.begin_counted_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("gautron.splat.pass"),
-            color_attachments: &[att(&out), att(&out_plain)],
+            color_attachments: &[att(&out), att(&out_plain), att(&out_dir)],
             depth_stencil_attachment: None,
             timestamp_writes: slot.and_then(|s| s.render(true, true)),
             occlusion_query_set: None,
@@ -253,18 +281,23 @@ impl SplatPass {
         pass.draw_indirect(args, 0);
     }
 
-    /// E = RGB / A and the reflected indirect light.
+    /// E = RGB / A and the reflected indirect light (`params`: the stage's uniform, whose
+    /// rules.y chooses the receiver; `camera`: the eye).
+    #[allow(clippy::too_many_arguments)]
     pub fn resolve(
         &self,
         ctx: &GpuContext,
         enc: &mut wgpu::CommandEncoder,
         slot: Option<crate::timing::Slot<'_>>,
-        albedo: &wgpu::TextureView,
+        g: &GBufferViews,
+        params: &wgpu::Buffer,
+        camera: &wgpu::Buffer,
     ) {
         let tv = wgpu::BindingResource::TextureView;
         let c = self.current.get();
         let (accum, accum_plain) =
             (view(&self.accum[c], "gautron.accum"), view(&self.accum_plain[c], "gautron.accum.plain"));
+        let accum_dir = view(&self.accum_dir[c], "gautron.accum.direction");
         let (indirect, irradiance, plain) = (
             view(&self.indirect, "gautron.indirect"),
             view(&self.irradiance, "gautron.irradiance"),
@@ -274,7 +307,20 @@ impl SplatPass {
             &ctx.device,
             "gautron.resolve",
             &self.resolve_layout,
-            vec![tv(&accum), tv(&accum_plain), tv(albedo), tv(&indirect), tv(&irradiance), tv(&plain)],
+            vec![
+                tv(&accum),
+                tv(&accum_plain),
+                tv(&g.albedo),
+                tv(&indirect),
+                tv(&irradiance),
+                tv(&plain),
+                tv(&accum_dir),
+                tv(&g.position),
+                tv(&g.normal),
+                tv(&g.material),
+                params.as_entire_binding(),
+                camera.as_entire_binding(),
+            ],
         );
         let size = (self.accum[0].width(), self.accum[0].height());
         crate::passes::dispatch_2d(
@@ -298,7 +344,8 @@ impl SplatPass {
     }
 }
 
-type Targets = ([wgpu::Texture; 2], [wgpu::Texture; 2], wgpu::Texture, wgpu::Texture, wgpu::Texture);
+type Targets =
+    ([wgpu::Texture; 2], [wgpu::Texture; 2], [wgpu::Texture; 2], wgpu::Texture, wgpu::Texture, wgpu::Texture);
 
 fn targets(device: &wgpu::Device, width: u32, height: u32) -> Targets {
     let st = wgpu::TextureUsages::STORAGE_BINDING;
@@ -312,10 +359,11 @@ fn targets(device: &wgpu::Device, width: u32, height: u32) -> Targets {
     };
     let accum = pair("gautron.accum");
     let accum_plain = pair("gautron.accum.plain");
+    let accum_dir = pair("gautron.accum.direction");
     let indirect = create_target(device, "gautron.indirect", width, height, ACCUM_FORMAT, st);
     let irradiance = create_target(device, "gautron.irradiance", width, height, ACCUM_FORMAT, st);
     let plain = create_target(device, "gautron.irradiance.plain", width, height, ACCUM_FORMAT, st);
-    (accum, accum_plain, indirect, irradiance, plain)
+    (accum, accum_plain, accum_dir, indirect, irradiance, plain)
 }
 
 /// Blend's pipeline: the quads of `vs_splat`, `fs_splat`'s two outputs added by blending.
@@ -358,7 +406,7 @@ fn raster_pipeline(
             module,
             entry_point: Some("fs_splat"),
             compilation_options: Default::default(),
-            targets: &[target.clone(), target],
+            targets: &[target.clone(), target.clone(), target],
         }),
         multiview_mask: None,
         cache: None,

@@ -310,7 +310,12 @@ impl GautronStage {
             },
             creation: glam::Vec4::new(s.creation_tile_px as f32, slots as f32, s.capacity as f32, 4.0 * r),
             misc: glam::Vec4::new(f.frame as f32, proj.x_axis.x, proj.y_axis.y, f.gbuffer_size.1 as f32 * 0.5),
-            rules: glam::Vec4::new(if s.in_front_test { s.in_front_tolerance } else { f32::MAX }, 0.0, 0.0, 0.0),
+            rules: glam::Vec4::new(
+                if s.in_front_test { s.in_front_tolerance } else { f32::MAX },
+                s.receiver.flag(),
+                0.0,
+                0.0,
+            ),
         };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         ctx.queue.write_buffer(&self.atlas_params, 0, bytemuck::cast_slice(&[s.hemisphere_resolution, per_row, 0, 0]));
@@ -490,7 +495,9 @@ impl GautronStage {
                 snap.take(enc, records, &self.state, k + 1);
             }
         }
-        timer.scope(ctx, enc, "gautron.resolve", |e, slot| splat.resolve(ctx, e, slot, &f.gbuffer.albedo));
+        timer.scope(ctx, enc, "gautron.resolve", |e, slot| {
+            splat.resolve(ctx, e, slot, f.gbuffer, &self.params, f.camera_buffer)
+        });
         splat.indirect_view()
     }
 
