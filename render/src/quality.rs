@@ -15,6 +15,7 @@
 
 use crate::image_io::hdr_display;
 use crate::passes::knecht::vpl_importance::ReceiverBrdf;
+use crate::passes::receiver::IrradianceReceiver;
 use crate::pipeline::{Reconstruction, ShadingPoints, Temporal};
 use crate::scene::Scene;
 use crate::{GpuContext, ImageF32, LabSettings, Renderer};
@@ -150,7 +151,13 @@ pub fn quality_table(
     every_pixel.pipeline.temporal = Temporal::None;
     every_pixel.vpl.receiver_brdf = ReceiverBrdf::DiffuseOnly;
     let per_pixel = render(ctx, scene, every_pixel, size, 1)?;
-    row("nguyen-hcb", 1, "per-pixel gather, same VPLs, diffuse only", flip(&hcb, &per_pixel)?, Some(0.03));
+    // Like for like: the HCB's diffuse-only receiver (Eq. 11 as printed) against the gather's.
+    let mut hcb_diffuse = preset(NGUYEN, "nguyen-hcb")?;
+    hcb_diffuse.vpl.new_set_each_frame = false;
+    hcb_diffuse.hcb.receiver = IrradianceReceiver::DiffuseOnly;
+    let hcb_diffuse = render(ctx, scene, hcb_diffuse, size, 1)?;
+    let against = "per-pixel gather, same VPLs, diffuse only";
+    row("nguyen-hcb (diffuse receiver)", 1, against, flip(&hcb_diffuse, &per_pixel)?, Some(0.03));
     // Soler et al.'s gather alone (16 frames: its temporal filter, Eq. 6, averages them) sees
     // only the direct light on screen; the mix must beat it and Knecht's row (issue #16).
     let knecht_flip = flip(&knecht, truth)?;

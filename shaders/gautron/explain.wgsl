@@ -13,6 +13,7 @@
 #import gautron/common.wgsl
 #import common/camera.wgsl
 #import common/bins.wgsl
+#import common/receiver.wgsl
 
 struct ExplainParams {
     // x, y: the pixel p; z: the splats' snapshots (0: none, the records as the frame left them)
@@ -25,11 +26,11 @@ struct Header {
     pixel: vec4<u32>,
     // gautron.accum at p: rgb Σ w·E, a Σ w
     accum: vec4<f32>,
-    // gautron.indirect at p (the resolve's c·DI·E/π)
+    // gautron.indirect at p (the resolve's f·E)
     indirect: vec4<f32>,
     // gautron.irradiance at p (E = RGB / A; a: Σ w)
     irradiance: vec4<f32>,
-    // rgb: c·DI (the G-buffer's albedo × its diffuse factor, as the resolve reads them);
+    // rgb: the resolve's receiver factor f (c·DI/π, plus the specular lobe's; its light is f·E);
     // a: 1 when the G-buffer is empty at p
     albedo: vec4<f32>,
     // xyz: P, the visible point; w: 0
@@ -92,6 +93,10 @@ const EXPLAIN_NO_CLAMP: f32 = 1e30;
 // round's), and the cache's counters then (word 0 of each 256-byte slot: the record count).
 @group(0) @binding(14) var<storage, read> snap_records: array<Record>;
 @group(0) @binding(15) var<storage, read> snap_states: array<vec4<u32>>;
+// the glossy receiver's direction sums, the plain sums that weigh them, the G-buffer material
+@group(0) @binding(16) var accum_dir: texture_2d<f32>;
+@group(0) @binding(17) var accum_plain: texture_2d<f32>;
+@group(0) @binding(18) var g_material: texture_2d<f32>;
 
 // Record k as the splat that added it read it: the first snapshot whose count holds k (a
 // cached record computed again in a round, or clamped by a later round's neighbours, was
@@ -118,7 +123,12 @@ fn cs_explain_pixel() {
     header.accum = textureLoad(accum, p, 0);
     header.indirect = textureLoad(indirect, p, 0);
     header.irradiance = textureLoad(irradiance, p, 0);
-    header.albedo = vec4<f32>(alb.rgb * alb.a, select(0.0, 1.0, nrm.w < 0.5));
+    // The resolve's receiver factor, as it computes it (common/receiver.wgsl).
+    let mat = textureLoad(g_material, p, 0);
+    let d = receiver_direction(textureLoad(accum_dir, p, 0).xyz, textureLoad(accum_plain, p, 0).rgb);
+    let v = normalize(camera.position.xyz - textureLoad(g_position, p, 0).xyz);
+    let f = receiver_factor(d, normalize(nrm.xyz), v, alb.rgb, alb.a, mat.x, mat.y, params.rules.y > 0.5);
+    header.albedo = vec4<f32>(f, select(0.0, 1.0, nrm.w < 0.5));
     header.point = vec4<f32>(textureLoad(g_position, p, 0).xyz, 0.0);
     header.normal = vec4<f32>(normalize(nrm.xyz), 0.0);
     header.state = vec4<u32>(state.made, state.refreshed, state.stale, state.count);

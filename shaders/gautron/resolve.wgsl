@@ -37,11 +37,8 @@ fn cs_resolve(@builtin(global_invocation_id) gid: vec3<u32>) {
     var d = vec3<f32>(0.0);
     if (s.a > 0.0) {
         e = s.rgb / s.a;
-        let lum = dot(sp.rgb, vec3<f32>(0.2126, 0.7152, 0.0722));
-        if (lum > 0.0) {
-            // The records' own E_k weigh their directions: Σ w·dir / Σ w·lum(E_k).
-            d = textureLoad(accum_dir, px, 0).xyz / lum;
-        }
+        // The records' own E_k weigh their directions: Σ w·dir / Σ w·lum(E_k).
+        d = receiver_direction(textureLoad(accum_dir, px, 0).xyz, sp.rgb);
     }
     if (sp.a > 0.0) {
         ep = sp.rgb / sp.a;

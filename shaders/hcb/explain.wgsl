@@ -17,6 +17,7 @@
 #import common/camera.wgsl
 #import common/reproject.wgsl
 #import hcb/common.wgsl
+#import common/receiver.wgsl
 
 // Rust twin: passes::hcb::explain::ExplainParams.
 struct ExplainParams {
@@ -38,7 +39,7 @@ struct Header {
     irradiance: vec4<f32>,
     // `hcb.indirect` at p (the stage's output: c·DI/π × the irradiance)
     indirect: vec4<f32>,
-    // rgb: the normalize pass's factor c·DI/π at p; a: 0
+    // rgb: the normalize pass's receiver factor at p (c·DI/π, plus the specular lobe's); a: 0
     factor: vec4<f32>,
     // the confidence merge: rgb the history it read for p, a the confidence c
     history: vec4<f32>,
@@ -86,6 +87,9 @@ const EXPLAIN_NEW: u32 = 8u;        // a sample identified this frame (§5.2)
 // [0]: the samples whose quad holds p (all of them, also those beyond `entries`)
 @group(0) @binding(16) var<storage, read_write> tally: array<atomic<u32>, 4>;
 @group(0) @binding(17) var<storage, read_write> entries: array<Entry>;
+// the glossy receiver's direction sums (`hcb.weight_sum.direction`) and the G-buffer material
+@group(0) @binding(18) var weight_dir: texture_2d<f32>;
+@group(0) @binding(19) var g_material: texture_2d<f32>;
 // cs_explain_args only: the dispatch-indirect (x, y, 1) of cs_explain_samples
 @group(1) @binding(0) var<storage, read_write> args: array<u32>;
 
@@ -111,9 +115,13 @@ fn cs_explain_args() {
     h.weight_sum = textureLoad(weight_sum, p, 0);
     h.irradiance = textureLoad(irradiance, p, 0);
     h.indirect = textureLoad(indirect, p, 0);
-    // normalize.wgsl's factor, as it computes it.
+    // normalize.wgsl's factor, as it computes it (common/receiver.wgsl).
     let alb = textureLoad(g_albedo, p, 0);
-    h.factor = vec4<f32>(alb.rgb * alb.a / 3.14159265, 0.0);
+    let mat = textureLoad(g_material, p, 0);
+    let d = receiver_direction(textureLoad(weight_dir, p, 0).xyz, h.weight_sum.rgb);
+    let v = normalize(hp.eye.xyz - textureLoad(g_position, p, 0).xyz);
+    let nrm = normalize(textureLoad(g_normal, p, 0).xyz);
+    h.factor = vec4<f32>(receiver_factor(d, nrm, v, alb.rgb, alb.a, mat.x, mat.y, hp.cache.y > 0.5), 0.0);
     h.final_value = textureLoad(final_light, p, 0);
     if (explain.pixel.w == 1u) {
         // The history the confidence merge read for p (temporal/confidence.wgsl).

@@ -35,10 +35,7 @@ fn cs_normalize(@builtin(global_invocation_id) gid: vec3<u32>) {
     var d = vec3<f32>(0.0);
     if (a.a > 0.0) {
         out = vec4<f32>(a.rgb / a.a, 1.0);
-        let lum = dot(out.rgb, vec3<f32>(0.2126, 0.7152, 0.0722));
-        if (lum > 0.0) {
-            d = textureLoad(accum_dir, gid.xy, 0).xyz / (a.a * lum);
-        }
+        d = receiver_direction(textureLoad(accum_dir, gid.xy, 0).xyz, a.rgb);
     } else if (nb.w > 0.5) {
         let i = atomicAdd(&uncovered[0], 1u);
         if (i < UNCOVERED_LIST) {

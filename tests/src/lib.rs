@@ -90,6 +90,14 @@ pub fn real_scene(rel: &str) -> std::path::PathBuf {
     p
 }
 
+/// A scene file of the tests' own in `tests/data/` (e.g. `chair-behind.glb`: the shipped
+/// chair with a camera of its own, `scripts/make-chair-view.py`), loaded as the CLI loads it.
+pub fn test_scene(file: &str) -> Scene {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data").join(file);
+    gi_render::scene::load_gltf_file(&path, &gi_render::scene::LoadOptions::default())
+        .unwrap_or_else(|e| panic!("tests/data/{file}: {e}"))
+}
+
 /// A path-traced reference stored in `tests/data/` (see `tests/references.rs`).
 pub fn stored_reference(file: &str) -> gi_render::ImageF32 {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data").join(file);
@@ -263,4 +271,51 @@ pub fn checker_texture(size: u32, cell: u32, dark: u8) -> gi_render::scene::Text
         })
         .collect();
     gi_render::scene::TextureImage { name: "checker".into(), width: size, height: size, rgba8: rgba8.into() }
+}
+
+/// Issue #51: at every pixel a splatting technique covers, its indirect light (`indirect`)
+/// equals the CPU twin of the glossy receiver (`cpu::brdf::receive_irradiance`) fed with the
+/// pass's own buffers: E from `irradiance`, the mean direction Σ w·dir / lum(Σ w·E) from the
+/// direction sums `dirs` and the irradiance sums `sums`, the G-buffer's normal, albedo, DI, SI
+/// and SP, the view from the camera. Returns the pixels compared and those whose specular term
+/// is at least 10 % of their diffuse one (so that the comparison is not of diffuse light only).
+pub fn assert_glossy_receiver_matches_the_cpu(
+    r: &Renderer,
+    indirect: &str,
+    irradiance: &str,
+    sums: &str,
+    dirs: &str,
+) -> (usize, usize) {
+    let [ind, irr, sum, dir, pos, nrm, alb, mat] =
+        [indirect, irradiance, sums, dirs, "gbuffer.position", "gbuffer.normal", "gbuffer.albedo", "gbuffer.material"]
+            .map(|name| read(r, name));
+    let eye = r.camera.position;
+    let luma = glam::Vec3::new(0.2126, 0.7152, 0.0722);
+    let (mut compared, mut glossy) = (0, 0);
+    for y in 0..ind.height {
+        for x in 0..ind.width {
+            let (n, a) = (nrm.at(x, y), sum.at(x, y));
+            if n[3] < 0.5 || a[3] <= 0.0 {
+                continue;
+            }
+            let e = v3(irr.at(x, y));
+            let lum = v3(a).dot(luma);
+            let d = if lum > 0.0 { v3(dir.at(x, y)) / lum } else { glam::Vec3::ZERO };
+            let p = v3(pos.at(x, y));
+            let (c, m) = (alb.at(x, y), mat.at(x, y));
+            let args = (v3(n).normalize(), (eye - p).normalize(), v3(c), c[3], m[0], m[1]);
+            let want =
+                gi_render::cpu::brdf::receive_irradiance(e, d, args.0, args.1, args.2, args.3, args.4, args.5, true);
+            let diffuse = args.2 * args.3 / std::f32::consts::PI * e;
+            let got = v3(ind.at(x, y));
+            let scale = want.max_element().max(1e-6);
+            assert!(
+                (got - want).abs().max_element() <= 2e-3 * scale + 1e-7,
+                "{indirect} at ({x}, {y}): {got} vs the CPU twin's {want} (E {e}, d {d})"
+            );
+            compared += 1;
+            glossy += ((want - diffuse).max_element() >= 0.1 * diffuse.max_element()) as usize;
+        }
+    }
+    (compared, glossy)
 }

@@ -559,3 +559,49 @@ fn a_second_light_leaves_the_samples_unchanged_and_the_splatting_close_to_the_pe
     // Measured 0.037 (one light at 256²: 0.040).
     assert!(flip <= 0.05, "two lights, HCB vs per-pixel gather: FLIP {flip}");
 }
+
+/// Issue #51: Eq. 11's pixels reflect the splatted irradiance with the glossy receiver — the
+/// GPU's `hcb.indirect` equals the CPU twin on the chair (whose wood and metal are glossy),
+/// and the paper's diffuse receiver is c·DI/π·E.
+#[test]
+fn the_glossy_receiver_of_the_hcb_matches_the_cpu_twin_on_the_chair() {
+    let settings = |receiver| {
+        let mut s = gi_render::preset::load_lenient(include_str!("../../presets/nguyen-hcb.ron"), "nguyen-hcb")
+            .expect("loads")
+            .settings;
+        s.hcb.receiver = receiver;
+        s
+    };
+    use gi_render::passes::receiver::IrradianceReceiver;
+    let scene = gi_lab_tests::test_scene("chair-behind.glb");
+    let mut r = gi_render::Renderer::new(gpu(), scene, settings(IrradianceReceiver::Glossy), 64, 64).expect("renderer");
+    r.clock.playing = false;
+    r.render_frame();
+    let (compared, glossy) = gi_lab_tests::assert_glossy_receiver_matches_the_cpu(
+        &r,
+        "hcb.indirect",
+        "hcb.irradiance",
+        "hcb.weight_sum",
+        "hcb.weight_sum.direction",
+    );
+    assert!(compared > 1500 && glossy > 100, "{compared} pixels compared, {glossy} with specular light");
+    // The samples' directions are at most as long as their irradiance's luminance.
+    let stats = r.hcb_stats().expect("stats");
+    for s in &stats.list {
+        let lum = Vec3::new(s.light.x, s.light.y, s.light.z).dot(Vec3::new(0.2126, 0.7152, 0.0722));
+        assert!(s.dir.truncate().length() <= lum * 1.0001 + 1e-9, "{s:?}");
+    }
+    r.set_settings(settings(IrradianceReceiver::DiffuseOnly)).expect("valid");
+    r.render_frame();
+    let (ind, irr, alb) = (
+        gi_lab_tests::read(&r, "hcb.indirect"),
+        gi_lab_tests::read(&r, "hcb.irradiance"),
+        gi_lab_tests::read(&r, "gbuffer.albedo"),
+    );
+    for ((i, e), c) in ind.data.iter().zip(&irr.data).zip(&alb.data) {
+        for k in 0..3 {
+            let want = c[k] * c[3] / std::f32::consts::PI * e[k];
+            assert!((i[k] - want).abs() <= 1e-5 * want.abs().max(1e-3), "{i:?} vs c·DI/π·E {want}");
+        }
+    }
+}

@@ -60,9 +60,12 @@ struct Scene {
     nrm: Vec<[f32; 4]>,
 }
 
+/// What the splat wrote: `hcb.weight_sum`, `hcb.irradiance`, the uncovered count and
+/// `hcb.weight_sum.direction`.
+type Splatted = (Vec<[f32; 4]>, Vec<[f32; 4]>, u32, Vec<[f32; 4]>);
+
 /// Splats `samples` over the G-buffer on the GPU by `method` (binned into at most `bins`
-/// items, the rest drawn as quads); returns `hcb.weight_sum`, `hcb.irradiance` and the
-/// uncovered count.
+/// items, the rest drawn as quads); returns what it wrote.
 #[allow(clippy::too_many_arguments)]
 fn gpu_splat(
     w: u32,
@@ -73,7 +76,7 @@ fn gpu_splat(
     samples: &[GpuHcbSample],
     frame: HcbFrame,
     (method, bins): (SplatMethod, u32),
-) -> (Vec<[f32; 4]>, Vec<[f32; 4]>, u32) {
+) -> Splatted {
     use gi_render::passes::hcb::HcbSplatPass;
     use wgpu::util::DeviceExt;
     let ctx = gpu();
@@ -94,13 +97,14 @@ fn gpu_splat(
     let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.splat") });
     let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
     let white = upload(&ctx, "test.albedo", w, h, &vec![[1.0; 4]; (w * h) as usize]);
-    let g = (&view(&p), &view(&n), &view(&white));
+    let black = upload(&ctx, "test.material", w, h, &vec![[0.0; 4]; (w * h) as usize]);
+    let g = (&view(&p), &view(&n), &view(&white), &view(&black));
     pass.run(&ctx, &mut enc, None, &cam, g, (&list, &counter), &args, frame, method);
     ctx.queue.submit([enc.finish()]);
     let read = |t: &wgpu::Texture| gi_render::buffers::read_texture(&ctx, "hcb", t, 0, 0).expect("read").data;
     let uncovered: Vec<u32> =
         bytemuck::pod_collect_to_vec(&gi_render::buffers::read_storage(&ctx, &pass.uncovered, 16).expect("count"));
-    (read(pass.weight_sum()), read(&pass.irradiance), uncovered[0])
+    (read(pass.weight_sum()), read(&pass.irradiance), uncovered[0], read(pass.weight_dir()))
 }
 
 fn splat_samples(w: u32, pos: &[[f32; 4]], nrm: &[[f32; 4]], light: impl Fn(usize) -> Vec3) -> Vec<GpuHcbSample> {
@@ -123,6 +127,7 @@ fn splat_samples(w: u32, pos: &[[f32; 4]], nrm: &[[f32; 4]], light: impl Fn(usiz
                 normal: glam::Vec4::new(nrm[i][0], nrm[i][1], nrm[i][2], 1.0),
                 texel: [x, y, 0, 0],
                 light: light(k).extend(1.0),
+                dir: glam::Vec4::ZERO,
             })
         })
         .collect()
@@ -139,7 +144,7 @@ fn splat_weights_match_the_cpu(method: SplatMethod) {
     let (Scene { w, h, camera, pos, nrm }, t, frame) = splat_case(15f32.to_radians().cos(), 80f32.to_radians().cos());
     let samples = splat_samples(w, &pos, &nrm, |k| Vec3::new(1.0 + k as f32, 0.5, 2.0 - 0.2 * k as f32));
     assert!(samples.len() >= 6, "the picked pixels are covered");
-    let (sum, light, uncovered) = gpu_splat(w, h, &pos, &nrm, &camera, &samples, frame, (method, w * h));
+    let (sum, light, uncovered, _) = gpu_splat(w, h, &pos, &nrm, &camera, &samples, frame, (method, w * h));
     let (mut reached, mut rejected) = (0, 0);
     let mut covered_unreached = 0;
     for i in 0..(w * h) as usize {
@@ -191,7 +196,7 @@ fn splatting_a_constant_light_gives_that_constant_wherever_a_sample_reaches() {
     let (Scene { w, h, camera, pos, nrm }, _, frame) = splat_case(0.8, 0.3);
     let e = Vec3::new(0.7, 0.25, 1.5);
     let samples = splat_samples(w, &pos, &nrm, |_| e);
-    let (sum, light, _) = gpu_splat(w, h, &pos, &nrm, &camera, &samples, frame, (SplatMethod::Blend, w * h));
+    let (sum, light, _, _) = gpu_splat(w, h, &pos, &nrm, &camera, &samples, frame, (SplatMethod::Blend, w * h));
     let mut lit = 0;
     for i in 0..(w * h) as usize {
         if sum[i][3] > 0.0 {
@@ -217,6 +222,8 @@ fn the_binned_splat_equals_the_blended_quads() {
             normal: glam::Vec4::new(nrm[i][0], nrm[i][1], nrm[i][2], 1.0),
             texel: [i as u32 % w, i as u32 / w, 0, 0],
             light: Vec3::new(0.3 + 0.1 * (k % 7) as f32, 1.0 / (1.0 + k as f32), 0.01 * k as f32).extend(1.0),
+            // The glossy receiver's direction sum (issue #51), summed beside the light.
+            dir: glam::Vec4::new(0.1 * (k % 5) as f32, 0.2, -0.05 * (k % 3) as f32, 0.0),
         })
         .collect();
     assert!(samples.len() > 100, "{} samples", samples.len());
@@ -225,10 +232,16 @@ fn the_binned_splat_equals_the_blended_quads() {
     let bits = |v: &[[f32; 4]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
     let reached = blend.0.iter().filter(|p| p[3] > 0.0).count();
     assert!(reached > 1000, "{reached} pixels reached");
+    assert!(blend.3.iter().filter(|p| p[1] > 0.0).count() == reached, "every reached pixel sums directions");
     // All samples binned, then 32 binned and the rest as quads.
     for bins in [w * h, 32] {
         let binned = run((SplatMethod::Binned, bins));
-        for (name, a, b) in [("weight_sum", &blend.0, &binned.0), ("irradiance", &blend.1, &binned.1)] {
+        let pairs = [
+            ("weight_sum", &blend.0, &binned.0),
+            ("irradiance", &blend.1, &binned.1),
+            ("weight_sum.direction", &blend.3, &binned.3),
+        ];
+        for (name, a, b) in pairs {
             let differ = bits(a).iter().zip(bits(b)).filter(|(x, y)| **x != *y).count();
             assert_eq!(differ, 0, "hcb.{name} with {bins} binned: {differ} channels differ");
         }

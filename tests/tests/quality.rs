@@ -2,8 +2,9 @@
 //! the default scene at 256², against the stored path-traced bounce of 2048 spp
 //! (`tests/data/cornell_1bounce_256_2048spp.exr`, the issue's ground truth). Bounds are what
 //! was measured on lavapipe plus a margin, or the issue's goal where it is met (the first two
-//! rows); they guard against regressions. The HCB's rows are still above their goals: see
-//! the note on issue #15.
+//! rows, and the HCB's since issue #51's glossy receiver); they guard against regressions.
+//! Issue #51 adds the real scenes' cases (the chair seen from behind, …) with their own stored
+//! truths.
 
 use gi_lab_tests::{default_scene, gpu, stored_reference};
 
@@ -35,7 +36,10 @@ fn the_quality_table_stays_within_its_measured_bounds() {
     // reflection off (Fig. 9 times the diffuse pipeline) and the senders' diffuse light
     // (§5.3): 0.2419 → 0.2584 (0.2515 with the view-dependent senders; the truth's senders
     // reflect specularly too). Its bound follows the measurement, as the others do.
-    let bounds = [0.05, 0.035, 0.062, 0.03, 0.265, 0.05, 0.06];
+    // Issue #51's glossy receivers: nguyen-hcb 0.0504 (its goal, 0.06, met; the diffuse
+    // receiver's 0.057–0.060 is what the row used to measure, now against the per-pixel gather
+    // as the fourth row), gautron-ic-splatting 0.0519 (0.0546).
+    let bounds = [0.05, 0.035, 0.06, 0.03, 0.265, 0.05, 0.06];
     assert_eq!(rows.len(), bounds.len());
     for (row, bound) in rows.iter().zip(bounds) {
         assert!(row.flip > 0.0, "{}: FLIP 0 means nothing was compared", row.configuration);
@@ -55,4 +59,40 @@ fn the_quality_table_stays_within_its_measured_bounds() {
     // The near/far mix beats both of its parts alone.
     assert!(rows[5].flip < rows[0].flip, "mix {} vs Knecht {}", rows[5].flip, rows[0].flip);
     assert!(rows[5].flip < rows[4].flip, "mix {} vs Soler {}", rows[5].flip, rows[4].flip);
+}
+
+/// Issue #51's chair: the shipped chair seen from behind, towards its sun
+/// (`tests/data/chair-behind.glb`), at 128² against a 2048-spp one-bounce path trace
+/// (`tests/data/chair_1bounce_128_2048spp.exr`). The chair's wood has an albedo of about 0.02:
+/// what shows there is its specular lobe reflecting the sunlit floor, which the HCB's and
+/// Gautron's diffuse receivers lost (FLIP 0.469 and 0.433 before; the goals are 0.20).
+#[test]
+fn the_chair_seen_from_behind_stays_within_its_measured_bounds() {
+    let truth = stored_reference("chair_1bounce_128_2048spp.exr");
+    let scene = gi_lab_tests::test_scene("chair-behind.glb");
+    let mut rows =
+        gi_render::quality::quality_table(&gpu(), &scene, &truth, (128, 128), gi_render::quality::Timing::None)
+            .expect("the table");
+    // The table's goals are the default scene's.
+    rows.iter_mut().for_each(|r| r.goal = None);
+    print!("{}", gi_render::quality::format_table(&rows));
+    // Measured on lavapipe after issue #51's glossy receivers (before them): knecht 0.1617,
+    // exact 0.1080, nguyen-hcb 0.1823 (0.4687), its diffuse receiver against the per-pixel
+    // diffuse gather 0.0580, soler 0.5946, the near/far mix 0.1922, gautron 0.1417 (0.4332).
+    // The HCB's and Gautron's bounds are the issue's goals; Knecht's (goal 0.15), the exact
+    // reference's (goal 0.10) and Soler's (goal 0.50) are not met yet: their bounds are the
+    // measurements plus a margin, so that they do not regress.
+    let bounds = [0.17, 0.115, 0.20, 0.065, 0.60, 0.20, 0.20];
+    assert_eq!(rows.len(), bounds.len());
+    for (row, bound) in rows.iter().zip(bounds) {
+        assert!(row.flip > 0.0, "{}: FLIP 0 means nothing was compared", row.configuration);
+        assert!(
+            row.flip <= bound,
+            "{} ({} frames) against {}: FLIP {:.4} > {bound}",
+            row.configuration,
+            row.frames,
+            row.against,
+            row.flip
+        );
+    }
 }

@@ -18,35 +18,58 @@ struct Reference {
     bounces: u32,
     /// Which image of the path tracer: "direct" or "full".
     image: &'static str,
+    /// The scene: the embedded default (None) or a file of `tests/data/` with its camera.
+    scene: Option<&'static str>,
 }
 
 const REFERENCES: &[Reference] = &[
-    Reference { file: "cornell_direct_64.exr", size: 64, spp: 1, bounces: 0, image: "direct" },
-    Reference { file: "cornell_1bounce_64.exr", size: 64, spp: 256, bounces: 1, image: "full" },
-    Reference { file: "cornell_1bounce_256.exr", size: 256, spp: 256, bounces: 1, image: "full" },
+    Reference { file: "cornell_direct_64.exr", size: 64, spp: 1, bounces: 0, image: "direct", scene: None },
+    Reference { file: "cornell_1bounce_64.exr", size: 64, spp: 256, bounces: 1, image: "full", scene: None },
+    Reference { file: "cornell_1bounce_256.exr", size: 256, spp: 256, bounces: 1, image: "full", scene: None },
     // The ground truth of issue #15's quality table (`gi-lab reference --size 256x256 --spp
     // 2048 --bounces 1`; about 25 minutes on two cores in a debug build).
-    Reference { file: "cornell_1bounce_256_2048spp.exr", size: 256, spp: 2048, bounces: 1, image: "full" },
-    Reference { file: "cornell_3bounce_128.exr", size: 128, spp: 256, bounces: 3, image: "full" },
+    Reference { file: "cornell_1bounce_256_2048spp.exr", size: 256, spp: 2048, bounces: 1, image: "full", scene: None },
+    Reference { file: "cornell_3bounce_128.exr", size: 128, spp: 256, bounces: 3, image: "full", scene: None },
+    // Issue #51's chair seen from behind (`gi-lab reference --scene tests/data/chair-behind.glb
+    // --size 128x128 --spp 2048 --bounces 1`: 20 s on two cores in a release build).
+    Reference {
+        file: "chair_1bounce_128_2048spp.exr",
+        size: 128,
+        spp: 2048,
+        bounces: 1,
+        image: "full",
+        scene: Some("chair-behind.glb"),
+    },
 ];
 
 fn data_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("data")
 }
 
-/// FNV-1a of the embedded default scene: a reference is stale when it changes.
-fn scene_hash() -> u64 {
-    gi_render::scene::cornell::DEFAULT_SCENE_GLB
-        .iter()
-        .fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ *b as u64).wrapping_mul(0x0100_0000_01b3))
+/// FNV-1a of some bytes.
+fn fnv(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ *b as u64).wrapping_mul(0x0100_0000_01b3))
 }
 
+/// What the references are made from: the path tracer's version and the hash of every scene
+/// (the embedded default, then each scene file): a reference is stale when one changes.
 fn stamp() -> String {
-    format!("path tracer {PATH_TRACER_VERSION}, default scene {:016x}\n", scene_hash())
+    let mut s = format!(
+        "path tracer {PATH_TRACER_VERSION}, default scene {:016x}",
+        fnv(gi_render::scene::cornell::DEFAULT_SCENE_GLB)
+    );
+    for file in REFERENCES.iter().filter_map(|r| r.scene) {
+        let bytes = std::fs::read(data_dir().join(file)).unwrap_or_else(|e| panic!("tests/data/{file}: {e}"));
+        s += &format!(", {file} {:016x}", fnv(&bytes));
+    }
+    s + "\n"
 }
 
 fn render(r: &Reference) -> ImageF32 {
-    let renderer = default_renderer(r.size, r.size);
+    let renderer = match r.scene {
+        None => default_renderer(r.size, r.size),
+        Some(file) => gi_lab_tests::scene_renderer(gi_lab_tests::test_scene(file), r.size, |_| {}),
+    };
     let pt = PathTracer::new(renderer.scene(), 0.0);
     let settings = PtSettings { bounces: r.bounces, spp: r.spp, seed: 1, ..Default::default() };
     let img = pt.render(renderer.view_proj(), renderer.camera.position, r.size, r.size, settings);

@@ -257,9 +257,10 @@ fn compare_images(images: [&Arc<Arrived>; 4], view: AbView, gain: f32) -> Result
 }
 
 /// B's settings for `source`, given A's live settings. The exact-VPL reference keeps A's
-/// scene-facing settings; when A is the HCB, which reflects its splatted irradiance
-/// diffusely (c·DI/π, Nguyen §4), the reference's gather is diffuse only too, so that the
-/// comparison is like for like (issue #15).
+/// scene-facing settings; when A is the HCB with the paper's diffuse receiver
+/// (`hcb.receiver = DiffuseOnly`: c·DI/π, Nguyen §4), the reference's gather is diffuse only
+/// too, so that the comparison is like for like (issue #15); with GI Lab's glossy receiver
+/// (issue #51) the reference reflects with the full BRDF.
 pub fn b_settings(live: &LabSettings, source: &AbSource) -> Result<LabSettings, String> {
     Ok(match source {
         AbSource::Preset(p) => gi_render::preset::load_file(p).map_err(|e| e.to_string())?.settings,
@@ -267,7 +268,9 @@ pub fn b_settings(live: &LabSettings, source: &AbSource) -> Result<LabSettings, 
         AbSource::Reference => {
             let mut s = live.clone();
             gi_render::pipeline::Technique::ExactVpl.apply(&mut s);
-            if live.pipeline.uses_hcb() {
+            if live.pipeline.uses_hcb()
+                && live.hcb.receiver == gi_render::passes::receiver::IrradianceReceiver::DiffuseOnly
+            {
                 s.vpl.receiver_brdf = gi_render::passes::knecht::vpl_importance::ReceiverBrdf::DiffuseOnly;
             }
             s
@@ -287,6 +290,9 @@ mod tests {
         Technique::Nguyen.apply(&mut live);
         let b = b_settings(&live, &AbSource::Reference).expect("settings");
         assert!(b.pipeline.is_reference());
+        assert_eq!(b.vpl.receiver_brdf, ReceiverBrdf::Full, "the glossy HCB against the full BRDF");
+        live.hcb.receiver = gi_render::passes::receiver::IrradianceReceiver::DiffuseOnly;
+        let b = b_settings(&live, &AbSource::Reference).expect("settings");
         assert_eq!(b.vpl.receiver_brdf, ReceiverBrdf::DiffuseOnly);
         Technique::Knecht.apply(&mut live);
         let b = b_settings(&live, &AbSource::Reference).expect("settings");

@@ -24,11 +24,12 @@ pub fn eval(n: Vec3, l: Vec3, v: Vec3, albedo: Vec3, di: f32, si: f32, sp: f32) 
     albedo * di / std::f32::consts::PI + Vec3::splat(spec)
 }
 
-/// The sharpness κ of a von Mises–Fisher lobe whose mean resultant length is `r` (Banerjee et
-/// al.'s approximation κ ≈ r(3 − r²)/(1 − r²)), r clamped below 0.999.
-pub fn receiver_sharpness(r: f32) -> f32 {
-    let q = r.clamp(0.0, 0.999);
-    q * (3.0 - q * q) / (1.0 - q * q)
+/// 1/(4κ), κ the sharpness of a von Mises–Fisher lobe whose mean resultant length is `r`
+/// (Banerjee et al.'s approximation κ ≈ r(3 − r²)/(1 − r²)): 0 for r = 1 (one direction);
+/// r is clamped to [10⁻⁴, 1].
+pub fn receiver_spread(r: f32) -> f32 {
+    let q = r.clamp(1e-4, 1.0);
+    (1.0 - q * q) / (4.0 * q * (3.0 - q * q))
 }
 
 /// How a pixel reflects the irradiance `e` that a technique interpolated to it, given the
@@ -57,17 +58,23 @@ pub fn receive_irradiance(
     sp: f32,
     glossy: bool,
 ) -> Vec3 {
-    let diffuse = albedo * di / std::f32::consts::PI * e;
+    receiver_factor(d, n, v, albedo, di, si, sp, glossy) * e
+}
+
+/// The reflected radiance per unit irradiance of [`receive_irradiance`] (per channel: c·DI/π
+/// plus the specular lobe's factor), so that a replay can split the pixel's light over the
+/// contributions to E. WGSL twin: `receiver_factor`.
+#[allow(clippy::too_many_arguments)]
+pub fn receiver_factor(d: Vec3, n: Vec3, v: Vec3, albedo: Vec3, di: f32, si: f32, sp: f32, glossy: bool) -> Vec3 {
+    let diffuse = albedo * di / std::f32::consts::PI;
     let r = d.length();
     if !glossy || si <= 0.0 || r <= 1e-4 {
         return diffuse;
     }
     let l = d / r;
-    let kappa = receiver_sharpness(r);
-    let sp_eff = 1.0 / (1.0 / sp.max(1e-3) + 1.0 / (4.0 * kappa).max(1e-3));
+    let sp_eff = 1.0 / (1.0 / sp.max(1e-3) + receiver_spread(r));
     let ndh = n.dot((l + v).normalize_or_zero()).max(0.0);
-    let spec = si * (sp_eff + 8.0) / (8.0 * std::f32::consts::PI) * ndh.powf(sp_eff);
-    diffuse + spec * e
+    diffuse + Vec3::splat(si * (sp_eff + 8.0) / (8.0 * std::f32::consts::PI) * ndh.powf(sp_eff))
 }
 
 /// KHR_lights_punctual spot falloff t² with t = saturate((cos θ − cos θ_outer) /
@@ -124,6 +131,54 @@ pub fn punctual_radiance(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Light from one direction (r → 1) is reflected exactly as the BRDF reflects it; the
+    /// diffuse-only receiver is c·DI/π·E; no direction known: diffuse only.
+    #[test]
+    fn the_glossy_receiver_is_exact_for_light_from_one_direction() {
+        let (n, v) = (Vec3::Y, Vec3::new(0.6, 0.8, 0.0));
+        let l = Vec3::new(-0.6, 0.8, 0.0);
+        let (c, e) = (Vec3::new(0.5, 0.2, 0.1), Vec3::new(2.0, 1.0, 0.5));
+        let exact = eval(n, l, v, c, 0.9, 0.3, 64.0) * e;
+        let one = receive_irradiance(e, l * 0.99999, n, v, c, 0.9, 0.3, 64.0, true);
+        assert!((one - exact).length() < 1e-3 * exact.length(), "{one} vs {exact}");
+        let diffuse = c * 0.9 / std::f32::consts::PI * e;
+        assert_eq!(receive_irradiance(e, l, n, v, c, 0.9, 0.3, 64.0, false), diffuse);
+        assert_eq!(receive_irradiance(e, Vec3::ZERO, n, v, c, 0.9, 0.3, 64.0, true), diffuse);
+    }
+
+    /// Spread light widens the lobe: the mirror direction gets less, a direction far from it
+    /// more, and the reflected energy of the lobe (∫ over the views of the specular part ·
+    /// cos θ_v) stays within 25 % of the energy for one direction (at most SI·E).
+    #[test]
+    fn spread_light_widens_the_specular_lobe_and_keeps_its_energy() {
+        let n = Vec3::Y;
+        let l = Vec3::new(-0.5, 0.866, 0.0).normalize();
+        let e = Vec3::ONE;
+        let spec = |r: f32, v: Vec3| receive_irradiance(e, l * r, n, v, Vec3::ZERO, 0.0, 0.5, 128.0, true).x;
+        let mirror = Vec3::new(0.5, 0.866, 0.0).normalize();
+        let off = Vec3::new(0.0, 0.8, 0.6).normalize();
+        assert!(spec(0.6, mirror) < spec(0.99, mirror));
+        assert!(spec(0.6, off) > spec(0.99, off));
+        // ∫ f_s cos θ_v dω_v over the hemisphere of views, by a fine grid in (cos θ, φ).
+        let energy = |r: f32| {
+            let (m, k) = (200, 400);
+            let mut sum = 0.0;
+            for i in 0..m {
+                let ct = (i as f32 + 0.5) / m as f32;
+                let st = (1.0 - ct * ct).sqrt();
+                for j in 0..k {
+                    let phi = std::f32::consts::TAU * (j as f32 + 0.5) / k as f32;
+                    let v = Vec3::new(st * phi.cos(), ct, st * phi.sin());
+                    sum += spec(r, v) * ct;
+                }
+            }
+            sum * std::f32::consts::TAU / (m * k) as f32
+        };
+        let (sharp, wide) = (energy(0.999), energy(0.5));
+        assert!(sharp > 0.3 && sharp <= 0.5 * 1.05, "{sharp}");
+        assert!((wide / sharp - 1.0).abs() < 0.25, "{wide} vs {sharp}");
+    }
 
     #[test]
     fn white_lambert_is_one_over_pi() {

@@ -49,7 +49,8 @@ pub struct GpuHeader {
     pub indirect: Vec4,
     /// `gautron.irradiance` (E, a: Σ w).
     pub irradiance: Vec4,
-    /// rgb: c·DI as the resolve reads it; a: 1 on the background.
+    /// rgb: the resolve's receiver factor f (c·DI/π, plus the specular lobe's with
+    /// `gautron.receiver = Glossy`: `receiver_factor`); a: 1 on the background.
     pub albedo: Vec4,
     /// xyz: P.
     pub point: Vec4,
@@ -156,6 +157,9 @@ impl GautronExplainPass {
                 bgl::storage(13, cs, false),
                 bgl::storage(14, cs, true),
                 bgl::storage(15, cs, true),
+                t(16),
+                t(17),
+                t(18),
             ],
         });
         let module = crate::shaders::create_module(device, "gautron/explain.wgsl");
@@ -201,6 +205,7 @@ impl GautronExplainPass {
         let part = |offset, size| crate::passes::buffer_part(&self.out, offset, size);
         let (accum, irradiance) = (stage.splat.accum_view(), view(&stage.splat.irradiance, "gautron.irradiance"));
         let g = f.gbuffer;
+        let (accum_dir, accum_plain) = stage.splat.receiver_views();
         let group = bind_group(
             &ctx.device,
             "explain.gautron.inputs",
@@ -222,6 +227,9 @@ impl GautronExplainPass {
                 part(ENTRIES_OFFSET, None),
                 snapshots.map_or(stage.records.as_entire_binding(), |s| s.records.as_entire_binding()),
                 snapshots.map_or(self.no_states.as_entire_binding(), |s| s.states.as_entire_binding()),
+                tv(&accum_dir),
+                tv(&accum_plain),
+                tv(&g.material),
             ],
         );
         let records = (stage.records.size() / super::RECORD_BYTES).max(1);
@@ -320,7 +328,8 @@ pub fn decode(info: &GautronInfo, bytes: &[u8]) -> Option<Explanation> {
     // The splat adds the records in increasing index (the blending's order, and the bins').
     entries.sort_by_key(|e| e.index[0]);
     let v3 = |v: Vec4| v.truncate();
-    let c_di = v3(header.albedo) * std::f32::consts::FRAC_1_PI;
+    // The resolve's factor f: its light is f·E (c·DI/π, and the glossy lobe's factor).
+    let c_di = v3(header.albedo);
     let accepted: Vec<&GpuEntry> = entries.iter().filter(|e| e.accepted()).collect();
     let (mut sum_we, mut sum_w) = (Vec3::ZERO, 0.0f32);
     for e in &accepted {
@@ -366,7 +375,7 @@ pub fn decode(info: &GautronInfo, bytes: &[u8]) -> Option<Explanation> {
                 if again(e) { ", recomputed" } else { "" }
             ),
             position: Some(v3(e.position)),
-            // c·DI/π · w_k·E_k(P) / Σ w: its share of the resolve's c·DI/π · RGB / A
+            // f · w_k·E_k(P) / Σ w: its share of the resolve's f · RGB / A
             value: if share > 0.0 { c_di * (e.weight.x * v3(e.e)) / sum_w } else { Vec3::ZERO },
             weight: share,
             rejected,
@@ -391,7 +400,7 @@ pub fn decode(info: &GautronInfo, bytes: &[u8]) -> Option<Explanation> {
             value: Vec3::splat(accum.w),
         },
         Check {
-            what: "c·DI/π · RGB / A of gautron.accum (the resolve)".into(),
+            what: "f · RGB / A of gautron.accum (the resolve; f: the receiver's factor)".into(),
             sum: resolved,
             buffer: "gautron.indirect".into(),
             value: v3(header.indirect),
@@ -413,7 +422,7 @@ pub fn decode(info: &GautronInfo, bytes: &[u8]) -> Option<Explanation> {
     ));
     let e = if sum_w > 0.0 { sum_we / sum_w } else { Vec3::ZERO };
     notes.push(format!(
-        "Σ w = {sum_w:.4} (covered from 1/a); E = Σ w·E / Σ w = ({:.4e}, {:.4e}, {:.4e}); c·DI/π = ({:.4}, {:.4}, {:.4}); gautron.irradiance = ({:.4e}, {:.4e}, {:.4e})",
+        "Σ w = {sum_w:.4} (covered from 1/a); E = Σ w·E / Σ w = ({:.4e}, {:.4e}, {:.4e}); f = ({:.4}, {:.4}, {:.4}) (c·DI/π, plus the specular lobe with gautron.receiver = Glossy); gautron.irradiance = ({:.4e}, {:.4e}, {:.4e})",
         e.x, e.y, e.z, c_di.x, c_di.y, c_di.z, header.irradiance.x, header.irradiance.y, header.irradiance.z
     ));
     notes.push(format!(

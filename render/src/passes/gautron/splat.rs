@@ -338,6 +338,13 @@ impl SplatPass {
         view(&self.indirect, "gautron.indirect")
     }
 
+    /// The latest direction sums and plain sums (`gautron.accum.direction`,
+    /// `gautron.accum.plain`), as the resolve reads them.
+    pub fn receiver_views(&self) -> (wgpu::TextureView, wgpu::TextureView) {
+        let c = self.current.get();
+        (view(&self.accum_dir[c], "gautron.accum.direction"), view(&self.accum_plain[c], "gautron.accum.plain"))
+    }
+
     /// The latest sums (`gautron.accum`), as the creation's coverage test reads them.
     pub fn accum_view(&self) -> wgpu::TextureView {
         view(&self.accum[self.current.get()], "gautron.accum")

@@ -6,7 +6,8 @@
 //! `shaders/hcb/explain.wgsl` replays every sample's splat at the pinned pixel through the
 //! splat's own `splat_quad` and `splat_value` (`shaders/hcb/common.wgsl`), after the frame's
 //! passes and in its encoder, and reads what the frame wrote there; [`decode`] turns it into
-//! the pixel's contributions (each coherent sample's share w_s·E_s / Σ w × c·DI/π), the
+//! the pixel's contributions (each coherent sample's share w_s·E_s / Σ w × the receiver's
+//! factor f: c·DI/π, plus the specular lobe's with `hcb.receiver = Glossy`), the
 //! samples whose quad holds the pixel but which fail Eq. 9, and the checks of the sums
 //! against `hcb.weight_sum`, `hcb.irradiance` and the stage's output `hcb.indirect`
 //! (`crate::explain`). CPU twin of each weight: `cpu::hcb::weight` (tests/explain/hcb.rs).
@@ -66,7 +67,8 @@ pub struct GpuHeader {
     pub irradiance: Vec4,
     /// `hcb.indirect` (the stage's output).
     pub indirect: Vec4,
-    /// rgb: the normalize pass's c·DI/π.
+    /// rgb: the normalize pass's receiver factor f (c·DI/π, and the specular lobe's factor
+    /// with the glossy receiver: `receiver_factor`).
     pub factor: Vec4,
     /// The confidence merge: rgb the history it read, a its confidence c.
     pub history: Vec4,
@@ -161,6 +163,8 @@ impl HcbExplainPass {
                 bgl::storage(15, cs, false),
                 bgl::storage(16, cs, false),
                 bgl::storage(17, cs, false),
+                t(18),
+                t(19),
             ],
         });
         let args_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -241,6 +245,7 @@ impl HcbExplainPass {
         let part = |offset, size| crate::passes::buffer_part(&self.out, offset, size);
         let g = f.gbuffer;
         let weight_sum = stage.splat.weight_sum_view();
+        let weight_dir = view(stage.splat.weight_dir(), "hcb.weight_sum.direction");
         let irradiance = view(&stage.splat.irradiance, "hcb.irradiance");
         let indirect = view(&stage.splat.indirect, "hcb.indirect");
         let (confidence, history_prev) = match temporal {
@@ -270,6 +275,8 @@ impl HcbExplainPass {
                 part(0, Some(std::mem::size_of::<GpuHeader>() as u64)),
                 part(TALLY_OFFSET, Some(16)),
                 part(ENTRIES_OFFSET, None),
+                tv(&weight_dir),
+                tv(&g.material),
             ],
         );
         let args_group =
@@ -400,7 +407,7 @@ pub fn decode(info: &HcbInfo, bytes: &[u8]) -> Option<Explanation> {
     });
     if info.merge {
         checks.push(Check {
-            what: "c·DI/π · Σ w·E_s / Σ w".into(),
+            what: "f · Σ w·E_s / Σ w (f: the receiver's factor)".into(),
             sum: factor * normalized,
             buffer: "hcb.indirect".into(),
             value: v3(header.indirect),
@@ -430,7 +437,7 @@ pub fn decode(info: &HcbInfo, bytes: &[u8]) -> Option<Explanation> {
         notes.push("no sample is coherent to the pixel: it is uncovered (hcb.irradiance a = 0)".into());
     }
     notes.push(format!(
-        "Σ w = {:.6} (Eq. 11 divides by it); c·DI/π = ({:.4}, {:.4}, {:.4}) (normalize's reflection)",
+        "Σ w = {:.6} (Eq. 11 divides by it); f = ({:.4}, {:.4}, {:.4}) (normalize's reflection: c·DI/π, plus the specular lobe lit from the samples' mean direction with hcb.receiver = Glossy)",
         sum_w, factor.x, factor.y, factor.z
     ));
     if info.merge {

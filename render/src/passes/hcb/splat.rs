@@ -250,6 +250,11 @@ impl HcbSplatPass {
         );
     }
 
+    /// The texture of the latest direction sums (`hcb.weight_sum.direction`).
+    pub fn weight_dir(&self) -> &wgpu::Texture {
+        &self.weight_dir[self.current.get()]
+    }
+
     /// The texture of the latest sums.
     pub fn weight_sum(&self) -> &wgpu::Texture {
         &self.weight_sum[self.current.get()]

@@ -86,7 +86,7 @@ settings_group! {
         irsm_size: u32 = 32,
         unit "px", symbol "", range 16..=128, cost "N IRSMs of this size² per bounce: splat fill, 16 B/texel", history false;
         /// How the per-pixel or interleaved gather and the exact-VPL reference reflect the
-        /// VPLs' light at the shading point (the HCB always reflects diffusely).
+        /// VPLs' light at the shading point.
         receiver_brdf: ReceiverBrdf = ReceiverBrdf::Full,
         unit "", symbol "f_x", range 0..=1, cost "free", history true;
         /// The constant of Eq. 4.3's glossiness factor (b + SP'): 0.5 in the thesis. Smaller
