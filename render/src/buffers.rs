@@ -90,6 +90,11 @@ pub struct BufferRegistry {
 }
 
 impl BufferRegistry {
+    /// Forgets a buffer that no pass writes any more (nothing when it is not registered).
+    pub fn remove(&mut self, name: &str) {
+        self.entries.remove(name);
+    }
+
     /// Registers (or replaces, after a resize) a buffer.
     pub fn register(&mut self, name: &str, kind: BufferKind, description: &str, texture: &wgpu::Texture) {
         self.entries.insert(

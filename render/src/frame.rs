@@ -16,6 +16,7 @@
 use glam::Vec4;
 
 use crate::passes::CameraUniform;
+use crate::passes::direct_history::DirectHistory;
 use crate::passes::knecht::temporal::MergeOrder;
 use crate::passes::knecht::vpl_importance::ReceiverBrdf;
 use crate::passes::shadow::{gpu_light, setup_lights};
@@ -93,8 +94,31 @@ impl Renderer {
         self.timer.scope(&ctx, &mut enc, "direct", |e, slot| {
             direct.run(&ctx, e, slot, &ds, camera_buffer, gviews, &lights, shadow_view, emitters.as_ref())
         });
+        // While the sky's directions rotate, the direct light is their running mean over the
+        // still frames (issue #51, `passes::direct_history`).
+        let rotating_sky = if self.settings.sky.rotate_each_frame { self.sky_lights.count() } else { 0 };
+        let mut direct_view = crate::passes::view(&self.direct.radiance, "direct.radiance");
+        if rotating_sky > 0 {
+            let (w, h) = (self.width, self.height);
+            let history = self.direct_history.get_or_insert_with(|| DirectHistory::new(&ctx, w, h));
+            history.ensure(&ctx, w, h);
+            let mut key: Vec<f32> = view_proj.to_cols_array().to_vec();
+            let steady = &state.lights[..state.lights.len() - rotating_sky];
+            key.extend(steady.iter().flat_map(|l| bytemuck::cast::<_, [f32; 20]>(gpu_light(l))));
+            key.extend(state.draws.iter().flat_map(|d| d.world.to_cols_array()));
+            let sky = &self.scene.sky;
+            key.extend([sky.color.x, sky.color.y, sky.color.z, sky.intensity, sky.rotation_deg]);
+            let settings = format!("{:?}", self.settings);
+            let radiance = &direct_view;
+            let averaged = self.timer.scope(&ctx, &mut enc, "direct.sky_history", |e, slot| {
+                history.run(&ctx, e, slot, radiance, key, settings)
+            });
+            history.register(&mut self.registry);
+            direct_view = averaged;
+        } else if self.direct_history.take().is_some() {
+            self.registry.remove("direct.sky_history");
+        }
         // Stages 3–7's indirect light, as the stage choices say (`pipeline.*`).
-        let direct_view = crate::passes::view(&self.direct.radiance, "direct.radiance");
         let f = FrameInputs {
             ctx: &ctx,
             scene: &self.scene,
@@ -114,6 +138,7 @@ impl Renderer {
             direct_diffuse: self.direct.diffuse.as_ref().map(|(_, v)| v),
             lights: state.lights.iter().map(gpu_light).collect(),
             views: light_view_list(&state, self.bounds),
+            rotating_sky: if self.settings.sky.rotate_each_frame { self.sky_lights.count() } else { 0 },
             explain_pixel: self.stages.explain_pixel,
         };
         let indirect = indirect_light(&f, &mut self.stages, &mut enc, &mut self.timer, view_proj);

@@ -42,12 +42,30 @@ pub struct FrameInputs<'a> {
     /// Every light of the frame on the GPU, and the light views with their light's index.
     pub lights: Vec<GpuLight>,
     pub views: Vec<(u32, LightView)>,
+    /// How many of `lights` (the last ones) are the sky's directions rotated this frame
+    /// (`sky.rotate_each_frame`, issue #51): they change every frame by design, so the caches
+    /// that restart when a light changes compare [`FrameInputs::steady_light_key`] instead.
+    pub rotating_sky: usize,
     /// The pixel being explained (issue #42), when one is: stages that replay inside their
     /// run (Soler's, bounce by bounce) read it here.
     pub explain_pixel: Option<(u32, u32)>,
 }
 
 impl FrameInputs<'_> {
+    /// What the lights are, but for the rotation of the sky's directions: every light but
+    /// the rotating sky's directions, and then the sky itself (on, colour, intensity, image
+    /// rotation) when its directions rotate.
+    pub fn steady_light_key(&self) -> Vec<f32> {
+        let steady = &self.lights[..self.lights.len() - self.rotating_sky.min(self.lights.len())];
+        let mut key: Vec<f32> = steady.iter().flat_map(|l| bytemuck::cast::<_, [f32; 20]>(*l)).collect();
+        if self.rotating_sky > 0 {
+            let sky = &self.scene.sky;
+            let image = sky.image.as_ref().map_or(0.0, |(_, m)| std::sync::Arc::as_ptr(m) as usize as f32);
+            key.extend([sky.color.x, sky.color.y, sky.color.z, sky.intensity, sky.rotation_deg, image]);
+        }
+        key
+    }
+
     /// The radiance Soler et al.'s first bounce gathers (`soler.sender`): the direct light's
     /// diffuse part (004 §5.3) or the whole of it toward the camera.
     pub fn sender_radiance(&self) -> &wgpu::TextureView {

@@ -98,6 +98,14 @@ pub fn test_scene(file: &str) -> Scene {
         .unwrap_or_else(|e| panic!("tests/data/{file}: {e}"))
 }
 
+/// The default scene under a constant white sky of radiance 1 (its lights kept), as `gi-lab …
+/// --sky 1,1,1` opens it: issue #51's sky box.
+pub fn white_sky_box() -> Scene {
+    let mut scene = default_scene();
+    scene.sky = gi_render::scene::sky::Sky::constant(glam::Vec3::ONE, 1.0);
+    scene
+}
+
 /// A path-traced reference stored in `tests/data/` (see `tests/references.rs`).
 pub fn stored_reference(file: &str) -> gi_render::ImageF32 {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data").join(file);

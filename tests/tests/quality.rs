@@ -61,6 +61,38 @@ fn the_quality_table_stays_within_its_measured_bounds() {
     assert!(rows[5].flip < rows[4].flip, "mix {} vs Soler {}", rows[5].flip, rows[4].flip);
 }
 
+/// Issue #51's sky box: the default scene under a white sky at 128² against a 2048-spp
+/// one-bounce path trace (`tests/data/sky_1bounce_128_2048spp.exr`). With the sky's 16
+/// directions fixed every technique, the exact reference included, sat at 0.19–0.21 (the
+/// direct light 14.7 % too bright); rotated every frame and averaged (`sky.rotate_each_frame`)
+/// they converge.
+#[test]
+fn the_box_under_a_white_sky_stays_within_its_measured_bounds() {
+    let truth = stored_reference("sky_1bounce_128_2048spp.exr");
+    let mut rows = gi_render::quality::quality_table(
+        &gpu(),
+        &gi_lab_tests::white_sky_box(),
+        &truth,
+        (128, 128),
+        gi_render::quality::Timing::None,
+    )
+    .expect("the table");
+    rows.iter_mut().for_each(|r| r.goal = None);
+    print!("{}", gi_render::quality::format_table(&rows));
+    // Issue #51's goals: the exact reference ≤ 0.08, every VPL, HCB and Gautron row ≤ 0.10;
+    // Soler's and the HCB's diffuse receiver against the per-pixel gather have none: their
+    // bounds are the measurements plus a margin. Measured on lavapipe with the rotating sky
+    // (before, 16 fixed directions): knecht 0.0938 (0.1977), exact 0.0796 (0.1971), nguyen-hcb
+    // 0.0914 (0.1983), its diffuse receiver against the per-pixel gather 0.0184, soler 0.1877
+    // (0.2255), the near/far mix 0.0880 (0.1958), gautron 0.0853 (0.1912).
+    let bounds = [0.10, 0.08, 0.10, 0.025, 0.20, 0.10, 0.10];
+    assert_eq!(rows.len(), bounds.len());
+    for (row, bound) in rows.iter().zip(bounds) {
+        assert!(row.flip > 0.0, "{}: FLIP 0 means nothing was compared", row.configuration);
+        assert!(row.flip <= bound, "{} against {}: FLIP {:.4} > {bound}", row.configuration, row.against, row.flip);
+    }
+}
+
 /// Issue #51's chair: the shipped chair seen from behind, towards its sun
 /// (`tests/data/chair-behind.glb`), at 128² against a 2048-spp one-bounce path trace
 /// (`tests/data/chair_1bounce_128_2048spp.exr`). The chair's wood has an albedo of about 0.02:

@@ -18,18 +18,34 @@ struct Reference {
     bounces: u32,
     /// Which image of the path tracer: "direct" or "full".
     image: &'static str,
-    /// The scene: the embedded default (None) or a file of `tests/data/` with its camera.
-    scene: Option<&'static str>,
+    /// The scene.
+    scene: Src,
+}
+
+/// A reference's scene: the embedded default, the default under a white sky (`gi-lab …
+/// --sky 1,1,1`) or a file of `tests/data/` with its camera.
+#[derive(Clone, Copy)]
+enum Src {
+    Default,
+    WhiteSky,
+    File(&'static str),
 }
 
 const REFERENCES: &[Reference] = &[
-    Reference { file: "cornell_direct_64.exr", size: 64, spp: 1, bounces: 0, image: "direct", scene: None },
-    Reference { file: "cornell_1bounce_64.exr", size: 64, spp: 256, bounces: 1, image: "full", scene: None },
-    Reference { file: "cornell_1bounce_256.exr", size: 256, spp: 256, bounces: 1, image: "full", scene: None },
+    Reference { file: "cornell_direct_64.exr", size: 64, spp: 1, bounces: 0, image: "direct", scene: Src::Default },
+    Reference { file: "cornell_1bounce_64.exr", size: 64, spp: 256, bounces: 1, image: "full", scene: Src::Default },
+    Reference { file: "cornell_1bounce_256.exr", size: 256, spp: 256, bounces: 1, image: "full", scene: Src::Default },
     // The ground truth of issue #15's quality table (`gi-lab reference --size 256x256 --spp
     // 2048 --bounces 1`; about 25 minutes on two cores in a debug build).
-    Reference { file: "cornell_1bounce_256_2048spp.exr", size: 256, spp: 2048, bounces: 1, image: "full", scene: None },
-    Reference { file: "cornell_3bounce_128.exr", size: 128, spp: 256, bounces: 3, image: "full", scene: None },
+    Reference {
+        file: "cornell_1bounce_256_2048spp.exr",
+        size: 256,
+        spp: 2048,
+        bounces: 1,
+        image: "full",
+        scene: Src::Default,
+    },
+    Reference { file: "cornell_3bounce_128.exr", size: 128, spp: 256, bounces: 3, image: "full", scene: Src::Default },
     // Issue #51's chair seen from behind (`gi-lab reference --scene tests/data/chair-behind.glb
     // --size 128x128 --spp 2048 --bounces 1`: 20 s on two cores in a release build).
     Reference {
@@ -38,7 +54,17 @@ const REFERENCES: &[Reference] = &[
         spp: 2048,
         bounces: 1,
         image: "full",
-        scene: Some("chair-behind.glb"),
+        scene: Src::File("chair-behind.glb"),
+    },
+    // Issue #51's default box under a white sky (`gi-lab reference --sky 1,1,1 --size 128x128
+    // --spp 2048 --bounces 1`).
+    Reference {
+        file: "sky_1bounce_128_2048spp.exr",
+        size: 128,
+        spp: 2048,
+        bounces: 1,
+        image: "full",
+        scene: Src::WhiteSky,
     },
 ];
 
@@ -58,7 +84,7 @@ fn stamp() -> String {
         "path tracer {PATH_TRACER_VERSION}, default scene {:016x}",
         fnv(gi_render::scene::cornell::DEFAULT_SCENE_GLB)
     );
-    for file in REFERENCES.iter().filter_map(|r| r.scene) {
+    for file in REFERENCES.iter().filter_map(|r| if let Src::File(f) = r.scene { Some(f) } else { None }) {
         let bytes = std::fs::read(data_dir().join(file)).unwrap_or_else(|e| panic!("tests/data/{file}: {e}"));
         s += &format!(", {file} {:016x}", fnv(&bytes));
     }
@@ -67,8 +93,9 @@ fn stamp() -> String {
 
 fn render(r: &Reference) -> ImageF32 {
     let renderer = match r.scene {
-        None => default_renderer(r.size, r.size),
-        Some(file) => gi_lab_tests::scene_renderer(gi_lab_tests::test_scene(file), r.size, |_| {}),
+        Src::Default => default_renderer(r.size, r.size),
+        Src::WhiteSky => gi_lab_tests::scene_renderer(gi_lab_tests::white_sky_box(), r.size, |_| {}),
+        Src::File(file) => gi_lab_tests::scene_renderer(gi_lab_tests::test_scene(file), r.size, |_| {}),
     };
     let pt = PathTracer::new(renderer.scene(), 0.0);
     let settings = PtSettings { bounces: r.bounces, spp: r.spp, seed: 1, ..Default::default() };

@@ -16,6 +16,7 @@ use crate::counters::prelude::*;
 pub mod bins;
 pub mod compose;
 pub mod direct;
+pub mod direct_history;
 pub mod emitters;
 pub mod gautron;
 pub mod gbuffer;

@@ -24,6 +24,14 @@ settings_group! {
         /// light view. 16 shows banded penumbrae of wide occluders; 64 is smoother.
         directions: u32 = 16,
         unit "directions", symbol "N_sky", range 1..=64, cost "one shadow map (direct.shadow_map_size²) and one light view each, only with the scene's sky on", history true;
+        /// Rotate the directions every frame (issue #51: a Cranley–Patterson shift of the
+        /// stratified set, `scene::sky::sky_shift`): while nothing moves, the direct light's
+        /// average over frames (`direct.sky_history`) and the bounce light the temporal stages
+        /// and the exact-VPL reference accumulate converge to the true sky. Off: the same
+        /// N_sky directions every frame (a plane gets between 0.8× and 1.2× its irradiance
+        /// with 16, and the directions' hard shadows overlap).
+        rotate_each_frame: bool = true,
+        unit "", symbol "", range 0..=1, cost "a history of the direct light (16 B a pixel) while the sky is on", history true;
         /// Draw the sky behind the scene: pixels the scene does not cover show the sky's
         /// radiance along their ray (stage 7's compose; the path tracer's escaping camera
         /// rays see it too). Off: black, the sky only lights.
@@ -36,7 +44,7 @@ settings_group! {
 /// (an image sky's sampling tables are rebuilt only then).
 #[derive(Default)]
 pub struct SkyLights {
-    key: Option<(Sky, u32)>,
+    key: Option<(Sky, u32, u32)>,
     lights: Vec<WorldLight>,
 }
 
@@ -55,14 +63,20 @@ fn same_sky(a: &Sky, b: &Sky) -> bool {
 }
 
 impl SkyLights {
-    /// The directional lights of `sky` sampled in `n` directions (empty when it is off).
-    pub fn get(&mut self, sky: &Sky, n: u32) -> &[WorldLight] {
-        let fresh = self.key.as_ref().is_some_and(|(k, kn)| *kn == n && same_sky(k, sky));
+    /// The directional lights of `sky` sampled in `n` directions, the set's `rotation`-th
+    /// shift (0: unrotated; empty when the sky is off).
+    pub fn get(&mut self, sky: &Sky, n: u32, rotation: u32) -> &[WorldLight] {
+        let fresh = self.key.as_ref().is_some_and(|(k, kn, kr)| *kn == n && *kr == rotation && same_sky(k, sky));
         if !fresh {
-            self.lights = sky.world_lights(n);
-            self.key = Some((sky.clone(), n));
+            self.lights = sky.world_lights_shifted(n, rotation);
+            self.key = Some((sky.clone(), n, rotation));
         }
         &self.lights
+    }
+
+    /// How many lights the last [`Self::get`] gave.
+    pub fn count(&self) -> usize {
+        self.lights.len()
     }
 }
 

@@ -112,6 +112,9 @@ pub struct Renderer {
     pub(crate) interactive: bool,
     /// The scene's sky as directional lights (`passes::sky`), cached.
     pub(crate) sky_lights: crate::passes::sky::SkyLights,
+    /// The direct light's average over still frames while the sky's directions rotate
+    /// (issue #51), created the first time it is needed.
+    pub(crate) direct_history: Option<crate::passes::direct_history::DirectHistory>,
     /// The sky drawn behind the scene by stage 7.
     pub(crate) sky_background: crate::passes::sky::SkyBackground,
     /// The pixel probe's depth reader, created on first use.
@@ -197,6 +200,7 @@ impl Renderer {
             flip_map: None,
             interactive: false,
             sky_lights: Default::default(),
+            direct_history: None,
             sky_background,
             depth_probe: std::sync::OnceLock::new(),
             last_good_camera: camera,
@@ -404,6 +408,9 @@ impl Renderer {
     pub fn reset_history_but_records(&mut self) {
         self.prev = None;
         self.compose.forget_exposure();
+        if let Some(h) = &mut self.direct_history {
+            h.reset();
+        }
         if let Some(x) = &mut self.stages.reference {
             x.batches = 0;
         }
@@ -501,7 +508,8 @@ impl Renderer {
     /// The scene at this instant, with the sky's directions among its lights (`passes::sky`).
     pub(crate) fn frame_state(&mut self) -> crate::scene::SceneState {
         let mut state = self.scene.evaluate(self.clock.time_s());
-        state.lights.extend_from_slice(self.sky_lights.get(&self.scene.sky, self.settings.sky.directions));
+        let rotation = if self.settings.sky.rotate_each_frame { self.clock.frame as u32 } else { 0 };
+        state.lights.extend_from_slice(self.sky_lights.get(&self.scene.sky, self.settings.sky.directions, rotation));
         state
     }
 

@@ -66,12 +66,18 @@ impl Sky {
     /// The sky's `n` directional VPLs as directional lights (pointing *from* the sky), or none
     /// when the sky is off or dark.
     pub fn world_lights(&self, n: u32) -> Vec<WorldLight> {
+        self.world_lights_shifted(n, 0)
+    }
+
+    /// [`Self::world_lights`] of the `k`-th rotation of the stratified set ([`sky_shift`]): the
+    /// set frame k lights with when `sky.rotate_each_frame` is on (k = 0: the unrotated set).
+    pub fn world_lights_shifted(&self, n: u32, k: u32) -> Vec<WorldLight> {
         if !self.is_lit() {
             return Vec::new();
         }
         let sampler = SkySampler::new(self);
         sampler
-            .directions(n)
+            .directions_shifted(n, sky_shift(k))
             .into_iter()
             .enumerate()
             .map(|(j, (dir, e))| {
@@ -269,11 +275,25 @@ impl<'a> SkySampler<'a> {
     /// `n` directions on the stratified Halton (2, 3) set, with their irradiance share
     /// E_j = L(ω_j) / (p(ω_j) · n) (directions of zero density are left out).
     pub fn directions(&self, n: u32) -> Vec<(Vec3, Vec3)> {
+        self.directions_shifted(n, [0.0, 0.0])
+    }
+
+    /// [`Self::directions`] with the set shifted by `shift` modulo 1 (a Cranley–Patterson
+    /// rotation: each shifted set is as stratified as the set and, for a uniformly random
+    /// shift, an unbiased estimate, so that averaging the sets of successive frames converges
+    /// to the sky's integral).
+    pub fn directions_shifted(&self, n: u32, shift: [f32; 2]) -> Vec<(Vec3, Vec3)> {
         (1..=n)
-            .filter_map(|i| self.sample([halton(i, 2), halton(i, 3)]))
+            .filter_map(|i| self.sample([(halton(i, 2) + shift[0]).fract(), (halton(i, 3) + shift[1]).fract()]))
             .map(|(d, l, pdf)| (d, l / (pdf * n as f32)))
             .collect()
     }
+}
+
+/// The shift of the sky's `k`-th rotated set: 0 for k = 0, then the Halton (5, 7) points, a
+/// low-discrepancy sequence of shifts (their average over frames fills the square evenly).
+pub fn sky_shift(k: u32) -> [f32; 2] {
+    if k == 0 { [0.0, 0.0] } else { [halton(k, 5), halton(k, 7)] }
 }
 
 #[cfg(test)]

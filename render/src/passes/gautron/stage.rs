@@ -635,8 +635,9 @@ impl GautronStage {
     /// A hash of the lights and the direct light's settings.
     fn lights(f: &FrameInputs) -> u64 {
         let mut h = std::collections::hash_map::DefaultHasher::new();
-        for l in &f.lights {
-            bytemuck::bytes_of(l).hash(&mut h);
+        // The sky's rotating directions are not a change (`sky.rotate_each_frame`).
+        for x in f.steady_light_key() {
+            x.to_bits().hash(&mut h);
         }
         format!("{:?}", f.settings.direct).hash(&mut h);
         // records lit by VPLs also depend on what makes the VPLs and their visibility

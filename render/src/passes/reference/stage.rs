@@ -95,8 +95,11 @@ impl ReferenceVpls {
             emitter_lights(e, rs.emitter_points, f.center, f.vpl_radius(), &mut lights, &mut views);
         }
         // Restart when anything the image depends on changed.
+        // The sky's rotating directions are not a change: each batch takes this frame's set, so
+        // that the average converges to the true sky (`sky.rotate_each_frame`, issue #51).
         let mut fingerprint: Vec<f32> = view_proj.to_cols_array().to_vec();
-        fingerprint.extend(lights.iter().flat_map(|l| bytemuck::cast::<_, [f32; 20]>(*l)));
+        fingerprint.extend(f.steady_light_key());
+        fingerprint.extend(lights[f.lights.len()..].iter().flat_map(|l| bytemuck::cast::<_, [f32; 20]>(*l)));
         fingerprint.extend(f.state.draws.iter().flat_map(|d| d.world.to_cols_array()));
         if fingerprint != self.fingerprint {
             self.fingerprint = fingerprint;
