@@ -28,6 +28,7 @@ nguyen.thresholds            nguyen-hcb                     hcb.theta_max_deg   
 nguyen.d-max                 nguyen-hcb                     hcb.d_max_m                 0               0.26
 nguyen.footprint-clamp       nguyen-hcb                     hcb.footprint_min_cos       0.01            0.0001
 nguyen.cache-thresholds      nguyen-hcb-cached              hcb.incomplete_weight       0.1             0.5
+nguyen.glossy-receiver       nguyen-hcb                     hcb.receiver                Glossy          DiffuseOnly
 knecht.albedo-mip            knecht-cornell-256             vpl.albedo_mip              4               0
 knecht.distance-clamp        knecht-cornell-256             vpl.min_distance_m          0.1             1
 knecht.budget-split          knecht-cornell-256             vpl.split_by_power          true            false
@@ -41,6 +42,7 @@ knecht.w-pos                 knecht-cornell-256             temporal.w_pos      
 knecht.merge-order           knecht-cornell-256             temporal.order              FilterThenMerge MergeThenFilter
 gautron.border-cosine        gautron-ic-splatting           gautron.border_compensation CosineWeighted  Paper
 gautron.weight-clamp         gautron-ic-splatting           gautron.weight_clamp        100             1000000
+gautron.glossy-receiver      gautron-ic-splatting           gautron.receiver            Glossy          DiffuseOnly
 gautron.r-clamps             gautron-ic-splatting           gautron.r_clamps            true            false
 gautron.in-front-tolerance   gautron-ic-splatting           gautron.in_front_tolerance  0.05            0
 gautron.neighbour-clamping   gautron-ic-splatting           gautron.neighbour_clamping  true            false

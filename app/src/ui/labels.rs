@@ -20,6 +20,7 @@ pub fn words(path: &str) -> Option<&'static str> {
         "emitters.min_distance" => "distance clamp",
         "emitters.two_sided" => "two-sided emission",
         "sky.directions" => "sky directions",
+        "sky.rotate_each_frame" => "rotate sky directions",
         "sky.background" => "sky behind the scene",
         "pipeline.vpl_source" => "VPL source",
         "pipeline.vpl_visibility" => "VPL visibility",
