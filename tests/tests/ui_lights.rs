@@ -98,6 +98,12 @@ fn sky(h: &Harness<'static, GiLabApp>) -> gi_render::scene::sky::Sky {
 fn the_sky_is_turned_on_in_the_scene_panel_and_a_bad_image_says_why() {
     let (mut h, dir) = harness("sky");
     pause(&mut h);
+    // The same directions every frame, so that frames compare exactly (the rotation's
+    // convergence is tests/sky.rs's).
+    if let Ok(l) = &mut h.state_mut().state.lab {
+        l.settings.sky.rotate_each_frame = false;
+        l.apply_settings();
+    }
     h.get_by_label("Scene & timeline").click();
     h.run_steps(3);
     assert!(!sky(&h).enabled, "off by default");
