@@ -28,12 +28,12 @@ for item in "$@"; do
     # shellcheck disable=SC2086
     "$bin" render --preset "presets/$preset.ron" $args --size "$SIZE" --frames "$frames" --paused --buffer final.hdr --out "$out" > /dev/null 2>&1
     flip=$("$AFTER" compare "$out/final.hdr.exr" "$work/truth.exr" | grep -m1 -o 'FLIP *[0-9.]*' | awk '{print $2}')
-    tiles+=(-label "$preset $which (FLIP $(printf %.3f "$flip"))" "$out/final.hdr.png")
+    tiles+=(-label "$preset\n$which: FLIP $(printf %.3f "$flip")" "$out/final.hdr.png")
   done
 done
 mkdir -p docs/screenshots
 montage "${tiles[@]}" -tile "$(( (${#tiles[@]} / 3) ))x1" -geometry 160x160+3+3 -pointsize 10 "$work/montage.png"
-convert "$work/montage.png" -strip PNG8:"docs/screenshots/$name.png"
+convert "$work/montage.png" -strip "docs/screenshots/$name.png"
 {
   echo "# docs/screenshots/$name.png"
   echo
