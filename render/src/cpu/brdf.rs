@@ -180,6 +180,26 @@ mod tests {
         assert!((wide / sharp - 1.0).abs() < 0.25, "{wide} vs {sharp}");
     }
 
+    /// Issue #51's limits: roughness 0 and 1 (SP 4096 and 1, `material_specular_power`), a
+    /// black metal, no light, light from one direction or spread over the hemisphere, views
+    /// along the surface: the receiver's light stays finite and non-negative.
+    #[test]
+    fn the_glossy_receiver_is_finite_at_the_limits() {
+        let n = Vec3::Y;
+        for sp in [1.0, 4096.0] {
+            for (c, di, si) in [(Vec3::ONE, 1.0, 0.04), (Vec3::ZERO, 0.0, 1.0)] {
+                for r in [0.0, 1e-6, 0.5, 2.0 / 3.0, 0.999_999, 1.0, 1.000_001] {
+                    for v in [Vec3::Y, Vec3::new(1.0, 1e-6, 0.0).normalize(), Vec3::new(-1.0, 0.0, 0.0)] {
+                        let d = Vec3::new(0.3, 0.9, 0.1).normalize() * r;
+                        let f = receiver_factor(d, n, v, c, di, si, sp, true);
+                        assert!(f.is_finite() && f.min_element() >= 0.0, "SP {sp} r {r} v {v}: {f}");
+                        assert_eq!(receive_irradiance(Vec3::ZERO, d, n, v, c, di, si, sp, true), Vec3::ZERO);
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn white_lambert_is_one_over_pi() {
         let f = eval(Vec3::Y, Vec3::Y, Vec3::Y, Vec3::ONE, 1.0, 0.0, 1.0);
