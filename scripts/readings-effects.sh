@@ -29,6 +29,7 @@ nguyen.d-max                 nguyen-hcb                     hcb.d_max_m         
 nguyen.footprint-clamp       nguyen-hcb                     hcb.footprint_min_cos       0.01            0.0001
 nguyen.cache-thresholds      nguyen-hcb-cached              hcb.incomplete_weight       0.1             0.5
 nguyen.glossy-receiver       nguyen-hcb                     hcb.receiver                Glossy          DiffuseOnly
+knecht.demodulated-filter    knecht-cornell-256             interleave.demodulate       true            false
 knecht.albedo-mip            knecht-cornell-256             vpl.albedo_mip              4               0
 knecht.distance-clamp        knecht-cornell-256             vpl.min_distance_m          0.1             1
 knecht.budget-split          knecht-cornell-256             vpl.split_by_power          true            false

@@ -316,10 +316,7 @@ fn indirect_light(
     };
     // Stages 6–7: reconstruction and temporal, in the order `temporal.order` says when the
     // filter and the merge both run.
-    let merge_first = p.reconstruction == Reconstruction::GeometryAwareFilter
-        && p.temporal == Temporal::ConfidenceMerge
-        && f.settings.temporal.order == MergeOrder::MergeThenFilter;
-    let last = if merge_first {
+    let last = if merges_first(f.settings) {
         let merged = temporal(f, x, enc, timer, gathered)?;
         reconstruct(f, x, enc, timer, merged)?
     } else {
@@ -378,10 +375,14 @@ fn reconstruct(
             // all N VPLs, with the history instead of one pixel's N/n² VPLs, whose noise
             // alone drove the confidence down and kept flicker high (measured in
             // tests/knecht_quality.rs).
+            // The demodulated filter (issue #51) reads this frame's irradiance beside the
+            // gathered light; after the thesis' merge its input is the history, which has none.
             let i = x.interleave.as_ref()?;
             let (ctx, s, depth_range) = (f.ctx, &f.settings.interleave, f.depth_range());
+            let irradiance = (s.demodulate && !merges_first(f.settings))
+                .then(|| crate::passes::view(&i.irradiance, "indirect.irradiance"));
             timer.scope(ctx, enc, "interleave.filter", |e, slot| {
-                i.filter(ctx, e, slot, s, depth_range, &src, f.gbuffer)
+                i.filter(ctx, e, slot, s, depth_range, &src, f.gbuffer, irradiance.as_ref())
             });
             crate::passes::view(&i.filtered, "indirect.filtered")
         }
@@ -411,4 +412,13 @@ fn temporal(
             crate::passes::view(t.history(), "temporal.history")
         }
     })
+}
+
+/// Whether stage 7's confidence merge runs before the geometry-aware filter (`temporal.order`
+/// MergeThenFilter, when both run).
+pub fn merges_first(s: &crate::lab_settings::LabSettings) -> bool {
+    let p = &s.pipeline;
+    p.reconstruction == Reconstruction::GeometryAwareFilter
+        && p.temporal == Temporal::ConfidenceMerge
+        && s.temporal.order == MergeOrder::MergeThenFilter
 }

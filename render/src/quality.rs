@@ -178,6 +178,45 @@ pub fn quality_table(
     Ok(rows)
 }
 
+/// The names of the ground-truth rows, in the table's order ([`row_settings`]).
+const GROUND_TRUTH_ROWS: [&str; 6] = [
+    "knecht-cornell-256",
+    "exact-vpl-reference",
+    "nguyen-hcb",
+    "soler-quarter-4-64",
+    "soler-near-knecht-far",
+    "gautron-ic-splatting",
+];
+
+/// One ground-truth row of [`quality_table`] alone (`configuration`: a shipped preset's name
+/// among the table's), rendered as the table renders it: for cases where the whole table
+/// would cost too much (issue #51's hotel room in the tests).
+pub fn ground_truth_row(
+    ctx: &GpuContext,
+    scene: &Scene,
+    truth: &ImageF32,
+    size: (u32, u32),
+    configuration: &str,
+) -> Result<QualityRow, String> {
+    let i = GROUND_TRUTH_ROWS.iter().position(|n| *n == configuration).ok_or_else(|| {
+        format!("{configuration} is not a row of the quality table ({})", GROUND_TRUTH_ROWS.join(", "))
+    })?;
+    if (truth.width, truth.height) != size {
+        return Err(format!("the ground truth is {}×{}, not {}×{}", truth.width, truth.height, size.0, size.1));
+    }
+    let (settings, frames) = row_settings()?.swap_remove(i);
+    let img = render(ctx, scene, settings, size, frames)?;
+    Ok(QualityRow {
+        configuration: configuration.into(),
+        frames,
+        against: "ground truth".into(),
+        flip: flip(&img, truth)?,
+        goal: None,
+        frame_ms: None,
+        equal_time: None,
+    })
+}
+
 /// The settings of each ground-truth row, in the table's order.
 fn row_settings() -> Result<Vec<(LabSettings, u32)>, String> {
     let exact = preset(EXACT, "exact-vpl-reference")?;

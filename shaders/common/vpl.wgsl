@@ -104,9 +104,14 @@ fn vpl_radiance(vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, eye: vec3<f32>, c: vec3<f
     if (max(e.r, max(e.g, e.b)) <= 0.0) {
         return vec3<f32>(0.0);
     }
+    return e * vpl_receiver_brdf(vpl, x, nx, eye, c, mat);
+}
+
+// f_x of Eq. 4.9: the receiver's BRDF from the VPL toward the eye (vpl_radiance's factor; the
+// gather at tiles also keeps the irradiance apart for the demodulated filter, issue #51).
+fn vpl_receiver_brdf(vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, eye: vec3<f32>, c: vec3<f32>, mat: vec3<f32>) -> vec3<f32> {
     let l = normalize(vpl.position.xyz - x);
-    let f_x = brdf_eval(nx, l, normalize(eye - x), c, mat.x, mat.y, mat.z);
-    return e * f_x;
+    return brdf_eval(nx, l, normalize(eye - x), c, mat.x, mat.y, mat.z);
 }
 
 // Exact visibility of x (receiver normal nx) from VPL i in a cube-face atlas (stage 4's

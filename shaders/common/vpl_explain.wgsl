@@ -16,6 +16,9 @@ struct VplTerm {
     // x: f_y, the VPL's BRDF toward the receiver (luminance); y: f_x, the receiver's BRDF
     // toward the eye (luminance); z: the map's stored depth; w: the receiver's depth in it
     detail: vec4<f32>,
+    // rgb: its light as it reaches the pinned pixel: `light`, or after the demodulated filter
+    // (interleave/explain.wgsl) its irradiance reflected with that pixel's colour
+    reach: vec4<f32>,
 }
 
 const EXPLAIN_EMPTY: u32 = 1u;        // an empty slot (no VPL)
@@ -67,5 +70,6 @@ fn vpl_term_seen(t: VplTerm, test: vec3<f32>, scale: f32) -> VplTerm {
     s.light = vec4<f32>(l * test.x * scale, test.x);
     s.unshadowed = vec4<f32>(l * scale, t.unshadowed.a);
     s.detail = vec4<f32>(t.detail.xy, test.yz);
+    s.reach = s.light;
     return s;
 }

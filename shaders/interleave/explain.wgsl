@@ -19,7 +19,8 @@ struct ExplainParams {
     // x, y: the pixel p; z: the filter's window side (n with the filter, else 1); w: 1 when
     // the confidence merge ran (temporal.confidence and the histories are bound)
     pixel: vec4<u32>,
-    // x: α · (z_far − z_near), y: β (interleave/filter.wgsl)
+    // x: α · (z_far − z_near), y: β (interleave/filter.wgsl); z: 1 when the filter ran
+    // demodulated (issue #51)
     thresholds: vec4<f32>,
 }
 
@@ -225,5 +226,14 @@ fn cs_explain_vpls(@builtin(global_invocation_id) gid: vec3<u32>) {
     let slot = term.slot;
     term = vpl_term_seen(seen, test, scale);
     term.slot = vec4<u32>(slot.x, flags | term.slot.y, slot.z, slot.w);
+    // The demodulated filter reflects q's irradiance with p's diffuse colour (filter.wgsl:
+    // k_p·E + (L − k_q·E)).
+    if (explain.thresholds.z > 0.5) {
+        let e = vpl_irradiance(vpl, x, nx, params.shade.x, params.near.x) * test.x * scale;
+        let ap = textureLoad(g_albedo, p, 0);
+        let k_p = ap.rgb * ap.a / PI;
+        let k_q = alb.rgb * alb.a / PI;
+        term.reach = vec4<f32>(term.light.rgb + (k_p - k_q) * e, term.light.w);
+    }
     terms[k] = term;
 }

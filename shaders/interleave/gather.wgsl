@@ -4,7 +4,9 @@
 // of 0…n² over every n² blocks (CPU twin and why: cpu::knecht::tile_offsets). Each split pixel
 // gathers its tile's N_t VPLs, scaled by N / N_t so that each tile is an unbiased estimate of
 // all N (the n×n filter averages the tiles). Each VPL: Eq. 4.7–4.9 (common/vpl.wgsl) times
-// its visibility — the ISM (common/ism.wgsl), the exact cube-face maps, or none.
+// its visibility — the ISM (common/ism.wgsl), the exact cube-face maps, or none. Beside the
+// light it writes the irradiance the same VPLs give (Σ E_k · V_k · N/N_t, out_irradiance): the
+// demodulated filter reflects it with each pixel's own colour (filter.wgsl, issue #51).
 #import common/camera.wgsl
 #import common/ism.wgsl
 #import common/fullscreen.wgsl
@@ -21,11 +23,19 @@
 @group(0) @binding(8) var s_material: texture_2d<f32>;
 @group(0) @binding(9) var out_accum: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(10) var<storage, read> tile_offsets: array<u32>;
+@group(0) @binding(11) var out_irradiance: texture_storage_2d<rgba16float, write>;
+
+// A split pixel's gathered light and the irradiance it came from.
+struct Gathered {
+    light: vec3<f32>,
+    irradiance: vec3<f32>,
+}
 
 // The light of split pixel `sp`'s tile's VPLs at the pixel `px` of the bound textures (the
 // split G-buffer at sp itself, or the G-buffer at sp's source pixel).
-fn gather_at(px: vec2<i32>, sp: vec2<u32>) -> vec3<f32> {
+fn gather_at(px: vec2<i32>, sp: vec2<u32>) -> Gathered {
     var sum = vec3<f32>(0.0);
+    var irr = vec3<f32>(0.0);
     let nrm = textureLoad(s_normal, px, 0);
     let n = params.split.x;
     let count = params.split.w;
@@ -50,18 +60,23 @@ fn gather_at(px: vec2<i32>, sp: vec2<u32>) -> vec3<f32> {
             if (vpl.position.w < 0.5) {
                 continue;
             }
-            let l = vpl_radiance(vpl, x, nx, camera.position.xyz, alb.rgb, m, params.shade.x, params.near.x);
-            if (max(l.r, max(l.g, l.b)) <= 0.0) {
+            // vpl_radiance's two factors, the irradiance kept apart.
+            let e = vpl_irradiance(vpl, x, nx, params.shade.x, params.near.x);
+            if (max(e.r, max(e.g, e.b)) <= 0.0) {
                 continue;
             }
+            let l = e * vpl_receiver_brdf(vpl, x, nx, camera.position.xyz, alb.rgb, m);
             let vis = gather_visibility(params.vis.x, ism_atlas, exact_atlas, k, vpl, x, nx, params.vis.y, params.vis.z, params.shade.yzw);
             sum = sum + l * vis;
+            irr = irr + e * vis;
         }
         if (per_tile > 0u) {
-            sum = sum * (f32(count) / f32(per_tile));
+            let scale = f32(count) / f32(per_tile);
+            sum = sum * scale;
+            irr = irr * scale;
         }
     }
-    return sum;
+    return Gathered(sum, irr);
 }
 
 // The thesis' layout: s_* are the split G-buffer, out_accum the split accumulation buffer.
@@ -71,7 +86,9 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (gid.x >= size.x || gid.y >= size.y) {
         return;
     }
-    textureStore(out_accum, vec2<i32>(gid.xy), vec4<f32>(gather_at(vec2<i32>(gid.xy), gid.xy), 1.0));
+    let g = gather_at(vec2<i32>(gid.xy), gid.xy);
+    textureStore(out_accum, vec2<i32>(gid.xy), vec4<f32>(g.light, 1.0));
+    textureStore(out_irradiance, vec2<i32>(gid.xy), vec4<f32>(g.irradiance, 1.0));
 }
 
 // Fused (issue #38): s_* are the G-buffer and out_accum the merged light; each split pixel
@@ -91,5 +108,7 @@ fn cs_gather_fused(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (p.x >= size.x || p.y >= size.y) {
         return;
     }
-    textureStore(out_accum, vec2<i32>(p), vec4<f32>(gather_at(vec2<i32>(p), gid.xy), 1.0));
+    let g = gather_at(vec2<i32>(p), gid.xy);
+    textureStore(out_accum, vec2<i32>(p), vec4<f32>(g.light, 1.0));
+    textureStore(out_irradiance, vec2<i32>(p), vec4<f32>(g.irradiance, 1.0));
 }

@@ -98,6 +98,14 @@ pub fn test_scene(file: &str) -> Scene {
         .unwrap_or_else(|e| panic!("tests/data/{file}: {e}"))
 }
 
+/// A scene of the repository's `assets/` (e.g. `scenes/hotel-room/hotel-room.glb`), loaded as
+/// `gi-lab --scene` loads it.
+pub fn asset_scene(file: &str) -> Scene {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets").join(file);
+    gi_render::scene::load_gltf_file(&path, &gi_render::scene::LoadOptions::default())
+        .unwrap_or_else(|e| panic!("assets/{file}: {e}"))
+}
+
 /// The default scene under a constant white sky of radiance 1 (its lights kept), as `gi-lab …
 /// --sky 1,1,1` opens it: issue #51's sky box.
 pub fn white_sky_box() -> Scene {

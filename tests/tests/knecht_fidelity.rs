@@ -124,6 +124,9 @@ fn the_thesis_order_merges_then_filters() {
                 value: glam::Vec3::new(h[0], h[1], h[2]),
                 depth: if n[3] > 0.5 { p[3] } else { 0.0 },
                 normal: glam::Vec3::new(n[0], n[1], n[2]),
+                // The thesis' order filters the history's light itself (no irradiance).
+                irradiance: glam::Vec3::ZERO,
+                reflectance: glam::Vec3::ZERO,
             }
         })
         .collect();

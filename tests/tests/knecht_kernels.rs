@@ -176,12 +176,13 @@ fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
         );
         ctx.queue.submit([enc.finish()]);
         let got = read(&ctx, &pass.merged);
+        let got_irradiance = read(&ctx, &pass.irradiance);
         let offsets = knecht::tile_offsets(vpl_count, n, frame);
         for y in 0..h {
             for x in 0..w {
                 let i = (y * w + x) as usize;
                 let tile = (x % n) + (y % n) * n;
-                let mut expected = Vec3::ZERO;
+                let (mut expected, mut irradiance) = (Vec3::ZERO, Vec3::ZERO);
                 if let Some(r) = &receivers[i] {
                     // Diffuse only: the receiver's SI is 0 (c·DI/π, as the HCB reflects).
                     let r = knecht::Receiver { si: if diffuse { 0.0 } else { r.si }, ..*r };
@@ -190,10 +191,21 @@ fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
                     for k in slots {
                         if let Some(v) = &cpu_vpls[k as usize] {
                             expected += knecht::vpl_radiance(v, &r, eye, d_min);
+                            irradiance += knecht::vpl_irradiance(v, &r, d_min);
                         }
                     }
                     expected *= vpl_count as f32 / per_tile as f32;
+                    irradiance *= vpl_count as f32 / per_tile as f32;
                 }
+                // The irradiance beside the light (indirect.irradiance, the demodulated
+                // filter's input), with the same tolerance.
+                let e = got_irradiance.at(x, y);
+                let e3 = Vec3::new(e[0], e[1], e[2]);
+                let step = gi_render::buffers::half_step(irradiance.abs().max_element());
+                assert!(
+                    (e3 - irradiance).abs().max_element() <= 1e-5 + 2e-4 * irradiance.abs().max_element() + step,
+                    "frame {frame}: irradiance at pixel ({x}, {y}): GPU {e3}, CPU {irradiance}"
+                );
                 let p = got.at(x, y);
                 let g3 = Vec3::new(p[0], p[1], p[2]);
                 let err = (g3 - expected).abs().max_element();
@@ -229,11 +241,23 @@ fn geometry_aware_filter_on_the_gpu_equals_the_cpu() {
     // Two surfaces meeting along a diagonal — a floor (depth 2 + a slope, normal +y) and a
     // wall 0.3 behind it (normal +z) — with per-pixel depth jitter around α·range = 0.1,
     // tilted normals around β, and background pixels.
+    // Each pixel has an irradiance E and a textured diffuse colour (c, DI), its light is
+    // k·E + S with k = c·DI/π and a specular part S: the demodulated filter must keep the
+    // colour's texture (issue #51).
     let mut texels = Vec::with_capacity(len);
+    let mut albedo = Vec::with_capacity(len);
     for y in 0..h {
         for x in 0..w {
             if rng.next_f32() < 0.08 {
-                texels.push(knecht::FilterTexel { value: Vec3::ZERO, depth: 0.0, normal: Vec3::Z });
+                let zero = Vec3::ZERO;
+                texels.push(knecht::FilterTexel {
+                    value: zero,
+                    depth: 0.0,
+                    normal: Vec3::Z,
+                    irradiance: zero,
+                    reflectance: zero,
+                });
+                albedo.push([0.0; 4]);
                 continue;
             }
             let floor = x + y < 24;
@@ -242,8 +266,15 @@ fn geometry_aware_filter_on_the_gpu_equals_the_cpu() {
             let axis = if floor { Vec3::Y } else { Vec3::Z };
             let normal = (axis + 0.5 * rng.range(0.0, 1.0) * rng.unit()).normalize();
             let normal = Vec3::new(f16(normal.x), f16(normal.y), f16(normal.z));
-            let value = Vec3::new(rng.range(0.0, 2.0), rng.range(0.0, 2.0), rng.range(0.0, 2.0));
-            texels.push(knecht::FilterTexel { value, depth, normal });
+            let e = Vec3::new(rng.range(0.0, 4.0), rng.range(0.0, 4.0), rng.range(0.0, 4.0));
+            let irradiance = Vec3::new(f16(e.x), f16(e.y), f16(e.z));
+            let (c, di) = (Vec3::new(rng.unorm8(), rng.unorm8(), rng.unorm8()), rng.unorm8());
+            let reflectance = c * di / std::f32::consts::PI;
+            let specular = Vec3::splat(rng.range(0.0, 0.5));
+            let v = reflectance * irradiance + specular;
+            let value = Vec3::new(f16(v.x), f16(v.y), f16(v.z));
+            texels.push(knecht::FilterTexel { value, depth, normal, irradiance, reflectance });
+            albedo.push([c.x, c.y, c.z, di]);
         }
     }
     let pos: Vec<[f32; 4]> = texels.iter().map(|t| [0.0, 0.0, 0.0, t.depth]).collect();
@@ -252,27 +283,55 @@ fn geometry_aware_filter_on_the_gpu_equals_the_cpu() {
         .map(|t| if t.depth > 0.0 { [t.normal.x, t.normal.y, t.normal.z, 1.0] } else { [0.0; 4] })
         .collect();
     let src: Vec<[f32; 4]> = texels.iter().map(|t| [t.value.x, t.value.y, t.value.z, 1.0]).collect();
+    let irr: Vec<[f32; 4]> = texels.iter().map(|t| t.irradiance.extend(1.0).to_array()).collect();
     let zero = vec![[0.0; 4]; len];
-    let g = SyntheticGBuffer::new(&ctx, w, h, &pos, &nrm, &zero, &zero, &zero);
+    let g = SyntheticGBuffer::new(&ctx, w, h, &pos, &nrm, &albedo, &zero, &zero);
     let src_tex = texture(&ctx, "test.src", w, h, &src, false);
     let pass =
         InterleavePass::new(&ctx, gi_render::passes::bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h, n, false);
+    // E in half floats, as the gather writes it.
+    let irr_tex = texture(&ctx, "test.irradiance", w, h, &irr, true);
     let s = InterleaveSettings { n, ..Default::default() };
-    let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.filter") });
-    pass.filter(&ctx, &mut enc, None, &s, depth_range, &src_tex.create_view(&Default::default()), &g.views());
-    ctx.queue.submit([enc.finish()]);
-    let got = read(&ctx, &pass.filtered);
+    let filter = |demodulated: bool| {
+        let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.filter") });
+        let (src, irr) = (src_tex.create_view(&Default::default()), irr_tex.create_view(&Default::default()));
+        pass.filter(&ctx, &mut enc, None, &s, depth_range, &src, &g.views(), demodulated.then_some(&irr));
+        ctx.queue.submit([enc.finish()]);
+        read(&ctx, &pass.filtered)
+    };
+    // The thesis' filter of L: the CPU twin with E = k = 0.
+    let plain: Vec<knecht::FilterTexel> =
+        texels.iter().map(|t| knecht::FilterTexel { irradiance: Vec3::ZERO, reflectance: Vec3::ZERO, ..*t }).collect();
+    let got_plain = filter(false);
+    let cpu_plain = knecht::geometry_aware_filter(&plain, w, h, n, s.alpha, s.beta, depth_range);
+    let mut worst_plain = 0.0f32;
+    for (i, c) in cpu_plain.iter().enumerate() {
+        let p = got_plain.at(i as u32 % w, i as u32 / w);
+        let err = (Vec3::new(p[0], p[1], p[2]) - *c).abs().max_element();
+        worst_plain = worst_plain.max(err - gi_render::buffers::half_step(c.abs().max_element()));
+    }
+    assert!(worst_plain <= 1e-5, "the filter of L: worst error beyond a half step {worst_plain}");
+    let got = filter(true);
     let cpu = knecht::geometry_aware_filter(&texels, w, h, n, s.alpha, s.beta, depth_range);
+    // Demodulated, a pixel's colour shows in its filtered light: k_p·mean(E) differs from the
+    // mean of k·E wherever the window's colours differ.
+    let sharper = cpu.iter().zip(&cpu_plain).filter(|(a, b)| (**a - **b).abs().max_element() > 1e-2).count();
+    assert!(sharper > len / 2, "the demodulated filter differs from the filter of L at only {sharper} pixels");
     let mut partial = 0;
     for y in 0..h {
         for x in 0..w {
             let i = (y * w + x) as usize;
             let p = got.at(x, y);
             let g3 = Vec3::new(p[0], p[1], p[2]);
-            // indirect.filtered holds half floats: one step of that format besides 1e-5.
+            // indirect.filtered holds half floats: one step of that format besides 1e-5 (k is
+            // the albedo's 8-bit value times DI / π in both).
             let step = gi_render::buffers::half_step(cpu[i].abs().max_element());
             let err = (g3 - cpu[i]).abs().max_element();
-            assert!(err <= 1e-5 + step, "pixel ({x}, {y}): GPU {g3}, CPU {}", cpu[i]);
+            assert!(
+                err <= 1e-5 + 1e-6 * cpu[i].abs().max_element() + step,
+                "pixel ({x}, {y}): GPU {g3}, CPU {}",
+                cpu[i]
+            );
             // Count pixels where the thresholds rejected some neighbours but not all.
             if texels[i].depth > 0.0 && (cpu[i] - texels[i].value).abs().max_element() > 1e-3 {
                 partial += 1;

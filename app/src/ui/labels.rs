@@ -59,6 +59,7 @@ pub fn words(path: &str) -> Option<&'static str> {
         "interleave.alpha" => "depth threshold",
         "interleave.beta" => "normal threshold",
         "interleave.split_passes" => "three passes (thesis)",
+        "interleave.demodulate" => "filter without albedo",
         "temporal.c_base" => "base confidence",
         "temporal.w_pos" => "position weight",
         "temporal.w_normal" => "normal weight",

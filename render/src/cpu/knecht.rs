@@ -360,6 +360,19 @@ pub struct Receiver {
 ///   reflection vector `ref`); its diffuse part is I_VPL·DI_VPL.
 /// - Eq. 4.9, the light leaving x toward the eye: f(x; x→y, v).
 pub fn vpl_radiance(vpl: &Vpl, x: &Receiver, eye: Vec3, d_min: f32) -> Vec3 {
+    let e = vpl_irradiance(vpl, x, d_min);
+    if e.max_element() <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let l = (vpl.position - x.position).normalize_or_zero();
+    let v = (eye - x.position).normalize_or_zero();
+    e * crate::cpu::brdf::eval(x.normal, l, v, x.albedo, x.di, x.si, x.sp)
+}
+
+/// The irradiance one VPL gives `x` (Eq. 4.7–4.8: Φ · f(y) · η, visibility not included):
+/// [`vpl_radiance`] before the receiver's BRDF. The gather at tiles keeps its sum apart
+/// (`indirect.irradiance`) for the demodulated filter ([`geometry_aware_filter`], issue #51).
+pub fn vpl_irradiance(vpl: &Vpl, x: &Receiver, d_min: f32) -> Vec3 {
     let w = vpl.position - x.position;
     let d2 = w.length_squared();
     let l = w / d2.max(1e-12).sqrt();
@@ -367,10 +380,8 @@ pub fn vpl_radiance(vpl: &Vpl, x: &Receiver, eye: Vec3, d_min: f32) -> Vec3 {
     if cos_x <= 0.0 || cos_y <= 0.0 {
         return Vec3::ZERO;
     }
-    let v = (eye - x.position).normalize_or_zero();
     let f_y = crate::cpu::brdf::eval(vpl.normal, vpl.incident, -l, vpl.albedo, vpl.di, vpl.si, vpl.sp);
-    let f_x = crate::cpu::brdf::eval(x.normal, l, v, x.albedo, x.di, x.si, x.sp);
-    vpl.flux * f_y * cos_y * f_x * cos_x / d2.max(d_min * d_min)
+    vpl.flux * f_y * cos_y * cos_x / d2.max(d_min * d_min)
 }
 
 /// The per-frame slot→tile map of interleaved sampling (Knecht §3.4.1; twin of the loop in
@@ -413,10 +424,16 @@ pub fn tile_slots(tile: u32, count: u32, n: u32, offsets: &[u32]) -> impl Iterat
 /// One pixel of the geometry-aware box filter's inputs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FilterTexel {
+    /// The gathered light L (`indirect.merged`).
     pub value: Vec3,
     /// Linear view depth (0: background).
     pub depth: f32,
     pub normal: Vec3,
+    /// The demodulated filter's inputs (issue #51): the gathered irradiance E
+    /// (`indirect.irradiance`) and the pixel's diffuse reflectance k = c·DI/π, so that
+    /// L = k·E + S with S the specular light. Both 0: the thesis' filter of L.
+    pub irradiance: Vec3,
+    pub reflectance: Vec3,
 }
 
 /// The window of the n×n box filter around a pixel: offsets −⌊n/2⌋ … n−1−⌊n/2⌋, one pixel
@@ -431,6 +448,11 @@ pub fn filter_window(n: u32) -> std::ops::RangeInclusive<i32> {
 /// α in the thesis' linear depth (Eq. 4.2: view depth / (z_far − z_near), so the threshold
 /// is α · `depth_range`) and normals with a dot product of at least β. Background pixels
 /// stay 0.
+///
+/// Demodulated (issue #51, ⚠[knecht.demodulated-filter]): the window's mean of the
+/// irradiance E is reflected with the centre's own reflectance k_p and the mean of the
+/// specular light S = L − k·E is added, k_p·mean(E) + mean(S), so that the albedo's texture
+/// stays sharp; with E = k = 0 this is the thesis' mean of L.
 pub fn geometry_aware_filter(
     img: &[FilterTexel],
     width: u32,
@@ -447,7 +469,7 @@ pub fn geometry_aware_filter(
             if c.depth <= 0.0 {
                 continue;
             }
-            let (mut sum, mut count) = (Vec3::ZERO, 0.0f32);
+            let (mut sum, mut irradiance, mut count) = (Vec3::ZERO, Vec3::ZERO, 0.0f32);
             for dy in filter_window(n) {
                 for dx in filter_window(n) {
                     let (qx, qy) = (x + dx, y + dy);
@@ -461,11 +483,12 @@ pub fn geometry_aware_filter(
                     {
                         continue;
                     }
-                    sum += q.value;
+                    sum += q.value - q.reflectance * q.irradiance;
+                    irradiance += q.irradiance;
                     count += 1.0;
                 }
             }
-            out[(y as u32 * width + x as u32) as usize] = sum / count.max(1.0);
+            out[(y as u32 * width + x as u32) as usize] = (c.reflectance * irradiance + sum) / count.max(1.0);
         }
     }
     out

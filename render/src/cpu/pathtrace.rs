@@ -45,7 +45,8 @@ use crate::scene::{Material, Scene, TextureImage, WorldLight};
 
 /// Version of the estimator: bump it whenever a change alters the images (references
 /// stored under `tests/data/` record the version they were made with).
-pub const PATH_TRACER_VERSION: u32 = 1;
+// 2 (issue #51): camera hits read textures from the mip level the G-buffer samples.
+pub const PATH_TRACER_VERSION: u32 = 2;
 
 /// Settings of a path-traced render.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -86,8 +87,9 @@ struct Viewer {
 pub struct PathTracer {
     bvh: SceneBvh,
     materials: Vec<Material>,
-    /// The scene's textures (shared), for emissive textures.
-    textures: Vec<TextureImage>,
+    /// The scene's textures (shared), each with its box-filtered mip levels (level 0 first,
+    /// `TextureImage::box_mips`): camera hits read them trilinearly as the G-buffer does.
+    textures: Vec<Vec<TextureImage>>,
     lights: Vec<WorldLight>,
     /// The emissive triangles, sampled by next-event estimation (empty: emitters only glow).
     emitters: Emitters,
@@ -106,12 +108,45 @@ struct Hit {
     /// The shading normal (bent by the normal texture), facing the ray's origin.
     n: Vec3,
     uv: Vec2,
+    /// At a camera hit, ∂uv/∂x and ∂uv/∂y per pixel (the mip level the G-buffer reads).
+    duv: Option<(Vec2, Vec2)>,
     material: usize,
     /// Base colour c and DI, SI, SP at the point (`Material::intensities_at`).
     c: Vec3,
     di: f32,
     si: f32,
     sp: f32,
+}
+
+/// A camera ray's neighbours one pixel to the right and one below (origin, direction): where
+/// they meet the hit triangle's plane gives the pixel's texture-coordinate derivatives, as
+/// the G-buffer's quads do (ray differentials).
+struct Footprint {
+    right: (Vec3, Vec3),
+    below: (Vec3, Vec3),
+}
+
+impl Footprint {
+    /// (∂uv/∂x, ∂uv/∂y) at the hit of texture coordinates `uv` on `tri` (None: a neighbour
+    /// ray parallel to its plane, or a degenerate triangle).
+    fn uv_derivatives(&self, tri: &crate::cpu::bvh::BvhTri, uv: Vec2) -> Option<(Vec2, Vec2)> {
+        let (e1, e2) = (tri.v[1] - tri.v[0], tri.v[2] - tri.v[0]);
+        let plane = e1.cross(e2);
+        let (d00, d01, d11) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+        let det = d00 * d11 - d01 * d01;
+        let at = |(o, d): (Vec3, Vec3)| {
+            let den = plane.dot(d);
+            if den.abs() <= 1e-30 || det.abs() <= 1e-30 {
+                return None;
+            }
+            let w = o + d * (plane.dot(tri.v[0] - o) / den) - tri.v[0];
+            let (d20, d21) = (w.dot(e1), w.dot(e2));
+            let (b1, b2) = ((d11 * d20 - d01 * d21) / det, (d00 * d21 - d01 * d20) / det);
+            let q = tri.uv[0] * (1.0 - b1 - b2) + tri.uv[1] * b1 + tri.uv[2] * b2;
+            q.is_finite().then_some(q - uv)
+        };
+        Some((at(self.right)?, at(self.below)?))
+    }
 }
 
 /// Small, fast, seedable generator (PCG32, O'Neill 2014).
@@ -150,7 +185,8 @@ impl PathTracer {
         let materials = if scene.materials.is_empty() { vec![Material::default()] } else { scene.materials.clone() };
         let emitters = Emitters::collect(scene, &state);
         let sky = scene.sky.is_lit().then(|| scene.sky.clone());
-        let textures = scene.textures.clone();
+        let textures =
+            scene.textures.iter().map(|t| std::iter::once(t.clone()).chain(t.box_mips()).collect()).collect();
         Self { bvh, materials, textures, lights: state.lights, emitters, sky, sky_background: true, eps }
     }
 
@@ -175,29 +211,42 @@ impl PathTracer {
         };
     }
 
-    fn texture(&self, t: Option<usize>) -> Option<&TextureImage> {
-        t.and_then(|t| self.textures.get(t))
+    /// Texture `t` at `uv` (RGB sRGB-decoded when `srgb`): at a camera hit (`duv`, the
+    /// pixel's texture-coordinate derivatives) filtered trilinearly from the mip level the
+    /// G-buffer's sampler picks, elsewhere bilinearly from level 0. Issue #51: read at level 0
+    /// everywhere, a patterned carpet at 128² was a different image from the G-buffer's
+    /// (the hotel's FLIP of every technique halved with the G-buffer forced to level 0).
+    fn read(&self, t: Option<usize>, uv: Vec2, duv: Option<(Vec2, Vec2)>, srgb: bool) -> Option<glam::Vec4> {
+        let levels = self.textures.get(t?)?;
+        let base = levels.first()?;
+        Some(match duv {
+            Some(d) => TextureImage::sample_trilinear(levels, uv, base.lod(d), srgb),
+            None => base.sample_rgba(uv, srgb),
+        })
     }
 
     /// Closest hit in (tmin, tmax), cut-outs (alphaMode MASK) passed through; the surface is
     /// read as the G-buffer reads it: base colour factor × texture (sRGB decoded), the
     /// normal bent by the normal texture in the MikkTSpace frame, DI, SI and SP from the
     /// metallic-roughness texture; the normal faces the ray.
-    fn intersect(&self, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
+    /// `pixel`: a camera ray's neighbours one pixel to the right and below, whose
+    /// texture coordinates on the hit's plane choose the mip level (None: level 0).
+    fn intersect(&self, o: Vec3, d: Vec3, tmin: f32, tmax: f32, pixel: Option<&Footprint>) -> Option<Hit> {
         let h = self.bvh.intersect_where(o, d, tmin, tmax, |tri, _, bary| {
             let m = &self.materials[tri.material.min(self.materials.len() - 1)];
             let Some(cutoff) = m.alpha_cutoff else { return true };
             let uv = tri.uv[0] * (1.0 - bary.x - bary.y) + tri.uv[1] * bary.x + tri.uv[2] * bary.y;
-            let a = m.base_color.w * self.texture(m.base_color_texture).map_or(1.0, |t| t.sample_rgba(uv, true).w);
+            let a = m.base_color.w * self.read(m.base_color_texture, uv, None, true).map_or(1.0, |t| t.w);
             a >= cutoff
         })?;
         let m = &self.materials[h.material.min(self.materials.len() - 1)];
         let tri = &self.bvh.tris[h.tri];
-        let c = m.base_color.xyz() * self.texture(m.base_color_texture).map_or(Vec3::ONE, |t| t.sample_linear(h.uv));
-        let mr = self.texture(m.metallic_roughness_texture).map(|t| t.sample_rgba(h.uv, false));
+        let duv = pixel.and_then(|f| f.uv_derivatives(tri, h.uv));
+        let c = m.base_color.xyz() * self.read(m.base_color_texture, h.uv, duv, true).map_or(Vec3::ONE, |t| t.xyz());
+        let mr = self.read(m.metallic_roughness_texture, h.uv, duv, false);
         let (di, si, sp) = m.intensities_at(c, mr);
         let mut n = h.n;
-        if let Some(t) = self.texture(m.normal_texture) {
+        if let Some(s) = self.read(m.normal_texture, h.uv, duv, false) {
             let (u, v) = (h.bary.x, h.bary.y);
             let w = 1.0 - u - v;
             let geo = (tri.n[0] * w + tri.n[1] * u + tri.n[2] * v).normalize_or_zero();
@@ -206,7 +255,7 @@ impl PathTracer {
             if geo != Vec3::ZERO && tan.xyz().length_squared() > 1e-12 && tri.t[0].w != 0.0 {
                 let tx = (tan.xyz() - geo * geo.dot(tan.xyz())).normalize_or_zero();
                 let b = geo.cross(tx) * sign;
-                let s = t.sample_rgba(h.uv, false).xyz() * 2.0 - Vec3::ONE;
+                let s = s.xyz() * 2.0 - Vec3::ONE;
                 let s = Vec3::new(s.x * m.normal_scale, s.y * m.normal_scale, s.z);
                 let bent = (tx * s.x + b * s.y + geo * s.z).normalize_or_zero();
                 if bent != Vec3::ZERO {
@@ -215,13 +264,13 @@ impl PathTracer {
                 }
             }
         }
-        Some(Hit { p: h.p, n, uv: h.uv, material: h.material, c, di, si, sp })
+        Some(Hit { p: h.p, n, uv: h.uv, duv, material: h.material, c, di, si, sp })
     }
 
     fn occluded(&self, a: Vec3, b: Vec3) -> bool {
         let d = b - a;
         let len = d.length();
-        len > 2.0 * self.eps && self.intersect(a, d / len, self.eps, len - self.eps).is_some()
+        len > 2.0 * self.eps && self.intersect(a, d / len, self.eps, len - self.eps, None).is_some()
     }
 
     /// Direct light at a hit: every punctual light (exact, so no noise) and one point of the
@@ -255,7 +304,7 @@ impl PathTracer {
             && let Some((l, radiance, pdf)) = SkySampler::new(sky).sample_at(h.n, [rng.f(), rng.f()])
         {
             let cos_x = h.n.dot(l);
-            if cos_x > 0.0 && self.intersect(origin, l, 0.0, f32::INFINITY).is_none() {
+            if cos_x > 0.0 && self.intersect(origin, l, 0.0, f32::INFINITY, None).is_none() {
                 sum += radiance * brdf::eval(h.n, l, v, h.c, h.di, h.si, h.sp) * (cos_x / pdf);
             }
         }
@@ -312,13 +361,21 @@ impl PathTracer {
         }
         let d = p - viewer.eye;
         let len = d.length();
-        len <= 2.0 * self.eps || self.intersect(viewer.eye, d / len, 0.0, len - 2.0 * self.eps).is_none()
+        len <= 2.0 * self.eps || self.intersect(viewer.eye, d / len, 0.0, len - 2.0 * self.eps, None).is_none()
     }
 
     /// One path through pixel (x, y): (direct, indirect). With a `viewer`, the first bounce
     /// counts only where the camera sees its hit ([`Senders::ScreenVisible`]).
-    fn trace(&self, origin: Vec3, dir: Vec3, bounces: u32, viewer: Option<&Viewer>, rng: &mut Pcg) -> (Vec3, Vec3) {
-        let Some(mut h) = self.intersect(origin, dir, 0.0, f32::INFINITY) else {
+    fn trace(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        pixel: &Footprint,
+        bounces: u32,
+        viewer: Option<&Viewer>,
+        rng: &mut Pcg,
+    ) -> (Vec3, Vec3) {
+        let Some(mut h) = self.intersect(origin, dir, 0.0, f32::INFINITY, Some(pixel)) else {
             // A camera ray that leaves the scene sees the sky (stage 7 of the lab draws it).
             let sky = self.sky.as_ref().filter(|_| self.sky_background);
             return (sky.map_or(Vec3::ZERO, |s| SkySampler::new(s).radiance(dir)), Vec3::ZERO);
@@ -326,10 +383,7 @@ impl PathTracer {
         let mut v = -dir;
         let emission = |h: &Hit| {
             let m = &self.materials[h.material.min(self.materials.len() - 1)];
-            match m.emissive_texture.and_then(|t| self.textures.get(t)) {
-                Some(image) => m.emissive * image.sample_linear(h.uv),
-                None => m.emissive,
-            }
+            m.emissive * self.read(m.emissive_texture, h.uv, h.duv, true).map_or(Vec3::ONE, |t| t.xyz())
         };
         let direct = emission(&h) + self.direct(&h, v, rng);
         let mut indirect = Vec3::ZERO;
@@ -337,7 +391,7 @@ impl PathTracer {
         for bounce in 0..bounces {
             let Some((l, weight)) = self.sample_brdf(&h, v, rng) else { break };
             throughput *= weight;
-            let Some(next) = self.intersect(h.p + h.n * self.eps, l, 0.0, f32::INFINITY) else { break };
+            let Some(next) = self.intersect(h.p + h.n * self.eps, l, 0.0, f32::INFINITY, None) else { break };
             if bounce == 0 && viewer.is_some_and(|c| !self.seen(c, next.p)) {
                 break;
             }
@@ -362,7 +416,7 @@ impl PathTracer {
     /// The first surface along a ray (every face, as a path's camera ray meets it), read as
     /// the G-buffer reads it; for the CPU irradiance cache ([`crate::cpu::irradiance_cache`]).
     pub fn surface(&self, o: Vec3, d: Vec3) -> Option<SurfacePoint> {
-        let h = self.intersect(o, d, 0.0, f32::INFINITY)?;
+        let h = self.intersect(o, d, 0.0, f32::INFINITY, None)?;
         Some(SurfacePoint { p: h.p, n: h.n, albedo: h.c * h.di })
     }
 
@@ -374,7 +428,7 @@ impl PathTracer {
     /// the emitter's and the sky's random numbers. The radiance a record's hemisphere ray
     /// gathers in the CPU irradiance cache (one bounce, as `trace`'s `bounces: 1`).
     pub fn reflected_direct(&self, o: Vec3, d: Vec3, seed: u64, stream: u64) -> Option<(f32, Vec3)> {
-        let h = self.intersect(o, d, 0.0, f32::INFINITY)?;
+        let h = self.intersect(o, d, 0.0, f32::INFINITY, None)?;
         let mut rng = Pcg::new(seed, stream);
         Some(((h.p - o).length(), self.direct(&h, -d, &mut rng)))
     }
@@ -433,11 +487,15 @@ impl Accumulator {
                     .map(|x| {
                         let (o, d) = primary_ray(inv, x, y, w, h);
                         let o = if o.is_finite() { o } else { eye };
+                        let pixel = Footprint {
+                            right: primary_ray(inv, x + 1, y, w, h),
+                            below: primary_ray(inv, x, y + 1, w, h),
+                        };
                         let mut sum = (Vec3::ZERO, Vec3::ZERO);
                         for s in 0..settings.spp {
                             let stream = ((y as u64 * w as u64 + x as u64) << 20) ^ (first + s) as u64;
                             let mut rng = Pcg::new(settings.seed, stream);
-                            let (dl, il) = pt.trace(o, d, settings.bounces, viewer.as_ref(), &mut rng);
+                            let (dl, il) = pt.trace(o, d, &pixel, settings.bounces, viewer.as_ref(), &mut rng);
                             sum.0 += dl;
                             sum.1 += il;
                         }

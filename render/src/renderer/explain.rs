@@ -51,10 +51,13 @@ pub(crate) fn explain_vpl_gather(
     } else {
         "indirect.merged"
     };
+    // The demodulated filter (issue #51) when it ran on this frame's gather.
+    let demodulated = filter && !merge_first && f.settings.interleave.demodulate;
     let info = ChainInfo {
         pixel,
         count: vpls.count,
         filter,
+        demodulated,
         temporal,
         buffer: buffer.into(),
         sources: vpls.sources.clone(),
@@ -69,6 +72,7 @@ pub(crate) fn explain_vpl_gather(
         vpls: &vpls.list,
         vis,
         filter: filter.then(|| (s.interleave.alpha * f.depth_range(), s.interleave.beta)),
+        demodulated,
         temporal: temporal.and(x.temporal.as_ref()),
         last,
     };

@@ -76,6 +76,66 @@ impl TextureImage {
         top.lerp(bottom, t.y)
     }
 
+    /// The box-filtered mip levels below this one, as `scene::upload` gives them to the GPU
+    /// (the G-buffer samples them trilinearly) and the path tracer reads them at camera hits
+    /// (issue #51): each level halves the one above (at least one texel), each byte the mean
+    /// of its 2×2 parents' (rounded down). A malformed image has no levels.
+    pub fn box_mips(&self) -> Vec<TextureImage> {
+        let (mut w, mut h) = (self.width.max(1), self.height.max(1));
+        if self.rgba8.len() != (w as usize * h as usize * 4) {
+            return Vec::new();
+        }
+        let mut level: std::sync::Arc<[u8]> = self.rgba8.clone();
+        let mut out = Vec::new();
+        while w > 1 || h > 1 {
+            let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
+            let mut next = vec![0u8; (nw * nh * 4) as usize];
+            for y in 0..nh {
+                for x in 0..nw {
+                    for c in 0..4 {
+                        let mut s = 0u32;
+                        for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                            let (sx, sy) = ((2 * x + dx).min(w - 1), (2 * y + dy).min(h - 1));
+                            s += level[((sy * w + sx) * 4 + c) as usize] as u32;
+                        }
+                        next[((y * nw + x) * 4 + c) as usize] = (s / 4) as u8;
+                    }
+                }
+            }
+            (w, h, level) = (nw, nh, next.into());
+            out.push(TextureImage {
+                name: format!("{}.mip{}", self.name, out.len() + 1),
+                width: w,
+                height: h,
+                rgba8: level.clone(),
+            });
+        }
+        out
+    }
+
+    /// The level of detail the GPU's sampler picks where the texture coordinates change by
+    /// `duv` = (∂uv/∂x, ∂uv/∂y) per pixel: log₂ of the longer side of the pixel's footprint in
+    /// texels of this level (the Vulkan specification's isotropic ρ; −∞ … 0 magnifies).
+    pub fn lod(&self, duv: (Vec2, Vec2)) -> f32 {
+        let size = Vec2::new(self.width as f32, self.height as f32);
+        let rho = (duv.0 * size).length().max((duv.1 * size).length());
+        if rho.is_finite() && rho > 0.0 { rho.log2() } else { 0.0 }
+    }
+
+    /// RGBA at `uv` filtered trilinearly at level of detail `lod` over `levels` (this level
+    /// and its [`Self::box_mips`]), as the G-buffer's `scene.material_sampler` reads it: the
+    /// bilinear lookups of the two levels around `lod` (clamped to the chain), blended.
+    pub fn sample_trilinear(levels: &[TextureImage], uv: Vec2, lod: f32, srgb: bool) -> glam::Vec4 {
+        let Some(top) = levels.len().checked_sub(1) else { return glam::Vec4::ZERO };
+        let d = if lod.is_finite() { lod.clamp(0.0, top as f32) } else { 0.0 };
+        let lo = d.floor() as usize;
+        let a = levels[lo].sample_rgba(uv, srgb);
+        match levels.get(lo + 1) {
+            Some(next) if d > lo as f32 => a.lerp(next.sample_rgba(uv, srgb), d - lo as f32),
+            _ => a,
+        }
+    }
+
     /// Mean linear RGB over the triangle `uv` of texture space, from a stratified set of
     /// barycentric points (about one per covered texel, 1 … 256).
     pub fn triangle_mean(&self, uv: [Vec2; 3]) -> Vec3 {

@@ -382,34 +382,18 @@ impl GpuScene {
 fn upload_texture(ctx: &GpuContext, img: &super::TextureImage) -> wgpu::Texture {
     let (w, h) = (img.width.max(1), img.height.max(1));
     let max_dim = ctx.limits.max_texture_dimension_2d;
-    let mut level = if img.rgba8.len() == (w as usize * h as usize * 4) {
-        img.rgba8.to_vec()
+    let base = if img.rgba8.len() == (w as usize * h as usize * 4) {
+        img.clone()
     } else {
-        vec![255; (w * h * 4) as usize]
-    };
-    let mut chain = vec![(w, h, level.clone())];
-    let (mut lw, mut lh) = (w, h);
-    while lw > 1 || lh > 1 {
-        let (nw, nh) = ((lw / 2).max(1), (lh / 2).max(1));
-        let mut next = vec![0u8; (nw * nh * 4) as usize];
-        for y in 0..nh {
-            for x in 0..nw {
-                for c in 0..4 {
-                    let mut s = 0u32;
-                    for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                        let sx = (2 * x + dx).min(lw - 1);
-                        let sy = (2 * y + dy).min(lh - 1);
-                        s += level[((sy * lw + sx) * 4 + c) as usize] as u32;
-                    }
-                    next[((y * nw + x) * 4 + c) as usize] = (s / 4) as u8;
-                }
-            }
+        super::TextureImage {
+            name: img.name.clone(),
+            width: w,
+            height: h,
+            rgba8: vec![255; (w * h * 4) as usize].into(),
         }
-        level = next;
-        lw = nw;
-        lh = nh;
-        chain.push((lw, lh, level.clone()));
-    }
+    };
+    let mut chain: Vec<(u32, u32, std::sync::Arc<[u8]>)> =
+        std::iter::once(&base).chain(base.box_mips().iter()).map(|t| (t.width, t.height, t.rgba8.clone())).collect();
     chain.retain(|(cw, ch, _)| *cw <= max_dim && *ch <= max_dim);
     let (bw, bh, _) = chain[0];
     let tex = ctx.device.counted_texture(&wgpu::TextureDescriptor {

@@ -52,6 +52,9 @@ pub struct GpuTerm {
     pub light: Vec4,
     pub unshadowed: Vec4,
     pub detail: Vec4,
+    /// rgb: its light as it reaches the pinned pixel (after the demodulated filter: reflected
+    /// with that pixel's colour; else `light`).
+    pub reach: Vec4,
 }
 
 /// One pixel of the filter's window; WGSL twin: `WindowPixel`.
@@ -80,6 +83,8 @@ pub struct ChainInfo {
     pub pixel: (u32, u32),
     pub count: u32,
     pub filter: bool,
+    /// The filter ran demodulated (`interleave.demodulate`, on this frame's gather).
+    pub demodulated: bool,
     /// The confidence merge ran, in this order with the filter.
     pub temporal: Option<MergeOrder>,
     /// The buffer holding the pixel's indirect value (the chain's last output).
@@ -99,6 +104,8 @@ pub struct ExplainInputs<'a> {
     pub vis: &'a GatherVisibility,
     /// (α · (z_far − z_near), β) when the geometry-aware filter ran.
     pub filter: Option<(f32, f32)>,
+    /// The filter ran demodulated (`ChainInfo::demodulated`).
+    pub demodulated: bool,
     pub temporal: Option<&'a TemporalPass>,
     /// The chain's last output (the pixel's indirect value).
     pub last: &'a wgpu::TextureView,
@@ -224,7 +231,7 @@ impl VplExplainPass {
         let (alpha, beta) = inp.filter.unwrap_or((0.0, 0.0));
         let p = ExplainParams {
             pixel: [inp.pixel.0, inp.pixel.1, window, inp.temporal.is_some() as u32],
-            thresholds: Vec4::new(alpha, beta, 0.0, 0.0),
+            thresholds: Vec4::new(alpha, beta, inp.demodulated as u32 as f32, 0.0),
         };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
         let (_, ism, exact, _, _, _) = inp.vis.parts(&self.dummy_ism, &self.dummy_exact);
@@ -393,7 +400,7 @@ pub fn decode(info: &ChainInfo, bytes: &[u8], vpls: &[GpuVpl]) -> Option<Explana
             name: format!("VPL {k}"),
             source: source_of(&info.sources, k),
             position: Some(v3(vpl.position)),
-            value: if rejected.is_some() { Vec3::ZERO } else { v3(t.light) * w },
+            value: if rejected.is_some() { Vec3::ZERO } else { v3(t.reach) * w },
             weight: w,
             rejected,
             via: (q != p).then_some(q),
@@ -436,7 +443,17 @@ pub fn decode(info: &ChainInfo, bytes: &[u8], vpls: &[GpuVpl]) -> Option<Explana
             value: v,
         });
     }
-    if info.filter && info.temporal != Some(MergeOrder::MergeThenFilter) {
+    if info.demodulated {
+        // Each accepted pixel's terms reflected with the pixel's colour (the filter's
+        // k_p·mean(E) + mean(L − k·E)).
+        let accepted_terms = terms.iter().filter(|t| t.slot[1] & (EMPTY | OUTSIDE | BACKGROUND | FILTERED) == 0);
+        checks.push(Check {
+            what: format!("Σ VPL terms of the window's {} accepted pixels, demodulated, / {m}", accepted.len()),
+            sum: accepted_terms.map(|t| v3(t.reach)).sum::<Vec3>() / m,
+            buffer: "indirect.filtered".into(),
+            value: v3(header.filtered),
+        });
+    } else if info.filter && info.temporal != Some(MergeOrder::MergeThenFilter) {
         let mean: Vec3 = accepted.iter().map(|q| v3(q.merged)).sum::<Vec3>() / m;
         checks.push(Check {
             what: format!("mean of the window's {} accepted merged pixels", accepted.len()),
@@ -457,6 +474,12 @@ pub fn decode(info: &ChainInfo, bytes: &[u8], vpls: &[GpuVpl]) -> Option<Explana
             side,
             accepted.len()
         ));
+    }
+    if info.demodulated {
+        notes.push(
+            "demodulated: each term's irradiance is reflected with this pixel's colour, its specular light with its own pixel's"
+                .into(),
+        );
     }
     if info.temporal.is_some() {
         notes.push(format!("confidence merge (Eq. 3.6): c = {c_p:.4} at the pixel (the history's share)"));

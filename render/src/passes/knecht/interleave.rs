@@ -1,8 +1,10 @@
 //! Stages 5–6 of instant radiosity (Knecht 002 §3.4): interleaved sampling. The camera
 //! G-buffer is split into n×n tiles (`interleave.split.*`), every VPL is assigned to one
 //! tile and all VPLs are shaded in one dispatch (`indirect.accum`, split layout), the tiles
-//! are merged back (`indirect.merged`), and — after the temporal merge of stage 7 — the
-//! geometry-aware n×n box filter smooths the tiles away (`indirect.filtered`).
+//! are merged back (`indirect.merged`, with the irradiance it came from beside it in
+//! `indirect.irradiance`), and the geometry-aware n×n box filter smooths the tiles away
+//! (`indirect.filtered`; by default demodulated: the irradiance is filtered and reflected
+//! with each pixel's own colour, issue #51).
 //! Shaders: `shaders/interleave/{split,gather,merge,filter}.wgsl`.
 //!
 //! The thesis draws one quad per VPL over its tile ("tiled mesh geometry", §3.4.2) so that
@@ -38,6 +40,14 @@ settings_group! {
         /// `interleave.split.*` and `indirect.accum`.
         split_passes: bool = false,
         unit "", symbol "", range 0..=1, cost "three passes and the split G-buffer's traffic (≈ 3× the fused pass's)", history false;
+        /// Filter the light without the albedo (issue #51, ⚠[knecht.demodulated-filter]): the
+        /// gather keeps its irradiance apart (`indirect.irradiance`), the filter averages it and
+        /// the specular light over the window and reflects the irradiance with each pixel's own
+        /// colour, so textures stay sharp; off: the thesis' filter of the reflected light.
+        /// With `temporal.order = MergeThenFilter` the filter reads the merged history, which
+        /// holds no irradiance, and filters the reflected light.
+        demodulate: bool = true,
+        unit "", symbol "", range 0..=1, cost "the gather writes a second half-float target; the filter reads it and the albedo", history false;
     }
     legacy {
         /// Version 1: the filter on or off; now `pipeline.reconstruction = GeometryAwareFilter`.
@@ -142,6 +152,7 @@ struct Split {
     albedo: wgpu::Texture,
     material: wgpu::Texture,
     accum: wgpu::Texture,
+    accum_irradiance: wgpu::Texture,
 }
 
 pub struct InterleavePass {
@@ -150,6 +161,8 @@ pub struct InterleavePass {
     height: u32,
     split: Option<Split>,
     pub merged: wgpu::Texture,
+    /// The irradiance of `merged`'s light (Σ E_k·V_k·N/N_t), the demodulated filter's input.
+    pub irradiance: wgpu::Texture,
     pub filtered: wgpu::Texture,
     /// `interleave.split_passes`: the split textures exist only then.
     split_passes: bool,
@@ -213,6 +226,7 @@ impl InterleavePass {
                 t(8),
                 bgl::storage_texture(9, LIGHT_FORMAT),
                 bgl::storage(10, cs, true),
+                bgl::storage_texture(11, LIGHT_FORMAT),
             ],
         });
         let merge_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -221,7 +235,7 @@ impl InterleavePass {
         });
         let filter_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("interleave.filter.inputs"),
-            entries: &[bgl::uniform(0, cs), t(1), t(2), t(3), bgl::storage_texture(4, LIGHT_FORMAT)],
+            entries: &[bgl::uniform(0, cs), t(1), t(2), t(3), bgl::storage_texture(4, LIGHT_FORMAT), t(5), t(6)],
         });
         let module = |p| crate::shaders::create_module(device, p);
         let split_pipeline = crate::passes::compute_pipeline(
@@ -272,13 +286,14 @@ impl InterleavePass {
         let gather_params = uniform("interleave.gather.params", std::mem::size_of::<GatherParams>() as u64);
         let filter_params = uniform("interleave.filter.params", std::mem::size_of::<FilterParams>() as u64);
         let (dummy_ism, dummy_exact) = no_visibility_atlases(device, "interleave");
-        let (split, merged, filtered) = Self::targets(device, width, height, n, split_passes);
+        let (split, [merged, irradiance, filtered]) = Self::targets(device, width, height, n, split_passes);
         Self {
             n,
             width,
             height,
             split,
             merged,
+            irradiance,
             filtered,
             split_passes,
             split_layout,
@@ -335,7 +350,7 @@ impl InterleavePass {
         height: u32,
         n: u32,
         split_passes: bool,
-    ) -> (Option<Split>, wgpu::Texture, wgpu::Texture) {
+    ) -> (Option<Split>, [wgpu::Texture; 3]) {
         let (tw, th) = Self::tile(width, height, n);
         let (sw, sh) = (tw * n.max(1), th * n.max(1));
         let st = wgpu::TextureUsages::STORAGE_BINDING;
@@ -346,10 +361,12 @@ impl InterleavePass {
             albedo: t("interleave.split.albedo", sw, sh, ALBEDO_FORMAT),
             material: t("interleave.split.material", sw, sh, MATERIAL_FORMAT),
             accum: t("indirect.accum", sw, sh, LIGHT_FORMAT),
+            accum_irradiance: t("indirect.accum_irradiance", sw, sh, LIGHT_FORMAT),
         });
         let merged = t("indirect.merged", width, height, LIGHT_FORMAT);
+        let irradiance = t("indirect.irradiance", width, height, LIGHT_FORMAT);
         let filtered = t("indirect.filtered", width, height, LIGHT_FORMAT);
-        (split, merged, filtered)
+        (split, [merged, irradiance, filtered])
     }
 
     /// Resizes for `width`×`height` and n; returns whether textures were recreated.
@@ -357,7 +374,8 @@ impl InterleavePass {
         if (width, height, n, split_passes) == (self.width, self.height, self.n, self.split_passes) {
             return false;
         }
-        (self.split, self.merged, self.filtered) = Self::targets(&ctx.device, width, height, n, split_passes);
+        (self.split, [self.merged, self.irradiance, self.filtered]) =
+            Self::targets(&ctx.device, width, height, n, split_passes);
         (self.width, self.height, self.n, self.split_passes) = (width, height, n, split_passes);
         true
     }
@@ -372,6 +390,12 @@ impl InterleavePass {
             BufferKind::Hdr,
             "the accumulation buffer merged back to image layout (each pixel lit by one tile's VPLs)",
             &self.merged,
+        );
+        reg.register(
+            "indirect.irradiance",
+            BufferKind::Hdr,
+            "the irradiance of indirect.merged's light (Σ E·V·N/N_t, before each pixel's BRDF): what the demodulated filter averages",
+            &self.irradiance,
         );
         reg.register(
             "indirect.filtered",
@@ -396,6 +420,12 @@ impl InterleavePass {
             BufferKind::Hdr,
             "indirect light of each tile's VPLs in the split layout, scaled to all VPLs (Knecht Fig. 3.4)",
             &s.accum,
+        );
+        reg.register(
+            "indirect.accum_irradiance",
+            BufferKind::Hdr,
+            "the irradiance of indirect.accum's light, in the split layout",
+            &s.accum_irradiance,
         );
     }
 
@@ -439,12 +469,13 @@ impl InterleavePass {
         }
         let v = |t: &wgpu::Texture, l: &str| crate::passes::view(t, l);
         let merged_v = v(&self.merged, "indirect.merged");
+        let irradiance_v = v(&self.irradiance, "indirect.irradiance");
         let tv = wgpu::BindingResource::TextureView;
         let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
         // The gather reads the split G-buffer (three passes) or the G-buffer itself at each
         // split pixel's source pixel (fused) and writes the split accumulation buffer or the
         // merged light.
-        let gather_group = |p: [&wgpu::TextureView; 4], out: &wgpu::TextureView| {
+        let gather_group = |p: [&wgpu::TextureView; 4], out: &wgpu::TextureView, irr: &wgpu::TextureView| {
             let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
             let tv = wgpu::BindingResource::TextureView;
             ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
@@ -462,13 +493,14 @@ impl InterleavePass {
                     entry(8, tv(p[3])),
                     entry(9, tv(out)),
                     entry(10, self.tile_offsets.as_entire_binding()),
+                    entry(11, tv(irr)),
                 ],
             })
         };
         let (sw, sh) = (tw * n, th * n);
         let tile = crate::passes::TILE;
         let Some(s) = self.split.as_ref().filter(|_| self.split_passes) else {
-            let group = gather_group([&g.position, &g.normal, &g.albedo, &g.material], &merged_v);
+            let group = gather_group([&g.position, &g.normal, &g.albedo, &g.material], &merged_v, &irradiance_v);
             timer.scope(ctx, encoder, "interleave.gather", |e, slot| {
                 let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("interleave.gather_fused"),
@@ -480,12 +512,13 @@ impl InterleavePass {
             });
             return;
         };
-        let (sp_v, sn_v, sa_v, sm_v, acc_v) = (
+        let (sp_v, sn_v, sa_v, sm_v, acc_v, acc_irr_v) = (
             v(&s.position, "interleave.split.position"),
             v(&s.normal, "interleave.split.normal"),
             v(&s.albedo, "interleave.split.albedo"),
             v(&s.material, "interleave.split.material"),
             v(&s.accum, "indirect.accum"),
+            v(&s.accum_irradiance, "indirect.accum_irradiance"),
         );
         let split_group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("interleave.split.inputs"),
@@ -502,12 +535,18 @@ impl InterleavePass {
                 entry(8, tv(&sm_v)),
             ],
         });
-        let gather_group = gather_group([&sp_v, &sn_v, &sa_v, &sm_v], &acc_v);
-        let merge_group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("interleave.merge.inputs"),
-            layout: &self.merge_layout,
-            entries: &[entry(0, self.split_params.as_entire_binding()), entry(1, tv(&acc_v)), entry(2, tv(&merged_v))],
-        });
+        let gather_group = gather_group([&sp_v, &sn_v, &sa_v, &sm_v], &acc_v, &acc_irr_v);
+        // The light and its irradiance are merged back alike.
+        let merge_group = |src: &wgpu::TextureView, dst: &wgpu::TextureView| {
+            let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
+            let tv = wgpu::BindingResource::TextureView;
+            ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("interleave.merge.inputs"),
+                layout: &self.merge_layout,
+                entries: &[entry(0, self.split_params.as_entire_binding()), entry(1, tv(src)), entry(2, tv(dst))],
+            })
+        };
+        let merge_groups = [merge_group(&acc_v, &merged_v), merge_group(&acc_irr_v, &irradiance_v)];
         timer.scope(ctx, encoder, "interleave.split", |e, slot| {
             let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("interleave.split"),
@@ -532,13 +571,18 @@ impl InterleavePass {
                 timestamp_writes: slot.and_then(|s| s.compute(true, true)),
             });
             pass.set_pipeline(&self.merge_pipeline);
-            pass.set_group(0, &merge_group, &[]);
-            pass.dispatch_workgroups(self.width.div_ceil(tile), self.height.div_ceil(tile), 1);
+            for group in &merge_groups {
+                pass.set_group(0, group, &[]);
+                pass.dispatch_workgroups(self.width.div_ceil(tile), self.height.div_ceil(tile), 1);
+            }
         });
     }
 
-    /// The geometry-aware filter of `src` into `indirect.filtered` (n = 1 or `filter` off:
-    /// a copy).
+    /// The geometry-aware filter of `src` into `indirect.filtered` (n = 1: a copy).
+    /// `irradiance`: the irradiance of `src`'s light (this frame's `indirect.irradiance` when
+    /// `src` is `indirect.merged`), which the filter averages apart and reflects with each
+    /// pixel's colour (`interleave.demodulate`); None: the thesis' filter of `src` (also when
+    /// `src` is a merged history, which holds no irradiance).
     #[allow(clippy::too_many_arguments)]
     pub fn filter(
         &self,
@@ -549,11 +593,17 @@ impl InterleavePass {
         depth_range: f32,
         src: &wgpu::TextureView,
         g: &GBufferViews,
+        irradiance: Option<&wgpu::TextureView>,
     ) {
         let n = self.n.max(1);
-        let fp = FilterParams { n: [n, 0, 0, 0], thresholds: Vec4::new(s.alpha * depth_range, s.beta, 0.0, 0.0) };
+        let fp = FilterParams {
+            n: [n, irradiance.is_some() as u32, 0, 0],
+            thresholds: Vec4::new(s.alpha * depth_range, s.beta, 0.0, 0.0),
+        };
         ctx.queue.write_buffer(&self.filter_params, 0, bytemuck::bytes_of(&fp));
         let dst = crate::passes::view(&self.filtered, "indirect.filtered");
+        // Without it the shader reads no irradiance: `src` stands in for the binding.
+        let irradiance = irradiance.unwrap_or(src);
         let tv = wgpu::BindingResource::TextureView;
         let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("interleave.filter.inputs"),
@@ -564,6 +614,8 @@ impl InterleavePass {
                 wgpu::BindGroupEntry { binding: 2, resource: tv(&g.position) },
                 wgpu::BindGroupEntry { binding: 3, resource: tv(&g.normal) },
                 wgpu::BindGroupEntry { binding: 4, resource: tv(&dst) },
+                wgpu::BindGroupEntry { binding: 5, resource: tv(irradiance) },
+                wgpu::BindGroupEntry { binding: 6, resource: tv(&g.albedo) },
             ],
         });
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
