@@ -420,6 +420,20 @@ impl PathTracer {
         Some(SurfacePoint { p: h.p, n: h.n, albedo: h.c * h.di })
     }
 
+    /// The surface a camera ray of pixel (x, y) of a `width`×`height` image meets, with its
+    /// material read as the path's first vertex reads it (textures at the G-buffer's mip
+    /// level, issue #51); None where the ray leaves the scene.
+    pub fn camera_surface(&self, view_proj: Mat4, x: u32, y: u32, width: u32, height: u32) -> Option<SurfacePoint> {
+        let inv = view_proj.inverse();
+        let (o, d) = primary_ray(inv, x, y, width, height);
+        let pixel = Footprint {
+            right: primary_ray(inv, x + 1, y, width, height),
+            below: primary_ray(inv, x, y + 1, width, height),
+        };
+        let h = self.intersect(o, d, 0.0, f32::INFINITY, Some(&pixel))?;
+        Some(SurfacePoint { p: h.p, n: h.n, albedo: h.c * h.di })
+    }
+
     /// The light that the first surface along a ray sends back toward the ray's origin when
     /// lit directly, as a path's vertex after the first bounce is lit (next-event estimation:
     /// every punctual light, one emitter point and one sky direction, with shadow rays; its

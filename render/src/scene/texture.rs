@@ -210,6 +210,34 @@ mod tests {
     }
 
     #[test]
+    fn mips_average_their_parents_and_the_level_follows_the_footprint() {
+        // 4×2 texels: the first level is 2×1 of the 2×2 blocks' byte means, the last 1×1.
+        let t = image(4, 2, |x, y| [(x * 60 + y * 10) as u8, 200, 0, 255]);
+        let mips = t.box_mips();
+        assert_eq!(mips.iter().map(|m| (m.width, m.height)).collect::<Vec<_>>(), vec![(2, 1), (1, 1)]);
+        assert_eq!(&mips[0].rgba8[..], &[35, 200, 0, 255, 155, 200, 0, 255]);
+        assert_eq!(&mips[1].rgba8[..], &[95, 200, 0, 255]);
+        let broken = TextureImage { name: "short".into(), width: 4, height: 4, rgba8: vec![255; 8].into() };
+        assert!(broken.box_mips().is_empty(), "a malformed image has no levels");
+        // One texel a pixel is level 0, four texels a pixel level 2 (the longer side counts).
+        let big = image(64, 64, |_, _| [0, 0, 0, 255]);
+        let texel = 1.0 / 64.0;
+        assert!(big.lod((Vec2::new(texel, 0.0), Vec2::new(0.0, texel))).abs() < 1e-6);
+        assert!((big.lod((Vec2::new(4.0 * texel, 0.0), Vec2::new(0.0, texel))) - 2.0).abs() < 1e-5);
+        assert_eq!(big.lod((Vec2::ZERO, Vec2::ZERO)), 0.0);
+        assert_eq!(big.lod((Vec2::NAN, Vec2::ZERO)), 0.0);
+        // Trilinear: between two levels the blend of their bilinear lookups, clamped at the ends.
+        let levels: Vec<TextureImage> = std::iter::once(t.clone()).chain(mips).collect();
+        let uv = Vec2::new(0.3, 0.4);
+        let (a, b) = (levels[0].sample_rgba(uv, true), levels[1].sample_rgba(uv, true));
+        let half = TextureImage::sample_trilinear(&levels, uv, 0.5, true);
+        assert!((half - (a + b) * 0.5).abs().max_element() < 1e-6, "{half} {a} {b}");
+        assert_eq!(TextureImage::sample_trilinear(&levels, uv, -3.0, true), a);
+        assert_eq!(TextureImage::sample_trilinear(&levels, uv, 9.0, true), levels[2].sample_rgba(uv, true));
+        assert_eq!(TextureImage::sample_trilinear(&[], uv, 1.0, true), glam::Vec4::ZERO);
+    }
+
+    #[test]
     fn triangle_means_follow_the_covered_texels() {
         // Left half black, right half white (64² texels).
         let t = image(64, 64, |x, _| if x < 32 { [0, 0, 0, 255] } else { [255, 255, 255, 255] });
