@@ -416,7 +416,7 @@ fn temporal(
 
 /// Whether stage 7's confidence merge runs before the geometry-aware filter (`temporal.order`
 /// MergeThenFilter, when both run).
-pub fn merges_first(s: &crate::lab_settings::LabSettings) -> bool {
+pub(crate) fn merges_first(s: &crate::lab_settings::LabSettings) -> bool {
     let p = &s.pipeline;
     p.reconstruction == Reconstruction::GeometryAwareFilter
         && p.temporal == Temporal::ConfidenceMerge

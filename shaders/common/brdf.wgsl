@@ -8,5 +8,11 @@ fn brdf_eval(n: vec3<f32>, l: vec3<f32>, v: vec3<f32>, albedo: vec3<f32>, di: f3
     let h = normalize(l + v);
     let ndh = max(dot(n, h), 0.0);
     let spec = si * (sp + 8.0) / (8.0 * PI) * pow(ndh, sp);
-    return albedo * di / PI + vec3<f32>(spec);
+    return brdf_diffuse(albedo, di) + vec3<f32>(spec);
+}
+
+// The diffuse term c·DI/π alone: what the demodulated filter (interleave/filter.wgsl) takes
+// apart from the light and applies again, to the bit as brdf_eval adds it.
+fn brdf_diffuse(albedo: vec3<f32>, di: f32) -> vec3<f32> {
+    return albedo * di / PI;
 }

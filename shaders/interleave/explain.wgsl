@@ -231,8 +231,8 @@ fn cs_explain_vpls(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (explain.thresholds.z > 0.5) {
         let e = vpl_irradiance(vpl, x, nx, params.shade.x, params.near.x) * test.x * scale;
         let ap = textureLoad(g_albedo, p, 0);
-        let k_p = ap.rgb * ap.a / PI;
-        let k_q = alb.rgb * alb.a / PI;
+        let k_p = brdf_diffuse(ap.rgb, ap.a);
+        let k_q = brdf_diffuse(alb.rgb, alb.a);
         term.reach = vec4<f32>(term.light.rgb + (k_p - k_q) * e, term.light.w);
     }
     terms[k] = term;

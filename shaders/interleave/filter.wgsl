@@ -8,8 +8,7 @@
 // mean of the specular light S = L − k·E is added, so that the albedo's texture is not
 // blurred; n.y = 0 averages L as the thesis does.
 #import common/fullscreen.wgsl
-
-const PI: f32 = 3.14159265358979;
+#import common/brdf.wgsl
 
 struct FilterParams {
     // x: n (1 = copy); y: 1 to filter demodulated light
@@ -33,7 +32,7 @@ fn reflectance(q: vec2<i32>) -> vec3<f32> {
         return vec3<f32>(0.0);
     }
     let alb = textureLoad(g_albedo, q, 0);
-    return alb.rgb * alb.a / PI;
+    return brdf_diffuse(alb.rgb, alb.a);
 }
 
 fn irradiance_at(q: vec2<i32>) -> vec3<f32> {

@@ -44,8 +44,8 @@ use crate::scene::sky::{Sky, SkySampler};
 use crate::scene::{Material, Scene, TextureImage, WorldLight};
 
 /// Version of the estimator: bump it whenever a change alters the images (references
-/// stored under `tests/data/` record the version they were made with).
-// 2 (issue #51): camera hits read textures from the mip level the G-buffer samples.
+/// stored under `tests/data/` record the version they were made with). 2 (issue #51):
+/// camera hits read textures from the mip level the G-buffer samples.
 pub const PATH_TRACER_VERSION: u32 = 2;
 
 /// Settings of a path-traced render.
@@ -127,6 +127,14 @@ struct Footprint {
 }
 
 impl Footprint {
+    /// The camera ray of pixel (x, y) of a `width`×`height` image (`inv`: the inverse
+    /// view-projection) and its footprint.
+    fn pixel(inv: Mat4, x: u32, y: u32, width: u32, height: u32) -> ((Vec3, Vec3), Footprint) {
+        let right = primary_ray(inv, x + 1, y, width, height);
+        let below = primary_ray(inv, x, y + 1, width, height);
+        (primary_ray(inv, x, y, width, height), Footprint { right, below })
+    }
+
     /// (∂uv/∂x, ∂uv/∂y) at the hit of texture coordinates `uv` on `tri` (None: a neighbour
     /// ray parallel to its plane, or a degenerate triangle).
     fn uv_derivatives(&self, tri: &crate::cpu::bvh::BvhTri, uv: Vec2) -> Option<(Vec2, Vec2)> {
@@ -424,12 +432,7 @@ impl PathTracer {
     /// material read as the path's first vertex reads it (textures at the G-buffer's mip
     /// level, issue #51); None where the ray leaves the scene.
     pub fn camera_surface(&self, view_proj: Mat4, x: u32, y: u32, width: u32, height: u32) -> Option<SurfacePoint> {
-        let inv = view_proj.inverse();
-        let (o, d) = primary_ray(inv, x, y, width, height);
-        let pixel = Footprint {
-            right: primary_ray(inv, x + 1, y, width, height),
-            below: primary_ray(inv, x, y + 1, width, height),
-        };
+        let ((o, d), pixel) = Footprint::pixel(view_proj.inverse(), x, y, width, height);
         let h = self.intersect(o, d, 0.0, f32::INFINITY, Some(&pixel))?;
         Some(SurfacePoint { p: h.p, n: h.n, albedo: h.c * h.di })
     }
@@ -499,12 +502,8 @@ impl Accumulator {
             .map(|y| {
                 (0..w)
                     .map(|x| {
-                        let (o, d) = primary_ray(inv, x, y, w, h);
+                        let ((o, d), pixel) = Footprint::pixel(inv, x, y, w, h);
                         let o = if o.is_finite() { o } else { eye };
-                        let pixel = Footprint {
-                            right: primary_ray(inv, x + 1, y, w, h),
-                            below: primary_ray(inv, x, y + 1, w, h),
-                        };
                         let mut sum = (Vec3::ZERO, Vec3::ZERO);
                         for s in 0..settings.spp {
                             let stream = ((y as u64 * w as u64 + x as u64) << 20) ^ (first + s) as u64;

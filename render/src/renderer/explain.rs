@@ -43,7 +43,7 @@ pub(crate) fn explain_vpl_gather(
     }
     let filter = p.reconstruction == Reconstruction::GeometryAwareFilter;
     let temporal = (p.temporal == Temporal::ConfidenceMerge).then_some(f.settings.temporal.order);
-    let merge_first = filter && temporal == Some(MergeOrder::MergeThenFilter);
+    let merge_first = crate::frame::merges_first(f.settings);
     let buffer = if merge_first || (filter && temporal.is_none()) {
         "indirect.filtered"
     } else if temporal.is_some() {
