@@ -51,6 +51,7 @@ gautron.creation-per-tile    gautron-ic-splatting           gautron.creation_til
 gautron.invalidation         gautron-ic-splatting           gautron.invalidation        Refresh         Drop
 soler.vote-sigmas            soler-quarter-4-64             soler.vote_sigma_depth      0.05            10
 soler.vote-radiance-power    soler-quarter-4-64             soler.vote_power            true            false
+soler.vote-consistent        soler-quarter-4-64             soler.vote_consistent       true            false
 soler.min-cos-beta           soler-quarter-4-64             soler.min_cos_beta          0.1             0.001
 soler.upsample-weights       soler-quarter-4-64             soler.upsample_sigma_depth  0.1             10
 soler.sender-diffuse         soler-quarter-4-64             soler.sender                Diffuse         ViewDependent

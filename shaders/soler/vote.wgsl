@@ -6,13 +6,16 @@
 // averaging. Radiance goes down as the block's mean (background is black); with
 // `vote_power`, each sub-pixel's weighted by its Eq. 2 area over the winner's, so that the
 // coarse texel, whose area Eq. 2 takes from the winner, emits its sub-pixels' power
-// Σ L_i ds_i (the plain mean loses what the winner's smaller area leaves out).
+// Σ L_i ds_i (the plain mean loses what the winner's smaller area leaves out); with
+// `vote_consistent`, each sub-pixel's also weighted by g₂ on its normal against the winner's,
+// so that the texel does not emit along the winner's normal the light of a sub-pixel that
+// faces elsewhere (docs/readings.md, soler.vote-consistent).
 // CPU twin: cpu::soler::vote_level.
 #import soler/common.wgsl
 
 // Rust twin: passes::soler::pyramid::VoteParams.
 struct VoteParams {
-    // σ₁ (texels), σ₂ (on 1 − n·n), σ₃ (relative depth), unused
+    // σ₁ (texels), σ₂ (on 1 − n·n), σ₃ (relative depth), 1 with `vote_consistent` else 0
     sigma: vec4<f32>,
     // xyz: the eye, w: Eq. 2's least cos β (< 0: the plain mean, no area weights)
     power: vec4<f32>,
@@ -62,9 +65,35 @@ fn weighted_radiance(p: vec2<i32>) -> vec3<f32> {
     return textureLoad(fine_radiance, p, 0).rgb * weight;
 }
 
-// The coarse texel's radiance: the block's sum over its `count` sub-pixels, over the winner's
-// Eq. 2 area with `vote_power`.
-fn block_radiance(sum: vec3<f32>, count: f32, position: vec4<f32>, normal: vec3<f32>) -> vec4<f32> {
+// How far a sub-pixel of normal `n` faces as the winner (normal `n_w`) does: Eq. 5's g₂ on
+// 1 − n·n_w, centred on the winner, with `vote_consistent`; 1 for every sub-pixel without it
+// (cpu::soler::consistency).
+fn consistency(n: vec3<f32>, n_w: vec3<f32>) -> f32 {
+    if (params.sigma.w < 0.5) {
+        return 1.0;
+    }
+    return gaussian(1.0 - dot(n, n_w), params.sigma.y);
+}
+
+// The coarse texel's radiance from its 2×2 block, whose winner has `position` and `normal`:
+// the sum of the sub-pixels' (area-weighted with `vote_power`) radiance, each weighted by its
+// consistency with the winner, over the block's sub-pixel count and, with `vote_power`, the
+// winner's Eq. 2 area.
+fn block_radiance(gid: vec2<u32>, size: vec2<u32>, position: vec4<f32>, normal: vec3<f32>) -> vec4<f32> {
+    var sum = vec3<f32>(0.0);
+    var count = 0.0;
+    for (var i = 0; i < 4; i = i + 1) {
+        let p = vec2<i32>(2 * i32(gid.x) + i % 2, 2 * i32(gid.y) + i / 2);
+        if (!inside(p, size)) {
+            continue;
+        }
+        count = count + 1.0;
+        if (!valid(p, size)) {
+            continue;
+        }
+        let w = consistency(textureLoad(fine_normal, p, 0).xyz, normal);
+        sum = sum + w * weighted_radiance(p);
+    }
     var winner_area = 1.0;
     if (params.power.w >= 0.0) {
         winner_area = max(area_factor(position, normal, params.power.xyz, params.power.w), 1e-20);
@@ -81,18 +110,11 @@ fn cs_vote(@builtin(global_invocation_id) gid: vec3<u32>) {
     let size = textureDimensions(fine_position);
     var best = -1;
     var best_score = 0.0;
-    var sum = vec3<f32>(0.0);
-    var count = 0.0;
     for (var i = 0; i < 4; i = i + 1) {
         let p = vec2<i32>(2 * i32(gid.x) + i % 2, 2 * i32(gid.y) + i / 2);
-        if (!inside(p, size)) {
-            continue;
-        }
-        count = count + 1.0;
         if (!valid(p, size)) {
             continue;
         }
-        sum = sum + weighted_radiance(p);
         let s = score(p, size);
         if (best < 0 || s > best_score) {
             best = i;
@@ -107,7 +129,7 @@ fn cs_vote(@builtin(global_invocation_id) gid: vec3<u32>) {
         let p = vec2<i32>(2 * i32(gid.x) + best % 2, 2 * i32(gid.y) + best / 2);
         position = textureLoad(fine_position, p, 0);
         normal = vec4<f32>(textureLoad(fine_normal, p, 0).xyz, 1.0);
-        radiance = block_radiance(sum, count, position, normal.xyz);
+        radiance = block_radiance(gid.xy, size, position, normal.xyz);
         material = textureLoad(fine_material, p, 0);
     }
     textureStore(out_position, gid.xy, position);
@@ -132,23 +154,10 @@ fn cs_vote_radiance(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let size = textureDimensions(fine_position);
-    var sum = vec3<f32>(0.0);
-    var count = 0.0;
-    for (var i = 0; i < 4; i = i + 1) {
-        let p = vec2<i32>(2 * i32(gid.x) + i % 2, 2 * i32(gid.y) + i / 2);
-        if (!inside(p, size)) {
-            continue;
-        }
-        count = count + 1.0;
-        if (!valid(p, size)) {
-            continue;
-        }
-        sum = sum + weighted_radiance(p);
-    }
     var radiance = vec4<f32>(0.0);
     let c = vec2<i32>(gid.xy);
     if (textureLoad(in_winner, c, 0).x >= 0.0) {
-        radiance = block_radiance(sum, count, textureLoad(coarse_position, c, 0), textureLoad(coarse_normal, c, 0).xyz);
+        radiance = block_radiance(gid.xy, size, textureLoad(coarse_position, c, 0), textureLoad(coarse_normal, c, 0).xyz);
     }
     textureStore(out_radiance, gid.xy, radiance);
 }

@@ -119,6 +119,7 @@ fn gpu_matches_cpu(technique: Technique, near_field_distance: f32, bounces: u32,
         normal: s.vote_sigma_normal,
         depth: s.vote_sigma_depth,
         power: s.vote_power.then_some((r.camera.position, s.min_cos_beta)),
+        consistent: s.vote_consistent,
     };
     // The light the last bounce gathered: the direct light's diffuse part (`soler.sender`), or the
     // bounce before's.

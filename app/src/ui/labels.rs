@@ -86,6 +86,7 @@ pub fn words(path: &str) -> Option<&'static str> {
         "soler.vote_sigma_normal" => "vote: normal",
         "soler.vote_sigma_depth" => "vote: depth",
         "soler.vote_power" => "power-preserving pyramid",
+        "soler.vote_consistent" => "light follows the winner's normal",
         "soler.form_factor" => "form factor",
         "soler.sender" => "sender radiance",
         "soler.min_cos_beta" => "grazing floor",

@@ -84,6 +84,17 @@ pub struct VoteSigmas {
     /// `vote_power`: the eye and Eq. 2's least cos β; the sub-pixels' radiance is weighted by
     /// their Eq. 2 areas over the winner's. None: the block's plain mean.
     pub power: Option<(Vec3, f32)>,
+    /// `vote_consistent`: the sub-pixels' radiance is also weighted by [`consistency`] with the
+    /// winner's normal.
+    pub consistent: bool,
+}
+
+/// How far a sub-pixel of normal `n` faces as the winner (normal `n_w`) does, with
+/// `vote_consistent`: Eq. 5's g₂ on 1 − n·n_w centred on the winner (⚠ soler.vote-consistent in
+/// docs/readings.md: the coarse texel emits along n_w, so the light of a sub-pixel facing
+/// elsewhere would leave in directions it never lit); 1 without it.
+pub fn consistency(n: Vec3, n_w: Vec3, s: VoteSigmas) -> f32 {
+    if s.consistent { gaussian(1.0 - n.dot(n_w), s.normal) } else { 1.0 }
 }
 
 /// exp(−x² / 2σ²).
@@ -114,7 +125,7 @@ pub fn vote_level(fine: &Level, s: VoteSigmas) -> (Level, Vec<i32>) {
     for cy in 0..h as i64 {
         for cx in 0..w as i64 {
             let mut best = (-1i32, 0.0f32);
-            let (mut sum, mut inside) = (Vec3::ZERO, 0u32);
+            let mut inside = 0u32;
             for i in 0..4i64 {
                 let (x, y) = (2 * cx + i % 2, 2 * cy + i / 2);
                 let Some(t) = fine.at(x, y) else { continue };
@@ -122,7 +133,6 @@ pub fn vote_level(fine: &Level, s: VoteSigmas) -> (Level, Vec<i32>) {
                 if !t.valid() {
                     continue;
                 }
-                sum += t.radiance * s.power.map_or(1.0, |(eye, m)| area_factor(t, eye, m));
                 let score = vote_score(fine, x, y, s);
                 if best.0 < 0 || score > best.1 {
                     best = (i as i32, score);
@@ -132,6 +142,14 @@ pub fn vote_level(fine: &Level, s: VoteSigmas) -> (Level, Vec<i32>) {
             if best.0 >= 0 {
                 let i = best.0 as i64;
                 let win = fine.at(2 * cx + i % 2, 2 * cy + i / 2).copied().unwrap_or_default();
+                let sum: Vec3 = (0..4i64)
+                    .filter_map(|j| fine.at(2 * cx + j % 2, 2 * cy + j / 2))
+                    .filter(|t| t.valid())
+                    .map(|t| {
+                        let area = s.power.map_or(1.0, |(eye, m)| area_factor(t, eye, m));
+                        t.radiance * area * consistency(t.normal, win.normal, s)
+                    })
+                    .sum();
                 let area = s.power.map_or(1.0, |(eye, m)| area_factor(&win, eye, m).max(1e-20));
                 out = Texel { radiance: sum / (inside.max(1) as f32 * area), ..win };
             }
@@ -645,7 +663,7 @@ mod tests {
         let mut texels = vec![wall; 16];
         texels[5] = post;
         let fine = Level { width: 4, height: 4, texels };
-        let s = VoteSigmas { pixel: 1.0, normal: 0.2, depth: 0.05, power: None };
+        let s = VoteSigmas { pixel: 1.0, normal: 0.2, depth: 0.05, power: None, consistent: false };
         let (coarse, winners) = vote_level(&fine, s);
         assert_eq!((coarse.width, coarse.height), (2, 2));
         assert_ne!(winners[0], 3, "the post (x + 2y = 3 in block 0) loses");
@@ -675,7 +693,7 @@ mod tests {
         let floor = |x: f32| t(Vec3::new(x, -0.3, -2.0), Vec3::Y, 3.0);
         let fine = Level { width: 2, height: 2, texels: vec![wall(0.0), wall(0.01), floor(0.0), floor(0.01)] };
         let power = |tx: &[Texel]| tx.iter().map(|t| t.radiance.x * area_factor(t, eye, 0.05)).sum::<f32>();
-        let sig = |power| VoteSigmas { pixel: 1.0, normal: 0.2, depth: 0.05, power };
+        let sig = |power| VoteSigmas { pixel: 1.0, normal: 0.2, depth: 0.05, power, consistent: false };
         let (kept, _) = vote_level(&fine, sig(Some((eye, 0.05))));
         let (mean, _) = vote_level(&fine, sig(None));
         let fine_power = power(&fine.texels);
@@ -685,6 +703,39 @@ mod tests {
             (coarse(&mean) - fine_power).abs() > 0.1 * fine_power,
             "the plain mean: {} vs {fine_power}",
             coarse(&mean)
+        );
+    }
+
+    /// `vote_consistent` (issue #51): a block won by an unlit back facing the eye (three
+    /// sub-pixels) with one sunlit seat sub-pixel facing up emits no light along the back's
+    /// normal; without it the seat's light leaves along the back's normal, amplified by the
+    /// areas' ratio with `vote_power`. A block of one surface is the same either way.
+    #[test]
+    fn the_consistent_vote_keeps_a_sub_pixels_light_off_a_normal_it_does_not_face() {
+        let eye = Vec3::ZERO;
+        let t = |p: Vec3, n: Vec3, l: f32| Texel {
+            position: p,
+            depth: -p.z,
+            normal: n,
+            radiance: Vec3::splat(l),
+            ..Default::default()
+        };
+        let back = |x: f32| t(Vec3::new(x, 0.0, -2.0), Vec3::Z, 0.0);
+        let seat = t(Vec3::new(0.01, -0.3, -2.0), Vec3::Y, 5.0);
+        let fine = Level { width: 2, height: 2, texels: vec![back(0.0), back(0.01), back(0.02), seat] };
+        let sig =
+            |consistent| VoteSigmas { pixel: 1.0, normal: 0.2, depth: 0.05, power: Some((eye, 0.05)), consistent };
+        let (on, w_on) = vote_level(&fine, sig(true));
+        let (off, w_off) = vote_level(&fine, sig(false));
+        assert_eq!(w_on, w_off, "the flag changes the light, not the vote");
+        assert_eq!(on.texels[0].normal, Vec3::Z, "the back wins");
+        assert!(off.texels[0].radiance.x > 1.0, "without it the seat's light leaves along the back's normal");
+        assert!(on.texels[0].radiance.x < 1e-6, "with it: {}", on.texels[0].radiance.x);
+        // One surface: the weights are all 1.
+        let wall = Level { width: 2, height: 2, texels: vec![t(Vec3::new(0.0, 0.0, -2.0), Vec3::Z, 2.0); 4] };
+        assert_eq!(
+            vote_level(&wall, sig(true)).0.texels[0].radiance,
+            vote_level(&wall, sig(false)).0.texels[0].radiance
         );
     }
 

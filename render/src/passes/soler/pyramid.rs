@@ -13,7 +13,8 @@ use crate::timing::Slot;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct VoteParams {
-    /// σ₁, σ₂, σ₃, unused.
+    /// σ₁, σ₂, σ₃, and 1 with `vote_consistent` (the sub-pixels' radiance weighted by g₂
+    /// on the winner's normal), else 0.
     pub sigma: [f32; 4],
     /// The eye, Eq. 2's least cos β (< 0: the block's plain mean, `vote_power` off).
     pub power: [f32; 4],
@@ -185,14 +186,14 @@ impl SolerPyramid {
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         slot: Option<Slot<'_>>,
-        sigma: [f32; 3],
+        sigma: [f32; 4],
         power: [f32; 4],
         position: &wgpu::TextureView,
         normal: &wgpu::TextureView,
         radiance: &wgpu::TextureView,
         material: &wgpu::TextureView,
     ) {
-        let p = VoteParams { sigma: [sigma[0], sigma[1], sigma[2], 0.0], power };
+        let p = VoteParams { sigma, power };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
         let view = |t: &wgpu::Texture| crate::passes::view(t, "soler.level.view");
         let views: Vec<[wgpu::TextureView; 5]> = self

@@ -271,7 +271,8 @@ impl SolerStage {
             return;
         }
         let (s, g) = (&f.settings.soler, f.gbuffer);
-        let sigma = [s.vote_sigma_pixel, s.vote_sigma_normal, s.vote_sigma_depth];
+        let consistent = if s.vote_consistent { 1.0 } else { 0.0 };
+        let sigma = [s.vote_sigma_pixel, s.vote_sigma_normal, s.vote_sigma_depth, consistent];
         let eye = f.camera.position;
         let power = [eye.x, eye.y, eye.z, if s.vote_power { s.min_cos_beta } else { -1.0 }];
         timer.scope(f.ctx, enc, scope, |e, slot| {
