@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use gi_lab_tests::default_renderer;
 use gi_render::ImageF32;
-use gi_render::cpu::pathtrace::{PATH_TRACER_VERSION, PathTracer, PtSettings};
+use gi_render::cpu::pathtrace::{PATH_TRACER_VERSION, PathTracer, PtSettings, Senders};
 use gi_render::image_io::hdr_display;
 
 /// One stored reference: what was rendered, and from what.
@@ -16,7 +16,8 @@ struct Reference {
     size: u32,
     spp: u32,
     bounces: u32,
-    /// Which image of the path tracer: "direct" or "full".
+    /// Which image of the path tracer: "direct", "full", or "screen-visible" (the full image
+    /// from screen-visible senders only, `gi-lab reference --screen-visible-senders`).
     image: &'static str,
     /// The scene.
     scene: Src,
@@ -68,6 +69,26 @@ const REFERENCES: &[Reference] = &[
         image: "full",
         scene: Src::WhiteSky,
     },
+    // Issue #51's Soler against what a screen-space gather can know: the chair seen from behind
+    // and the default box, one bounce from screen-visible senders only (`gi-lab reference
+    // [--scene tests/data/chair-behind.glb] --size 128x128 --spp 2048 --bounces 1
+    // --screen-visible-senders`: 30 s and 24 s on two cores in a release build).
+    Reference {
+        file: "chair_screen_visible_128_2048spp.exr",
+        size: 128,
+        spp: 2048,
+        bounces: 1,
+        image: "screen-visible",
+        scene: Src::File("chair-behind.glb"),
+    },
+    Reference {
+        file: "cornell_screen_visible_128_2048spp.exr",
+        size: 128,
+        spp: 2048,
+        bounces: 1,
+        image: "screen-visible",
+        scene: Src::Default,
+    },
     // Issue #51's hotel room at the view it opens on (`gi-lab reference --scene
     // assets/scenes/hotel-room/hotel-room.glb --size 128x128 --spp 2048 --bounces 1`: 30 s on
     // two cores in a release build).
@@ -117,7 +138,8 @@ fn render(r: &Reference) -> ImageF32 {
         Src::Asset(file) => gi_lab_tests::scene_renderer(gi_lab_tests::asset_scene(file), r.size, |_| {}),
     };
     let pt = PathTracer::new(renderer.scene(), 0.0);
-    let settings = PtSettings { bounces: r.bounces, spp: r.spp, seed: 1, ..Default::default() };
+    let senders = if r.image == "screen-visible" { Senders::ScreenVisible } else { Senders::All };
+    let settings = PtSettings { bounces: r.bounces, spp: r.spp, seed: 1, senders };
     let img = pt.render(renderer.view_proj(), renderer.camera.position, r.size, r.size, settings);
     if r.image == "direct" { img.direct } else { img.full }
 }

@@ -90,8 +90,8 @@ pub struct VoteSigmas {
 }
 
 /// How far a sub-pixel of normal `n` faces as the winner (normal `n_w`) does, with
-/// `vote_consistent`: Eq. 5's g₂ on 1 − n·n_w centred on the winner (⚠ soler.vote-consistent in
-/// docs/readings.md: the coarse texel emits along n_w, so the light of a sub-pixel facing
+/// `vote_consistent`: Eq. 5's g₂ on 1 − n·n_w centred on the winner (our reading, the row
+/// soler.vote-consistent of docs/readings.md: the coarse texel emits along n_w, so the light of a sub-pixel facing
 /// elsewhere would leave in directions it never lit); 1 without it.
 pub fn consistency(n: Vec3, n_w: Vec3, s: VoteSigmas) -> f32 {
     if s.consistent { gaussian(1.0 - n.dot(n_w), s.normal) } else { 1.0 }
