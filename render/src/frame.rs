@@ -129,6 +129,7 @@ impl Renderer {
             camera: &self.camera,
             gbuffer: &self.gbuffer.targets.views,
             radius: self.bounds.radius(),
+            scale: self.scale_radius(),
             center: self.bounds.center(),
             height: self.height,
             gbuffer_size: (self.width, self.height),

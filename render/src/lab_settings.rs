@@ -19,6 +19,7 @@ use crate::passes::reference::vpl::ReferenceSettings;
 use crate::passes::sky::SkySettings;
 use crate::passes::soler::SolerSettings;
 use crate::pipeline::{LegacyIndirect, PipelineSettings};
+use crate::scale::ScaleSettings;
 use crate::settings::{FieldError, FieldMeta, PRESET_VERSION, PresetError, SettingsGroup, Value};
 use crate::settings_group;
 
@@ -51,6 +52,7 @@ pub struct LabSettings {
     pub sky: SkySettings,
     /// The stage choices (stages 3–7): which pass each stage runs.
     pub pipeline: PipelineSettings,
+    pub scale: ScaleSettings,
     /// Version 1's technique, read from old presets only (see `pipeline::migrate_v1`), never
     /// written (it is read without `Some(..)`, so a written `Some(..)` could not be read back).
     #[serde(skip_serializing, deserialize_with = "crate::settings::legacy_field")]
@@ -75,6 +77,7 @@ impl Default for LabSettings {
             emitters: Default::default(),
             sky: Default::default(),
             pipeline: Default::default(),
+            scale: Default::default(),
             indirect: None,
             vpl: Default::default(),
             ism: Default::default(),
@@ -97,6 +100,7 @@ macro_rules! for_each_group {
         $m!(emitters, EmitterSettings);
         $m!(sky, SkySettings);
         $m!(pipeline, PipelineSettings);
+        $m!(scale, ScaleSettings);
         $m!(vpl, VplSettings);
         $m!(ism, IsmSettings);
         $m!(interleave, InterleaveSettings);

@@ -19,6 +19,7 @@ pub mod preset;
 pub mod quality;
 pub mod readback;
 pub mod renderer;
+pub mod scale;
 pub mod scene;
 pub mod settings;
 pub mod shaders;

@@ -24,8 +24,11 @@ pub struct FrameInputs<'a> {
     pub camera_buffer: &'a wgpu::Buffer,
     pub camera: &'a Camera,
     pub gbuffer: &'a GBufferViews,
-    /// The scene's bounding radius (scene-relative offsets and clip planes).
+    /// The scene's bounding radius (the VPL maps' offsets and clip planes).
     pub radius: f32,
+    /// The length scene-relative settings are fractions of (`scale::scale_radius`: the room
+    /// the camera is in, else the scene's bounding radius).
+    pub scale: f32,
     /// The centre of the scene's bounds.
     pub center: glam::Vec3,
     pub height: u32,
@@ -86,7 +89,7 @@ impl FrameInputs<'_> {
     pub fn near_field_cut(&self) -> f32 {
         let p = &self.settings.pipeline;
         if p.uses_vpls() && p.near_field == crate::pipeline::NearField::ScreenSpace {
-            self.settings.soler.near_field_split(self.radius).max(0.0)
+            self.settings.soler.near_field_split(self.scale).max(0.0)
         } else {
             0.0
         }

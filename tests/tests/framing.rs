@@ -170,3 +170,38 @@ fn one_click_in_the_scene_panel_removes_the_default_light() {
     assert!(!scene.sky.enabled && scene.default_light_note().is_none());
     assert!(h.query_by_label("Remove the default light").is_none(), "the button goes with the light");
 }
+
+/// Issue #51 point 4: the scene-relative settings scale with the room the camera stands in.
+/// In "two-rooms" the camera opens in room A, whose box is smaller than the model: the scale is
+/// half the room's diagonal and the HCB's d_max (`hcb.d_max_m` = 0) is 0.1 of it; with
+/// `scale.reference = Model`, or with the camera moved into room B (not the framed room), it
+/// is the model's bounding radius again.
+#[test]
+fn scene_relative_settings_scale_with_the_room_the_camera_is_in() {
+    use gi_render::scale::{ScaleReference, ScaleSource};
+    let scene = load("two-rooms", 1.0);
+    let room = scene.view.as_ref().and_then(|v| v.room).expect("an interior view has a room");
+    let mut r = Renderer::new(gpu(), scene, LabSettings::default(), 64, 48).expect("renderer");
+    r.clock.playing = false;
+    let model = r.bounds().radius();
+    let (scale, from) = r.scale();
+    assert_eq!(from, ScaleSource::Room(room.bounds));
+    assert!((scale - room.bounds.radius()).abs() < 1e-5 && scale < 0.9 * model, "room {scale}, model {model}");
+    let mut s = r.settings().clone();
+    gi_render::pipeline::Technique::Nguyen.apply(&mut s);
+    r.set_settings(s.clone()).expect("the HCB");
+    r.render_frame();
+    let d_max = r.hcb_stats().expect("HCB statistics").d_max;
+    assert!((d_max - 0.1 * scale).abs() < 1e-5, "d_max {d_max} against 0.1 × the room's {scale}");
+    s.scale.reference = ScaleReference::Model;
+    r.set_settings(s.clone()).expect("the model's scale");
+    assert_eq!(r.scale(), (model, ScaleSource::Model));
+    r.render_frame();
+    let d_max = r.hcb_stats().expect("HCB statistics").d_max;
+    assert!((d_max - 0.1 * model).abs() < 1e-5, "d_max {d_max} against 0.1 × the model's {model}");
+    // In room B, which the loader did not frame: the model's radius.
+    s.scale.reference = ScaleReference::Room;
+    r.set_settings(s).expect("the room's scale");
+    r.camera.position.x = room.bounds.max.x + 0.2 * (r.bounds().max.x - room.bounds.max.x).max(1.0);
+    assert_eq!(r.scale().1, ScaleSource::Model, "camera at {} outside {room:?}", r.camera.position);
+}

@@ -485,7 +485,7 @@ fn coarse_to_fine_rounds_approach_the_sequential_scans_record_count() {
     assert!(with_h * 100 >= points.iter().flatten().count() * 99, "H at {with_h} pixels");
     // R_k of the default settings at each pixel (the clamps of `clamped_radius`).
     let s = LabSettings::default().gautron;
-    let radius = brute.bounds().radius();
+    let radius = brute.scale_radius();
     let p11 = brute.camera.projection(1.0).y_axis.y;
     let r: Vec<f32> = (0..(n * n) as usize)
         .map(|k| {

@@ -112,7 +112,7 @@ fn gpu_matches_cpu(technique: Technique, near_field_distance: f32, bounces: u32,
         r.render_frame();
     }
     let start_level = r.settings().soler.gathered_levels().start;
-    let near_cut = if near_field_distance > 0.0 { near_field_distance * r.bounds().radius() } else { 0.0 };
+    let near_cut = if near_field_distance > 0.0 { near_field_distance * r.scale_radius() } else { 0.0 };
     let s = r.settings().soler.clone();
     let sig = VoteSigmas {
         pixel: s.vote_sigma_pixel,

@@ -586,6 +586,12 @@ fn soler_settings_buffers_and_reach_appear_in_the_lab() {
     let reach = format!("reach {:.0} px", settings.soler.reach_px());
     assert_eq!(settings.soler.reach_px(), 1280.0);
     assert!(h.query_all_by_label_contains(&reach).next().is_some(), "'{reach}' is shown");
+    // Issue #51 point 4: the levels whose ring starts beyond the image's diagonal are marked.
+    let size = h.state().renderer().expect("renderer").size();
+    let off = settings.soler.levels_off_image(size).len();
+    assert_eq!(h.query_all_by_label_contains("off the image").count(), off, "levels off a {size:?} image");
+    // The scale of the scene-relative settings is said (the default box: no room).
+    assert!(h.query_all_by_label_contains("scene scale").next().is_some(), "the scene's scale is shown");
     let names = h.state().renderer().expect("renderer").buffers().names();
     let soler: Vec<&String> = names.iter().filter(|n| n.starts_with("soler.")).collect();
     for want in [

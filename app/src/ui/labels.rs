@@ -8,6 +8,7 @@
 pub fn words(path: &str) -> Option<&'static str> {
     Some(match path {
         "animation.time_step_s" => "time step",
+        "scale.reference" => "relative to",
         "direct.intensity_scale" => "light intensity scale",
         "direct.shadows" => "shadows",
         "direct.shadow_map_size" => "shadow map size",

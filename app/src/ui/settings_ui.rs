@@ -261,6 +261,7 @@ pub fn section_title(group: &str) -> String {
         "sky" => "2 · Sky light".into(),
         "indirect" => "3–6 · Indirect light".into(),
         "pipeline" => "Stage choices (3–7)".into(),
+        "scale" => "Scene scale (relative settings)".into(),
         "vpl" => "3 · VPLs (instant radiosity)".into(),
         "ism" => "4 · VPL visibility (imperfect shadow maps)".into(),
         "interleave" => "5–6 · Interleaved sampling and filter".into(),

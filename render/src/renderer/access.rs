@@ -215,7 +215,7 @@ impl Renderer {
     /// per level, the texels per level and the covered pixels that no sample reached. None
     /// when the technique is not the HCB or no frame was rendered with it. Blocks until the
     pub fn hcb_stats(&self) -> Option<HcbStats> {
-        self.stages.hcb.as_ref()?.stats(&self.ctx, self.settings.hcb.d_max(self.bounds.radius()))
+        self.stages.hcb.as_ref()?.stats(&self.ctx, self.settings.hcb.d_max(self.scale_radius()))
     }
 
     /// Why the shadow maps render at a smaller size than `direct.shadow_map_size` asks: the
@@ -323,7 +323,7 @@ impl Renderer {
         let h = self.stages.hcb.as_ref()?;
         let a = self.read_later("hcb.stats", Readback::Storage(h.stats_sources()), 0)?;
         match &a.data {
-            Ok(Readout::Bytes(parts)) => h.stats_from(parts, self.settings.hcb.d_max(self.bounds.radius())),
+            Ok(Readout::Bytes(parts)) => h.stats_from(parts, self.settings.hcb.d_max(self.scale_radius())),
             _ => None,
         }
     }
@@ -496,6 +496,20 @@ fn level_indirect(k: &str) -> Option<&'static str> {
 /// The camera a scene opens on: its first glTF camera, else the view of
 /// [`crate::scene::framing`] (inside its largest room, or a three-quarter view fitted to its
 /// geometry), fitted to `aspect`.
+impl Renderer {
+    /// The length scene-relative settings are fractions of now (`scale.reference`: the room
+    /// the camera stands in, else the scene's bounding radius; [`crate::scale`]).
+    pub fn scale_radius(&self) -> f32 {
+        self.scale().0
+    }
+
+    /// [`Self::scale_radius`] and where it comes from (the status bar says it).
+    pub fn scale(&self) -> (f32, crate::scale::ScaleSource) {
+        let room = self.scene.view.as_ref().and_then(|v| v.room.as_ref());
+        crate::scale::scale_radius(self.settings.scale.reference, room, self.camera.position, self.bounds)
+    }
+}
+
 pub fn default_camera(scene: &Scene, bounds: Aabb, aspect: f32) -> Camera {
     scene_view(scene, bounds, aspect).camera
 }

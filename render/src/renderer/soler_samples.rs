@@ -156,7 +156,7 @@ impl Renderer {
             axes: [right, right.cross(forward), forward],
         });
         let near_cut = if p.uses_vpls() && p.near_field == crate::pipeline::NearField::ScreenSpace {
-            s.near_field_split(self.bounds.radius()).max(0.0)
+            s.near_field_split(self.scale_radius()).max(0.0)
         } else {
             0.0
         };

@@ -64,7 +64,7 @@ fn assert_sums(e: &Explanation) {
 /// rejected by Eq. 9 on the CPU too. Returns how many samples were compared.
 fn assert_cpu_twin(r: &Renderer, e: &Explanation) -> usize {
     let stats = r.hcb_stats().expect("HCB statistics");
-    let t = r.settings().hcb.thresholds(r.bounds().radius());
+    let t = r.settings().hcb.thresholds(r.scale_radius());
     let probe = r.probe(&[e.pixel]).expect("probe");
     let at = |name: &str| probe[0].iter().find(|v| v.name == name).unwrap_or_else(|| panic!("{name}")).value;
     let (pos, nrm) = (at("gbuffer.position"), at("gbuffer.normal"));

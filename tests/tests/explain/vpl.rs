@@ -103,7 +103,7 @@ fn assert_cpu_twin(r: &Renderer, e: &Explanation) {
         if c.rejected == Some(Rejection::NearField) {
             // Closer than the cut: the near field's; the far field's gather adds nothing.
             assert_eq!(field(c, "unshadowed (lum)"), 0.0, "{}", c.name);
-            let cut = r.settings().soler.near_field_split(r.bounds().radius());
+            let cut = r.settings().soler.near_field_split(r.scale_radius());
             assert!((vpl.position - x.position).length() < cut * 1.0001, "{} is beyond the cut", c.name);
             compared += 1;
             continue;

@@ -41,6 +41,7 @@ pub(super) fn settings_ui(st: &mut State, ui: &mut egui::Ui) {
         let colour = if e.starts_with("clamped:") { ui.visuals().warn_fg_color } else { ERROR };
         ui.colored_label(colour, e);
     }
+    ui.small(scale_note(&l.renderer));
     if l.settings.pipeline.uses_soler() {
         ui.separator();
         egui::CollapsingHeader::new("Soler rings and reach (Fig. 3)")
@@ -66,6 +67,18 @@ pub(super) fn settings_ui(st: &mut State, ui: &mut egui::Ui) {
                 }
             },
         );
+    }
+}
+
+/// What the scene-relative settings scale with (`scale.reference`, issue #51 point 4).
+pub fn scale_note(r: &gi_render::Renderer) -> String {
+    use gi_render::scale::ScaleSource;
+    match r.scale() {
+        (s, ScaleSource::Room(b)) => {
+            let e = b.extent();
+            format!("scene scale {s:.2} m: the room the camera is in ({:.1} × {:.1} × {:.1} m)", e.x, e.y, e.z)
+        }
+        (s, ScaleSource::Model) => format!("scene scale {s:.2} m: the model's bounding radius"),
     }
 }
 
@@ -138,6 +151,7 @@ pub fn hcb_stats_ui(ui: &mut egui::Ui, stats: &gi_render::passes::hcb::stage::Hc
 /// quarter reach 1280 px, but the first level only from a full start).
 pub fn soler_reach_ui(ui: &mut egui::Ui, s: &gi_render::passes::soler::SolerSettings, size: (u32, u32)) {
     let r = s.radius_px;
+    let off = s.levels_off_image(size);
     egui::Grid::new("soler_rings").num_columns(4).striped(true).show(ui, |ui| {
         for head in ["level (resolution)", "ring (level texels)", "ring (G-buffer px)", "texels"] {
             ui.strong(head);
@@ -149,7 +163,16 @@ pub fn soler_reach_ui(ui: &mut egui::Ui, s: &gi_render::passes::soler::SolerSett
             let inner = if i == 0 { 0.0 } else { 0.5 * r };
             ui.label(format!("{k} ({w}×{h})"));
             ui.label(if i == 0 { format!("disc 0 … {r:.0}") } else { format!("{inner:.0} … {r:.0}") });
-            ui.label(format!("{:.0} … {:.0}", inner * scale, r * scale));
+            // A ring that starts beyond the image's diagonal samples nothing on screen.
+            if off.contains(&k) {
+                ui.colored_label(
+                    ui.visuals().warn_fg_color,
+                    format!("{:.0} … {:.0}: off the image", inner * scale, r * scale),
+                )
+                .on_hover_text("this level's ring starts beyond the image's diagonal: it adds no light at this size");
+            } else {
+                ui.label(format!("{:.0} … {:.0}", inner * scale, r * scale));
+            }
             ui.label((w as u64 * h as u64).to_string());
             ui.end_row();
         }

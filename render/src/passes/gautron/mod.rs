@@ -151,12 +151,12 @@ settings_group! {
         /// Upper clamp of R_k projected on the screen at the record's depth (not in 003).
         r_max_px: f32 = 150.0,
         unit "px", symbol "R_max", range 1.0..=4000.0, cost "free (smaller: more records)", history true;
-        /// Lower clamp of R_k in scene units, as a fraction of the scene's bounding radius (not in
-        /// 003).
+        /// Lower clamp of R_k in scene units, as a fraction of the scene's scale
+        /// (`scale.reference`: the room the camera is in, else the bounding radius; not in 003).
         r_min_scene: f32 = 0.005,
         unit "× radius", symbol "", range 0.0..=10.0, cost "free", history true;
-        /// Upper clamp of R_k in scene units, as a fraction of the scene's bounding radius (not in
-        /// 003).
+        /// Upper clamp of R_k in scene units, as a fraction of the scene's scale
+        /// (`scale.reference`; not in 003).
         r_max_scene: f32 = 1.0,
         unit "× radius", symbol "", range 0.0001..=100.0, cost "free", history true;
         /// Neighbour clamping (⚠[gautron.neighbour-clamping] Křivánek et al. 2006; not in 003): each new record's R_k and

@@ -305,7 +305,10 @@ impl GautronStage {
                 r * 1e-4,
             ),
             clamps: match s.r_clamps {
-                true => glam::Vec4::new(s.r_min_scene * r, s.r_max_scene * r, s.r_min_px, s.r_max_px),
+                true => {
+                    let scale = f.scale.max(1e-6);
+                    glam::Vec4::new(s.r_min_scene * scale, s.r_max_scene * scale, s.r_min_px, s.r_max_px)
+                }
                 false => glam::Vec4::new(0.0, f32::MAX, 0.0, f32::MAX),
             },
             creation: glam::Vec4::new(s.creation_tile_px as f32, slots as f32, s.capacity as f32, 4.0 * r),

@@ -41,8 +41,9 @@ settings_group! {
         gamma_max_deg: f32 = 70.0,
         unit "°", symbol "γ_max", range 1.0..=90.0, cost "smaller: fewer samples, light leaks across steps", history false;
         /// Largest radius of a coherent group (Eq. 1 on the accumulated distance, §3.5), in
-        /// scene units; ⚠[nguyen.d-max] 0 picks it from the scene: 0.1 × its bounding radius
-        /// (0.17 on the default Cornell box, 0.61 on the hotel room).
+        /// scene units; ⚠[nguyen.d-max] 0 picks it from the scene: 0.1 × its scale
+        /// (`scale.reference`: the room the camera is in, else the bounding radius; 0.17 on
+        /// the default Cornell box, 0.42 in the hotel room, 0.61 with the model's radius).
         d_max_m: f32 = 0.0,
         unit "m", symbol "d_max", range 0.0..=100.0, cost "larger: fewer samples, coarser light", history false;
         /// HCB levels including the G-buffer's (1: every pixel is a sample, the per-pixel gather).
@@ -118,7 +119,7 @@ settings_enum! {
 pub const D_MAX_PER_RADIUS: f32 = 0.1;
 
 impl HcbSettings {
-    /// d_max in scene units for a scene of bounding radius `scene_radius` (the setting, or
+    /// d_max in scene units for a scene of scale `scene_radius` (`scale::scale_radius`; the setting, or
     /// the scene-relative default when it is 0).
     pub fn d_max(&self, scene_radius: f32) -> f32 {
         if self.d_max_m > 0.0 { self.d_max_m } else { D_MAX_PER_RADIUS * scene_radius }

@@ -113,7 +113,7 @@ impl HcbStage {
     pub(crate) fn frame(f: &FrameInputs) -> HcbFrame {
         let s = &f.settings.hcb;
         HcbFrame {
-            thresholds: s.thresholds(f.radius),
+            thresholds: s.thresholds(f.scale),
             eye: f.camera.position,
             pixel_scale: 2.0 * (f.camera.yfov * 0.5).tan() / f.height.max(1) as f32,
             pattern: crate::cpu::hcb::recompute_pattern(s.recompute_period),

@@ -274,8 +274,9 @@ settings_group! {
         /// radiance after the albedo multiply as an option).
         temporal_quantity: TemporalQuantity = TemporalQuantity::Irradiance,
         unit "", symbol "", range 0..=1, cost "free", history true;
-        /// Split distance of `pipeline.near_field`, in units of the scene's bounding radius:
-        /// the screen-space gather takes senders closer than it, the VPL gather the others.
+        /// Split distance of `pipeline.near_field`, in units of the scene's scale
+        /// (`scale.reference`: the room the camera is in, else the bounding radius): the
+        /// screen-space gather takes senders closer than it, the VPL gather the others.
         near_field_distance: f32 = 0.25,
         unit "× radius", symbol "d_near", range 0.001..=4.0, cost "free", history false;
         /// Visibility by solid voxelization (004 §4 "Visibility", Eisemann & Décoret): the
@@ -331,7 +332,7 @@ impl SolerSettings {
     }
 
     /// The split distance of the near field in scene units (`near_field_distance` × the
-    /// scene's bounding radius `radius`).
+    /// scene's scale `radius`, `scale::scale_radius`).
     pub fn near_field_split(&self, radius: f32) -> f32 {
         self.near_field_distance * radius
     }
@@ -339,6 +340,15 @@ impl SolerSettings {
     /// 32-bit words per column of the voxel grid.
     pub fn voxel_words(&self) -> u32 {
         self.voxel_slices.clamp(32, 128).div_ceil(32)
+    }
+
+    /// The gathered levels whose ring starts beyond the diagonal of a `size` image, where it
+    /// samples nothing (issue #51 point 4: at 128² with r = 40 from a quarter resolution,
+    /// levels 4 and 5; level 3's ring, 160 … 320 px, joins only far corners). The first level
+    /// samples the whole disc and is never off.
+    pub fn levels_off_image(&self, size: (u32, u32)) -> Vec<u32> {
+        let diagonal = (size.0 as f32).hypot(size.1 as f32);
+        self.gathered_levels().skip(1).filter(|&k| 0.5 * self.radius_px * (1u64 << k) as f32 >= diagonal).collect()
     }
 
     /// The reach of the coarsest ring in G-buffer pixels: r · 2^{start + levels − 1}.
@@ -349,3 +359,22 @@ impl SolerSettings {
 
 /// Uniform slot stride for dynamic offsets (the device's minimum alignment).
 pub const STRIDE: u64 = 256;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue #51 point 4: at 128² the paper's setting (r = 40 from a quarter resolution, 4
+    /// levels) gathers on levels 2 and 3 (level 3 only between far corners); at 1280×720, the
+    /// paper's size, every level acts.
+    #[test]
+    fn the_levels_whose_ring_starts_beyond_the_image_are_named() {
+        let s = SolerSettings::default();
+        assert_eq!(s.levels_off_image((128, 128)), vec![4, 5]);
+        assert!(s.levels_off_image((1280, 720)).is_empty());
+        // Level 3's inner ring is 160 px: off a 100 × 100 image (diagonal 141 px), on a
+        // 120 × 120 one (170 px).
+        assert_eq!(SolerSettings { levels: 2, ..s.clone() }.levels_off_image((100, 100)), vec![3]);
+        assert!(SolerSettings { levels: 2, ..s }.levels_off_image((120, 120)).is_empty());
+    }
+}
