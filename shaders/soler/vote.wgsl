@@ -77,8 +77,11 @@ fn consistency(n: vec3<f32>, n_w: vec3<f32>) -> f32 {
 
 // The coarse texel's radiance from its 2×2 block, whose winner has `position` and `normal`:
 // the sum of the sub-pixels' (area-weighted with `vote_power`) radiance, each weighted by its
-// consistency with the winner, over the block's sub-pixel count and, with `vote_power`, the
-// winner's Eq. 2 area.
+// consistency w with the winner, over the sum of the weights (w for a surface sub-pixel, 1 for
+// background inside the image: the block's count without `vote_consistent`) and, with
+// `vote_power`, the winner's Eq. 2 area. The texel so stands for the winner's surface over the
+// whole block, as Eq. 5 makes it for the depth and normal (a corner block keeps the winner's
+// light instead of losing the other wall's).
 fn block_radiance(gid: vec2<u32>, size: vec2<u32>, position: vec4<f32>, normal: vec3<f32>) -> vec4<f32> {
     var sum = vec3<f32>(0.0);
     var count = 0.0;
@@ -87,12 +90,13 @@ fn block_radiance(gid: vec2<u32>, size: vec2<u32>, position: vec4<f32>, normal: 
         if (!inside(p, size)) {
             continue;
         }
-        count = count + 1.0;
         if (!valid(p, size)) {
+            count = count + 1.0;
             continue;
         }
         let w = consistency(textureLoad(fine_normal, p, 0).xyz, normal);
         sum = sum + w * weighted_radiance(p);
+        count = count + w;
     }
     var winner_area = 1.0;
     if (params.power.w >= 0.0) {

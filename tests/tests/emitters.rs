@@ -111,8 +111,12 @@ fn the_shared_cornell_box_lit_only_by_its_ceiling_quad_matches_the_path_tracer()
     // Measured on lavapipe at 96² (direct only: FLIP 0.120): knecht 0.0775 with 0.85 of the
     // indirect light, nguyen 0.0803 / 0.81, soler 0.1026 / 0.60 (the screen-space gather sees
     // only the senders on screen), gautron 0.0630 / 0.89; the bounds are those + ~20 %.
+    // Issue #51's consistent vote (`soler.vote_consistent`: a coarse texel keeps only the light
+    // of the sub-pixels facing as its winner) took Soler's share to 0.474 at the same FLIP
+    // (0.1026 → 0.1028): at 24² texels most of this box's blocks mix two walls, and a wall's
+    // light no longer leaves along the other's normal. Its lowest share is that − 20 %.
     let cases: [(&str, u32, f64, f64); 4] =
-        [("knecht", 8, 0.095, 0.7), ("nguyen", 4, 0.097, 0.65), ("soler", 4, 0.123, 0.48), ("gautron", 6, 0.076, 0.7)];
+        [("knecht", 8, 0.095, 0.7), ("nguyen", 4, 0.097, 0.65), ("soler", 4, 0.123, 0.38), ("gautron", 6, 0.076, 0.7)];
     for (name, frames, bound, least) in cases {
         let mut r = scene_renderer(scene.clone(), size, |s| {
             let t = match name {

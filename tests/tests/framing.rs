@@ -172,21 +172,23 @@ fn one_click_in_the_scene_panel_removes_the_default_light() {
 }
 
 /// Issue #51 point 4: the scene-relative settings scale with the room the camera stands in.
-/// In "two-rooms" the camera opens in room A, whose box is smaller than the model: the scale is
-/// half the room's diagonal and the HCB's d_max (`hcb.d_max_m` = 0) is 0.1 of it; with
+/// In "two-rooms" the camera opens in room A, smaller than the model: the scale is half the
+/// diagonal of its mean spans and height, and the HCB's d_max (`hcb.d_max_m` = 0) 0.1 of it; with
 /// `scale.reference = Model`, or with the camera moved into room B (not the framed room), it
 /// is the model's bounding radius again.
 #[test]
 fn scene_relative_settings_scale_with_the_room_the_camera_is_in() {
-    use gi_render::scale::{ScaleReference, ScaleSource};
+    use gi_render::scale::{ScaleReference, ScaleSource, room_box};
     let scene = load("two-rooms", 1.0);
     let room = scene.view.as_ref().and_then(|v| v.room).expect("an interior view has a room");
     let mut r = Renderer::new(gpu(), scene, LabSettings::default(), 64, 48).expect("renderer");
     r.clock.playing = false;
     let model = r.bounds().radius();
     let (scale, from) = r.scale();
-    assert_eq!(from, ScaleSource::Room(room.bounds));
-    assert!((scale - room.bounds.radius()).abs() < 1e-5 && scale < 0.9 * model, "room {scale}, model {model}");
+    let in_room = room_box(&room).expect("the room's box");
+    assert_eq!(from, ScaleSource::Room(in_room));
+    let want = 0.5 * (room.size.length_squared() + (room.ceiling - room.floor).powi(2)).sqrt();
+    assert!((scale - want).abs() < 1e-5 && scale < 0.9 * model, "room {scale} ({room:?}), model {model}");
     let mut s = r.settings().clone();
     gi_render::pipeline::Technique::Nguyen.apply(&mut s);
     r.set_settings(s.clone()).expect("the HCB");
@@ -202,6 +204,6 @@ fn scene_relative_settings_scale_with_the_room_the_camera_is_in() {
     // In room B, which the loader did not frame: the model's radius.
     s.scale.reference = ScaleReference::Room;
     r.set_settings(s).expect("the room's scale");
-    r.camera.position.x = room.bounds.max.x + 0.2 * (r.bounds().max.x - room.bounds.max.x).max(1.0);
+    r.camera.position.x = in_room.max.x + 0.5 * (r.bounds().max.x - in_room.max.x);
     assert_eq!(r.scale().1, ScaleSource::Model, "camera at {} outside {room:?}", r.camera.position);
 }

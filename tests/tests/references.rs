@@ -118,12 +118,18 @@ fn stamp() -> String {
         "path tracer {PATH_TRACER_VERSION}, default scene {:016x}",
         fnv(gi_render::scene::cornell::DEFAULT_SCENE_GLB)
     );
+    let mut seen = Vec::new();
     for r in REFERENCES {
         let (file, path) = match r.scene {
             Src::File(f) => (f, data_dir().join(f)),
             Src::Asset(f) => (f, data_dir().join("../../assets").join(f)),
             Src::Default | Src::WhiteSky => continue,
         };
+        // A scene of several references is hashed once.
+        if seen.contains(&file) {
+            continue;
+        }
+        seen.push(file);
         let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         s += &format!(", {file} {:016x}", fnv(&bytes));
     }

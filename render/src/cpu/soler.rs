@@ -125,11 +125,9 @@ pub fn vote_level(fine: &Level, s: VoteSigmas) -> (Level, Vec<i32>) {
     for cy in 0..h as i64 {
         for cx in 0..w as i64 {
             let mut best = (-1i32, 0.0f32);
-            let mut inside = 0u32;
             for i in 0..4i64 {
                 let (x, y) = (2 * cx + i % 2, 2 * cy + i / 2);
                 let Some(t) = fine.at(x, y) else { continue };
-                inside += 1;
                 if !t.valid() {
                     continue;
                 }
@@ -142,16 +140,20 @@ pub fn vote_level(fine: &Level, s: VoteSigmas) -> (Level, Vec<i32>) {
             if best.0 >= 0 {
                 let i = best.0 as i64;
                 let win = fine.at(2 * cx + i % 2, 2 * cy + i / 2).copied().unwrap_or_default();
-                let sum: Vec3 = (0..4i64)
-                    .filter_map(|j| fine.at(2 * cx + j % 2, 2 * cy + j / 2))
-                    .filter(|t| t.valid())
-                    .map(|t| {
-                        let area = s.power.map_or(1.0, |(eye, m)| area_factor(t, eye, m));
-                        t.radiance * area * consistency(t.normal, win.normal, s)
-                    })
-                    .sum();
+                // Each sub-pixel weighs its consistency with the winner (background inside the
+                // image 1, as black): the texel stands for the winner's surface over the block.
+                let (mut sum, mut weight) = (Vec3::ZERO, 0.0f32);
+                for t in (0..4i64).filter_map(|j| fine.at(2 * cx + j % 2, 2 * cy + j / 2)) {
+                    if !t.valid() {
+                        weight += 1.0;
+                        continue;
+                    }
+                    let w = consistency(t.normal, win.normal, s);
+                    sum += t.radiance * s.power.map_or(1.0, |(eye, m)| area_factor(t, eye, m)) * w;
+                    weight += w;
+                }
                 let area = s.power.map_or(1.0, |(eye, m)| area_factor(&win, eye, m).max(1e-20));
-                out = Texel { radiance: sum / (inside.max(1) as f32 * area), ..win };
+                out = Texel { radiance: sum / (weight.max(1.0) * area), ..win };
             }
             texels.push(out);
             winners.push(best.0);
@@ -730,7 +732,24 @@ mod tests {
         assert_eq!(w_on, w_off, "the flag changes the light, not the vote");
         assert_eq!(on.texels[0].normal, Vec3::Z, "the back wins");
         assert!(off.texels[0].radiance.x > 1.0, "without it the seat's light leaves along the back's normal");
-        assert!(on.texels[0].radiance.x < 1e-6, "with it: {}", on.texels[0].radiance.x);
+        // With it the seat (the only lit sub-pixel) enters weighted by g = g₂(1 − 0) = e^{−12.5},
+        // and the block's weight is 3 + g instead of 4.
+        let g = gaussian(1.0, 0.2);
+        let (on, off) = (on.texels[0].radiance.x, off.texels[0].radiance.x);
+        assert!((on - off * g * 4.0 / (3.0 + g)).abs() <= 1e-6 * off && on < 1e-4, "with it: {on}, without: {off}");
+        // A corner (two wall sub-pixels facing the eye, two of a floor): the texel keeps the
+        // light of the winner's surface over the whole block instead of losing the other's.
+        let wall = |x: f32| t(Vec3::new(x, 0.0, -2.0), Vec3::Z, 1.0);
+        let floor = |x: f32| t(Vec3::new(x, -0.3, -2.0), Vec3::Y, 3.0);
+        let corner = Level { width: 2, height: 2, texels: vec![wall(0.0), wall(0.01), floor(0.0), floor(0.01)] };
+        let c = vote_level(&corner, sig(true)).0.texels[0];
+        let own = if c.normal == Vec3::Z { 1.0 } else { 3.0 };
+        assert!(
+            (c.radiance.x - own).abs() < 0.01 * own,
+            "winner {:?}: {} against its own {own}",
+            c.normal,
+            c.radiance.x
+        );
         // One surface: the weights are all 1.
         let wall = Level { width: 2, height: 2, texels: vec![t(Vec3::new(0.0, 0.0, -2.0), Vec3::Z, 2.0); 4] };
         assert_eq!(

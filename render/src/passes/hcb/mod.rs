@@ -43,7 +43,7 @@ settings_group! {
         /// Largest radius of a coherent group (Eq. 1 on the accumulated distance, §3.5), in
         /// scene units; ⚠[nguyen.d-max] 0 picks it from the scene: 0.1 × its scale
         /// (`scale.reference`: the room the camera is in, else the bounding radius; 0.17 on
-        /// the default Cornell box, 0.42 in the hotel room, 0.61 with the model's radius).
+        /// the default Cornell box, 0.47 in the hotel room, 0.61 with the model's radius).
         d_max_m: f32 = 0.0,
         unit "m", symbol "d_max", range 0.0..=100.0, cost "larger: fewer samples, coarser light", history false;
         /// HCB levels including the G-buffer's (1: every pixel is a sample, the per-pixel gather).

@@ -171,14 +171,14 @@ settings_group! {
         vote_power: bool = true,
         unit "", symbol "", range 0..=1, cost "free", history false;
         /// ⚠[soler.vote-consistent] A sub-pixel's radiance enters its coarse texel weighted by
-        /// g₂(1 − n_i·n_w), Eq. 5's normal kernel (σ₂) centred on the winner's normal n_w (on):
-        /// the coarse texel emits along the winner's normal only the light of the sub-pixels
-        /// that face as it does, the "small inconsistent regions" Eq. 5 discards for the normal
-        /// and depth are discarded for the light too; off: every sub-pixel's light, so that a
-        /// sunlit seat inside a block won by the chair's unlit back lights the floor under the
-        /// chair (issue #51: 300× the truth at quarter resolution). On loses the light of
-        /// corners at coarse levels (the default box at 128² against its screen-visible truth:
-        /// FLIP 0.178 → 0.194; the chair from behind 0.366 → 0.183).
+        /// w = g₂(1 − n_i·n_w), Eq. 5's normal kernel (σ₂) centred on the winner's normal n_w,
+        /// over Σ w (on): the coarse texel stands for the winner's surface over the whole block
+        /// and emits along its normal only the light of the sub-pixels that face as it does —
+        /// the "small inconsistent regions" Eq. 5 discards for the normal and depth are
+        /// discarded for the light too; off: every sub-pixel's light over the block's count, so
+        /// that a sunlit seat inside a block won by the chair's unlit back lights the floor under
+        /// the chair (issue #51: 300× the truth at quarter resolution; FLIP against the
+        /// screen-visible truth 0.366 → 0.185, the default box's 0.178 → 0.191 at 128²).
         vote_consistent: bool = true,
         unit "", symbol "", range 0..=1, cost "free (one more gaussian per sub-pixel)", history false;
         /// The geometry term of each sample (004 §3, Eq. 1 or Eq. 4).
