@@ -10,7 +10,7 @@
 // `vote_consistent`, each sub-pixel's also weighted by g₂ on its normal against the winner's,
 // so that the texel does not emit along the winner's normal the light of a sub-pixel that
 // faces elsewhere (docs/readings.md, soler.vote-consistent).
-// CPU twin: cpu::soler::vote_level.
+// CPU twin: cpu::soler_vote::vote_level.
 #import soler/common.wgsl
 
 // Rust twin: passes::soler::pyramid::VoteParams.
@@ -67,7 +67,7 @@ fn weighted_radiance(p: vec2<i32>) -> vec3<f32> {
 
 // How far a sub-pixel of normal `n` faces as the winner (normal `n_w`) does: Eq. 5's g₂ on
 // 1 − n·n_w, centred on the winner, with `vote_consistent`; 1 for every sub-pixel without it
-// (cpu::soler::consistency).
+// (cpu::soler_vote::consistency).
 fn consistency(n: vec3<f32>, n_w: vec3<f32>) -> f32 {
     if (params.sigma.w < 0.5) {
         return 1.0;

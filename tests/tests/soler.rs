@@ -4,8 +4,9 @@
 
 use gi_lab_tests::{paused_renderer, read, soler_gather_params, soler_level, v3};
 use gi_render::Renderer;
-use gi_render::cpu::soler::{self, GatherParams, ScreenCamera, Texel, UpsampleSigmas, VoteSigmas};
+use gi_render::cpu::soler::{self, GatherParams, ScreenCamera, Texel, UpsampleSigmas};
 use gi_render::cpu::soler_glossy::Gloss;
+use gi_render::cpu::soler_vote::{self, VoteSigmas};
 use gi_render::passes::soler::{FormFactor, StartResolution, VoxelResolution};
 use gi_render::pipeline::Technique;
 use glam::{Vec2, Vec3};
@@ -129,7 +130,7 @@ fn gpu_matches_cpu(technique: Technique, near_field_distance: f32, bounces: u32,
     for k in 1..=s.gathered_levels().end - 1 {
         let gpu = soler_level(&r, k, "");
         let winners = read(&r, &format!("soler.level.{k}.winner"));
-        let (cpu, cpu_winners) = soler::vote_level(&levels[k as usize - 1], sig);
+        let (cpu, cpu_winners) = soler_vote::vote_level(&levels[k as usize - 1], sig);
         assert_eq!((gpu.width, gpu.height), (cpu.width, cpu.height), "level {k} size");
         let differ = cpu_winners.iter().zip(&winners.data).filter(|(c, g)| **c as f32 != g[0]).count();
         // The scores are sums of f32 exponentials: a near-tie may go either way.

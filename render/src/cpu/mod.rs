@@ -13,5 +13,6 @@ pub mod raycast;
 pub mod soler;
 pub mod soler_glossy;
 pub mod soler_temporal;
+pub mod soler_vote;
 pub mod tonemap;
 pub mod view;

@@ -1,7 +1,7 @@
 //! Stage 5 "mip levels" (Soler et al. 004 §4, "Filtering of mipmap levels", Eq. 5): the
 //! G-buffer's position, depth and normal and the direct light are mipmapped by voting among
 //! the sub-pixels of each 2×2 block (`shaders/soler/vote.wgsl`; CPU twin
-//! `cpu::soler::vote_level`). Level 0 is the G-buffer itself.
+//! `cpu::soler_vote::vote_level`). Level 0 is the G-buffer itself.
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::counters::prelude::*;
