@@ -503,7 +503,7 @@ impl Renderer {
         self.scale().0
     }
 
-    /// [`Self::scale_radius`] and where it comes from (the status bar says it).
+    /// [`Self::scale_radius`] and where it comes from (the settings pane says it).
     pub fn scale(&self) -> (f32, crate::scale::ScaleSource) {
         let room = self.scene.view.as_ref().and_then(|v| v.room.as_ref());
         crate::scale::scale_radius(self.settings.scale.reference, room, self.camera.position, self.bounds)
