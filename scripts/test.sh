@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
-# Runs GI Lab's whole test suite. On a machine without a GPU it installs Mesa's software
-# Vulkan driver (lavapipe), Xvfb, Chromium and GNU parallel when it may (root with apt-get), otherwise it says how.
+# Runs GI Lab's whole test suite: `cargo fmt --check`, clippy with warnings as errors, then
+# every test binary, as many at a time as there are cores. On a machine without a GPU it
+# installs Mesa's software Vulkan driver (lavapipe), Xvfb, Chromium and GNU parallel when it
+# may (root with apt-get), otherwise it says how. `--quick` leaves out the slowest binaries
+# (the inner loop); other arguments go to `cargo test --workspace` as they are.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -12,7 +15,7 @@ fi
 
 need=()
 # A Vulkan loader and an ICD (a real GPU driver or lavapipe).
-if ! ls /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json >/dev/null 2>&1 \
+if ! { ls /usr/share/vulkan/icd.d/*.json || ls /etc/vulkan/icd.d/*.json; } >/dev/null 2>&1 \
    || ! ldconfig -p 2>/dev/null | grep -q 'libvulkan.so.1'; then
   need+=(mesa-vulkan-drivers libvulkan1)
 fi
@@ -38,4 +41,66 @@ fi
 # would add about a gigabyte to target/ (CI's disk is small: docs/performance.md, "Build
 # size"); set CARGO_INCREMENTAL=1 to keep them.
 export CARGO_INCREMENTAL="${CARGO_INCREMENTAL:-0}"
-cargo test --workspace "$@"
+
+# Arguments other than --quick go to `cargo test --workspace` as they are (a test name, or
+# `-- --nocapture`): the inner loop of one test.
+quick=0
+if [ "${1:-}" = "--quick" ]; then
+  quick=1
+  shift
+fi
+if [ $# -gt 0 ]; then
+  exec cargo test --workspace "$@"
+fi
+
+# Style first: a formatting slip fails in seconds, a lint in about two minutes (clippy checks
+# every target of the workspace), not after the suite.
+cargo fmt --all --check
+cargo clippy --workspace --all-targets --quiet -- -D warnings
+
+# The suite. `cargo test` runs its test binaries one after another, each on as many threads
+# as it has tests running; most binaries hold one to three long tests, so one of the two
+# cores idled for much of the run (docs/performance.md, "Build and test time"). Here every
+# binary is built first, then they run as many at a time as there are cores, the longest
+# first (GNU parallel), each in its package's folder as `cargo test` runs it.
+# `--quick` leaves out the slowest binaries (the window walk, the every-widget and quality
+# tests): for the inner loop, never for CI.
+slow_first="ui_walk ui cli quality preset_images knecht_quality ui_history gi_render study soak framing ui_no_wait"
+quick_skips="ui_walk ui cli quality preset_images"
+list="$(mktemp /tmp/gi-lab-tests.XXXXXX)"
+trap 'rm -f "$list" "$list".*' EXIT
+cargo test --workspace --no-run --message-format=json-render-diagnostics >"$list.json"
+# One line per test binary: its package folder and its path.
+grep '"reason":"compiler-artifact"' "$list.json" | grep -E '"profile":\{[^}]*"test":true' | grep '"executable":"/' |
+  sed -E 's/.*"manifest_path":"([^"]*)\/Cargo.toml".*"executable":"([^"]*)".*/\1 \2/' >"$list.all"
+rank() { # binary name (without its hash) → its place in slow_first, or 99
+  local i=0 n
+  for n in $slow_first; do
+    [ "$n" = "$1" ] && { echo "$i"; return; }
+    i=$((i + 1))
+  done
+  echo 99
+}
+while read -r dir exe; do
+  name="$(basename "$exe")"
+  name="${name%-*}"
+  if [ "$quick" = 1 ] && [[ " $quick_skips " == *" $name "* ]]; then
+    echo "scripts/test.sh --quick: leaving out $name" >&2
+    continue
+  fi
+  echo "$(rank "$name") $dir $exe"
+done <"$list.all" | sort -n -s -k1,1 | cut -d' ' -f2- >"$list.run"
+echo "scripts/test.sh: $(wc -l <"$list.run") test binaries, $(nproc) at a time"
+status=0
+parallel --will-cite --jobs "$(nproc)" --group --colsep ' ' --joblog "$list.log" \
+  'cd {1} && {2}' :::: "$list.run" || status=$?
+# Doc tests (none run today, but a new one would).
+cargo test --workspace --doc --quiet || status=1
+echo "scripts/test.sh: the slowest binaries (s):"
+tail -n +2 "$list.log" | awk -F'\t' '{ n = $NF; sub(/^cd [^ ]* && /, "", n); sub(/.*\//, "", n); printf "%8.1f  %s  exit %s\n", $4, n, $7 }' |
+  sort -rn | head -8
+if [ "$status" != 0 ]; then
+  echo "scripts/test.sh: failed binaries:" >&2
+  tail -n +2 "$list.log" | awk -F'\t' '$7 != 0 { print "  " $NF }' >&2
+  exit 1
+fi
