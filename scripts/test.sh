@@ -53,8 +53,16 @@ if [ $# -gt 0 ]; then
   exec cargo test --workspace "$@"
 fi
 
-# Style first: a formatting slip fails in seconds, not after the suite.
+# Nothing here reads standard input. Cargo's probe of the compiler (`rustc - --print=…`)
+# inherits it and parses what it finds there: run from a job whose input held text, clippy's
+# probe failed ("failed to run `rustc` to learn about target-specific information") and cargo
+# cached the failure in target/.rustc_info.json.
+exec </dev/null
+
+# Style first: a formatting slip fails in seconds, a lint in about two minutes (clippy checks
+# every target), not after the suite.
 cargo fmt --all --check
+cargo clippy --workspace --all-targets --quiet -- -D warnings
 
 # The suite. `cargo test` runs its test binaries one after another, each on as many threads
 # as it has tests running; most binaries hold one to three long tests, so one of the two
@@ -68,11 +76,6 @@ quick_skips="ui_walk ui cli quality preset_images"
 list="$(mktemp /tmp/gi-lab-tests.XXXXXX)"
 trap 'rm -f "$list" "$list".*' EXIT
 cargo test --workspace --no-run --message-format=json-render-diagnostics >"$list.json"
-# Lints next (about two minutes), before the tests. After the build, not before it: from an
-# empty target folder, the `cargo test` that followed clippy failed in cargo's own probe of
-# rustc ("failed to run `rustc` to learn about target-specific information"); in this order a
-# clean clone builds, lints and tests.
-cargo clippy --workspace --all-targets --quiet -- -D warnings
 # One line per test binary: its package folder and its path.
 grep '"reason":"compiler-artifact"' "$list.json" | grep -E '"profile":\{[^}]*"test":true' | grep '"executable":"/' |
   sed -E 's/.*"manifest_path":"([^"]*)\/Cargo.toml".*"executable":"([^"]*)".*/\1 \2/' >"$list.all"
