@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Runs GI Lab's whole test suite: `cargo fmt --check`, clippy with warnings as errors, then
-# every test binary, as many at a time as there are cores. On a machine without a GPU it
+# Runs GI Lab's whole test suite: `cargo fmt --check`, then every test binary, as many at a
+# time as there are cores. On a machine without a GPU it
 # installs Mesa's software Vulkan driver (lavapipe), Xvfb, Chromium and GNU parallel when it
 # may (root with apt-get), otherwise it says how. `--quick` leaves out the slowest binaries
 # (the inner loop); other arguments go to `cargo test --workspace` as they are.
@@ -53,15 +53,16 @@ if [ $# -gt 0 ]; then
   exec cargo test --workspace "$@"
 fi
 
-# Nothing here reads standard input. Cargo's probe of the compiler (`rustc - --print=…`)
-# inherits it and parses what it finds there: run from a job whose input held text, clippy's
-# probe failed ("failed to run `rustc` to learn about target-specific information") and cargo
-# cached the failure in target/.rustc_info.json.
+# Nothing here reads standard input (cargo's probe of the compiler, `rustc - --print=…`,
+# would parse what it inherits).
 exec </dev/null
 
 # Style first: a formatting slip fails in seconds, not after the suite. Clippy is not run
 # here yet: on a clean clone, whichever of `cargo clippy` and `cargo test --no-run` ran
-# second failed in cargo's probe of the compiler (issue #52's note), so CI would be red.
+# second failed in cargo's probe of the compiler ("failed to run `rustc` to learn about
+# target-specific information": its `rustc -` parsed a rustc error message as its input, and
+# cargo cached the failure in target/.rustc_info.json), so CI would be red. Run it by hand:
+# `cargo clippy --workspace --all-targets -- -D warnings` (clean today).
 cargo fmt --all --check
 
 # The suite. `cargo test` runs its test binaries one after another, each on as many threads

@@ -7,8 +7,8 @@
 //! had there bit for bit, then redoes to the end and must find them again.
 //!
 //! `GI_LAB_WALK_STEPS` (default 600) and `GI_LAB_WALK_SEED` (default 1) replay a walk; a
-//! failure names the seed and the step. The suite walks 600 steps (about 4 minutes on the
-//! 2-core CI machine, a fifth of the suite's time when it walked 2,000); the long walk is
+//! failure names the seed and the step. The suite walks 600 steps (about 10 minutes beside the
+//! other binaries on the 2-core CI machine, where 2,000 took 14 alone); the long walk is
 //! `GI_LAB_WALK_STEPS=2000 cargo test -p gi-lab-tests --test ui_walk` (docs/performance.md,
 //! "Build and test time").
 
