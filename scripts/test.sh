@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Runs GI Lab's whole test suite: `cargo fmt --check`, then every test binary, as many at a
-# time as there are cores. On a machine without a GPU it
-# installs Mesa's software Vulkan driver (lavapipe), Xvfb, Chromium and GNU parallel when it
-# may (root with apt-get), otherwise it says how. `--quick` leaves out the slowest binaries
-# (the inner loop); other arguments go to `cargo test --workspace` as they are.
+# time as there are cores. On a machine without a GPU it installs Mesa's software Vulkan
+# driver (lavapipe), Xvfb, Chromium and GNU parallel when it may (root with apt-get),
+# otherwise it says how. `--quick` leaves out the slowest binaries (the inner loop); other
+# arguments go to `cargo test --workspace` as they are.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
