@@ -409,10 +409,31 @@ fn temporal(
         Temporal::ConfidenceMerge => {
             let t = x.temporal.as_mut()?;
             let (ctx, s, depth_range) = (f.ctx, &f.settings.temporal, f.depth_range());
-            timer.scope(ctx, enc, "temporal", |e, slot| t.run(ctx, e, slot, s, depth_range, &src, f.gbuffer));
+            // The demodulated merge (issue #51) keeps the demodulated filter's irradiance.
+            let irradiance = merges_demodulated(f.settings)
+                .then(|| {
+                    x.interleave
+                        .as_ref()
+                        .map(|i| crate::passes::view(&i.filtered_irradiance, "indirect.filtered_irradiance"))
+                })
+                .flatten();
+            timer.scope(ctx, enc, "temporal", |e, slot| {
+                t.run(ctx, e, slot, s, depth_range, &src, f.gbuffer, irradiance.as_ref())
+            });
             crate::passes::view(t.history(), "temporal.history")
         }
     })
+}
+
+/// Whether stage 7's confidence merge keeps the light demodulated (`temporal.demodulate`): only
+/// after the demodulated geometry-aware filter, whose mean irradiance it merges.
+pub(crate) fn merges_demodulated(s: &crate::lab_settings::LabSettings) -> bool {
+    let p = &s.pipeline;
+    p.reconstruction == Reconstruction::GeometryAwareFilter
+        && p.temporal == Temporal::ConfidenceMerge
+        && s.temporal.demodulate
+        && s.interleave.demodulate
+        && !merges_first(s)
 }
 
 /// Whether stage 7's confidence merge runs before the geometry-aware filter (`temporal.order`

@@ -14,13 +14,14 @@
 #import common/reproject.wgsl
 #import common/vpl_explain.wgsl
 #import interleave/params.wgsl
+#import common/brdf.wgsl
 
 struct ExplainParams {
     // x, y: the pixel p; z: the filter's window side (n with the filter, else 1); w: 1 when
     // the confidence merge ran (temporal.confidence and the histories are bound)
     pixel: vec4<u32>,
     // x: α · (z_far − z_near), y: β (interleave/filter.wgsl); z: 1 when the filter ran
-    // demodulated (issue #51)
+    // demodulated (issue #51); w: 1 when the merge ran demodulated (its history is split_prev)
     thresholds: vec4<f32>,
 }
 
@@ -70,6 +71,18 @@ const EXPLAIN_W_SURFACE: u32 = 4u;
 @group(0) @binding(18) var<storage, read_write> header: Header;
 @group(0) @binding(19) var<storage, read_write> window: array<WindowPixel, 64>;
 @group(0) @binding(20) var<storage, read_write> terms: array<VplTerm>;
+// The demodulated merge's split history (temporal/confidence.wgsl: x = E.rg, y = (E.b, S.r),
+// z = S.gb as half-float pairs).
+@group(0) @binding(21) var split_prev: texture_2d<u32>;
+
+// The history as the demodulated merge reads it at q: k_q·E_prev + S_prev.
+fn split_history(q: vec2<i32>, prev: vec2<i32>) -> vec3<f32> {
+    let v = textureLoad(split_prev, prev, 0);
+    let e = vec3<f32>(unpack2x16float(v.x), unpack2x16float(v.y).x);
+    let s = vec3<f32>(unpack2x16float(v.y).y, unpack2x16float(v.z));
+    let alb = textureLoad(g_albedo, q, 0);
+    return brdf_diffuse(alb.rgb, alb.a) * e + s;
+}
 
 fn tile_of(q: vec2<i32>) -> u32 {
     let n = params.split.x;
@@ -161,7 +174,11 @@ fn cs_explain_pixel(@builtin(local_invocation_index) i: u32) {
             var h = vec3<f32>(0.0);
             if (c > 0.0) {
                 let prev = previous_texel(q, textureLoad(g_motion, q, 0).xy, size);
-                h = textureLoad(history_prev, prev, 0).rgb;
+                if (explain.thresholds.w > 0.5) {
+                    h = split_history(q, prev);
+                } else {
+                    h = textureLoad(history_prev, prev, 0).rgb;
+                }
             }
             out.history = vec4<f32>(h, c);
             out.out = vec4<f32>(textureLoad(history_out, q, 0).rgb, 0.0);

@@ -6,7 +6,8 @@
 // Demodulated (n.y = 1; issue #51, docs/readings.md knecht.demodulated-filter): the window's
 // mean irradiance E is reflected with the centre's own diffuse reflectance k = c·DI/π and the
 // mean of the specular light S = L − k·E is added, so that the albedo's texture is not
-// blurred; n.y = 0 averages L as the thesis does.
+// blurred; n.y = 0 averages L as the thesis does. The mean irradiance goes to
+// `indirect.filtered_irradiance` for the demodulated confidence merge (temporal/confidence.wgsl).
 #import common/fullscreen.wgsl
 #import common/brdf.wgsl
 
@@ -24,6 +25,7 @@ struct FilterParams {
 @group(0) @binding(4) var dst: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(5) var irradiance: texture_2d<f32>;
 @group(0) @binding(6) var g_albedo: texture_2d<f32>;
+@group(0) @binding(7) var dst_irradiance: texture_storage_2d<rgba16float, write>;
 
 // The pixel's diffuse reflectance k = c·DI/π (brdf_eval's diffuse term; 0 when the filter
 // averages L itself).
@@ -52,6 +54,7 @@ fn cs_filter(@builtin(global_invocation_id) gid: vec3<u32>) {
     let cn = textureLoad(g_normal, p, 0);
     if (cn.w < 0.5) {
         textureStore(dst, p, vec4<f32>(0.0, 0.0, 0.0, 1.0));
+        textureStore(dst_irradiance, p, vec4<f32>(0.0, 0.0, 0.0, 1.0));
         return;
     }
     let cd = textureLoad(g_position, p, 0).w;
@@ -78,4 +81,5 @@ fn cs_filter(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
     textureStore(dst, p, vec4<f32>((reflectance(p) * irr + sum) / max(count, 1.0), 1.0));
+    textureStore(dst_irradiance, p, vec4<f32>(irr / max(count, 1.0), 1.0));
 }

@@ -6,13 +6,22 @@
 // previous position is off screen or was background get confidence 0. The history keeps the
 // merged light in rgb and the linear depth in a, as the thesis stores depth in the fourth
 // channel of the old illumination. CPU twin: cpu::knecht::confidence (readings there).
+//
+// Demodulated (state.y = 1; issue #51, docs/readings.md knecht.demodulated-merge): the light
+// is split as the demodulated filter split it, L = k·E + S with E the filter's mean irradiance
+// (`indirect.filtered_irradiance`), k = c·DI/π this pixel's diffuse colour and S the specular
+// light; E and S are merged apart and reflected with this pixel's own k, so that a history
+// reprojected from a neighbouring texel brings its light but not its texture. The split
+// history (`temporal.history_split`) keeps E and S as half floats; Eq. 3.3 compares L with the
+// history as this pixel reflects it, k·E_prev + S_prev. CPU twin: cpu::knecht::merge_demodulated.
 #import common/fullscreen.wgsl
 #import common/reproject.wgsl
+#import common/brdf.wgsl
 
 struct ConfidenceParams {
     // x: c_base, y: w_pos, z: w_normal, w: w_illumination
     weights: vec4<f32>,
-    // x: 1 when the history is valid and temporal coherence is on
+    // x: 1 when the history is valid and temporal coherence is on; y: 1 to merge demodulated
     state: vec4<u32>,
     // x: z_far − z_near of the camera (the thesis' linear depth unit, Eq. 4.2)
     range: vec4<f32>,
@@ -29,6 +38,24 @@ struct ConfidenceParams {
 @group(0) @binding(8) var history_out: texture_storage_2d<rgba32float, write>;
 // This frame's normals, next frame's prev_normal (ping-pong: no copy, issue #38).
 @group(0) @binding(9) var normal_out: texture_storage_2d<rgba16float, write>;
+// The demodulated merge's inputs and split history: x = E.rg, y = (E.b, S.r), z = S.gb as
+// pack2x16float, w unused.
+@group(0) @binding(10) var g_albedo: texture_2d<f32>;
+@group(0) @binding(11) var irradiance: texture_2d<f32>;
+@group(0) @binding(12) var split_prev: texture_2d<u32>;
+@group(0) @binding(13) var split_out: texture_storage_2d<rgba32uint, write>;
+
+fn pack_split(e: vec3<f32>, s: vec3<f32>) -> vec4<u32> {
+    return vec4<u32>(pack2x16float(e.xy), pack2x16float(vec2<f32>(e.z, s.x)), pack2x16float(s.yz), 0u);
+}
+
+fn unpack_irradiance(v: vec4<u32>) -> vec3<f32> {
+    return vec3<f32>(unpack2x16float(v.x), unpack2x16float(v.y).x);
+}
+
+fn unpack_specular(v: vec4<u32>) -> vec3<f32> {
+    return vec3<f32>(unpack2x16float(v.y).y, unpack2x16float(v.z));
+}
 
 fn confidence(motion: vec2<f32>, size: vec2<f32>, d: f32, d_prev: f32, n: vec3<f32>, n_prev: vec3<f32>, i_new: vec3<f32>, i_prev: vec3<f32>) -> f32 {
     let w = params.weights;
@@ -53,6 +80,17 @@ fn cs_confidence(@builtin(global_invocation_id) gid: vec3<u32>) {
     let d = textureLoad(g_position, p, 0).w;
     var c = 0.0;
     var merged = i_new;
+    let demodulate = params.state.y == 1u;
+    var k = vec3<f32>(0.0);
+    var e_new = vec3<f32>(0.0);
+    if (demodulate) {
+        let alb = textureLoad(g_albedo, p, 0);
+        k = brdf_diffuse(alb.rgb, alb.a);
+        e_new = textureLoad(irradiance, p, 0).rgb;
+    }
+    let s_new = i_new - k * e_new;
+    var e_out = e_new;
+    var s_out = s_new;
     if (params.state.x == 1u && nrm.w > 0.5) {
         let motion = textureLoad(g_motion, p, 0).xy;
         let q = previous_texel(p, motion, size);
@@ -60,8 +98,18 @@ fn cs_confidence(@builtin(global_invocation_id) gid: vec3<u32>) {
             let pn = textureLoad(prev_normal, q, 0);
             let h = textureLoad(history_prev, q, 0);
             if (pn.w > 0.5 && h.a > 0.0) {
-                c = confidence(motion, vec2<f32>(size), d, h.a, nrm.xyz, pn.xyz, i_new, h.rgb);
-                merged = h.rgb * c + (1.0 - c) * i_new;
+                if (demodulate) {
+                    let sp = textureLoad(split_prev, q, 0);
+                    let e_prev = unpack_irradiance(sp);
+                    let s_prev = unpack_specular(sp);
+                    c = confidence(motion, vec2<f32>(size), d, h.a, nrm.xyz, pn.xyz, i_new, k * e_prev + s_prev);
+                    e_out = e_prev * c + (1.0 - c) * e_new;
+                    s_out = s_prev * c + (1.0 - c) * s_new;
+                    merged = k * e_out + s_out;
+                } else {
+                    c = confidence(motion, vec2<f32>(size), d, h.a, nrm.xyz, pn.xyz, i_new, h.rgb);
+                    merged = h.rgb * c + (1.0 - c) * i_new;
+                }
             }
         }
     }
@@ -72,4 +120,7 @@ fn cs_confidence(@builtin(global_invocation_id) gid: vec3<u32>) {
         depth = d;
     }
     textureStore(history_out, p, vec4<f32>(merged, depth));
+    if (demodulate) {
+        textureStore(split_out, p, pack_split(e_out, s_out));
+    }
 }

@@ -385,3 +385,70 @@ fn the_fused_gather_equals_split_gather_and_merge() {
         tr.readback(name).unwrap_or_else(|e| panic!("{name}: {e}"));
     }
 }
+
+/// The default box with a checkerboard base-colour texture on every surface (8 cells across
+/// a 64-texel texture), 96², Knecht's defaults (filter, then the confidence merge). Renders
+/// four still frames, then pans the camera sideways by 0.2 % of the scene's radius a frame
+/// for ten frames (about a third of a pixel: the confidence stays near 0.5 on average, as
+/// w_pos = 300 rejects faster motion); returns the merged light (`temporal.history`) after
+/// the pan and that of a camera that stood still at the pan's end for as many frames (the
+/// same VPLs each frame, so the same noise), and the mean confidence of the pan.
+fn knecht_pan(demodulate: bool) -> (gi_render::ImageF32, gi_render::ImageF32, f64) {
+    let mut scene = default_scene();
+    scene.textures.push(gi_lab_tests::checker_texture(64, 8, 137));
+    let t = scene.textures.len() - 1;
+    for m in &mut scene.materials {
+        m.base_color_texture = Some(t);
+    }
+    let renderer = || {
+        let mut r = gi_lab_tests::scene_renderer(scene.clone(), 96, |s| {
+            Technique::Knecht.apply(s);
+            s.temporal.demodulate = demodulate;
+        });
+        r.clock.playing = false;
+        r
+    };
+    let (mut pan, mut still) = (renderer(), renderer());
+    let step = Vec3::new(0.002 * pan.bounds().radius(), 0.0, 0.0);
+    still.camera.fly(10.0 * step);
+    for i in 0..14 {
+        if i >= 4 {
+            pan.camera.fly(step);
+        }
+        pan.render_frame();
+        still.render_frame();
+    }
+    let conf = gi_lab_tests::read(&pan, "temporal.confidence");
+    let mean_conf = conf.data.iter().map(|c| c[0] as f64).sum::<f64>() / conf.data.len() as f64;
+    (gi_lab_tests::read(&pan, "temporal.history"), gi_lab_tests::read(&still, "temporal.history"), mean_conf)
+}
+
+/// Relative mean absolute difference of two images' rgb.
+fn relative_difference(a: &gi_render::ImageF32, b: &gi_render::ImageF32) -> f64 {
+    let rgb = |v: [f32; 4]| Vec3::new(v[0], v[1], v[2]);
+    let (num, den) = a.data.iter().zip(&b.data).fold((0.0f64, 0.0f64), |(n, d), (a, b)| {
+        (n + (rgb(*a) - rgb(*b)).abs().element_sum() as f64, d + rgb(*b).element_sum() as f64)
+    });
+    num / den.max(1e-12)
+}
+
+/// Issue #51 point 3: the confidence merge keeps the demodulated filter's irradiance and the
+/// specular light apart and reflects the irradiance with each pixel's own colour
+/// (`temporal.demodulate`), so that under a camera pan the history, which held the texture
+/// that lay under the pixel in earlier frames, brings its light but not that texture. After
+/// the pan the demodulated merge is closer to what a still camera sees there than the thesis'
+/// merge of the reflected light. Measured on lavapipe: 0.0424 against 0.0586 (mean confidence 0.51).
+#[test]
+fn the_demodulated_merge_smears_textures_less_under_a_pan() {
+    let (pan, still, c) = knecht_pan(true);
+    let (pan_l, still_l, c_l) = knecht_pan(false);
+    let (demodulated, reflected) = (relative_difference(&pan, &still), relative_difference(&pan_l, &still_l));
+    println!(
+        "after a pan against a still camera: demodulated merge {demodulated:.4} (mean confidence {c:.3}), merge of the reflected light {reflected:.4} ({c_l:.3})"
+    );
+    assert!(c > 0.3 && c_l > 0.3, "the pan is too fast for the merge to keep any history: {c}, {c_l}");
+    assert!(
+        demodulated < 0.9 * reflected,
+        "demodulated merge {demodulated} vs merge of the reflected light {reflected}"
+    );
+}

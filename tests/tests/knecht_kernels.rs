@@ -297,12 +297,12 @@ fn geometry_aware_filter_on_the_gpu_equals_the_cpu() {
         let (src, irr) = (src_tex.create_view(&Default::default()), irr_tex.create_view(&Default::default()));
         pass.filter(&ctx, &mut enc, None, &s, depth_range, &src, &g.views(), demodulated.then_some(&irr));
         ctx.queue.submit([enc.finish()]);
-        read(&ctx, &pass.filtered)
+        (read(&ctx, &pass.filtered), read(&ctx, &pass.filtered_irradiance))
     };
     // The thesis' filter of L: the CPU twin with E = k = 0.
     let plain: Vec<knecht::FilterTexel> =
         texels.iter().map(|t| knecht::FilterTexel { irradiance: Vec3::ZERO, reflectance: Vec3::ZERO, ..*t }).collect();
-    let got_plain = filter(false);
+    let (got_plain, _) = filter(false);
     let cpu_plain = knecht::geometry_aware_filter(&plain, w, h, n, s.alpha, s.beta, depth_range);
     let mut worst_plain = 0.0f32;
     for (i, c) in cpu_plain.iter().enumerate() {
@@ -311,8 +311,18 @@ fn geometry_aware_filter_on_the_gpu_equals_the_cpu() {
         worst_plain = worst_plain.max(err - gi_render::buffers::half_step(c.abs().max_element()));
     }
     assert!(worst_plain <= 1e-5, "the filter of L: worst error beyond a half step {worst_plain}");
-    let got = filter(true);
+    let (got, got_irradiance) = filter(true);
     let cpu = knecht::geometry_aware_filter(&texels, w, h, n, s.alpha, s.beta, depth_range);
+    // The window's mean irradiance beside it (indirect.filtered_irradiance, the demodulated
+    // merge's E), also half floats.
+    let cpu_irradiance = knecht::filter_with_irradiance(&texels, w, h, n, s.alpha, s.beta, depth_range);
+    for (i, (l, e)) in cpu_irradiance.iter().enumerate() {
+        assert_eq!(*l, cpu[i], "the two CPU filters disagree at {i}");
+        let p = got_irradiance.at(i as u32 % w, i as u32 / w);
+        let err = (Vec3::new(p[0], p[1], p[2]) - *e).abs().max_element();
+        let step = gi_render::buffers::half_step(e.abs().max_element());
+        assert!(err <= 1e-5 + 1e-6 * e.abs().max_element() + step, "mean irradiance at {i}: GPU {p:?}, CPU {e}");
+    }
     // Demodulated, a pixel's colour shows in its filtered light: k_p·mean(E) differs from the
     // mean of k·E wherever the window's colours differ.
     let sharper = cpu.iter().zip(&cpu_plain).filter(|(a, b)| (**a - **b).abs().max_element() > 1e-2).count();
@@ -347,28 +357,53 @@ fn geometry_aware_filter_on_the_gpu_equals_the_cpu() {
 
 #[test]
 fn confidence_and_merge_on_the_gpu_equal_eq_3_1_to_3_6_on_the_cpu() {
+    confidence_and_merge_case(false);
+}
+
+/// The demodulated merge (issue #51): E and S merged apart with Eq. 3.6 and reflected with
+/// each pixel's own colour, against `cpu::knecht::merge_demodulated`.
+#[test]
+fn the_demodulated_merge_on_the_gpu_equals_the_cpu() {
+    confidence_and_merge_case(true);
+}
+
+/// Two frames through the confidence pass against Eq. 3.1–3.6 on the CPU; `demodulated`: each
+/// pixel also has a textured colour and an irradiance E, its light is k·E + S, and the pass
+/// merges E and S apart (`cpu::knecht::merge_demodulated`).
+fn confidence_and_merge_case(demodulated: bool) {
     use gi_render::passes::knecht::temporal::{TemporalPass, TemporalSettings};
     let ctx = gpu();
     let (w, h) = (24u32, 20u32);
     let depth_range = 9.9;
-    let mut rng = Rng(23);
+    let mut rng = Rng(if demodulated { 29 } else { 23 });
     let len = (w * h) as usize;
-    // Frame 0: depth, normal and light per pixel (some background).
+    // Frame 0: depth, normal, colour, irradiance and light per pixel (some background).
     struct Px {
         depth: f32,
         normal: Vec3,
         light: Vec3,
+        /// (c, DI) and E; light = k·E + S with k = c·DI/π (zero colour without demodulation).
+        albedo: [f32; 4],
+        irradiance: Vec3,
     }
+    let half3 = |v: Vec3| Vec3::new(f16(v.x), f16(v.y), f16(v.z));
+    let lit = |rng: &mut Rng, depth: f32, normal: Vec3| {
+        let (c, di) = (Vec3::new(rng.unorm8(), rng.unorm8(), rng.unorm8()), rng.unorm8());
+        let e = half3(Vec3::new(rng.range(0.1, 4.0), rng.range(0.1, 4.0), rng.range(0.1, 4.0)));
+        let light = if demodulated {
+            half3(c * di / std::f32::consts::PI * e + Vec3::splat(rng.range(0.0, 0.5)))
+        } else {
+            Vec3::new(rng.range(0.1, 2.0), rng.range(0.1, 2.0), rng.range(0.1, 2.0))
+        };
+        Px { depth, normal, light, albedo: [c.x, c.y, c.z, di], irradiance: e }
+    };
     let frame = |rng: &mut Rng| -> Vec<Option<Px>> {
         (0..len)
             .map(|_| {
                 (rng.next_f32() > 0.1).then(|| {
                     let n = (Vec3::Z + 0.4 * rng.unit()).normalize();
-                    Px {
-                        depth: rng.range(1.0, 5.0),
-                        normal: Vec3::new(f16(n.x), f16(n.y), f16(n.z)),
-                        light: Vec3::new(rng.range(0.1, 2.0), rng.range(0.1, 2.0), rng.range(0.1, 2.0)),
-                    }
+                    let depth = rng.range(1.0, 5.0);
+                    lit(rng, depth, half3(n))
                 })
             })
             .collect()
@@ -386,17 +421,17 @@ fn confidence_and_merge_on_the_gpu_equal_eq_3_1_to_3_6_on_the_cpu() {
             Some(match p {
                 Some(p) if keep < 0.8 => {
                     let n = (p.normal + rng.range(0.0, 0.3) * rng.unit()).normalize();
-                    Px {
-                        depth: p.depth + rng.range(-0.2, 0.2),
-                        normal: Vec3::new(f16(n.x), f16(n.y), f16(n.z)),
-                        light: p.light * rng.range(0.7, 1.3),
+                    let depth = p.depth + rng.range(-0.2, 0.2);
+                    let mut q = lit(&mut rng, depth, half3(n));
+                    if !demodulated {
+                        q.light = p.light * rng.range(0.7, 1.3);
                     }
+                    q
                 }
-                _ => Px {
-                    depth: rng.range(1.0, 5.0),
-                    normal: Vec3::Z,
-                    light: Vec3::new(rng.range(0.1, 2.0), rng.range(0.1, 2.0), rng.range(0.1, 2.0)),
-                },
+                _ => {
+                    let depth = rng.range(1.0, 5.0);
+                    lit(&mut rng, depth, Vec3::Z)
+                }
             })
         })
         .collect();
@@ -409,22 +444,29 @@ fn confidence_and_merge_on_the_gpu_equal_eq_3_1_to_3_6_on_the_cpu() {
             f.iter().map(|p| p.as_ref().map_or([0.0; 4], |p| [p.normal.x, p.normal.y, p.normal.z, 1.0])).collect();
         let light: Vec<[f32; 4]> =
             f.iter().map(|p| p.as_ref().map_or([0.0; 4], |p| [p.light.x, p.light.y, p.light.z, 1.0])).collect();
+        let albedo: Vec<[f32; 4]> = f.iter().map(|p| p.as_ref().map_or([0.0; 4], |p| p.albedo)).collect();
+        let irr: Vec<[f32; 4]> =
+            f.iter().map(|p| p.as_ref().map_or([0.0; 4], |p| p.irradiance.extend(1.0).to_array())).collect();
         let mv: Vec<[f32; 4]> = motion.iter().map(|m| [m.x, m.y, 0.0, 0.0]).collect();
         let zero = vec![[0.0; 4]; len];
         (
-            SyntheticGBuffer::new(&ctx, w, h, &pos, &nrm, &zero, &zero, &mv),
+            SyntheticGBuffer::new(&ctx, w, h, &pos, &nrm, &albedo, &zero, &mv),
             texture(&ctx, "test.light", w, h, &light, false),
+            texture(&ctx, "test.irradiance", w, h, &irr, true),
         )
     };
     let s = TemporalSettings { w_pos: 10.0, ..Default::default() };
     let mut pass = TemporalPass::new(&ctx, w, h);
     for (f, m) in [(&f0, vec![Vec2::ZERO; len]), (&f1, motion.clone())] {
-        let (g, light) = upload(f, &m);
+        let (g, light, irr) = upload(f, &m);
         let mut enc =
             ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.temporal") });
-        pass.run(&ctx, &mut enc, None, &s, depth_range, &light.create_view(&Default::default()), &g.views());
+        let irr = irr.create_view(&Default::default());
+        let irr = demodulated.then_some(&irr);
+        pass.run(&ctx, &mut enc, None, &s, depth_range, &light.create_view(&Default::default()), &g.views(), irr);
         ctx.queue.submit([enc.finish()]);
     }
+    assert_eq!(pass.split_prev().is_some(), demodulated, "the second frame read a split history");
     let conf = read(&ctx, &pass.confidence);
     let hist = read(&ctx, pass.history());
     let weights = knecht::ConfidenceWeights {
@@ -433,17 +475,29 @@ fn confidence_and_merge_on_the_gpu_equal_eq_3_1_to_3_6_on_the_cpu() {
         w_normal: s.w_normal,
         w_illumination: s.w_illumination,
     };
+    let k = |p: &Px| Vec3::new(p.albedo[0], p.albedo[1], p.albedo[2]) * p.albedo[3] / std::f32::consts::PI;
     let (mut zero, mut middle, mut merged) = (0, 0, 0);
     for y in 0..h as i32 {
         for x in 0..w as i32 {
             let i = (y * w as i32 + x) as usize;
             let (mut c, mut out) = (0.0, f1[i].as_ref().map_or(Vec3::ZERO, |p| p.light));
+            // The half-float rounding of the split history (E_prev, S_prev) that the merge read,
+            // as one half step of each, times its share: 0 without demodulation.
+            let mut split_step = 0.0;
             if let Some(p) = &f1[i] {
                 // The shader's lookup: the previous position rounded to a pixel.
                 let m = motion[i];
                 let q = (Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + m).floor();
                 let inside = q.x >= 0.0 && q.y >= 0.0 && q.x < w as f32 && q.y < h as f32;
                 if inside && let Some(prev) = &f0[(q.y as u32 * w + q.x as u32) as usize] {
+                    // Without demodulation the history is the light itself; demodulated it is
+                    // frame 0's split, stored as half floats, reflected with this pixel's k.
+                    let split_prev = knecht::SplitLight::of(prev.light, k(prev), prev.irradiance);
+                    let split_prev = knecht::SplitLight {
+                        irradiance: half3(split_prev.irradiance),
+                        specular: half3(split_prev.specular),
+                    };
+                    let i_prev = if demodulated { split_prev.reflect(k(p)) } else { prev.light };
                     let input = knecht::ConfidenceInput {
                         motion_px: m,
                         size: Vec2::new(w as f32, h as f32),
@@ -453,10 +507,17 @@ fn confidence_and_merge_on_the_gpu_equal_eq_3_1_to_3_6_on_the_cpu() {
                         normal: p.normal,
                         normal_prev: prev.normal,
                         illumination: p.light,
-                        illumination_prev: prev.light,
+                        illumination_prev: i_prev,
                     };
                     c = knecht::confidence(&input, &weights);
-                    out = knecht::merge(p.light, prev.light, c);
+                    out = if demodulated {
+                        let new = knecht::SplitLight::of(p.light, k(p), p.irradiance);
+                        let step = |v: Vec3| gi_render::buffers::half_step(v.abs().max_element());
+                        split_step = c * (k(p).max_element() * step(split_prev.irradiance) + step(split_prev.specular));
+                        knecht::merge_demodulated(k(p), new, split_prev, c).0
+                    } else {
+                        knecht::merge(p.light, prev.light, c)
+                    };
                     merged += 1;
                 }
             }
@@ -465,7 +526,7 @@ fn confidence_and_merge_on_the_gpu_equal_eq_3_1_to_3_6_on_the_cpu() {
             let hp = hist.at(x as u32, y as u32);
             let h3 = Vec3::new(hp[0], hp[1], hp[2]);
             assert!(
-                (h3 - out).abs().max_element() <= 1e-4 * out.max_element().max(1.0),
+                (h3 - out).abs().max_element() <= 1e-4 * out.max_element().max(1.0) + split_step,
                 "merge at ({x}, {y}): GPU {h3}, CPU {out}"
             );
             let depth = f1[i].as_ref().map_or(0.0, |p| p.depth);

@@ -462,7 +462,21 @@ pub fn geometry_aware_filter(
     beta: f32,
     depth_range: f32,
 ) -> Vec<Vec3> {
-    let mut out = vec![Vec3::ZERO; img.len()];
+    filter_with_irradiance(img, width, height, n, alpha, beta, depth_range).into_iter().map(|(l, _)| l).collect()
+}
+
+/// [`geometry_aware_filter`] with the window's mean irradiance beside each pixel's light
+/// (`indirect.filtered_irradiance`, what the demodulated merge keeps, [`merge_demodulated`]).
+pub fn filter_with_irradiance(
+    img: &[FilterTexel],
+    width: u32,
+    height: u32,
+    n: u32,
+    alpha: f32,
+    beta: f32,
+    depth_range: f32,
+) -> Vec<(Vec3, Vec3)> {
+    let mut out = vec![(Vec3::ZERO, Vec3::ZERO); img.len()];
     for y in 0..height as i32 {
         for x in 0..width as i32 {
             let c = img[(y as u32 * width + x as u32) as usize];
@@ -488,7 +502,8 @@ pub fn geometry_aware_filter(
                     count += 1.0;
                 }
             }
-            out[(y as u32 * width + x as u32) as usize] = (c.reflectance * irradiance + sum) / count.max(1.0);
+            out[(y as u32 * width + x as u32) as usize] =
+                ((c.reflectance * irradiance + sum) / count.max(1.0), irradiance / count.max(1.0));
         }
     }
     out
@@ -543,6 +558,39 @@ pub fn confidence(i: &ConfidenceInput, w: &ConfidenceWeights) -> f32 {
 /// The merge of Eq. 3.6: I = I_prev · confidence + (1 − confidence) · I_new.
 pub fn merge(i_new: Vec3, i_prev: Vec3, confidence: f32) -> Vec3 {
     i_prev * confidence + (1.0 - confidence) * i_new
+}
+
+/// Light split as the demodulated filter splits it: L = k·E + S.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SplitLight {
+    /// The irradiance E (the filter's window mean).
+    pub irradiance: Vec3,
+    /// The specular light S = L − k·E.
+    pub specular: Vec3,
+}
+
+impl SplitLight {
+    /// L split with the pixel's diffuse reflectance k and the irradiance E it reflects.
+    pub fn of(light: Vec3, k: Vec3, irradiance: Vec3) -> Self {
+        Self { irradiance, specular: light - k * irradiance }
+    }
+
+    /// The light a pixel of diffuse reflectance k gives back: k·E + S.
+    pub fn reflect(&self, k: Vec3) -> Vec3 {
+        k * self.irradiance + self.specular
+    }
+}
+
+/// The demodulated merge (issue #51, ⚠[knecht.demodulated-merge]; twin of the demodulated path
+/// of `shaders/temporal/confidence.wgsl`): Eq. 3.6 applied to E and S apart, the result
+/// reflected with this pixel's own k. Eq. 3.3's I_prev is the history as this pixel reflects
+/// it, `prev.reflect(k)`. Returns the merged light and the split history to keep.
+pub fn merge_demodulated(k: Vec3, new: SplitLight, prev: SplitLight, confidence: f32) -> (Vec3, SplitLight) {
+    let m = SplitLight {
+        irradiance: merge(new.irradiance, prev.irradiance, confidence),
+        specular: merge(new.specular, prev.specular, confidence),
+    };
+    (m.reflect(k), m)
 }
 
 #[cfg(test)]

@@ -119,6 +119,8 @@ pub struct VplExplainPass {
     /// Header, window and terms (`TERMS_OFFSET` + 64 bytes per slot).
     pub out: wgpu::Buffer,
     dummy: wgpu::TextureView,
+    /// Stands in for the demodulated merge's split history when it did not run.
+    dummy_split: wgpu::TextureView,
     dummy_ism: wgpu::TextureView,
     dummy_exact: wgpu::TextureView,
     /// The last run's chain, and its slot count.
@@ -169,6 +171,7 @@ impl VplExplainPass {
                 bgl::storage(18, cs, false),
                 bgl::storage(19, cs, false),
                 bgl::storage(20, cs, false),
+                bgl::uint_texture(21, cs),
             ],
         });
         let module = crate::shaders::create_module(device, "interleave/explain.wgsl");
@@ -196,6 +199,17 @@ impl VplExplainPass {
             ),
             out: Self::out_buffer(device, 256),
             dummy,
+            dummy_split: crate::passes::view(
+                &crate::passes::create_target(
+                    device,
+                    "explain.vpl.no_split",
+                    1,
+                    1,
+                    crate::passes::knecht::temporal::SPLIT_FORMAT,
+                    wgpu::TextureUsages::empty(),
+                ),
+                "explain.vpl.no_split",
+            ),
             dummy_ism,
             dummy_exact,
             info: None,
@@ -229,9 +243,11 @@ impl VplExplainPass {
             None => 1,
         };
         let (alpha, beta) = inp.filter.unwrap_or((0.0, 0.0));
+        // The demodulated merge read a split history (E, S) instead of `temporal.history_prev`.
+        let split_prev = inp.temporal.and_then(|t| t.split_prev());
         let p = ExplainParams {
             pixel: [inp.pixel.0, inp.pixel.1, window, inp.temporal.is_some() as u32],
-            thresholds: Vec4::new(alpha, beta, inp.demodulated as u32 as f32, 0.0),
+            thresholds: Vec4::new(alpha, beta, inp.demodulated as u32 as f32, split_prev.is_some() as u32 as f32),
         };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
         let (_, ism, exact, _, _, _) = inp.vis.parts(&self.dummy_ism, &self.dummy_exact);
@@ -274,6 +290,7 @@ impl VplExplainPass {
                 entry(18, part(0, Some(std::mem::size_of::<GpuHeader>() as u64))),
                 entry(19, part(WINDOW_OFFSET, Some(WINDOW_PIXELS * 64))),
                 entry(20, part(TERMS_OFFSET, None)),
+                entry(21, tv(&split_prev.map_or(self.dummy_split.clone(), |t| v(t, "temporal.history_split_prev")))),
             ],
         });
         let mut pass =

@@ -164,6 +164,9 @@ pub struct InterleavePass {
     /// The irradiance of `merged`'s light (Σ E_k·V_k·N/N_t), the demodulated filter's input.
     pub irradiance: wgpu::Texture,
     pub filtered: wgpu::Texture,
+    /// The window's mean irradiance that `filtered` reflects (demodulated filter only): the
+    /// demodulated confidence merge's E (`temporal.demodulate`).
+    pub filtered_irradiance: wgpu::Texture,
     /// `interleave.split_passes`: the split textures exist only then.
     split_passes: bool,
     split_layout: wgpu::BindGroupLayout,
@@ -235,7 +238,16 @@ impl InterleavePass {
         });
         let filter_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("interleave.filter.inputs"),
-            entries: &[bgl::uniform(0, cs), t(1), t(2), t(3), bgl::storage_texture(4, LIGHT_FORMAT), t(5), t(6)],
+            entries: &[
+                bgl::uniform(0, cs),
+                t(1),
+                t(2),
+                t(3),
+                bgl::storage_texture(4, LIGHT_FORMAT),
+                t(5),
+                t(6),
+                bgl::storage_texture(7, LIGHT_FORMAT),
+            ],
         });
         let module = |p| crate::shaders::create_module(device, p);
         let split_pipeline = crate::passes::compute_pipeline(
@@ -286,7 +298,8 @@ impl InterleavePass {
         let gather_params = uniform("interleave.gather.params", std::mem::size_of::<GatherParams>() as u64);
         let filter_params = uniform("interleave.filter.params", std::mem::size_of::<FilterParams>() as u64);
         let (dummy_ism, dummy_exact) = no_visibility_atlases(device, "interleave");
-        let (split, [merged, irradiance, filtered]) = Self::targets(device, width, height, n, split_passes);
+        let (split, [merged, irradiance, filtered, filtered_irradiance]) =
+            Self::targets(device, width, height, n, split_passes);
         Self {
             n,
             width,
@@ -295,6 +308,7 @@ impl InterleavePass {
             merged,
             irradiance,
             filtered,
+            filtered_irradiance,
             split_passes,
             split_layout,
             gather_layout,
@@ -350,7 +364,7 @@ impl InterleavePass {
         height: u32,
         n: u32,
         split_passes: bool,
-    ) -> (Option<Split>, [wgpu::Texture; 3]) {
+    ) -> (Option<Split>, [wgpu::Texture; 4]) {
         let (tw, th) = Self::tile(width, height, n);
         let (sw, sh) = (tw * n.max(1), th * n.max(1));
         let st = wgpu::TextureUsages::STORAGE_BINDING;
@@ -366,7 +380,8 @@ impl InterleavePass {
         let merged = t("indirect.merged", width, height, LIGHT_FORMAT);
         let irradiance = t("indirect.irradiance", width, height, LIGHT_FORMAT);
         let filtered = t("indirect.filtered", width, height, LIGHT_FORMAT);
-        (split, [merged, irradiance, filtered])
+        let filtered_irradiance = t("indirect.filtered_irradiance", width, height, LIGHT_FORMAT);
+        (split, [merged, irradiance, filtered, filtered_irradiance])
     }
 
     /// Resizes for `width`×`height` and n; returns whether textures were recreated.
@@ -374,7 +389,7 @@ impl InterleavePass {
         if (width, height, n, split_passes) == (self.width, self.height, self.n, self.split_passes) {
             return false;
         }
-        (self.split, [self.merged, self.irradiance, self.filtered]) =
+        (self.split, [self.merged, self.irradiance, self.filtered, self.filtered_irradiance]) =
             Self::targets(&ctx.device, width, height, n, split_passes);
         (self.width, self.height, self.n, self.split_passes) = (width, height, n, split_passes);
         true
@@ -402,6 +417,12 @@ impl InterleavePass {
             BufferKind::Hdr,
             "indirect light after the geometry-aware n×n filter (Knecht §3.4.1); the confidence merge follows",
             &self.filtered,
+        );
+        reg.register(
+            "indirect.filtered_irradiance",
+            BufferKind::Hdr,
+            "the demodulated filter's mean irradiance E (indirect.filtered = k·E + the mean specular light): what the demodulated confidence merge keeps (stale when the filter ran on L)",
+            &self.filtered_irradiance,
         );
     }
 
@@ -602,6 +623,7 @@ impl InterleavePass {
         };
         ctx.queue.write_buffer(&self.filter_params, 0, bytemuck::bytes_of(&fp));
         let dst = crate::passes::view(&self.filtered, "indirect.filtered");
+        let dst_irradiance = crate::passes::view(&self.filtered_irradiance, "indirect.filtered_irradiance");
         // Without it the shader reads no irradiance: `src` stands in for the binding.
         let irradiance = irradiance.unwrap_or(src);
         let tv = wgpu::BindingResource::TextureView;
@@ -616,6 +638,7 @@ impl InterleavePass {
                 wgpu::BindGroupEntry { binding: 4, resource: tv(&dst) },
                 wgpu::BindGroupEntry { binding: 5, resource: tv(irradiance) },
                 wgpu::BindGroupEntry { binding: 6, resource: tv(&g.albedo) },
+                wgpu::BindGroupEntry { binding: 7, resource: tv(&dst_irradiance) },
             ],
         });
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {

@@ -8,6 +8,13 @@
 //! pass reads last frame's pair and writes this frame's, the G-buffer normals included as it
 //! reads them (the thesis double-buffers the normals in the G-buffer). The registry names
 //! the pair just written (`temporal.history`, `temporal.prev_normal`).
+//!
+//! Demodulated (`demodulate`, issue #51, ⚠[knecht.demodulated-merge]): after the demodulated
+//! filter the pass also keeps the light split into the filter's irradiance E and the specular
+//! rest S (a third ping-pong pair, made on first use; not a viewable buffer: two half-float
+//! triples packed in `Rgba32Uint`), merges them
+//! apart and reflects E with each pixel's own colour; `temporal.history` still holds the
+//! merged light the compose adds.
 
 use crate::counters::prelude::*;
 
@@ -58,12 +65,23 @@ settings_group! {
         /// thesis, §4 steps 11–12; ⚠[knecht.merge-order]); only with both chosen.
         order: MergeOrder = MergeOrder::FilterThenMerge,
         unit "", symbol "", range 0..=1, cost "free", history true;
+        /// Merge the light demodulated (issue #51, ⚠[knecht.demodulated-merge]): the history
+        /// keeps the demodulated filter's irradiance E and the specular light S apart, merges
+        /// each with its own history and reflects E with the pixel's own colour, so that under
+        /// motion a history fetched from a neighbouring texel brings its light, not its texture;
+        /// off: the thesis' merge of the reflected light. Only after the demodulated filter
+        /// (`interleave.demodulate`, filter then merge); elsewhere the merge has no irradiance.
+        demodulate: bool = true,
+        unit "", symbol "", range 0..=1, cost "a third ping-pong pair (16 B a pixel each) written and read", history true;
     }
     legacy {
         /// Version 1: the confidence merge on or off; now `pipeline.temporal = ConfidenceMerge`.
         enabled: bool;
     }
 }
+
+/// Format of the demodulated merge's split history: E and S as three half-float pairs.
+pub const SPLIT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
 
 /// Uniform of the confidence pass; WGSL twin: `ConfidenceParams`.
 #[repr(C)]
@@ -87,6 +105,15 @@ pub struct TemporalPass {
     current: usize,
     /// Whether the previous-frame textures hold a frame.
     valid: bool,
+    /// The demodulated merge's split history (E and S as half floats, `Rgba32Uint`), made on
+    /// its first use; `split[current]` is this frame's.
+    split: Option<[wgpu::Texture; 2]>,
+    /// Whether the last run wrote `split[current]` (merged demodulated), and whether it read
+    /// `split[1 − current]` as its history.
+    split_written: bool,
+    split_read: bool,
+    /// 1×1 stand-ins for the split pair when the merge is not demodulated.
+    dummy_split: [wgpu::Texture; 2],
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::ComputePipeline,
     params: wgpu::Buffer,
@@ -110,6 +137,10 @@ impl TemporalPass {
                 bgl::storage_texture(7, wgpu::TextureFormat::R32Float),
                 bgl::storage_texture(8, wgpu::TextureFormat::Rgba32Float),
                 bgl::storage_texture(9, NORMAL_FORMAT),
+                t(10),
+                t(11),
+                bgl::uint_texture(12, cs),
+                bgl::storage_texture(13, SPLIT_FORMAT),
             ],
         });
         let module = crate::shaders::create_module(device, "temporal/confidence.wgsl");
@@ -122,7 +153,28 @@ impl TemporalPass {
             mapped_at_creation: false,
         });
         let (confidence, history, normals) = Self::targets(device, width, height);
-        Self { width, height, confidence, history, normals, current: 0, valid: false, layout, pipeline, params }
+        Self {
+            width,
+            height,
+            confidence,
+            history,
+            normals,
+            current: 0,
+            valid: false,
+            split: None,
+            split_written: false,
+            split_read: false,
+            dummy_split: Self::split_pair(device, 1, 1, "temporal.history_split.unused"),
+            layout,
+            pipeline,
+            params,
+        }
+    }
+
+    fn split_pair(device: &wgpu::Device, w: u32, h: u32, label: &str) -> [wgpu::Texture; 2] {
+        let st = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST;
+        let t = |i| crate::passes::create_target(device, &format!("{label}.{i}"), w, h, SPLIT_FORMAT, st);
+        [t(0), t(1)]
     }
 
     #[allow(clippy::type_complexity)]
@@ -137,6 +189,20 @@ impl TemporalPass {
             ],
             [t("temporal.prev_normal.0", NORMAL_FORMAT), t("temporal.prev_normal.1", NORMAL_FORMAT)],
         )
+    }
+
+    /// The split history this frame's demodulated merge read (E and S of last frame, packed as
+    /// `shaders/temporal/confidence.wgsl` says), or None when this frame did not merge
+    /// demodulated or last frame left no split history.
+    pub fn split_prev(&self) -> Option<&wgpu::Texture> {
+        let split = self.split.as_ref()?;
+        self.split_read.then(|| &split[1 - self.current])
+    }
+
+    /// This frame's split history (`temporal.history_split`) when it merged demodulated.
+    pub fn split(&self) -> Option<&wgpu::Texture> {
+        let split = self.split.as_ref()?;
+        self.split_written.then(|| &split[self.current])
     }
 
     /// This frame's merged light (`temporal.history`).
@@ -155,6 +221,7 @@ impl TemporalPass {
         }
         (self.confidence, self.history, self.normals) = Self::targets(&ctx.device, width, height);
         (self.width, self.height) = (width, height);
+        self.split = None;
         self.valid = false;
         true
     }
@@ -186,8 +253,9 @@ impl TemporalPass {
     }
 
     /// Merges `current` (this frame's indirect light) with the reprojected history; the
-    /// result is `temporal.history`. With `enabled` off the result is `current` and the
-    /// confidence 0.
+    /// result is `temporal.history`. `irradiance`: the demodulated filter's mean irradiance
+    /// of `current` (`indirect.filtered_irradiance`) to merge demodulated, None for the
+    /// thesis' merge of the reflected light. A switch between the two forgets the history.
     #[allow(clippy::too_many_arguments)]
     pub fn run(
         &mut self,
@@ -198,10 +266,19 @@ impl TemporalPass {
         depth_range: f32,
         current: &wgpu::TextureView,
         g: &GBufferViews,
+        irradiance: Option<&wgpu::TextureView>,
     ) {
+        let demodulate = irradiance.is_some();
+        if demodulate != self.split_written {
+            // The other kind of history: this frame starts afresh.
+            self.valid = false;
+        }
+        if demodulate && self.split.is_none() {
+            self.split = Some(Self::split_pair(&ctx.device, self.width, self.height, "temporal.history_split"));
+        }
         let p = ConfidenceParams {
             weights: Vec4::new(s.c_base, s.w_pos, s.w_normal, s.w_illumination),
-            state: [self.valid as u32, 0, 0, 0],
+            state: [self.valid as u32, demodulate as u32, 0, 0],
             range: Vec4::new(depth_range, 0.0, 0.0, 0.0),
         };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
@@ -214,6 +291,12 @@ impl TemporalPass {
             v(&self.history[write], "temporal.history"),
             v(&self.normals[write], "temporal.normal_out"),
         );
+        let split = match (&self.split, demodulate) {
+            (Some(pair), true) => pair,
+            _ => &self.dummy_split,
+        };
+        let (split_prev, split_out) =
+            (v(&split[read], "temporal.history_split_prev"), v(&split[write], "temporal.history_split"));
         let tv = wgpu::BindingResource::TextureView;
         let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
         let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
@@ -230,6 +313,10 @@ impl TemporalPass {
                 entry(7, tv(&conf)),
                 entry(8, tv(&hist)),
                 entry(9, tv(&normal_out)),
+                entry(10, tv(&g.albedo)),
+                entry(11, tv(irradiance.unwrap_or(current))),
+                entry(12, tv(&split_prev)),
+                entry(13, tv(&split_out)),
             ],
         });
         {
@@ -246,6 +333,8 @@ impl TemporalPass {
             );
         }
         self.current = write;
+        self.split_read = demodulate && self.valid;
+        self.split_written = demodulate;
         self.valid = true;
     }
 }
