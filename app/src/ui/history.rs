@@ -17,7 +17,7 @@
 //!
 //! Memory is bounded: at most [`MAX_STEPS`] steps are kept (the oldest go first). A step
 //! holds the settings (about 2 KB), the bookmarks and, shared between the steps that did not
-//! change them, the scene's nodes and lights (README, "Undo and history").
+//! change them, the scene's nodes and lights (docs/usage.md, "Undo and history").
 
 use std::path::PathBuf;
 use std::sync::Arc;

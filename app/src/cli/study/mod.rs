@@ -88,7 +88,7 @@ pub struct StudyArgs {
     #[arg(long, value_name = "DIR", conflicts_with_all = ["shard", "emit_jobs"])]
     pub merge: Option<PathBuf>,
     /// Write the script that runs this study's shards and then the merge (DIR/study.slurm or
-    /// DIR/study.parallel) instead of running it; see the README.
+    /// DIR/study.parallel) instead of running it; see docs/cli.md.
     #[arg(long, value_enum, conflicts_with = "shard")]
     pub emit_jobs: Option<JobEngine>,
     /// The number of shards of --emit-jobs.
