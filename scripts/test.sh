@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Runs GI Lab's whole test suite: `cargo fmt --check`, then every test binary, as many at a
-# time as there are cores. On a machine without a GPU it installs Mesa's software Vulkan
+# Runs GI Lab's whole test suite: `cargo fmt --check` and clippy, then every test binary, as
+# many at a time as there are cores. On a machine without a GPU it installs Mesa's software Vulkan
 # driver (lavapipe), Xvfb, Chromium and GNU parallel when it may (root with apt-get),
 # otherwise it says how. `--quick` leaves out the slowest binaries (the inner loop); other
 # arguments go to `cargo test --workspace` as they are.
@@ -57,13 +57,15 @@ fi
 # would parse what it inherits).
 exec </dev/null
 
-# Style first: a formatting slip fails in seconds, not after the suite. Clippy is not run
-# here yet: on a clean clone, whichever of `cargo clippy` and `cargo test --no-run` ran
-# second failed in cargo's probe of the compiler ("failed to run `rustc` to learn about
-# target-specific information": its `rustc -` parsed a rustc error message as its input, and
-# cargo cached the failure in target/.rustc_info.json), so CI would be red. Run it by hand:
-# `cargo clippy --workspace --all-targets -- -D warnings` (clean today).
+# Style first: a formatting slip fails in seconds, a lint in about two minutes, both before
+# the suite's build. (Session 4 saw the build after clippy fail in cargo's probe of the
+# compiler on a clean clone; a clean clone on 2026-11-29 ran clippy, then the build, without
+# it. Its message was "failed to run `rustc` to learn about target-specific
+# information", and cargo had cached the failure in target/.rustc_info.json, so the cache is
+# dropped between the two; it costs one probe.)
 cargo fmt --all --check
+cargo clippy --workspace --all-targets -- -D warnings
+rm -f target/.rustc_info.json
 
 # The suite. `cargo test` runs its test binaries one after another, each on as many threads
 # as it has tests running; most binaries hold one to three long tests, so one of the two
@@ -101,8 +103,7 @@ echo "scripts/test.sh: $(wc -l <"$list.run") test binaries, $(nproc) at a time"
 status=0
 parallel --will-cite --jobs "$(nproc)" --group --colsep ' ' --joblog "$list.log" \
   'cd {1} && {2}' :::: "$list.run" || status=$?
-# No doc tests: the crates have none, and a second cargo command after a clean build fails
-# as clippy's did (above).
+# No doc tests: the crates have none.
 echo "scripts/test.sh: the slowest binaries (s):"
 tail -n +2 "$list.log" | awk -F'\t' '{ n = $NF; sub(/^cd [^ ]* && /, "", n); sub(/.*\//, "", n); printf "%8.1f  %s  exit %s\n", $4, n, $7 }' |
   sort -rn | head -8
