@@ -23,6 +23,11 @@ command -v xvfb-run >/dev/null 2>&1 || need+=(xvfb xauth)
 # `gi-lab study`'s tests: its page in a headless browser, its shards run by GNU parallel.
 command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || need+=(chromium)
 command -v parallel >/dev/null 2>&1 || need+=(parallel)
+# The Vulkan validation layer: tests/validation.rs runs every shipped preset under it.
+{ ls /usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json \
+     /usr/local/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json \
+     /etc/vulkan/explicit_layer.d/VkLayer_khronos_validation.json 2>/dev/null | grep -q .; } \
+  || need+=(vulkan-validationlayers)
 
 if [ ${#need[@]} -gt 0 ]; then
   if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
@@ -37,6 +42,22 @@ if [ ${#need[@]} -gt 0 ]; then
   fi
 fi
 
+# /dev/null must be the null device. On some container images it is a regular file: then
+# every `2>/dev/null` of a build script's feature probe (a `#![feature]` test compile) writes
+# its error text into it, and cargo's next probe of the compiler (`rustc - --print=…`, with
+# /dev/null as its standard input) parses that text as Rust and fails: "failed to run `rustc`
+# to learn about target-specific information … error[E0554]" — the second cargo command
+# after a clean build always did. As root the device is made again; otherwise the file is
+# emptied before each cargo command.
+if [ ! -c /dev/null ]; then
+  if [ "$(id -u)" = 0 ] && mknod -m 666 /dev/null.gi-lab c 1 3 2>/dev/null && mv -f /dev/null.gi-lab /dev/null; then
+    echo "scripts/test.sh: /dev/null was a regular file; made it the null device again"
+  else
+    echo "scripts/test.sh: /dev/null is a regular file (not the null device); emptying it before each cargo command" >&2
+  fi
+fi
+empty_null() { [ -c /dev/null ] || : >/dev/null; }
+
 # A whole-suite run from scratch gains nothing from incremental compilation, whose caches
 # would add about a gigabyte to target/ (CI's disk is small: docs/performance.md, "Build
 # size"); set CARGO_INCREMENTAL=1 to keep them.
@@ -50,22 +71,19 @@ if [ "${1:-}" = "--quick" ]; then
   shift
 fi
 if [ $# -gt 0 ]; then
+  empty_null
   exec cargo test --workspace "$@"
 fi
 
-# Nothing here reads standard input (cargo's probe of the compiler, `rustc - --print=…`,
-# would parse what it inherits).
+# Nothing here reads standard input.
 exec </dev/null
 
 # Style first: a formatting slip fails in seconds, a lint in about two minutes, both before
-# the suite's build. (Session 4 saw the build after clippy fail in cargo's probe of the
-# compiler on a clean clone; a clean clone on 2026-11-29 ran clippy, then the build, without
-# it. Its message was "failed to run `rustc` to learn about target-specific
-# information", and cargo had cached the failure in target/.rustc_info.json, so the cache is
-# dropped between the two; it costs one probe.)
+# the suite's build.
 cargo fmt --all --check
+empty_null
 cargo clippy --workspace --all-targets -- -D warnings
-rm -f target/.rustc_info.json
+empty_null
 
 # The suite. `cargo test` runs its test binaries one after another, each on as many threads
 # as it has tests running; most binaries hold one to three long tests, so one of the two
@@ -97,12 +115,15 @@ while read -r dir exe; do
     echo "scripts/test.sh --quick: leaving out $name" >&2
     continue
   fi
-  echo "$(rank "$name") $dir $exe"
+  # The validation layer slows every Vulkan call: only tests/validation.rs runs under it.
+  validate=0
+  [ "$name" = validation ] && validate=1
+  echo "$(rank "$name") $dir $exe $validate"
 done <"$list.all" | sort -n -s -k1,1 | cut -d' ' -f2- >"$list.run"
 echo "scripts/test.sh: $(wc -l <"$list.run") test binaries, $(nproc) at a time"
 status=0
 parallel --will-cite --jobs "$(nproc)" --group --colsep ' ' --joblog "$list.log" \
-  'cd {1} && {2}' :::: "$list.run" || status=$?
+  'cd {1} && WGPU_VALIDATION={3} {2}' :::: "$list.run" || status=$?
 # No doc tests: the crates have none.
 echo "scripts/test.sh: the slowest binaries (s):"
 tail -n +2 "$list.log" | awk -F'\t' '{ n = $NF; sub(/^cd [^ ]* && /, "", n); sub(/.*\//, "", n); printf "%8.1f  %s  exit %s\n", $4, n, $7 }' |

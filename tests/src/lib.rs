@@ -276,6 +276,7 @@ pub mod images;
 pub mod knecht_support;
 pub mod meshopt_copy;
 pub mod ui_harness;
+pub mod validation;
 
 /// A square grey checkerboard base-colour texture of `size` texels, cells of `cell` texels,
 /// white and `dark` (sRGB byte) in turn.

@@ -692,6 +692,23 @@ impl IsmPass {
                 ],
             }));
         }
+        // Mips 1…levels are first written (the pull, storage) and then read (the push,
+        // sampled) inside the one pass below. wgpu 30 records a pass's *last* use of a
+        // subresource the encoder has not seen yet as the encoder's start state (gfx-rs/wgpu
+        // #10199, fix pending in #10212), so at submission it moved these mips to
+        // SHADER_READ_ONLY while the first dispatch wrote them as storage (GENERAL): the
+        // validation layers' InvalidImageLayout on `ism.atlas_pulled` (issue #52 point 6).
+        // Telling the encoder their first use before the pass makes its start state right.
+        if self.levels > 0 {
+            encoder.transition_resources(
+                std::iter::empty(),
+                std::iter::once(wgpu::TextureTransition {
+                    texture: &self.pulled,
+                    selector: Some(wgpu::wgt::TextureSelector { mips: 1..self.levels + 1, layers: 0..1 }),
+                    state: wgpu::TextureUses::STORAGE_WRITE_ONLY,
+                }),
+            );
+        }
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("ism.pull_push"),
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
