@@ -24,10 +24,11 @@ command -v xvfb-run >/dev/null 2>&1 || need+=(xvfb xauth)
 command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || need+=(chromium)
 command -v parallel >/dev/null 2>&1 || need+=(parallel)
 # The Vulkan validation layer: tests/validation.rs runs every shipped preset under it.
-{ ls /usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json \
-     /usr/local/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json \
-     /etc/vulkan/explicit_layer.d/VkLayer_khronos_validation.json 2>/dev/null | grep -q .; } \
-  || need+=(vulkan-validationlayers)
+layer=0
+for d in /usr/share /usr/local/share /etc; do
+  [ -e "$d/vulkan/explicit_layer.d/VkLayer_khronos_validation.json" ] && layer=1
+done
+[ "$layer" = 1 ] || need+=(vulkan-validationlayers)
 
 if [ ${#need[@]} -gt 0 ]; then
   if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then

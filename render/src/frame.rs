@@ -407,16 +407,10 @@ fn temporal(
         | Temporal::WarpedBlend
         | Temporal::RecordCache => src,
         Temporal::ConfidenceMerge => {
+            // The demodulated merge (issue #51) keeps the irradiance beside the light.
+            let irradiance = merge_irradiance(f, x);
             let t = x.temporal.as_mut()?;
             let (ctx, s, depth_range) = (f.ctx, &f.settings.temporal, f.depth_range());
-            // The demodulated merge (issue #51) keeps the demodulated filter's irradiance.
-            let irradiance = merges_demodulated(f.settings)
-                .then(|| {
-                    x.interleave
-                        .as_ref()
-                        .map(|i| crate::passes::view(&i.filtered_irradiance, "indirect.filtered_irradiance"))
-                })
-                .flatten();
             timer.scope(ctx, enc, "temporal", |e, slot| {
                 t.run(ctx, e, slot, s, depth_range, &src, f.gbuffer, irradiance.as_ref())
             });
@@ -425,15 +419,24 @@ fn temporal(
     })
 }
 
-/// Whether stage 7's confidence merge keeps the light demodulated (`temporal.demodulate`): only
-/// after the demodulated geometry-aware filter, whose mean irradiance it merges.
-pub(crate) fn merges_demodulated(s: &crate::lab_settings::LabSettings) -> bool {
-    let p = &s.pipeline;
-    p.reconstruction == Reconstruction::GeometryAwareFilter
-        && p.temporal == Temporal::ConfidenceMerge
-        && s.temporal.demodulate
-        && s.interleave.demodulate
-        && !merges_first(s)
+/// The irradiance the demodulated confidence merge keeps (`temporal.demodulate`, issue #51):
+/// after the demodulated geometry-aware filter its window mean (`indirect.filtered_irradiance`),
+/// after the HCB's coherence splatting the splatted irradiance (`hcb.irradiance`); None where
+/// the merge blends the reflected light (the thesis' merge, or no irradiance to keep).
+fn merge_irradiance(f: &FrameInputs, x: &StagePasses) -> Option<wgpu::TextureView> {
+    let (s, p) = (f.settings, &f.settings.pipeline);
+    if p.temporal != Temporal::ConfidenceMerge || !s.temporal.demodulate {
+        return None;
+    }
+    match p.reconstruction {
+        Reconstruction::GeometryAwareFilter if s.interleave.demodulate && !merges_first(s) => {
+            x.interleave.as_ref().map(|i| crate::passes::view(&i.filtered_irradiance, "indirect.filtered_irradiance"))
+        }
+        Reconstruction::CoherenceSplatting if p.shading_points == ShadingPoints::HcbSamples => {
+            x.hcb.as_ref().map(|h| crate::passes::view(&h.splat.irradiance, "hcb.irradiance"))
+        }
+        _ => None,
+    }
 }
 
 /// Whether stage 7's confidence merge runs before the geometry-aware filter (`temporal.order`

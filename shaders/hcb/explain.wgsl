@@ -18,11 +18,13 @@
 #import common/reproject.wgsl
 #import hcb/common.wgsl
 #import common/receiver.wgsl
+#import common/brdf.wgsl
 
 // Rust twin: passes::hcb::explain::ExplainParams.
 struct ExplainParams {
     // x, y: the pixel p; z: 1 with the sample cache (counter words 1–2 are its counts);
-    // w: 1 when the confidence merge ran after the splat (its textures are bound)
+    // w: 1 when the confidence merge ran after the splat (its textures are bound), 2 when it ran
+    // demodulated (its history is `split_prev`: temporal/confidence.wgsl)
     pixel: vec4<u32>,
 }
 
@@ -90,6 +92,8 @@ const EXPLAIN_NEW: u32 = 8u;        // a sample identified this frame (§5.2)
 // the glossy receiver's direction sums (`hcb.weight_sum.direction`) and the G-buffer material
 @group(0) @binding(18) var weight_dir: texture_2d<f32>;
 @group(0) @binding(19) var g_material: texture_2d<f32>;
+// the demodulated merge's split history: x = E.rg, y = (E.b, S.r), z = S.gb as half floats
+@group(0) @binding(20) var split_prev: texture_2d<u32>;
 // cs_explain_args only: the dispatch-indirect (x, y, 1) of cs_explain_samples
 @group(1) @binding(0) var<storage, read_write> args: array<u32>;
 
@@ -123,7 +127,7 @@ fn cs_explain_args() {
     let nrm = normalize(textureLoad(g_normal, p, 0).xyz);
     h.factor = vec4<f32>(receiver_factor(d, nrm, v, alb.rgb, alb.a, mat.x, mat.y, hp.cache.y > 0.5), 0.0);
     h.final_value = textureLoad(final_light, p, 0);
-    if (explain.pixel.w == 1u) {
+    if (explain.pixel.w >= 1u) {
         // The history the confidence merge read for p (temporal/confidence.wgsl).
         let c = textureLoad(confidence, p, 0).r;
         var prev = vec3<f32>(0.0);
@@ -131,7 +135,15 @@ fn cs_explain_args() {
             let size = textureDimensions(g_normal);
             let q = previous_texel(p, textureLoad(g_motion, p, 0).xy, size);
             if (q.x >= 0) {
-                prev = textureLoad(history_prev, q, 0).rgb;
+                if (explain.pixel.w == 2u) {
+                    // The demodulated merge's history as p reflects it: k_p·E_prev + S_prev.
+                    let v = textureLoad(split_prev, q, 0);
+                    let e = vec3<f32>(unpack2x16float(v.x), unpack2x16float(v.y).x);
+                    let s = vec3<f32>(unpack2x16float(v.y).y, unpack2x16float(v.z));
+                    prev = brdf_diffuse(alb.rgb, alb.a) * e + s;
+                } else {
+                    prev = textureLoad(history_prev, q, 0).rgb;
+                }
             }
         }
         h.history = vec4<f32>(prev, c);

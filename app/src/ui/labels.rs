@@ -66,6 +66,7 @@ pub fn words(path: &str) -> Option<&'static str> {
         "temporal.w_normal" => "normal weight",
         "temporal.w_illumination" => "illumination weight",
         "temporal.order" => "filter and merge order",
+        "temporal.demodulate" => "merge without albedo",
         "hcb.theta_max_deg" => "normal divergence",
         "hcb.gamma_max_deg" => "pose limit",
         "hcb.d_max_m" => "splat radius",

@@ -121,6 +121,8 @@ pub struct HcbExplainPass {
     no_args: wgpu::Buffer,
     /// Stands for the confidence merge's textures when it did not run.
     dummy: wgpu::TextureView,
+    /// Stands in for the demodulated merge's split history when it did not run.
+    dummy_split: wgpu::TextureView,
     /// The last run's chain.
     pub info: Option<HcbInfo>,
 }
@@ -165,6 +167,7 @@ impl HcbExplainPass {
                 bgl::storage(17, cs, false),
                 t(18),
                 t(19),
+                bgl::uint_texture(20, cs),
             ],
         });
         let args_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -217,6 +220,17 @@ impl HcbExplainPass {
             args,
             no_args,
             dummy,
+            dummy_split: view(
+                &crate::passes::create_target(
+                    device,
+                    "explain.hcb.no_split",
+                    1,
+                    1,
+                    crate::passes::knecht::temporal::SPLIT_FORMAT,
+                    wgpu::TextureUsages::empty(),
+                ),
+                "explain.hcb.no_split",
+            ),
             info: None,
         }
     }
@@ -239,7 +253,14 @@ impl HcbExplainPass {
             0,
             bytemuck::bytes_of(&super::stage::HcbStage::frame(f).params([0; 4])),
         );
-        let p = ExplainParams { pixel: [info.pixel.0, info.pixel.1, info.cache as u32, temporal.is_some() as u32] };
+        // w: 1 when the confidence merge ran, 2 when it ran demodulated (its history is split).
+        let split_prev = temporal.and_then(|t| t.split_prev());
+        let merge = match (temporal, split_prev) {
+            (None, _) => 0,
+            (Some(_), None) => 1,
+            (Some(_), Some(_)) => 2,
+        };
+        let p = ExplainParams { pixel: [info.pixel.0, info.pixel.1, info.cache as u32, merge] };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
         let tv = wgpu::BindingResource::TextureView;
         let part = |offset, size| crate::passes::buffer_part(&self.out, offset, size);
@@ -277,6 +298,7 @@ impl HcbExplainPass {
                 part(ENTRIES_OFFSET, None),
                 tv(&weight_dir),
                 tv(&g.material),
+                tv(&split_prev.map_or(self.dummy_split.clone(), |t| view(t, "temporal.history_split_prev"))),
             ],
         );
         let args_group =

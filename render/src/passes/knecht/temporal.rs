@@ -10,11 +10,11 @@
 //! the pair just written (`temporal.history`, `temporal.prev_normal`).
 //!
 //! Demodulated (`demodulate`, issue #51, ⚠[knecht.demodulated-merge]): after the demodulated
-//! filter the pass also keeps the light split into the filter's irradiance E and the specular
-//! rest S (a third ping-pong pair, made on first use; not a viewable buffer: two half-float
-//! triples packed in `Rgba32Uint`), merges them
-//! apart and reflects E with each pixel's own colour; `temporal.history` still holds the
-//! merged light the compose adds.
+//! filter (or the HCB's splat) the pass also keeps the light split into the irradiance E it
+//! reflects (the filter's window mean, or `hcb.irradiance`) and the specular rest S, in a
+//! third ping-pong pair made on first use (not a viewable buffer: two half-float triples
+//! packed in `Rgba32Uint`); it merges them apart and reflects E with each pixel's own colour.
+//! `temporal.history` still holds the merged light the compose adds.
 
 use crate::counters::prelude::*;
 
@@ -69,8 +69,9 @@ settings_group! {
         /// keeps the demodulated filter's irradiance E and the specular light S apart, merges
         /// each with its own history and reflects E with the pixel's own colour, so that under
         /// motion a history fetched from a neighbouring texel brings its light, not its texture;
-        /// off: the thesis' merge of the reflected light. Only after the demodulated filter
-        /// (`interleave.demodulate`, filter then merge); elsewhere the merge has no irradiance.
+        /// off: the thesis' merge of the reflected light. After the demodulated filter
+        /// (`interleave.demodulate`, filter then merge) or the HCB's splat (its `hcb.irradiance`);
+        /// elsewhere the merge has no irradiance to keep.
         demodulate: bool = true,
         unit "", symbol "", range 0..=1, cost "a third ping-pong pair (16 B a pixel each) written and read", history true;
     }
@@ -253,8 +254,9 @@ impl TemporalPass {
     }
 
     /// Merges `current` (this frame's indirect light) with the reprojected history; the
-    /// result is `temporal.history`. `irradiance`: the demodulated filter's mean irradiance
-    /// of `current` (`indirect.filtered_irradiance`) to merge demodulated, None for the
+    /// result is `temporal.history`. `irradiance`: the irradiance `current` reflects (the
+    /// demodulated filter's `indirect.filtered_irradiance`, the HCB's `hcb.irradiance`) to
+    /// merge demodulated, None for the
     /// thesis' merge of the reflected light. A switch between the two forgets the history.
     #[allow(clippy::too_many_arguments)]
     pub fn run(
