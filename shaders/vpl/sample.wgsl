@@ -10,8 +10,9 @@
 // Φ = I(ω) · dω (spot, point and emitter point: intensity × falloff × the texel's solid
 // angle dω = s² cos³θ; an emitter point's falloff is its cosine lobe max(n · ω, 0)) or Φ = E · s² (directional), divided by the sampling density N / (R² · V)
 // (N VPLs over R² texels, this view one of the V views taken in turn), so that the set is
-// an unbiased estimate of the power the light delivers to the visible surfaces. Importance
-// sampling by hierarchical warping (Knecht §3.3, §4.4) replaces this with the Knecht issue.
+// an unbiased estimate of the power the light delivers to the visible surfaces. The
+// reference keeps this uniform sampling; Knecht's importance sampling by hierarchical warping
+// (§3.3, §4.4) is `vpl/importance.wgsl`.
 #import common/lights.wgsl
 #import common/vpl.wgsl
 #import common/random.wgsl

@@ -90,6 +90,19 @@ pub fn real_scene(rel: &str) -> std::path::PathBuf {
     p
 }
 
+/// Every shipped preset (`presets/*.ron`), sorted by name; fails when fewer than ten are found.
+pub fn shipped_presets() -> Vec<std::path::PathBuf> {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../presets");
+    let mut presets: Vec<std::path::PathBuf> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "ron"))
+        .collect();
+    presets.sort();
+    assert!(presets.len() >= 10, "only {} presets found in presets/", presets.len());
+    presets
+}
+
 /// A scene file of the tests' own in `tests/data/` (e.g. `chair-behind.glb`: the shipped
 /// chair with a camera of its own, `scripts/make-chair-view.py`), loaded as the CLI loads it.
 pub fn test_scene(file: &str) -> Scene {

@@ -75,13 +75,7 @@ fn load_half_png(path: &Path) -> Option<ImageF32> {
 fn every_shipped_preset_keeps_its_image() {
     let record = std::env::var("GI_LAB_RECORD_PRESET_IMAGES").unwrap_or_default();
     let data = root().join("tests/data/presets");
-    let mut presets: Vec<PathBuf> = std::fs::read_dir(root().join("presets"))
-        .expect("presets/")
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "ron"))
-        .collect();
-    presets.sort();
-    assert!(presets.len() >= 10, "only {} presets found in presets/", presets.len());
+    let presets = gi_lab_tests::shipped_presets();
     let mut failures = Vec::new();
     let mut report = Vec::new();
     for p in &presets {

@@ -9,14 +9,8 @@
 //! binary with validation on, the others with `WGPU_VALIDATION=0` (the layers slow every Vulkan
 //! call). Without the layers this test fails and says how to install them.
 
-use std::path::{Path, PathBuf};
-
 use gi_lab_tests::{default_scene, gpu, validation};
 use gi_render::{GpuContext, Renderer};
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
 
 #[test]
 fn every_shipped_preset_runs_without_a_validation_message() {
@@ -32,13 +26,7 @@ fn every_shipped_preset_runs_without_a_validation_message() {
     );
     validation::install();
     wgpus_mip_tracking_still_needs_the_ism_workaround();
-    let mut presets: Vec<PathBuf> = std::fs::read_dir(root().join("presets"))
-        .expect("presets/")
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "ron"))
-        .collect();
-    presets.sort();
-    assert!(presets.len() >= 10, "only {} presets found in presets/", presets.len());
+    let presets = gi_lab_tests::shipped_presets();
     let mut failures = Vec::new();
     for p in &presets {
         let name = p.file_stem().and_then(|s| s.to_str()).unwrap_or("?").to_string();

@@ -220,17 +220,7 @@ impl HcbExplainPass {
             args,
             no_args,
             dummy,
-            dummy_split: view(
-                &crate::passes::create_target(
-                    device,
-                    "explain.hcb.no_split",
-                    1,
-                    1,
-                    crate::passes::knecht::temporal::SPLIT_FORMAT,
-                    wgpu::TextureUsages::empty(),
-                ),
-                "explain.hcb.no_split",
-            ),
+            dummy_split: crate::passes::knecht::temporal::no_split_view(device, "explain.hcb.no_split"),
             info: None,
         }
     }

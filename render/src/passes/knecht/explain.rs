@@ -199,17 +199,7 @@ impl VplExplainPass {
             ),
             out: Self::out_buffer(device, 256),
             dummy,
-            dummy_split: crate::passes::view(
-                &crate::passes::create_target(
-                    device,
-                    "explain.vpl.no_split",
-                    1,
-                    1,
-                    crate::passes::knecht::temporal::SPLIT_FORMAT,
-                    wgpu::TextureUsages::empty(),
-                ),
-                "explain.vpl.no_split",
-            ),
+            dummy_split: crate::passes::knecht::temporal::no_split_view(device, "explain.vpl.no_split"),
             dummy_ism,
             dummy_exact,
             info: None,

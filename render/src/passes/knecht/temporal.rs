@@ -84,6 +84,13 @@ settings_group! {
 /// Format of the demodulated merge's split history: E and S as three half-float pairs.
 pub const SPLIT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
 
+/// A 1×1 stand-in for the split history, bound by the explain replays when the merge did not
+/// run demodulated.
+pub fn no_split_view(device: &wgpu::Device, label: &str) -> wgpu::TextureView {
+    let t = crate::passes::create_target(device, label, 1, 1, SPLIT_FORMAT, wgpu::TextureUsages::empty());
+    crate::passes::view(&t, label)
+}
+
 /// Uniform of the confidence pass; WGSL twin: `ConfidenceParams`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]

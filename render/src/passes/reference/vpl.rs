@@ -8,9 +8,9 @@
 //! are taken in turn), each VPL's flux divided by its sampling density so that every batch
 //! is an unbiased estimate of one-bounce light; `passes::reference::vpl_gather` averages the batches.
 //! The light G-buffer's projection is jittered by a Halton (2, 3) sub-texel offset per
-//! batch, so that VPL positions cover the surfaces continuously. Importance-driven VPL
-//! placement (hierarchical warping, Knecht §3.3 and §4.4) replaces the uniform sampling
-//! with the Knecht issue (#5).
+//! batch, so that VPL positions cover the surfaces continuously. The reference keeps this
+//! uniform sampling; Knecht's importance-driven placement (hierarchical warping, §3.3 and
+//! §4.4) is `passes::knecht::vpl_importance`.
 
 use crate::counters::prelude::*;
 
