@@ -11,6 +11,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("common/camera.wgsl", include_str!("../../shaders/common/camera.wgsl")),
     ("common/material.wgsl", include_str!("../../shaders/common/material.wgsl")),
     ("common/brdf.wgsl", include_str!("../../shaders/common/brdf.wgsl")),
+    ("common/split_light.wgsl", include_str!("../../shaders/common/split_light.wgsl")),
     ("common/receiver.wgsl", include_str!("../../shaders/common/receiver.wgsl")),
     ("common/lights.wgsl", include_str!("../../shaders/common/lights.wgsl")),
     ("common/fullscreen.wgsl", include_str!("../../shaders/common/fullscreen.wgsl")),

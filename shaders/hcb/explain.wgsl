@@ -19,6 +19,7 @@
 #import hcb/common.wgsl
 #import common/receiver.wgsl
 #import common/brdf.wgsl
+#import common/split_light.wgsl
 
 // Rust twin: passes::hcb::explain::ExplainParams.
 struct ExplainParams {
@@ -92,7 +93,7 @@ const EXPLAIN_NEW: u32 = 8u;        // a sample identified this frame (§5.2)
 // the glossy receiver's direction sums (`hcb.weight_sum.direction`) and the G-buffer material
 @group(0) @binding(18) var weight_dir: texture_2d<f32>;
 @group(0) @binding(19) var g_material: texture_2d<f32>;
-// the demodulated merge's split history: x = E.rg, y = (E.b, S.r), z = S.gb as half floats
+// the demodulated merge's split history (common/split_light.wgsl)
 @group(0) @binding(20) var split_prev: texture_2d<u32>;
 // cs_explain_args only: the dispatch-indirect (x, y, 1) of cs_explain_samples
 @group(1) @binding(0) var<storage, read_write> args: array<u32>;
@@ -138,9 +139,7 @@ fn cs_explain_args() {
                 if (explain.pixel.w == 2u) {
                     // The demodulated merge's history as p reflects it: k_p·E_prev + S_prev.
                     let v = textureLoad(split_prev, q, 0);
-                    let e = vec3<f32>(unpack2x16float(v.x), unpack2x16float(v.y).x);
-                    let s = vec3<f32>(unpack2x16float(v.y).y, unpack2x16float(v.z));
-                    prev = brdf_diffuse(alb.rgb, alb.a) * e + s;
+                    prev = brdf_diffuse(alb.rgb, alb.a) * unpack_irradiance(v) + unpack_specular(v);
                 } else {
                     prev = textureLoad(history_prev, q, 0).rgb;
                 }

@@ -15,6 +15,7 @@
 #import common/vpl_explain.wgsl
 #import interleave/params.wgsl
 #import common/brdf.wgsl
+#import common/split_light.wgsl
 
 struct ExplainParams {
     // x, y: the pixel p; z: the filter's window side (n with the filter, else 1); w: 1 when
@@ -71,17 +72,14 @@ const EXPLAIN_W_SURFACE: u32 = 4u;
 @group(0) @binding(18) var<storage, read_write> header: Header;
 @group(0) @binding(19) var<storage, read_write> window: array<WindowPixel, 64>;
 @group(0) @binding(20) var<storage, read_write> terms: array<VplTerm>;
-// The demodulated merge's split history (temporal/confidence.wgsl: x = E.rg, y = (E.b, S.r),
-// z = S.gb as half-float pairs).
+// The demodulated merge's split history (common/split_light.wgsl).
 @group(0) @binding(21) var split_prev: texture_2d<u32>;
 
 // The history as the demodulated merge reads it at q: k_q·E_prev + S_prev.
 fn split_history(q: vec2<i32>, prev: vec2<i32>) -> vec3<f32> {
     let v = textureLoad(split_prev, prev, 0);
-    let e = vec3<f32>(unpack2x16float(v.x), unpack2x16float(v.y).x);
-    let s = vec3<f32>(unpack2x16float(v.y).y, unpack2x16float(v.z));
     let alb = textureLoad(g_albedo, q, 0);
-    return brdf_diffuse(alb.rgb, alb.a) * e + s;
+    return brdf_diffuse(alb.rgb, alb.a) * unpack_irradiance(v) + unpack_specular(v);
 }
 
 fn tile_of(q: vec2<i32>) -> u32 {

@@ -12,11 +12,12 @@
 // (`indirect.filtered_irradiance`), k = c·DI/π this pixel's diffuse colour and S the specular
 // light; E and S are merged apart and reflected with this pixel's own k, so that a history
 // reprojected from a neighbouring texel brings its light but not its texture. The split
-// history (`temporal.history_split`) keeps E and S as half floats; Eq. 3.3 compares L with the
+// history (a third ping-pong pair) keeps E and S as half floats; Eq. 3.3 compares L with the
 // history as this pixel reflects it, k·E_prev + S_prev. CPU twin: cpu::knecht::merge_demodulated.
 #import common/fullscreen.wgsl
 #import common/reproject.wgsl
 #import common/brdf.wgsl
+#import common/split_light.wgsl
 
 struct ConfidenceParams {
     // x: c_base, y: w_pos, z: w_normal, w: w_illumination
@@ -38,24 +39,11 @@ struct ConfidenceParams {
 @group(0) @binding(8) var history_out: texture_storage_2d<rgba32float, write>;
 // This frame's normals, next frame's prev_normal (ping-pong: no copy, issue #38).
 @group(0) @binding(9) var normal_out: texture_storage_2d<rgba16float, write>;
-// The demodulated merge's inputs and split history: x = E.rg, y = (E.b, S.r), z = S.gb as
-// pack2x16float, w unused.
+// The demodulated merge's inputs and split history (common/split_light.wgsl).
 @group(0) @binding(10) var g_albedo: texture_2d<f32>;
 @group(0) @binding(11) var irradiance: texture_2d<f32>;
 @group(0) @binding(12) var split_prev: texture_2d<u32>;
 @group(0) @binding(13) var split_out: texture_storage_2d<rgba32uint, write>;
-
-fn pack_split(e: vec3<f32>, s: vec3<f32>) -> vec4<u32> {
-    return vec4<u32>(pack2x16float(e.xy), pack2x16float(vec2<f32>(e.z, s.x)), pack2x16float(s.yz), 0u);
-}
-
-fn unpack_irradiance(v: vec4<u32>) -> vec3<f32> {
-    return vec3<f32>(unpack2x16float(v.x), unpack2x16float(v.y).x);
-}
-
-fn unpack_specular(v: vec4<u32>) -> vec3<f32> {
-    return vec3<f32>(unpack2x16float(v.y).y, unpack2x16float(v.z));
-}
 
 fn confidence(motion: vec2<f32>, size: vec2<f32>, d: f32, d_prev: f32, n: vec3<f32>, n_prev: vec3<f32>, i_new: vec3<f32>, i_prev: vec3<f32>) -> f32 {
     let w = params.weights;

@@ -207,12 +207,6 @@ impl TemporalPass {
         self.split_read.then(|| &split[1 - self.current])
     }
 
-    /// This frame's split history (`temporal.history_split`) when it merged demodulated.
-    pub fn split(&self) -> Option<&wgpu::Texture> {
-        let split = self.split.as_ref()?;
-        self.split_written.then(|| &split[self.current])
-    }
-
     /// This frame's merged light (`temporal.history`).
     pub fn history(&self) -> &wgpu::Texture {
         &self.history[self.current]
@@ -263,8 +257,8 @@ impl TemporalPass {
     /// Merges `current` (this frame's indirect light) with the reprojected history; the
     /// result is `temporal.history`. `irradiance`: the irradiance `current` reflects (the
     /// demodulated filter's `indirect.filtered_irradiance`, the HCB's `hcb.irradiance`) to
-    /// merge demodulated, None for the
-    /// thesis' merge of the reflected light. A switch between the two forgets the history.
+    /// merge demodulated, None for the thesis' merge of the reflected light. A switch between
+    /// the two forgets the history.
     #[allow(clippy::too_many_arguments)]
     pub fn run(
         &mut self,
