@@ -98,3 +98,23 @@ pub fn run_until(h: &mut Harness<'static, GiLabApp>, max: usize, done: impl Fn(&
 pub fn arrived(app: &GiLabApp, key: &str) -> bool {
     app.state.lab.as_ref().is_ok_and(|l| l.renderer.read_latest(key).is_some_and(|a| a.data.is_ok()))
 }
+
+/// The settings [`cheap_frames`] applies: the passes whose cost does not follow the image
+/// (the ISM splat and pull-push, the light views, the shadow map) at their smallest useful
+/// sizes. At render scale 0.1 they took about half of a default frame (`gi-lab bench --size
+/// 140x360`: 114 → 49 ms on lavapipe, docs/performance.md "Build and test time").
+pub const CHEAP_FRAMES: &[&str] =
+    &["vpl.count=32", "ism.points=16384", "ism.map_size=32", "vpl.light_gbuffer_size=64", "direct.shadow_map_size=256"];
+
+/// Makes the lab's frames cheap for the tests that ask what the window does, not what it
+/// renders (the random walk, every widget reaching the renderer): [`CHEAP_FRAMES`] applied
+/// to the live settings as if typed, before the test's first step.
+pub fn cheap_frames(h: &mut Harness<'static, GiLabApp>) {
+    let Ok(l) = &mut h.state_mut().state.lab else { panic!("no renderer") };
+    for a in CHEAP_FRAMES {
+        l.settings.apply_override(a).unwrap_or_else(|e| panic!("{a}: {e}"));
+    }
+    l.apply_settings();
+    assert!(l.settings_error.is_none(), "cheap frames: {:?}", l.settings_error);
+    h.run_steps(2);
+}

@@ -11,7 +11,7 @@ use gi_render::LabSettings;
 use gi_render::settings::{FieldKind, Value};
 
 use gi_lab_tests::ui_harness::{
-    args_in, arrived, harness, harness_in, harness_with, pause, run_until, show_in_viewer, temp_dir,
+    args_in, arrived, cheap_frames, harness, harness_in, harness_with, pause, run_until, show_in_viewer, temp_dir,
 };
 
 #[test]
@@ -94,6 +94,8 @@ fn every_setting_has_a_widget_that_changes_the_renderer() {
     // whether each widget reaches the renderer.
     h.state_mut().state.session.render_scale = 0.1;
     h.run_steps(2);
+    // And cheap frames: each widget must reach the renderer, whatever the sizes it starts at.
+    cheap_frames(&mut h);
     // Choices that no other value of can be applied alone from the defaults (each refused
     // with its reason): the VPL source, since the default VPL gather needs importance-warped
     // VPLs and uniform batches need the reference's other stages; the shading points, since
