@@ -12,6 +12,7 @@ pub mod frame;
 pub mod gpu;
 pub mod image_io;
 pub mod lab_settings;
+pub mod maths;
 pub mod metrics;
 pub mod passes;
 pub mod pipeline;

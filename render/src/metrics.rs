@@ -10,7 +10,7 @@
 //!   sudden change.
 
 use crate::buffers::ImageF32;
-use crate::cpu::tonemap::luminance;
+use crate::maths::luminance;
 
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum MetricError {

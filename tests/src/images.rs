@@ -7,7 +7,7 @@ use gi_render::metrics::{auto_exposure, flip, scaled};
 
 /// Rec. 709 luminance of a pixel.
 pub fn luminance(p: &[f32; 4]) -> f64 {
-    gi_render::cpu::tonemap::luminance([p[0], p[1], p[2]]) as f64
+    gi_render::maths::luminance([p[0], p[1], p[2]]) as f64
 }
 
 /// Mean luminance of an image.

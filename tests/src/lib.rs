@@ -349,3 +349,16 @@ pub fn assert_glossy_receiver_matches_the_cpu(
     }
     (compared, glossy)
 }
+
+/// A GPU irradiance record as Gautron's CPU twin holds it (`cpu::gautron::Record`), for the
+/// tests that compare the two (the renderer itself never needs the conversion).
+pub fn cpu_record(r: &gi_render::passes::gautron::GpuRecord) -> gi_render::cpu::gautron::Record {
+    gi_render::cpu::gautron::Record {
+        p: r.position.truncate(),
+        n: r.normal.truncate(),
+        r: r.position.w,
+        e: r.irradiance.truncate(),
+        rot: r.rot.map(|v| v.truncate()),
+        trans: r.trans.map(|v| v.truncate()),
+    }
+}

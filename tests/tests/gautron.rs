@@ -167,7 +167,7 @@ fn splat_matches_the_cpu_accumulation(method: SplatMethod, edit: impl FnOnce(&mu
     let g = r.gautron().unwrap();
     let st = g.read_state(&r.ctx).unwrap();
     let gpu_records = g.read_records(&r.ctx, st.count).unwrap();
-    let records: Vec<Record> = gpu_records.iter().map(GpuRecord::to_cpu).collect();
+    let records: Vec<Record> = gpu_records.iter().map(gi_lab_tests::cpu_record).collect();
     assert!(records.len() > 20, "{st:?}");
     let (accum, position, normal) =
         (read(&r, "gautron.accum"), read(&r, "gbuffer.position"), read(&r, "gbuffer.normal"));

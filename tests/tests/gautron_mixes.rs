@@ -99,7 +99,7 @@ fn vpl_lit_records_match_the_cpu_twin_with(wide: bool) {
     // predicts their irradiance better than the record's E_k alone.
     let a = s.gautron.accuracy;
     let (mut with, mut without, mut pairs) = (0.0f64, 0.0f64, 0);
-    let cpu: Vec<Record> = recs.iter().map(GpuRecord::to_cpu).collect();
+    let cpu: Vec<Record> = recs.iter().map(gi_lab_tests::cpu_record).collect();
     for k in &cpu {
         for j in &cpu {
             if std::ptr::eq(k, j) || k.p.distance(j.p) > a * k.r || k.n.dot(j.n) < 0.9 {

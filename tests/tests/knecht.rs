@@ -4,7 +4,8 @@
 
 use gi_lab_tests::knecht_support::{knecht_settings, read_buffer};
 use gi_lab_tests::{default_scene, gpu};
-use gi_render::cpu::knecht::{self, ISM_EMPTY, Pyramid, halton};
+use gi_render::cpu::knecht::{self, ISM_EMPTY, Pyramid};
+use gi_render::maths::halton;
 use gi_render::passes::knecht::ism::{IsmPass, IsmSettings, PushBehind};
 use gi_render::passes::knecht::vpl_importance::{ViewJob, VplImportancePass};
 use gi_render::passes::shadow::LightView;

@@ -155,7 +155,7 @@ fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
     let vpl_buf = buffer("test.vpls", bytemuck::cast_slice(&gpu_vpls), wgpu::BufferUsages::STORAGE);
     let g = SyntheticGBuffer::new(&ctx, w, h, &pos, &nrm, &alb, &mat, &vec![[0.0; 4]; len]);
     let mut pass =
-        InterleavePass::new(&ctx, gi_render::passes::bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h, n, false);
+        InterleavePass::new(&ctx, gi_render::gpu::bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h, n, false);
     let mut timer = gi_render::timing::GpuTimer::new(&ctx);
     // Frame 0 with the full BRDF at the receiver, frame 1 (another slot→tile map) diffuse only.
     let (mut lit, mut dark) = (0, 0);
@@ -177,7 +177,7 @@ fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
         ctx.queue.submit([enc.finish()]);
         let got = read(&ctx, &pass.merged);
         let got_irradiance = read(&ctx, &pass.irradiance);
-        let offsets = knecht::tile_offsets(vpl_count, n, frame);
+        let offsets = gi_render::maths::tile_offsets(vpl_count, n, frame);
         for y in 0..h {
             for x in 0..w {
                 let i = (y * w + x) as usize;
@@ -186,7 +186,7 @@ fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
                 if let Some(r) = &receivers[i] {
                     // Diffuse only: the receiver's SI is 0 (c·DI/π, as the HCB reflects).
                     let r = knecht::Receiver { si: if diffuse { 0.0 } else { r.si }, ..*r };
-                    let slots: Vec<u32> = knecht::tile_slots(tile, vpl_count, n, &offsets).collect();
+                    let slots: Vec<u32> = gi_render::maths::tile_slots(tile, vpl_count, n, &offsets).collect();
                     let per_tile = slots.len() as u32;
                     for k in slots {
                         if let Some(v) = &cpu_vpls[k as usize] {
@@ -288,7 +288,7 @@ fn geometry_aware_filter_on_the_gpu_equals_the_cpu() {
     let g = SyntheticGBuffer::new(&ctx, w, h, &pos, &nrm, &albedo, &zero, &zero);
     let src_tex = texture(&ctx, "test.src", w, h, &src, false);
     let pass =
-        InterleavePass::new(&ctx, gi_render::passes::bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h, n, false);
+        InterleavePass::new(&ctx, gi_render::gpu::bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h, n, false);
     // E in half floats, as the gather writes it.
     let irr_tex = texture(&ctx, "test.irradiance", w, h, &irr, true);
     let s = InterleaveSettings { n, ..Default::default() };

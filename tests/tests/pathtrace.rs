@@ -118,7 +118,7 @@ fn camera_hits_read_the_textures_the_g_buffer_reads() {
             let g = albedo.at(x, y);
             let gpu = Vec3::new(g[0], g[1], g[2]) * g[3];
             let Some(hit) = pt.camera_surface(r.view_proj(), x, y, size, size) else { continue };
-            let (o, d) = gi_render::cpu::raycast::primary_ray(inv, x, y, size, size);
+            let (o, d) = gi_render::scene::raycast::primary_ray(inv, x, y, size, size);
             let level0 = pt.surface(o, d).expect("the same ray hits");
             sum_lod += (hit.albedo - gpu).abs().max_element() as f64;
             sum_level0 += (level0.albedo - gpu).abs().max_element() as f64;

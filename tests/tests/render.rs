@@ -2,7 +2,7 @@
 
 use gi_lab_tests::{default_renderer, default_scene, gpu, real_scene};
 use gi_render::cpu::brdf;
-use gi_render::cpu::raycast::{Hit, TriangleSoup, primary_ray};
+use gi_render::scene::raycast::{Hit, TriangleSoup, primary_ray};
 use gi_render::scene::{Light, LightKind, LoadOptions, Node, Scene, SceneState, Transform};
 use gi_render::{LabSettings, Renderer};
 use glam::{Quat, Vec3, Vec4Swizzles};

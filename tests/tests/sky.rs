@@ -130,7 +130,7 @@ fn an_image_sky_lights_from_where_it_is_bright() {
 /// off, the background is black and the lit pixels are unchanged.
 #[test]
 fn the_sky_is_drawn_behind_the_scene() {
-    use gi_render::cpu::raycast::primary_ray;
+    use gi_render::scene::raycast::primary_ray;
     use gi_render::scene::sky::SkySampler;
     let size = 48;
     // An image whose every texel differs (a hue and brightness ramp), turned by 30°.

@@ -345,8 +345,8 @@ fn the_screen_voxel_grid_is_anded_down_to_the_gathered_levels() {
 /// Renders the default scene at 64² with visibility from half resolution on two levels and
 /// the grid built at `resolution`, and compares the voxelized grid with the CPU's.
 fn voxel_grid_matches_the_cpu(resolution: VoxelResolution) -> Renderer {
-    use gi_render::cpu::raycast::{TriangleSoup, moller_trumbore, primary_ray};
     use gi_render::passes::soler::voxels::open_meshes;
+    use gi_render::scene::raycast::{TriangleSoup, moller_trumbore, primary_ray};
     const SIZE: u32 = 64;
     let mut r = paused_renderer(SIZE, Technique::Soler, |s| {
         s.soler.start_resolution = StartResolution::Half;
@@ -373,7 +373,7 @@ fn voxel_grid_matches_the_cpu(resolution: VoxelResolution) -> Renderer {
         for x in 0..n {
             let (o, d) = primary_ray(inv, x, y, n, n);
             // The view depth where the ray through column (cx, cy) meets triangle t's plane.
-            let plane_depth = |t: &gi_render::cpu::raycast::Triangle, cx: u32, cy: u32| {
+            let plane_depth = |t: &gi_render::scene::raycast::Triangle, cx: u32, cy: u32| {
                 let (o, d) = primary_ray(inv, cx, cy, n, n);
                 let normal = (t.v[1] - t.v[0]).cross(t.v[2] - t.v[0]);
                 let h = (t.v[0] - o).dot(normal) / d.dot(normal);
@@ -513,7 +513,7 @@ fn march_against_exact_visibility(
     (start, levels, samples, radius): (StartResolution, u32, u32, f32),
     resolution: VoxelResolution,
 ) -> Vec<MarchErrors> {
-    use gi_render::cpu::raycast::TriangleSoup;
+    use gi_render::scene::raycast::TriangleSoup;
     let mut r = paused_renderer(size, Technique::Soler, |s| {
         s.soler.visibility = true;
         s.soler.voxel_resolution = resolution;

@@ -76,7 +76,8 @@ fn view_of_every_kind_of_buffer_matches_the_cpu_twin() {
 /// non-finite values left out.
 #[test]
 fn the_gpu_auto_range_matches_the_cpu() {
-    use gi_render::cpu::view::{RANGE_STATS_BYTES, auto_range, order_key, range_from_stats};
+    use gi_render::cpu::view::{auto_range, order_key, range_from_stats};
+    use gi_render::maths::colormap::RANGE_STATS_BYTES;
     let mut r = default_renderer(64, 48);
     for _ in 0..3 {
         r.render_frame();

@@ -148,7 +148,7 @@ impl Viewer {
                 self.last_auto = Some(Instant::now());
                 ask_range = true;
                 if let Some(gpu) = &self.gpu {
-                    let stats = (gpu.range_stats().clone(), gi_render::cpu::view::RANGE_STATS_BYTES);
+                    let stats = (gpu.range_stats().clone(), gi_render::maths::colormap::RANGE_STATS_BYTES);
                     renderer.read_later(&key, Readback::Storage(vec![stats]), 0);
                 }
             }

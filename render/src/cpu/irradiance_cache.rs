@@ -7,7 +7,7 @@
 //! - Records by ray tracing ("Irradiance Caching: ray tracing and octrees": "estimated by Monte
 //!   Carlo integration ... by tracing several hundreds to thousands of rays"): a stratified,
 //!   cosine-weighted hemisphere of M×N rays (M in θ, N in φ, one jittered ray per cell) through
-//!   the path tracer's BVH ([`crate::cpu::bvh::SceneBvh`]); each ray gathers the direct light
+//!   the path tracer's BVH ([`crate::scene::bvh::SceneBvh`]); each ray gathers the direct light
 //!   reflected by the surface it meets ([`PathTracer::reflected_direct`]: one bounce, as the
 //!   GPU records see the direct-lit G-buffer of their hemisphere camera). [`hemisphere`] gives
 //!   the record's terms ("Irradiance Caching": position, normal, irradiance, gradients, mean
@@ -46,7 +46,7 @@ use glam::{Mat4, Vec3};
 use crate::buffers::ImageF32;
 use crate::cpu::gautron::{Interpolation, Record, RecordTerms, extrapolate, frame, weight};
 use crate::cpu::pathtrace::{PathTracer, SurfacePoint};
-use crate::cpu::raycast::primary_ray;
+use crate::scene::raycast::primary_ray;
 
 /// What the cache casts its rays against: the path tracer's scene, or an analytic one (tests).
 pub trait CacheScene {

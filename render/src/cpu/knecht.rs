@@ -16,19 +16,9 @@
 
 use glam::{UVec2, Vec2, Vec3};
 
-pub use crate::cpu::knecht_bounce::*;
+use crate::maths::{halton, pcg_hash};
 
-/// Element `index` of the Halton sequence in base `base`, in [0, 1) (Halton 1964; Knecht §3.3
-/// uses it as the low-discrepancy set that hierarchical warping redistributes).
-pub fn halton(mut index: u32, base: u32) -> f32 {
-    let (mut f, mut r) = (1.0f32, 0.0f32);
-    while index > 0 {
-        f /= base as f32;
-        r += f * (index % base) as f32;
-        index /= base;
-    }
-    r
-}
+pub use crate::cpu::knecht_bounce::*;
 
 /// Point `j` of the exact-VPL reference's sampling set in the light view's uv square: the
 /// Halton point (h₂(j+1), h₃(j+1)) shifted by a toroidal offset drawn from `seed`
@@ -120,31 +110,6 @@ impl Pyramid {
         let pdf = self.at(0, cell.x, cell.y) / mean;
         Some((cell, (cell.as_vec2() + u) / self.size as f32, pdf))
     }
-}
-
-/// Splits `total` VPLs over views in proportion to their power (Knecht §4.4 samples each
-/// light's G-buffer; the split by power is ours): every view with power gets at least one
-/// VPL while `total` allows, the remainder goes by largest fractional share.
-pub fn split_budget(powers: &[f32], total: u32) -> Vec<u32> {
-    let sum: f64 = powers.iter().map(|p| p.max(0.0) as f64).sum();
-    if sum <= 0.0 || powers.is_empty() {
-        return vec![0; powers.len()];
-    }
-    let shares: Vec<f64> = powers.iter().map(|p| p.max(0.0) as f64 / sum * total as f64).collect();
-    let mut counts: Vec<u32> = shares.iter().map(|s| s.floor() as u32).collect();
-    let mut left = total - counts.iter().sum::<u32>();
-    for (c, p) in counts.iter_mut().zip(powers) {
-        if *c == 0 && *p > 0.0 && left > 0 {
-            *c = 1;
-            left -= 1;
-        }
-    }
-    let mut order: Vec<usize> = (0..powers.len()).collect();
-    order.sort_by(|&a, &b| (shares[b] - shares[b].floor()).total_cmp(&(shares[a] - shares[a].floor())));
-    for i in order.into_iter().cycle().take(left as usize) {
-        counts[i] += 1;
-    }
-    counts
 }
 
 /// Orthonormal basis (t, b, n) around a unit n (Duff et al. 2017); twin of `vpl_basis`.
@@ -384,43 +349,6 @@ pub fn vpl_irradiance(vpl: &Vpl, x: &Receiver, d_min: f32) -> Vec3 {
     vpl.flux * f_y * cos_y * cos_x / d2.max(d_min * d_min)
 }
 
-/// The per-frame slot→tile map of interleaved sampling (Knecht §3.4.1; twin of the loop in
-/// `shaders/interleave/gather.wgsl`; ⚠[knecht.interleave-shuffle] the thesis does not say which
-/// VPL shades which tile). Slots are cut into blocks of n² consecutive slots; in block b, tile
-/// t takes slot b·n² + (t + o_b) mod n². One VPL per block per tile keeps every tile a
-/// representative subset: consecutive slots hold consecutive Halton indices, which lie in
-/// different strips of the light view (the radical inverse's leading digits are the index's
-/// trailing ones), and the offsets o_b of every n² consecutive blocks are a permutation of
-/// 0…n², so each tile takes each of the n² strips once per n² blocks. The offsets are
-/// reshuffled every frame (seeded by `frame`), so that a tile's share — and the n×n pattern it
-/// would leave — changes from frame to frame. The old map, tile = slot mod n², gave tile t the
-/// same strip every frame (the 4×4 block pattern of issue #15). Returns one offset per block
-/// (⌈count / n²⌉ of them).
-pub fn tile_offsets(count: u32, n: u32, frame: u32) -> Vec<u32> {
-    let stride = (n.max(1) * n.max(1)) as usize;
-    let blocks = (count as usize).div_ceil(stride);
-    let mut offsets = Vec::with_capacity(blocks + stride);
-    let mut group = 0u32;
-    while offsets.len() < blocks {
-        let mut perm: Vec<u32> = (0..stride as u32).collect();
-        let seed = pcg_hash(frame.wrapping_mul(0x9E37_79B9) ^ pcg_hash(group));
-        for i in (1..stride).rev() {
-            let k = (pcg_hash(seed ^ i as u32) as usize) % (i + 1);
-            perm.swap(i, k);
-        }
-        offsets.extend(perm);
-        group += 1;
-    }
-    offsets.truncate(blocks);
-    offsets
-}
-
-/// The VPL slots of `tile` under [`tile_offsets`]: one per block, those below `count`.
-pub fn tile_slots(tile: u32, count: u32, n: u32, offsets: &[u32]) -> impl Iterator<Item = u32> + '_ {
-    let stride = n.max(1) * n.max(1);
-    offsets.iter().enumerate().map(move |(b, &o)| b as u32 * stride + (tile + o) % stride).filter(move |&k| k < count)
-}
-
 /// One pixel of the geometry-aware box filter's inputs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FilterTexel {
@@ -598,12 +526,6 @@ mod tests {
     use super::*;
 
     #[test]
-    fn halton_is_the_radical_inverse() {
-        assert_eq!([1, 2, 3, 4].map(|i| halton(i, 2)), [0.5, 0.25, 0.75, 0.125]);
-        assert!((halton(5, 3) - 7.0 / 9.0).abs() < 1e-6);
-    }
-
-    #[test]
     fn the_reference_sampling_set_is_stratified_and_uniform() {
         // 4,096 points (the exact-VPL reference's default) on a 16×16 grid: 16 expected per
         // cell. The rotated Halton set stays within 5 for every seed tried (0…19: 2 to 5);
@@ -664,14 +586,6 @@ mod tests {
         }
         // 3 : 1 by importance, to the discrepancy of 400 Halton points.
         assert!(hits[0].abs_diff(300) <= 4 && hits[0] + hits[1] == 400, "{hits:?}");
-    }
-
-    #[test]
-    fn budget_split_follows_power_and_gives_every_light_one() {
-        assert_eq!(split_budget(&[3.0, 1.0], 256), vec![192, 64]);
-        assert_eq!(split_budget(&[1000.0, 1.0], 10), vec![9, 1]);
-        assert_eq!(split_budget(&[1.0, 0.0, 1.0], 5).iter().sum::<u32>(), 5);
-        assert_eq!(split_budget(&[0.0], 5), vec![0]);
     }
 
     #[test]
@@ -753,34 +667,5 @@ mod tests {
         let new = ConfidenceInput { depth_prev: 4.0, ..still };
         // Δpos = 0.2 · 10 ≥ 1.
         assert_eq!(confidence(&new, &w), 0.0);
-    }
-
-    #[test]
-    fn every_tile_takes_every_strip_once_and_the_map_changes_per_frame() {
-        let (count, n) = (256u32, 4u32);
-        let offsets = tile_offsets(count, n, 3);
-        assert_eq!(offsets.len(), 16);
-        let mut seen = vec![0u32; count as usize];
-        for tile in 0..16 {
-            let slots: Vec<u32> = tile_slots(tile, count, n, &offsets).collect();
-            assert_eq!(slots.len(), 16, "tile {tile}");
-            // One slot of each residue mod n² (each strip of the light view) per tile; the
-            // old map (slot mod n² = tile) gave every slot the same residue.
-            let mut residues: Vec<u32> = slots.iter().map(|k| k % 16).collect();
-            residues.sort_unstable();
-            assert_eq!(residues, (0..16).collect::<Vec<_>>(), "tile {tile}");
-            for k in slots {
-                seen[k as usize] += 1;
-            }
-        }
-        assert!(seen.iter().all(|&c| c == 1), "every slot belongs to exactly one tile");
-        assert_ne!(offsets, tile_offsets(count, n, 4), "the map is reshuffled each frame");
-        assert_eq!(offsets, tile_offsets(count, n, 3), "and deterministic");
-        // A partial last block: 7 slots over 4 tiles; n = 1 keeps every slot in its tile.
-        let short = tile_offsets(7, 2, 0);
-        let sizes: Vec<usize> = (0..4).map(|t| tile_slots(t, 7, 2, &short).count()).collect();
-        assert_eq!(sizes.iter().sum::<usize>(), 7);
-        assert!(sizes.iter().all(|&c| c == 1 || c == 2), "{sizes:?}");
-        assert_eq!(tile_slots(0, 5, 1, &tile_offsets(5, 1, 9)).collect::<Vec<_>>(), [0, 1, 2, 3, 4]);
     }
 }

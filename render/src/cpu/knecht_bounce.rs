@@ -7,13 +7,7 @@
 use glam::Vec3;
 
 use crate::cpu::knecht::{Receiver, Vpl};
-
-/// PCG hash (Jarzynski & Olano, JCGT 2020), the GPU's random source for the bounce selection.
-pub fn pcg_hash(v: u32) -> u32 {
-    let state = v.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
-    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
-    (word >> 22) ^ word
-}
+use crate::maths::pcg_hash;
 
 /// Uniform number in (0, 1) of sample `j` for the proportional bounce selection.
 pub fn bounce_uniform(seed: u32, j: u32) -> f32 {

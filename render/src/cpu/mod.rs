@@ -2,14 +2,12 @@
 //! the passes' outputs with these on small inputs.
 
 pub mod brdf;
-pub mod bvh;
 pub mod gautron;
 pub mod hcb;
 pub mod irradiance_cache;
 pub mod knecht;
 pub mod knecht_bounce;
 pub mod pathtrace;
-pub mod raycast;
 pub mod soler;
 pub mod soler_glossy;
 pub mod soler_temporal;

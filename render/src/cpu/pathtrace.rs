@@ -37,9 +37,9 @@ use rayon::prelude::*;
 
 use crate::buffers::ImageF32;
 use crate::cpu::brdf;
-use crate::cpu::bvh::SceneBvh;
-use crate::cpu::raycast::primary_ray;
+use crate::scene::bvh::SceneBvh;
 use crate::scene::emitters::Emitters;
+use crate::scene::raycast::primary_ray;
 use crate::scene::sky::{Sky, SkySampler};
 use crate::scene::{Material, Scene, TextureImage, WorldLight};
 
@@ -137,7 +137,7 @@ impl Footprint {
 
     /// (∂uv/∂x, ∂uv/∂y) at the hit of texture coordinates `uv` on `tri` (None: a neighbour
     /// ray parallel to its plane, or a degenerate triangle).
-    fn uv_derivatives(&self, tri: &crate::cpu::bvh::BvhTri, uv: Vec2) -> Option<(Vec2, Vec2)> {
+    fn uv_derivatives(&self, tri: &crate::scene::bvh::BvhTri, uv: Vec2) -> Option<(Vec2, Vec2)> {
         let (e1, e2) = (tri.v[1] - tri.v[0], tri.v[2] - tri.v[0]);
         let plane = e1.cross(e2);
         let (d00, d01, d11) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));

@@ -28,7 +28,7 @@
 
 use glam::{Vec2, Vec3};
 
-use crate::cpu::knecht_bounce::pcg_hash;
+use crate::maths::pcg_hash;
 
 /// The golden angle (radians): successive spiral samples are this far apart.
 pub const GOLDEN_ANGLE: f32 = 2.399_963_2;

@@ -3,12 +3,8 @@
 //! pixels with Lw > 0, as the GPU does), Eq. 2 and Eq. 4, then sRGB encoding.
 
 use crate::buffers::ImageF32;
+use crate::maths::luminance;
 use crate::passes::compose::TonemapSettings;
-
-/// Rec. 709 luminance.
-pub fn luminance(c: [f32; 3]) -> f32 {
-    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
-}
 
 /// L̄w = exp(mean log(δ + Lw)) over pixels with Lw > 0 (1 when there are none), each log
 /// clamped to ±30 (Lw ≤ e^30 ≈ 10^13) as the GPU's sums are.

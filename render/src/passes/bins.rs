@@ -9,7 +9,7 @@
 use crate::counters::prelude::*;
 
 use crate::gpu::GpuContext;
-use crate::passes::bgl;
+use crate::gpu::bgl;
 use crate::settings_enum;
 
 /// Side in pixels of the squares the items are binned into (a multiple of the 16 × 16

@@ -79,33 +79,33 @@ impl ComposePass {
         let layout0 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("compose.inputs"),
             entries: &[
-                super::bgl::texture(1, cs, false),
-                super::bgl::texture(2, cs, false),
-                super::bgl::storage_texture(3, HDR_FORMAT),
-                super::bgl::texture(4, cs, false),
-                super::bgl::texture(5, cs, false),
-                super::bgl::uniform(6, cs),
-                super::bgl::texture(7, cs, false),
-                super::bgl::uniform(8, cs),
-                super::bgl::texture(9, cs, false),
-                super::bgl::uniform(10, cs),
-                super::bgl::storage(11, cs, true),
-                super::bgl::storage_texture(12, LDR_FORMAT),
-                super::bgl::storage(13, cs, false),
+                crate::gpu::bgl::texture(1, cs, false),
+                crate::gpu::bgl::texture(2, cs, false),
+                crate::gpu::bgl::storage_texture(3, HDR_FORMAT),
+                crate::gpu::bgl::texture(4, cs, false),
+                crate::gpu::bgl::texture(5, cs, false),
+                crate::gpu::bgl::uniform(6, cs),
+                crate::gpu::bgl::texture(7, cs, false),
+                crate::gpu::bgl::uniform(8, cs),
+                crate::gpu::bgl::texture(9, cs, false),
+                crate::gpu::bgl::uniform(10, cs),
+                crate::gpu::bgl::storage(11, cs, true),
+                crate::gpu::bgl::storage_texture(12, LDR_FORMAT),
+                crate::gpu::bgl::storage(13, cs, false),
             ],
         });
         let layout1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("compose.tonemap"),
             entries: &[
-                super::bgl::uniform(0, cs),
-                super::bgl::texture(1, cs, false),
-                super::bgl::storage(2, cs, true),
-                super::bgl::storage_texture(3, LDR_FORMAT),
+                crate::gpu::bgl::uniform(0, cs),
+                crate::gpu::bgl::texture(1, cs, false),
+                crate::gpu::bgl::storage(2, cs, true),
+                crate::gpu::bgl::storage_texture(3, LDR_FORMAT),
             ],
         });
         let lum_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("compose.luminance"),
-            entries: &[super::bgl::storage(1, cs, false), super::bgl::storage(2, cs, false)],
+            entries: &[crate::gpu::bgl::storage(1, cs, false), crate::gpu::bgl::storage(2, cs, false)],
         });
         let compose = super::compute_pipeline(device, "compose.compose", &module, "cs_compose", &[&layout0]);
         let tonemap = super::compute_pipeline(device, "compose.tonemap", &tone_module, "cs_tonemap", &[&layout1]);

@@ -101,30 +101,30 @@ impl DirectPass {
             label: Some("direct.inputs"),
             entries: &[
                 camera_layout_entry,
-                super::bgl::uniform(1, cs),
-                super::bgl::storage(2, cs, true),
-                super::bgl::storage(3, cs, true),
-                super::bgl::depth_array(4, cs),
-                super::bgl::sampler(5, cs, wgpu::SamplerBindingType::Comparison),
-                super::bgl::storage(6, cs, true),
-                super::bgl::texture(7, cs, false),
-                super::bgl::depth(8, cs),
+                crate::gpu::bgl::uniform(1, cs),
+                crate::gpu::bgl::storage(2, cs, true),
+                crate::gpu::bgl::storage(3, cs, true),
+                crate::gpu::bgl::depth_array(4, cs),
+                crate::gpu::bgl::sampler(5, cs, wgpu::SamplerBindingType::Comparison),
+                crate::gpu::bgl::storage(6, cs, true),
+                crate::gpu::bgl::texture(7, cs, false),
+                crate::gpu::bgl::depth(8, cs),
             ],
         });
         let layout1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("direct.gbuffer"),
             entries: &[
-                super::bgl::texture(0, cs, false),
-                super::bgl::texture(1, cs, false),
-                super::bgl::texture(2, cs, false),
-                super::bgl::texture(3, cs, false),
-                super::bgl::storage_texture(4, RADIANCE_FORMAT),
+                crate::gpu::bgl::texture(0, cs, false),
+                crate::gpu::bgl::texture(1, cs, false),
+                crate::gpu::bgl::texture(2, cs, false),
+                crate::gpu::bgl::texture(3, cs, false),
+                crate::gpu::bgl::storage_texture(4, RADIANCE_FORMAT),
             ],
         });
         let pipeline = super::compute_pipeline(device, "direct.pipeline", &module, "cs_main", &[&layout0, &layout1]);
         let layout2 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("direct.atlas"),
-            entries: &[super::bgl::uniform(0, cs), super::bgl::storage(1, cs, true)],
+            entries: &[crate::gpu::bgl::uniform(0, cs), crate::gpu::bgl::storage(1, cs, true)],
         });
         let atlas_pipeline = super::compute_pipeline(
             device,
@@ -135,7 +135,7 @@ impl DirectPass {
         );
         let diffuse_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("direct.diffuse"),
-            entries: &[super::bgl::storage_texture(2, RADIANCE_FORMAT)],
+            entries: &[crate::gpu::bgl::storage_texture(2, RADIANCE_FORMAT)],
         });
         let diffuse_pipeline = super::compute_pipeline(
             device,

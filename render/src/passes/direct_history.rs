@@ -9,7 +9,8 @@
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::passes::{bgl, bind_group, create_target, view};
+use crate::gpu::bgl;
+use crate::passes::{bind_group, create_target, view};
 
 /// The format of the history (the mean of many frames of half floats).
 const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;

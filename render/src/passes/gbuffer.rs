@@ -76,7 +76,7 @@ impl GBufferPass {
         let module = crate::shaders::create_module(device, "gbuffer/gbuffer.wgsl");
         let camera_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some(&format!("{name}.camera")),
-            entries: &[super::bgl::uniform(0, wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE)],
+            entries: &[crate::gpu::bgl::uniform(0, wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE)],
         });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some(&format!("{name}.layout")),

@@ -187,7 +187,7 @@ impl ShadowPass {
         let module = crate::shaders::create_module(device, "shadow/shadow.wgsl");
         let view_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("direct.shadow.view"),
-            entries: &[super::bgl::uniform_dynamic(0, wgpu::ShaderStages::VERTEX)],
+            entries: &[crate::gpu::bgl::uniform_dynamic(0, wgpu::ShaderStages::VERTEX)],
         });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("direct.shadow.layout"),

@@ -205,15 +205,15 @@ impl ViewPipeline {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("view.inputs"),
             entries: &[
-                super::bgl::uniform(0, fs),
+                crate::gpu::bgl::uniform(0, fs),
                 tex(1, float, d2),
                 tex(2, float, arr),
                 tex(3, wgpu::TextureSampleType::Uint, d2),
                 tex(4, wgpu::TextureSampleType::Uint, arr),
                 tex(5, wgpu::TextureSampleType::Depth, d2),
                 tex(6, wgpu::TextureSampleType::Depth, arr),
-                super::bgl::storage(7, fs, true),
-                super::bgl::storage(8, wgpu::ShaderStages::COMPUTE, false),
+                crate::gpu::bgl::storage(7, fs, true),
+                crate::gpu::bgl::storage(8, wgpu::ShaderStages::COMPUTE, false),
             ],
         });
         let module = crate::shaders::create_module(device, "view/view.wgsl");
@@ -272,8 +272,10 @@ impl ViewPipeline {
             dummy("view.dummy_depth", F::Depth32Float, 1),
             dummy("view.dummy_depth_array", F::Depth32Float, 2),
         ];
-        let table: Vec<[f32; 4]> =
-            crate::cpu::view::COLORMAP_TABLES.iter().flat_map(|t| t.iter().map(|c| [c[0], c[1], c[2], 1.0])).collect();
+        let table: Vec<[f32; 4]> = crate::maths::colormap::COLORMAP_TABLES
+            .iter()
+            .flat_map(|t| t.iter().map(|c| [c[0], c[1], c[2], 1.0]))
+            .collect();
         let colormaps = wgpu::util::DeviceExt::create_buffer_init(
             device,
             &wgpu::util::BufferInitDescriptor {
@@ -305,7 +307,7 @@ impl BufferView {
         });
         let range_stats = ctx.device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("view.range_stats"),
-            size: crate::cpu::view::RANGE_STATS_BYTES,
+            size: crate::maths::colormap::RANGE_STATS_BYTES,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
@@ -402,7 +404,7 @@ impl BufferView {
             pass.set_group(0, &group, &[]);
             let [clear, minmax, histogram] = &self.shared.range;
             pass.set_pipeline(clear);
-            pass.dispatch_workgroups(((crate::cpu::view::RANGE_STATS_BYTES / 4) as u32).div_ceil(256), 1, 1);
+            pass.dispatch_workgroups(((crate::maths::colormap::RANGE_STATS_BYTES / 4) as u32).div_ceil(256), 1, 1);
             for pipeline in [minmax, histogram] {
                 pass.set_pipeline(pipeline);
                 pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
@@ -461,10 +463,10 @@ impl DepthProbe {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("probe.inputs"),
             entries: &[
-                super::bgl::uniform(0, cs),
-                super::bgl::depth(1, cs),
-                super::bgl::depth_array(2, cs),
-                super::bgl::storage(3, cs, false),
+                crate::gpu::bgl::uniform(0, cs),
+                crate::gpu::bgl::depth(1, cs),
+                crate::gpu::bgl::depth_array(2, cs),
+                crate::gpu::bgl::storage(3, cs, false),
             ],
         });
         let module = crate::shaders::create_module(device, "view/probe.wgsl");

@@ -11,7 +11,7 @@ use glam::Mat4;
 use super::Renderer;
 use crate::buffers::{BufferError, BufferRegistry, ImageF32};
 use crate::camera::Camera;
-use crate::passes::bgl;
+use crate::gpu::bgl;
 use crate::passes::compose::ComposePass;
 use crate::passes::direct::DirectPass;
 use crate::passes::gbuffer::GBufferPass;

@@ -76,7 +76,7 @@ pub(crate) fn explain_vpl_gather(
         temporal: temporal.and(x.temporal.as_ref()),
         last,
     };
-    let camera = crate::passes::bgl::uniform(0, wgpu::ShaderStages::COMPUTE);
+    let camera = crate::gpu::bgl::uniform(0, wgpu::ShaderStages::COMPUTE);
     let pass = x.explain_vpl.get_or_insert_with(|| VplExplainPass::new(f.ctx, camera));
     pass.run(f.ctx, enc, &inputs, info);
 }

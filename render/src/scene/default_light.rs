@@ -21,7 +21,7 @@ use glam::{Quat, Vec3};
 
 use super::framing::{ViewKind, ViewPreference, choose_view_with};
 use super::{Light, LightKind, Node, Scene, Transform};
-use crate::cpu::bvh::SceneBvh;
+use crate::scene::bvh::SceneBvh;
 
 /// The start of the warning that names the added light (the Scene panel and the status bar
 /// show it).

@@ -28,7 +28,7 @@
 use glam::{Mat4, Vec2, Vec3, Vec4Swizzles};
 
 use super::{Scene, SceneState, TextureImage};
-use crate::cpu::knecht::halton;
+use crate::maths::halton;
 
 /// One emissive triangle in world space.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -36,7 +36,7 @@ use glam::{Vec2, Vec3};
 
 use super::{Aabb, Scene};
 use crate::camera::Camera;
-use crate::cpu::bvh::SceneBvh;
+use crate::scene::bvh::SceneBvh;
 
 /// What the user asked for: the rule's choice, or a side.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -153,7 +153,7 @@ fn usable(b: Aabb) -> Aabb {
     if !(b.min.is_finite() && b.max.is_finite()) || b.is_empty() {
         return Aabb { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) };
     }
-    let limit = Vec3::splat(crate::cpu::bvh::MAX_COORDINATE);
+    let limit = Vec3::splat(crate::scene::bvh::MAX_COORDINATE);
     let b = Aabb { min: b.min.clamp(-limit, limit), max: b.max.clamp(-limit, limit) };
     let pad = (b.extent().max_element() * 1e-3).max(1e-3);
     Aabb { min: b.min - Vec3::splat(pad), max: b.max + Vec3::splat(pad) }
@@ -546,7 +546,7 @@ fn view_score(bvh: &SceneBvh, cam: &Camera, aspect: f32) -> (f32, f32) {
     let eps = 1e-4 * cam.orbit_distance.max(1e-3);
     for y in 0..h {
         for x in 0..w {
-            let (o, d) = crate::cpu::raycast::primary_ray(inv, x, y, w, h);
+            let (o, d) = crate::scene::raycast::primary_ray(inv, x, y, w, h);
             if let Some(s) = bvh.intersect_camera(o, d, 0.0, f32::INFINITY) {
                 hit += 1;
                 if bvh.intersect(s.p + s.n * eps, s.n, 0.0, f32::INFINITY).is_some() {

@@ -8,12 +8,14 @@
 //! and lights for one instant of the deterministic clock.
 
 mod animation;
+pub mod bvh;
 pub mod cornell;
 pub mod default_light;
 pub mod emitters;
 pub mod framing;
 pub mod framing_cases;
 mod gltf_load;
+pub mod raycast;
 pub mod sky;
 mod texture;
 pub mod upload;

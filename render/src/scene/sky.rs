@@ -18,8 +18,8 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use super::{Light, LightKind, WorldLight};
-use crate::cpu::knecht::halton;
-use crate::cpu::tonemap::luminance;
+use crate::maths::halton;
+use crate::maths::luminance;
 
 /// Where the sky's radiance comes from.
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -67,13 +67,13 @@ pub fn material_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLay
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some(label),
         entries: &[
-            crate::passes::bgl::uniform(0, fs),
-            crate::passes::bgl::texture(1, fs, true),
-            crate::passes::bgl::sampler(2, fs, wgpu::SamplerBindingType::Filtering),
-            crate::passes::bgl::texture(3, fs, true),
-            crate::passes::bgl::texture(4, fs, true),
-            crate::passes::bgl::texture(5, fs, true),
-            crate::passes::bgl::texture(6, fs, true),
+            crate::gpu::bgl::uniform(0, fs),
+            crate::gpu::bgl::texture(1, fs, true),
+            crate::gpu::bgl::sampler(2, fs, wgpu::SamplerBindingType::Filtering),
+            crate::gpu::bgl::texture(3, fs, true),
+            crate::gpu::bgl::texture(4, fs, true),
+            crate::gpu::bgl::texture(5, fs, true),
+            crate::gpu::bgl::texture(6, fs, true),
         ],
     })
 }
@@ -136,7 +136,7 @@ impl GpuScene {
         });
         let instance_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("scene.instances"),
-            entries: &[crate::passes::bgl::storage(0, wgpu::ShaderStages::VERTEX, true)],
+            entries: &[crate::gpu::bgl::storage(0, wgpu::ShaderStages::VERTEX, true)],
         });
         let instance_group = device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("scene.instances"),

@@ -99,7 +99,7 @@ fn assert_explained(r: &Renderer, e: &Explanation) -> usize {
     let interp = Interpolation::of(s);
     let mut sum_w = 0.0;
     for c in &added {
-        let rec = records[record_index(c)].to_cpu();
+        let rec = gi_lab_tests::cpu_record(&records[record_index(c)]);
         let cpu = gautron::weight(&rec, p, n, s.weight_clamp, interp.in_front);
         let gpu = field(c, "w clamped");
         assert!(
@@ -116,7 +116,7 @@ fn assert_explained(r: &Renderer, e: &Explanation) -> usize {
         assert!(c.position.is_some_and(|q| q == rec.p), "{}", c.name);
         sum_w += cpu;
     }
-    let cpu_records: Vec<gautron::Record> = records.iter().map(GpuRecord::to_cpu).collect();
+    let cpu_records: Vec<gautron::Record> = records.iter().map(gi_lab_tests::cpu_record).collect();
     let (cpu_sum, cpu_w) = gautron::accumulate(&cpu_records, p, n, &interp);
     assert!(
         (cpu_w - sum_w).abs() <= 1e-3 * cpu_w,

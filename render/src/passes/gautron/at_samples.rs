@@ -9,7 +9,8 @@
 use crate::counters::prelude::*;
 
 use crate::gpu::GpuContext;
-use crate::passes::{bgl, bind_group};
+use crate::gpu::bgl;
+use crate::passes::bind_group;
 
 /// Bytes of one HCB sample (`passes::hcb::GpuHcbSample`).
 pub const HCB_SAMPLE_BYTES: u64 = std::mem::size_of::<crate::passes::hcb::GpuHcbSample>() as u64;

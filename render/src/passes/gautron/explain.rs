@@ -13,7 +13,8 @@ use glam::{Vec3, Vec4};
 use super::stage::GautronStage;
 use crate::explain::{Check, Contribution, Explanation, Rejection, luminance};
 use crate::gpu::GpuContext;
-use crate::passes::{bgl, bind_group, view};
+use crate::gpu::bgl;
+use crate::passes::{bind_group, view};
 use crate::stages::FrameInputs;
 
 /// Flags of a listed record (`EXPLAIN_*` in the shader).

@@ -13,8 +13,9 @@ use super::{GautronSettings, atlas_grid};
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::cpu::gautron::HemisphereTable;
 use crate::gpu::GpuContext;
+use crate::gpu::bgl;
+use crate::passes::bind_group;
 use crate::passes::gbuffer::{self, GBuffer};
-use crate::passes::{bgl, bind_group};
 use crate::scene::SceneState;
 use crate::scene::upload::GpuScene;
 

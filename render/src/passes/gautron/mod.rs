@@ -246,18 +246,6 @@ impl GpuRecord {
     pub fn saw(&self, draw: usize) -> bool {
         self.seen[(draw % 128) / 32] & (1 << (draw % 32)) != 0
     }
-
-    /// The record as the CPU twin holds it (`cpu::gautron::Record`).
-    pub fn to_cpu(&self) -> crate::cpu::gautron::Record {
-        crate::cpu::gautron::Record {
-            p: self.position.truncate(),
-            n: self.normal.truncate(),
-            r: self.position.w,
-            e: self.irradiance.truncate(),
-            rot: self.rot.map(|v| v.truncate()),
-            trans: self.trans.map(|v| v.truncate()),
-        }
-    }
 }
 
 /// Bytes per record on the GPU.

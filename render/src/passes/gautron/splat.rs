@@ -11,9 +11,10 @@ use crate::counters::prelude::*;
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
+use crate::gpu::bgl;
 use crate::passes::bins::{Bins, SplatMethod};
 use crate::passes::gbuffer::GBufferViews;
-use crate::passes::{bgl, bind_group, create_target, view};
+use crate::passes::{bind_group, create_target, view};
 
 pub const ACCUM_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 

@@ -20,7 +20,8 @@ use super::{
 };
 use crate::buffers::{BufferKind, BufferRegistry, read_storage};
 use crate::gpu::GpuContext;
-use crate::passes::{bgl, bind_group, buffer, create_target, view};
+use crate::gpu::bgl;
+use crate::passes::{bind_group, buffer, create_target, view};
 use crate::pipeline::Temporal;
 use crate::stages::{FrameInputs, Visibility, VplSet};
 use crate::timing::GpuTimer;

@@ -11,7 +11,8 @@ use crate::counters::prelude::*;
 use glam::Vec4;
 
 use crate::gpu::GpuContext;
-use crate::passes::{bgl, bind_group};
+use crate::gpu::bgl;
+use crate::passes::bind_group;
 use crate::stages::{Visibility, VplSet};
 use crate::timing::Slot;
 

@@ -7,7 +7,7 @@ use bytemuck::Zeroable;
 use super::{GpuHcbSample, HcbFrame, HcbLevel, HcbParams, MAX_LEVELS, STRIDE};
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::passes::bgl;
+use crate::gpu::bgl;
 use crate::timing::Slot;
 
 /// The cache's textures the HCB build writes (§5.2): with them, level 0 is the supplementary

@@ -14,7 +14,7 @@ use glam::Vec4;
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::passes::bgl;
+use crate::gpu::bgl;
 use crate::passes::hcb::{COUNTER_BYTES, CacheViews, GpuHcbSample, HcbPass};
 use crate::timing::Slot;
 

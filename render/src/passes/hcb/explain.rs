@@ -19,8 +19,9 @@ use glam::{Vec3, Vec4};
 use super::stage::HcbStage;
 use crate::explain::{Check, Contribution, Explanation, Rejection, luminance};
 use crate::gpu::GpuContext;
+use crate::gpu::bgl;
 use crate::passes::knecht::temporal::TemporalPass;
-use crate::passes::{bgl, bind_group, view};
+use crate::passes::{bind_group, view};
 use crate::stages::FrameInputs;
 
 /// Flags of a listed sample (`EXPLAIN_*` in the shader).

@@ -6,7 +6,7 @@ use glam::Vec4;
 
 use super::build::HcbPass;
 use crate::gpu::GpuContext;
-use crate::passes::bgl;
+use crate::gpu::bgl;
 use crate::timing::Slot;
 
 /// Uniform of the gather at the samples; WGSL twin: `HcbGatherParams` in

@@ -226,7 +226,7 @@ impl HcbFrame {
             thresholds,
             eye,
             pixel_scale,
-            pattern: crate::cpu::hcb::recompute_pattern(4),
+            pattern: crate::maths::recompute_pattern(4),
             incomplete_weight: 0.0,
             footprint_min_cos: HcbSettings::default().footprint_min_cos,
             receiver: IrradianceReceiver::Glossy,

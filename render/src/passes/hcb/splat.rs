@@ -7,7 +7,7 @@ use crate::counters::prelude::*;
 use super::{HcbFrame, HcbParams};
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::passes::bgl;
+use crate::gpu::bgl;
 use crate::passes::bins::{Bins, SplatMethod};
 use crate::timing::Slot;
 

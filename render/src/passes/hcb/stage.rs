@@ -5,8 +5,8 @@
 //! before the build adds samples only where texels stay incomplete.
 
 use crate::gpu::GpuContext;
+use crate::gpu::bgl;
 use crate::lab_settings::LabSettings;
-use crate::passes::bgl;
 use crate::passes::hcb::cache::{CacheCounts, CacheFrame, HcbCachePass, cache_views};
 use crate::passes::hcb::{GatherSet, GpuHcbSample, HcbFrame, HcbGatherPass, HcbPass, HcbSettings, HcbSplatPass};
 use crate::pipeline::Temporal;
@@ -116,7 +116,7 @@ impl HcbStage {
             thresholds: s.thresholds(f.scale),
             eye: f.camera.position,
             pixel_scale: 2.0 * (f.camera.yfov * 0.5).tan() / f.height.max(1) as f32,
-            pattern: crate::cpu::hcb::recompute_pattern(s.recompute_period),
+            pattern: crate::maths::recompute_pattern(s.recompute_period),
             incomplete_weight: s.incomplete_weight,
             footprint_min_cos: s.footprint_min_cos,
             receiver: s.receiver,

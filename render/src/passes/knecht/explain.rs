@@ -12,7 +12,7 @@ use glam::{Vec3, Vec4};
 
 use crate::explain::{Check, Contribution, Explanation, Rejection};
 use crate::gpu::GpuContext;
-use crate::passes::bgl;
+use crate::gpu::bgl;
 use crate::passes::gbuffer::GBufferViews;
 use crate::passes::knecht::interleave::{GatherVisibility, InterleavePass};
 use crate::passes::knecht::temporal::{MergeOrder, TemporalPass};

@@ -17,7 +17,7 @@ use glam::Vec4;
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::passes::bgl;
+use crate::gpu::bgl;
 use crate::passes::gbuffer::{ALBEDO_FORMAT, GBufferViews, MATERIAL_FORMAT, NORMAL_FORMAT, POSITION_FORMAT};
 use crate::settings_group;
 
@@ -480,7 +480,7 @@ impl InterleavePass {
             near: Vec4::new(near_cut * near_cut, 0.0, 0.0, 0.0),
         };
         ctx.queue.write_buffer(&self.gather_params, 0, bytemuck::bytes_of(&gp));
-        let offsets = crate::cpu::knecht::tile_offsets(vpl_count, n, self.frames);
+        let offsets = crate::maths::tile_offsets(vpl_count, n, self.frames);
         self.frames = self.frames.wrapping_add(1);
         if (offsets.len() as u64) * 4 > self.tile_offsets.size() {
             self.tile_offsets = Self::offsets_buffer(&ctx.device, offsets.len() as u32);

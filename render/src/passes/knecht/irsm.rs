@@ -88,7 +88,7 @@ impl IrsmPass {
         let splat_layout = crate::passes::knecht::ism::splat_layout(device, "irsm.splat.inputs");
         let mut entries =
             crate::passes::uniform_and_storage_entries(&[true, true, true, true, false, false, false, false]);
-        entries.push(crate::passes::bgl::storage_texture(9, wgpu::TextureFormat::R32Float));
+        entries.push(crate::gpu::bgl::storage_texture(9, wgpu::TextureFormat::R32Float));
         let sample_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("irsm.sample.inputs"),
             entries: &entries,

@@ -17,7 +17,7 @@ use glam::Vec4;
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::passes::bgl;
+use crate::gpu::bgl;
 use crate::pipeline::VplVisibility;
 use crate::scene::{Scene, SceneState};
 use crate::timing::Slot;

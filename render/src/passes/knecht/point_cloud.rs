@@ -6,7 +6,7 @@
 
 use glam::Vec3;
 
-use crate::cpu::knecht::halton;
+use crate::maths::halton;
 use crate::scene::{Scene, SceneState};
 
 use super::ism::PointPlacement;

@@ -6,9 +6,9 @@
 //! splatted, then bounce b + 1's VPLs are chosen from the point cloud with them), so stage 3
 //! splats the maps the bounces read and stage 4 splats what is left and pulls-pushes.
 
-use crate::cpu::knecht::split_budget;
 use crate::gpu::GpuContext;
 use crate::lab_settings::LabSettings;
+use crate::maths::split_budget;
 use crate::passes::emitters::EmitterPass;
 use crate::passes::knecht::irsm::{IrsmFrame, IrsmJob, IrsmPass};
 use crate::passes::knecht::ism::{BounceShadowTest, IsmFrame, IsmJob, IsmPass, MAX_BOUNCES};

@@ -22,7 +22,7 @@ use glam::Vec4;
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::passes::bgl;
+use crate::gpu::bgl;
 use crate::passes::gbuffer::{GBufferViews, NORMAL_FORMAT};
 use crate::settings_group;
 

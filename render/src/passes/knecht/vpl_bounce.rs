@@ -60,7 +60,7 @@ const STRIDE: u64 = 256;
 
 /// The random seed of bounce `b` in the frame with seed `frame_seed`.
 pub fn bounce_seed(frame_seed: u32, b: u32) -> u32 {
-    crate::cpu::knecht::pcg_hash(frame_seed.wrapping_mul(MAX_BOUNCES).wrapping_add(b))
+    crate::maths::pcg_hash(frame_seed.wrapping_mul(MAX_BOUNCES).wrapping_add(b))
 }
 
 /// What one frame's bounces need besides the ISM pass.
@@ -90,7 +90,7 @@ impl VplBouncePass {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
         let mut entries = crate::passes::uniform_and_storage_entries(&[true, true, true, true, false]);
-        entries.push(crate::passes::bgl::texture(6, wgpu::ShaderStages::COMPUTE, false));
+        entries.push(crate::gpu::bgl::texture(6, wgpu::ShaderStages::COMPUTE, false));
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("vpl.bounce.inputs"),
             entries: &entries,

@@ -15,10 +15,11 @@ use glam::Vec4;
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
+use crate::gpu::bgl;
+use crate::passes::CameraUniform;
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::reference::vpl::GpuVpl;
 use crate::passes::shadow::{GpuLight, LightView};
-use crate::passes::{CameraUniform, bgl};
 use crate::scene::upload::GpuScene;
 use crate::scene::{LightKind, SceneState, WorldLight};
 use crate::settings_group;

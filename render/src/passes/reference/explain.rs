@@ -10,7 +10,7 @@ use glam::{Vec3, Vec4};
 
 use crate::explain::{Check, Contribution, Explanation, Replay};
 use crate::gpu::GpuContext;
-use crate::passes::bgl;
+use crate::gpu::bgl;
 use crate::passes::gbuffer::GBufferViews;
 use crate::passes::knecht::explain::{EMPTY, term_fields, term_rejection};
 use crate::passes::reference::vpl::GpuVpl;

@@ -14,9 +14,10 @@
 use glam::{Mat4, Vec3, Vec4};
 
 use crate::gpu::GpuContext;
-use crate::passes::bgl;
+use crate::gpu::bgl;
+use crate::maths::halton;
 use crate::passes::knecht::vpl_importance::ReceiverBrdf;
-use crate::passes::reference::vpl::{BatchView, VplSamplePass, halton};
+use crate::passes::reference::vpl::{BatchView, VplSamplePass};
 use crate::passes::reference::vpl_gather::{GatherParams, VplGatherPass};
 use crate::passes::reference::vpl_visibility::VplVisibilityPass;
 use crate::passes::shadow::{GpuLight, LightView};

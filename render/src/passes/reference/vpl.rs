@@ -17,9 +17,10 @@ use crate::counters::prelude::*;
 use glam::{Mat4, Vec3, Vec4};
 
 use crate::gpu::GpuContext;
+use crate::gpu::bgl;
+use crate::passes::CameraUniform;
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::shadow::{GpuLight, LightView};
-use crate::passes::{CameraUniform, bgl};
 use crate::scene::SceneState;
 use crate::scene::upload::GpuScene;
 use crate::settings_group;
@@ -85,8 +86,6 @@ pub struct SampleParams {
     pub scale: Vec4,
     pub seed: [u32; 4],
 }
-
-pub use crate::cpu::knecht::halton;
 
 /// One batch's view: which light and which of its views.
 #[derive(Clone, Copy, Debug)]

@@ -91,9 +91,9 @@ impl VplVisibilityPass {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("vpl.shadow.inputs"),
             entries: &[
-                crate::passes::bgl::uniform_dynamic(0, vs),
-                crate::passes::bgl::uniform(1, vs),
-                crate::passes::bgl::storage(2, vs, true),
+                crate::gpu::bgl::uniform_dynamic(0, vs),
+                crate::gpu::bgl::uniform(1, vs),
+                crate::gpu::bgl::storage(2, vs, true),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {

@@ -10,7 +10,7 @@ use crate::counters::prelude::*;
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::passes::bgl;
+use crate::gpu::bgl;
 use crate::timing::Slot;
 
 /// Rust twin of `BounceParams` in `shaders/soler/bounces.wgsl`.

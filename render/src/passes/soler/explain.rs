@@ -14,7 +14,7 @@ use glam::{Vec3, Vec4};
 
 use crate::explain::{Check, Contribution, Explanation, Rejection, Replay};
 use crate::gpu::GpuContext;
-use crate::passes::bgl;
+use crate::gpu::bgl;
 
 /// Texels per level the replay follows (`MAX_PER_LEVEL` in the shader).
 const MAX_PER_LEVEL: u64 = 64;

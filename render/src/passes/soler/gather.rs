@@ -6,7 +6,7 @@
 use super::STRIDE;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::passes::bgl;
+use crate::gpu::bgl;
 use crate::timing::Slot;
 
 /// Rust twin of `GatherParams` in `shaders/soler/gather.wgsl`.

@@ -9,7 +9,7 @@ use crate::counters::prelude::*;
 
 use super::gather::{GatherParams, LevelInputs};
 use crate::gpu::GpuContext;
-use crate::passes::bgl;
+use crate::gpu::bgl;
 use crate::timing::Slot;
 
 pub struct SolerHcbGather {

@@ -6,7 +6,7 @@
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::counters::prelude::*;
 use crate::gpu::GpuContext;
-use crate::passes::bgl;
+use crate::gpu::bgl;
 use crate::timing::Slot;
 
 /// Rust twin of `VoteParams` in `shaders/soler/vote.wgsl`.

@@ -12,7 +12,7 @@
 use super::{SolerSettings, TemporalHistory, TemporalQuantity};
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::passes::bgl;
+use crate::gpu::bgl;
 use crate::passes::gbuffer::{GBufferViews, NORMAL_FORMAT};
 use crate::timing::Slot;
 

@@ -9,7 +9,7 @@
 use super::STRIDE;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::passes::bgl;
+use crate::gpu::bgl;
 use crate::timing::Slot;
 
 /// Rust twin of `UpsampleParams` in `shaders/soler/upsample.wgsl`.

@@ -21,7 +21,7 @@ use crate::counters::prelude::*;
 use super::STRIDE;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::passes::bgl;
+use crate::gpu::bgl;
 use crate::scene::upload::GpuScene;
 use crate::scene::{Scene, SceneState};
 use crate::timing::Slot;

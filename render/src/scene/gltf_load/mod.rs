@@ -223,7 +223,7 @@ fn load(bytes: &[u8], base_dir: Option<&Path>, opts: &LoadOptions, file: &str) -
         // built only when either needs rays.
         let state = scene.evaluate(0.0);
         let needs_rays = state.cameras.is_empty() || (scene.lights.is_empty() && !scene.has_emitters());
-        let bvh = needs_rays.then(|| crate::cpu::bvh::SceneBvh::new(&scene, &state));
+        let bvh = needs_rays.then(|| crate::scene::bvh::SceneBvh::new(&scene, &state));
         let view = crate::scene::framing::choose_view_with(&scene, 16.0 / 9.0, Default::default(), bvh.as_ref());
         scene.view = Some(view);
         scene.ensure_light_with(bvh.as_ref());

@@ -9,6 +9,8 @@
 //! every desktop Vulkan, Metal and DX12 driver have them); timestamp queries are used when
 //! the adapter has them.
 
+pub mod bgl;
+
 use std::sync::Arc;
 
 /// Features without which the pipeline cannot run (see the module docs).

@@ -1,0 +1,16 @@
+//! The floor of the render crate (issue #52 point 2): pure functions and tables that GPU
+//! passes, CPU twins and scene code all need — sequences, the VPL budget, the HCB's recompute
+//! pattern, colour maths, colour maps. It imports nothing of the crate, so that `passes/`
+//! never reaches into `cpu/` at run time and `scene/` into neither (docs/architecture.md,
+//! "Layers").
+
+pub mod budget;
+pub mod colormap;
+pub mod colour;
+pub mod pattern;
+pub mod sequence;
+
+pub use budget::{split_budget, tile_offsets, tile_slots};
+pub use colour::luminance;
+pub use pattern::recompute_pattern;
+pub use sequence::{halton, pcg_hash};
