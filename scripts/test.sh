@@ -126,9 +126,12 @@ status=0
 parallel --will-cite --jobs "$(nproc)" --group --colsep ' ' --joblog "$list.log" \
   'cd {1} && WGPU_VALIDATION={3} {2}' :::: "$list.run" || status=$?
 # No doc tests: the crates have none.
-echo "scripts/test.sh: the slowest binaries (s):"
-tail -n +2 "$list.log" | awk -F'\t' '{ n = $NF; sub(/^cd [^ ]* && /, "", n); sub(/.*\//, "", n); printf "%8.1f  %s  exit %s\n", $4, n, $7 }' |
-  sort -rn | head -8
+# Every binary's time, kept in target/test-times.txt (the slowest first) for whoever trims
+# the suite next (docs/performance.md, "Build and test time").
+tail -n +2 "$list.log" | awk -F'\t' '{ n = $NF; sub(/^cd [^ ]* && /, "", n); sub(/^WGPU_VALIDATION=[0-9] /, "", n); sub(/.*\//, "", n); printf "%8.1f  %s  exit %s\n", $4, n, $7 }' |
+  sort -rn >target/test-times.txt || true
+echo "scripts/test.sh: the slowest binaries (s, sharing the cores; all in target/test-times.txt):"
+head -12 target/test-times.txt
 if [ "$status" != 0 ]; then
   echo "scripts/test.sh: failed binaries:" >&2
   tail -n +2 "$list.log" | awk -F'\t' '$7 != 0 { print "  " $NF }' >&2

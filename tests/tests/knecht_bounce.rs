@@ -4,6 +4,7 @@
 use gi_lab_tests::knecht_support::{Rng, knecht_settings, read, read_buffer};
 use gi_lab_tests::{default_scene, gpu};
 use gi_render::cpu::knecht::{self, ISM_EMPTY};
+use gi_render::cpu::knecht_bounce;
 use gi_render::passes::knecht::ism::{IsmPass, IsmSettings};
 use gi_render::scene::upload::GpuScene;
 use gi_render::{GpuContext, Renderer};
@@ -73,10 +74,10 @@ impl BounceFixture {
         (m.transform_point3(Vec3::from(p.position)), nm.transform_vector3(Vec3::from(p.normal)).normalize())
     }
 
-    fn sample(&self, j: usize) -> knecht::BounceSample {
+    fn sample(&self, j: usize) -> knecht_bounce::BounceSample {
         let (position, normal) = self.world(j);
         let surf = self.ism.cloud.surfaces[j];
-        knecht::BounceSample {
+        knecht_bounce::BounceSample {
             surface: knecht::Receiver {
                 position,
                 normal,
@@ -135,7 +136,7 @@ fn close(a: Vec3, b: Vec3, tol: f32) -> bool {
 /// new VPL; the GPU's must be the same sample with the same flux.
 #[test]
 fn bounce_selection_on_the_gpu_picks_the_cpu_arg_max() {
-    use gi_render::cpu::knecht::Selection;
+    use gi_render::cpu::knecht_bounce::Selection;
     use gi_render::passes::knecht::ism::BounceShadowTest;
     use gi_render::passes::knecht::ism::IsmFrame;
     use gi_render::passes::knecht::vpl_bounce::{BounceFrame, BounceSelection, VplBouncePass};
@@ -214,8 +215,8 @@ fn bounce_selection_on_the_gpu_picks_the_cpu_arg_max() {
                         s.normal_offset,
                     ),
                 };
-                let (flux, c) = knecht::bounce_incident(&src, &bs, per_vpl, d_min, visible);
-                let (_, c_unseen) = knecht::bounce_incident(&src, &bs, per_vpl, d_min, true);
+                let (flux, c) = knecht_bounce::bounce_incident(&src, &bs, per_vpl, d_min, visible);
+                let (_, c_unseen) = knecht_bounce::bounce_incident(&src, &bs, per_vpl, d_min, true);
                 if c_unseen > 0.0 && !visible {
                     hidden += 1;
                 }
@@ -227,13 +228,13 @@ fn bounce_selection_on_the_gpu_picks_the_cpu_arg_max() {
                 assert_eq!(got.position.w, 0.0, "{selection:?}: empty source slot {i} gives an empty VPL");
                 continue;
             }
-            let Some((j, sum)) = knecht::select_bounce(&contributions, sel) else {
+            let Some((j, sum)) = knecht_bounce::select_bounce(&contributions, sel) else {
                 assert_eq!(got.position.w, 0.0, "{selection:?}: VPL {i} lights no sample");
                 continue;
             };
             lit += 1;
             let (bs, flux, c) = samples[((j - i as u32) / n) as usize];
-            let want = knecht::bounce_vpl(&src, &bs, flux, c, sum);
+            let want = knecht_bounce::bounce_vpl(&src, &bs, flux, c, sum);
             assert_vpl_eq(&got, &want, &format!("{selection:?}, {test:?}: VPL {i} (CPU sample {j})"));
         }
         assert!(lit >= 5, "{selection:?}: only {lit} VPLs found a lit sample");
@@ -263,7 +264,7 @@ fn assert_vpl_eq(got: &gi_render::passes::reference::vpl::GpuVpl, want: &knecht:
 /// The IRSM baseline (Knecht 002 §3.6 after Ritschel et al.) on the GPU against the CPU: the
 /// same seven VPLs' IRSMs of 16²; every texel's CDF step equals the contribution of the
 /// sample that owns it (the nearest that covers it), the coverage counts equal the owned
-/// texels, and each new VPL is the texel `cpu::knecht::irsm_pick` draws from those CDFs,
+/// texels, and each new VPL is the texel `cpu::knecht_bounce::irsm_pick` draws from those CDFs,
 /// with flux Φ_s · ΣC / (N n_s C_s).
 #[test]
 fn irsm_bounce_on_the_gpu_samples_the_texels_the_cpu_picks() {
@@ -308,7 +309,7 @@ fn irsm_bounce_on_the_gpu_samples_the_texels_the_cpu_picks() {
             let want = if o == 0 || fx.vpls[i].position.w < 0.5 {
                 0.0
             } else {
-                knecht::bounce_incident(&src, &fx.sample(o as usize - 1), fx.per_vpl(i), d_min, true).1
+                knecht_bounce::bounce_incident(&src, &fx.sample(o as usize - 1), fx.per_vpl(i), d_min, true).1
             };
             if want > 0.0 {
                 owned[o as usize - 1] += 1;
@@ -337,12 +338,12 @@ fn irsm_bounce_on_the_gpu_samples_the_texels_the_cpu_picks() {
     let mut sources = std::collections::BTreeSet::new();
     for k in 0..n {
         let got = out[(n + k) as usize];
-        let (i, t) = knecht::irsm_pick(&totals, &cdfs, k, seed_gpu).expect("the IRSMs are lit");
+        let (i, t) = knecht_bounce::irsm_pick(&totals, &cdfs, k, seed_gpu).expect("the IRSMs are lit");
         sources.insert(i);
         let j = owner_of(i, t) as usize - 1;
         let (src, bs) = (fx.source(i), fx.sample(j));
-        let (flux, c) = knecht::bounce_incident(&src, &bs, fx.per_vpl(i), d_min, true);
-        let want = knecht::bounce_vpl(&src, &bs, flux, c, grand / (n as f32 * coverage[j] as f32));
+        let (flux, c) = knecht_bounce::bounce_incident(&src, &bs, fx.per_vpl(i), d_min, true);
+        let want = knecht_bounce::bounce_vpl(&src, &bs, flux, c, grand / (n as f32 * coverage[j] as f32));
         assert_vpl_eq(&got, &want, &format!("new VPL {k} (IRSM {i}, texel {t}, sample {j})"));
     }
     assert!(!sources.contains(&4), "the empty VPL's IRSM was sampled");

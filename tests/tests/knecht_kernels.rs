@@ -287,8 +287,7 @@ fn geometry_aware_filter_on_the_gpu_equals_the_cpu() {
     let zero = vec![[0.0; 4]; len];
     let g = SyntheticGBuffer::new(&ctx, w, h, &pos, &nrm, &albedo, &zero, &zero);
     let src_tex = texture(&ctx, "test.src", w, h, &src, false);
-    let pass =
-        InterleavePass::new(&ctx, gi_render::gpu::bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h, n, false);
+    let pass = InterleavePass::new(&ctx, gi_render::gpu::bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h, n, false);
     // E in half floats, as the gather writes it.
     let irr_tex = texture(&ctx, "test.irradiance", w, h, &irr, true);
     let s = InterleaveSettings { n, ..Default::default() };

@@ -19,18 +19,8 @@ use std::path::{Path, PathBuf};
 const KNOWN: &[&str] = &[
     "render <root>: buffers camera cpu image_io lab_settings passes pipeline preset readback scale scene settings stages",
     "render <root>: frame renderer",
-    "render cpu: knecht knecht_bounce",
-    "render cpu: soler soler_glossy",
     "render passes: emitters knecht reference",
-    "render passes::gautron: explain stage",
-    "render passes::knecht: ism point_cloud",
-    "render passes::soler: explain stage",
-    "render passes::soler: gather voxels",
-    "app cli: sweep sweep_run",
-    "app cli::bench: gautron gautron_cpu",
-    "app cli::study: page results svg",
     "app ui: app capture history panes presets session state viewer",
-    "app ui::panes: grid viewport",
 ];
 
 type ModPath = Vec<String>;

@@ -679,8 +679,8 @@ fn gautron_settings_buffers_cache_and_records_appear_in_the_lab() {
     let dir = temp_dir("gautron");
     let mut h = harness_in(&dir, egui::vec2(1400.0, 2600.0));
     pause(&mut h);
-    // A third of the viewport's pixels: the tall harness would need thousands of records.
-    h.state_mut().state.session.render_scale = 0.35;
+    // A fifth of the viewport's side: the tall harness would need thousands of records.
+    h.state_mut().state.session.render_scale = 0.2;
     if let Ok(l) = &mut h.state_mut().state.lab {
         gi_render::pipeline::Technique::Gautron.apply(&mut l.settings);
         l.apply_settings();

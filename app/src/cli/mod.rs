@@ -133,7 +133,7 @@ pub fn main() -> ExitCode {
         Some(Command::Compare(a)) => compare::compare(a),
         Some(Command::Reference(a)) => reference::reference(a),
         Some(Command::HcbStats(a)) => hcb_stats::hcb_stats(a),
-        Some(Command::Sweep(a)) => sweep::sweep(a),
+        Some(Command::Sweep(a)) => sweep_run::sweep(a),
         Some(Command::Study(a)) => study::study(a),
         Some(Command::Settings) => {
             settings::settings();

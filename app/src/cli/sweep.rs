@@ -8,7 +8,6 @@ use clap::Args;
 use gi_render::LabSettings;
 use gi_render::settings::{FieldKind, Value};
 
-use crate::error::CliError;
 use crate::plot::{Anchor, Canvas, tick_label, ticks};
 use crate::scene_args::SceneArgs;
 
@@ -287,10 +286,6 @@ pub fn pareto_plot(title: &str, points: &[PointResult]) -> image::RgbaImage {
         c.text((left + 22.0, bottom + 84.0 + 22.0 * k as f32), &line, 13.0, ink, Anchor::LeftCenter);
     }
     c.img
-}
-
-pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
-    super::sweep_run::sweep(args)
 }
 
 #[cfg(test)]

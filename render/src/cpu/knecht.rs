@@ -12,13 +12,11 @@
 //! | one VPL's light at a pixel, Eq. 4.7–4.9 | [`vpl_radiance`] | `common/vpl.wgsl` `vpl_radiance` |
 //! | geometry-aware n×n box filter (§3.4.1) | [`geometry_aware_filter`] | `interleave/filter.wgsl` |
 //! | confidence, Eq. 3.1–3.4, and the merge Eq. 3.6 | [`confidence`] | `temporal/confidence.wgsl` |
-//! | bounce selection, §3.6.1 | [`bounce_incident`], [`select_bounce`], [`bounce_vpl`] | `vpl/bounce.wgsl` |
+//! | bounce selection, §3.6.1 | [`crate::cpu::knecht_bounce`]: `bounce_incident`, `select_bounce`, `bounce_vpl` | `vpl/bounce.wgsl` |
 
 use glam::{UVec2, Vec2, Vec3};
 
 use crate::maths::{halton, pcg_hash};
-
-pub use crate::cpu::knecht_bounce::*;
 
 /// Point `j` of the exact-VPL reference's sampling set in the light view's uv square: the
 /// Halton point (h₂(j+1), h₃(j+1)) shifted by a toroidal offset drawn from `seed`

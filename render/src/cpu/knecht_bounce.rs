@@ -2,7 +2,7 @@
 //! baseline after Ritschel et al. 2008): the light a VPL sends to a point-cloud sample, the
 //! selection of the next bounce's VPL and the VPL it becomes, and the IRSM draw. Twins of
 //! `shaders/vpl/bounce.wgsl`, `shaders/common/bounce.wgsl` and `shaders/vpl/irsm.wgsl`;
-//! re-exported by [`crate::cpu::knecht`], whose VPL and receiver types they use.
+//! built on the VPL and receiver types of [`crate::cpu::knecht`].
 
 use glam::Vec3;
 

@@ -13,4 +13,4 @@ pub mod sequence;
 pub use budget::{split_budget, tile_offsets, tile_slots};
 pub use colour::luminance;
 pub use pattern::recompute_pattern;
-pub use sequence::{halton, pcg_hash};
+pub use sequence::{GOLDEN_ANGLE, halton, pcg_hash};

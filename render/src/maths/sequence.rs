@@ -20,6 +20,9 @@ pub fn pcg_hash(v: u32) -> u32 {
     (word >> 22) ^ word
 }
 
+/// The golden angle (radians): successive spiral samples are this far apart.
+pub const GOLDEN_ANGLE: f32 = 2.399_963_2;
+
 #[cfg(test)]
 mod tests {
     use super::*;

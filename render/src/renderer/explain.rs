@@ -120,7 +120,7 @@ pub(crate) fn explain_gautron(
         technique: gautron_words(f),
     };
     let pass = x.explain_gautron.get_or_insert_with(|| GautronExplainPass::new(f.ctx));
-    pass.run(f, enc, stage, indirect, info);
+    pass.run(f, enc, stage.explain_parts(), indirect, info);
 }
 
 /// Records the replay of the pinned pixel's coherence splatting of the HCB's samples (Nguyen

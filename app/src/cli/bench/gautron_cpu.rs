@@ -22,7 +22,7 @@ use gi_render::cpu::irradiance_cache::{CacheSettings, IrradianceCache};
 use gi_render::cpu::pathtrace::PathTracer;
 use gi_render::{ImageF32, LabSettings, Renderer};
 
-use super::gautron::{cold_to_covered, flip_of};
+use super::gautron_cold::{cold_to_covered, flip_of};
 use crate::error::CliError;
 
 /// The accuracies of the comparison.

@@ -8,6 +8,7 @@
 //! reaches a suite or this file.
 
 pub mod gautron;
+pub mod gautron_cold;
 pub mod gautron_cpu;
 pub mod knecht;
 pub mod nguyen;

@@ -14,6 +14,7 @@
 pub mod jobs;
 pub mod measure;
 pub mod page;
+pub mod report;
 pub mod results;
 pub mod svg;
 
@@ -98,7 +99,7 @@ pub struct StudyArgs {
 
 pub fn study(args: &StudyArgs) -> Result<(), CliError> {
     if let Some(dir) = &args.merge {
-        return results::merge(dir);
+        return report::merge(dir);
     }
     let Some(out) = args.out.clone() else {
         return Err(CliError::input("--out DIR is required (or --merge DIR)"));
@@ -135,6 +136,6 @@ pub fn study(args: &StudyArgs) -> Result<(), CliError> {
         return Ok(());
     }
     let study = results::Study::assemble(vec![part])?;
-    results::write_report(&out, &study)?;
+    report::write_report(&out, &study)?;
     Ok(())
 }

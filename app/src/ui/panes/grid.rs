@@ -278,7 +278,7 @@ pub(super) fn grid_ui(st: &mut State, ui: &mut egui::Ui, rect: egui::Rect) {
         g.remove(i, &l.render_state);
     }
     for response in &responses {
-        super::viewport::navigate(l, ui, response);
+        super::navigate(l, ui, response);
     }
 }
 

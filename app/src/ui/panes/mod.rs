@@ -105,3 +105,37 @@ fn viewer_ui(st: &mut State, ui: &mut egui::Ui, id: u32) {
         st.set_status(m);
     }
 }
+
+/// Orbit, fly and dolly the camera of `l` by the viewport's (or a compare cell's) drags,
+/// WASD/QE keys and scroll.
+fn navigate(l: &mut crate::ui::lab::Lab, ui: &egui::Ui, response: &egui::Response) {
+    let r = l.renderer.bounds().radius();
+    let cam = &mut l.renderer.camera;
+    if response.dragged_by(egui::PointerButton::Primary) {
+        let d = response.drag_delta();
+        cam.orbit(-d.x * 0.008, -d.y * 0.008);
+    }
+    if response.hovered() && !ui.ctx().egui_wants_keyboard_input() {
+        let (scroll, dt, keys) = ui.input(|i| {
+            let k = |key| if i.key_down(key) && i.modifiers.is_none() { 1.0 } else { 0.0 };
+            (
+                i.smooth_scroll_delta.y,
+                i.stable_dt.min(0.1),
+                glam::Vec3::new(
+                    k(egui::Key::D) - k(egui::Key::A),
+                    k(egui::Key::E) - k(egui::Key::Q),
+                    k(egui::Key::W) - k(egui::Key::S),
+                ),
+            )
+        });
+        let speed = r * 0.8;
+        if keys != glam::Vec3::ZERO {
+            cam.fly(keys * speed * dt);
+        }
+        if scroll != 0.0 {
+            let step = scroll * r * 0.002;
+            cam.fly(glam::Vec3::new(0.0, 0.0, step));
+            cam.orbit_distance = (cam.orbit_distance - step).max(r * 0.05);
+        }
+    }
+}

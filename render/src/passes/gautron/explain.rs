@@ -10,7 +10,6 @@
 
 use glam::{Vec3, Vec4};
 
-use super::stage::GautronStage;
 use crate::explain::{Check, Contribution, Explanation, Rejection, luminance};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
@@ -109,6 +108,18 @@ pub struct GautronInfo {
     pub technique: String,
 }
 
+/// What the replay reads of the stage (issue #52: the explain replay takes its inputs, not
+/// the stage): its uniforms, the record cache and its state, the splat's outputs, and the
+/// cache as each splat read it.
+#[derive(Clone, Copy)]
+pub struct StageParts<'s> {
+    pub params: &'s wgpu::Buffer,
+    pub records: &'s wgpu::Buffer,
+    pub state: &'s wgpu::Buffer,
+    pub splat: &'s super::splat::SplatPass,
+    pub snapshots: Option<&'s Snapshots>,
+}
+
 pub struct GautronExplainPass {
     layout: wgpu::BindGroupLayout,
     pixel_pipeline: wgpu::ComputePipeline,
@@ -191,12 +202,12 @@ impl GautronExplainPass {
         &mut self,
         f: &FrameInputs,
         enc: &mut wgpu::CommandEncoder,
-        stage: &GautronStage,
+        stage: StageParts<'_>,
         indirect: &wgpu::TextureView,
         info: GautronInfo,
     ) {
         let ctx = f.ctx;
-        let snapshots = stage.snapshots.as_ref().filter(|s| s.taken > 0 && s.capacity == stage.records.size());
+        let snapshots = stage.snapshots.filter(|s| s.taken > 0 && s.capacity == stage.records.size());
         let taken = snapshots.map(|s| s.taken).unwrap_or(0);
         let p = ExplainParams { pixel: [info.pixel.0, info.pixel.1, taken, 0] };
         let info = GautronInfo { snapshots: taken > 0, ..info };
@@ -212,7 +223,7 @@ impl GautronExplainPass {
             "explain.gautron.inputs",
             &self.layout,
             vec![
-                stage.params().as_entire_binding(),
+                stage.params.as_entire_binding(),
                 f.camera_buffer.as_entire_binding(),
                 stage.records.as_entire_binding(),
                 stage.state.as_entire_binding(),

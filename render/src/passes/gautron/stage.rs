@@ -109,6 +109,17 @@ pub struct GautronStage {
 }
 
 impl GautronStage {
+    /// What the explain replay reads of the stage.
+    pub fn explain_parts(&self) -> super::explain::StageParts<'_> {
+        super::explain::StageParts {
+            params: self.params(),
+            records: &self.records,
+            state: &self.state,
+            splat: &self.splat,
+            snapshots: self.snapshots.as_ref(),
+        }
+    }
+
     /// The stage's uniform (`GautronParams`) as this frame wrote it.
     pub fn params(&self) -> &wgpu::Buffer {
         &self.params

@@ -23,18 +23,7 @@ use crate::scene::{Scene, SceneState};
 use crate::timing::Slot;
 use crate::{settings_enum, settings_group};
 
-pub use super::point_cloud::{CloudPoint, GpuPoint, GpuPointSurface, PointCloud};
-
-settings_enum! {
-    /// How the point cloud places its samples.
-    pub enum PointPlacement {
-        /// Independent random samples (Ritschel et al.).
-        Random = "random",
-        /// Halton low-discrepancy samples (Knecht §6.1's future work).
-        Halton = "Halton (quasi-random)",
-    }
-    default Halton
-}
+pub use super::point_cloud::{CloudPoint, GpuPoint, GpuPointSurface, PointCloud, PointPlacement};
 
 settings_enum! {
     /// The shadow test of further bounces (Knecht 002 §3.6.1: a sample is "visible to the

@@ -9,7 +9,18 @@ use glam::Vec3;
 use crate::maths::halton;
 use crate::scene::{Scene, SceneState};
 
-use super::ism::PointPlacement;
+use crate::settings_enum;
+
+settings_enum! {
+    /// How the point cloud places its samples.
+    pub enum PointPlacement {
+        /// Independent random samples (Ritschel et al.).
+        Random = "random",
+        /// Halton low-discrepancy samples (Knecht §6.1's future work).
+        Halton = "Halton (quasi-random)",
+    }
+    default Halton
+}
 
 /// One point of the cloud on the GPU; WGSL twin: `IsmPoint` in `shaders/ism/splat.wgsl`.
 #[repr(C)]

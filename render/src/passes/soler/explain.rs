@@ -6,7 +6,7 @@
 //! scaled by Eq. 6's 1 − a, and the warped history's a · c·DI/π · W (or a · W when the
 //! radiance is blended). The stage replays each bounce right after gathering it (the levels'
 //! light is that bounce's until the next one), and with alternating bounces reads the bounces
-//! it did not gather this frame from what it kept (`SolerStage::run`).
+//! it did not gather this frame from what it kept (the stage's `run`).
 
 use crate::counters::prelude::*;
 
@@ -395,10 +395,20 @@ impl SolerExplainPass {
     }
 }
 
-/// The replay's inputs from the stage as it stands (after a bounce: the levels' light is that
-/// bounce's).
+/// The passes of the stage whose outputs the replay reads (issue #52: the explain replay
+/// takes its inputs, not the stage).
+#[derive(Clone, Copy)]
+pub struct StageParts<'s> {
+    pub pyramid: &'s super::pyramid::SolerPyramid,
+    pub gather: &'s super::gather::SolerGather,
+    pub upsample: &'s super::upsample::SolerUpsample,
+    pub temporal: Option<&'s super::temporal::SolerTemporal>,
+}
+
+/// The replay's inputs from the stage's passes as they stand (after a bounce: the levels'
+/// light is that bounce's).
 pub fn inputs<'a>(
-    stage: &super::stage::SolerStage,
+    stage: StageParts<'_>,
     f: &'a crate::stages::FrameInputs,
     pixel: (u32, u32),
 ) -> SolerExplainInputs<'a> {
@@ -421,7 +431,7 @@ pub fn inputs<'a>(
         })
         .collect();
     let indirect = v(&stage.upsample.indirect);
-    let (last, temporal, spec_history) = match &stage.temporal {
+    let (last, temporal, spec_history) = match stage.temporal {
         Some(t) => (v(&t.filtered), Some((v(&t.warped), v(&t.a))), Some(v(t.spec_history_prev()))),
         None => (indirect.clone(), None, None),
     };

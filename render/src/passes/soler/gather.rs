@@ -34,8 +34,7 @@ pub struct GatherParams {
     pub forward: [f32; 4],
 }
 
-/// Most levels a frame gathers (the settings' range).
-pub const MAX_GATHERED: usize = 8;
+use super::MAX_GATHERED;
 
 /// Most bounces (the settings' range).
 pub const MAX_BOUNCES: usize = 4;

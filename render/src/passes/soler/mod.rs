@@ -36,6 +36,9 @@ pub mod temporal;
 pub mod upsample;
 pub mod voxels;
 
+/// Most levels a frame gathers (the settings' range).
+pub const MAX_GATHERED: usize = 8;
+
 settings_enum! {
     /// The resolution the first gathered level has (004 §4, Fig. 10).
     pub enum StartResolution {

@@ -42,6 +42,16 @@ fn all_sizes(width: u32, height: u32, top: u32) -> Vec<(u32, u32)> {
 }
 
 impl SolerStage {
+    /// The passes the explain replay reads.
+    fn parts(&self) -> super::explain::StageParts<'_> {
+        super::explain::StageParts {
+            pyramid: &self.pyramid,
+            gather: &self.gather,
+            upsample: &self.upsample,
+            temporal: self.temporal.as_ref(),
+        }
+    }
+
     pub fn new(ctx: &GpuContext, s: &SolerSettings, width: u32, height: u32, temporal: bool) -> Self {
         let top = s.gathered_levels().end - 1;
         let mut stage = Self {
@@ -158,7 +168,7 @@ impl SolerStage {
         let explain = f.explain_pixel.filter(|p| p.0 < f.gbuffer_size.0 && p.1 < f.gbuffer_size.1);
         let mut replay = explain.map(|px| {
             let mut ex = self.explain.take().unwrap_or_else(|| super::explain::SolerExplainPass::new(ctx));
-            let levels = super::explain::inputs(self, f, px).levels;
+            let levels = super::explain::inputs(self.parts(), f, px).levels;
             let sigma = [s.upsample_sigma_depth, s.upsample_sigma_normal];
             ex.begin(ctx, &levels, sigma, super::explain::chain(f, px, &bounces, self.temporal.is_some()));
             (px, ex)
@@ -173,7 +183,7 @@ impl SolerStage {
                 let lv = self.level_views();
                 let ins = self.level_inputs(f, radiance, &lv, &grids[j], &all);
                 let gathered = (&ins[..], j as u32, &self.gather.params);
-                ex.bounce(ctx, enc, &super::explain::inputs(self, f, *px), b, gathered);
+                ex.bounce(ctx, enc, &super::explain::inputs(self.parts(), f, *px), b, gathered);
             }
             self.bounces.keep(enc, &self.upsample.indirect, self.specular_light(), b as usize);
         }
@@ -198,7 +208,7 @@ impl SolerStage {
                 .filter(|b| !bounces.contains(b))
                 .map(|b| (b, view(&self.bounces.light[b as usize]), self.bounces.specular.get(b as usize).map(view)))
                 .collect();
-            ex.finish(ctx, enc, &super::explain::inputs(self, f, px), &kept);
+            ex.finish(ctx, enc, &super::explain::inputs(self.parts(), f, px), &kept);
             self.explain = Some(ex);
         }
         out

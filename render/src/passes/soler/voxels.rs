@@ -149,8 +149,7 @@ impl SolerVoxels {
         let view_module = crate::shaders::create_module(device, "soler/voxel_view.wgsl");
         let view_pipeline =
             crate::passes::compute_pipeline(device, "soler.voxel_view", &view_module, "cs_view", &[&view_layout]);
-        let params =
-            crate::passes::uniform_buffer(device, "soler.voxels.params", STRIDE * super::gather::MAX_GATHERED as u64);
+        let params = crate::passes::uniform_buffer(device, "soler.voxels.params", STRIDE * super::MAX_GATHERED as u64);
         let empty = crate::passes::buffer(device, "soler.voxels.empty", 16, wgpu::BufferUsages::STORAGE);
         Self {
             grids: Vec::new(),
