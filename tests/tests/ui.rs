@@ -565,6 +565,8 @@ fn soler_settings_buffers_and_reach_appear_in_the_lab() {
     let dir = temp_dir("soler");
     let mut h = harness_in(&dir, egui::vec2(1400.0, 2600.0));
     pause(&mut h);
+    // The tall harness at a quarter of its side: the test asks what the lab lists and shows.
+    h.state_mut().state.session.render_scale = 0.25;
     if let Ok(l) = &mut h.state_mut().state.lab {
         gi_render::pipeline::Technique::Soler.apply(&mut l.settings);
         l.settings.soler.visibility = true;

@@ -9,6 +9,14 @@ use gi_lab::ui::app::GiLabApp;
 use gi_lab_tests::ui_harness::{harness, pause};
 use gi_render::LabSettings;
 
+/// The lab at a tenth of its render size: these tests ask what the history does, not what
+/// the frame shows (the render scale is the session's, not a step).
+fn small_harness(name: &str) -> (Harness<'static, GiLabApp>, std::path::PathBuf) {
+    let (mut h, dir) = harness(name);
+    h.state_mut().state.session.render_scale = 0.1;
+    (h, dir)
+}
+
 fn settings(h: &Harness<'static, GiLabApp>) -> LabSettings {
     h.state().settings().expect("settings").clone()
 }
@@ -29,7 +37,7 @@ fn undo(h: &mut Harness<'static, GiLabApp>) {
 
 #[test]
 fn a_slider_drag_is_one_step_and_undo_restores_the_settings_bit_for_bit() {
-    let (mut h, dir) = harness("history_drag");
+    let (mut h, dir) = small_harness("history_drag");
     pause(&mut h);
     h.run_steps(3);
     let before = settings(&h);
@@ -89,7 +97,7 @@ fn a_slider_drag_is_one_step_and_undo_restores_the_settings_bit_for_bit() {
 
 #[test]
 fn a_preset_load_a_light_and_a_bookmark_are_undone_in_order_and_the_history_pane_jumps() {
-    let (mut h, dir) = harness("history_kinds");
+    let (mut h, dir) = small_harness("history_kinds");
     pause(&mut h);
     h.run_steps(3);
     let start = settings(&h);
@@ -141,7 +149,7 @@ fn a_preset_load_a_light_and_a_bookmark_are_undone_in_order_and_the_history_pane
 
 #[test]
 fn a_preset_save_is_not_a_step_and_undo_keeps_the_file_saved() {
-    let (mut h, dir) = harness("history_save");
+    let (mut h, dir) = small_harness("history_save");
     pause(&mut h);
     h.run_steps(3);
     let start = settings(&h);
@@ -169,7 +177,7 @@ fn a_preset_save_is_not_a_step_and_undo_keeps_the_file_saved() {
 /// duplicated and one removed, the sky turned on, a revert of the preset, and a scene opened.
 #[test]
 fn every_kind_of_edit_is_undone() {
-    let (mut h, dir) = harness("history_all");
+    let (mut h, dir) = small_harness("history_all");
     pause(&mut h);
     h.run_steps(3);
     let mut states = vec![(settings(&h), lights(&h))];
