@@ -119,7 +119,7 @@ pub struct VplSet {
 }
 
 /// Stage 4's output: the visibility the gather reads.
-pub use crate::passes::knecht::interleave::GatherVisibility as Visibility;
+pub use crate::passes::reference::vpl_visibility::GatherVisibility as Visibility;
 
 /// The clip planes of VPL depth maps in a scene of bounding radius `r`: (near, far, eye
 /// offset, w).

@@ -74,7 +74,8 @@ impl SyntheticGBuffer {
 
 #[test]
 fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
-    use gi_render::passes::knecht::interleave::{GatherVisibility, InterleavePass};
+    use gi_render::passes::knecht::interleave::InterleavePass;
+    use gi_render::passes::reference::vpl_visibility::GatherVisibility;
     let ctx = gpu();
     // An odd size, so that the last row and column of tiles are partial; n = 2 and 7 VPLs,
     // so that the tiles hold 2, 2, 2 and 1 VPLs and the N / N_t scaling differs per tile.

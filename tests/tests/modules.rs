@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 const KNOWN: &[&str] = &[
     "render <root>: buffers camera cpu image_io lab_settings passes pipeline preset readback scale scene settings stages",
     "render <root>: frame renderer",
-    "render passes: emitters knecht reference",
+    "render passes: emitters knecht",
     "app ui: app capture history panes presets session state viewer",
 ];
 

@@ -169,7 +169,7 @@ impl DirectPass {
         });
         let (radiance, radiance_view) = Self::target(ctx, "direct.radiance", width, height);
         let no_emitters = storage("direct.no_emitters", std::mem::size_of::<super::reference::vpl::GpuVpl>() as u64);
-        let (no_ism, no_exact) = super::knecht::interleave::no_visibility_atlases(device, "direct.emitters");
+        let (no_ism, no_exact) = super::reference::vpl_visibility::no_visibility_atlases(device, "direct.emitters");
         Self {
             no_emitters,
             no_ism,
@@ -261,7 +261,7 @@ impl DirectPass {
         emitters: Option<&super::emitters::EmitterLight>,
     ) {
         let device = &ctx.device;
-        let none = super::knecht::interleave::GatherVisibility::None;
+        let none = super::reference::vpl_visibility::GatherVisibility::None;
         let vis = emitters.map_or(&none, |e| &e.visibility);
         let (mode, ism, exact, cols, size, vp) = vis.parts(&self.no_ism, &self.no_exact);
         let (count, dmin) = emitters.map_or((0, 0.0), |e| (e.count, e.min_distance));

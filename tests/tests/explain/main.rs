@@ -28,7 +28,7 @@ fn the_replays_structs_have_the_sizes_of_their_wgsl_twins() {
     use gi_render::passes::{gautron, knecht, reference, soler};
     use std::mem::size_of;
     let pairs = [
-        ("interleave/explain.wgsl", "VplTerm", size_of::<knecht::explain::GpuTerm>()),
+        ("interleave/explain.wgsl", "VplTerm", size_of::<reference::explain::GpuTerm>()),
         ("interleave/explain.wgsl", "WindowPixel", size_of::<knecht::explain::GpuWindow>()),
         ("interleave/explain.wgsl", "Header", size_of::<knecht::explain::GpuHeader>()),
         ("soler/explain.wgsl", "Entry", size_of::<soler::explain::GpuEntry>()),

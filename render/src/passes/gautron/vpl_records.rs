@@ -83,7 +83,7 @@ impl VplRecordPass {
             std::mem::size_of::<VplRecordParams>() as u64,
         );
         let (no_ism, no_exact) =
-            crate::passes::knecht::interleave::no_visibility_atlases(device, "gautron.vpl_records");
+            crate::passes::reference::vpl_visibility::no_visibility_atlases(device, "gautron.vpl_records");
         Self { layout, wide_pipeline, serial_pipeline, wide, params, no_ism, no_exact }
     }
 

@@ -98,7 +98,7 @@ impl HcbGatherPass {
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC,
         );
         let no_args = crate::passes::buffer(device, "hcb.no_args", 64, wgpu::BufferUsages::STORAGE);
-        let (no_ism, no_exact) = crate::passes::knecht::interleave::no_visibility_atlases(device, "hcb.gather");
+        let (no_ism, no_exact) = crate::passes::reference::vpl_visibility::no_visibility_atlases(device, "hcb.gather");
         Self {
             layout,
             args_pipeline,
@@ -126,7 +126,7 @@ impl HcbGatherPass {
         vpl_count: u32,
         d_min: f32,
         near_cut: f32,
-        vis: &crate::passes::knecht::interleave::GatherVisibility,
+        vis: &crate::passes::reference::vpl_visibility::GatherVisibility,
         set: GatherSet<'_>,
     ) {
         let (code, ism, exact, cols, size, shade) = vis.parts(&self.no_ism, &self.no_exact);

@@ -14,19 +14,12 @@ use crate::explain::{Check, Contribution, Explanation, Rejection};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
 use crate::passes::gbuffer::GBufferViews;
-use crate::passes::knecht::interleave::{GatherVisibility, InterleavePass};
+use crate::passes::knecht::interleave::InterleavePass;
 use crate::passes::knecht::temporal::{MergeOrder, TemporalPass};
+use crate::passes::reference::explain::{BACKGROUND, EMPTY, FILTERED, GpuTerm, OUTSIDE, term_fields, term_rejection};
 use crate::passes::reference::vpl::GpuVpl;
+use crate::passes::reference::vpl_visibility::GatherVisibility;
 
-/// Flags of a term (`EXPLAIN_*` in `shaders/common/vpl_explain.wgsl`).
-pub const EMPTY: u32 = 1;
-pub const OUTSIDE: u32 = 2;
-pub const FACING: u32 = 4;
-pub const NEAR: u32 = 8;
-pub const OCCLUDED: u32 = 16;
-pub const FILTERED: u32 = 32;
-pub const CLAMPED: u32 = 64;
-pub const BACKGROUND: u32 = 128;
 /// Flags of a window pixel (`EXPLAIN_W_*`).
 pub const W_INSIDE: u32 = 1;
 pub const W_ACCEPTED: u32 = 2;
@@ -42,19 +35,6 @@ const TERMS_OFFSET: u64 = WINDOW_OFFSET + WINDOW_PIXELS * 64;
 struct ExplainParams {
     pixel: [u32; 4],
     thresholds: Vec4,
-}
-
-/// One VPL slot's term; WGSL twin: `VplTerm` (`shaders/common/vpl_explain.wgsl`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GpuTerm {
-    pub slot: [u32; 4],
-    pub light: Vec4,
-    pub unshadowed: Vec4,
-    pub detail: Vec4,
-    /// rgb: its light as it reaches the pinned pixel (after the demodulated filter: reflected
-    /// with that pixel's colour; else `light`).
-    pub reach: Vec4,
 }
 
 /// One pixel of the filter's window; WGSL twin: `WindowPixel`.
@@ -176,7 +156,8 @@ impl VplExplainPass {
         });
         let module = crate::shaders::create_module(device, "interleave/explain.wgsl");
         let pipeline = |label, entry| crate::passes::compute_pipeline(device, label, &module, entry, &[&layout]);
-        let (dummy_ism, dummy_exact) = crate::passes::knecht::interleave::no_visibility_atlases(device, "explain.vpl");
+        let (dummy_ism, dummy_exact) =
+            crate::passes::reference::vpl_visibility::no_visibility_atlases(device, "explain.vpl");
         let dummy = crate::passes::view(
             &crate::passes::create_target(
                 device,
@@ -296,43 +277,6 @@ impl VplExplainPass {
         self.info = Some(info);
         self.vpls = Some(inp.vpls.clone());
     }
-}
-
-/// Why a VPL's term adds nothing, from the flags `common/vpl_explain.wgsl` sets at the
-/// receiver (None: it adds its light).
-pub fn term_rejection(flags: u32) -> Option<Rejection> {
-    if flags & NEAR != 0 {
-        Some(Rejection::NearField)
-    } else if flags & FACING != 0 {
-        Some(Rejection::Facing)
-    } else if flags & OCCLUDED != 0 {
-        Some(Rejection::Occluded)
-    } else {
-        None
-    }
-}
-
-/// What made a VPL's term (`vpl_term` in `common/vpl_explain.wgsl`): its flux, the geometry
-/// term, both BRDFs, the visibility with the map's depths, its light without visibility and
-/// the d_min clamp.
-pub fn term_fields(vpl: &GpuVpl, t: &GpuTerm) -> Vec<(&'static str, f32)> {
-    let v3 = |v: Vec4| v.truncate();
-    let mut fields = vec![
-        ("Φ (lum)", crate::explain::luminance(v3(vpl.flux))),
-        ("G", t.unshadowed.w),
-        ("f_y", t.detail.x),
-        ("f_x", t.detail.y),
-        ("V", t.light.w),
-        ("unshadowed (lum)", crate::explain::luminance(v3(t.unshadowed))),
-    ];
-    if t.detail.z != 0.0 || t.detail.w != 0.0 {
-        fields.push(("map depth", t.detail.z));
-        fields.push(("receiver depth", t.detail.w));
-    }
-    if t.slot[1] & CLAMPED != 0 {
-        fields.push(("d_min clamp", 1.0));
-    }
-    fields
 }
 
 /// The source of slot `k` (`ChainInfo::sources`).

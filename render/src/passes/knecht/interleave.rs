@@ -19,6 +19,7 @@ use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
 use crate::passes::gbuffer::{ALBEDO_FORMAT, GBufferViews, MATERIAL_FORMAT, NORMAL_FORMAT, POSITION_FORMAT};
+use crate::passes::reference::vpl_visibility::{GatherVisibility, no_visibility_atlases};
 use crate::settings_group;
 
 settings_group! {
@@ -85,65 +86,6 @@ pub struct GatherParams {
 pub struct FilterParams {
     pub n: [u32; 4],
     pub thresholds: Vec4,
-}
-
-/// The visibility the gather reads: stage 4's output (views are shared handles, cheap to
-/// clone).
-#[derive(Clone)]
-pub enum GatherVisibility {
-    None,
-    /// The ISM atlas (level 0 after pull-push), with columns, map size, eye offset, depth bias
-    /// and receiver normal offset (texels).
-    Ism {
-        atlas: wgpu::TextureView,
-        cols: u32,
-        size: u32,
-        eye_offset: f32,
-        bias: f32,
-        normal_offset: f32,
-    },
-    /// The exact cube-face atlas, with columns, face size and (near, far, eye offset).
-    Exact {
-        atlas: wgpu::TextureView,
-        cols: u32,
-        size: u32,
-        clip: glam::Vec3,
-    },
-}
-
-impl GatherVisibility {
-    /// The shaders' encoding: (mode 0 none / 1 ISM / 2 exact, the ISM atlas or `no_ism`, the
-    /// exact atlas or `no_exact`, atlas columns, map size, (0, eye offset or near, bias or
-    /// far, normal offset or eye offset)).
-    pub fn parts<'a>(
-        &'a self,
-        no_ism: &'a wgpu::TextureView,
-        no_exact: &'a wgpu::TextureView,
-    ) -> (u32, &'a wgpu::TextureView, &'a wgpu::TextureView, u32, u32, Vec4) {
-        match self {
-            GatherVisibility::None => (0, no_ism, no_exact, 1, 1, Vec4::ZERO),
-            GatherVisibility::Ism { atlas, cols, size, eye_offset, bias, normal_offset } => {
-                (1, atlas, no_exact, *cols, *size, Vec4::new(0.0, *eye_offset, *bias, *normal_offset))
-            }
-            GatherVisibility::Exact { atlas, cols, size, clip } => {
-                (2, no_ism, atlas, *cols, *size, Vec4::new(0.0, clip.x, clip.y, clip.z))
-            }
-        }
-    }
-}
-
-/// 1×1 stand-ins for the atlases a gather does not read (an ISM and an exact one).
-pub fn no_visibility_atlases(device: &wgpu::Device, label: &str) -> (wgpu::TextureView, wgpu::TextureView) {
-    let make = |name: String, format| {
-        crate::passes::view(
-            &crate::passes::create_target(device, &name, 1, 1, format, wgpu::TextureUsages::empty()),
-            &name,
-        )
-    };
-    (
-        make(format!("{label}.no_ism"), wgpu::TextureFormat::R32Float),
-        make(format!("{label}.no_exact"), wgpu::TextureFormat::Depth32Float),
-    )
 }
 
 struct Split {

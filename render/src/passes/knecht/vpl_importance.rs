@@ -97,6 +97,14 @@ settings_group! {
     }
 }
 
+impl VplSettings {
+    /// Whether the gathers reflect the VPLs' light with the diffuse term alone
+    /// (`vpl.receiver_brdf = DiffuseOnly`), the flag every VPL gather's uniform carries.
+    pub fn diffuse_only_receiver(&self) -> bool {
+        self.receiver_brdf == ReceiverBrdf::DiffuseOnly
+    }
+}
+
 /// Uniform of one view's importance and warp passes; WGSL twin: `ViewParams` in
 /// `shaders/vpl/importance.wgsl` and `shaders/vpl/warp.wgsl`.
 #[repr(C)]

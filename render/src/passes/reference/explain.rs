@@ -8,13 +8,35 @@ use crate::counters::prelude::*;
 
 use glam::{Vec3, Vec4};
 
-use crate::explain::{Check, Contribution, Explanation, Replay};
+use crate::explain::{Check, Contribution, Explanation, Rejection, Replay};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
 use crate::passes::gbuffer::GBufferViews;
-use crate::passes::knecht::explain::{EMPTY, term_fields, term_rejection};
 use crate::passes::reference::vpl::GpuVpl;
 use crate::passes::reference::vpl_gather::VplGatherPass;
+
+/// Flags of a term (`EXPLAIN_*` in `shaders/common/vpl_explain.wgsl`).
+pub const EMPTY: u32 = 1;
+pub const OUTSIDE: u32 = 2;
+pub const FACING: u32 = 4;
+pub const NEAR: u32 = 8;
+pub const OCCLUDED: u32 = 16;
+pub const FILTERED: u32 = 32;
+pub const CLAMPED: u32 = 64;
+pub const BACKGROUND: u32 = 128;
+/// One VPL slot's term, as the VPL gathers' replays write it (Knecht's and this reference's);
+/// WGSL twin: `VplTerm` (`shaders/common/vpl_explain.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuTerm {
+    pub slot: [u32; 4],
+    pub light: Vec4,
+    pub unshadowed: Vec4,
+    pub detail: Vec4,
+    /// rgb: its light as it reaches the pinned pixel (after the demodulated filter: reflected
+    /// with that pixel's colour; else `light`).
+    pub reach: Vec4,
+}
 
 const TERMS_OFFSET: u64 = 256;
 
@@ -27,9 +49,6 @@ pub struct GpuHeader {
     pub raw: Vec4,
     pub accum: Vec4,
 }
-
-/// One VPL's term: the VPL gather's replay's (`common/vpl_explain.wgsl`).
-pub use crate::passes::knecht::explain::GpuTerm;
 
 /// What decode needs of the run.
 #[derive(Clone, Debug, PartialEq)]
@@ -249,4 +268,41 @@ pub fn decode(info: &ReferenceRun, bytes: &[u8], vpls: &[GpuVpl]) -> Option<Expl
     };
     e.sort();
     Some(e)
+}
+
+/// Why a VPL's term adds nothing, from the flags `common/vpl_explain.wgsl` sets at the
+/// receiver (None: it adds its light).
+pub fn term_rejection(flags: u32) -> Option<Rejection> {
+    if flags & NEAR != 0 {
+        Some(Rejection::NearField)
+    } else if flags & FACING != 0 {
+        Some(Rejection::Facing)
+    } else if flags & OCCLUDED != 0 {
+        Some(Rejection::Occluded)
+    } else {
+        None
+    }
+}
+
+/// What made a VPL's term (`vpl_term` in `common/vpl_explain.wgsl`): its flux, the geometry
+/// term, both BRDFs, the visibility with the map's depths, its light without visibility and
+/// the d_min clamp.
+pub fn term_fields(vpl: &GpuVpl, t: &GpuTerm) -> Vec<(&'static str, f32)> {
+    let v3 = |v: Vec4| v.truncate();
+    let mut fields = vec![
+        ("Φ (lum)", crate::explain::luminance(v3(vpl.flux))),
+        ("G", t.unshadowed.w),
+        ("f_y", t.detail.x),
+        ("f_x", t.detail.y),
+        ("V", t.light.w),
+        ("unshadowed (lum)", crate::explain::luminance(v3(t.unshadowed))),
+    ];
+    if t.detail.z != 0.0 || t.detail.w != 0.0 {
+        fields.push(("map depth", t.detail.z));
+        fields.push(("receiver depth", t.detail.w));
+    }
+    if t.slot[1] & CLAMPED != 0 {
+        fields.push(("d_min clamp", 1.0));
+    }
+    fields
 }

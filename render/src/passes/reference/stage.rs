@@ -16,7 +16,6 @@ use glam::{Mat4, Vec3, Vec4};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
 use crate::maths::halton;
-use crate::passes::knecht::vpl_importance::ReceiverBrdf;
 use crate::passes::reference::vpl::{BatchView, VplSamplePass};
 use crate::passes::reference::vpl_gather::{GatherParams, VplGatherPass};
 use crate::passes::reference::vpl_visibility::VplVisibilityPass;
@@ -175,7 +174,7 @@ impl ReferenceVpls {
                 rs.depth_bias,
                 rs.normal_offset,
                 if visible { 1.0 } else { 0.0 },
-                (f.settings.vpl.receiver_brdf == ReceiverBrdf::DiffuseOnly) as u32 as f32,
+                f.settings.vpl.diffuse_only_receiver() as u32 as f32,
             ),
             near: Vec4::new(vpls.near_cut * vpls.near_cut, 0.0, 0.0, 0.0),
         };
