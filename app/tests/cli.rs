@@ -28,6 +28,10 @@ fn render_writes_final_png_and_buffers() {
         .output()
         .expect("runs");
     assert!(o.status.success(), "render failed: {}", String::from_utf8_lossy(&o.stderr));
+    // The default preset's stages 3–7 as the frame runs them (Knecht's chain).
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let steps = stdout.lines().find_map(|l| l.strip_prefix("steps: ")).expect("a steps line");
+    assert!(steps.starts_with("3 knecht.vpls → 4 knecht.visibility → 6 knecht.gather"), "{steps}");
     let img = image::open(out.join("final.png")).expect("final.png is a PNG").to_rgba8();
     assert_eq!(img.dimensions(), (64, 48));
     assert!(img.pixels().any(|p| p.0[0] > 20), "final.png is black");

@@ -4,6 +4,7 @@
 
 pub mod buffers;
 pub mod camera;
+pub mod chain;
 pub mod clock;
 pub mod counters;
 pub mod cpu;

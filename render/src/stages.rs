@@ -23,6 +23,8 @@ pub struct FrameInputs<'a> {
     /// The camera uniform buffer (`passes::CameraUniform`).
     pub camera_buffer: &'a wgpu::Buffer,
     pub camera: &'a Camera,
+    /// The camera's view-projection this frame.
+    pub view_proj: glam::Mat4,
     pub gbuffer: &'a GBufferViews,
     /// The scene's bounding radius (the VPL maps' offsets and clip planes).
     pub radius: f32,

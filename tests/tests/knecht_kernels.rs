@@ -162,19 +162,17 @@ fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
     let (mut lit, mut dark) = (0, 0);
     for (frame, diffuse) in [(0u32, false), (1, true)] {
         let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.shade") });
-        pass.shade(
-            &ctx,
-            &mut enc,
-            &mut timer,
-            &camera_buf,
-            &g.views(),
-            &vpl_buf,
-            vpl_count,
-            d_min,
-            0.0,
-            &GatherVisibility::None,
-            diffuse,
-        );
+        let inputs = gi_render::passes::knecht::interleave::ShadeInputs {
+            camera: &camera_buf,
+            g: &g.views(),
+            vpls: &vpl_buf,
+            count: vpl_count,
+            min_distance: d_min,
+            near_cut: 0.0,
+            vis: &GatherVisibility::None,
+            diffuse_only: diffuse,
+        };
+        pass.shade(&ctx, &mut enc, &mut timer, &inputs);
         ctx.queue.submit([enc.finish()]);
         let got = read(&ctx, &pass.merged);
         let got_irradiance = read(&ctx, &pass.irradiance);

@@ -32,6 +32,12 @@ fn render_preset(path: &Path) -> ImageF32 {
     for _ in 0..FRAMES {
         r.render_frame();
     }
+    // The frame as a list (issue #52): a preset with indirect light has steps, and every step
+    // found the pass its choice brought.
+    let steps = r.frame_steps();
+    let direct_only = r.settings().pipeline.gather == gi_render::pipeline::Gather::None;
+    assert_eq!(steps.is_empty(), direct_only, "{}: steps {steps:?}", path.display());
+    assert_eq!(r.failed_step(), None, "{}: steps {steps:?}", path.display());
     read(&r, "final.hdr")
 }
 

@@ -114,6 +114,12 @@ pub(super) fn render(args: &RenderArgs) -> Result<(), CliError> {
     gi_render::image_io::save_png(&final_png, &img, gi_render::BufferKind::Ldr)
         .map_err(|e| CliError::failure(format!("{}: {e}", final_png.display())))?;
     println!("wrote {}", final_png.display());
+    // The frame as a list (docs/architecture.md, "The frame as a list"): stages 3–7's steps.
+    let steps: Vec<String> = r.frame_steps().iter().map(|(stage, name)| format!("{stage} {name}")).collect();
+    println!("steps: {}", if steps.is_empty() { "none (direct light only)".into() } else { steps.join(" → ") });
+    if let Some(step) = r.failed_step() {
+        return Err(CliError::failure(format!("the step {step} found no pass to run")));
+    }
     for b in &args.buffers {
         for f in write_buffer(&r, b, &args.out)? {
             println!("wrote {}", f.display());

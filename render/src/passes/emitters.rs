@@ -35,6 +35,7 @@ use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::lab_settings::LabSettings;
 use crate::passes::knecht::ism::{IsmFrame, IsmPass};
+use crate::passes::knecht::stage::FirstBounceSource;
 use crate::passes::knecht::vpl_bounce::{BounceFrame, VplBouncePass};
 use crate::passes::reference::vpl::GpuVpl;
 use crate::passes::reference::vpl_visibility::GatherVisibility;
@@ -42,6 +43,7 @@ use crate::passes::reference::vpl_visibility::{VisibilityParams, VplVisibilityPa
 use crate::scene::emitters::{EmitterVpl, Emitters};
 use crate::scene::upload::GpuScene;
 use crate::scene::{Scene, SceneState};
+use crate::stages::FrameInputs;
 use crate::timing::GpuTimer;
 use crate::{settings_enum, settings_group};
 
@@ -335,24 +337,25 @@ impl EmitterPass {
         timer.scope(ctx, enc, "emitters.ism.pull_push", |e, slot| ism.finish(ctx, e, slot, &job, &s.ism, extent));
         self.splatted = true;
     }
+}
+
+impl FirstBounceSource for EmitterPass {
+    fn share(&self) -> Option<(u32, f32)> {
+        (self.stats.vpls > 0).then_some((self.stats.vpls, self.stats.power))
+    }
 
     /// Stage 3's share of the emitters: `k` VPLs of the first bounce off the surfaces the
     /// emitters light, written to slots `first` … `first + k − 1` of `dest` (see the module
     /// doc). `k` is at most this frame's emitter VPL count; returns how many were written.
-    #[allow(clippy::too_many_arguments)]
-    pub fn bounce_into(
+    fn bounce_into(
         &mut self,
-        ctx: &GpuContext,
+        f: &FrameInputs,
         enc: &mut wgpu::CommandEncoder,
         timer: &mut GpuTimer,
-        gpu_scene: &GpuScene,
-        s: &LabSettings,
-        radius: f32,
-        k: u32,
-        budget: u32,
-        dest: &wgpu::Buffer,
-        first: u32,
+        (k, budget): (u32, u32),
+        (dest, first): (&wgpu::Buffer, u32),
     ) -> u32 {
+        let (ctx, gpu_scene, s, radius) = (f.ctx, f.gpu_scene, f.settings, f.vpl_radius());
         let k = k.min(self.stats.vpls).min(self.bounce_capacity);
         self.stats.bounce_budget = budget;
         if k == 0 {
@@ -361,7 +364,6 @@ impl EmitterPass {
         let sources: Vec<GpuVpl> = self.emitters.vpls(k, 0).iter().map(gpu_vpl).collect();
         let k = sources.len() as u32;
         ctx.queue.write_buffer(&self.bounce_list, 0, bytemuck::cast_slice(&sources));
-        let radius = radius.max(1e-3);
         // The shadow test reads the emitter VPLs' ISMs when they were splatted this frame.
         let test = self.splatted.then_some(s.ism.bounce_test);
         let frame = BounceFrame {

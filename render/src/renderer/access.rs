@@ -191,6 +191,17 @@ impl Renderer {
     }
 
     /// Timings of the last frame.
+    /// Stages 3–7 of this frame as the list of steps the stage choices compose (`chain`):
+    /// (stage, step) in frame order, the near field's last.
+    pub fn frame_steps(&self) -> Vec<(u8, &'static str)> {
+        self.steps.names()
+    }
+
+    /// The step of the last frame that found no pass to run (None: every step ran).
+    pub fn failed_step(&self) -> Option<&'static str> {
+        self.steps.failed
+    }
+
     pub fn timings(&self) -> &[PassTiming] {
         self.timer.last()
     }

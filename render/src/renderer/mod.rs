@@ -5,6 +5,7 @@
 use crate::counters::prelude::*;
 
 mod access;
+mod direct_stage;
 pub(crate) mod explain;
 mod soler_samples;
 pub use soler_samples::{SolerReceiver, SolerSample};
@@ -18,64 +19,20 @@ use checks::{check_ism_atlas, check_scene, check_size, check_split, check_vpl_at
 
 use crate::buffers::{BufferRegistry, ImageF32};
 use crate::camera::Camera;
+pub(crate) use crate::chain::StagePasses;
+use crate::chain::StepList;
 use crate::clock::Clock;
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
 use crate::passes::CameraUniform;
 use crate::passes::compose::ComposePass;
 use crate::passes::direct::DirectPass;
-use crate::passes::emitters::EmitterPass;
-use crate::passes::gautron::stage::GautronStage;
 use crate::passes::gbuffer::GBufferPass;
-use crate::passes::hcb::stage::HcbStage;
-use crate::passes::knecht::interleave::InterleavePass;
-use crate::passes::knecht::stage::KnechtVpls;
-use crate::passes::knecht::temporal::TemporalPass;
-use crate::passes::reference::stage::ReferenceVpls;
 use crate::passes::shadow::{ShadowPass, light_views};
-use crate::passes::soler::stage::SolerStage;
-use crate::pipeline::{ShadingPoints, Temporal};
 use crate::scene::upload::GpuScene;
 use crate::scene::{Aabb, Scene};
 use crate::settings::LabSettings;
 use crate::timing::GpuTimer;
-
-/// The passes of stages 3–7, each present while a stage's choice names it, and the emitters'
-/// VPLs of stage 2 while the scene has emitters and `emitters.enabled` is on.
-#[derive(Default)]
-pub(crate) struct StagePasses {
-    /// Emissive surfaces as lights (stage 2; their first bounce in stage 3).
-    pub emitters: Option<EmitterPass>,
-    /// VPL source "importance warping" with its visibility (Knecht).
-    pub knecht: Option<KnechtVpls>,
-    /// VPL source "uniform batches": the exact-VPL reference (its visibility, gather and
-    /// running average included).
-    pub reference: Option<ReferenceVpls>,
-    /// Shading points "every pixel" (n = 1) or "interleaved tiles", the VPL gather there and
-    /// the geometry-aware filter (Knecht).
-    pub interleave: Option<InterleavePass>,
-    /// Shading points "HCB samples", their gather, coherence splatting and the sample cache
-    /// (Nguyen).
-    pub hcb: Option<HcbStage>,
-    /// Temporal "confidence merge" (Knecht).
-    pub temporal: Option<TemporalPass>,
-    /// Shading points "mip levels", the screen-space gather and the upsampling (Soler).
-    pub soler: Option<SolerStage>,
-    /// Irradiance records, their hemispheres, the splatting and the record cache (Gautron).
-    pub gautron: Option<GautronStage>,
-    /// The pinned pixel to explain (issue #42), and the replay of the VPL gather at tiles or
-    /// pixels (created when a pixel is first explained).
-    pub explain_pixel: Option<(u32, u32)>,
-    pub explain_vpl: Option<crate::passes::knecht::explain::VplExplainPass>,
-    /// The replay of the exact-VPL reference's batch.
-    pub explain_reference: Option<crate::passes::reference::explain::ReferenceExplainPass>,
-    /// The replay of Gautron's splat of irradiance records (created when a pixel is first
-    /// explained with them).
-    pub explain_gautron: Option<crate::passes::gautron::explain::GautronExplainPass>,
-    /// The replay of the HCB's coherence splatting (Nguyen et al. §4.2–4.3; created when a
-    /// pixel is first explained with HCB samples).
-    pub explain_hcb: Option<crate::passes::hcb::explain::HcbExplainPass>,
-}
 
 /// A pixel and the Soler samples behind it (the overlay's last complete answer).
 pub(crate) type SolerAnswer = ((u32, u32), Vec<SolerReceiver>);
@@ -103,6 +60,8 @@ pub struct Renderer {
     pub(crate) shadow: ShadowPass,
     pub(crate) direct: DirectPass,
     pub(crate) stages: StagePasses,
+    /// Stages 3–7 as the list of steps of the stage choices (`chain`), built when they change.
+    pub(crate) steps: StepList,
     pub(crate) compose: ComposePass,
     pub(crate) registry: BufferRegistry,
     pub(crate) timer: GpuTimer,
@@ -198,6 +157,7 @@ impl Renderer {
             timer,
             prev: None,
             stages: StagePasses::default(),
+            steps: StepList::default(),
             flip_map: None,
             interactive: false,
             sky_lights: Default::default(),
@@ -526,94 +486,28 @@ impl Renderer {
         self.ctx.make_current();
         let ctx = self.ctx.clone();
         let s = self.settings.clone();
-        let p = &s.pipeline;
-        let (w, h) = (self.width, self.height);
         // The scene at this instant, evaluated only when a pass sizes itself by it.
-        let emitters = s.emitters.enabled && self.scene.has_emitters();
         let evaluated;
         let state = match frame_state {
             Some(state) => state,
             None => {
-                evaluated = if emitters || p.uses_knecht_vpls() { self.frame_state() } else { Default::default() };
+                let needed = (s.emitters.enabled && self.scene.has_emitters()) || s.pipeline.uses_knecht_vpls();
+                evaluated = if needed { self.frame_state() } else { Default::default() };
                 &evaluated
             }
         };
-        let x = &mut self.stages;
-        let mut fresh = false;
-        if emitters {
-            let created = x.emitters.is_none();
-            let e = x.emitters.get_or_insert_with(|| EmitterPass::new(&ctx));
-            fresh |= e.ensure(&ctx, &self.scene, state, &self.gpu_scene, &s) | created;
-        } else {
-            fresh |= x.emitters.take().is_some();
-        }
-        if p.uses_knecht_vpls() {
-            let views = light_view_list(state, self.bounds).len();
-            let created = x.knecht.is_none();
-            let k = x.knecht.get_or_insert_with(|| KnechtVpls::new(&ctx, &s));
-            fresh |= k.ensure(&ctx, &self.scene, state, &self.gpu_scene, &s, views) | created;
-        } else {
-            fresh |= x.knecht.take().is_some();
-        }
-        if p.is_reference() {
-            let created = x.reference.is_none();
-            let r = x.reference.get_or_insert_with(|| ReferenceVpls::new(&ctx, &self.gpu_scene, &s, w, h));
-            fresh |= r.ensure(&ctx, &s) | created;
-        } else {
-            fresh |= x.reference.take().is_some();
-        }
-        let tiles = match p.shading_points {
-            ShadingPoints::EveryPixel => Some(1),
-            ShadingPoints::InterleavedTiles => Some(s.interleave.n),
-            ShadingPoints::HcbSamples | ShadingPoints::MipLevels | ShadingPoints::IrradianceRecords => None,
+        let needs = crate::chain::Needs {
+            ctx: &ctx,
+            scene: &self.scene,
+            gpu_scene: &self.gpu_scene,
+            state,
+            settings: &s,
+            size: (self.width, self.height),
+            light_views: light_view_list(state, self.bounds).len(),
         };
-        match tiles.filter(|_| p.uses_knecht_vpls()) {
-            Some(n) => {
-                let created = x.interleave.is_none();
-                let camera_entry = bgl::uniform(0, wgpu::ShaderStages::COMPUTE);
-                let split = s.interleave.split_passes;
-                let i = x.interleave.get_or_insert_with(|| InterleavePass::new(&ctx, camera_entry, w, h, n, split));
-                fresh |= i.ensure(&ctx, w, h, n, split) | created;
-            }
-            None => fresh |= x.interleave.take().is_some(),
-        }
-        if p.uses_hcb() {
-            let created = x.hcb.is_none();
-            let hcb = x.hcb.get_or_insert_with(|| HcbStage::new(&ctx, &s, w, h));
-            fresh |= hcb.ensure(&ctx, &s, w, h) | created;
-        } else {
-            fresh |= x.hcb.take().is_some();
-        }
-        if p.uses_knecht_vpls() && p.temporal == Temporal::ConfidenceMerge {
-            let created = x.temporal.is_none();
-            let t = x.temporal.get_or_insert_with(|| TemporalPass::new(&ctx, w, h));
-            fresh |= t.resize(&ctx, w, h) | created;
-        } else {
-            fresh |= x.temporal.take().is_some();
-        }
-        if p.uses_soler() {
-            let created = x.soler.is_none();
-            let scene = &self.scene;
-            let temporal = p.soler_temporal();
-            let st = x.soler.get_or_insert_with(|| {
-                let mut st = SolerStage::new(&ctx, &s.soler, w, h, temporal);
-                st.open_meshes = crate::passes::soler::voxels::open_meshes(scene);
-                st
-            });
-            fresh |= st.ensure(&ctx, &s.soler, w, h, temporal) | created;
-        } else {
-            fresh |= x.soler.take().is_some();
-        }
-        if p.uses_gautron() {
-            let created = x.gautron.is_none();
-            let scene = &self.gpu_scene;
-            let st = x.gautron.get_or_insert_with(|| GautronStage::new(&ctx, scene, &s.gautron, w, h));
-            fresh |= st.ensure(&ctx, &s.gautron, w, h) | created;
-        } else {
-            fresh |= x.gautron.take().is_some();
-        }
-        let diffuse = p.uses_soler() && s.soler.sender == crate::passes::soler::Sender::Diffuse;
-        fresh |= self.direct.ensure_diffuse(&ctx, diffuse);
+        let mut fresh = self.stages.ensure(&needs);
+        fresh |= self.direct.ensure_diffuse(&ctx, crate::chain::needs_direct_diffuse(&s));
+        self.steps.update(&s);
         if fresh {
             self.register_all();
         }

@@ -34,6 +34,7 @@ pub(super) fn timings_ui(st: &mut State, ui: &mut egui::Ui) {
                 ui.end_row();
             });
             ui.small("hover a pass to see its output in the viewport");
+            steps_ui(ui, &l.renderer);
         });
         let names: Vec<String> = l.renderer.timings().iter().map(|t| t.name.clone()).collect();
         Plot::new("timing_history").legend(Legend::default()).y_axis_label("ms").x_axis_label("frame").show(
@@ -52,4 +53,22 @@ pub(super) fn timings_ui(st: &mut State, ui: &mut egui::Ui) {
         );
     });
     st.hovered_pass = hovered;
+}
+
+/// Stages 3–7 of the frame as the list of steps the stage choices compose (`gi_render::chain`),
+/// and the step that found no pass to run, if one did.
+fn steps_ui(ui: &mut egui::Ui, r: &gi_render::Renderer) {
+    let steps = r.frame_steps();
+    ui.separator();
+    ui.label("this frame's steps (stage · step)")
+        .on_hover_text("stages 3–7 as the stage choices compose them; docs/architecture.md, 'The frame as a list'");
+    if steps.is_empty() {
+        ui.small("direct light only (gather: none)");
+    }
+    for (stage, name) in steps {
+        ui.monospace(format!("{stage} · {name}"));
+    }
+    if let Some(step) = r.failed_step() {
+        ui.colored_label(ui.visuals().error_fg_color, format!("{step} found no pass to run: no indirect light"));
+    }
 }

@@ -131,6 +131,24 @@ pub struct InterleavePass {
     pub frames: u32,
 }
 
+/// What the gather at tiles or pixels reads (Knecht 002 §3.5): the camera, the G-buffer,
+/// stage 3's VPLs and stage 4's visibility.
+#[derive(Clone, Copy)]
+pub struct ShadeInputs<'a> {
+    pub camera: &'a wgpu::Buffer,
+    pub g: &'a GBufferViews,
+    /// `vpl.list` and how many of its slots to gather.
+    pub vpls: &'a wgpu::Buffer,
+    pub count: u32,
+    /// The geometry term's distance clamp d_min (Eq. 4.7).
+    pub min_distance: f32,
+    /// Senders closer than this are the near field's (0: none).
+    pub near_cut: f32,
+    pub vis: &'a GatherVisibility,
+    /// The receiver's BRDF: diffuse only (`vpl.receiver_brdf`).
+    pub diffuse_only: bool,
+}
+
 impl InterleavePass {
     pub fn new(
         ctx: &GpuContext,
@@ -392,24 +410,18 @@ impl InterleavePass {
         );
     }
 
-    /// Splits the G-buffer, gathers `vpl_count` VPLs into the split accumulation buffer (tile
-    /// t takes this frame's share, `cpu::knecht::tile_offsets`) and merges it back into
+    /// Splits the G-buffer, gathers `inputs.count` VPLs into the split accumulation buffer
+    /// (tile t takes this frame's share, `maths::tile_offsets`) and merges it back into
     /// `indirect.merged`.
-    #[allow(clippy::too_many_arguments)]
     pub fn shade(
         &mut self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         timer: &mut crate::timing::GpuTimer,
-        camera: &wgpu::Buffer,
-        g: &GBufferViews,
-        vpls: &wgpu::Buffer,
-        vpl_count: u32,
-        d_min: f32,
-        near_cut: f32,
-        vis: &GatherVisibility,
-        diffuse_only: bool,
+        inputs: &ShadeInputs,
     ) {
+        let ShadeInputs { camera, g, vpls, count: vpl_count, min_distance: d_min, near_cut, vis, diffuse_only } =
+            *inputs;
         let n = self.n.max(1);
         let (tw, th) = Self::tile(self.width, self.height, n);
         let sp = SplitParams { n: [n, tw, th, 0] };

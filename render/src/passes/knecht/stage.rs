@@ -9,7 +9,6 @@
 use crate::gpu::GpuContext;
 use crate::lab_settings::LabSettings;
 use crate::maths::split_budget;
-use crate::passes::emitters::EmitterPass;
 use crate::passes::knecht::irsm::{IrsmFrame, IrsmJob, IrsmPass};
 use crate::passes::knecht::ism::{BounceShadowTest, IsmFrame, IsmJob, IsmPass, MAX_BOUNCES};
 use crate::passes::knecht::vpl_bounce::{BounceFrame, BounceMethod, VplBouncePass};
@@ -53,6 +52,24 @@ pub fn ism_splats(s: &LabSettings) -> bool {
         VplVisibility::Imperfect => true,
         VplVisibility::Exact => s.vpl.bounces > 1 && s.vpl.bounce_method == BounceMethod::PointCloud,
     }
+}
+
+/// Another source of bounce-0 VPLs that shares stage 3's budget with the light views, by
+/// power (`vpl.split_by_power`): the emissive surfaces (`passes::emitters`, which implements
+/// it; Knecht's VPLs do not depend on it).
+pub trait FirstBounceSource {
+    /// How many VPLs it has this frame and their power; None when it has none.
+    fn share(&self) -> Option<(u32, f32)>;
+    /// Writes `k` (of a budget of `budget`) first-bounce VPLs to slots `first` … of `dest`;
+    /// returns how many it wrote.
+    fn bounce_into(
+        &mut self,
+        f: &FrameInputs,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        k_of_budget: (u32, u32),
+        dest_from: (&wgpu::Buffer, u32),
+    ) -> u32;
 }
 
 impl KnechtVpls {
@@ -131,13 +148,13 @@ impl KnechtVpls {
         f: &FrameInputs,
         enc: &mut wgpu::CommandEncoder,
         timer: &mut GpuTimer,
-        emitters: Option<&mut EmitterPass>,
+        emitters: Option<&mut dyn FirstBounceSource>,
     ) -> VplSet {
         let (ctx, s) = (f.ctx, f.settings);
         let mut powers = view_powers(&f.state.lights, f.vpl_radius(), s.vpl.split_by_power);
-        let emitters = emitters.filter(|e| e.stats.vpls > 0);
-        if let Some(e) = &emitters {
-            powers.push(if s.vpl.split_by_power { e.stats.power } else { 1.0 });
+        let emitters = emitters.filter(|e| e.share().is_some());
+        if let Some((_, power)) = emitters.as_ref().and_then(|e| e.share()) {
+            powers.push(if s.vpl.split_by_power { power } else { 1.0 });
         }
         let mut counts = split_budget(&powers, s.vpl.count);
         let emitter_share = if emitters.is_some() { counts.pop().unwrap_or(0) } else { 0 };
@@ -172,8 +189,8 @@ impl KnechtVpls {
         let bounces = s.vpl.bounces.clamp(1, MAX_BOUNCES);
         let n_vpls = s.vpl.count.min(self.vpl.capacity / bounces);
         if let Some(e) = emitters {
-            let (scene, list, r) = (f.gpu_scene, &self.vpl.vpls, f.vpl_radius());
-            let written = e.bounce_into(ctx, enc, timer, scene, s, r, emitter_share, s.vpl.count, list, first);
+            let list = &self.vpl.vpls;
+            let written = e.bounce_into(f, enc, timer, (emitter_share, s.vpl.count), (list, first));
             sources.push((first, written, "emitters, bounce 0".into()));
             // Slots the emitters could not fill (more than their VPLs) stay empty.
             let (used, size) = (first + written, std::mem::size_of::<crate::passes::reference::vpl::GpuVpl>() as u64);

@@ -1,0 +1,30 @@
+//! Gautron et al.'s steps (docs/readings.md, "Gautron"): irradiance records created where
+//! the splatted weights fall short, lit by their rasterised hemispheres (§3) or, GI Lab's mix,
+//! by the VPL gather, splatted with Ward's weight (Eq. 1–2) and kept by the record cache
+//! (§4); or the hemispheres at the HCB's samples (GI Lab's mix).
+
+use super::{Flow, Recorder, StagePasses};
+use crate::stages::FrameInputs;
+
+/// Stages 5–7: records lit by their hemispheres (`gautron.indirect`).
+pub(super) fn hemispheres(f: &FrameInputs, x: &mut StagePasses, r: &mut Recorder, flow: &mut Flow) -> Option<()> {
+    flow.light = Some(x.gautron.as_mut()?.run(f, r.enc, r.timer, None));
+    Some(())
+}
+
+/// Stages 5–7: records lit by stage 3's VPLs through stage 4's visibility (GI Lab's mix).
+pub(super) fn lit_by_vpls(f: &FrameInputs, x: &mut StagePasses, r: &mut Recorder, flow: &mut Flow) -> Option<()> {
+    let light = flow.vpl_light()?;
+    let view = x.gautron.as_mut()?.run(f, r.enc, r.timer, Some(light));
+    flow.light = Some(view);
+    Some(())
+}
+
+/// Stage 6: a hemisphere at each of the HCB's samples (GI Lab's mix), for its splat.
+pub(super) fn at_hcb_samples(f: &FrameInputs, x: &mut StagePasses, r: &mut Recorder, _: &mut Flow) -> Option<()> {
+    let (hcb, gautron) = (x.hcb.as_ref()?, x.gautron.as_mut()?);
+    if let Err(e) = gautron.gather_at_samples(f, r.enc, r.timer, hcb.sample_buffers()) {
+        log::warn!("gautron: the HCB's sample count could not be read: {e}");
+    }
+    Some(())
+}

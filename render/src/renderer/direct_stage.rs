@@ -1,0 +1,101 @@
+//! Stages 1's camera and 2 of the frame (docs/principles.md, the pipeline table): the camera
+//! uniform, the shadow maps, the emitters' VPLs and their visibility, the direct light, and
+//! its running mean over the still frames while the sky's directions rotate (issue #51,
+//! `passes::direct_history`).
+
+use glam::{Mat4, Vec4};
+
+use crate::passes::CameraUniform;
+use crate::passes::direct_history::DirectHistory;
+use crate::passes::shadow::{gpu_light, setup_lights};
+use crate::renderer::Renderer;
+use crate::scene::SceneState;
+
+impl Renderer {
+    /// The camera uniform of this frame (`passes::CameraUniform`), with the previous frame's
+    /// view-projection for the movement buffer.
+    pub(crate) fn camera_uniform(&self, view_proj: Mat4) -> CameraUniform {
+        let prev_view_proj = self.prev.as_ref().map(|p| p.view_proj).unwrap_or(view_proj);
+        let (w, h) = (self.width as f32, self.height as f32);
+        CameraUniform {
+            view_proj,
+            prev_view_proj,
+            inv_view_proj: view_proj.inverse(),
+            view: self.camera.view(),
+            position: self.camera.position.extend(1.0),
+            viewport: Vec4::new(w, h, 1.0 / w, 1.0 / h),
+            params: Vec4::new(self.camera.znear, self.camera.zfar, self.clock.frame as f32, self.clock.time_s()),
+            lod: Vec4::new(-1.0, 0.0, 0.0, 0.0),
+        }
+    }
+
+    /// How many of the frame's lights (the last ones) are the sky's directions rotated this
+    /// frame (`sky.rotate_each_frame`).
+    pub(crate) fn rotating_sky(&self) -> usize {
+        if self.settings.sky.rotate_each_frame { self.sky_lights.count() } else { 0 }
+    }
+
+    /// Stage 2: shadow maps, the emitters' VPLs and their visibility, direct light. Returns
+    /// the direct light the later stages read (`direct.radiance`, or its running mean while
+    /// the sky rotates).
+    pub(crate) fn direct_light(
+        &mut self,
+        enc: &mut wgpu::CommandEncoder,
+        state: &SceneState,
+        view_proj: Mat4,
+    ) -> wgpu::TextureView {
+        let ctx = self.ctx.clone();
+        let ds = self.settings.direct.clone();
+        let mut lights = setup_lights(&state.lights, self.bounds, ds.shadow_map_size, ds.shadows);
+        let size = ds.shadow_map_size.min(ctx.limits.max_texture_dimension_2d);
+        let layers = (lights.views.len() as u32).clamp(1, ctx.limits.max_texture_array_layers);
+        if self.shadow.ensure(&ctx, size, layers) {
+            self.shadow.register(&mut self.registry);
+        }
+        if self.shadow.size != ds.shadow_map_size {
+            // Layers made smaller to fit the device: a texel covers more of the world.
+            let k = ds.shadow_map_size as f32 / self.shadow.size as f32;
+            lights.lights.iter_mut().for_each(|l| l.shadow.x *= k);
+        }
+        let (shadow, gpu_scene) = (&self.shadow, &self.gpu_scene);
+        self.timer
+            .scope(&ctx, enc, "direct.shadow", |e, slot| shadow.run(&ctx, e, slot, gpu_scene, state, &lights.views));
+        let emitters = match self.stages.emitters.as_mut() {
+            Some(pass) => {
+                let (scene, radius) = (&self.scene, self.bounds.radius());
+                pass.run(&ctx, enc, &mut self.timer, scene, state, gpu_scene, &self.settings, radius)
+            }
+            None => None,
+        };
+        let (direct, camera_buffer, gviews) = (&mut self.direct, &self.camera_buffer, &self.gbuffer.targets.views);
+        let shadow_view = &self.shadow.array_view;
+        self.timer.scope(&ctx, enc, "direct", |e, slot| {
+            direct.run(&ctx, e, slot, &ds, camera_buffer, gviews, &lights, shadow_view, emitters.as_ref())
+        });
+        let direct_view = crate::passes::view(&self.direct.radiance, "direct.radiance");
+        let rotating_sky = self.rotating_sky();
+        if rotating_sky == 0 {
+            if self.direct_history.take().is_some() {
+                self.registry.remove("direct.sky_history");
+            }
+            return direct_view;
+        }
+        // While the sky's directions rotate, the direct light is their running mean over the
+        // still frames (issue #51): it restarts when anything but the rotation changes.
+        let (w, h) = (self.width, self.height);
+        let history = self.direct_history.get_or_insert_with(|| DirectHistory::new(&ctx, w, h));
+        history.ensure(&ctx, w, h);
+        let mut key: Vec<f32> = view_proj.to_cols_array().to_vec();
+        let steady = &state.lights[..state.lights.len() - rotating_sky];
+        key.extend(steady.iter().flat_map(|l| bytemuck::cast::<_, [f32; 20]>(gpu_light(l))));
+        key.extend(state.draws.iter().flat_map(|d| d.world.to_cols_array()));
+        let sky = &self.scene.sky;
+        key.extend([sky.color.x, sky.color.y, sky.color.z, sky.intensity, sky.rotation_deg]);
+        let settings = format!("{:?}", self.settings);
+        let averaged = self
+            .timer
+            .scope(&ctx, enc, "direct.sky_history", |e, slot| history.run(&ctx, e, slot, &direct_view, key, settings));
+        history.register(&mut self.registry);
+        averaged
+    }
+}
