@@ -520,6 +520,8 @@ fn bench_scenes_lists_every_scene_with_each_technique() {
     let o = gi_lab()
         .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
         .args(["bench", "--suite", "scenes", "--size", "32x32", "--frames", "1", "--json"])
+        // Every technique from few VPLs and points: the suite's rows, not its figures, are tested.
+        .args(["--set", "vpl.count=16", "--set", "ism.points=16384", "--set", "direct.shadow_map_size=256"])
         .output()
         .expect("runs");
     assert!(o.status.success(), "bench failed: {}", String::from_utf8_lossy(&o.stderr));

@@ -90,9 +90,9 @@ fn every_setting_has_a_widget_that_changes_the_renderer() {
     // Tall enough that the whole settings panel (every group, Soler's included) is on
     // screen: the reset buttons are clicked where they are drawn.
     let mut h = harness_in(&dir, egui::vec2(1400.0, 3600.0));
-    // The tall viewport at a tenth of its size: this test renders ~600 frames and asks only
-    // whether each widget reaches the renderer.
-    h.state_mut().state.session.render_scale = 0.1;
+    // The tall viewport at 3 % of its size (about 30×110 pixels): this test renders ~600
+    // frames and asks only whether each widget reaches the renderer.
+    h.state_mut().state.session.render_scale = 0.03;
     h.run_steps(2);
     // And cheap frames: each widget must reach the renderer, whatever the sizes it starts at.
     cheap_frames(&mut h);

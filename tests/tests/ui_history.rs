@@ -9,11 +9,11 @@ use gi_lab::ui::app::GiLabApp;
 use gi_lab_tests::ui_harness::{harness, pause};
 use gi_render::LabSettings;
 
-/// The lab at a tenth of its render size: these tests ask what the history does, not what
-/// the frame shows (the render scale is the session's, not a step).
+/// The lab at 3 % of its render size: these tests ask what the history does, not what the
+/// frame shows (the render scale is the session's, not a step).
 fn small_harness(name: &str) -> (Harness<'static, GiLabApp>, std::path::PathBuf) {
     let (mut h, dir) = harness(name);
-    h.state_mut().state.session.render_scale = 0.1;
+    h.state_mut().state.session.render_scale = 0.03;
     (h, dir)
 }
 

@@ -20,6 +20,9 @@ fn waits_over(h: &mut Harness<'static, GiLabApp>, steps: usize) -> u64 {
 #[test]
 fn no_frame_of_the_window_waits_for_the_gpu_with_every_readback_on() {
     let (mut h, _dir) = harness("no_wait");
+    // Small frames (about 100×90 pixels, the probes and the explained pixel inside): the test
+    // asks whether a frame waits, not what it shows.
+    h.state_mut().state.session.render_scale = 0.1;
     pause(&mut h);
     h.run_steps(2);
     // An auto-ranging viewer.

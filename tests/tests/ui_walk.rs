@@ -345,7 +345,7 @@ fn walk(seed: u64, steps: usize) {
     for step in 0..steps {
         let t0 = std::time::Instant::now();
         // Cheap frames whatever the walk does to the View menu.
-        h.state_mut().state.session.render_scale = 0.1;
+        h.state_mut().state.session.render_scale = 0.03;
         let done = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| act(&mut h, &mut rng, &dir, step)));
         let what = match done {
             Ok(w) => w,

@@ -219,7 +219,7 @@ impl State {
                 );
                 ui.horizontal(|ui| {
                     ui.label("render scale");
-                    ui.add(egui::Slider::new(&mut self.session.render_scale, 0.1..=2.0).step_by(0.05))
+                    ui.add(egui::Slider::new(&mut self.session.render_scale, super::session::RENDER_SCALE_RANGE).logarithmic(true))
                         .on_hover_text("render resolution relative to the viewport's physical pixels; a new session starts at 1 / the display's scale (one pixel per point)");
                 });
                 ui.horizontal(|ui| {

@@ -107,6 +107,11 @@ impl Default for Session {
     }
 }
 
+/// The render scales the View menu offers and the viewport accepts: down to 2 % (a few
+/// dozen pixels, for a software device or a test that asks what the window does, not what it
+/// shows) and up to supersampling by 2.
+pub const RENDER_SCALE_RANGE: std::ops::RangeInclusive<f32> = 0.02..=2.0;
+
 /// Half resolution in debug builds (software Vulkan is slow), full in release builds.
 pub fn default_render_scale() -> f32 {
     if cfg!(debug_assertions) { 0.5 } else { 1.0 }

@@ -203,7 +203,8 @@ impl State {
         } else {
             1.0
         };
-        let scale = self.session.render_scale.clamp(0.1, 2.0) * factor;
+        let range = super::session::RENDER_SCALE_RANGE;
+        let scale = self.session.render_scale.clamp(*range.start(), *range.end()) * factor;
         let (vw, vh) = self.viewport_px;
         let target = self
             .render_size_override

@@ -97,11 +97,11 @@ pub(crate) fn bench(args: &BenchArgs) -> Result<(), CliError> {
         return quality::quality(args);
     }
     if let Some(BenchSuite::Scenes) = args.suite {
-        let rows = scenes::scenes(&args.scenes_dir, args.size, args.frames)?;
+        let rows = scenes::scenes(&args.scenes_dir, args.size, args.frames, &args.scene.overrides)?;
         if args.json {
             println!("{}", serde_json::to_string_pretty(&rows).map_err(|e| CliError::failure(e.to_string()))?);
         } else {
-            print!("{}", scenes::format(&rows, args.size, args.frames));
+            print!("{}", scenes::format(&rows, args.size, args.frames, &args.scene.overrides));
         }
         return Ok(());
     }

@@ -52,8 +52,15 @@ fn load(path: &Path, unit_scale: f32) -> Result<gi_render::scene::Scene, CliErro
     crate::scene_args::load_scene(&args)
 }
 
-/// Runs the suite.
-pub fn scenes(scenes_dir: &Path, size: (u32, u32), frames: u32) -> Result<Vec<SceneRow>, CliError> {
+/// Runs the suite. `overrides` (`--set group.field=value`) apply on top of every technique's
+/// preset (e.g. fewer VPLs for a quick pass over the scenes).
+pub fn scenes(
+    scenes_dir: &Path,
+    size: (u32, u32),
+    frames: u32,
+    overrides: &[String],
+) -> Result<Vec<SceneRow>, CliError> {
+    let presets = technique_settings(overrides)?;
     let files = scene_files(scenes_dir);
     if files.is_empty() {
         return Err(CliError::input(format!(
@@ -84,7 +91,7 @@ pub fn scenes(scenes_dir: &Path, size: (u32, u32), frames: u32) -> Result<Vec<Sc
             emissive_triangles,
             unit_scale,
             load_ms,
-            frame_ms: preset_times(&ctx, &scene, size, frames)?,
+            frame_ms: preset_times(&ctx, &scene, &presets, size, frames),
         };
         rows.push(row);
     }
@@ -109,7 +116,7 @@ pub fn scenes(scenes_dir: &Path, size: (u32, u32), frames: u32) -> Result<Vec<Sc
             emissive_triangles: tris,
             unit_scale: 1.0,
             load_ms: 0.0,
-            frame_ms: preset_times(&ctx, &scene, size, frames)?,
+            frame_ms: preset_times(&ctx, &scene, &presets, size, frames),
         };
         rows.push(row);
     }
@@ -119,21 +126,36 @@ pub fn scenes(scenes_dir: &Path, size: (u32, u32), frames: u32) -> Result<Vec<Sc
 /// A preset's name and its mean frame time (ms) or the error that stopped it.
 pub type PresetTime = (String, Result<f64, String>);
 
+/// Every technique preset's settings with `overrides` applied (each refused with its reason).
+fn technique_settings(overrides: &[String]) -> Result<Vec<(&'static str, LabSettings)>, CliError> {
+    let mut out = Vec::new();
+    for (name, text) in super::run::TECHNIQUE_PRESETS {
+        let mut settings = gi_render::preset::load_lenient(text, name)
+            .map(|l| l.settings)
+            .map_err(|e| CliError::failure(format!("preset {name}: {e}")))?;
+        for o in overrides {
+            settings.apply_override(o).map_err(|e| CliError::input(format!("--set {o}: {e}")))?;
+        }
+        if let Some(e) = settings.validate().first() {
+            return Err(CliError::input(format!("{name} with --set: {e}")));
+        }
+        out.push((name, settings));
+    }
+    Ok(out)
+}
+
 /// The mean frame time of every technique preset on `scene`.
 fn preset_times(
     ctx: &GpuContext,
     scene: &gi_render::scene::Scene,
+    presets: &[(&'static str, LabSettings)],
     size: (u32, u32),
     frames: u32,
-) -> Result<Vec<PresetTime>, CliError> {
-    let mut out = Vec::new();
-    for (name, text) in super::run::TECHNIQUE_PRESETS {
-        let settings = gi_render::preset::load_lenient(text, name)
-            .map(|l| l.settings)
-            .map_err(|e| CliError::failure(format!("preset {name}: {e}")))?;
-        out.push((name.to_string(), frame_ms(ctx, scene, settings, size, frames)));
-    }
-    Ok(out)
+) -> Vec<PresetTime> {
+    presets
+        .iter()
+        .map(|(name, settings)| (name.to_string(), frame_ms(ctx, scene, settings.clone(), size, frames)))
+        .collect()
 }
 
 fn frame_ms(
@@ -148,11 +170,15 @@ fn frame_ms(
 }
 
 /// The table.
-pub fn format(rows: &[SceneRow], size: (u32, u32), frames: u32) -> String {
+pub fn format(rows: &[SceneRow], size: (u32, u32), frames: u32, overrides: &[String]) -> String {
     let mut s = format!(
-        "GI Lab bench suite scenes — {}×{}, mean frame time (ms, sum of the passes) over {frames} frames after 3 warm-up frames\n\n",
+        "GI Lab bench suite scenes — {}×{}, mean frame time (ms, sum of the passes) over {frames} frames after 3 warm-up frames",
         size.0, size.1
     );
+    if !overrides.is_empty() {
+        s += &format!("; every preset with --set {}", overrides.join(" --set "));
+    }
+    s += "\n\n";
     s += &format!("{:<62} {:>9} {:>7} {:>9} {:>8}", "scene", "triangles", "lights", "emissive", "load ms");
     for (name, _) in super::run::TECHNIQUE_PRESETS {
         s += &format!(" {name:>9}");
