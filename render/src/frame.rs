@@ -76,11 +76,15 @@ impl Renderer {
         self.sky_background.update(&ctx, &self.scene.sky, self.settings.sky.background);
         // The compose tone maps with the previous frame's exposure; a separate tone-mapping
         // pass runs only when there is none yet (the first frame of automatic exposure).
-        let (compose, ts, emission) = (&mut self.compose, &self.settings.tonemap, &self.gbuffer.targets.views.emission);
-        let sky = (&self.sky_background, &self.camera_buffer, &self.gbuffer.targets.views.normal);
-        self.timer.scope(&ctx, &mut enc, "compose", |e, slot| {
-            compose.compose(&ctx, e, slot, ts, emission, &direct_view, indirect.as_ref(), near_field.as_ref(), sky)
-        });
+        let inputs = crate::passes::compose::ComposeInputs {
+            emission: &self.gbuffer.targets.views.emission,
+            direct: &direct_view,
+            indirect: indirect.as_ref(),
+            near_field: near_field.as_ref(),
+            sky: (&self.sky_background, &self.camera_buffer, &self.gbuffer.targets.views.normal),
+        };
+        let (compose, ts) = (&mut self.compose, &self.settings.tonemap);
+        self.timer.pass(&ctx, &mut enc, "compose", |r| compose.compose(r, ts, &inputs));
         self.timer.scope(&ctx, &mut enc, "compose.luminance", |e, slot| compose.luminance(&ctx, e, slot, ts));
         if !compose.tone_mapped() {
             self.timer.scope(&ctx, &mut enc, "compose.tonemap", |e, slot| compose.tonemap(&ctx, e, slot, ts));

@@ -57,6 +57,20 @@ impl<'a> Slot<'a> {
     }
 }
 
+/// Where one pass records (issue #52): the device and queue, the encoder of its timing scope
+/// and the scope's timestamp slot ([`GpuTimer::pass`]).
+pub struct PassRec<'a, 's> {
+    pub ctx: &'a GpuContext,
+    pub enc: &'a mut wgpu::CommandEncoder,
+    pub slot: Option<Slot<'s>>,
+}
+
+/// Where a stage records its passes (issue #52): the frame's encoder and its pass timer.
+pub struct Recorder<'a> {
+    pub enc: &'a mut wgpu::CommandEncoder,
+    pub timer: &'a mut GpuTimer,
+}
+
 /// Per-frame GPU timer.
 pub struct GpuTimer {
     gpu: Option<GpuQueries>,
@@ -178,6 +192,17 @@ impl GpuTimer {
         let r = self.scope_inner(ctx, encoder, name, index, f);
         crate::counters::traffic::end_scope();
         r
+    }
+
+    /// [`Self::scope`] handing the pass one [`PassRec`].
+    pub fn pass<R>(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        name: &str,
+        f: impl FnOnce(PassRec<'_, '_>) -> R,
+    ) -> R {
+        self.scope(ctx, encoder, name, |enc, slot| f(PassRec { ctx, enc, slot }))
     }
 
     fn scope_inner<R>(

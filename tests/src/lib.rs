@@ -333,10 +333,10 @@ pub fn assert_glossy_receiver_matches_the_cpu(
             let d = if lum > 0.0 { v3(dir.at(x, y)) / lum } else { glam::Vec3::ZERO };
             let p = v3(pos.at(x, y));
             let (c, m) = (alb.at(x, y), mat.at(x, y));
-            let args = (v3(n).normalize(), (eye - p).normalize(), v3(c), c[3], m[0], m[1]);
-            let want =
-                gi_render::cpu::brdf::receive_irradiance(e, d, args.0, args.1, args.2, args.3, args.4, args.5, true);
-            let diffuse = args.2 * args.3 / std::f32::consts::PI * e;
+            let (n, v) = (v3(n).normalize(), (eye - p).normalize());
+            let rx = gi_render::cpu::brdf::Receiver { n, v, albedo: v3(c), di: c[3], si: m[0], sp: m[1], glossy: true };
+            let want = gi_render::cpu::brdf::receive_irradiance(e, d, &rx);
+            let diffuse = rx.albedo * rx.di / std::f32::consts::PI * e;
             let got = v3(ind.at(x, y));
             let scale = want.max_element().max(1e-6);
             assert!(

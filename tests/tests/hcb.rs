@@ -34,7 +34,9 @@ fn gpu_hcb(ctx: &GpuContext, c: &Case) -> (Vec<Level>, Vec<Vec<bool>>, Vec<Sampl
     let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.hcb") });
     let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
     match &c.incomplete {
-        None => pass.run(ctx, &mut enc, None, &view(&p), &view(&n), c.frame, None),
+        None => {
+            pass.run(gi_render::timing::PassRec { ctx, enc: &mut enc, slot: None }, &view(&p), &view(&n), c.frame, None)
+        }
         Some(inc) => {
             // The cached samples' splat: Σw 0 on the incomplete texels, 1 elsewhere.
             let weights: Vec<[f32; 4]> = inc.iter().map(|&i| [0.0, 0.0, 0.0, if i { 0.0 } else { 1.0 }]).collect();
@@ -57,7 +59,13 @@ fn gpu_hcb(ctx: &GpuContext, c: &Case) -> (Vec<Level>, Vec<Vec<bool>>, Vec<Sampl
                 cache: &mv,
                 recompute_group: &gv,
             };
-            pass.run(ctx, &mut enc, None, &view(&p), &view(&n), c.frame, Some(io));
+            pass.run(
+                gi_render::timing::PassRec { ctx, enc: &mut enc, slot: None },
+                &view(&p),
+                &view(&n),
+                c.frame,
+                Some(io),
+            );
             ctx.queue.submit([enc.finish()]);
             enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.hcb") });
             let got = gi_render::buffers::read_texture(ctx, "hcb", &i, 0, 0).expect("read");

@@ -99,7 +99,14 @@ fn gpu_splat(
     let white = upload(&ctx, "test.albedo", w, h, &vec![[1.0; 4]; (w * h) as usize]);
     let black = upload(&ctx, "test.material", w, h, &vec![[0.0; 4]; (w * h) as usize]);
     let g = (&view(&p), &view(&n), &view(&white), &view(&black));
-    pass.run(&ctx, &mut enc, None, &cam, g, (&list, &counter), &args, frame, method);
+    pass.run(
+        gi_render::timing::PassRec { ctx: &ctx, enc: &mut enc, slot: None },
+        &cam,
+        g,
+        (&list, &counter),
+        &args,
+        (frame, method),
+    );
     ctx.queue.submit([enc.finish()]);
     let read = |t: &wgpu::Texture| gi_render::buffers::read_texture(&ctx, "hcb", t, 0, 0).expect("read").data;
     let uncovered: Vec<u32> =

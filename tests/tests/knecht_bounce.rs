@@ -205,14 +205,14 @@ fn bounce_selection_on_the_gpu_picks_the_cpu_arg_max() {
                     // The gather's test on the pulled maps.
                     BounceShadowTest::PulledMaps => knecht::ism_visible(
                         |tx, ty| pulled.at(ox + tx, oy + ty)[0],
-                        src.position,
-                        src.normal,
-                        bs.surface.position,
-                        bs.surface.normal,
-                        eye_offset,
-                        l.size,
-                        s.depth_bias,
-                        s.normal_offset,
+                        &knecht::IsmTest {
+                            size: l.size,
+                            eye_offset,
+                            bias: s.depth_bias,
+                            normal_offset: s.normal_offset,
+                        },
+                        (src.position, src.normal),
+                        (bs.surface.position, bs.surface.normal),
                     ),
                 };
                 let (flux, c) = knecht_bounce::bounce_incident(&src, &bs, per_vpl, d_min, visible);

@@ -293,7 +293,14 @@ fn geometry_aware_filter_on_the_gpu_equals_the_cpu() {
     let filter = |demodulated: bool| {
         let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.filter") });
         let (src, irr) = (src_tex.create_view(&Default::default()), irr_tex.create_view(&Default::default()));
-        pass.filter(&ctx, &mut enc, None, &s, depth_range, &src, &g.views(), demodulated.then_some(&irr));
+        pass.filter(
+            gi_render::timing::PassRec { ctx: &ctx, enc: &mut enc, slot: None },
+            &s,
+            depth_range,
+            &src,
+            &g.views(),
+            demodulated.then_some(&irr),
+        );
         ctx.queue.submit([enc.finish()]);
         (read(&ctx, &pass.filtered), read(&ctx, &pass.filtered_irradiance))
     };
@@ -461,7 +468,14 @@ fn confidence_and_merge_case(demodulated: bool) {
             ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.temporal") });
         let irr = irr.create_view(&Default::default());
         let irr = demodulated.then_some(&irr);
-        pass.run(&ctx, &mut enc, None, &s, depth_range, &light.create_view(&Default::default()), &g.views(), irr);
+        pass.run(
+            gi_render::timing::PassRec { ctx: &ctx, enc: &mut enc, slot: None },
+            &s,
+            depth_range,
+            &light.create_view(&Default::default()),
+            &g.views(),
+            irr,
+        );
         ctx.queue.submit([enc.finish()]);
     }
     assert_eq!(pass.split_prev().is_some(), demodulated, "the second frame read a split history");

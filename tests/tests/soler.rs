@@ -547,7 +547,7 @@ fn march_against_exact_visibility(
         for y in 0..l.height {
             for x in 0..l.width {
                 let Some(rx) = l.at(x as i64, y as i64).filter(|t| t.valid()) else { continue };
-                let gather = |v: &soler::VisibleFn<'_>| soler::gather_with(&l, x, y, rx, &screen, p, v, None).0;
+                let gather = |v: &soler::VisibleFn<'_>| soler::gather_with(&l, (x, y), rx, &screen, p, v, None).0;
                 let (e_exact, e_vox, e_none) = (gather(&exact), gather(&march), gather(&open));
                 let (vox, none) = ((e_vox - e_exact).length(), (e_none - e_exact).length());
                 e.all = (e.all.0 + vox, e.all.1 + none);

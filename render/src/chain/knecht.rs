@@ -11,6 +11,7 @@ use crate::passes::knecht::temporal::MergeOrder;
 use crate::passes::knecht::vpl_importance::ReceiverBrdf;
 use crate::pipeline::{Reconstruction, ShadingPoints, Temporal};
 use crate::stages::FrameInputs;
+use crate::timing::PassRec;
 
 /// Stage 3: this frame's VPLs of every light view and bounce (and the emitters' first bounce).
 pub(super) fn vpls(f: &FrameInputs, x: &mut StagePasses, r: &mut Recorder, flow: &mut Flow) -> Option<()> {
@@ -62,7 +63,7 @@ pub(super) fn filter(f: &FrameInputs, x: &mut StagePasses, r: &mut Recorder, flo
     let irradiance =
         (s.demodulate && !merges_first(f.settings)).then(|| crate::passes::view(&i.irradiance, "indirect.irradiance"));
     r.timer.scope(ctx, r.enc, "interleave.filter", |e, slot| {
-        i.filter(ctx, e, slot, s, depth_range, &src, f.gbuffer, irradiance.as_ref())
+        i.filter(PassRec { ctx, enc: e, slot }, s, depth_range, &src, f.gbuffer, irradiance.as_ref())
     });
     flow.light = Some(crate::passes::view(&i.filtered, "indirect.filtered"));
     Some(())
@@ -76,7 +77,7 @@ pub(super) fn merge(f: &FrameInputs, x: &mut StagePasses, r: &mut Recorder, flow
     let t = x.temporal.as_mut()?;
     let (ctx, s, depth_range) = (f.ctx, &f.settings.temporal, f.depth_range());
     r.timer.scope(ctx, r.enc, "temporal", |e, slot| {
-        t.run(ctx, e, slot, s, depth_range, &src, f.gbuffer, irradiance.as_ref())
+        t.run(PassRec { ctx, enc: e, slot }, s, depth_range, &src, f.gbuffer, irradiance.as_ref())
     });
     flow.light = Some(crate::passes::view(t.history(), "temporal.history"));
     Some(())

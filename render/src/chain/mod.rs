@@ -30,7 +30,7 @@ use crate::passes::reference::stage::ReferenceVpls;
 use crate::passes::soler::stage::SolerStage;
 use crate::pipeline::{Gather, Reconstruction, ShadingPoints, Temporal, VplSource, VplVisibility};
 use crate::stages::{FrameInputs, Visibility, VplSet};
-use crate::timing::GpuTimer;
+pub(crate) use crate::timing::Recorder;
 
 /// The passes of stages 3–7, each present while a stage's choice names it, and the emitters'
 /// VPLs of stage 2 while the scene has emitters and `emitters.enabled` is on
@@ -87,12 +87,6 @@ impl StagePasses {
             h.register_sums(reg);
         }
     }
-}
-
-/// Where a step records: the frame's encoder and its pass timer.
-pub(crate) struct Recorder<'a> {
-    pub enc: &'a mut wgpu::CommandEncoder,
-    pub timer: &'a mut GpuTimer,
 }
 
 /// What the steps hand on to the next.

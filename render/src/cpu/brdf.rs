@@ -46,26 +46,29 @@ pub fn receiver_spread(r: f32) -> f32 {
 /// sharpness κ (from r), whose angle in the half-vector is half the light's, 1/SP' = 1/SP +
 /// 1/(4κ). Light from one direction (r → 1) gives the exact reflection f(l, v)·E; the diffuse
 /// term is always exact. `glossy` false is the papers' diffuse-only receiver.
-#[allow(clippy::too_many_arguments)]
-pub fn receive_irradiance(
-    e: Vec3,
-    d: Vec3,
-    n: Vec3,
-    v: Vec3,
-    albedo: Vec3,
-    di: f32,
-    si: f32,
-    sp: f32,
-    glossy: bool,
-) -> Vec3 {
-    receiver_factor(d, n, v, albedo, di, si, sp, glossy) * e
+pub fn receive_irradiance(e: Vec3, d: Vec3, rx: &Receiver) -> Vec3 {
+    receiver_factor(d, rx) * e
+}
+
+/// The receiving pixel of [`receive_irradiance`]: its normal `n`, the direction `v` to the eye,
+/// its material (albedo c, diffuse and specular intensities DI and SI, specular power SP), and
+/// whether it reflects with the specular lobe (`glossy`; false: the papers' diffuse receiver).
+#[derive(Clone, Copy, Debug)]
+pub struct Receiver {
+    pub n: Vec3,
+    pub v: Vec3,
+    pub albedo: Vec3,
+    pub di: f32,
+    pub si: f32,
+    pub sp: f32,
+    pub glossy: bool,
 }
 
 /// The reflected radiance per unit irradiance of [`receive_irradiance`] (per channel: c·DI/π
 /// plus the specular lobe's factor), so that a replay can split the pixel's light over the
 /// contributions to E. WGSL twin: `receiver_factor`.
-#[allow(clippy::too_many_arguments)]
-pub fn receiver_factor(d: Vec3, n: Vec3, v: Vec3, albedo: Vec3, di: f32, si: f32, sp: f32, glossy: bool) -> Vec3 {
+pub fn receiver_factor(d: Vec3, rx: &Receiver) -> Vec3 {
+    let Receiver { n, v, albedo, di, si, sp, glossy } = *rx;
     let diffuse = albedo * di / std::f32::consts::PI;
     let r = d.length();
     if !glossy || si <= 0.0 || r <= 1e-4 {
@@ -132,6 +135,10 @@ pub fn punctual_radiance(
 mod tests {
     use super::*;
 
+    fn rx(n: Vec3, v: Vec3, albedo: Vec3, (di, si, sp): (f32, f32, f32), glossy: bool) -> Receiver {
+        Receiver { n, v, albedo, di, si, sp, glossy }
+    }
+
     /// Light from one direction (r → 1) is reflected exactly as the BRDF reflects it; the
     /// diffuse-only receiver is c·DI/π·E; no direction known: diffuse only.
     #[test]
@@ -140,11 +147,11 @@ mod tests {
         let l = Vec3::new(-0.6, 0.8, 0.0);
         let (c, e) = (Vec3::new(0.5, 0.2, 0.1), Vec3::new(2.0, 1.0, 0.5));
         let exact = eval(n, l, v, c, 0.9, 0.3, 64.0) * e;
-        let one = receive_irradiance(e, l * 0.99999, n, v, c, 0.9, 0.3, 64.0, true);
+        let one = receive_irradiance(e, l * 0.99999, &rx(n, v, c, (0.9, 0.3, 64.0), true));
         assert!((one - exact).length() < 1e-3 * exact.length(), "{one} vs {exact}");
         let diffuse = c * 0.9 / std::f32::consts::PI * e;
-        assert_eq!(receive_irradiance(e, l, n, v, c, 0.9, 0.3, 64.0, false), diffuse);
-        assert_eq!(receive_irradiance(e, Vec3::ZERO, n, v, c, 0.9, 0.3, 64.0, true), diffuse);
+        assert_eq!(receive_irradiance(e, l, &rx(n, v, c, (0.9, 0.3, 64.0), false)), diffuse);
+        assert_eq!(receive_irradiance(e, Vec3::ZERO, &rx(n, v, c, (0.9, 0.3, 64.0), true)), diffuse);
     }
 
     /// Spread light widens the lobe: the mirror direction gets less, a direction far from it
@@ -155,7 +162,7 @@ mod tests {
         let n = Vec3::Y;
         let l = Vec3::new(-0.5, 0.866, 0.0).normalize();
         let e = Vec3::ONE;
-        let spec = |r: f32, v: Vec3| receive_irradiance(e, l * r, n, v, Vec3::ZERO, 0.0, 0.5, 128.0, true).x;
+        let spec = |r: f32, v: Vec3| receive_irradiance(e, l * r, &rx(n, v, Vec3::ZERO, (0.0, 0.5, 128.0), true)).x;
         let mirror = Vec3::new(0.5, 0.866, 0.0).normalize();
         let off = Vec3::new(0.0, 0.8, 0.6).normalize();
         assert!(spec(0.6, mirror) < spec(0.99, mirror));
@@ -191,9 +198,9 @@ mod tests {
                 for r in [0.0, 1e-6, 0.5, 2.0 / 3.0, 0.999_999, 1.0, 1.000_001] {
                     for v in [Vec3::Y, Vec3::new(1.0, 1e-6, 0.0).normalize(), Vec3::new(-1.0, 0.0, 0.0)] {
                         let d = Vec3::new(0.3, 0.9, 0.1).normalize() * r;
-                        let f = receiver_factor(d, n, v, c, di, si, sp, true);
+                        let f = receiver_factor(d, &rx(n, v, c, (di, si, sp), true));
                         assert!(f.is_finite() && f.min_element() >= 0.0, "SP {sp} r {r} v {v}: {f}");
-                        assert_eq!(receive_irradiance(Vec3::ZERO, d, n, v, c, di, si, sp, true), Vec3::ZERO);
+                        assert_eq!(receive_irradiance(Vec3::ZERO, d, &rx(n, v, c, (di, si, sp), true)), Vec3::ZERO);
                     }
                 }
             }

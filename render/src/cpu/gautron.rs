@@ -641,7 +641,6 @@ pub fn vpl_irradiance(vpl: &crate::cpu::knecht::Vpl, x: Vec3, n: Vec3, d_min: f3
 ///   b·R_b with R_u the central difference of E over n turned by ±ε_r about u (about t: n ∓
 ///   ε_r b; about b: n ± ε_r t, normalised), so that E(n') ≈ E + (n × n')·∇_r as the
 ///   hemisphere's ∇_r.
-#[allow(clippy::too_many_arguments)]
 pub fn vpl_record(
     vpls: &[crate::cpu::knecht::Vpl],
     visibility: &dyn Fn(usize) -> f32,

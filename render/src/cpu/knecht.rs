@@ -139,24 +139,30 @@ pub fn paraboloid_unproject(uv: Vec2) -> Vec3 {
     Vec3::new(p.x * (1.0 + z), p.y * (1.0 + z), z)
 }
 
+/// How [`ism_visible`] reads a VPL's imperfect shadow map: the map's size (texels), the
+/// eye's lift above the VPL, the depth bias (a fraction of the distance) and the receiver's
+/// normal offset (texels).
+#[derive(Clone, Copy, Debug)]
+pub struct IsmTest {
+    pub size: u32,
+    pub eye_offset: f32,
+    pub bias: f32,
+    pub normal_offset: f32,
+}
+
 /// The ISM shadow test of a receiver x with normal nx (twin of `ism_visibility` in
 /// `shaders/common/ism.wgsl`): x is moved along nx by `normal_offset` texels of the map at
 /// its distance from the eye (the eye is the VPL lifted by `eye_offset` along its normal; a
 /// paraboloid texel at cos θ spans 2 (1 + cos θ) / size radians), then its distance less
 /// `bias` × that distance is tested against `stored(tx, ty)`, the map's value at the texel
 /// it projects to. Points below the VPL's horizon are hidden.
-#[allow(clippy::too_many_arguments)]
 pub fn ism_visible(
     stored: impl Fn(u32, u32) -> f32,
-    vpl_position: Vec3,
-    vpl_normal: Vec3,
-    x: Vec3,
-    nx: Vec3,
-    eye_offset: f32,
-    size: u32,
-    bias: f32,
-    normal_offset: f32,
+    test: &IsmTest,
+    (vpl_position, vpl_normal): (Vec3, Vec3),
+    (x, nx): (Vec3, Vec3),
 ) -> bool {
+    let IsmTest { size, eye_offset, bias, normal_offset } = *test;
     let eye = vpl_position + vpl_normal * eye_offset;
     let w0 = x - eye;
     let d0 = w0.length();

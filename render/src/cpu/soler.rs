@@ -312,7 +312,7 @@ pub fn gather_glossy(
     gloss: Option<&crate::cpu::soler_glossy::Gloss>,
 ) -> (Vec3, Vec3) {
     let Some(rx) = level.at(x as i64, y as i64).filter(|t| t.valid()) else { return (Vec3::ZERO, Vec3::ZERO) };
-    gather_for(level, x, y, rx, cam, p, vis, gloss)
+    gather_for(level, (x, y), rx, cam, p, vis, gloss)
 }
 
 /// GI Lab's mix with Nguyen et al. (`shaders/soler/hcb_gather.wgsl`): the irradiance one
@@ -331,16 +331,14 @@ pub fn gather_at(
         (pixel.0 >> p.level).min(level.width.saturating_sub(1)),
         (pixel.1 >> p.level).min(level.height.saturating_sub(1)),
     );
-    gather_for(level, q.0, q.1, x, cam, p, vis, None).0
+    gather_for(level, q, x, cam, p, vis, None).0
 }
 
 /// The ring of texel (x, y) of `level` gathered at receiver `rx` (the texel itself, or a
 /// point under it): the irradiance and, with `gloss`, the glossy reflection.
-#[allow(clippy::too_many_arguments)]
 fn gather_for(
     level: &Level,
-    x: u32,
-    y: u32,
+    (x, y): (u32, u32),
     rx: &Texel,
     cam: &ScreenCamera,
     p: GatherParams,
@@ -351,7 +349,7 @@ fn gather_for(
         Some((g, bias_px, depth_bias)) => march_visible(g, a, rx.depth, b, s.depth, bias_px, depth_bias),
         None => true,
     };
-    gather_with(level, x, y, rx, cam, p, &march, gloss)
+    gather_with(level, (x, y), rx, cam, p, &march, gloss)
 }
 
 /// A visibility test between receiver texel a (the point `rx`) and sender texel b (`s`).
@@ -359,11 +357,9 @@ pub type VisibleFn<'a> = dyn Fn((i64, i64), &Texel, (i64, i64), &Texel) -> bool 
 
 /// The ring of texel (x, y) of `level` gathered at receiver `rx` with any visibility test
 /// (the voxel march, none, or exact ray casts in tests): irradiance and glossy reflection.
-#[allow(clippy::too_many_arguments)]
 pub fn gather_with(
     level: &Level,
-    x: u32,
-    y: u32,
+    (x, y): (u32, u32),
     rx: &Texel,
     cam: &ScreenCamera,
     p: GatherParams,

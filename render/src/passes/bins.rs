@@ -62,6 +62,16 @@ pub struct BinParams {
     pub mode: [u32; 4],
 }
 
+/// One splat of [`Bins::splat`]: the technique's bin and accumulate pipelines, its bind
+/// group 0, whether the splat adds to the last one's sums (`add`), and the target's size.
+#[derive(Clone, Copy)]
+pub struct SplatJob<'a> {
+    pub pipelines: (&'a wgpu::ComputePipeline, &'a wgpu::ComputePipeline),
+    pub group: &'a wgpu::BindGroup,
+    pub add: bool,
+    pub size: (u32, u32),
+}
+
 /// The bins of one splat: the mask, the items' rectangles and the two `BinParams`.
 pub struct Bins {
     label: &'static str,
@@ -144,21 +154,18 @@ impl Bins {
         )
     }
 
-    /// Records one splat: the mask cleared, then `bin` over every item the bins hold (64 per
-    /// workgroup) and `accumulate` over the `size` pixels (16 × 16 per workgroup), with
-    /// `group` as bind group 0 and [`Self::group`] as 1.
-    #[allow(clippy::too_many_arguments)]
+    /// Records one splat, a compute pass named `label`: the mask cleared, then the job's
+    /// `bin` pipeline over every item the bins hold (64 per workgroup) and its `accumulate`
+    /// over the `size` pixels (16 × 16 per workgroup), with its `group` as bind group 0 and
+    /// [`Self::group`] as 1.
     pub fn splat(
         &self,
         ctx: &GpuContext,
         enc: &mut wgpu::CommandEncoder,
-        label: &str,
-        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
-        (bin, accumulate): (&wgpu::ComputePipeline, &wgpu::ComputePipeline),
-        group: &wgpu::BindGroup,
-        add: bool,
-        size: (u32, u32),
+        (label, timestamp_writes): (&str, Option<wgpu::ComputePassTimestampWrites<'_>>),
+        job: &SplatJob,
     ) {
+        let SplatJob { pipelines: (bin, accumulate), group, add, size } = *job;
         let bins = self.group(&ctx.device, add);
         enc.clear_buffer(&self.mask, 0, None);
         let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(label), timestamp_writes });

@@ -14,6 +14,7 @@ use glam::Vec4;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::settings_group;
+use crate::timing::PassRec;
 
 settings_group! {
     /// Tone mapping (stage 7): Reinhard's global photographic operator.
@@ -67,6 +68,18 @@ pub struct ComposePass {
     black: wgpu::TextureView,
     pub hdr: wgpu::Texture,
     pub ldr: wgpu::Texture,
+}
+
+/// What stage 7's compose adds up: the surfaces' emission, the direct light, the indirect
+/// light and the near field (None: black), and the sky behind the scene (its parameters and
+/// image, the camera uniform for the rays, the G-buffer's normals for its coverage).
+#[derive(Clone, Copy)]
+pub struct ComposeInputs<'a> {
+    pub emission: &'a wgpu::TextureView,
+    pub direct: &'a wgpu::TextureView,
+    pub indirect: Option<&'a wgpu::TextureView>,
+    pub near_field: Option<&'a wgpu::TextureView>,
+    pub sky: (&'a super::sky::SkyBackground, &'a wgpu::Buffer, &'a wgpu::TextureView),
 }
 
 impl ComposePass {
@@ -210,19 +223,9 @@ impl ComposePass {
     /// is empty (`sky`: its parameters and image, `camera`: the camera uniform for the rays,
     /// `normal`: the G-buffer's coverage); final.ldr tone-mapped in the same pass unless
     /// automatic exposure has no previous L̄w yet (then `tonemap` does it after `luminance`).
-    #[allow(clippy::too_many_arguments)]
-    pub fn compose(
-        &mut self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<crate::timing::Slot<'_>>,
-        settings: &TonemapSettings,
-        emission: &wgpu::TextureView,
-        direct: &wgpu::TextureView,
-        indirect: Option<&wgpu::TextureView>,
-        near_field: Option<&wgpu::TextureView>,
-        (sky, camera, normal): (&super::sky::SkyBackground, &wgpu::Buffer, &wgpu::TextureView),
-    ) {
+    pub fn compose(&mut self, r: PassRec<'_, '_>, settings: &TonemapSettings, inputs: &ComposeInputs) {
+        let PassRec { ctx, enc: encoder, slot } = r;
+        let ComposeInputs { emission, direct, indirect, near_field, sky: (sky, camera, normal) } = *inputs;
         let mode = match (settings.auto_exposure, self.exposure_known) {
             (false, _) => 1.0,
             (true, true) => 2.0,
@@ -333,7 +336,6 @@ impl ComposePass {
 
     /// One compute pass with its own timestamps (a scope per pass: on lavapipe, timestamps
     /// of a scope spanning several compute passes were measured wrong).
-    #[allow(clippy::too_many_arguments)]
     fn dispatch(
         &self,
         encoder: &mut wgpu::CommandEncoder,

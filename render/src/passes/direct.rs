@@ -17,6 +17,7 @@ use super::shadow::LightSetup;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::settings_group;
+use crate::timing::PassRec;
 
 settings_group! {
     /// Direct light and its shadow maps (stage 2).
@@ -90,6 +91,19 @@ pub struct DirectPass {
     no_emitters: wgpu::Buffer,
     no_ism: wgpu::TextureView,
     no_exact: wgpu::TextureView,
+}
+
+/// What stage 2's direct light reads: the settings, the camera uniform, the G-buffer, the
+/// lights with their shadow maps, and the emitters' VPLs with their visibility when the scene
+/// has emitters (`passes::emitters`).
+#[derive(Clone, Copy)]
+pub struct DirectInputs<'a> {
+    pub settings: &'a DirectSettings,
+    pub camera: &'a wgpu::Buffer,
+    pub gbuffer: &'a GBufferViews,
+    pub lights: &'a LightSetup,
+    pub shadow_map: &'a wgpu::TextureView,
+    pub emitters: Option<&'a super::emitters::EmitterLight>,
 }
 
 impl DirectPass {
@@ -247,19 +261,10 @@ impl DirectPass {
         }
     }
 
-    #[allow(clippy::too_many_arguments)]
-    pub fn run(
-        &mut self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<crate::timing::Slot<'_>>,
-        settings: &DirectSettings,
-        camera: &wgpu::Buffer,
-        gbuffer: &GBufferViews,
-        lights: &LightSetup,
-        shadow_map: &wgpu::TextureView,
-        emitters: Option<&super::emitters::EmitterLight>,
-    ) {
+    /// Stage 2's direct light at every pixel of `inputs.gbuffer` (`direct.radiance`).
+    pub fn run(&mut self, r: PassRec<'_, '_>, inputs: &DirectInputs) {
+        let PassRec { ctx, enc: encoder, slot } = r;
+        let DirectInputs { settings, camera, gbuffer, lights, shadow_map, emitters } = *inputs;
         let device = &ctx.device;
         let none = super::reference::vpl_visibility::GatherVisibility::None;
         let vis = emitters.map_or(&none, |e| &e.visibility);
@@ -364,18 +369,16 @@ impl DirectPass {
     /// at an atlas of G-buffer tiles of `tile` texels, `per_row` to a row, tile k seen from
     /// `viewers[k]` (xyz; w = 0: an empty tile), into `out` (`RADIANCE_FORMAT`, the atlas's
     /// size): the hemispheres of Gautron et al.'s records (003, "Simple plane sampling").
-    #[allow(clippy::too_many_arguments)]
     pub fn shade_atlas(
         &self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<crate::timing::Slot<'_>>,
+        r: PassRec<'_, '_>,
         atlas: &GBufferViews,
         out: &wgpu::TextureView,
         size: (u32, u32),
         params: &wgpu::Buffer,
         viewers: &wgpu::Buffer,
     ) {
+        let PassRec { ctx, enc: encoder, slot } = r;
         let Some(group0) = &self.group0 else { return };
         let device = &ctx.device;
         let tv = wgpu::BindingResource::TextureView;

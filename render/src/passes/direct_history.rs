@@ -11,6 +11,7 @@ use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
 use crate::passes::{bind_group, create_target, view};
+use crate::timing::PassRec;
 
 /// The format of the history (the mean of many frames of half floats).
 const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -98,16 +99,14 @@ impl DirectHistory {
 
     /// Adds this frame's `direct.radiance` to the mean (restarting it when `fingerprint` or
     /// `settings` differ from the last frame's) and returns the mean's view.
-    #[allow(clippy::too_many_arguments)]
     pub fn run(
         &mut self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<crate::timing::Slot<'_>>,
+        r: PassRec<'_, '_>,
         radiance: &wgpu::TextureView,
         fingerprint: Vec<f32>,
         settings: String,
     ) -> wgpu::TextureView {
+        let PassRec { ctx, enc: encoder, slot } = r;
         if fingerprint != self.fingerprint || self.settings.as_ref() != Some(&settings) {
             self.fingerprint = fingerprint;
             self.settings = Some(settings);

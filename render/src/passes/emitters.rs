@@ -44,7 +44,8 @@ use crate::scene::emitters::{EmitterVpl, Emitters};
 use crate::scene::upload::GpuScene;
 use crate::scene::{Scene, SceneState};
 use crate::stages::FrameInputs;
-use crate::timing::GpuTimer;
+use crate::timing::PassRec;
+use crate::timing::{GpuTimer, Recorder};
 use crate::{settings_enum, settings_group};
 
 settings_enum! {
@@ -239,19 +240,17 @@ impl EmitterPass {
     }
 
     /// Stage 2: this frame's emitter VPLs and their visibility (None when the scene has no
-    /// emitter).
-    #[allow(clippy::too_many_arguments)]
+    /// emitter), for the scene at this instant (`scene`, its `state` and its GPU copy) in a
+    /// scene of bounding radius `radius`.
     pub fn run(
         &mut self,
         ctx: &GpuContext,
-        enc: &mut wgpu::CommandEncoder,
-        timer: &mut GpuTimer,
-        scene: &Scene,
-        state: &SceneState,
-        gpu_scene: &GpuScene,
+        r: &mut Recorder,
+        (scene, state, gpu_scene): (&Scene, &SceneState, &GpuScene),
         s: &LabSettings,
         radius: f32,
     ) -> Option<EmitterLight> {
+        let (enc, timer) = (&mut *r.enc, &mut *r.timer);
         let key = emitter_key(scene, state, s.emitters.two_sided);
         if key != self.key {
             self.emitters = Emitters::collect_sides(scene, state, s.emitters.two_sided);
@@ -276,7 +275,7 @@ impl EmitterPass {
         let eye_offset = s.ism.eye_offset * radius;
         let visibility = match s.emitters.visibility {
             EmitterVisibility::Imperfect => {
-                self.splat(ctx, enc, timer, gpu_scene, s, n, eye_offset, radius);
+                self.splat(ctx, &mut Recorder { enc, timer }, gpu_scene, s, n, radius);
                 let l = self.ism.layout_info;
                 GatherVisibility::Ism {
                     atlas: self.ism.shading_view(),
@@ -290,13 +289,13 @@ impl EmitterPass {
             EmitterVisibility::Exact => {
                 // The first bounce's shadow test reads ISMs.
                 if s.pipeline.uses_knecht_vpls() {
-                    self.splat(ctx, enc, timer, gpu_scene, s, n, eye_offset, radius);
+                    self.splat(ctx, &mut Recorder { enc, timer }, gpu_scene, s, n, radius);
                 }
                 let exact = self.exact.as_ref()?;
                 let clip = crate::stages::vpl_clip(radius, 0.0);
                 let list = &self.list;
                 timer.scope(ctx, enc, "emitters.shadow", |e, slot| {
-                    exact.run(ctx, e, slot, gpu_scene, state, list, n, VisibilityParams { clip })
+                    exact.run(PassRec { ctx, enc: e, slot }, gpu_scene, state, list, n, VisibilityParams { clip })
                 });
                 let l = exact.layout_info;
                 GatherVisibility::Exact {
@@ -317,18 +316,17 @@ impl EmitterPass {
     }
 
     /// Splats the point cloud into the ISMs of the `n` emitter VPLs and pulls-pushes them.
-    #[allow(clippy::too_many_arguments)]
     fn splat(
         &mut self,
         ctx: &GpuContext,
-        enc: &mut wgpu::CommandEncoder,
-        timer: &mut GpuTimer,
+        r: &mut Recorder,
         gpu_scene: &GpuScene,
         s: &LabSettings,
         n: u32,
-        eye_offset: f32,
         radius: f32,
     ) {
+        let (enc, timer) = (&mut *r.enc, &mut *r.timer);
+        let eye_offset = s.ism.eye_offset * radius;
         let extent = 2.0 * radius;
         let frame = IsmFrame { vpls: n, bounces: 1, eye_offset, extent };
         let job = self.ism.begin(ctx, &gpu_scene.instances, &self.list, &s.ism, frame);

@@ -221,18 +221,16 @@ impl GBufferPass {
         scene: &GpuScene,
         state: &SceneState,
     ) {
-        self.run_with(encoder, slot, true, true, camera_group, scene, state);
+        self.run_with(encoder, slot, (true, true), camera_group, scene, state);
     }
 
-    /// [`Self::run`] as one of several passes of a timing scope (`first` / `last` open and
-    /// close it).
-    #[allow(clippy::too_many_arguments)]
+    /// [`Self::run`] as one of several passes of a timing scope (`(first, last)`: whether
+    /// this pass opens and closes it).
     pub fn run_with(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         slot: Option<crate::timing::Slot<'_>>,
-        first: bool,
-        last: bool,
+        (first, last): (bool, bool),
         camera_group: &wgpu::BindGroup,
         scene: &GpuScene,
         state: &SceneState,

@@ -10,6 +10,7 @@ use crate::passes::direct_history::DirectHistory;
 use crate::passes::shadow::{gpu_light, setup_lights};
 use crate::renderer::Renderer;
 use crate::scene::SceneState;
+use crate::timing::PassRec;
 
 impl Renderer {
     /// The camera uniform of this frame (`passes::CameraUniform`), with the previous frame's
@@ -63,15 +64,21 @@ impl Renderer {
         let emitters = match self.stages.emitters.as_mut() {
             Some(pass) => {
                 let (scene, radius) = (&self.scene, self.bounds.radius());
-                pass.run(&ctx, enc, &mut self.timer, scene, state, gpu_scene, &self.settings, radius)
+                let mut r = crate::timing::Recorder { enc, timer: &mut self.timer };
+                pass.run(&ctx, &mut r, (scene, state, gpu_scene), &self.settings, radius)
             }
             None => None,
         };
-        let (direct, camera_buffer, gviews) = (&mut self.direct, &self.camera_buffer, &self.gbuffer.targets.views);
-        let shadow_view = &self.shadow.array_view;
-        self.timer.scope(&ctx, enc, "direct", |e, slot| {
-            direct.run(&ctx, e, slot, &ds, camera_buffer, gviews, &lights, shadow_view, emitters.as_ref())
-        });
+        let inputs = crate::passes::direct::DirectInputs {
+            settings: &ds,
+            camera: &self.camera_buffer,
+            gbuffer: &self.gbuffer.targets.views,
+            lights: &lights,
+            shadow_map: &self.shadow.array_view,
+            emitters: emitters.as_ref(),
+        };
+        let direct = &mut self.direct;
+        self.timer.pass(&ctx, enc, "direct", |r| direct.run(r, &inputs));
         let direct_view = crate::passes::view(&self.direct.radiance, "direct.radiance");
         let rotating_sky = self.rotating_sky();
         if rotating_sky == 0 {
@@ -92,9 +99,9 @@ impl Renderer {
         let sky = &self.scene.sky;
         key.extend([sky.color.x, sky.color.y, sky.color.z, sky.intensity, sky.rotation_deg]);
         let settings = format!("{:?}", self.settings);
-        let averaged = self
-            .timer
-            .scope(&ctx, enc, "direct.sky_history", |e, slot| history.run(&ctx, e, slot, &direct_view, key, settings));
+        let averaged = self.timer.scope(&ctx, enc, "direct.sky_history", |e, slot| {
+            history.run(PassRec { ctx: &ctx, enc: e, slot }, &direct_view, key, settings)
+        });
         history.register(&mut self.registry);
         averaged
     }

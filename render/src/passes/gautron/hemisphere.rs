@@ -18,6 +18,7 @@ use crate::passes::bind_group;
 use crate::passes::gbuffer::{self, GBuffer};
 use crate::scene::SceneState;
 use crate::scene::upload::GpuScene;
+use crate::timing::PassRec;
 
 /// The atlas, its pipelines and the texel table of one hemisphere resolution.
 pub struct HemispherePass {
@@ -193,20 +194,18 @@ impl HemispherePass {
     }
 
     /// Renders the round's hemispheres into the atlas (`args`: the indirect draws, one per
-    /// scene draw, written by the creation pass; `cameras`: the slots' cameras).
-    #[allow(clippy::too_many_arguments)]
+    /// scene draw, written by the creation pass; `camera`: the eye's uniform, `cameras`: the
+    /// slots' cameras).
     pub fn raster(
         &self,
-        ctx: &GpuContext,
-        enc: &mut wgpu::CommandEncoder,
-        slot: Option<crate::timing::Slot<'_>>,
+        r: PassRec<'_, '_>,
         scene: &GpuScene,
         state: &SceneState,
-        camera: &wgpu::Buffer,
-        cameras: &wgpu::Buffer,
+        (camera, cameras): (&wgpu::Buffer, &wgpu::Buffer),
         params: &wgpu::Buffer,
         args: &wgpu::Buffer,
     ) {
+        let PassRec { ctx, enc, slot } = r;
         let group = bind_group(
             &ctx.device,
             "gautron.hemisphere.cameras",
@@ -231,18 +230,16 @@ impl HemispherePass {
     }
 
     /// Reduces each new or refreshed record's tile to its terms (`gautron/reduce.wgsl`).
-    #[allow(clippy::too_many_arguments)]
     pub fn reduce(
         &self,
-        ctx: &GpuContext,
-        enc: &mut wgpu::CommandEncoder,
-        slot: Option<crate::timing::Slot<'_>>,
+        r: PassRec<'_, '_>,
         params: &wgpu::Buffer,
         state: &wgpu::Buffer,
         cameras: &wgpu::Buffer,
         records: &wgpu::Buffer,
         slots: u32,
     ) {
+        let PassRec { ctx, enc, slot } = r;
         let tv = wgpu::BindingResource::TextureView;
         let group = bind_group(
             &ctx.device,

@@ -15,6 +15,7 @@ use crate::gpu::bgl;
 use crate::passes::bins::{Bins, SplatMethod};
 use crate::passes::gbuffer::GBufferViews;
 use crate::passes::{bind_group, create_target, view};
+use crate::timing::PassRec;
 
 pub const ACCUM_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
@@ -186,23 +187,20 @@ impl SplatPass {
     /// Splats the records the creation's draw arguments `args` name (first … first + count)
     /// into the accumulators: from zero when `clear`, else added to the latest sums (Binned
     /// writes them into the other texture of each pair, which becomes the latest).
-    #[allow(clippy::too_many_arguments)]
+    /// `buffers`: the stage's uniform, the camera and the records.
     pub fn splat(
         &self,
-        ctx: &GpuContext,
-        enc: &mut wgpu::CommandEncoder,
-        slot: Option<crate::timing::Slot<'_>>,
-        method: SplatMethod,
-        clear: bool,
-        params: &wgpu::Buffer,
-        camera: &wgpu::Buffer,
-        records: &wgpu::Buffer,
+        r: PassRec<'_, '_>,
+        (method, clear): (SplatMethod, bool),
+        buffers: [&wgpu::Buffer; 3],
         g: &GBufferViews,
         args: &wgpu::Buffer,
     ) {
+        let [params, camera, records] = buffers;
+        let PassRec { ctx, enc, slot } = r;
         let tv = wgpu::BindingResource::TextureView;
         if method.on(ctx) == SplatMethod::Blend {
-            self.blend(ctx, enc, slot, clear, [params, camera, records], g, args);
+            self.blend(PassRec { ctx, enc, slot }, clear, [params, camera, records], g, args);
             return;
         }
         let (src, dst) = if clear { (1, 0) } else { (self.current.get(), 1 - self.current.get()) };
@@ -231,22 +229,26 @@ impl SplatPass {
         );
         let size = (self.accum[0].width(), self.accum[0].height());
         let timestamps = slot.and_then(|s| s.compute(true, true));
-        self.bins.splat(ctx, enc, "gautron.splat", timestamps, (&self.bin, &self.accumulate), &group, !clear, size);
+        let job = crate::passes::bins::SplatJob {
+            pipelines: (&self.bin, &self.accumulate),
+            group: &group,
+            add: !clear,
+            size,
+        };
+        self.bins.splat(ctx, enc, ("gautron.splat", timestamps), &job);
         self.current.set(dst);
     }
 
     /// Blend: the quads into the latest sums (cleared first when `clear`).
-    #[allow(clippy::too_many_arguments)]
     fn blend(
         &self,
-        ctx: &GpuContext,
-        enc: &mut wgpu::CommandEncoder,
-        slot: Option<crate::timing::Slot<'_>>,
+        r: PassRec<'_, '_>,
         clear: bool,
         [params, camera, records]: [&wgpu::Buffer; 3],
         g: &GBufferViews,
         args: &wgpu::Buffer,
     ) {
+        let PassRec { ctx, enc, slot } = r;
         if clear {
             self.current.set(0);
         }
@@ -284,7 +286,6 @@ impl SplatPass {
 
     /// E = RGB / A and the reflected indirect light (`params`: the stage's uniform, whose
     /// rules.y chooses the receiver; `camera`: the eye).
-    #[allow(clippy::too_many_arguments)]
     pub fn resolve(
         &self,
         ctx: &GpuContext,

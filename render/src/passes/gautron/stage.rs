@@ -25,6 +25,7 @@ use crate::passes::{bind_group, buffer, create_target, view};
 use crate::pipeline::Temporal;
 use crate::stages::{FrameInputs, Visibility, VplSet};
 use crate::timing::GpuTimer;
+use crate::timing::PassRec;
 
 /// Bytes between the rounds' uniforms (dynamic offsets).
 const ROUND_STRIDE: u64 = 256;
@@ -363,32 +364,34 @@ impl GautronStage {
         let ctx = f.ctx;
         if let (Some((vpls, vis)), Some(pass)) = (light, &self.vpl_records) {
             let buffers = (&self.params, &self.state, &self.cameras, &self.records);
-            pass.run(ctx, e, slot, buffers, (vpls, vis), f.radius, slots);
+            pass.run(PassRec { ctx, enc: e, slot }, buffers, (vpls, vis), f.radius, slots);
             return;
         }
         let hemisphere = &self.hemisphere;
         hemisphere.raster(
-            ctx,
-            e,
-            slot,
+            PassRec { ctx, enc: e, slot },
             f.gpu_scene,
             f.state,
-            f.camera_buffer,
-            &self.cameras,
+            (f.camera_buffer, &self.cameras),
             &self.params,
             &self.raster_args,
         );
         f.direct.shade_atlas(
-            ctx,
-            e,
-            None,
+            PassRec { ctx, enc: e, slot: None },
             &hemisphere.atlas.views,
             hemisphere.radiance_view(),
             hemisphere.size,
             &self.atlas_params,
             &self.viewers,
         );
-        hemisphere.reduce(ctx, e, slot, &self.params, &self.state, &self.cameras, &self.records, slots);
+        hemisphere.reduce(
+            PassRec { ctx, enc: e, slot },
+            &self.params,
+            &self.state,
+            &self.cameras,
+            &self.records,
+            slots,
+        );
     }
 
     /// Stages 5–7 for the frame: returns the reflected indirect light (`gautron.indirect`).
@@ -455,7 +458,13 @@ impl GautronStage {
                 pass.set_group(1, g1, &[]);
                 pass.dispatch_workgroups(1, 1, 1);
             }
-            splat.splat(ctx, e, slot, s.splat, true, &self.params, camera, records, f.gbuffer, &self.splat_args)
+            splat.splat(
+                PassRec { ctx, enc: e, slot },
+                (s.splat, true),
+                [&self.params, camera, records],
+                f.gbuffer,
+                &self.splat_args,
+            )
         });
         if let Some(snap) = &mut self.snapshots {
             snap.taken = 0;
@@ -504,7 +513,13 @@ impl GautronStage {
                 }
             });
             timer.scope(ctx, enc, "gautron.splat", |e, slot| {
-                splat.splat(ctx, e, slot, s.splat, false, &self.params, camera, records, f.gbuffer, &self.splat_args)
+                splat.splat(
+                    PassRec { ctx, enc: e, slot },
+                    (s.splat, false),
+                    [&self.params, camera, records],
+                    f.gbuffer,
+                    &self.splat_args,
+                )
             });
             if let Some(snap) = &mut self.snapshots {
                 snap.take(enc, records, &self.state, k + 1);

@@ -14,7 +14,7 @@ use crate::gpu::GpuContext;
 use crate::gpu::bgl;
 use crate::passes::bind_group;
 use crate::stages::{Visibility, VplSet};
-use crate::timing::Slot;
+use crate::timing::PassRec;
 
 /// Uniform of the VPL-lit records; WGSL twin: `VplRecordParams` in
 /// `shaders/gautron/vpl_records.wgsl`.
@@ -88,17 +88,15 @@ impl VplRecordPass {
     }
 
     /// Lights the records of the round's slots (`cameras` says which) with `light`.
-    #[allow(clippy::too_many_arguments)]
     pub fn run(
         &self,
-        ctx: &GpuContext,
-        enc: &mut wgpu::CommandEncoder,
-        slot: Option<Slot<'_>>,
+        r: PassRec<'_, '_>,
         (gautron_params, state, cameras, records): (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
         (vpls, vis): (&VplSet, &Visibility),
         radius: f32,
         slots: u32,
     ) {
+        let PassRec { ctx, enc, slot } = r;
         let (code, ism, exact, cols, size, shade) = vis.parts(&self.no_ism, &self.no_exact);
         let d_min = vpls.min_distance;
         let p = VplRecordParams {

@@ -8,7 +8,7 @@ use super::{GpuHcbSample, HcbFrame, HcbLevel, HcbParams, MAX_LEVELS, STRIDE};
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
-use crate::timing::Slot;
+use crate::timing::PassRec;
 
 /// The cache's textures the HCB build writes (§5.2): with them, level 0 is the supplementary
 /// G-buffer (n^w = ±1 from `weight_sum`'s Σw), `incomplete` marks the incomplete texels and
@@ -298,17 +298,15 @@ impl HcbPass {
     /// Without `cache` the sample counter and `hcb.samples` start empty; with it (§5.2) the
     /// base is the supplementary G-buffer and the new samples are appended to the cached
     /// ones the cache pass put in the list (and `hcb.samples`).
-    #[allow(clippy::too_many_arguments)]
     pub fn run(
         &self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<Slot<'_>>,
+        r: PassRec<'_, '_>,
         g_position: &wgpu::TextureView,
         g_normal: &wgpu::TextureView,
         f: HcbFrame,
         cache: Option<CacheViews<'_>>,
     ) {
+        let PassRec { ctx, enc: encoder, slot } = r;
         let n = self.levels.len() as u32;
         let cached = cache.is_some() as u32;
         let spread = f.thresholds.spread_incomplete as u32;

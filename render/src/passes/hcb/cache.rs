@@ -16,7 +16,7 @@ use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
 use crate::passes::hcb::{COUNTER_BYTES, CacheViews, GpuHcbSample, HcbPass};
-use crate::timing::Slot;
+use crate::timing::PassRec;
 
 /// Uniform of the cache update; WGSL twin: `CacheParams` in `shaders/hcb/common.wgsl`.
 #[repr(C)]
@@ -331,17 +331,15 @@ impl HcbCachePass {
     /// invalid and surplus ones, and appends the survivors (reprojected, their recompute
     /// counter advanced) to `hcb`'s emptied list; marks them in `hcb.samples`, `hcb.cache`
     /// and `hcb.recompute_group`.
-    #[allow(clippy::too_many_arguments)]
     pub fn update(
         &self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<Slot<'_>>,
+        r: PassRec<'_, '_>,
         camera: &wgpu::Buffer,
         g: (&wgpu::TextureView, &wgpu::TextureView),
         hcb: &HcbPass,
         f: CacheFrame,
     ) {
+        let PassRec { ctx, enc: encoder, slot } = r;
         let p = CacheParams {
             limits: Vec4::new(
                 f.max_distance,

@@ -7,7 +7,7 @@ use glam::Vec4;
 use super::build::HcbPass;
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
-use crate::timing::Slot;
+use crate::timing::PassRec;
 
 /// Uniform of the gather at the samples; WGSL twin: `HcbGatherParams` in
 /// `shaders/hcb/gather.wgsl`.
@@ -114,21 +114,18 @@ impl HcbGatherPass {
         }
     }
 
-    /// Gathers at the samples `set` of `hcb`'s list from `vpl_count` VPLs with `vis`.
-    #[allow(clippy::too_many_arguments)]
+    /// Gathers at the samples `set` of `hcb`'s list from stage 3's VPLs with stage 4's
+    /// visibility.
     pub fn run(
         &self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<Slot<'_>>,
+        r: PassRec<'_, '_>,
         hcb: &HcbPass,
-        vpls: &wgpu::Buffer,
-        vpl_count: u32,
-        d_min: f32,
-        near_cut: f32,
-        vis: &crate::passes::reference::vpl_visibility::GatherVisibility,
+        (set_of_vpls, vis): (&crate::stages::VplSet, &crate::passes::reference::vpl_visibility::GatherVisibility),
         set: GatherSet<'_>,
     ) {
+        let PassRec { ctx, enc: encoder, slot } = r;
+        let (vpls, vpl_count) = (&set_of_vpls.list, set_of_vpls.count);
+        let (d_min, near_cut) = (set_of_vpls.min_distance, set_of_vpls.near_cut);
         let (code, ism, exact, cols, size, shade) = vis.parts(&self.no_ism, &self.no_exact);
         let (mode, queue) = match set {
             GatherSet::All => (0, &self.no_queue),

@@ -9,6 +9,7 @@ use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
 use crate::passes::bins::{Bins, SplatMethod};
+use crate::timing::PassRec;
 use crate::timing::Slot;
 
 /// The G-buffer's position, normal, albedo and material views, as the splat and Eq. 11 read them.
@@ -289,20 +290,24 @@ impl HcbSplatPass {
 
     /// Splats the samples of `list` (instance count from `draw_args`, a `DrawIndirectArgs`
     /// with 6 vertices) over the G-buffer and normalises.
-    #[allow(clippy::too_many_arguments)]
     pub fn run(
         &self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<Slot<'_>>,
+        r: PassRec<'_, '_>,
         camera: &wgpu::Buffer,
         g: GViews<'_>,
         samples: (&wgpu::Buffer, &wgpu::Buffer),
         draw_args: &wgpu::Buffer,
-        f: HcbFrame,
-        method: SplatMethod,
+        (f, method): (HcbFrame, SplatMethod),
     ) {
-        self.splat(ctx, encoder, slot, camera, g, samples, (draw_args, 0), false, false, f, method);
+        let PassRec { ctx, enc: encoder, slot } = r;
+        self.splat(
+            PassRec { ctx, enc: encoder, slot },
+            camera,
+            g,
+            (samples, (draw_args, 0)),
+            (false, false),
+            (f, method),
+        );
         self.normalize(ctx, encoder, slot, g);
     }
 
@@ -311,22 +316,18 @@ impl HcbSplatPass {
     /// every sample, 32 for the new ones): all of them onto zero sums, or with `new_only` the
     /// ones after the cached samples (counter word 1, §5.2) onto what the cached ones left.
     /// `slot`'s scope begins here and ends here with `ends_scope`, else with
-    /// [`Self::normalize`].
-    #[allow(clippy::too_many_arguments)]
+    /// [`Self::normalize`]. `f` and `method`: the frame's HCB parameters and the splatting's
+    /// implementation.
     pub fn splat(
         &self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<Slot<'_>>,
+        r: PassRec<'_, '_>,
         camera: &wgpu::Buffer,
         g: GViews<'_>,
-        samples: (&wgpu::Buffer, &wgpu::Buffer),
-        draw_args: (&wgpu::Buffer, u64),
-        new_only: bool,
-        ends_scope: bool,
-        f: HcbFrame,
-        method: SplatMethod,
+        (samples, draw_args): ((&wgpu::Buffer, &wgpu::Buffer), (&wgpu::Buffer, u64)),
+        (new_only, ends_scope): (bool, bool),
+        (f, method): (HcbFrame, SplatMethod),
     ) {
+        let PassRec { ctx, enc: encoder, slot } = r;
         let params = &self.params[new_only as usize];
         ctx.queue.write_buffer(params, 0, bytemuck::bytes_of(&f.params([new_only as u32, 0, 0, 0])));
         let tv = wgpu::BindingResource::TextureView;
@@ -374,7 +375,8 @@ impl HcbSplatPass {
         let timestamps = slot.as_ref().and_then(|s| s.compute(true, ends_scope && !remainder));
         let pipelines = (&self.bin, &self.accumulate);
         let size = (self.width, self.height);
-        self.bins.splat(ctx, encoder, "hcb.splat", timestamps, pipelines, &binned, new_only, size);
+        let job = crate::passes::bins::SplatJob { pipelines, group: &binned, add: new_only, size };
+        self.bins.splat(ctx, encoder, ("hcb.splat", timestamps), &job);
         self.current.set(dst);
         if remainder {
             let timestamps = slot.as_ref().and_then(|s| s.render(false, ends_scope));

@@ -12,6 +12,7 @@ use crate::passes::hcb::{GatherSet, GpuHcbSample, HcbFrame, HcbGatherPass, HcbPa
 use crate::pipeline::Temporal;
 use crate::stages::{FrameInputs, Visibility, VplSet};
 use crate::timing::GpuTimer;
+use crate::timing::PassRec;
 
 /// The HCB's passes: levels, masks and samples; gathering; splatting; the cache.
 pub struct HcbStage {
@@ -132,9 +133,9 @@ impl HcbStage {
         (vpls, vis): (&VplSet, &Visibility),
         set: GatherSet<'_>,
     ) {
-        let (ctx, list) = (f.ctx, &vpls.list);
+        let ctx = f.ctx;
         timer.scope(ctx, enc, scope, |e, slot| {
-            self.gather.run(ctx, e, slot, &self.build, list, vpls.count, vpls.min_distance, vpls.near_cut, vis, set)
+            self.gather.run(PassRec { ctx, enc: e, slot }, &self.build, (vpls, vis), set)
         });
     }
 
@@ -160,7 +161,7 @@ impl HcbStage {
         }
         let Some(c) = &self.cache else {
             let build = &self.build;
-            timer.scope(ctx, enc, "hcb.build", |e, slot| build.run(ctx, e, slot, &g.position, &g.normal, hf, None));
+            timer.pass(ctx, enc, "hcb.build", |r| build.run(r, &g.position, &g.normal, hf, None));
             return;
         };
         let s = &f.settings.hcb;
@@ -173,19 +174,19 @@ impl HcbStage {
         let (camera, g3) = (f.camera_buffer, (&g.position, &g.normal, &g.albedo, &g.material));
         let samples = (&self.build.list, &self.build.counter);
         timer.scope(ctx, enc, "hcb.cache.update", |e, slot| {
-            c.update(ctx, e, slot, camera, (&g.position, &g.normal), &self.build, cf)
+            c.update(PassRec { ctx, enc: e, slot }, camera, (&g.position, &g.normal), &self.build, cf)
         });
         self.run_gather(f, enc, timer, "hcb.cache.recompute", light, GatherSet::Recompute(&c.queue));
         let (splat, args) = (&self.splat, &self.gather.args);
         timer.scope(ctx, enc, "hcb.cache.splat", |e, slot| {
-            splat.splat(ctx, e, slot, camera, g3, samples, (args, 0), false, true, hf, s.splat)
+            splat.splat(PassRec { ctx, enc: e, slot }, camera, g3, (samples, (args, 0)), (false, true), (hf, s.splat))
         });
         let weight_sum = self.splat.weight_sum_view();
         let views = c.views();
         let build = &self.build;
         timer.scope(ctx, enc, "hcb.build", |e, slot| {
             let io = cache_views(&weight_sum, &views);
-            build.run(ctx, e, slot, &g.position, &g.normal, hf, Some(io))
+            build.run(PassRec { ctx, enc: e, slot }, &g.position, &g.normal, hf, Some(io))
         });
     }
 
@@ -207,10 +208,17 @@ impl HcbStage {
         let (splat, args, method) = (&self.splat, &self.gather.args, f.settings.hcb.splat);
         timer.scope(ctx, enc, "hcb.splat", |e, slot| {
             if self.cache.is_some() {
-                splat.splat(ctx, e, slot, camera, g3, samples, (args, 32), true, false, hf, method);
+                splat.splat(
+                    PassRec { ctx, enc: e, slot },
+                    camera,
+                    g3,
+                    (samples, (args, 32)),
+                    (true, false),
+                    (hf, method),
+                );
                 splat.normalize(ctx, e, slot, g3);
             } else {
-                splat.run(ctx, e, slot, camera, g3, samples, args, hf, method);
+                splat.run(PassRec { ctx, enc: e, slot }, camera, g3, samples, args, (hf, method));
             }
         });
         crate::passes::view(&self.splat.indirect, "hcb.indirect")
@@ -221,7 +229,7 @@ impl HcbStage {
     pub fn build_only(&self, f: &FrameInputs, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) {
         let (ctx, g, hf) = (f.ctx, f.gbuffer, Self::frame(f));
         let build = &self.build;
-        timer.scope(ctx, enc, "hcb.build", |e, slot| build.run(ctx, e, slot, &g.position, &g.normal, hf, None));
+        timer.pass(ctx, enc, "hcb.build", |r| build.run(r, &g.position, &g.normal, hf, None));
     }
 
     /// The buffers another gather fills at the samples: the list, its counter and the
@@ -242,7 +250,7 @@ impl HcbStage {
         let (camera, g3) = (f.camera_buffer, (&g.position, &g.normal, &g.albedo, &g.material));
         let samples = (&self.build.list, &self.build.counter);
         let (splat, args, method) = (&self.splat, &self.gather.args, f.settings.hcb.splat);
-        timer.scope(ctx, enc, "hcb.splat", |e, slot| splat.run(ctx, e, slot, camera, g3, samples, args, hf, method));
+        timer.pass(ctx, enc, "hcb.splat", |r| splat.run(r, camera, g3, samples, args, (hf, method)));
         crate::passes::view(&self.splat.indirect, "hcb.indirect")
     }
 

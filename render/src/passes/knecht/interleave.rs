@@ -21,6 +21,7 @@ use crate::gpu::bgl;
 use crate::passes::gbuffer::{ALBEDO_FORMAT, GBufferViews, MATERIAL_FORMAT, NORMAL_FORMAT, POSITION_FORMAT};
 use crate::passes::reference::vpl_visibility::{GatherVisibility, no_visibility_atlases};
 use crate::settings_group;
+use crate::timing::PassRec;
 
 settings_group! {
     /// Interleaved sampling and the geometry-aware filter (stages 5–6; Knecht 002 §3.4.1).
@@ -558,18 +559,16 @@ impl InterleavePass {
     /// `src` is `indirect.merged`), which the filter averages apart and reflects with each
     /// pixel's colour (`interleave.demodulate`); None: the thesis' filter of `src` (also when
     /// `src` is a merged history, which holds no irradiance).
-    #[allow(clippy::too_many_arguments)]
     pub fn filter(
         &self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<crate::timing::Slot<'_>>,
+        r: PassRec<'_, '_>,
         s: &InterleaveSettings,
         depth_range: f32,
         src: &wgpu::TextureView,
         g: &GBufferViews,
         irradiance: Option<&wgpu::TextureView>,
     ) {
+        let PassRec { ctx, enc: encoder, slot } = r;
         let n = self.n.max(1);
         let fp = FilterParams {
             n: [n, irradiance.is_some() as u32, 0, 0],

@@ -20,6 +20,7 @@ use crate::gpu::GpuContext;
 use crate::gpu::bgl;
 use crate::pipeline::VplVisibility;
 use crate::scene::{Scene, SceneState};
+use crate::timing::PassRec;
 use crate::timing::Slot;
 use crate::{settings_enum, settings_group};
 
@@ -535,7 +536,7 @@ impl IsmPass {
         extent: f32,
     ) {
         let all = self.layout_info.cols * self.layout_info.rows;
-        self.finish_maps(ctx, encoder, slot, job, s, extent, 0..all, 0);
+        self.finish_maps(PassRec { ctx, enc: encoder, slot }, job, s, extent, 0..all, 0);
     }
 
     /// [`Self::finish`] over the rows of the atlas that hold maps `maps` (issue #38: each extra
@@ -543,18 +544,16 @@ impl IsmPass {
     /// atlas again). Maps are independent (pull and push stay inside a map), so a row done
     /// twice comes out the same. `call` (0 … MAX_BOUNCES) picks this call's uniform slots: every
     /// call of a frame needs its own, as all are written before the submission.
-    #[allow(clippy::too_many_arguments)]
     pub fn finish_maps(
         &self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<Slot<'_>>,
+        r: PassRec<'_, '_>,
         job: &IsmJob,
         s: &IsmSettings,
         extent: f32,
         maps: std::ops::Range<u32>,
         call: u32,
     ) {
+        let PassRec { ctx, enc: encoder, slot } = r;
         let l = self.layout_info;
         let rows = (maps.start / l.cols).min(l.rows)..maps.end.div_ceil(l.cols).min(l.rows);
         if rows.is_empty() {

@@ -19,6 +19,7 @@ use crate::scene::upload::GpuScene;
 use crate::scene::{Scene, SceneState};
 use crate::stages::{FrameInputs, Visibility, VplSet, vpl_clip};
 use crate::timing::GpuTimer;
+use crate::timing::PassRec;
 
 /// The passes of importance-warped VPLs and their visibility.
 pub struct KnechtVpls {
@@ -184,7 +185,8 @@ impl KnechtVpls {
             self.vpl.albedo_mip = s.vpl.albedo_mip;
             self.vpl.importance_bias = s.vpl.importance_bias;
             let (scene, state, lights) = (f.gpu_scene, f.state, &f.lights);
-            self.vpl.run(ctx, enc, timer, scene, state, lights, &jobs, halton_first, s.direct.intensity_scale);
+            self.vpl.write_params(ctx, lights, &jobs, halton_first, s.direct.intensity_scale);
+            self.vpl.run(ctx, &mut crate::timing::Recorder { enc, timer }, scene, state, &jobs);
         }
         let bounces = s.vpl.bounces.clamp(1, MAX_BOUNCES);
         let n_vpls = s.vpl.count.min(self.vpl.capacity / bounces);
@@ -245,7 +247,7 @@ impl KnechtVpls {
                     if pulled && matches!(make, Bounces::PointCloud(..)) {
                         let maps = (b - 1) * n_vpls..b * n_vpls;
                         timer.scope(ctx, enc, &format!("ism.pull_push.{b}"), |e, slot| {
-                            ism.finish_maps(ctx, e, slot, job, &s.ism, extent, maps, b)
+                            ism.finish_maps(PassRec { ctx, enc: e, slot }, job, &s.ism, extent, maps, b)
                         });
                         self.pulled_maps = b * n_vpls;
                     }
@@ -295,7 +297,7 @@ impl KnechtVpls {
                 // The maps the bounces' shadow tests left (all of them without bounces).
                 let maps = self.pulled_maps..vpls.count.max(self.pulled_maps);
                 timer.scope(ctx, enc, "ism.pull_push", |e, slot| {
-                    ism.finish_maps(ctx, e, slot, job, &s.ism, extent, maps, 0)
+                    ism.finish_maps(PassRec { ctx, enc: e, slot }, job, &s.ism, extent, maps, 0)
                 });
                 let l = self.ism.layout_info;
                 Visibility::Ism {

@@ -25,6 +25,7 @@ use crate::gpu::GpuContext;
 use crate::gpu::bgl;
 use crate::passes::gbuffer::{GBufferViews, NORMAL_FORMAT};
 use crate::settings_group;
+use crate::timing::PassRec;
 
 crate::settings_enum! {
     /// The order of the geometry-aware filter (stage 6) and the confidence merge (stage 7)
@@ -259,18 +260,16 @@ impl TemporalPass {
     /// demodulated filter's `indirect.filtered_irradiance`, the HCB's `hcb.irradiance`) to
     /// merge demodulated, None for the thesis' merge of the reflected light. A switch between
     /// the two forgets the history.
-    #[allow(clippy::too_many_arguments)]
     pub fn run(
         &mut self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<crate::timing::Slot<'_>>,
+        r: PassRec<'_, '_>,
         s: &TemporalSettings,
         depth_range: f32,
         current: &wgpu::TextureView,
         g: &GBufferViews,
         irradiance: Option<&wgpu::TextureView>,
     ) {
+        let PassRec { ctx, enc: encoder, slot } = r;
         let demodulate = irradiance.is_some();
         if demodulate != self.split_written {
             // The other kind of history: this frame starts afresh.

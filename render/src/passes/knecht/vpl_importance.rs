@@ -395,28 +395,24 @@ impl VplImportancePass {
         );
     }
 
-    /// The light G-buffers, importance pyramids and VPLs of `jobs` (one per light view).
-    #[allow(clippy::too_many_arguments)]
+    /// The light G-buffers, importance pyramids and VPLs of `jobs` (one per light view), after
+    /// [`Self::write_params`] for the same jobs.
     pub fn run(
         &mut self,
         ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        timer: &mut crate::timing::GpuTimer,
+        r: &mut crate::timing::Recorder,
         scene: &GpuScene,
         state: &SceneState,
-        lights: &[GpuLight],
         jobs: &[ViewJob],
-        halton_first: u32,
-        flux_scale: f32,
     ) {
         if jobs.is_empty() || jobs.len() > self.views.len() {
             return;
         }
-        self.write_params(ctx, lights, jobs, halton_first, flux_scale);
+        let (encoder, timer) = (&mut *r.enc, &mut *r.timer);
         let views = &self.views;
         timer.scope(ctx, encoder, "vpl.light_gbuffer", |e, slot| {
             for (k, v) in views.iter().take(jobs.len()).enumerate() {
-                v.gbuffer.run_with(e, slot, k == 0, k + 1 == jobs.len(), &v.group, scene, state);
+                v.gbuffer.run_with(e, slot, (k == 0, k + 1 == jobs.len()), &v.group, scene, state);
             }
         });
         timer.scope(ctx, encoder, "vpl.importance", |e, slot| self.pyramid(ctx, e, slot, jobs.len(), true));
@@ -432,6 +428,10 @@ impl VplImportancePass {
         halton_first: u32,
         flux_scale: f32,
     ) {
+        // More views than the pass holds: nothing is written (`run` draws nothing then).
+        if jobs.len() > self.views.len() {
+            return;
+        }
         let fs = self.size as f32;
         if lights.len() > self.light_capacity {
             (self.lights, self.light_capacity) = Self::light_buffer(&ctx.device, lights.len().next_power_of_two());

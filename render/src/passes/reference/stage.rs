@@ -25,6 +25,7 @@ use crate::scene::emitters::Emitters;
 use crate::scene::upload::GpuScene;
 use crate::stages::{FrameInputs, Visibility, VplSet, vpl_clip};
 use crate::timing::GpuTimer;
+use crate::timing::PassRec;
 
 /// The exact-VPL reference's passes and its progress.
 pub struct ReferenceVpls {
@@ -121,10 +122,10 @@ impl ReferenceVpls {
         let (gpu_scene, state) = (f.gpu_scene, f.state);
         let sample = &mut self.sample;
         timer.scope(ctx, enc, "vpl.light_gbuffer", |e, slot| {
-            sample.render_view(ctx, e, slot, gpu_scene, state, &batch.view, jitter)
+            sample.render_view(PassRec { ctx, enc: e, slot }, gpu_scene, state, &batch.view, jitter)
         });
         timer.scope(ctx, enc, "vpl.sample", |e, slot| {
-            sample.sample(ctx, e, slot, &lights, batch, n, flux_scale, [rs.seed, k, k / v_count])
+            sample.sample(PassRec { ctx, enc: e, slot }, &lights, batch, n, flux_scale, [rs.seed, k, k / v_count])
         });
         Some(VplSet {
             list: self.sample.vpls.clone(),
@@ -180,7 +181,7 @@ impl ReferenceVpls {
         };
         let (gather, atlas) = (&self.gather, &self.visibility.atlas_view);
         timer.scope(ctx, enc, "indirect.gather", |e, slot| {
-            gather.run(ctx, e, slot, f.camera_buffer, f.gbuffer, &vpls.list, atlas, params)
+            gather.run(PassRec { ctx, enc: e, slot }, f.camera_buffer, f.gbuffer, &vpls.list, atlas, params)
         });
         self.batches += 1;
         self.average()

@@ -24,6 +24,7 @@ use crate::passes::shadow::{GpuLight, LightView};
 use crate::scene::SceneState;
 use crate::scene::upload::GpuScene;
 use crate::settings_group;
+use crate::timing::PassRec;
 
 settings_group! {
     /// Exact-VPL reference (issue #3): many VPLs, each with an exact visibility map rendered
@@ -196,17 +197,15 @@ impl VplSamplePass {
     }
 
     /// Renders the light G-buffer of `view`, its projection shifted by `jitter` texels.
-    #[allow(clippy::too_many_arguments)]
     pub fn render_view(
         &self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<crate::timing::Slot<'_>>,
+        r: PassRec<'_, '_>,
         scene: &GpuScene,
         state: &SceneState,
         view: &LightView,
         jitter: (f32, f32),
     ) {
+        let PassRec { ctx, enc: encoder, slot } = r;
         let size = self.size as f32;
         let v = view;
         let jitter_m = Mat4::from_translation(Vec3::new(2.0 * jitter.0 / size, -2.0 * jitter.1 / size, 0.0));
@@ -230,18 +229,16 @@ impl VplSamplePass {
     /// multiplied by `flux_scale` (R² · V / N × intensity scale). `seed` is (the setting, the
     /// batch index, the batch index within this view): VPL i of the view's b-th batch is point
     /// b·N + i of the seed's rotated Halton set ([`crate::cpu::knecht::reference_uv`]).
-    #[allow(clippy::too_many_arguments)]
     pub fn sample(
         &mut self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<crate::timing::Slot<'_>>,
+        r: PassRec<'_, '_>,
         lights: &[GpuLight],
         batch: BatchView,
         count: u32,
         flux_scale: f32,
         seed: [u32; 3],
     ) {
+        let PassRec { ctx, enc: encoder, slot } = r;
         let size = self.size as f32;
         let v = batch.view;
         if lights.len() > self.light_capacity {

@@ -11,6 +11,7 @@ use glam::Vec4;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::passes::gbuffer::GBufferViews;
+use crate::timing::PassRec;
 
 pub const INDIRECT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
@@ -118,18 +119,16 @@ impl VplGatherPass {
     }
 
     /// Gathers one batch and folds it into the average with weight `params.batch.w`.
-    #[allow(clippy::too_many_arguments)]
     pub fn run(
         &self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<crate::timing::Slot<'_>>,
+        r: PassRec<'_, '_>,
         camera: &wgpu::Buffer,
         gbuffer: &GBufferViews,
         vpl_list: &wgpu::Buffer,
         atlas: &wgpu::TextureView,
         params: GatherParams,
     ) {
+        let PassRec { ctx, enc: encoder, slot } = r;
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         let raw = crate::passes::view(&self.raw, "indirect.raw");
         let accum = crate::passes::view(&self.accum, "indirect.accum");

@@ -18,6 +18,7 @@ use crate::scene::SceneState;
 use crate::scene::upload::GpuScene;
 use crate::stages::{FrameInputs, VplSet};
 use crate::timing::GpuTimer;
+use crate::timing::PassRec;
 
 /// Faces per VPL (`VPL_FACES` in `shaders/common/vpl.wgsl`).
 pub const FACES: u32 = 5;
@@ -176,18 +177,16 @@ impl VplVisibilityPass {
     }
 
     /// Renders the five faces of each of the first `vpls` VPLs of `vpl_list`.
-    #[allow(clippy::too_many_arguments)]
     pub fn run(
         &self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<crate::timing::Slot<'_>>,
+        r: PassRec<'_, '_>,
         scene: &GpuScene,
         state: &SceneState,
         vpl_list: &wgpu::Buffer,
         vpls: u32,
         params: VisibilityParams,
     ) {
+        let PassRec { ctx, enc: encoder, slot } = r;
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("vpl.shadow.inputs"),
@@ -240,7 +239,7 @@ impl VplVisibilityPass {
     ) -> GatherVisibility {
         let (ctx, scene, state) = (f.ctx, f.gpu_scene, f.state);
         timer.scope(ctx, enc, "vpl.shadow", |e, slot| {
-            self.run(ctx, e, slot, scene, state, &vpls.list, vpls.count, VisibilityParams { clip })
+            self.run(PassRec { ctx, enc: e, slot }, scene, state, &vpls.list, vpls.count, VisibilityParams { clip })
         });
         let l = self.layout_info;
         GatherVisibility::Exact { atlas: self.atlas_view.clone(), cols: l.cols, size: l.size, clip: clip.truncate() }

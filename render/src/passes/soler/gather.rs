@@ -7,7 +7,6 @@ use super::STRIDE;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
-use crate::timing::Slot;
 
 /// Rust twin of `GatherParams` in `shaders/soler/gather.wgsl`.
 #[repr(C)]
@@ -35,6 +34,7 @@ pub struct GatherParams {
 }
 
 use super::MAX_GATHERED;
+use crate::timing::PassRec;
 
 /// Most bounces (the settings' range).
 pub const MAX_BOUNCES: usize = 4;
@@ -177,16 +177,8 @@ impl SolerGather {
 
     /// Gathers the level `l`, the i-th of [`Self::light`], with the parameters of `slot_index`
     /// ([`Self::write_params`]).
-    #[allow(clippy::too_many_arguments)]
-    pub fn run_level(
-        &self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<Slot<'_>>,
-        l: &LevelInputs<'_>,
-        i: usize,
-        slot_index: usize,
-    ) {
+    pub fn run_level(&self, r: PassRec<'_, '_>, l: &LevelInputs<'_>, i: usize, slot_index: usize) {
+        let PassRec { ctx, enc: encoder, slot } = r;
         let uniform = crate::passes::dynamic_slot(&self.params, std::mem::size_of::<GatherParams>());
         let (out, occ) = (&self.light[i].1, &self.occlusion[i]);
         let out_view = crate::passes::view(out, "soler.gather.out");

@@ -10,7 +10,7 @@ use crate::counters::prelude::*;
 use super::gather::{GatherParams, LevelInputs};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
-use crate::timing::Slot;
+use crate::timing::PassRec;
 
 pub struct SolerHcbGather {
     layout: wgpu::BindGroupLayout,
@@ -54,16 +54,14 @@ impl SolerHcbGather {
     /// Writes the HCB's indirect arguments (`args`) for its `list` of `counter` samples, then
     /// gathers `levels` (in order; the i-th with the parameter slot i of `params`) into each
     /// sample's light.
-    #[allow(clippy::too_many_arguments)]
     pub fn run(
         &self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<Slot<'_>>,
+        r: PassRec<'_, '_>,
         params: &wgpu::Buffer,
         levels: &[LevelInputs<'_>],
         (list, counter, args): (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
     ) {
+        let PassRec { ctx, enc: encoder, slot } = r;
         let uniform = || crate::passes::dynamic_slot(params, std::mem::size_of::<GatherParams>());
         let tv = wgpu::BindingResource::TextureView;
         let groups: Vec<wgpu::BindGroup> = levels

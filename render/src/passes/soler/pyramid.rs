@@ -7,6 +7,7 @@ use crate::buffers::{BufferKind, BufferRegistry};
 use crate::counters::prelude::*;
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
+use crate::timing::PassRec;
 use crate::timing::Slot;
 
 /// Rust twin of `VoteParams` in `shaders/soler/vote.wgsl`.
@@ -179,20 +180,17 @@ impl SolerPyramid {
     }
 
     /// Votes levels 1 … top from the G-buffer's `position`, `normal` and `material` and the
-    /// `radiance` of the previous bounce.
-    #[allow(clippy::too_many_arguments)]
+    /// `radiance` of the previous bounce, with the vote's `sigma` and `power` (`VoteParams`).
     pub fn run(
         &self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<Slot<'_>>,
-        sigma: [f32; 4],
-        power: [f32; 4],
+        r: PassRec<'_, '_>,
+        (sigma, power): ([f32; 4], [f32; 4]),
         position: &wgpu::TextureView,
         normal: &wgpu::TextureView,
         radiance: &wgpu::TextureView,
         material: &wgpu::TextureView,
     ) {
+        let PassRec { ctx, enc: encoder, slot } = r;
         let p = VoteParams { sigma, power };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
         let view = |t: &wgpu::Texture| crate::passes::view(t, "soler.level.view");

@@ -14,6 +14,7 @@ use crate::buffers::BufferRegistry;
 use crate::gpu::GpuContext;
 use crate::stages::FrameInputs;
 use crate::timing::GpuTimer;
+use crate::timing::PassRec;
 
 pub struct SolerStage {
     pub pyramid: SolerPyramid,
@@ -177,7 +178,7 @@ impl SolerStage {
             // Bounce b + 1 gathers the light of bounce b (the direct light for the first).
             let radiance = if b == 0 { f.sender_radiance() } else { &bounce_views[b as usize - 1] };
             let prefix = if b == 0 { "soler".to_string() } else { format!("soler.bounce{}", b + 1) };
-            self.bounce(f, enc, timer, &prefix, radiance, &grids[j], (j, &all));
+            self.bounce(f, &mut crate::timing::Recorder { enc, timer }, &prefix, radiance, &grids[j], (j, &all));
             if let Some((px, ex)) = &replay {
                 // Each gathered level as this bounce's gather read it (its ring replayed).
                 let lv = self.level_views();
@@ -196,7 +197,7 @@ impl SolerStage {
         let out = match &mut self.temporal {
             Some(t) => {
                 let (camera, spec) = (f.camera_buffer, specular.as_ref());
-                timer.scope(ctx, enc, "soler.temporal", |e, slot| t.run(ctx, e, slot, s, camera, (&indirect, spec), g));
+                timer.pass(ctx, enc, "soler.temporal", |r| t.run(r, s, camera, (&indirect, spec), g));
                 crate::passes::view(&t.filtered, "soler.temporal")
             }
             None => indirect,
@@ -236,7 +237,7 @@ impl SolerStage {
         if !voxel_params.is_empty() {
             timer.scope(f.ctx, enc, "soler.voxels", |e, slot| {
                 let (cam, scene, state) = (f.camera_buffer, f.gpu_scene, f.state);
-                self.voxels.run(f.ctx, e, slot, cam, scene, state, &voxel_params, f.gbuffer_size)
+                self.voxels.run(PassRec { ctx: f.ctx, enc: e, slot }, cam, scene, state, &voxel_params, f.gbuffer_size)
             });
         }
         // The gather marches the gathered levels' grids only.
@@ -264,7 +265,7 @@ impl SolerStage {
         let lv = self.level_views();
         let inputs = self.level_inputs(f, f.sender_radiance(), &lv, &voxel_params, &all);
         let params = &self.gather.params;
-        timer.scope(ctx, enc, "soler.hcb_gather", |e, slot| self.hcb_gather.run(ctx, e, slot, params, &inputs, hcb));
+        timer.pass(ctx, enc, "soler.hcb_gather", |r| self.hcb_gather.run(r, params, &inputs, hcb));
     }
 
     /// Stage 5: the mip levels of the G-buffer and of `radiance` by voting (Eq. 5), timed as
@@ -286,7 +287,14 @@ impl SolerStage {
         let eye = f.camera.position;
         let power = [eye.x, eye.y, eye.z, if s.vote_power { s.min_cos_beta } else { -1.0 }];
         timer.scope(f.ctx, enc, scope, |e, slot| {
-            self.pyramid.run(f.ctx, e, slot, sigma, power, &g.position, &g.normal, radiance, &g.material)
+            self.pyramid.run(
+                PassRec { ctx: f.ctx, enc: e, slot },
+                (sigma, power),
+                &g.position,
+                &g.normal,
+                radiance,
+                &g.material,
+            )
         });
     }
 
@@ -335,17 +343,16 @@ impl SolerStage {
     /// One bounce: the pyramid of `radiance`, the gather of every level (timing scopes
     /// `{prefix}.gather.k`) and the upsampling into `soler.indirect`. `slot.0` is the bounce's
     /// index among the frame's gathers (its parameter slots), `slot.1` the level sizes.
-    #[allow(clippy::too_many_arguments)]
     fn bounce(
         &self,
         f: &FrameInputs,
-        enc: &mut wgpu::CommandEncoder,
-        timer: &mut GpuTimer,
+        r: &mut crate::timing::Recorder,
         prefix: &str,
         radiance: &wgpu::TextureView,
         grids: &[VoxelParams],
         (j, all): (usize, &[(u32, u32)]),
     ) {
+        let (enc, timer) = (&mut *r.enc, &mut *r.timer);
         let s = &f.settings.soler;
         let ctx = f.ctx;
         let g = f.gbuffer;
@@ -372,7 +379,7 @@ impl SolerStage {
         let n = inputs.len();
         for (i, l) in inputs.iter().enumerate() {
             timer.scope(ctx, enc, &format!("{prefix}.gather.{}", l.level), |e, slot| {
-                self.gather.run_level(ctx, e, slot, l, i, j * n + i)
+                self.gather.run_level(PassRec { ctx, enc: e, slot }, l, i, j * n + i)
             });
         }
         let top = s.gathered_levels().end - 1;
@@ -393,15 +400,12 @@ impl SolerStage {
         timer.scope(ctx, enc, &format!("{prefix}.upsample"), |e, slot| {
             let spec_chain = glossy.then(|| (&spec_steps[..], last(top, &spec, &spec_accum)));
             self.upsample.run(
-                ctx,
-                e,
-                slot,
+                PassRec { ctx, enc: e, slot },
                 sigma,
                 &steps,
                 last(top, &light, &accum),
                 &g.albedo,
-                spec_chain,
-                add_specular,
+                (spec_chain, add_specular),
             )
         });
     }

@@ -14,7 +14,7 @@ use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
 use crate::passes::gbuffer::{GBufferViews, NORMAL_FORMAT};
-use crate::timing::Slot;
+use crate::timing::PassRec;
 
 /// Rust twin of `TemporalParams` in `shaders/soler/temporal.wgsl`.
 #[repr(C)]
@@ -223,17 +223,15 @@ impl SolerTemporal {
 
     /// Blends `current` (I_i, and the glossy light added into it) with the warped history
     /// into `soler.temporal`.
-    #[allow(clippy::too_many_arguments)]
     pub fn run(
         &mut self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<Slot<'_>>,
+        r: PassRec<'_, '_>,
         s: &SolerSettings,
         camera: &wgpu::Buffer,
         (current, specular): (&wgpu::TextureView, Option<&wgpu::TextureView>),
         g: &GBufferViews,
     ) {
+        let PassRec { ctx, enc: encoder, slot } = r;
         let params = TemporalParams::of(s, self.valid, specular.is_some());
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         let no_specular = crate::passes::view(&self.no_specular, "soler.temporal.no_specular");

@@ -10,7 +10,7 @@ use super::STRIDE;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
-use crate::timing::Slot;
+use crate::timing::PassRec;
 
 /// Rust twin of `UpsampleParams` in `shaders/soler/upsample.wgsl`.
 #[repr(C)]
@@ -162,19 +162,16 @@ impl SolerUpsample {
     /// `spec_steps` when it is on (into `soler.specular.accum.k`), and the resolve of
     /// `last_light` (the accumulator at G-buffer resolution) with `albedo`; the resolve adds
     /// the glossy reflection's `last_spec` when `add_specular`.
-    #[allow(clippy::too_many_arguments)]
     pub fn run(
         &self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<Slot<'_>>,
+        r: PassRec<'_, '_>,
         sigma: [f32; 2],
         steps: &[Step<'_>],
         last_light: &wgpu::TextureView,
         albedo: &wgpu::TextureView,
-        spec: Option<(&[Step<'_>], &wgpu::TextureView)>,
-        add_specular: bool,
+        (spec, add_specular): (Option<(&[Step<'_>], &wgpu::TextureView)>, bool),
     ) {
+        let PassRec { ctx, enc: encoder, slot } = r;
         let params: Vec<UpsampleParams> = steps
             .iter()
             .map(|s| UpsampleParams { sigma: [sigma[0], sigma[1], s.fine_light.is_some() as u32 as f32, 0.0] })

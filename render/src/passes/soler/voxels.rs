@@ -24,7 +24,7 @@ use crate::gpu::GpuContext;
 use crate::gpu::bgl;
 use crate::scene::upload::GpuScene;
 use crate::scene::{Scene, SceneState};
-use crate::timing::Slot;
+use crate::timing::PassRec;
 
 /// Rust twin of `VoxelParams` in `shaders/soler/voxel_common.wgsl`.
 #[repr(C)]
@@ -255,18 +255,16 @@ impl SolerVoxels {
 
     /// Voxelizes the scene into the first grid, ANDs it down the others and writes the
     /// viewer's images. `gbuffer_size` is the G-buffer's (the viewport maps it onto the grid).
-    #[allow(clippy::too_many_arguments)]
     pub fn run(
         &self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: Option<Slot<'_>>,
+        r: PassRec<'_, '_>,
         camera: &wgpu::Buffer,
         scene: &GpuScene,
         state: &SceneState,
         params: &[VoxelParams],
         gbuffer_size: (u32, u32),
     ) {
+        let PassRec { ctx, enc: encoder, slot } = r;
         let (Some(first), Some(target)) = (self.grids.first(), &self.target) else { return };
         let device = &ctx.device;
         ctx.queue.write_buffer(&self.params, 0, &crate::passes::strided_bytes(STRIDE, params.len(), params));

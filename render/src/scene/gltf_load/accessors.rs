@@ -24,6 +24,19 @@ struct Elements<'b> {
     normalized: bool,
 }
 
+/// What [`Loader::locate`] looks for: `count` elements of `components` × `component` in buffer
+/// view `view` from byte `offset`, `normalized` integers or not; `tight` ignores the view's
+/// byteStride (sparse data).
+#[derive(Clone, Copy)]
+struct Span {
+    view: usize,
+    offset: usize,
+    count: usize,
+    component: ComponentType,
+    components: usize,
+    normalized: bool,
+    tight: bool,
+}
 impl Elements<'_> {
     /// The bytes of component `c` of element `i`.
     fn raw(&self, i: usize, c: usize) -> Option<&[u8]> {
@@ -159,22 +172,11 @@ impl Loader<'_> {
         })
     }
 
-    /// Locates `count` elements of `components` × `component` in buffer view `view` starting
-    /// at `offset`, checking offset + (count − 1) · stride + element size ≤ view length
-    /// (§3.6.2.4) with checked arithmetic. `tight` ignores the view's byteStride (sparse data).
-    #[allow(clippy::too_many_arguments)]
-    fn locate(
-        &self,
-        accessor: usize,
-        what: &str,
-        view: usize,
-        offset: usize,
-        count: usize,
-        component: ComponentType,
-        components: usize,
-        normalized: bool,
-        tight: bool,
-    ) -> Result<Elements<'_>, SceneError> {
+    /// Locates the elements of `span` (of accessor `accessor`, read as `what`), checking
+    /// offset + (count − 1) · stride + element size ≤ view length (§3.6.2.4) with checked
+    /// arithmetic.
+    fn locate(&self, accessor: usize, what: &str, span: Span) -> Result<Elements<'_>, SceneError> {
+        let Span { view, offset, count, component, components, normalized, tight } = span;
         let out_of_range = |reason: String| SceneError::AccessorOutOfRange {
             file: self.file.to_string(),
             accessor,
@@ -265,7 +267,16 @@ impl Loader<'_> {
         let mut out = match acc.buffer_view {
             Some(view) => {
                 let offset = to_usize(acc.byte_offset.map_or(0, |o| o.0));
-                let el = self.locate(index, what, view.value(), offset, count, component, n, acc.normalized, false)?;
+                let span = Span {
+                    view: view.value(),
+                    offset,
+                    count,
+                    component,
+                    components: n,
+                    normalized: acc.normalized,
+                    tight: false,
+                };
+                let el = self.locate(index, what, span)?;
                 spend(self)?;
                 let mut out = Vec::with_capacity(count * n); // bounded: the elements were found in the buffer
                 for i in 0..count {
@@ -301,24 +312,28 @@ impl Loader<'_> {
             let indices = self.locate(
                 index,
                 what,
-                sparse.indices.buffer_view.value(),
-                to_usize(sparse.indices.byte_offset.0),
-                sparse_count,
-                index_type,
-                1,
-                false,
-                true,
+                Span {
+                    view: sparse.indices.buffer_view.value(),
+                    offset: to_usize(sparse.indices.byte_offset.0),
+                    count: sparse_count,
+                    component: index_type,
+                    components: 1,
+                    normalized: false,
+                    tight: true,
+                },
             )?;
             let values = self.locate(
                 index,
                 what,
-                sparse.values.buffer_view.value(),
-                to_usize(sparse.values.byte_offset.0),
-                sparse_count,
-                component,
-                n,
-                acc.normalized,
-                true,
+                Span {
+                    view: sparse.values.buffer_view.value(),
+                    offset: to_usize(sparse.values.byte_offset.0),
+                    count: sparse_count,
+                    component,
+                    components: n,
+                    normalized: acc.normalized,
+                    tight: true,
+                },
             )?;
             for k in 0..sparse_count {
                 let i = indices.uint(k, 0) as usize;
