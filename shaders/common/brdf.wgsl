@@ -11,7 +11,7 @@ fn brdf_eval(n: vec3<f32>, l: vec3<f32>, v: vec3<f32>, albedo: vec3<f32>, di: f3
     return brdf_diffuse(albedo, di) + vec3<f32>(spec);
 }
 
-// The diffuse term c·DI/π alone: what the demodulated filter (interleave/filter.wgsl) takes
+// The diffuse term c·DI/π alone: what the demodulated filter (knecht/interleave/filter.wgsl) takes
 // apart from the light and applies again, to the bit as brdf_eval adds it.
 fn brdf_diffuse(albedo: vec3<f32>, di: f32) -> vec3<f32> {
     return albedo * di / PI;

@@ -37,7 +37,7 @@ fn ism_visibility(atlas: texture_2d<f32>, i: u32, vpl: Vpl, x: vec3<f32>, nx: ve
 
 // The comparison behind ism_visibility: (the pulled distance stored at x's texel, x's biased
 // distance d·(1 − bias)); (−1, d) when x lies behind the map's hemisphere. Explaining a pixel
-// (interleave/explain.wgsl) shows both.
+// (knecht/interleave/explain.wgsl) shows both.
 fn ism_depths(atlas: texture_2d<f32>, i: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, offset: f32, cols: u32, size: u32, bias: f32, normal_offset: f32) -> vec2<f32> {
     let eye = ism_eye(vpl, offset);
     let w0 = x - eye;

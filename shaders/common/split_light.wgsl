@@ -1,4 +1,4 @@
-// The demodulated confidence merge's split history (issue #51, temporal/confidence.wgsl): the
+// The demodulated confidence merge's split history (issue #51, knecht/temporal/confidence.wgsl): the
 // irradiance E and the specular light S of L = k·E + S, six half floats in an Rgba32Uint texel:
 // x = E.rg, y = (E.b, S.r), z = S.gb as pack2x16float, w unused. CPU twin: cpu::knecht::SplitLight.
 

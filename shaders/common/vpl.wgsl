@@ -124,7 +124,7 @@ fn vpl_exact_visibility(atlas: texture_depth_2d, i: u32, vpl: Vpl, x: vec3<f32>,
 
 // The comparison behind vpl_exact_visibility: (the depth stored in the face's texel, the
 // receiver's biased depth), both in the face's [0, 1] depth; (−1, 1) when x lies behind the
-// face's eye. Explaining a pixel (interleave/explain.wgsl) shows both.
+// face's eye. Explaining a pixel (knecht/interleave/explain.wgsl) shows both.
 fn vpl_exact_depths(atlas: texture_depth_2d, i: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, clip: vec3<f32>, cols: u32, size: u32, depth_bias: f32, normal_offset: f32) -> vec2<f32> {
     let n = vpl.normal.xyz;
     let eye = vpl.position.xyz + n * clip.z;

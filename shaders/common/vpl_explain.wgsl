@@ -1,6 +1,6 @@
 // A VPL's term at a receiver, as the replays of a pinned pixel show it (issue #42): the VPL
-// gather at tiles or pixels (interleave/explain.wgsl) and the exact-VPL reference
-// (vpl/explain.wgsl). The term is vpl_radiance's (Knecht 002 Eq. 4.7–4.9), the very function
+// gather at tiles or pixels (knecht/interleave/explain.wgsl) and the exact-VPL reference
+// (reference/explain.wgsl). The term is vpl_radiance's (Knecht 002 Eq. 4.7–4.9), the very function
 // their gathers call; this adds what made it. Needs common/vpl.wgsl.
 
 // One VPL slot's term (passes::knecht::explain::GpuTerm).
@@ -17,7 +17,7 @@ struct VplTerm {
     // toward the eye (luminance); z: the map's stored depth; w: the receiver's depth in it
     detail: vec4<f32>,
     // rgb: its light as it reaches the pinned pixel: `light`, or after the demodulated filter
-    // (interleave/explain.wgsl) its irradiance reflected with that pixel's colour
+    // (knecht/interleave/explain.wgsl) its irradiance reflected with that pixel's colour
     reach: vec4<f32>,
 }
 

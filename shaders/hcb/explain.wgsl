@@ -25,7 +25,7 @@
 struct ExplainParams {
     // x, y: the pixel p; z: 1 with the sample cache (counter words 1–2 are its counts);
     // w: 1 when the confidence merge ran after the splat (its textures are bound), 2 when it ran
-    // demodulated (its history is `split_prev`: temporal/confidence.wgsl)
+    // demodulated (its history is `split_prev`: knecht/temporal/confidence.wgsl)
     pixel: vec4<u32>,
 }
 
@@ -129,7 +129,7 @@ fn cs_explain_args() {
     h.factor = vec4<f32>(receiver_factor(d, nrm, v, alb.rgb, alb.a, mat.x, mat.y, hp.cache.y > 0.5), 0.0);
     h.final_value = textureLoad(final_light, p, 0);
     if (explain.pixel.w >= 1u) {
-        // The history the confidence merge read for p (temporal/confidence.wgsl).
+        // The history the confidence merge read for p (knecht/temporal/confidence.wgsl).
         let c = textureLoad(confidence, p, 0).r;
         var prev = vec3<f32>(0.0);
         if (c > 0.0) {

@@ -122,7 +122,7 @@ fn emitter_points_carry_the_path_traced_indirect_energy() {
     check_batches("emitters", scene, 80);
 }
 
-/// Stage 3 of the reference on the GPU (`vpl/sample.wgsl`) against its CPU twin
+/// Stage 3 of the reference on the GPU (`reference/sample.wgsl`) against its CPU twin
 /// `cpu::knecht::reference_uv`: VPL i of the first batch sits at the light G-buffer texel
 /// under point i of the seed's rotated Halton set (slots whose texel is empty or faces away
 /// from the light stay empty, so the filled VPLs are a subsequence of the predicted texels).

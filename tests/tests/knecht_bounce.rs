@@ -127,7 +127,7 @@ fn close(a: Vec3, b: Vec3, tol: f32) -> bool {
     (a - b).length() <= tol * b.length().max(1e-6)
 }
 
-/// The bounce selection of Knecht 002 §3.6.1 on the GPU (`vpl/bounce.wgsl`) against its CPU
+/// The bounce selection of Knecht 002 §3.6.1 on the GPU (`knecht/vpl/bounce.wgsl`) against its CPU
 /// twin: seven VPLs on the default scene's surfaces (one slot empty, some glossy), the point
 /// cloud splatted into their ISMs, then bounce 2's VPLs read back. For every source VPL the
 /// CPU lights its samples (Eq. 4.7–4.8 times the test against the GPU's splatted map, or the

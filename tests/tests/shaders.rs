@@ -1,6 +1,7 @@
 //! Every WGSL file resolves its imports and validates with naga; the Rust uniform structs
 //! have the sizes of their WGSL twins (docs/principles.md principle 8).
 
+use gi_render::gpu::bindings::Kind;
 use gi_render::shaders::{ENTRY_MODULES, SOURCES, resolve};
 
 fn parse(path: &str) -> naga::Module {
@@ -80,13 +81,13 @@ fn uniform_sizes_match_wgsl() {
     let s = parse("shadow/shadow.wgsl");
     assert_eq!(struct_size(&s, "Instance") as usize, std::mem::size_of::<InstanceUniform>());
     use gi_render::passes::reference::{vpl, vpl_gather, vpl_visibility};
-    let vs = parse("vpl/sample.wgsl");
+    let vs = parse("reference/sample.wgsl");
     assert_eq!(struct_size(&vs, "Vpl") as usize, std::mem::size_of::<vpl::GpuVpl>());
     assert_eq!(struct_size(&vs, "Params") as usize, std::mem::size_of::<vpl::SampleParams>());
-    let vv = parse("vpl/shadow.wgsl");
+    let vv = parse("reference/shadow.wgsl");
     assert_eq!(struct_size(&vv, "Params") as usize, std::mem::size_of::<vpl_visibility::VisibilityParams>());
     assert_eq!(struct_size(&vv, "Instance") as usize, std::mem::size_of::<InstanceUniform>());
-    let vg = parse("vpl/gather.wgsl");
+    let vg = parse("reference/gather.wgsl");
     assert_eq!(struct_size(&vg, "Params") as usize, std::mem::size_of::<vpl_gather::GatherParams>());
     assert_eq!(struct_size(&vg, "Camera") as usize, std::mem::size_of::<CameraUniform>());
     let v = parse("view/view.wgsl");
@@ -95,15 +96,15 @@ fn uniform_sizes_match_wgsl() {
     assert_eq!(struct_size(&p, "Jobs") as usize, std::mem::size_of::<gi_render::passes::view::ProbeJobs>());
     // Instant radiosity (issue #5).
     use gi_render::passes::knecht::{interleave, ism, temporal, vpl_importance};
-    let w = parse("vpl/warp.wgsl");
+    let w = parse("knecht/vpl/warp.wgsl");
     assert_eq!(struct_size(&w, "ViewParams") as usize, std::mem::size_of::<vpl_importance::ViewParams>());
     assert_eq!(struct_size(&w, "Vpl") as usize, std::mem::size_of::<vpl::GpuVpl>());
-    let sp = parse("ism/splat.wgsl");
+    let sp = parse("knecht/ism/splat.wgsl");
     assert_eq!(struct_size(&sp, "IsmPoint") as usize, std::mem::size_of::<ism::GpuPoint>());
     assert_eq!(struct_size(&sp, "SplatParams") as usize, std::mem::size_of::<ism::SplatParams>());
     assert_eq!(struct_size(&sp, "Instance") as usize, std::mem::size_of::<InstanceUniform>());
     use gi_render::passes::knecht::vpl_bounce::BounceParams;
-    for file in ["vpl/bounce.wgsl", "vpl/irsm.wgsl"] {
+    for file in ["knecht/vpl/bounce.wgsl", "knecht/vpl/irsm.wgsl"] {
         let m = parse(file);
         assert_eq!(struct_size(&m, "BounceParams") as usize, std::mem::size_of::<BounceParams>(), "{file}");
         assert_eq!(struct_size(&m, "PointSurface") as usize, std::mem::size_of::<ism::GpuPointSurface>(), "{file}");
@@ -130,15 +131,15 @@ fn uniform_sizes_match_wgsl() {
         struct_size(&hg, "HcbGatherParams") as usize,
         std::mem::size_of::<gi_render::passes::hcb::HcbGatherParams>()
     );
-    let pp = parse("ism/pull_push.wgsl");
+    let pp = parse("knecht/ism/pull_push.wgsl");
     assert_eq!(struct_size(&pp, "LevelParams") as usize, std::mem::size_of::<ism::LevelParams>());
-    let sl = parse("interleave/split.wgsl");
+    let sl = parse("knecht/interleave/split.wgsl");
     assert_eq!(struct_size(&sl, "SplitParams") as usize, std::mem::size_of::<interleave::SplitParams>());
-    let ig = parse("interleave/gather.wgsl");
+    let ig = parse("knecht/interleave/gather.wgsl");
     assert_eq!(struct_size(&ig, "GatherParams") as usize, std::mem::size_of::<interleave::GatherParams>());
-    let f = parse("interleave/filter.wgsl");
+    let f = parse("knecht/interleave/filter.wgsl");
     assert_eq!(struct_size(&f, "FilterParams") as usize, std::mem::size_of::<interleave::FilterParams>());
-    let c = parse("temporal/confidence.wgsl");
+    let c = parse("knecht/temporal/confidence.wgsl");
     assert_eq!(struct_size(&c, "ConfidenceParams") as usize, std::mem::size_of::<temporal::ConfidenceParams>());
 }
 
@@ -175,4 +176,75 @@ fn shader_reload_rebuilds_only_the_affected_passes() {
     assert_eq!(r.readback("final.hdr").expect("readback"), before, "same source, same image");
     let all = r.reload_shaders(gi_render::shaders::ENTRY_MODULES).expect("rebuilds all");
     assert_eq!(all, ["compose", "direct", "direct.shadow", "gbuffer"], "exact_vpl is off, the viewer is not a pass");
+}
+
+/// Whether the shader variable `v` of `module` is a binding of `kind` (what WGSL cannot say —
+/// whether a float texture is filterable, a sampler's filtering — is not compared).
+fn declared_as(module: &naga::Module, v: &naga::GlobalVariable, kind: Kind) -> bool {
+    use naga::{AddressSpace, ImageClass, ImageDimension, ScalarKind, StorageAccess, TypeInner};
+    match (kind, v.space, &module.types[v.ty].inner) {
+        (Kind::Uniform, AddressSpace::Uniform, _) => true,
+        (Kind::Storage { read_only }, AddressSpace::Storage { access }, _) => {
+            read_only != access.contains(StorageAccess::STORE)
+        }
+        (_, _, TypeInner::Image { dim: ImageDimension::D2, arrayed, class }) => match (kind, class) {
+            (Kind::Texture { .. }, ImageClass::Sampled { kind: ScalarKind::Float, multi: false }) => !arrayed,
+            (Kind::UintTexture, ImageClass::Sampled { kind: ScalarKind::Uint, multi: false }) => !arrayed,
+            (Kind::Depth, ImageClass::Depth { multi: false }) => !arrayed,
+            (Kind::DepthArray, ImageClass::Depth { multi: false }) => *arrayed,
+            (Kind::StorageTexture(format), ImageClass::Storage { format: f, .. }) => {
+                !arrayed && format!("{format:?}") == format!("{f:?}")
+            }
+            _ => false,
+        },
+        (Kind::Sampler(ty), _, TypeInner::Sampler { comparison }) => {
+            *comparison == (ty == wgpu::SamplerBindingType::Comparison)
+        }
+        _ => false,
+    }
+}
+
+/// Issue #52 point 3: every pass's bind group description (`passes::BINDINGS`) matches its
+/// shader, binding by binding (number, variable name, kind), and describes every binding the
+/// shader declares in that group: the layout and the group made from the description are the
+/// ones the shader reads.
+#[test]
+fn every_bind_group_description_matches_its_shader() {
+    assert!(!gi_render::passes::BINDINGS.is_empty());
+    for d in gi_render::passes::BINDINGS {
+        let module = parse(d.shader);
+        let declared: Vec<&naga::GlobalVariable> = module
+            .global_variables
+            .iter()
+            .map(|(_, v)| v)
+            .filter(|v| v.binding.as_ref().is_some_and(|b| b.group == d.group))
+            .collect();
+        for b in d.list {
+            let v =
+                declared.iter().find(|v| v.binding.as_ref().is_some_and(|r| r.binding == b.binding)).unwrap_or_else(
+                    || panic!("{}: {} declares no binding {} in group {}", d.label, d.shader, b.binding, d.group),
+                );
+            assert_eq!(v.name.as_deref(), Some(b.name), "{}: binding {} of {}", d.label, b.binding, d.shader);
+            assert!(
+                declared_as(&module, v, b.kind),
+                "{}: {} ({}) is not a {:?} in {}",
+                d.label,
+                b.name,
+                b.binding,
+                b.kind,
+                d.shader
+            );
+        }
+        for v in &declared {
+            let n = v.binding.as_ref().map_or(0, |r| r.binding);
+            assert!(
+                d.list.iter().any(|b| b.binding == n),
+                "{}: {} declares binding {n} ({:?}) in group {}, which the description lacks",
+                d.label,
+                d.shader,
+                v.name,
+                d.group
+            );
+        }
+    }
 }

@@ -11,8 +11,8 @@
 //! uniforms it can inline into branch and loop conditions (`update_inline_shader_state` in
 //! lvp_execute.c), and never frees the variant it replaces. GI Lab's frame binds about a dozen
 //! such pipelines (any pass whose uniform chooses a branch: the light kind in
-//! `vpl/importance.wgsl`, the sky mode in `compose/compose.wgsl`, the window size in
-//! `interleave/filter.wgsl`), which made one live renderer's resident memory rise by about
+//! `knecht/vpl/importance.wgsl`, the sky mode in `compose/compose.wgsl`, the window size in
+//! `knecht/interleave/filter.wgsl`), which made one live renderer's resident memory rise by about
 //! 1.6 MiB a frame at 64×64 on lavapipe while wgpu's objects and allocator bytes stayed flat.
 //! The probe below runs a pipeline of that kind and measures the driver's growth directly.
 

@@ -4,15 +4,15 @@
 //!
 //! | kernel | here | shader |
 //! |---|---|---|
-//! | Halton sequence (§3.3) | [`halton`] | `vpl/warp.wgsl` `halton` |
-//! | importance pyramid + hierarchical warping (§3.3, Clarberg et al. 2005) | [`Pyramid`], [`Pyramid::warp`] | `vpl/importance.wgsl`, `vpl/warp.wgsl` |
+//! | Halton sequence (§3.3) | [`halton`] | `knecht/vpl/warp.wgsl` `halton` |
+//! | importance pyramid + hierarchical warping (§3.3, Clarberg et al. 2005) | [`Pyramid`], [`Pyramid::warp`] | `knecht/vpl/importance.wgsl`, `knecht/vpl/warp.wgsl` |
 //! | VPL budget split over lights by power (§4.4) | [`split_budget`] | — (CPU) |
 //! | paraboloid projection of a VPL's hemisphere (§2.6.5, Brabec et al. 2002) | [`paraboloid_project`], [`paraboloid_unproject`] | `common/ism.wgsl` |
-//! | pull-push hole filling (§2.6.5) | [`pull_push`] | `ism/pull_push.wgsl` |
+//! | pull-push hole filling (§2.6.5) | [`pull_push`] | `knecht/ism/pull_push.wgsl` |
 //! | one VPL's light at a pixel, Eq. 4.7–4.9 | [`vpl_radiance`] | `common/vpl.wgsl` `vpl_radiance` |
-//! | geometry-aware n×n box filter (§3.4.1) | [`geometry_aware_filter`] | `interleave/filter.wgsl` |
-//! | confidence, Eq. 3.1–3.4, and the merge Eq. 3.6 | [`confidence`] | `temporal/confidence.wgsl` |
-//! | bounce selection, §3.6.1 | [`crate::cpu::knecht_bounce`]: `bounce_incident`, `select_bounce`, `bounce_vpl` | `vpl/bounce.wgsl` |
+//! | geometry-aware n×n box filter (§3.4.1) | [`geometry_aware_filter`] | `knecht/interleave/filter.wgsl` |
+//! | confidence, Eq. 3.1–3.4, and the merge Eq. 3.6 | [`confidence`] | `knecht/temporal/confidence.wgsl` |
+//! | bounce selection, §3.6.1 | [`crate::cpu::knecht_bounce`]: `bounce_incident`, `select_bounce`, `bounce_vpl` | `knecht/vpl/bounce.wgsl` |
 
 use glam::{UVec2, Vec2, Vec3};
 
@@ -21,7 +21,7 @@ use crate::maths::{halton, pcg_hash};
 /// Point `j` of the exact-VPL reference's sampling set in the light view's uv square: the
 /// Halton point (h₂(j+1), h₃(j+1)) shifted by a toroidal offset drawn from `seed`
 /// (Cranley–Patterson rotation), so that every point is uniform over the view while the set
-/// stays stratified (twin of `reference_uv` in `shaders/vpl/sample.wgsl`).
+/// stays stratified (twin of `reference_uv` in `shaders/reference/sample.wgsl`).
 pub fn reference_uv(seed: u32, j: u32) -> Vec2 {
     let h = pcg_hash(seed);
     let offset = Vec2::new((h >> 8) as f32, (pcg_hash(h) >> 8) as f32) / 16_777_216.0;
@@ -185,7 +185,7 @@ pub fn ism_visible(
 /// coordinates `uv` (texel centre): the distance along the texel's ray from the eye to the
 /// plane through the point (`local`, relative to the eye in the VPL's frame, at distance `d`)
 /// with normal `normal` (same frame), kept within ± `reach` of `d`; a ray that misses the
-/// plane in front takes `d + reach`. Twin of `texel_key` in `shaders/ism/splat.wgsl`.
+/// plane in front takes `d + reach`. Twin of `texel_key` in `shaders/knecht/ism/splat.wgsl`.
 pub fn splat_distance(local: Vec3, normal: Vec3, d: f32, reach: f32, uv: Vec2) -> f32 {
     let ray = paraboloid_unproject(uv);
     let den = ray.dot(normal);
@@ -268,7 +268,7 @@ pub fn pull_push(
 
 /// Bilinear interpolation of the valid coarse texels around fine texel (x, y), within the
 /// coarse map (`ct`² texels) that contains it, and whether all four are valid and agree
-/// within `threshold`; twin of `coarse_at` in `ism/pull_push.wgsl`.
+/// within `threshold`; twin of `coarse_at` in `knecht/ism/pull_push.wgsl`.
 fn coarse_at(coarse: &[f32], cw: u32, ct: u32, x: u32, y: u32, threshold: f32) -> (f32, bool) {
     let (px, py) = ((x as f32 + 0.5) * 0.5 - 0.5, (y as f32 + 0.5) * 0.5 - 0.5);
     let (x0, y0) = (px.floor(), py.floor());
@@ -514,7 +514,7 @@ impl SplitLight {
 }
 
 /// The demodulated merge (issue #51, ⚠[knecht.demodulated-merge]; twin of the demodulated path
-/// of `shaders/temporal/confidence.wgsl`): Eq. 3.6 applied to E and S apart, the result
+/// of `shaders/knecht/temporal/confidence.wgsl`): Eq. 3.6 applied to E and S apart, the result
 /// reflected with this pixel's own k. Eq. 3.3's I_prev is the history as this pixel reflects
 /// it, `prev.reflect(k)`. Returns the merged light and the split history to keep.
 pub fn merge_demodulated(k: Vec3, new: SplitLight, prev: SplitLight, confidence: f32) -> (Vec3, SplitLight) {

@@ -1,7 +1,7 @@
 //! CPU references of instant radiosity's further bounces (Knecht 002 §3.6 and the IRSM
 //! baseline after Ritschel et al. 2008): the light a VPL sends to a point-cloud sample, the
 //! selection of the next bounce's VPL and the VPL it becomes, and the IRSM draw. Twins of
-//! `shaders/vpl/bounce.wgsl`, `shaders/common/bounce.wgsl` and `shaders/vpl/irsm.wgsl`;
+//! `shaders/knecht/vpl/bounce.wgsl`, `shaders/common/bounce.wgsl` and `shaders/knecht/vpl/irsm.wgsl`;
 //! built on the VPL and receiver types of [`crate::cpu::knecht`].
 
 use glam::Vec3;
@@ -24,7 +24,7 @@ pub struct BounceSample {
 }
 
 /// Flux arriving at sample `s` from `vpl` and the sample's contribution (Knecht 002
-/// §3.6.1, twin of `incident` in `shaders/vpl/bounce.wgsl`):
+/// §3.6.1, twin of `incident` in `shaders/knecht/vpl/bounce.wgsl`):
 ///
 /// - Φ_s = Φ_v · f_v(ω_in, v→s) · cos θ_v · cos θ_s / max(d², d_min²) · A_s with the glossy
 ///   VPL emission of Eq. 4.8 (the one BRDF, [`crate::cpu::brdf`]) and the geometry term of
@@ -65,7 +65,7 @@ pub enum Selection {
     Proportional { seed: u32 },
 }
 
-/// Bounce selection for one VPL (twin of the reduction in `shaders/vpl/bounce.wgsl`):
+/// Bounce selection for one VPL (twin of the reduction in `shaders/knecht/vpl/bounce.wgsl`):
 /// among `samples` (index j, contribution C_j) the one with the largest key — C_j, or
 /// C_j / (−ln u_j) — ties to the lowest index, and ΣC. None when no C_j > 0.
 pub fn select_bounce(samples: &[(u32, f32)], selection: Selection) -> Option<(u32, f32)> {
@@ -112,7 +112,7 @@ pub fn bounce_vpl(source: &Vpl, sample: &BounceSample, flux: Vec3, c: f32, sum: 
 }
 
 /// IRSM importance sampling (the baseline of §3.6 after Ritschel et al.; twin of `cs_sample`
-/// in `shaders/vpl/irsm.wgsl`): new VPL `k` of `n` picks an IRSM with the stratified
+/// in `shaders/knecht/vpl/irsm.wgsl`): new VPL `k` of `n` picks an IRSM with the stratified
 /// u₁ = (k + ξ)/n over the running sum of `totals`, then a texel with u₂ = ξ' inside that
 /// IRSM's inclusive prefix sums `cdf[i]` (the first entry above u). Returns (IRSM, texel), or
 /// None when every total is 0.

@@ -10,6 +10,7 @@
 //! the adapter has them.
 
 pub mod bgl;
+pub mod bindings;
 
 use std::sync::Arc;
 

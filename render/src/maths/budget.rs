@@ -30,7 +30,7 @@ pub fn split_budget(powers: &[f32], total: u32) -> Vec<u32> {
 }
 
 /// The per-frame slot→tile map of interleaved sampling (Knecht §3.4.1; twin of the loop in
-/// `shaders/interleave/gather.wgsl`; ⚠[knecht.interleave-shuffle] the thesis does not say which
+/// `shaders/knecht/interleave/gather.wgsl`; ⚠[knecht.interleave-shuffle] the thesis does not say which
 /// VPL shades which tile). Slots are cut into blocks of n² consecutive slots; in block b, tile
 /// t takes slot b·n² + (t + o_b) mod n². One VPL per block per tile keeps every tile a
 /// representative subset: consecutive slots hold consecutive Halton indices, which lie in

@@ -13,6 +13,7 @@ use glam::Vec4;
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::settings_group;
 use crate::timing::PassRec;
 
@@ -82,44 +83,66 @@ pub struct ComposeInputs<'a> {
     pub sky: (&'a super::sky::SkyBackground, &'a wgpu::Buffer, &'a wgpu::TextureView),
 }
 
+const CS: wgpu::ShaderStages = wgpu::ShaderStages::COMPUTE;
+const TEXTURE: Kind = Kind::Texture { filterable: false };
+const READ: Kind = Kind::Storage { read_only: true };
+const READ_WRITE: Kind = Kind::Storage { read_only: false };
+
+/// The compose's inputs and outputs (`compose/compose.wgsl`, group 0).
+pub const COMPOSE_BINDINGS: Bindings = Bindings {
+    label: "compose.inputs",
+    shader: "compose/compose.wgsl",
+    group: 0,
+    visibility: CS,
+    list: &[
+        binding(1, "direct", TEXTURE),
+        binding(2, "indirect", TEXTURE),
+        binding(3, "out_hdr", Kind::StorageTexture(HDR_FORMAT)),
+        binding(4, "near_field", TEXTURE),
+        binding(5, "emission", TEXTURE),
+        binding(6, "sky", Kind::Uniform),
+        binding(7, "sky_image", TEXTURE),
+        binding(8, "camera", Kind::Uniform),
+        binding(9, "gbuffer_normal", TEXTURE),
+        binding(10, "tone", Kind::Uniform),
+        binding(11, "log_average", READ),
+        binding(12, "out_ldr", Kind::StorageTexture(LDR_FORMAT)),
+        binding(13, "partials", READ_WRITE),
+    ],
+};
+
+/// The separate tone-mapping pass (`compose/tonemap.wgsl`, group 0).
+pub const TONEMAP_BINDINGS: Bindings = Bindings {
+    label: "compose.tonemap",
+    shader: "compose/tonemap.wgsl",
+    group: 0,
+    visibility: CS,
+    list: &[
+        binding(0, "params", Kind::Uniform),
+        binding(1, "hdr_in", TEXTURE),
+        binding(2, "log_average", READ),
+        binding(3, "out_ldr", Kind::StorageTexture(LDR_FORMAT)),
+    ],
+};
+
+/// The log-average luminance's last reduction (`compose/luminance.wgsl`, group 0).
+pub const LUMINANCE_BINDINGS: Bindings = Bindings {
+    label: "compose.luminance",
+    shader: "compose/luminance.wgsl",
+    group: 0,
+    visibility: CS,
+    list: &[binding(1, "result", READ_WRITE), binding(2, "partials", READ_WRITE)],
+};
+
 impl ComposePass {
     pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
         let module = crate::shaders::create_module(device, "compose/compose.wgsl");
         let tone_module = crate::shaders::create_module(device, "compose/tonemap.wgsl");
         let lum_module = crate::shaders::create_module(device, "compose/luminance.wgsl");
-        let layout0 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("compose.inputs"),
-            entries: &[
-                crate::gpu::bgl::texture(1, cs, false),
-                crate::gpu::bgl::texture(2, cs, false),
-                crate::gpu::bgl::storage_texture(3, HDR_FORMAT),
-                crate::gpu::bgl::texture(4, cs, false),
-                crate::gpu::bgl::texture(5, cs, false),
-                crate::gpu::bgl::uniform(6, cs),
-                crate::gpu::bgl::texture(7, cs, false),
-                crate::gpu::bgl::uniform(8, cs),
-                crate::gpu::bgl::texture(9, cs, false),
-                crate::gpu::bgl::uniform(10, cs),
-                crate::gpu::bgl::storage(11, cs, true),
-                crate::gpu::bgl::storage_texture(12, LDR_FORMAT),
-                crate::gpu::bgl::storage(13, cs, false),
-            ],
-        });
-        let layout1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("compose.tonemap"),
-            entries: &[
-                crate::gpu::bgl::uniform(0, cs),
-                crate::gpu::bgl::texture(1, cs, false),
-                crate::gpu::bgl::storage(2, cs, true),
-                crate::gpu::bgl::storage_texture(3, LDR_FORMAT),
-            ],
-        });
-        let lum_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("compose.luminance"),
-            entries: &[crate::gpu::bgl::storage(1, cs, false), crate::gpu::bgl::storage(2, cs, false)],
-        });
+        let layout0 = COMPOSE_BINDINGS.layout(device);
+        let layout1 = TONEMAP_BINDINGS.layout(device);
+        let lum_layout = LUMINANCE_BINDINGS.layout(device);
         let compose = super::compute_pipeline(device, "compose.compose", &module, "cs_compose", &[&layout0]);
         let tonemap = super::compute_pipeline(device, "compose.tonemap", &tone_module, "cs_tonemap", &[&layout1]);
         let luminance = super::compute_pipeline(device, "compose.luminance", &lum_module, "cs_final", &[&lum_layout]);
@@ -240,25 +263,25 @@ impl ComposePass {
         let hdr_view = super::view(&self.hdr, "final.hdr");
         let ldr_view = super::view(&self.ldr, "final.ldr");
         let tv = wgpu::BindingResource::TextureView;
-        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("compose.inputs"),
-            layout: &self.layout0,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 1, resource: tv(direct) },
-                wgpu::BindGroupEntry { binding: 2, resource: tv(indirect.unwrap_or(&self.black)) },
-                wgpu::BindGroupEntry { binding: 3, resource: tv(&hdr_view) },
-                wgpu::BindGroupEntry { binding: 4, resource: tv(near_field.unwrap_or(&self.black)) },
-                wgpu::BindGroupEntry { binding: 5, resource: tv(emission) },
-                wgpu::BindGroupEntry { binding: 6, resource: sky.params.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 7, resource: tv(&sky_view) },
-                wgpu::BindGroupEntry { binding: 8, resource: camera.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 9, resource: tv(normal) },
-                wgpu::BindGroupEntry { binding: 10, resource: self.compose_tone.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 11, resource: self.log_average.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 12, resource: tv(&ldr_view) },
-                wgpu::BindGroupEntry { binding: 13, resource: self.tiles.as_entire_binding() },
+        let group = COMPOSE_BINDINGS.group(
+            &ctx.device,
+            &self.layout0,
+            [
+                tv(direct),
+                tv(indirect.unwrap_or(&self.black)),
+                tv(&hdr_view),
+                tv(near_field.unwrap_or(&self.black)),
+                tv(emission),
+                sky.params.as_entire_binding(),
+                tv(&sky_view),
+                camera.as_entire_binding(),
+                tv(normal),
+                self.compose_tone.as_entire_binding(),
+                self.log_average.as_entire_binding(),
+                tv(&ldr_view),
+                self.tiles.as_entire_binding(),
             ],
-        });
+        );
         // The tiles' sums are atomic additions: they start from zero.
         encoder.clear_buffer(&self.tiles, 0, None);
         self.dispatch(encoder, slot, "compose.compose", &self.compose, &group, self.screen_groups());
@@ -273,14 +296,8 @@ impl ComposePass {
         slot: Option<crate::timing::Slot<'_>>,
         settings: &TonemapSettings,
     ) {
-        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("compose.luminance"),
-            layout: &self.lum_layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 1, resource: self.log_average.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: self.tiles.as_entire_binding() },
-            ],
-        });
+        let resources = [self.log_average.as_entire_binding(), self.tiles.as_entire_binding()];
+        let group = LUMINANCE_BINDINGS.group(&ctx.device, &self.lum_layout, resources);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("compose.luminance"),
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
@@ -311,16 +328,9 @@ impl ComposePass {
         let hdr_view = super::view(&self.hdr, "final.hdr");
         let ldr_view = super::view(&self.ldr, "final.ldr");
         let tv = wgpu::BindingResource::TextureView;
-        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("compose.tonemap"),
-            layout: &self.layout1,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: self.params.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: tv(&hdr_view) },
-                wgpu::BindGroupEntry { binding: 2, resource: self.log_average.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: tv(&ldr_view) },
-            ],
-        });
+        let resources =
+            [self.params.as_entire_binding(), tv(&hdr_view), self.log_average.as_entire_binding(), tv(&ldr_view)];
+        let group = TONEMAP_BINDINGS.group(&ctx.device, &self.layout1, resources);
         self.dispatch(encoder, slot, "compose.tonemap", &self.tonemap, &group, self.screen_groups());
     }
 

@@ -17,7 +17,7 @@
 //! 2. **The first bounce of the VPL techniques**: stage 3 (importance warping) gives the
 //!    emitters their share of `vpl.count` by power (as it splits the budget between light
 //!    views), and [`EmitterPass::bounce_into`] makes that many VPLs on the surfaces the
-//!    emitters light with Knecht's point-cloud bounce (002 §3.6.1, `vpl/bounce.wgsl`, tested
+//!    emitters light with Knecht's point-cloud bounce (002 §3.6.1, `knecht/vpl/bounce.wgsl`, tested
 //!    against the ISMs of the emitter VPLs; ⚠[knecht.emitter-bounce] the sample chosen ∝ its
 //!    contribution, §6.1 — the thesis' strongest sample would put every VPL next to the
 //!    emitter). Its sources are the first k emitter VPLs with flux Φ/k: the Halton prefix, so

@@ -6,9 +6,9 @@
 //! | folder | paper | stage choices | shaders |
 //! |---|---|---|---|
 //! | `gbuffer`, `shadow`, `direct`, `compose`, `view` | all | stages 1, 2, 7's compose, the viewer | `gbuffer/`, `shadow/`, `direct/`, `compose/`, `view/` |
-//! | `knecht/` | Knecht 002 | VPL source importance warping, visibility imperfect, shading points every pixel / interleaved tiles, VPL gather, geometry-aware filter, confidence merge | `vpl/{importance,reduce,warp,bounce,irsm}`, `ism/`, `interleave/`, `temporal/` |
+//! | `knecht/` | Knecht 002 | VPL source importance warping, visibility imperfect, shading points every pixel / interleaved tiles, VPL gather, geometry-aware filter, confidence merge | `knecht/` (`vpl/{importance,reduce,warp,bounce,irsm}`, `ism/`, `interleave/`, `temporal/`) |
 //! | `hcb/` | Nguyen et al. 000 | shading points HCB samples, coherence splatting, HCB sample cache | `hcb/` |
-//! | `reference/` | Knecht 002 §5.2 (the baseline) | VPL source uniform batches, visibility exact, running average | `vpl/{sample,shadow,gather}` |
+//! | `reference/` | Knecht 002 §5.2 (the baseline) | VPL source uniform batches, visibility exact, running average | `reference/` (`{sample,shadow,gather,explain}`) |
 //! | `soler/` | Soler et al. 004 | shading points mip levels, screen-space ring gather, joint bilateral upsampling | `soler/` |
 
 use crate::counters::prelude::*;
@@ -94,6 +94,17 @@ pub fn strided_bytes<T: bytemuck::Pod>(stride: u64, slots: usize, items: &[T]) -
 
 /// Size of the screen-space compute tiles (`TILE` in `shaders/common/fullscreen.wgsl`).
 pub const TILE: u32 = 8;
+
+/// The bind groups described once (`gpu::bindings`, issue #52 point 3), each checked against
+/// its shader by `tests/tests/shaders.rs`. The passes not listed still write their layouts and
+/// groups by hand (`gpu::bgl`); a pass moves here when its bindings next change.
+pub const BINDINGS: &[&crate::gpu::bindings::Bindings] = &[
+    &compose::COMPOSE_BINDINGS,
+    &compose::TONEMAP_BINDINGS,
+    &compose::LUMINANCE_BINDINGS,
+    &knecht::interleave::FILTER_BINDINGS,
+    &knecht::temporal::CONFIDENCE_BINDINGS,
+];
 
 /// A 2D render/storage target with the usages every registered buffer needs (sampling,
 /// copying out for readback).

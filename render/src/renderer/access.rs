@@ -380,22 +380,22 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         "shadow/shadow.wgsl" => "direct.shadow",
         "direct/direct.wgsl" => "direct",
         "compose/compose.wgsl" | "compose/tonemap.wgsl" | "compose/luminance.wgsl" => "compose",
-        "vpl/sample.wgsl" | "vpl/gather.wgsl" => "exact_vpl",
+        "reference/sample.wgsl" | "reference/gather.wgsl" => "exact_vpl",
         // The exact cube-face maps serve both VPL techniques.
-        "vpl/shadow.wgsl" => "vpl_shadow",
-        "vpl/importance.wgsl"
-        | "vpl/reduce.wgsl"
-        | "vpl/warp.wgsl"
-        | "vpl/bounce.wgsl"
-        | "vpl/irsm.wgsl"
-        | "ism/splat.wgsl"
-        | "ism/resolve.wgsl"
-        | "ism/pull_push.wgsl"
-        | "interleave/split.wgsl"
-        | "interleave/gather.wgsl"
-        | "interleave/merge.wgsl"
-        | "interleave/filter.wgsl"
-        | "temporal/confidence.wgsl"
+        "reference/shadow.wgsl" => "vpl_shadow",
+        "knecht/vpl/importance.wgsl"
+        | "knecht/vpl/reduce.wgsl"
+        | "knecht/vpl/warp.wgsl"
+        | "knecht/vpl/bounce.wgsl"
+        | "knecht/vpl/irsm.wgsl"
+        | "knecht/ism/splat.wgsl"
+        | "knecht/ism/resolve.wgsl"
+        | "knecht/ism/pull_push.wgsl"
+        | "knecht/interleave/split.wgsl"
+        | "knecht/interleave/gather.wgsl"
+        | "knecht/interleave/merge.wgsl"
+        | "knecht/interleave/filter.wgsl"
+        | "knecht/temporal/confidence.wgsl"
         | "hcb/base.wgsl"
         | "hcb/build.wgsl"
         | "hcb/samples.wgsl"
@@ -419,12 +419,12 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         | "soler/ring_texel.wgsl"
         | "soler/hcb_gather.wgsl"
         | "soler/voxel_common.wgsl" => "soler",
-        "interleave/explain.wgsl"
+        "knecht/interleave/explain.wgsl"
         | "gautron/explain.wgsl"
         | "soler/explain.wgsl"
         | "soler/explain_ring.wgsl"
         | "hcb/explain.wgsl"
-        | "vpl/explain.wgsl" => "explain",
+        | "reference/explain.wgsl" => "explain",
         "gautron/create.wgsl"
         | "gautron/hemisphere.wgsl"
         | "gautron/reduce.wgsl"

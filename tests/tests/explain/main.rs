@@ -28,14 +28,14 @@ fn the_replays_structs_have_the_sizes_of_their_wgsl_twins() {
     use gi_render::passes::{gautron, knecht, reference, soler};
     use std::mem::size_of;
     let pairs = [
-        ("interleave/explain.wgsl", "VplTerm", size_of::<reference::explain::GpuTerm>()),
-        ("interleave/explain.wgsl", "WindowPixel", size_of::<knecht::explain::GpuWindow>()),
-        ("interleave/explain.wgsl", "Header", size_of::<knecht::explain::GpuHeader>()),
+        ("knecht/interleave/explain.wgsl", "VplTerm", size_of::<reference::explain::GpuTerm>()),
+        ("knecht/interleave/explain.wgsl", "WindowPixel", size_of::<knecht::explain::GpuWindow>()),
+        ("knecht/interleave/explain.wgsl", "Header", size_of::<knecht::explain::GpuHeader>()),
         ("soler/explain.wgsl", "Entry", size_of::<soler::explain::GpuEntry>()),
         ("soler/explain.wgsl", "Header", size_of::<soler::explain::GpuHeader>()),
         ("soler/explain_ring.wgsl", "RingOut", size_of::<soler::explain::GpuRingTerm>()),
-        ("vpl/explain.wgsl", "VplTerm", size_of::<reference::explain::GpuTerm>()),
-        ("vpl/explain.wgsl", "Header", size_of::<reference::explain::GpuHeader>()),
+        ("reference/explain.wgsl", "VplTerm", size_of::<reference::explain::GpuTerm>()),
+        ("reference/explain.wgsl", "Header", size_of::<reference::explain::GpuHeader>()),
         ("gautron/explain.wgsl", "Entry", size_of::<gautron::explain::GpuEntry>()),
         ("gautron/explain.wgsl", "Header", size_of::<gautron::explain::GpuHeader>()),
     ];

@@ -1,6 +1,6 @@
 //! Explain a pixel (issue #42) for the VPL gather at tiles or at every pixel (Knecht 002
 //! §3.4.1, §4.5), the geometry-aware filter after it (§3.4.1, Eq. 4.2) and the confidence
-//! merge (§3.5, Eq. 3.6), in either `temporal.order`. `shaders/interleave/explain.wgsl`
+//! merge (§3.5, Eq. 3.6), in either `temporal.order`. `shaders/knecht/interleave/explain.wgsl`
 //! replays every VPL slot's term at the pixel of the filter's window that its tile reached,
 //! with the frame's own inputs, and reads the buffers the frame wrote there; [`decode`] turns
 //! that into the pixel's contributions and checks (`crate::explain`). CPU twin of each term:
@@ -154,7 +154,7 @@ impl VplExplainPass {
                 bgl::uint_texture(21, cs),
             ],
         });
-        let module = crate::shaders::create_module(device, "interleave/explain.wgsl");
+        let module = crate::shaders::create_module(device, "knecht/interleave/explain.wgsl");
         let pipeline = |label, entry| crate::passes::compute_pipeline(device, label, &module, entry, &[&layout]);
         let (dummy_ism, dummy_exact) =
             crate::passes::reference::vpl_visibility::no_visibility_atlases(device, "explain.vpl");

@@ -5,7 +5,7 @@
 //! `indirect.irradiance`), and the geometry-aware n×n box filter smooths the tiles away
 //! (`indirect.filtered`; by default demodulated: the irradiance is filtered and reflected
 //! with each pixel's own colour, issue #51).
-//! Shaders: `shaders/interleave/{split,gather,merge,filter}.wgsl`.
+//! Shaders: `shaders/knecht/interleave/{split,gather,merge,filter}.wgsl`.
 //!
 //! The thesis draws one quad per VPL over its tile ("tiled mesh geometry", §3.4.2) so that
 //! one draw call shades all VPLs; here one compute dispatch over the split G-buffer does
@@ -18,6 +18,7 @@ use glam::Vec4;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::gbuffer::{ALBEDO_FORMAT, GBufferViews, MATERIAL_FORMAT, NORMAL_FORMAT, POSITION_FORMAT};
 use crate::passes::reference::vpl_visibility::{GatherVisibility, no_visibility_atlases};
 use crate::settings_group;
@@ -70,7 +71,7 @@ pub struct SplitParams {
     pub n: [u32; 4],
 }
 
-/// Uniform of the gather; WGSL twin: `GatherParams` in `shaders/interleave/gather.wgsl`.
+/// Uniform of the gather; WGSL twin: `GatherParams` in `shaders/knecht/interleave/gather.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GatherParams {
@@ -131,6 +132,24 @@ pub struct InterleavePass {
     /// Gathers run so far: the seed of the per-frame slot→tile map.
     pub frames: u32,
 }
+
+/// The geometry-aware filter's bindings (`knecht/interleave/filter.wgsl`, group 0).
+pub const FILTER_BINDINGS: Bindings = Bindings {
+    label: "interleave.filter.inputs",
+    shader: "knecht/interleave/filter.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::Uniform),
+        binding(1, "src", Kind::Texture { filterable: false }),
+        binding(2, "g_position", Kind::Texture { filterable: false }),
+        binding(3, "g_normal", Kind::Texture { filterable: false }),
+        binding(4, "dst", Kind::StorageTexture(LIGHT_FORMAT)),
+        binding(5, "irradiance", Kind::Texture { filterable: false }),
+        binding(6, "g_albedo", Kind::Texture { filterable: false }),
+        binding(7, "dst_irradiance", Kind::StorageTexture(LIGHT_FORMAT)),
+    ],
+};
 
 /// What the gather at tiles or pixels reads (Knecht 002 §3.5): the camera, the G-buffer,
 /// stage 3's VPLs and stage 4's visibility.
@@ -197,28 +216,16 @@ impl InterleavePass {
             label: Some("interleave.merge.inputs"),
             entries: &[bgl::uniform(0, cs), t(1), bgl::storage_texture(2, LIGHT_FORMAT)],
         });
-        let filter_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("interleave.filter.inputs"),
-            entries: &[
-                bgl::uniform(0, cs),
-                t(1),
-                t(2),
-                t(3),
-                bgl::storage_texture(4, LIGHT_FORMAT),
-                t(5),
-                t(6),
-                bgl::storage_texture(7, LIGHT_FORMAT),
-            ],
-        });
+        let filter_layout = FILTER_BINDINGS.layout(device);
         let module = |p| crate::shaders::create_module(device, p);
         let split_pipeline = crate::passes::compute_pipeline(
             device,
             "interleave.split",
-            &module("interleave/split.wgsl"),
+            &module("knecht/interleave/split.wgsl"),
             "cs_split",
             &[&split_layout],
         );
-        let gather_module = module("interleave/gather.wgsl");
+        let gather_module = module("knecht/interleave/gather.wgsl");
         let gather_pipeline = crate::passes::compute_pipeline(
             device,
             "interleave.gather",
@@ -236,14 +243,14 @@ impl InterleavePass {
         let merge_pipeline = crate::passes::compute_pipeline(
             device,
             "interleave.merge",
-            &module("interleave/merge.wgsl"),
+            &module("knecht/interleave/merge.wgsl"),
             "cs_merge",
             &[&merge_layout],
         );
         let filter_pipeline = crate::passes::compute_pipeline(
             device,
             "interleave.filter",
-            &module("interleave/filter.wgsl"),
+            &module("knecht/interleave/filter.wgsl"),
             "cs_filter",
             &[&filter_layout],
         );
@@ -580,20 +587,17 @@ impl InterleavePass {
         // Without it the shader reads no irradiance: `src` stands in for the binding.
         let irradiance = irradiance.unwrap_or(src);
         let tv = wgpu::BindingResource::TextureView;
-        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("interleave.filter.inputs"),
-            layout: &self.filter_layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: self.filter_params.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: tv(src) },
-                wgpu::BindGroupEntry { binding: 2, resource: tv(&g.position) },
-                wgpu::BindGroupEntry { binding: 3, resource: tv(&g.normal) },
-                wgpu::BindGroupEntry { binding: 4, resource: tv(&dst) },
-                wgpu::BindGroupEntry { binding: 5, resource: tv(irradiance) },
-                wgpu::BindGroupEntry { binding: 6, resource: tv(&g.albedo) },
-                wgpu::BindGroupEntry { binding: 7, resource: tv(&dst_irradiance) },
-            ],
-        });
+        let resources = [
+            self.filter_params.as_entire_binding(),
+            tv(src),
+            tv(&g.position),
+            tv(&g.normal),
+            tv(&dst),
+            tv(irradiance),
+            tv(&g.albedo),
+            tv(&dst_irradiance),
+        ];
+        let group = FILTER_BINDINGS.group(&ctx.device, &self.filter_layout, resources);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("interleave.filter"),
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),

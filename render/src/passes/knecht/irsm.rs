@@ -1,8 +1,8 @@
 //! The multi-bounce baseline of Knecht 002 §3.6 (Ritschel et al. 2008): imperfect reflective
 //! shadow maps. Per bounce, every source VPL's IRSM is splatted from its N-th of the point
-//! cloud (`shaders/ism/splat.wgsl` `cs_splat`, `cs_owner`), its texels weighted by the
+//! cloud (`shaders/knecht/ism/splat.wgsl` `cs_splat`, `cs_owner`), its texels weighted by the
 //! illumination of the point that owns them, and the next bounce's N VPLs importance-sampled
-//! from all IRSMs together (`shaders/vpl/irsm.wgsl`, documented there; CPU twin
+//! from all IRSMs together (`shaders/knecht/vpl/irsm.wgsl`, documented there; CPU twin
 //! `cpu::knecht::irsm_pick`). Table 5.3 of the thesis compares its time with §3.6.1's
 //! ([`crate::passes::knecht::vpl_bounce`]); `gi-lab bench --suite knecht` reproduces it.
 
@@ -93,8 +93,8 @@ impl IrsmPass {
             label: Some("irsm.sample.inputs"),
             entries: &entries,
         });
-        let m_splat = crate::shaders::create_module(device, "ism/splat.wgsl");
-        let m_irsm = crate::shaders::create_module(device, "vpl/irsm.wgsl");
+        let m_splat = crate::shaders::create_module(device, "knecht/ism/splat.wgsl");
+        let m_irsm = crate::shaders::create_module(device, "knecht/vpl/irsm.wgsl");
         let splat_pipeline =
             crate::passes::compute_pipeline(device, "irsm.splat", &m_splat, "cs_splat", &[&splat_layout]);
         let owner_pipeline =

@@ -1,7 +1,7 @@
 //! Stage 4, imperfect shadow maps (Knecht 002 §2.6.5 after Ritschel et al. 2008): a point
 //! cloud on the scene's triangles, splatted into one paraboloid map per VPL in one atlas
 //! (`ism.atlas`), then pull-push fills the holes (`ism.atlas_pulled`, one mip per level).
-//! Shaders: `shaders/ism/{splat,resolve,pull_push}.wgsl`, `shaders/common/ism.wgsl`; CPU
+//! Shaders: `shaders/knecht/ism/{splat,resolve,pull_push}.wgsl`, `shaders/common/ism.wgsl`; CPU
 //! twins in `cpu::knecht`.
 //!
 //! Point cloud (§2.6.5, §5.1): triangles are chosen with probability ∝ area × the object's
@@ -150,7 +150,7 @@ pub struct IsmJob {
     resolve: wgpu::BindGroup,
 }
 
-/// Bind group layout of `shaders/ism/splat.wgsl` (the ISMs' and the IRSM baseline's splats):
+/// Bind group layout of `shaders/knecht/ism/splat.wgsl` (the ISMs' and the IRSM baseline's splats):
 /// params (dynamic), points, instances, VPLs, distances, IRSM owners.
 pub fn splat_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
     crate::passes::uniform_and_storage_layout(device, label, &[true, true, true, false, false])
@@ -198,7 +198,7 @@ impl IsmLayout {
     }
 }
 
-/// Uniform of the splat pass; WGSL twin: `SplatParams` in `shaders/ism/splat.wgsl`.
+/// Uniform of the splat pass; WGSL twin: `SplatParams` in `shaders/knecht/ism/splat.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct SplatParams {
@@ -214,7 +214,7 @@ pub struct SplatParams {
 /// Most light bounces (`vpl.bounces`); one splat uniform slot each.
 pub const MAX_BOUNCES: u32 = 6;
 
-/// Uniform of one pull-push level; WGSL twin: `LevelParams` in `shaders/ism/pull_push.wgsl`.
+/// Uniform of one pull-push level; WGSL twin: `LevelParams` in `shaders/knecht/ism/pull_push.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct LevelParams {
@@ -298,9 +298,9 @@ impl IsmPass {
                 },
             ],
         });
-        let m_splat = crate::shaders::create_module(device, "ism/splat.wgsl");
-        let m_resolve = crate::shaders::create_module(device, "ism/resolve.wgsl");
-        let m_pp = crate::shaders::create_module(device, "ism/pull_push.wgsl");
+        let m_splat = crate::shaders::create_module(device, "knecht/ism/splat.wgsl");
+        let m_resolve = crate::shaders::create_module(device, "knecht/ism/resolve.wgsl");
+        let m_pp = crate::shaders::create_module(device, "knecht/ism/pull_push.wgsl");
         let splat_pipeline =
             crate::passes::compute_pipeline(device, "ism.splat", &m_splat, "cs_splat", &[&splat_layout]);
         let resolve_pipeline =

@@ -2,8 +2,8 @@
 //! importance and hierarchical warping with further bounces (`vpl_importance`, `vpl_bounce`,
 //! `irsm`), imperfect shadow maps with pull-push (`ism`), interleaved sampling and the
 //! geometry-aware filter (`interleave`), the confidence merge (`temporal`). `stage` runs
-//! stages 3–4 for the frame. Shaders: `shaders/vpl/{importance,reduce,warp,bounce,irsm}.wgsl`,
-//! `shaders/ism/`, `shaders/interleave/`, `shaders/temporal/`.
+//! stages 3–4 for the frame. Shaders: `shaders/knecht/vpl/{importance,reduce,warp,bounce,irsm}.wgsl`,
+//! `shaders/knecht/ism/`, `shaders/knecht/interleave/`, `shaders/knecht/temporal/`.
 
 pub mod explain;
 pub mod interleave;

@@ -22,7 +22,7 @@ settings_enum! {
     default Halton
 }
 
-/// One point of the cloud on the GPU; WGSL twin: `IsmPoint` in `shaders/ism/splat.wgsl`.
+/// One point of the cloud on the GPU; WGSL twin: `IsmPoint` in `shaders/knecht/ism/splat.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuPoint {
@@ -37,7 +37,7 @@ pub struct GpuPoint {
 }
 
 /// What a point's surface reflects, for the bounce selection (Knecht 002 §3.6.1); WGSL twin:
-/// `PointSurface` in `shaders/vpl/bounce.wgsl`: the base colour factor × the base colour texture
+/// `PointSurface` in `shaders/knecht/vpl/bounce.wgsl`: the base colour factor × the base colour texture
 /// at the point (the path tracer of `cpu::pathtrace` reads it the same way).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]

@@ -2,7 +2,7 @@
 //! indirect light, depth and normals, reprojected through the movement buffer, are blended
 //! with this frame's by the confidence of Eq. 3.1–3.4 (`temporal.confidence`) and the merge
 //! of Eq. 3.6 (`temporal.history`, rgb = light, a = depth). Shader:
-//! `shaders/temporal/confidence.wgsl`; CPU twin: `cpu::knecht::confidence`.
+//! `shaders/knecht/temporal/confidence.wgsl`; CPU twin: `cpu::knecht::confidence`.
 //!
 //! History and normals ping-pong between two textures each, with no copy (issue #38): the
 //! pass reads last frame's pair and writes this frame's, the G-buffer normals included as it
@@ -22,7 +22,7 @@ use glam::Vec4;
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::gbuffer::{GBufferViews, NORMAL_FORMAT};
 use crate::settings_group;
 use crate::timing::PassRec;
@@ -85,6 +85,30 @@ settings_group! {
 /// Format of the demodulated merge's split history: E and S as three half-float pairs.
 pub const SPLIT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
 
+/// The confidence merge's bindings (`knecht/temporal/confidence.wgsl`, group 0).
+pub const CONFIDENCE_BINDINGS: Bindings = Bindings {
+    label: "temporal.confidence.inputs",
+    shader: "knecht/temporal/confidence.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::Uniform),
+        binding(1, "current", Kind::Texture { filterable: false }),
+        binding(2, "g_position", Kind::Texture { filterable: false }),
+        binding(3, "g_normal", Kind::Texture { filterable: false }),
+        binding(4, "g_motion", Kind::Texture { filterable: false }),
+        binding(5, "prev_normal", Kind::Texture { filterable: false }),
+        binding(6, "history_prev", Kind::Texture { filterable: false }),
+        binding(7, "confidence_out", Kind::StorageTexture(wgpu::TextureFormat::R32Float)),
+        binding(8, "history_out", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(9, "normal_out", Kind::StorageTexture(NORMAL_FORMAT)),
+        binding(10, "g_albedo", Kind::Texture { filterable: false }),
+        binding(11, "irradiance", Kind::Texture { filterable: false }),
+        binding(12, "split_prev", Kind::UintTexture),
+        binding(13, "split_out", Kind::StorageTexture(SPLIT_FORMAT)),
+    ],
+};
+
 /// A 1×1 stand-in for the split history, bound by the explain replays when the merge did not
 /// run demodulated.
 pub fn no_split_view(device: &wgpu::Device, label: &str) -> wgpu::TextureView {
@@ -131,28 +155,8 @@ pub struct TemporalPass {
 impl TemporalPass {
     pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let t = |b| bgl::texture(b, cs, false);
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("temporal.confidence.inputs"),
-            entries: &[
-                bgl::uniform(0, cs),
-                t(1),
-                t(2),
-                t(3),
-                t(4),
-                t(5),
-                t(6),
-                bgl::storage_texture(7, wgpu::TextureFormat::R32Float),
-                bgl::storage_texture(8, wgpu::TextureFormat::Rgba32Float),
-                bgl::storage_texture(9, NORMAL_FORMAT),
-                t(10),
-                t(11),
-                bgl::uint_texture(12, cs),
-                bgl::storage_texture(13, SPLIT_FORMAT),
-            ],
-        });
-        let module = crate::shaders::create_module(device, "temporal/confidence.wgsl");
+        let layout = CONFIDENCE_BINDINGS.layout(device);
+        let module = crate::shaders::create_module(device, "knecht/temporal/confidence.wgsl");
         let pipeline =
             crate::passes::compute_pipeline(device, "temporal.confidence", &module, "cs_confidence", &[&layout]);
         let params = device.counted_buffer(&wgpu::BufferDescriptor {
@@ -201,7 +205,7 @@ impl TemporalPass {
     }
 
     /// The split history this frame's demodulated merge read (E and S of last frame, packed as
-    /// `shaders/temporal/confidence.wgsl` says), or None when this frame did not merge
+    /// `shaders/knecht/temporal/confidence.wgsl` says), or None when this frame did not merge
     /// demodulated or last frame left no split history.
     pub fn split_prev(&self) -> Option<&wgpu::Texture> {
         let split = self.split.as_ref()?;
@@ -300,27 +304,23 @@ impl TemporalPass {
         let (split_prev, split_out) =
             (v(&split[read], "temporal.history_split_prev"), v(&split[write], "temporal.history_split"));
         let tv = wgpu::BindingResource::TextureView;
-        let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
-        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("temporal.confidence.inputs"),
-            layout: &self.layout,
-            entries: &[
-                entry(0, self.params.as_entire_binding()),
-                entry(1, tv(current)),
-                entry(2, tv(&g.position)),
-                entry(3, tv(&g.normal)),
-                entry(4, tv(&g.motion)),
-                entry(5, tv(&prev_n)),
-                entry(6, tv(&hist_prev)),
-                entry(7, tv(&conf)),
-                entry(8, tv(&hist)),
-                entry(9, tv(&normal_out)),
-                entry(10, tv(&g.albedo)),
-                entry(11, tv(irradiance.unwrap_or(current))),
-                entry(12, tv(&split_prev)),
-                entry(13, tv(&split_out)),
-            ],
-        });
+        let resources = [
+            self.params.as_entire_binding(),
+            tv(current),
+            tv(&g.position),
+            tv(&g.normal),
+            tv(&g.motion),
+            tv(&prev_n),
+            tv(&hist_prev),
+            tv(&conf),
+            tv(&hist),
+            tv(&normal_out),
+            tv(&g.albedo),
+            tv(irradiance.unwrap_or(current)),
+            tv(&split_prev),
+            tv(&split_out),
+        ];
+        let group = CONFIDENCE_BINDINGS.group(&ctx.device, &self.layout, resources);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("temporal.confidence"),

@@ -1,6 +1,6 @@
 //! Stage 3, further light bounces of instant radiosity (Knecht 002 §3.6.1): per VPL of a
 //! bounce, one point of the point cloud among those assigned to it becomes a VPL of the next
-//! bounce; `shaders/vpl/bounce.wgsl` (documented there), CPU twins
+//! bounce; `shaders/knecht/vpl/bounce.wgsl` (documented there), CPU twins
 //! `cpu::knecht::{bounce_incident, select_bounce}`.
 //!
 //! The VPL list (`vpl.list`) holds the bounces one after another: bounce b in slots
@@ -95,7 +95,7 @@ impl VplBouncePass {
             label: Some("vpl.bounce.inputs"),
             entries: &entries,
         });
-        let module = crate::shaders::create_module(device, "vpl/bounce.wgsl");
+        let module = crate::shaders::create_module(device, "knecht/vpl/bounce.wgsl");
         let pipeline = crate::passes::compute_pipeline(device, "vpl.bounce", &module, "cs_bounce", &[&layout]);
         let params = crate::passes::uniform_buffer(device, "vpl.bounce.params", STRIDE * MAX_BOUNCES as u64);
         Self { layout, pipeline, params }

@@ -3,7 +3,7 @@
 //! its texels get the importance of Eq. 4.3 (`vpl.importance`, one layer per view with its
 //! mip pyramid), and one pass per view warps a Halton set down the pyramid (hierarchical
 //! warping, Clarberg et al. 2005) and creates the VPLs (`vpl.list`).
-//! Shaders: `shaders/vpl/{importance,reduce,warp}.wgsl`; CPU twins in `cpu::knecht`.
+//! Shaders: `shaders/knecht/vpl/{importance,reduce,warp}.wgsl`; CPU twins in `cpu::knecht`.
 //!
 //! The VPL budget N is split over the views by the lights' power ([`view_powers`]): the
 //! thesis samples one spot light; point lights' cube maps were not importance-sampled there
@@ -106,7 +106,7 @@ impl VplSettings {
 }
 
 /// Uniform of one view's importance and warp passes; WGSL twin: `ViewParams` in
-/// `shaders/vpl/importance.wgsl` and `shaders/vpl/warp.wgsl`.
+/// `shaders/knecht/vpl/importance.wgsl` and `shaders/knecht/vpl/warp.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ViewParams {
@@ -241,9 +241,9 @@ impl VplImportancePass {
                 bgl::storage(8, cs, false),
             ],
         });
-        let m_imp = crate::shaders::create_module(device, "vpl/importance.wgsl");
-        let m_red = crate::shaders::create_module(device, "vpl/reduce.wgsl");
-        let m_warp = crate::shaders::create_module(device, "vpl/warp.wgsl");
+        let m_imp = crate::shaders::create_module(device, "knecht/vpl/importance.wgsl");
+        let m_red = crate::shaders::create_module(device, "knecht/vpl/reduce.wgsl");
+        let m_warp = crate::shaders::create_module(device, "knecht/vpl/warp.wgsl");
         let importance_pipeline =
             crate::passes::compute_pipeline(device, "vpl.importance", &m_imp, "cs_importance", &[&importance_layout]);
         let reduce_pipeline =

@@ -1,4 +1,4 @@
-//! Explain a pixel (issue #42) for the exact-VPL reference: `shaders/vpl/explain.wgsl` reads
+//! Explain a pixel (issue #42) for the exact-VPL reference: `shaders/reference/explain.wgsl` reads
 //! the running average before this frame's gather, then replays the batch's VPL terms at the
 //! pixel with the gather's own functions and uniform (Knecht 002 Eq. 4.7–4.9, full BRDF, exact
 //! visibility) and reads what the gather wrote; [`decode`] makes each VPL's share (its light
@@ -101,7 +101,7 @@ impl ReferenceExplainPass {
                 bgl::storage(11, cs, false),
             ],
         });
-        let module = crate::shaders::create_module(device, "vpl/explain.wgsl");
+        let module = crate::shaders::create_module(device, "reference/explain.wgsl");
         let pipeline = |label, entry| crate::passes::compute_pipeline(device, label, &module, entry, &[&layout]);
         Self {
             before: pipeline("explain.reference.before", "cs_explain_before"),

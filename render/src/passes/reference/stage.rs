@@ -1,7 +1,7 @@
 //! Stages 3, 4, 6 and 7 with the VPL source "uniform batches" (the exact-VPL reference,
 //! Knecht 002 §5.2): one batch of uniformly sampled VPLs from one light view per frame, their
 //! exact cube-face visibility (or none), and the full-BRDF gather at every pixel folded into
-//! the running average (`vpl/gather.wgsl` weights batch k by 1/(k+1): the gather and the
+//! the running average (`reference/gather.wgsl` weights batch k by 1/(k+1): the gather and the
 //! temporal choice "running average" are one shader). Once `total_vpls` are in, the average
 //! is kept as it is; anything the image depends on restarts it.
 //!

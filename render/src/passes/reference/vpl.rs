@@ -1,6 +1,6 @@
 //! Stage 3 for the exact-VPL reference (issue #3): the light G-buffer of Knecht 002 §4.3
 //! (`vpl.light_gbuffer.*`, this crate's G-buffer pass rendered from one light view) and VPLs
-//! placed by stratified uniform sampling of its texels (`shaders/vpl/sample.wgsl`: a
+//! placed by stratified uniform sampling of its texels (`shaders/reference/sample.wgsl`: a
 //! Halton point set over the view, randomly rotated by the seed).
 //!
 //! The reference renders many VPLs progressively: each frame is one *batch* of
@@ -78,7 +78,7 @@ pub struct GpuVpl {
     pub albedo: Vec4,
 }
 
-/// Uniform of the sampling pass; WGSL twin: `Params` in `shaders/vpl/sample.wgsl`.
+/// Uniform of the sampling pass; WGSL twin: `Params` in `shaders/reference/sample.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct SampleParams {
@@ -125,7 +125,7 @@ impl VplSamplePass {
             layout: &light_gbuffer.camera_layout,
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: camera_buffer.as_entire_binding() }],
         });
-        let module = crate::shaders::create_module(device, "vpl/sample.wgsl");
+        let module = crate::shaders::create_module(device, "reference/sample.wgsl");
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("vpl.sample.inputs"),
             entries: &[

@@ -1,5 +1,5 @@
 //! Stage 6 for the exact-VPL reference: every pixel gathers the batch's VPLs with exact
-//! visibility and the full BRDF at both ends (`shaders/vpl/gather.wgsl`, the VPL shading of
+//! visibility and the full BRDF at both ends (`shaders/reference/gather.wgsl`, the VPL shading of
 //! Knecht 002 Eq. 4.7–4.9 without its approximations), writes the batch to `indirect.raw`
 //! and averages the batches into `indirect.accum` (batch k has weight 1/(k+1)), which the
 //! compose pass adds to the direct light.
@@ -15,7 +15,7 @@ use crate::timing::PassRec;
 
 pub const INDIRECT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
-/// Uniform of the gather; WGSL twin: `Params` in `shaders/vpl/gather.wgsl`.
+/// Uniform of the gather; WGSL twin: `Params` in `shaders/reference/gather.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GatherParams {
@@ -46,7 +46,7 @@ impl VplGatherPass {
     pub fn new(ctx: &GpuContext, camera_layout_entry: wgpu::BindGroupLayoutEntry, width: u32, height: u32) -> Self {
         let device = &ctx.device;
         let cs = wgpu::ShaderStages::COMPUTE;
-        let module = crate::shaders::create_module(device, "vpl/gather.wgsl");
+        let module = crate::shaders::create_module(device, "reference/gather.wgsl");
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("indirect.gather.inputs"),
             entries: &[

@@ -3,7 +3,7 @@
 //! oriented on its normal that cover its hemisphere — rendered from the real triangles into
 //! one `Depth32Float` atlas (`vpl.shadow_atlas`). The reference Knecht 002 §5.2 measures
 //! imperfect shadow maps against.
-//! Shaders: `shaders/vpl/shadow.wgsl`; the face geometry is in `shaders/common/vpl.wgsl`.
+//! Shaders: `shaders/reference/shadow.wgsl`; the face geometry is in `shaders/common/vpl.wgsl`.
 //!
 //! Departure from a paraboloid map per VPL (the form ISMs take): a paraboloid projection
 //! bends straight triangle edges, so large triangles render wrong; cube faces are exact.
@@ -27,7 +27,7 @@ pub const FACES: u32 = 5;
 const FACE_STRIDE: u64 = 256;
 
 /// Uniform of the depth render and of the gather's lookups; WGSL twin: `Params` in
-/// `shaders/vpl/shadow.wgsl`.
+/// `shaders/reference/shadow.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct VisibilityParams {
@@ -89,7 +89,7 @@ impl VplVisibilityPass {
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
         let device = &ctx.device;
         let vs = wgpu::ShaderStages::VERTEX;
-        let module = crate::shaders::create_module(device, "vpl/shadow.wgsl");
+        let module = crate::shaders::create_module(device, "reference/shadow.wgsl");
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("vpl.shadow.inputs"),
             entries: &[

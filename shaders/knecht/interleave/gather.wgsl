@@ -10,7 +10,7 @@
 #import common/camera.wgsl
 #import common/ism.wgsl
 #import common/fullscreen.wgsl
-#import interleave/params.wgsl
+#import knecht/interleave/params.wgsl
 
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(0) @binding(1) var<uniform> params: GatherParams;

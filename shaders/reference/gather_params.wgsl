@@ -1,5 +1,5 @@
 // The exact-VPL reference's gather uniform (Rust twin: passes::reference::vpl_gather::GatherParams),
-// shared by the gather (vpl/gather.wgsl) and its replay at a pinned pixel (vpl/explain.wgsl).
+// shared by the gather (reference/gather.wgsl) and its replay at a pinned pixel (reference/explain.wgsl).
 struct Params {
     // x: VPL count of the batch, y: atlas columns, z: tile size, w: weight of this batch 1/(k+1)
     batch: vec4<f32>,

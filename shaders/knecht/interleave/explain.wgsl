@@ -13,7 +13,7 @@
 #import common/ism.wgsl
 #import common/reproject.wgsl
 #import common/vpl_explain.wgsl
-#import interleave/params.wgsl
+#import knecht/interleave/params.wgsl
 #import common/brdf.wgsl
 #import common/split_light.wgsl
 
@@ -21,7 +21,7 @@ struct ExplainParams {
     // x, y: the pixel p; z: the filter's window side (n with the filter, else 1); w: 1 when
     // the confidence merge ran (temporal.confidence and the histories are bound)
     pixel: vec4<u32>,
-    // x: α · (z_far − z_near), y: β (interleave/filter.wgsl); z: 1 when the filter ran
+    // x: α · (z_far − z_near), y: β (knecht/interleave/filter.wgsl); z: 1 when the filter ran
     // demodulated (issue #51); w: 1 when the merge ran demodulated (its history is split_prev)
     thresholds: vec4<f32>,
 }
@@ -105,7 +105,7 @@ fn window_pixel(t: u32) -> vec2<i32> {
     return vec2<i32>(-1, -1);
 }
 
-// The filter's test of q against p (interleave/filter.wgsl).
+// The filter's test of q against p (knecht/interleave/filter.wgsl).
 fn accepted(p: vec2<i32>, q: vec2<i32>) -> bool {
     let size = vec2<i32>(textureDimensions(g_normal));
     if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) {

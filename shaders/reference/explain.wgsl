@@ -1,4 +1,4 @@
-// Explain a pixel (issue #42) for the exact-VPL reference (vpl/gather.wgsl): this batch's
+// Explain a pixel (issue #42) for the exact-VPL reference (reference/gather.wgsl): this batch's
 // VPLs at pixel p term by term, with the same functions the gather calls (Knecht 002
 // Eq. 4.7–4.9 with the full BRDF, the exact cube-face visibility), and the running average
 // they are folded into (batch k weighs 1/(k+1)). cs_explain_before reads the average before
@@ -8,7 +8,7 @@
 #import common/brdf.wgsl
 #import common/vpl.wgsl
 #import common/vpl_explain.wgsl
-#import vpl/gather_params.wgsl
+#import reference/gather_params.wgsl
 
 struct Header {
     // x, y: the pixel; z: the batch's VPL count
@@ -69,7 +69,7 @@ fn cs_explain_terms(@builtin(global_invocation_id) gid: vec3<u32>) {
     let dmin2 = params.clip.w * params.clip.w;
     let si = select(mat.x, 0.0, params.bias.w > 0.5);
     let seen = vpl_term(vpl, x, nx, camera.position.xyz, alb.rgb, vec3<f32>(alb.a, si, mat.y), dmin2, params.near.x);
-    // The gather's exact test, with the reference's own biases (vpl/gather.wgsl).
+    // The gather's exact test, with the reference's own biases (reference/gather.wgsl).
     var test = vec3<f32>(1.0, 0.0, 0.0);
     if (params.bias.z > 0.5) {
         let cols = u32(params.batch.y);

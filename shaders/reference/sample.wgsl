@@ -12,7 +12,7 @@
 // (N VPLs over R² texels, this view one of the V views taken in turn), so that the set is
 // an unbiased estimate of the power the light delivers to the visible surfaces. The
 // reference keeps this uniform sampling; Knecht's importance sampling by hierarchical warping
-// (§3.3, §4.4) is `vpl/importance.wgsl`.
+// (§3.3, §4.4) is `knecht/vpl/importance.wgsl`.
 #import common/lights.wgsl
 #import common/vpl.wgsl
 #import common/random.wgsl

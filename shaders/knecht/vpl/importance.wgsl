@@ -1,7 +1,7 @@
 // Stage 3 (Knecht 002 §4.3): the importance of every light G-buffer texel, Eq. 4.3,
 //   importance = lightIntensity · (surfaceColor · lightColor) · (0.5 + SP),
 // and its mip pyramid (each level the average of its 2×2 children) that hierarchical
-// warping descends (vpl/warp.wgsl). Readings chosen:
+// warping descends (knecht/vpl/warp.wgsl). Readings chosen:
 // - ⚠[knecht.importance-flux] lightIntensity · lightColor is the flux the light sends through
 //   the texel (common/light_view.wgsl), so that the importance is proportional to the VPL's
 //   power;

@@ -7,7 +7,7 @@
 // mean irradiance E is reflected with the centre's own diffuse reflectance k = c·DI/π and the
 // mean of the specular light S = L − k·E is added, so that the albedo's texture is not
 // blurred; n.y = 0 averages L as the thesis does. The mean irradiance goes to
-// `indirect.filtered_irradiance` for the demodulated confidence merge (temporal/confidence.wgsl).
+// `indirect.filtered_irradiance` for the demodulated confidence merge (knecht/temporal/confidence.wgsl).
 #import common/fullscreen.wgsl
 #import common/brdf.wgsl
 

@@ -8,7 +8,7 @@
 #import common/brdf.wgsl
 #import common/vpl.wgsl
 #import common/fullscreen.wgsl
-#import vpl/gather_params.wgsl
+#import reference/gather_params.wgsl
 
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(0) @binding(1) var<uniform> params: Params;

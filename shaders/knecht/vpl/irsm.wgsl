@@ -1,6 +1,6 @@
 // The multi-bounce baseline of Knecht 002 §3.6 after Ritschel et al. 2008: imperfect
 // reflective shadow maps. Each VPL of the source bounce gets an IRSM splatted from its
-// N-th of the point cloud (ism/splat.wgsl cs_splat + cs_owner: every texel knows the nearest
+// N-th of the point cloud (knecht/ism/splat.wgsl cs_splat + cs_owner: every texel knows the nearest
 // point that covers it), whose texels store that point's illumination from the VPL; the
 // next bounce's N VPLs are then importance-sampled from all IRSMs together (so one source
 // VPL may get several new VPLs, or none, unlike §3.6.1).

@@ -1,5 +1,5 @@
 // The VPL gather's uniform (Rust twin: passes::knecht::interleave::GatherParams), shared by
-// the gather (interleave/gather.wgsl) and its replay at a pinned pixel (interleave/explain.wgsl).
+// the gather (knecht/interleave/gather.wgsl) and its replay at a pinned pixel (knecht/interleave/explain.wgsl).
 struct GatherParams {
     // x: n, y: tile width, z: tile height, w: VPL count N
     split: vec4<u32>,
