@@ -19,6 +19,7 @@ pub(super) fn timings_ui(st: &mut State, ui: &mut egui::Ui) {
             if l.renderer.timing_source() == gi_render::timing::TimingSource::Off {
                 ui.colored_label(ui.visuals().warn_fg_color, "this device has no GPU timestamps: the window does not time passes, because timing without them means waiting for the GPU after every pass; `gi-lab bench` times each pass by the wall clock");
             }
+            steps_ui(ui, &l.renderer);
             egui::Grid::new("timings").num_columns(2).striped(true).show(ui, |ui| {
                 let mut total = 0.0;
                 for t in l.renderer.timings() {
@@ -34,7 +35,6 @@ pub(super) fn timings_ui(st: &mut State, ui: &mut egui::Ui) {
                 ui.end_row();
             });
             ui.small("hover a pass to see its output in the viewport");
-            steps_ui(ui, &l.renderer);
         });
         let names: Vec<String> = l.renderer.timings().iter().map(|t| t.name.clone()).collect();
         Plot::new("timing_history").legend(Legend::default()).y_axis_label("ms").x_axis_label("frame").show(
@@ -56,19 +56,15 @@ pub(super) fn timings_ui(st: &mut State, ui: &mut egui::Ui) {
 }
 
 /// Stages 3–7 of the frame as the list of steps the stage choices compose (`gi_render::chain`),
-/// and the step that found no pass to run, if one did.
+/// on one wrapped line above the passes, and the step that found no pass to run, if one did.
 fn steps_ui(ui: &mut egui::Ui, r: &gi_render::Renderer) {
-    let steps = r.frame_steps();
-    ui.separator();
-    ui.label("this frame's steps (stage · step)")
-        .on_hover_text("stages 3–7 as the stage choices compose them; docs/architecture.md, 'The frame as a list'");
-    if steps.is_empty() {
-        ui.small("direct light only (gather: none)");
-    }
-    for (stage, name) in steps {
-        ui.monospace(format!("{stage} · {name}"));
-    }
+    let steps: Vec<String> = r.frame_steps().iter().map(|(stage, name)| format!("{stage} {name}")).collect();
+    let text = if steps.is_empty() { "none: direct light only".to_string() } else { steps.join(" → ") };
+    ui.add(egui::Label::new(egui::RichText::new(format!("steps: {text}")).small()).wrap()).on_hover_text(
+        "stages 3–7 as the stage choices compose them (stage, step), in frame order; docs/architecture.md, 'The frame as a list'",
+    );
     if let Some(step) = r.failed_step() {
         ui.colored_label(ui.visuals().error_fg_color, format!("{step} found no pass to run: no indirect light"));
     }
+    ui.separator();
 }
