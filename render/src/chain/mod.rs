@@ -135,8 +135,8 @@ fn no_visibility(_: &FrameInputs, _: &mut StagePasses, _: &mut Recorder, flow: &
 /// The steps of the stage choices, built when they change.
 #[derive(Default)]
 pub(crate) struct StepList {
-    /// The choices the list was built for.
-    key: String,
+    /// The choices the list was built for (None: not built yet).
+    key: Option<ListKey>,
     /// Stages 3–7's indirect light (empty: direct light only).
     pub indirect: Vec<Step>,
     /// Stage 6's near field (`pipeline.near_field`), added to the indirect light by the compose.
@@ -149,10 +149,8 @@ pub(crate) struct StepList {
 impl StepList {
     /// Builds the list again when the stage choices in `s` changed.
     pub(crate) fn update(&mut self, s: &LabSettings) {
-        let key = list_key(s);
-        if key != self.key {
+        if self.key.as_ref() != Some(&list_key(s)) {
             *self = Self::build(s);
-            self.key = key;
         }
     }
 
@@ -164,7 +162,7 @@ impl StepList {
         } else {
             vec![]
         };
-        Self { key: list_key(s), indirect: indirect_steps(s), near_field, failed: None }
+        Self { key: Some(list_key(s)), indirect: indirect_steps(s), near_field, failed: None }
     }
 
     /// Runs the indirect light's steps, then the near field's: (indirect, near field).
@@ -191,8 +189,10 @@ impl StepList {
 }
 
 /// What the list depends on: the stage choices and the order of the filter and the merge.
-fn list_key(s: &LabSettings) -> String {
-    format!("{:?} {:?}", s.pipeline, s.temporal.order)
+type ListKey = (crate::pipeline::PipelineSettings, crate::passes::knecht::temporal::MergeOrder);
+
+fn list_key(s: &LabSettings) -> ListKey {
+    (s.pipeline.clone(), s.temporal.order)
 }
 
 /// Runs `steps` in order: the light of the last (None: direct light only), or the name of
