@@ -1,4 +1,4 @@
-//! Stages 1's camera and 2 of the frame (docs/principles.md, the pipeline table): the camera
+//! The camera of stage 1 and stage 2 of the frame (docs/principles.md, the pipeline table): the camera
 //! uniform, the shadow maps, the emitters' VPLs and their visibility, the direct light, and
 //! its running mean over the still frames while the sky's directions rotate (issue #51,
 //! `passes::direct_history`).
