@@ -607,6 +607,9 @@ fn the_quality_suite_runs_on_a_real_scene_and_traces_its_own_truth() {
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/scenes/cornell-box/CornellBox-Original.gltf");
     let o = gi_lab()
         .args(["bench", "--suite", "quality", "--scene", scene, "--size", "24x24", "--spp", "4", "--json"])
+        // Few VPLs, points and reference batches: the suite's rows on a real scene, not its figures, are tested.
+        .args(["--set", "vpl.count=16", "--set", "ism.points=16384", "--set", "direct.shadow_map_size=256"])
+        .args(["--set", "reference.total_vpls=256", "--set", "reference.light_gbuffer_size=64"])
         .output()
         .expect("runs");
     let stderr = String::from_utf8_lossy(&o.stderr);
@@ -616,6 +619,8 @@ fn the_quality_suite_runs_on_a_real_scene_and_traces_its_own_truth() {
     let rows = rows.as_array().expect("rows");
     let truth_rows: Vec<_> = rows.iter().filter(|r| r["against"] == "ground truth").collect();
     assert_eq!(truth_rows.len(), 6, "{rows:?}");
+    // `--set` reached every row: the exact reference names the VPLs it was given.
+    assert!(rows.iter().any(|r| r["configuration"] == "exact-vpl-reference (256 VPLs)"), "{rows:?}");
     for r in truth_rows {
         let flip = r["flip"].as_f64().expect("FLIP");
         assert!(flip > 0.0 && flip < 1.0, "{r}");

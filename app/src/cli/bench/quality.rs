@@ -7,7 +7,8 @@ use crate::error::CliError;
 
 /// `gi-lab bench --suite quality`: the quality table of `gi_render::quality` on any scene,
 /// against `--reference` or a one-bounce ground truth traced here at `--size` with `--spp`,
-/// with each row's frame time and its FLIP at equal time (issue #37 point 5).
+/// with each row's frame time and its FLIP at equal time (issue #37 point 5); `--set` lays
+/// its values over every row's preset.
 pub fn quality(args: &BenchArgs) -> Result<(), CliError> {
     let scene = crate::scene_args::load_scene(&args.scene)?;
     let (truth, against) = match &args.reference {
@@ -28,11 +29,17 @@ pub fn quality(args: &BenchArgs) -> Result<(), CliError> {
         }
     };
     let ctx = gi_render::GpuContext::headless().map_err(|e| CliError::failure(e.to_string()))?;
-    let mut rows =
-        gi_render::quality::quality_table(&ctx, &scene, &truth, args.size, gi_render::quality::Timing::EqualTime)
-            .map_err(CliError::input)?;
+    let mut rows = gi_render::quality::quality_table_with(
+        &ctx,
+        &scene,
+        &truth,
+        args.size,
+        gi_render::quality::Timing::EqualTime,
+        &args.scene.overrides,
+    )
+    .map_err(CliError::input)?;
     // The goals were set for the default scene as it ships: elsewhere they mean nothing.
-    let default_scene = args.scene.scene.is_none() && args.scene.sky.is_none();
+    let default_scene = args.scene.scene.is_none() && args.scene.sky.is_none() && args.scene.overrides.is_empty();
     if !default_scene {
         rows.iter_mut().for_each(|r| r.goal = None);
     }
