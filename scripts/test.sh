@@ -62,6 +62,12 @@ if [ ! -c /dev/null ]; then
 fi
 empty_null() { [ -c /dev/null ] || : >/dev/null; }
 
+# Lavapipe compiles each shader variant with LLVM the first time a process uses it, and keeps
+# it in Mesa's disk cache for the next: with a cold cache the sky's tests took 85 s instead of
+# 16 (65 % of the time in LLVM). One writable cache for every test binary of the run, under
+# target/, whatever $HOME is (docs/performance.md, "Build and test time, issue #52's fifth step").
+export MESA_SHADER_CACHE_DIR="${MESA_SHADER_CACHE_DIR:-$PWD/target/mesa-shader-cache}"
+
 # A whole-suite run from scratch gains nothing from incremental compilation, whose caches
 # would add about a gigabyte to target/ (CI's disk is small: docs/performance.md, "Build
 # size"); set CARGO_INCREMENTAL=1 to keep them.
