@@ -126,6 +126,8 @@ fn window_and_command_line_choose_the_same_view() {
         let args = gi_lab::scene_args::SceneArgs { scene: Some(path.clone()), ..Default::default() };
         let cli_scene = gi_lab::scene_args::load_scene(&args).expect("the CLI loads it");
         let mut h = gi_lab_tests::ui_harness::harness_in(&dir, egui::vec2(900.0, 700.0));
+        // The view is chosen from the scene and the aspect, not from the pixels: small frames.
+        h.state_mut().state.session.render_scale = 0.05;
         h.run_steps(2);
         h.state_mut().open_scene(&path.to_string_lossy(), 0.0).expect("the window opens it");
         h.run_steps(2);
@@ -154,6 +156,8 @@ fn one_click_in_the_scene_panel_removes_the_default_light() {
     let path = dir.join("object-m.glb");
     std::fs::write(&path, framing_cases::case_glb("object", 1.0).expect("case")).expect("write");
     let mut h = gi_lab_tests::ui_harness::harness_in(&dir, egui::vec2(1200.0, 900.0));
+    // What the click does to the scene is asked, not what the frames show: small frames.
+    h.state_mut().state.session.render_scale = 0.05;
     h.run_steps(2);
     h.state_mut().open_scene(&path.to_string_lossy(), 0.0).expect("the window opens it");
     h.run_steps(2);

@@ -264,6 +264,8 @@ fn probe_shows_the_values_of_a_cpu_readback() {
 #[test]
 fn preset_save_and_open_round_trip_through_the_ui() {
     let (mut h, dir) = harness("presets");
+    // The preset's round trip is asked, not the frames: small ones.
+    h.state_mut().state.session.render_scale = 0.1;
     h.run_steps(2);
     // The tone mapping section is below the technique sections: scroll it into view.
     h.get_by_label("tonemap.auto_exposure").scroll_to_me();
@@ -307,6 +309,8 @@ fn preset_save_and_open_round_trip_through_the_ui() {
 #[test]
 fn a_bad_preset_lists_its_problems_and_changes_nothing_until_accepted() {
     let (mut h, dir) = harness("badpreset");
+    // The preset's round trip is asked, not the frames: small ones.
+    h.state_mut().state.session.render_scale = 0.1;
     h.run_steps(2);
     std::fs::write(
         dir.join("presets/bad.ron"),

@@ -7,6 +7,15 @@ use egui_kittest::kittest::Queryable;
 use gi_lab::ui::app::GiLabApp;
 use gi_lab_tests::ui_harness::{harness, pause};
 
+/// The lab in a harness at a tenth of its viewport's size: these tests ask what the Scene
+/// panel does to the scene and compare stage 2's mean light before and after, which needs no
+/// more pixels (issue #52: the suite's time).
+fn small_harness(name: &str) -> (Harness<'static, GiLabApp>, std::path::PathBuf) {
+    let (mut h, dir) = harness(name);
+    h.state_mut().state.session.render_scale = 0.1;
+    (h, dir)
+}
+
 /// Stage 2's direct light (deterministic: the indirect light's VPLs change every frame).
 fn mean_luminance(h: &Harness<'static, GiLabApp>) -> f64 {
     let img = h.state().renderer().expect("renderer").readback("direct.radiance").expect("direct.radiance");
@@ -25,7 +34,7 @@ fn last_light_y(h: &Harness<'static, GiLabApp>) -> f32 {
 
 #[test]
 fn a_light_is_added_moved_removed_and_reset_in_the_scene_panel() {
-    let (mut h, dir) = harness("lights");
+    let (mut h, dir) = small_harness("lights");
     pause(&mut h);
     h.get_by_label("Scene & timeline").click();
     h.run_steps(3);
@@ -63,7 +72,7 @@ fn a_light_is_added_moved_removed_and_reset_in_the_scene_panel() {
 /// Lights saved beside a scene file come back when it is opened again (the glTF unchanged).
 #[test]
 fn lights_saved_beside_the_scene_come_back_when_it_opens() {
-    let (mut h, dir) = harness("lights_file");
+    let (mut h, dir) = small_harness("lights_file");
     pause(&mut h);
     let glb = dir.join("box.glb");
     gi_render::scene::cornell::write_glb(&glb).expect("writes the default scene");
@@ -96,7 +105,7 @@ fn sky(h: &Harness<'static, GiLabApp>) -> gi_render::scene::sky::Sky {
 /// on screen and changes nothing; an image loads and lights from where it is bright.
 #[test]
 fn the_sky_is_turned_on_in_the_scene_panel_and_a_bad_image_says_why() {
-    let (mut h, dir) = harness("sky");
+    let (mut h, dir) = small_harness("sky");
     pause(&mut h);
     // The same directions every frame, so that frames compare exactly (the rotation's
     // convergence is tests/sky.rs's).
@@ -150,7 +159,7 @@ fn the_sky_is_turned_on_in_the_scene_panel_and_a_bad_image_says_why() {
 /// and the box is dark.
 #[test]
 fn the_scene_panel_shows_the_emitters_and_turns_them_into_glow() {
-    let (mut h, dir) = harness("emitters");
+    let (mut h, dir) = small_harness("emitters");
     pause(&mut h);
     let path = gi_lab_tests::real_scene("cornell-box/CornellBox-Original.gltf");
     h.state_mut().open_scene(&path.to_string_lossy(), 1.0).expect("opens");
