@@ -10,8 +10,9 @@
 //!
 //! With [`Timing::EqualTime`] each row also gets its mean frame time (the passes' sum) and
 //! its FLIP at equal time: the frames it renders within the time the default preset
-//! (`LabSettings::default()`) takes for 16 frames (1 to 64 frames), so that a technique that
-//! converges over frames is judged by what it reaches in the same budget.
+//! (`LabSettings::default()`, with the table's `--set` overrides) takes for 16 frames (1 to 64
+//! frames), so that a technique that converges over frames is judged by what it reaches in
+//! the same budget.
 
 use crate::image_io::hdr_display;
 use crate::passes::knecht::vpl_importance::ReceiverBrdf;
@@ -187,7 +188,12 @@ pub fn quality_table_with(
     let gautron = render(ctx, scene, gautron.0, size, gautron.1)?;
     row("gautron-ic-splatting", 16, "ground truth", flip(&gautron, truth)?, None);
     if timing == Timing::EqualTime {
-        equal_time(ctx, scene, truth, size, &mut rows, settings)?;
+        // The budget is the default preset's time with the same overrides.
+        let mut budget = LabSettings::default();
+        for o in overrides {
+            budget.apply_override(o).map_err(|e| format!("the default settings: {o}: {e}"))?;
+        }
+        equal_time(ctx, scene, truth, size, &mut rows, settings, budget)?;
     }
     Ok(rows)
 }
@@ -271,7 +277,8 @@ fn row_settings(overrides: &[String]) -> Result<Vec<(LabSettings, u32)>, String>
     ])
 }
 
-/// Frame times and the FLIP at equal time of the ground-truth rows (see the module doc).
+/// Frame times and the FLIP at equal time of the ground-truth rows (see the module doc):
+/// the budget is 16 frames of `budget_settings` (the defaults, with the table's overrides).
 fn equal_time(
     ctx: &GpuContext,
     scene: &Scene,
@@ -279,8 +286,9 @@ fn equal_time(
     size: (u32, u32),
     rows: &mut [QualityRow],
     settings: Vec<(LabSettings, u32)>,
+    budget_settings: LabSettings,
 ) -> Result<(), String> {
-    let (_, default_ms) = render_timed(ctx, scene, LabSettings::default(), size, 4)?;
+    let (_, default_ms) = render_timed(ctx, scene, budget_settings, size, 4)?;
     let budget = 16.0 * default_ms;
     let truth_rows: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].against == "ground truth").collect();
     for (i, (settings, frames)) in truth_rows.into_iter().zip(settings) {
