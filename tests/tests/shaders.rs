@@ -183,7 +183,7 @@ fn shader_reload_rebuilds_only_the_affected_passes() {
 fn declared_as(module: &naga::Module, v: &naga::GlobalVariable, kind: Kind) -> bool {
     use naga::{AddressSpace, ImageClass, ImageDimension, ScalarKind, StorageAccess, TypeInner};
     match (kind, v.space, &module.types[v.ty].inner) {
-        (Kind::Uniform, AddressSpace::Uniform, _) => true,
+        (Kind::Uniform | Kind::UniformDynamic, AddressSpace::Uniform, _) => true,
         (Kind::Storage { read_only }, AddressSpace::Storage { access }, _) => {
             read_only != access.contains(StorageAccess::STORE)
         }

@@ -16,6 +16,8 @@ use super::bgl;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
     Uniform,
+    /// A uniform read at a dynamic offset (one slot of a strided buffer per dispatch).
+    UniformDynamic,
     Storage {
         read_only: bool,
     },
@@ -66,6 +68,7 @@ impl Bindings {
             .iter()
             .map(|b| match b.kind {
                 Kind::Uniform => bgl::uniform(b.binding, vis),
+                Kind::UniformDynamic => bgl::uniform_dynamic(b.binding, vis),
                 Kind::Storage { read_only } => bgl::storage(b.binding, vis, read_only),
                 Kind::Texture { filterable } => bgl::texture(b.binding, vis, filterable),
                 Kind::UintTexture => bgl::uint_texture(b.binding, vis),

@@ -104,6 +104,8 @@ pub const BINDINGS: &[&crate::gpu::bindings::Bindings] = &[
     &compose::LUMINANCE_BINDINGS,
     &knecht::interleave::FILTER_BINDINGS,
     &knecht::temporal::CONFIDENCE_BINDINGS,
+    &knecht::vpl_bounce::BOUNCE_BINDINGS,
+    &reference::vpl::SAMPLE_BINDINGS,
 ];
 
 /// A 2D render/storage target with the usages every registered buffer needs (sampling,

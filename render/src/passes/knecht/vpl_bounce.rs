@@ -13,6 +13,7 @@ use crate::counters::prelude::*;
 use glam::Vec4;
 
 use crate::gpu::GpuContext;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::knecht::ism::{BounceShadowTest, IsmPass, MAX_BOUNCES};
 use crate::settings_enum;
 use crate::timing::Slot;
@@ -80,6 +81,27 @@ pub struct BounceFrame {
     pub seed: u32,
 }
 
+const CS: wgpu::ShaderStages = wgpu::ShaderStages::COMPUTE;
+const READ: Kind = Kind::Storage { read_only: true };
+
+/// The bounce's inputs (`knecht/vpl/bounce.wgsl`, group 0): the bounce's uniform slot, the
+/// point cloud, the instances, the raw splats, the VPL list it writes, the pulled atlas.
+pub const BOUNCE_BINDINGS: Bindings = Bindings {
+    label: "vpl.bounce.inputs",
+    shader: "knecht/vpl/bounce.wgsl",
+    group: 0,
+    visibility: CS,
+    list: &[
+        binding(0, "bp", Kind::UniformDynamic),
+        binding(1, "points", READ),
+        binding(2, "surfaces", READ),
+        binding(3, "instances", READ),
+        binding(4, "depth", READ),
+        binding(5, "vpls", Kind::Storage { read_only: false }),
+        binding(6, "pulled", Kind::Texture { filterable: false }),
+    ],
+};
+
 pub struct VplBouncePass {
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::ComputePipeline,
@@ -89,12 +111,7 @@ pub struct VplBouncePass {
 impl VplBouncePass {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let mut entries = crate::passes::uniform_and_storage_entries(&[true, true, true, true, false]);
-        entries.push(crate::gpu::bgl::texture(6, wgpu::ShaderStages::COMPUTE, false));
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("vpl.bounce.inputs"),
-            entries: &entries,
-        });
+        let layout = BOUNCE_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "knecht/vpl/bounce.wgsl");
         let pipeline = crate::passes::compute_pipeline(device, "vpl.bounce", &module, "cs_bounce", &[&layout]);
         let params = crate::passes::uniform_buffer(device, "vpl.bounce.params", STRIDE * MAX_BOUNCES as u64);
@@ -132,26 +149,24 @@ impl VplBouncePass {
             .collect();
         let data = crate::passes::strided_bytes(STRIDE, MAX_BOUNCES as usize, &params);
         ctx.queue.write_buffer(&self.params, 0, &data);
-        ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("vpl.bounce.inputs"),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: &self.params,
-                        offset: 0,
-                        size: std::num::NonZeroU64::new(std::mem::size_of::<BounceParams>() as u64),
-                    }),
-                },
-                wgpu::BindGroupEntry { binding: 1, resource: ism.points.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: ism.surfaces.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: instances.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 4, resource: ism.depth.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 5, resource: vpls.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::TextureView(&ism.shading_view()) },
+        let shading = ism.shading_view();
+        BOUNCE_BINDINGS.group(
+            &ctx.device,
+            &self.layout,
+            [
+                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &self.params,
+                    offset: 0,
+                    size: std::num::NonZeroU64::new(std::mem::size_of::<BounceParams>() as u64),
+                }),
+                ism.points.as_entire_binding(),
+                ism.surfaces.as_entire_binding(),
+                instances.as_entire_binding(),
+                ism.depth.as_entire_binding(),
+                vpls.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&shading),
             ],
-        })
+        )
     }
 
     /// Creates bounce `bounce`'s N VPLs (slots b·N …) from bounce b − 1's, whose ISMs must

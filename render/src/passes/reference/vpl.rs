@@ -17,7 +17,7 @@ use crate::counters::prelude::*;
 use glam::{Mat4, Vec3, Vec4};
 
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::CameraUniform;
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::shadow::{GpuLight, LightView};
@@ -25,6 +25,24 @@ use crate::scene::SceneState;
 use crate::scene::upload::GpuScene;
 use crate::settings_group;
 use crate::timing::PassRec;
+
+/// The uniform batch sampler's inputs (`reference/sample.wgsl`, group 0): its parameters, the
+/// lights, the light G-buffer it samples, the VPL list it writes.
+pub const SAMPLE_BINDINGS: Bindings = Bindings {
+    label: "vpl.sample.inputs",
+    shader: "reference/sample.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::Uniform),
+        binding(1, "lights", Kind::Storage { read_only: true }),
+        binding(2, "lg_position", Kind::Texture { filterable: false }),
+        binding(3, "lg_normal", Kind::Texture { filterable: false }),
+        binding(4, "lg_albedo", Kind::Texture { filterable: false }),
+        binding(5, "lg_material", Kind::Texture { filterable: false }),
+        binding(6, "vpls", Kind::Storage { read_only: false }),
+    ],
+};
 
 settings_group! {
     /// Exact-VPL reference (issue #3): many VPLs, each with an exact visibility map rendered
@@ -112,7 +130,6 @@ pub struct VplSamplePass {
 impl VplSamplePass {
     pub fn new(ctx: &GpuContext, scene: &GpuScene, size: u32, capacity: u32) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
         let light_gbuffer = GBufferPass::light_view(ctx, scene, size, "vpl.light_gbuffer");
         let camera_buffer = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("vpl.light_gbuffer.camera"),
@@ -126,18 +143,7 @@ impl VplSamplePass {
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: camera_buffer.as_entire_binding() }],
         });
         let module = crate::shaders::create_module(device, "reference/sample.wgsl");
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("vpl.sample.inputs"),
-            entries: &[
-                bgl::uniform(0, cs),
-                bgl::storage(1, cs, true),
-                bgl::texture(2, cs, false),
-                bgl::texture(3, cs, false),
-                bgl::texture(4, cs, false),
-                bgl::texture(5, cs, false),
-                bgl::storage(6, cs, false),
-            ],
-        });
+        let layout = SAMPLE_BINDINGS.layout(device);
         let pipeline = crate::passes::compute_pipeline(device, "vpl.sample", &module, "cs_main", &[&layout]);
         let params = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("vpl.sample.params"),
@@ -254,19 +260,19 @@ impl VplSamplePass {
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         let t = &self.light_gbuffer.targets.views;
         let tv = wgpu::BindingResource::TextureView;
-        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("vpl.sample.inputs"),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: self.params.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: self.lights.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: tv(&t.position) },
-                wgpu::BindGroupEntry { binding: 3, resource: tv(&t.normal) },
-                wgpu::BindGroupEntry { binding: 4, resource: tv(&t.albedo) },
-                wgpu::BindGroupEntry { binding: 5, resource: tv(&t.material) },
-                wgpu::BindGroupEntry { binding: 6, resource: self.vpls.as_entire_binding() },
+        let group = SAMPLE_BINDINGS.group(
+            &ctx.device,
+            &self.layout,
+            [
+                self.params.as_entire_binding(),
+                self.lights.as_entire_binding(),
+                tv(&t.position),
+                tv(&t.normal),
+                tv(&t.albedo),
+                tv(&t.material),
+                self.vpls.as_entire_binding(),
             ],
-        });
+        );
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("vpl.sample"),
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
