@@ -59,6 +59,9 @@ pub fn quality(args: &BenchArgs) -> Result<(), CliError> {
                 "wall clock per pass"
             }
         );
+        if !args.scene.overrides.is_empty() {
+            println!("every row's preset with --set {}\n", args.scene.overrides.join(" --set "));
+        }
         print!("{}", gi_render::quality::format_table(&rows));
         println!(
             "\nframe ms: mean of the passes' times; equal time: the frames each row renders in the default preset's time for 16 frames, and the FLIP they reach"
