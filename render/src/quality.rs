@@ -154,7 +154,8 @@ pub fn quality_table_with(
     let [knecht, exact, nguyen, soler, mix, gautron] = <[(LabSettings, u32); 6]>::try_from(settings.clone())
         .map_err(|_| "the table has six ground-truth rows".to_string())?;
     let knecht = render(ctx, scene, knecht.0, size, knecht.1)?;
-    row("knecht-cornell-256", 16, "ground truth", flip(&knecht, truth)?, Some(0.05));
+    let knecht_flip = flip(&knecht, truth)?;
+    row("knecht-cornell-256", 16, "ground truth", knecht_flip, Some(0.05));
     let exact_name = format!("exact-vpl-reference ({} VPLs)", thousands(exact.0.reference.total_vpls));
     let exact_img = render(ctx, scene, exact.0, size, exact.1)?;
     row(&exact_name, exact.1, "ground truth", flip(&exact_img, truth)?, Some(0.035));
@@ -177,7 +178,6 @@ pub fn quality_table_with(
     row("nguyen-hcb (diffuse receiver)", 1, against, flip(&hcb_diffuse, &per_pixel)?, Some(0.03));
     // Soler et al.'s gather alone (16 frames: its temporal filter, Eq. 6, averages them) sees
     // only the direct light on screen; the mix must beat it and Knecht's row (issue #16).
-    let knecht_flip = flip(&knecht, truth)?;
     let soler = flip(&render(ctx, scene, soler.0, size, soler.1)?, truth)?;
     row("soler-quarter-4-64", 16, "ground truth", soler, None);
     let mix = render(ctx, scene, mix.0, size, mix.1)?;
