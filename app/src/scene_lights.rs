@@ -249,7 +249,7 @@ pub fn apply_sky(scene: &mut Scene, def: &SkyDef, scene_file: &Path) -> Result<(
 }
 
 /// Writes the scene's lights beside `scene_file` atomically (a temporary file renamed over
-/// it: `gi_render::preset::write_atomic_bytes`), without a `.bak`.
+/// it: `gi_render::files::write_atomic_bytes`), without a `.bak`.
 pub fn save_overrides(scene: &Scene, scene_file: &Path) -> Result<PathBuf, String> {
     let path = overrides_path(scene_file);
     let overrides = LightOverrides { lights: light_edits(scene), sky: Some(sky_def(&scene.sky, scene_file)) };
@@ -260,7 +260,7 @@ pub fn save_overrides(scene: &Scene, scene_file: &Path) -> Result<PathBuf, Strin
     );
     // No .bak: the file is the lab's own, rewritten on each edit, and lives in the user's
     // scene folder.
-    gi_render::preset::write_atomic_bytes(&path, text.as_bytes(), gi_render::preset::Backup::Skip)
+    gi_render::files::write_atomic_bytes(&path, text.as_bytes(), gi_render::files::Backup::Skip)
         .map_err(|e| format!("{}: {e}", path.display()))?;
     Ok(path)
 }

@@ -4,7 +4,7 @@
 
 use glam::{Mat4, Vec3};
 
-use crate::scene::{Aabb, CameraDef, Projection};
+use crate::maths::Aabb;
 
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Camera {
@@ -129,6 +129,19 @@ impl Camera {
     pub fn fly(&mut self, local: Vec3) {
         self.position += self.right() * local.x + Vec3::Y * local.y + self.forward() * local.z;
     }
+}
+
+/// A camera's projection as a glTF file describes it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    Perspective { yfov: f32, znear: f32, zfar: Option<f32> },
+    Orthographic { xmag: f32, ymag: f32, znear: f32, zfar: f32 },
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct CameraDef {
+    pub name: String,
+    pub projection: Projection,
 }
 
 #[cfg(test)]

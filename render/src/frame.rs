@@ -94,7 +94,7 @@ impl Renderer {
         let readbacks = self.readbacks.get_mut().unwrap_or_else(|p| p.into_inner());
         if readbacks.pending() > 0 {
             crate::counters::traffic::begin_scope("readback");
-            let probe = self.depth_probe.get_or_init(|| crate::passes::view::DepthProbe::new(&ctx));
+            let probe = self.depth_probe.get_or_init(|| crate::buffers::DepthProbe::new(&ctx));
             let size = (self.width, self.height);
             readbacks.record(&ctx, &mut enc, &self.registry, probe, size, self.clock.frame);
             crate::counters::traffic::end_scope();

@@ -25,7 +25,7 @@ fn srgb_encode(c: f32) -> f32 {
 pub fn error_map_rgba8(map: &ImageF32) -> image::RgbaImage {
     image::RgbaImage::from_fn(map.width, map.height, |x, y| {
         let e = map.data[(y * map.width + x) as usize][0];
-        let c = crate::cpu::view::colormap(crate::passes::view::Colormap::Inferno, e);
+        let c = crate::maths::colormap::colormap(crate::maths::colormap::Colormap::Inferno, e);
         image::Rgba([(c[0] * 255.0).round() as u8, (c[1] * 255.0).round() as u8, (c[2] * 255.0).round() as u8, 255])
     })
 }
@@ -106,7 +106,7 @@ pub fn save_png(path: &Path, img: &ImageF32, kind: BufferKind) -> Result<(), ima
     save_atomic(path, &image::DynamicImage::ImageRgba8(to_rgba8(img, kind)), image::ImageFormat::Png)
 }
 
-/// Encodes `img` in memory and writes it with [`crate::preset::write_atomic_bytes`]: a
+/// Encodes `img` in memory and writes it with [`crate::files::write_atomic_bytes`]: a
 /// temporary file renamed over `path`, so that a crash or a kill mid-save leaves either the
 /// old or the new complete image, never a truncated one. No `.bak` is kept (captures are
 /// not edited, and each usually has a new name).
@@ -117,7 +117,7 @@ pub fn save_atomic(
 ) -> Result<(), image::ImageError> {
     let mut bytes = std::io::Cursor::new(Vec::new());
     img.write_to(&mut bytes, format)?;
-    crate::preset::write_atomic_bytes(path, bytes.get_ref(), crate::preset::Backup::Skip)
+    crate::files::write_atomic_bytes(path, bytes.get_ref(), crate::files::Backup::Skip)
         .map_err(image::ImageError::IoError)
 }
 

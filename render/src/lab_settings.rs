@@ -361,10 +361,10 @@ impl LabSettings {
         out
     }
 
-    /// Writes the preset atomically (`crate::preset::write_atomic`): a temporary file, then
+    /// Writes the preset atomically (`crate::files::write_atomic`): a temporary file, then
     /// a rename; the replaced file is kept as `<name>.bak`.
     pub fn save(&self, path: &Path) -> Result<(), PresetError> {
-        crate::preset::write_atomic(path, &self.to_ron())
+        crate::files::write_atomic(path, &self.to_ron())
             .map_err(|source| PresetError::Io { path: path.display().to_string(), source })
     }
 }

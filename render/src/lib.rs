@@ -9,6 +9,7 @@ pub mod clock;
 pub mod counters;
 pub mod cpu;
 pub mod explain;
+pub mod files;
 pub mod frame;
 pub mod gpu;
 pub mod image_io;

@@ -135,7 +135,7 @@ impl Readbacks {
         ctx: &GpuContext,
         enc: &mut wgpu::CommandEncoder,
         registry: &BufferRegistry,
-        depth_probe: &crate::passes::view::DepthProbe,
+        depth_probe: &crate::buffers::DepthProbe,
         frame_size: (u32, u32),
         frame: u64,
     ) {

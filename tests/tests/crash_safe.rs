@@ -6,7 +6,7 @@
 //! the last generation the loop reported complete, and the `.bak` is never newer than its
 //! file. Temporary files a kill leaves behind are hidden `.tmp` files (which no preset
 //! listing shows), and nothing else appears in the folder; the lab's start-up cleaning
-//! (`preset::remove_stale_temps`) removes them all and nothing else.
+//! (`files::remove_stale_temps`) removes them all and nothing else.
 
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Read};
@@ -157,7 +157,7 @@ fn files_survive_sigkill_mid_save() {
         assert!(seen.contains_key(&format!("{b}.bak")), "no {b}.bak was written");
     }
     // Every writer is dead: the lab's start-up cleaning removes all they left, and only that.
-    let removed = gi_render::preset::remove_stale_temps(&dir);
+    let removed = gi_render::files::remove_stale_temps(&dir);
     let (left, _) = crash_safe::strays(&dir).expect("list the folder");
     if cfg!(target_os = "linux") {
         assert!(

@@ -93,7 +93,7 @@ fn uniform_sizes_match_wgsl() {
     let v = parse("view/view.wgsl");
     assert_eq!(struct_size(&v, "ViewParams") as usize, std::mem::size_of::<gi_render::passes::view::ViewParams>());
     let p = parse("view/probe.wgsl");
-    assert_eq!(struct_size(&p, "Jobs") as usize, std::mem::size_of::<gi_render::passes::view::ProbeJobs>());
+    assert_eq!(struct_size(&p, "Jobs") as usize, std::mem::size_of::<gi_render::buffers::ProbeJobs>());
     // Instant radiosity (issue #5).
     use gi_render::passes::knecht::{interleave, ism, temporal, vpl_importance};
     let w = parse("knecht/vpl/warp.wgsl");

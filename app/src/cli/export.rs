@@ -24,7 +24,8 @@ pub struct ExportArgs {
 
 /// `gi-lab export`: the preset (with overrides) as an engine export.
 pub(super) fn export(a: &ExportArgs) -> Result<(), CliError> {
-    use gi_render::preset::{Export, ExportFormat, Provenance, schema_markdown, write_atomic};
+    use gi_render::files::write_atomic;
+    use gi_render::preset::{Export, ExportFormat, Provenance, schema_markdown};
     if let Some(path) = &a.schema_doc {
         return write_atomic(path, &schema_markdown())
             .map(|_| println!("wrote {}", path.display()))

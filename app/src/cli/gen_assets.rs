@@ -9,7 +9,7 @@ use crate::error::CliError;
 
 /// Writes the embedded Cornell box as a .glb to `out`.
 pub(super) fn gen_assets(out: &Path) -> Result<(), CliError> {
-    gi_render::preset::write_atomic_bytes(out, &scene::cornell::build_glb(), gi_render::preset::Backup::Skip)
+    gi_render::files::write_atomic_bytes(out, &scene::cornell::build_glb(), gi_render::files::Backup::Skip)
         .map(|_| println!("wrote {}", out.display()))
         .map_err(|e| CliError::input(format!("{}: {e}", out.display())))
 }
@@ -22,7 +22,7 @@ pub(super) fn framing_cases(dir: &Path) -> Result<(), CliError> {
             let bytes = scene::framing_cases::case_glb(name, unit)
                 .ok_or_else(|| CliError::failure(format!("framing case {name} could not be built")))?;
             let out = dir.join(format!("{name}-{suffix}.glb"));
-            gi_render::preset::write_atomic_bytes(&out, &bytes, gi_render::preset::Backup::Skip)
+            gi_render::files::write_atomic_bytes(&out, &bytes, gi_render::files::Backup::Skip)
                 .map_err(|e| CliError::input(format!("{}: {e}", out.display())))?;
             println!("wrote {}", out.display());
         }

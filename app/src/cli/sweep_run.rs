@@ -42,7 +42,7 @@ fn path_trace(r: &Renderer, spp: u32, bounces: u32) -> gi_render::ImageF32 {
 }
 
 fn write(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
-    gi_render::preset::write_atomic_bytes(path, bytes, gi_render::preset::Backup::Skip)
+    gi_render::files::write_atomic_bytes(path, bytes, gi_render::files::Backup::Skip)
         .map_err(|e| CliError::failure(format!("{}: {e}", path.display())))
 }
 

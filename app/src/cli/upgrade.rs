@@ -5,7 +5,8 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use gi_render::preset::{load_lenient, write_atomic};
+use gi_render::files::write_atomic;
+use gi_render::preset::load_lenient;
 use gi_render::settings::PRESET_VERSION;
 
 use crate::error::CliError;

@@ -30,9 +30,9 @@ impl GiLabApp {
         crate::ui::install_fonts(&cc.egui_ctx);
         let config_dir = session::config_dir(args.config_dir.as_deref());
         // Temporary files of saves that a kill interrupted (the saved files themselves are
-        // whole: `preset::write_atomic`).
+        // whole: `files::write_atomic`).
         for dir in config_dir.iter().chain([&args.presets_dir]) {
-            let n = gi_render::preset::remove_stale_temps(dir);
+            let n = gi_render::files::remove_stale_temps(dir);
             if n > 0 {
                 log::info!("removed {n} temporary files of interrupted saves from {}", dir.display());
             }

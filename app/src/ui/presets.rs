@@ -166,7 +166,7 @@ impl State {
 
     pub fn export_to(&mut self, path: &Path, format: ExportFormat) -> Result<(), String> {
         let e = self.export().ok_or("no renderer")?;
-        gi_render::preset::write_atomic(path, &e.to_text(format)).map_err(|e| format!("{}: {e}", path.display()))?;
+        gi_render::files::write_atomic(path, &e.to_text(format)).map_err(|e| format!("{}: {e}", path.display()))?;
         self.set_status(format!("exported {}", path.display()));
         Ok(())
     }

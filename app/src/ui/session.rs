@@ -179,7 +179,7 @@ impl Session {
     pub fn save(&self, dir: &Path) -> Result<(), String> {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
         let path = Self::file(dir);
-        gi_render::preset::write_atomic(&path, &self.to_ron()).map_err(|e| format!("{}: {e}", path.display()))
+        gi_render::files::write_atomic(&path, &self.to_ron()).map_err(|e| format!("{}: {e}", path.display()))
     }
 
     /// Puts `path` first in a recent-files list (at most 10, no duplicates).

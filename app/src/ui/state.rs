@@ -243,7 +243,7 @@ impl State {
         // Probes: the hovered pixel and every pinned one, in one readback.
         let mut points: Vec<(u32, u32)> = self.hover.into_iter().collect();
         points.extend(self.pinned.iter().map(|p| p.pixel));
-        points.truncate(gi_render::passes::view::PROBE_MAX_POINTS);
+        points.truncate(gi_render::buffers::PROBE_MAX_POINTS);
         let (fw, fh) = l.renderer.size();
         let points: Vec<(u32, u32)> = points.into_iter().map(|(x, y)| (x.min(fw - 1), y.min(fh - 1))).collect();
         // Read without waiting (issue #38): the values arrive a frame or two late; the tag says
@@ -357,7 +357,7 @@ impl State {
     }
 
     pub fn pin_probe(&mut self, pixel: (u32, u32)) {
-        if self.pinned.len() + 1 >= gi_render::passes::view::PROBE_MAX_POINTS {
+        if self.pinned.len() + 1 >= gi_render::buffers::PROBE_MAX_POINTS {
             self.set_status("too many pinned probes");
             return;
         }

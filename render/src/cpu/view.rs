@@ -1,29 +1,8 @@
 //! CPU twin of the buffer viewer's colour mapping (`shaders/view/view.wgsl`): the tests compare the GPU view with it texel by texel.
 
-use crate::maths::colormap::{INFERNO, RANGE_BINS, TURBO, VIRIDIS};
-use crate::passes::view::{Colormap, ViewMode, ViewSettings};
-
-// Lookup in the false-colour tables of `maths::colormap` (interpolated linearly between
-// their 65 entries), as the view shader does.
-
-fn lookup(table: &[[f32; 3]; 65], t: f32) -> [f32; 3] {
-    let s = t.clamp(0.0, 1.0) * 64.0;
-    let i = (s as usize).min(63);
-    let f = s - i as f32;
-    [0, 1, 2].map(|k| table[i][k] + (table[i + 1][k] - table[i][k]) * f)
-}
-
-/// A map's display-encoded colour at t ∈ [0, 1].
-pub fn colormap(map: Colormap, t: f32) -> [f32; 3] {
-    let x = t.clamp(0.0, 1.0);
-    let c = match map {
-        Colormap::Grey => [x; 3],
-        Colormap::Viridis => lookup(&VIRIDIS, x),
-        Colormap::Turbo => lookup(&TURBO, x),
-        Colormap::Inferno => lookup(&INFERNO, x),
-    };
-    c.map(|v| v.clamp(0.0, 1.0))
-}
+pub use crate::maths::colormap::colormap;
+use crate::maths::colormap::RANGE_BINS;
+use crate::passes::view::{ViewMode, ViewSettings};
 
 /// NaN maps to 0 (black) when the overlay is off.
 fn normalise(s: &ViewSettings, x: f32) -> f32 {
@@ -155,6 +134,7 @@ pub fn auto_range(s: &ViewSettings, img: &crate::ImageF32, percentile: f32) -> O
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::maths::colormap::Colormap;
 
     fn near(a: [f32; 3], b: [f32; 3], tol: f32) -> bool {
         a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol)

@@ -1,5 +1,44 @@
 //! The buffer viewer's colour maps and its auto-range histogram's size, shared by the view
-//! pass (`passes::view`, which uploads the tables) and its CPU twin (`cpu::view`).
+//! pass (`passes::view`, which uploads the tables) and its CPU twin (`cpu::view`), and the
+//! lookup both the twin and the error maps of `image_io` use.
+
+use serde::{Deserialize, Serialize};
+
+/// False-colour maps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum Colormap {
+    #[default]
+    Grey,
+    Viridis,
+    Turbo,
+    Inferno,
+}
+
+impl Colormap {
+    pub const ALL: [Colormap; 4] = [Colormap::Grey, Colormap::Viridis, Colormap::Turbo, Colormap::Inferno];
+}
+
+// Lookup in the false-colour tables below (interpolated linearly between
+// their 65 entries), as the view shader does.
+
+fn lookup(table: &[[f32; 3]; 65], t: f32) -> [f32; 3] {
+    let s = t.clamp(0.0, 1.0) * 64.0;
+    let i = (s as usize).min(63);
+    let f = s - i as f32;
+    [0, 1, 2].map(|k| table[i][k] + (table[i + 1][k] - table[i][k]) * f)
+}
+
+/// A map's display-encoded colour at t ∈ [0, 1].
+pub fn colormap(map: Colormap, t: f32) -> [f32; 3] {
+    let x = t.clamp(0.0, 1.0);
+    let c = match map {
+        Colormap::Grey => [x; 3],
+        Colormap::Viridis => lookup(&VIRIDIS, x),
+        Colormap::Turbo => lookup(&TURBO, x),
+        Colormap::Inferno => lookup(&INFERNO, x),
+    };
+    c.map(|v| v.clamp(0.0, 1.0))
+}
 
 // False-colour tables: matplotlib's viridis and inferno and Google's Turbo, sampled at 65
 // evenly spaced points of matplotlib's 256-entry tables and interpolated linearly (within

@@ -4,12 +4,14 @@
 //! never reaches into `cpu/` at run time and `scene/` into neither (docs/architecture.md,
 //! "Layers").
 
+pub mod aabb;
 pub mod budget;
 pub mod colormap;
 pub mod colour;
 pub mod pattern;
 pub mod sequence;
 
+pub use aabb::Aabb;
 pub use budget::{split_budget, tile_offsets, tile_slots};
 pub use colour::luminance;
 pub use pattern::recompute_pattern;

@@ -13,6 +13,8 @@
 
 use crate::counters::prelude::*;
 
+pub use crate::gpu::compute_pipeline;
+
 pub mod bins;
 pub mod compose;
 pub mod direct;
@@ -175,29 +177,6 @@ pub fn view(texture: &wgpu::Texture, label: &str) -> wgpu::TextureView {
     texture.counted_view(&wgpu::TextureViewDescriptor { label: Some(label), ..Default::default() })
 }
 
-/// A compute pipeline over one resolved shader module.
-pub fn compute_pipeline(
-    device: &wgpu::Device,
-    label: &str,
-    module: &wgpu::ShaderModule,
-    entry: &str,
-    layouts: &[&wgpu::BindGroupLayout],
-) -> wgpu::ComputePipeline {
-    let layouts: Vec<Option<&wgpu::BindGroupLayout>> = layouts.iter().map(|l| Some(*l)).collect();
-    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(label),
-        bind_group_layouts: &layouts,
-        immediate_size: 0,
-    });
-    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(label),
-        layout: Some(&layout),
-        module,
-        entry_point: Some(entry),
-        compilation_options: Default::default(),
-        cache: None,
-    })
-}
 
 /// A bind group whose entry k is binding k (the compute passes' inputs in binding order).
 pub fn bind_group(

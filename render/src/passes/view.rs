@@ -16,6 +16,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::buffers::{BufferEntry, BufferError, BufferKind};
 use crate::gpu::GpuContext;
+pub use crate::maths::colormap::Colormap;
 
 /// Which values are shown.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -27,20 +28,6 @@ pub enum ViewMode {
     Channel,
     /// The length of xyz (speed of a motion vector, norm of a normal) through a colour map.
     Length,
-}
-
-/// False-colour maps.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
-pub enum Colormap {
-    #[default]
-    Grey,
-    Viridis,
-    Turbo,
-    Inferno,
-}
-
-impl Colormap {
-    pub const ALL: [Colormap; 4] = [Colormap::Grey, Colormap::Viridis, Colormap::Turbo, Colormap::Inferno];
 }
 
 /// How one buffer is mapped to colour.
@@ -433,118 +420,5 @@ impl BufferView {
         }
         ctx.submit([enc.finish()]);
         Ok(recreated)
-    }
-}
-
-/// Most texels one probe dispatch reads (`texels` in `shaders/view/probe.wgsl`).
-pub const PROBE_MAX_POINTS: usize = 64;
-
-/// Uniform of the depth probe; WGSL twin: `Jobs` in `shaders/view/probe.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct ProbeJobs {
-    pub header: UVec4,
-    pub texels: [UVec4; PROBE_MAX_POINTS],
-}
-
-/// Reads single texels of depth textures (which WebGPU cannot copy partially) into a
-/// buffer, for the pixel probe.
-pub struct DepthProbe {
-    pipeline: wgpu::ComputePipeline,
-    layout: wgpu::BindGroupLayout,
-    dummy_2d: wgpu::TextureView,
-    dummy_array: wgpu::TextureView,
-}
-
-impl DepthProbe {
-    pub fn new(ctx: &GpuContext) -> Self {
-        let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("probe.inputs"),
-            entries: &[
-                crate::gpu::bgl::uniform(0, cs),
-                crate::gpu::bgl::depth(1, cs),
-                crate::gpu::bgl::depth_array(2, cs),
-                crate::gpu::bgl::storage(3, cs, false),
-            ],
-        });
-        let module = crate::shaders::create_module(device, "view/probe.wgsl");
-        let pipeline = super::compute_pipeline(device, "probe.depth", &module, "probe_depth", &[&layout]);
-        let dummy = |label: &str, layers: u32, dimension| {
-            device
-                .counted_texture(&wgpu::TextureDescriptor {
-                    label: Some(label),
-                    size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: layers },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format: wgpu::TextureFormat::Depth32Float,
-                    usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                    view_formats: &[],
-                })
-                .counted_view(&wgpu::TextureViewDescriptor {
-                    label: Some(label),
-                    dimension: Some(dimension),
-                    ..Default::default()
-                })
-        };
-        Self {
-            pipeline,
-            layout,
-            dummy_2d: dummy("probe.dummy_2d", 1, wgpu::TextureViewDimension::D2),
-            dummy_array: dummy("probe.dummy_array", 2, wgpu::TextureViewDimension::D2Array),
-        }
-    }
-
-    /// Records reads of `texels` (layer 0) of the depth texture `t` into `values`, starting at
-    /// float index `first`. At most [`PROBE_MAX_POINTS`] texels.
-    pub fn record(
-        &self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        t: &wgpu::Texture,
-        texels: &[(u32, u32)],
-        values: &wgpu::Buffer,
-        first: u32,
-    ) {
-        let n = texels.len().min(PROBE_MAX_POINTS);
-        let array = t.depth_or_array_layers() > 1;
-        let mut jobs =
-            ProbeJobs { header: UVec4::new(n as u32, first, 0, array as u32), texels: [UVec4::ZERO; PROBE_MAX_POINTS] };
-        for (j, &(x, y)) in jobs.texels.iter_mut().zip(texels) {
-            *j = UVec4::new(x, y, 0, 0);
-        }
-        let uniform = wgpu::util::DeviceExt::create_buffer_init(
-            &ctx.device,
-            &wgpu::util::BufferInitDescriptor {
-                label: Some("probe.jobs"),
-                contents: bytemuck::bytes_of(&jobs),
-                usage: wgpu::BufferUsages::UNIFORM,
-            },
-        );
-        let dimension = if array { wgpu::TextureViewDimension::D2Array } else { wgpu::TextureViewDimension::D2 };
-        let view = t.counted_view(&wgpu::TextureViewDescriptor {
-            label: Some("probe.source"),
-            dimension: Some(dimension),
-            aspect: wgpu::TextureAspect::DepthOnly,
-            ..Default::default()
-        });
-        let (v2, va) = if array { (&self.dummy_2d, &view) } else { (&view, &self.dummy_array) };
-        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("probe.inputs"),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(v2) },
-                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(va) },
-                wgpu::BindGroupEntry { binding: 3, resource: values.as_entire_binding() },
-            ],
-        });
-        let mut pass = encoder
-            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("probe.depth"), timestamp_writes: None });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_group(0, &group, &[]);
-        pass.dispatch_workgroups(1, 1, 1);
     }
 }

@@ -299,7 +299,7 @@ impl Renderer {
     /// The raw value of every registered buffer at each pixel (see
     /// [`BufferRegistry::probe`]); blocks until the values are on the CPU.
     pub fn probe(&self, pixels: &[(u32, u32)]) -> Result<Vec<Vec<crate::buffers::ProbeValue>>, BufferError> {
-        let probe = self.depth_probe.get_or_init(|| crate::passes::view::DepthProbe::new(&self.ctx));
+        let probe = self.depth_probe.get_or_init(|| crate::buffers::DepthProbe::new(&self.ctx));
         self.registry.probe(&self.ctx, probe, self.size(), pixels)
     }
 

@@ -78,7 +78,7 @@ pub struct Renderer {
     /// The sky drawn behind the scene by stage 7.
     pub(crate) sky_background: crate::passes::sky::SkyBackground,
     /// The pixel probe's depth reader, created on first use.
-    pub(crate) depth_probe: std::sync::OnceLock<crate::passes::view::DepthProbe>,
+    pub(crate) depth_probe: std::sync::OnceLock<crate::buffers::DepthProbe>,
     /// The last camera that could render, used in place of one that cannot.
     pub(crate) last_good_camera: Camera,
     /// Why the camera was last replaced by `last_good_camera`, until a good one comes.

@@ -22,6 +22,8 @@ pub mod upload;
 
 pub use animation::{Animation, Channel, ChannelTarget, Interpolation};
 pub use gltf_load::{LoadOptions, SceneError, load_gltf_bytes, load_gltf_file};
+pub use crate::camera::{CameraDef, Projection};
+pub use crate::maths::Aabb;
 
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 
@@ -241,18 +243,6 @@ pub struct Light {
     pub range: Option<f32>,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Projection {
-    Perspective { yfov: f32, znear: f32, zfar: Option<f32> },
-    Orthographic { xmag: f32, ymag: f32, znear: f32, zfar: f32 },
-}
-
-#[derive(Clone, Debug, PartialEq)]
-pub struct CameraDef {
-    pub name: String,
-    pub projection: Projection,
-}
-
 /// A loaded scene. Node indices, mesh indices etc. are into the vectors here.
 #[derive(Clone, Debug, Default)]
 pub struct Scene {
@@ -311,48 +301,6 @@ pub struct SceneState {
     pub draws: Vec<DrawItem>,
     pub lights: Vec<WorldLight>,
     pub cameras: Vec<WorldCamera>,
-}
-
-/// Axis-aligned bounding box.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Aabb {
-    pub min: Vec3,
-    pub max: Vec3,
-}
-
-impl Aabb {
-    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
-    pub fn grow(&mut self, p: Vec3) {
-        self.min = self.min.min(p);
-        self.max = self.max.max(p);
-    }
-    pub fn is_empty(&self) -> bool {
-        self.min.x > self.max.x
-    }
-    pub fn center(&self) -> Vec3 {
-        (self.min + self.max) * 0.5
-    }
-    pub fn extent(&self) -> Vec3 {
-        self.max - self.min
-    }
-    /// Radius of the bounding sphere around the centre.
-    pub fn radius(&self) -> f32 {
-        self.extent().length() * 0.5
-    }
-    /// The bounds of this box's eight corners under `m`.
-    pub fn transformed(&self, m: Mat4) -> Aabb {
-        let mut b = Aabb::EMPTY;
-        for k in 0..8 {
-            let pick = |bit: u32, lo: f32, hi: f32| if k & bit == 0 { lo } else { hi };
-            let c = Vec3::new(
-                pick(1, self.min.x, self.max.x),
-                pick(2, self.min.y, self.max.y),
-                pick(4, self.min.z, self.max.z),
-            );
-            b.grow(m.transform_point3(c));
-        }
-        b
-    }
 }
 
 impl Primitive {

@@ -113,7 +113,7 @@ pub fn study(args: &StudyArgs) -> Result<(), CliError> {
         }
         let (path, text) = jobs::emit(&spec, &out, engine, args.shards)?;
         std::fs::create_dir_all(&out).map_err(|e| CliError::input(format!("--out {}: {e}", out.display())))?;
-        gi_render::preset::write_atomic_bytes(&path, text.as_bytes(), gi_render::preset::Backup::Skip)
+        gi_render::files::write_atomic_bytes(&path, text.as_bytes(), gi_render::files::Backup::Skip)
             .map_err(|e| CliError::failure(format!("{}: {e}", path.display())))?;
         println!("wrote {} ({} jobs in {} shards)", path.display(), plan.jobs.len(), args.shards);
         return Ok(());

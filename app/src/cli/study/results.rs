@@ -299,7 +299,7 @@ pub(super) fn write(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
     if let Some(parent) = path.parent() {
         std::fs::create_dir_all(parent).map_err(|e| CliError::failure(format!("{}: {e}", parent.display())))?;
     }
-    gi_render::preset::write_atomic_bytes(path, bytes, gi_render::preset::Backup::Skip)
+    gi_render::files::write_atomic_bytes(path, bytes, gi_render::files::Backup::Skip)
         .map_err(|e| CliError::failure(format!("{}: {e}", path.display())))
 }
 

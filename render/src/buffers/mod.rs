@@ -11,6 +11,10 @@ use std::collections::BTreeMap;
 
 use crate::gpu::GpuContext;
 
+mod probe;
+
+pub use probe::{DepthProbe, PROBE_MAX_POINTS, ProbeJobs};
+
 /// How a buffer's values should be shown when turned into an 8-bit image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BufferKind {
@@ -143,7 +147,7 @@ impl BufferRegistry {
     pub fn probe(
         &self,
         ctx: &GpuContext,
-        depth_probe: &crate::passes::view::DepthProbe,
+        depth_probe: &DepthProbe,
         frame_size: (u32, u32),
         pixels: &[(u32, u32)],
     ) -> Result<Vec<Vec<ProbeValue>>, BufferError> {
@@ -158,7 +162,7 @@ impl BufferRegistry {
 
     /// What a probe of `pixels` copies and how its bytes decode (see [`Self::probe`]).
     pub fn probe_plan(&self, frame_size: (u32, u32), pixels: &[(u32, u32)]) -> Result<ProbePlan, BufferError> {
-        let max = crate::passes::view::PROBE_MAX_POINTS;
+        let max = PROBE_MAX_POINTS;
         if pixels.len() > max {
             return Err(BufferError::Range {
                 name: "probe".into(),
@@ -206,7 +210,7 @@ impl ProbePlan {
         &self,
         ctx: &GpuContext,
         enc: &mut wgpu::CommandEncoder,
-        depth_probe: &crate::passes::view::DepthProbe,
+        depth_probe: &DepthProbe,
         staging: &wgpu::Buffer,
     ) {
         let n = self.readable.len();
