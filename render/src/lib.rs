@@ -32,4 +32,4 @@ pub mod timing;
 pub use buffers::{BufferKind, BufferRegistry, ImageF32};
 pub use gpu::GpuContext;
 pub use renderer::{RenderError, Renderer};
-pub use settings::LabSettings;
+pub use lab_settings::LabSettings;

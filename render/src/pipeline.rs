@@ -2,16 +2,11 @@
 //! (stages 3–7), and the named techniques that are only sets of these choices.
 //!
 //! A paper is a preset of choices ([`Technique`]); after the technique picker has set them,
-//! every stage's choice can be changed on its own, and [`combination_errors`] refuses the
+//! every stage's choice can be changed on its own, and `lab_settings`'s rules refuse the
 //! mixes that cannot work with a message naming the stage and what it needs.
 //! `docs/architecture.md` lists every choice with the pass it runs; `frame.rs` runs them.
 
-use crate::lab_settings::LabSettings;
-use crate::settings::FieldError;
 use crate::{settings_enum, settings_group};
-
-mod rules;
-pub use rules::combination_errors;
 
 settings_enum! {
     /// Stage 3: where the virtual point lights come from.
@@ -311,11 +306,6 @@ impl Technique {
         })
     }
 
-    /// Sets the technique's choices in `s`.
-    pub fn apply(self, s: &mut LabSettings) {
-        s.pipeline = self.choices(&s.pipeline);
-    }
-
     /// The technique in words (as the picker shows it).
     pub fn label(self) -> &'static str {
         Self::LABELS[Self::ALL.iter().position(|x| *x == self).unwrap_or(0)]
@@ -397,7 +387,7 @@ impl PipelineSettings {
 }
 
 /// The settings of version-1 presets that the stage choices replaced; read on load only
-/// (`settings_group!`'s `legacy` fields) and turned into choices by [`migrate_v1`].
+/// (`settings_group!`'s `legacy` fields) and turned into choices by `lab_settings`'s migration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum LegacyTechnique {
     None,
@@ -453,31 +443,6 @@ impl V1Choices {
             },
         }
     }
-}
-
-/// Migrates a version-1 preset read strictly (the `legacy` fields of the groups) to the
-/// stage choices of version 2 and clears the old fields.
-pub fn migrate_v1(s: &mut LabSettings) {
-    let any = s.indirect.is_some()
-        || s.ism.visibility.is_some()
-        || s.reference.visibility.is_some()
-        || s.interleave.filter.is_some()
-        || s.temporal.enabled.is_some()
-        || s.hcb.cache.is_some();
-    if !any {
-        // Nothing of version 1 to carry over (a file without `version` may be a version-2
-        // snippet): the stage choices stay as read.
-        return;
-    }
-    let v1 = V1Choices {
-        technique: s.indirect.take().map_or(LegacyTechnique::None, |i| i.technique),
-        ism_visibility: s.ism.visibility.take().unwrap_or_default(),
-        reference_visibility: s.reference.visibility.take().unwrap_or(true),
-        filter: s.interleave.filter.take().unwrap_or(true),
-        temporal: s.temporal.enabled.take().unwrap_or(true),
-        cache: s.hcb.cache.take().unwrap_or(false),
-    };
-    s.pipeline = v1.choices();
 }
 
 /// Migrates a version-1 preset read leniently (`preset::load_lenient`, identifiers quoted as
@@ -565,7 +530,7 @@ pub fn migrate_v1_map(top: &mut ron::Map) -> Vec<(String, String)> {
 }
 
 /// Version 1's settings that the stage choices replaced, with what replaced them.
-const MOVED: [(&str, &str); 6] = [
+pub(crate) const MOVED: [(&str, &str); 6] = [
     ("indirect.technique", "the pipeline.* stage choices (a technique sets them all)"),
     ("ism.visibility", "pipeline.vpl_visibility"),
     ("reference.visibility", "pipeline.vpl_visibility"),
@@ -577,26 +542,4 @@ const MOVED: [(&str, &str); 6] = [
 /// What replaced a version-1 setting (for `--set` and sweeps written before version 2).
 pub fn moved_setting(path: &str) -> Option<&'static str> {
     MOVED.iter().find(|(p, _)| *p == path).map(|(_, to)| *to)
-}
-
-/// The version-1 fields still set in a version-2 preset (they were replaced by the stage
-/// choices: a current preset naming them is refused with the new name).
-pub fn legacy_field_errors(s: &LabSettings) -> Vec<FieldError> {
-    let set = [
-        s.indirect.is_some(),
-        s.ism.visibility.is_some(),
-        s.reference.visibility.is_some(),
-        s.interleave.filter.is_some(),
-        s.temporal.enabled.is_some(),
-        s.hcb.cache.is_some(),
-    ];
-    MOVED
-        .into_iter()
-        .zip(set)
-        .filter(|(_, set)| *set)
-        .map(|((field, to), _)| FieldError {
-            field: field.into(),
-            message: format!("replaced by {to} in preset version 2 (set version: 1 to have it migrated)"),
-        })
-        .collect()
 }

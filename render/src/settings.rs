@@ -336,8 +336,6 @@ macro_rules! settings_group {
     };
 }
 
-pub use crate::lab_settings::{AnimationSettings, LabSettings};
-
 /// A typed error of preset parsing (RON syntax or types).
 #[derive(Debug, thiserror::Error)]
 pub enum PresetError {

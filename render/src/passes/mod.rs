@@ -49,14 +49,7 @@ pub struct CameraUniform {
     pub lod: Vec4,
 }
 
-/// Per-draw transforms; WGSL twin: `Instance` in `shaders/gbuffer/gbuffer.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct InstanceUniform {
-    pub model: Mat4,
-    pub prev_model: Mat4,
-    pub normal_matrix: Mat4,
-}
+pub use crate::scene::upload::InstanceUniform;
 
 /// An unmapped buffer of `size` bytes.
 pub fn buffer(device: &wgpu::Device, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {

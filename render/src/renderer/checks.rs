@@ -7,7 +7,8 @@ use crate::passes::knecht::stage::ism_splats;
 use crate::passes::knecht::vpl_bounce::BounceMethod;
 use crate::passes::reference::vpl_visibility::AtlasLayout;
 use crate::pipeline::VplVisibility;
-use crate::settings::{FieldError, LabSettings};
+use crate::lab_settings::LabSettings;
+use crate::settings::FieldError;
 
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {

@@ -31,7 +31,7 @@ use crate::passes::gbuffer::GBufferPass;
 use crate::passes::shadow::{ShadowPass, light_views};
 use crate::scene::upload::GpuScene;
 use crate::scene::{Aabb, Scene};
-use crate::settings::LabSettings;
+use crate::lab_settings::LabSettings;
 use crate::timing::GpuTimer;
 
 /// A pixel and the Soler samples behind it (the overlay's last complete answer).

@@ -8,7 +8,15 @@ use glam::Mat4;
 
 use super::{Scene, SceneState, Vertex};
 use crate::gpu::GpuContext;
-use crate::passes::InstanceUniform;
+
+/// Per-draw transforms; WGSL twin: `Instance` in `shaders/gbuffer/gbuffer.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct InstanceUniform {
+    pub model: glam::Mat4,
+    pub prev_model: glam::Mat4,
+    pub normal_matrix: glam::Mat4,
+}
 
 /// Material uniform; WGSL twin: `Material` in `shaders/common/material.wgsl`.
 #[repr(C)]
@@ -43,7 +51,7 @@ pub struct GpuScene {
     pub instances: wgpu::Buffer,
     pub instance_capacity: usize,
     /// What `instances` holds (written only when the frame's transforms differ).
-    uploaded: std::sync::Mutex<Vec<crate::passes::InstanceUniform>>,
+    uploaded: std::sync::Mutex<Vec<InstanceUniform>>,
     pub instance_layout: wgpu::BindGroupLayout,
     pub instance_group: wgpu::BindGroup,
     pub material_layout: wgpu::BindGroupLayout,

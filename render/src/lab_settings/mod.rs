@@ -23,6 +23,16 @@ use crate::scale::ScaleSettings;
 use crate::settings::{FieldError, FieldMeta, PRESET_VERSION, PresetError, SettingsGroup, Value};
 use crate::settings_group;
 
+mod migrate;
+mod rules;
+
+impl crate::pipeline::Technique {
+    /// Sets the technique's choices in `s`.
+    pub fn apply(self, s: &mut LabSettings) {
+        s.pipeline = self.choices(&s.pipeline);
+    }
+}
+
 settings_group! {
     /// The deterministic clock (see `clock.rs`).
     pub struct AnimationSettings: "animation" {
@@ -271,9 +281,9 @@ impl LabSettings {
                     ),
                 );
             }
-            errors.extend(crate::pipeline::combination_errors(self));
+            errors.extend(rules::combination_errors(self));
         }
-        errors.extend(crate::pipeline::legacy_field_errors(self));
+        errors.extend(migrate::legacy_field_errors(self));
         errors
     }
 
@@ -314,7 +324,7 @@ impl LabSettings {
     /// version 1's technique and stage switches become the stage choices of version 2.
     pub fn migrate(mut self) -> Self {
         if self.version < 2 {
-            crate::pipeline::migrate_v1(&mut self);
+            migrate::migrate_v1(&mut self);
         }
         if self.version < PRESET_VERSION {
             self.version = PRESET_VERSION;
@@ -383,7 +393,7 @@ mod tests {
 
     #[test]
     fn checked_in_default_preset_matches_defaults() {
-        let text = include_str!("../../presets/default.ron");
+        let text = include_str!("../../../presets/default.ron");
         let s = LabSettings::from_ron(text, "presets/default.ron").expect("presets/default.ron loads");
         assert_eq!(s, LabSettings::default(), "presets/default.ron differs from LabSettings::default()");
     }

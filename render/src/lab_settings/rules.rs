@@ -1,8 +1,8 @@
 //! Which stage choices work together (`combination_errors`, called by
 //! `LabSettings::validate`): the rules of docs/architecture.md's "What works with what".
 
-use super::{Gather, NearField, Reconstruction, ShadingPoints, Temporal, VplSource, VplVisibility};
-use crate::lab_settings::LabSettings;
+use super::LabSettings;
+use crate::pipeline::{Gather, NearField, Reconstruction, ShadingPoints, Temporal, VplSource, VplVisibility};
 use crate::settings::FieldError;
 
 /// The stage choices that cannot work together, each with the stage that needs what
