@@ -12,8 +12,8 @@
 //! | 7. Compose | `passes::compose`: direct + indirect + near field + emission + sky, tone mapped |
 
 use crate::chain::Recorder;
+use crate::passes::stages::FrameInputs;
 use crate::renderer::{PrevFrame, Renderer, light_view_list};
-use crate::stages::FrameInputs;
 use crate::timing::PassTiming;
 
 impl Renderer {

@@ -135,13 +135,13 @@ const MIGRATIONS: &[Migration] = &[
         0,
         2,
         "files without a version field have version 1's fields; indirect.technique, ism.visibility, reference.visibility, interleave.filter, temporal.enabled and hcb.cache became the stage choices pipeline.*",
-        crate::pipeline::migrate_v1_map,
+        crate::settings::pipeline::migrate_v1_map,
     ),
     (
         1,
         2,
         "indirect.technique, ism.visibility, reference.visibility, interleave.filter, temporal.enabled and hcb.cache became the stage choices pipeline.*",
-        crate::pipeline::migrate_v1_map,
+        crate::settings::pipeline::migrate_v1_map,
     ),
 ];
 
@@ -395,7 +395,6 @@ impl Export {
     }
 }
 
-
 /// The current UTC time as `YYYY-MM-DDTHH:MM:SSZ`.
 pub fn utc_now() -> String {
     let secs = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs()).unwrap_or(0);
@@ -488,7 +487,7 @@ mod tests {
         assert!(l.migrations.is_empty());
         assert_eq!(l.settings, LabSettings::default());
         let mut s = LabSettings::default();
-        crate::pipeline::Technique::ExactVpl.apply(&mut s);
+        crate::settings::pipeline::Technique::ExactVpl.apply(&mut s);
         s.direct.pcf_radius = 3;
         let l = load_lenient(&s.to_ron(), "t").expect("loads");
         assert_eq!(l.settings, s);
@@ -539,7 +538,7 @@ mod tests {
         let mut s = LabSettings::default();
         s.tonemap.exposure_ev = 0.1 + 0.2;
         s.direct.depth_bias = 1.0 / 3.0;
-        crate::pipeline::Technique::ExactVpl.apply(&mut s);
+        crate::settings::pipeline::Technique::ExactVpl.apply(&mut s);
         let cam = Camera {
             position: glam::Vec3::new(0.1, 1.7, 3.3),
             yaw: 0.3,
@@ -573,5 +572,4 @@ mod tests {
             "docs/preset-schema.md is stale: run `gi-lab export --schema-doc docs/preset-schema.md`"
         );
     }
-
 }

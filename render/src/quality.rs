@@ -15,10 +15,10 @@
 //! the same budget.
 
 use crate::image_io::hdr_display;
-use crate::passes::knecht::vpl_importance::ReceiverBrdf;
-use crate::passes::receiver::IrradianceReceiver;
-use crate::pipeline::{Reconstruction, ShadingPoints, Temporal};
 use crate::scene::Scene;
+use crate::settings::knecht::ReceiverBrdf;
+use crate::settings::pipeline::{Reconstruction, ShadingPoints, Temporal};
+use crate::settings::splat::IrradianceReceiver;
 use crate::{GpuContext, ImageF32, LabSettings, Renderer};
 
 /// The shipped presets the rows start from.

@@ -1,6 +1,6 @@
 //! Helpers shared by the Knecht test files (`tests/knecht*.rs`).
 
-use gi_render::pipeline::Technique;
+use gi_render::settings::pipeline::Technique;
 use gi_render::{GpuContext, LabSettings};
 use glam::Vec3;
 

@@ -55,7 +55,7 @@ pub fn first_frame(passes: &[&'static str]) -> Vec<&'static str> {
 /// from frame to frame, for tests of the direct light and the frame's machinery.
 pub fn direct_only_renderer(w: u32, h: u32) -> Renderer {
     let mut s = LabSettings::default();
-    s.pipeline.gather = gi_render::pipeline::Gather::None;
+    s.pipeline.gather = gi_render::settings::pipeline::Gather::None;
     let mut r = Renderer::new(gpu(), default_scene(), s, w, h).expect("renderer");
     r.clock.playing = false;
     r
@@ -195,7 +195,7 @@ pub fn texture_from_bytes(
 /// (which must leave them valid), with the animation paused.
 pub fn paused_renderer(
     size: u32,
-    technique: gi_render::pipeline::Technique,
+    technique: gi_render::settings::pipeline::Technique,
     edit: impl FnOnce(&mut LabSettings),
 ) -> Renderer {
     let mut s = LabSettings::default();

@@ -35,7 +35,7 @@ fn emitter_direct_light_matches_its_cpu_twin() {
     // same VPLs at every covered pixel.
     let size = 48;
     let mut r = scene_renderer(cornell(), size, |s| {
-        gi_render::pipeline::Technique::DirectOnly.apply(s);
+        gi_render::settings::pipeline::Technique::DirectOnly.apply(s);
         s.apply_override("emitters.visibility=None").expect("valid");
     });
     r.render_frame();
@@ -120,10 +120,10 @@ fn the_shared_cornell_box_lit_only_by_its_ceiling_quad_matches_the_path_tracer()
     for (name, frames, bound, least) in cases {
         let mut r = scene_renderer(scene.clone(), size, |s| {
             let t = match name {
-                "knecht" => gi_render::pipeline::Technique::Knecht,
-                "nguyen" => gi_render::pipeline::Technique::Nguyen,
-                "soler" => gi_render::pipeline::Technique::Soler,
-                _ => gi_render::pipeline::Technique::Gautron,
+                "knecht" => gi_render::settings::pipeline::Technique::Knecht,
+                "nguyen" => gi_render::settings::pipeline::Technique::Nguyen,
+                "soler" => gi_render::settings::pipeline::Technique::Soler,
+                _ => gi_render::settings::pipeline::Technique::Gautron,
             };
             t.apply(s);
         });
@@ -224,7 +224,7 @@ fn an_emissive_texture_shapes_the_emitters_light() {
     assert!(vpls.iter().filter(|v| v.flux.max_element() > 0.0).all(|v| v.position.x > mid - 0.07 * (hi - lo)));
 
     let pt = PathTracer::new(&scene, 0.0);
-    let mut r = scene_renderer(scene, size, |s| gi_render::pipeline::Technique::DirectOnly.apply(s));
+    let mut r = scene_renderer(scene, size, |s| gi_render::settings::pipeline::Technique::DirectOnly.apply(s));
     // From the middle of the box, looking up at the quad (the file's camera does not see it).
     r.camera.position = r.bounds().center();
     r.camera.pitch = 1.0;

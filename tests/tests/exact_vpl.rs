@@ -5,8 +5,8 @@
 
 use gi_lab_tests::{default_scene, gpu};
 use gi_render::cpu::pathtrace::{PathTracer, PtSettings};
-use gi_render::pipeline::Technique;
 use gi_render::scene::{LightKind, Scene};
+use gi_render::settings::pipeline::Technique;
 use gi_render::{ImageF32, LabSettings, Renderer};
 
 const SIZE: u32 = 32;

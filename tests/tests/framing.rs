@@ -194,7 +194,7 @@ fn scene_relative_settings_scale_with_the_room_the_camera_is_in() {
     let want = 0.5 * (room.size.length_squared() + (room.ceiling - room.floor).powi(2)).sqrt();
     assert!((scale - want).abs() < 1e-5 && scale < 0.9 * model, "room {scale} ({room:?}), model {model}");
     let mut s = r.settings().clone();
-    gi_render::pipeline::Technique::Nguyen.apply(&mut s);
+    gi_render::settings::pipeline::Technique::Nguyen.apply(&mut s);
     r.set_settings(s.clone()).expect("the HCB");
     r.render_frame();
     let d_max = r.hcb_stats().expect("HCB statistics").d_max;

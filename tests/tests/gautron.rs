@@ -5,7 +5,7 @@ use gi_lab_tests::{paused_renderer, read, stored_reference, v3};
 use gi_render::LabSettings;
 use gi_render::cpu::gautron::{self, HemisphereTable, Record};
 use gi_render::passes::gautron::{GpuRecord, SplatMethod};
-use gi_render::pipeline::Technique;
+use gi_render::settings::pipeline::Technique;
 use glam::Vec3;
 
 fn close(a: Vec3, b: Vec3, scale: f32, tol: f32) -> bool {
@@ -289,7 +289,7 @@ fn creation_covers_every_pixel_and_the_cache_keeps_its_records() {
     assert_eq!((warm.made, warm.count), (0, count));
 
     let mut none = r.settings().clone();
-    none.pipeline.temporal = gi_render::pipeline::Temporal::None;
+    none.pipeline.temporal = gi_render::settings::pipeline::Temporal::None;
     r.set_settings(none).unwrap();
     r.render_frame();
     r.render_frame();
@@ -315,7 +315,7 @@ fn irradiance_cache_splatting_against_the_path_tracer() {
     // whose light is all interpolated (the glossy receiver's specular term is not
     // extrapolated, so it adds the same error with and without them).
     let mut diffuse = r.settings().clone();
-    diffuse.gautron.receiver = gi_render::passes::receiver::IrradianceReceiver::DiffuseOnly;
+    diffuse.gautron.receiver = gi_render::settings::splat::IrradianceReceiver::DiffuseOnly;
     r.set_settings(diffuse).unwrap();
     r.render_frame();
     assert_eq!(r.gautron().unwrap().read_state(&r.ctx).unwrap().count, records, "the same records");
@@ -518,7 +518,7 @@ fn coarse_to_fine_rounds_approach_the_sequential_scans_record_count() {
 /// c·DI/π·E.
 #[test]
 fn the_glossy_receiver_of_the_records_matches_the_cpu_twin_on_the_chair() {
-    use gi_render::passes::receiver::IrradianceReceiver;
+    use gi_render::settings::splat::IrradianceReceiver;
     let settings = |receiver| {
         let mut s = LabSettings::default();
         Technique::Gautron.apply(&mut s);

@@ -8,7 +8,7 @@ use gi_lab_tests::{paused_renderer, read};
 use gi_render::Renderer;
 use gi_render::cpu::gautron::{Changes, Fate, fate};
 use gi_render::passes::gautron::{GpuRecord, Invalidation};
-use gi_render::pipeline::Technique;
+use gi_render::settings::pipeline::Technique;
 use glam::Vec3;
 
 fn renderer(invalidation: Invalidation) -> Renderer {
@@ -221,12 +221,12 @@ fn a_light_change_computes_every_record_again() {
 /// and leaves almost no pixel uncovered.
 #[test]
 fn popping_while_the_scene_animates() {
-    let run = |temporal: gi_render::pipeline::Temporal, invalidation: Invalidation| {
+    let run = |temporal: gi_render::settings::pipeline::Temporal, invalidation: Invalidation| {
         let mut r = paused_renderer(96, Technique::Gautron, |s| {
             s.pipeline.temporal = temporal;
             s.gautron.invalidation = invalidation;
         });
-        if temporal == gi_render::pipeline::Temporal::RecordCache {
+        if temporal == gi_render::settings::pipeline::Temporal::RecordCache {
             settle(&mut r, 24);
         }
         r.clock.playing = true;
@@ -239,7 +239,7 @@ fn popping_while_the_scene_animates() {
         }
         (gi_render::metrics::flicker(&frames).unwrap(), holes)
     };
-    use gi_render::pipeline::Temporal;
+    use gi_render::settings::pipeline::Temporal;
     let (refresh, refresh_holes) = run(Temporal::RecordCache, Invalidation::Refresh);
     let (drop, drop_holes) = run(Temporal::RecordCache, Invalidation::Drop);
     let (cold, cold_holes) = run(Temporal::None, Invalidation::Refresh);

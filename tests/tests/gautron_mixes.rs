@@ -8,7 +8,7 @@ use gi_render::cpu::gautron::{self, Record};
 use gi_render::cpu::knecht::Vpl;
 use gi_render::passes::gautron::GpuRecord;
 use gi_render::passes::gautron::vpl_records::{EPS_R, EPS_T};
-use gi_render::pipeline::{Technique, VplVisibility};
+use gi_render::settings::pipeline::{Technique, VplVisibility};
 use glam::Vec3;
 
 fn flip_against(img: &gi_render::ImageF32, truth: &gi_render::ImageF32) -> f64 {

@@ -341,7 +341,7 @@ fn the_gather_per_workgroup_equals_the_gather_per_invocation() {
             let mut r = hcb_renderer(96, |s| {
                 s.vpl.count = 256;
                 if cached {
-                    s.pipeline.temporal = gi_render::pipeline::Temporal::HcbSampleCache;
+                    s.pipeline.temporal = gi_render::settings::pipeline::Temporal::HcbSampleCache;
                 }
             });
             r.hcb_mut().expect("the HCB runs").gather.wide = wide;
@@ -580,7 +580,7 @@ fn the_glossy_receiver_of_the_hcb_matches_the_cpu_twin_on_the_chair() {
         s.hcb.receiver = receiver;
         s
     };
-    use gi_render::passes::receiver::IrradianceReceiver;
+    use gi_render::settings::splat::IrradianceReceiver;
     let scene = gi_lab_tests::test_scene("chair-behind.glb");
     let mut r = gi_render::Renderer::new(gpu(), scene, settings(IrradianceReceiver::Glossy), 64, 64).expect("renderer");
     r.clock.playing = false;

@@ -15,7 +15,7 @@ fn renderer(size: u32, edit: impl FnOnce(&mut LabSettings)) -> Renderer {
     let loaded = gi_render::preset::load_lenient(include_str!("../../presets/nguyen-hcb-cached.ron"), "cached")
         .expect("the preset loads");
     let mut s = loaded.settings;
-    assert_eq!(s.pipeline.temporal, gi_render::pipeline::Temporal::HcbSampleCache, "the preset caches");
+    assert_eq!(s.pipeline.temporal, gi_render::settings::pipeline::Temporal::HcbSampleCache, "the preset caches");
     edit(&mut s);
     let mut r = Renderer::new(gpu(), default_scene(), s, size, size).expect("renderer");
     r.clock.playing = false;
@@ -62,7 +62,7 @@ fn a_static_view_settles_to_almost_no_new_samples_and_stays_close_to_the_per_fra
     // The image stays close to the per-frame HCB with the same VPLs.
     let cached = r.readback("final.hdr").expect("final").data;
     let mut p = renderer(size, |s| {
-        s.pipeline.temporal = gi_render::pipeline::Temporal::None;
+        s.pipeline.temporal = gi_render::settings::pipeline::Temporal::None;
         s.vpl.count = 64;
     });
     let per_frame_stats = frame(&mut p);
@@ -99,7 +99,7 @@ fn samples_on_a_moving_object_are_removed_and_renewed() {
     // The per-frame HCB at the same instant.
     // 64 VPLs: the cache does not depend on their number, and the test stays short.
     let mut per_frame = renderer(128, |s| {
-        s.pipeline.temporal = gi_render::pipeline::Temporal::None;
+        s.pipeline.temporal = gi_render::settings::pipeline::Temporal::None;
         s.vpl.count = 64;
     });
     per_frame.clock.playing = true;
@@ -165,7 +165,7 @@ fn the_binned_splat_equals_the_blended_quads_in_the_renderer() {
             s.vpl.count = 32;
             s.hcb.splat = method;
             if !cache {
-                s.pipeline.temporal = gi_render::pipeline::Temporal::None;
+                s.pipeline.temporal = gi_render::settings::pipeline::Temporal::None;
             }
         });
         let stats: Vec<_> = (0..4).map(|_| frame(&mut r)).collect();

@@ -9,8 +9,8 @@ use gi_render::maths::halton;
 use gi_render::passes::knecht::ism::{IsmPass, IsmSettings, PushBehind};
 use gi_render::passes::knecht::vpl_importance::{ViewJob, VplImportancePass};
 use gi_render::passes::shadow::LightView;
-use gi_render::pipeline::{Technique, VplVisibility};
 use gi_render::scene::upload::GpuScene;
+use gi_render::settings::pipeline::{Technique, VplVisibility};
 use gi_render::{GpuContext, LabSettings, RenderError, Renderer};
 use glam::{Mat4, Vec2, Vec3};
 
@@ -404,7 +404,7 @@ fn knecht_pan(technique: Technique, demodulate: bool) -> (gi_render::ImageF32, g
     let renderer = || {
         let mut r = gi_lab_tests::scene_renderer(scene.clone(), 96, |s| {
             technique.apply(s);
-            s.pipeline.temporal = gi_render::pipeline::Temporal::ConfidenceMerge;
+            s.pipeline.temporal = gi_render::settings::pipeline::Temporal::ConfidenceMerge;
             s.temporal.demodulate = demodulate;
         });
         r.clock.playing = false;

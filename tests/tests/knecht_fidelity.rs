@@ -5,7 +5,7 @@
 
 use gi_lab_tests::{default_scene, gpu};
 use gi_render::image_io::hdr_display;
-use gi_render::pipeline::{Reconstruction, Temporal};
+use gi_render::settings::pipeline::{Reconstruction, Temporal};
 use gi_render::{ImageF32, LabSettings, Renderer};
 
 /// The `knecht-cornell-256` preset, edited, on the default scene at `size`², paused.
@@ -161,8 +161,8 @@ fn the_thesis_order_merges_then_filters() {
 #[test]
 fn the_hcb_with_imperfect_maps_needs_as_many_points_as_vpls() {
     let mut s = LabSettings::default();
-    gi_render::pipeline::Technique::Nguyen.apply(&mut s);
-    s.pipeline.vpl_visibility = gi_render::pipeline::VplVisibility::Imperfect;
+    gi_render::settings::pipeline::Technique::Nguyen.apply(&mut s);
+    s.pipeline.vpl_visibility = gi_render::settings::pipeline::VplVisibility::Imperfect;
     s.vpl.count = 4096;
     s.ism.points = 2048;
     let errors = s.validate();
@@ -182,8 +182,8 @@ fn the_hcb_with_imperfect_maps_needs_as_many_points_as_vpls() {
 #[test]
 fn the_diffuse_only_gather_compares_like_for_like_with_the_hcb() {
     use gi_render::passes::knecht::vpl_importance::ReceiverBrdf;
-    use gi_render::passes::receiver::IrradianceReceiver;
-    use gi_render::pipeline::ShadingPoints;
+    use gi_render::settings::pipeline::ShadingPoints;
+    use gi_render::settings::splat::IrradianceReceiver;
     let render = |edit: &dyn Fn(&mut LabSettings)| {
         let mut r = gi_lab_tests::nguyen_fixed_vpls_renderer(128, 128, edit);
         r.render_frame();

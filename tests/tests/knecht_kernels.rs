@@ -4,7 +4,7 @@
 use gi_lab_tests::knecht_support::{Rng, knecht_settings, read};
 use gi_lab_tests::{default_scene, gpu};
 use gi_render::cpu::knecht::{self};
-use gi_render::pipeline::Technique;
+use gi_render::settings::pipeline::Technique;
 use gi_render::{GpuContext, Renderer};
 use glam::{Mat4, Vec2, Vec3};
 

@@ -5,7 +5,7 @@
 
 use gi_lab_tests::{default_scene, gpu, stored_reference};
 use gi_render::image_io::hdr_display;
-use gi_render::pipeline::{Temporal, VplVisibility};
+use gi_render::settings::pipeline::{Temporal, VplVisibility};
 use gi_render::{ImageF32, LabSettings, Renderer};
 use glam::Vec3;
 

@@ -93,7 +93,7 @@ fn a_normal_texture_bends_the_normal_by_the_closed_form() {
     let mut m = plain("bumped", 0.8);
     m.normal_texture = Some(0);
     let scene = scene(vec![(quad(-2.0, 2.0, -2.0, 2.0, 0.0), m)], vec![normal_map], LightKind::Directional);
-    let mut r = scene_renderer(scene.clone(), 32, |s| gi_render::pipeline::Technique::DirectOnly.apply(s));
+    let mut r = scene_renderer(scene.clone(), 32, |s| gi_render::settings::pipeline::Technique::DirectOnly.apply(s));
     look_down(&mut r, 2.0);
     r.render_frame();
     let normal = read(&r, "gbuffer.normal");
@@ -127,12 +127,12 @@ fn a_metallic_roughness_texture_sets_the_material_per_texel() {
     let scene = scene(vec![(quad(-2.0, 2.0, -2.0, 2.0, 0.0), m.clone())], vec![mr, occlusion], LightKind::Directional);
     let mut with_ao = scene.clone();
     with_ao.materials[0].occlusion_texture = Some(1);
-    let mut r = scene_renderer(scene, 16, |s| gi_render::pipeline::Technique::DirectOnly.apply(s));
+    let mut r = scene_renderer(scene, 16, |s| gi_render::settings::pipeline::Technique::DirectOnly.apply(s));
     look_down(&mut r, 2.0);
     r.render_frame();
     let (direct, emission) = (read(&r, "direct.radiance"), read(&r, "gbuffer.emission"));
     assert_eq!(emission.data[8 * 16 + 8][3], 1.0, "no occlusion texture: 1");
-    let mut ao = scene_renderer(with_ao, 16, |s| gi_render::pipeline::Technique::DirectOnly.apply(s));
+    let mut ao = scene_renderer(with_ao, 16, |s| gi_render::settings::pipeline::Technique::DirectOnly.apply(s));
     look_down(&mut ao, 2.0);
     ao.render_frame();
     let occ = read(&ao, "gbuffer.emission").data[8 * 16 + 8][3];
@@ -163,7 +163,7 @@ fn an_alpha_mask_cuts_the_surface_its_shadow_and_its_ism_points() {
         LightKind::Directional,
     );
     let size = 48;
-    let mut r = scene_renderer(scene.clone(), size, |s| gi_render::pipeline::Technique::DirectOnly.apply(s));
+    let mut r = scene_renderer(scene.clone(), size, |s| gi_render::settings::pipeline::Technique::DirectOnly.apply(s));
     look_down(&mut r, 3.0);
     r.render_frame();
     let position = read(&r, "gbuffer.position");
@@ -241,7 +241,8 @@ fn textured_real_scenes_agree_with_the_path_tracer_in_direct_light() {
     for (rel, bound) in [("chair-on-floor/MixedLightingExample.gltf", 0.025), ("hotel-room/hotel-room.glb", 0.085)] {
         let scene = gi_render::scene::load_gltf_file(&real_scene(rel), &LoadOptions::default()).expect("loads");
         let size = 64;
-        let mut r = scene_renderer(scene.clone(), size, |s| gi_render::pipeline::Technique::DirectOnly.apply(s));
+        let mut r =
+            scene_renderer(scene.clone(), size, |s| gi_render::settings::pipeline::Technique::DirectOnly.apply(s));
         r.render_frame();
         let direct = read(&r, "direct.radiance");
         let pt = PathTracer::new(&scene, 0.0);
@@ -286,7 +287,7 @@ fn cut_out_surfaces_do_not_voxelize() {
             }
         }
         let mut r = scene_renderer(scene, 32, |s| {
-            gi_render::pipeline::Technique::Soler.apply(s);
+            gi_render::settings::pipeline::Technique::Soler.apply(s);
             s.soler.visibility = true;
         });
         r.render_frame();

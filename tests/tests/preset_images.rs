@@ -35,7 +35,7 @@ fn render_preset(path: &Path) -> ImageF32 {
     // The frame as a list (issue #52): a preset with indirect light has steps, and every step
     // found the pass its choice brought.
     let steps = r.frame_steps();
-    let direct_only = r.settings().pipeline.gather == gi_render::pipeline::Gather::None;
+    let direct_only = r.settings().pipeline.gather == gi_render::settings::pipeline::Gather::None;
     assert_eq!(steps.is_empty(), direct_only, "{}: steps {steps:?}", path.display());
     assert_eq!(r.failed_step(), None, "{}: steps {steps:?}", path.display());
     read(&r, "final.hdr")

@@ -208,7 +208,7 @@ fn the_one_bounce_reference_has_indirect_light_that_direct_light_lacks() {
 fn exact_vpl_image(total: u32) -> ImageF32 {
     let mut r = default_renderer(64, 64);
     let mut s = r.settings().clone();
-    gi_render::pipeline::Technique::ExactVpl.apply(&mut s);
+    gi_render::settings::pipeline::Technique::ExactVpl.apply(&mut s);
     s.reference.vpls_per_frame = 64;
     s.reference.total_vpls = total;
     r.set_settings(s).expect("exact-VPL settings are valid");

@@ -266,7 +266,7 @@ fn check_direct_buffer(mut r: Renderer, buffer: &str, diffuse: bool) -> DirectCh
 #[test]
 fn the_diffuse_direct_light_matches_the_analytic_diffuse_part() {
     let mut s = LabSettings::default();
-    gi_render::pipeline::Technique::Soler.apply(&mut s);
+    gi_render::settings::pipeline::Technique::Soler.apply(&mut s);
     let r = Renderer::new(gpu(), default_scene(), s, N, N).expect("renderer");
     let c = check_direct_buffer(r, "direct.diffuse", true);
     println!("diffuse part: {} lit floor pixels within {:.3} %, {} shadowed", c.lit, c.worst_rel * 100.0, c.shadowed);
@@ -526,7 +526,7 @@ fn an_exact_vpl_atlas_larger_than_the_device_is_refused_with_the_largest_valid_b
     let mut r = default_renderer(16, 16);
     let before = r.settings().clone();
     let mut s = before.clone();
-    gi_render::pipeline::Technique::ExactVpl.apply(&mut s);
+    gi_render::settings::pipeline::Technique::ExactVpl.apply(&mut s);
     s.reference.vpls_per_frame = 1024;
     s.reference.shadow_map_size = 1024;
     let e = r.set_settings(s.clone()).expect_err("a 73728-texel-wide atlas cannot exist").to_string();

@@ -5,9 +5,9 @@
 use gi_lab_tests::images::{exposed_flip, mean, sub};
 use gi_lab_tests::{default_scene, read, scene_renderer};
 use gi_render::cpu::pathtrace::{PathTracer, PtSettings};
-use gi_render::pipeline::Technique;
 use gi_render::scene::Scene;
 use gi_render::scene::sky::{EnvMap, Sky};
+use gi_render::settings::pipeline::Technique;
 use glam::Vec3;
 
 /// The default box without its punctual lights, under `sky`.

@@ -8,7 +8,7 @@ use gi_render::cpu::soler::{self, GatherParams, ScreenCamera, Texel, UpsampleSig
 use gi_render::cpu::soler_glossy::Gloss;
 use gi_render::cpu::soler_vote::{self, VoteSigmas};
 use gi_render::passes::soler::{FormFactor, StartResolution, VoxelResolution};
-use gi_render::pipeline::Technique;
+use gi_render::settings::pipeline::Technique;
 use glam::{Vec2, Vec3};
 
 /// The glossy reflection's settings as the CPU twin takes them.

@@ -4,7 +4,7 @@
 //! comparison of the gather and both upsampling chains is in `soler.rs`.
 
 use gi_lab_tests::{default_scene, gpu};
-use gi_render::pipeline::Technique;
+use gi_render::settings::pipeline::Technique;
 use gi_render::{LabSettings, Renderer};
 use glam::Vec3;
 
@@ -22,7 +22,7 @@ fn glossy_renderer(roughness: f32, edit: impl FnOnce(&mut LabSettings)) -> Rende
     white.roughness = roughness;
     let mut s = LabSettings::default();
     Technique::Soler.apply(&mut s);
-    s.pipeline.temporal = gi_render::pipeline::Temporal::None;
+    s.pipeline.temporal = gi_render::settings::pipeline::Temporal::None;
     s.soler.radius_px = 12.0;
     edit(&mut s);
     assert!(s.validate().is_empty(), "{:?}", s.validate());

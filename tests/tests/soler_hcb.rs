@@ -4,7 +4,7 @@
 use gi_lab_tests::{paused_renderer, read, soler_level, stored_reference, v3};
 use gi_render::cpu::soler::{self, Level, Texel};
 use gi_render::passes::soler::StartResolution;
-use gi_render::pipeline::{Technique, Temporal};
+use gi_render::settings::pipeline::{Technique, Temporal};
 use glam::Vec3;
 
 /// Every HCB sample's light is the sum, over Soler's gathered levels, of the ring of the

@@ -3,7 +3,7 @@
 //! visibility against the path tracer restricted to screen-visible senders.
 
 use gi_lab_tests::{default_scene, gpu, stored_reference};
-use gi_render::pipeline::Technique;
+use gi_render::settings::pipeline::Technique;
 use gi_render::{ImageF32, LabSettings, Renderer};
 
 fn renderer(size: u32, edit: impl FnOnce(&mut LabSettings)) -> Renderer {

@@ -5,7 +5,7 @@
 use gi_lab_tests::{paused_renderer, read};
 use gi_render::cpu::soler_temporal::{BlendInputs, BlendParams, blend};
 use gi_render::passes::soler::{TemporalHistory, TemporalQuantity};
-use gi_render::pipeline::{Technique, Temporal};
+use gi_render::settings::pipeline::{Technique, Temporal};
 use gi_render::{ImageF32, LabSettings, Renderer};
 use glam::Vec3;
 

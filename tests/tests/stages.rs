@@ -4,7 +4,9 @@
 
 use gi_lab_tests::{default_scene, gpu};
 use gi_render::image_io::hdr_display;
-use gi_render::pipeline::{Gather, Reconstruction, ShadingPoints, Technique, Temporal, VplSource, VplVisibility};
+use gi_render::settings::pipeline::{
+    Gather, Reconstruction, ShadingPoints, Technique, Temporal, VplSource, VplVisibility,
+};
 use gi_render::{ImageF32, LabSettings, Renderer};
 
 const SIZE: u32 = 128;

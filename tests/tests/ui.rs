@@ -226,7 +226,7 @@ fn probe_shows_the_values_of_a_cpu_readback() {
     // Direct light only: every frame is the same, so the probe's values, which arrive a frame
     // or two late without waiting (issue #38), equal a read-back of the frame now.
     if let Ok(l) = &mut h.state_mut().state.lab {
-        gi_render::pipeline::Technique::DirectOnly.apply(&mut l.settings);
+        gi_render::settings::pipeline::Technique::DirectOnly.apply(&mut l.settings);
         l.apply_settings();
     }
     h.run_steps(3);
@@ -498,7 +498,7 @@ fn the_hcb_samples_overlay_draws_white_dots_and_table_1() {
     let (mut h, _dir) = harness("hcb_overlay");
     pause(&mut h);
     if let Ok(l) = &mut h.state_mut().state.lab {
-        gi_render::pipeline::Technique::Nguyen.apply(&mut l.settings);
+        gi_render::settings::pipeline::Technique::Nguyen.apply(&mut l.settings);
         l.apply_settings();
     }
     h.run_steps(3);
@@ -538,7 +538,7 @@ fn the_settings_pane_shows_table_1_and_the_cache_counts_for_the_hcb() {
     let mut h = harness_in(&dir, egui::vec2(1400.0, 2600.0));
     pause(&mut h);
     if let Ok(l) = &mut h.state_mut().state.lab {
-        gi_render::pipeline::Technique::NguyenCached.apply(&mut l.settings);
+        gi_render::settings::pipeline::Technique::NguyenCached.apply(&mut l.settings);
         l.apply_settings();
     }
     h.run_steps(4);
@@ -572,7 +572,7 @@ fn soler_settings_buffers_and_reach_appear_in_the_lab() {
     // The tall harness at a quarter of its side: the test asks what the lab lists and shows.
     h.state_mut().state.session.render_scale = 0.25;
     if let Ok(l) = &mut h.state_mut().state.lab {
-        gi_render::pipeline::Technique::Soler.apply(&mut l.settings);
+        gi_render::settings::pipeline::Technique::Soler.apply(&mut l.settings);
         l.settings.soler.visibility = true;
         l.settings.soler.bounces = 2;
         l.apply_settings();
@@ -645,7 +645,7 @@ fn the_soler_samples_overlay_draws_the_rings_behind_a_pixel() {
     let mut h = harness_in(&dir, egui::vec2(1200.0, 800.0));
     pause(&mut h);
     if let Ok(l) = &mut h.state_mut().state.lab {
-        gi_render::pipeline::Technique::Soler.apply(&mut l.settings);
+        gi_render::settings::pipeline::Technique::Soler.apply(&mut l.settings);
         l.settings.soler.radius_px = 12.0;
         l.apply_settings();
     }
@@ -688,7 +688,7 @@ fn gautron_settings_buffers_cache_and_records_appear_in_the_lab() {
     // A fifth of the viewport's side: the tall harness would need thousands of records.
     h.state_mut().state.session.render_scale = 0.2;
     if let Ok(l) = &mut h.state_mut().state.lab {
-        gi_render::pipeline::Technique::Gautron.apply(&mut l.settings);
+        gi_render::settings::pipeline::Technique::Gautron.apply(&mut l.settings);
         l.apply_settings();
     }
     h.run_steps(8);

@@ -190,7 +190,7 @@ fn every_kind_of_edit_is_undone() {
     // A technique.
     if let Ok(l) = &mut h.state_mut().state.lab {
         // What the technique picker does.
-        gi_render::pipeline::Technique::Nguyen.apply(&mut l.settings);
+        gi_render::settings::pipeline::Technique::Nguyen.apply(&mut l.settings);
         l.apply_settings();
     }
     expect_step(&mut h, "pipeline.");

@@ -7,7 +7,7 @@ use egui_kittest::Harness;
 use gi_lab::ui::app::GiLabApp;
 use gi_lab::ui::session::PinnedProbe;
 use gi_lab_tests::ui_harness::{arrived, harness, pause, run_until, show_in_viewer};
-use gi_render::pipeline::Technique;
+use gi_render::settings::pipeline::Technique;
 
 fn waits_over(h: &mut Harness<'static, GiLabApp>, steps: usize) -> u64 {
     let before = gi_render::counters::now();

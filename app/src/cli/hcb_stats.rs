@@ -32,7 +32,7 @@ pub(super) fn hcb_stats(args: &HcbStatsArgs) -> Result<(), CliError> {
     r.clock.playing = args.play;
     let mut s = r.settings().clone();
     if !s.pipeline.uses_hcb() {
-        gi_render::pipeline::Technique::Nguyen.apply(&mut s);
+        gi_render::settings::pipeline::Technique::Nguyen.apply(&mut s);
     }
     r.set_settings(s).map_err(|e| CliError::input(e.to_string()))?;
     let mut stats = None;

@@ -78,7 +78,7 @@ pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
     let reference = match &args.reference {
         Some(path) => super::compare::load_image(path)?.0,
         None => {
-            use gi_render::pipeline::{Gather, ShadingPoints};
+            use gi_render::settings::pipeline::{Gather, ShadingPoints};
             let p = &base.pipeline;
             let bounces = if p.gather == Gather::None {
                 0

@@ -267,9 +267,9 @@ pub fn b_settings(live: &LabSettings, source: &AbSource) -> Result<LabSettings, 
         AbSource::Frozen => live.clone(),
         AbSource::Reference => {
             let mut s = live.clone();
-            gi_render::pipeline::Technique::ExactVpl.apply(&mut s);
+            gi_render::settings::pipeline::Technique::ExactVpl.apply(&mut s);
             if live.pipeline.uses_hcb()
-                && live.hcb.receiver == gi_render::passes::receiver::IrradianceReceiver::DiffuseOnly
+                && live.hcb.receiver == gi_render::settings::splat::IrradianceReceiver::DiffuseOnly
             {
                 s.vpl.receiver_brdf = gi_render::passes::knecht::vpl_importance::ReceiverBrdf::DiffuseOnly;
             }
@@ -282,7 +282,7 @@ pub fn b_settings(live: &LabSettings, source: &AbSource) -> Result<LabSettings, 
 mod tests {
     use super::*;
     use gi_render::passes::knecht::vpl_importance::ReceiverBrdf;
-    use gi_render::pipeline::Technique;
+    use gi_render::settings::pipeline::Technique;
 
     #[test]
     fn the_reference_of_the_hcb_reflects_diffusely_like_it() {
@@ -291,7 +291,7 @@ mod tests {
         let b = b_settings(&live, &AbSource::Reference).expect("settings");
         assert!(b.pipeline.is_reference());
         assert_eq!(b.vpl.receiver_brdf, ReceiverBrdf::Full, "the glossy HCB against the full BRDF");
-        live.hcb.receiver = gi_render::passes::receiver::IrradianceReceiver::DiffuseOnly;
+        live.hcb.receiver = gi_render::settings::splat::IrradianceReceiver::DiffuseOnly;
         let b = b_settings(&live, &AbSource::Reference).expect("settings");
         assert_eq!(b.vpl.receiver_brdf, ReceiverBrdf::DiffuseOnly);
         Technique::Knecht.apply(&mut live);

@@ -243,7 +243,7 @@ impl Default for Grid {
 
 /// The technique of `s` in words.
 pub fn technique_of(s: &LabSettings) -> String {
-    match gi_render::pipeline::Technique::of(&s.pipeline) {
+    match gi_render::settings::pipeline::Technique::of(&s.pipeline) {
         Some(t) => t.label().to_string(),
         None => "a mix of stages".into(),
     }

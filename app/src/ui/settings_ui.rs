@@ -9,7 +9,7 @@
 use egui::Ui;
 use gi_render::LabSettings;
 use gi_render::lab_settings::GroupVisitor;
-use gi_render::pipeline::{Technique as Choices, Temporal};
+use gi_render::settings::pipeline::{Technique as Choices, Temporal};
 use gi_render::settings::{FieldKind, FieldMeta, SettingsGroup, Value};
 
 /// Colour of the "differs from the preset" marker.
@@ -284,7 +284,7 @@ pub struct Technique {
 }
 
 /// The techniques of the picker: each is a named set of stage choices
-/// (`gi_render::pipeline::Technique`); after picking one, every stage can be changed alone.
+/// (`gi_render::settings::pipeline::Technique`); after picking one, every stage can be changed alone.
 pub const TECHNIQUES: &[Technique] = &[
     Technique {
         name: "Direct light only",
@@ -413,7 +413,7 @@ pub fn lab_settings_ui(ui: &mut Ui, s: &mut LabSettings, preset: &LabSettings, c
     struct Sections<'a> {
         ui: &'a mut Ui,
         changed: bool,
-        pipeline: gi_render::pipeline::PipelineSettings,
+        pipeline: gi_render::settings::pipeline::PipelineSettings,
         in_use: bool,
         query: String,
         idle: &'a [(&'static str, String)],

@@ -14,9 +14,9 @@ use crate::passes::knecht::stage::KnechtVpls;
 use crate::passes::knecht::temporal::TemporalPass;
 use crate::passes::reference::stage::ReferenceVpls;
 use crate::passes::soler::stage::SolerStage;
-use crate::pipeline::{ShadingPoints, Temporal};
 use crate::scene::upload::GpuScene;
 use crate::scene::{Scene, SceneState};
+use crate::settings::pipeline::{ShadingPoints, Temporal};
 
 /// What the passes size themselves by.
 pub(crate) struct Needs<'a> {

@@ -7,8 +7,8 @@ use super::{Flow, Recorder, StagePasses};
 use crate::passes::gautron::explain::{GautronExplainPass, GautronInfo};
 use crate::passes::knecht::explain::{ChainInfo, ExplainInputs, VplExplainPass};
 use crate::passes::knecht::temporal::MergeOrder;
-use crate::pipeline::{Gather, NearField, Reconstruction, ShadingPoints, Temporal};
-use crate::stages::FrameInputs;
+use crate::passes::stages::FrameInputs;
+use crate::settings::pipeline::{Gather, NearField, Reconstruction, ShadingPoints, Temporal};
 
 /// The pinned pixel, when it lies in the G-buffer.
 fn pinned(f: &FrameInputs, x: &StagePasses) -> Option<(u32, u32)> {

@@ -4,7 +4,7 @@
 //! (§4); or the hemispheres at the HCB's samples (GI Lab's mix).
 
 use super::{Flow, Recorder, StagePasses};
-use crate::stages::FrameInputs;
+use crate::passes::stages::FrameInputs;
 
 /// Stages 5–7: records lit by their hemispheres (`gautron.indirect`).
 pub(super) fn hemispheres(f: &FrameInputs, x: &mut StagePasses, r: &mut Recorder, flow: &mut Flow) -> Option<()> {

@@ -5,7 +5,7 @@
 //! and `splat`.
 
 use super::{Flow, Recorder, StagePasses};
-use crate::stages::FrameInputs;
+use crate::passes::stages::FrameInputs;
 
 /// Stage 5 without VPLs: this frame's levels, masks and samples, for another gather to light.
 pub(super) fn build_samples(f: &FrameInputs, x: &mut StagePasses, r: &mut Recorder, _: &mut Flow) -> Option<()> {

@@ -9,8 +9,8 @@ use crate::passes::knecht::interleave::ShadeInputs;
 use crate::passes::knecht::stage::FirstBounceSource;
 use crate::passes::knecht::temporal::MergeOrder;
 use crate::passes::knecht::vpl_importance::ReceiverBrdf;
-use crate::pipeline::{Reconstruction, ShadingPoints, Temporal};
-use crate::stages::FrameInputs;
+use crate::passes::stages::FrameInputs;
+use crate::settings::pipeline::{Reconstruction, ShadingPoints, Temporal};
 use crate::timing::PassRec;
 
 /// Stage 3: this frame's VPLs of every light view and bounce (and the emitters' first bounce).

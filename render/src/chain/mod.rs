@@ -28,8 +28,8 @@ use crate::passes::knecht::stage::KnechtVpls;
 use crate::passes::knecht::temporal::TemporalPass;
 use crate::passes::reference::stage::ReferenceVpls;
 use crate::passes::soler::stage::SolerStage;
-use crate::pipeline::{Gather, Reconstruction, ShadingPoints, Temporal, VplSource, VplVisibility};
-use crate::stages::{FrameInputs, Visibility, VplSet};
+use crate::passes::stages::{FrameInputs, Visibility, VplSet};
+use crate::settings::pipeline::{Gather, Reconstruction, ShadingPoints, Temporal, VplSource, VplVisibility};
 pub(crate) use crate::timing::Recorder;
 
 /// The passes of stages 3–7, each present while a stage's choice names it, and the emitters'
@@ -189,7 +189,7 @@ impl StepList {
 }
 
 /// What the list depends on: the stage choices and the order of the filter and the merge.
-type ListKey = (crate::pipeline::PipelineSettings, crate::passes::knecht::temporal::MergeOrder);
+type ListKey = (crate::settings::pipeline::PipelineSettings, crate::passes::knecht::temporal::MergeOrder);
 
 fn list_key(s: &LabSettings) -> ListKey {
     (s.pipeline.clone(), s.temporal.order)

@@ -4,7 +4,7 @@
 //! ends with it.
 
 use super::{Flow, Recorder, StagePasses};
-use crate::stages::FrameInputs;
+use crate::passes::stages::FrameInputs;
 
 /// Stage 3: the next batch; when the average is complete (or there is no light), the list
 /// ends with the average.

@@ -5,7 +5,7 @@
 //! (GI Lab's mix).
 
 use super::{Flow, Recorder, StagePasses};
-use crate::stages::FrameInputs;
+use crate::passes::stages::FrameInputs;
 
 /// Stages 5–7: the screen-space indirect light (`soler.indirect`), or the near field's.
 pub(super) fn levels(f: &FrameInputs, x: &mut StagePasses, r: &mut Recorder, flow: &mut Flow) -> Option<()> {

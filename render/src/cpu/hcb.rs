@@ -22,6 +22,8 @@
 
 use glam::Vec3;
 
+pub use crate::settings::hcb::Thresholds;
+
 /// One texel of an HCB level: the world-space point, the sphere radius a^w (the texel
 /// footprint at level 0, the accumulated distance above), the normal and the group coherence
 /// n^w (1 at level 0, 0 for incoherent blocks and the background).
@@ -35,22 +37,6 @@ pub struct HcbTexel {
 
 impl HcbTexel {
     pub const BACKGROUND: Self = Self { position: Vec3::ZERO, distance: 0.0, normal: Vec3::Z, coherence: 0.0 };
-}
-
-/// The thresholds of §3.1.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Thresholds {
-    /// cos θ_max (normal coherence, Eq. 2 and 6–7).
-    pub cos_theta_max: f32,
-    /// cos γ_max (pose coherence, Eq. 3).
-    pub cos_gamma_max: f32,
-    /// d_max in scene units (distance coherence, Eq. 1).
-    pub d_max: f32,
-    /// The caching HCB's sign rule (§5.2), where n^w carries +1 for incomplete texels and −1
-    /// for complete ones: false keeps the centre texel's sign (Fig. 7c: new samples only on
-    /// incomplete texels), true makes a block with any positive texel positive (Fig. 7d: new
-    /// samples may lie outside them). Without signs (the per-frame HCB) both are the same.
-    pub spread_incomplete: bool,
 }
 
 /// One level: `width` × `height` texels, row-major.

@@ -211,7 +211,7 @@ impl PathTracer {
     }
 
     /// The emitters as the lab's `emitters.*` settings say (on or off, one or two sides).
-    pub fn use_emitter_settings(&mut self, s: &crate::passes::emitters::EmitterSettings, scene: &Scene, time_s: f32) {
+    pub fn use_emitter_settings(&mut self, s: &crate::settings::emitters::EmitterSettings, scene: &Scene, time_s: f32) {
         self.emitters = if s.enabled {
             Emitters::collect_sides(scene, &scene.evaluate(time_s), s.two_sided)
         } else {

@@ -4,7 +4,7 @@
 
 use crate::buffers::ImageF32;
 use crate::maths::luminance;
-use crate::passes::compose::TonemapSettings;
+use crate::settings::compose::TonemapSettings;
 
 /// L̄w = exp(mean log(δ + Lw)) over pixels with Lw > 0 (1 when there are none), each log
 /// clamped to ±30 (Lw ≤ e^30 ≈ 10^13) as the GPU's sums are.

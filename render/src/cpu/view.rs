@@ -1,8 +1,8 @@
 //! CPU twin of the buffer viewer's colour mapping (`shaders/view/view.wgsl`): the tests compare the GPU view with it texel by texel.
 
-pub use crate::maths::colormap::colormap;
 use crate::maths::colormap::RANGE_BINS;
-use crate::passes::view::{ViewMode, ViewSettings};
+pub use crate::maths::colormap::colormap;
+use crate::settings::view::{ViewMode, ViewSettings};
 
 /// NaN maps to 0 (black) when the overlay is off.
 fn normalise(s: &ViewSettings, x: f32) -> f32 {

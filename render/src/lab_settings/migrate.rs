@@ -1,10 +1,10 @@
 //! Version 1's presets read into version 2 (docs/preset-schema.md): the technique and stage
-//! switches of version 1 turned into the stage choices of `crate::pipeline`, and a current
+//! switches of version 1 turned into the stage choices of `crate::settings::pipeline`, and a current
 //! preset that still names a replaced field refused with the new name.
 
 use crate::lab_settings::LabSettings;
-use crate::pipeline::*;
 use crate::settings::FieldError;
+use crate::settings::pipeline::*;
 
 /// Migrates a version-1 preset read strictly (the `legacy` fields of the groups) to the
 /// stage choices of version 2 and clears the old fields.

@@ -6,27 +6,27 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::passes::compose::TonemapSettings;
-use crate::passes::direct::DirectSettings;
-use crate::passes::emitters::EmitterSettings;
-use crate::passes::gautron::GautronSettings;
-use crate::passes::hcb::HcbSettings;
-use crate::passes::knecht::interleave::InterleaveSettings;
-use crate::passes::knecht::ism::IsmSettings;
-use crate::passes::knecht::temporal::TemporalSettings;
-use crate::passes::knecht::vpl_importance::VplSettings;
-use crate::passes::reference::vpl::ReferenceSettings;
-use crate::passes::sky::SkySettings;
-use crate::passes::soler::SolerSettings;
-use crate::pipeline::{LegacyIndirect, PipelineSettings};
-use crate::scale::ScaleSettings;
+use crate::settings::compose::TonemapSettings;
+use crate::settings::direct::DirectSettings;
+use crate::settings::emitters::EmitterSettings;
+use crate::settings::gautron::GautronSettings;
+use crate::settings::hcb::HcbSettings;
+use crate::settings::knecht::InterleaveSettings;
+use crate::settings::knecht::IsmSettings;
+use crate::settings::knecht::TemporalSettings;
+use crate::settings::knecht::VplSettings;
+use crate::settings::pipeline::{LegacyIndirect, PipelineSettings};
+use crate::settings::reference::ReferenceSettings;
+use crate::settings::scale::ScaleSettings;
+use crate::settings::sky::SkySettings;
+use crate::settings::soler::SolerSettings;
 use crate::settings::{FieldError, FieldMeta, PRESET_VERSION, PresetError, SettingsGroup, Value};
 use crate::settings_group;
 
 mod migrate;
 mod rules;
 
-impl crate::pipeline::Technique {
+impl crate::settings::pipeline::Technique {
     /// Sets the technique's choices in `s`.
     pub fn apply(self, s: &mut LabSettings) {
         s.pipeline = self.choices(&s.pipeline);
@@ -188,16 +188,17 @@ impl LabSettings {
             assignment.split_once('=').ok_or_else(|| format!("'{assignment}' is not of the form group.field=value"))?;
         if path.trim() == "indirect.technique" {
             // Version 1's technique, kept for scripts written before the stage choices.
-            let t = crate::pipeline::Technique::from_v1_name(text.trim()).ok_or_else(|| {
+            let t = crate::settings::pipeline::Technique::from_v1_name(text.trim()).ok_or_else(|| {
                 format!("indirect.technique: '{}' is not one of None, ExactVpl, InstantRadiosity, Hcb", text.trim())
             })?;
             t.apply(self);
             return Ok(());
         }
-        let meta = Self::field(path.trim()).ok_or_else(|| match crate::pipeline::moved_setting(path.trim()) {
-            Some(to) => format!("{} was replaced by {to} (preset version 2)", path.trim()),
-            None => format!("no setting named '{}'; known: {}", path.trim(), Self::all_paths().join(", ")),
-        })?;
+        let meta =
+            Self::field(path.trim()).ok_or_else(|| match crate::settings::pipeline::moved_setting(path.trim()) {
+                Some(to) => format!("{} was replaced by {to} (preset version 2)", path.trim()),
+                None => format!("no setting named '{}'; known: {}", path.trim(), Self::all_paths().join(", ")),
+            })?;
         let v = crate::settings::parse_value(meta.kind, text).map_err(|e| format!("{}: {e}", path.trim()))?;
         self.set(path.trim(), &v)
     }
@@ -481,8 +482,8 @@ mod tests {
     #[test]
     fn combination_rules_wait_for_valid_fields() {
         let mut s = LabSettings::default();
-        crate::pipeline::Technique::Knecht.apply(&mut s);
-        assert_eq!(s.pipeline.shading_points, crate::pipeline::ShadingPoints::InterleavedTiles);
+        crate::settings::pipeline::Technique::Knecht.apply(&mut s);
+        assert_eq!(s.pipeline.shading_points, crate::settings::pipeline::ShadingPoints::InterleavedTiles);
         s.vpl.count = 4;
         let fields = |s: &LabSettings| s.validate().into_iter().map(|e| e.field).collect::<Vec<_>>();
         assert!(fields(&s).contains(&"vpl.count".to_string()), "4 VPLs for 4×4 tiles: {:?}", s.validate());

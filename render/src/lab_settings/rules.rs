@@ -2,8 +2,8 @@
 //! `LabSettings::validate`): the rules of docs/architecture.md's "What works with what".
 
 use super::LabSettings;
-use crate::pipeline::{Gather, NearField, Reconstruction, ShadingPoints, Temporal, VplSource, VplVisibility};
 use crate::settings::FieldError;
+use crate::settings::pipeline::{Gather, NearField, Reconstruction, ShadingPoints, Temporal, VplSource, VplVisibility};
 
 /// The stage choices that cannot work together, each with the stage that needs what
 /// (docs/principles.md, the pipeline table: refused with a reason, never by a crash or a

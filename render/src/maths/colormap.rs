@@ -2,21 +2,7 @@
 //! pass (`passes::view`, which uploads the tables) and its CPU twin (`cpu::view`), and the
 //! lookup both the twin and the error maps of `image_io` use.
 
-use serde::{Deserialize, Serialize};
-
-/// False-colour maps.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
-pub enum Colormap {
-    #[default]
-    Grey,
-    Viridis,
-    Turbo,
-    Inferno,
-}
-
-impl Colormap {
-    pub const ALL: [Colormap; 4] = [Colormap::Grey, Colormap::Viridis, Colormap::Turbo, Colormap::Inferno];
-}
+pub use crate::settings::view::Colormap;
 
 // Lookup in the false-colour tables below (interpolated linearly between
 // their 65 entries), as the view shader does.

@@ -1,6 +1,7 @@
 //! The floor of the render crate (issue #52 point 2): pure functions and tables that GPU
 //! passes, CPU twins and scene code all need — sequences, the VPL budget, the HCB's recompute
-//! pattern, colour maths, colour maps. It imports nothing of the crate, so that `passes/`
+//! pattern, colour maths, colour maps, the hemisphere camera's table. It imports nothing of the
+//! crate but a setting's type (a leaf), so that `passes/`
 //! never reaches into `cpu/` at run time and `scene/` into neither (docs/architecture.md,
 //! "Layers").
 
@@ -8,6 +9,7 @@ pub mod aabb;
 pub mod budget;
 pub mod colormap;
 pub mod colour;
+pub mod hemisphere;
 pub mod pattern;
 pub mod sequence;
 

@@ -10,7 +10,7 @@ use crate::counters::prelude::*;
 
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
-use crate::settings_enum;
+pub use crate::settings::splat::*;
 
 /// Side in pixels of the squares the items are binned into (a multiple of the 16 × 16
 /// accumulation workgroup).
@@ -22,35 +22,6 @@ pub const MAX_ITEMS: u32 = 65536;
 
 /// Pixels per side of the accumulating workgroup.
 pub const GROUP: u32 = 16;
-
-settings_enum! {
-    /// How a splat's weighted light is summed at the pixels (Gautron's records, the HCB's
-    /// samples); every method gives the same sums, in the same order.
-    pub enum SplatMethod {
-        /// The fastest on this device: binned on a GPU, blended quads on a CPU renderer
-        /// (lavapipe), where the binning was measured 3.5× slower (docs/performance.md).
-        Auto = "the device's fastest",
-        /// One quad per item, added by blending into float targets (the texts' `GL_ONE,
-        /// GL_ONE`): the cost is the quads' overdraw.
-        Blend = "blended quads (the texts)",
-        /// The items binned into 64-pixel squares in compute, each pixel summing the items of
-        /// its square (GI Lab, issue #38: no overdraw nor blending; 46× cheaper than the
-        /// quads for Gautron's splat on an H200, docs/performance.md).
-        Binned = "binned in compute (GI Lab)",
-    }
-    default Auto
-}
-
-impl SplatMethod {
-    /// The method that runs on `ctx`'s device: `Auto` resolved by the adapter's type.
-    pub fn on(self, ctx: &GpuContext) -> SplatMethod {
-        match self {
-            SplatMethod::Auto if ctx.adapter_info.device_type == wgpu::DeviceType::Cpu => SplatMethod::Blend,
-            SplatMethod::Auto => SplatMethod::Binned,
-            m => m,
-        }
-    }
-}
 
 /// Rust twin of `BinParams` in `shaders/common/bins.wgsl`.
 #[repr(C)]

@@ -24,11 +24,11 @@ pub mod gautron;
 pub mod gbuffer;
 pub mod hcb;
 pub mod knecht;
-pub mod receiver;
 pub mod reference;
 pub mod shadow;
 pub mod sky;
 pub mod soler;
+pub mod stages;
 pub mod view;
 
 use glam::{Mat4, Vec4};
@@ -169,7 +169,6 @@ pub fn depth_only_pipeline(
 pub fn view(texture: &wgpu::Texture, label: &str) -> wgpu::TextureView {
     texture.counted_view(&wgpu::TextureViewDescriptor { label: Some(label), ..Default::default() })
 }
-
 
 /// A bind group whose entry k is binding k (the compute passes' inputs in binding order).
 pub fn bind_group(

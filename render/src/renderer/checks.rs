@@ -2,13 +2,13 @@
 //! than its limits, each with the largest value that fits.
 
 use crate::gpu::GpuContext;
+use crate::lab_settings::LabSettings;
 use crate::passes::knecht::ism::{IsmLayout, MAX_BOUNCES};
 use crate::passes::knecht::stage::ism_splats;
 use crate::passes::knecht::vpl_bounce::BounceMethod;
 use crate::passes::reference::vpl_visibility::AtlasLayout;
-use crate::pipeline::VplVisibility;
-use crate::lab_settings::LabSettings;
 use crate::settings::FieldError;
+use crate::settings::pipeline::VplVisibility;
 
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
@@ -210,7 +210,7 @@ pub(crate) fn check_split(
     height: u32,
 ) -> Result<(), RenderError> {
     let p = &settings.pipeline;
-    if !(p.uses_knecht_vpls() && p.shading_points == crate::pipeline::ShadingPoints::InterleavedTiles) {
+    if !(p.uses_knecht_vpls() && p.shading_points == crate::settings::pipeline::ShadingPoints::InterleavedTiles) {
         return Ok(());
     }
     let n = settings.interleave.n.max(1);

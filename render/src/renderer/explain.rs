@@ -6,13 +6,13 @@
 //! `tests/tests/explain/`.
 
 use crate::explain::{Explanation, Replay};
-use crate::pipeline::{Gather, NearField, Reconstruction, ShadingPoints, VplSource};
 use crate::readback::{Readback, Readout};
 use crate::renderer::Renderer;
+use crate::settings::pipeline::{Gather, NearField, Reconstruction, ShadingPoints, VplSource};
 
 /// The read-back key of the explanation: one per stage choices, so that a copy made before
 /// the choices changed is never decoded by another technique's replay.
-fn key(p: &crate::pipeline::PipelineSettings) -> String {
+fn key(p: &crate::settings::pipeline::PipelineSettings) -> String {
     format!("explain.{:?}.{:?}.{:?}.{:?}", p.vpl_source, p.shading_points, p.gather, p.near_field)
 }
 

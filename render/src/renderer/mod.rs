@@ -24,6 +24,7 @@ use crate::chain::StepList;
 use crate::clock::Clock;
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
+use crate::lab_settings::LabSettings;
 use crate::passes::CameraUniform;
 use crate::passes::compose::ComposePass;
 use crate::passes::direct::DirectPass;
@@ -31,7 +32,6 @@ use crate::passes::gbuffer::GBufferPass;
 use crate::passes::shadow::{ShadowPass, light_views};
 use crate::scene::upload::GpuScene;
 use crate::scene::{Aabb, Scene};
-use crate::lab_settings::LabSettings;
 use crate::timing::GpuTimer;
 
 /// A pixel and the Soler samples behind it (the overlay's last complete answer).

@@ -155,7 +155,7 @@ impl Renderer {
             importance: s.glossy_sampling,
             axes: [right, right.cross(forward), forward],
         });
-        let near_cut = if p.uses_vpls() && p.near_field == crate::pipeline::NearField::ScreenSpace {
+        let near_cut = if p.uses_vpls() && p.near_field == crate::settings::pipeline::NearField::ScreenSpace {
             s.near_field_split(self.scale_radius()).max(0.0)
         } else {
             0.0

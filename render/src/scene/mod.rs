@@ -20,10 +20,10 @@ pub mod sky;
 mod texture;
 pub mod upload;
 
-pub use animation::{Animation, Channel, ChannelTarget, Interpolation};
-pub use gltf_load::{LoadOptions, SceneError, load_gltf_bytes, load_gltf_file};
 pub use crate::camera::{CameraDef, Projection};
 pub use crate::maths::Aabb;
+pub use animation::{Animation, Channel, ChannelTarget, Interpolation};
+pub use gltf_load::{LoadOptions, SceneError, load_gltf_bytes, load_gltf_file};
 
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 

@@ -12,7 +12,7 @@ use gi_render::cpu::hcb::{HcbTexel, coherence_errors, weight};
 use gi_render::explain::{Contribution, Explanation, Rejection, luminance};
 use gi_render::passes::bins::SplatMethod;
 use gi_render::passes::hcb::explain::{E_DISTANCE, E_NORMAL, E_POSE, LEVEL, WEIGHT};
-use gi_render::pipeline::{Technique, Temporal};
+use gi_render::settings::pipeline::{Technique, Temporal};
 use glam::Vec3;
 
 /// Every buffer the sums are checked against is `Rgba32Float` (`hcb.weight_sum`,

@@ -9,7 +9,7 @@ use std::collections::HashMap;
 use gi_lab_tests::{paused_renderer, read, soler_level, v3};
 use gi_render::cpu::soler::{Level, UpsampleSigmas, upsample};
 use gi_render::explain::{Explanation, luminance};
-use gi_render::pipeline::Technique;
+use gi_render::settings::pipeline::Technique;
 use glam::Vec3;
 
 /// The sums are of f32 terms; `soler.temporal` is a half float (a step of 2⁻¹¹ relative) and
@@ -113,7 +113,7 @@ fn levels_sum_to_the_upsampled_light_and_their_weights_are_the_cpu_twins() {
             }
             let e = r.explanation().unwrap_or_else(|e| panic!("preset {i} pixel {p:?}: {e}"));
             check(&r, &e);
-            if r.settings().pipeline.temporal == gi_render::pipeline::Temporal::WarpedBlend {
+            if r.settings().pipeline.temporal == gi_render::settings::pipeline::Temporal::WarpedBlend {
                 assert_eq!(e.buffer, "soler.temporal");
                 let h = e.contributions.iter().find(|c| c.name == "history").expect("the history's share");
                 assert!(field(h, "a") > 0.0, "{}", e.to_text(4));

@@ -8,8 +8,8 @@ use gi_render::Renderer;
 use gi_render::cpu::knecht::{Receiver, Vpl, vpl_radiance};
 use gi_render::explain::{Explanation, Rejection, luminance};
 use gi_render::passes::knecht::temporal::MergeOrder;
-use gi_render::pipeline::{Reconstruction, ShadingPoints, Technique, Temporal, VplVisibility};
 use gi_render::scene::raycast::TriangleSoup;
+use gi_render::settings::pipeline::{Reconstruction, ShadingPoints, Technique, Temporal, VplVisibility};
 use glam::Vec3;
 
 /// The sums are of f32 terms; the buffers they are checked against are half floats

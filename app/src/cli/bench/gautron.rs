@@ -21,7 +21,7 @@
 
 use gi_render::ImageF32;
 use gi_render::Renderer;
-use gi_render::pipeline::{Technique, Temporal};
+use gi_render::settings::pipeline::{Technique, Temporal};
 
 use crate::error::CliError;
 

@@ -339,7 +339,7 @@ mod tests {
     use super::*;
     use gi_render::GpuContext;
     use gi_render::cpu::pathtrace::{PtSettings, Senders};
-    use gi_render::pipeline::{Technique, Temporal};
+    use gi_render::settings::pipeline::{Technique, Temporal};
 
     /// The section runs at 32×32 and reports finite numbers with records on both sides (no
     /// timing is asserted: speed is the bench's to measure).

@@ -10,7 +10,7 @@
 
 use gi_render::Renderer;
 use gi_render::passes::knecht::vpl_bounce::BounceMethod;
-use gi_render::pipeline::{ShadingPoints, Technique, Temporal, VplSource, VplVisibility};
+use gi_render::settings::pipeline::{ShadingPoints, Technique, Temporal, VplSource, VplVisibility};
 
 use super::run::{bench_run, focus};
 use crate::error::CliError;

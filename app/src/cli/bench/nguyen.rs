@@ -2,7 +2,7 @@
 //! gathering at every pixel, cached and per frame.
 
 use gi_render::Renderer;
-use gi_render::pipeline::{Technique, Temporal};
+use gi_render::settings::pipeline::{Technique, Temporal};
 
 use super::run::{BenchReport, bench_run, focus};
 use crate::error::CliError;

@@ -9,7 +9,7 @@
 
 use gi_render::Renderer;
 use gi_render::passes::soler::StartResolution;
-use gi_render::pipeline::{Technique, Temporal};
+use gi_render::settings::pipeline::{Technique, Temporal};
 
 use super::run::{BenchReport, bench_run};
 use crate::error::CliError;

@@ -194,7 +194,7 @@ pub fn gautron_cache_ui(ui: &mut egui::Ui, r: &gi_render::Renderer, s: &gi_rende
         ui.small("no Gautron frame rendered yet");
         return;
     };
-    if s.pipeline.shading_points == gi_render::pipeline::ShadingPoints::HcbSamples {
+    if s.pipeline.shading_points == gi_render::settings::pipeline::ShadingPoints::HcbSamples {
         ui.label(format!("{} hemispheres this frame, one per HCB sample (no cache)", st.made));
         return;
     }

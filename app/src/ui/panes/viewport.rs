@@ -216,9 +216,9 @@ fn records_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
     };
     let r = &l.renderer;
     let records = r.gautron_state_later(true).and_then(|(_, records)| records);
-    let Some(records) =
-        records.filter(|_| l.settings.pipeline.shading_points == gi_render::pipeline::ShadingPoints::IrradianceRecords)
-    else {
+    let Some(records) = records.filter(|_| {
+        l.settings.pipeline.shading_points == gi_render::settings::pipeline::ShadingPoints::IrradianceRecords
+    }) else {
         text("Gautron records: pick irradiance records (Gautron, or records lit by VPLs) to see them".into());
         return;
     };

@@ -13,8 +13,8 @@ use glam::{Vec3, Vec4};
 use crate::explain::{Check, Contribution, Explanation, Rejection, luminance};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
+use crate::passes::stages::FrameInputs;
 use crate::passes::{bind_group, view};
-use crate::stages::FrameInputs;
 
 /// Flags of a listed record (`EXPLAIN_*` in the shader).
 pub const COVERS: u32 = 1;

@@ -4,16 +4,16 @@
 //! clipped to tile s by clip distances; instance counts written by the GPU's creation pass),
 //! the direct pass lights the atlas toward each record (`DirectPass::shade_atlas`), and a
 //! compute pass reduces each tile to the record's irradiance, gradients and harmonic mean
-//! distance with the per-texel table of `cpu::gautron::HemisphereTable`. Shaders
+//! distance with the per-texel table of `maths::hemisphere::HemisphereTable`. Shaders
 //! `gautron/hemisphere.wgsl`, `gautron/reduce.wgsl`.
 
 use crate::counters::prelude::*;
 
 use super::{GautronSettings, atlas_grid};
 use crate::buffers::{BufferKind, BufferRegistry};
-use crate::cpu::gautron::HemisphereTable;
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
+use crate::maths::hemisphere::HemisphereTable;
 use crate::passes::bind_group;
 use crate::passes::gbuffer::{self, GBuffer};
 use crate::scene::SceneState;

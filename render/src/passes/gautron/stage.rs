@@ -21,9 +21,9 @@ use super::{
 use crate::buffers::{BufferKind, BufferRegistry, read_storage};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
+use crate::passes::stages::{FrameInputs, Visibility, VplSet};
 use crate::passes::{bind_group, buffer, create_target, view};
-use crate::pipeline::Temporal;
-use crate::stages::{FrameInputs, Visibility, VplSet};
+use crate::settings::pipeline::Temporal;
 use crate::timing::GpuTimer;
 use crate::timing::PassRec;
 

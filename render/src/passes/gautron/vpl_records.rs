@@ -13,7 +13,7 @@ use glam::Vec4;
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
 use crate::passes::bind_group;
-use crate::stages::{Visibility, VplSet};
+use crate::passes::stages::{Visibility, VplSet};
 use crate::timing::PassRec;
 
 /// Uniform of the VPL-lit records; WGSL twin: `VplRecordParams` in

@@ -21,8 +21,8 @@ use crate::explain::{Check, Contribution, Explanation, Rejection, luminance};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
 use crate::passes::knecht::temporal::TemporalPass;
+use crate::passes::stages::FrameInputs;
 use crate::passes::{bind_group, view};
-use crate::stages::FrameInputs;
 
 /// Flags of a listed sample (`EXPLAIN_*` in the shader).
 pub const COHERENT: u32 = 1;

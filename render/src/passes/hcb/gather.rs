@@ -120,7 +120,10 @@ impl HcbGatherPass {
         &self,
         r: PassRec<'_, '_>,
         hcb: &HcbPass,
-        (set_of_vpls, vis): (&crate::stages::VplSet, &crate::passes::reference::vpl_visibility::GatherVisibility),
+        (set_of_vpls, vis): (
+            &crate::passes::stages::VplSet,
+            &crate::passes::reference::vpl_visibility::GatherVisibility,
+        ),
         set: GatherSet<'_>,
     ) {
         let PassRec { ctx, enc: encoder, slot } = r;

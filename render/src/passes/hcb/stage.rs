@@ -9,8 +9,8 @@ use crate::gpu::bgl;
 use crate::lab_settings::LabSettings;
 use crate::passes::hcb::cache::{CacheCounts, CacheFrame, HcbCachePass, cache_views};
 use crate::passes::hcb::{GatherSet, GpuHcbSample, HcbFrame, HcbGatherPass, HcbPass, HcbSettings, HcbSplatPass};
-use crate::pipeline::Temporal;
-use crate::stages::{FrameInputs, Visibility, VplSet};
+use crate::passes::stages::{FrameInputs, Visibility, VplSet};
+use crate::settings::pipeline::Temporal;
 use crate::timing::GpuTimer;
 use crate::timing::PassRec;
 

@@ -21,42 +21,8 @@ use crate::gpu::bgl;
 use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::gbuffer::{ALBEDO_FORMAT, GBufferViews, MATERIAL_FORMAT, NORMAL_FORMAT, POSITION_FORMAT};
 use crate::passes::reference::vpl_visibility::{GatherVisibility, no_visibility_atlases};
-use crate::settings_group;
+pub use crate::settings::knecht::*;
 use crate::timing::PassRec;
-
-settings_group! {
-    /// Interleaved sampling and the geometry-aware filter (stages 5–6; Knecht 002 §3.4.1).
-    pub struct InterleaveSettings: "interleave" {
-        /// Tiles per side: each VPL shades one pixel in n×n (1: every pixel gets every VPL).
-        n: u32 = 4,
-        unit "tiles", symbol "n", range 1..=8, cost "shading time falls as 1/n²; the filter reads n² pixels", history false;
-        /// Depth threshold: neighbours whose depth differs by more than α in the thesis' linear
-        /// depth (view depth / (z_far − z_near), Eq. 4.2) are not averaged.
-        alpha: f32 = 0.01,
-        unit "× (z_far − z_near)", symbol "α", range 0.0..=1.0, cost "free", history false;
-        /// Normal threshold: neighbours whose normal's dot product with the centre's is below β are not averaged.
-        beta: f32 = 0.8,
-        unit "", symbol "β", range -1.0..=1.0, cost "free", history false;
-        /// The thesis' three passes (§3.4.1): split the G-buffer into tiles, gather in the
-        /// split layout, merge back; off: one pass that gathers each split pixel's tile at its
-        /// own pixel, the same light without the split copies (issue #38). On to inspect
-        /// `interleave.split.*` and `indirect.accum`.
-        split_passes: bool = false,
-        unit "", symbol "", range 0..=1, cost "three passes and the split G-buffer's traffic (≈ 3× the fused pass's)", history false;
-        /// Filter the light without the albedo (issue #51, ⚠[knecht.demodulated-filter]): the
-        /// gather keeps its irradiance apart (`indirect.irradiance`), the filter averages it and
-        /// the specular light over the window and reflects the irradiance with each pixel's own
-        /// colour, so textures stay sharp; off: the thesis' filter of the reflected light.
-        /// With `temporal.order = MergeThenFilter` the filter reads the merged history, which
-        /// holds no irradiance, and filters the reflected light.
-        demodulate: bool = true,
-        unit "", symbol "", range 0..=1, cost "the gather writes a second half-float target; the filter reads it and the albedo", history false;
-    }
-    legacy {
-        /// Version 1: the filter on or off; now `pipeline.reconstruction = GeometryAwareFilter`.
-        filter: bool;
-    }
-}
 
 /// Format of the gathered and filtered light (`indirect.accum`, `indirect.merged`,
 /// `indirect.filtered`): half floats, as `direct::RADIANCE_FORMAT` (issue #38; the kernel

@@ -9,18 +9,7 @@ use glam::Vec3;
 use crate::maths::halton;
 use crate::scene::{Scene, SceneState};
 
-use crate::settings_enum;
-
-settings_enum! {
-    /// How the point cloud places its samples.
-    pub enum PointPlacement {
-        /// Independent random samples (Ritschel et al.).
-        Random = "random",
-        /// Halton low-discrepancy samples (Knecht §6.1's future work).
-        Halton = "Halton (quasi-random)",
-    }
-    default Halton
-}
+pub use crate::settings::knecht::PointPlacement;
 
 /// One point of the cloud on the GPU; WGSL twin: `IsmPoint` in `shaders/knecht/ism/splat.wgsl`.
 #[repr(C)]

@@ -14,10 +14,10 @@ use crate::passes::knecht::ism::{BounceShadowTest, IsmFrame, IsmJob, IsmPass, MA
 use crate::passes::knecht::vpl_bounce::{BounceFrame, BounceMethod, VplBouncePass};
 use crate::passes::knecht::vpl_importance::{ViewJob, VplImportancePass, view_powers};
 use crate::passes::reference::vpl_visibility::VplVisibilityPass;
-use crate::pipeline::VplVisibility;
+use crate::passes::stages::{FrameInputs, Visibility, VplSet, vpl_clip};
 use crate::scene::upload::GpuScene;
 use crate::scene::{Scene, SceneState};
-use crate::stages::{FrameInputs, Visibility, VplSet, vpl_clip};
+use crate::settings::pipeline::VplVisibility;
 use crate::timing::GpuTimer;
 use crate::timing::PassRec;
 

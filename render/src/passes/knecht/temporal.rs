@@ -24,63 +24,8 @@ use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::gbuffer::{GBufferViews, NORMAL_FORMAT};
-use crate::settings_group;
+pub use crate::settings::knecht::*;
 use crate::timing::PassRec;
-
-crate::settings_enum! {
-    /// The order of the geometry-aware filter (stage 6) and the confidence merge (stage 7)
-    /// when both run.
-    pub enum MergeOrder {
-        /// Filter the merged tiles, then merge with the history (GI Lab's default): the
-        /// confidence's illumination term (Eq. 3.3) compares an estimate from all N VPLs
-        /// with the history, and the history holds filtered light.
-        FilterThenMerge = "filter, then merge (GI Lab)",
-        /// The thesis' order (§4 steps 11–12): merge each pixel's N/n² VPLs with the
-        /// history, then filter; the history holds unfiltered light and Eq. 3.3 sees the
-        /// tiles' noise (Fig. 3.5's confidence).
-        MergeThenFilter = "merge, then filter (thesis §4)",
-    }
-    default FilterThenMerge
-}
-
-settings_group! {
-    /// Temporal coherence (stage 7; Knecht 002 §3.5): the confidence merge.
-    pub struct TemporalSettings: "temporal" {
-        /// Base confidence: the largest weight the previous frame gets (Eq. 3.4).
-        c_base: f32 = 0.9,
-        unit "", symbol "c_base", range 0.0..=1.0, cost "free", history false;
-        /// Weight of the position change (Eq. 3.1; screen movement as a fraction of the image,
-        /// depth change in units of z_far − z_near as the thesis' linear depth, Eq. 4.2).
-        /// ⚠[knecht.w-pos] The thesis gives no value; 300 drops the confidence to 0 for a
-        /// surface that moves 1/300 of the image per frame, and was tuned on the default
-        /// scene's sliding sphere (tests/knecht_quality.rs: low on the sphere, high elsewhere).
-        w_pos: f32 = 300.0,
-        unit "", symbol "w_pos", range 0.0..=1000.0, cost "free", history false;
-        /// Weight of the normal change (Eq. 3.2).
-        w_normal: f32 = 2.0,
-        unit "", symbol "w_normal", range 0.0..=100.0, cost "free", history false;
-        /// Weight of the illumination change (Eq. 3.3; relative difference, cubed).
-        w_illumination: f32 = 1.0,
-        unit "", symbol "w_illumination", range 0.0..=100.0, cost "free", history false;
-        /// Whether the geometry-aware filter runs before the merge (GI Lab) or after it (the
-        /// thesis, §4 steps 11–12; ⚠[knecht.merge-order]); only with both chosen.
-        order: MergeOrder = MergeOrder::FilterThenMerge,
-        unit "", symbol "", range 0..=1, cost "free", history true;
-        /// Merge the light demodulated (issue #51, ⚠[knecht.demodulated-merge]): the history
-        /// keeps the demodulated filter's irradiance E and the specular light S apart, merges
-        /// each with its own history and reflects E with the pixel's own colour, so that under
-        /// motion a history fetched from a neighbouring texel brings its light, not its texture;
-        /// off: the thesis' merge of the reflected light. After the demodulated filter
-        /// (`interleave.demodulate`, filter then merge) or the HCB's splat (its `hcb.irradiance`);
-        /// elsewhere the merge has no irradiance to keep.
-        demodulate: bool = true,
-        unit "", symbol "", range 0..=1, cost "a third ping-pong pair (16 B a pixel each) written and read", history true;
-    }
-    legacy {
-        /// Version 1: the confidence merge on or off; now `pipeline.temporal = ConfidenceMerge`.
-        enabled: bool;
-    }
-}
 
 /// Format of the demodulated merge's split history: E and S as three half-float pairs.
 pub const SPLIT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;

@@ -15,31 +15,8 @@ use glam::Vec4;
 use crate::gpu::GpuContext;
 use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::knecht::ism::{BounceShadowTest, IsmPass, MAX_BOUNCES};
-use crate::settings_enum;
+pub use crate::settings::knecht::{BounceMethod, BounceSelection};
 use crate::timing::Slot;
-
-settings_enum! {
-    /// Which point-cloud sample becomes the next bounce's VPL (Knecht 002 §3.6.1, §6.1).
-    pub enum BounceSelection {
-        /// The sample with the largest contribution (the thesis' depth-test selection).
-        Strongest = "strongest (thesis)",
-        /// A sample drawn with probability proportional to its contribution (the thesis'
-        /// future work, §6.1): unbiased, weaker regions get VPLs too.
-        Proportional = "proportional to contribution",
-    }
-    default Strongest
-}
-
-settings_enum! {
-    /// How the VPLs of further bounces are made (Knecht 002 §3.6).
-    pub enum BounceMethod {
-        /// One sample per VPL chosen from the point cloud in one pass (§3.6.1).
-        PointCloud = "point cloud, one pass (Knecht)",
-        /// Imperfect reflective shadow maps, importance-sampled (Ritschel et al. 2008).
-        Irsm = "IRSM, importance-sampled (Ritschel)",
-    }
-    default PointCloud
-}
 
 /// Uniform of one bounce; WGSL twin: `BounceParams` in `shaders/common/bounce.wgsl` (the
 /// IRSM baseline, `passes::knecht::irsm`, uses it too: counts, the two first slots, d_min², seed).

@@ -20,10 +20,10 @@ use crate::passes::reference::vpl::{BatchView, VplSamplePass};
 use crate::passes::reference::vpl_gather::{GatherParams, VplGatherPass};
 use crate::passes::reference::vpl_visibility::VplVisibilityPass;
 use crate::passes::shadow::{GpuLight, LightView};
-use crate::pipeline::VplVisibility;
+use crate::passes::stages::{FrameInputs, Visibility, VplSet, vpl_clip};
 use crate::scene::emitters::Emitters;
 use crate::scene::upload::GpuScene;
-use crate::stages::{FrameInputs, Visibility, VplSet, vpl_clip};
+use crate::settings::pipeline::VplVisibility;
 use crate::timing::GpuTimer;
 use crate::timing::PassRec;
 

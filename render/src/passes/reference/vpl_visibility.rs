@@ -10,13 +10,12 @@
 
 use crate::counters::prelude::*;
 
-use glam::Vec4;
-
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
+pub use crate::passes::stages::GatherVisibility;
+use crate::passes::stages::{FrameInputs, VplSet};
 use crate::scene::SceneState;
 use crate::scene::upload::GpuScene;
-use crate::stages::{FrameInputs, VplSet};
 use crate::timing::GpuTimer;
 use crate::timing::PassRec;
 
@@ -228,7 +227,7 @@ impl VplVisibilityPass {
     }
 
     /// Stage 4 "exact": renders the maps of `vpls` (scope `vpl.shadow`) and returns them as
-    /// the gathers read them; `clip` as [`crate::stages::vpl_clip`] makes it.
+    /// the gathers read them; `clip` as [`crate::passes::stages::vpl_clip`] makes it.
     pub fn exact_visibility(
         &self,
         f: &FrameInputs,
@@ -243,51 +242,6 @@ impl VplVisibilityPass {
         });
         let l = self.layout_info;
         GatherVisibility::Exact { atlas: self.atlas_view.clone(), cols: l.cols, size: l.size, clip: clip.truncate() }
-    }
-}
-
-/// The visibility the gather reads: stage 4's output (views are shared handles, cheap to
-/// clone).
-#[derive(Clone)]
-pub enum GatherVisibility {
-    None,
-    /// The ISM atlas (level 0 after pull-push), with columns, map size, eye offset, depth bias
-    /// and receiver normal offset (texels).
-    Ism {
-        atlas: wgpu::TextureView,
-        cols: u32,
-        size: u32,
-        eye_offset: f32,
-        bias: f32,
-        normal_offset: f32,
-    },
-    /// The exact cube-face atlas, with columns, face size and (near, far, eye offset).
-    Exact {
-        atlas: wgpu::TextureView,
-        cols: u32,
-        size: u32,
-        clip: glam::Vec3,
-    },
-}
-
-impl GatherVisibility {
-    /// The shaders' encoding: (mode 0 none / 1 ISM / 2 exact, the ISM atlas or `no_ism`, the
-    /// exact atlas or `no_exact`, atlas columns, map size, (0, eye offset or near, bias or
-    /// far, normal offset or eye offset)).
-    pub fn parts<'a>(
-        &'a self,
-        no_ism: &'a wgpu::TextureView,
-        no_exact: &'a wgpu::TextureView,
-    ) -> (u32, &'a wgpu::TextureView, &'a wgpu::TextureView, u32, u32, Vec4) {
-        match self {
-            GatherVisibility::None => (0, no_ism, no_exact, 1, 1, Vec4::ZERO),
-            GatherVisibility::Ism { atlas, cols, size, eye_offset, bias, normal_offset } => {
-                (1, atlas, no_exact, *cols, *size, Vec4::new(0.0, *eye_offset, *bias, *normal_offset))
-            }
-            GatherVisibility::Exact { atlas, cols, size, clip } => {
-                (2, no_ism, atlas, *cols, *size, Vec4::new(0.0, clip.x, clip.y, clip.z))
-            }
-        }
     }
 }
 

@@ -409,7 +409,7 @@ pub struct StageParts<'s> {
 /// light is that bounce's).
 pub fn inputs<'a>(
     stage: StageParts<'_>,
-    f: &'a crate::stages::FrameInputs,
+    f: &'a crate::passes::stages::FrameInputs,
     pixel: (u32, u32),
 ) -> SolerExplainInputs<'a> {
     let s = &f.settings.soler;
@@ -449,7 +449,7 @@ pub fn inputs<'a>(
 }
 
 /// What decode needs of this frame's stage (`bounces`: the bounces it gathers).
-pub fn chain(f: &crate::stages::FrameInputs, pixel: (u32, u32), bounces: &[u32], temporal: bool) -> SolerChain {
+pub fn chain(f: &crate::passes::stages::FrameInputs, pixel: (u32, u32), bounces: &[u32], temporal: bool) -> SolerChain {
     let s = &f.settings.soler;
     let n = s.bounces.clamp(1, MAX_BOUNCES as u32);
     SolerChain {
@@ -463,7 +463,7 @@ pub fn chain(f: &crate::stages::FrameInputs, pixel: (u32, u32), bounces: &[u32],
         technique: format!(
             "{}screen-space mip levels (Soler): levels {}…{} gathered with {} samples of r = {} texels, joint \
              bilateral upsampling{}{}",
-            if f.settings.pipeline.gather == crate::pipeline::Gather::Vpl { "near field: " } else { "" },
+            if f.settings.pipeline.gather == crate::settings::pipeline::Gather::Vpl { "near field: " } else { "" },
             s.gathered_levels().start,
             s.gathered_levels().end - 1,
             s.samples,

@@ -12,7 +12,7 @@ use super::voxels::{SolerVoxels, VoxelParams};
 use super::{FormFactor, SolerSettings};
 use crate::buffers::BufferRegistry;
 use crate::gpu::GpuContext;
-use crate::stages::FrameInputs;
+use crate::passes::stages::FrameInputs;
 use crate::timing::GpuTimer;
 use crate::timing::PassRec;
 

@@ -4,13 +4,14 @@
 
 use glam::Vec4;
 
+use super::gbuffer::GBufferViews;
+use super::shadow::{GpuLight, LightView};
 use crate::camera::Camera;
 use crate::gpu::GpuContext;
 use crate::lab_settings::LabSettings;
-use crate::passes::gbuffer::GBufferViews;
-use crate::passes::shadow::{GpuLight, LightView};
 use crate::scene::upload::GpuScene;
 use crate::scene::{Scene, SceneState};
+use crate::timing::PassRec;
 
 /// What the stages read of the frame: the scene at this instant, the settings, the camera
 /// and the G-buffer of stage 1.
@@ -38,8 +39,9 @@ pub struct FrameInputs<'a> {
     pub gbuffer_size: (u32, u32),
     /// The frame's index (per-frame sample rotations).
     pub frame: u32,
-    /// Stage 2's pass: its lights and shadow maps also light Gautron's record hemispheres.
-    pub direct: &'a crate::passes::direct::DirectPass,
+    /// Stage 2's pass (`passes::direct::DirectPass`): its lights and shadow maps also light
+    /// Gautron's record hemispheres.
+    pub direct: &'a dyn DirectAtlas,
     /// Stage 2's direct light (`direct.radiance`), the first bounce's source.
     pub direct_radiance: &'a wgpu::TextureView,
     /// Its diffuse part (`direct.diffuse`), when a stage asked for it (`soler.sender`).
@@ -54,6 +56,25 @@ pub struct FrameInputs<'a> {
     /// The pixel being explained (issue #42), when one is: stages that replay inside their
     /// run (Soler's, bounce by bounce) read it here.
     pub explain_pixel: Option<(u32, u32)>,
+}
+
+/// What the later stages ask of stage 2's direct light besides its image: the same lights and
+/// shadow maps at an atlas of G-buffer tiles (Gautron et al.'s record hemispheres, 003 "Simple
+/// plane sampling"). `passes::direct::DirectPass` implements it; the stages see only this, so
+/// that the frame's data sits below every pass.
+pub trait DirectAtlas {
+    /// The direct light of this frame at an atlas of G-buffer tiles, tile k
+    /// seen from `viewers[k]` (xyz; w = 0: an empty tile), into `out` (the direct light's
+    /// radiance format, the atlas's `size`).
+    fn shade_atlas(
+        &self,
+        r: PassRec<'_, '_>,
+        atlas: &GBufferViews,
+        out: &wgpu::TextureView,
+        size: (u32, u32),
+        params: &wgpu::Buffer,
+        viewers: &wgpu::Buffer,
+    );
 }
 
 impl FrameInputs<'_> {
@@ -75,7 +96,7 @@ impl FrameInputs<'_> {
     /// diffuse part (004 §5.3) or the whole of it toward the camera.
     pub fn sender_radiance(&self) -> &wgpu::TextureView {
         match (self.settings.soler.sender, self.direct_diffuse) {
-            (crate::passes::soler::Sender::Diffuse, Some(d)) => d,
+            (crate::settings::soler::Sender::Diffuse, Some(d)) => d,
             _ => self.direct_radiance,
         }
     }
@@ -90,7 +111,7 @@ impl FrameInputs<'_> {
     /// skips senders farther.
     pub fn near_field_cut(&self) -> f32 {
         let p = &self.settings.pipeline;
-        if p.uses_vpls() && p.near_field == crate::pipeline::NearField::ScreenSpace {
+        if p.uses_vpls() && p.near_field == crate::settings::pipeline::NearField::ScreenSpace {
             self.settings.soler.near_field_split(self.scale).max(0.0)
         } else {
             0.0
@@ -120,8 +141,53 @@ pub struct VplSet {
     pub sources: Vec<(u32, u32, String)>,
 }
 
-/// Stage 4's output: the visibility the gather reads.
-pub use crate::passes::reference::vpl_visibility::GatherVisibility as Visibility;
+/// The visibility the gather reads: stage 4's output (views are shared handles, cheap to
+/// clone).
+#[derive(Clone)]
+pub enum GatherVisibility {
+    None,
+    /// The ISM atlas (level 0 after pull-push), with columns, map size, eye offset, depth bias
+    /// and receiver normal offset (texels).
+    Ism {
+        atlas: wgpu::TextureView,
+        cols: u32,
+        size: u32,
+        eye_offset: f32,
+        bias: f32,
+        normal_offset: f32,
+    },
+    /// The exact cube-face atlas, with columns, face size and (near, far, eye offset).
+    Exact {
+        atlas: wgpu::TextureView,
+        cols: u32,
+        size: u32,
+        clip: glam::Vec3,
+    },
+}
+
+impl GatherVisibility {
+    /// The shaders' encoding: (mode 0 none / 1 ISM / 2 exact, the ISM atlas or `no_ism`, the
+    /// exact atlas or `no_exact`, atlas columns, map size, (0, eye offset or near, bias or
+    /// far, normal offset or eye offset)).
+    pub fn parts<'a>(
+        &'a self,
+        no_ism: &'a wgpu::TextureView,
+        no_exact: &'a wgpu::TextureView,
+    ) -> (u32, &'a wgpu::TextureView, &'a wgpu::TextureView, u32, u32, Vec4) {
+        match self {
+            GatherVisibility::None => (0, no_ism, no_exact, 1, 1, Vec4::ZERO),
+            GatherVisibility::Ism { atlas, cols, size, eye_offset, bias, normal_offset } => {
+                (1, atlas, no_exact, *cols, *size, Vec4::new(0.0, *eye_offset, *bias, *normal_offset))
+            }
+            GatherVisibility::Exact { atlas, cols, size, clip } => {
+                (2, no_ism, atlas, *cols, *size, Vec4::new(0.0, clip.x, clip.y, clip.z))
+            }
+        }
+    }
+}
+
+/// Stage 4's output under its stage's name.
+pub use GatherVisibility as Visibility;
 
 /// The clip planes of VPL depth maps in a scene of bounding radius `r`: (near, far, eye
 /// offset, w).

@@ -7,6 +7,20 @@
 //! sliders, preset validation and CLI overrides (`--set direct.pcf_radius=2`) — ranges
 //! are never repeated elsewhere.
 
+pub mod compose;
+pub mod direct;
+pub mod emitters;
+pub mod gautron;
+pub mod hcb;
+pub mod knecht;
+pub mod pipeline;
+pub mod reference;
+pub mod scale;
+pub mod sky;
+pub mod soler;
+pub mod splat;
+pub mod view;
+
 /// A setting's value, type-erased for the UI, CLI overrides and validation.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Value {
@@ -353,7 +367,7 @@ fn list(errors: &[FieldError]) -> String {
 
 /// Current preset format version (see [`LabSettings::version`]). Version 2 replaced
 /// `indirect.technique` and the stage switches of the groups by the stage choices
-/// (`pipeline.*`, see `crate::pipeline::migrate_v1`).
+/// (`pipeline.*`, see `crate::settings::pipeline::migrate_v1`).
 pub const PRESET_VERSION: u32 = 2;
 
 /// Reads a field of an older preset version (a `legacy` field of [`settings_group!`]),
