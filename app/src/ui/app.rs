@@ -11,9 +11,9 @@ use gi_render::{LabSettings, Renderer};
 use crate::args::AppArgs;
 use crate::ui::ERROR;
 use crate::ui::lab::Lab;
-use crate::ui::presets::PresetState;
 use crate::ui::session::{self, Pane, Session};
 use crate::ui::state::State;
+use crate::ui::state::presets::PresetState;
 use crate::ui::viewer::{Viewer, ViewerState};
 
 /// The window's test hook that destroys its GPU device at a frame (see `State::lose_device_at`).
@@ -524,5 +524,30 @@ impl GiLabApp {
         self.screenshot_step(ctx);
         self.autosave();
         ctx.request_repaint();
+    }
+}
+
+/// The `--screenshot` of the window (`crate::ui::capture::save_color_image` writes it).
+impl GiLabApp {
+    pub(super) fn screenshot_step(&mut self, ctx: &egui::Context) {
+        let st = &mut self.state;
+        let Some(path) = st.args.screenshot.clone() else { return };
+        if !st.screenshot_requested && st.frames >= st.args.screenshot_frames {
+            let slot = st.screenshot.clone();
+            ctx.request_screenshot(move |img| {
+                if let Ok(mut s) = slot.lock() {
+                    *s = Some(img);
+                }
+            });
+            st.screenshot_requested = true;
+        }
+        let taken = st.screenshot.lock().ok().and_then(|mut s| s.take());
+        if let Some(img) = taken {
+            match crate::ui::capture::save_color_image(&path, &img) {
+                Ok(()) => println!("wrote screenshot {}", path.display()),
+                Err(e) => eprintln!("gi-lab: {e}"),
+            }
+            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+        }
     }
 }

@@ -1,5 +1,5 @@
 //! The History pane (issue #39 point 1): every edit of the session, oldest first, the
-//! current one marked; a click goes back (or forward) to any step (`crate::ui::history`).
+//! current one marked; a click goes back (or forward) to any step (`crate::ui::state::history`).
 
 use crate::ui::state::State;
 
@@ -25,7 +25,7 @@ pub(super) fn history_ui(st: &mut State, ui: &mut egui::Ui) {
             "{} of {} steps (the last {} are kept)",
             cursor,
             steps.len() - 1,
-            crate::ui::history::MAX_STEPS
+            crate::ui::state::history::MAX_STEPS
         ));
     });
     if st.history.dropped() > 0 {

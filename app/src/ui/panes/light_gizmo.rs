@@ -5,7 +5,7 @@
 //! aim handle at the tip of its direction for spots and directional lights. A click on an
 //! icon selects the light (the Scene panel opens its section); holding Ctrl snaps moves to
 //! a grid of a tenth of a power of ten of the scene's size and aims to 15° of elevation and
-//! azimuth. Each drag is one undo step (`crate::ui::history` waits for the release), and the
+//! azimuth. Each drag is one undo step (`crate::ui::state::history` waits for the release), and the
 //! image follows live, with the temporal history restarted as for the Scene panel's fields.
 
 use glam::{Mat4, Quat, Vec3};

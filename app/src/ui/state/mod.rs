@@ -14,9 +14,13 @@ use gi_render::timing::PassTiming;
 use crate::args::AppArgs;
 use crate::ui::capture::Recording;
 use crate::ui::lab::Lab;
-use crate::ui::presets::PresetState;
 use crate::ui::session::{Bookmark, PinnedProbe, Session};
+use crate::ui::state::presets::PresetState;
 use crate::ui::viewer::{Viewer, ViewerState};
+
+pub mod capture;
+pub mod history;
+pub mod presets;
 
 /// Everything but the tile tree (so that the tree's behaviour can borrow it).
 pub struct State {
@@ -92,7 +96,7 @@ pub struct State {
     /// The settings panel's search text (issue #39 point 4).
     pub settings_search: String,
     /// Undo and redo (issue #39 point 1).
-    pub history: crate::ui::history::History,
+    pub history: crate::ui::state::history::History,
     /// Edit → History asked for the History pane (the app owns the layout).
     pub show_history_request: bool,
     /// The pinned pixel explained (issue #42), when one is.

@@ -201,7 +201,7 @@ impl State {
 
     /// The dialog of a preset load with problems: every problem listed, the fixes named;
     /// nothing changes unless the user accepts.
-    pub(super) fn problem_dialog(&mut self, ctx: &egui::Context) {
+    pub(in crate::ui) fn problem_dialog(&mut self, ctx: &egui::Context) {
         let Some(p) = &self.preset.pending else { return };
         let usable = p.path.is_some();
         let mut decision = None;
