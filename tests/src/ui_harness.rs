@@ -76,7 +76,7 @@ pub fn show_in_viewer(h: &mut Harness<'static, GiLabApp>, name: &str) {
     h.run_steps(2);
     h.get_by_label(name).click();
     h.run_steps(3);
-    let v = h.state().state.viewers.values().next().expect("a viewer");
+    let v = h.state().state.viewers.open.values().next().expect("a viewer");
     assert_eq!(v.state.buffer, name);
     assert!(v.error.is_none(), "{name}: {:?}", v.error);
 }

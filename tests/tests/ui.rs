@@ -203,7 +203,7 @@ fn buffer_viewer_lists_every_buffer_and_shows_the_chosen_one() {
     pause(&mut h);
     h.run_steps(4);
     let st = &h.state().state;
-    let v = st.viewers.values().next().expect("a viewer");
+    let v = st.viewers.open.values().next().expect("a viewer");
     assert_eq!(v.state.buffer, "direct.radiance");
     assert!(v.error.is_none(), "{:?}", v.error);
     // What the viewer shows: its view output, read back, against a stored snapshot.
@@ -237,20 +237,20 @@ fn probe_shows_the_values_of_a_cpu_readback() {
     h.run_steps(3);
     h.get_by_label("Probes").click();
     h.hover_at(pos);
-    run_until(&mut h, 30, |a| !a.state.hover_values.is_empty());
+    run_until(&mut h, 30, |a| !a.state.probes.values.is_empty());
     let st = &h.state().state;
     let l = st.lab.as_ref().expect("lab");
-    assert!(!st.hover_values.is_empty(), "the probe read nothing at {pos:?}");
+    assert!(!st.probes.values.is_empty(), "the probe read nothing at {pos:?}");
     let names = l.renderer.buffers().names();
-    assert_eq!(st.hover_values.len(), names.len(), "every buffer is probed");
-    for v in &st.hover_values {
+    assert_eq!(st.probes.values.len(), names.len(), "every buffer is probed");
+    for v in &st.probes.values {
         let img = l.renderer.readback(&v.name).expect("readback");
         let want = img.at(v.texel.0, v.texel.1);
         let same = v.value.iter().zip(want).all(|(a, b)| *a == b || (a.is_nan() && b.is_nan()));
         assert!(same, "{} at {:?}: probe {:?}, readback {want:?}", v.name, v.texel, v.value);
     }
     // The Probes panel prints them.
-    let hdr = st.hover_values.iter().find(|v| v.name == "final.hdr").expect("final.hdr probed");
+    let hdr = st.probes.values.iter().find(|v| v.name == "final.hdr").expect("final.hdr probed");
     let text = gi_lab::ui::panes::format_value(hdr.value);
     assert!(h.query_all_by_label(&text).next().is_some(), "the Probes panel does not show final.hdr = {text}");
     // A click pins a probe there.
@@ -258,7 +258,7 @@ fn probe_shows_the_values_of_a_cpu_readback() {
     h.drag_at(pos);
     h.drop_at(pos);
     h.run_steps(3);
-    assert_eq!(h.state().state.pinned.len(), 1, "a click in the viewport pins a probe");
+    assert_eq!(h.state().state.probes.pinned.len(), 1, "a click in the viewport pins a probe");
 }
 
 #[test]
@@ -353,15 +353,15 @@ fn the_session_restores_layout_settings_viewers_and_probes() {
     h.state_mut().state.pin_probe((10, 12));
     h.run_steps(2);
     let settings = h.state().settings().expect("settings").clone();
-    let viewers: Vec<String> = h.state().state.viewers.values().map(|v| v.state.buffer.clone()).collect();
+    let viewers: Vec<String> = h.state().state.viewers.open.values().map(|v| v.state.buffer.clone()).collect();
     h.state_mut().save_session().expect("session saved");
     drop(h);
     let mut h = harness_with(args_in(&dir, false), egui::vec2(1400.0, 1000.0));
     h.run_steps(2);
     assert_eq!(h.state().settings(), Some(&settings), "unsaved settings come back");
-    let again: Vec<String> = h.state().state.viewers.values().map(|v| v.state.buffer.clone()).collect();
+    let again: Vec<String> = h.state().state.viewers.open.values().map(|v| v.state.buffer.clone()).collect();
     assert_eq!(again, viewers, "the viewers come back");
-    assert_eq!(h.state().state.pinned.len(), 1, "the pinned probe comes back");
+    assert_eq!(h.state().state.probes.pinned.len(), 1, "the pinned probe comes back");
     assert!(h.state().state.unsaved(), "and they are still marked unsaved against the defaults");
 }
 
@@ -517,7 +517,7 @@ fn the_hcb_samples_overlay_draws_white_dots_and_table_1() {
         (n, image)
     };
     let (before, _) = white(&mut h);
-    h.state_mut().state.show_hcb_samples = true;
+    h.state_mut().state.overlays.hcb_samples = true;
     run_until(&mut h, 30, |a| arrived(a, "hcb.stats"));
     let (after, image) = white(&mut h);
     let _ = image.save(std::env::temp_dir().join("gi_lab_hcb_overlay.png"));
@@ -659,18 +659,18 @@ fn the_soler_samples_overlay_draws_the_rings_behind_a_pixel() {
         image.pixels().filter(|p| p.0[0] < 80 && p.0[1] > 150 && p.0[2] > 190 && p.0[2] > p.0[1]).count()
     };
     let before = cyan(&mut h);
-    h.state_mut().state.show_soler_samples = true;
+    h.state_mut().state.overlays.soler_samples = true;
     // The overlay reads the receivers, then their samples, each a frame or two late.
     run_until(&mut h, 40, |a| {
         a.state
             .lab
             .as_ref()
-            .is_ok_and(|l| l.renderer.soler_samples_later(a.state.pinned[0].pixel).is_ok_and(|r| r.is_some()))
+            .is_ok_and(|l| l.renderer.soler_samples_later(a.state.probes.pinned[0].pixel).is_ok_and(|r| r.is_some()))
     });
     let after = cyan(&mut h);
     let _ = h.render().map(|i| i.save(std::env::temp_dir().join("gi_lab_soler_overlay.png")));
     // (The legend is painted text, not a widget: the renderer's replay stands for it.)
-    let pinned = h.state().state.pinned[0].pixel;
+    let pinned = h.state().state.probes.pinned[0].pixel;
     let rings = h.state().renderer().expect("renderer").soler_samples(pinned).expect("the samples");
     assert!(rings.iter().any(|r| r.level == 2 && !r.samples.is_empty()), "level 2's ring: {rings:?}");
     assert!(after > before + 20, "level 2's samples: {before} -> {after} cyan pixels");
@@ -736,7 +736,7 @@ fn gautron_settings_buffers_cache_and_records_appear_in_the_lab() {
         (pixels, image)
     };
     let (before, _) = viewport(&mut h);
-    h.state_mut().state.show_gautron_records = true;
+    h.state_mut().state.overlays.gautron_records = true;
     run_until(&mut h, 30, |a| arrived(a, "gautron.records"));
     let (after, image) = viewport(&mut h);
     let _ = image.save(std::env::temp_dir().join("gi_lab_gautron_records.png"));

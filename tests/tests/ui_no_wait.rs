@@ -27,7 +27,7 @@ fn no_frame_of_the_window_waits_for_the_gpu_with_every_readback_on() {
     h.run_steps(2);
     // An auto-ranging viewer.
     show_in_viewer(&mut h, "gbuffer.position");
-    if let Some(v) = h.state_mut().state.viewers.values_mut().next() {
+    if let Some(v) = h.state_mut().state.viewers.open.values_mut().next() {
         v.state.range_mode = gi_lab::ui::viewer::RangeMode::MinMax;
     }
     // The hovered pixel and two pinned probes.
@@ -35,14 +35,14 @@ fn no_frame_of_the_window_waits_for_the_gpu_with_every_readback_on() {
     h.hover_at(vp.center());
     {
         let st = &mut h.state_mut().state;
-        st.pinned.push(PinnedProbe { pixel: (20, 30), buffer: "final.hdr".into(), channel: 0 });
-        st.pinned.push(PinnedProbe { pixel: (60, 40), buffer: "gbuffer.normal".into(), channel: 0 });
-        st.probe_history.resize_with(2, Default::default);
+        st.probes.pinned.push(PinnedProbe { pixel: (20, 30), buffer: "final.hdr".into(), channel: 0 });
+        st.probes.pinned.push(PinnedProbe { pixel: (60, 40), buffer: "gbuffer.normal".into(), channel: 0 });
+        st.probes.history.resize_with(2, Default::default);
         // Every overlay.
-        st.show_vpls = true;
-        st.show_hcb_samples = true;
-        st.show_soler_samples = true;
-        st.show_gautron_records = true;
+        st.overlays.vpls = true;
+        st.overlays.hcb_samples = true;
+        st.overlays.soler_samples = true;
+        st.overlays.gautron_records = true;
         // A pixel explained (issue #42).
         st.explain = Some(gi_lab::ui::explain::ExplainView::new((30, 40)));
         // A/B with its FLIP view.
@@ -75,8 +75,8 @@ fn no_frame_of_the_window_waits_for_the_gpu_with_every_readback_on() {
         run_until(&mut h, 40, |a| {
             arrived(a, overlay)
                 && arrived(a, "ab.final.ldr")
-                && a.state.viewers.values().next().is_some_and(|v| v.auto_range_frame().is_some())
-                && !a.state.hover_values.is_empty()
+                && a.state.viewers.open.values().next().is_some_and(|v| v.auto_range_frame().is_some())
+                && !a.state.probes.values.is_empty()
                 && a.state.ab.as_ref().is_some_and(|ab| ab.metrics.is_some())
                 && a.state.explain.as_ref().is_some_and(|v| v.latest.is_some())
         });
@@ -85,13 +85,13 @@ fn no_frame_of_the_window_waits_for_the_gpu_with_every_readback_on() {
 
         // Every feature got data without waiting.
         let st = &h.state().state;
-        assert!(!st.hover_values.is_empty(), "{t:?}: the hovered probe has no values");
-        assert!(st.probe_history.iter().all(|p| !p.is_empty()), "{t:?}: a pinned probe has no history");
+        assert!(!st.probes.values.is_empty(), "{t:?}: the hovered probe has no values");
+        assert!(st.probes.history.iter().all(|p| !p.is_empty()), "{t:?}: a pinned probe has no history");
         let r = &st.lab.as_ref().expect("lab").renderer;
         let arrived = |key: &str| r.read_latest(key).is_some_and(|a| a.data.is_ok());
         // The GPU's statistics arrived and set the range (positions span more than [0, 1]).
         assert!(
-            st.viewers.values().next().is_some_and(|v| v.auto_range_frame().is_some()
+            st.viewers.open.values().next().is_some_and(|v| v.auto_range_frame().is_some()
                 && v.state.view.range[1] > v.state.view.range[0]
                 && v.state.view.range != [0.0, 1.0]),
             "{t:?}: the viewer's auto-range"

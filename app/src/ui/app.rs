@@ -3,7 +3,6 @@
 
 use std::collections::{BTreeMap, VecDeque};
 use std::path::PathBuf;
-use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use gi_render::{LabSettings, Renderer};
@@ -151,9 +150,12 @@ impl GiLabApp {
             config_dir,
             lab,
             session,
-            viewers,
-            view_pipeline: None,
-            pass_view: None,
+            viewers: crate::ui::state::Viewers { open: viewers, ..Default::default() },
+            probes: crate::ui::state::Probes { pinned, history, ..Default::default() },
+            timings: Default::default(),
+            overlays: Default::default(),
+            requests: crate::ui::state::Requests { explain: explain.is_some(), ..Default::default() },
+            capture: Default::default(),
             preset: PresetState {
                 path: preset_path,
                 baseline,
@@ -162,35 +164,15 @@ impl GiLabApp {
                 diff_with: None,
                 diff_cache: None,
             },
-            hover: None,
-            hover_values: Vec::new(),
-            pinned,
-            probe_history: history,
-            probe_frame: 0,
-            timing_history: VecDeque::new(),
-            hovered_pass: None,
             viewport_px: (640, 480),
             viewport_rect: egui::Rect::NOTHING,
             render_size_override: None,
             status,
             frames: 0,
-            recording: None,
             bookmark_name: String::new(),
             scene_path_text: String::new(),
-            record_frames: 60,
-            visible_viewers: Vec::new(),
-            show_help: false,
-            show_vpls: false,
-            show_hcb_samples: false,
-            show_soler_samples: false,
-            show_gautron_records: false,
-            show_lights: true,
             ab: None,
             grid: None,
-            request_new_viewer: false,
-            request_reset_layout: false,
-            screenshot: Arc::new(Mutex::new(None)),
-            screenshot_requested: false,
             last_autosave: Instant::now(),
             last_saved_session: String::new(),
             device_lost: None,
@@ -199,10 +181,7 @@ impl GiLabApp {
             settings_search: String::new(),
             adaptive: Default::default(),
             interacting: false,
-            show_history_request: false,
             explain: explain.map(crate::ui::explain::ExplainView::new),
-            context_pixel: None,
-            show_explain_request: explain.is_some(),
         };
         Self { tree, state }
     }
@@ -247,8 +226,8 @@ impl GiLabApp {
         let mut s = st.session.clone();
         s.layout = Some(self.tree.clone());
         s.preset_path = st.preset.path.clone();
-        s.viewers = st.viewers.iter().map(|(id, v)| (*id, v.state.clone())).collect();
-        s.probes = st.pinned.clone();
+        s.viewers = st.viewers.open.iter().map(|(id, v)| (*id, v.state.clone())).collect();
+        s.probes = st.probes.pinned.clone();
         if let Ok(l) = &st.lab {
             s.settings_ron = Some(l.settings.to_ron());
             s.scene = l.scene_path.clone();
@@ -368,12 +347,12 @@ impl GiLabApp {
 
     /// Adds a buffer viewer panel next to the first viewer (or on the right).
     pub fn add_viewer(&mut self) {
-        let id = self.state.viewers.keys().max().copied().unwrap_or(0) + 1;
+        let id = self.state.viewers.open.keys().max().copied().unwrap_or(0) + 1;
         let mut v = Viewer::new(ViewerState::default());
         if let Ok(l) = &self.state.lab {
             v.show_buffer(&l.renderer, "gbuffer.motion");
         }
-        self.state.viewers.insert(id, v);
+        self.state.viewers.open.insert(id, v);
         let pane = self.tree.tiles.insert_pane(Pane::Viewer(id));
         let parent = viewer_ids(&self.tree)
             .first()
@@ -469,13 +448,13 @@ impl GiLabApp {
     fn frame_ui(&mut self, ui: &mut egui::Ui, ctx: &egui::Context) {
         self.state.handle_dropped_files(ctx);
         self.state.shortcuts(ctx);
-        if std::mem::take(&mut self.state.request_new_viewer) {
+        if std::mem::take(&mut self.state.requests.new_viewer) {
             self.add_viewer();
         }
-        if std::mem::take(&mut self.state.request_reset_layout) {
+        if std::mem::take(&mut self.state.requests.reset_layout) {
             self.tree = session::default_layout();
             for id in viewer_ids(&self.tree) {
-                self.state.viewers.entry(id).or_insert_with(|| Viewer::new(ViewerState::default()));
+                self.state.viewers.open.entry(id).or_insert_with(|| Viewer::new(ViewerState::default()));
             }
         }
         // (Outside `input`: it holds the context's lock.)
@@ -488,7 +467,7 @@ impl GiLabApp {
         });
         self.state.frame();
         // The panels set the hovered pixel again while they are drawn.
-        self.state.hover = None;
+        self.state.probes.hover = None;
         egui::Panel::top("menu").show(ui, |ui| self.state.menu_bar(ui));
         egui::Panel::bottom("status").show(ui, |ui| self.state.status_bar(ui));
         egui::CentralPanel::default().show(ui, |ui| {
@@ -498,12 +477,12 @@ impl GiLabApp {
                 });
                 return;
             }
-            self.state.visible_viewers.clear();
+            self.state.viewers.visible.clear();
             let mut behavior = crate::ui::panes::Behavior { state: &mut self.state, closed_viewers: Vec::new() };
             self.tree.ui(&mut behavior, ui);
             let closed = std::mem::take(&mut behavior.closed_viewers);
             for id in closed {
-                if let (Some(mut v), Ok(l)) = (self.state.viewers.remove(&id), &self.state.lab) {
+                if let (Some(mut v), Ok(l)) = (self.state.viewers.open.remove(&id), &self.state.lab) {
                     v.release(&l.render_state);
                 }
             }
@@ -515,10 +494,10 @@ impl GiLabApp {
         // left): a slider drag is one step.
         let idle = !ctx.input(|i| i.pointer.any_down()) && !ctx.egui_wants_keyboard_input();
         self.state.record_history(idle);
-        if std::mem::take(&mut self.state.show_history_request) {
+        if std::mem::take(&mut self.state.requests.history) {
             self.show_pane(Pane::History);
         }
-        if std::mem::take(&mut self.state.show_explain_request) {
+        if std::mem::take(&mut self.state.requests.explain) {
             self.show_pane(Pane::Explain);
         }
         self.screenshot_step(ctx);
@@ -532,16 +511,16 @@ impl GiLabApp {
     pub(super) fn screenshot_step(&mut self, ctx: &egui::Context) {
         let st = &mut self.state;
         let Some(path) = st.args.screenshot.clone() else { return };
-        if !st.screenshot_requested && st.frames >= st.args.screenshot_frames {
-            let slot = st.screenshot.clone();
+        if !st.capture.screenshot_requested && st.frames >= st.args.screenshot_frames {
+            let slot = st.capture.screenshot.clone();
             ctx.request_screenshot(move |img| {
                 if let Ok(mut s) = slot.lock() {
                     *s = Some(img);
                 }
             });
-            st.screenshot_requested = true;
+            st.capture.screenshot_requested = true;
         }
-        let taken = st.screenshot.lock().ok().and_then(|mut s| s.take());
+        let taken = st.capture.screenshot.lock().ok().and_then(|mut s| s.take());
         if let Some(img) = taken {
             match crate::ui::capture::save_color_image(&path, &img) {
                 Ok(()) => println!("wrote screenshot {}", path.display()),

@@ -55,7 +55,7 @@ impl State {
             self.export_dialog(ExportFormat::Json);
         }
         if pressed(Modifiers::COMMAND, Key::B) {
-            self.request_new_viewer = true;
+            self.requests.new_viewer = true;
         }
         if pressed(Modifiers::NONE, Key::F12) {
             self.capture_viewport();
@@ -92,8 +92,8 @@ impl State {
             return;
         }
         if pressed(Modifiers::NONE, Key::Escape) {
-            self.pinned.clear();
-            self.probe_history.clear();
+            self.probes.pinned.clear();
+            self.probes.history.clear();
             if let Ok(l) = &mut self.lab {
                 l.selected_light = None;
             }
@@ -145,9 +145,9 @@ impl State {
                 }
                 ui.horizontal(|ui| {
                     if ui.button("Record").clicked() {
-                        self.start_recording(self.record_frames);
+                        self.start_recording(self.capture.record_frames);
                     }
-                    ui.add(egui::DragValue::new(&mut self.record_frames).range(1..=100_000).suffix(" frames"));
+                    ui.add(egui::DragValue::new(&mut self.capture.record_frames).range(1..=100_000).suffix(" frames"));
                 });
                 ui.separator();
                 if ui.button("Quit").clicked() {
@@ -171,15 +171,15 @@ impl State {
                 }
                 ui.separator();
                 if ui.button("History").on_hover_text("every edit of this session; click one to go back to it").clicked() {
-                    self.show_history_request = true;
+                    self.requests.history = true;
                 }
             });
             ui.menu_button("View", |ui| {
                 if ui.button("Add buffer viewer").clicked() {
-                    self.request_new_viewer = true;
+                    self.requests.new_viewer = true;
                 }
                 if ui.button("Reset panel layout").clicked() {
-                    self.request_reset_layout = true;
+                    self.requests.reset_layout = true;
                 }
                 let mut hot = self.hot.enabled();
                 if ui
@@ -193,26 +193,26 @@ impl State {
                 {
                     self.set_status(e);
                 }
-                ui.checkbox(&mut self.show_lights, "Lights in the viewport").on_hover_text(
+                ui.checkbox(&mut self.overlays.lights, "Lights in the viewport").on_hover_text(
                     "every light over the image (icon, spot cones, directions, ranges); click one to select it, \
                      drag its arrows to move it or its yellow handle to aim it (Ctrl: snap)",
                 );
-                ui.checkbox(&mut self.show_vpls, "VPL overlay (vpl.list)").on_hover_text(
+                ui.checkbox(&mut self.overlays.vpls, "VPL overlay (vpl.list)").on_hover_text(
                     "instant radiosity's VPLs as dots over the viewport, coloured by their reflected flux \
                      (the brightest at full colour); reads the list back every frame",
                 );
-                ui.checkbox(&mut self.show_hcb_samples, "HCB samples overlay (Table 1)").on_hover_text(
+                ui.checkbox(&mut self.overlays.hcb_samples, "HCB samples overlay (Table 1)").on_hover_text(
                     "the hierarchical coherence buffer's samples as white dots, larger for higher levels, \
                      with the count per level, and the covered pixels no sample reached in magenta; \
                      reads the sample list back every frame",
                 );
-                ui.checkbox(&mut self.show_soler_samples, "Soler samples overlay (Fig. 3 right)").on_hover_text(
+                ui.checkbox(&mut self.overlays.soler_samples, "Soler samples overlay (Fig. 3 right)").on_hover_text(
                     "the screen-space gather's ring samples behind the pixel under the cursor (or the first \
                      pinned probe), one colour per mip level: filled where the sample can light the pixel, \
                      hollow where it cannot (background, facing away, beyond the near field's cut); the \
                      receiver texel of each level outlined; glossy receivers' samples follow their lobe",
                 );
-                ui.checkbox(&mut self.show_gautron_records, "Gautron records overlay").on_hover_text(
+                ui.checkbox(&mut self.overlays.gautron_records, "Gautron records overlay").on_hover_text(
                     "the irradiance records as dots at P_k coloured by their irradiance E_k (the brightest \
                      at full colour), each with its influence circle of radius a·R_k; stale records \
                      (waiting to be computed again) outlined in orange; reads the records back every frame",
@@ -324,7 +324,7 @@ impl State {
             });
             ui.menu_button("Help", |ui| {
                 if ui.button("Keyboard shortcuts").clicked() {
-                    self.show_help = true;
+                    self.requests.help = true;
                 }
                 ui.label(format!("GI Lab {}", env!("CARGO_PKG_VERSION")));
             });
@@ -374,7 +374,7 @@ impl State {
                     )
                     .on_hover_text(all.join("\n\n"));
                 }
-                if let Some(r) = &self.recording {
+                if let Some(r) = &self.capture.recording {
                     ui.separator();
                     ui.colored_label(ERROR, format!("recording, {} frames left", r.remaining));
                 }
@@ -393,7 +393,7 @@ impl State {
     }
 
     pub(super) fn help_window(&mut self, ctx: &egui::Context) {
-        let mut open = self.show_help;
+        let mut open = self.requests.help;
         egui::Window::new("Keyboard shortcuts").open(&mut open).collapsible(false).show(ctx, |ui| {
             egui::Grid::new("shortcuts").striped(true).show(ui, |ui| {
                 for (k, what) in SHORTCUTS {
@@ -403,6 +403,6 @@ impl State {
                 }
             });
         });
-        self.show_help = open;
+        self.requests.help = open;
     }
 }

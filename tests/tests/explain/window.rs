@@ -32,7 +32,7 @@ fn x_over_the_viewport_explains_the_pixel_in_the_pane_and_the_overlay() {
     run_until(&mut h, 40, |a| a.state.explain.as_ref().is_some_and(|v| v.explanation().is_some()));
     let st = &h.state().state;
     let v = st.explain.as_ref().expect("X pins the hovered pixel");
-    assert_eq!(Some(v.pixel), st.hover, "the explained pixel is the hovered one");
+    assert_eq!(Some(v.pixel), st.probes.hover, "the explained pixel is the hovered one");
     let e = v.explanation().expect("the explanation arrives");
     assert!(e.total_check().relative_error() < 1e-3, "{}", e.to_text(4));
     assert!(e.contributions.iter().any(|c| c.name.starts_with("VPL ") && c.rejected.is_none()));
@@ -66,7 +66,7 @@ fn the_viewport_context_menu_explains_the_pixel_under_the_pointer() {
     let pos = egui::pos2(vp.center().x + 120.0, vp.max.y + 300.0);
     h.hover_at(pos);
     h.run_steps(2);
-    let hovered = h.state().state.hover.expect("a hovered pixel");
+    let hovered = h.state().state.probes.hover.expect("a hovered pixel");
     for pressed in [true, false] {
         h.event(egui::Event::PointerButton {
             pos,

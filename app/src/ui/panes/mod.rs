@@ -42,7 +42,7 @@ impl egui_tiles::Behavior<Pane> for Behavior<'_> {
             Pane::History => "History".into(),
             Pane::Explain => "Explain".into(),
             Pane::Viewer(id) => {
-                let name = self.state.viewers.get(id).map(|v| v.state.buffer.as_str()).unwrap_or("?");
+                let name = self.state.viewers.open.get(id).map(|v| v.state.buffer.as_str()).unwrap_or("?");
                 format!("Viewer {id}: {name}").into()
             }
         }
@@ -55,8 +55,16 @@ impl egui_tiles::Behavior<Pane> for Behavior<'_> {
             Pane::Settings => scrolled(ui, "settings", |ui| settings_ui(st, ui)),
             Pane::Scene => scrolled(ui, "scene", |ui| scene_ui(st, ui)),
             Pane::Presets => scrolled(ui, "presets", |ui| presets_ui(st, ui)),
-            Pane::Timings => timings_ui(st, ui),
-            Pane::Probe => scrolled(ui, "probe", |ui| probe_ui(st, ui)),
+            Pane::Timings => {
+                if let Ok(l) = &st.lab {
+                    timings_ui(&mut st.timings, l, ui);
+                }
+            }
+            Pane::Probe => {
+                if let Ok(l) = &st.lab {
+                    scrolled(ui, "probe", |ui| probe_ui(&mut st.probes, l, ui));
+                }
+            }
             Pane::History => scrolled(ui, "history", |ui| history::history_ui(st, ui)),
             Pane::Explain => explain::explain_ui(st, ui),
             Pane::Viewer(id) => viewer_ui(st, ui, *id),
@@ -88,15 +96,15 @@ fn scrolled(ui: &mut egui::Ui, id: &str, f: impl FnOnce(&mut egui::Ui)) {
 }
 
 fn viewer_ui(st: &mut State, ui: &mut egui::Ui, id: u32) {
-    st.visible_viewers.push(id);
+    st.viewers.visible.push(id);
     let Ok(l) = &st.lab else { return };
-    let Some(v) = st.viewers.get_mut(&id) else {
+    let Some(v) = st.viewers.open.get_mut(&id) else {
         ui.weak("this viewer was closed");
         return;
     };
-    let events = v.ui(ui, &l.renderer, &st.hover_values, id);
+    let events = v.ui(ui, &l.renderer, &st.probes.values, id);
     if let Some(p) = events.hovered_pixel {
-        st.hover = Some(p);
+        st.probes.hover = Some(p);
     }
     if let Some(p) = events.pin {
         st.pin_probe(p);

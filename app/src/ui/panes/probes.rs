@@ -2,21 +2,22 @@
 
 use egui_plot::{Line, Plot, PlotPoints};
 
-use crate::ui::state::State;
+use crate::ui::lab::Lab;
+use crate::ui::state::Probes;
 
-pub(super) fn probe_ui(st: &mut State, ui: &mut egui::Ui) {
-    let Ok(l) = &st.lab else { return };
+/// The pane reads the lab's buffer names and its own part of the state, nothing else.
+pub(super) fn probe_ui(probes: &mut Probes, l: &Lab, ui: &mut egui::Ui) {
     let names = l.renderer.buffers().names();
     ui.horizontal(|ui| {
         ui.heading("Hovered pixel");
-        match st.hover {
+        match probes.hover {
             Some((x, y)) => ui.monospace(format!("({x}, {y})")),
             None => ui.weak("hover the viewport or a viewer"),
         };
     });
-    if !st.hover_values.is_empty() {
+    if !probes.values.is_empty() {
         egui::Grid::new("hover_values").striped(true).num_columns(3).show(ui, |ui| {
-            for v in &st.hover_values {
+            for v in &probes.values {
                 ui.monospace(&v.name);
                 ui.monospace(format!("({}, {})", v.texel.0, v.texel.1));
                 ui.monospace(format_value(v.value));
@@ -26,11 +27,11 @@ pub(super) fn probe_ui(st: &mut State, ui: &mut egui::Ui) {
     }
     ui.separator();
     ui.heading("Pinned probes");
-    if st.pinned.is_empty() {
+    if probes.pinned.is_empty() {
         ui.weak("click the viewport or a viewer to pin a probe; its value is plotted over the last frames");
     }
     let mut remove = None;
-    for (k, p) in st.pinned.iter_mut().enumerate() {
+    for (k, p) in probes.pinned.iter_mut().enumerate() {
         ui.horizontal(|ui| {
             ui.strong(format!("{} at ({}, {})", k + 1, p.pixel.0, p.pixel.1));
             crate::ui::viewer::buffer_picker(ui, 1000 + k as u32, &names, &mut p.buffer);
@@ -41,7 +42,7 @@ pub(super) fn probe_ui(st: &mut State, ui: &mut egui::Ui) {
                 remove = Some(k);
             }
         });
-        if let Some(h) = st.probe_history.get(k) {
+        if let Some(h) = probes.history.get(k) {
             if let Some(last) = h.back() {
                 ui.monospace(format!("{} = {}", p.buffer, format_value(*last)));
             }
@@ -58,10 +59,7 @@ pub(super) fn probe_ui(st: &mut State, ui: &mut egui::Ui) {
         }
     }
     if let Some(k) = remove {
-        st.pinned.remove(k);
-        if k < st.probe_history.len() {
-            st.probe_history.remove(k);
-        }
+        probes.unpin(k);
     }
 }
 

@@ -2,10 +2,11 @@
 
 use egui_plot::{Legend, Line, Plot, PlotPoints};
 
-use crate::ui::state::State;
+use crate::ui::lab::Lab;
+use crate::ui::state::Timings;
 
-pub(super) fn timings_ui(st: &mut State, ui: &mut egui::Ui) {
-    let Ok(l) = &st.lab else { return };
+/// The pane reads the lab's renderer and its own part of the state, nothing else.
+pub(super) fn timings_ui(timings: &mut Timings, l: &Lab, ui: &mut egui::Ui) {
     let mut hovered = None;
     ui.horizontal_top(|ui| {
         ui.vertical(|ui| {
@@ -41,8 +42,8 @@ pub(super) fn timings_ui(st: &mut State, ui: &mut egui::Ui) {
             ui,
             |plot| {
                 for name in names {
-                    let points: PlotPoints = st
-                        .timing_history
+                    let points: PlotPoints = timings
+                        .history
                         .iter()
                         .enumerate()
                         .filter_map(|(i, ts)| ts.iter().find(|t| t.name == name).map(|t| [i as f64, t.ms]))
@@ -52,7 +53,7 @@ pub(super) fn timings_ui(st: &mut State, ui: &mut egui::Ui) {
             },
         );
     });
-    st.hovered_pass = hovered;
+    timings.hovered_pass = hovered;
 }
 
 /// Stages 3–7 of the frame as the list of steps the stage choices compose (`gi_render::chain`),

@@ -22,16 +22,16 @@ pub(super) fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
         egui::Color32::WHITE,
     );
     ab_overlay(st, ui, rect);
-    if st.show_vpls {
+    if st.overlays.vpls {
         vpl_overlay(st, ui, rect);
     }
-    if st.show_hcb_samples {
+    if st.overlays.hcb_samples {
         hcb_overlay(st, ui, rect);
     }
-    if st.show_soler_samples {
+    if st.overlays.soler_samples {
         soler_overlay(st, ui, rect);
     }
-    if st.show_gautron_records {
+    if st.overlays.gautron_records {
         records_overlay(st, ui, rect);
     }
     if let (Some(v), Ok(l)) = (&st.explain, &st.lab)
@@ -41,7 +41,7 @@ pub(super) fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
     }
     // The lights and their handles, on top of the image's response (they take its clicks
     // and drags where they are).
-    if st.show_lights
+    if st.overlays.lights
         && let Ok(l) = &mut st.lab
     {
         super::light_gizmo::light_gizmos(l, ui, rect);
@@ -74,22 +74,22 @@ pub(super) fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
     // The hovered pixel of the render (for the probe); a click pins it.
     if let Some(p) = response.hover_pos() {
         let uv = (p - rect.min) / rect.size();
-        st.hover = Some((
+        st.probes.hover = Some((
             (uv.x * w as f32).clamp(0.0, w as f32 - 1.0) as u32,
             (uv.y * h as f32).clamp(0.0, h as f32 - 1.0) as u32,
         ));
     }
     if response.clicked()
-        && let Some(p) = st.hover
+        && let Some(p) = st.probes.hover
     {
         st.pin_probe(p);
     }
     // Explain a pixel (issue #42): the context menu, or X over the image.
     if response.secondary_clicked() {
-        st.context_pixel = st.hover;
+        st.probes.context_pixel = st.probes.hover;
     }
     response.context_menu(|ui| {
-        let Some(p) = st.context_pixel else {
+        let Some(p) = st.probes.context_pixel else {
             ui.weak("no pixel under the pointer");
             return;
         };
@@ -109,12 +109,12 @@ pub(super) fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
     if response.hovered()
         && !ui.ctx().egui_wants_keyboard_input()
         && ui.input_mut(|i| i.consume_key(egui::Modifiers::NONE, egui::Key::X))
-        && let Some(p) = st.hover
+        && let Some(p) = st.probes.hover
     {
         st.explain_pixel(p);
     }
     // Pinned probes as numbered rings.
-    for (k, p) in st.pinned.iter().enumerate() {
+    for (k, p) in st.probes.pinned.iter().enumerate() {
         let pos = rect.min
             + egui::vec2((p.pixel.0 as f32 + 0.5) / w as f32, (p.pixel.1 as f32 + 0.5) / h as f32) * rect.size();
         ui.painter().circle_stroke(pos, 6.0, egui::Stroke::new(2.0, egui::Color32::YELLOW));
@@ -277,7 +277,7 @@ fn soler_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
         );
         painter.galley(pos, galley, egui::Color32::WHITE);
     };
-    let Some(pixel) = st.pinned.first().map(|p| p.pixel).or(st.hover) else {
+    let Some(pixel) = st.probes.pinned.first().map(|p| p.pixel).or(st.probes.hover) else {
         text("Soler samples: hover the image (or pin a probe) to see the samples behind a pixel".into());
         return;
     };

@@ -32,14 +32,14 @@ impl State {
         match std::fs::create_dir_all(&dir) {
             Ok(()) => {
                 self.set_status(format!("recording {frames} frames to {}", dir.display()));
-                self.recording = Some(Recording { dir, remaining: frames, index: 0 });
+                self.capture.recording = Some(Recording { dir, remaining: frames, index: 0 });
             }
             Err(e) => self.set_status(format!("cannot record to {}: {e}", dir.display())),
         }
     }
 
     pub(in crate::ui) fn record_step(&mut self) {
-        let (Some(rec), Ok(l)) = (&mut self.recording, &self.lab) else { return };
+        let (Some(rec), Ok(l)) = (&mut self.capture.recording, &self.lab) else { return };
         let path = rec.dir.join(format!("frame-{:05}.png", rec.index));
         let r = l.renderer.readback("final.ldr").map_err(|e| e.to_string()).and_then(|img| {
             gi_render::image_io::save_png(&path, &img, gi_render::BufferKind::Ldr).map_err(|e| e.to_string())
@@ -50,10 +50,10 @@ impl State {
         let dir = rec.dir.clone();
         let count = rec.index;
         if let Err(e) = r {
-            self.recording = None;
+            self.capture.recording = None;
             self.set_status(format!("recording stopped: {e}"));
         } else if done {
-            self.recording = None;
+            self.capture.recording = None;
             self.set_status(format!("recorded {count} frames to {}", dir.display()));
         }
     }

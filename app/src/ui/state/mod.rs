@@ -1,26 +1,23 @@
 //! The window's state besides the tile tree, and its frame loop: rendering, probes, viewers,
 //! shader hot reload, A/B, scene opening and dropped files.
 
-use std::collections::{BTreeMap, VecDeque};
 use std::path::PathBuf;
-use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-use gi_render::buffers::ProbeValue;
 use gi_render::passes::view::ViewPipeline;
-use gi_render::readback::{Readback, Readout};
-use gi_render::timing::PassTiming;
 
 use crate::args::AppArgs;
-use crate::ui::capture::Recording;
 use crate::ui::lab::Lab;
-use crate::ui::session::{Bookmark, PinnedProbe, Session};
+use crate::ui::session::{Bookmark, Session};
 use crate::ui::state::presets::PresetState;
 use crate::ui::viewer::{Viewer, ViewerState};
 
 pub mod capture;
 pub mod history;
+pub mod parts;
 pub mod presets;
+
+pub use parts::{Captures, Overlays, Probes, Requests, Timings, Viewers};
 
 /// Everything but the tile tree (so that the tree's behaviour can borrow it).
 pub struct State {
@@ -28,22 +25,19 @@ pub struct State {
     pub config_dir: Option<PathBuf>,
     pub lab: Result<Lab, String>,
     pub session: Session,
-    pub viewers: BTreeMap<u32, Viewer>,
-    pub(super) view_pipeline: Option<Arc<ViewPipeline>>,
-    /// A viewer used by the viewport to show a hovered pass's output.
-    pub(super) pass_view: Option<Viewer>,
+    /// The buffer viewers.
+    pub viewers: Viewers,
+    /// The hovered and pinned pixel probes.
+    pub probes: Probes,
+    /// The timings pane's history.
+    pub timings: Timings,
+    /// What the View menu draws over the viewport.
+    pub overlays: Overlays,
+    /// What a menu or pane asked of the app (the layout is the app's).
+    pub requests: Requests,
+    /// Recordings and the window's screenshot.
+    pub capture: Captures,
     pub preset: PresetState,
-    /// The hovered frame pixel (viewport or a viewer) and every buffer's value there.
-    pub hover: Option<(u32, u32)>,
-    pub hover_values: Vec<ProbeValue>,
-    pub pinned: Vec<PinnedProbe>,
-    /// Per pinned probe: the chosen buffer's value over the last frames.
-    pub probe_history: Vec<VecDeque<[f32; 4]>>,
-    /// The frame of the last probe values taken in (they arrive without waiting, late).
-    pub probe_frame: u64,
-    pub timing_history: VecDeque<Vec<PassTiming>>,
-    /// The pass whose row the pointer is over in the timings panel.
-    pub hovered_pass: Option<String>,
     /// Viewport size in physical pixels (the render size is this × the render scale).
     pub viewport_px: (u32, u32),
     /// Where the viewport was drawn last frame (points).
@@ -52,36 +46,14 @@ pub struct State {
     pub render_size_override: Option<(u32, u32)>,
     pub status: Option<(String, Instant)>,
     pub frames: u64,
-    pub recording: Option<Recording>,
     pub bookmark_name: String,
     /// Path typed in the scene panel (when no file dialog is available).
     pub scene_path_text: String,
-    pub record_frames: u32,
-    /// Panels the tree drew last frame (viewers not shown are not updated).
-    pub visible_viewers: Vec<u32>,
-    pub show_help: bool,
-    /// View → VPL overlay: instant radiosity's VPLs (`vpl.list`) as dots over the viewport.
-    pub show_vpls: bool,
-    /// Draw the HCB's samples over the viewport (Nguyen et al.'s white dots).
-    pub show_hcb_samples: bool,
-    /// View → Soler samples overlay: the ring samples of the hovered pixel per level (004
-    /// Fig. 3 right).
-    pub show_soler_samples: bool,
-    /// View → Gautron records overlay: the irradiance records as dots coloured by E_k with
-    /// their influence circles a·R_k (003, "From Octree to Splatting").
-    pub show_gautron_records: bool,
-    /// View → Lights in the viewport: every light drawn over the image, the selected one
-    /// with its move and aim handles (issue #39 point 2).
-    pub show_lights: bool,
     /// The A/B comparison, when one runs.
     pub ab: Option<crate::ui::ab::Ab>,
     /// The comparison grid, when open (View → Compare grid; issue #40 point 1).
     pub grid: Option<crate::ui::grid::Grid>,
     pub hot: crate::ui::hot_reload::HotReload,
-    pub request_new_viewer: bool,
-    pub request_reset_layout: bool,
-    pub(super) screenshot: Arc<Mutex<Option<Arc<egui::ColorImage>>>>,
-    pub(super) screenshot_requested: bool,
     pub(super) last_autosave: Instant,
     /// What the lab said when its GPU device was lost (it saved the session and restarts).
     pub device_lost: Option<String>,
@@ -97,14 +69,8 @@ pub struct State {
     pub settings_search: String,
     /// Undo and redo (issue #39 point 1).
     pub history: crate::ui::state::history::History,
-    /// Edit → History asked for the History pane (the app owns the layout).
-    pub show_history_request: bool,
     /// The pinned pixel explained (issue #42), when one is.
     pub explain: Option<crate::ui::explain::ExplainView>,
-    /// The pixel under the pointer when the viewport's context menu opened.
-    pub context_pixel: Option<(u32, u32)>,
-    /// An explain pin asked for the Explain pane.
-    pub show_explain_request: bool,
 }
 
 impl State {
@@ -127,7 +93,7 @@ impl State {
             if let Some(p) = &path {
                 Session::remember(&mut self.session.recent_scenes, p);
             }
-            self.pass_view = None;
+            self.viewers.pass_view = None;
             // What the lab chose for the scene: its light (issue #18), the view and the unit
             // (issue #37).
             if let Some(note) = self.lab.as_ref().ok().and_then(|l| scene_note(l.renderer.scene())) {
@@ -177,11 +143,11 @@ impl State {
                 let mut rebuilt: Vec<String> = passes.iter().map(|p| p.to_string()).collect();
                 if changes.entries.iter().any(|e| e.starts_with("view/")) {
                     // The viewers' pipeline: new views from the new source.
-                    self.view_pipeline = None;
-                    for v in self.viewers.values_mut() {
+                    self.viewers.pipeline = None;
+                    for v in self.viewers.open.values_mut() {
                         v.reset_gpu();
                     }
-                    self.pass_view = None;
+                    self.viewers.pass_view = None;
                     rebuilt.push("buffer viewers".into());
                 }
                 let m = format!("reloaded {}, rebuilt {}", changes.files.join(", "), rebuilt.join(", "));
@@ -239,70 +205,23 @@ impl State {
             let now = Instant::now();
             l.frame_ms = (now - l.last_frame).as_secs_f32() * 1e3;
             l.last_frame = now;
-            self.timing_history.push_back(l.renderer.timings().to_vec());
-            while self.timing_history.len() > self.session.history_frames.max(2) {
-                self.timing_history.pop_front();
-            }
+            self.timings.push(l.renderer.timings().to_vec(), self.session.history_frames);
         }
-        // Probes: the hovered pixel and every pinned one, in one readback.
-        let mut points: Vec<(u32, u32)> = self.hover.into_iter().collect();
-        points.extend(self.pinned.iter().map(|p| p.pixel));
-        points.truncate(gi_render::buffers::PROBE_MAX_POINTS);
-        let (fw, fh) = l.renderer.size();
-        let points: Vec<(u32, u32)> = points.into_iter().map(|(x, y)| (x.min(fw - 1), y.min(fh - 1))).collect();
-        // Read without waiting (issue #38): the values arrive a frame or two late; the tag says
-        // which points they are, so that a pin added or removed meanwhile is not misread.
-        let tag = |hover: bool| probe_tag(hover, self.pinned.iter().map(|p| p.pixel));
-        let arrived = if points.is_empty() {
-            l.renderer.read_latest("probe")
-        } else {
-            l.renderer.read_later("probe", Readback::Probe(points), tag(self.hover.is_some()))
-        };
-        match arrived.as_deref().map(|a| (a.frame, a.tag, &a.data)) {
-            Some((frame, t, Ok(Readout::Probe(values)))) if frame != self.probe_frame => {
-                self.probe_frame = frame;
-                let had_hover = t == tag(true);
-                let pins_same = had_hover || t == tag(false);
-                let mut values = values.iter();
-                self.hover_values = match (had_hover, self.hover.is_some()) {
-                    (true, true) => values.next().cloned().unwrap_or_default(),
-                    (true, false) => {
-                        values.next();
-                        Vec::new()
-                    }
-                    _ => Vec::new(),
-                };
-                if pins_same {
-                    self.probe_history.resize_with(self.pinned.len(), VecDeque::new);
-                    for ((p, h), vals) in self.pinned.iter().zip(&mut self.probe_history).zip(values) {
-                        let v = vals.iter().find(|v| v.name == p.buffer).map(|v| v.value).unwrap_or([f32::NAN; 4]);
-                        h.push_back(v);
-                        while h.len() > self.session.history_frames.max(2) {
-                            h.pop_front();
-                        }
-                    }
-                }
-            }
-            Some((frame, _, Err(e))) if frame != self.probe_frame => {
-                self.probe_frame = frame;
-                self.status = Some((format!("probe: {e}"), Instant::now()));
-            }
-            _ => {}
+        // Probes: the hovered pixel and every pinned one, in one read-back.
+        if let Some(e) = self.probes.update(&mut l.renderer, self.session.history_frames) {
+            self.status = Some((e, Instant::now()));
         }
-        if self.hover.is_none() {
-            self.hover_values.clear();
-        }
-        let pipeline = self.view_pipeline.get_or_insert_with(|| ViewPipeline::new(&l.renderer.ctx)).clone();
-        for id in &self.visible_viewers {
-            if let Some(v) = self.viewers.get_mut(id) {
+        let pipeline = self.viewers.pipeline.get_or_insert_with(|| ViewPipeline::new(&l.renderer.ctx)).clone();
+        for id in &self.viewers.visible {
+            if let Some(v) = self.viewers.open.get_mut(id) {
                 v.update(&l.renderer, &pipeline, &l.render_state);
             }
         }
         // The viewport shows the hovered pass's output instead of the final image.
-        if let Some(pass) = &self.hovered_pass
+        if let Some(pass) = &self.timings.hovered_pass
             && let Some(buffer) = gi_render::renderer::scope_output(pass)
         {
-            let v = self.pass_view.get_or_insert_with(|| Viewer::new(ViewerState::default()));
+            let v = self.viewers.pass_view.get_or_insert_with(|| Viewer::new(ViewerState::default()));
             if v.state.buffer != buffer {
                 v.show_buffer(&l.renderer, buffer);
                 if v.state.view.mode != gi_render::passes::view::ViewMode::Rgb
@@ -326,7 +245,7 @@ impl State {
     /// The viewport's texture this frame: the hovered pass's output or the final image.
     pub fn viewport_texture(&mut self) -> Option<(egui::TextureId, (u32, u32), Option<String>)> {
         let l = self.lab.as_mut().ok()?;
-        if let (Some(pass), Some(v)) = (&self.hovered_pass, &self.pass_view)
+        if let (Some(pass), Some(v)) = (&self.timings.hovered_pass, &self.viewers.pass_view)
             && let Some(out) = v.output_texture()
         {
             let size = (out.width(), out.height());
@@ -334,10 +253,10 @@ impl State {
             return Some((id, size, Some(format!("{pass}: {}", v.state.buffer))));
         }
         let out = l.renderer.final_ldr().clone();
-        let force =
-            l.texture.is_some_and(|(_, s)| s == (0, 0)) || self.pass_view.is_some() && self.hovered_pass.is_none();
-        if self.hovered_pass.is_none() {
-            self.pass_view = None;
+        let force = l.texture.is_some_and(|(_, s)| s == (0, 0))
+            || self.viewers.pass_view.is_some() && self.timings.hovered_pass.is_none();
+        if self.timings.hovered_pass.is_none() {
+            self.viewers.pass_view = None;
         }
         let id = l.show_texture(&out, force);
         Some((id, (out.width(), out.height()), None))
@@ -361,13 +280,11 @@ impl State {
     }
 
     pub fn pin_probe(&mut self, pixel: (u32, u32)) {
-        if self.pinned.len() + 1 >= gi_render::buffers::PROBE_MAX_POINTS {
-            self.set_status("too many pinned probes");
-            return;
+        let buffer =
+            self.viewers.open.values().next().map(|v| v.state.buffer.clone()).unwrap_or_else(|| "final.hdr".into());
+        if let Err(e) = self.probes.pin(pixel, buffer) {
+            self.set_status(e);
         }
-        let buffer = self.viewers.values().next().map(|v| v.state.buffer.clone()).unwrap_or_else(|| "final.hdr".into());
-        self.pinned.push(PinnedProbe { pixel, buffer, channel: 0 });
-        self.probe_history.push(VecDeque::new());
     }
 
     /// Explains `pixel` (frame pixels): pins it and shows the Explain pane.
@@ -378,7 +295,7 @@ impl State {
             (v.show_rejected, v.overlay) = (rejected, overlay);
         }
         self.explain = Some(v);
-        self.show_explain_request = true;
+        self.requests.explain = true;
     }
 
     pub fn add_bookmark(&mut self) {
@@ -433,16 +350,4 @@ pub fn scene_note(scene: &gi_render::scene::Scene) -> Option<String> {
         parts.push(u.clone());
     }
     (!parts.is_empty()).then(|| parts.join(" · "))
-}
-
-/// Which points a probe read-back was asked for: whether the hovered pixel came first, and
-/// the pinned pixels.
-fn probe_tag(hover: bool, pins: impl Iterator<Item = (u32, u32)>) -> u64 {
-    use std::hash::{Hash, Hasher};
-    let mut h = std::collections::hash_map::DefaultHasher::new();
-    hover.hash(&mut h);
-    for p in pins {
-        p.hash(&mut h);
-    }
-    h.finish()
 }
