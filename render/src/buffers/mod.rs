@@ -13,7 +13,7 @@ use crate::gpu::GpuContext;
 
 mod probe;
 
-pub use probe::{DepthProbe, PROBE_MAX_POINTS, ProbeJobs};
+pub use probe::{DepthProbe, PROBE_INPUTS_BINDINGS, PROBE_MAX_POINTS, ProbeJobs};
 
 /// How a buffer's values should be shown when turned into an 8-bit image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

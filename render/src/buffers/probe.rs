@@ -6,6 +6,21 @@ use crate::counters::prelude::*;
 use glam::UVec4;
 
 use crate::gpu::GpuContext;
+use crate::gpu::bindings::{Bindings, Kind, binding};
+
+/// Bind group `probe.inputs` of `shaders/view/probe.wgsl` (group 0).
+pub const PROBE_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "probe.inputs",
+    shader: "view/probe.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "jobs", Kind::Uniform),
+        binding(1, "depth_2d", Kind::Depth),
+        binding(2, "depth_array", Kind::DepthArray),
+        binding(3, "values", Kind::Storage { read_only: false }),
+    ],
+};
 
 /// Most texels one probe dispatch reads (`texels` in `shaders/view/probe.wgsl`).
 pub const PROBE_MAX_POINTS: usize = 64;
@@ -30,16 +45,7 @@ pub struct DepthProbe {
 impl DepthProbe {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("probe.inputs"),
-            entries: &[
-                crate::gpu::bgl::uniform(0, cs),
-                crate::gpu::bgl::depth(1, cs),
-                crate::gpu::bgl::depth_array(2, cs),
-                crate::gpu::bgl::storage(3, cs, false),
-            ],
-        });
+        let layout = PROBE_INPUTS_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "view/probe.wgsl");
         let pipeline = crate::gpu::compute_pipeline(device, "probe.depth", &module, "probe_depth", &[&layout]);
         let dummy = |label: &str, layers: u32, dimension| {
@@ -102,16 +108,16 @@ impl DepthProbe {
             ..Default::default()
         });
         let (v2, va) = if array { (&self.dummy_2d, &view) } else { (&view, &self.dummy_array) };
-        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("probe.inputs"),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(v2) },
-                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(va) },
-                wgpu::BindGroupEntry { binding: 3, resource: values.as_entire_binding() },
+        let group = PROBE_INPUTS_BINDINGS.group(
+            &ctx.device,
+            &self.layout,
+            [
+                uniform.as_entire_binding(),
+                wgpu::BindingResource::TextureView(v2),
+                wgpu::BindingResource::TextureView(va),
+                values.as_entire_binding(),
             ],
-        });
+        );
         let mut pass = encoder
             .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("probe.depth"), timestamp_writes: None });
         pass.set_pipeline(&self.pipeline);

@@ -16,8 +16,24 @@ use super::gbuffer::GBufferViews;
 use super::shadow::LightSetup;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 pub use crate::settings::direct::*;
 use crate::timing::PassRec;
+
+/// Bind group `direct.gbuffer` of `shaders/direct/direct.wgsl` (group 1).
+pub const DIRECT_GBUFFER_BINDINGS: Bindings = Bindings {
+    label: "direct.gbuffer",
+    shader: "direct/direct.wgsl",
+    group: 1,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "g_position", Kind::Texture { filterable: false }),
+        binding(1, "g_normal", Kind::Texture { filterable: false }),
+        binding(2, "g_albedo", Kind::Texture { filterable: false }),
+        binding(3, "g_material", Kind::Texture { filterable: false }),
+        binding(4, "out_radiance", Kind::StorageTexture(wgpu::TextureFormat::Rgba16Float)),
+    ],
+};
 
 /// Uniform of the direct pass; WGSL twin: `Params` in `shaders/direct/direct.wgsl`.
 #[repr(C)]
@@ -99,16 +115,7 @@ impl DirectPass {
                 crate::gpu::bgl::depth(8, cs),
             ],
         });
-        let layout1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("direct.gbuffer"),
-            entries: &[
-                crate::gpu::bgl::texture(0, cs, false),
-                crate::gpu::bgl::texture(1, cs, false),
-                crate::gpu::bgl::texture(2, cs, false),
-                crate::gpu::bgl::texture(3, cs, false),
-                crate::gpu::bgl::storage_texture(4, RADIANCE_FORMAT),
-            ],
-        });
+        let layout1 = DIRECT_GBUFFER_BINDINGS.layout(device);
         let pipeline = super::compute_pipeline(device, "direct.pipeline", &module, "cs_main", &[&layout0, &layout1]);
         let layout2 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("direct.atlas"),
@@ -305,17 +312,17 @@ impl DirectPass {
             ],
         });
         let tv = wgpu::BindingResource::TextureView;
-        let group1 = device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("direct.gbuffer"),
-            layout: &self.layout1,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: tv(&gbuffer.position) },
-                wgpu::BindGroupEntry { binding: 1, resource: tv(&gbuffer.normal) },
-                wgpu::BindGroupEntry { binding: 2, resource: tv(&gbuffer.albedo) },
-                wgpu::BindGroupEntry { binding: 3, resource: tv(&gbuffer.material) },
-                wgpu::BindGroupEntry { binding: 4, resource: tv(&self.radiance_view) },
+        let group1 = DIRECT_GBUFFER_BINDINGS.group(
+            device,
+            &self.layout1,
+            [
+                tv(&gbuffer.position),
+                tv(&gbuffer.normal),
+                tv(&gbuffer.albedo),
+                tv(&gbuffer.material),
+                tv(&self.radiance_view),
             ],
-        });
+        );
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("direct.pass"),
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),

@@ -101,6 +101,18 @@ pub const BINDINGS: &[&crate::gpu::bindings::Bindings] = &[
     &knecht::temporal::CONFIDENCE_BINDINGS,
     &knecht::vpl_bounce::BOUNCE_BINDINGS,
     &reference::vpl::SAMPLE_BINDINGS,
+    &direct::DIRECT_GBUFFER_BINDINGS,
+    &hcb::build::LEVEL_INPUTS_BINDINGS,
+    &hcb::build::SAMPLES_INPUTS_BINDINGS,
+    &hcb::cache::CACHE_INPUTS_BINDINGS,
+    &hcb::cache::CACHE_ARGS_BINDINGS,
+    &hcb::cache::CACHE_REMOVAL_INPUTS_BINDINGS,
+    &knecht::ism::RESOLVE_INPUTS_BINDINGS,
+    &hcb::splat::NORMALIZE_INPUTS_BINDINGS,
+    &hcb::gather::GATHER_INPUTS_BINDINGS,
+    &crate::buffers::PROBE_INPUTS_BINDINGS,
+    &reference::vpl_visibility::SHADOW_INPUTS_BINDINGS,
+    &shadow::DIRECT_SHADOW_VIEW_BINDINGS,
 ];
 
 /// A 2D render/storage target with the usages every registered buffer needs (sampling,

@@ -10,8 +10,18 @@ use glam::{Mat4, Vec3, Vec4};
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::scene::upload::GpuScene;
 use crate::scene::{Aabb, LightKind, SceneState, WorldLight};
+
+/// Bind group `direct.shadow.view` of `shaders/shadow/shadow.wgsl` (group 0).
+pub const DIRECT_SHADOW_VIEW_BINDINGS: Bindings = Bindings {
+    label: "direct.shadow.view",
+    shader: "shadow/shadow.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::VERTEX,
+    list: &[binding(0, "view", Kind::UniformDynamic)],
+};
 
 /// Light record; WGSL twin: `Light` in `shaders/common/lights.wgsl`.
 #[repr(C)]
@@ -185,10 +195,7 @@ impl ShadowPass {
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
         let device = &ctx.device;
         let module = crate::shaders::create_module(device, "shadow/shadow.wgsl");
-        let view_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("direct.shadow.view"),
-            entries: &[crate::gpu::bgl::uniform_dynamic(0, wgpu::ShaderStages::VERTEX)],
-        });
+        let view_layout = DIRECT_SHADOW_VIEW_BINDINGS.layout(device);
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("direct.shadow.layout"),
             bind_group_layouts: &[Some(&view_layout), Some(&scene.instance_layout), Some(&scene.material_layout)],

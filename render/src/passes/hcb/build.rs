@@ -7,8 +7,45 @@ use bytemuck::Zeroable;
 use super::{GpuHcbSample, HcbFrame, HcbLevel, HcbParams, MAX_LEVELS, STRIDE};
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::timing::PassRec;
+
+/// Bind group `hcb.level.inputs` of `shaders/hcb/base.wgsl` (group 0).
+pub const LEVEL_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "hcb.level.inputs",
+    shader: "hcb/base.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "hp", Kind::UniformDynamic),
+        binding(1, "g_position", Kind::Texture { filterable: false }),
+        binding(2, "g_normal", Kind::Texture { filterable: false }),
+        binding(3, "out_position", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(4, "out_normal", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(5, "weight_sum", Kind::Texture { filterable: false }),
+        binding(6, "out_incomplete", Kind::StorageTexture(wgpu::TextureFormat::R32Float)),
+    ],
+};
+
+/// Bind group `hcb.samples.inputs` of `shaders/hcb/samples.wgsl` (group 0).
+pub const SAMPLES_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "hcb.samples.inputs",
+    shader: "hcb/samples.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "hp", Kind::UniformDynamic),
+        binding(1, "level_normal", Kind::Texture { filterable: false }),
+        binding(2, "mask_out", Kind::StorageTexture(wgpu::TextureFormat::R32Float)),
+        binding(3, "mask_in", Kind::Texture { filterable: false }),
+        binding(4, "samples_out", Kind::StorageTexture(wgpu::TextureFormat::R32Float)),
+        binding(5, "counter", Kind::Storage { read_only: false }),
+        binding(6, "level_position", Kind::Texture { filterable: false }),
+        binding(7, "list", Kind::Storage { read_only: false }),
+        binding(8, "cache_out", Kind::StorageTexture(wgpu::TextureFormat::R32Float)),
+        binding(9, "group_out", Kind::StorageTexture(wgpu::TextureFormat::R32Float)),
+    ],
+};
 
 /// The cache's textures the HCB build writes (§5.2): with them, level 0 is the supplementary
 /// G-buffer (n^w = ±1 from `weight_sum`'s Σw), `incomplete` marks the incomplete texels and
@@ -64,36 +101,9 @@ pub fn level_sizes(width: u32, height: u32, levels: u32) -> Vec<(u32, u32)> {
 impl HcbPass {
     pub fn new(ctx: &GpuContext, width: u32, height: u32, levels: u32) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let rgba = wgpu::TextureFormat::Rgba32Float;
         let r32 = wgpu::TextureFormat::R32Float;
-        let io_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("hcb.level.inputs"),
-            entries: &[
-                bgl::uniform_dynamic(0, cs),
-                bgl::texture(1, cs, false),
-                bgl::texture(2, cs, false),
-                bgl::storage_texture(3, rgba),
-                bgl::storage_texture(4, rgba),
-                bgl::texture(5, cs, false),
-                bgl::storage_texture(6, r32),
-            ],
-        });
-        let sample_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("hcb.samples.inputs"),
-            entries: &[
-                bgl::uniform_dynamic(0, cs),
-                bgl::texture(1, cs, false),
-                bgl::storage_texture(2, r32),
-                bgl::texture(3, cs, false),
-                bgl::storage_texture(4, r32),
-                bgl::storage(5, cs, false),
-                bgl::texture(6, cs, false),
-                bgl::storage(7, cs, false),
-                bgl::storage_texture(8, r32),
-                bgl::storage_texture(9, r32),
-            ],
-        });
+        let io_layout = LEVEL_INPUTS_BINDINGS.layout(device);
+        let sample_layout = SAMPLES_INPUTS_BINDINGS.layout(device);
         let m_base = crate::shaders::create_module(device, "hcb/base.wgsl");
         let m_build = crate::shaders::create_module(device, "hcb/build.wgsl");
         let m_samples = crate::shaders::create_module(device, "hcb/samples.wgsl");
@@ -249,22 +259,22 @@ impl HcbPass {
             size: std::num::NonZeroU64::new(std::mem::size_of::<HcbParams>() as u64),
         });
         let [normal, mask_out, mask_in, samples, position, cache, group] = views;
-        ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("hcb.samples.inputs"),
-            layout: &self.sample_layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: uniform },
-                wgpu::BindGroupEntry { binding: 1, resource: tv(normal) },
-                wgpu::BindGroupEntry { binding: 2, resource: tv(mask_out) },
-                wgpu::BindGroupEntry { binding: 3, resource: tv(mask_in) },
-                wgpu::BindGroupEntry { binding: 4, resource: tv(samples) },
-                wgpu::BindGroupEntry { binding: 5, resource: self.counter.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 6, resource: tv(position) },
-                wgpu::BindGroupEntry { binding: 7, resource: self.list.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 8, resource: tv(cache) },
-                wgpu::BindGroupEntry { binding: 9, resource: tv(group) },
+        SAMPLES_INPUTS_BINDINGS.group(
+            &ctx.device,
+            &self.sample_layout,
+            [
+                uniform,
+                tv(normal),
+                tv(mask_out),
+                tv(mask_in),
+                tv(samples),
+                self.counter.as_entire_binding(),
+                tv(position),
+                self.list.as_entire_binding(),
+                tv(cache),
+                tv(group),
             ],
-        })
+        )
     }
 
     /// Clears `hcb.samples` and the cache's `recompute_group` before the cache pass marks the
@@ -336,19 +346,11 @@ impl HcbPass {
                         d: &wgpu::TextureView,
                         weights: &wgpu::TextureView,
                         marks: &wgpu::TextureView| {
-            ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("hcb.level.inputs"),
-                layout: &self.io_layout,
-                entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: uniform.clone() },
-                    wgpu::BindGroupEntry { binding: 1, resource: tv(a) },
-                    wgpu::BindGroupEntry { binding: 2, resource: tv(b) },
-                    wgpu::BindGroupEntry { binding: 3, resource: tv(c) },
-                    wgpu::BindGroupEntry { binding: 4, resource: tv(d) },
-                    wgpu::BindGroupEntry { binding: 5, resource: tv(weights) },
-                    wgpu::BindGroupEntry { binding: 6, resource: tv(marks) },
-                ],
-            })
+            LEVEL_INPUTS_BINDINGS.group(
+                &ctx.device,
+                &self.io_layout,
+                [uniform.clone(), tv(a), tv(b), tv(c), tv(d), tv(weights), tv(marks)],
+            )
         };
         let views: Vec<(wgpu::TextureView, wgpu::TextureView, wgpu::TextureView)> =
             self.levels.iter().map(|l| (view(&l.position), view(&l.normal), view(&l.mask))).collect();

@@ -14,9 +14,53 @@ use glam::Vec4;
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::hcb::{COUNTER_BYTES, CacheViews, GpuHcbSample, HcbPass};
 use crate::timing::PassRec;
+
+/// Bind group `hcb.cache.inputs` of `shaders/hcb/cache.wgsl` (group 0).
+pub const CACHE_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "hcb.cache.inputs",
+    shader: "hcb/cache.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "camera", Kind::Uniform),
+        binding(1, "cp", Kind::Uniform),
+        binding(2, "prev_counter", Kind::Storage { read_only: false }),
+        binding(3, "prev", Kind::Storage { read_only: false }),
+        binding(4, "g_position", Kind::Texture { filterable: false }),
+        binding(5, "g_normal", Kind::Texture { filterable: false }),
+        binding(6, "counter", Kind::Storage { read_only: false }),
+        binding(7, "list", Kind::Storage { read_only: false }),
+        binding(8, "removal", Kind::Texture { filterable: false }),
+        binding(9, "samples_out", Kind::StorageTexture(wgpu::TextureFormat::R32Float)),
+        binding(10, "group_out", Kind::StorageTexture(wgpu::TextureFormat::R32Float)),
+        binding(11, "queue", Kind::Storage { read_only: false }),
+    ],
+};
+
+/// Bind group `hcb.cache.args` of `shaders/hcb/cache.wgsl` (group 1).
+pub const CACHE_ARGS_BINDINGS: Bindings = Bindings {
+    label: "hcb.cache.args",
+    shader: "hcb/cache.wgsl",
+    group: 1,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[binding(0, "args", Kind::Storage { read_only: false })],
+};
+
+/// Bind group `hcb.cache.removal.inputs` of `shaders/hcb/cache_removal.wgsl` (group 0).
+pub const CACHE_REMOVAL_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "hcb.cache.removal.inputs",
+    shader: "hcb/cache_removal.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+    list: &[
+        binding(0, "camera", Kind::Uniform),
+        binding(1, "cp", Kind::Uniform),
+        binding(2, "prev", Kind::Storage { read_only: true }),
+    ],
+};
 
 /// Uniform of the cache update; WGSL twin: `CacheParams` in `shaders/hcb/common.wgsl`.
 #[repr(C)]
@@ -120,33 +164,9 @@ const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 impl HcbCachePass {
     pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
         let device = &ctx.device;
-        let (vs, fs, cs) = (wgpu::ShaderStages::VERTEX, wgpu::ShaderStages::FRAGMENT, wgpu::ShaderStages::COMPUTE);
-        let r32 = wgpu::TextureFormat::R32Float;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("hcb.cache.inputs"),
-            entries: &[
-                bgl::uniform(0, cs),
-                bgl::uniform(1, cs),
-                bgl::storage(2, cs, false),
-                bgl::storage(3, cs, false),
-                bgl::texture(4, cs, false),
-                bgl::texture(5, cs, false),
-                bgl::storage(6, cs, false),
-                bgl::storage(7, cs, false),
-                bgl::texture(8, cs, false),
-                bgl::storage_texture(9, r32),
-                bgl::storage_texture(10, r32),
-                bgl::storage(11, cs, false),
-            ],
-        });
-        let args_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("hcb.cache.args"),
-            entries: &[bgl::storage(0, cs, false)],
-        });
-        let removal_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("hcb.cache.removal.inputs"),
-            entries: &[bgl::uniform(0, vs | fs), bgl::uniform(1, vs), bgl::storage(2, vs, true)],
-        });
+        let layout = CACHE_INPUTS_BINDINGS.layout(device);
+        let args_layout = CACHE_ARGS_BINDINGS.layout(device);
+        let removal_layout = CACHE_REMOVAL_INPUTS_BINDINGS.layout(device);
         let m_cache = crate::shaders::create_module(device, "hcb/cache.wgsl");
         let m_removal = crate::shaders::create_module(device, "hcb/cache_removal.wgsl");
         let args_pipeline =
@@ -354,38 +374,30 @@ impl HcbCachePass {
         hcb.clear_marks(ctx, encoder, &group_view);
         let samples_view = crate::passes::view(&hcb.samples, "hcb.samples");
         let tv = wgpu::BindingResource::TextureView;
-        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("hcb.cache.inputs"),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: camera.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: self.params.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: self.prev_counter.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: self.prev_list.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 4, resource: tv(g.0) },
-                wgpu::BindGroupEntry { binding: 5, resource: tv(g.1) },
-                wgpu::BindGroupEntry { binding: 6, resource: hcb.counter.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 7, resource: hcb.list.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 8, resource: tv(&cache_view) },
-                wgpu::BindGroupEntry { binding: 9, resource: tv(&samples_view) },
-                wgpu::BindGroupEntry { binding: 10, resource: tv(&group_view) },
-                wgpu::BindGroupEntry { binding: 11, resource: self.queue.as_entire_binding() },
+        let group = CACHE_INPUTS_BINDINGS.group(
+            &ctx.device,
+            &self.layout,
+            [
+                camera.as_entire_binding(),
+                self.params.as_entire_binding(),
+                self.prev_counter.as_entire_binding(),
+                self.prev_list.as_entire_binding(),
+                tv(g.0),
+                tv(g.1),
+                hcb.counter.as_entire_binding(),
+                hcb.list.as_entire_binding(),
+                tv(&cache_view),
+                tv(&samples_view),
+                tv(&group_view),
+                self.queue.as_entire_binding(),
             ],
-        });
-        let args_group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("hcb.cache.args"),
-            layout: &self.args_layout,
-            entries: &[wgpu::BindGroupEntry { binding: 0, resource: self.args.as_entire_binding() }],
-        });
-        let removal_group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("hcb.cache.removal.inputs"),
-            layout: &self.removal_layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: camera.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: self.params.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: self.prev_list.as_entire_binding() },
-            ],
-        });
+        );
+        let args_group = CACHE_ARGS_BINDINGS.group(&ctx.device, &self.args_layout, [self.args.as_entire_binding()]);
+        let removal_group = CACHE_REMOVAL_INPUTS_BINDINGS.group(
+            &ctx.device,
+            &self.removal_layout,
+            [camera.as_entire_binding(), self.params.as_entire_binding(), self.prev_list.as_entire_binding()],
+        );
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("hcb.cache.args"),

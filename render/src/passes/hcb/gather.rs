@@ -6,8 +6,26 @@ use glam::Vec4;
 
 use super::build::HcbPass;
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::timing::PassRec;
+
+/// Bind group `hcb.gather.inputs` of `shaders/hcb/gather.wgsl` (group 0).
+pub const GATHER_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "hcb.gather.inputs",
+    shader: "hcb/gather.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::Uniform),
+        binding(1, "vpls", Kind::Storage { read_only: true }),
+        binding(2, "ism_atlas", Kind::Texture { filterable: false }),
+        binding(3, "exact_atlas", Kind::Depth),
+        binding(4, "counter", Kind::Storage { read_only: true }),
+        binding(5, "list", Kind::Storage { read_only: false }),
+        binding(6, "args", Kind::Storage { read_only: false }),
+        binding(7, "queue", Kind::Storage { read_only: true }),
+    ],
+};
 
 /// Uniform of the gather at the samples; WGSL twin: `HcbGatherParams` in
 /// `shaders/hcb/gather.wgsl`.
@@ -65,20 +83,7 @@ pub struct HcbGatherPass {
 impl HcbGatherPass {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("hcb.gather.inputs"),
-            entries: &[
-                bgl::uniform(0, cs),
-                bgl::storage(1, cs, true),
-                bgl::texture(2, cs, false),
-                bgl::depth(3, cs),
-                bgl::storage(4, cs, true),
-                bgl::storage(5, cs, false),
-                bgl::storage(6, cs, false),
-                bgl::storage(7, cs, true),
-            ],
-        });
+        let layout = GATHER_INPUTS_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "hcb/gather.wgsl");
         let args_pipeline = crate::passes::compute_pipeline(device, "hcb.gather.args", &module, "cs_args", &[&layout]);
         let wide_pipeline = crate::passes::compute_pipeline(device, "hcb.gather", &module, "cs_gather", &[&layout]);
@@ -145,20 +150,20 @@ impl HcbGatherPass {
         ctx.queue.write_buffer(params, 0, bytemuck::bytes_of(&p));
         let tv = wgpu::BindingResource::TextureView;
         let group = |args: &wgpu::Buffer| {
-            ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("hcb.gather.inputs"),
-                layout: &self.layout,
-                entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: params.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 1, resource: vpls.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 2, resource: tv(ism) },
-                    wgpu::BindGroupEntry { binding: 3, resource: tv(exact) },
-                    wgpu::BindGroupEntry { binding: 4, resource: hcb.counter.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 5, resource: hcb.list.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 6, resource: args.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 7, resource: queue.as_entire_binding() },
+            GATHER_INPUTS_BINDINGS.group(
+                &ctx.device,
+                &self.layout,
+                [
+                    params.as_entire_binding(),
+                    vpls.as_entire_binding(),
+                    tv(ism),
+                    tv(exact),
+                    hcb.counter.as_entire_binding(),
+                    hcb.list.as_entire_binding(),
+                    args.as_entire_binding(),
+                    queue.as_entire_binding(),
                 ],
-            })
+            )
         };
         let (args_group, gather_group) = (group(&self.args), group(&self.no_args));
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {

@@ -8,9 +8,30 @@ use super::{HcbFrame, HcbParams};
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::bins::{Bins, SplatMethod};
 use crate::timing::PassRec;
 use crate::timing::Slot;
+
+/// Bind group `hcb.normalize.inputs` of `shaders/hcb/normalize.wgsl` (group 0).
+pub const NORMALIZE_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "hcb.normalize.inputs",
+    shader: "hcb/normalize.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "accum", Kind::Texture { filterable: false }),
+        binding(1, "g_normal", Kind::Texture { filterable: false }),
+        binding(2, "out_light", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(3, "uncovered", Kind::Storage { read_only: false }),
+        binding(4, "g_albedo", Kind::Texture { filterable: false }),
+        binding(5, "out_radiance", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(6, "accum_dir", Kind::Texture { filterable: false }),
+        binding(7, "g_position", Kind::Texture { filterable: false }),
+        binding(8, "g_material", Kind::Texture { filterable: false }),
+        binding(9, "hp", Kind::Uniform),
+    ],
+};
 
 /// The G-buffer's position, normal, albedo and material views, as the splat and Eq. 11 read them.
 pub type GViews<'a> = (&'a wgpu::TextureView, &'a wgpu::TextureView, &'a wgpu::TextureView, &'a wgpu::TextureView);
@@ -74,21 +95,7 @@ impl HcbSplatPass {
                 bgl::storage(5, vs, true),
             ],
         });
-        let normalize_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("hcb.normalize.inputs"),
-            entries: &[
-                bgl::texture(0, cs, false),
-                bgl::texture(1, cs, false),
-                bgl::storage_texture(2, wgpu::TextureFormat::Rgba32Float),
-                bgl::storage(3, cs, false),
-                bgl::texture(4, cs, false),
-                bgl::storage_texture(5, wgpu::TextureFormat::Rgba32Float),
-                bgl::texture(6, cs, false),
-                bgl::texture(7, cs, false),
-                bgl::texture(8, cs, false),
-                bgl::uniform(9, cs),
-            ],
-        });
+        let normalize_layout = NORMALIZE_INPUTS_BINDINGS.layout(device);
         let m_splat = crate::shaders::create_module(device, "hcb/splat.wgsl");
         let m_norm = crate::shaders::create_module(device, "hcb/normalize.wgsl");
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -430,22 +437,22 @@ impl HcbSplatPass {
         let accum_dir = crate::passes::view(&self.weight_dir[self.current.get()], "hcb.weight_sum.direction");
         let out = crate::passes::view(&self.irradiance, "hcb.irradiance");
         let radiance = crate::passes::view(&self.indirect, "hcb.indirect");
-        let ngroup = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("hcb.normalize.inputs"),
-            layout: &self.normalize_layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: tv(&accum) },
-                wgpu::BindGroupEntry { binding: 1, resource: tv(g.1) },
-                wgpu::BindGroupEntry { binding: 2, resource: tv(&out) },
-                wgpu::BindGroupEntry { binding: 3, resource: self.uncovered.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 4, resource: tv(g.2) },
-                wgpu::BindGroupEntry { binding: 5, resource: tv(&radiance) },
-                wgpu::BindGroupEntry { binding: 6, resource: tv(&accum_dir) },
-                wgpu::BindGroupEntry { binding: 7, resource: tv(g.0) },
-                wgpu::BindGroupEntry { binding: 8, resource: tv(g.3) },
-                wgpu::BindGroupEntry { binding: 9, resource: self.params[0].as_entire_binding() },
+        let ngroup = NORMALIZE_INPUTS_BINDINGS.group(
+            &ctx.device,
+            &self.normalize_layout,
+            [
+                tv(&accum),
+                tv(g.1),
+                tv(&out),
+                self.uncovered.as_entire_binding(),
+                tv(g.2),
+                tv(&radiance),
+                tv(&accum_dir),
+                tv(g.0),
+                tv(g.3),
+                self.params[0].as_entire_binding(),
             ],
-        });
+        );
         // The count only: the list is written up to it.
         encoder.clear_buffer(&self.uncovered, 0, Some(16));
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {

@@ -18,12 +18,26 @@ use glam::Vec4;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::scene::{Scene, SceneState};
 use crate::timing::PassRec;
 use crate::timing::Slot;
 
 pub use super::point_cloud::{CloudPoint, GpuPoint, GpuPointSurface, PointCloud, PointPlacement};
 pub use crate::settings::knecht::*;
+
+/// Bind group `ism.resolve.inputs` of `shaders/knecht/ism/resolve.wgsl` (group 0).
+pub const RESOLVE_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "ism.resolve.inputs",
+    shader: "knecht/ism/resolve.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "depth", Kind::Storage { read_only: true }),
+        binding(1, "atlas", Kind::StorageTexture(wgpu::TextureFormat::R32Float)),
+        binding(2, "lp", Kind::UniformDynamic),
+    ],
+};
 
 /// Bind groups of one frame's splats and resolve ([`IsmPass::begin`]).
 pub struct IsmJob {
@@ -154,10 +168,7 @@ impl IsmPass {
         let cs = wgpu::ShaderStages::COMPUTE;
         let r32 = wgpu::TextureFormat::R32Float;
         let splat_layout = splat_layout(device, "ism.splat.inputs");
-        let resolve_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("ism.resolve.inputs"),
-            entries: &[bgl::storage(0, cs, true), bgl::storage_texture(1, r32), bgl::uniform_dynamic(2, cs)],
-        });
+        let resolve_layout = RESOLVE_INPUTS_BINDINGS.layout(device);
         let pull_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("ism.pull.inputs"),
             entries: &[bgl::uniform_dynamic(0, cs), bgl::texture(1, cs, false), bgl::storage_texture(2, r32)],
@@ -378,15 +389,11 @@ impl IsmPass {
             offset: 0,
             size: std::num::NonZeroU64::new(std::mem::size_of::<LevelParams>() as u64),
         });
-        let resolve = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("ism.resolve.inputs"),
-            layout: &self.resolve_layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: self.depth.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&atlas_view) },
-                wgpu::BindGroupEntry { binding: 2, resource: rows },
-            ],
-        });
+        let resolve = RESOLVE_INPUTS_BINDINGS.group(
+            &ctx.device,
+            &self.resolve_layout,
+            [self.depth.as_entire_binding(), wgpu::BindingResource::TextureView(&atlas_view), rows],
+        );
         IsmJob { splat, resolve }
     }
 

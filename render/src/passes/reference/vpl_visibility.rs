@@ -12,12 +12,26 @@ use crate::counters::prelude::*;
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 pub use crate::passes::stages::GatherVisibility;
 use crate::passes::stages::{FrameInputs, VplSet};
 use crate::scene::SceneState;
 use crate::scene::upload::GpuScene;
 use crate::timing::GpuTimer;
 use crate::timing::PassRec;
+
+/// Bind group `vpl.shadow.inputs` of `shaders/reference/shadow.wgsl` (group 0).
+pub const SHADOW_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "vpl.shadow.inputs",
+    shader: "reference/shadow.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::VERTEX,
+    list: &[
+        binding(0, "face", Kind::UniformDynamic),
+        binding(1, "params", Kind::Uniform),
+        binding(2, "vpls", Kind::Storage { read_only: true }),
+    ],
+};
 
 /// Faces per VPL (`VPL_FACES` in `shaders/common/vpl.wgsl`).
 pub const FACES: u32 = 5;
@@ -87,16 +101,8 @@ pub struct VplVisibilityPass {
 impl VplVisibilityPass {
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
         let device = &ctx.device;
-        let vs = wgpu::ShaderStages::VERTEX;
         let module = crate::shaders::create_module(device, "reference/shadow.wgsl");
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("vpl.shadow.inputs"),
-            entries: &[
-                crate::gpu::bgl::uniform_dynamic(0, vs),
-                crate::gpu::bgl::uniform(1, vs),
-                crate::gpu::bgl::storage(2, vs, true),
-            ],
-        });
+        let layout = SHADOW_INPUTS_BINDINGS.layout(device);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("vpl.shadow.layout"),
             bind_group_layouts: &[Some(&layout), Some(&scene.instance_layout), Some(&scene.material_layout)],
@@ -187,22 +193,19 @@ impl VplVisibilityPass {
     ) {
         let PassRec { ctx, enc: encoder, slot } = r;
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("vpl.shadow.inputs"),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: &self.faces,
-                        offset: 0,
-                        size: std::num::NonZeroU64::new(16),
-                    }),
-                },
-                wgpu::BindGroupEntry { binding: 1, resource: self.params.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: vpl_list.as_entire_binding() },
+        let group = SHADOW_INPUTS_BINDINGS.group(
+            &ctx.device,
+            &self.layout,
+            [
+                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &self.faces,
+                    offset: 0,
+                    size: std::num::NonZeroU64::new(16),
+                }),
+                self.params.as_entire_binding(),
+                vpl_list.as_entire_binding(),
             ],
-        });
+        );
         let mut pass = encoder.begin_counted_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("vpl.shadow.pass"),
             color_attachments: &[],
