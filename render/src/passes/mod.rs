@@ -113,6 +113,9 @@ pub const BINDINGS: &[&crate::gpu::bindings::Bindings] = &[
     &crate::buffers::PROBE_INPUTS_BINDINGS,
     &reference::vpl_visibility::SHADOW_INPUTS_BINDINGS,
     &shadow::DIRECT_SHADOW_VIEW_BINDINGS,
+    &knecht::interleave::SPLIT_INPUTS_BINDINGS,
+    &knecht::interleave::MERGE_INPUTS_BINDINGS,
+    &reference::explain::REFERENCE_INPUTS_BINDINGS,
 ];
 
 /// A 2D render/storage target with the usages every registered buffer needs (sampling,

@@ -24,6 +24,38 @@ use crate::passes::reference::vpl_visibility::{GatherVisibility, no_visibility_a
 pub use crate::settings::knecht::*;
 use crate::timing::PassRec;
 
+/// Bind group `interleave.split.inputs` of `shaders/knecht/interleave/split.wgsl` (group 0).
+pub const SPLIT_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "interleave.split.inputs",
+    shader: "knecht/interleave/split.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::Uniform),
+        binding(1, "g_position", Kind::Texture { filterable: false }),
+        binding(2, "g_normal", Kind::Texture { filterable: false }),
+        binding(3, "g_albedo", Kind::Texture { filterable: false }),
+        binding(4, "g_material", Kind::Texture { filterable: false }),
+        binding(5, "s_position", Kind::StorageTexture(POSITION_FORMAT)),
+        binding(6, "s_normal", Kind::StorageTexture(NORMAL_FORMAT)),
+        binding(7, "s_albedo", Kind::StorageTexture(ALBEDO_FORMAT)),
+        binding(8, "s_material", Kind::StorageTexture(MATERIAL_FORMAT)),
+    ],
+};
+
+/// Bind group `interleave.merge.inputs` of `shaders/knecht/interleave/merge.wgsl` (group 0).
+pub const MERGE_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "interleave.merge.inputs",
+    shader: "knecht/interleave/merge.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::Uniform),
+        binding(1, "split", Kind::Texture { filterable: false }),
+        binding(2, "merged", Kind::StorageTexture(wgpu::TextureFormat::Rgba16Float)),
+    ],
+};
+
 /// Format of the gathered and filtered light (`indirect.accum`, `indirect.merged`,
 /// `indirect.filtered`): half floats, as `direct::RADIANCE_FORMAT` (issue #38; the kernel
 /// tests allow one half step besides their own tolerance, since Vulkan lets a store round to
@@ -147,20 +179,7 @@ impl InterleavePass {
         let device = &ctx.device;
         let cs = wgpu::ShaderStages::COMPUTE;
         let t = |b| bgl::texture(b, cs, false);
-        let split_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("interleave.split.inputs"),
-            entries: &[
-                bgl::uniform(0, cs),
-                t(1),
-                t(2),
-                t(3),
-                t(4),
-                bgl::storage_texture(5, POSITION_FORMAT),
-                bgl::storage_texture(6, NORMAL_FORMAT),
-                bgl::storage_texture(7, ALBEDO_FORMAT),
-                bgl::storage_texture(8, MATERIAL_FORMAT),
-            ],
-        });
+        let split_layout = SPLIT_INPUTS_BINDINGS.layout(device);
         let gather_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("interleave.gather.inputs"),
             entries: &[
@@ -178,10 +197,7 @@ impl InterleavePass {
                 bgl::storage_texture(11, LIGHT_FORMAT),
             ],
         });
-        let merge_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("interleave.merge.inputs"),
-            entries: &[bgl::uniform(0, cs), t(1), bgl::storage_texture(2, LIGHT_FORMAT)],
-        });
+        let merge_layout = MERGE_INPUTS_BINDINGS.layout(device);
         let filter_layout = FILTER_BINDINGS.layout(device);
         let module = |p| crate::shaders::create_module(device, p);
         let split_pipeline = crate::passes::compute_pipeline(
@@ -420,7 +436,6 @@ impl InterleavePass {
         let merged_v = v(&self.merged, "indirect.merged");
         let irradiance_v = v(&self.irradiance, "indirect.irradiance");
         let tv = wgpu::BindingResource::TextureView;
-        let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
         // The gather reads the split G-buffer (three passes) or the G-buffer itself at each
         // split pixel's source pixel (fused) and writes the split accumulation buffer or the
         // merged light.
@@ -469,31 +484,30 @@ impl InterleavePass {
             v(&s.accum, "indirect.accum"),
             v(&s.accum_irradiance, "indirect.accum_irradiance"),
         );
-        let split_group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("interleave.split.inputs"),
-            layout: &self.split_layout,
-            entries: &[
-                entry(0, self.split_params.as_entire_binding()),
-                entry(1, tv(&g.position)),
-                entry(2, tv(&g.normal)),
-                entry(3, tv(&g.albedo)),
-                entry(4, tv(&g.material)),
-                entry(5, tv(&sp_v)),
-                entry(6, tv(&sn_v)),
-                entry(7, tv(&sa_v)),
-                entry(8, tv(&sm_v)),
+        let split_group = SPLIT_INPUTS_BINDINGS.group(
+            &ctx.device,
+            &self.split_layout,
+            [
+                self.split_params.as_entire_binding(),
+                tv(&g.position),
+                tv(&g.normal),
+                tv(&g.albedo),
+                tv(&g.material),
+                tv(&sp_v),
+                tv(&sn_v),
+                tv(&sa_v),
+                tv(&sm_v),
             ],
-        });
+        );
         let gather_group = gather_group([&sp_v, &sn_v, &sa_v, &sm_v], &acc_v, &acc_irr_v);
         // The light and its irradiance are merged back alike.
         let merge_group = |src: &wgpu::TextureView, dst: &wgpu::TextureView| {
-            let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
             let tv = wgpu::BindingResource::TextureView;
-            ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("interleave.merge.inputs"),
-                layout: &self.merge_layout,
-                entries: &[entry(0, self.split_params.as_entire_binding()), entry(1, tv(src)), entry(2, tv(dst))],
-            })
+            MERGE_INPUTS_BINDINGS.group(
+                &ctx.device,
+                &self.merge_layout,
+                [self.split_params.as_entire_binding(), tv(src), tv(dst)],
+            )
         };
         let merge_groups = [merge_group(&acc_v, &merged_v), merge_group(&acc_irr_v, &irradiance_v)];
         timer.scope(ctx, encoder, "interleave.split", |e, slot| {

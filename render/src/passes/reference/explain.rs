@@ -10,10 +10,32 @@ use glam::{Vec3, Vec4};
 
 use crate::explain::{Check, Contribution, Explanation, Rejection, Replay};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::gbuffer::GBufferViews;
 use crate::passes::reference::vpl::GpuVpl;
 use crate::passes::reference::vpl_gather::VplGatherPass;
+
+/// Bind group `explain.reference.inputs` of `shaders/reference/explain.wgsl` (group 0).
+pub const REFERENCE_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "explain.reference.inputs",
+    shader: "reference/explain.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "camera", Kind::Uniform),
+        binding(1, "params", Kind::Uniform),
+        binding(2, "vpls", Kind::Storage { read_only: true }),
+        binding(3, "atlas", Kind::Depth),
+        binding(4, "g_position", Kind::Texture { filterable: false }),
+        binding(5, "g_normal", Kind::Texture { filterable: false }),
+        binding(6, "g_albedo", Kind::Texture { filterable: false }),
+        binding(7, "g_material", Kind::Texture { filterable: false }),
+        binding(8, "accum", Kind::Texture { filterable: false }),
+        binding(9, "raw", Kind::Texture { filterable: false }),
+        binding(10, "header", Kind::Storage { read_only: false }),
+        binding(11, "terms", Kind::Storage { read_only: false }),
+    ],
+};
 
 /// Flags of a term (`EXPLAIN_*` in `shaders/common/vpl_explain.wgsl`).
 pub const EMPTY: u32 = 1;
@@ -82,25 +104,7 @@ pub struct ReferenceExplainPass {
 impl ReferenceExplainPass {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let t = |b| bgl::texture(b, cs, false);
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("explain.reference.inputs"),
-            entries: &[
-                bgl::uniform(0, cs),
-                bgl::uniform(1, cs),
-                bgl::storage(2, cs, true),
-                bgl::depth(3, cs),
-                t(4),
-                t(5),
-                t(6),
-                t(7),
-                t(8),
-                t(9),
-                bgl::storage(10, cs, false),
-                bgl::storage(11, cs, false),
-            ],
-        });
+        let layout = REFERENCE_INPUTS_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "reference/explain.wgsl");
         let pipeline = |label, entry| crate::passes::compute_pipeline(device, label, &module, entry, &[&layout]);
         Self {
@@ -127,26 +131,25 @@ impl ReferenceExplainPass {
         let raw = crate::passes::view(&inp.gather.raw, "indirect.raw");
         let accum = crate::passes::view(&inp.gather.accum, "indirect.accum");
         let tv = wgpu::BindingResource::TextureView;
-        let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
         let part = |offset, size| crate::passes::buffer_part(&self.out, offset, size);
-        ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("explain.reference.inputs"),
-            layout: &self.layout,
-            entries: &[
-                entry(0, inp.camera.as_entire_binding()),
-                entry(1, inp.gather.params().as_entire_binding()),
-                entry(2, inp.vpls.as_entire_binding()),
-                entry(3, tv(inp.atlas)),
-                entry(4, tv(&inp.g.position)),
-                entry(5, tv(&inp.g.normal)),
-                entry(6, tv(&inp.g.albedo)),
-                entry(7, tv(&inp.g.material)),
-                entry(8, tv(&accum)),
-                entry(9, tv(&raw)),
-                entry(10, part(0, Some(std::mem::size_of::<GpuHeader>() as u64))),
-                entry(11, part(TERMS_OFFSET, None)),
+        REFERENCE_INPUTS_BINDINGS.group(
+            &ctx.device,
+            &self.layout,
+            [
+                inp.camera.as_entire_binding(),
+                inp.gather.params().as_entire_binding(),
+                inp.vpls.as_entire_binding(),
+                tv(inp.atlas),
+                tv(&inp.g.position),
+                tv(&inp.g.normal),
+                tv(&inp.g.albedo),
+                tv(&inp.g.material),
+                tv(&accum),
+                tv(&raw),
+                part(0, Some(std::mem::size_of::<GpuHeader>() as u64)),
+                part(TERMS_OFFSET, None),
             ],
-        })
+        )
     }
 
     fn dispatch(enc: &mut wgpu::CommandEncoder, pipeline: &wgpu::ComputePipeline, group: &wgpu::BindGroup, n: u32) {
