@@ -9,9 +9,23 @@
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
-use crate::passes::{bind_group, create_target, view};
+use crate::gpu::bindings::{Bindings, Kind, binding};
+use crate::passes::{create_target, view};
 use crate::timing::PassRec;
+
+/// Bind group `direct.sky_history.inputs` of `shaders/direct/sky_history.wgsl` (group 0).
+pub const SKY_HISTORY_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "direct.sky_history.inputs",
+    shader: "direct/sky_history.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::Uniform),
+        binding(1, "prev", Kind::Texture { filterable: false }),
+        binding(2, "current", Kind::Texture { filterable: false }),
+        binding(3, "next", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+    ],
+};
 
 /// The format of the history (the mean of many frames of half floats).
 const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -39,16 +53,7 @@ pub struct DirectHistory {
 impl DirectHistory {
     pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("direct.sky_history.inputs"),
-            entries: &[
-                bgl::uniform(0, cs),
-                bgl::texture(1, cs, false),
-                bgl::texture(2, cs, false),
-                bgl::storage_texture(3, FORMAT),
-            ],
-        });
+        let layout = SKY_HISTORY_INPUTS_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "direct/sky_history.wgsl");
         let pipeline = crate::passes::compute_pipeline(device, "direct.sky_history", &module, "cs_average", &[&layout]);
         let params = crate::passes::uniform_buffer(device, "direct.sky_history.params", 16);
@@ -119,11 +124,10 @@ impl DirectHistory {
         let (prev, next) =
             (view(&self.history[src], "direct.sky_history"), view(&self.history[dst], "direct.sky_history"));
         let tv = wgpu::BindingResource::TextureView;
-        let group = bind_group(
+        let group = SKY_HISTORY_INPUTS_BINDINGS.group(
             &ctx.device,
-            "direct.sky_history.inputs",
             &self.layout,
-            vec![self.params.as_entire_binding(), tv(&prev), tv(radiance), tv(&next)],
+            [self.params.as_entire_binding(), tv(&prev), tv(radiance), tv(&next)],
         );
         let size = (self.history[0].width(), self.history[0].height());
         crate::passes::dispatch_2d(

@@ -9,8 +9,26 @@
 use crate::counters::prelude::*;
 
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
-use crate::passes::bind_group;
+use crate::gpu::bindings::{Bindings, Kind, binding};
+
+/// Bind group `gautron.at_samples` of `shaders/gautron/at_samples.wgsl` (group 0).
+pub const AT_SAMPLES_BINDINGS: Bindings = Bindings {
+    label: "gautron.at_samples",
+    shader: "gautron/at_samples.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::Uniform),
+        binding(1, "round", Kind::UniformDynamic),
+        binding(2, "state", Kind::Storage { read_only: false }),
+        binding(3, "slots", Kind::Storage { read_only: false }),
+        binding(4, "records", Kind::Storage { read_only: false }),
+        binding(5, "raster_args", Kind::Storage { read_only: false }),
+        binding(6, "counter", Kind::Storage { read_only: true }),
+        binding(7, "list", Kind::Storage { read_only: false }),
+        binding(8, "args", Kind::Storage { read_only: false }),
+    ],
+};
 
 /// Bytes of one HCB sample (`passes::hcb::GpuHcbSample`).
 pub const HCB_SAMPLE_BYTES: u64 = std::mem::size_of::<crate::passes::hcb::GpuHcbSample>() as u64;
@@ -29,21 +47,7 @@ pub struct AtSamplesPass {
 impl AtSamplesPass {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("gautron.at_samples"),
-            entries: &[
-                bgl::uniform(0, cs),
-                bgl::uniform_dynamic(1, cs),
-                bgl::storage(2, cs, false),
-                bgl::storage(3, cs, false),
-                bgl::storage(4, cs, false),
-                bgl::storage(5, cs, false),
-                bgl::storage(6, cs, true),
-                bgl::storage(7, cs, false),
-                bgl::storage(8, cs, false),
-            ],
-        });
+        let layout = AT_SAMPLES_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "gautron/at_samples.wgsl");
         let pipeline = |entry: &str| {
             crate::passes::compute_pipeline(device, &format!("gautron.{entry}"), &module, entry, &[&layout])
@@ -80,11 +84,10 @@ impl AtSamplesPass {
         raster_args: &wgpu::BufferBinding<'_>,
         (counter, list, args): (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
     ) -> wgpu::BindGroup {
-        bind_group(
+        AT_SAMPLES_BINDINGS.group(
             &ctx.device,
-            "gautron.at_samples",
             &self.layout,
-            vec![
+            [
                 params.as_entire_binding(),
                 crate::passes::dynamic_slot(&self.chunks, 16),
                 state.as_entire_binding(),

@@ -12,9 +12,38 @@ use glam::{Vec3, Vec4};
 
 use crate::explain::{Check, Contribution, Explanation, Rejection, luminance};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::stages::FrameInputs;
-use crate::passes::{bind_group, view};
+use crate::passes::view;
+
+/// Bind group `explain.gautron.inputs` of `shaders/gautron/explain.wgsl` (group 0).
+pub const GAUTRON_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "explain.gautron.inputs",
+    shader: "gautron/explain.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::Uniform),
+        binding(1, "camera", Kind::Uniform),
+        binding(2, "records", Kind::Storage { read_only: true }),
+        binding(3, "state", Kind::Storage { read_only: true }),
+        binding(4, "g_position", Kind::Texture { filterable: false }),
+        binding(5, "g_normal", Kind::Texture { filterable: false }),
+        binding(6, "g_albedo", Kind::Texture { filterable: false }),
+        binding(7, "accum", Kind::Texture { filterable: false }),
+        binding(8, "indirect", Kind::Texture { filterable: false }),
+        binding(9, "irradiance", Kind::Texture { filterable: false }),
+        binding(10, "explain", Kind::Uniform),
+        binding(11, "header", Kind::Storage { read_only: false }),
+        binding(12, "counters", Kind::Storage { read_only: false }),
+        binding(13, "listed", Kind::Storage { read_only: false }),
+        binding(14, "snap_records", Kind::Storage { read_only: true }),
+        binding(15, "snap_states", Kind::Storage { read_only: true }),
+        binding(16, "accum_dir", Kind::Texture { filterable: false }),
+        binding(17, "accum_plain", Kind::Texture { filterable: false }),
+        binding(18, "g_material", Kind::Texture { filterable: false }),
+    ],
+};
 
 /// Flags of a listed record (`EXPLAIN_*` in the shader).
 pub const COVERS: u32 = 1;
@@ -148,32 +177,8 @@ impl crate::explain::Replay for GautronExplainPass {
 impl GautronExplainPass {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let t = |b| bgl::texture(b, cs, false);
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("explain.gautron.inputs"),
-            entries: &[
-                bgl::uniform(0, cs),
-                bgl::uniform(1, cs),
-                bgl::storage(2, cs, true),
-                bgl::storage(3, cs, true),
-                t(4),
-                t(5),
-                t(6),
-                t(7),
-                t(8),
-                t(9),
-                bgl::uniform(10, cs),
-                bgl::storage(11, cs, false),
-                bgl::storage(12, cs, false),
-                bgl::storage(13, cs, false),
-                bgl::storage(14, cs, true),
-                bgl::storage(15, cs, true),
-                t(16),
-                t(17),
-                t(18),
-            ],
-        });
+        let _cs = wgpu::ShaderStages::COMPUTE;
+        let layout = GAUTRON_INPUTS_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "gautron/explain.wgsl");
         let pipeline = |label, entry| crate::passes::compute_pipeline(device, label, &module, entry, &[&layout]);
         Self {
@@ -218,11 +223,10 @@ impl GautronExplainPass {
         let (accum, irradiance) = (stage.splat.accum_view(), view(&stage.splat.irradiance, "gautron.irradiance"));
         let g = f.gbuffer;
         let (accum_dir, accum_plain) = stage.splat.receiver_views();
-        let group = bind_group(
+        let group = GAUTRON_INPUTS_BINDINGS.group(
             &ctx.device,
-            "explain.gautron.inputs",
             &self.layout,
-            vec![
+            [
                 stage.params.as_entire_binding(),
                 f.camera_buffer.as_entire_binding(),
                 stage.records.as_entire_binding(),

@@ -12,13 +12,44 @@ use crate::counters::prelude::*;
 use super::{GautronSettings, atlas_grid};
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::maths::hemisphere::HemisphereTable;
-use crate::passes::bind_group;
 use crate::passes::gbuffer::{self, GBuffer};
 use crate::scene::SceneState;
 use crate::scene::upload::GpuScene;
 use crate::timing::PassRec;
+
+/// Bind group `gautron.hemisphere.cameras` of `shaders/gautron/hemisphere.wgsl` (group 0).
+pub const HEMISPHERE_CAMERAS_BINDINGS: Bindings = Bindings {
+    label: "gautron.hemisphere.cameras",
+    shader: "gautron/hemisphere.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+    list: &[
+        binding(0, "camera", Kind::Uniform),
+        binding(1, "hemispheres", Kind::Storage { read_only: true }),
+        binding(2, "params", Kind::Uniform),
+    ],
+};
+
+/// Bind group `gautron.reduce` of `shaders/gautron/reduce.wgsl` (group 0).
+pub const REDUCE_BINDINGS: Bindings = Bindings {
+    label: "gautron.reduce",
+    shader: "gautron/reduce.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::Uniform),
+        binding(1, "state", Kind::Storage { read_only: true }),
+        binding(2, "table", Kind::Storage { read_only: true }),
+        binding(3, "cameras", Kind::Storage { read_only: true }),
+        binding(4, "records", Kind::Storage { read_only: false }),
+        binding(5, "radiance", Kind::Texture { filterable: false }),
+        binding(6, "position", Kind::Texture { filterable: false }),
+        binding(7, "normal", Kind::Texture { filterable: false }),
+        binding(8, "object", Kind::Texture { filterable: false }),
+    ],
+};
 
 /// The atlas, its pipelines and the texel table of one hemisphere resolution.
 pub struct HemispherePass {
@@ -43,11 +74,7 @@ impl HemispherePass {
     pub fn new(ctx: &GpuContext, scene: &GpuScene, s: &GautronSettings) -> Self {
         let device = &ctx.device;
         let module = crate::shaders::create_module(device, "gautron/hemisphere.wgsl");
-        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
-        let raster_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("gautron.hemisphere.cameras"),
-            entries: &[bgl::uniform(0, vf), bgl::storage(1, wgpu::ShaderStages::VERTEX, true), bgl::uniform(2, vf)],
-        });
+        let raster_layout = HEMISPHERE_CAMERAS_BINDINGS.layout(device);
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("gautron.hemisphere.layout"),
             bind_group_layouts: &[Some(&raster_layout), Some(&scene.instance_layout), Some(&scene.material_layout)],
@@ -55,21 +82,7 @@ impl HemispherePass {
         });
         let [single_sided, double_sided] =
             [Some(wgpu::Face::Back), None].map(|cull| raster_pipeline(device, &layout, &module, cull));
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let reduce_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("gautron.reduce"),
-            entries: &[
-                bgl::uniform(0, cs),
-                bgl::storage(1, cs, true),
-                bgl::storage(2, cs, true),
-                bgl::storage(3, cs, true),
-                bgl::storage(4, cs, false),
-                bgl::texture(5, cs, false),
-                bgl::texture(6, cs, false),
-                bgl::texture(7, cs, false),
-                bgl::texture(8, cs, false),
-            ],
-        });
+        let reduce_layout = REDUCE_BINDINGS.layout(device);
         let reduce_module = crate::shaders::create_module(device, "gautron/reduce.wgsl");
         let reduce =
             crate::passes::compute_pipeline(device, "gautron.reduce", &reduce_module, "cs_reduce", &[&reduce_layout]);
@@ -206,11 +219,10 @@ impl HemispherePass {
         args: &wgpu::Buffer,
     ) {
         let PassRec { ctx, enc, slot } = r;
-        let group = bind_group(
+        let group = HEMISPHERE_CAMERAS_BINDINGS.group(
             &ctx.device,
-            "gautron.hemisphere.cameras",
             &self.raster_layout,
-            vec![camera.as_entire_binding(), cameras.as_entire_binding(), params.as_entire_binding()],
+            [camera.as_entire_binding(), cameras.as_entire_binding(), params.as_entire_binding()],
         );
         let mut pass =
             self.atlas.begin_clear_pass(enc, "gautron.hemisphere.pass", slot.and_then(|s| s.render(true, false)));
@@ -241,11 +253,10 @@ impl HemispherePass {
     ) {
         let PassRec { ctx, enc, slot } = r;
         let tv = wgpu::BindingResource::TextureView;
-        let group = bind_group(
+        let group = REDUCE_BINDINGS.group(
             &ctx.device,
-            "gautron.reduce",
             &self.reduce_layout,
-            vec![
+            [
                 params.as_entire_binding(),
                 state.as_entire_binding(),
                 self.table.as_entire_binding(),

@@ -12,10 +12,33 @@ use crate::counters::prelude::*;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::bins::{Bins, SplatMethod};
 use crate::passes::gbuffer::GBufferViews;
 use crate::passes::{bind_group, create_target, view};
 use crate::timing::PassRec;
+
+/// Bind group `gautron.resolve` of `shaders/gautron/resolve.wgsl` (group 0).
+pub const RESOLVE_BINDINGS: Bindings = Bindings {
+    label: "gautron.resolve",
+    shader: "gautron/resolve.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "accum", Kind::Texture { filterable: false }),
+        binding(1, "accum_plain", Kind::Texture { filterable: false }),
+        binding(2, "g_albedo", Kind::Texture { filterable: false }),
+        binding(3, "out_indirect", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(4, "out_irradiance", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(5, "out_plain", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(6, "accum_dir", Kind::Texture { filterable: false }),
+        binding(7, "g_position", Kind::Texture { filterable: false }),
+        binding(8, "g_normal", Kind::Texture { filterable: false }),
+        binding(9, "g_material", Kind::Texture { filterable: false }),
+        binding(10, "params", Kind::Uniform),
+        binding(11, "camera", Kind::Uniform),
+    ],
+};
 
 pub const ACCUM_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
@@ -74,23 +97,7 @@ impl SplatPass {
         let bin = crate::passes::compute_pipeline(device, "gautron.splat.bin", &module, "cs_bin", &layouts);
         let accumulate =
             crate::passes::compute_pipeline(device, "gautron.splat.accumulate", &module, "cs_accumulate", &layouts);
-        let resolve_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("gautron.resolve"),
-            entries: &[
-                bgl::texture(0, cs, false),
-                bgl::texture(1, cs, false),
-                bgl::texture(2, cs, false),
-                bgl::storage_texture(3, ACCUM_FORMAT),
-                bgl::storage_texture(4, ACCUM_FORMAT),
-                bgl::storage_texture(5, ACCUM_FORMAT),
-                bgl::texture(6, cs, false),
-                bgl::texture(7, cs, false),
-                bgl::texture(8, cs, false),
-                bgl::texture(9, cs, false),
-                bgl::uniform(10, cs),
-                bgl::uniform(11, cs),
-            ],
-        });
+        let resolve_layout = RESOLVE_BINDINGS.layout(device);
         let resolve_module = crate::shaders::create_module(device, "gautron/resolve.wgsl");
         let resolve = crate::passes::compute_pipeline(
             device,
@@ -305,11 +312,10 @@ impl SplatPass {
             view(&self.irradiance, "gautron.irradiance"),
             view(&self.plain, "gautron.irradiance.plain"),
         );
-        let group = bind_group(
+        let group = RESOLVE_BINDINGS.group(
             &ctx.device,
-            "gautron.resolve",
             &self.resolve_layout,
-            vec![
+            [
                 tv(&accum),
                 tv(&accum_plain),
                 tv(&g.albedo),

@@ -21,11 +21,35 @@ use super::{
 use crate::buffers::{BufferKind, BufferRegistry, read_storage};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::stages::{FrameInputs, Visibility, VplSet};
 use crate::passes::{bind_group, buffer, create_target, view};
 use crate::settings::pipeline::Temporal;
 use crate::timing::GpuTimer;
 use crate::timing::PassRec;
+
+/// Bind group `gautron.create` of `shaders/gautron/create.wgsl` (group 0).
+pub const CREATE_BINDINGS: Bindings = Bindings {
+    label: "gautron.create",
+    shader: "gautron/create.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::Uniform),
+        binding(1, "round", Kind::UniformDynamic),
+        binding(2, "camera", Kind::Uniform),
+        binding(3, "state", Kind::Storage { read_only: false }),
+        binding(4, "candidates", Kind::Storage { read_only: false }),
+        binding(5, "slots", Kind::Storage { read_only: false }),
+        binding(6, "records", Kind::Storage { read_only: false }),
+        binding(7, "cameras", Kind::Storage { read_only: false }),
+        binding(8, "viewers", Kind::Storage { read_only: false }),
+        binding(9, "raster_args", Kind::Storage { read_only: false }),
+        binding(10, "splat_args", Kind::Storage { read_only: false }),
+        binding(11, "maintain", Kind::Uniform),
+        binding(12, "moved", Kind::Storage { read_only: true }),
+    ],
+};
 
 /// Bytes between the rounds' uniforms (dynamic offsets).
 const ROUND_STRIDE: u64 = 256;
@@ -135,24 +159,7 @@ impl GautronStage {
     ) -> Self {
         let device = &ctx.device;
         let cs = wgpu::ShaderStages::COMPUTE;
-        let layout0 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("gautron.create"),
-            entries: &[
-                bgl::uniform(0, cs),
-                bgl::uniform_dynamic(1, cs),
-                bgl::uniform(2, cs),
-                bgl::storage(3, cs, false),
-                bgl::storage(4, cs, false),
-                bgl::storage(5, cs, false),
-                bgl::storage(6, cs, false),
-                bgl::storage(7, cs, false),
-                bgl::storage(8, cs, false),
-                bgl::storage(9, cs, false),
-                bgl::storage(10, cs, false),
-                bgl::uniform(11, cs),
-                bgl::storage(12, cs, true),
-            ],
-        });
+        let layout0 = CREATE_BINDINGS.layout(device);
         let layout1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("gautron.create.gbuffer"),
             entries: &[
@@ -613,11 +620,10 @@ impl GautronStage {
 
     fn create_group(&self, f: &FrameInputs) -> wgpu::BindGroup {
         let device = &f.ctx.device;
-        bind_group(
+        CREATE_BINDINGS.group(
             device,
-            "gautron.create",
             &self.layout0,
-            vec![
+            [
                 self.params.as_entire_binding(),
                 crate::passes::dynamic_slot(&self.rounds, 16),
                 f.camera_buffer.as_entire_binding(),

@@ -11,10 +11,27 @@ use crate::counters::prelude::*;
 use glam::Vec4;
 
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
-use crate::passes::bind_group;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::stages::{Visibility, VplSet};
 use crate::timing::PassRec;
+
+/// Bind group `gautron.vpl_records` of `shaders/gautron/vpl_records.wgsl` (group 0).
+pub const VPL_RECORDS_BINDINGS: Bindings = Bindings {
+    label: "gautron.vpl_records",
+    shader: "gautron/vpl_records.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::Uniform),
+        binding(1, "vparams", Kind::Uniform),
+        binding(2, "state", Kind::Storage { read_only: true }),
+        binding(3, "cameras", Kind::Storage { read_only: true }),
+        binding(4, "records", Kind::Storage { read_only: false }),
+        binding(5, "vpls", Kind::Storage { read_only: true }),
+        binding(6, "ism_atlas", Kind::Texture { filterable: false }),
+        binding(7, "exact_atlas", Kind::Depth),
+    ],
+};
 
 /// Uniform of the VPL-lit records; WGSL twin: `VplRecordParams` in
 /// `shaders/gautron/vpl_records.wgsl`.
@@ -52,20 +69,7 @@ pub struct VplRecordPass {
 impl VplRecordPass {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("gautron.vpl_records"),
-            entries: &[
-                bgl::uniform(0, cs),
-                bgl::uniform(1, cs),
-                bgl::storage(2, cs, true),
-                bgl::storage(3, cs, true),
-                bgl::storage(4, cs, false),
-                bgl::storage(5, cs, true),
-                bgl::texture(6, cs, false),
-                bgl::depth(7, cs),
-            ],
-        });
+        let layout = VPL_RECORDS_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "gautron/vpl_records.wgsl");
         let wide_pipeline =
             crate::passes::compute_pipeline(device, "gautron.vpl_records", &module, "cs_vpl_records", &[&layout]);
@@ -106,11 +110,10 @@ impl VplRecordPass {
         };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
         let tv = wgpu::BindingResource::TextureView;
-        let group = bind_group(
+        let group = VPL_RECORDS_BINDINGS.group(
             &ctx.device,
-            "gautron.vpl_records",
             &self.layout,
-            vec![
+            [
                 gautron_params.as_entire_binding(),
                 self.params.as_entire_binding(),
                 state.as_entire_binding(),

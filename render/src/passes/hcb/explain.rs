@@ -19,10 +19,50 @@ use glam::{Vec3, Vec4};
 use super::stage::HcbStage;
 use crate::explain::{Check, Contribution, Explanation, Rejection, luminance};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::knecht::temporal::TemporalPass;
 use crate::passes::stages::FrameInputs;
 use crate::passes::{bind_group, view};
+
+/// Bind group `explain.hcb.inputs` of `shaders/hcb/explain.wgsl` (group 0).
+pub const HCB_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "explain.hcb.inputs",
+    shader: "hcb/explain.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "camera", Kind::Uniform),
+        binding(1, "hp", Kind::Uniform),
+        binding(2, "explain", Kind::Uniform),
+        binding(3, "samples", Kind::Storage { read_only: true }),
+        binding(4, "counter", Kind::Storage { read_only: true }),
+        binding(5, "g_position", Kind::Texture { filterable: false }),
+        binding(6, "g_normal", Kind::Texture { filterable: false }),
+        binding(7, "g_albedo", Kind::Texture { filterable: false }),
+        binding(8, "g_motion", Kind::Texture { filterable: false }),
+        binding(9, "weight_sum", Kind::Texture { filterable: false }),
+        binding(10, "irradiance", Kind::Texture { filterable: false }),
+        binding(11, "indirect", Kind::Texture { filterable: false }),
+        binding(12, "final_light", Kind::Texture { filterable: false }),
+        binding(13, "confidence", Kind::Texture { filterable: false }),
+        binding(14, "history_prev", Kind::Texture { filterable: false }),
+        binding(15, "header", Kind::Storage { read_only: false }),
+        binding(16, "tally", Kind::Storage { read_only: false }),
+        binding(17, "entries", Kind::Storage { read_only: false }),
+        binding(18, "weight_dir", Kind::Texture { filterable: false }),
+        binding(19, "g_material", Kind::Texture { filterable: false }),
+        binding(20, "split_prev", Kind::UintTexture),
+    ],
+};
+
+/// Bind group `explain.hcb.args` of `shaders/hcb/explain.wgsl` (group 1).
+pub const HCB_ARGS_BINDINGS: Bindings = Bindings {
+    label: "explain.hcb.args",
+    shader: "hcb/explain.wgsl",
+    group: 1,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[binding(0, "args", Kind::Storage { read_only: false })],
+};
 
 /// Flags of a listed sample (`EXPLAIN_*` in the shader).
 pub const COHERENT: u32 = 1;
@@ -143,38 +183,9 @@ impl crate::explain::Replay for HcbExplainPass {
 impl HcbExplainPass {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let t = |b| bgl::texture(b, cs, false);
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("explain.hcb.inputs"),
-            entries: &[
-                bgl::uniform(0, cs),
-                bgl::uniform(1, cs),
-                bgl::uniform(2, cs),
-                bgl::storage(3, cs, true),
-                bgl::storage(4, cs, true),
-                t(5),
-                t(6),
-                t(7),
-                t(8),
-                t(9),
-                t(10),
-                t(11),
-                t(12),
-                t(13),
-                t(14),
-                bgl::storage(15, cs, false),
-                bgl::storage(16, cs, false),
-                bgl::storage(17, cs, false),
-                t(18),
-                t(19),
-                bgl::uint_texture(20, cs),
-            ],
-        });
-        let args_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("explain.hcb.args"),
-            entries: &[bgl::storage(0, cs, false)],
-        });
+        let _cs = wgpu::ShaderStages::COMPUTE;
+        let layout = HCB_INPUTS_BINDINGS.layout(device);
+        let args_layout = HCB_ARGS_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "hcb/explain.wgsl");
         let layouts = [&layout, &args_layout];
         let args_pipeline =
@@ -264,11 +275,10 @@ impl HcbExplainPass {
             Some(t) => (view(&t.confidence, "temporal.confidence"), view(t.history_prev(), "temporal.history_prev")),
             None => (self.dummy.clone(), self.dummy.clone()),
         };
-        let group = bind_group(
+        let group = HCB_INPUTS_BINDINGS.group(
             &ctx.device,
-            "explain.hcb.inputs",
             &self.layout,
-            vec![
+            [
                 f.camera_buffer.as_entire_binding(),
                 self.hcb_params.as_entire_binding(),
                 self.params.as_entire_binding(),
@@ -292,8 +302,7 @@ impl HcbExplainPass {
                 tv(&split_prev.map_or(self.dummy_split.clone(), |t| view(t, "temporal.history_split_prev"))),
             ],
         );
-        let args_group =
-            bind_group(&ctx.device, "explain.hcb.args", &self.args_layout, vec![self.args.as_entire_binding()]);
+        let args_group = HCB_ARGS_BINDINGS.group(&ctx.device, &self.args_layout, [self.args.as_entire_binding()]);
         let no_args =
             bind_group(&ctx.device, "explain.hcb.no_args", &self.args_layout, vec![self.no_args.as_entire_binding()]);
         let mut pass =

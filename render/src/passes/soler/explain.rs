@@ -15,6 +15,27 @@ use glam::{Vec3, Vec4};
 use crate::explain::{Check, Contribution, Explanation, Rejection, Replay};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
+
+/// Bind group `explain.soler.ring.inputs` of `shaders/soler/explain_ring.wgsl` (group 0).
+pub const SOLER_RING_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "explain.soler.ring.inputs",
+    shader: "soler/explain_ring.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::UniformDynamic),
+        binding(1, "level_position", Kind::Texture { filterable: false }),
+        binding(2, "level_normal", Kind::Texture { filterable: false }),
+        binding(3, "level_radiance", Kind::Texture { filterable: false }),
+        binding(4, "grid", Kind::Storage { read_only: true }),
+        binding(5, "level_material", Kind::Texture { filterable: false }),
+        binding(6, "ring", Kind::UniformDynamic),
+        binding(7, "header_words", Kind::Storage { read_only: true }),
+        binding(8, "entries", Kind::Storage { read_only: true }),
+        binding(9, "slots", Kind::Storage { read_only: false }),
+    ],
+};
 
 /// Texels per level the replay follows (`MAX_PER_LEVEL` in the shader).
 const MAX_PER_LEVEL: u64 = 64;
@@ -160,21 +181,7 @@ impl SolerExplainPass {
             label: Some("explain.soler.inputs"),
             entries: &entries,
         });
-        let ring_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("explain.soler.ring.inputs"),
-            entries: &[
-                bgl::uniform_dynamic(0, cs),
-                bgl::texture(1, cs, false),
-                bgl::texture(2, cs, false),
-                bgl::texture(3, cs, false),
-                bgl::storage(4, cs, true),
-                bgl::texture(5, cs, false),
-                bgl::uniform_dynamic(6, cs),
-                bgl::storage(7, cs, true),
-                bgl::storage(8, cs, true),
-                bgl::storage(9, cs, false),
-            ],
-        });
+        let ring_layout = SOLER_RING_INPUTS_BINDINGS.layout(device);
         let ring_module = crate::shaders::create_module(device, "soler/explain_ring.wgsl");
         let ring_pipeline = crate::passes::compute_pipeline(
             device,
@@ -364,8 +371,7 @@ impl SolerExplainPass {
                 part(ENTRIES_OFFSET, None),
                 self.rings.as_entire_binding(),
             ];
-            let group =
-                crate::passes::bind_group(&ctx.device, "explain.soler.ring.inputs", &self.ring_layout, resources);
+            let group = SOLER_RING_INPUTS_BINDINGS.group(&ctx.device, &self.ring_layout, resources);
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("explain.soler.ring"),
                 timestamp_writes: None,

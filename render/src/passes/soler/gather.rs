@@ -6,7 +6,7 @@
 use super::STRIDE;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 
 /// Rust twin of `GatherParams` in `shaders/soler/gather.wgsl`.
 #[repr(C)]
@@ -35,6 +35,25 @@ pub struct GatherParams {
 
 use super::MAX_GATHERED;
 use crate::timing::PassRec;
+
+/// Bind group `soler.gather.inputs` of `shaders/soler/gather.wgsl` (group 0).
+pub const GATHER_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "soler.gather.inputs",
+    shader: "soler/gather.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::UniformDynamic),
+        binding(1, "level_position", Kind::Texture { filterable: false }),
+        binding(2, "level_normal", Kind::Texture { filterable: false }),
+        binding(3, "level_radiance", Kind::Texture { filterable: false }),
+        binding(4, "out_light", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(5, "grid", Kind::Storage { read_only: true }),
+        binding(6, "out_occlusion", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(7, "level_material", Kind::Texture { filterable: false }),
+        binding(8, "out_specular", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+    ],
+};
 
 /// Most bounces (the settings' range).
 pub const MAX_BOUNCES: usize = 4;
@@ -71,21 +90,7 @@ pub struct SolerGather {
 impl SolerGather {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("soler.gather.inputs"),
-            entries: &[
-                bgl::uniform_dynamic(0, cs),
-                bgl::texture(1, cs, false),
-                bgl::texture(2, cs, false),
-                bgl::texture(3, cs, false),
-                bgl::storage_texture(4, wgpu::TextureFormat::Rgba32Float),
-                bgl::storage(5, cs, true),
-                bgl::storage_texture(6, wgpu::TextureFormat::Rgba32Float),
-                bgl::texture(7, cs, false),
-                bgl::storage_texture(8, wgpu::TextureFormat::Rgba32Float),
-            ],
-        });
+        let layout = GATHER_INPUTS_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "soler/gather.wgsl");
         let pipeline = crate::passes::compute_pipeline(device, "soler.gather", &module, "cs_gather", &[&layout]);
         let params =
@@ -191,7 +196,7 @@ impl SolerGather {
         resources.push(tv(&occ_view));
         resources.push(tv(l.material));
         resources.push(tv(&spec_view));
-        let group = crate::passes::bind_group(&ctx.device, "soler.gather.inputs", &self.layout, resources);
+        let group = GATHER_INPUTS_BINDINGS.group(&ctx.device, &self.layout, resources);
         let stamps = slot.as_ref().and_then(|s| s.compute(true, true));
         let offset = [(slot_index as u64 * STRIDE) as u32];
         crate::passes::dispatch_2d(encoder, "soler.gather", &self.pipeline, &group, &offset, stamps, l.size);

@@ -9,8 +9,34 @@ use crate::counters::prelude::*;
 
 use super::gather::{GatherParams, LevelInputs};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::timing::PassRec;
+
+/// Bind group `soler.hcb_gather.inputs` of `shaders/soler/hcb_gather.wgsl` (group 0).
+pub const HCB_GATHER_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "soler.hcb_gather.inputs",
+    shader: "soler/hcb_gather.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::UniformDynamic),
+        binding(1, "level_position", Kind::Texture { filterable: false }),
+        binding(2, "level_normal", Kind::Texture { filterable: false }),
+        binding(3, "level_radiance", Kind::Texture { filterable: false }),
+        binding(4, "grid", Kind::Storage { read_only: true }),
+        binding(5, "counter", Kind::Storage { read_only: true }),
+        binding(6, "list", Kind::Storage { read_only: false }),
+    ],
+};
+
+/// Bind group `soler.hcb_gather.args` of `shaders/soler/hcb_gather.wgsl` (group 1).
+pub const HCB_GATHER_ARGS_BINDINGS: Bindings = Bindings {
+    label: "soler.hcb_gather.args",
+    shader: "soler/hcb_gather.wgsl",
+    group: 1,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[binding(0, "args", Kind::Storage { read_only: false })],
+};
 
 pub struct SolerHcbGather {
     layout: wgpu::BindGroupLayout,
@@ -22,23 +48,8 @@ pub struct SolerHcbGather {
 impl SolerHcbGather {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("soler.hcb_gather.inputs"),
-            entries: &[
-                bgl::uniform_dynamic(0, cs),
-                bgl::texture(1, cs, false),
-                bgl::texture(2, cs, false),
-                bgl::texture(3, cs, false),
-                bgl::storage(4, cs, true),
-                bgl::storage(5, cs, true),
-                bgl::storage(6, cs, false),
-            ],
-        });
-        let args_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("soler.hcb_gather.args"),
-            entries: &[bgl::storage(0, cs, false)],
-        });
+        let layout = HCB_GATHER_INPUTS_BINDINGS.layout(device);
+        let args_layout = HCB_GATHER_ARGS_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "soler/hcb_gather.wgsl");
         let args_pipeline = crate::passes::compute_pipeline(
             device,
@@ -76,16 +87,11 @@ impl SolerHcbGather {
                     counter.as_entire_binding(),
                     list.as_entire_binding(),
                 ];
-                crate::passes::bind_group(&ctx.device, "soler.hcb_gather.inputs", &self.layout, resources)
+                HCB_GATHER_INPUTS_BINDINGS.group(&ctx.device, &self.layout, resources)
             })
             .collect();
         let Some(first) = groups.first() else { return };
-        let args_group = crate::passes::bind_group(
-            &ctx.device,
-            "soler.hcb_gather.args",
-            &self.args_layout,
-            vec![args.as_entire_binding()],
-        );
+        let args_group = HCB_GATHER_ARGS_BINDINGS.group(&ctx.device, &self.args_layout, [args.as_entire_binding()]);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("soler.hcb_gather.args"),

@@ -10,7 +10,23 @@ use super::STRIDE;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::timing::PassRec;
+
+/// Bind group `soler.resolve.inputs` of `shaders/soler/resolve.wgsl` (group 0).
+pub const RESOLVE_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "soler.resolve.inputs",
+    shader: "soler/resolve.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "resolve_light", Kind::Texture { filterable: false }),
+        binding(1, "g_albedo", Kind::Texture { filterable: false }),
+        binding(2, "out_radiance", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(3, "resolve_specular", Kind::Texture { filterable: false }),
+        binding(4, "flags", Kind::Uniform),
+    ],
+};
 
 /// Rust twin of `UpsampleParams` in `shaders/soler/upsample.wgsl`.
 #[repr(C)]
@@ -61,16 +77,7 @@ impl SolerUpsample {
             label: Some("soler.upsample.inputs"),
             entries: &entries,
         });
-        let resolve_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("soler.resolve.inputs"),
-            entries: &[
-                bgl::texture(0, cs, false),
-                bgl::texture(1, cs, false),
-                bgl::storage_texture(2, rgba),
-                bgl::texture(3, cs, false),
-                bgl::uniform(4, cs),
-            ],
-        });
+        let resolve_layout = RESOLVE_INPUTS_BINDINGS.layout(device);
         let m_up = crate::shaders::create_module(device, "soler/upsample.wgsl");
         let m_resolve = crate::shaders::create_module(device, "soler/resolve.wgsl");
         let pipeline = crate::passes::compute_pipeline(device, "soler.upsample", &m_up, "cs_upsample", &[&layout]);
@@ -208,7 +215,7 @@ impl SolerUpsample {
         let last_spec = spec.map_or(&dummy, |(_, v)| v);
         let mut resources: Vec<wgpu::BindingResource<'_>> = [last_light, albedo, &out, last_spec].map(tv).into();
         resources.push(self.resolve_params.as_entire_binding());
-        let group = crate::passes::bind_group(&ctx.device, "soler.resolve.inputs", &self.resolve_layout, resources);
+        let group = RESOLVE_INPUTS_BINDINGS.group(&ctx.device, &self.resolve_layout, resources);
         let stamps = slot.as_ref().and_then(|s| s.compute(first, true));
         let size = (self.indirect.width(), self.indirect.height());
         crate::passes::dispatch_2d(encoder, "soler.resolve", &self.resolve_pipeline, &group, &[], stamps, size);
