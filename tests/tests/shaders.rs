@@ -189,11 +189,15 @@ fn declared_as(module: &naga::Module, v: &naga::GlobalVariable, kind: Kind) -> b
         }
         (_, _, TypeInner::Image { dim: ImageDimension::D2, arrayed, class }) => match (kind, class) {
             (Kind::Texture { .. }, ImageClass::Sampled { kind: ScalarKind::Float, multi: false }) => !arrayed,
+            (Kind::TextureArray { .. }, ImageClass::Sampled { kind: ScalarKind::Float, multi: false }) => *arrayed,
             (Kind::UintTexture, ImageClass::Sampled { kind: ScalarKind::Uint, multi: false }) => !arrayed,
             (Kind::Depth, ImageClass::Depth { multi: false }) => !arrayed,
             (Kind::DepthArray, ImageClass::Depth { multi: false }) => *arrayed,
             (Kind::StorageTexture(format), ImageClass::Storage { format: f, .. }) => {
                 !arrayed && format!("{format:?}") == format!("{f:?}")
+            }
+            (Kind::StorageTextureArray(format), ImageClass::Storage { format: f, .. }) => {
+                *arrayed && format!("{format:?}") == format!("{f:?}")
             }
             _ => false,
         },

@@ -48,6 +48,17 @@ pub fn texture(binding: u32, visibility: wgpu::ShaderStages, filterable: bool) -
         count: None,
     }
 }
+/// A 2D float texture array (one layer per view or level).
+pub fn texture_array(binding: u32, visibility: wgpu::ShaderStages, filterable: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable },
+            view_dimension: wgpu::TextureViewDimension::D2Array,
+            multisampled: false,
+        },
+        ..texture(binding, visibility, filterable)
+    }
+}
 pub fn uint_texture(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
@@ -94,6 +105,17 @@ pub fn storage_texture(binding: u32, format: wgpu::TextureFormat) -> wgpu::BindG
             view_dimension: wgpu::TextureViewDimension::D2,
         },
         count: None,
+    }
+}
+/// A write-only 2D storage texture array of `format` (compute).
+pub fn storage_texture_array(binding: u32, format: wgpu::TextureFormat) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        ty: wgpu::BindingType::StorageTexture {
+            access: wgpu::StorageTextureAccess::WriteOnly,
+            format,
+            view_dimension: wgpu::TextureViewDimension::D2Array,
+        },
+        ..storage_texture(binding, format)
     }
 }
 pub fn sampler(

@@ -25,6 +25,10 @@ pub enum Kind {
     Texture {
         filterable: bool,
     },
+    /// A 2D float texture array.
+    TextureArray {
+        filterable: bool,
+    },
     /// A 2D unsigned-integer texture.
     UintTexture,
     /// A 2D depth texture.
@@ -33,6 +37,8 @@ pub enum Kind {
     DepthArray,
     /// A write-only 2D storage texture of this format.
     StorageTexture(wgpu::TextureFormat),
+    /// A write-only 2D storage texture array of this format.
+    StorageTextureArray(wgpu::TextureFormat),
     Sampler(wgpu::SamplerBindingType),
 }
 
@@ -71,11 +77,15 @@ impl Bindings {
                 Kind::UniformDynamic => bgl::uniform_dynamic(b.binding, vis),
                 Kind::Storage { read_only } => bgl::storage(b.binding, vis, read_only),
                 Kind::Texture { filterable } => bgl::texture(b.binding, vis, filterable),
+                Kind::TextureArray { filterable } => bgl::texture_array(b.binding, vis, filterable),
                 Kind::UintTexture => bgl::uint_texture(b.binding, vis),
                 Kind::Depth => bgl::depth(b.binding, vis),
                 Kind::DepthArray => bgl::depth_array(b.binding, vis),
                 Kind::StorageTexture(format) => {
                     wgpu::BindGroupLayoutEntry { visibility: vis, ..bgl::storage_texture(b.binding, format) }
+                }
+                Kind::StorageTextureArray(format) => {
+                    wgpu::BindGroupLayoutEntry { visibility: vis, ..bgl::storage_texture_array(b.binding, format) }
                 }
                 Kind::Sampler(ty) => bgl::sampler(b.binding, vis, ty),
             })

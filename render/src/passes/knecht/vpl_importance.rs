@@ -15,7 +15,7 @@ use glam::Vec4;
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::CameraUniform;
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::reference::vpl::GpuVpl;
@@ -23,6 +23,54 @@ use crate::passes::shadow::{GpuLight, LightView};
 use crate::scene::upload::GpuScene;
 use crate::scene::{LightKind, SceneState, WorldLight};
 pub use crate::settings::knecht::*;
+
+/// Bind group `vpl.importance.inputs` of `shaders/knecht/vpl/importance.wgsl` (group 0).
+pub const IMPORTANCE_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "vpl.importance.inputs",
+    shader: "knecht/vpl/importance.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "vp", Kind::UniformDynamic),
+        binding(1, "lights", Kind::Storage { read_only: true }),
+        binding(2, "lg_position", Kind::Texture { filterable: false }),
+        binding(3, "lg_normal", Kind::Texture { filterable: false }),
+        binding(4, "lg_albedo", Kind::Texture { filterable: false }),
+        binding(5, "lg_material", Kind::Texture { filterable: false }),
+        binding(6, "importance", Kind::StorageTextureArray(wgpu::TextureFormat::R32Float)),
+    ],
+};
+
+/// Bind group `vpl.importance.reduce` of `shaders/knecht/vpl/reduce.wgsl` (group 0).
+pub const IMPORTANCE_REDUCE_BINDINGS: Bindings = Bindings {
+    label: "vpl.importance.reduce",
+    shader: "knecht/vpl/reduce.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "finer", Kind::TextureArray { filterable: false }),
+        binding(1, "coarser", Kind::StorageTextureArray(wgpu::TextureFormat::R32Float)),
+    ],
+};
+
+/// Bind group `vpl.warp.inputs` of `shaders/knecht/vpl/warp.wgsl` (group 0).
+pub const WARP_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "vpl.warp.inputs",
+    shader: "knecht/vpl/warp.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "vp", Kind::UniformDynamic),
+        binding(1, "lights", Kind::Storage { read_only: true }),
+        binding(2, "lg_position", Kind::Texture { filterable: false }),
+        binding(3, "lg_normal", Kind::Texture { filterable: false }),
+        binding(4, "lg_albedo", Kind::Texture { filterable: false }),
+        binding(5, "lg_material", Kind::Texture { filterable: false }),
+        binding(6, "importance", Kind::TextureArray { filterable: false }),
+        binding(7, "vpls", Kind::Storage { read_only: false }),
+        binding(8, "warped", Kind::Storage { read_only: false }),
+    ],
+};
 
 /// Uniform of one view's importance and warp passes; WGSL twin: `ViewParams` in
 /// `shaders/knecht/vpl/importance.wgsl` and `shaders/knecht/vpl/warp.wgsl`.
@@ -108,58 +156,9 @@ pub struct VplImportancePass {
 impl VplImportancePass {
     pub fn new(ctx: &GpuContext, size: u32) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let array_storage = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: cs,
-            ty: wgpu::BindingType::StorageTexture {
-                access: wgpu::StorageTextureAccess::WriteOnly,
-                format: wgpu::TextureFormat::R32Float,
-                view_dimension: wgpu::TextureViewDimension::D2Array,
-            },
-            count: None,
-        };
-        let array_texture = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: cs,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2Array,
-                multisampled: false,
-            },
-            count: None,
-        };
-        let lg = |b| bgl::texture(b, cs, false);
-        let importance_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("vpl.importance.inputs"),
-            entries: &[
-                bgl::uniform_dynamic(0, cs),
-                bgl::storage(1, cs, true),
-                lg(2),
-                lg(3),
-                lg(4),
-                lg(5),
-                array_storage(6),
-            ],
-        });
-        let reduce_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("vpl.importance.reduce"),
-            entries: &[array_texture(0), array_storage(1)],
-        });
-        let warp_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("vpl.warp.inputs"),
-            entries: &[
-                bgl::uniform_dynamic(0, cs),
-                bgl::storage(1, cs, true),
-                lg(2),
-                lg(3),
-                lg(4),
-                lg(5),
-                array_texture(6),
-                bgl::storage(7, cs, false),
-                bgl::storage(8, cs, false),
-            ],
-        });
+        let importance_layout = IMPORTANCE_INPUTS_BINDINGS.layout(device);
+        let reduce_layout = IMPORTANCE_REDUCE_BINDINGS.layout(device);
+        let warp_layout = WARP_INPUTS_BINDINGS.layout(device);
         let m_imp = crate::shaders::create_module(device, "knecht/vpl/importance.wgsl");
         let m_red = crate::shaders::create_module(device, "knecht/vpl/reduce.wgsl");
         let m_warp = crate::shaders::create_module(device, "knecht/vpl/warp.wgsl");
@@ -389,15 +388,15 @@ impl VplImportancePass {
 
     /// Bindings 0–5 shared by the importance and warp passes: the view uniform, the lights
     /// and the view's light G-buffer.
-    fn view_entries<'a>(&'a self, t: &'a crate::passes::gbuffer::GBufferViews) -> [wgpu::BindGroupEntry<'a>; 6] {
+    fn view_resources<'a>(&'a self, t: &'a crate::passes::gbuffer::GBufferViews) -> [wgpu::BindingResource<'a>; 6] {
         let tv = wgpu::BindingResource::TextureView;
         [
-            wgpu::BindGroupEntry { binding: 0, resource: dynamic(&self.params) },
-            wgpu::BindGroupEntry { binding: 1, resource: self.lights.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 2, resource: tv(&t.position) },
-            wgpu::BindGroupEntry { binding: 3, resource: tv(&t.normal) },
-            wgpu::BindGroupEntry { binding: 4, resource: tv(&t.albedo) },
-            wgpu::BindGroupEntry { binding: 5, resource: tv(&t.material) },
+            dynamic(&self.params),
+            self.lights.as_entire_binding(),
+            tv(&t.position),
+            tv(&t.normal),
+            tv(&t.albedo),
+            tv(&t.material),
         ]
     }
 
@@ -431,29 +430,22 @@ impl VplImportancePass {
             .take(if importance { views } else { 0 })
             .map(|v| {
                 let t = &v.gbuffer.targets.views;
-                ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("vpl.importance.inputs"),
-                    layout: &self.importance_layout,
-                    entries: &self
-                        .view_entries(t)
-                        .into_iter()
-                        .chain([wgpu::BindGroupEntry { binding: 6, resource: tv(&level0) }])
-                        .collect::<Vec<_>>(),
-                })
+                IMPORTANCE_INPUTS_BINDINGS.group(
+                    &ctx.device,
+                    &self.importance_layout,
+                    self.view_resources(t).into_iter().chain([tv(&level0)]),
+                )
             })
             .collect();
         let reduce_groups: Vec<wgpu::BindGroup> = (1..levels)
             .map(|l| {
                 let finer = self.mip_view(l - 1, "vpl.importance.finer");
                 let coarser = self.mip_view(l, "vpl.importance.coarser");
-                ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("vpl.importance.reduce"),
-                    layout: &self.reduce_layout,
-                    entries: &[
-                        wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&finer) },
-                        wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&coarser) },
-                    ],
-                })
+                IMPORTANCE_REDUCE_BINDINGS.group(
+                    &ctx.device,
+                    &self.reduce_layout,
+                    [wgpu::BindingResource::TextureView(&finer), wgpu::BindingResource::TextureView(&coarser)],
+                )
             })
             .collect();
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -494,19 +486,15 @@ impl VplImportancePass {
             .take(jobs.len())
             .map(|v| {
                 let t = &v.gbuffer.targets.views;
-                ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("vpl.warp.inputs"),
-                    layout: &self.warp_layout,
-                    entries: &self
-                        .view_entries(t)
-                        .into_iter()
-                        .chain([
-                            wgpu::BindGroupEntry { binding: 6, resource: tv(&full) },
-                            wgpu::BindGroupEntry { binding: 7, resource: self.vpls.as_entire_binding() },
-                            wgpu::BindGroupEntry { binding: 8, resource: self.warped.as_entire_binding() },
-                        ])
-                        .collect::<Vec<_>>(),
-                })
+                WARP_INPUTS_BINDINGS.group(
+                    &ctx.device,
+                    &self.warp_layout,
+                    self.view_resources(t).into_iter().chain([
+                        tv(&full),
+                        self.vpls.as_entire_binding(),
+                        self.warped.as_entire_binding(),
+                    ]),
+                )
             })
             .collect();
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
