@@ -92,7 +92,7 @@ fn gpu_splat(
         wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::STORAGE,
     );
     let counter = buf("test.counter", &[0u8; 32], wgpu::BufferUsages::STORAGE);
-    let mut pass = HcbSplatPass::new(&ctx, gi_render::gpu::bgl::uniform(0, wgpu::ShaderStages::VERTEX), w, h);
+    let mut pass = HcbSplatPass::new(&ctx, w, h);
     pass.limit_bins(&ctx, bins);
     let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.splat") });
     let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());

@@ -155,8 +155,7 @@ fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
     let camera_buf = buffer("test.camera", bytemuck::bytes_of(&camera), wgpu::BufferUsages::UNIFORM);
     let vpl_buf = buffer("test.vpls", bytemuck::cast_slice(&gpu_vpls), wgpu::BufferUsages::STORAGE);
     let g = SyntheticGBuffer::new(&ctx, w, h, &pos, &nrm, &alb, &mat, &vec![[0.0; 4]; len]);
-    let mut pass =
-        InterleavePass::new(&ctx, gi_render::gpu::bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h, n, false);
+    let mut pass = InterleavePass::new(&ctx, w, h, n, false);
     let mut timer = gi_render::timing::GpuTimer::new(&ctx);
     // Frame 0 with the full BRDF at the receiver, frame 1 (another slot→tile map) diffuse only.
     let (mut lit, mut dark) = (0, 0);
@@ -286,7 +285,7 @@ fn geometry_aware_filter_on_the_gpu_equals_the_cpu() {
     let zero = vec![[0.0; 4]; len];
     let g = SyntheticGBuffer::new(&ctx, w, h, &pos, &nrm, &albedo, &zero, &zero);
     let src_tex = texture(&ctx, "test.src", w, h, &src, false);
-    let pass = InterleavePass::new(&ctx, gi_render::gpu::bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h, n, false);
+    let pass = InterleavePass::new(&ctx, w, h, n, false);
     // E in half floats, as the gather writes it.
     let irr_tex = texture(&ctx, "test.irradiance", w, h, &irr, true);
     let s = InterleaveSettings { n, ..Default::default() };

@@ -4,7 +4,6 @@
 
 use super::StagePasses;
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
 use crate::lab_settings::LabSettings;
 use crate::passes::emitters::EmitterPass;
 use crate::passes::gautron::stage::GautronStage;
@@ -75,10 +74,8 @@ impl StagePasses {
         match tiles.filter(|_| p.uses_knecht_vpls()) {
             Some(tiles) => {
                 let created = self.interleave.is_none();
-                let camera_entry = bgl::uniform(0, wgpu::ShaderStages::COMPUTE);
                 let split = s.interleave.split_passes;
-                let i =
-                    self.interleave.get_or_insert_with(|| InterleavePass::new(ctx, camera_entry, w, h, tiles, split));
+                let i = self.interleave.get_or_insert_with(|| InterleavePass::new(ctx, w, h, tiles, split));
                 fresh |= i.ensure(ctx, w, h, tiles, split) | created;
             }
             None => fresh |= self.interleave.take().is_some(),

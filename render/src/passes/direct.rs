@@ -20,6 +20,25 @@ use crate::gpu::bindings::{Bindings, Kind, binding};
 pub use crate::settings::direct::*;
 use crate::timing::PassRec;
 
+/// Bind group `direct.inputs` of `shaders/direct/direct.wgsl` (group 0).
+pub const DIRECT_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "direct.inputs",
+    shader: "direct/direct.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "camera", Kind::Uniform),
+        binding(1, "params", Kind::Uniform),
+        binding(2, "lights", Kind::Storage { read_only: true }),
+        binding(3, "light_view_proj", Kind::Storage { read_only: true }),
+        binding(4, "shadow_map", Kind::DepthArray),
+        binding(5, "shadow_sampler", Kind::Sampler(wgpu::SamplerBindingType::Comparison)),
+        binding(6, "emitter_vpls", Kind::Storage { read_only: true }),
+        binding(7, "emitter_ism", Kind::Texture { filterable: false }),
+        binding(8, "emitter_exact", Kind::Depth),
+    ],
+};
+
 /// Bind group `direct.gbuffer` of `shaders/direct/direct.wgsl` (group 1).
 pub const DIRECT_GBUFFER_BINDINGS: Bindings = Bindings {
     label: "direct.gbuffer",
@@ -97,24 +116,11 @@ pub struct DirectInputs<'a> {
 }
 
 impl DirectPass {
-    pub fn new(ctx: &GpuContext, camera_layout_entry: wgpu::BindGroupLayoutEntry, width: u32, height: u32) -> Self {
+    pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
         let device = &ctx.device;
         let cs = wgpu::ShaderStages::COMPUTE;
         let module = crate::shaders::create_module(device, "direct/direct.wgsl");
-        let layout0 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("direct.inputs"),
-            entries: &[
-                camera_layout_entry,
-                crate::gpu::bgl::uniform(1, cs),
-                crate::gpu::bgl::storage(2, cs, true),
-                crate::gpu::bgl::storage(3, cs, true),
-                crate::gpu::bgl::depth_array(4, cs),
-                crate::gpu::bgl::sampler(5, cs, wgpu::SamplerBindingType::Comparison),
-                crate::gpu::bgl::storage(6, cs, true),
-                crate::gpu::bgl::texture(7, cs, false),
-                crate::gpu::bgl::depth(8, cs),
-            ],
-        });
+        let layout0 = DIRECT_INPUTS_BINDINGS.layout(device);
         let layout1 = DIRECT_GBUFFER_BINDINGS.layout(device);
         let pipeline = super::compute_pipeline(device, "direct.pipeline", &module, "cs_main", &[&layout0, &layout1]);
         let layout2 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -286,31 +292,25 @@ impl DirectPass {
         if !lights.views.is_empty() {
             ctx.queue.write_buffer(&self.matrices, 0, bytemuck::cast_slice(&lights.views));
         }
-        let group0 = device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("direct.inputs"),
-            layout: &self.layout0,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: camera.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: self.params.as_entire_binding() },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: &self.lights,
-                        offset: 0,
-                        size: std::num::NonZeroU64::new(lights.lights.len() as u64 * light_size),
-                    }),
-                },
-                wgpu::BindGroupEntry { binding: 3, resource: self.matrices.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(shadow_map) },
-                wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::Sampler(&self.sampler) },
-                wgpu::BindGroupEntry {
-                    binding: 6,
-                    resource: emitters.map_or(&self.no_emitters, |e| &e.list).as_entire_binding(),
-                },
-                wgpu::BindGroupEntry { binding: 7, resource: wgpu::BindingResource::TextureView(ism) },
-                wgpu::BindGroupEntry { binding: 8, resource: wgpu::BindingResource::TextureView(exact) },
+        let group0 = DIRECT_INPUTS_BINDINGS.group(
+            device,
+            &self.layout0,
+            [
+                camera.as_entire_binding(),
+                self.params.as_entire_binding(),
+                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &self.lights,
+                    offset: 0,
+                    size: std::num::NonZeroU64::new(lights.lights.len() as u64 * light_size),
+                }),
+                self.matrices.as_entire_binding(),
+                wgpu::BindingResource::TextureView(shadow_map),
+                wgpu::BindingResource::Sampler(&self.sampler),
+                emitters.map_or(&self.no_emitters, |e| &e.list).as_entire_binding(),
+                wgpu::BindingResource::TextureView(ism),
+                wgpu::BindingResource::TextureView(exact),
             ],
-        });
+        );
         let tv = wgpu::BindingResource::TextureView;
         let group1 = DIRECT_GBUFFER_BINDINGS.group(
             device,

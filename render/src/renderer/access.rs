@@ -78,9 +78,7 @@ impl Renderer {
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let gbuffer = passes.contains(&"gbuffer").then(|| GBufferPass::new(&ctx, &self.gpu_scene, w, h));
         let shadow = passes.contains(&"direct.shadow").then(|| ShadowPass::new(&ctx, &self.gpu_scene));
-        let direct = passes
-            .contains(&"direct")
-            .then(|| DirectPass::new(&ctx, bgl::uniform(0, wgpu::ShaderStages::COMPUTE), w, h));
+        let direct = passes.contains(&"direct").then(|| DirectPass::new(&ctx, w, h));
         let compose = passes.contains(&"compose").then(|| ComposePass::new(&ctx, w, h));
         let explain = (passes.contains(&"explain") && self.stages.explain_vpl.is_some()).then(|| {
             crate::passes::knecht::explain::VplExplainPass::new(&ctx, bgl::uniform(0, wgpu::ShaderStages::COMPUTE))

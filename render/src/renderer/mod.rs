@@ -23,7 +23,6 @@ pub(crate) use crate::chain::StagePasses;
 use crate::chain::StepList;
 use crate::clock::Clock;
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
 use crate::lab_settings::LabSettings;
 use crate::passes::CameraUniform;
 use crate::passes::compose::ComposePass;
@@ -132,7 +131,7 @@ impl Renderer {
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: camera_buffer.as_entire_binding() }],
         });
         let shadow = ShadowPass::new(&ctx, &gpu_scene);
-        let direct = DirectPass::new(&ctx, bgl::uniform(0, wgpu::ShaderStages::COMPUTE), width, height);
+        let direct = DirectPass::new(&ctx, width, height);
         let compose = ComposePass::new(&ctx, width, height);
         let sky_background = crate::passes::sky::SkyBackground::new(&ctx.device);
         let timer = GpuTimer::new(&ctx);

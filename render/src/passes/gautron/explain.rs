@@ -177,7 +177,6 @@ impl crate::explain::Replay for GautronExplainPass {
 impl GautronExplainPass {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let _cs = wgpu::ShaderStages::COMPUTE;
         let layout = GAUTRON_INPUTS_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "gautron/explain.wgsl");
         let pipeline = |label, entry| crate::passes::compute_pipeline(device, label, &module, entry, &[&layout]);

@@ -183,7 +183,6 @@ impl crate::explain::Replay for HcbExplainPass {
 impl HcbExplainPass {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let _cs = wgpu::ShaderStages::COMPUTE;
         let layout = HCB_INPUTS_BINDINGS.layout(device);
         let args_layout = HCB_ARGS_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "hcb/explain.wgsl");

@@ -13,6 +13,28 @@ use crate::passes::bins::{Bins, SplatMethod};
 use crate::timing::PassRec;
 use crate::timing::Slot;
 
+/// Bind group `hcb.splat.binned` of `shaders/hcb/splat.wgsl` (group 0).
+pub const SPLAT_BINNED_BINDINGS: Bindings = Bindings {
+    label: "hcb.splat.binned",
+    shader: "hcb/splat.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "camera", Kind::Uniform),
+        binding(1, "hp", Kind::Uniform),
+        binding(2, "samples", Kind::Storage { read_only: true }),
+        binding(3, "g_position", Kind::Texture { filterable: false }),
+        binding(4, "g_normal", Kind::Texture { filterable: false }),
+        binding(5, "counter", Kind::Storage { read_only: true }),
+        binding(6, "args", Kind::Storage { read_only: true }),
+        binding(7, "prev_sum", Kind::Texture { filterable: false }),
+        binding(8, "out_sum", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(9, "rest", Kind::Storage { read_only: false }),
+        binding(10, "prev_dir", Kind::Texture { filterable: false }),
+        binding(11, "out_dir", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+    ],
+};
+
 /// Bind group `hcb.normalize.inputs` of `shaders/hcb/normalize.wgsl` (group 0).
 pub const NORMALIZE_INPUTS_BINDINGS: Bindings = Bindings {
     label: "hcb.normalize.inputs",
@@ -80,14 +102,13 @@ pub const UNCOVERED_BYTES: u64 = 16 + UNCOVERED_LIST as u64 * 4;
 const ACCUM_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 impl HcbSplatPass {
-    pub fn new(ctx: &GpuContext, camera_entry: wgpu::BindGroupLayoutEntry, width: u32, height: u32) -> Self {
+    pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
         let device = &ctx.device;
-        let (vs, fs, cs) = (wgpu::ShaderStages::VERTEX, wgpu::ShaderStages::FRAGMENT, wgpu::ShaderStages::COMPUTE);
-        let camera_entry = wgpu::BindGroupLayoutEntry { visibility: vs | fs, ..camera_entry };
+        let (vs, fs) = (wgpu::ShaderStages::VERTEX, wgpu::ShaderStages::FRAGMENT);
         let splat_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("hcb.splat.inputs"),
             entries: &[
-                camera_entry,
+                bgl::uniform(0, vs | fs),
                 bgl::uniform(1, vs | fs),
                 bgl::storage(2, vs | fs, true),
                 bgl::texture(3, fs, false),
@@ -142,23 +163,7 @@ impl HcbSplatPass {
         });
         let normalize_pipeline =
             crate::passes::compute_pipeline(device, "hcb.normalize", &m_norm, "cs_normalize", &[&normalize_layout]);
-        let binned_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("hcb.splat.binned"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry { visibility: cs, ..camera_entry },
-                bgl::uniform(1, cs),
-                bgl::storage(2, cs, true),
-                bgl::texture(3, cs, false),
-                bgl::texture(4, cs, false),
-                bgl::storage(5, cs, true),
-                bgl::storage(6, cs, true),
-                bgl::texture(7, cs, false),
-                bgl::storage_texture(8, ACCUM_FORMAT),
-                bgl::storage(9, cs, false),
-                bgl::texture(10, cs, false),
-                bgl::storage_texture(11, ACCUM_FORMAT),
-            ],
-        });
+        let binned_layout = SPLAT_BINNED_BINDINGS.layout(device);
         let mut bins = Bins::new(ctx, "hcb.splat.bins");
         bins.ensure(ctx, width, height, width.max(1) * height.max(1));
         let layouts = [&binned_layout, bins.layout()];
@@ -361,21 +366,17 @@ impl HcbSplatPass {
         let out = crate::passes::view(&self.weight_sum[dst], "hcb.weight_sum");
         let prev_dir = crate::passes::view(&self.weight_dir[src], "hcb.weight_sum.direction");
         let out_dir = crate::passes::view(&self.weight_dir[dst], "hcb.weight_sum.direction");
-        let binned = crate::passes::bind_group(
+        let binned = SPLAT_BINNED_BINDINGS.group(
             &ctx.device,
-            "hcb.splat.binned",
             &self.binned_layout,
-            inputs
-                .into_iter()
-                .chain([
-                    draw_args.0.as_entire_binding(),
-                    tv(&prev),
-                    tv(&out),
-                    self.rest.as_entire_binding(),
-                    tv(&prev_dir),
-                    tv(&out_dir),
-                ])
-                .collect(),
+            inputs.into_iter().chain([
+                draw_args.0.as_entire_binding(),
+                tv(&prev),
+                tv(&out),
+                self.rest.as_entire_binding(),
+                tv(&prev_dir),
+                tv(&out_dir),
+            ]),
         );
         // Samples beyond the bins (more than 65,536 at this size): their quads after them.
         let remainder = self.width as u64 * self.height as u64 > self.bins.capacity() as u64;

@@ -5,7 +5,6 @@
 //! before the build adds samples only where texels stay incomplete.
 
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
 use crate::lab_settings::LabSettings;
 use crate::passes::hcb::cache::{CacheCounts, CacheFrame, HcbCachePass, cache_views};
 use crate::passes::hcb::{GatherSet, GpuHcbSample, HcbFrame, HcbGatherPass, HcbPass, HcbSettings, HcbSplatPass};
@@ -72,7 +71,7 @@ impl HcbStage {
         Self {
             build: HcbPass::new(ctx, width, height, s.hcb.levels),
             gather: HcbGatherPass::new(ctx),
-            splat: HcbSplatPass::new(ctx, bgl::uniform(0, wgpu::ShaderStages::VERTEX), width, height),
+            splat: HcbSplatPass::new(ctx, width, height),
             cache: None,
             cached_with: None,
         }

@@ -17,12 +17,33 @@ use glam::Vec4;
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
 use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::gbuffer::{ALBEDO_FORMAT, GBufferViews, MATERIAL_FORMAT, NORMAL_FORMAT, POSITION_FORMAT};
 use crate::passes::reference::vpl_visibility::{GatherVisibility, no_visibility_atlases};
 pub use crate::settings::knecht::*;
 use crate::timing::PassRec;
+
+/// Bind group `interleave.gather.inputs` of `shaders/knecht/interleave/gather.wgsl` (group 0).
+pub const GATHER_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "interleave.gather.inputs",
+    shader: "knecht/interleave/gather.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "camera", Kind::Uniform),
+        binding(1, "params", Kind::Uniform),
+        binding(2, "vpls", Kind::Storage { read_only: true }),
+        binding(3, "ism_atlas", Kind::Texture { filterable: false }),
+        binding(4, "exact_atlas", Kind::Depth),
+        binding(5, "s_position", Kind::Texture { filterable: false }),
+        binding(6, "s_normal", Kind::Texture { filterable: false }),
+        binding(7, "s_albedo", Kind::Texture { filterable: false }),
+        binding(8, "s_material", Kind::Texture { filterable: false }),
+        binding(9, "out_accum", Kind::StorageTexture(wgpu::TextureFormat::Rgba16Float)),
+        binding(10, "tile_offsets", Kind::Storage { read_only: true }),
+        binding(11, "out_irradiance", Kind::StorageTexture(wgpu::TextureFormat::Rgba16Float)),
+    ],
+};
 
 /// Bind group `interleave.split.inputs` of `shaders/knecht/interleave/split.wgsl` (group 0).
 pub const SPLIT_INPUTS_BINDINGS: Bindings = Bindings {
@@ -168,35 +189,10 @@ pub struct ShadeInputs<'a> {
 }
 
 impl InterleavePass {
-    pub fn new(
-        ctx: &GpuContext,
-        camera: wgpu::BindGroupLayoutEntry,
-        width: u32,
-        height: u32,
-        n: u32,
-        split_passes: bool,
-    ) -> Self {
+    pub fn new(ctx: &GpuContext, width: u32, height: u32, n: u32, split_passes: bool) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let t = |b| bgl::texture(b, cs, false);
         let split_layout = SPLIT_INPUTS_BINDINGS.layout(device);
-        let gather_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("interleave.gather.inputs"),
-            entries: &[
-                camera,
-                bgl::uniform(1, cs),
-                bgl::storage(2, cs, true),
-                t(3),
-                bgl::depth(4, cs),
-                t(5),
-                t(6),
-                t(7),
-                t(8),
-                bgl::storage_texture(9, LIGHT_FORMAT),
-                bgl::storage(10, cs, true),
-                bgl::storage_texture(11, LIGHT_FORMAT),
-            ],
-        });
+        let gather_layout = GATHER_INPUTS_BINDINGS.layout(device);
         let merge_layout = MERGE_INPUTS_BINDINGS.layout(device);
         let filter_layout = FILTER_BINDINGS.layout(device);
         let module = |p| crate::shaders::create_module(device, p);
@@ -440,26 +436,25 @@ impl InterleavePass {
         // split pixel's source pixel (fused) and writes the split accumulation buffer or the
         // merged light.
         let gather_group = |p: [&wgpu::TextureView; 4], out: &wgpu::TextureView, irr: &wgpu::TextureView| {
-            let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
             let tv = wgpu::BindingResource::TextureView;
-            ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("interleave.gather.inputs"),
-                layout: &self.gather_layout,
-                entries: &[
-                    entry(0, camera.as_entire_binding()),
-                    entry(1, self.gather_params.as_entire_binding()),
-                    entry(2, vpls.as_entire_binding()),
-                    entry(3, tv(atlas_ism)),
-                    entry(4, tv(atlas_exact)),
-                    entry(5, tv(p[0])),
-                    entry(6, tv(p[1])),
-                    entry(7, tv(p[2])),
-                    entry(8, tv(p[3])),
-                    entry(9, tv(out)),
-                    entry(10, self.tile_offsets.as_entire_binding()),
-                    entry(11, tv(irr)),
+            GATHER_INPUTS_BINDINGS.group(
+                &ctx.device,
+                &self.gather_layout,
+                [
+                    camera.as_entire_binding(),
+                    self.gather_params.as_entire_binding(),
+                    vpls.as_entire_binding(),
+                    tv(atlas_ism),
+                    tv(atlas_exact),
+                    tv(p[0]),
+                    tv(p[1]),
+                    tv(p[2]),
+                    tv(p[3]),
+                    tv(out),
+                    self.tile_offsets.as_entire_binding(),
+                    tv(irr),
                 ],
-            })
+            )
         };
         let (sw, sh) = (tw * n, th * n);
         let tile = crate::passes::TILE;

@@ -14,7 +14,6 @@
 use glam::{Mat4, Vec3, Vec4};
 
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
 use crate::maths::halton;
 use crate::passes::reference::vpl::{BatchView, VplSamplePass};
 use crate::passes::reference::vpl_gather::{GatherParams, VplGatherPass};
@@ -45,7 +44,7 @@ impl ReferenceVpls {
         Self {
             sample: VplSamplePass::new(ctx, gpu_scene, rs.light_gbuffer_size, rs.vpls_per_frame),
             visibility: VplVisibilityPass::new(ctx, gpu_scene),
-            gather: VplGatherPass::new(ctx, bgl::uniform(0, wgpu::ShaderStages::COMPUTE), width, height),
+            gather: VplGatherPass::new(ctx, width, height),
             batches: 0,
             fingerprint: Vec::new(),
         }

@@ -10,8 +10,30 @@ use glam::Vec4;
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::gbuffer::GBufferViews;
 use crate::timing::PassRec;
+
+/// Bind group `indirect.gather.inputs` of `shaders/reference/gather.wgsl` (group 0).
+pub const INDIRECT_GATHER_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "indirect.gather.inputs",
+    shader: "reference/gather.wgsl",
+    group: 0,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "camera", Kind::Uniform),
+        binding(1, "params", Kind::Uniform),
+        binding(2, "vpls", Kind::Storage { read_only: true }),
+        binding(3, "atlas", Kind::Depth),
+        binding(4, "g_position", Kind::Texture { filterable: false }),
+        binding(5, "g_normal", Kind::Texture { filterable: false }),
+        binding(6, "g_albedo", Kind::Texture { filterable: false }),
+        binding(7, "g_material", Kind::Texture { filterable: false }),
+        binding(8, "accum_prev", Kind::Texture { filterable: false }),
+        binding(9, "out_raw", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(10, "out_accum", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+    ],
+};
 
 pub const INDIRECT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
@@ -43,26 +65,10 @@ pub struct VplGatherPass {
 }
 
 impl VplGatherPass {
-    pub fn new(ctx: &GpuContext, camera_layout_entry: wgpu::BindGroupLayoutEntry, width: u32, height: u32) -> Self {
+    pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
         let module = crate::shaders::create_module(device, "reference/gather.wgsl");
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("indirect.gather.inputs"),
-            entries: &[
-                camera_layout_entry,
-                crate::gpu::bgl::uniform(1, cs),
-                crate::gpu::bgl::storage(2, cs, true),
-                crate::gpu::bgl::depth(3, cs),
-                crate::gpu::bgl::texture(4, cs, false),
-                crate::gpu::bgl::texture(5, cs, false),
-                crate::gpu::bgl::texture(6, cs, false),
-                crate::gpu::bgl::texture(7, cs, false),
-                crate::gpu::bgl::texture(8, cs, false),
-                crate::gpu::bgl::storage_texture(9, INDIRECT_FORMAT),
-                crate::gpu::bgl::storage_texture(10, INDIRECT_FORMAT),
-            ],
-        });
+        let layout = INDIRECT_GATHER_INPUTS_BINDINGS.layout(device);
         let pipeline = crate::passes::compute_pipeline(device, "indirect.gather", &module, "cs_main", &[&layout]);
         let params = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("indirect.gather.params"),
@@ -134,23 +140,23 @@ impl VplGatherPass {
         let accum = crate::passes::view(&self.accum, "indirect.accum");
         let prev = crate::passes::view(&self.accum_prev, "indirect.accum_prev");
         let tv = wgpu::BindingResource::TextureView;
-        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("indirect.gather.inputs"),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: camera.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: self.params.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: vpl_list.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: tv(atlas) },
-                wgpu::BindGroupEntry { binding: 4, resource: tv(&gbuffer.position) },
-                wgpu::BindGroupEntry { binding: 5, resource: tv(&gbuffer.normal) },
-                wgpu::BindGroupEntry { binding: 6, resource: tv(&gbuffer.albedo) },
-                wgpu::BindGroupEntry { binding: 7, resource: tv(&gbuffer.material) },
-                wgpu::BindGroupEntry { binding: 8, resource: tv(&prev) },
-                wgpu::BindGroupEntry { binding: 9, resource: tv(&raw) },
-                wgpu::BindGroupEntry { binding: 10, resource: tv(&accum) },
+        let group = INDIRECT_GATHER_INPUTS_BINDINGS.group(
+            &ctx.device,
+            &self.layout,
+            [
+                camera.as_entire_binding(),
+                self.params.as_entire_binding(),
+                vpl_list.as_entire_binding(),
+                tv(atlas),
+                tv(&gbuffer.position),
+                tv(&gbuffer.normal),
+                tv(&gbuffer.albedo),
+                tv(&gbuffer.material),
+                tv(&prev),
+                tv(&raw),
+                tv(&accum),
             ],
-        });
+        );
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("indirect.gather"),
