@@ -5,12 +5,17 @@ use gi_render::gpu::bindings::Kind;
 use gi_render::shaders::{ENTRY_MODULES, SOURCES, resolve};
 
 fn parse(path: &str) -> naga::Module {
+    parse_with_info(path).0
+}
+
+/// The module and its validation info (which globals each entry point uses).
+fn parse_with_info(path: &str) -> (naga::Module, naga::valid::ModuleInfo) {
     let src = resolve(path).unwrap_or_else(|e| panic!("{path}: {e}"));
     let module = naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{path}: {}", e.emit_to_string(&src)));
-    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
+    let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
         .validate(&module)
         .unwrap_or_else(|e| panic!("{path}: {}", e.emit_to_string(&src)));
-    module
+    (module, info)
 }
 
 fn struct_size(module: &naga::Module, name: &str) -> u32 {
@@ -193,11 +198,16 @@ fn declared_as(module: &naga::Module, v: &naga::GlobalVariable, kind: Kind) -> b
             (Kind::UintTexture, ImageClass::Sampled { kind: ScalarKind::Uint, multi: false }) => !arrayed,
             (Kind::Depth, ImageClass::Depth { multi: false }) => !arrayed,
             (Kind::DepthArray, ImageClass::Depth { multi: false }) => *arrayed,
-            (Kind::StorageTexture(format), ImageClass::Storage { format: f, .. }) => {
-                !arrayed && format!("{format:?}") == format!("{f:?}")
-            }
             (Kind::StorageTextureArray(format), ImageClass::Storage { format: f, .. }) => {
                 *arrayed && format!("{format:?}") == format!("{f:?}")
+            }
+            (Kind::StorageTexture(format), ImageClass::Storage { format: f, access }) => {
+                !arrayed && !access.contains(StorageAccess::LOAD) && format!("{format:?}") == format!("{f:?}")
+            }
+            (Kind::StorageTextureReadWrite(format), ImageClass::Storage { format: f, access }) => {
+                !arrayed
+                    && access.contains(StorageAccess::LOAD | StorageAccess::STORE)
+                    && format!("{format:?}") == format!("{f:?}")
             }
             _ => false,
         },
@@ -210,18 +220,31 @@ fn declared_as(module: &naga::Module, v: &naga::GlobalVariable, kind: Kind) -> b
 
 /// Issue #52 point 3: every pass's bind group description (`passes::BINDINGS`) matches its
 /// shader, binding by binding (number, variable name, kind), and describes every binding the
-/// shader declares in that group: the layout and the group made from the description are the
-/// ones the shader reads.
+/// shader declares in that group (or, for a description naming its entry point, every binding
+/// of the group that entry point uses): the layout and the group made from the description
+/// are the ones the shader reads.
 #[test]
 fn every_bind_group_description_matches_its_shader() {
     assert!(!gi_render::passes::BINDINGS.is_empty());
     for d in gi_render::passes::BINDINGS {
-        let module = parse(d.shader);
+        let (module, info) = parse_with_info(d.shader);
+        // With an entry point named: the bindings of the group that entry point uses.
+        let used = |h: naga::Handle<naga::GlobalVariable>| match d.entry {
+            None => true,
+            Some(name) => {
+                let k = module
+                    .entry_points
+                    .iter()
+                    .position(|e| e.name == name)
+                    .unwrap_or_else(|| panic!("{}: {} has no entry point {name}", d.label, d.shader));
+                !info.get_entry_point(k)[h].is_empty()
+            }
+        };
         let declared: Vec<&naga::GlobalVariable> = module
             .global_variables
             .iter()
+            .filter(|(h, v)| v.binding.as_ref().is_some_and(|b| b.group == d.group) && used(*h))
             .map(|(_, v)| v)
-            .filter(|v| v.binding.as_ref().is_some_and(|b| b.group == d.group))
             .collect();
         for b in d.list {
             let v =

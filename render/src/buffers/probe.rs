@@ -13,6 +13,7 @@ pub const PROBE_INPUTS_BINDINGS: Bindings = Bindings {
     label: "probe.inputs",
     shader: "view/probe.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "jobs", Kind::Uniform),

@@ -107,6 +107,17 @@ pub fn storage_texture(binding: u32, format: wgpu::TextureFormat) -> wgpu::BindG
         count: None,
     }
 }
+/// A read-write 2D storage texture of `format` (compute).
+pub fn storage_texture_read_write(binding: u32, format: wgpu::TextureFormat) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        ty: wgpu::BindingType::StorageTexture {
+            access: wgpu::StorageTextureAccess::ReadWrite,
+            format,
+            view_dimension: wgpu::TextureViewDimension::D2,
+        },
+        ..storage_texture(binding, format)
+    }
+}
 /// A write-only 2D storage texture array of `format` (compute).
 pub fn storage_texture_array(binding: u32, format: wgpu::TextureFormat) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {

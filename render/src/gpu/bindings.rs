@@ -39,6 +39,8 @@ pub enum Kind {
     StorageTexture(wgpu::TextureFormat),
     /// A write-only 2D storage texture array of this format.
     StorageTextureArray(wgpu::TextureFormat),
+    /// A read-write 2D storage texture of this format.
+    StorageTextureReadWrite(wgpu::TextureFormat),
     Sampler(wgpu::SamplerBindingType),
 }
 
@@ -62,6 +64,10 @@ pub struct Bindings {
     pub label: &'static str,
     pub shader: &'static str,
     pub group: u32,
+    /// The entry point the group serves, where the shader's entry points bind different
+    /// subsets of one group number (the direct light's group 2, the ISM's pull and push);
+    /// None: the group is every binding the shader declares under its number.
+    pub entry: Option<&'static str>,
     pub visibility: wgpu::ShaderStages,
     pub list: &'static [Binding],
 }
@@ -86,6 +92,9 @@ impl Bindings {
                 }
                 Kind::StorageTextureArray(format) => {
                     wgpu::BindGroupLayoutEntry { visibility: vis, ..bgl::storage_texture_array(b.binding, format) }
+                }
+                Kind::StorageTextureReadWrite(format) => {
+                    wgpu::BindGroupLayoutEntry { visibility: vis, ..bgl::storage_texture_read_write(b.binding, format) }
                 }
                 Kind::Sampler(ty) => bgl::sampler(b.binding, vis, ty),
             })

@@ -74,6 +74,7 @@ pub const COMPOSE_BINDINGS: Bindings = Bindings {
     label: "compose.inputs",
     shader: "compose/compose.wgsl",
     group: 0,
+    entry: None,
     visibility: CS,
     list: &[
         binding(1, "direct", TEXTURE),
@@ -97,6 +98,7 @@ pub const TONEMAP_BINDINGS: Bindings = Bindings {
     label: "compose.tonemap",
     shader: "compose/tonemap.wgsl",
     group: 0,
+    entry: None,
     visibility: CS,
     list: &[
         binding(0, "params", Kind::Uniform),
@@ -111,6 +113,7 @@ pub const LUMINANCE_BINDINGS: Bindings = Bindings {
     label: "compose.luminance",
     shader: "compose/luminance.wgsl",
     group: 0,
+    entry: None,
     visibility: CS,
     list: &[binding(1, "result", READ_WRITE), binding(2, "partials", READ_WRITE)],
 };

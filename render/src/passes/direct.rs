@@ -25,6 +25,7 @@ pub const DIRECT_INPUTS_BINDINGS: Bindings = Bindings {
     label: "direct.inputs",
     shader: "direct/direct.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "camera", Kind::Uniform),
@@ -39,11 +40,34 @@ pub const DIRECT_INPUTS_BINDINGS: Bindings = Bindings {
     ],
 };
 
+/// Bind group `direct.atlas` of `shaders/direct/direct.wgsl` (group 2 of `cs_atlas`): the
+/// atlas of record hemispheres Gautron's stage lights (`DirectAtlas::shade_atlas`).
+pub const DIRECT_ATLAS_BINDINGS: Bindings = Bindings {
+    label: "direct.atlas",
+    shader: "direct/direct.wgsl",
+    group: 2,
+    entry: Some("cs_atlas"),
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[binding(0, "atlas", Kind::Uniform), binding(1, "viewers", Kind::Storage { read_only: true })],
+};
+
+/// Bind group `direct.diffuse` of `shaders/direct/direct.wgsl` (group 2 of
+/// `cs_main_diffuse`): the diffuse part Soler et al.'s senders read.
+pub const DIRECT_DIFFUSE_BINDINGS: Bindings = Bindings {
+    label: "direct.diffuse",
+    shader: "direct/direct.wgsl",
+    group: 2,
+    entry: Some("cs_main_diffuse"),
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[binding(2, "out_diffuse", Kind::StorageTexture(RADIANCE_FORMAT))],
+};
+
 /// Bind group `direct.gbuffer` of `shaders/direct/direct.wgsl` (group 1).
 pub const DIRECT_GBUFFER_BINDINGS: Bindings = Bindings {
     label: "direct.gbuffer",
     shader: "direct/direct.wgsl",
     group: 1,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "g_position", Kind::Texture { filterable: false }),
@@ -118,15 +142,11 @@ pub struct DirectInputs<'a> {
 impl DirectPass {
     pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
         let module = crate::shaders::create_module(device, "direct/direct.wgsl");
         let layout0 = DIRECT_INPUTS_BINDINGS.layout(device);
         let layout1 = DIRECT_GBUFFER_BINDINGS.layout(device);
         let pipeline = super::compute_pipeline(device, "direct.pipeline", &module, "cs_main", &[&layout0, &layout1]);
-        let layout2 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("direct.atlas"),
-            entries: &[crate::gpu::bgl::uniform(0, cs), crate::gpu::bgl::storage(1, cs, true)],
-        });
+        let layout2 = DIRECT_ATLAS_BINDINGS.layout(device);
         let atlas_pipeline = super::compute_pipeline(
             device,
             "direct.atlas_pipeline",
@@ -134,10 +154,7 @@ impl DirectPass {
             "cs_atlas",
             &[&layout0, &layout1, &layout2],
         );
-        let diffuse_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("direct.diffuse"),
-            entries: &[crate::gpu::bgl::storage_texture(2, RADIANCE_FORMAT)],
-        });
+        let diffuse_layout = DIRECT_DIFFUSE_BINDINGS.layout(device);
         let diffuse_pipeline = super::compute_pipeline(
             device,
             "direct.diffuse_pipeline",
@@ -327,13 +344,8 @@ impl DirectPass {
             label: Some("direct.pass"),
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
-        let diffuse = self.diffuse.as_ref().map(|(_, v)| {
-            device.counted_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("direct.diffuse"),
-                layout: &self.diffuse_layout,
-                entries: &[wgpu::BindGroupEntry { binding: 2, resource: tv(v) }],
-            })
-        });
+        let diffuse =
+            self.diffuse.as_ref().map(|(_, v)| DIRECT_DIFFUSE_BINDINGS.group(device, &self.diffuse_layout, [tv(v)]));
         pass.set_pipeline(if diffuse.is_some() { &self.diffuse_pipeline } else { &self.pipeline });
         pass.set_group(0, &group0, &[]);
         pass.set_group(1, &group1, &[]);
@@ -363,22 +375,16 @@ impl super::stages::DirectAtlas for DirectPass {
         let Some(group0) = &self.group0 else { return };
         let device = &ctx.device;
         let tv = wgpu::BindingResource::TextureView;
-        let group1 = device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("direct.atlas_gbuffer"),
-            layout: &self.layout1,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: tv(&atlas.position) },
-                wgpu::BindGroupEntry { binding: 1, resource: tv(&atlas.normal) },
-                wgpu::BindGroupEntry { binding: 2, resource: tv(&atlas.albedo) },
-                wgpu::BindGroupEntry { binding: 3, resource: tv(&atlas.material) },
-                wgpu::BindGroupEntry { binding: 4, resource: tv(out) },
-            ],
-        });
-        let group2 = super::bind_group(
+        // The G-buffer group over the atlas's tiles (labelled `direct.gbuffer` like the frame's).
+        let group1 = DIRECT_GBUFFER_BINDINGS.group(
             device,
-            "direct.atlas",
+            &self.layout1,
+            [tv(&atlas.position), tv(&atlas.normal), tv(&atlas.albedo), tv(&atlas.material), tv(out)],
+        );
+        let group2 = DIRECT_ATLAS_BINDINGS.group(
+            device,
             &self.layout2,
-            vec![params.as_entire_binding(), viewers.as_entire_binding()],
+            [params.as_entire_binding(), viewers.as_entire_binding()],
         );
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("direct.atlas_pass"),

@@ -18,6 +18,7 @@ pub const SKY_HISTORY_INPUTS_BINDINGS: Bindings = Bindings {
     label: "direct.sky_history.inputs",
     shader: "direct/sky_history.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "params", Kind::Uniform),

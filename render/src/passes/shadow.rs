@@ -19,6 +19,7 @@ pub const DIRECT_SHADOW_VIEW_BINDINGS: Bindings = Bindings {
     label: "direct.shadow.view",
     shader: "shadow/shadow.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::VERTEX,
     list: &[binding(0, "view", Kind::UniformDynamic)],
 };

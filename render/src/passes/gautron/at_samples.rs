@@ -16,6 +16,7 @@ pub const AT_SAMPLES_BINDINGS: Bindings = Bindings {
     label: "gautron.at_samples",
     shader: "gautron/at_samples.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "params", Kind::Uniform),

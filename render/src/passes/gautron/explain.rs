@@ -21,6 +21,7 @@ pub const GAUTRON_INPUTS_BINDINGS: Bindings = Bindings {
     label: "explain.gautron.inputs",
     shader: "gautron/explain.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "params", Kind::Uniform),

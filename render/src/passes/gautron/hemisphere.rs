@@ -24,6 +24,7 @@ pub const HEMISPHERE_CAMERAS_BINDINGS: Bindings = Bindings {
     label: "gautron.hemisphere.cameras",
     shader: "gautron/hemisphere.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
     list: &[
         binding(0, "camera", Kind::Uniform),
@@ -37,6 +38,7 @@ pub const REDUCE_BINDINGS: Bindings = Bindings {
     label: "gautron.reduce",
     shader: "gautron/reduce.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "params", Kind::Uniform),

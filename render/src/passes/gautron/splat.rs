@@ -23,6 +23,7 @@ pub const RESOLVE_BINDINGS: Bindings = Bindings {
     label: "gautron.resolve",
     shader: "gautron/resolve.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "accum", Kind::Texture { filterable: false }),

@@ -33,6 +33,7 @@ pub const CREATE_BINDINGS: Bindings = Bindings {
     label: "gautron.create",
     shader: "gautron/create.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "params", Kind::Uniform),

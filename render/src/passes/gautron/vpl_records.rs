@@ -20,6 +20,7 @@ pub const VPL_RECORDS_BINDINGS: Bindings = Bindings {
     label: "gautron.vpl_records",
     shader: "gautron/vpl_records.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "params", Kind::Uniform),

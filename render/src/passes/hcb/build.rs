@@ -15,6 +15,7 @@ pub const LEVEL_INPUTS_BINDINGS: Bindings = Bindings {
     label: "hcb.level.inputs",
     shader: "hcb/base.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "hp", Kind::UniformDynamic),
@@ -32,6 +33,7 @@ pub const SAMPLES_INPUTS_BINDINGS: Bindings = Bindings {
     label: "hcb.samples.inputs",
     shader: "hcb/samples.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "hp", Kind::UniformDynamic),

@@ -23,6 +23,7 @@ pub const CACHE_INPUTS_BINDINGS: Bindings = Bindings {
     label: "hcb.cache.inputs",
     shader: "hcb/cache.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "camera", Kind::Uniform),
@@ -45,6 +46,7 @@ pub const CACHE_ARGS_BINDINGS: Bindings = Bindings {
     label: "hcb.cache.args",
     shader: "hcb/cache.wgsl",
     group: 1,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[binding(0, "args", Kind::Storage { read_only: false })],
 };
@@ -54,6 +56,7 @@ pub const CACHE_REMOVAL_INPUTS_BINDINGS: Bindings = Bindings {
     label: "hcb.cache.removal.inputs",
     shader: "hcb/cache_removal.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
     list: &[
         binding(0, "camera", Kind::Uniform),

@@ -29,6 +29,7 @@ pub const HCB_INPUTS_BINDINGS: Bindings = Bindings {
     label: "explain.hcb.inputs",
     shader: "hcb/explain.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "camera", Kind::Uniform),
@@ -60,6 +61,7 @@ pub const HCB_ARGS_BINDINGS: Bindings = Bindings {
     label: "explain.hcb.args",
     shader: "hcb/explain.wgsl",
     group: 1,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[binding(0, "args", Kind::Storage { read_only: false })],
 };

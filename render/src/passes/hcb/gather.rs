@@ -14,6 +14,7 @@ pub const GATHER_INPUTS_BINDINGS: Bindings = Bindings {
     label: "hcb.gather.inputs",
     shader: "hcb/gather.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "params", Kind::Uniform),

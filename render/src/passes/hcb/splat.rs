@@ -18,6 +18,7 @@ pub const SPLAT_BINNED_BINDINGS: Bindings = Bindings {
     label: "hcb.splat.binned",
     shader: "hcb/splat.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "camera", Kind::Uniform),
@@ -40,6 +41,7 @@ pub const NORMALIZE_INPUTS_BINDINGS: Bindings = Bindings {
     label: "hcb.normalize.inputs",
     shader: "hcb/normalize.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "accum", Kind::Texture { filterable: false }),

@@ -28,6 +28,7 @@ pub const GATHER_INPUTS_BINDINGS: Bindings = Bindings {
     label: "interleave.gather.inputs",
     shader: "knecht/interleave/gather.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "camera", Kind::Uniform),
@@ -50,6 +51,7 @@ pub const SPLIT_INPUTS_BINDINGS: Bindings = Bindings {
     label: "interleave.split.inputs",
     shader: "knecht/interleave/split.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "params", Kind::Uniform),
@@ -69,6 +71,7 @@ pub const MERGE_INPUTS_BINDINGS: Bindings = Bindings {
     label: "interleave.merge.inputs",
     shader: "knecht/interleave/merge.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "params", Kind::Uniform),
@@ -157,6 +160,7 @@ pub const FILTER_BINDINGS: Bindings = Bindings {
     label: "interleave.filter.inputs",
     shader: "knecht/interleave/filter.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "params", Kind::Uniform),

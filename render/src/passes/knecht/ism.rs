@@ -17,7 +17,6 @@ use glam::Vec4;
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
 use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::scene::{Scene, SceneState};
 use crate::timing::PassRec;
@@ -26,11 +25,42 @@ use crate::timing::Slot;
 pub use super::point_cloud::{CloudPoint, GpuPoint, GpuPointSurface, PointCloud, PointPlacement};
 pub use crate::settings::knecht::*;
 
+/// Bind group `ism.pull.inputs` of `shaders/knecht/ism/pull_push.wgsl` (group 0 of
+/// `cs_pull`): one level of the pull (Knecht 002 §3.3's pull-push).
+pub const PULL_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "ism.pull.inputs",
+    shader: "knecht/ism/pull_push.wgsl",
+    group: 0,
+    entry: Some("cs_pull"),
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "lp", Kind::UniformDynamic),
+        binding(1, "src", Kind::Texture { filterable: false }),
+        binding(2, "dst", Kind::StorageTexture(wgpu::TextureFormat::R32Float)),
+    ],
+};
+
+/// Bind group `ism.push.inputs` of `shaders/knecht/ism/pull_push.wgsl` (group 0 of
+/// `cs_push`): one level of the push, filling the finer level's holes in place.
+pub const PUSH_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "ism.push.inputs",
+    shader: "knecht/ism/pull_push.wgsl",
+    group: 0,
+    entry: Some("cs_push"),
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "lp", Kind::UniformDynamic),
+        binding(1, "src", Kind::Texture { filterable: false }),
+        binding(3, "fine", Kind::StorageTextureReadWrite(wgpu::TextureFormat::R32Float)),
+    ],
+};
+
 /// Bind group `ism.resolve.inputs` of `shaders/knecht/ism/resolve.wgsl` (group 0).
 pub const RESOLVE_INPUTS_BINDINGS: Bindings = Bindings {
     label: "ism.resolve.inputs",
     shader: "knecht/ism/resolve.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "depth", Kind::Storage { read_only: true }),
@@ -165,31 +195,10 @@ pub struct IsmPass {
 impl IsmPass {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let r32 = wgpu::TextureFormat::R32Float;
         let splat_layout = splat_layout(device, "ism.splat.inputs");
         let resolve_layout = RESOLVE_INPUTS_BINDINGS.layout(device);
-        let pull_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("ism.pull.inputs"),
-            entries: &[bgl::uniform_dynamic(0, cs), bgl::texture(1, cs, false), bgl::storage_texture(2, r32)],
-        });
-        let push_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("ism.push.inputs"),
-            entries: &[
-                bgl::uniform_dynamic(0, cs),
-                bgl::texture(1, cs, false),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 3,
-                    visibility: cs,
-                    ty: wgpu::BindingType::StorageTexture {
-                        access: wgpu::StorageTextureAccess::ReadWrite,
-                        format: r32,
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                    },
-                    count: None,
-                },
-            ],
-        });
+        let pull_layout = PULL_INPUTS_BINDINGS.layout(device);
+        let push_layout = PUSH_INPUTS_BINDINGS.layout(device);
         let m_splat = crate::shaders::create_module(device, "knecht/ism/splat.wgsl");
         let m_resolve = crate::shaders::create_module(device, "knecht/ism/resolve.wgsl");
         let m_pp = crate::shaders::create_module(device, "knecht/ism/pull_push.wgsl");
@@ -549,24 +558,17 @@ impl IsmPass {
         });
         for level in 0..self.levels {
             let (fine, coarse) = (self.level_view(level), self.level_view(level + 1));
-            pulls.push(ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("ism.pull.inputs"),
-                layout: &self.pull_layout,
-                entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: dynamic.clone() },
-                    wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&fine) },
-                    wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&coarse) },
-                ],
-            }));
-            pushes.push(ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("ism.push.inputs"),
-                layout: &self.push_layout,
-                entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: dynamic.clone() },
-                    wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&coarse) },
-                    wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&fine) },
-                ],
-            }));
+            let tv = wgpu::BindingResource::TextureView;
+            pulls.push(PULL_INPUTS_BINDINGS.group(
+                &ctx.device,
+                &self.pull_layout,
+                [dynamic.clone(), tv(&fine), tv(&coarse)],
+            ));
+            pushes.push(PUSH_INPUTS_BINDINGS.group(
+                &ctx.device,
+                &self.push_layout,
+                [dynamic.clone(), tv(&coarse), tv(&fine)],
+            ));
         }
         // Mips 1…levels are first written (the pull, storage) and then read (the push,
         // sampled) inside the one pass below. wgpu 30 records a pass's *last* use of a

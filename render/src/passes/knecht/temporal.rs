@@ -35,6 +35,7 @@ pub const CONFIDENCE_BINDINGS: Bindings = Bindings {
     label: "temporal.confidence.inputs",
     shader: "knecht/temporal/confidence.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "params", Kind::Uniform),

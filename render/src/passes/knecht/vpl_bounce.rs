@@ -67,6 +67,7 @@ pub const BOUNCE_BINDINGS: Bindings = Bindings {
     label: "vpl.bounce.inputs",
     shader: "knecht/vpl/bounce.wgsl",
     group: 0,
+    entry: None,
     visibility: CS,
     list: &[
         binding(0, "bp", Kind::UniformDynamic),

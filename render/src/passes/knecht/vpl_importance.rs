@@ -29,6 +29,7 @@ pub const IMPORTANCE_INPUTS_BINDINGS: Bindings = Bindings {
     label: "vpl.importance.inputs",
     shader: "knecht/vpl/importance.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "vp", Kind::UniformDynamic),
@@ -46,6 +47,7 @@ pub const IMPORTANCE_REDUCE_BINDINGS: Bindings = Bindings {
     label: "vpl.importance.reduce",
     shader: "knecht/vpl/reduce.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "finer", Kind::TextureArray { filterable: false }),
@@ -58,6 +60,7 @@ pub const WARP_INPUTS_BINDINGS: Bindings = Bindings {
     label: "vpl.warp.inputs",
     shader: "knecht/vpl/warp.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "vp", Kind::UniformDynamic),

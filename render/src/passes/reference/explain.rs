@@ -20,6 +20,7 @@ pub const REFERENCE_INPUTS_BINDINGS: Bindings = Bindings {
     label: "explain.reference.inputs",
     shader: "reference/explain.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "camera", Kind::Uniform),

@@ -32,6 +32,7 @@ pub const SAMPLE_BINDINGS: Bindings = Bindings {
     label: "vpl.sample.inputs",
     shader: "reference/sample.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "params", Kind::Uniform),

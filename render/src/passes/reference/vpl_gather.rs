@@ -19,6 +19,7 @@ pub const INDIRECT_GATHER_INPUTS_BINDINGS: Bindings = Bindings {
     label: "indirect.gather.inputs",
     shader: "reference/gather.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "camera", Kind::Uniform),

@@ -25,6 +25,7 @@ pub const SHADOW_INPUTS_BINDINGS: Bindings = Bindings {
     label: "vpl.shadow.inputs",
     shader: "reference/shadow.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::VERTEX,
     list: &[
         binding(0, "face", Kind::UniformDynamic),

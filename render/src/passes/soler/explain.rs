@@ -22,6 +22,7 @@ pub const SOLER_RING_INPUTS_BINDINGS: Bindings = Bindings {
     label: "explain.soler.ring.inputs",
     shader: "soler/explain_ring.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "params", Kind::UniformDynamic),

@@ -41,6 +41,7 @@ pub const GATHER_INPUTS_BINDINGS: Bindings = Bindings {
     label: "soler.gather.inputs",
     shader: "soler/gather.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "params", Kind::UniformDynamic),

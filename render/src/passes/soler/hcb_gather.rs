@@ -17,6 +17,7 @@ pub const HCB_GATHER_INPUTS_BINDINGS: Bindings = Bindings {
     label: "soler.hcb_gather.inputs",
     shader: "soler/hcb_gather.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "params", Kind::UniformDynamic),
@@ -34,6 +35,7 @@ pub const HCB_GATHER_ARGS_BINDINGS: Bindings = Bindings {
     label: "soler.hcb_gather.args",
     shader: "soler/hcb_gather.wgsl",
     group: 1,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[binding(0, "args", Kind::Storage { read_only: false })],
 };

@@ -18,6 +18,7 @@ pub const RESOLVE_INPUTS_BINDINGS: Bindings = Bindings {
     label: "soler.resolve.inputs",
     shader: "soler/resolve.wgsl",
     group: 0,
+    entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "resolve_light", Kind::Texture { filterable: false }),
