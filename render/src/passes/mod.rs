@@ -91,8 +91,8 @@ pub fn strided_bytes<T: bytemuck::Pod>(stride: u64, slots: usize, items: &[T]) -
 pub const TILE: u32 = 8;
 
 /// The bind groups described once (`gpu::bindings`, issue #52 point 3), each checked against
-/// its shader by `tests/tests/shaders.rs`. The passes not listed still write their layouts and
-/// groups by hand (`gpu::bgl`); a pass moves here when its bindings next change.
+/// its shader by `tests/tests/shaders.rs`. The groups not listed write their layouts by hand
+/// (`gpu::bgl`) because their entries or labels are made at run time (CONTRIBUTING.md).
 pub const BINDINGS: &[&crate::gpu::bindings::Bindings] = &[
     &compose::COMPOSE_BINDINGS,
     &compose::TONEMAP_BINDINGS,
