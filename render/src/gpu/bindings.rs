@@ -103,8 +103,15 @@ impl Bindings {
 
     /// The bind group layout of the description.
     pub fn layout(&self, device: &wgpu::Device) -> wgpu::BindGroupLayout {
+        self.layout_labelled(device, self.label)
+    }
+
+    /// The layout under another label: a pass that binds an equal group of its own (the
+    /// G-buffer's camera in each light's G-buffer; WebGPU: groups of equal layouts are
+    /// interchangeable).
+    pub fn layout_labelled(&self, device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
         device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some(self.label),
+            label: Some(label),
             entries: &self.layout_entries(),
         })
     }
@@ -118,6 +125,17 @@ impl Bindings {
         layout: &wgpu::BindGroupLayout,
         resources: impl IntoIterator<Item = wgpu::BindingResource<'a>>,
     ) -> wgpu::BindGroup {
+        self.group_labelled(device, self.label, layout, resources)
+    }
+
+    /// [`Self::group`] under another label (one group per material, per light, per level).
+    pub fn group_labelled<'a>(
+        &self,
+        device: &wgpu::Device,
+        label: &str,
+        layout: &wgpu::BindGroupLayout,
+        resources: impl IntoIterator<Item = wgpu::BindingResource<'a>>,
+    ) -> wgpu::BindGroup {
         let resources: Vec<wgpu::BindingResource> = resources.into_iter().collect();
         let n = (resources.len(), self.list.len());
         assert_eq!(n.0, n.1, "{}: {} resources for {} bindings", self.label, n.0, n.1);
@@ -127,6 +145,6 @@ impl Bindings {
             .zip(resources)
             .map(|(b, resource)| wgpu::BindGroupEntry { binding: b.binding, resource })
             .collect();
-        device.counted_bind_group(&wgpu::BindGroupDescriptor { label: Some(self.label), layout, entries: &entries })
+        device.counted_bind_group(&wgpu::BindGroupDescriptor { label: Some(label), layout, entries: &entries })
     }
 }

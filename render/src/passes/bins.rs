@@ -7,9 +7,9 @@
 //! passes that use it); docs/architecture.md, "Read-backs, waits and the frame's traffic".
 
 use crate::counters::prelude::*;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
 pub use crate::settings::splat::*;
 
 /// Side in pixels of the squares the items are binned into (a multiple of the 16 × 16
@@ -22,6 +22,21 @@ pub const MAX_ITEMS: u32 = 65536;
 
 /// Pixels per side of the accumulating workgroup.
 pub const GROUP: u32 = 16;
+
+/// The bins' bind group (group 1 of `shaders/common/bins.wgsl`, imported by the HCB's and
+/// Gautron's splats); each user's bins carry their own label (`hcb.splat.bins`, …).
+pub const BINS_BINDINGS: Bindings = Bindings {
+    label: "bins",
+    shader: "hcb/splat.wgsl",
+    group: 1,
+    entry: None,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "bin_params", Kind::Uniform),
+        binding(1, "bin_mask", Kind::Storage { read_only: false }),
+        binding(2, "bin_rects", Kind::Storage { read_only: false }),
+    ],
+};
 
 /// Rust twin of `BinParams` in `shaders/common/bins.wgsl`.
 #[repr(C)]
@@ -61,11 +76,7 @@ impl Bins {
     /// Empty bins named `label` (its mask `label.mask`, …); size them with [`Self::ensure`].
     pub fn new(ctx: &GpuContext, label: &'static str) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some(label),
-            entries: &[bgl::uniform(0, cs), bgl::storage(1, cs, false), bgl::storage(2, cs, false)],
-        });
+        let layout = BINS_BINDINGS.layout_labelled(device, label);
         let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
         let size = std::mem::size_of::<BinParams>() as u64;
         Self {
@@ -113,11 +124,11 @@ impl Bins {
 
     /// Bind group 1: start the sums from zero, or `add` to the previous ones.
     pub fn group(&self, device: &wgpu::Device, add: bool) -> wgpu::BindGroup {
-        crate::passes::bind_group(
+        BINS_BINDINGS.group_labelled(
             device,
             self.label,
             &self.layout,
-            vec![
+            [
                 self.params[usize::from(add)].as_entire_binding(),
                 self.mask.as_entire_binding(),
                 self.rects.as_entire_binding(),

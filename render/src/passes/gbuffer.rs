@@ -9,6 +9,7 @@
 //! (the classic Cornell box's light quad) show in the direct light.
 
 use crate::counters::prelude::*;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
@@ -28,6 +29,17 @@ pub const MOTION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const EMISSION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
+/// The camera's bind group (group 0 of the G-buffer's raster, read by the screen-space
+/// passes too): each G-buffer (the frame's, each light's, Gautron's hemispheres, Soler's
+/// voxels) makes its own layout and group from it under its own label.
+pub const CAMERA_BINDINGS: Bindings = Bindings {
+    label: "gbuffer.camera",
+    shader: "gbuffer/gbuffer.wgsl",
+    group: 0,
+    entry: None,
+    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT.union(wgpu::ShaderStages::COMPUTE),
+    list: &[binding(0, "camera", Kind::Uniform)],
+};
 /// The G-buffer textures of one frame.
 pub struct GBuffer {
     pub position: wgpu::Texture,
@@ -74,10 +86,7 @@ impl GBufferPass {
         let name: String = name.into();
         let device = &ctx.device;
         let module = crate::shaders::create_module(device, "gbuffer/gbuffer.wgsl");
-        let camera_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some(&format!("{name}.camera")),
-            entries: &[crate::gpu::bgl::uniform(0, wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE)],
-        });
+        let camera_layout = CAMERA_BINDINGS.layout_labelled(device, &format!("{name}.camera"));
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some(&format!("{name}.layout")),
             bind_group_layouts: &[Some(&camera_layout), Some(&scene.instance_layout), Some(&scene.material_layout)],

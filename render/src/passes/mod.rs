@@ -61,21 +61,6 @@ pub fn uniform_buffer(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Bu
     buffer(device, label, size, wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST)
 }
 
-/// A compute bind group layout of a dynamic-offset uniform at binding 0 and storage buffers
-/// at bindings 1… with `read_only[k]` for binding k + 1 (the bounce and splat kernels).
-pub fn uniform_and_storage_layout(device: &wgpu::Device, label: &str, read_only: &[bool]) -> wgpu::BindGroupLayout {
-    let entries = uniform_and_storage_entries(read_only);
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &entries })
-}
-
-/// The entries of [`uniform_and_storage_layout`], for layouts that add more.
-pub fn uniform_and_storage_entries(read_only: &[bool]) -> Vec<wgpu::BindGroupLayoutEntry> {
-    let cs = wgpu::ShaderStages::COMPUTE;
-    std::iter::once(crate::gpu::bgl::uniform_dynamic(0, cs))
-        .chain(read_only.iter().enumerate().map(|(k, &ro)| crate::gpu::bgl::storage(k as u32 + 1, cs, ro)))
-        .collect()
-}
-
 /// Uniforms for dynamic offsets: `items` laid out every `stride` bytes in a buffer of
 /// `slots` × `stride` bytes (the rest zero).
 pub fn strided_bytes<T: bytemuck::Pod>(stride: u64, slots: usize, items: &[T]) -> Vec<u8> {
@@ -112,6 +97,19 @@ pub const BINDINGS: &[&crate::gpu::bindings::Bindings] = &[
     &knecht::ism::RESOLVE_INPUTS_BINDINGS,
     &knecht::ism::PULL_INPUTS_BINDINGS,
     &knecht::ism::PUSH_INPUTS_BINDINGS,
+    &gbuffer::CAMERA_BINDINGS,
+    &crate::scene::upload::INSTANCES_BINDINGS,
+    &crate::scene::upload::MATERIAL_BINDINGS,
+    &soler::voxels::GRID_BINDINGS,
+    &soler::temporal::TEMPORAL_INPUTS_BINDINGS,
+    &soler::bounces::BOUNCES_INPUTS_BINDINGS,
+    &knecht::ism::SPLAT_INPUTS_BINDINGS,
+    &knecht::irsm::SAMPLE_INPUTS_BINDINGS,
+    &bins::BINS_BINDINGS,
+    &soler::pyramid::VOTE_INPUTS_BINDINGS,
+    &soler::pyramid::VOTE_RADIANCE_INPUTS_BINDINGS,
+    &soler::upsample::UPSAMPLE_INPUTS_BINDINGS,
+    &soler::explain::SOLER_INPUTS_BINDINGS,
     &hcb::splat::NORMALIZE_INPUTS_BINDINGS,
     &hcb::gather::GATHER_INPUTS_BINDINGS,
     &crate::buffers::PROBE_INPUTS_BINDINGS,

@@ -3,7 +3,6 @@
 
 use std::sync::Arc;
 
-use crate::counters::prelude::*;
 use crate::readback::{Arrived, Readback, Readout};
 
 use glam::Mat4;
@@ -97,11 +96,12 @@ impl Renderer {
         }
         if let Some(g) = gbuffer {
             self.gbuffer = g;
-            self.camera_group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("frame.camera"),
-                layout: &self.gbuffer.camera_layout,
-                entries: &[wgpu::BindGroupEntry { binding: 0, resource: self.camera_buffer.as_entire_binding() }],
-            });
+            self.camera_group = crate::passes::gbuffer::CAMERA_BINDINGS.group_labelled(
+                &ctx.device,
+                "frame.camera",
+                &self.gbuffer.camera_layout,
+                [self.camera_buffer.as_entire_binding()],
+            );
         }
         if let Some(p) = shadow {
             self.shadow = p;

@@ -125,11 +125,12 @@ impl Renderer {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let camera_group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("frame.camera"),
-            layout: &gbuffer.camera_layout,
-            entries: &[wgpu::BindGroupEntry { binding: 0, resource: camera_buffer.as_entire_binding() }],
-        });
+        let camera_group = crate::passes::gbuffer::CAMERA_BINDINGS.group_labelled(
+            &ctx.device,
+            "frame.camera",
+            &gbuffer.camera_layout,
+            [camera_buffer.as_entire_binding()],
+        );
         let shadow = ShadowPass::new(&ctx, &gpu_scene);
         let direct = DirectPass::new(&ctx, width, height);
         let compose = ComposePass::new(&ctx, width, height);

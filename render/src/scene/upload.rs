@@ -8,6 +8,7 @@ use glam::Mat4;
 
 use super::{Scene, SceneState, Vertex};
 use crate::gpu::GpuContext;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 
 /// Per-draw transforms; WGSL twin: `Instance` in `shaders/gbuffer/gbuffer.wgsl`.
 #[repr(C)]
@@ -67,23 +68,40 @@ pub struct GpuScene {
     pub warnings: Vec<String>,
 }
 
-/// The layout of a material's bind group (`shaders/common/material.wgsl`); a pass that makes
-/// its own pipelines before it sees the scene makes an equal one (WebGPU: bind groups of equal
-/// layouts are interchangeable).
+/// The instances' bind group (group 1 of the scene's raster passes: the G-buffer, the shadow
+/// and light views, Gautron's hemispheres, Soler's voxels).
+pub const INSTANCES_BINDINGS: Bindings = Bindings {
+    label: "scene.instances",
+    shader: "gbuffer/gbuffer.wgsl",
+    group: 1,
+    entry: None,
+    visibility: wgpu::ShaderStages::VERTEX,
+    list: &[binding(0, "instances", Kind::Storage { read_only: true })],
+};
+
+/// A material's bind group (group 2, `shaders/common/material.wgsl`).
+pub const MATERIAL_BINDINGS: Bindings = Bindings {
+    label: "scene.material",
+    shader: "gbuffer/gbuffer.wgsl",
+    group: 2,
+    entry: None,
+    visibility: wgpu::ShaderStages::FRAGMENT,
+    list: &[
+        binding(0, "material", Kind::Uniform),
+        binding(1, "base_tex", Kind::Texture { filterable: true }),
+        binding(2, "base_sampler", Kind::Sampler(wgpu::SamplerBindingType::Filtering)),
+        binding(3, "emissive_tex", Kind::Texture { filterable: true }),
+        binding(4, "normal_tex", Kind::Texture { filterable: true }),
+        binding(5, "mr_tex", Kind::Texture { filterable: true }),
+        binding(6, "occlusion_tex", Kind::Texture { filterable: true }),
+    ],
+};
+
+/// The layout of a material's bind group ([`MATERIAL_BINDINGS`]); a pass that makes its own
+/// pipelines before it sees the scene makes an equal one (WebGPU: bind groups of equal layouts
+/// are interchangeable).
 pub fn material_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
-    let fs = wgpu::ShaderStages::FRAGMENT;
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some(label),
-        entries: &[
-            crate::gpu::bgl::uniform(0, fs),
-            crate::gpu::bgl::texture(1, fs, true),
-            crate::gpu::bgl::sampler(2, fs, wgpu::SamplerBindingType::Filtering),
-            crate::gpu::bgl::texture(3, fs, true),
-            crate::gpu::bgl::texture(4, fs, true),
-            crate::gpu::bgl::texture(5, fs, true),
-            crate::gpu::bgl::texture(6, fs, true),
-        ],
-    })
+    MATERIAL_BINDINGS.layout_labelled(device, label)
 }
 
 /// Vertex buffer layout of [`Vertex`].
@@ -142,15 +160,8 @@ impl GpuScene {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let instance_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("scene.instances"),
-            entries: &[crate::gpu::bgl::storage(0, wgpu::ShaderStages::VERTEX, true)],
-        });
-        let instance_group = device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("scene.instances"),
-            layout: &instance_layout,
-            entries: &[wgpu::BindGroupEntry { binding: 0, resource: instances.as_entire_binding() }],
-        });
+        let instance_layout = INSTANCES_BINDINGS.layout(device);
+        let instance_group = INSTANCES_BINDINGS.group(device, &instance_layout, [instances.as_entire_binding()]);
 
         let material_layout = material_layout(device, "scene.material");
         let sampler = device.counted_sampler(&wgpu::SamplerDescriptor {
@@ -240,19 +251,21 @@ impl GpuScene {
             let normal_view = linear(normal_tex, "scene.material_normal_texture");
             let mr_view = linear(mr_tex, "scene.material_metallic_roughness_texture");
             let occlusion_view = linear(occlusion_tex, "scene.material_occlusion_texture");
-            material_groups.push(device.counted_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(&format!("scene.material[{i}]")),
-                layout: &material_layout,
-                entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&view) },
-                    wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&sampler) },
-                    wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&emissive_view) },
-                    wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(&normal_view) },
-                    wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(&mr_view) },
-                    wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::TextureView(&occlusion_view) },
+            let tv = wgpu::BindingResource::TextureView;
+            material_groups.push(MATERIAL_BINDINGS.group_labelled(
+                device,
+                &format!("scene.material[{i}]"),
+                &material_layout,
+                [
+                    buffer.as_entire_binding(),
+                    tv(&view),
+                    wgpu::BindingResource::Sampler(&sampler),
+                    tv(&emissive_view),
+                    tv(&normal_view),
+                    tv(&mr_view),
+                    tv(&occlusion_view),
                 ],
-            }));
+            ));
             material_buffers.push(buffer);
         }
         textures.push(white);

@@ -7,6 +7,7 @@
 //! ([`crate::passes::knecht::vpl_bounce`]); `gi-lab bench --suite knecht` reproduces it.
 
 use crate::counters::prelude::*;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 
 use glam::Vec4;
 
@@ -16,6 +17,27 @@ use crate::passes::knecht::vpl_bounce::{BounceParams, bounce_seed};
 use crate::timing::Slot;
 
 const STRIDE: u64 = 256;
+
+/// Bind group `irsm.sample.inputs` of `shaders/knecht/vpl/irsm.wgsl` (group 0).
+pub const SAMPLE_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "irsm.sample.inputs",
+    shader: "knecht/vpl/irsm.wgsl",
+    group: 0,
+    entry: None,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "ip", Kind::UniformDynamic),
+        binding(1, "points", Kind::Storage { read_only: true }),
+        binding(2, "surfaces", Kind::Storage { read_only: true }),
+        binding(3, "instances", Kind::Storage { read_only: true }),
+        binding(4, "owner", Kind::Storage { read_only: true }),
+        binding(5, "cdf", Kind::Storage { read_only: false }),
+        binding(6, "totals", Kind::Storage { read_only: false }),
+        binding(7, "coverage", Kind::Storage { read_only: false }),
+        binding(8, "vpls", Kind::Storage { read_only: false }),
+        binding(9, "illumination", Kind::StorageTexture(wgpu::TextureFormat::R32Float)),
+    ],
+};
 
 /// What one frame's IRSM bounces need.
 #[derive(Clone, Copy, Debug)]
@@ -68,14 +90,6 @@ fn dynamic(buffer: &wgpu::Buffer, size: usize) -> wgpu::BindingResource<'_> {
     })
 }
 
-fn entries<'a>(resources: Vec<wgpu::BindingResource<'a>>) -> Vec<wgpu::BindGroupEntry<'a>> {
-    resources
-        .into_iter()
-        .enumerate()
-        .map(|(i, resource)| wgpu::BindGroupEntry { binding: i as u32, resource })
-        .collect()
-}
-
 /// The IRSM side actually used: a power of two in 16 … 128 (the CDF pass gives each of its
 /// 256 threads size²/256 texels).
 pub fn irsm_size(setting: u32) -> u32 {
@@ -86,13 +100,7 @@ impl IrsmPass {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
         let splat_layout = crate::passes::knecht::ism::splat_layout(device, "irsm.splat.inputs");
-        let mut entries =
-            crate::passes::uniform_and_storage_entries(&[true, true, true, true, false, false, false, false]);
-        entries.push(crate::gpu::bgl::storage_texture(9, wgpu::TextureFormat::R32Float));
-        let sample_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("irsm.sample.inputs"),
-            entries: &entries,
-        });
+        let sample_layout = SAMPLE_INPUTS_BINDINGS.layout(device);
         let m_splat = crate::shaders::create_module(device, "knecht/ism/splat.wgsl");
         let m_irsm = crate::shaders::create_module(device, "knecht/vpl/irsm.wgsl");
         let splat_pipeline =
@@ -221,23 +229,24 @@ impl IrsmPass {
         );
         ctx.queue.write_buffer(&self.splat_params, 0, &splat);
         ctx.queue.write_buffer(&self.params, 0, &irsm);
-        let splat = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("irsm.splat.inputs"),
-            layout: &self.splat_layout,
-            entries: &entries(vec![
+        let splat = crate::passes::knecht::ism::SPLAT_INPUTS_BINDINGS.group_labelled(
+            &ctx.device,
+            "irsm.splat.inputs",
+            &self.splat_layout,
+            [
                 dynamic(&self.splat_params, std::mem::size_of::<SplatParams>()),
                 ism.points.as_entire_binding(),
                 instances.as_entire_binding(),
                 vpls.as_entire_binding(),
                 self.depth.as_entire_binding(),
                 self.owner.as_entire_binding(),
-            ]),
-        });
+            ],
+        );
         let illumination = crate::passes::view(&self.illumination, "irsm.illumination");
-        let sample = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("irsm.sample.inputs"),
-            layout: &self.sample_layout,
-            entries: &entries(vec![
+        let sample = SAMPLE_INPUTS_BINDINGS.group(
+            &ctx.device,
+            &self.sample_layout,
+            [
                 dynamic(&self.params, std::mem::size_of::<BounceParams>()),
                 ism.points.as_entire_binding(),
                 ism.surfaces.as_entire_binding(),
@@ -248,8 +257,8 @@ impl IrsmPass {
                 self.coverage.as_entire_binding(),
                 vpls.as_entire_binding(),
                 wgpu::BindingResource::TextureView(&illumination),
-            ]),
-        });
+            ],
+        );
         IrsmJob { splat, sample }
     }
 

@@ -25,6 +25,24 @@ use crate::timing::Slot;
 pub use super::point_cloud::{CloudPoint, GpuPoint, GpuPointSurface, PointCloud, PointPlacement};
 pub use crate::settings::knecht::*;
 
+/// Bind group `ism.splat.inputs` of `shaders/knecht/ism/splat.wgsl` (group 0; the IRSM's splat
+/// binds an equal group of its own, `irsm.splat.inputs`).
+pub const SPLAT_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "ism.splat.inputs",
+    shader: "knecht/ism/splat.wgsl",
+    group: 0,
+    entry: None,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "sp", Kind::UniformDynamic),
+        binding(1, "points", Kind::Storage { read_only: true }),
+        binding(2, "instances", Kind::Storage { read_only: true }),
+        binding(3, "vpls", Kind::Storage { read_only: true }),
+        binding(4, "depth", Kind::Storage { read_only: false }),
+        binding(5, "owner", Kind::Storage { read_only: false }),
+    ],
+};
+
 /// Bind group `ism.pull.inputs` of `shaders/knecht/ism/pull_push.wgsl` (group 0 of
 /// `cs_pull`): one level of the pull (Knecht 002 §3.3's pull-push).
 pub const PULL_INPUTS_BINDINGS: Bindings = Bindings {
@@ -78,7 +96,7 @@ pub struct IsmJob {
 /// Bind group layout of `shaders/knecht/ism/splat.wgsl` (the ISMs' and the IRSM baseline's splats):
 /// params (dynamic), points, instances, VPLs, distances, IRSM owners.
 pub fn splat_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
-    crate::passes::uniform_and_storage_layout(device, label, &[true, true, true, false, false])
+    SPLAT_INPUTS_BINDINGS.layout_labelled(device, label)
 }
 
 /// Layout of the ISM atlas: `cols` × `rows` maps of `size`², map = VPL index.
@@ -379,18 +397,18 @@ impl IsmPass {
             offset: 0,
             size: std::num::NonZeroU64::new(std::mem::size_of::<SplatParams>() as u64),
         });
-        let splat = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("ism.splat.inputs"),
-            layout: &self.splat_layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: params },
-                wgpu::BindGroupEntry { binding: 1, resource: self.points.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: instances.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: vpls.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 4, resource: self.depth.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 5, resource: self.no_owner.as_entire_binding() },
+        let splat = SPLAT_INPUTS_BINDINGS.group(
+            &ctx.device,
+            &self.splat_layout,
+            [
+                params,
+                self.points.as_entire_binding(),
+                instances.as_entire_binding(),
+                vpls.as_entire_binding(),
+                self.depth.as_entire_binding(),
+                self.no_owner.as_entire_binding(),
             ],
-        });
+        );
         let atlas_view = crate::passes::view(&self.atlas, "ism.atlas");
         // The resolve reads its first row from the level-0 push slot of its call.
         let rows = wgpu::BindingResource::Buffer(wgpu::BufferBinding {

@@ -284,11 +284,12 @@ impl VplImportancePass {
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
-            let group = device.counted_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(&format!("{name}.camera")),
-                layout: &gbuffer.camera_layout,
-                entries: &[wgpu::BindGroupEntry { binding: 0, resource: camera.as_entire_binding() }],
-            });
+            let group = crate::passes::gbuffer::CAMERA_BINDINGS.group_labelled(
+                device,
+                &format!("{name}.camera"),
+                &gbuffer.camera_layout,
+                [camera.as_entire_binding()],
+            );
             self.views.push(LightGBuffer { gbuffer, camera, group });
             fresh = true;
         }

@@ -97,11 +97,12 @@ impl VplSamplePass {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let camera_group = device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("vpl.light_gbuffer.camera"),
-            layout: &light_gbuffer.camera_layout,
-            entries: &[wgpu::BindGroupEntry { binding: 0, resource: camera_buffer.as_entire_binding() }],
-        });
+        let camera_group = crate::passes::gbuffer::CAMERA_BINDINGS.group_labelled(
+            device,
+            "vpl.light_gbuffer.camera",
+            &light_gbuffer.camera_layout,
+            [camera_buffer.as_entire_binding()],
+        );
         let module = crate::shaders::create_module(device, "reference/sample.wgsl");
         let layout = SAMPLE_BINDINGS.layout(device);
         let pipeline = crate::passes::compute_pipeline(device, "vpl.sample", &module, "cs_main", &[&layout]);

@@ -7,11 +7,33 @@
 //! nothing here runs.
 
 use crate::counters::prelude::*;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
 use crate::timing::Slot;
+
+/// Bind group `soler.bounces.inputs` of `shaders/soler/bounces.wgsl` (group 0).
+pub const BOUNCES_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "soler.bounces.inputs",
+    shader: "soler/bounces.wgsl",
+    group: 0,
+    entry: None,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::Uniform),
+        binding(1, "bounce1", Kind::Texture { filterable: false }),
+        binding(2, "bounce2", Kind::Texture { filterable: false }),
+        binding(3, "bounce3", Kind::Texture { filterable: false }),
+        binding(4, "bounce4", Kind::Texture { filterable: false }),
+        binding(5, "out_sum", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(6, "specular1", Kind::Texture { filterable: false }),
+        binding(7, "specular2", Kind::Texture { filterable: false }),
+        binding(8, "specular3", Kind::Texture { filterable: false }),
+        binding(9, "specular4", Kind::Texture { filterable: false }),
+        binding(10, "out_specular", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+    ],
+};
 
 /// Rust twin of `BounceParams` in `shaders/soler/bounces.wgsl`.
 #[repr(C)]
@@ -40,16 +62,7 @@ pub struct SolerBounces {
 impl SolerBounces {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let mut entries = vec![bgl::uniform(0, cs)];
-        entries.extend((1..=4).map(|b| bgl::texture(b, cs, false)));
-        entries.push(bgl::storage_texture(5, wgpu::TextureFormat::Rgba32Float));
-        entries.extend((6..=9).map(|b| bgl::texture(b, cs, false)));
-        entries.push(bgl::storage_texture(10, wgpu::TextureFormat::Rgba32Float));
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("soler.bounces.inputs"),
-            entries: &entries,
-        });
+        let layout = BOUNCES_INPUTS_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "soler/bounces.wgsl");
         let pipeline = crate::passes::compute_pipeline(device, "soler.bounces", &module, "cs_sum", &[&layout]);
         let params =
@@ -162,7 +175,7 @@ impl SolerBounces {
         resources.extend(spec_views.iter().map(tv));
         let sum_view = view(self.specular_sum.as_ref().unwrap_or(&self.no_sum));
         resources.push(tv(&sum_view));
-        let group = crate::passes::bind_group(&ctx.device, "soler.bounces.inputs", &self.layout, resources);
+        let group = BOUNCES_INPUTS_BINDINGS.group(&ctx.device, &self.layout, resources);
         let stamps = slot.and_then(|s| s.compute(true, true));
         crate::passes::dispatch_2d(
             encoder,

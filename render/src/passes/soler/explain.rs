@@ -14,8 +14,36 @@ use glam::{Vec3, Vec4};
 
 use crate::explain::{Check, Contribution, Explanation, Rejection, Replay};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
 use crate::gpu::bindings::{Bindings, Kind, binding};
+
+/// Bind group `explain.soler.inputs` of `shaders/soler/explain.wgsl` (group 0): a pixel's
+/// replay of the gathers and the upsampling, bounce by bounce.
+pub const SOLER_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "explain.soler.inputs",
+    shader: "soler/explain.wgsl",
+    group: 0,
+    entry: None,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "step", Kind::UniformDynamic),
+        binding(1, "fine_position", Kind::Texture { filterable: false }),
+        binding(2, "fine_normal", Kind::Texture { filterable: false }),
+        binding(3, "fine_light", Kind::Texture { filterable: false }),
+        binding(4, "fine_occlusion", Kind::Texture { filterable: false }),
+        binding(5, "coarse_position", Kind::Texture { filterable: false }),
+        binding(6, "coarse_normal", Kind::Texture { filterable: false }),
+        binding(7, "indirect", Kind::Texture { filterable: false }),
+        binding(8, "last", Kind::Texture { filterable: false }),
+        binding(9, "warped", Kind::Texture { filterable: false }),
+        binding(10, "blend_a", Kind::Texture { filterable: false }),
+        binding(11, "g_albedo", Kind::Texture { filterable: false }),
+        binding(12, "header", Kind::Storage { read_only: false }),
+        binding(13, "entries", Kind::Storage { read_only: false }),
+        binding(14, "fine_specular", Kind::Texture { filterable: false }),
+        binding(15, "g_motion", Kind::Texture { filterable: false }),
+        binding(16, "spec_history_prev", Kind::Texture { filterable: false }),
+    ],
+};
 
 /// Bind group `explain.soler.ring.inputs` of `shaders/soler/explain_ring.wgsl` (group 0).
 pub const SOLER_RING_INPUTS_BINDINGS: Bindings = Bindings {
@@ -172,16 +200,7 @@ pub struct SolerExplainPass {
 impl SolerExplainPass {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let mut entries = vec![bgl::uniform_dynamic(0, cs)];
-        entries.extend((1..=11).map(|b| bgl::texture(b, cs, false)));
-        entries.push(bgl::storage(12, cs, false));
-        entries.push(bgl::storage(13, cs, false));
-        entries.extend((14..=16).map(|b| bgl::texture(b, cs, false)));
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("explain.soler.inputs"),
-            entries: &entries,
-        });
+        let layout = SOLER_INPUTS_BINDINGS.layout(device);
         let ring_layout = SOLER_RING_INPUTS_BINDINGS.layout(device);
         let ring_module = crate::shaders::create_module(device, "soler/explain_ring.wgsl");
         let ring_pipeline = crate::passes::compute_pipeline(
@@ -321,7 +340,7 @@ impl SolerExplainPass {
         resources.push(crate::passes::buffer_part(&self.out, ENTRIES_OFFSET, None));
         let spec_history = inp.spec_history.as_ref().unwrap_or(&self.dummy);
         resources.extend([spec, inp.motion, spec_history].map(wgpu::BindingResource::TextureView));
-        crate::passes::bind_group(&ctx.device, "explain.soler.inputs", &self.layout, resources)
+        SOLER_INPUTS_BINDINGS.group(&ctx.device, &self.layout, resources)
     }
 
     /// One dispatch of `pipeline`, alone in its pass (each reads what the one before wrote).

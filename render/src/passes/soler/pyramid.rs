@@ -4,11 +4,52 @@
 //! `cpu::soler_vote::vote_level`). Level 0 is the G-buffer itself.
 
 use crate::buffers::{BufferKind, BufferRegistry};
-use crate::counters::prelude::*;
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::timing::PassRec;
 use crate::timing::Slot;
+
+/// Bind group `soler.vote.inputs` of `shaders/soler/vote.wgsl` (group 0 of `cs_vote`): one
+/// level of the pyramid's vote (Soler 004 §3.1).
+pub const VOTE_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "soler.vote.inputs",
+    shader: "soler/vote.wgsl",
+    group: 0,
+    entry: Some("cs_vote"),
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::Uniform),
+        binding(1, "fine_position", Kind::Texture { filterable: false }),
+        binding(2, "fine_normal", Kind::Texture { filterable: false }),
+        binding(3, "fine_radiance", Kind::Texture { filterable: false }),
+        binding(4, "out_position", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(5, "out_normal", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(6, "out_radiance", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(7, "out_winner", Kind::StorageTexture(wgpu::TextureFormat::R32Float)),
+        binding(8, "fine_material", Kind::Texture { filterable: false }),
+        binding(9, "out_material", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+    ],
+};
+
+/// Bind group `soler.vote_radiance.inputs` of `shaders/soler/vote.wgsl` (group 0 of
+/// `cs_vote_radiance`): a later bounce's radiance through the frame's winners.
+pub const VOTE_RADIANCE_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "soler.vote_radiance.inputs",
+    shader: "soler/vote.wgsl",
+    group: 0,
+    entry: Some("cs_vote_radiance"),
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::Uniform),
+        binding(1, "fine_position", Kind::Texture { filterable: false }),
+        binding(2, "fine_normal", Kind::Texture { filterable: false }),
+        binding(3, "fine_radiance", Kind::Texture { filterable: false }),
+        binding(6, "out_radiance", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(10, "in_winner", Kind::Texture { filterable: false }),
+        binding(11, "coarse_position", Kind::Texture { filterable: false }),
+        binding(12, "coarse_normal", Kind::Texture { filterable: false }),
+    ],
+};
 
 /// Rust twin of `VoteParams` in `shaders/soler/vote.wgsl`.
 #[repr(C)]
@@ -63,38 +104,10 @@ pub fn sizes(width: u32, height: u32, top: u32) -> Vec<(u32, u32)> {
 impl SolerPyramid {
     pub fn new(ctx: &GpuContext, width: u32, height: u32, top: u32) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let rgba = wgpu::TextureFormat::Rgba32Float;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("soler.vote.inputs"),
-            entries: &[
-                bgl::uniform(0, cs),
-                bgl::texture(1, cs, false),
-                bgl::texture(2, cs, false),
-                bgl::texture(3, cs, false),
-                bgl::storage_texture(4, rgba),
-                bgl::storage_texture(5, rgba),
-                bgl::storage_texture(6, rgba),
-                bgl::storage_texture(7, wgpu::TextureFormat::R32Float),
-                bgl::texture(8, cs, false),
-                bgl::storage_texture(9, rgba),
-            ],
-        });
+        let layout = VOTE_INPUTS_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "soler/vote.wgsl");
         let pipeline = crate::passes::compute_pipeline(device, "soler.vote", &module, "cs_vote", &[&layout]);
-        let radiance_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("soler.vote_radiance.inputs"),
-            entries: &[
-                bgl::uniform(0, cs),
-                bgl::texture(1, cs, false),
-                bgl::texture(2, cs, false),
-                bgl::texture(3, cs, false),
-                bgl::storage_texture(6, rgba),
-                bgl::texture(10, cs, false),
-                bgl::texture(11, cs, false),
-                bgl::texture(12, cs, false),
-            ],
-        });
+        let radiance_layout = VOTE_RADIANCE_INPUTS_BINDINGS.layout(device);
         let radiance_pipeline = crate::passes::compute_pipeline(
             device,
             "soler.vote_radiance",
@@ -208,8 +221,8 @@ impl SolerPyramid {
             };
             let tv = wgpu::BindingResource::TextureView;
             let inputs = [fp, fnorm, fr, &out[0], &out[1], &out[2], &out[3], fm, &out[4]];
-            let resources = std::iter::once(self.params.as_entire_binding()).chain(inputs.map(tv)).collect();
-            let group = crate::passes::bind_group(&ctx.device, "soler.vote.inputs", &self.layout, resources);
+            let resources = std::iter::once(self.params.as_entire_binding()).chain(inputs.map(tv));
+            let group = VOTE_INPUTS_BINDINGS.group(&ctx.device, &self.layout, resources);
             let l = &self.levels[i];
             let stamps = slot.as_ref().and_then(|s| s.compute(i == 0, i + 1 == n));
             crate::passes::dispatch_2d(encoder, "soler.vote", &self.pipeline, &group, &[], stamps, (l.width, l.height));
@@ -242,14 +255,21 @@ impl SolerPyramid {
             } else {
                 (&views[i - 1][0], &views[i - 1][1], &views[i - 1][2])
             };
-            let entries = [(1, fp), (2, fnorm), (3, fr), (6, &out[2]), (10, &out[3]), (11, &out[0]), (12, &out[1])];
-            let mut list = vec![wgpu::BindGroupEntry { binding: 0, resource: self.params.as_entire_binding() }];
-            list.extend(entries.map(|(binding, v)| wgpu::BindGroupEntry { binding, resource: tv(v) }));
-            let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("soler.vote_radiance.inputs"),
-                layout: &self.radiance_layout,
-                entries: &list,
-            });
+            // Bindings 0, 1–3, 6, 10–12 in the description's order.
+            let group = VOTE_RADIANCE_INPUTS_BINDINGS.group(
+                &ctx.device,
+                &self.radiance_layout,
+                [
+                    self.params.as_entire_binding(),
+                    tv(fp),
+                    tv(fnorm),
+                    tv(fr),
+                    tv(&out[2]),
+                    tv(&out[3]),
+                    tv(&out[0]),
+                    tv(&out[1]),
+                ],
+            );
             let l = &self.levels[i];
             let stamps = slot.as_ref().and_then(|s| s.compute(i == 0, i + 1 == n));
             crate::passes::dispatch_2d(

@@ -12,9 +12,39 @@
 use super::{SolerSettings, TemporalHistory, TemporalQuantity};
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::gbuffer::{GBufferViews, NORMAL_FORMAT};
 use crate::timing::PassRec;
+
+/// Bind group `soler.temporal.inputs` of `shaders/soler/temporal.wgsl` (group 0).
+pub const TEMPORAL_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "soler.temporal.inputs",
+    shader: "soler/temporal.wgsl",
+    group: 0,
+    entry: None,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::Uniform),
+        binding(1, "camera", Kind::Uniform),
+        binding(2, "current", Kind::Texture { filterable: false }),
+        binding(3, "g_position", Kind::Texture { filterable: false }),
+        binding(4, "g_normal", Kind::Texture { filterable: false }),
+        binding(5, "g_motion", Kind::Texture { filterable: false }),
+        binding(6, "g_material", Kind::Texture { filterable: false }),
+        binding(7, "prev_normal", Kind::Texture { filterable: false }),
+        binding(8, "history_prev", Kind::Texture { filterable: false }),
+        binding(9, "out_filtered", Kind::StorageTexture(wgpu::TextureFormat::Rgba16Float)),
+        binding(10, "out_history", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(11, "out_warped", Kind::StorageTexture(wgpu::TextureFormat::Rgba16Float)),
+        binding(12, "out_mask", Kind::StorageTexture(wgpu::TextureFormat::Rgba8Unorm)),
+        binding(13, "out_a", Kind::StorageTexture(wgpu::TextureFormat::R32Float)),
+        binding(14, "out_normal", Kind::StorageTexture(wgpu::TextureFormat::Rgba16Float)),
+        binding(15, "g_albedo", Kind::Texture { filterable: false }),
+        binding(16, "specular", Kind::Texture { filterable: false }),
+        binding(17, "spec_history_prev", Kind::Texture { filterable: false }),
+        binding(18, "out_spec_history", Kind::StorageTexture(wgpu::TextureFormat::Rgba16Float)),
+    ],
+};
 
 /// Rust twin of `TemporalParams` in `shaders/soler/temporal.wgsl`.
 #[repr(C)]
@@ -113,23 +143,7 @@ impl SolerTemporal {
 
     pub fn new(ctx: &GpuContext, size: (u32, u32)) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let mut entries = vec![bgl::uniform(0, cs), bgl::uniform(1, cs)];
-        entries.extend((2..=8).map(|b| bgl::texture(b, cs, false)));
-        entries.extend([
-            bgl::storage_texture(9, LIGHT_FORMAT),
-            bgl::storage_texture(10, wgpu::TextureFormat::Rgba32Float),
-            bgl::storage_texture(11, LIGHT_FORMAT),
-            bgl::storage_texture(12, MASK_FORMAT),
-        ]);
-        entries.push(bgl::storage_texture(13, wgpu::TextureFormat::R32Float));
-        entries.push(bgl::storage_texture(14, NORMAL_FORMAT));
-        entries.extend([bgl::texture(15, cs, false), bgl::texture(16, cs, false), bgl::texture(17, cs, false)]);
-        entries.push(bgl::storage_texture(18, LIGHT_FORMAT));
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("soler.temporal.inputs"),
-            entries: &entries,
-        });
+        let layout = TEMPORAL_INPUTS_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "soler/temporal.wgsl");
         let pipeline = crate::passes::compute_pipeline(device, "soler.temporal", &module, "cs_temporal", &[&layout]);
         let params = crate::passes::uniform_buffer(
@@ -254,7 +268,7 @@ impl SolerTemporal {
         resources.extend([&filtered, &hist, &warped, &rejection, &a, &normal_out].map(tv));
         let (spec_prev, spec_out) = (v(&self.spec_history[read]), v(&self.spec_history[write]));
         resources.extend([&g.albedo, specular.unwrap_or(&no_specular), &spec_prev, &spec_out].map(tv));
-        let group = crate::passes::bind_group(&ctx.device, "soler.temporal.inputs", &self.layout, resources);
+        let group = TEMPORAL_INPUTS_BINDINGS.group(&ctx.device, &self.layout, resources);
         let stamps = slot.and_then(|s| s.compute(true, true));
         crate::passes::dispatch_2d(encoder, "soler.temporal", &self.pipeline, &group, &[], stamps, self.size);
         self.current = write;

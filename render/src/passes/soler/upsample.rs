@@ -9,9 +9,28 @@
 use super::STRIDE;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
 use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::timing::PassRec;
+
+/// Bind group `soler.upsample.inputs` of `shaders/soler/upsample.wgsl` (group 0): one step of
+/// the bilateral upsampling (Soler 004 §3.3).
+pub const UPSAMPLE_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "soler.upsample.inputs",
+    shader: "soler/upsample.wgsl",
+    group: 0,
+    entry: None,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::UniformDynamic),
+        binding(1, "fine_position", Kind::Texture { filterable: false }),
+        binding(2, "fine_normal", Kind::Texture { filterable: false }),
+        binding(3, "fine_light", Kind::Texture { filterable: false }),
+        binding(4, "coarse_position", Kind::Texture { filterable: false }),
+        binding(5, "coarse_normal", Kind::Texture { filterable: false }),
+        binding(6, "coarse_light", Kind::Texture { filterable: false }),
+        binding(7, "out_light", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+    ],
+};
 
 /// Bind group `soler.resolve.inputs` of `shaders/soler/resolve.wgsl` (group 0).
 pub const RESOLVE_INPUTS_BINDINGS: Bindings = Bindings {
@@ -69,15 +88,8 @@ pub struct SolerUpsample {
 impl SolerUpsample {
     pub fn new(ctx: &GpuContext, sizes: &[(u32, u32)]) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
         let rgba = wgpu::TextureFormat::Rgba32Float;
-        let mut entries: Vec<wgpu::BindGroupLayoutEntry> = vec![bgl::uniform_dynamic(0, cs)];
-        entries.extend((1..=6).map(|b| bgl::texture(b, cs, false)));
-        entries.push(bgl::storage_texture(7, rgba));
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("soler.upsample.inputs"),
-            entries: &entries,
-        });
+        let layout = UPSAMPLE_INPUTS_BINDINGS.layout(device);
         let resolve_layout = RESOLVE_INPUTS_BINDINGS.layout(device);
         let m_up = crate::shaders::create_module(device, "soler/upsample.wgsl");
         let m_resolve = crate::shaders::create_module(device, "soler/resolve.wgsl");
@@ -203,8 +215,8 @@ impl SolerUpsample {
                 let views =
                     [s.fine[0], s.fine[1], s.fine_light.unwrap_or(&dummy), s.coarse[0], s.coarse[1], s.coarse[2], &out];
                 let uniform = crate::passes::dynamic_slot(&self.params, std::mem::size_of::<UpsampleParams>());
-                let resources = std::iter::once(uniform).chain(views.map(tv)).collect();
-                let group = crate::passes::bind_group(&ctx.device, "soler.upsample.inputs", &self.layout, resources);
+                let resources = std::iter::once(uniform).chain(views.map(tv));
+                let group = UPSAMPLE_INPUTS_BINDINGS.group(&ctx.device, &self.layout, resources);
                 let stamps = slot.as_ref().and_then(|s| s.compute(first, false));
                 first = false;
                 let offset = [(i as u64 * STRIDE) as u32];

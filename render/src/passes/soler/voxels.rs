@@ -17,6 +17,7 @@
 //! which leaves the room's inside right).
 
 use crate::counters::prelude::*;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 
 use super::STRIDE;
 use crate::buffers::{BufferKind, BufferRegistry};
@@ -26,6 +27,16 @@ use crate::scene::upload::GpuScene;
 use crate::scene::{Scene, SceneState};
 use crate::timing::PassRec;
 
+/// The voxelisation's grid group (group 3 of `shaders/soler/voxelize.wgsl`): the level's
+/// parameters and its occupancy bits.
+pub const GRID_BINDINGS: Bindings = Bindings {
+    label: "soler.voxelize.grid",
+    shader: "soler/voxelize.wgsl",
+    group: 3,
+    entry: None,
+    visibility: wgpu::ShaderStages::FRAGMENT,
+    list: &[binding(0, "params", Kind::UniformDynamic), binding(1, "grid", Kind::Storage { read_only: false })],
+};
 /// Rust twin of `VoxelParams` in `shaders/soler/voxel_common.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -77,21 +88,16 @@ const TARGET_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
 impl SolerVoxels {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let (cs, vf) = (wgpu::ShaderStages::COMPUTE, wgpu::ShaderStages::VERTEX_FRAGMENT);
+        let cs = wgpu::ShaderStages::COMPUTE;
         let layout = |label: &str, entries: &[wgpu::BindGroupLayoutEntry]| {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries })
         };
         // The camera and instance layouts equal the G-buffer's and the scene's (WebGPU: bind
         // groups of equal layouts are interchangeable).
-        let camera_layout = layout("soler.voxelize.camera", &[bgl::uniform(0, vf | cs)]);
-        let instance_layout = layout("soler.voxelize.instances", &[bgl::storage(0, wgpu::ShaderStages::VERTEX, true)]);
-        let grid_layout = layout(
-            "soler.voxelize.grid",
-            &[
-                bgl::uniform_dynamic(0, wgpu::ShaderStages::FRAGMENT),
-                bgl::storage(1, wgpu::ShaderStages::FRAGMENT, false),
-            ],
-        );
+        let camera_layout = crate::passes::gbuffer::CAMERA_BINDINGS.layout_labelled(device, "soler.voxelize.camera");
+        let instance_layout =
+            crate::scene::upload::INSTANCES_BINDINGS.layout_labelled(device, "soler.voxelize.instances");
+        let grid_layout = GRID_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "soler/voxelize.wgsl");
         // The scene's materials (group 2): alpha cutouts toggle nothing.
         let material_layout = crate::scene::upload::material_layout(device, "soler.voxelize.material");
@@ -272,18 +278,14 @@ impl SolerVoxels {
         for g in &self.grids {
             encoder.clear_buffer(&g.buffer, 0, None);
         }
-        let camera_group = crate::passes::bind_group(
+        let camera_group = crate::passes::gbuffer::CAMERA_BINDINGS.group_labelled(
             device,
             "soler.voxelize.camera",
             &self.camera_layout,
-            vec![camera.as_entire_binding()],
+            [camera.as_entire_binding()],
         );
-        let grid_group = crate::passes::bind_group(
-            device,
-            "soler.voxelize.grid",
-            &self.grid_layout,
-            vec![uniform.clone(), first.buffer.as_entire_binding()],
-        );
+        let grid_group =
+            GRID_BINDINGS.group(device, &self.grid_layout, [uniform.clone(), first.buffer.as_entire_binding()]);
         let target_view = crate::passes::view(target, "soler.voxelize.target");
         {
             let mut pass = encoder.begin_counted_render_pass(&wgpu::RenderPassDescriptor {
