@@ -62,8 +62,7 @@ pub(super) fn vpl_gather(f: &FrameInputs, x: &mut StagePasses, r: &mut Recorder,
         temporal: temporal.and(x.temporal.as_ref()),
         last,
     };
-    let camera = crate::gpu::bgl::uniform(0, wgpu::ShaderStages::COMPUTE);
-    let pass = x.explain_vpl.get_or_insert_with(|| VplExplainPass::new(f.ctx, camera));
+    let pass = x.explain_vpl.get_or_insert_with(|| VplExplainPass::new(f.ctx));
     pass.run(f.ctx, r.enc, &inputs, info);
     Some(())
 }

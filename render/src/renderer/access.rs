@@ -10,7 +10,6 @@ use glam::Mat4;
 use super::Renderer;
 use crate::buffers::{BufferError, BufferRegistry, ImageF32};
 use crate::camera::Camera;
-use crate::gpu::bgl;
 use crate::passes::compose::ComposePass;
 use crate::passes::direct::DirectPass;
 use crate::passes::gbuffer::GBufferPass;
@@ -79,9 +78,8 @@ impl Renderer {
         let shadow = passes.contains(&"direct.shadow").then(|| ShadowPass::new(&ctx, &self.gpu_scene));
         let direct = passes.contains(&"direct").then(|| DirectPass::new(&ctx, w, h));
         let compose = passes.contains(&"compose").then(|| ComposePass::new(&ctx, w, h));
-        let explain = (passes.contains(&"explain") && self.stages.explain_vpl.is_some()).then(|| {
-            crate::passes::knecht::explain::VplExplainPass::new(&ctx, bgl::uniform(0, wgpu::ShaderStages::COMPUTE))
-        });
+        let explain = (passes.contains(&"explain") && self.stages.explain_vpl.is_some())
+            .then(|| crate::passes::knecht::explain::VplExplainPass::new(&ctx));
         let explain_gautron = (passes.contains(&"explain") && self.stages.explain_gautron.is_some())
             .then(|| crate::passes::gautron::explain::GautronExplainPass::new(&ctx));
         let explain_soler = (passes.contains(&"explain")

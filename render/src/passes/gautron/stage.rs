@@ -20,13 +20,28 @@ use super::{
 };
 use crate::buffers::{BufferKind, BufferRegistry, read_storage};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
 use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::stages::{FrameInputs, Visibility, VplSet};
-use crate::passes::{bind_group, buffer, create_target, view};
+use crate::passes::{buffer, create_target, view};
 use crate::settings::pipeline::Temporal;
 use crate::timing::GpuTimer;
 use crate::timing::PassRec;
+
+/// Bind group `gautron.create.gbuffer` of `shaders/gautron/create.wgsl` (group 1): the G-buffer
+/// and splatted coverage the creation tests, and its candidates' mask.
+pub const CREATE_GBUFFER_BINDINGS: Bindings = Bindings {
+    label: "gautron.create.gbuffer",
+    shader: "gautron/create.wgsl",
+    group: 1,
+    entry: None,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "g_position", Kind::Texture { filterable: false }),
+        binding(1, "g_normal", Kind::Texture { filterable: false }),
+        binding(2, "accum", Kind::Texture { filterable: false }),
+        binding(3, "candidate_mask", Kind::StorageTexture(wgpu::TextureFormat::R32Float)),
+    ],
+};
 
 /// Bind group `gautron.create` of `shaders/gautron/create.wgsl` (group 0).
 pub const CREATE_BINDINGS: Bindings = Bindings {
@@ -159,26 +174,8 @@ impl GautronStage {
         h: u32,
     ) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
         let layout0 = CREATE_BINDINGS.layout(device);
-        let layout1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("gautron.create.gbuffer"),
-            entries: &[
-                bgl::texture(0, cs, false),
-                bgl::texture(1, cs, false),
-                bgl::texture(2, cs, false),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 3,
-                    visibility: cs,
-                    ty: wgpu::BindingType::StorageTexture {
-                        access: wgpu::StorageTextureAccess::WriteOnly,
-                        format: wgpu::TextureFormat::R32Float,
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                    },
-                    count: None,
-                },
-            ],
-        });
+        let layout1 = CREATE_GBUFFER_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "gautron/create.wgsl");
         let pipeline = |entry: &str| {
             crate::passes::compute_pipeline(device, &format!("gautron.{entry}"), &module, entry, &[&layout0, &layout1])
@@ -646,11 +643,10 @@ impl GautronStage {
     fn gbuffer_group(&self, f: &FrameInputs) -> wgpu::BindGroup {
         let tv = wgpu::BindingResource::TextureView;
         let mask_view = view(&self.candidate_mask, "gautron.candidates");
-        bind_group(
+        CREATE_GBUFFER_BINDINGS.group(
             &f.ctx.device,
-            "gautron.create.gbuffer",
             &self.layout1,
-            vec![tv(&f.gbuffer.position), tv(&f.gbuffer.normal), tv(&self.splat.accum_view()), tv(&mask_view)],
+            [tv(&f.gbuffer.position), tv(&f.gbuffer.normal), tv(&self.splat.accum_view()), tv(&mask_view)],
         )
     }
 

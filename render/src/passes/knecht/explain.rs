@@ -12,13 +12,46 @@ use glam::{Vec3, Vec4};
 
 use crate::explain::{Check, Contribution, Explanation, Rejection};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::gbuffer::GBufferViews;
 use crate::passes::knecht::interleave::InterleavePass;
 use crate::passes::knecht::temporal::{MergeOrder, TemporalPass};
 use crate::passes::reference::explain::{BACKGROUND, EMPTY, FILTERED, GpuTerm, OUTSIDE, term_fields, term_rejection};
 use crate::passes::reference::vpl::GpuVpl;
 use crate::passes::reference::vpl_visibility::GatherVisibility;
+
+/// Bind group `explain.vpl.inputs` of `shaders/knecht/interleave/explain.wgsl` (group 0).
+pub const VPL_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "explain.vpl.inputs",
+    shader: "knecht/interleave/explain.wgsl",
+    group: 0,
+    entry: None,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "camera", Kind::Uniform),
+        binding(1, "params", Kind::Uniform),
+        binding(2, "vpls", Kind::Storage { read_only: true }),
+        binding(3, "ism_atlas", Kind::Texture { filterable: false }),
+        binding(4, "exact_atlas", Kind::Depth),
+        binding(5, "g_position", Kind::Texture { filterable: false }),
+        binding(6, "g_normal", Kind::Texture { filterable: false }),
+        binding(7, "g_albedo", Kind::Texture { filterable: false }),
+        binding(8, "g_material", Kind::Texture { filterable: false }),
+        binding(9, "tile_offsets", Kind::Storage { read_only: true }),
+        binding(10, "explain", Kind::Uniform),
+        binding(11, "merged", Kind::Texture { filterable: false }),
+        binding(12, "filtered", Kind::Texture { filterable: false }),
+        binding(13, "confidence", Kind::Texture { filterable: false }),
+        binding(14, "history_prev", Kind::Texture { filterable: false }),
+        binding(15, "history_out", Kind::Texture { filterable: false }),
+        binding(16, "g_motion", Kind::Texture { filterable: false }),
+        binding(17, "final_light", Kind::Texture { filterable: false }),
+        binding(18, "header", Kind::Storage { read_only: false }),
+        binding(19, "window", Kind::Storage { read_only: false }),
+        binding(20, "terms", Kind::Storage { read_only: false }),
+        binding(21, "split_prev", Kind::UintTexture),
+    ],
+};
 
 /// Flags of a window pixel (`EXPLAIN_W_*`).
 pub const W_INSIDE: u32 = 1;
@@ -123,37 +156,9 @@ impl crate::explain::Replay for VplExplainPass {
 }
 
 impl VplExplainPass {
-    pub fn new(ctx: &GpuContext, camera: wgpu::BindGroupLayoutEntry) -> Self {
+    pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let t = |b| bgl::texture(b, cs, false);
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("explain.vpl.inputs"),
-            entries: &[
-                camera,
-                bgl::uniform(1, cs),
-                bgl::storage(2, cs, true),
-                t(3),
-                bgl::depth(4, cs),
-                t(5),
-                t(6),
-                t(7),
-                t(8),
-                bgl::storage(9, cs, true),
-                bgl::uniform(10, cs),
-                t(11),
-                t(12),
-                t(13),
-                t(14),
-                t(15),
-                t(16),
-                t(17),
-                bgl::storage(18, cs, false),
-                bgl::storage(19, cs, false),
-                bgl::storage(20, cs, false),
-                bgl::uint_texture(21, cs),
-            ],
-        });
+        let layout = VPL_INPUTS_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "knecht/interleave/explain.wgsl");
         let pipeline = |label, entry| crate::passes::compute_pipeline(device, label, &module, entry, &[&layout]);
         let (dummy_ism, dummy_exact) =
@@ -234,36 +239,35 @@ impl VplExplainPass {
             None => (self.dummy.clone(), self.dummy.clone(), self.dummy.clone()),
         };
         let tv = wgpu::BindingResource::TextureView;
-        let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
         let part = |offset, size| crate::passes::buffer_part(&self.out, offset, size);
-        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("explain.vpl.inputs"),
-            layout: &self.layout,
-            entries: &[
-                entry(0, inp.camera.as_entire_binding()),
-                entry(1, inp.interleave.gather_params().as_entire_binding()),
-                entry(2, inp.vpls.as_entire_binding()),
-                entry(3, tv(ism)),
-                entry(4, tv(exact)),
-                entry(5, tv(&inp.g.position)),
-                entry(6, tv(&inp.g.normal)),
-                entry(7, tv(&inp.g.albedo)),
-                entry(8, tv(&inp.g.material)),
-                entry(9, inp.interleave.tile_offsets().as_entire_binding()),
-                entry(10, self.params.as_entire_binding()),
-                entry(11, tv(&merged)),
-                entry(12, tv(&filtered)),
-                entry(13, tv(&confidence)),
-                entry(14, tv(&prev)),
-                entry(15, tv(&out)),
-                entry(16, tv(&inp.g.motion)),
-                entry(17, tv(inp.last)),
-                entry(18, part(0, Some(std::mem::size_of::<GpuHeader>() as u64))),
-                entry(19, part(WINDOW_OFFSET, Some(WINDOW_PIXELS * 64))),
-                entry(20, part(TERMS_OFFSET, None)),
-                entry(21, tv(&split_prev.map_or(self.dummy_split.clone(), |t| v(t, "temporal.history_split_prev")))),
+        let group = VPL_INPUTS_BINDINGS.group(
+            &ctx.device,
+            &self.layout,
+            [
+                inp.camera.as_entire_binding(),
+                inp.interleave.gather_params().as_entire_binding(),
+                inp.vpls.as_entire_binding(),
+                tv(ism),
+                tv(exact),
+                tv(&inp.g.position),
+                tv(&inp.g.normal),
+                tv(&inp.g.albedo),
+                tv(&inp.g.material),
+                inp.interleave.tile_offsets().as_entire_binding(),
+                self.params.as_entire_binding(),
+                tv(&merged),
+                tv(&filtered),
+                tv(&confidence),
+                tv(&prev),
+                tv(&out),
+                tv(&inp.g.motion),
+                tv(inp.last),
+                part(0, Some(std::mem::size_of::<GpuHeader>() as u64)),
+                part(WINDOW_OFFSET, Some(WINDOW_PIXELS * 64)),
+                part(TERMS_OFFSET, None),
+                tv(&split_prev.map_or(self.dummy_split.clone(), |t| v(t, "temporal.history_split_prev"))),
             ],
-        });
+        );
         let mut pass =
             enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("explain.vpl"), timestamp_writes: None });
         pass.set_bind_group(0, &group, &[]);

@@ -22,10 +22,39 @@ use crate::gpu::bindings::{Bindings, Kind, binding};
 use super::STRIDE;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
 use crate::scene::upload::GpuScene;
 use crate::scene::{Scene, SceneState};
 use crate::timing::PassRec;
+
+/// Bind group `soler.voxel_down.inputs` of `shaders/soler/voxel_down.wgsl` (group 0): one
+/// coarser level of the voxel grid from the finer one.
+pub const DOWN_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "soler.voxel_down.inputs",
+    shader: "soler/voxel_down.wgsl",
+    group: 0,
+    entry: None,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::UniformDynamic),
+        binding(1, "fine", Kind::Storage { read_only: true }),
+        binding(2, "coarse", Kind::Storage { read_only: false }),
+    ],
+};
+
+/// Bind group `soler.voxel_view.inputs` of `shaders/soler/voxel_view.wgsl` (group 0): a level
+/// of the grid drawn for the viewer.
+pub const VIEW_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "soler.voxel_view.inputs",
+    shader: "soler/voxel_view.wgsl",
+    group: 0,
+    entry: None,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::UniformDynamic),
+        binding(1, "grid", Kind::Storage { read_only: true }),
+        binding(2, "out_view", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+    ],
+};
 
 /// The voxelisation's grid group (group 3 of `shaders/soler/voxelize.wgsl`): the level's
 /// parameters and its occupancy bits.
@@ -88,10 +117,6 @@ const TARGET_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
 impl SolerVoxels {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let layout = |label: &str, entries: &[wgpu::BindGroupLayoutEntry]| {
-            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries })
-        };
         // The camera and instance layouts equal the G-buffer's and the scene's (WebGPU: bind
         // groups of equal layouts are interchangeable).
         let camera_layout = crate::passes::gbuffer::CAMERA_BINDINGS.layout_labelled(device, "soler.voxelize.camera");
@@ -137,21 +162,11 @@ impl SolerVoxels {
             multiview_mask: None,
             cache: None,
         });
-        let down_layout = layout(
-            "soler.voxel_down.inputs",
-            &[bgl::uniform_dynamic(0, cs), bgl::storage(1, cs, true), bgl::storage(2, cs, false)],
-        );
+        let down_layout = DOWN_INPUTS_BINDINGS.layout(device);
         let down_module = crate::shaders::create_module(device, "soler/voxel_down.wgsl");
         let down =
             crate::passes::compute_pipeline(device, "soler.voxel_down", &down_module, "cs_down", &[&down_layout]);
-        let view_layout = layout(
-            "soler.voxel_view.inputs",
-            &[
-                bgl::uniform_dynamic(0, cs),
-                bgl::storage(1, cs, true),
-                bgl::storage_texture(2, wgpu::TextureFormat::Rgba32Float),
-            ],
-        );
+        let view_layout = VIEW_INPUTS_BINDINGS.layout(device);
         let view_module = crate::shaders::create_module(device, "soler/voxel_view.wgsl");
         let view_pipeline =
             crate::passes::compute_pipeline(device, "soler.voxel_view", &view_module, "cs_view", &[&view_layout]);
@@ -318,21 +333,19 @@ impl SolerVoxels {
         for (i, g) in self.grids.iter().enumerate() {
             let offset = [(i as u64 * STRIDE) as u32];
             if let Some(next) = self.grids.get(i + 1) {
-                let group = crate::passes::bind_group(
+                let group = DOWN_INPUTS_BINDINGS.group(
                     device,
-                    "soler.voxel_down.inputs",
                     &self.down_layout,
-                    vec![uniform.clone(), g.buffer.as_entire_binding(), next.buffer.as_entire_binding()],
+                    [uniform.clone(), g.buffer.as_entire_binding(), next.buffer.as_entire_binding()],
                 );
                 let size = (next.width, next.height);
                 crate::passes::dispatch_2d(encoder, "soler.voxel_down", &self.down, &group, &offset, None, size);
             }
             let view = crate::passes::view(&g.view, "soler.voxels.view");
-            let group = crate::passes::bind_group(
+            let group = VIEW_INPUTS_BINDINGS.group(
                 device,
-                "soler.voxel_view.inputs",
                 &self.view_layout,
-                vec![uniform.clone(), g.buffer.as_entire_binding(), wgpu::BindingResource::TextureView(&view)],
+                [uniform.clone(), g.buffer.as_entire_binding(), wgpu::BindingResource::TextureView(&view)],
             );
             let stamps = slot.as_ref().and_then(|s| s.compute(false, i + 1 == n));
             crate::passes::dispatch_2d(
