@@ -228,17 +228,18 @@ fn every_bind_group_description_matches_its_shader() {
     assert!(!gi_render::passes::BINDINGS.is_empty());
     for d in gi_render::passes::BINDINGS {
         let (module, info) = parse_with_info(d.shader);
-        // With an entry point named: the bindings of the group that entry point uses.
+        // With entry points named (`a+b` for a raster pipeline's vertex and fragment stages):
+        // the bindings of the group those entry points use.
         let used = |h: naga::Handle<naga::GlobalVariable>| match d.entry {
             None => true,
-            Some(name) => {
+            Some(names) => names.split('+').any(|name| {
                 let k = module
                     .entry_points
                     .iter()
                     .position(|e| e.name == name)
                     .unwrap_or_else(|| panic!("{}: {} has no entry point {name}", d.label, d.shader));
                 !info.get_entry_point(k)[h].is_empty()
-            }
+            }),
         };
         let declared: Vec<&naga::GlobalVariable> = module
             .global_variables

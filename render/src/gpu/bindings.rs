@@ -65,8 +65,9 @@ pub struct Bindings {
     pub shader: &'static str,
     pub group: u32,
     /// The entry point the group serves, where the shader's entry points bind different
-    /// subsets of one group number (the direct light's group 2, the ISM's pull and push);
-    /// None: the group is every binding the shader declares under its number.
+    /// subsets of one group number (the direct light's group 2, the ISM's pull and push;
+    /// `vs_x+fs_x` for a raster pipeline's two stages); None: the group is every binding the
+    /// shader declares under its number.
     pub entry: Option<&'static str>,
     pub visibility: wgpu::ShaderStages,
     pub list: &'static [Binding],

@@ -233,18 +233,13 @@ impl ShadowPass {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let group = device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("direct.shadow.views"),
-            layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                    buffer: &buffer,
-                    offset: 0,
-                    size: std::num::NonZeroU64::new(64),
-                }),
-            }],
+        // One view's 64 bytes at a dynamic offset.
+        let view = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &buffer,
+            offset: 0,
+            size: std::num::NonZeroU64::new(64),
         });
+        let group = DIRECT_SHADOW_VIEW_BINDINGS.group_labelled(device, "direct.shadow.views", layout, [view]);
         (buffer, group)
     }
 

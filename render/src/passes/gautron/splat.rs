@@ -11,12 +11,52 @@ use crate::counters::prelude::*;
 
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
 use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::bins::{Bins, SplatMethod};
 use crate::passes::gbuffer::GBufferViews;
-use crate::passes::{bind_group, create_target, view};
+use crate::passes::{create_target, view};
 use crate::timing::PassRec;
+
+/// Bind group `gautron.splat` of `shaders/gautron/splat.wgsl` (group 0 of the binned splat,
+/// `cs_bin` and `cs_accumulate`).
+pub const SPLAT_BINDINGS: Bindings = Bindings {
+    label: "gautron.splat",
+    shader: "gautron/splat.wgsl",
+    group: 0,
+    entry: Some("cs_bin+cs_accumulate"),
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::Uniform),
+        binding(1, "camera", Kind::Uniform),
+        binding(2, "records", Kind::Storage { read_only: true }),
+        binding(3, "g_position", Kind::Texture { filterable: false }),
+        binding(4, "g_normal", Kind::Texture { filterable: false }),
+        binding(5, "args", Kind::Storage { read_only: true }),
+        binding(6, "prev_weighted", Kind::Texture { filterable: false }),
+        binding(7, "prev_plain", Kind::Texture { filterable: false }),
+        binding(8, "out_weighted", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(9, "out_plain", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(10, "prev_dir", Kind::Texture { filterable: false }),
+        binding(11, "out_dir", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+    ],
+};
+
+/// Bind group `gautron.splat.blend` of `shaders/gautron/splat.wgsl` (group 0 of the blended
+/// quads, `vs_splat` and `fs_splat`).
+pub const SPLAT_BLEND_BINDINGS: Bindings = Bindings {
+    label: "gautron.splat.blend",
+    shader: "gautron/splat.wgsl",
+    group: 0,
+    entry: Some("vs_splat+fs_splat"),
+    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+    list: &[
+        binding(0, "params", Kind::Uniform),
+        binding(1, "camera", Kind::Uniform),
+        binding(2, "records", Kind::Storage { read_only: true }),
+        binding(3, "g_position", Kind::Texture { filterable: false }),
+        binding(4, "g_normal", Kind::Texture { filterable: false }),
+    ],
+};
 
 /// Bind group `gautron.resolve` of `shaders/gautron/resolve.wgsl` (group 0).
 pub const RESOLVE_BINDINGS: Bindings = Bindings {
@@ -77,21 +117,7 @@ impl SplatPass {
     pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
         let device = &ctx.device;
         let module = crate::shaders::create_module(device, "gautron/splat.wgsl");
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let mut entries = input_entries(cs, cs).to_vec();
-        entries.extend([
-            bgl::storage(5, cs, true),
-            bgl::texture(6, cs, false),
-            bgl::texture(7, cs, false),
-            bgl::storage_texture(8, ACCUM_FORMAT),
-            bgl::storage_texture(9, ACCUM_FORMAT),
-            bgl::texture(10, cs, false),
-            bgl::storage_texture(11, ACCUM_FORMAT),
-        ]);
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("gautron.splat"),
-            entries: &entries,
-        });
+        let layout = SPLAT_BINDINGS.layout(device);
         let (raster, raster_layout) = raster_pipeline(device, &module);
         let bins = Bins::new(ctx, "gautron.splat.bins");
         let layouts = [&layout, bins.layout()];
@@ -218,22 +244,18 @@ impl SplatPass {
         let (out, out_plain) = (v(&self.accum[dst], "gautron.accum"), v(&self.accum_plain[dst], "gautron.accum.plain"));
         let (prev_dir, out_dir) =
             (v(&self.accum_dir[src], "gautron.accum.direction"), v(&self.accum_dir[dst], "gautron.accum.direction"));
-        let group = bind_group(
+        let group = SPLAT_BINDINGS.group(
             &ctx.device,
-            "gautron.splat",
             &self.layout,
-            inputs([params, camera, records], g)
-                .into_iter()
-                .chain([
-                    args.as_entire_binding(),
-                    tv(&prev),
-                    tv(&prev_plain),
-                    tv(&out),
-                    tv(&out_plain),
-                    tv(&prev_dir),
-                    tv(&out_dir),
-                ])
-                .collect(),
+            inputs([params, camera, records], g).into_iter().chain([
+                args.as_entire_binding(),
+                tv(&prev),
+                tv(&prev_plain),
+                tv(&out),
+                tv(&out_plain),
+                tv(&prev_dir),
+                tv(&out_dir),
+            ]),
         );
         let size = (self.accum[0].width(), self.accum[0].height());
         let timestamps = slot.and_then(|s| s.compute(true, true));
@@ -261,12 +283,7 @@ impl SplatPass {
             self.current.set(0);
         }
         let c = self.current.get();
-        let group = bind_group(
-            &ctx.device,
-            "gautron.splat.blend",
-            &self.raster_layout,
-            inputs([params, camera, records], g).to_vec(),
-        );
+        let group = SPLAT_BLEND_BINDINGS.group(&ctx.device, &self.raster_layout, inputs([params, camera, records], g));
         let (out, out_plain) =
             (view(&self.accum[c], "gautron.accum"), view(&self.accum_plain[c], "gautron.accum.plain"));
         let out_dir = view(&self.accum_dir[c], "gautron.accum.direction");
@@ -387,10 +404,7 @@ fn raster_pipeline(
     device: &wgpu::Device,
     module: &wgpu::ShaderModule,
 ) -> (wgpu::RenderPipeline, wgpu::BindGroupLayout) {
-    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("gautron.splat.blend"),
-        entries: &input_entries(wgpu::ShaderStages::VERTEX_FRAGMENT, wgpu::ShaderStages::FRAGMENT),
-    });
+    let layout = SPLAT_BLEND_BINDINGS.layout(device);
     let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("gautron.splat.blend.layout"),
         bind_group_layouts: &[Some(&layout)],
@@ -430,19 +444,7 @@ fn raster_pipeline(
     (pipeline, layout)
 }
 
-/// Bindings 0–4 of both methods' layouts: the splat's uniform, the camera and the records
-/// (visible to `buffers`), the G-buffer's position and normal (visible to `textures`).
-fn input_entries(buffers: wgpu::ShaderStages, textures: wgpu::ShaderStages) -> [wgpu::BindGroupLayoutEntry; 5] {
-    [
-        bgl::uniform(0, buffers),
-        bgl::uniform(1, buffers),
-        bgl::storage(2, buffers, true),
-        bgl::texture(3, textures, false),
-        bgl::texture(4, textures, false),
-    ]
-}
-
-/// The resources of [`input_entries`]: (params, camera, records) and the G-buffer.
+/// Bindings 0–4 of both splat groups: (params, camera, records) and the G-buffer.
 fn inputs<'a>([params, camera, records]: [&'a wgpu::Buffer; 3], g: &'a GBufferViews) -> [wgpu::BindingResource<'a>; 5] {
     let tv = wgpu::BindingResource::TextureView;
     [

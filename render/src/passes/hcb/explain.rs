@@ -22,7 +22,7 @@ use crate::gpu::GpuContext;
 use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::knecht::temporal::TemporalPass;
 use crate::passes::stages::FrameInputs;
-use crate::passes::{bind_group, view};
+use crate::passes::view;
 
 /// Bind group `explain.hcb.inputs` of `shaders/hcb/explain.wgsl` (group 0).
 pub const HCB_INPUTS_BINDINGS: Bindings = Bindings {
@@ -304,8 +304,12 @@ impl HcbExplainPass {
             ],
         );
         let args_group = HCB_ARGS_BINDINGS.group(&ctx.device, &self.args_layout, [self.args.as_entire_binding()]);
-        let no_args =
-            bind_group(&ctx.device, "explain.hcb.no_args", &self.args_layout, vec![self.no_args.as_entire_binding()]);
+        let no_args = HCB_ARGS_BINDINGS.group_labelled(
+            &ctx.device,
+            "explain.hcb.no_args",
+            &self.args_layout,
+            [self.no_args.as_entire_binding()],
+        );
         let mut pass =
             enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("explain.hcb"), timestamp_writes: None });
         pass.set_group(0, &group, &[]);

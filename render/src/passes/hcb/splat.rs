@@ -7,11 +7,28 @@ use crate::counters::prelude::*;
 use super::{HcbFrame, HcbParams};
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
-use crate::gpu::bgl;
 use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::bins::{Bins, SplatMethod};
 use crate::timing::PassRec;
 use crate::timing::Slot;
+
+/// Bind group `hcb.splat.inputs` of `shaders/hcb/splat.wgsl` (group 0 of the blended quads,
+/// `vs_splat` and `fs_splat`; Nguyen 000 §4.2's coherence-weighted splatting).
+pub const SPLAT_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "hcb.splat.inputs",
+    shader: "hcb/splat.wgsl",
+    group: 0,
+    entry: Some("vs_splat+fs_splat"),
+    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+    list: &[
+        binding(0, "camera", Kind::Uniform),
+        binding(1, "hp", Kind::Uniform),
+        binding(2, "samples", Kind::Storage { read_only: true }),
+        binding(3, "g_position", Kind::Texture { filterable: false }),
+        binding(4, "g_normal", Kind::Texture { filterable: false }),
+        binding(5, "counter", Kind::Storage { read_only: true }),
+    ],
+};
 
 /// Bind group `hcb.splat.binned` of `shaders/hcb/splat.wgsl` (group 0).
 pub const SPLAT_BINNED_BINDINGS: Bindings = Bindings {
@@ -106,18 +123,7 @@ const ACCUM_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 impl HcbSplatPass {
     pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
         let device = &ctx.device;
-        let (vs, fs) = (wgpu::ShaderStages::VERTEX, wgpu::ShaderStages::FRAGMENT);
-        let splat_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("hcb.splat.inputs"),
-            entries: &[
-                bgl::uniform(0, vs | fs),
-                bgl::uniform(1, vs | fs),
-                bgl::storage(2, vs | fs, true),
-                bgl::texture(3, fs, false),
-                bgl::texture(4, fs, false),
-                bgl::storage(5, vs, true),
-            ],
-        });
+        let splat_layout = SPLAT_INPUTS_BINDINGS.layout(device);
         let normalize_layout = NORMALIZE_INPUTS_BINDINGS.layout(device);
         let m_splat = crate::shaders::create_module(device, "hcb/splat.wgsl");
         let m_norm = crate::shaders::create_module(device, "hcb/normalize.wgsl");
@@ -353,7 +359,7 @@ impl HcbSplatPass {
             tv(g.1),
             samples.1.as_entire_binding(),
         ];
-        let group = crate::passes::bind_group(&ctx.device, "hcb.splat.inputs", &self.splat_layout, inputs.to_vec());
+        let group = SPLAT_INPUTS_BINDINGS.group(&ctx.device, &self.splat_layout, inputs.clone());
         if method.on(ctx) == SplatMethod::Blend {
             if !new_only {
                 self.current.set(0);
