@@ -196,6 +196,7 @@ fn declared_as(module: &naga::Module, v: &naga::GlobalVariable, kind: Kind) -> b
             (Kind::Texture { .. }, ImageClass::Sampled { kind: ScalarKind::Float, multi: false }) => !arrayed,
             (Kind::TextureArray { .. }, ImageClass::Sampled { kind: ScalarKind::Float, multi: false }) => *arrayed,
             (Kind::UintTexture, ImageClass::Sampled { kind: ScalarKind::Uint, multi: false }) => !arrayed,
+            (Kind::UintTextureArray, ImageClass::Sampled { kind: ScalarKind::Uint, multi: false }) => *arrayed,
             (Kind::Depth, ImageClass::Depth { multi: false }) => !arrayed,
             (Kind::DepthArray, ImageClass::Depth { multi: false }) => *arrayed,
             (Kind::StorageTextureArray(format), ImageClass::Storage { format: f, .. }) => {

@@ -234,7 +234,7 @@ pub fn driver_growth_mib(ctx: &GpuContext) -> f64 {
         compilation_options: Default::default(),
         cache: None,
     });
-    use gi_render::passes::{bind_group, create_target, uniform_buffer, view};
+    use gi_render::passes::{create_target, uniform_buffer, view};
     let texture = |label: &str, usage| create_target(d, label, 16, 16, wgpu::TextureFormat::Rgba32Float, usage);
     let src = texture("soak.driver_probe.src", wgpu::TextureUsages::empty());
     let aux = texture("soak.driver_probe.aux", wgpu::TextureUsages::empty());
@@ -247,12 +247,17 @@ pub fn driver_growth_mib(ctx: &GpuContext) -> f64 {
     let (src_v, aux_v, dst_v) =
         (view(&src, "soak.driver_probe.src"), view(&aux, "soak.driver_probe.aux"), view(&dst, "soak.driver_probe.dst"));
     let tv = wgpu::BindingResource::TextureView;
-    let group = bind_group(
-        d,
-        "soak.driver_probe",
-        &pipeline.get_bind_group_layout(0),
-        vec![params.as_entire_binding(), tv(&src_v), tv(&aux_v), tv(&dst_v)],
-    );
+    let resources = [params.as_entire_binding(), tv(&src_v), tv(&aux_v), tv(&dst_v)];
+    let entries: Vec<wgpu::BindGroupEntry> = resources
+        .into_iter()
+        .enumerate()
+        .map(|(k, resource)| wgpu::BindGroupEntry { binding: k as u32, resource })
+        .collect();
+    let group = d.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("soak.driver_probe"),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &entries,
+    });
     let dispatch = || {
         let mut e = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("soak.driver_probe") });
         {

@@ -59,6 +59,17 @@ pub fn texture_array(binding: u32, visibility: wgpu::ShaderStages, filterable: b
         ..texture(binding, visibility, filterable)
     }
 }
+/// A 2D unsigned-integer texture array.
+pub fn uint_texture_array(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Uint,
+            view_dimension: wgpu::TextureViewDimension::D2Array,
+            multisampled: false,
+        },
+        ..uint_texture(binding, visibility)
+    }
+}
 pub fn uint_texture(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,

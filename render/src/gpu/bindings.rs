@@ -31,6 +31,8 @@ pub enum Kind {
     },
     /// A 2D unsigned-integer texture.
     UintTexture,
+    /// A 2D unsigned-integer texture array.
+    UintTextureArray,
     /// A 2D depth texture.
     Depth,
     /// A depth texture array.
@@ -86,6 +88,7 @@ impl Bindings {
                 Kind::Texture { filterable } => bgl::texture(b.binding, vis, filterable),
                 Kind::TextureArray { filterable } => bgl::texture_array(b.binding, vis, filterable),
                 Kind::UintTexture => bgl::uint_texture(b.binding, vis),
+                Kind::UintTextureArray => bgl::uint_texture_array(b.binding, vis),
                 Kind::Depth => bgl::depth(b.binding, vis),
                 Kind::DepthArray => bgl::depth_array(b.binding, vis),
                 Kind::StorageTexture(format) => {

@@ -117,6 +117,7 @@ pub const BINDINGS: &[&crate::gpu::bindings::Bindings] = &[
     &gautron::splat::SPLAT_BINDINGS,
     &gautron::splat::SPLAT_BLEND_BINDINGS,
     &hcb::splat::SPLAT_INPUTS_BINDINGS,
+    &view::VIEW_INPUTS_BINDINGS,
     &hcb::splat::NORMALIZE_INPUTS_BINDINGS,
     &hcb::gather::GATHER_INPUTS_BINDINGS,
     &crate::buffers::PROBE_INPUTS_BINDINGS,
@@ -214,21 +215,6 @@ pub fn depth_only_pipeline(
 /// Default view of a texture, labelled.
 pub fn view(texture: &wgpu::Texture, label: &str) -> wgpu::TextureView {
     texture.counted_view(&wgpu::TextureViewDescriptor { label: Some(label), ..Default::default() })
-}
-
-/// A bind group whose entry k is binding k (the compute passes' inputs in binding order).
-pub fn bind_group(
-    device: &wgpu::Device,
-    label: &str,
-    layout: &wgpu::BindGroupLayout,
-    resources: Vec<wgpu::BindingResource<'_>>,
-) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry> = resources
-        .into_iter()
-        .enumerate()
-        .map(|(k, resource)| wgpu::BindGroupEntry { binding: k as u32, resource })
-        .collect();
-    device.counted_bind_group(&wgpu::BindGroupDescriptor { label: Some(label), layout, entries: &entries })
 }
 
 /// The first `size` bytes of `buffer`, bound with a dynamic offset (one slot of

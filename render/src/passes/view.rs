@@ -15,8 +15,31 @@ use glam::{UVec4, Vec4};
 
 use crate::buffers::{BufferEntry, BufferError};
 use crate::gpu::GpuContext;
+use crate::gpu::bindings::{Bindings, Kind, binding};
 pub use crate::settings::view::Colormap;
 pub use crate::settings::view::{ViewMode, ViewSettings};
+
+/// Bind group `view.inputs` of `shaders/view/view.wgsl` (group 0): the viewer's parameters,
+/// one source texture per kind (the buffer's own at its kind's binding, 1×1 stand-ins at the
+/// others), the colour maps and the auto-range statistics.
+pub const VIEW_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "view.inputs",
+    shader: "view/view.wgsl",
+    group: 0,
+    entry: None,
+    visibility: wgpu::ShaderStages::FRAGMENT.union(wgpu::ShaderStages::COMPUTE),
+    list: &[
+        binding(0, "params", Kind::Uniform),
+        binding(1, "src_float", Kind::Texture { filterable: false }),
+        binding(2, "src_float_array", Kind::TextureArray { filterable: false }),
+        binding(3, "src_uint", Kind::UintTexture),
+        binding(4, "src_uint_array", Kind::UintTextureArray),
+        binding(5, "src_depth", Kind::Depth),
+        binding(6, "src_depth_array", Kind::DepthArray),
+        binding(7, "colormaps", Kind::Storage { read_only: true }),
+        binding(8, "range_stats", Kind::Storage { read_only: false }),
+    ],
+};
 
 /// Uniform of the view pass; WGSL twin: `ViewParams` in `shaders/view/view.wgsl`.
 #[repr(C)]
@@ -100,29 +123,7 @@ pub struct ViewPipeline {
 impl ViewPipeline {
     pub fn new(ctx: &GpuContext) -> Arc<Self> {
         let device = &ctx.device;
-        let fs = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
-        let tex = |binding, sample_type, view_dimension| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: fs,
-            ty: wgpu::BindingType::Texture { sample_type, view_dimension, multisampled: false },
-            count: None,
-        };
-        let float = wgpu::TextureSampleType::Float { filterable: false };
-        let (d2, arr) = (wgpu::TextureViewDimension::D2, wgpu::TextureViewDimension::D2Array);
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("view.inputs"),
-            entries: &[
-                crate::gpu::bgl::uniform(0, fs),
-                tex(1, float, d2),
-                tex(2, float, arr),
-                tex(3, wgpu::TextureSampleType::Uint, d2),
-                tex(4, wgpu::TextureSampleType::Uint, arr),
-                tex(5, wgpu::TextureSampleType::Depth, d2),
-                tex(6, wgpu::TextureSampleType::Depth, arr),
-                crate::gpu::bgl::storage(7, fs, true),
-                crate::gpu::bgl::storage(8, wgpu::ShaderStages::COMPUTE, false),
-            ],
-        });
+        let layout = VIEW_INPUTS_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "view/view.wgsl");
         let range = ["cs_range_clear", "cs_range_minmax", "cs_range_histogram"]
             .map(|entry| super::compute_pipeline(device, &format!("view.{entry}"), &module, entry, &[&layout]));
@@ -163,7 +164,8 @@ impl ViewPipeline {
                 usage: wgpu::TextureUsages::TEXTURE_BINDING,
                 view_formats: &[],
             });
-            let dimension = if layers > 1 { arr } else { d2 };
+            let dimension =
+                if layers > 1 { wgpu::TextureViewDimension::D2Array } else { wgpu::TextureViewDimension::D2 };
             t.counted_view(&wgpu::TextureViewDescriptor {
                 label: Some(label),
                 dimension: Some(dimension),
@@ -288,19 +290,18 @@ impl BufferView {
             aspect,
             ..Default::default()
         });
-        let mut entries = vec![wgpu::BindGroupEntry { binding: 0, resource: self.params.as_entire_binding() }];
-        for (i, dummy) in self.shared.dummies.iter().enumerate() {
-            let binding = i as u32 + 1;
-            let view = if binding == source.binding() { &src_view } else { dummy };
-            entries.push(wgpu::BindGroupEntry { binding, resource: wgpu::BindingResource::TextureView(view) });
-        }
-        entries.push(wgpu::BindGroupEntry { binding: 7, resource: self.shared.colormaps.as_entire_binding() });
-        entries.push(wgpu::BindGroupEntry { binding: 8, resource: self.range_stats.as_entire_binding() });
-        let group = ctx.device.counted_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("view.inputs"),
-            layout: &self.shared.layout,
-            entries: &entries,
+        // Bindings 1–6: the source at its kind's binding, the stand-ins at the others.
+        let sources = self.shared.dummies.iter().enumerate().map(|(i, dummy)| {
+            let view = if i as u32 + 1 == source.binding() { &src_view } else { dummy };
+            wgpu::BindingResource::TextureView(view)
         });
+        let group = VIEW_INPUTS_BINDINGS.group(
+            &ctx.device,
+            &self.shared.layout,
+            std::iter::once(self.params.as_entire_binding())
+                .chain(sources)
+                .chain([self.shared.colormaps.as_entire_binding(), self.range_stats.as_entire_binding()]),
+        );
         let out_view =
             output.counted_view(&wgpu::TextureViewDescriptor { label: Some("view.output"), ..Default::default() });
         let mut enc =
