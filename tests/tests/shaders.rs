@@ -277,3 +277,54 @@ fn every_bind_group_description_matches_its_shader() {
         }
     }
 }
+
+/// Issue #52 point 3: no bind group layout or entry of the renderer is written by hand (only
+/// `gpu::bindings` makes them), and every description in its source is listed in
+/// `passes::BINDINGS`, so that the check above sees all of them.
+#[test]
+fn every_bind_group_of_the_renderer_comes_from_a_listed_description() {
+    fn rust_files(dir: &std::path::Path, out: &mut Vec<std::path::PathBuf>) {
+        for e in std::fs::read_dir(dir).expect("source folder").flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                rust_files(&p, out);
+            } else if p.extension().is_some_and(|x| x == "rs") {
+                out.push(p);
+            }
+        }
+    }
+    let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../render/src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    let listed: Vec<&str> = gi_render::passes::BINDINGS.iter().map(|d| d.label).collect();
+    let mut by_hand = Vec::new();
+    let mut unlisted = Vec::new();
+    for f in &files {
+        let text = std::fs::read_to_string(f).expect("source");
+        let code: Vec<&str> = text.lines().filter(|l| !l.trim_start().starts_with("//")).collect();
+        if !f.ends_with("gpu/bindings.rs") {
+            for (n, l) in code.iter().enumerate() {
+                if l.contains("BindGroupEntry {") || l.contains("create_bind_group_layout(") {
+                    by_hand.push(format!("{}: {}", f.display(), n + 1));
+                }
+            }
+        }
+        for (n, l) in code.iter().enumerate() {
+            if l.contains(": Bindings = Bindings {") {
+                let label = code[n + 1..]
+                    .iter()
+                    .find_map(|l| l.trim().strip_prefix("label: \"").and_then(|r| r.strip_suffix("\",")))
+                    .unwrap_or_else(|| panic!("{}: a description without a label", f.display()));
+                if !listed.contains(&label) {
+                    unlisted.push(label.to_string());
+                }
+            }
+        }
+    }
+    assert!(by_hand.is_empty(), "bind group layouts or entries written by hand: {by_hand:?}");
+    assert!(unlisted.is_empty(), "descriptions not in passes::BINDINGS: {unlisted:?}");
+    let mut labels = listed.clone();
+    labels.sort();
+    labels.dedup();
+    assert_eq!(labels.len(), listed.len(), "two descriptions share a label");
+}

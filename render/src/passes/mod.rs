@@ -76,8 +76,9 @@ pub fn strided_bytes<T: bytemuck::Pod>(stride: u64, slots: usize, items: &[T]) -
 pub const TILE: u32 = 8;
 
 /// The bind groups described once (`gpu::bindings`, issue #52 point 3), each checked against
-/// its shader by `tests/tests/shaders.rs`. The groups not listed write their layouts by hand
-/// (`gpu::bgl`) because their entries or labels are made at run time (CONTRIBUTING.md).
+/// its shader by `tests/tests/shaders.rs`: every bind group the renderer makes comes from one
+/// of these (the same test finds a layout or an entry written by hand, or a description not
+/// listed here).
 pub const BINDINGS: &[&crate::gpu::bindings::Bindings] = &[
     &compose::COMPOSE_BINDINGS,
     &compose::TONEMAP_BINDINGS,
