@@ -7,14 +7,14 @@ use gi_render::explain::{Contribution, Explanation};
 
 use crate::ui::ERROR;
 use crate::ui::explain::ExplainView;
-use crate::ui::state::State;
 
 /// Checks within this relative difference are shown as holding (two half-float steps: the
 /// buffers the sums are checked against are half floats).
 const CHECK_OK: f32 = 1e-3;
 
-pub(super) fn explain_ui(st: &mut State, ui: &mut egui::Ui) {
-    let Some(v) = &mut st.explain else {
+/// The pane reads and changes the explained pixel's view only.
+pub(super) fn explain_ui(explain: &mut Option<ExplainView>, ui: &mut egui::Ui) {
+    let Some(v) = explain else {
         ui.heading("Explain a pixel");
         ui.weak(
             "Right-click the viewport → Explain this pixel, or press X over it: this pane then lists \
@@ -39,7 +39,7 @@ pub(super) fn explain_ui(st: &mut State, ui: &mut egui::Ui) {
         ui.checkbox(&mut v.overlay, "overlay");
     });
     if unpin {
-        st.explain = None;
+        *explain = None;
         return;
     }
     match &v.latest {

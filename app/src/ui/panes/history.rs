@@ -1,13 +1,15 @@
 //! The History pane (issue #39 point 1): every edit of the session, oldest first, the
 //! current one marked; a click goes back (or forward) to any step (`crate::ui::state::history`).
 
-use crate::ui::state::State;
+use crate::ui::state::history::History;
 
-pub(super) fn history_ui(st: &mut State, ui: &mut egui::Ui) {
-    let (steps, cursor) = st.history.steps();
+/// The pane reads the undo steps only; the step clicked (undo, redo or a row) is returned for
+/// the state to go to.
+pub(super) fn history_ui(history: &History, ui: &mut egui::Ui) -> Option<usize> {
+    let (steps, cursor) = history.steps();
     if steps.is_empty() {
         ui.weak("no edits yet");
-        return;
+        return None;
     }
     let mut jump = None;
     ui.horizontal(|ui| {
@@ -28,8 +30,8 @@ pub(super) fn history_ui(st: &mut State, ui: &mut egui::Ui) {
             crate::ui::state::history::MAX_STEPS
         ));
     });
-    if st.history.dropped() > 0 {
-        ui.weak(format!("{} older steps were dropped", st.history.dropped()));
+    if history.dropped() > 0 {
+        ui.weak(format!("{} older steps were dropped", history.dropped()));
     }
     ui.separator();
     for (k, name) in steps.iter().enumerate() {
@@ -46,7 +48,5 @@ pub(super) fn history_ui(st: &mut State, ui: &mut egui::Ui) {
             jump = Some(k);
         }
     }
-    if let Some(k) = jump {
-        st.jump_to(k);
-    }
+    jump
 }

@@ -65,8 +65,14 @@ impl egui_tiles::Behavior<Pane> for Behavior<'_> {
                     scrolled(ui, "probe", |ui| probe_ui(&mut st.probes, l, ui));
                 }
             }
-            Pane::History => scrolled(ui, "history", |ui| history::history_ui(st, ui)),
-            Pane::Explain => explain::explain_ui(st, ui),
+            Pane::History => {
+                let mut jump = None;
+                scrolled(ui, "history", |ui| jump = history::history_ui(&st.history, ui));
+                if let Some(k) = jump {
+                    st.jump_to(k);
+                }
+            }
+            Pane::Explain => explain::explain_ui(&mut st.explain, ui),
             Pane::Viewer(id) => viewer_ui(st, ui, *id),
         }
         egui_tiles::UiResponse::None
