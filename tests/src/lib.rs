@@ -82,6 +82,22 @@ pub fn default_renderer(w: u32, h: u32) -> Renderer {
     r
 }
 
+/// Every `.rs` file below `dir`, sorted (the source scans of `tests/modules.rs` and
+/// `tests/shaders.rs`).
+pub fn rust_sources(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut entries: Vec<_> = std::fs::read_dir(dir).expect("source folder").flatten().map(|e| e.path()).collect();
+    entries.sort();
+    let mut out = Vec::new();
+    for p in entries {
+        if p.is_dir() {
+            out.extend(rust_sources(&p));
+        } else if p.extension().is_some_and(|e| e == "rs") {
+            out.push(p);
+        }
+    }
+    out
+}
+
 /// Path of a real scene in the repository's `assets/scenes/` (each with its licence and
 /// attribution), failing clearly when it is missing.
 pub fn real_scene(rel: &str) -> std::path::PathBuf {

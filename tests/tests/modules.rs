@@ -20,18 +20,6 @@ const KNOWN: &[&str] = &[];
 
 type ModPath = Vec<String>;
 
-fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    let mut entries: Vec<_> = std::fs::read_dir(dir).expect("source folder").flatten().map(|e| e.path()).collect();
-    entries.sort();
-    for p in entries {
-        if p.is_dir() {
-            rust_files(&p, out);
-        } else if p.extension().is_some_and(|e| e == "rs") {
-            out.push(p);
-        }
-    }
-}
-
 /// `a/b/c.rs` → [a, b, c]; `a/mod.rs` → [a]; `lib.rs` / `main.rs` → [].
 fn module_of(root: &Path, file: &Path) -> ModPath {
     let rel = file.strip_prefix(root).expect("under the root").with_extension("");
@@ -189,8 +177,7 @@ fn root_reexports(lib: &str) -> BTreeMap<String, String> {
 /// The cycles among the siblings of every folder of the crate at `root`, as
 /// "folder: a b c" lines, sorted.
 fn cycles(root: &Path) -> Vec<String> {
-    let mut files = Vec::new();
-    rust_files(root, &mut files);
+    let files = gi_lab_tests::rust_sources(root);
     let modules: BTreeSet<ModPath> = files.iter().map(|f| module_of(root, f)).collect();
     let lib = ["lib.rs", "main.rs"].iter().map(|n| root.join(n)).find(|p| p.exists()).expect("a crate root");
     let reexports = root_reexports(&std::fs::read_to_string(&lib).expect("crate root"));

@@ -283,19 +283,8 @@ fn every_bind_group_description_matches_its_shader() {
 /// `passes::BINDINGS`, so that the check above sees all of them.
 #[test]
 fn every_bind_group_of_the_renderer_comes_from_a_listed_description() {
-    fn rust_files(dir: &std::path::Path, out: &mut Vec<std::path::PathBuf>) {
-        for e in std::fs::read_dir(dir).expect("source folder").flatten() {
-            let p = e.path();
-            if p.is_dir() {
-                rust_files(&p, out);
-            } else if p.extension().is_some_and(|x| x == "rs") {
-                out.push(p);
-            }
-        }
-    }
     let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../render/src");
-    let mut files = Vec::new();
-    rust_files(&src, &mut files);
+    let files = gi_lab_tests::rust_sources(&src);
     let listed: Vec<&str> = gi_render::passes::BINDINGS.iter().map(|d| d.label).collect();
     let mut by_hand = Vec::new();
     let mut unlisted = Vec::new();

@@ -1,9 +1,8 @@
 //! The floor of the render crate (issue #52 point 2): pure functions and tables that GPU
 //! passes, CPU twins and scene code all need — sequences, the VPL budget, the HCB's recompute
-//! pattern, colour maths, colour maps, the hemisphere camera's table. It imports nothing of the
-//! crate but a setting's type (a leaf), so that `passes/`
-//! never reaches into `cpu/` at run time and `scene/` into neither (docs/architecture.md,
-//! "Layers").
+//! pattern, colour maths, colour maps, the hemisphere camera's table, bounding boxes. It imports
+//! nothing of the crate but a setting's type (a leaf), so that `passes/` never reaches into
+//! `cpu/` at run time and `scene/` into neither (docs/architecture.md, "Layers").
 
 pub mod aabb;
 pub mod budget;

@@ -10,7 +10,7 @@ use crate::counters::prelude::*;
 use crate::gpu::bindings::{Bindings, Kind, binding};
 
 use crate::gpu::GpuContext;
-pub use crate::settings::splat::*;
+pub use crate::settings::splat::SplatMethod;
 
 /// Side in pixels of the squares the items are binned into (a multiple of the 16 × 16
 /// accumulation workgroup).

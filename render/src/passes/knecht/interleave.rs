@@ -20,7 +20,7 @@ use crate::gpu::GpuContext;
 use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::gbuffer::{ALBEDO_FORMAT, GBufferViews, MATERIAL_FORMAT, NORMAL_FORMAT, POSITION_FORMAT};
 use crate::passes::reference::vpl_visibility::{GatherVisibility, no_visibility_atlases};
-pub use crate::settings::knecht::*;
+pub use crate::settings::knecht::InterleaveSettings;
 use crate::timing::PassRec;
 
 /// Bind group `interleave.gather.inputs` of `shaders/knecht/interleave/gather.wgsl` (group 0).

@@ -23,7 +23,7 @@ use crate::timing::PassRec;
 use crate::timing::Slot;
 
 pub use super::point_cloud::{CloudPoint, GpuPoint, GpuPointSurface, PointCloud, PointPlacement};
-pub use crate::settings::knecht::*;
+pub use crate::settings::knecht::{BounceShadowTest, IsmSettings, PushBehind, SplatDepth};
 
 /// Bind group `ism.splat.inputs` of `shaders/knecht/ism/splat.wgsl` (group 0; the IRSM's splat
 /// binds an equal group of its own, `irsm.splat.inputs`).

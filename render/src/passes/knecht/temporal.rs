@@ -24,7 +24,7 @@ use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::gbuffer::{GBufferViews, NORMAL_FORMAT};
-pub use crate::settings::knecht::*;
+pub use crate::settings::knecht::{MergeOrder, TemporalSettings};
 use crate::timing::PassRec;
 
 /// Format of the demodulated merge's split history: E and S as three half-float pairs.

@@ -22,7 +22,7 @@ use crate::passes::reference::vpl::GpuVpl;
 use crate::passes::shadow::{GpuLight, LightView};
 use crate::scene::upload::GpuScene;
 use crate::scene::{LightKind, SceneState, WorldLight};
-pub use crate::settings::knecht::*;
+pub use crate::settings::knecht::{ReceiverBrdf, VplSettings};
 
 /// Bind group `vpl.importance.inputs` of `shaders/knecht/vpl/importance.wgsl` (group 0).
 pub const IMPORTANCE_INPUTS_BINDINGS: Bindings = Bindings {
