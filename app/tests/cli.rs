@@ -308,6 +308,25 @@ fn buffers_lists_registered_names_and_bench_prints_every_pass() {
     assert_eq!(passes, ["gbuffer", "direct.shadow", "direct", "compose", "compose.luminance"]);
     // Without temporal history, a light change shows at once.
     assert_eq!(v["afterglow_frames"], 0, "afterglow without history");
+    // The default box's animation moves an object: its shadow maps are redone every frame.
+    assert_eq!(
+        (v["light_space_runs_per_frame"].as_f64(), v["light_space_skips_per_frame"].as_f64()),
+        (Some(1.0), Some(0.0))
+    );
+    // Paused, they are kept (issue #53): the pass is not timed and the counter says so.
+    let o = gi_lab()
+        .args(["bench", "--size", "64x64", "--frames", "2", "--json", "--paused", "--set", "pipeline.gather=None"])
+        .args(["--flicker-frames", "0", "--afterglow-frames", "0"])
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("bench --json prints JSON");
+    let passes: Vec<&str> = v["passes"].as_array().expect("passes").iter().filter_map(|p| p["pass"].as_str()).collect();
+    assert_eq!(passes, ["gbuffer", "direct", "compose", "compose.luminance"]);
+    assert_eq!(
+        (v["light_space_runs_per_frame"].as_f64(), v["light_space_skips_per_frame"].as_f64()),
+        (Some(0.0), Some(1.0))
+    );
 
     // The exact-VPL reference accumulates over frames: its passes are timed, it changes from
     // frame to frame while it converges, and after a light change it needs frames to settle.

@@ -21,6 +21,12 @@ pub struct Counts {
     pub objects_created: u64,
     /// Bytes the recorded passes touch (see [`traffic`]).
     pub traffic_bytes: u64,
+    /// Light-space work that ran: each frame, each of the shadow maps, the light G-buffers
+    /// with their importance, and a fixed VPL set with its visibility counts once when its
+    /// inputs changed (`fingerprint::LastRun`, issue #53) …
+    pub light_space_runs: u64,
+    /// … and once when they did not and its last result was kept.
+    pub light_space_skips: u64,
 }
 
 impl std::ops::Sub for Counts {
@@ -31,13 +37,23 @@ impl std::ops::Sub for Counts {
             submits: self.submits.saturating_sub(o.submits),
             objects_created: self.objects_created.saturating_sub(o.objects_created),
             traffic_bytes: self.traffic_bytes.saturating_sub(o.traffic_bytes),
+            light_space_runs: self.light_space_runs.saturating_sub(o.light_space_runs),
+            light_space_skips: self.light_space_skips.saturating_sub(o.light_space_skips),
         }
     }
 }
 
 thread_local! {
-    static COUNTS: Cell<Counts> =
-        const { Cell::new(Counts { blocking_waits: 0, submits: 0, objects_created: 0, traffic_bytes: 0 }) };
+    static COUNTS: Cell<Counts> = const {
+        Cell::new(Counts {
+            blocking_waits: 0,
+            submits: 0,
+            objects_created: 0,
+            traffic_bytes: 0,
+            light_space_runs: 0,
+            light_space_skips: 0,
+        })
+    };
 }
 
 thread_local! {
@@ -77,6 +93,10 @@ pub(crate) fn note_submit() {
 
 pub(crate) fn note_created() {
     bump(|c| c.objects_created += 1);
+}
+
+pub(crate) fn note_light_space(ran: bool) {
+    bump(|c| if ran { c.light_space_runs += 1 } else { c.light_space_skips += 1 });
 }
 
 /// Object creation that counts (see the module docs). Import `crate::counters::*`.
@@ -157,7 +177,7 @@ mod tests {
         note_submit();
         note_created();
         let d = now() - before;
-        assert_eq!(d, Counts { blocking_waits: 1, submits: 2, objects_created: 1, traffic_bytes: 0 });
+        assert_eq!(d, Counts { blocking_waits: 1, submits: 2, objects_created: 1, ..Counts::default() });
         let other = std::thread::spawn(now).join().expect("thread");
         assert_eq!(other, Counts::default());
     }

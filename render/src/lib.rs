@@ -10,6 +10,7 @@ pub mod counters;
 pub mod cpu;
 pub mod explain;
 pub mod files;
+pub mod fingerprint;
 pub mod frame;
 pub mod gpu;
 pub mod image_io;

@@ -22,7 +22,8 @@ pub fn default_scene() -> Scene {
 }
 
 /// The passes of a frame with the default settings (instant radiosity with ISMs and
-/// temporal coherence, Knecht), in order, after the first frame (see [`first_frame`]).
+/// temporal coherence, Knecht), in order, after the first frame (see [`first_frame`]), while
+/// the scene moves (its animation plays); a still frame keeps some ([`still`]).
 pub const DEFAULT_PASSES: &[&str] = &[
     "gbuffer",
     "direct.shadow",
@@ -38,6 +39,16 @@ pub const DEFAULT_PASSES: &[&str] = &[
     "compose",
     "compose.luminance",
 ];
+
+/// The passes of the default settings that a frame keeps from the one before while nothing
+/// they depend on moved (issue #53): the shadow maps, the light G-buffer and its importance
+/// (the VPL set is new every frame, `vpl.new_set_each_frame`).
+pub const KEPT_WHEN_STILL: &[&str] = &["direct.shadow", "vpl.light_gbuffer", "vpl.importance"];
+
+/// `passes` without those a still frame keeps ([`KEPT_WHEN_STILL`]).
+pub fn still(passes: &[&'static str]) -> Vec<&'static str> {
+    passes.iter().copied().filter(|p| !KEPT_WHEN_STILL.contains(p)).collect()
+}
 
 /// The passes of a frame of direct light only (`pipeline.gather = None`), after the first.
 pub const DIRECT_PASSES: &[&str] = &["gbuffer", "direct.shadow", "direct", "compose", "compose.luminance"];

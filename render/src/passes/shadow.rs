@@ -190,6 +190,8 @@ pub struct ShadowPass {
     layers: u32,
     /// Why the layers are smaller than asked, when they are.
     pub fitted: Option<String>,
+    /// What the maps were last rendered for: they are kept while nothing moved (issue #53).
+    pub last: crate::fingerprint::LastRun,
 }
 
 impl ShadowPass {
@@ -219,6 +221,7 @@ impl ShadowPass {
             requested: 16,
             layers: 1,
             fitted: None,
+            last: Default::default(),
         }
     }
 
@@ -302,6 +305,7 @@ impl ShadowPass {
             self.size = s;
             self.requested = size;
             self.layers = layers;
+            self.last.invalidate();
             changed = true;
         }
         if layers as usize > self.view_capacity {

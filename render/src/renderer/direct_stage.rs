@@ -58,9 +58,27 @@ impl Renderer {
             let k = ds.shadow_map_size as f32 / self.shadow.size as f32;
             lights.lights.iter_mut().for_each(|l| l.shadow.x *= k);
         }
-        let (shadow, gpu_scene) = (&self.shadow, &self.gpu_scene);
-        self.timer
-            .scope(&ctx, enc, "direct.shadow", |e, slot| shadow.run(&ctx, e, slot, gpu_scene, state, &lights.views));
+        // The maps are kept while the lights, the objects and the settings stay as they were
+        // (issue #53): the views and the draws are all the maps depend on.
+        let key = crate::fingerprint::Fingerprint::new()
+            .pod(&lights.views)
+            .draws(&state.draws)
+            .debug(&ds)
+            .u64s(&[self.shadow.size as u64])
+            .finish();
+        if !self.keep_light_space {
+            self.shadow.last.invalidate();
+            if let Some(k) = self.stages.knecht.as_mut() {
+                k.redo_light_space();
+            }
+        }
+        if self.shadow.last.needs_run(key) {
+            let (shadow, gpu_scene) = (&self.shadow, &self.gpu_scene);
+            self.timer.scope(&ctx, enc, "direct.shadow", |e, slot| {
+                shadow.run(&ctx, e, slot, gpu_scene, state, &lights.views)
+            });
+        }
+        let gpu_scene = &self.gpu_scene;
         let emitters = match self.stages.emitters.as_mut() {
             Some(pass) => {
                 let (scene, radius) = (&self.scene, self.bounds.radius());

@@ -69,6 +69,11 @@ pub struct Renderer {
     flip_map: Option<wgpu::Texture>,
     /// Interactive mode (the app): timings are collected without waiting for the GPU.
     pub(crate) interactive: bool,
+    /// Whether the light-space passes (shadow maps, light G-buffers, a fixed VPL set and its
+    /// visibility) keep their last result while nothing they depend on changed (issue #53;
+    /// on by default). Off redoes them every frame, as before: the same image, for
+    /// comparisons and measurements.
+    pub keep_light_space: bool,
     /// The scene's sky as directional lights (`passes::sky`), cached.
     pub(crate) sky_lights: crate::passes::sky::SkyLights,
     /// The direct light's average over still frames while the sky's directions rotate
@@ -160,6 +165,7 @@ impl Renderer {
             steps: StepList::default(),
             flip_map: None,
             interactive: false,
+            keep_light_space: true,
             sky_lights: Default::default(),
             direct_history: None,
             sky_background,

@@ -48,6 +48,11 @@ pub struct BenchArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Hold the animation at its start while measuring: the still view a lighting artist
+    /// tunes, where the light-space passes are kept from frame to frame (issue #53). By
+    /// default the scene's animation plays.
+    #[arg(long)]
+    pub paused: bool,
     /// Samples per pixel of the one-bounce ground truth that `--suite quality` traces when no
     /// --reference is given.
     #[arg(long, default_value_t = 256)]
@@ -152,6 +157,10 @@ pub(crate) fn bench(args: &BenchArgs) -> Result<(), CliError> {
             print!("{}", nguyen::format_nguyen(&report));
         }
         return Ok(());
+    }
+    if args.paused {
+        r.clock.playing = false;
+        r.clock.anim_frame = 0;
     }
     let mut report = bench_run(&mut r, args.frames, &name);
     report.window_frame_ms = Some(window_frames(&mut r, args.frames));

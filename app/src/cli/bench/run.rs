@@ -61,6 +61,13 @@ pub struct BenchReport {
     /// Bytes read and written per measured frame: per pass, the bytes of every resource it
     /// binds, from their formats and sizes (`gi_render::counters::traffic`), summed.
     pub traffic_bytes_per_frame: f64,
+    /// Light-space work per measured frame that ran (shadow maps, light G-buffers with their
+    /// importance, a fixed VPL set with its visibility: each counts once a frame) …
+    pub light_space_runs_per_frame: f64,
+    /// … and that was kept from an earlier frame because nothing it depends on changed
+    /// (issue #53). A still scene under the default preset: the shadow maps and the light
+    /// G-buffers are kept; its VPL set is new every frame (`vpl.new_set_each_frame`).
+    pub light_space_skips_per_frame: f64,
     /// Temporal flicker of final.hdr with the animation paused and the camera still
     /// (`metrics::flicker`); None when not measured.
     pub flicker: Option<f64>,
@@ -167,6 +174,8 @@ pub fn bench_run(r: &mut Renderer, frames: u32, scene_name: &str) -> BenchReport
         submits_per_frame: per_frame(counts.submits),
         objects_created_per_frame: per_frame(counts.objects_created),
         traffic_bytes_per_frame: per_frame(counts.traffic_bytes),
+        light_space_runs_per_frame: per_frame(counts.light_space_runs),
+        light_space_skips_per_frame: per_frame(counts.light_space_skips),
         passes,
         flicker: None,
         flip: None,
@@ -239,6 +248,10 @@ pub fn format_bench_table(b: &BenchReport) -> String {
     s += &format!(
         "per frame: {:.1} blocking waits, {:.1} submits, {:.1} GPU objects created\n",
         b.blocking_waits_per_frame, b.submits_per_frame, b.objects_created_per_frame
+    );
+    s += &format!(
+        "light space per frame: {:.1} redone, {:.1} kept (nothing they depend on moved)\n",
+        b.light_space_runs_per_frame, b.light_space_skips_per_frame
     );
     if !b.device_choices.is_empty() {
         s += &format!("on this device: {}\n", b.device_choices.join("; "));

@@ -6,6 +6,7 @@
 //! splatted, then bounce b + 1's VPLs are chosen from the point cloud with them), so stage 3
 //! splats the maps the bounces read and stage 4 splats what is left and pulls-pushes.
 
+use crate::fingerprint::{Fingerprint, LastRun};
 use crate::gpu::GpuContext;
 use crate::lab_settings::LabSettings;
 use crate::maths::split_budget;
@@ -37,12 +38,23 @@ pub struct KnechtVpls {
     /// Maps of this frame's atlas already resolved and pull-pushed by the bounces' shadow
     /// tests (stage 4 does the rest).
     pulled_maps: u32,
+    /// What the light G-buffers and importance pyramids were last made for, and the VPL set
+    /// with its visibility: each is kept while its inputs stay the same (issue #53).
+    light_views: LastRun,
+    set: LastRun,
+    /// Whether this frame made a new VPL set (stage 4 then redoes its visibility).
+    set_made: bool,
 }
 
 /// The pass that makes a frame's further bounces, with its bind groups.
 enum Bounces<'a> {
     PointCloud(&'a VplBouncePass, wgpu::BindGroup),
     Irsm(&'a IrsmPass, IrsmJob),
+}
+
+/// The slots of each bounce: `vpl.count`, or fewer where the VPL list holds fewer.
+fn first_bounce_slots(vpl: &VplImportancePass, s: &LabSettings) -> u32 {
+    s.vpl.count.min(vpl.capacity / s.vpl.bounces.clamp(1, MAX_BOUNCES))
 }
 
 /// Whether the point cloud is splatted into ISMs this frame: for the ISM visibility, and for
@@ -84,6 +96,9 @@ impl KnechtVpls {
             frames: 0,
             pulled_maps: 0,
             job: None,
+            light_views: LastRun::default(),
+            set: LastRun::default(),
+            set_made: false,
         }
     }
 
@@ -122,7 +137,18 @@ impl KnechtVpls {
             // atlas of ~11 MB stayed alive at the starting state after a visit to Exact).
             fresh = true;
         }
+        if fresh {
+            self.light_views.invalidate();
+            self.set.invalidate();
+        }
         fresh
+    }
+
+    /// Forgets what the light views and the VPL set were made for: the next frame redoes them
+    /// (`Renderer::keep_light_space` off).
+    pub fn redo_light_space(&mut self) {
+        self.light_views.invalidate();
+        self.set.invalidate();
     }
 
     pub fn register(&self, reg: &mut crate::buffers::BufferRegistry, s: &LabSettings) {
@@ -178,6 +204,24 @@ impl KnechtVpls {
             .map(|j| (j.first, j.count, format!("light {} '{}', bounce 0", j.light_index, light_name(j.light_index))))
             .collect();
         let halton_first = 1 + if s.vpl.new_set_each_frame { self.frames.wrapping_mul(s.vpl.count) } else { 0 };
+        let seed = if s.vpl.new_set_each_frame { self.frames } else { 0 };
+        // The light G-buffers and their importance depend on the lights, their views, the
+        // objects and the settings; the VPL set on those and its sequence offsets (new each
+        // frame with `vpl.new_set_each_frame`). Each is redone only when they changed (issue
+        // #53). The emitters' share is redone every frame (their pass keeps no such record).
+        let light_key = Fingerprint::new().debug(s).pod(&f.lights).debug(&f.views).draws(&f.state.draws).finish();
+        let views_changed = self.light_views.needs_run(light_key);
+        if emitters.is_some() {
+            self.set.invalidate();
+        }
+        let set_key = Fingerprint::new()
+            .u64s(&[light_key, halton_first as u64, seed as u64, f.vpl_radius().to_bits() as u64])
+            .finish();
+        self.set_made = self.set.needs_run(set_key);
+        if !self.set_made {
+            self.frames = self.frames.wrapping_add(1);
+            return self.vpl_set(s, f, sources, first_bounce_slots(&self.vpl, s));
+        }
         if f.lights.is_empty() {
             // No light: no VPL slot is written, so the list is cleared.
             enc.clear_buffer(&self.vpl.vpls, 0, None);
@@ -186,10 +230,11 @@ impl KnechtVpls {
             self.vpl.importance_bias = s.vpl.importance_bias;
             let (scene, state, lights) = (f.gpu_scene, f.state, &f.lights);
             self.vpl.write_params(ctx, lights, &jobs, halton_first, s.direct.intensity_scale);
-            self.vpl.run(ctx, &mut crate::timing::Recorder { enc, timer }, scene, state, &jobs);
+            let r = &mut crate::timing::Recorder { enc, timer };
+            self.vpl.run(ctx, r, (scene, state), &jobs, views_changed);
         }
         let bounces = s.vpl.bounces.clamp(1, MAX_BOUNCES);
-        let n_vpls = s.vpl.count.min(self.vpl.capacity / bounces);
+        let n_vpls = first_bounce_slots(&self.vpl, s);
         if let Some(e) = emitters {
             let list = &self.vpl.vpls;
             let written = e.bounce_into(f, enc, timer, (emitter_share, s.vpl.count), (list, first));
@@ -215,7 +260,6 @@ impl KnechtVpls {
                 timer.scope(ctx, enc, "ism.splat", |e, slot| ism.splat(e, slot, job, 0));
             }
             if bounces > 1 {
-                let seed = if s.vpl.new_set_each_frame { self.frames } else { 0 };
                 let make = match (s.vpl.bounce_method, self.irsm.as_ref()) {
                     (BounceMethod::Irsm, Some(irsm)) => {
                         let fr =
@@ -264,6 +308,13 @@ impl KnechtVpls {
             }
         }
         self.frames = self.frames.wrapping_add(1);
+        self.vpl_set(s, f, sources, n_vpls)
+    }
+
+    /// The frame's VPL set: `n_vpls` slots a bounce, bounce 0's `sources` and the further
+    /// bounces'.
+    fn vpl_set(&self, s: &LabSettings, f: &FrameInputs, mut sources: Vec<(u32, u32, String)>, n_vpls: u32) -> VplSet {
+        let bounces = s.vpl.bounces.clamp(1, MAX_BOUNCES);
         sources.extend((1..bounces).map(|b| (b * n_vpls, n_vpls, format!("bounce {b}"))));
         VplSet {
             list: self.vpl.vpls.clone(),
@@ -296,9 +347,11 @@ impl KnechtVpls {
                 let extent = 2.0 * f.vpl_radius();
                 // The maps the bounces' shadow tests left (all of them without bounces).
                 let maps = self.pulled_maps..vpls.count.max(self.pulled_maps);
-                timer.scope(ctx, enc, "ism.pull_push", |e, slot| {
-                    ism.finish_maps(PassRec { ctx, enc: e, slot }, job, &s.ism, extent, maps, 0)
-                });
+                if self.set_made {
+                    timer.scope(ctx, enc, "ism.pull_push", |e, slot| {
+                        ism.finish_maps(PassRec { ctx, enc: e, slot }, job, &s.ism, extent, maps, 0)
+                    });
+                }
                 let l = self.ism.layout_info;
                 Visibility::Ism {
                     atlas: self.ism.shading_view(),
@@ -310,7 +363,8 @@ impl KnechtVpls {
                 }
             }
             VplVisibility::Exact => {
-                self.exact.as_ref()?.exact_visibility(f, enc, timer, vpls, vpl_clip(f.vpl_radius(), 0.0))
+                let clip = vpl_clip(f.vpl_radius(), 0.0);
+                self.exact.as_ref()?.exact_visibility(f, enc, timer, vpls, (clip, self.set_made))
             }
         })
     }

@@ -317,27 +317,30 @@ impl VplImportancePass {
         );
     }
 
-    /// The light G-buffers, importance pyramids and VPLs of `jobs` (one per light view), after
+    /// The light G-buffers and importance pyramids (when `views`: they are kept while nothing
+    /// moved, issue #53) and the VPLs of `jobs` (one per light view), after
     /// [`Self::write_params`] for the same jobs.
     pub fn run(
         &mut self,
         ctx: &GpuContext,
         r: &mut crate::timing::Recorder,
-        scene: &GpuScene,
-        state: &SceneState,
+        (scene, state): (&GpuScene, &SceneState),
         jobs: &[ViewJob],
+        views: bool,
     ) {
         if jobs.is_empty() || jobs.len() > self.views.len() {
             return;
         }
         let (encoder, timer) = (&mut *r.enc, &mut *r.timer);
-        let views = &self.views;
-        timer.scope(ctx, encoder, "vpl.light_gbuffer", |e, slot| {
-            for (k, v) in views.iter().take(jobs.len()).enumerate() {
-                v.gbuffer.run_with(e, slot, (k == 0, k + 1 == jobs.len()), &v.group, scene, state);
-            }
-        });
-        timer.scope(ctx, encoder, "vpl.importance", |e, slot| self.pyramid(ctx, e, slot, jobs.len(), true));
+        if views {
+            let views = &self.views;
+            timer.scope(ctx, encoder, "vpl.light_gbuffer", |e, slot| {
+                for (k, v) in views.iter().take(jobs.len()).enumerate() {
+                    v.gbuffer.run_with(e, slot, (k == 0, k + 1 == jobs.len()), &v.group, scene, state);
+                }
+            });
+            timer.scope(ctx, encoder, "vpl.importance", |e, slot| self.pyramid(ctx, e, slot, jobs.len(), true));
+        }
         timer.scope(ctx, encoder, "vpl.sample", |e, slot| self.warp(ctx, e, slot, jobs));
     }
 

@@ -150,7 +150,7 @@ impl ReferenceVpls {
         if f.settings.pipeline.vpl_visibility != VplVisibility::Exact {
             return Visibility::None;
         }
-        self.visibility.exact_visibility(f, enc, timer, vpls, self.clip(f))
+        self.visibility.exact_visibility(f, enc, timer, vpls, (self.clip(f), true))
     }
 
     /// Stage 6 (and 7): the gather at every pixel (full BRDF, or diffuse only by

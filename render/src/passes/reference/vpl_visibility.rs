@@ -230,20 +230,23 @@ impl VplVisibilityPass {
         }
     }
 
-    /// Stage 4 "exact": renders the maps of `vpls` (scope `vpl.shadow`) and returns them as
-    /// the gathers read them; `clip` as [`crate::passes::stages::vpl_clip`] makes it.
+    /// Stage 4 "exact": renders the maps of `vpls` (scope `vpl.shadow`; unless `render` is
+    /// false, which keeps the last ones, made for the same VPLs: issue #53) and returns them
+    /// as the gathers read them; `clip` as [`crate::passes::stages::vpl_clip`] makes it.
     pub fn exact_visibility(
         &self,
         f: &FrameInputs,
         enc: &mut wgpu::CommandEncoder,
         timer: &mut GpuTimer,
         vpls: &VplSet,
-        clip: glam::Vec4,
+        (clip, render): (glam::Vec4, bool),
     ) -> GatherVisibility {
         let (ctx, scene, state) = (f.ctx, f.gpu_scene, f.state);
-        timer.scope(ctx, enc, "vpl.shadow", |e, slot| {
-            self.run(PassRec { ctx, enc: e, slot }, scene, state, &vpls.list, vpls.count, VisibilityParams { clip })
-        });
+        if render {
+            timer.scope(ctx, enc, "vpl.shadow", |e, slot| {
+                self.run(PassRec { ctx, enc: e, slot }, scene, state, &vpls.list, vpls.count, VisibilityParams { clip })
+            });
+        }
         let l = self.layout_info;
         GatherVisibility::Exact { atlas: self.atlas_view.clone(), cols: l.cols, size: l.size, clip: clip.truncate() }
     }
