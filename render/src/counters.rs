@@ -27,6 +27,10 @@ pub struct Counts {
     pub light_space_runs: u64,
     /// … and once when they did not and its last result was kept.
     pub light_space_skips: u64,
+    /// The same for the camera's G-buffer and direct light (kept while the camera, the
+    /// objects and the lights stay put).
+    pub screen_space_runs: u64,
+    pub screen_space_skips: u64,
 }
 
 impl std::ops::Sub for Counts {
@@ -39,6 +43,8 @@ impl std::ops::Sub for Counts {
             traffic_bytes: self.traffic_bytes.saturating_sub(o.traffic_bytes),
             light_space_runs: self.light_space_runs.saturating_sub(o.light_space_runs),
             light_space_skips: self.light_space_skips.saturating_sub(o.light_space_skips),
+            screen_space_runs: self.screen_space_runs.saturating_sub(o.screen_space_runs),
+            screen_space_skips: self.screen_space_skips.saturating_sub(o.screen_space_skips),
         }
     }
 }
@@ -52,6 +58,8 @@ thread_local! {
             traffic_bytes: 0,
             light_space_runs: 0,
             light_space_skips: 0,
+            screen_space_runs: 0,
+            screen_space_skips: 0,
         })
     };
 }
@@ -95,8 +103,14 @@ pub(crate) fn note_created() {
     bump(|c| c.objects_created += 1);
 }
 
-pub(crate) fn note_light_space(ran: bool) {
-    bump(|c| if ran { c.light_space_runs += 1 } else { c.light_space_skips += 1 });
+pub(crate) fn note_kept(space: crate::fingerprint::Space, ran: bool) {
+    use crate::fingerprint::Space;
+    bump(|c| match (space, ran) {
+        (Space::Light, true) => c.light_space_runs += 1,
+        (Space::Light, false) => c.light_space_skips += 1,
+        (Space::Screen, true) => c.screen_space_runs += 1,
+        (Space::Screen, false) => c.screen_space_skips += 1,
+    });
 }
 
 /// Object creation that counts (see the module docs). Import `crate::counters::*`.

@@ -1,8 +1,10 @@
 //! What a pass last ran on, as one number: the light-space passes (shadow maps, light
-//! G-buffers, a fixed VPL set and its visibility) compare this frame's with the last one's
-//! and run only when it changed (issue #53; docs/performance.md, "Light space while nothing
-//! moves"). Every input goes in exactly: matrices and lights as their bytes, settings by
-//! their `Debug` text (which writes every float so that it parses back to the same value).
+//! G-buffers, a fixed VPL set and its visibility) and the screen-space passes that depend
+//! only on the camera, the objects and the lights (the G-buffer, the direct light) compare
+//! this frame's with the last one's and run only when it changed (issue #53;
+//! docs/performance.md, "Passes kept while nothing moves"). Every input goes in exactly:
+//! matrices and lights as their bytes, settings by their `Debug` text (which writes every
+//! float so that it parses back to the same value).
 
 use std::hash::{DefaultHasher, Hasher};
 
@@ -56,6 +58,16 @@ impl Fingerprint {
     }
 }
 
+/// Where a kept pass works, for the counters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Space {
+    /// Shadow maps, light G-buffers, VPL sets and their visibility
+    /// (`counters::Counts::light_space_runs` / `light_space_skips`).
+    Light,
+    /// The camera's G-buffer and direct light (`screen_space_runs` / `screen_space_skips`).
+    Screen,
+}
+
 /// The last fingerprint a pass ran on; `None` until it has run, and after its outputs were
 /// recreated.
 #[derive(Clone, Copy, Debug, Default)]
@@ -64,11 +76,11 @@ pub struct LastRun(Option<u64>);
 impl LastRun {
     /// Whether the pass must run for inputs `key`: true when they differ from the last run's
     /// (and remembers them), false when its outputs still hold their result. Counts the
-    /// outcome (`counters::Counts::light_space_runs` / `light_space_skips`).
-    pub fn needs_run(&mut self, key: u64) -> bool {
+    /// outcome in `space`'s counters.
+    pub fn needs_run(&mut self, key: u64, space: Space) -> bool {
         let run = self.0 != Some(key);
         self.0 = Some(key);
-        crate::counters::note_light_space(run);
+        crate::counters::note_kept(space, run);
         run
     }
 
@@ -87,14 +99,17 @@ mod tests {
         let key = |m: glam::Mat4, s: &str| Fingerprint::new().pod(&[m]).debug(&s).finish();
         let mut last = LastRun::default();
         let before = crate::counters::now();
-        assert!(last.needs_run(key(glam::Mat4::IDENTITY, "a")), "the first frame runs");
-        assert!(!last.needs_run(key(glam::Mat4::IDENTITY, "a")), "nothing changed: skipped");
+        let l = Space::Light;
+        assert!(last.needs_run(key(glam::Mat4::IDENTITY, "a"), l), "the first frame runs");
+        assert!(!last.needs_run(key(glam::Mat4::IDENTITY, "a"), l), "nothing changed: skipped");
         let moved = glam::Mat4::from_translation(glam::Vec3::new(0.0, 1e-6, 0.0));
-        assert!(last.needs_run(key(moved, "a")), "a micrometre of motion runs it");
-        assert!(last.needs_run(key(moved, "b")), "a setting runs it");
+        assert!(last.needs_run(key(moved, "a"), l), "a micrometre of motion runs it");
+        assert!(last.needs_run(key(moved, "b"), l), "a setting runs it");
         last.invalidate();
-        assert!(last.needs_run(key(moved, "b")), "recreated outputs run it");
+        assert!(last.needs_run(key(moved, "b"), l), "recreated outputs run it");
+        assert!(!last.needs_run(key(moved, "b"), Space::Screen), "counted apart");
         let d = crate::counters::now() - before;
         assert_eq!((d.light_space_runs, d.light_space_skips), (4, 1));
+        assert_eq!((d.screen_space_runs, d.screen_space_skips), (0, 1));
     }
 }

@@ -12,6 +12,7 @@
 //! | 7. Compose | `passes::compose`: direct + indirect + near field + emission + sky, tone mapped |
 
 use crate::chain::Recorder;
+use crate::fingerprint::{Fingerprint, Space};
 use crate::passes::stages::FrameInputs;
 use crate::renderer::{PrevFrame, Renderer, light_view_list};
 use crate::timing::PassTiming;
@@ -35,12 +36,26 @@ impl Renderer {
         // The passes and the list of steps the stage choices name (built when they change).
         self.ensure_passes_for(Some(&state));
 
-        // Stage 1: G-buffer and movement buffer.
-        let (gbuffer, camera_group, gpu_scene) = (&self.gbuffer, &self.camera_group, &self.gpu_scene);
-        self.timer.scope(&ctx, &mut enc, "gbuffer", |e, slot| gbuffer.run(e, slot, camera_group, gpu_scene, &state));
+        // Stage 1: G-buffer and movement buffer, kept while the camera and the objects stay
+        // put (issue #53: the key holds everything its raster reads).
+        if !self.reuse_unchanged {
+            self.redo_kept_passes();
+        }
+        let prev_models = self.prev.as_ref().map(|p| p.models.as_slice()).unwrap_or(&[]);
+        let gbuffer_key = Fingerprint::new()
+            .pod(&[cam.view_proj, cam.prev_view_proj, cam.view])
+            .pod(&[cam.position, cam.viewport, cam.lod])
+            .draws(&state.draws)
+            .pod(prev_models)
+            .finish();
+        if self.gbuffer.last.needs_run(gbuffer_key, Space::Screen) {
+            let (gbuffer, camera_group, gpu_scene) = (&self.gbuffer, &self.camera_group, &self.gpu_scene);
+            self.timer
+                .scope(&ctx, &mut enc, "gbuffer", |e, slot| gbuffer.run(e, slot, camera_group, gpu_scene, &state));
+        }
 
         // Stage 2: shadow maps, the emitters' VPLs, direct light.
-        let direct_view = self.direct_light(&mut enc, &state, view_proj);
+        let direct_view = self.direct_light(&mut enc, &state, (view_proj, gbuffer_key));
 
         // Stages 3–7: the indirect light of the stage choices' steps, then the near field's.
         let f = FrameInputs {

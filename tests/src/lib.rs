@@ -41,9 +41,18 @@ pub const DEFAULT_PASSES: &[&str] = &[
 ];
 
 /// The passes of the default settings that a frame keeps from the one before while nothing
-/// they depend on moved (issue #53): the shadow maps, the light G-buffer and its importance
-/// (the VPL set is new every frame, `vpl.new_set_each_frame`).
-pub const KEPT_WHEN_STILL: &[&str] = &["direct.shadow", "vpl.light_gbuffer", "vpl.importance"];
+/// they depend on moved (issue #53): the G-buffer, the shadow maps, the direct light, the
+/// light G-buffer and its importance (the VPL set is new every frame,
+/// `vpl.new_set_each_frame`). From the third still frame on: the second redraws the G-buffer,
+/// whose movement buffer had no previous frame in the first.
+pub const KEPT_WHEN_STILL: &[&str] = &["gbuffer", "direct.shadow", "direct", "vpl.light_gbuffer", "vpl.importance"];
+
+/// The second frame of a still scene: it keeps the light space, not yet the G-buffer and
+/// the direct light (see [`KEPT_WHEN_STILL`]).
+pub fn second_frame(passes: &[&'static str]) -> Vec<&'static str> {
+    let redone = ["gbuffer", "direct"];
+    passes.iter().copied().filter(|p| !KEPT_WHEN_STILL.contains(p) || redone.contains(p)).collect()
+}
 
 /// `passes` without those a still frame keeps ([`KEPT_WHEN_STILL`]).
 pub fn still(passes: &[&'static str]) -> Vec<&'static str> {

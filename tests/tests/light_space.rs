@@ -1,30 +1,38 @@
 //! Issue #53: the light-space passes (shadow maps, light G-buffers with their importance, a
-//! fixed VPL set with its ISMs or exact maps) run only when something they depend on changed,
-//! and keeping them changes no pixel.
+//! fixed VPL set with its ISMs or exact maps) and the camera's G-buffer and direct light run
+//! only when something they depend on changed, and keeping them changes no pixel.
 
 use gi_lab_tests::*;
 use gi_render::Renderer;
 use gi_render::settings::pipeline::{Technique, VplVisibility};
 
-/// The passes a still frame keeps with a fixed VPL set.
+/// The passes a still frame keeps with a fixed VPL set: in light space …
 const KEPT: [&str; 6] =
     ["direct.shadow", "vpl.light_gbuffer", "vpl.importance", "vpl.sample", "ism.splat", "ism.pull_push"];
+/// … and in screen space.
+const KEPT_SCREEN: [&str; 2] = ["gbuffer", "direct"];
 
 fn renderer(visibility: VplVisibility, keep: bool) -> Renderer {
     let mut r = paused_renderer(48, Technique::Knecht, |s| {
         s.vpl.new_set_each_frame = false;
         s.pipeline.vpl_visibility = visibility;
     });
-    r.keep_light_space = keep;
+    r.reuse_unchanged = keep;
     r
 }
 
-/// The passes of one frame and the light-space counts it added (runs, kept).
-fn frame(r: &mut Renderer) -> (Vec<String>, (u64, u64)) {
+/// The passes of one frame and the counts it added: light space (runs, kept), then the
+/// G-buffer's and the direct light's.
+fn frame(r: &mut Renderer) -> (Vec<String>, (u64, u64), (u64, u64)) {
     let before = gi_render::counters::now();
     let names = r.render_frame().into_iter().map(|t| t.name).collect();
     let d = gi_render::counters::now() - before;
-    (names, (d.light_space_runs, d.light_space_skips))
+    (names, (d.light_space_runs, d.light_space_skips), (d.screen_space_runs, d.screen_space_skips))
+}
+
+fn counts(r: &mut Renderer) -> ((u64, u64), (u64, u64)) {
+    let (_, light, screen) = frame(r);
+    (light, screen)
 }
 
 fn bits(i: &gi_render::ImageF32) -> Vec<u32> {
@@ -35,20 +43,24 @@ fn bits(i: &gi_render::ImageF32) -> Vec<u32> {
 fn a_still_frame_keeps_the_light_space_passes_and_changes_no_pixel() {
     for visibility in [VplVisibility::Imperfect, VplVisibility::Exact] {
         let mut kept = renderer(visibility, true);
-        let (first, counts) = frame(&mut kept);
-        assert_eq!(counts, (3, 0), "{visibility:?}: the first frame makes the maps, the light views and the set");
+        let (first, light, screen) = frame(&mut kept);
+        assert_eq!(light, (3, 0), "{visibility:?}: the first frame makes the maps, the light views and the set");
+        assert_eq!(screen, (2, 0), "{visibility:?}: and the G-buffer and the direct light");
         assert!(first.iter().any(|n| n == "direct.shadow"), "{visibility:?}: {first:?}");
+        // The second frame redraws the G-buffer: the first one's movement buffer had no
+        // previous frame.
+        frame(&mut kept);
         for _ in 0..4 {
-            let (names, counts) = frame(&mut kept);
-            assert_eq!(counts, (0, 3), "{visibility:?}: a still frame keeps all three");
-            for pass in KEPT.iter().chain(&["vpl.shadow"]) {
+            let (names, light, screen) = frame(&mut kept);
+            assert_eq!((light, screen), ((0, 3), (0, 2)), "{visibility:?}: a still frame keeps all five");
+            for pass in KEPT.iter().chain(&KEPT_SCREEN).chain(&["vpl.shadow"]) {
                 assert!(!names.iter().any(|n| n == pass), "{visibility:?}: {pass} ran in a still frame: {names:?}");
             }
         }
         let mut redone = renderer(visibility, false);
-        for _ in 0..5 {
-            let (names, counts) = frame(&mut redone);
-            assert_eq!(counts, (3, 0), "{visibility:?}: keep_light_space off redoes them");
+        for _ in 0..6 {
+            let (names, light, screen) = frame(&mut redone);
+            assert_eq!((light, screen), ((3, 0), (2, 0)), "{visibility:?}: reuse_unchanged off redoes them");
             assert!(names.iter().any(|n| n == "vpl.light_gbuffer"), "{visibility:?}: {names:?}");
         }
         let (a, b) = (read(&kept, "final.hdr"), read(&redone, "final.hdr"));
@@ -61,39 +73,55 @@ fn a_still_frame_keeps_the_light_space_passes_and_changes_no_pixel() {
 fn a_moved_light_or_object_or_a_setting_redoes_them() {
     let mut r = renderer(VplVisibility::Imperfect, true);
     frame(&mut r);
-    assert_eq!(frame(&mut r).1, (0, 3));
+    frame(&mut r);
+    assert_eq!(counts(&mut r), ((0, 3), (0, 2)));
     let scene = r.scene();
     let light = scene.nodes.iter().position(|n| n.light.is_some()).expect("the default box has a light");
     let object = scene.nodes.iter().position(|n| n.mesh.is_some()).expect("and objects");
     r.scene_mut().nodes[light].transform.translation.x += 0.05;
-    let (names, counts) = frame(&mut r);
-    assert_eq!(counts, (3, 0), "a moved light redoes all three");
-    for pass in KEPT {
+    let (names, light, screen) = frame(&mut r);
+    assert_eq!(light, (3, 0), "a moved light redoes the light space");
+    assert_eq!(screen, (1, 1), "and the direct light, not the G-buffer");
+    for pass in KEPT.iter().chain(&["direct"]) {
         assert!(names.iter().any(|n| n == pass), "{pass} missing after the light moved: {names:?}");
     }
-    assert_eq!(frame(&mut r).1, (0, 3), "and the next still frame keeps them again");
+    assert_eq!(counts(&mut r), ((0, 3), (0, 2)), "the next still frame keeps them again");
     r.scene_mut().nodes[object].transform.translation.y += 0.01;
-    assert_eq!(frame(&mut r).1, (3, 0), "a moved object redoes all three");
+    assert_eq!(counts(&mut r), ((3, 0), (2, 0)), "a moved object redoes all five");
+    // The movement buffer still holds the motion: the first still frame redraws it.
+    assert_eq!(counts(&mut r), ((0, 3), (2, 0)), "the first still frame after a move redraws the G-buffer");
+    assert_eq!(counts(&mut r), ((0, 3), (0, 2)));
+    r.camera.position.x += 0.01;
+    assert_eq!(counts(&mut r), ((0, 3), (2, 0)), "a moved camera redoes the screen, not the light space");
     frame(&mut r);
     let mut s = r.settings().clone();
     s.vpl.importance_bias *= 0.5;
     r.set_settings(s).expect("valid settings");
-    assert_eq!(frame(&mut r).1, (2, 1), "a VPL setting redoes the light views and the set, not the shadow maps");
+    let (light, screen) = counts(&mut r);
+    assert_eq!(light, (2, 1), "a VPL setting redoes the light views and the set, not the shadow maps");
+    assert_eq!(screen.1, 1, "and keeps the G-buffer: {screen:?}");
     let mut s = r.settings().clone();
     s.direct.pcf_radius += 1;
     r.set_settings(s).expect("valid settings");
-    assert_eq!(frame(&mut r).1, (3, 0), "a setting of the direct light redoes all three");
-    r.resize(40, 40).expect("resize");
+    let (light, screen) = counts(&mut r);
+    assert_eq!(light, (3, 0), "a setting of the direct light redoes the light space");
+    assert!(screen.0 >= 1, "and the direct light: {screen:?}");
     frame(&mut r);
-    assert_eq!(frame(&mut r).1, (0, 3), "a resized window keeps them (they are in light space)");
+    assert_eq!(counts(&mut r), ((0, 3), (0, 2)));
+    r.resize(40, 40).expect("resize");
+    assert_eq!(counts(&mut r).1, (2, 0), "a resized window redoes the screen");
+    frame(&mut r);
+    assert_eq!(counts(&mut r), ((0, 3), (0, 2)), "the light space stayed");
 }
 
 #[test]
 fn a_new_vpl_set_each_frame_is_made_every_frame_while_the_maps_are_kept() {
     let mut r = paused_renderer(48, Technique::Knecht, |s| s.vpl.new_set_each_frame = true);
     frame(&mut r);
-    let (names, counts) = frame(&mut r);
-    assert_eq!(counts, (1, 2), "the set is new, the shadow maps and the light views are kept");
+    frame(&mut r);
+    let (names, light, screen) = frame(&mut r);
+    assert_eq!(light, (1, 2), "the set is new, the shadow maps and the light views are kept");
+    assert_eq!(screen, (0, 2), "the G-buffer and the direct light are kept");
     for pass in ["vpl.sample", "ism.splat", "ism.pull_push"] {
         assert!(names.iter().any(|n| n == pass), "{pass} missing: {names:?}");
     }

@@ -120,6 +120,8 @@ pub struct DirectPass {
     /// `direct.diffuse`, while a stage asks for it (`ensure_diffuse`): Soler et al.'s senders
     /// under 004 §5.3's diffuse approximation (`soler.sender`).
     pub diffuse: Option<(wgpu::Texture, wgpu::TextureView)>,
+    /// What the light was last computed for: kept while nothing moved (issue #53).
+    pub last: crate::fingerprint::LastRun,
     /// Stand-ins for the emitter VPLs and their atlases when there are none.
     no_emitters: wgpu::Buffer,
     no_ism: wgpu::TextureView,
@@ -190,6 +192,7 @@ impl DirectPass {
         let (no_ism, no_exact) = super::reference::vpl_visibility::no_visibility_atlases(device, "direct.emitters");
         Self {
             no_emitters,
+            last: Default::default(),
             no_ism,
             no_exact,
             pipeline,
@@ -226,6 +229,7 @@ impl DirectPass {
     }
 
     pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) {
+        self.last.invalidate();
         (self.radiance, self.radiance_view) = Self::target(ctx, "direct.radiance", width, height);
         if self.diffuse.is_some() {
             self.diffuse = Some(Self::target(ctx, "direct.diffuse", width, height));

@@ -73,6 +73,9 @@ pub struct GBufferPass {
     cull_single_sided: bool,
     pub camera_layout: wgpu::BindGroupLayout,
     pub targets: GBuffer,
+    /// What the targets were last rendered for: the camera's G-buffer is kept while the
+    /// camera and the objects stay put (issue #53).
+    pub last: crate::fingerprint::LastRun,
 }
 
 impl GBufferPass {
@@ -97,7 +100,8 @@ impl GBufferPass {
         });
         let [single_sided, double_sided] = pipelines;
         let targets = create_targets(ctx, width, height, &name);
-        Self { name, single_sided, double_sided, cull_single_sided: true, camera_layout, targets }
+        let last = Default::default();
+        Self { name, single_sided, double_sided, cull_single_sided: true, camera_layout, targets, last }
     }
 
     /// The G-buffer of a light's view (Knecht 002 §4.3): every face is drawn, single-sided
@@ -171,6 +175,7 @@ impl GBufferPass {
 
     /// Recreates the targets for a new size.
     pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) {
+        self.last.invalidate();
         self.targets = create_targets(ctx, width, height, &self.name);
     }
 

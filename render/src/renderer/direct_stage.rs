@@ -5,6 +5,7 @@
 
 use glam::{Mat4, Vec4};
 
+use crate::fingerprint::{Fingerprint, Space};
 use crate::passes::CameraUniform;
 use crate::passes::direct_history::DirectHistory;
 use crate::passes::shadow::{gpu_light, setup_lights};
@@ -43,7 +44,7 @@ impl Renderer {
         &mut self,
         enc: &mut wgpu::CommandEncoder,
         state: &SceneState,
-        view_proj: Mat4,
+        (view_proj, gbuffer_key): (Mat4, u64),
     ) -> wgpu::TextureView {
         let ctx = self.ctx.clone();
         let ds = self.settings.direct.clone();
@@ -60,19 +61,13 @@ impl Renderer {
         }
         // The maps are kept while the lights, the objects and the settings stay as they were
         // (issue #53): the views and the draws are all the maps depend on.
-        let key = crate::fingerprint::Fingerprint::new()
+        let shadow_key = Fingerprint::new()
             .pod(&lights.views)
             .draws(&state.draws)
             .debug(&ds)
             .u64s(&[self.shadow.size as u64])
             .finish();
-        if !self.keep_light_space {
-            self.shadow.last.invalidate();
-            if let Some(k) = self.stages.knecht.as_mut() {
-                k.redo_light_space();
-            }
-        }
-        if self.shadow.last.needs_run(key) {
+        if self.shadow.last.needs_run(shadow_key, Space::Light) {
             let (shadow, gpu_scene) = (&self.shadow, &self.gpu_scene);
             self.timer.scope(&ctx, enc, "direct.shadow", |e, slot| {
                 shadow.run(&ctx, e, slot, gpu_scene, state, &lights.views)
@@ -95,8 +90,17 @@ impl Renderer {
             shadow_map: &self.shadow.array_view,
             emitters: emitters.as_ref(),
         };
-        let direct = &mut self.direct;
-        self.timer.pass(&ctx, enc, "direct", |r| direct.run(r, &inputs));
+        // The direct light is kept while the G-buffer, the shadow maps, the lights and the
+        // settings are (issue #53); the emitters' VPLs may be new every frame.
+        let key =
+            Fingerprint::new().u64s(&[gbuffer_key, shadow_key]).pod(&lights.lights).debug(&self.settings).finish();
+        if emitters.is_some() {
+            self.direct.last.invalidate();
+        }
+        if self.direct.last.needs_run(key, Space::Screen) {
+            let direct = &mut self.direct;
+            self.timer.pass(&ctx, enc, "direct", |r| direct.run(r, &inputs));
+        }
         let direct_view = crate::passes::view(&self.direct.radiance, "direct.radiance");
         let rotating_sky = self.rotating_sky();
         if rotating_sky == 0 {

@@ -69,11 +69,12 @@ pub struct Renderer {
     flip_map: Option<wgpu::Texture>,
     /// Interactive mode (the app): timings are collected without waiting for the GPU.
     pub(crate) interactive: bool,
-    /// Whether the light-space passes (shadow maps, light G-buffers, a fixed VPL set and its
-    /// visibility) keep their last result while nothing they depend on changed (issue #53;
-    /// on by default). Off redoes them every frame, as before: the same image, for
-    /// comparisons and measurements.
-    pub keep_light_space: bool,
+    /// Whether the passes that depend only on the camera, the objects, the lights and the
+    /// settings keep their last result while none of these changed (issue #53; on by
+    /// default): the shadow maps, the light G-buffers with their importance, a fixed VPL set
+    /// with its visibility, the camera's G-buffer and the direct light. Off redoes them every
+    /// frame, as before: the same image, for comparisons and measurements.
+    pub reuse_unchanged: bool,
     /// The scene's sky as directional lights (`passes::sky`), cached.
     pub(crate) sky_lights: crate::passes::sky::SkyLights,
     /// The direct light's average over still frames while the sky's directions rotate
@@ -165,7 +166,7 @@ impl Renderer {
             steps: StepList::default(),
             flip_map: None,
             interactive: false,
-            keep_light_space: true,
+            reuse_unchanged: true,
             sky_lights: Default::default(),
             direct_history: None,
             sky_background,
@@ -374,6 +375,8 @@ impl Renderer {
     /// a settings change or a light edit.
     pub fn reset_history_but_records(&mut self) {
         self.prev = None;
+        // A reloaded shader or a reset asks for every pass anew.
+        self.redo_kept_passes();
         self.compose.forget_exposure();
         if let Some(h) = &mut self.direct_history {
             h.reset();
@@ -462,6 +465,18 @@ impl Renderer {
             return Err(RenderError::ShadowMapTooLarge { size, layers, max_dim, max_layers, largest: max_dim });
         }
         Ok(())
+    }
+
+    /// Forgets what the kept passes (see [`Self::reuse_unchanged`]) were last made for: the
+    /// next frame redoes them (after a shader reload, a history reset, or every frame when
+    /// reuse is off).
+    pub fn redo_kept_passes(&mut self) {
+        self.shadow.last.invalidate();
+        self.gbuffer.last.invalidate();
+        self.direct.last.invalidate();
+        if let Some(k) = self.stages.knecht.as_mut() {
+            k.redo_light_space();
+        }
     }
 
     /// Interactive mode: `render_frame` does not wait for the GPU; its timings are those of

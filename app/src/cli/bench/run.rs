@@ -68,6 +68,10 @@ pub struct BenchReport {
     /// (issue #53). A still scene under the default preset: the shadow maps and the light
     /// G-buffers are kept; its VPL set is new every frame (`vpl.new_set_each_frame`).
     pub light_space_skips_per_frame: f64,
+    /// The same for the camera's G-buffer and the direct light (each once a frame): kept
+    /// while the camera, the objects and the lights stay put.
+    pub screen_space_runs_per_frame: f64,
+    pub screen_space_skips_per_frame: f64,
     /// Temporal flicker of final.hdr with the animation paused and the camera still
     /// (`metrics::flicker`); None when not measured.
     pub flicker: Option<f64>,
@@ -176,6 +180,8 @@ pub fn bench_run(r: &mut Renderer, frames: u32, scene_name: &str) -> BenchReport
         traffic_bytes_per_frame: per_frame(counts.traffic_bytes),
         light_space_runs_per_frame: per_frame(counts.light_space_runs),
         light_space_skips_per_frame: per_frame(counts.light_space_skips),
+        screen_space_runs_per_frame: per_frame(counts.screen_space_runs),
+        screen_space_skips_per_frame: per_frame(counts.screen_space_skips),
         passes,
         flicker: None,
         flip: None,
@@ -250,8 +256,11 @@ pub fn format_bench_table(b: &BenchReport) -> String {
         b.blocking_waits_per_frame, b.submits_per_frame, b.objects_created_per_frame
     );
     s += &format!(
-        "light space per frame: {:.1} redone, {:.1} kept (nothing they depend on moved)\n",
-        b.light_space_runs_per_frame, b.light_space_skips_per_frame
+        "kept while nothing moved, per frame: light space {:.1} redone, {:.1} kept; G-buffer and direct light {:.1} redone, {:.1} kept\n",
+        b.light_space_runs_per_frame,
+        b.light_space_skips_per_frame,
+        b.screen_space_runs_per_frame,
+        b.screen_space_skips_per_frame
     );
     if !b.device_choices.is_empty() {
         s += &format!("on this device: {}\n", b.device_choices.join("; "));

@@ -6,7 +6,7 @@
 //! splatted, then bounce b + 1's VPLs are chosen from the point cloud with them), so stage 3
 //! splats the maps the bounces read and stage 4 splats what is left and pulls-pushes.
 
-use crate::fingerprint::{Fingerprint, LastRun};
+use crate::fingerprint::{Fingerprint, LastRun, Space};
 use crate::gpu::GpuContext;
 use crate::lab_settings::LabSettings;
 use crate::maths::split_budget;
@@ -210,14 +210,14 @@ impl KnechtVpls {
         // frame with `vpl.new_set_each_frame`). Each is redone only when they changed (issue
         // #53). The emitters' share is redone every frame (their pass keeps no such record).
         let light_key = Fingerprint::new().debug(s).pod(&f.lights).debug(&f.views).draws(&f.state.draws).finish();
-        let views_changed = self.light_views.needs_run(light_key);
+        let views_changed = self.light_views.needs_run(light_key, Space::Light);
         if emitters.is_some() {
             self.set.invalidate();
         }
         let set_key = Fingerprint::new()
             .u64s(&[light_key, halton_first as u64, seed as u64, f.vpl_radius().to_bits() as u64])
             .finish();
-        self.set_made = self.set.needs_run(set_key);
+        self.set_made = self.set.needs_run(set_key, Space::Light);
         if !self.set_made {
             self.frames = self.frames.wrapping_add(1);
             return self.vpl_set(s, f, sources, first_bounce_slots(&self.vpl, s));
