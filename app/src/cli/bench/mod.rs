@@ -53,6 +53,10 @@ pub struct BenchArgs {
     /// default the scene's animation plays.
     #[arg(long)]
     pub paused: bool,
+    /// Redo every pass every frame, as before issue #53 (`Renderer::reuse_unchanged` off):
+    /// the same images, for a before/after comparison with one binary.
+    #[arg(long)]
+    pub no_reuse: bool,
     /// Samples per pixel of the one-bounce ground truth that `--suite quality` traces when no
     /// --reference is given.
     #[arg(long, default_value_t = 256)]
@@ -162,6 +166,7 @@ pub(crate) fn bench(args: &BenchArgs) -> Result<(), CliError> {
         r.clock.playing = false;
         r.clock.anim_frame = 0;
     }
+    r.reuse_unchanged = !args.no_reuse;
     let mut report = bench_run(&mut r, args.frames, &name);
     report.window_frame_ms = Some(window_frames(&mut r, args.frames));
     if args.flicker_frames == 1 {
