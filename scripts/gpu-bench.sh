@@ -3,6 +3,7 @@
 # (also summed up as one Markdown table, gpu-bench.md: GPU and wall time, the per-frame
 # counters of issue #38 and the heaviest pass), the papers' blended splats beside the default
 # (binned on a GPU), the default preset at 960x540 and 3840x2160 (how the passes scale),
+# the default paused with and without the passes kept while nothing moves (issue #53),
 # the suites (knecht and nguyen at 1920x1080, soler at 1280x720 as its Fig. 9, gautron at
 # 64x64 for its per-pixel brute force, scenes at 1920x1080 over assets/), written as text
 # into one folder. Run it from the project root with a release build:
@@ -53,8 +54,8 @@ row() {
 
 TABLE="$OUT/gpu-bench.md"
 {
-  echo "| preset ($SIZE) | GPU ms | wall ms | window frame ms | blocking waits / frame | submits / frame | objects created / frame | MB bound / frame | heaviest pass (ms) |"
-  echo "|---|---:|---:|---:|---:|---:|---:|---:|---|"
+  echo "| preset ($SIZE) | GPU ms | wall ms | window frame ms | blocking waits / frame | submits / frame | objects created / frame | MB bound / frame | kept / frame: light space, G-buffer + direct | heaviest pass (ms) |"
+  echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|"
 } >"$TABLE"
 # One preset (or a variant of it: NAME+VARIANT with extra --set arguments), as a table row.
 preset_row() {
@@ -71,7 +72,8 @@ preset_row() {
     mine && /^frame wall/ { wall = $3 }
     mine && /^window frame/ { window = $3 }
     mine && /^per frame:/ { waits = $3; submits = $6; objects = $8 }
-    END { if (gpu != "") printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s %.2f |\n", name, gpu, wall, window, waits, submits, objects, mb, top, top_ms }
+    mine && /^kept while nothing moved/ { kept = $11 ", " $19 }
+    END { if (gpu != "") printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s %.2f |\n", name, gpu, wall, window, waits, submits, objects, mb, kept, top, top_ms }
   ' "$LOG" >>"$TABLE"
 }
 for p in presets/*.ron; do
@@ -82,6 +84,11 @@ done
 preset_row gautron-ic-splatting+blend presets/gautron-ic-splatting.ron --set gautron.splat=Blend
 preset_row nguyen-hcb+blend presets/nguyen-hcb.ron --set hcb.splat=Blend
 preset_row nguyen-hcb-cached+blend presets/nguyen-hcb-cached.ron --set hcb.splat=Blend
+# The default preset with its animation paused (issue #53: the still view a lighting artist
+# tunes keeps its shadow maps, light G-buffer, G-buffer and direct light), and the same
+# redoing every pass every frame (before #53), so that the saving is read in one run.
+preset_row default+paused presets/default.ron --paused
+preset_row default+paused+no-reuse presets/default.ron --paused --no-reuse
 # The default preset at a quarter and four times the pixels: how each pass scales with the
 # image (on the H100/H200 the G-buffer is linear in the pixels: their raster is the limit).
 row "scaling 960x540" bench --preset presets/default.ron --size 960x540 --frames 30 --flicker-frames 0 --afterglow-frames 0

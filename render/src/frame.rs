@@ -48,7 +48,10 @@ impl Renderer {
             .draws(&state.draws)
             .pod(prev_models)
             .finish();
-        if self.gbuffer.last.needs_run(gbuffer_key, Space::Screen) {
+        self.kept.clear();
+        if !self.gbuffer.last.needs_run(gbuffer_key, Space::Screen) {
+            self.kept.push("gbuffer");
+        } else {
             let (gbuffer, camera_group, gpu_scene) = (&self.gbuffer, &self.camera_group, &self.gpu_scene);
             self.timer
                 .scope(&ctx, &mut enc, "gbuffer", |e, slot| gbuffer.run(e, slot, camera_group, gpu_scene, &state));
@@ -84,6 +87,9 @@ impl Renderer {
         };
         let mut rec = Recorder { enc: &mut enc, timer: &mut self.timer };
         let (indirect, near_field) = self.steps.run(&f, &mut self.stages, &mut rec);
+        if let Some(k) = self.stages.knecht.as_ref().filter(|_| self.settings.pipeline.uses_knecht_vpls()) {
+            self.kept.extend(k.kept(&self.settings));
+        }
         // The temporal histories ping-pong: the registry names this frame's.
         self.stages.register_histories(&mut self.registry);
 

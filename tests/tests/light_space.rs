@@ -53,6 +53,12 @@ fn a_still_frame_keeps_the_light_space_passes_and_changes_no_pixel() {
         for _ in 0..4 {
             let (names, light, screen) = frame(&mut kept);
             assert_eq!((light, screen), ((0, 3), (0, 2)), "{visibility:?}: a still frame keeps all five");
+            let visibility_passes: &[&str] =
+                if visibility == VplVisibility::Exact { &["vpl.shadow"] } else { &["ism.splat", "ism.pull_push"] };
+            let mut listed =
+                vec!["gbuffer", "direct.shadow", "direct", "vpl.light_gbuffer", "vpl.importance", "vpl.sample"];
+            listed.extend(visibility_passes);
+            assert_eq!(kept.kept_passes(), listed, "{visibility:?}: the passes the window lists as kept");
             for pass in KEPT.iter().chain(&KEPT_SCREEN).chain(&["vpl.shadow"]) {
                 assert!(!names.iter().any(|n| n == pass), "{visibility:?}: {pass} ran in a still frame: {names:?}");
             }
@@ -85,6 +91,7 @@ fn a_moved_light_or_object_or_a_setting_redoes_them() {
     for pass in KEPT.iter().chain(&["direct"]) {
         assert!(names.iter().any(|n| n == pass), "{pass} missing after the light moved: {names:?}");
     }
+    assert_eq!(r.kept_passes(), ["gbuffer"], "only the G-buffer was kept");
     assert_eq!(counts(&mut r), ((0, 3), (0, 2)), "the next still frame keeps them again");
     r.scene_mut().nodes[object].transform.translation.y += 0.01;
     assert_eq!(counts(&mut r), ((3, 0), (2, 0)), "a moved object redoes all five");

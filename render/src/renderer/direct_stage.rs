@@ -67,7 +67,9 @@ impl Renderer {
             .debug(&ds)
             .u64s(&[self.shadow.size as u64])
             .finish();
-        if self.shadow.last.needs_run(shadow_key, Space::Light) {
+        if !self.shadow.last.needs_run(shadow_key, Space::Light) {
+            self.kept.push("direct.shadow");
+        } else {
             let (shadow, gpu_scene) = (&self.shadow, &self.gpu_scene);
             self.timer.scope(&ctx, enc, "direct.shadow", |e, slot| {
                 shadow.run(&ctx, e, slot, gpu_scene, state, &lights.views)
@@ -97,7 +99,9 @@ impl Renderer {
         if emitters.is_some() {
             self.direct.last.invalidate();
         }
-        if self.direct.last.needs_run(key, Space::Screen) {
+        if !self.direct.last.needs_run(key, Space::Screen) {
+            self.kept.push("direct");
+        } else {
             let direct = &mut self.direct;
             self.timer.pass(&ctx, enc, "direct", |r| direct.run(r, &inputs));
         }

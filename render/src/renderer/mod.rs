@@ -75,6 +75,8 @@ pub struct Renderer {
     /// with its visibility, the camera's G-buffer and the direct light. Off redoes them every
     /// frame, as before: the same image, for comparisons and measurements.
     pub reuse_unchanged: bool,
+    /// The passes the last frame kept from an earlier one ([`Self::kept_passes`]).
+    pub(crate) kept: Vec<&'static str>,
     /// The scene's sky as directional lights (`passes::sky`), cached.
     pub(crate) sky_lights: crate::passes::sky::SkyLights,
     /// The direct light's average over still frames while the sky's directions rotate
@@ -167,6 +169,7 @@ impl Renderer {
             flip_map: None,
             interactive: false,
             reuse_unchanged: true,
+            kept: Vec::new(),
             sky_lights: Default::default(),
             direct_history: None,
             sky_background,
@@ -465,6 +468,13 @@ impl Renderer {
             return Err(RenderError::ShadowMapTooLarge { size, layers, max_dim, max_layers, largest: max_dim });
         }
         Ok(())
+    }
+
+    /// The passes the last frame did not run because nothing they read had changed since
+    /// they last ran (issue #53): their outputs hold that run's result. The window lists
+    /// them under the timings.
+    pub fn kept_passes(&self) -> &[&'static str] {
+        &self.kept
     }
 
     /// Forgets what the kept passes (see [`Self::reuse_unchanged`]) were last made for: the

@@ -21,6 +21,13 @@ pub(super) fn timings_ui(timings: &mut Timings, l: &Lab, ui: &mut egui::Ui) {
                 ui.colored_label(ui.visuals().warn_fg_color, "this device has no GPU timestamps: the window does not time passes, because timing without them means waiting for the GPU after every pass; `gi-lab bench` times each pass by the wall clock");
             }
             steps_ui(ui, &l.renderer);
+            let kept = l.renderer.kept_passes();
+            if !kept.is_empty() {
+                let text = egui::RichText::new(format!("kept from an earlier frame: {}", kept.join(", "))).small();
+                ui.add(egui::Label::new(text).wrap()).on_hover_text(
+                    "nothing these passes read (camera, objects, lights, settings) changed since they last ran, so their outputs hold that result (issue #53; docs/architecture.md, 'Passes kept while nothing moves')",
+                );
+            }
             egui::Grid::new("timings").num_columns(2).striped(true).show(ui, |ui| {
                 let mut total = 0.0;
                 for t in l.renderer.timings() {

@@ -42,8 +42,10 @@ pub struct KnechtVpls {
     /// with its visibility: each is kept while its inputs stay the same (issue #53).
     light_views: LastRun,
     set: LastRun,
-    /// Whether this frame made a new VPL set (stage 4 then redoes its visibility).
+    /// Whether this frame made a new VPL set (stage 4 then redoes its visibility) and new
+    /// light views.
     set_made: bool,
+    views_made: bool,
 }
 
 /// The pass that makes a frame's further bounces, with its bind groups.
@@ -99,6 +101,7 @@ impl KnechtVpls {
             light_views: LastRun::default(),
             set: LastRun::default(),
             set_made: false,
+            views_made: false,
         }
     }
 
@@ -142,6 +145,23 @@ impl KnechtVpls {
             self.set.invalidate();
         }
         fresh
+    }
+
+    /// The passes this frame kept from an earlier one (`Renderer::kept_passes`).
+    pub fn kept(&self, s: &LabSettings) -> Vec<&'static str> {
+        let mut v = Vec::new();
+        if !self.views_made {
+            v.extend(["vpl.light_gbuffer", "vpl.importance"]);
+        }
+        if !self.set_made {
+            v.push("vpl.sample");
+            match s.pipeline.vpl_visibility {
+                VplVisibility::Exact => v.push("vpl.shadow"),
+                VplVisibility::Imperfect => v.extend(["ism.splat", "ism.pull_push"]),
+                VplVisibility::None => {}
+            }
+        }
+        v
     }
 
     /// Forgets what the light views and the VPL set were made for: the next frame redoes them
@@ -211,6 +231,7 @@ impl KnechtVpls {
         // #53). The emitters' share is redone every frame (their pass keeps no such record).
         let light_key = Fingerprint::new().debug(s).pod(&f.lights).debug(&f.views).draws(&f.state.draws).finish();
         let views_changed = self.light_views.needs_run(light_key, Space::Light);
+        self.views_made = views_changed;
         if emitters.is_some() {
             self.set.invalidate();
         }
