@@ -313,7 +313,8 @@ fn buffers_lists_registered_names_and_bench_prints_every_pass() {
         (v["light_space_runs_per_frame"].as_f64(), v["light_space_skips_per_frame"].as_f64()),
         (Some(1.0), Some(0.0))
     );
-    // Paused, they are kept (issue #53): the pass is not timed and the counter says so.
+    // Paused, they are kept (issue #53) with the G-buffer and the direct light: not timed, and
+    // the counters say so.
     let o = gi_lab()
         .args(["bench", "--size", "64x64", "--frames", "2", "--json", "--paused", "--set", "pipeline.gather=None"])
         .args(["--flicker-frames", "0", "--afterglow-frames", "0"])
@@ -322,10 +323,14 @@ fn buffers_lists_registered_names_and_bench_prints_every_pass() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("bench --json prints JSON");
     let passes: Vec<&str> = v["passes"].as_array().expect("passes").iter().filter_map(|p| p["pass"].as_str()).collect();
-    assert_eq!(passes, ["gbuffer", "direct", "compose", "compose.luminance"]);
+    assert_eq!(passes, ["compose", "compose.luminance"]);
     assert_eq!(
         (v["light_space_runs_per_frame"].as_f64(), v["light_space_skips_per_frame"].as_f64()),
         (Some(0.0), Some(1.0))
+    );
+    assert_eq!(
+        (v["screen_space_runs_per_frame"].as_f64(), v["screen_space_skips_per_frame"].as_f64()),
+        (Some(0.0), Some(2.0))
     );
 
     // The exact-VPL reference accumulates over frames: its passes are timed, it changes from

@@ -88,8 +88,9 @@ pub struct BenchReport {
     pub device_choices: Vec<String>,
 }
 
-/// A renderer of its own for one measurement: paused at the start of the animation, and
-/// timed by the wall clock per pass on a device whose timestamps land in the wrong passes.
+/// A renderer of its own for one measurement: paused at the start of the animation, every
+/// pass redone every frame, and timed by the wall clock per pass on a device whose timestamps
+/// land in the wrong passes.
 /// Each job of a study, point of a sweep and row of the scenes suite gets one, so that its
 /// result does not depend on what a renderer rendered before (its frame count seeds the
 /// sample patterns).
@@ -105,6 +106,10 @@ pub fn measuring_renderer(
     }
     r.clock.playing = false;
     r.clock.anim_frame = 0;
+    // Every pass of every frame is timed, as in a frame where something moves: a study's or
+    // sweep's frame time is comparable between techniques and with earlier runs. What the
+    // passes kept while nothing moves save (issue #53) is `gi-lab bench --paused`'s measure.
+    r.reuse_unchanged = false;
     Ok(r)
 }
 
