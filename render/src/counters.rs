@@ -103,8 +103,18 @@ pub(crate) fn note_created() {
     bump(|c| c.objects_created += 1);
 }
 
-pub(crate) fn note_kept(space: crate::fingerprint::Space, ran: bool) {
-    use crate::fingerprint::Space;
+/// Where a kept pass works (`fingerprint::LastRun`), for the counts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Space {
+    /// Shadow maps, light G-buffers, VPL sets and their visibility
+    /// ([`Counts::light_space_runs`] / [`Counts::light_space_skips`]).
+    Light,
+    /// The camera's G-buffer and direct light ([`Counts::screen_space_runs`] /
+    /// [`Counts::screen_space_skips`]).
+    Screen,
+}
+
+pub(crate) fn note_kept(space: Space, ran: bool) {
     bump(|c| match (space, ran) {
         (Space::Light, true) => c.light_space_runs += 1,
         (Space::Light, false) => c.light_space_skips += 1,

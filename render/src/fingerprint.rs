@@ -58,15 +58,7 @@ impl Fingerprint {
     }
 }
 
-/// Where a kept pass works, for the counters.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Space {
-    /// Shadow maps, light G-buffers, VPL sets and their visibility
-    /// (`counters::Counts::light_space_runs` / `light_space_skips`).
-    Light,
-    /// The camera's G-buffer and direct light (`screen_space_runs` / `screen_space_skips`).
-    Screen,
-}
+pub use crate::counters::Space;
 
 /// The last fingerprint a pass ran on; `None` until it has run, and after its outputs were
 /// recreated.
