@@ -16,6 +16,11 @@ struct Instance {
     normal_matrix: mat4x4<f32>,
 }
 
+// Whether the pipeline draws materials with textures (issue #53): the camera's G-buffer draws
+// untextured materials with this false, so that its fragment stage carries none of the
+// texture branches (on lavapipe they cost about a third of the pass even when not taken).
+override TEXTURED: bool = true;
+
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(1) @binding(0) var<storage, read> instances: array<Instance>;
 
@@ -80,7 +85,7 @@ fn sample_map(t: texture_2d<f32>, uv: vec2<f32>) -> vec4<f32> {
 // stage adds the object's index).
 fn gbuffer_fragment(i: VsOut, front: bool) -> FsOut {
     var color = material.base_color;
-    if (material.params.w > 0.5) {
+    if (TEXTURED && material.params.w > 0.5) {
         if (camera.lod.x >= 0.0) {
             color = color * textureSampleLevel(base_tex, base_sampler, i.uv, camera.lod.x);
         } else {
@@ -95,7 +100,7 @@ fn gbuffer_fragment(i: VsOut, front: bool) -> FsOut {
     // space x = tangent, y = bitangent = sign · n × t, z = n; xy × scale), then turned to the
     // side the camera sees.
     var n = normalize(i.normal);
-    if (material.maps.x != 0.0) {
+    if (TEXTURED && material.maps.x != 0.0) {
         var tn = sample_map(normal_tex, i.uv).xyz * 2.0 - 1.0;
         tn = vec3<f32>(tn.xy * material.maps.x, tn.z);
         let t_len = length(i.tangent.xyz);
@@ -115,7 +120,7 @@ fn gbuffer_fragment(i: VsOut, front: bool) -> FsOut {
     // DI, SI and SP per fragment by `scene::Material::intensities_at`'s mapping.
     var params = material.params;
     var metal_rough = material.extra.xy;
-    if (material.maps.y > 0.5) {
+    if (TEXTURED && material.maps.y > 0.5) {
         let mr = sample_map(mr_tex, i.uv);
         let metallic = clamp(material.extra.x * mr.b, 0.0, 1.0);
         let roughness = clamp(material.extra.y * mr.g, 0.0, 1.0);
@@ -132,10 +137,12 @@ fn gbuffer_fragment(i: VsOut, front: bool) -> FsOut {
     o.normal = vec4<f32>(n, 1.0);
     o.albedo = vec4<f32>(color.rgb, params.x);
     o.material = vec4<f32>(params.y, params.z, metal_rough.x, metal_rough.y);
-    let m = clip_to_pixel(i.prev_clip, camera.viewport) - clip_to_pixel(i.cur_clip, camera.viewport);
+    // The fragment's own position is the pixel centre (issue #53: one interpolated input less
+    // than projecting the interpolated clip position again).
+    let m = clip_to_pixel(i.prev_clip, camera.viewport) - i.clip.xy;
     o.motion = vec4<f32>(m, i.prev_clip.w, 1.0);
     var emission = material.emissive.rgb;
-    if (material.emissive.w > 0.5) {
+    if (TEXTURED && material.emissive.w > 0.5) {
         // The camera filters by its footprint like the base colour; the light views read mip
         // 0 (their colour blur is for the VPLs' albedo, §4.3). The emitters' light samples
         // read the same texels on the CPU (scene::texture).
@@ -148,7 +155,7 @@ fn gbuffer_fragment(i: VsOut, front: bool) -> FsOut {
     // a: the occlusion texture's R (§3.9.5), 1 without one: loaded so that it can be viewed,
     // never multiplied into the computed light.
     var occlusion = 1.0;
-    if (material.maps.w > 0.5) {
+    if (TEXTURED && material.maps.w > 0.5) {
         occlusion = sample_map(occlusion_tex, i.uv).r;
     }
     o.emission = vec4<f32>(emission, occlusion);

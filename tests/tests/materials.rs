@@ -81,6 +81,33 @@ fn plain(name: &str, c: f32) -> Material {
     }
 }
 
+/// Issue #53: the G-buffer draws materials without any texture by its plain pipelines (no
+/// texture reads in their fragment stage) and the others by the textured ones, in one pass;
+/// each writes its surface: a normal map tilting 30° towards +x beside no map, each with its
+/// own colour.
+#[test]
+fn the_g_buffer_draws_untextured_materials_without_texture_reads() {
+    let (sin, cos) = 30f32.to_radians().sin_cos();
+    let enc = |x: f32| ((x * 0.5 + 0.5) * 255.0).round() as u8;
+    let tilted = texture("tilted normal", 4, 4, |_, _| [enc(sin), enc(0.0), enc(cos), 255]);
+    let mut bumped = plain("tilted", 0.8);
+    bumped.normal_texture = Some(0);
+    let parts = vec![(quad(-2.0, 0.0, -2.0, 2.0, 0.0), bumped), (quad(0.0, 2.0, -2.0, 2.0, 0.0), plain("none", 0.5))];
+    let scene = scene(parts, vec![tilted], LightKind::Directional);
+    let uploaded = gi_render::scene::upload::GpuScene::new(&gi_lab_tests::gpu(), &scene);
+    assert_eq!(uploaded.textured, [true, false], "which materials read a texture");
+    let mut r = scene_renderer(scene, 32, |s| gi_render::settings::pipeline::Technique::DirectOnly.apply(s));
+    look_down(&mut r, 2.0);
+    r.render_frame();
+    let (normal, albedo) = (read(&r, "gbuffer.normal"), read(&r, "gbuffer.albedo"));
+    for (x, c, want) in [(8, 0.8, Vec3::new(sin, cos, 0.0)), (24, 0.5, Vec3::Y)] {
+        let i = 16 * 32 + x;
+        let n = Vec3::from_slice(&normal.data[i][..3]);
+        assert!((n - want).length() < 0.02, "pixel {x}: normal {n}, want {want}");
+        assert!((albedo.data[i][0] - c).abs() < 1.0 / 255.0, "pixel {x}: albedo {:?}, want {c}", albedo.data[i]);
+    }
+}
+
 /// glTF §3.9.3: n' = normalize(t·x + b·y + n·z) with (x, y) × scale and b = w · n × t. A
 /// texel that tilts the normal 30° towards +x in tangent space tilts the G-buffer's normal
 /// 30° towards the tangent (+x), and the path tracer lights the surface by the same normal.

@@ -68,6 +68,9 @@ pub struct GBufferPass {
     name: String,
     single_sided: wgpu::RenderPipeline,
     double_sided: wgpu::RenderPipeline,
+    /// The same for materials without textures (`TEXTURED` false in the shader, issue #53).
+    plain_single_sided: wgpu::RenderPipeline,
+    plain_double_sided: wgpu::RenderPipeline,
     /// Whether single-sided materials cull their back faces (the camera's G-buffer, as glTF
     /// asks); light views draw every face (see [`Self::light_view`]).
     cull_single_sided: bool,
@@ -95,13 +98,25 @@ impl GBufferPass {
             bind_group_layouts: &[Some(&camera_layout), Some(&scene.instance_layout), Some(&scene.material_layout)],
             immediate_size: 0,
         });
-        let pipelines = [Some(wgpu::Face::Back), None].map(|cull_mode| {
-            Self::pipeline(device, &layout, &module, ("vs_main", "fs_main", wgpu::FrontFace::Ccw), cull_mode, &name)
-        });
-        let [single_sided, double_sided] = pipelines;
+        let make = |cull_mode, textured| {
+            let entries = ("vs_main", "fs_main", wgpu::FrontFace::Ccw);
+            Self::pipeline(device, &layout, &module, entries, (cull_mode, textured), &name)
+        };
+        let [single_sided, double_sided] = [Some(wgpu::Face::Back), None].map(|c| make(c, true));
+        let [plain_single_sided, plain_double_sided] = [Some(wgpu::Face::Back), None].map(|c| make(c, false));
         let targets = create_targets(ctx, width, height, &name);
         let last = Default::default();
-        Self { name, single_sided, double_sided, cull_single_sided: true, camera_layout, targets, last }
+        Self {
+            name,
+            single_sided,
+            double_sided,
+            plain_single_sided,
+            plain_double_sided,
+            cull_single_sided: true,
+            camera_layout,
+            targets,
+            last,
+        }
     }
 
     /// The G-buffer of a light's view (Knecht 002 §4.3): every face is drawn, single-sided
@@ -116,21 +131,24 @@ impl GBufferPass {
 
     /// The G-buffer's render pipeline with the vertex and fragment entries `(vs, fs)` of
     /// `module` (`fs_main` or a wrapper of `gbuffer_fragment`: also Gautron's hemisphere
-    /// atlas, whose mirrored record views wind front faces clockwise).
+    /// atlas, whose mirrored record views wind front faces clockwise); `textured` false
+    /// leaves the texture reads out (materials without textures, issue #53).
     pub(crate) fn pipeline(
         device: &wgpu::Device,
         layout: &wgpu::PipelineLayout,
         module: &wgpu::ShaderModule,
         (vs_entry, fs_entry, front_face): (&str, &str, wgpu::FrontFace),
-        cull_mode: Option<wgpu::Face>,
+        (cull_mode, textured): (Option<wgpu::Face>, bool),
         name: &str,
     ) -> wgpu::RenderPipeline {
+        let constants = [("TEXTURED", if textured { 1.0 } else { 0.0 })];
+        let kind = if textured { "" } else { "_plain" };
         let target = |format| Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL });
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(&if cull_mode.is_some() {
-                format!("{name}.pipeline_single_sided")
+                format!("{name}.pipeline_single_sided{kind}")
             } else {
-                format!("{name}.pipeline_double_sided")
+                format!("{name}.pipeline_double_sided{kind}")
             }),
             layout: Some(layout),
             vertex: wgpu::VertexState {
@@ -158,7 +176,7 @@ impl GBufferPass {
             fragment: Some(wgpu::FragmentState {
                 module,
                 entry_point: Some(fs_entry),
-                compilation_options: Default::default(),
+                compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
                 targets: &[
                     target(POSITION_FORMAT),
                     target(NORMAL_FORMAT),
@@ -255,7 +273,9 @@ impl GBufferPass {
         pass.set_group(0, camera_group, &[]);
         pass.set_group(1, &scene.instance_group, &[]);
         let single = if self.cull_single_sided { &self.single_sided } else { &self.double_sided };
-        scene.draw(&mut pass, state, Some(2), Some((single, &self.double_sided)));
+        let plain = if self.cull_single_sided { &self.plain_single_sided } else { &self.plain_double_sided };
+        let pipelines = ((single, &self.double_sided), (plain, &self.plain_double_sided));
+        scene.draw_by_material(&mut pass, state, Some(2), Some(pipelines));
     }
 }
 

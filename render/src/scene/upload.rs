@@ -61,6 +61,10 @@ pub struct GpuScene {
     pub double_sided: Vec<bool>,
     /// Whether each material has an alpha cutout (alphaMode MASK or BLEND).
     pub cutout: Vec<bool>,
+    /// Whether each material reads a texture (base colour, normal, metallic-roughness,
+    /// emissive or occlusion): the camera's G-buffer draws the others with a fragment stage
+    /// without texture reads ([`Self::draw_by_material`]).
+    pub textured: Vec<bool>,
     _material_buffers: Vec<wgpu::Buffer>,
     _textures: Vec<wgpu::Texture>,
     /// What the upload changed to fit the device (textures downscaled), for the scene's
@@ -200,6 +204,7 @@ impl GpuScene {
             .collect();
         let mut material_buffers = Vec::new();
         let mut material_groups = Vec::new();
+        let mut textured = Vec::new();
         let default_material = [super::Material::default()];
         let materials: &[super::Material] =
             if scene.materials.is_empty() { &default_material } else { &scene.materials };
@@ -209,6 +214,7 @@ impl GpuScene {
             let normal_tex = m.normal_texture.filter(|&t| t < textures.len());
             let mr_tex = m.metallic_roughness_texture.filter(|&t| t < textures.len());
             let occlusion_tex = m.occlusion_texture.filter(|&t| t < textures.len());
+            textured.push([tex, emissive_tex, normal_tex, mr_tex, occlusion_tex].iter().any(Option::is_some));
             let u = MaterialUniform {
                 base_color: m.base_color.to_array(),
                 params: [
@@ -274,6 +280,7 @@ impl GpuScene {
         Self {
             double_sided,
             cutout,
+            textured,
             vertices: vertex_buffer,
             indices: index_buffer,
             primitives,
@@ -322,10 +329,24 @@ impl GpuScene {
         material_group: Option<u32>,
         pipelines: Option<(&wgpu::RenderPipeline, &wgpu::RenderPipeline)>,
     ) {
+        self.draw_by_material(pass, state, material_group, pipelines.map(|p| (p, p)));
+    }
+
+    /// [`Self::draw`] with pipelines `(textured, plain)`, each (single-sided, double-sided):
+    /// materials without textures take the plain ones.
+    pub fn draw_by_material(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        state: &SceneState,
+        material_group: Option<u32>,
+        pipelines: Option<PipelinePairs<'_>>,
+    ) {
         self.bind_geometry(pass);
         for (inst, p) in self.primitives_of(state) {
-            if let Some((single, double)) = pipelines {
+            if let Some((textured, plain)) = pipelines {
                 let ds = self.double_sided.get(p.material).copied().unwrap_or(true);
+                let tex = self.textured.get(p.material).copied().unwrap_or(true);
+                let (single, double) = if tex { textured } else { plain };
                 pass.set_pipeline(if ds { double } else { single });
             }
             if let Some(g) = material_group {
@@ -335,6 +356,10 @@ impl GpuScene {
         }
     }
 }
+
+/// Pipelines (single-sided, double-sided) for textured materials, then for the others.
+pub type PipelinePairs<'a> =
+    ((&'a wgpu::RenderPipeline, &'a wgpu::RenderPipeline), (&'a wgpu::RenderPipeline, &'a wgpu::RenderPipeline));
 
 impl GpuScene {
     /// Binds the shared vertex and index buffers.
@@ -377,7 +402,7 @@ impl GpuScene {
         self.primitives_of(state).map(|(i, p)| (p.first_index, p.index_count, p.base_vertex, i)).collect()
     }
 
-    /// [`Self::draw`] with indirect draws: draw k of [`Self::indexed_draws`] reads its
+    /// [`Self::draw_by_material`] with indirect draws: draw k of [`Self::indexed_draws`] reads its
     /// arguments (5 words) at k·20 bytes of `args` (Gautron's hemispheres: the instance count
     /// is written by the GPU).
     pub fn draw_indirect(
@@ -385,12 +410,14 @@ impl GpuScene {
         pass: &mut wgpu::RenderPass<'_>,
         state: &SceneState,
         material_group: u32,
-        (single, double): (&wgpu::RenderPipeline, &wgpu::RenderPipeline),
+        (textured, plain): PipelinePairs<'_>,
         args: &wgpu::Buffer,
     ) {
         self.bind_geometry(pass);
         for (k, (_, p)) in self.primitives_of(state).enumerate() {
             let ds = self.double_sided.get(p.material).copied().unwrap_or(true);
+            let tex = self.textured.get(p.material).copied().unwrap_or(true);
+            let (single, double) = if tex { textured } else { plain };
             pass.set_pipeline(if ds { double } else { single });
             pass.set_group(material_group, &self.material_groups[p.material.min(self.material_groups.len() - 1)], &[]);
             pass.draw_indexed_indirect(args, k as u64 * 20);

@@ -57,6 +57,9 @@ pub const REDUCE_BINDINGS: Bindings = Bindings {
 pub struct HemispherePass {
     single_sided: wgpu::RenderPipeline,
     double_sided: wgpu::RenderPipeline,
+    /// The same for materials without textures (issue #53).
+    plain_single_sided: wgpu::RenderPipeline,
+    plain_double_sided: wgpu::RenderPipeline,
     raster_layout: wgpu::BindGroupLayout,
     reduce: wgpu::ComputePipeline,
     reduce_layout: wgpu::BindGroupLayout,
@@ -83,7 +86,9 @@ impl HemispherePass {
             immediate_size: 0,
         });
         let [single_sided, double_sided] =
-            [Some(wgpu::Face::Back), None].map(|cull| raster_pipeline(device, &layout, &module, cull));
+            [Some(wgpu::Face::Back), None].map(|cull| raster_pipeline(device, &layout, &module, (cull, true)));
+        let [plain_single_sided, plain_double_sided] =
+            [Some(wgpu::Face::Back), None].map(|cull| raster_pipeline(device, &layout, &module, (cull, false)));
         let reduce_layout = REDUCE_BINDINGS.layout(device);
         let reduce_module = crate::shaders::create_module(device, "gautron/reduce.wgsl");
         let reduce =
@@ -108,6 +113,8 @@ impl HemispherePass {
         let mut pass = Self {
             single_sided,
             double_sided,
+            plain_single_sided,
+            plain_double_sided,
             raster_layout,
             reduce,
             reduce_layout,
@@ -230,7 +237,9 @@ impl HemispherePass {
             self.atlas.begin_clear_pass(enc, "gautron.hemisphere.pass", slot.and_then(|s| s.render(true, false)));
         pass.set_group(0, &group, &[]);
         pass.set_group(1, &scene.instance_group, &[]);
-        scene.draw_indirect(&mut pass, state, 2, (&self.single_sided, &self.double_sided), args);
+        let pipelines =
+            ((&self.single_sided, &self.double_sided), (&self.plain_single_sided, &self.plain_double_sided));
+        scene.draw_indirect(&mut pass, state, 2, pipelines, args);
     }
 
     /// The indirect draw arguments of the scene's draws for `slots` slots: draw i renders
@@ -291,14 +300,14 @@ fn raster_pipeline(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
-    cull_mode: Option<wgpu::Face>,
+    cull_textured: (Option<wgpu::Face>, bool),
 ) -> wgpu::RenderPipeline {
     gbuffer::GBufferPass::pipeline(
         device,
         layout,
         module,
         ("vs_hemisphere", "fs_hemisphere", wgpu::FrontFace::Cw),
-        cull_mode,
+        cull_textured,
         "gautron.hemisphere",
     )
 }
