@@ -24,6 +24,11 @@ struct Params {
     emitter_vis: vec4<f32>,
 }
 
+// Whether the pipeline evaluates emitter VPLs (issue #53): a scene without emitters runs a
+// pipeline with this false, whose loop over them is left out (on lavapipe the loop's code
+// cost about a fifth of the pass even with no emitter to loop over).
+override EMITTERS: bool = true;
+
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(0) @binding(1) var<uniform> params: Params;
 @group(0) @binding(2) var<storage, read> lights: array<Light>;
@@ -126,9 +131,13 @@ fn reflected_emitters(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, alb: vec4<f32>, 
 
 // The light of every punctual light and emitter VPL reflected toward v at p.
 fn reflected_direct(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, alb: vec4<f32>, mat: vec4<f32>) -> Reflected {
-    let emitted = reflected_emitters(p, n, v, alb, mat);
-    var radiance = emitted.radiance;
-    var irradiance = emitted.irradiance;
+    var radiance = vec3<f32>(0.0);
+    var irradiance = vec3<f32>(0.0);
+    if (EMITTERS) {
+        let emitted = reflected_emitters(p, n, v, alb, mat);
+        radiance = emitted.radiance;
+        irradiance = emitted.irradiance;
+    }
     let count = arrayLength(&lights);
     for (var i = 0u; i < count; i = i + 1u) {
         let light = lights[i];

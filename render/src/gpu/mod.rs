@@ -301,6 +301,17 @@ pub fn compute_pipeline(
     entry: &str,
     layouts: &[&wgpu::BindGroupLayout],
 ) -> wgpu::ComputePipeline {
+    compute_pipeline_with(device, label, (module, entry, &[]), layouts)
+}
+
+/// [`compute_pipeline`] with values for the module's pipeline-overridable constants
+/// (`override` in WGSL), by name.
+pub fn compute_pipeline_with(
+    device: &wgpu::Device,
+    label: &str,
+    (module, entry, constants): (&wgpu::ShaderModule, &str, &[(&str, f64)]),
+    layouts: &[&wgpu::BindGroupLayout],
+) -> wgpu::ComputePipeline {
     let layouts: Vec<Option<&wgpu::BindGroupLayout>> = layouts.iter().map(|l| Some(*l)).collect();
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some(label),
@@ -312,7 +323,7 @@ pub fn compute_pipeline(
         layout: Some(&layout),
         module,
         entry_point: Some(entry),
-        compilation_options: Default::default(),
+        compilation_options: wgpu::PipelineCompilationOptions { constants, ..Default::default() },
         cache: None,
     })
 }

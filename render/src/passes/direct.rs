@@ -97,10 +97,11 @@ pub struct DirectParams {
 pub const RADIANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
 pub struct DirectPass {
-    pipeline: wgpu::ComputePipeline,
+    /// `cs_main` with the emitters' loop, and without it (scenes without emitters).
+    pipeline: [wgpu::ComputePipeline; 2],
     /// `cs_atlas`: the same light at an atlas of G-buffer tiles, each seen from its own
     /// viewer (Gautron et al.'s record hemispheres).
-    atlas_pipeline: wgpu::ComputePipeline,
+    atlas_pipeline: [wgpu::ComputePipeline; 2],
     layout2: wgpu::BindGroupLayout,
     /// The lights, shadow maps and parameters of the last `run`, for `shade_atlas`.
     group0: Option<wgpu::BindGroup>,
@@ -115,13 +116,15 @@ pub struct DirectPass {
     pub radiance: wgpu::Texture,
     radiance_view: wgpu::TextureView,
     /// `cs_main_diffuse`: the same light, and its diffuse part c·DI/π·E into `diffuse`.
-    diffuse_pipeline: wgpu::ComputePipeline,
+    diffuse_pipeline: [wgpu::ComputePipeline; 2],
     diffuse_layout: wgpu::BindGroupLayout,
     /// `direct.diffuse`, while a stage asks for it (`ensure_diffuse`): Soler et al.'s senders
     /// under 004 §5.3's diffuse approximation (`soler.sender`).
     pub diffuse: Option<(wgpu::Texture, wgpu::TextureView)>,
     /// What the light was last computed for: kept while nothing moved (issue #53).
     pub last: crate::fingerprint::LastRun,
+    /// Whether the last `run` had emitter VPLs (the atlas then runs the same variant).
+    emitters: bool,
     /// Stand-ins for the emitter VPLs and their atlases when there are none.
     no_emitters: wgpu::Buffer,
     no_ism: wgpu::TextureView,
@@ -147,23 +150,20 @@ impl DirectPass {
         let module = crate::shaders::create_module(device, "direct/direct.wgsl");
         let layout0 = DIRECT_INPUTS_BINDINGS.layout(device);
         let layout1 = DIRECT_GBUFFER_BINDINGS.layout(device);
-        let pipeline = super::compute_pipeline(device, "direct.pipeline", &module, "cs_main", &[&layout0, &layout1]);
+        // Each entry with and without the emitters' loop (`EMITTERS`, issue #53).
+        let both = |label: &str, entry: &str, layouts: &[&wgpu::BindGroupLayout]| {
+            [true, false].map(|on| {
+                let label = if on { label.to_string() } else { format!("{label}_no_emitters") };
+                let constants = [("EMITTERS", if on { 1.0 } else { 0.0 })];
+                crate::gpu::compute_pipeline_with(device, &label, (&module, entry, &constants), layouts)
+            })
+        };
+        let pipeline = both("direct.pipeline", "cs_main", &[&layout0, &layout1]);
         let layout2 = DIRECT_ATLAS_BINDINGS.layout(device);
-        let atlas_pipeline = super::compute_pipeline(
-            device,
-            "direct.atlas_pipeline",
-            &module,
-            "cs_atlas",
-            &[&layout0, &layout1, &layout2],
-        );
+        let atlas_pipeline = both("direct.atlas_pipeline", "cs_atlas", &[&layout0, &layout1, &layout2]);
         let diffuse_layout = DIRECT_DIFFUSE_BINDINGS.layout(device);
-        let diffuse_pipeline = super::compute_pipeline(
-            device,
-            "direct.diffuse_pipeline",
-            &module,
-            "cs_main_diffuse",
-            &[&layout0, &layout1, &diffuse_layout],
-        );
+        let diffuse_pipeline =
+            both("direct.diffuse_pipeline", "cs_main_diffuse", &[&layout0, &layout1, &diffuse_layout]);
         let params = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("direct.params"),
             size: std::mem::size_of::<DirectParams>() as u64,
@@ -193,6 +193,7 @@ impl DirectPass {
         Self {
             no_emitters,
             last: Default::default(),
+            emitters: true,
             no_ism,
             no_exact,
             pipeline,
@@ -350,7 +351,8 @@ impl DirectPass {
         });
         let diffuse =
             self.diffuse.as_ref().map(|(_, v)| DIRECT_DIFFUSE_BINDINGS.group(device, &self.diffuse_layout, [tv(v)]));
-        pass.set_pipeline(if diffuse.is_some() { &self.diffuse_pipeline } else { &self.pipeline });
+        let k = emitters.is_none() as usize;
+        pass.set_pipeline(if diffuse.is_some() { &self.diffuse_pipeline[k] } else { &self.pipeline[k] });
         pass.set_group(0, &group0, &[]);
         pass.set_group(1, &group1, &[]);
         if let Some(g) = &diffuse {
@@ -360,6 +362,7 @@ impl DirectPass {
         pass.dispatch_workgroups(w.div_ceil(super::TILE), h.div_ceil(super::TILE), 1);
         drop(pass);
         self.group0 = Some(group0);
+        self.emitters = emitters.is_some();
     }
 }
 
@@ -394,7 +397,7 @@ impl super::stages::DirectAtlas for DirectPass {
             label: Some("direct.atlas_pass"),
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
-        pass.set_pipeline(&self.atlas_pipeline);
+        pass.set_pipeline(&self.atlas_pipeline[!self.emitters as usize]);
         pass.set_group(0, group0, &[]);
         pass.set_group(1, &group1, &[]);
         pass.set_group(2, &group2, &[]);
