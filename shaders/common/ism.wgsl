@@ -59,7 +59,12 @@ fn ism_depths(atlas: texture_2d<f32>, i: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f
 // Visibility of x (normal nx) from VPL k as a gather chooses it: `mode` 0 none, 1 the ISM
 // atlas, 2 the exact cube-face atlas; atlas columns and map size; p = (ISM eye offset, bias,
 // receiver normal offset) or (exact near, far, eye offset).
-fn gather_visibility(mode: u32, ism: texture_2d<f32>, exact: texture_depth_2d, k: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, cols: u32, size: u32, p: vec3<f32>) -> f32 {
+// The visibility mode a pipeline is made for (0 none, 1 ISM, 2 exact; issue #53), so that the
+// others' code is left out of it; 3 (the default): the mode its caller passes at run time.
+override VISIBILITY_MODE: u32 = 3u;
+
+fn gather_visibility(mode_at_run: u32, ism: texture_2d<f32>, exact: texture_depth_2d, k: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, cols: u32, size: u32, p: vec3<f32>) -> f32 {
+    let mode = select(mode_at_run, VISIBILITY_MODE, VISIBILITY_MODE < 3u);
     if (mode == 1u) {
         return ism_visibility(ism, k, vpl, x, nx, p.x, cols, size, p.y, p.z);
     }

@@ -140,8 +140,9 @@ pub struct InterleavePass {
     merge_layout: wgpu::BindGroupLayout,
     filter_layout: wgpu::BindGroupLayout,
     split_pipeline: wgpu::ComputePipeline,
-    gather_pipeline: wgpu::ComputePipeline,
-    fused_pipeline: wgpu::ComputePipeline,
+    /// By visibility mode (none, ISM, exact).
+    gather_pipeline: [wgpu::ComputePipeline; 3],
+    fused_pipeline: [wgpu::ComputePipeline; 3],
     merge_pipeline: wgpu::ComputePipeline,
     filter_pipeline: wgpu::ComputePipeline,
     split_params: wgpu::Buffer,
@@ -208,20 +209,22 @@ impl InterleavePass {
             &[&split_layout],
         );
         let gather_module = module("knecht/interleave/gather.wgsl");
-        let gather_pipeline = crate::passes::compute_pipeline(
-            device,
-            "interleave.gather",
-            &gather_module,
-            "cs_gather",
-            &[&gather_layout],
-        );
-        let fused_pipeline = crate::passes::compute_pipeline(
-            device,
-            "interleave.gather_fused",
-            &gather_module,
-            "cs_gather_fused",
-            &[&gather_layout],
-        );
+        // One pipeline per visibility mode (none, ISM, exact: `VISIBILITY_MODE`, issue #53), so
+        // that each carries only its own test.
+        let by_mode = |label: &str, entry: &str| {
+            [0u32, 1, 2].map(|mode| {
+                let constants = [("VISIBILITY_MODE", mode as f64)];
+                let label = format!("{label}.visibility_{mode}");
+                crate::gpu::compute_pipeline_with(
+                    device,
+                    &label,
+                    (&gather_module, entry, &constants),
+                    &[&gather_layout],
+                )
+            })
+        };
+        let gather_pipeline = by_mode("interleave.gather", "cs_gather");
+        let fused_pipeline = by_mode("interleave.gather_fused", "cs_gather_fused");
         let merge_pipeline = crate::passes::compute_pipeline(
             device,
             "interleave.merge",
@@ -417,6 +420,7 @@ impl InterleavePass {
         let sp = SplitParams { n: [n, tw, th, 0] };
         ctx.queue.write_buffer(&self.split_params, 0, bytemuck::bytes_of(&sp));
         let (code, atlas_ism, atlas_exact, cols, size, shade) = vis.parts(&self.dummy_ism, &self.dummy_exact);
+        let mode = (code as usize).min(2);
         let gp = GatherParams {
             split: [n, tw, th, vpl_count],
             vis: [code, cols, size, diffuse_only as u32],
@@ -469,7 +473,7 @@ impl InterleavePass {
                     label: Some("interleave.gather_fused"),
                     timestamp_writes: slot.and_then(|s| s.compute(true, true)),
                 });
-                pass.set_pipeline(&self.fused_pipeline);
+                pass.set_pipeline(&self.fused_pipeline[mode]);
                 pass.set_group(0, &group, &[]);
                 pass.dispatch_workgroups(sw.div_ceil(tile), sh.div_ceil(tile), 1);
             });
@@ -523,7 +527,7 @@ impl InterleavePass {
                 label: Some("interleave.gather"),
                 timestamp_writes: slot.and_then(|s| s.compute(true, true)),
             });
-            pass.set_pipeline(&self.gather_pipeline);
+            pass.set_pipeline(&self.gather_pipeline[mode]);
             pass.set_group(0, &gather_group, &[]);
             pass.dispatch_workgroups(sw.div_ceil(tile), sh.div_ceil(tile), 1);
         });
