@@ -28,6 +28,10 @@ struct ConfidenceParams {
     range: vec4<f32>,
 }
 
+// The merge a pipeline is made for (0 the thesis', 1 demodulated; issue #53), so that it
+// carries only its own branch; 2 (the default): `params.state.y` at run time.
+override DEMODULATE: u32 = 2u;
+
 @group(0) @binding(0) var<uniform> params: ConfidenceParams;
 @group(0) @binding(1) var current: texture_2d<f32>;
 @group(0) @binding(2) var g_position: texture_2d<f32>;
@@ -68,7 +72,7 @@ fn cs_confidence(@builtin(global_invocation_id) gid: vec3<u32>) {
     let d = textureLoad(g_position, p, 0).w;
     var c = 0.0;
     var merged = i_new;
-    let demodulate = params.state.y == 1u;
+    let demodulate = select(params.state.y, DEMODULATE, DEMODULATE < 2u) == 1u;
     var k = vec3<f32>(0.0);
     var e_new = vec3<f32>(0.0);
     if (demodulate) {

@@ -94,7 +94,8 @@ pub struct TemporalPass {
     /// 1×1 stand-ins for the split pair when the merge is not demodulated.
     dummy_split: [wgpu::Texture; 2],
     layout: wgpu::BindGroupLayout,
-    pipeline: wgpu::ComputePipeline,
+    /// The merge of the thesis, then the demodulated one.
+    pipeline: [wgpu::ComputePipeline; 2],
     params: wgpu::Buffer,
 }
 
@@ -103,8 +104,13 @@ impl TemporalPass {
         let device = &ctx.device;
         let layout = CONFIDENCE_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "knecht/temporal/confidence.wgsl");
-        let pipeline =
-            crate::passes::compute_pipeline(device, "temporal.confidence", &module, "cs_confidence", &[&layout]);
+        // The thesis' merge and the demodulated one, each without the other's branch
+        // (`DEMODULATE`, issue #53).
+        let pipeline = [0.0, 1.0].map(|demodulate| {
+            let label = if demodulate > 0.0 { "temporal.confidence.demodulated" } else { "temporal.confidence" };
+            let constants = [("DEMODULATE", demodulate)];
+            crate::gpu::compute_pipeline_with(device, label, (&module, "cs_confidence", &constants), &[&layout])
+        });
         let params = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("temporal.params"),
             size: std::mem::size_of::<ConfidenceParams>() as u64,
@@ -272,7 +278,7 @@ impl TemporalPass {
                 label: Some("temporal.confidence"),
                 timestamp_writes: slot.and_then(|s| s.compute(true, true)),
             });
-            pass.set_pipeline(&self.pipeline);
+            pass.set_pipeline(&self.pipeline[demodulate as usize]);
             pass.set_group(0, &group, &[]);
             pass.dispatch_workgroups(
                 self.width.div_ceil(crate::passes::TILE),
