@@ -84,11 +84,16 @@ impl Renderer {
             views: light_view_list(&state, self.bounds),
             rotating_sky: self.rotating_sky(),
             explain_pixel: self.stages.explain_pixel,
+            unchanged: self.kept.contains(&"gbuffer") && self.kept.contains(&"direct"),
         };
+        let unchanged = f.unchanged;
         let mut rec = Recorder { enc: &mut enc, timer: &mut self.timer };
         let (indirect, near_field) = self.steps.run(&f, &mut self.stages, &mut rec);
         if let Some(k) = self.stages.knecht.as_ref().filter(|_| self.settings.pipeline.uses_knecht_vpls()) {
             self.kept.extend(k.kept(&self.settings));
+        }
+        if unchanged {
+            self.kept.extend(self.steps.kept_when_unchanged());
         }
         // The temporal histories ping-pong: the registry names this frame's.
         self.stages.register_histories(&mut self.registry);

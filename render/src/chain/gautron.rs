@@ -20,9 +20,14 @@ pub(super) fn lit_by_vpls(f: &FrameInputs, x: &mut StagePasses, r: &mut Recorder
     Some(())
 }
 
-/// Stage 6: a hemisphere at each of the HCB's samples (GI Lab's mix), for its splat.
+/// Stage 6: a hemisphere at each of the HCB's samples (GI Lab's mix), for its splat. The
+/// samples and their light are kept from the last frame when nothing the screen depends on
+/// changed (issue #53: the samples, the scene the hemispheres see and its light are the same).
 pub(super) fn at_hcb_samples(f: &FrameInputs, x: &mut StagePasses, r: &mut Recorder, _: &mut Flow) -> Option<()> {
     let (hcb, gautron) = (x.hcb.as_ref()?, x.gautron.as_mut()?);
+    if f.unchanged {
+        return Some(());
+    }
     if let Err(e) = gautron.gather_at_samples(f, r.enc, r.timer, hcb.sample_buffers()) {
         log::warn!("gautron: the HCB's sample count could not be read: {e}");
     }

@@ -7,9 +7,13 @@
 use super::{Flow, Recorder, StagePasses};
 use crate::passes::stages::FrameInputs;
 
-/// Stage 5 without VPLs: this frame's levels, masks and samples, for another gather to light.
+/// Stage 5 without VPLs: this frame's levels, masks and samples, for another gather to light;
+/// kept from the last frame when nothing the screen depends on changed (issue #53).
 pub(super) fn build_samples(f: &FrameInputs, x: &mut StagePasses, r: &mut Recorder, _: &mut Flow) -> Option<()> {
-    x.hcb.as_ref()?.build_only(f, r.enc, r.timer);
+    let hcb = x.hcb.as_ref()?;
+    if !f.unchanged {
+        hcb.build_only(f, r.enc, r.timer);
+    }
     Some(())
 }
 

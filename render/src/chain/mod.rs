@@ -186,6 +186,21 @@ impl StepList {
     pub(crate) fn names(&self) -> Vec<(u8, &'static str)> {
         self.indirect.iter().chain(&self.near_field).map(|s| (s.stage, s.name)).collect()
     }
+
+    /// The passes the list's steps keep while the frame is unchanged
+    /// (`FrameInputs::unchanged`): the HCB's samples that another gather lights, and
+    /// Gautron's hemispheres at them.
+    pub(crate) fn kept_when_unchanged(&self) -> Vec<&'static str> {
+        let names: Vec<&str> = self.indirect.iter().map(|s| s.name).collect();
+        let mut kept = Vec::new();
+        if names.contains(&"hcb.build") {
+            kept.push("hcb.build");
+        }
+        if names.contains(&"gautron.at_hcb_samples") {
+            kept.extend(["gautron.create", "gautron.hemispheres"]);
+        }
+        kept
+    }
 }
 
 /// What the list depends on: the stage choices and the order of the filter and the merge.

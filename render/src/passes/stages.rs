@@ -56,6 +56,11 @@ pub struct FrameInputs<'a> {
     /// The pixel being explained (issue #42), when one is: stages that replay inside their
     /// run (Soler's, bounce by bounce) read it here.
     pub explain_pixel: Option<(u32, u32)>,
+    /// Whether this frame kept the G-buffer and the direct light: nothing the screen depends
+    /// on (camera, objects, lights, settings, size) changed since the last frame (issue #53).
+    /// Steps that depend on nothing else keep their last result too (the hemispheres at the
+    /// HCB's samples).
+    pub unchanged: bool,
 }
 
 /// What the later stages ask of stage 2's direct light besides its image: the same lights and
