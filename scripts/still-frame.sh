@@ -37,11 +37,11 @@ row() {
   awk -v label="$1" '
     /^pass / { table = 1; next }
     table && /^total / { table = 0; next }
-    table && $1 == "gbuffer" { g = $2 }
-    table && $1 == "direct" { d = $2 }
-    table && $1 == "interleave.gather" { ga = $2 }
-    table && $1 == "interleave.filter" { fi = $2 }
-    table && $1 == "temporal" { t = $2 }
+    table && $1 == "gbuffer" { g = $2 " (" $3 ")" }
+    table && $1 == "direct" { d = $2 " (" $3 ")" }
+    table && $1 == "interleave.gather" { ga = $2 " (" $3 ")" }
+    table && $1 == "interleave.filter" { fi = $2 " (" $3 ")" }
+    table && $1 == "temporal" { t = $2 " (" $3 ")" }
     table && ($1 == "direct.shadow" || $1 ~ /^vpl\.(light_gbuffer|importance|sample)/ || $1 ~ /^ism\./) { ls += $2 }
     /^frame wall/ { wall = $3 }
     /^window frame/ { window = $3 }
@@ -55,7 +55,7 @@ row() {
   ' "$LOG"
 }
 
-echo "Commit $(git rev-parse --short HEAD 2>/dev/null || echo unknown)${BEFORE:+ against $BEFORE_LABEL}, $SIZE, $FRAMES frames after 3 warm-up frames, the default preset on the embedded default scene from its camera, $(date -u +%Y-%m-%d). Times in ms."
+echo "Commit $(git rev-parse --short HEAD 2>/dev/null || echo unknown)${BEFORE:+ against $BEFORE_LABEL}, $SIZE, $FRAMES frames after 3 warm-up frames, the default preset on the embedded default scene from its camera, $(date -u +%Y-%m-%d). Times in ms: per pass the mean (and the least) over the frames; the light-space passes summed (means); frame wall and window frame are means."
 echo
 echo "| frames | gbuffer | direct | interleave.gather | interleave.filter | temporal | light-space passes | frame wall | window frame | kept / frame: light space, G-buffer + direct |"
 echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|"
