@@ -88,8 +88,15 @@ pub struct EmitterPass {
     /// What `emitters` was collected from (see [`emitter_key`]): collected again only when
     /// it changes (a textured emitter's triangle means cost texture lookups).
     key: Vec<f32>,
-    /// Whether this frame's ISMs were splatted (the bounce's shadow test reads them).
+    /// Whether the ISMs hold this frame's VPLs (splatted now, or kept: the bounce's shadow
+    /// test reads them).
     splatted: bool,
+    /// What the visibility maps were last made for: the emitter VPLs are the same every frame
+    /// (sequence offset 0), so the maps are kept while the emitters, the objects and the
+    /// settings are (issue #53).
+    maps: crate::fingerprint::LastRun,
+    /// Whether this frame kept them.
+    pub maps_kept: bool,
     pub stats: EmitterStats,
 }
 
@@ -127,6 +134,8 @@ impl EmitterPass {
             emitters: Emitters::default(),
             key: Vec::new(),
             splatted: false,
+            maps: Default::default(),
+            maps_kept: false,
             stats: EmitterStats::default(),
         }
     }
@@ -173,7 +182,31 @@ impl EmitterPass {
         } else {
             fresh |= self.exact.take().is_some();
         }
+        if fresh {
+            self.maps.invalidate();
+        }
         fresh
+    }
+
+    /// Forgets what the maps were made for: the next frame redoes them
+    /// (`Renderer::redo_kept_passes`).
+    pub fn redo_maps(&mut self) {
+        self.maps.invalidate();
+    }
+
+    /// The passes this frame kept from an earlier one (`Renderer::kept_passes`).
+    pub fn kept(&self, s: &LabSettings) -> Vec<&'static str> {
+        if !self.maps_kept {
+            return Vec::new();
+        }
+        match s.emitters.visibility {
+            EmitterVisibility::Imperfect => vec!["emitters.ism.splat", "emitters.ism.pull_push"],
+            EmitterVisibility::Exact if s.pipeline.uses_knecht_vpls() => {
+                vec!["emitters.ism.splat", "emitters.ism.pull_push", "emitters.shadow"]
+            }
+            EmitterVisibility::Exact => vec!["emitters.shadow"],
+            EmitterVisibility::None => Vec::new(),
+        }
     }
 
     pub fn register(&self, reg: &mut BufferRegistry, s: &LabSettings) {
@@ -215,7 +248,7 @@ impl EmitterPass {
             self.emitters = Emitters::collect_sides(scene, state, s.emitters.two_sided);
             self.key = key;
         }
-        self.splatted = false;
+        self.maps_kept = false;
         self.stats = EmitterStats {
             triangles: self.emitters.triangles.len(),
             power: self.emitters.luminance_power(),
@@ -232,9 +265,22 @@ impl EmitterPass {
         self.stats.vpls = n;
         let radius = radius.max(1e-3);
         let eye_offset = s.ism.eye_offset * radius;
+        let maps_key = crate::fingerprint::Fingerprint::new()
+            .pod(&self.key)
+            .draws(&state.draws)
+            .debug(s)
+            .u64s(&[n as u64, radius.to_bits() as u64])
+            .finish();
+        self.maps_kept = !self.maps.needs_run(maps_key, crate::fingerprint::Space::Light);
+        if !self.maps_kept {
+            self.splatted = false;
+        }
+        let keep = self.maps_kept;
         let visibility = match s.emitters.visibility {
             EmitterVisibility::Imperfect => {
-                self.splat(ctx, &mut Recorder { enc, timer }, gpu_scene, s, n, radius);
+                if !keep {
+                    self.splat(ctx, &mut Recorder { enc, timer }, gpu_scene, s, n, radius);
+                }
                 let l = self.ism.layout_info;
                 GatherVisibility::Ism {
                     atlas: self.ism.shading_view(),
@@ -247,15 +293,17 @@ impl EmitterPass {
             }
             EmitterVisibility::Exact => {
                 // The first bounce's shadow test reads ISMs.
-                if s.pipeline.uses_knecht_vpls() {
+                if s.pipeline.uses_knecht_vpls() && !keep {
                     self.splat(ctx, &mut Recorder { enc, timer }, gpu_scene, s, n, radius);
                 }
                 let exact = self.exact.as_ref()?;
                 let clip = crate::passes::stages::vpl_clip(radius, 0.0);
                 let list = &self.list;
-                timer.scope(ctx, enc, "emitters.shadow", |e, slot| {
-                    exact.run(PassRec { ctx, enc: e, slot }, gpu_scene, state, list, n, VisibilityParams { clip })
-                });
+                if !keep {
+                    timer.scope(ctx, enc, "emitters.shadow", |e, slot| {
+                        exact.run(PassRec { ctx, enc: e, slot }, gpu_scene, state, list, n, VisibilityParams { clip })
+                    });
+                }
                 let l = exact.layout_info;
                 GatherVisibility::Exact {
                     atlas: exact.atlas_view.clone(),

@@ -84,6 +84,9 @@ impl Renderer {
             }
             None => None,
         };
+        if let (Some(pass), Some(_)) = (self.stages.emitters.as_ref(), emitters.as_ref()) {
+            self.kept.extend(pass.kept(&self.settings));
+        }
         let inputs = crate::passes::direct::DirectInputs {
             settings: &ds,
             camera: &self.camera_buffer,
@@ -93,12 +96,10 @@ impl Renderer {
             emitters: emitters.as_ref(),
         };
         // The direct light is kept while the G-buffer, the shadow maps, the lights and the
-        // settings are (issue #53); the emitters' VPLs may be new every frame.
+        // settings are (issue #53). The emitters' VPLs and their maps follow from the objects
+        // (in the G-buffer's key) and the settings: the same VPLs every frame.
         let key =
             Fingerprint::new().u64s(&[gbuffer_key, shadow_key]).pod(&lights.lights).debug(&self.settings).finish();
-        if emitters.is_some() {
-            self.direct.last.invalidate();
-        }
         if !self.direct.last.needs_run(key, Space::Screen) {
             self.kept.push("direct");
         } else {

@@ -487,6 +487,9 @@ impl Renderer {
         if let Some(k) = self.stages.knecht.as_mut() {
             k.redo_light_space();
         }
+        if let Some(e) = self.stages.emitters.as_mut() {
+            e.redo_maps();
+        }
     }
 
     /// Interactive mode: `render_frame` does not wait for the GPU; its timings are those of

@@ -165,7 +165,7 @@ impl KnechtVpls {
     }
 
     /// Forgets what the light views and the VPL set were made for: the next frame redoes them
-    /// (`Renderer::keep_light_space` off).
+    /// (`Renderer::redo_kept_passes`, `Renderer::reuse_unchanged` off).
     pub fn redo_light_space(&mut self) {
         self.light_views.invalidate();
         self.set.invalidate();
@@ -228,13 +228,11 @@ impl KnechtVpls {
         // The light G-buffers and their importance depend on the lights, their views, the
         // objects and the settings; the VPL set on those and its sequence offsets (new each
         // frame with `vpl.new_set_each_frame`). Each is redone only when they changed (issue
-        // #53). The emitters' share is redone every frame (their pass keeps no such record).
+        // #53). The emitters' share follows from the same inputs (their VPLs and bounce use
+        // sequence offset 0).
         let light_key = Fingerprint::new().debug(s).pod(&f.lights).debug(&f.views).draws(&f.state.draws).finish();
         let views_changed = self.light_views.needs_run(light_key, Space::Light);
         self.views_made = views_changed;
-        if emitters.is_some() {
-            self.set.invalidate();
-        }
         let set_key = Fingerprint::new()
             .u64s(&[light_key, halton_first as u64, seed as u64, f.vpl_radius().to_bits() as u64])
             .finish();
