@@ -8,8 +8,8 @@
 // removal quads win wherever they overlap a valid sample, whatever the order). cs_compact
 // keeps the valid samples whose point survived, appends them to the current list at their
 // new pixel and advances their recompute counter (§5.3): when it reaches the period the
-// light is marked for gathering this frame and the counter restarts. CPU twins:
-// cpu::hcb::{validate, advance_counter}.
+// light is marked for gathering this frame and the counter restarts; so is the light of a
+// sample not gathered yet. CPU twins: cpu::hcb::{validate, advance_counter}.
 #import common/camera.wgsl
 #import hcb/common.wgsl
 
@@ -101,8 +101,13 @@ fn cs_compact(@builtin(global_invocation_id) gid: vec3<u32>) {
     let slot = atomicAdd(&counter[0], 1u);
     atomicAdd(&counter[1], 1u);
     var light = s.light;
+    // Due (§5.3), or never lit: a sample whose gather a frame could not fit (the hemisphere
+    // mix bounds its chunks by a late count, issue #53) is gathered as soon as it can be,
+    // its counter's phase kept.
     if (c >= period) {
         c = 0u;
+    }
+    if (c == 0u || light.a < 0.5) {
         light.a = 0.0;
         let r = atomicAdd(&counter[2], 1u);
         if (r < arrayLength(&queue)) {

@@ -181,3 +181,53 @@ fn hemispheres_at_hcb_samples() {
     eprintln!("hemispheres at {n} HCB samples: FLIP {flip:.4}; Gautron's own {records} records: FLIP {own_flip:.4}");
     assert!(flip < 0.08, "{flip}");
 }
+
+/// Hemispheres at the HCB's samples kept by the HCB's sample cache (Nguyen §5; issue #53):
+/// once the cache holds the view, a frame gives a hemisphere only to its new samples and to
+/// the cached ones due for recomputation (§5.3: a quarter at the default period), every
+/// sample ends the frame lit, and the image stays the uncached mix's; while the camera
+/// moves a little the cache still spares most of the hemispheres and every sample is lit.
+#[test]
+fn hemispheres_at_cached_hcb_samples() {
+    use gi_render::settings::pipeline::Temporal;
+    let edit = |s: &mut gi_render::LabSettings| {
+        s.gautron.records_per_round = 256;
+        s.pipeline.temporal = Temporal::HcbSampleCache;
+    };
+    let mut r = paused_renderer(128, Technique::GautronAtHcbSamples, edit);
+    // Every frame redone (a still frame would keep the samples and their light whole).
+    r.reuse_unchanged = false;
+    let mut uncached = paused_renderer(128, Technique::GautronAtHcbSamples, |s| {
+        s.gautron.records_per_round = 256;
+        s.pipeline.temporal = Temporal::None;
+    });
+    uncached.render_frame();
+    // The first frames fill the cache and let the late counts arrive.
+    for _ in 0..8 {
+        r.render_frame();
+    }
+    let stats = r.hcb_stats().expect("HCB stats");
+    let (n, cache) = (stats.list.len() as u32, stats.cache.expect("cache counts"));
+    // The chunk state's count of hemispheres made, over the frame's two sets.
+    let made = r.gautron().unwrap().read_state(&r.ctx).unwrap().made;
+    eprintln!("still: {n} samples, {} new, {} recomputed, {made} hemispheres", cache.new_samples(), cache.recomputed);
+    assert!(n > 512, "{n} samples");
+    assert_eq!(made, cache.new_samples() + cache.recomputed, "hemispheres for the new and the due samples only");
+    assert!(cache.new_samples() < n / 20, "{cache:?}");
+    assert!(cache.recomputed >= n / 5 && cache.recomputed <= n / 3, "a quarter recomputed: {cache:?} of {n}");
+    assert!(stats.list.iter().all(|s| s.light.w == 1.0), "every sample lit");
+    let diff = flip_against(&read(&r, "final.hdr"), &read(&uncached, "final.hdr"));
+    assert!(diff < 0.01, "cached against uncached, still: FLIP {diff}");
+    // Small camera moves: most samples stay cached.
+    for _ in 0..3 {
+        r.camera.position.x += 0.01;
+        r.render_frame();
+        let made = r.gautron().unwrap().read_state(&r.ctx).unwrap().made;
+        let stats = r.hcb_stats().expect("HCB stats");
+        let (n, cache) = (stats.list.len() as u32, stats.cache.expect("cache counts"));
+        let unlit = stats.list.iter().filter(|s| s.light.w != 1.0).count();
+        eprintln!("moving: {made} hemispheres for {n} samples ({cache:?}), {unlit} unlit");
+        assert_eq!(unlit, 0, "every sample lit");
+        assert!(made < n * 3 / 4, "{made} of {n}");
+    }
+}

@@ -138,7 +138,8 @@ fn impossible_mixes_are_refused_with_the_stage_that_needs_what() {
     refused(|s| s.pipeline.temporal = Temporal::RunningAverage, "pipeline.temporal", "UniformBatches");
     refused(|s| s.pipeline.vpl_source = VplSource::None, "pipeline.gather", "needs VPLs");
     // Gautron's mixes: records lit by VPLs are splatted by Ward's weights; hemispheres at HCB
-    // samples are spread by coherence and not cached; the record cache needs records.
+    // samples are spread by coherence and kept by the HCB's sample cache, not the record
+    // cache, which needs records.
     refused(
         |s| s.pipeline.shading_points = ShadingPoints::IrradianceRecords,
         "pipeline.reconstruction",

@@ -196,6 +196,9 @@ impl StepList {
         if names.contains(&"hcb.build") {
             kept.push("hcb.build");
         }
+        if names.contains(&"hcb.select") && names.contains(&"gautron.at_hcb_samples") {
+            kept.extend(["hcb.cache.update", "hcb.cache.splat", "hcb.build"]);
+        }
         if names.contains(&"gautron.at_hcb_samples") {
             kept.extend(["gautron.create", "gautron.hemispheres"]);
         }
@@ -238,6 +241,12 @@ fn indirect_steps(s: &LabSettings) -> Vec<Step> {
         // Gautron et al.: irradiance records, their hemispheres, Ward-weight splatting and the
         // record cache, run together; or the hemispheres at the HCB's samples, splatted by
         // coherence (GI Lab's mix).
+        Gather::Hemispheres if at_hcb_samples && p.temporal == Temporal::HcbSampleCache => vec![
+            step(5, "hcb.select", gautron::select_for_hemispheres),
+            step(6, "gautron.at_hcb_samples", gautron::at_hcb_samples),
+            step(6, "hcb.splat", hcb::splat),
+            step(6, "explain.hcb", explain::hcb),
+        ],
         Gather::Hemispheres if at_hcb_samples => vec![
             step(5, "hcb.build", hcb::build_samples),
             step(6, "gautron.at_hcb_samples", gautron::at_hcb_samples),

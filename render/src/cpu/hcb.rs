@@ -218,10 +218,12 @@ pub fn supplementary_base(mut base: Level, incomplete: &[bool]) -> Level {
 }
 
 /// §5.3's counter: one frame later a sample's counter `c` is c + 1, and when it reaches the
-/// period the light is recomputed and the counter restarts at 0. Returns (counter, recompute).
-pub fn advance_counter(c: u32, period: u32) -> (u32, bool) {
+/// period the light is recomputed and the counter restarts at 0; a sample whose light was
+/// never gathered (`lit` false: a frame of the hemisphere mix could not fit it, issue #53)
+/// is recomputed at once, its counter's phase kept. Returns (counter, recompute).
+pub fn advance_counter(c: u32, period: u32, lit: bool) -> (u32, bool) {
     let next = c + 1;
-    if next >= period.max(1) { (0, true) } else { (next, false) }
+    if next >= period.max(1) { (0, true) } else { (next, !lit) }
 }
 
 /// What §5.1's "updating cache" makes of a cached sample in the current view.
@@ -443,11 +445,14 @@ mod tests {
             for start in 0..period {
                 let (mut c, mut fired) = (start, 0);
                 for _ in 0..period {
-                    let (next, recompute) = advance_counter(c, period);
+                    let (next, recompute) = advance_counter(c, period, true);
                     fired += recompute as u32;
                     c = next;
                 }
                 assert_eq!((fired, c), (1, start), "period {period} start {start}");
+                // A sample never lit is recomputed at once, its phase kept.
+                let (next, _) = advance_counter(start, period, true);
+                assert_eq!(advance_counter(start, period, false), (next, true), "period {period} start {start}");
             }
         }
         // Period 4: each row, column and diagonal holds each phase once.

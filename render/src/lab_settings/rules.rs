@@ -24,8 +24,8 @@ pub fn combination_errors(s: &LabSettings) -> Vec<FieldError> {
             if p.reconstruction != Reconstruction::CoherenceSplatting {
                 err("reconstruction", "hemispheres at HCB samples are spread by coherence splatting: set pipeline.reconstruction = CoherenceSplatting".into());
             }
-            if p.temporal != Temporal::None {
-                err("temporal", "hemispheres at HCB samples are computed every frame (the sample cache re-gathers with VPLs, the record cache keeps irradiance records): set pipeline.temporal = None".into());
+            if !matches!(p.temporal, Temporal::None | Temporal::HcbSampleCache) {
+                err("temporal", "hemispheres at HCB samples are computed every frame (None) or kept with their samples by the HCB sample cache (HcbSampleCache); the record cache keeps Gautron's own records".into());
             }
         } else {
             if p.shading_points != ShadingPoints::IrradianceRecords {

@@ -201,7 +201,8 @@ settings_enum! {
         /// (instant radiosity at the records) instead of their hemispheres (GI Lab's mix).
         GautronVplRecords = "irradiance records lit by VPLs (Gautron + Knecht)",
         /// Gautron's hemispheres computed at the HCB's samples and spread by coherence
-        /// splatting (GI Lab's mix of Nguyen et al. and Gautron et al.).
+        /// splatting (GI Lab's mix of Nguyen et al. and Gautron et al.); the HCB's sample
+        /// cache keeps the samples and their hemispheres' light across frames (Nguyen §5).
         GautronAtHcbSamples = "hemispheres at HCB samples (Nguyen + Gautron)",
     }
     default DirectOnly
@@ -289,7 +290,7 @@ impl Technique {
             Self::GautronAtHcbSamples => PipelineSettings {
                 shading_points: ShadingPoints::HcbSamples,
                 reconstruction: Reconstruction::CoherenceSplatting,
-                temporal: Temporal::None,
+                temporal: Temporal::HcbSampleCache,
                 ..Self::Gautron.choices(base)
             },
         }

@@ -152,9 +152,11 @@ pub fn gautron(r: &mut Renderer, truth: Option<(ImageF32, String)>) -> Result<Ga
         flip_vs_brute_force: flip_of(&image, &brute_image)?,
         flip_vs_truth: flip_of(&image, &truth)?,
     });
-    // A hemisphere at each HCB sample: one frame.
+    // A hemisphere at each HCB sample: one frame, without the sample cache (which would light
+    // only a quarter of the samples in the second frame; the row compares shading points).
     let mut s = base.clone();
     Technique::GautronAtHcbSamples.apply(&mut s);
+    s.pipeline.temporal = gi_render::settings::pipeline::Temporal::None;
     set(r, s)?;
     r.render_frame();
     let t = r.render_frame();

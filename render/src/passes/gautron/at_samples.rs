@@ -28,6 +28,7 @@ pub const AT_SAMPLES_BINDINGS: Bindings = Bindings {
         binding(6, "counter", Kind::Storage { read_only: true }),
         binding(7, "list", Kind::Storage { read_only: false }),
         binding(8, "args", Kind::Storage { read_only: false }),
+        binding(9, "queue", Kind::Storage { read_only: true }),
     ],
 };
 
@@ -35,14 +36,39 @@ pub const AT_SAMPLES_BINDINGS: Bindings = Bindings {
 pub const HCB_SAMPLE_BYTES: u64 = std::mem::size_of::<crate::passes::hcb::GpuHcbSample>() as u64;
 /// Bytes between the chunks' uniforms (dynamic offsets).
 const CHUNK_STRIDE: u64 = 256;
+/// The dispatches' sample sets (`round.y` in the shader): every sample; the cached ones due
+/// for recomputation and the new ones.
+pub const MODES: u32 = 2;
+
+/// Which of the HCB's samples a frame's hemispheres light (as `hcb::GatherSet`).
+#[derive(Clone, Copy, Debug)]
+pub enum SampleSet<'a> {
+    /// Every sample of the list (no cache).
+    All,
+    /// With the HCB's sample cache: the cached samples due for recomputation (Nguyen §5.3;
+    /// their list slots in the queue), then the new samples after the cached ones (§5.2).
+    DueAndNew(&'a wgpu::Buffer),
+}
+
+impl SampleSet<'_> {
+    pub fn mode(&self) -> u32 {
+        match self {
+            Self::All => 0,
+            Self::DueAndNew(_) => 1,
+        }
+    }
+}
 
 pub struct AtSamplesPass {
     layout: wgpu::BindGroupLayout,
     begin: wgpu::ComputePipeline,
     store: wgpu::ComputePipeline,
-    /// The chunks' indices, one per [`CHUNK_STRIDE`].
+    cached_args: wgpu::ComputePipeline,
+    /// The chunks' (index, mode), one per [`CHUNK_STRIDE`]: mode m's chunk k at m·capacity + k.
     chunks: wgpu::Buffer,
     capacity: u32,
+    /// Bound as the queue when the set has none.
+    no_queue: wgpu::Buffer,
 }
 
 impl AtSamplesPass {
@@ -54,37 +80,38 @@ impl AtSamplesPass {
             crate::passes::compute_pipeline(device, &format!("gautron.{entry}"), &module, entry, &[&layout])
         };
         let (begin, store) = (pipeline("cs_samples_begin"), pipeline("cs_samples_store"));
-        let chunks = crate::passes::uniform_buffer(device, "gautron.at_samples.chunks", CHUNK_STRIDE);
-        Self { layout, begin, store, chunks, capacity: 1 }
+        let cached_args = pipeline("cs_cached_args");
+        let chunks = crate::passes::uniform_buffer(device, "gautron.at_samples.chunks", CHUNK_STRIDE * MODES as u64);
+        let no_queue = crate::passes::buffer(device, "gautron.at_samples.no_queue", 16, wgpu::BufferUsages::STORAGE);
+        Self { layout, begin, store, cached_args, chunks, capacity: 1, no_queue }
     }
 
     /// Makes room for `chunks` chunk indices.
     pub fn ensure_chunks(&mut self, ctx: &GpuContext, chunks: u32) {
         if chunks > self.capacity || self.capacity == 1 {
             self.capacity = chunks.max(self.capacity).next_power_of_two();
-            self.chunks = crate::passes::uniform_buffer(
-                &ctx.device,
-                "gautron.at_samples.chunks",
-                CHUNK_STRIDE * self.capacity as u64,
-            );
-            let words: Vec<[u32; 4]> = (0..self.capacity).map(|k| [k, 0, 0, 0]).collect();
-            ctx.queue.write_buffer(
-                &self.chunks,
-                0,
-                &crate::passes::strided_bytes(CHUNK_STRIDE, self.capacity as usize, &words),
-            );
+            let entries = (self.capacity * MODES) as usize;
+            self.chunks =
+                crate::passes::uniform_buffer(&ctx.device, "gautron.at_samples.chunks", CHUNK_STRIDE * entries as u64);
+            let words: Vec<[u32; 4]> = (0..MODES).flat_map(|m| (0..self.capacity).map(move |k| [k, m, 0, 0])).collect();
+            ctx.queue.write_buffer(&self.chunks, 0, &crate::passes::strided_bytes(CHUNK_STRIDE, entries, &words));
         }
     }
 
-    /// The bind group over Gautron's (params, state, slots, records), the raster's draws
-    /// and the HCB's (counter, list, args).
+    /// The bind group over Gautron's (params, state, slots, records), the raster's draws,
+    /// the HCB's (counter, list, args) and the set's queue.
     pub fn group(
         &self,
         ctx: &GpuContext,
         (params, state, slots, records): (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
         raster_args: &wgpu::BufferBinding<'_>,
         (counter, list, args): (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
+        set: SampleSet<'_>,
     ) -> wgpu::BindGroup {
+        let queue = match set {
+            SampleSet::DueAndNew(q) => q,
+            SampleSet::All => &self.no_queue,
+        };
         AT_SAMPLES_BINDINGS.group(
             &ctx.device,
             &self.layout,
@@ -98,21 +125,36 @@ impl AtSamplesPass {
                 counter.as_entire_binding(),
                 list.as_entire_binding(),
                 args.as_entire_binding(),
+                queue.as_entire_binding(),
             ],
         )
     }
 
-    /// Chunk `k`'s samples into the slots' records (and the raster's instance counts).
-    pub fn begin(&self, pass: &mut wgpu::ComputePass<'_>, group: &wgpu::BindGroup, k: u32) {
+    /// The dynamic offset of chunk `k` of `mode`'s dispatch.
+    fn offset(&self, mode: u32, k: u32) -> u32 {
+        ((mode * self.capacity + k) as u64 * CHUNK_STRIDE) as u32
+    }
+
+    /// Chunk `k`'s samples of `mode`'s set into the slots' records (and the raster's
+    /// instance counts).
+    pub fn begin(&self, pass: &mut wgpu::ComputePass<'_>, group: &wgpu::BindGroup, (mode, k): (u32, u32)) {
         pass.set_pipeline(&self.begin);
-        pass.set_group(0, group, &[(k as u64 * CHUNK_STRIDE) as u32]);
+        pass.set_group(0, group, &[self.offset(mode, k)]);
+        pass.dispatch_workgroups(1, 1, 1);
+    }
+
+    /// The HCB splat's indirect arguments over the cached samples (between the cache's
+    /// update and the build).
+    pub fn cached_args(&self, pass: &mut wgpu::ComputePass<'_>, group: &wgpu::BindGroup) {
+        pass.set_pipeline(&self.cached_args);
+        pass.set_group(0, group, &[0]);
         pass.dispatch_workgroups(1, 1, 1);
     }
 
     /// Chunk `k`'s records' irradiance into its samples' light.
-    pub fn store(&self, pass: &mut wgpu::ComputePass<'_>, group: &wgpu::BindGroup, k: u32, slots: u32) {
+    pub fn store(&self, pass: &mut wgpu::ComputePass<'_>, group: &wgpu::BindGroup, (mode, k): (u32, u32), slots: u32) {
         pass.set_pipeline(&self.store);
-        pass.set_group(0, group, &[(k as u64 * CHUNK_STRIDE) as u32]);
+        pass.set_group(0, group, &[self.offset(mode, k)]);
         pass.dispatch_workgroups(slots.div_ceil(64), 1, 1);
     }
 }

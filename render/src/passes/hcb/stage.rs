@@ -148,20 +148,29 @@ impl HcbStage {
         timer: &mut GpuTimer,
         light: (&VplSet, &Visibility),
     ) {
-        let ctx = f.ctx;
-        let hf = Self::frame(f);
-        let g = f.gbuffer;
-        if let Some(c) = self.cache.as_mut() {
-            c.swap(&mut self.build);
-            if self.cached_with.as_ref() != Some(&f.settings.hcb) {
-                c.reset(enc);
-                self.cached_with = Some(f.settings.hcb.clone());
-            }
+        if self.update_cache(f, enc, timer)
+            && let Some(queue) = self.recompute_queue()
+        {
+            self.run_gather(f, enc, timer, "hcb.cache.recompute", light, GatherSet::Recompute(queue));
         }
-        let Some(c) = &self.cache else {
-            let build = &self.build;
-            timer.pass(ctx, enc, "hcb.build", |r| build.run(r, &g.position, &g.normal, hf, None));
-            return;
+        self.build_after_cache(f, enc, timer);
+    }
+
+    /// §5.1's first half (Fig. 5): last frame's samples become the cache (emptied when the
+    /// HCB's settings changed), validated in this view and appended to the emptied list.
+    /// The caller lights the cached samples due for a new gather (§5.3,
+    /// [`Self::recompute_queue`]) before [`Self::build_after_cache`]. False without the cache.
+    pub fn update_cache(&mut self, f: &FrameInputs, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) -> bool {
+        let Some(c) = self.cache.as_mut() else {
+            return false;
+        };
+        c.swap(&mut self.build);
+        if self.cached_with.as_ref() != Some(&f.settings.hcb) {
+            c.reset(enc);
+            self.cached_with = Some(f.settings.hcb.clone());
+        }
+        let Some(c) = self.cache.as_ref() else {
+            return false;
         };
         let s = &f.settings.hcb;
         let cf = CacheFrame {
@@ -170,12 +179,34 @@ impl HcbStage {
             quad_px: s.surplus_quad_px,
             period: s.recompute_period,
         };
+        let (ctx, g, camera, build) = (f.ctx, f.gbuffer, f.camera_buffer, &self.build);
+        timer.scope(ctx, enc, "hcb.cache.update", |e, slot| {
+            c.update(PassRec { ctx, enc: e, slot }, camera, (&g.position, &g.normal), build, cf)
+        });
+        true
+    }
+
+    /// The list slots of the cached samples due for a new gather this frame (§5.3; their
+    /// count is word 2 of the sample counter); None without the cache.
+    pub fn recompute_queue(&self) -> Option<&wgpu::Buffer> {
+        self.cache.as_ref().map(|c| &c.queue)
+    }
+
+    /// §5.1's second half and §5.2: the cached samples (their due ones lit again) splatted,
+    /// and the build adding samples where their weights stay incomplete; without the cache,
+    /// the build of every sample.
+    pub fn build_after_cache(&self, f: &FrameInputs, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) {
+        let ctx = f.ctx;
+        let hf = Self::frame(f);
+        let g = f.gbuffer;
+        let Some(c) = &self.cache else {
+            let build = &self.build;
+            timer.pass(ctx, enc, "hcb.build", |r| build.run(r, &g.position, &g.normal, hf, None));
+            return;
+        };
+        let s = &f.settings.hcb;
         let (camera, g3) = (f.camera_buffer, (&g.position, &g.normal, &g.albedo, &g.material));
         let samples = (&self.build.list, &self.build.counter);
-        timer.scope(ctx, enc, "hcb.cache.update", |e, slot| {
-            c.update(PassRec { ctx, enc: e, slot }, camera, (&g.position, &g.normal), &self.build, cf)
-        });
-        self.run_gather(f, enc, timer, "hcb.cache.recompute", light, GatherSet::Recompute(&c.queue));
         let (splat, args) = (&self.splat, &self.gather.args);
         timer.scope(ctx, enc, "hcb.cache.splat", |e, slot| {
             splat.splat(PassRec { ctx, enc: e, slot }, camera, g3, (samples, (args, 0)), (false, true), (hf, s.splat))
