@@ -397,7 +397,7 @@ fn confidence_and_merge_case(demodulated: bool) {
         let light = if demodulated {
             half3(c * di / std::f32::consts::PI * e + Vec3::splat(rng.range(0.0, 0.5)))
         } else {
-            Vec3::new(rng.range(0.1, 2.0), rng.range(0.1, 2.0), rng.range(0.1, 2.0))
+            half3(Vec3::new(rng.range(0.1, 2.0), rng.range(0.1, 2.0), rng.range(0.1, 2.0)))
         };
         Px { depth, normal, light, albedo: [c.x, c.y, c.z, di], irradiance: e }
     };
@@ -406,7 +406,7 @@ fn confidence_and_merge_case(demodulated: bool) {
             .map(|_| {
                 (rng.next_f32() > 0.1).then(|| {
                     let n = (Vec3::Z + 0.4 * rng.unit()).normalize();
-                    let depth = rng.range(1.0, 5.0);
+                    let depth = f16(rng.range(1.0, 5.0));
                     lit(rng, depth, half3(n))
                 })
             })
@@ -425,15 +425,15 @@ fn confidence_and_merge_case(demodulated: bool) {
             Some(match p {
                 Some(p) if keep < 0.8 => {
                     let n = (p.normal + rng.range(0.0, 0.3) * rng.unit()).normalize();
-                    let depth = p.depth + rng.range(-0.2, 0.2);
+                    let depth = f16(p.depth + rng.range(-0.2, 0.2));
                     let mut q = lit(&mut rng, depth, half3(n));
                     if !demodulated {
-                        q.light = p.light * rng.range(0.7, 1.3);
+                        q.light = half3(p.light * rng.range(0.7, 1.3));
                     }
                     q
                 }
                 _ => {
-                    let depth = rng.range(1.0, 5.0);
+                    let depth = f16(rng.range(1.0, 5.0));
                     lit(&mut rng, depth, Vec3::Z)
                 }
             })
@@ -536,8 +536,12 @@ fn confidence_and_merge_case(demodulated: bool) {
             assert!((g - c).abs() <= 2e-5, "confidence at ({x}, {y}): GPU {g}, CPU {c}");
             let hp = hist.at(x as u32, y as u32);
             let h3 = Vec3::new(hp[0], hp[1], hp[2]);
+            // The history is stored as half floats (issue #53): one half step of the merged
+            // light more (the inputs are exact halves, so the depth and frame 0's light read
+            // back unrounded).
+            let store_step = gi_render::buffers::half_step(out.max_element());
             assert!(
-                (h3 - out).abs().max_element() <= 1e-4 * out.max_element().max(1.0) + split_step,
+                (h3 - out).abs().max_element() <= 1e-4 * out.max_element().max(1.0) + split_step + store_step,
                 "merge at ({x}, {y}): GPU {h3}, CPU {out}"
             );
             let depth = f1[i].as_ref().map_or(0.0, |p| p.depth);

@@ -456,7 +456,9 @@ pub struct ConfidenceInput {
     /// Movement buffer value (previous − current position) in pixels.
     pub motion_px: Vec2,
     pub size: Vec2,
-    /// View depth and the previous one (scene units) and z_far − z_near of the camera.
+    /// View depth and the previous one (scene units) and z_far − z_near of the camera. The GPU
+    /// compares both as half floats, the history's format (`temporal/confidence.wgsl`, issue
+    /// #53): pass half-exact depths to compare with it.
     pub depth: f32,
     pub depth_prev: f32,
     pub depth_range: f32,

@@ -40,7 +40,8 @@ override DEMODULATE: u32 = 2u;
 @group(0) @binding(5) var prev_normal: texture_2d<f32>;
 @group(0) @binding(6) var history_prev: texture_2d<f32>;
 @group(0) @binding(7) var confidence_out: texture_storage_2d<r32float, write>;
-@group(0) @binding(8) var history_out: texture_storage_2d<rgba32float, write>;
+// Half floats (passes::knecht::temporal::HISTORY_FORMAT).
+@group(0) @binding(8) var history_out: texture_storage_2d<rgba16float, write>;
 // This frame's normals, next frame's prev_normal (ping-pong: no copy, issue #38).
 @group(0) @binding(9) var normal_out: texture_storage_2d<rgba16float, write>;
 // The demodulated merge's inputs and split history (common/split_light.wgsl).
@@ -69,7 +70,11 @@ fn cs_confidence(@builtin(global_invocation_id) gid: vec3<u32>) {
     let p = vec2<i32>(gid.xy);
     let i_new = textureLoad(current, p, 0).rgb;
     let nrm = textureLoad(g_normal, p, 0);
-    let d = textureLoad(g_position, p, 0).w;
+    // The history keeps the depth as a half float (issue #53): this frame's depth is compared
+    // as the same half, so that a still pixel compares equal (Eq. 3.2's w_pos = 300 would turn
+    // a half's rounding at 5 m into a confidence drop of several percent), and stored as that
+    // half, exact, whatever rounding the device's store uses.
+    let d = quantizeToF16(textureLoad(g_position, p, 0).w);
     var c = 0.0;
     var merged = i_new;
     let demodulate = select(params.state.y, DEMODULATE, DEMODULATE < 2u) == 1u;

@@ -15,14 +15,20 @@ use gi_render::passes::hcb::explain::{E_DISTANCE, E_NORMAL, E_POSE, LEVEL, WEIGH
 use gi_render::settings::pipeline::{Technique, Temporal};
 use glam::Vec3;
 
-/// Every buffer the sums are checked against is `Rgba32Float` (`hcb.weight_sum`,
-/// `hcb.irradiance`, `hcb.indirect`, `temporal.history`), and the replay computes each term
+/// Every buffer the sums are checked against but one is `Rgba32Float` (`hcb.weight_sum`,
+/// `hcb.irradiance`, `hcb.indirect`; `temporal.history` is half floats, [`HISTORY_TOLERANCE`]),
+/// and the replay computes each term
 /// with the splat's own functions (`hcb/common.wgsl`) and sums them in the splat's order
 /// (increasing sample index), so the sums differ only by f32 rounding: the two shader modules'
 /// contraction choices and the shares' divisions (Σ f·w·E / Σw against f·(Σ w·E / Σw)). For n
 /// non-negative terms that is at most about n·2⁻²⁴ relative; a pixel's quads hold at most a
 /// few dozen coherent samples here, so 1e-5 (n up to ~160) bounds it with room.
 const SUM_TOLERANCE: f32 = 1e-5;
+
+/// `temporal.history` is stored as half floats (issue #53): a sum checked against it differs by
+/// the store's rounding too, up to one unit in the last place, 2⁻¹⁰ relative, where the store
+/// truncates (lavapipe) — on top of [`SUM_TOLERANCE`].
+const HISTORY_TOLERANCE: f32 = SUM_TOLERANCE + 9.8e-4;
 
 /// Pixels of the default box at 64²: the floor, the back wall, the red wall, the tall block.
 const PIXELS: [(u32, u32); 4] = [(32, 56), (32, 20), (6, 30), (24, 36)];
@@ -44,8 +50,9 @@ fn explain(r: &mut Renderer, pixel: (u32, u32), frames: u32) -> Explanation {
 /// to f32 rounding, and the pixel is lit by at least one coherent sample.
 fn assert_sums(e: &Explanation) {
     for c in std::iter::once(e.total_check()).chain(e.checks.iter().cloned()) {
+        let tolerance = if c.buffer.starts_with("temporal.history") { HISTORY_TOLERANCE } else { SUM_TOLERANCE };
         assert!(
-            c.relative_error() <= SUM_TOLERANCE,
+            c.relative_error() <= tolerance,
             "pixel {:?}: {} against {} ({})\n{}",
             e.pixel,
             c.what,

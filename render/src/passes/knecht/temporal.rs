@@ -27,6 +27,11 @@ use crate::passes::gbuffer::{GBufferViews, NORMAL_FORMAT};
 pub use crate::settings::knecht::{MergeOrder, TemporalSettings};
 use crate::timing::PassRec;
 
+/// Format of `temporal.history` (the merged light in rgb, the linear depth in a): half floats,
+/// as the light passes store light (issue #53: half the traffic of `Rgba32Float`; the depth's
+/// relative step of 2⁻¹¹ is far below what Eq. 3.2's position term reacts to).
+pub const HISTORY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
 /// Format of the demodulated merge's split history: E and S as three half-float pairs.
 pub const SPLIT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
 
@@ -46,7 +51,7 @@ pub const CONFIDENCE_BINDINGS: Bindings = Bindings {
         binding(5, "prev_normal", Kind::Texture { filterable: false }),
         binding(6, "history_prev", Kind::Texture { filterable: false }),
         binding(7, "confidence_out", Kind::StorageTexture(wgpu::TextureFormat::R32Float)),
-        binding(8, "history_out", Kind::StorageTexture(wgpu::TextureFormat::Rgba32Float)),
+        binding(8, "history_out", Kind::StorageTexture(HISTORY_FORMAT)),
         binding(9, "normal_out", Kind::StorageTexture(NORMAL_FORMAT)),
         binding(10, "g_albedo", Kind::Texture { filterable: false }),
         binding(11, "irradiance", Kind::Texture { filterable: false }),
@@ -148,10 +153,7 @@ impl TemporalPass {
         let t = |label, f| crate::passes::create_target(device, label, w, h, f, st);
         (
             t("temporal.confidence", wgpu::TextureFormat::R32Float),
-            [
-                t("temporal.history.0", wgpu::TextureFormat::Rgba32Float),
-                t("temporal.history.1", wgpu::TextureFormat::Rgba32Float),
-            ],
+            [t("temporal.history.0", HISTORY_FORMAT), t("temporal.history.1", HISTORY_FORMAT)],
             [t("temporal.prev_normal.0", NORMAL_FORMAT), t("temporal.prev_normal.1", NORMAL_FORMAT)],
         )
     }
