@@ -84,6 +84,9 @@ done
 preset_row gautron-ic-splatting+blend presets/gautron-ic-splatting.ron --set gautron.splat=Blend
 preset_row nguyen-hcb+blend presets/nguyen-hcb.ron --set hcb.splat=Blend
 preset_row nguyen-hcb-cached+blend presets/nguyen-hcb-cached.ron --set hcb.splat=Blend
+# The Gautron mix without the HCB's sample cache (issue #53: the preset caches its samples'
+# hemispheres; every sample a hemisphere every frame, as before).
+preset_row gautron-at-hcb-samples+no-cache presets/gautron-at-hcb-samples.ron --set pipeline.temporal=None
 # The default preset with its animation paused (issue #53: the still view a lighting artist
 # tunes keeps its shadow maps, light G-buffer, G-buffer and direct light), and the same
 # redoing every pass every frame (before #53), so that the saving is read in one run.
