@@ -145,7 +145,9 @@ fn a_new_vpl_set_each_frame_is_made_every_frame_while_the_maps_are_kept() {
 /// and the order in which the splat sums the samples lit at it, varies between builds (about
 /// 10⁻⁵ relative). There a kept result is the second frame's, so it may differ from the
 /// third by at most the redone frames' step from the second to the third and one more for
-/// the variation between the two runs.
+/// the variation between the two runs, and by one half-float step of `final.hdr` where the
+/// sums' order flips its rounding (the sample cache's still view may keep its order from
+/// frame to frame, so that the frames' own step is 0).
 #[test]
 fn every_shipped_preset_renders_the_same_image_with_the_passes_kept() {
     for path in shipped_presets() {
@@ -184,10 +186,28 @@ fn every_shipped_preset_renders_the_same_image_with_the_passes_kept() {
         if !kept.contains(&"hcb.build") {
             assert!(bits(a) == bits(b), "{name}: keeping {kept:?} changed the image");
         } else {
+            // The HCB's sample list is appended to atomically, so its order, and the order of
+            // the splat's f32 sums, varies from frame to frame and from run to run: the kept
+            // frame and the redone one may differ by the redone frames' own steps, and by one
+            // step of `final.hdr`'s half floats wherever a sum's last f32 bits flip its
+            // rounding (a still view's cached samples can keep their order for a few frames,
+            // so the frames' own steps may be 0 while the two runs' orders differ).
             let bound = steps.iter().sum::<f32>() + steps.iter().copied().fold(0.0, f32::max);
+            let excess = a
+                .data
+                .iter()
+                .flatten()
+                .zip(b.data.iter().flatten())
+                .map(|(x, y)| (x - y).abs() - gi_render::buffers::half_step(x.abs().max(y.abs())))
+                .fold(0.0f32, f32::max);
             let d = max_diff(a, b);
-            println!("{name}: redone frames step by {steps:?}; kept against redone {d}, bound {bound}");
-            assert!(d <= bound, "{name}: keeping {kept:?} changed the image by {d}, beyond the frames' own {bound}");
+            println!(
+                "{name}: redone frames step by {steps:?}; kept against redone {d} ({excess} beyond a half step), bound {bound}"
+            );
+            assert!(
+                excess <= bound,
+                "{name}: keeping {kept:?} changed the image by {d}, {excess} beyond a half step and the frames' own {bound}"
+            );
         }
     }
 }
