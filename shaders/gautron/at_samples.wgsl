@@ -15,6 +15,7 @@
 // again at the end, so one set after the build does.)
 #import gautron/common.wgsl
 #import hcb/common.wgsl
+#import common/fullscreen.wgsl
 
 const REFRESH: u32 = 0x80000000u;
 
@@ -38,6 +39,9 @@ struct RoundParams {
 @group(0) @binding(8) var<storage, read_write> args: array<u32>;
 // the list slots of the cached samples due for recomputation (counter word 2 of them)
 @group(0) @binding(9) var<storage, read> queue: array<u32>;
+// the chunk's round arguments (passes::gautron::hemisphere::RoundArgs): the tile clears' draw,
+// the direct light's dispatch over the rows of tiles in use, the reduction's dispatch
+@group(0) @binding(10) var<storage, read_write> round_args: array<u32>;
 
 fn sample_count() -> u32 {
     return min(counter[0], arrayLength(&list));
@@ -92,6 +96,23 @@ fn cs_samples_begin(@builtin(local_invocation_index) li: u32) {
         slots[s] = s | REFRESH;
     }
     if (li == 0u) {
+        // Only this chunk's tiles are cleared, lit and reduced (issue #53): a chunk past the
+        // set's size costs almost nothing.
+        let n_px = u32(params.hemisphere.x);
+        let per_row = max(u32(params.hemisphere.y), 1u);
+        let rows = (c.y + per_row - 1u) / per_row;
+        round_args[0] = 6u;
+        round_args[1] = c.y;
+        round_args[2] = 0u;
+        round_args[3] = 0u;
+        round_args[4] = (per_row * n_px + TILE - 1u) / TILE;
+        round_args[5] = (rows * n_px + TILE - 1u) / TILE;
+        round_args[6] = 1u;
+        round_args[7] = 0u;
+        round_args[8] = c.y;
+        round_args[9] = 1u;
+        round_args[10] = 1u;
+        round_args[11] = 0u;
         state.count = c.y;
         state.new_base = 0u;
         state.new_count = 0u;

@@ -49,6 +49,32 @@ fn vs_hemisphere(v: VsIn, @builtin(instance_index) instance: u32) -> HemiOut {
     return o;
 }
 
+// The tiles of a round's records cleared by one quad each (instance s: slot s's tile, at the
+// far depth), drawn first in a pass that loads the atlas, instead of clearing the whole atlas:
+// a round of few records, or none (the HCB mix's chunks past its sample count), then costs
+// what its tiles cost (issue #53). The same values as the G-buffer's clear: zero, depth 1.
+struct TileClearOut {
+    @builtin(position) clip: vec4<f32>,
+}
+
+@vertex
+fn vs_tile_clear(@builtin(vertex_index) v: u32, @builtin(instance_index) s: u32) -> TileClearOut {
+    var corners = array<vec2<f32>, 6>(
+        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, -1.0), vec2<f32>(1.0, 1.0),
+        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, 1.0), vec2<f32>(-1.0, 1.0),
+    );
+    let tile = hemispheres[s].tile;
+    var o: TileClearOut;
+    o.clip = vec4<f32>(corners[v % 6u] * tile.zw + tile.xy, 1.0, 1.0);
+    return o;
+}
+
+@fragment
+fn fs_tile_clear() -> FsOut {
+    let zero = vec4<f32>(0.0);
+    return FsOut(zero, zero, zero, zero, zero, zero);
+}
+
 // HemiOut without the clip distances (a vertex output only).
 struct HemiIn {
     @builtin(position) clip: vec4<f32>,

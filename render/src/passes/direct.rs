@@ -377,6 +377,7 @@ impl super::stages::DirectAtlas for DirectPass {
         size: (u32, u32),
         params: &wgpu::Buffer,
         viewers: &wgpu::Buffer,
+        indirect: Option<(&wgpu::Buffer, u64)>,
     ) {
         let PassRec { ctx, enc: encoder, slot } = r;
         let Some(group0) = &self.group0 else { return };
@@ -401,6 +402,9 @@ impl super::stages::DirectAtlas for DirectPass {
         pass.set_group(0, group0, &[]);
         pass.set_group(1, &group1, &[]);
         pass.set_group(2, &group2, &[]);
-        pass.dispatch_workgroups(size.0.div_ceil(super::TILE), size.1.div_ceil(super::TILE), 1);
+        match indirect {
+            Some((args, offset)) => pass.dispatch_workgroups_indirect(args, offset),
+            None => pass.dispatch_workgroups(size.0.div_ceil(super::TILE), size.1.div_ceil(super::TILE), 1),
+        }
     }
 }

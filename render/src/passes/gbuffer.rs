@@ -287,16 +287,36 @@ impl GBuffer {
         label: &str,
         timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) -> wgpu::RenderPass<'e> {
+        self.begin_pass(encoder, label, timestamp_writes, true)
+    }
+
+    /// A render pass over the targets as they are (nothing cleared): the caller clears what
+    /// it draws into (Gautron's atlas clears only its round's tiles, issue #53).
+    pub(crate) fn begin_load_pass<'e>(
+        &self,
+        encoder: &'e mut wgpu::CommandEncoder,
+        label: &str,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) -> wgpu::RenderPass<'e> {
+        self.begin_pass(encoder, label, timestamp_writes, false)
+    }
+
+    fn begin_pass<'e>(
+        &self,
+        encoder: &'e mut wgpu::CommandEncoder,
+        label: &str,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+        clear: bool,
+    ) -> wgpu::RenderPass<'e> {
         let v = &self.views;
+        let colour_load = if clear { wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT) } else { wgpu::LoadOp::Load };
+        let depth_load = if clear { wgpu::LoadOp::Clear(1.0) } else { wgpu::LoadOp::Load };
         let clear = |view| {
             Some(wgpu::RenderPassColorAttachment {
                 view,
                 depth_slice: None,
                 resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
-                },
+                ops: wgpu::Operations { load: colour_load, store: wgpu::StoreOp::Store },
             })
         };
         encoder.begin_counted_render_pass(&wgpu::RenderPassDescriptor {
@@ -311,7 +331,7 @@ impl GBuffer {
             ],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &v.depth,
-                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                depth_ops: Some(wgpu::Operations { load: depth_load, store: wgpu::StoreOp::Store }),
                 stencil_ops: None,
             }),
             timestamp_writes,

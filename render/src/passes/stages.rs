@@ -70,7 +70,10 @@ pub struct FrameInputs<'a> {
 pub trait DirectAtlas {
     /// The direct light of this frame at an atlas of G-buffer tiles, tile k
     /// seen from `viewers[k]` (xyz; w = 0: an empty tile), into `out` (the direct light's
-    /// radiance format, the atlas's `size`).
+    /// radiance format, the atlas's `size`). `indirect`: the dispatch's workgroups from a
+    /// buffer (x, y, 1 at the offset; the rows of the tiles in use, issue #53) instead of the
+    /// whole atlas.
+    #[allow(clippy::too_many_arguments)]
     fn shade_atlas(
         &self,
         r: PassRec<'_, '_>,
@@ -79,6 +82,7 @@ pub trait DirectAtlas {
         size: (u32, u32),
         params: &wgpu::Buffer,
         viewers: &wgpu::Buffer,
+        indirect: Option<(&wgpu::Buffer, u64)>,
     );
 }
 

@@ -29,6 +29,7 @@ pub const AT_SAMPLES_BINDINGS: Bindings = Bindings {
         binding(7, "list", Kind::Storage { read_only: false }),
         binding(8, "args", Kind::Storage { read_only: false }),
         binding(9, "queue", Kind::Storage { read_only: true }),
+        binding(10, "round_args", Kind::Storage { read_only: false }),
     ],
 };
 
@@ -69,6 +70,8 @@ pub struct AtSamplesPass {
     capacity: u32,
     /// Bound as the queue when the set has none.
     no_queue: wgpu::Buffer,
+    /// The chunk's round arguments (`hemisphere::RoundArgs`), written by `begin`.
+    pub round_args: wgpu::Buffer,
 }
 
 impl AtSamplesPass {
@@ -83,7 +86,13 @@ impl AtSamplesPass {
         let cached_args = pipeline("cs_cached_args");
         let chunks = crate::passes::uniform_buffer(device, "gautron.at_samples.chunks", CHUNK_STRIDE * MODES as u64);
         let no_queue = crate::passes::buffer(device, "gautron.at_samples.no_queue", 16, wgpu::BufferUsages::STORAGE);
-        Self { layout, begin, store, cached_args, chunks, capacity: 1, no_queue }
+        let round_args = crate::passes::buffer(
+            device,
+            "gautron.at_samples.round_args",
+            super::hemisphere::ROUND_ARGS_BYTES,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+        );
+        Self { layout, begin, store, cached_args, chunks, capacity: 1, no_queue, round_args }
     }
 
     /// Makes room for `chunks` chunk indices.
@@ -126,6 +135,7 @@ impl AtSamplesPass {
                 list.as_entire_binding(),
                 args.as_entire_binding(),
                 queue.as_entire_binding(),
+                self.round_args.as_entire_binding(),
             ],
         )
     }

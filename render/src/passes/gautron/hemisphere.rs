@@ -53,6 +53,23 @@ pub const REDUCE_BINDINGS: Bindings = Bindings {
     ],
 };
 
+/// Bytes of a round's indirect arguments ([`RoundArgs`]).
+pub const ROUND_ARGS_BYTES: u64 = 48;
+
+/// A round's indirect arguments, written by the GPU from the round's record count (issue #53;
+/// `gautron/at_samples.wgsl`): the tile clears' draw (6 vertices, an instance per record) at
+/// byte 0, the direct light's dispatch over the tiles' rows at 16, the reduction's (a
+/// workgroup per record) at 32. A round of few records, or none, then costs what its tiles
+/// cost instead of the whole atlas.
+#[derive(Clone, Copy)]
+pub struct RoundArgs<'a>(pub &'a wgpu::Buffer);
+
+impl RoundArgs<'_> {
+    pub const CLEAR: u64 = 0;
+    pub const SHADE: u64 = 16;
+    pub const REDUCE: u64 = 32;
+}
+
 /// The atlas, its pipelines and the texel table of one hemisphere resolution.
 pub struct HemispherePass {
     single_sided: wgpu::RenderPipeline,
@@ -60,6 +77,8 @@ pub struct HemispherePass {
     /// The same for materials without textures (issue #53).
     plain_single_sided: wgpu::RenderPipeline,
     plain_double_sided: wgpu::RenderPipeline,
+    /// The round's tiles cleared by quads (with [`RoundArgs`]).
+    tile_clear: wgpu::RenderPipeline,
     raster_layout: wgpu::BindGroupLayout,
     reduce: wgpu::ComputePipeline,
     reduce_layout: wgpu::BindGroupLayout,
@@ -89,6 +108,7 @@ impl HemispherePass {
             [Some(wgpu::Face::Back), None].map(|cull| raster_pipeline(device, &layout, &module, (cull, true)));
         let [plain_single_sided, plain_double_sided] =
             [Some(wgpu::Face::Back), None].map(|cull| raster_pipeline(device, &layout, &module, (cull, false)));
+        let tile_clear = tile_clear_pipeline(device, &raster_layout, &module);
         let reduce_layout = REDUCE_BINDINGS.layout(device);
         let reduce_module = crate::shaders::create_module(device, "gautron/reduce.wgsl");
         let reduce =
@@ -115,6 +135,7 @@ impl HemispherePass {
             double_sided,
             plain_single_sided,
             plain_double_sided,
+            tile_clear,
             raster_layout,
             reduce,
             reduce_layout,
@@ -225,7 +246,7 @@ impl HemispherePass {
         state: &SceneState,
         (camera, cameras): (&wgpu::Buffer, &wgpu::Buffer),
         params: &wgpu::Buffer,
-        args: &wgpu::Buffer,
+        (args, round): (&wgpu::Buffer, Option<RoundArgs<'_>>),
     ) {
         let PassRec { ctx, enc, slot } = r;
         let group = HEMISPHERE_CAMERAS_BINDINGS.group(
@@ -233,9 +254,16 @@ impl HemispherePass {
             &self.raster_layout,
             [camera.as_entire_binding(), cameras.as_entire_binding(), params.as_entire_binding()],
         );
-        let mut pass =
-            self.atlas.begin_clear_pass(enc, "gautron.hemisphere.pass", slot.and_then(|s| s.render(true, false)));
+        let (label, timestamps) = ("gautron.hemisphere.pass", slot.and_then(|s| s.render(true, false)));
+        let mut pass = match round {
+            Some(_) => self.atlas.begin_load_pass(enc, label, timestamps),
+            None => self.atlas.begin_clear_pass(enc, label, timestamps),
+        };
         pass.set_group(0, &group, &[]);
+        if let Some(RoundArgs(round)) = round {
+            pass.set_pipeline(&self.tile_clear);
+            pass.draw_indirect(round, RoundArgs::CLEAR);
+        }
         pass.set_group(1, &scene.instance_group, &[]);
         let pipelines =
             ((&self.single_sided, &self.double_sided), (&self.plain_single_sided, &self.plain_double_sided));
@@ -260,7 +288,7 @@ impl HemispherePass {
         state: &wgpu::Buffer,
         cameras: &wgpu::Buffer,
         records: &wgpu::Buffer,
-        slots: u32,
+        (slots, round): (u32, Option<RoundArgs<'_>>),
     ) {
         let PassRec { ctx, enc, slot } = r;
         let tv = wgpu::BindingResource::TextureView;
@@ -285,7 +313,10 @@ impl HemispherePass {
         });
         pass.set_pipeline(&self.reduce);
         pass.set_group(0, &group, &[]);
-        pass.dispatch_workgroups(slots, 1, 1);
+        match round {
+            Some(RoundArgs(round)) => pass.dispatch_workgroups_indirect(round, RoundArgs::REDUCE),
+            None => pass.dispatch_workgroups(slots, 1, 1),
+        }
     }
 
     pub fn radiance_view(&self) -> &wgpu::TextureView {
@@ -310,4 +341,56 @@ fn raster_pipeline(
         cull_textured,
         "gautron.hemisphere",
     )
+}
+
+/// The tile clears' pipeline: a quad over each of the round's tiles writing the G-buffer's
+/// clear values (zero, depth 1) whatever the depth there.
+fn tile_clear_pipeline(
+    device: &wgpu::Device,
+    raster_layout: &wgpu::BindGroupLayout,
+    module: &wgpu::ShaderModule,
+) -> wgpu::RenderPipeline {
+    use gbuffer::{
+        ALBEDO_FORMAT, DEPTH_FORMAT, EMISSION_FORMAT, MATERIAL_FORMAT, MOTION_FORMAT, NORMAL_FORMAT, POSITION_FORMAT,
+    };
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("gautron.hemisphere.tile_clear.layout"),
+        bind_group_layouts: &[Some(raster_layout)],
+        immediate_size: 0,
+    });
+    let target = |format| Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL });
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("gautron.hemisphere.tile_clear"),
+        layout: Some(&layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some("vs_tile_clear"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: wgpu::PrimitiveState { topology: wgpu::PrimitiveTopology::TriangleList, ..Default::default() },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Always),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some("fs_tile_clear"),
+            compilation_options: Default::default(),
+            targets: &[
+                target(POSITION_FORMAT),
+                target(NORMAL_FORMAT),
+                target(ALBEDO_FORMAT),
+                target(MATERIAL_FORMAT),
+                target(MOTION_FORMAT),
+                target(EMISSION_FORMAT),
+            ],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
 }

@@ -14,7 +14,7 @@ use std::hash::{Hash, Hasher};
 mod at_hcb;
 
 use super::at_samples::AtSamplesPass;
-use super::hemisphere::HemispherePass;
+use super::hemisphere::{HemispherePass, RoundArgs};
 use super::splat::SplatPass;
 use super::vpl_records::VplRecordPass;
 use super::{
@@ -368,6 +368,7 @@ impl GautronStage {
         slot: Option<crate::timing::Slot<'_>>,
         light: Option<(&VplSet, &Visibility)>,
         slots: u32,
+        round: Option<RoundArgs<'_>>,
     ) {
         let ctx = f.ctx;
         if let (Some((vpls, vis)), Some(pass)) = (light, &self.vpl_records) {
@@ -382,7 +383,7 @@ impl GautronStage {
             f.state,
             (f.camera_buffer, &self.cameras),
             &self.params,
-            &self.raster_args,
+            (&self.raster_args, round),
         );
         f.direct.shade_atlas(
             PassRec { ctx, enc: e, slot: None },
@@ -391,6 +392,7 @@ impl GautronStage {
             hemisphere.size,
             &self.atlas_params,
             &self.viewers,
+            round.map(|RoundArgs(b)| (b, RoundArgs::SHADE)),
         );
         hemisphere.reduce(
             PassRec { ctx, enc: e, slot },
@@ -398,7 +400,7 @@ impl GautronStage {
             &self.state,
             &self.cameras,
             &self.records,
-            slots,
+            (slots, round),
         );
     }
 
@@ -504,7 +506,7 @@ impl GautronStage {
             });
             let name = if light.is_some() { "gautron.vpl_records" } else { "gautron.hemispheres" };
             timer.scope(ctx, enc, name, |e, slot| {
-                self.compute_records(f, e, slot, light, slots);
+                self.compute_records(f, e, slot, light, slots, None);
                 if s.neighbour_clamping {
                     let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
                         label: Some("gautron.neighbours"),

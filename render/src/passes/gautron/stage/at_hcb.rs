@@ -80,7 +80,8 @@ impl GautronStage {
                 c.dispatch_workgroups(slots.div_ceil(64), 1, 1);
             });
             timer.scope(ctx, enc, "gautron.hemispheres", |e, slot| {
-                self.compute_records(f, e, slot, None, slots);
+                let round = Some(crate::passes::gautron::hemisphere::RoundArgs(&pass.round_args));
+                self.compute_records(f, e, slot, None, slots, round);
                 let mut c = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("gautron.at_samples.store"),
                     timestamp_writes: None,
