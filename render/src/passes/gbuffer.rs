@@ -143,7 +143,6 @@ impl GBufferPass {
     ) -> wgpu::RenderPipeline {
         let constants = [("TEXTURED", if textured { 1.0 } else { 0.0 })];
         let kind = if textured { "" } else { "_plain" };
-        let target = |format| Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL });
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(&if cull_mode.is_some() {
                 format!("{name}.pipeline_single_sided{kind}")
@@ -177,14 +176,7 @@ impl GBufferPass {
                 module,
                 entry_point: Some(fs_entry),
                 compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
-                targets: &[
-                    target(POSITION_FORMAT),
-                    target(NORMAL_FORMAT),
-                    target(ALBEDO_FORMAT),
-                    target(MATERIAL_FORMAT),
-                    target(MOTION_FORMAT),
-                    target(EMISSION_FORMAT),
-                ],
+                targets: &color_targets(),
             }),
             multiview_mask: None,
             cache: None,
@@ -339,6 +331,13 @@ impl GBuffer {
             multiview_mask: None,
         })
     }
+}
+
+/// The six colour targets of a G-buffer pipeline, in attachment order (position, normal,
+/// albedo, material, motion, emission), unblended.
+pub(crate) fn color_targets() -> [Option<wgpu::ColorTargetState>; 6] {
+    [POSITION_FORMAT, NORMAL_FORMAT, ALBEDO_FORMAT, MATERIAL_FORMAT, MOTION_FORMAT, EMISSION_FORMAT]
+        .map(|format| Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL }))
 }
 
 /// The G-buffer's textures at `width`×`height` (also the atlas of Gautron's hemispheres).

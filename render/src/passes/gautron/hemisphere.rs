@@ -350,15 +350,11 @@ fn tile_clear_pipeline(
     raster_layout: &wgpu::BindGroupLayout,
     module: &wgpu::ShaderModule,
 ) -> wgpu::RenderPipeline {
-    use gbuffer::{
-        ALBEDO_FORMAT, DEPTH_FORMAT, EMISSION_FORMAT, MATERIAL_FORMAT, MOTION_FORMAT, NORMAL_FORMAT, POSITION_FORMAT,
-    };
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("gautron.hemisphere.tile_clear.layout"),
         bind_group_layouts: &[Some(raster_layout)],
         immediate_size: 0,
     });
-    let target = |format| Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL });
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some("gautron.hemisphere.tile_clear"),
         layout: Some(&layout),
@@ -370,7 +366,7 @@ fn tile_clear_pipeline(
         },
         primitive: wgpu::PrimitiveState { topology: wgpu::PrimitiveTopology::TriangleList, ..Default::default() },
         depth_stencil: Some(wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
+            format: gbuffer::DEPTH_FORMAT,
             depth_write_enabled: Some(true),
             depth_compare: Some(wgpu::CompareFunction::Always),
             stencil: Default::default(),
@@ -381,14 +377,7 @@ fn tile_clear_pipeline(
             module,
             entry_point: Some("fs_tile_clear"),
             compilation_options: Default::default(),
-            targets: &[
-                target(POSITION_FORMAT),
-                target(NORMAL_FORMAT),
-                target(ALBEDO_FORMAT),
-                target(MATERIAL_FORMAT),
-                target(MOTION_FORMAT),
-                target(EMISSION_FORMAT),
-            ],
+            targets: &gbuffer::color_targets(),
         }),
         multiview_mask: None,
         cache: None,
