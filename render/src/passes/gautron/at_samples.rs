@@ -68,6 +68,8 @@ pub struct AtSamplesPass {
     /// The chunks' (index, mode), one per [`CHUNK_STRIDE`]: mode m's chunk k at m·capacity + k.
     chunks: wgpu::Buffer,
     capacity: u32,
+    /// Whether `chunks` holds its indices (made once, remade only when it grows).
+    written: bool,
     /// Bound as the queue when the set has none.
     no_queue: wgpu::Buffer,
     /// The chunk's round arguments (`hemisphere::RoundArgs`), written by `begin`.
@@ -92,12 +94,14 @@ impl AtSamplesPass {
             super::hemisphere::ROUND_ARGS_BYTES,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
         );
-        Self { layout, begin, store, cached_args, chunks, capacity: 1, no_queue, round_args }
+        Self { layout, begin, store, cached_args, chunks, capacity: 1, written: false, no_queue, round_args }
     }
 
     /// Makes room for `chunks` chunk indices.
     pub fn ensure_chunks(&mut self, ctx: &GpuContext, chunks: u32) {
-        if chunks > self.capacity || self.capacity == 1 {
+        // The first call writes the indices (the buffer of `new` holds none yet).
+        if chunks > self.capacity || !self.written {
+            self.written = true;
             self.capacity = chunks.max(self.capacity).next_power_of_two();
             let entries = (self.capacity * MODES) as usize;
             self.chunks =

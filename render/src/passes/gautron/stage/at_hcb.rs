@@ -102,7 +102,10 @@ impl GautronStage {
         (list, counter, args): (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
     ) {
         let ctx = f.ctx;
-        self.at_samples.get_or_insert_with(|| AtSamplesPass::new(ctx)).ensure_chunks(ctx, 1);
+        // Offset 0 of the chunk uniform: `cs_cached_args` reads no chunk index.
+        if self.at_samples.is_none() {
+            self.at_samples = Some(AtSamplesPass::new(ctx));
+        }
         let Some(pass) = self.at_samples.as_ref() else {
             return;
         };
