@@ -6,7 +6,7 @@
 //!
 //! | stage | what runs |
 //! |---|---|
-//! | 1. G-buffer | `passes::gbuffer`: position, normal, albedo, material, depth, movement buffer |
+//! | 1. G-buffer | `passes::gbuffer`: linear depth, normal, albedo, material, depth, movement buffer; the position rebuilt from the depth when read (`passes::gbuffer_position`) |
 //! | 2. Direct light | `renderer::direct_stage`: shadow maps, the emitters' VPLs, the direct light, the rotating sky's mean |
 //! | 3–7. Indirect light | `chain`: the steps of the stage choices (VPLs, their visibility, shading points, gather, reconstruction, temporal), then the near field's |
 //! | 7. Compose | `passes::compose`: direct + indirect + near field + emission + sky, tone mapped |
@@ -24,6 +24,9 @@ impl Renderer {
         let ctx = self.ctx.clone();
         ctx.make_current();
         self.check_camera();
+        // Whether `gbuffer.position` lags the linear depth (issue #53): this frame fills it
+        // or leaves it to be filled when read, never before its camera is written below.
+        let position_stale = self.gbuffer.position.as_ref().is_some_and(|p| p.take_stale());
 
         // The scene at this instant; the sky's directions join its lights (`passes::sky`).
         let state = self.frame_state();
@@ -49,12 +52,30 @@ impl Renderer {
             .pod(prev_models)
             .finish();
         self.kept.clear();
-        if !self.gbuffer.last.needs_run(gbuffer_key, Space::Screen) {
+        let gbuffer_ran = self.gbuffer.last.needs_run(gbuffer_key, Space::Screen);
+        if !gbuffer_ran {
             self.kept.push("gbuffer");
         } else {
             let (gbuffer, camera_group, gpu_scene) = (&self.gbuffer, &self.camera_group, &self.gpu_scene);
             self.timer
                 .scope(&ctx, &mut enc, "gbuffer", |e, slot| gbuffer.run(e, slot, camera_group, gpu_scene, &state));
+        }
+        // The camera G-buffer's position, rebuilt from its linear depth when a step of this
+        // frame or a read-back recorded in it reads it; otherwise when something reads it.
+        let mut position_stale = position_stale || gbuffer_ran;
+        if let Some(position) = self.gbuffer.position.clone() {
+            if gbuffer_ran {
+                position.keep_camera(&mut enc, &self.camera_buffer);
+            }
+            let pinned = self.stages.explain_pixel.is_some();
+            let read = self.steps.needs_position(pinned)
+                || self.readbacks.get_mut().map(|r| r.wants("gbuffer.position")).unwrap_or(true);
+            if position_stale && read {
+                self.timer.scope(&ctx, &mut enc, "gbuffer.position", |e, slot| {
+                    position.record(e, slot.and_then(|s| s.compute(true, true)))
+                });
+                position_stale = false;
+            }
         }
 
         // Stage 2: shadow maps, the emitters' VPLs, direct light.
@@ -127,6 +148,9 @@ impl Renderer {
         }
         self.timer.resolve(&ctx, &mut enc);
         ctx.submit([enc.finish()]);
+        if let Some(position) = self.gbuffer.position.as_ref() {
+            position.set_stale(position_stale);
+        }
         readbacks.start_maps();
         let timings = self.timer.collect(&ctx, !self.interactive).to_vec();
 

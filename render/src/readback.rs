@@ -122,6 +122,16 @@ impl Readbacks {
         self.latest.remove(key);
     }
 
+    /// Whether a request not yet recorded reads the buffer `name` (a probe reads them all).
+    pub fn wants(&self, name: &str) -> bool {
+        self.requested.values().any(|(what, _)| match what {
+            Readback::Probe(_) => true,
+            Readback::Image { name: n, .. } => n == name,
+            Readback::Texels(points) => points.iter().any(|(n, _, _)| n == name),
+            Readback::Storage(_) => false,
+        })
+    }
+
     /// Read-backs requested or in flight.
     pub fn pending(&self) -> usize {
         self.requested.len() + self.in_flight.len()

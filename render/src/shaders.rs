@@ -16,6 +16,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("common/lights.wgsl", include_str!("../../shaders/common/lights.wgsl")),
     ("common/fullscreen.wgsl", include_str!("../../shaders/common/fullscreen.wgsl")),
     ("gbuffer/gbuffer.wgsl", include_str!("../../shaders/gbuffer/gbuffer.wgsl")),
+    ("gbuffer/position.wgsl", include_str!("../../shaders/gbuffer/position.wgsl")),
     ("shadow/shadow.wgsl", include_str!("../../shaders/shadow/shadow.wgsl")),
     ("direct/direct.wgsl", include_str!("../../shaders/direct/direct.wgsl")),
     ("direct/sky_history.wgsl", include_str!("../../shaders/direct/sky_history.wgsl")),
@@ -95,6 +96,7 @@ pub const SOURCES: &[(&str, &str)] = &[
 /// Files that are entry modules (not only imported).
 pub const ENTRY_MODULES: &[&str] = &[
     "gbuffer/gbuffer.wgsl",
+    "gbuffer/position.wgsl",
     "shadow/shadow.wgsl",
     "direct/direct.wgsl",
     "direct/sky_history.wgsl",

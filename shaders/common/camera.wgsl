@@ -22,3 +22,19 @@ fn clip_to_pixel(clip: vec4<f32>, viewport: vec4<f32>) -> vec2<f32> {
     let ndc = clip.xy / clip.w;
     return vec2<f32>((ndc.x * 0.5 + 0.5) * viewport.x, (0.5 - ndc.y * 0.5) * viewport.y);
 }
+
+// The world-space point of pixel `p` (integer pixel, its centre) at linear view depth `depth`
+// (the G-buffer's `gbuffer.linear_depth`, −z in view space, scene units; issue #53: the camera's
+// G-buffer stores this one float instead of the position, and the passes rebuild the point).
+// The ray through the pixel's centre meets the far plane at `far`; the point lies on it where
+// its distance along the view axis is `depth` (Knecht 002 §4.2 stores the same linear depth,
+// Eq. 4.2, beside the normal). CPU twin: `passes::gbuffer::world_from_linear_depth`.
+fn world_from_linear_depth(cam: Camera, p: vec2<i32>, depth: f32) -> vec3<f32> {
+    let uv = (vec2<f32>(p) + 0.5) * cam.viewport.zw;
+    let ndc = vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 1.0, 1.0);
+    let far = cam.inv_view_proj * ndc;
+    let dir = far.xyz / far.w - cam.position.xyz;
+    // The view axis in world space: −(third row of the view matrix's rotation).
+    let forward = -vec3<f32>(cam.view[0].z, cam.view[1].z, cam.view[2].z);
+    return cam.position.xyz + dir * (depth / dot(dir, forward));
+}

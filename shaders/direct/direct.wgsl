@@ -28,6 +28,9 @@ struct Params {
 // pipeline with this false, whose loop over them is left out (on lavapipe the loop's code
 // cost about a fifth of the pass even with no emitter to loop over).
 override EMITTERS: bool = true;
+// Whether g_position is the camera G-buffer's linear depth (the screen's entries, issue #53)
+// rather than world positions (the hemisphere atlas).
+override LINEAR_DEPTH: bool = true;
 
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(0) @binding(1) var<uniform> params: Params;
@@ -38,6 +41,8 @@ override EMITTERS: bool = true;
 @group(0) @binding(6) var<storage, read> emitter_vpls: array<Vpl>;
 @group(0) @binding(7) var emitter_ism: texture_2d<f32>;
 @group(0) @binding(8) var emitter_exact: texture_depth_2d;
+// The camera G-buffer's linear depth (LINEAR_DEPTH: cs_main, cs_main_diffuse; issue #53), or
+// the hemisphere atlas's world positions (cs_atlas).
 @group(1) @binding(0) var g_position: texture_2d<f32>;
 @group(1) @binding(1) var g_normal: texture_2d<f32>;
 @group(1) @binding(2) var g_albedo: texture_2d<f32>;
@@ -179,7 +184,10 @@ fn shade_texel(px: vec2<i32>, viewer: vec3<f32>) -> Shaded {
     if (nrm.w < 0.5) {
         return Shaded(vec4<f32>(0.0), vec4<f32>(0.0));
     }
-    let p = textureLoad(g_position, px, 0).xyz;
+    var p = textureLoad(g_position, px, 0).xyz;
+    if (LINEAR_DEPTH) {
+        p = world_from_linear_depth(camera, px, p.x);
+    }
     let alb = textureLoad(g_albedo, px, 0);
     let mat = textureLoad(g_material, px, 0);
     let r = reflected_direct(p, normalize(nrm.xyz), normalize(viewer - p), alb, mat);

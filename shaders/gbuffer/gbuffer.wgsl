@@ -21,6 +21,12 @@ struct Instance {
 // texture branches (on lavapipe they cost about a third of the pass even when not taken).
 override TEXTURED: bool = true;
 
+// Whether target 0 is the camera's `gbuffer.linear_depth` (R32Float, issue #53): it then gets
+// the linear depth alone, and the passes rebuild the position from it
+// (common/camera.wgsl `world_from_linear_depth`); false: the light views' and the hemispheres'
+// `position` (world position in xyz, linear depth in w).
+override LINEAR_DEPTH: bool = false;
+
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(1) @binding(0) var<storage, read> instances: array<Instance>;
 
@@ -133,6 +139,9 @@ fn gbuffer_fragment(i: VsOut, front: bool) -> FsOut {
     var o: FsOut;
     // w: linear view-space depth in scene units (distance along the view axis).
     o.position = vec4<f32>(i.world, -view_pos.z);
+    if (LINEAR_DEPTH) {
+        o.position = vec4<f32>(-view_pos.z, 0.0, 0.0, 0.0);
+    }
     // w = 1 marks covered pixels (the background keeps 0).
     o.normal = vec4<f32>(n, 1.0);
     o.albedo = vec4<f32>(color.rgb, params.x);

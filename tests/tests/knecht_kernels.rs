@@ -6,7 +6,7 @@ use gi_lab_tests::{default_scene, gpu};
 use gi_render::cpu::knecht::{self};
 use gi_render::settings::pipeline::Technique;
 use gi_render::{GpuContext, Renderer};
-use glam::{Mat4, Vec2, Vec3};
+use glam::{Vec2, Vec3};
 
 // ---------------------------------------------------------------------------------------
 // Shading, filter and confidence kernels against their CPU twins on synthetic G-buffers.
@@ -28,9 +28,11 @@ fn texture(ctx: &GpuContext, label: &str, w: u32, h: u32, data: &[[f32; 4]], hal
     gi_lab_tests::texture_from_bytes(ctx, label, format, (w, h), &bytes)
 }
 
-/// Views of a synthetic G-buffer (emission and depth are not read by the passes tested).
+/// Views of a synthetic G-buffer (emission and depth are not read by the passes tested). The
+/// linear depth the passes read (issue #53) is the positions' w.
 struct SyntheticGBuffer {
     position: wgpu::Texture,
+    linear_depth: wgpu::Texture,
     normal: wgpu::Texture,
     albedo: wgpu::Texture,
     material: wgpu::Texture,
@@ -51,6 +53,10 @@ impl SyntheticGBuffer {
     ) -> Self {
         Self {
             position: texture(ctx, "test.position", w, h, position, false),
+            linear_depth: {
+                let depth: Vec<[f32; 4]> = position.iter().map(|p| [p[3], 0.0, 0.0, 0.0]).collect();
+                texture(ctx, "test.linear_depth", w, h, &depth, false)
+            },
             normal: texture(ctx, "test.normal", w, h, normal, true),
             albedo: texture(ctx, "test.albedo", w, h, albedo, false),
             material: texture(ctx, "test.material", w, h, material, false),
@@ -62,6 +68,7 @@ impl SyntheticGBuffer {
         let v = |t: &wgpu::Texture| t.create_view(&Default::default());
         gi_render::passes::gbuffer::GBufferViews {
             position: v(&self.position),
+            linear_depth: v(&self.linear_depth),
             normal: v(&self.normal),
             albedo: v(&self.albedo),
             material: v(&self.material),
@@ -85,11 +92,21 @@ fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
     let (mut pos, mut nrm, mut alb, mut mat) =
         (vec![[0.0; 4]; len], vec![[0.0; 4]; len], vec![[0.0; 4]; len], vec![[0.0; 4]; len]);
     let mut receivers = vec![None; len];
+    // A camera at `eye` looking at the origin: the gather rebuilds each receiver from its
+    // linear depth (issue #53), as the CPU twin below does. A 30° field and depths 2.5–4 put
+    // the receivers in about [−1, 1]² × [−1, 0.5], under the VPLs.
+    let eye = Vec3::new(0.2, 0.1, 3.0);
+    let view = glam::camera::rh::view::look_at_mat4(eye, Vec3::ZERO, Vec3::Y);
+    let view_proj =
+        glam::camera::rh::proj::directx::perspective(30f32.to_radians(), w as f32 / h as f32, 0.1, 10.0) * view;
     for i in 0..len {
         if rng.next_f32() < 0.1 {
             continue; // background
         }
-        let p = Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 0.5));
+        let (x, y) = (i as u32 % w, i as u32 / w);
+        let depth = rng.range(2.5, 4.0);
+        let p =
+            gi_render::passes::gbuffer_position::world_from_linear_depth(view_proj, view, eye, (w, h), (x, y), depth);
         let nq = {
             let u = rng.unit();
             Vec3::new(f16(u.x), f16(u.y), f16(u.z))
@@ -99,7 +116,7 @@ fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
         // SI in eighths and SP a small integer: exact in the split's half-float target.
         let si = (rng.next_f32() * 8.0).floor() / 8.0;
         let sp = [1.0, 8.0, 32.0, 200.0][(rng.next_f32() * 4.0) as usize % 4];
-        pos[i] = [p.x, p.y, p.z, 1.0];
+        pos[i] = [p.x, p.y, p.z, depth];
         nrm[i] = [nq.x, nq.y, nq.z, 1.0];
         alb[i] = [c.x, c.y, c.z, di];
         mat[i] = [si, sp, 0.0, 0.0];
@@ -130,13 +147,12 @@ fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
         });
         cpu_vpls.push(enabled.then_some(v));
     }
-    let eye = Vec3::new(0.2, 0.1, 3.0);
     let d_min = 0.1;
     let camera = gi_render::passes::CameraUniform {
-        view_proj: Mat4::IDENTITY,
-        prev_view_proj: Mat4::IDENTITY,
-        inv_view_proj: Mat4::IDENTITY,
-        view: Mat4::IDENTITY,
+        view_proj,
+        prev_view_proj: view_proj,
+        inv_view_proj: view_proj.inverse(),
+        view,
         position: eye.extend(1.0),
         viewport: glam::Vec4::new(w as f32, h as f32, 1.0 / w as f32, 1.0 / h as f32),
         params: glam::Vec4::new(0.1, 10.0, 0.0, 0.0),

@@ -8,6 +8,7 @@
 use crate::counters::prelude::*;
 
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 use crate::gpu::GpuContext;
 
@@ -87,16 +88,36 @@ pub enum BufferError {
     Map { name: String, message: String },
 }
 
+/// A buffer that a pass fills only when something reads it (issue #53: the camera G-buffer's
+/// position, rebuilt from its linear depth by `passes::gbuffer_position`). The registry
+/// brings it up to date before it hands it out.
+pub trait Derived: Send + Sync {
+    /// Records and submits the pass that fills the buffer, when its content is stale.
+    fn refresh(&self);
+}
+
+#[derive(Clone)]
+struct DerivedHook(Arc<dyn Derived>);
+
+impl std::fmt::Debug for DerivedHook {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("DerivedHook")
+    }
+}
+
 /// Named textures of the current frame.
 #[derive(Default, Debug)]
 pub struct BufferRegistry {
     entries: BTreeMap<String, BufferEntry>,
+    /// The buffers filled on demand ([`Derived`]), by name.
+    derived: BTreeMap<String, DerivedHook>,
 }
 
 impl BufferRegistry {
     /// Forgets a buffer that no pass writes any more (nothing when it is not registered).
     pub fn remove(&mut self, name: &str) {
         self.entries.remove(name);
+        self.derived.remove(name);
     }
 
     /// Registers (or replaces, after a resize) a buffer.
@@ -105,9 +126,33 @@ impl BufferRegistry {
             name.to_string(),
             BufferEntry { name: name.into(), description: description.into(), kind, texture: texture.clone() },
         );
+        self.derived.remove(name);
+    }
+
+    /// Registers a buffer that `hook` fills when it is read ([`Derived`]): every access
+    /// through [`Self::get`] and [`Self::entries`] (the viewer, the probe, the read-backs)
+    /// refreshes it first.
+    pub fn register_derived(
+        &mut self,
+        name: &str,
+        kind: BufferKind,
+        description: &str,
+        texture: &wgpu::Texture,
+        hook: Arc<dyn Derived>,
+    ) {
+        self.register(name, kind, description, texture);
+        self.derived.insert(name.to_string(), DerivedHook(hook));
+    }
+
+    /// Refreshes every derived buffer (before a read of all of them).
+    fn refresh_all(&self) {
+        self.derived.values().for_each(|h| h.0.refresh());
     }
 
     pub fn get(&self, name: &str) -> Result<&BufferEntry, BufferError> {
+        if let Some(h) = self.derived.get(name) {
+            h.0.refresh();
+        }
         self.entries.get(name).ok_or_else(|| BufferError::Unknown {
             name: name.into(),
             known: self.entries.keys().cloned().collect::<Vec<_>>().join(", "),
@@ -120,6 +165,7 @@ impl BufferRegistry {
     }
 
     pub fn entries(&self) -> impl Iterator<Item = &BufferEntry> {
+        self.refresh_all();
         self.entries.values()
     }
 
@@ -171,6 +217,7 @@ impl BufferRegistry {
                 want: pixels.len() as u32,
             });
         }
+        self.refresh_all();
         let readable: Vec<(String, wgpu::Texture, u32, TexelDecoder)> = self
             .entries
             .values()

@@ -187,6 +187,19 @@ impl StepList {
         self.indirect.iter().chain(&self.near_field).map(|s| (s.stage, s.name)).collect()
     }
 
+    /// Whether a step reads the camera G-buffer's position (`gbuffer.position`), which is then
+    /// filled in the frame (issue #53, `passes::gbuffer_position`); `pinned`: a pixel is
+    /// explained (the `explain.*` steps run). Knecht's steps read the linear depth and rebuild
+    /// the points themselves; every other step reads the position.
+    pub(crate) fn needs_position(&self, pinned: bool) -> bool {
+        const LINEAR_DEPTH: &[&str] =
+            &["knecht.vpls", "knecht.visibility", "knecht.gather", "knecht.filter", "knecht.merge"];
+        self.indirect
+            .iter()
+            .chain(&self.near_field)
+            .any(|s| !LINEAR_DEPTH.contains(&s.name) && (pinned || !s.name.starts_with("explain.")))
+    }
+
     /// The passes the list's steps keep while the frame is unchanged
     /// (`FrameInputs::unchanged`): the HCB's samples that another gather lights, and
     /// Gautron's hemispheres at them.

@@ -70,6 +70,8 @@ pub const DIRECT_GBUFFER_BINDINGS: Bindings = Bindings {
     entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
+        // The camera G-buffer's linear depth (`cs_main`, `cs_main_diffuse`), or the atlas's
+        // positions (`cs_atlas`).
         binding(0, "g_position", Kind::Texture { filterable: false }),
         binding(1, "g_normal", Kind::Texture { filterable: false }),
         binding(2, "g_albedo", Kind::Texture { filterable: false }),
@@ -150,11 +152,14 @@ impl DirectPass {
         let module = crate::shaders::create_module(device, "direct/direct.wgsl");
         let layout0 = DIRECT_INPUTS_BINDINGS.layout(device);
         let layout1 = DIRECT_GBUFFER_BINDINGS.layout(device);
-        // Each entry with and without the emitters' loop (`EMITTERS`, issue #53).
+        // Each entry with and without the emitters' loop (`EMITTERS`, issue #53); the screen's
+        // entries read the camera G-buffer's linear depth, the atlas its positions
+        // (`LINEAR_DEPTH`, issue #53).
         let both = |label: &str, entry: &str, layouts: &[&wgpu::BindGroupLayout]| {
+            let linear = if entry == "cs_atlas" { 0.0 } else { 1.0 };
             [true, false].map(|on| {
                 let label = if on { label.to_string() } else { format!("{label}_no_emitters") };
-                let constants = [("EMITTERS", if on { 1.0 } else { 0.0 })];
+                let constants = [("EMITTERS", if on { 1.0 } else { 0.0 }), ("LINEAR_DEPTH", linear)];
                 crate::gpu::compute_pipeline_with(device, &label, (&module, entry, &constants), layouts)
             })
         };
@@ -338,7 +343,7 @@ impl DirectPass {
             device,
             &self.layout1,
             [
-                tv(&gbuffer.position),
+                tv(&gbuffer.linear_depth),
                 tv(&gbuffer.normal),
                 tv(&gbuffer.albedo),
                 tv(&gbuffer.material),

@@ -17,6 +17,12 @@ use crate::scene::SceneState;
 use crate::scene::upload::GpuScene;
 
 pub const POSITION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// The camera G-buffer's target 0 (issue #53): the linear view depth alone (Eq. 4.2's depth,
+/// unnormalised, scene units), 4 bytes a pixel instead of the position's 16. The passes
+/// rebuild the point from it (`shaders/common/camera.wgsl` `world_from_linear_depth`), and
+/// `gbuffer.position` is filled from it only when something reads it
+/// (`passes::gbuffer_position`).
+pub const LINEAR_DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 pub const MATERIAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
@@ -42,7 +48,12 @@ pub const CAMERA_BINDINGS: Bindings = Bindings {
 };
 /// The G-buffer textures of one frame.
 pub struct GBuffer {
+    /// World position (xyz) and linear depth (w): a render target of the light views and the
+    /// hemispheres; for the camera, filled from `linear_depth` when read (issue #53).
     pub position: wgpu::Texture,
+    /// The camera's target 0, the linear depth ([`LINEAR_DEPTH_FORMAT`]); None for the light
+    /// views and the hemispheres, which render the position itself.
+    pub linear_depth: Option<wgpu::Texture>,
     pub normal: wgpu::Texture,
     pub albedo: wgpu::Texture,
     pub material: wgpu::Texture,
@@ -54,6 +65,9 @@ pub struct GBuffer {
 
 pub struct GBufferViews {
     pub position: wgpu::TextureView,
+    /// The camera's linear depth (see [`GBuffer::linear_depth`]); for the other G-buffers a
+    /// view of `position` (whose w is the linear depth: no pass reads it there as depth).
+    pub linear_depth: wgpu::TextureView,
     pub normal: wgpu::TextureView,
     pub albedo: wgpu::TextureView,
     pub material: wgpu::TextureView,
@@ -74,6 +88,8 @@ pub struct GBufferPass {
     /// Whether single-sided materials cull their back faces (the camera's G-buffer, as glTF
     /// asks); light views draw every face (see [`Self::light_view`]).
     cull_single_sided: bool,
+    /// The camera's position rebuilt from its linear depth, when something reads it.
+    pub position: Option<std::sync::Arc<super::gbuffer_position::PositionPass>>,
     pub camera_layout: wgpu::BindGroupLayout,
     pub targets: GBuffer,
     /// What the targets were last rendered for: the camera's G-buffer is kept while the
@@ -98,13 +114,16 @@ impl GBufferPass {
             bind_group_layouts: &[Some(&camera_layout), Some(&scene.instance_layout), Some(&scene.material_layout)],
             immediate_size: 0,
         });
+        // The camera's G-buffer writes the linear depth to target 0 (issue #53).
+        let linear = name == "gbuffer";
         let make = |cull_mode, textured| {
             let entries = ("vs_main", "fs_main", wgpu::FrontFace::Ccw);
-            Self::pipeline(device, &layout, &module, entries, (cull_mode, textured), &name)
+            Self::pipeline_with(device, &layout, &module, entries, (cull_mode, textured, linear), &name)
         };
         let [single_sided, double_sided] = [Some(wgpu::Face::Back), None].map(|c| make(c, true));
         let [plain_single_sided, plain_double_sided] = [Some(wgpu::Face::Back), None].map(|c| make(c, false));
-        let targets = create_targets(ctx, width, height, &name);
+        let targets = create_targets_with(ctx, width, height, &name, linear);
+        let position = linear.then(|| super::gbuffer_position::PositionPass::new(ctx, &targets));
         let last = Default::default();
         Self {
             name,
@@ -113,6 +132,7 @@ impl GBufferPass {
             plain_single_sided,
             plain_double_sided,
             cull_single_sided: true,
+            position,
             camera_layout,
             targets,
             last,
@@ -137,11 +157,25 @@ impl GBufferPass {
         device: &wgpu::Device,
         layout: &wgpu::PipelineLayout,
         module: &wgpu::ShaderModule,
-        (vs_entry, fs_entry, front_face): (&str, &str, wgpu::FrontFace),
+        entries: (&str, &str, wgpu::FrontFace),
         (cull_mode, textured): (Option<wgpu::Face>, bool),
         name: &str,
     ) -> wgpu::RenderPipeline {
-        let constants = [("TEXTURED", if textured { 1.0 } else { 0.0 })];
+        Self::pipeline_with(device, layout, module, entries, (cull_mode, textured, false), name)
+    }
+
+    /// [`Self::pipeline`], with target 0 the linear depth when `linear` (the camera's
+    /// G-buffer, issue #53).
+    fn pipeline_with(
+        device: &wgpu::Device,
+        layout: &wgpu::PipelineLayout,
+        module: &wgpu::ShaderModule,
+        (vs_entry, fs_entry, front_face): (&str, &str, wgpu::FrontFace),
+        (cull_mode, textured, linear): (Option<wgpu::Face>, bool, bool),
+        name: &str,
+    ) -> wgpu::RenderPipeline {
+        let constants =
+            [("TEXTURED", if textured { 1.0 } else { 0.0 }), ("LINEAR_DEPTH", if linear { 1.0 } else { 0.0 })];
         let kind = if textured { "" } else { "_plain" };
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(&if cull_mode.is_some() {
@@ -176,7 +210,7 @@ impl GBufferPass {
                 module,
                 entry_point: Some(fs_entry),
                 compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
-                targets: &color_targets(),
+                targets: &color_targets_with(if linear { LINEAR_DEPTH_FORMAT } else { POSITION_FORMAT }),
             }),
             multiview_mask: None,
             cache: None,
@@ -186,19 +220,40 @@ impl GBufferPass {
     /// Recreates the targets for a new size.
     pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) {
         self.last.invalidate();
-        self.targets = create_targets(ctx, width, height, &self.name);
+        let linear = self.position.is_some();
+        self.targets = create_targets_with(ctx, width, height, &self.name, linear);
+        if linear {
+            self.position = Some(super::gbuffer_position::PositionPass::new(ctx, &self.targets));
+        }
     }
 
     pub fn register(&self, reg: &mut BufferRegistry) {
         let t = &self.targets;
         let name = &self.name;
         let camera = name == "gbuffer";
-        reg.register(
-            &format!("{name}.position"),
-            BufferKind::Data,
-            "world-space position (xyz) and linear view depth (w), scene units",
-            &t.position,
-        );
+        match (&self.position, &t.linear_depth) {
+            (Some(pass), Some(linear_depth)) => {
+                reg.register_derived(
+                    "gbuffer.position",
+                    BufferKind::Data,
+                    "world-space position (xyz) and linear view depth (w), scene units: rebuilt from gbuffer.linear_depth when read (issue #53)",
+                    &t.position,
+                    pass.clone(),
+                );
+                reg.register(
+                    "gbuffer.linear_depth",
+                    BufferKind::Data,
+                    "linear view depth (−z in view space, scene units; Knecht §4.2 Eq. 4.2), 0 where no geometry covers the pixel: the camera G-buffer's target 0",
+                    linear_depth,
+                );
+            }
+            _ => reg.register(
+                &format!("{name}.position"),
+                BufferKind::Data,
+                "world-space position (xyz) and linear view depth (w), scene units",
+                &t.position,
+            ),
+        }
         reg.register(
             &format!("{name}.normal"),
             BufferKind::Direction,
@@ -314,7 +369,7 @@ impl GBuffer {
         encoder.begin_counted_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(label),
             color_attachments: &[
-                clear(&v.position),
+                clear(if self.linear_depth.is_some() { &v.linear_depth } else { &v.position }),
                 clear(&v.normal),
                 clear(&v.albedo),
                 clear(&v.material),
@@ -336,15 +391,29 @@ impl GBuffer {
 /// The six colour targets of a G-buffer pipeline, in attachment order (position, normal,
 /// albedo, material, motion, emission), unblended.
 pub(crate) fn color_targets() -> [Option<wgpu::ColorTargetState>; 6] {
-    [POSITION_FORMAT, NORMAL_FORMAT, ALBEDO_FORMAT, MATERIAL_FORMAT, MOTION_FORMAT, EMISSION_FORMAT]
+    color_targets_with(POSITION_FORMAT)
+}
+
+/// [`color_targets`] with target 0 in `position` (the camera's linear depth, issue #53).
+fn color_targets_with(position: wgpu::TextureFormat) -> [Option<wgpu::ColorTargetState>; 6] {
+    [position, NORMAL_FORMAT, ALBEDO_FORMAT, MATERIAL_FORMAT, MOTION_FORMAT, EMISSION_FORMAT]
         .map(|format| Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL }))
 }
 
 /// The G-buffer's textures at `width`×`height` (also the atlas of Gautron's hemispheres).
 pub(crate) fn create_targets(ctx: &GpuContext, width: u32, height: u32, name: &str) -> GBuffer {
+    create_targets_with(ctx, width, height, name, false)
+}
+
+/// [`create_targets`]; `linear`: target 0 is the linear depth and the position a storage
+/// texture filled from it (the camera's G-buffer, issue #53).
+fn create_targets_with(ctx: &GpuContext, width: u32, height: u32, name: &str, linear: bool) -> GBuffer {
     let d = &ctx.device;
     let att = wgpu::TextureUsages::RENDER_ATTACHMENT;
-    let position = super::create_target(d, &format!("{name}.position"), width, height, POSITION_FORMAT, att);
+    let linear_depth = linear
+        .then(|| super::create_target(d, &format!("{name}.linear_depth"), width, height, LINEAR_DEPTH_FORMAT, att));
+    let position_usage = if linear { wgpu::TextureUsages::STORAGE_BINDING } else { att };
+    let position = super::create_target(d, &format!("{name}.position"), width, height, POSITION_FORMAT, position_usage);
     let normal = super::create_target(d, &format!("{name}.normal"), width, height, NORMAL_FORMAT, att);
     let albedo = super::create_target(d, &format!("{name}.albedo"), width, height, ALBEDO_FORMAT, att);
     let material = super::create_target(d, &format!("{name}.material"), width, height, MATERIAL_FORMAT, att);
@@ -353,6 +422,10 @@ pub(crate) fn create_targets(ctx: &GpuContext, width: u32, height: u32, name: &s
     let depth = super::create_target(d, &format!("{name}.depth"), width, height, DEPTH_FORMAT, att);
     let views = GBufferViews {
         position: super::view(&position, &format!("{name}.position")),
+        linear_depth: match &linear_depth {
+            Some(t) => super::view(t, &format!("{name}.linear_depth")),
+            None => super::view(&position, &format!("{name}.position")),
+        },
         normal: super::view(&normal, &format!("{name}.normal")),
         albedo: super::view(&albedo, &format!("{name}.albedo")),
         material: super::view(&material, &format!("{name}.material")),
@@ -360,5 +433,5 @@ pub(crate) fn create_targets(ctx: &GpuContext, width: u32, height: u32, name: &s
         emission: super::view(&emission, &format!("{name}.emission")),
         depth: super::view(&depth, &format!("{name}.depth")),
     };
-    GBuffer { position, normal, albedo, material, motion, emission, depth, views }
+    GBuffer { position, linear_depth, normal, albedo, material, motion, emission, depth, views }
 }

@@ -22,6 +22,7 @@ pub mod direct_history;
 pub mod emitters;
 pub mod gautron;
 pub mod gbuffer;
+pub mod gbuffer_position;
 pub mod hcb;
 pub mod knecht;
 pub mod reference;
@@ -99,6 +100,7 @@ pub const BINDINGS: &[&crate::gpu::bindings::Bindings] = &[
     &knecht::ism::PULL_INPUTS_BINDINGS,
     &knecht::ism::PUSH_INPUTS_BINDINGS,
     &gbuffer::CAMERA_BINDINGS,
+    &gbuffer_position::POSITION_BINDINGS,
     &crate::scene::upload::INSTANCES_BINDINGS,
     &crate::scene::upload::MATERIAL_BINDINGS,
     &soler::voxels::GRID_BINDINGS,

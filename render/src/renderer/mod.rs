@@ -130,7 +130,8 @@ impl Renderer {
         let camera_buffer = ctx.device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("frame.camera"),
             size: std::mem::size_of::<CameraUniform>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            // COPY_SRC: `gbuffer.position` keeps the camera its depth was drawn with.
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
         let camera_group = crate::passes::gbuffer::CAMERA_BINDINGS.group_labelled(

@@ -20,6 +20,7 @@ struct FilterParams {
 
 @group(0) @binding(0) var<uniform> params: FilterParams;
 @group(0) @binding(1) var src: texture_2d<f32>;
+// The camera G-buffer's linear depth (issue #53).
 @group(0) @binding(2) var g_position: texture_2d<f32>;
 @group(0) @binding(3) var g_normal: texture_2d<f32>;
 @group(0) @binding(4) var dst: texture_storage_2d<rgba16float, write>;
@@ -57,7 +58,7 @@ fn cs_filter(@builtin(global_invocation_id) gid: vec3<u32>) {
         textureStore(dst_irradiance, p, vec4<f32>(0.0, 0.0, 0.0, 1.0));
         return;
     }
-    let cd = textureLoad(g_position, p, 0).w;
+    let cd = textureLoad(g_position, p, 0).x;
     let n = i32(params.n.x);
     let lo = -(n / 2);
     var sum = vec3<f32>(0.0);
@@ -70,7 +71,7 @@ fn cs_filter(@builtin(global_invocation_id) gid: vec3<u32>) {
                 continue;
             }
             let qn = textureLoad(g_normal, q, 0);
-            let qd = textureLoad(g_position, q, 0).w;
+            let qd = textureLoad(g_position, q, 0).x;
             if (qn.w < 0.5 || abs(qd - cd) > params.thresholds.x || dot(qn.xyz, cn.xyz) < params.thresholds.y) {
                 continue;
             }

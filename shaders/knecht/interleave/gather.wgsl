@@ -17,6 +17,8 @@
 @group(0) @binding(2) var<storage, read> vpls: array<Vpl>;
 @group(0) @binding(3) var ism_atlas: texture_2d<f32>;
 @group(0) @binding(4) var exact_atlas: texture_depth_2d;
+// Linear depth (the camera G-buffer's or the split one, issue #53): the point is rebuilt at the
+// source pixel (common/camera.wgsl world_from_linear_depth).
 @group(0) @binding(5) var s_position: texture_2d<f32>;
 @group(0) @binding(6) var s_normal: texture_2d<f32>;
 @group(0) @binding(7) var s_albedo: texture_2d<f32>;
@@ -32,8 +34,9 @@ struct Gathered {
 }
 
 // The light of split pixel `sp`'s tile's VPLs at the pixel `px` of the bound textures (the
-// split G-buffer at sp itself, or the G-buffer at sp's source pixel).
-fn gather_at(px: vec2<i32>, sp: vec2<u32>) -> Gathered {
+// split G-buffer at sp itself, or the G-buffer at sp's source pixel), whose G-buffer pixel is
+// `src`.
+fn gather_at(px: vec2<i32>, sp: vec2<u32>, src: vec2<i32>) -> Gathered {
     var sum = vec3<f32>(0.0);
     var irr = vec3<f32>(0.0);
     let nrm = textureLoad(s_normal, px, 0);
@@ -43,7 +46,7 @@ fn gather_at(px: vec2<i32>, sp: vec2<u32>) -> Gathered {
     let tile = t2.x + t2.y * n;
     let stride = n * n;
     if (nrm.w > 0.5) {
-        let x = textureLoad(s_position, px, 0).xyz;
+        let x = world_from_linear_depth(camera, src, textureLoad(s_position, px, 0).x);
         let nx = normalize(nrm.xyz);
         let alb = textureLoad(s_albedo, px, 0);
         let mat = textureLoad(s_material, px, 0);
@@ -86,7 +89,10 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (gid.x >= size.x || gid.y >= size.y) {
         return;
     }
-    let g = gather_at(vec2<i32>(gid.xy), gid.xy);
+    // The G-buffer pixel of split pixel s: (s mod tile)·n + s / tile (split.wgsl).
+    let tile = params.split.yz;
+    let src = (gid.xy % tile) * params.split.x + gid.xy / tile;
+    let g = gather_at(vec2<i32>(gid.xy), gid.xy, vec2<i32>(src));
     textureStore(out_accum, vec2<i32>(gid.xy), vec4<f32>(g.light, 1.0));
     textureStore(out_irradiance, vec2<i32>(gid.xy), vec4<f32>(g.irradiance, 1.0));
 }
@@ -108,7 +114,7 @@ fn cs_gather_fused(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (p.x >= size.x || p.y >= size.y) {
         return;
     }
-    let g = gather_at(vec2<i32>(p), gid.xy);
+    let g = gather_at(vec2<i32>(p), gid.xy, vec2<i32>(p));
     textureStore(out_accum, vec2<i32>(p), vec4<f32>(g.light, 1.0));
     textureStore(out_irradiance, vec2<i32>(p), vec4<f32>(g.irradiance, 1.0));
 }

@@ -10,11 +10,13 @@ struct SplitParams {
 }
 
 @group(0) @binding(0) var<uniform> params: SplitParams;
+// The camera G-buffer's linear depth (issue #53): the gather rebuilds the point from it at the
+// split pixel's source pixel.
 @group(0) @binding(1) var g_position: texture_2d<f32>;
 @group(0) @binding(2) var g_normal: texture_2d<f32>;
 @group(0) @binding(3) var g_albedo: texture_2d<f32>;
 @group(0) @binding(4) var g_material: texture_2d<f32>;
-@group(0) @binding(5) var s_position: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(5) var s_position: texture_storage_2d<r32float, write>;
 @group(0) @binding(6) var s_normal: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(7) var s_albedo: texture_storage_2d<rgba8unorm, write>;
 @group(0) @binding(8) var s_material: texture_storage_2d<rgba16float, write>;

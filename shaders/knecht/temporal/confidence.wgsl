@@ -34,6 +34,7 @@ override DEMODULATE: u32 = 2u;
 
 @group(0) @binding(0) var<uniform> params: ConfidenceParams;
 @group(0) @binding(1) var current: texture_2d<f32>;
+// The camera G-buffer's linear depth (issue #53).
 @group(0) @binding(2) var g_position: texture_2d<f32>;
 @group(0) @binding(3) var g_normal: texture_2d<f32>;
 @group(0) @binding(4) var g_motion: texture_2d<f32>;
@@ -74,7 +75,7 @@ fn cs_confidence(@builtin(global_invocation_id) gid: vec3<u32>) {
     // as the same half, so that a still pixel compares equal (Eq. 3.2's w_pos = 300 would turn
     // a half's rounding at 5 m into a confidence drop of several percent), and stored as that
     // half, exact, whatever rounding the device's store uses.
-    let d = quantizeToF16(textureLoad(g_position, p, 0).w);
+    let d = quantizeToF16(textureLoad(g_position, p, 0).x);
     var c = 0.0;
     var merged = i_new;
     let demodulate = select(params.state.y, DEMODULATE, DEMODULATE < 2u) == 1u;

@@ -18,7 +18,7 @@ use glam::Vec4;
 use crate::buffers::{BufferKind, BufferRegistry};
 use crate::gpu::GpuContext;
 use crate::gpu::bindings::{Bindings, Kind, binding};
-use crate::passes::gbuffer::{ALBEDO_FORMAT, GBufferViews, MATERIAL_FORMAT, NORMAL_FORMAT, POSITION_FORMAT};
+use crate::passes::gbuffer::{ALBEDO_FORMAT, GBufferViews, LINEAR_DEPTH_FORMAT, MATERIAL_FORMAT, NORMAL_FORMAT};
 use crate::passes::reference::vpl_visibility::{GatherVisibility, no_visibility_atlases};
 pub use crate::settings::knecht::InterleaveSettings;
 use crate::timing::PassRec;
@@ -59,7 +59,7 @@ pub const SPLIT_INPUTS_BINDINGS: Bindings = Bindings {
         binding(2, "g_normal", Kind::Texture { filterable: false }),
         binding(3, "g_albedo", Kind::Texture { filterable: false }),
         binding(4, "g_material", Kind::Texture { filterable: false }),
-        binding(5, "s_position", Kind::StorageTexture(POSITION_FORMAT)),
+        binding(5, "s_position", Kind::StorageTexture(LINEAR_DEPTH_FORMAT)),
         binding(6, "s_normal", Kind::StorageTexture(NORMAL_FORMAT)),
         binding(7, "s_albedo", Kind::StorageTexture(ALBEDO_FORMAT)),
         binding(8, "s_material", Kind::StorageTexture(MATERIAL_FORMAT)),
@@ -323,7 +323,7 @@ impl InterleavePass {
         let st = wgpu::TextureUsages::STORAGE_BINDING;
         let t = |label, w, h, f| crate::passes::create_target(device, label, w, h, f, st);
         let split = split_passes.then(|| Split {
-            position: t("interleave.split.position", sw, sh, POSITION_FORMAT),
+            position: t("interleave.split.position", sw, sh, LINEAR_DEPTH_FORMAT),
             normal: t("interleave.split.normal", sw, sh, NORMAL_FORMAT),
             albedo: t("interleave.split.albedo", sw, sh, ALBEDO_FORMAT),
             material: t("interleave.split.material", sw, sh, MATERIAL_FORMAT),
@@ -387,7 +387,12 @@ impl InterleavePass {
             &s.albedo,
         );
         reg.register("interleave.split.normal", BufferKind::Direction, "split G-buffer: normals", &s.normal);
-        reg.register("interleave.split.position", BufferKind::Data, "split G-buffer: position and depth", &s.position);
+        reg.register(
+            "interleave.split.position",
+            BufferKind::Data,
+            "split G-buffer: linear depth (the gather rebuilds the point at the source pixel)",
+            &s.position,
+        );
         reg.register("interleave.split.material", BufferKind::Data, "split G-buffer: SI, SP", &s.material);
         reg.register(
             "indirect.accum",
@@ -467,7 +472,7 @@ impl InterleavePass {
         let (sw, sh) = (tw * n, th * n);
         let tile = crate::passes::TILE;
         let Some(s) = self.split.as_ref().filter(|_| self.split_passes) else {
-            let group = gather_group([&g.position, &g.normal, &g.albedo, &g.material], &merged_v, &irradiance_v);
+            let group = gather_group([&g.linear_depth, &g.normal, &g.albedo, &g.material], &merged_v, &irradiance_v);
             timer.scope(ctx, encoder, "interleave.gather", |e, slot| {
                 let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("interleave.gather_fused"),
@@ -492,7 +497,7 @@ impl InterleavePass {
             &self.split_layout,
             [
                 self.split_params.as_entire_binding(),
-                tv(&g.position),
+                tv(&g.linear_depth),
                 tv(&g.normal),
                 tv(&g.albedo),
                 tv(&g.material),
@@ -573,7 +578,7 @@ impl InterleavePass {
         let resources = [
             self.filter_params.as_entire_binding(),
             tv(src),
-            tv(&g.position),
+            tv(&g.linear_depth),
             tv(&g.normal),
             tv(&dst),
             tv(irradiance),

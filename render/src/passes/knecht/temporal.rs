@@ -261,7 +261,7 @@ impl TemporalPass {
         let resources = [
             self.params.as_entire_binding(),
             tv(current),
-            tv(&g.position),
+            tv(&g.linear_depth),
             tv(&g.normal),
             tv(&g.motion),
             tv(&prev_n),

@@ -1,0 +1,134 @@
+//! Stage 1's world positions rebuilt from the camera G-buffer's linear depth (issue #53,
+//! docs/architecture.md "The camera G-buffer's position"). Shader: `shaders/gbuffer/position.wgsl`.
+//!
+//! The camera's G-buffer writes the linear depth of Knecht 002 §4.2 (Eq. 4.2, unnormalised)
+//! as its target 0, 4 bytes a pixel, where it wrote the world position and the depth in 16.
+//! The passes that moved to it (the direct light, Knecht's gather, filter and merge) rebuild
+//! the point themselves; the others, and every viewer, probe and read-back of
+//! `gbuffer.position`, read this pass's texture, which is filled in the frame when one of
+//! the frame's steps needs it, and otherwise only when it is read ([`Derived`]): a frame
+//! that no one looks at the position of never writes it.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use glam::{Mat4, Vec3, Vec4};
+
+use crate::buffers::Derived;
+use crate::gpu::GpuContext;
+use crate::gpu::bindings::{Bindings, Kind, binding};
+use crate::passes::gbuffer::{GBuffer, POSITION_FORMAT};
+
+pub const POSITION_BINDINGS: Bindings = Bindings {
+    label: "gbuffer.position.inputs",
+    shader: "gbuffer/position.wgsl",
+    group: 0,
+    entry: None,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "camera", Kind::Uniform),
+        binding(1, "linear_depth", Kind::Texture { filterable: false }),
+        binding(2, "out_position", Kind::StorageTexture(POSITION_FORMAT)),
+    ],
+};
+
+/// The pass that fills `gbuffer.position` from `gbuffer.linear_depth`.
+pub struct PositionPass {
+    ctx: GpuContext,
+    pipeline: wgpu::ComputePipeline,
+    group: wgpu::BindGroup,
+    /// The camera of the frame the linear depth was drawn for (copied from the frame's
+    /// camera uniform when the G-buffer runs): a later read rebuilds the positions with it
+    /// even after the next frame has written its own camera.
+    camera: wgpu::Buffer,
+    size: (u32, u32),
+    /// Whether the linear depth changed since the position was last filled.
+    stale: AtomicBool,
+}
+
+impl PositionPass {
+    pub fn new(ctx: &GpuContext, targets: &GBuffer) -> Arc<Self> {
+        let device = &ctx.device;
+        let layout = POSITION_BINDINGS.layout(device);
+        let module = crate::shaders::create_module(device, "gbuffer/position.wgsl");
+        let pipeline = crate::passes::compute_pipeline(device, "gbuffer.position", &module, "cs_position", &[&layout]);
+        let size = std::mem::size_of::<crate::passes::CameraUniform>() as u64;
+        let camera = crate::passes::uniform_buffer(device, "gbuffer.position.camera", size);
+        let tv = wgpu::BindingResource::TextureView;
+        let v = &targets.views;
+        let group = POSITION_BINDINGS.group(
+            device,
+            &layout,
+            [camera.as_entire_binding(), tv(&v.linear_depth), tv(&v.position)],
+        );
+        let size = (targets.position.width(), targets.position.height());
+        Arc::new(Self { ctx: ctx.clone(), pipeline, group, camera, size, stale: AtomicBool::new(false) })
+    }
+
+    /// Keeps the camera the G-buffer was just drawn with (`camera`: the frame's uniform).
+    pub fn keep_camera(&self, enc: &mut wgpu::CommandEncoder, camera: &wgpu::Buffer) {
+        enc.copy_buffer_to_buffer(camera, 0, &self.camera, 0, self.camera.size());
+    }
+
+    /// Records the pass (after [`Self::keep_camera`] of the same G-buffer).
+    pub fn record(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) {
+        crate::passes::dispatch_2d(
+            enc,
+            "gbuffer.position",
+            &self.pipeline,
+            &self.group,
+            &[],
+            timestamp_writes,
+            self.size,
+        );
+    }
+
+    /// Takes the stale flag: whether the position needed filling (it is now the caller's to
+    /// fill or to mark stale again with [`Self::set_stale`]).
+    pub fn take_stale(&self) -> bool {
+        self.stale.swap(false, Ordering::SeqCst)
+    }
+
+    pub fn set_stale(&self, stale: bool) {
+        self.stale.store(stale, Ordering::SeqCst);
+    }
+}
+
+impl Derived for PositionPass {
+    fn refresh(&self) {
+        if !self.take_stale() {
+            return;
+        }
+        self.ctx.make_current();
+        let mut enc = self
+            .ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("gbuffer.position.on_read") });
+        crate::counters::traffic::begin_scope("gbuffer.position");
+        self.record(&mut enc, None);
+        crate::counters::traffic::end_scope();
+        self.ctx.submit([enc.finish()]);
+    }
+}
+
+/// CPU twin of `world_from_linear_depth` (shaders/common/camera.wgsl): the world point of
+/// pixel `p`'s centre at linear view depth `depth`, for a camera with `view_proj` and `view`
+/// at `eye` and a `size`-pixel image.
+pub fn world_from_linear_depth(
+    view_proj: Mat4,
+    view: Mat4,
+    eye: Vec3,
+    size: (u32, u32),
+    p: (u32, u32),
+    depth: f32,
+) -> Vec3 {
+    let uv = (glam::Vec2::new(p.0 as f32, p.1 as f32) + 0.5) / glam::Vec2::new(size.0 as f32, size.1 as f32);
+    let far = view_proj.inverse() * Vec4::new(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 1.0, 1.0);
+    let dir = far.truncate() / far.w - eye;
+    let forward = -Vec3::new(view.x_axis.z, view.y_axis.z, view.z_axis.z);
+    eye + dir * (depth / dir.dot(forward))
+}
