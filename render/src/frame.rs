@@ -27,6 +27,13 @@ impl Renderer {
         // Whether `gbuffer.position` lags the linear depth (issue #53): this frame fills it
         // or leaves it to be filled when read, never before its camera is written below.
         let position_stale = self.gbuffer.position.as_ref().is_some_and(|p| p.take_stale());
+        // What the read-backs recorded in this frame copy (a buffer filled only when read is
+        // then filled in the frame).
+        let read_back = self
+            .readbacks
+            .get_mut()
+            .map(|r| r.wanted())
+            .unwrap_or(crate::readback::Wanted { all: true, names: vec![] });
 
         // The scene at this instant; the sky's directions join its lights (`passes::sky`).
         let state = self.frame_state();
@@ -68,8 +75,7 @@ impl Renderer {
                 position.keep_camera(&mut enc, &self.camera_buffer);
             }
             let pinned = self.stages.explain_pixel.is_some();
-            let read = self.steps.needs_position(pinned)
-                || self.readbacks.get_mut().map(|r| r.wants("gbuffer.position")).unwrap_or(true);
+            let read = self.steps.needs_position(pinned) || read_back.reads("gbuffer.position");
             if position_stale && read {
                 self.timer.scope(&ctx, &mut enc, "gbuffer.position", |e, slot| {
                     position.record(e, slot.and_then(|s| s.compute(true, true)))
@@ -106,6 +112,7 @@ impl Renderer {
             rotating_sky: self.rotating_sky(),
             explain_pixel: self.stages.explain_pixel,
             unchanged: self.kept.contains(&"gbuffer") && self.kept.contains(&"direct"),
+            read_back,
         };
         let unchanged = f.unchanged;
         let mut rec = Recorder { enc: &mut enc, timer: &mut self.timer };
@@ -128,7 +135,7 @@ impl Renderer {
             direct: &direct_view,
             indirect: indirect.as_ref(),
             near_field: near_field.as_ref(),
-            sky: (&self.sky_background, &self.camera_buffer, &self.gbuffer.targets.views.normal),
+            sky: (&self.sky_background, &self.camera_buffer, &self.gbuffer.targets.views.linear_depth),
         };
         let (compose, ts) = (&mut self.compose, &self.settings.tonemap);
         self.timer.pass(&ctx, &mut enc, "compose", |r| compose.compose(r, ts, &inputs));

@@ -88,6 +88,20 @@ struct InFlight {
     mapped: Option<MapState>,
 }
 
+/// The buffers a frame's read-backs copy ([`Readbacks::wanted`]).
+#[derive(Clone, Debug, Default)]
+pub struct Wanted {
+    /// A probe: every buffer.
+    pub all: bool,
+    pub names: Vec<String>,
+}
+
+impl Wanted {
+    pub fn reads(&self, name: &str) -> bool {
+        self.all || self.names.iter().any(|n| n == name)
+    }
+}
+
 /// The read-back ring of one renderer.
 #[derive(Default)]
 pub struct Readbacks {
@@ -122,14 +136,18 @@ impl Readbacks {
         self.latest.remove(key);
     }
 
-    /// Whether a request not yet recorded reads the buffer `name` (a probe reads them all).
-    pub fn wants(&self, name: &str) -> bool {
-        self.requested.values().any(|(what, _)| match what {
-            Readback::Probe(_) => true,
-            Readback::Image { name: n, .. } => n == name,
-            Readback::Texels(points) => points.iter().any(|(n, _, _)| n == name),
-            Readback::Storage(_) => false,
-        })
+    /// The buffers the requests not yet recorded read (a probe reads them all).
+    pub fn wanted(&self) -> Wanted {
+        let mut w = Wanted::default();
+        for (what, _) in self.requested.values() {
+            match what {
+                Readback::Probe(_) => w.all = true,
+                Readback::Image { name, .. } => w.names.push(name.clone()),
+                Readback::Texels(points) => w.names.extend(points.iter().map(|(n, _, _)| n.clone())),
+                Readback::Storage(_) => {}
+            }
+        }
+        w
     }
 
     /// Read-backs requested or in flight.

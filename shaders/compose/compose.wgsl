@@ -25,7 +25,8 @@ struct SkyParams {
 @group(0) @binding(6) var<uniform> sky: SkyParams;
 @group(0) @binding(7) var sky_image: texture_2d<f32>;
 @group(0) @binding(8) var<uniform> camera: Camera;
-@group(0) @binding(9) var gbuffer_normal: texture_2d<f32>;
+// The camera G-buffer's linear depth (issue #53): 0 where no geometry covers the pixel.
+@group(0) @binding(9) var gbuffer_depth: texture_2d<f32>;
 // x: 2^EV, y: key a, z: L_white, w: 0 no tone mapping here (compose/tonemap.wgsl follows),
 // 1 manual exposure, 2 automatic with the previous frame's L̄w
 @group(0) @binding(10) var<uniform> tone: vec4<f32>;
@@ -72,7 +73,7 @@ fn cs_compose(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(workgroup_
     }
     let px = vec2<i32>(gid.xy);
     var c = textureLoad(emission, px, 0).rgb + textureLoad(direct, px, 0).rgb + textureLoad(indirect, px, 0).rgb + textureLoad(near_field, px, 0).rgb;
-    if (sky.radiance.w > 0.5 && textureLoad(gbuffer_normal, px, 0).w < 0.5) {
+    if (sky.radiance.w > 0.5 && textureLoad(gbuffer_depth, px, 0).x <= 0.0) {
         c = c + sky_radiance(pixel_ray(gid.xy, size));
     }
     textureStore(out_hdr, px, vec4<f32>(c, 1.0));

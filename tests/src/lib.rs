@@ -34,8 +34,7 @@ pub const DEFAULT_PASSES: &[&str] = &[
     "ism.splat",
     "ism.pull_push",
     "interleave.gather",
-    "interleave.filter",
-    "temporal",
+    "temporal.filter_merge",
     "compose",
     "compose.luminance",
 ];

@@ -387,6 +387,56 @@ fn the_fused_gather_equals_split_gather_and_merge() {
     }
 }
 
+/// Issue #53: after the gather the default list runs the geometry-aware filter fused into the
+/// confidence merge (`temporal.filter_merge`); a frame whose read-backs copy the filter's
+/// output runs the two passes instead. Over still and moving frames both give the same merged
+/// light within the half-float rounding of the filter's two outputs that the fused pass skips,
+/// and the fused frame's `indirect.filtered`, filled when read, is the two passes' bit for bit.
+#[test]
+fn the_filter_fused_into_the_merge_equals_the_two_passes() {
+    use gi_render::readback::Readback;
+    let mut fused = gi_lab_tests::default_renderer(96, 64);
+    let mut apart = gi_lab_tests::default_renderer(96, 64);
+    let names = |r: &mut Renderer| -> Vec<String> { r.render_frame().into_iter().map(|t| t.name).collect() };
+    let mut worst = 0.0f32;
+    for frame in 0..6 {
+        if frame >= 3 {
+            // The camera moves: the history is reprojected through the movement buffer.
+            let step = Vec3::new(0.004, 0.002, 0.0) * fused.bounds().radius();
+            fused.camera.fly(step);
+            apart.camera.fly(step);
+        }
+        let image = Readback::Image { name: "indirect.filtered".into(), layer: 0, mip: 0 };
+        apart.read_later("test.filtered", image, frame);
+        let (pf, pa) = (names(&mut fused), names(&mut apart));
+        assert!(pf.iter().any(|p| p == "temporal.filter_merge"), "frame {frame}: {pf:?}");
+        assert!(!pf.iter().any(|p| p == "interleave.filter" || p == "temporal"), "frame {frame}: {pf:?}");
+        assert!(pa.iter().any(|p| p == "interleave.filter") && pa.iter().any(|p| p == "temporal"), "{pa:?}");
+        assert!(!pa.iter().any(|p| p == "temporal.filter_merge"), "frame {frame}: {pa:?}");
+        let (hf, ha) = (
+            fused.readback("temporal.history").expect("history"),
+            apart.readback("temporal.history").expect("history"),
+        );
+        for (a, b) in hf.data.iter().zip(&ha.data) {
+            for c in 0..3 {
+                let step = gi_render::buffers::half_step(a[c].abs().max(b[c].abs()));
+                worst = worst.max((a[c] - b[c]).abs() / step.max(1e-6));
+            }
+            assert_eq!(a[3], b[3], "frame {frame}: the history's depth");
+        }
+        let (ff, fa) = (
+            fused.readback("indirect.filtered").expect("filled when read"),
+            apart.readback("indirect.filtered").expect("filtered"),
+        );
+        assert!(ff.data.iter().any(|p| p[0] > 0.0), "frame {frame}: the filter lights something");
+        assert_eq!(ff.data, fa.data, "frame {frame}: indirect.filtered filled when read");
+    }
+    // A merged value differs by the rounding of its filtered input (half a step each way) and
+    // the history's own rounding: at most a few steps of the history's half floats.
+    println!("fused against separate merges: at most {worst} half-float steps");
+    assert!(worst <= 4.0, "fused and separate merges differ by {worst} half-float steps");
+}
+
 /// The default box with a checkerboard base-colour texture on every surface (8 cells across
 /// a 64-texel texture), 96², Knecht's defaults (filter, then the confidence merge). Renders
 /// four still frames, then pans the camera sideways by 0.2 % of the scene's radius a frame

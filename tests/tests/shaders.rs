@@ -146,6 +146,9 @@ fn uniform_sizes_match_wgsl() {
     assert_eq!(struct_size(&f, "FilterParams") as usize, std::mem::size_of::<interleave::FilterParams>());
     let c = parse("knecht/temporal/confidence.wgsl");
     assert_eq!(struct_size(&c, "ConfidenceParams") as usize, std::mem::size_of::<temporal::ConfidenceParams>());
+    let fm = parse("knecht/temporal/filter_merge.wgsl");
+    assert_eq!(struct_size(&fm, "ConfidenceParams") as usize, std::mem::size_of::<temporal::ConfidenceParams>());
+    assert_eq!(struct_size(&fm, "FilterParams") as usize, std::mem::size_of::<interleave::FilterParams>());
 }
 
 /// The hot reload's building blocks: what a file affects, validation of a candidate text

@@ -7,7 +7,7 @@ use super::{Flow, Recorder, StagePasses};
 use crate::lab_settings::LabSettings;
 use crate::passes::knecht::interleave::ShadeInputs;
 use crate::passes::knecht::stage::FirstBounceSource;
-use crate::passes::knecht::temporal::MergeOrder;
+use crate::passes::knecht::temporal::{FusedFilter, MergeOrder};
 use crate::passes::knecht::vpl_importance::ReceiverBrdf;
 use crate::passes::stages::FrameInputs;
 use crate::settings::pipeline::{Reconstruction, ShadingPoints, Temporal};
@@ -78,6 +78,34 @@ pub(super) fn merge(f: &FrameInputs, x: &mut StagePasses, r: &mut Recorder, flow
     let (ctx, s, depth_range) = (f.ctx, &f.settings.temporal, f.depth_range());
     r.timer.scope(ctx, r.enc, "temporal", |e, slot| {
         t.run(PassRec { ctx, enc: e, slot }, s, depth_range, &src, f.gbuffer, irradiance.as_ref())
+    });
+    flow.light = Some(crate::passes::view(t.history(), "temporal.history"));
+    Some(())
+}
+
+/// Stages 6–7 in one pass when the filter precedes the merge (issue #53): the geometry-aware
+/// filter of the gathered light fused into the confidence merge
+/// (`TemporalPass::run_fused`); `indirect.filtered` and its irradiance are filled from the
+/// same inputs only when read. While a pixel is explained, or a read-back of this frame copies
+/// the filter's output, the two passes run as [`filter`] and [`merge`].
+pub(super) fn filter_and_merge(f: &FrameInputs, x: &mut StagePasses, r: &mut Recorder, flow: &mut Flow) -> Option<()> {
+    let apart = ["indirect.filtered", "indirect.filtered_irradiance"].iter().any(|n| f.read_back.reads(n));
+    if f.explain_pixel.is_some() || apart {
+        filter(f, x, r, flow)?;
+        return merge(f, x, r, flow);
+    }
+    let gathered = flow.light.take()?;
+    let demodulate = merge_irradiance(f, x).is_some();
+    let (ctx, depth_range) = (f.ctx, f.depth_range());
+    let i = x.interleave.as_ref()?;
+    let s = &f.settings.interleave;
+    let irradiance = s.demodulate.then(|| crate::passes::view(&i.irradiance, "indirect.irradiance"));
+    let params = i.prepare_fused(ctx, s, depth_range, &gathered, f.gbuffer, irradiance.as_ref());
+    let t = x.temporal.as_mut()?;
+    let filter = FusedFilter { demodulate, params, irradiance: irradiance.as_ref() };
+    r.timer.scope(ctx, r.enc, "temporal.filter_merge", |e, slot| {
+        let rec = PassRec { ctx, enc: e, slot };
+        t.run_fused(rec, &f.settings.temporal, depth_range, &gathered, f.gbuffer, filter)
     });
     flow.light = Some(crate::passes::view(t.history(), "temporal.history"));
     Some(())

@@ -192,8 +192,14 @@ impl StepList {
     /// explained (the `explain.*` steps run). Knecht's steps read the linear depth and rebuild
     /// the points themselves; every other step reads the position.
     pub(crate) fn needs_position(&self, pinned: bool) -> bool {
-        const LINEAR_DEPTH: &[&str] =
-            &["knecht.vpls", "knecht.visibility", "knecht.gather", "knecht.filter", "knecht.merge"];
+        const LINEAR_DEPTH: &[&str] = &[
+            "knecht.vpls",
+            "knecht.visibility",
+            "knecht.gather",
+            "knecht.filter",
+            "knecht.merge",
+            "knecht.filter_and_merge",
+        ];
         self.indirect
             .iter()
             .chain(&self.near_field)
@@ -325,6 +331,9 @@ fn vpl_steps(s: &LabSettings) -> Vec<Step> {
     let merge = (p.temporal == Temporal::ConfidenceMerge).then(|| step(7, "knecht.merge", knecht::merge));
     if merges_first(s) {
         list.extend(merge.into_iter().chain(filter));
+    } else if filter.is_some() && merge.is_some() {
+        // Filter, then merge: one pass (issue #53, `knecht::filter_and_merge`).
+        list.push(step(7, "knecht.filter_and_merge", knecht::filter_and_merge));
     } else {
         list.extend(filter.into_iter().chain(merge));
     }

@@ -54,7 +54,7 @@ pub struct ComposePass {
 
 /// What stage 7's compose adds up: the surfaces' emission, the direct light, the indirect
 /// light and the near field (None: black), and the sky behind the scene (its parameters and
-/// image, the camera uniform for the rays, the G-buffer's normals for its coverage).
+/// image, the camera uniform for the rays, the G-buffer's linear depth for its coverage).
 #[derive(Clone, Copy)]
 pub struct ComposeInputs<'a> {
     pub emission: &'a wgpu::TextureView,
@@ -85,7 +85,7 @@ pub const COMPOSE_BINDINGS: Bindings = Bindings {
         binding(6, "sky", Kind::Uniform),
         binding(7, "sky_image", TEXTURE),
         binding(8, "camera", Kind::Uniform),
-        binding(9, "gbuffer_normal", TEXTURE),
+        binding(9, "gbuffer_depth", TEXTURE),
         binding(10, "tone", Kind::Uniform),
         binding(11, "log_average", READ),
         binding(12, "out_ldr", Kind::StorageTexture(LDR_FORMAT)),
@@ -232,7 +232,7 @@ impl ComposePass {
     /// automatic exposure has no previous L̄w yet (then `tonemap` does it after `luminance`).
     pub fn compose(&mut self, r: PassRec<'_, '_>, settings: &TonemapSettings, inputs: &ComposeInputs) {
         let PassRec { ctx, enc: encoder, slot } = r;
-        let ComposeInputs { emission, direct, indirect, near_field, sky: (sky, camera, normal) } = *inputs;
+        let ComposeInputs { emission, direct, indirect, near_field, sky: (sky, camera, depth) } = *inputs;
         let mode = match (settings.auto_exposure, self.exposure_known) {
             (false, _) => 1.0,
             (true, true) => 2.0,
@@ -259,7 +259,7 @@ impl ComposePass {
                 sky.params.as_entire_binding(),
                 tv(&sky_view),
                 camera.as_entire_binding(),
-                tv(normal),
+                tv(depth),
                 self.compose_tone.as_entire_binding(),
                 self.log_average.as_entire_binding(),
                 tv(&ldr_view),

@@ -1,10 +1,13 @@
 //! Stage 1, the camera G-buffer (Knecht 002 §4.2, movement buffer §3.5.1).
 //! Shader: `shaders/gbuffer/gbuffer.wgsl`.
 //!
-//! ⚠[knecht.gbuffer-precision] Departure from the thesis' four 32-bit targets: we keep full precision (world position
-//! in `Rgba32Float`, normals in `Rgba16Float`) instead of packing normal.z into the sign of
-//! SI (Eq. 4.1), because a lab must show exact values; the linear depth of Eq. 4.2 is kept
-//! unnormalised in `gbuffer.position.w` (view-space distance in scene units). The thesis
+//! ⚠[knecht.gbuffer-precision] Departure from the thesis' four 32-bit targets: we keep full precision (the linear
+//! depth of Eq. 4.2 unnormalised in `R32Float`, normals in `Rgba16Float`) instead of packing
+//! normal.z into the sign of SI (Eq. 4.1), because a lab must show exact values. The camera's
+//! target 0 is that depth alone (issue #53; docs/architecture.md "The camera G-buffer's
+//! position"): the passes rebuild the point from it, and `gbuffer.position` (world position,
+//! depth in w) is filled from it when read (`passes::gbuffer_position`); the light views'
+//! G-buffers keep the position in `Rgba32Float`. The thesis
 //! has no emitters; `gbuffer.emission` carries glTF emission so that emissive surfaces
 //! (the classic Cornell box's light quad) show in the direct light.
 
@@ -16,7 +19,7 @@ use crate::gpu::GpuContext;
 use crate::scene::SceneState;
 use crate::scene::upload::GpuScene;
 
-pub const POSITION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+pub use super::gbuffer_position::POSITION_FORMAT;
 /// The camera G-buffer's target 0 (issue #53): the linear view depth alone (Eq. 4.2's depth,
 /// unnormalised, scene units), 4 bytes a pixel instead of the position's 16. The passes
 /// rebuild the point from it (`shaders/common/camera.wgsl` `world_from_linear_depth`), and
@@ -123,7 +126,7 @@ impl GBufferPass {
         let [single_sided, double_sided] = [Some(wgpu::Face::Back), None].map(|c| make(c, true));
         let [plain_single_sided, plain_double_sided] = [Some(wgpu::Face::Back), None].map(|c| make(c, false));
         let targets = create_targets_with(ctx, width, height, &name, linear);
-        let position = linear.then(|| super::gbuffer_position::PositionPass::new(ctx, &targets));
+        let position = linear.then(|| position_pass(ctx, &targets));
         let last = Default::default();
         Self {
             name,
@@ -223,7 +226,7 @@ impl GBufferPass {
         let linear = self.position.is_some();
         self.targets = create_targets_with(ctx, width, height, &self.name, linear);
         if linear {
-            self.position = Some(super::gbuffer_position::PositionPass::new(ctx, &self.targets));
+            self.position = Some(position_pass(ctx, &self.targets));
         }
     }
 
@@ -386,6 +389,12 @@ impl GBuffer {
             multiview_mask: None,
         })
     }
+}
+
+/// The camera's position from its linear depth (issue #53), for these targets.
+fn position_pass(ctx: &GpuContext, t: &GBuffer) -> std::sync::Arc<super::gbuffer_position::PositionPass> {
+    let size = (t.position.width(), t.position.height());
+    super::gbuffer_position::PositionPass::new(ctx, &t.views.linear_depth, &t.views.position, size)
 }
 
 /// The six colour targets of a G-buffer pipeline, in attachment order (position, normal,

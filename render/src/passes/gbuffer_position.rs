@@ -17,7 +17,10 @@ use glam::{Mat4, Vec3, Vec4};
 use crate::buffers::Derived;
 use crate::gpu::GpuContext;
 use crate::gpu::bindings::{Bindings, Kind, binding};
-use crate::passes::gbuffer::{GBuffer, POSITION_FORMAT};
+
+/// `gbuffer.position`'s format (and the light views' and the hemispheres' target 0): world
+/// position in xyz, linear depth in w.
+pub const POSITION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 pub const POSITION_BINDINGS: Bindings = Bindings {
     label: "gbuffer.position.inputs",
@@ -47,21 +50,22 @@ pub struct PositionPass {
 }
 
 impl PositionPass {
-    pub fn new(ctx: &GpuContext, targets: &GBuffer) -> Arc<Self> {
+    /// The pass from the camera G-buffer's `linear_depth` into `position` (`size` pixels).
+    pub fn new(
+        ctx: &GpuContext,
+        linear_depth: &wgpu::TextureView,
+        position: &wgpu::TextureView,
+        size: (u32, u32),
+    ) -> Arc<Self> {
         let device = &ctx.device;
         let layout = POSITION_BINDINGS.layout(device);
         let module = crate::shaders::create_module(device, "gbuffer/position.wgsl");
         let pipeline = crate::passes::compute_pipeline(device, "gbuffer.position", &module, "cs_position", &[&layout]);
-        let size = std::mem::size_of::<crate::passes::CameraUniform>() as u64;
-        let camera = crate::passes::uniform_buffer(device, "gbuffer.position.camera", size);
+        let bytes = std::mem::size_of::<crate::passes::CameraUniform>() as u64;
+        let camera = crate::passes::uniform_buffer(device, "gbuffer.position.camera", bytes);
         let tv = wgpu::BindingResource::TextureView;
-        let v = &targets.views;
-        let group = POSITION_BINDINGS.group(
-            device,
-            &layout,
-            [camera.as_entire_binding(), tv(&v.linear_depth), tv(&v.position)],
-        );
-        let size = (targets.position.width(), targets.position.height());
+        let group =
+            POSITION_BINDINGS.group(device, &layout, [camera.as_entire_binding(), tv(linear_depth), tv(position)]);
         Arc::new(Self { ctx: ctx.clone(), pipeline, group, camera, size, stale: AtomicBool::new(false) })
     }
 

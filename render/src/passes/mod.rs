@@ -86,6 +86,7 @@ pub const BINDINGS: &[&crate::gpu::bindings::Bindings] = &[
     &compose::LUMINANCE_BINDINGS,
     &knecht::interleave::FILTER_BINDINGS,
     &knecht::temporal::CONFIDENCE_BINDINGS,
+    &knecht::temporal::FILTER_MERGE_BINDINGS,
     &knecht::vpl_bounce::BOUNCE_BINDINGS,
     &reference::vpl::SAMPLE_BINDINGS,
     &direct::DIRECT_GBUFFER_BINDINGS,

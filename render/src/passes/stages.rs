@@ -61,6 +61,9 @@ pub struct FrameInputs<'a> {
     /// Steps that depend on nothing else keep their last result too (the hemispheres at the
     /// HCB's samples).
     pub unchanged: bool,
+    /// The buffers this frame's recorded read-backs copy (a pass that leaves one to be filled
+    /// when read fills it in the frame instead, issue #53).
+    pub read_back: crate::readback::Wanted,
 }
 
 /// What the later stages ask of stage 2's direct light besides its image: the same lights and

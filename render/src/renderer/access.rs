@@ -372,7 +372,7 @@ impl Renderer {
 /// belong to; None for shaders outside the frame (the viewer's).
 pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
     Some(match entry {
-        "gbuffer/gbuffer.wgsl" => "gbuffer",
+        "gbuffer/gbuffer.wgsl" | "gbuffer/position.wgsl" => "gbuffer",
         "shadow/shadow.wgsl" => "direct.shadow",
         "direct/direct.wgsl" => "direct",
         "compose/compose.wgsl" | "compose/tonemap.wgsl" | "compose/luminance.wgsl" => "compose",
@@ -392,6 +392,7 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         | "knecht/interleave/merge.wgsl"
         | "knecht/interleave/filter.wgsl"
         | "knecht/temporal/confidence.wgsl"
+        | "knecht/temporal/filter_merge.wgsl"
         | "hcb/base.wgsl"
         | "hcb/build.wgsl"
         | "hcb/samples.wgsl"
@@ -455,7 +456,7 @@ pub fn scope_output(scope: &str) -> Option<&'static str> {
         // its output is `indirect.accum`, which the merge turns into this.
         "interleave.gather" => "indirect.merged",
         "interleave.merge" => "indirect.merged",
-        "temporal" => "temporal.confidence",
+        "temporal" | "temporal.filter_merge" => "temporal.confidence",
         "interleave.filter" => "indirect.filtered",
         "hcb.build" => "hcb.samples",
         "hcb.gather" => "hcb.samples",

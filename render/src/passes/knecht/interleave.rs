@@ -154,6 +154,9 @@ pub struct InterleavePass {
     tile_offsets: wgpu::Buffer,
     /// Gathers run so far: the seed of the per-frame slot→tile map.
     pub frames: u32,
+    /// The filter's own pass for a read of `indirect.filtered` after a frame that fused it
+    /// into the merge (issue #53).
+    on_read: std::sync::Arc<super::filter_on_read::FilterOnRead>,
 }
 
 /// The geometry-aware filter's bindings (`knecht/interleave/filter.wgsl`, group 0).
@@ -239,6 +242,7 @@ impl InterleavePass {
             "cs_filter",
             &[&filter_layout],
         );
+        let on_read = super::filter_on_read::FilterOnRead::new(ctx, &filter_pipeline, (width, height));
         let uniform = |label, size| {
             device.counted_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -279,6 +283,7 @@ impl InterleavePass {
             dummy_exact,
             tile_offsets: Self::offsets_buffer(device, 256),
             frames: 0,
+            on_read,
         }
     }
 
@@ -345,6 +350,7 @@ impl InterleavePass {
         (self.split, [self.merged, self.irradiance, self.filtered, self.filtered_irradiance]) =
             Self::targets(&ctx.device, width, height, n, split_passes);
         (self.width, self.height, self.n, self.split_passes) = (width, height, n, split_passes);
+        self.on_read = super::filter_on_read::FilterOnRead::new(ctx, &self.filter_pipeline, (width, height));
         true
     }
 
@@ -365,17 +371,19 @@ impl InterleavePass {
             "the irradiance of indirect.merged's light (Σ E·V·N/N_t, before each pixel's BRDF): what the demodulated filter averages",
             &self.irradiance,
         );
-        reg.register(
+        reg.register_derived(
             "indirect.filtered",
             BufferKind::Hdr,
-            "indirect light after the geometry-aware n×n filter (Knecht §3.4.1); the confidence merge follows",
+            "indirect light after the geometry-aware n×n filter (Knecht §3.4.1); the confidence merge follows (fused into it by default: then filled when read)",
             &self.filtered,
+            self.on_read.clone(),
         );
-        reg.register(
+        reg.register_derived(
             "indirect.filtered_irradiance",
             BufferKind::Hdr,
             "the demodulated filter's mean irradiance E (indirect.filtered = k·E + the mean specular light): what the demodulated confidence merge keeps (stale when the filter ran on L)",
             &self.filtered_irradiance,
+            self.on_read.clone(),
         );
     }
 
@@ -564,6 +572,49 @@ impl InterleavePass {
         irradiance: Option<&wgpu::TextureView>,
     ) {
         let PassRec { ctx, enc: encoder, slot } = r;
+        let group = self.filter_group(ctx, s, depth_range, src, g, irradiance);
+        self.on_read.arm(None);
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("interleave.filter"),
+            timestamp_writes: slot.and_then(|s| s.compute(true, true)),
+        });
+        pass.set_pipeline(&self.filter_pipeline);
+        pass.set_group(0, &group, &[]);
+        pass.dispatch_workgroups(
+            self.width.div_ceil(crate::passes::TILE),
+            self.height.div_ceil(crate::passes::TILE),
+            1,
+        );
+    }
+
+    /// The filter's uniform for a merge that runs it fused (`TemporalPass::run_fused`,
+    /// issue #53), written for these inputs as [`Self::filter`] would; its outputs
+    /// (`indirect.filtered`, `indirect.filtered_irradiance`) are filled from the same inputs
+    /// when read.
+    pub fn prepare_fused(
+        &self,
+        ctx: &GpuContext,
+        s: &InterleaveSettings,
+        depth_range: f32,
+        src: &wgpu::TextureView,
+        g: &GBufferViews,
+        irradiance: Option<&wgpu::TextureView>,
+    ) -> &wgpu::Buffer {
+        let group = self.filter_group(ctx, s, depth_range, src, g, irradiance);
+        self.on_read.arm(Some(group));
+        &self.filter_params
+    }
+
+    /// Writes the filter's uniform and makes its bind group (see [`Self::filter`]).
+    fn filter_group(
+        &self,
+        ctx: &GpuContext,
+        s: &InterleaveSettings,
+        depth_range: f32,
+        src: &wgpu::TextureView,
+        g: &GBufferViews,
+        irradiance: Option<&wgpu::TextureView>,
+    ) -> wgpu::BindGroup {
         let n = self.n.max(1);
         let fp = FilterParams {
             n: [n, irradiance.is_some() as u32, 0, 0],
@@ -585,17 +636,6 @@ impl InterleavePass {
             tv(&g.albedo),
             tv(&dst_irradiance),
         ];
-        let group = FILTER_BINDINGS.group(&ctx.device, &self.filter_layout, resources);
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("interleave.filter"),
-            timestamp_writes: slot.and_then(|s| s.compute(true, true)),
-        });
-        pass.set_pipeline(&self.filter_pipeline);
-        pass.set_group(0, &group, &[]);
-        pass.dispatch_workgroups(
-            self.width.div_ceil(crate::passes::TILE),
-            self.height.div_ceil(crate::passes::TILE),
-            1,
-        );
+        FILTER_BINDINGS.group(&ctx.device, &self.filter_layout, resources)
     }
 }

@@ -6,6 +6,7 @@
 //! `shaders/knecht/ism/`, `shaders/knecht/interleave/`, `shaders/knecht/temporal/`.
 
 pub mod explain;
+pub mod filter_on_read;
 pub mod interleave;
 pub mod irsm;
 pub mod ism;

@@ -60,6 +60,46 @@ pub const CONFIDENCE_BINDINGS: Bindings = Bindings {
     ],
 };
 
+/// The geometry-aware filter fused into the confidence merge
+/// (`knecht/temporal/filter_merge.wgsl`, group 0, issue #53): the merge's bindings, with the
+/// gathered light and its irradiance in place of the filtered ones, and the filter's uniform.
+pub const FILTER_MERGE_BINDINGS: Bindings = Bindings {
+    label: "temporal.filter_merge.inputs",
+    shader: "knecht/temporal/filter_merge.wgsl",
+    group: 0,
+    entry: None,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "params", Kind::Uniform),
+        binding(1, "src", Kind::Texture { filterable: false }),
+        binding(2, "g_position", Kind::Texture { filterable: false }),
+        binding(3, "g_normal", Kind::Texture { filterable: false }),
+        binding(4, "g_motion", Kind::Texture { filterable: false }),
+        binding(5, "prev_normal", Kind::Texture { filterable: false }),
+        binding(6, "history_prev", Kind::Texture { filterable: false }),
+        binding(7, "confidence_out", Kind::StorageTexture(wgpu::TextureFormat::R32Float)),
+        binding(8, "history_out", Kind::StorageTexture(HISTORY_FORMAT)),
+        binding(9, "normal_out", Kind::StorageTexture(NORMAL_FORMAT)),
+        binding(10, "g_albedo", Kind::Texture { filterable: false }),
+        binding(11, "irradiance", Kind::Texture { filterable: false }),
+        binding(12, "split_prev", Kind::UintTexture),
+        binding(13, "split_out", Kind::StorageTexture(SPLIT_FORMAT)),
+        binding(14, "filter_params", Kind::Uniform),
+    ],
+};
+
+/// The filter a merge runs first, fused (`TemporalPass::run_fused`, issue #53).
+pub struct FusedFilter<'a> {
+    /// Whether the merge keeps the filter's mean irradiance apart (as [`TemporalPass::run`]
+    /// with `Some` irradiance).
+    pub demodulate: bool,
+    /// The filter's uniform (`interleave::FilterParams`, as `InterleavePass` wrote it).
+    pub params: &'a wgpu::Buffer,
+    /// The gathered light's irradiance, which a demodulated filter averages (None: the filter
+    /// averages the light itself).
+    pub irradiance: Option<&'a wgpu::TextureView>,
+}
+
 /// A 1×1 stand-in for the split history, bound by the explain replays when the merge did not
 /// run demodulated.
 pub fn no_split_view(device: &wgpu::Device, label: &str) -> wgpu::TextureView {
@@ -101,6 +141,9 @@ pub struct TemporalPass {
     layout: wgpu::BindGroupLayout,
     /// The merge of the thesis, then the demodulated one.
     pipeline: [wgpu::ComputePipeline; 2],
+    /// The same with the geometry-aware filter fused in front (issue #53).
+    fused_layout: wgpu::BindGroupLayout,
+    fused_pipeline: [wgpu::ComputePipeline; 2],
     params: wgpu::Buffer,
 }
 
@@ -115,6 +158,13 @@ impl TemporalPass {
             let label = if demodulate > 0.0 { "temporal.confidence.demodulated" } else { "temporal.confidence" };
             let constants = [("DEMODULATE", demodulate)];
             crate::gpu::compute_pipeline_with(device, label, (&module, "cs_confidence", &constants), &[&layout])
+        });
+        let fused_layout = FILTER_MERGE_BINDINGS.layout(device);
+        let fused_module = crate::shaders::create_module(device, "knecht/temporal/filter_merge.wgsl");
+        let fused_pipeline = [0.0, 1.0].map(|demodulate| {
+            let label = if demodulate > 0.0 { "temporal.filter_merge.demodulated" } else { "temporal.filter_merge" };
+            let entry = (&fused_module, "cs_filter_merge", &[("DEMODULATE", demodulate)][..]);
+            crate::gpu::compute_pipeline_with(device, label, entry, &[&fused_layout])
         });
         let params = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("temporal.params"),
@@ -137,6 +187,8 @@ impl TemporalPass {
             dummy_split: Self::split_pair(device, 1, 1, "temporal.history_split.unused"),
             layout,
             pipeline,
+            fused_layout,
+            fused_pipeline,
             params,
         }
     }
@@ -227,8 +279,37 @@ impl TemporalPass {
         g: &GBufferViews,
         irradiance: Option<&wgpu::TextureView>,
     ) {
+        self.merge(r, s, depth_range, current, g, (irradiance.is_some(), irradiance, None));
+    }
+
+    /// The geometry-aware filter of `gathered` and the merge of its result in one pass
+    /// (`knecht/temporal/filter_merge.wgsl`, issue #53): what `InterleavePass::filter` then
+    /// [`Self::run`] give, without `indirect.filtered` in between.
+    pub fn run_fused(
+        &mut self,
+        r: PassRec<'_, '_>,
+        s: &TemporalSettings,
+        depth_range: f32,
+        gathered: &wgpu::TextureView,
+        g: &GBufferViews,
+        filter: FusedFilter<'_>,
+    ) {
+        let how = (filter.demodulate, filter.irradiance, Some(filter.params));
+        self.merge(r, s, depth_range, gathered, g, how);
+    }
+
+    /// [`Self::run`] (`filter` None) or [`Self::run_fused`]; `how`: whether to merge
+    /// demodulated, the irradiance texture the shader reads, the fused filter's uniform.
+    fn merge(
+        &mut self,
+        r: PassRec<'_, '_>,
+        s: &TemporalSettings,
+        depth_range: f32,
+        current: &wgpu::TextureView,
+        g: &GBufferViews,
+        (demodulate, irradiance, filter): (bool, Option<&wgpu::TextureView>, Option<&wgpu::Buffer>),
+    ) {
         let PassRec { ctx, enc: encoder, slot } = r;
-        let demodulate = irradiance.is_some();
         if demodulate != self.split_written {
             // The other kind of history: this frame starts afresh.
             self.valid = false;
@@ -274,13 +355,24 @@ impl TemporalPass {
             tv(&split_prev),
             tv(&split_out),
         ];
-        let group = CONFIDENCE_BINDINGS.group(&ctx.device, &self.layout, resources);
+        let (group, pipeline, label) = match filter {
+            None => (
+                CONFIDENCE_BINDINGS.group(&ctx.device, &self.layout, resources),
+                &self.pipeline[demodulate as usize],
+                "temporal.confidence",
+            ),
+            Some(params) => {
+                let all = resources.into_iter().chain([params.as_entire_binding()]);
+                let group = FILTER_MERGE_BINDINGS.group(&ctx.device, &self.fused_layout, all);
+                (group, &self.fused_pipeline[demodulate as usize], "temporal.filter_merge")
+            }
+        };
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("temporal.confidence"),
+                label: Some(label),
                 timestamp_writes: slot.and_then(|s| s.compute(true, true)),
             });
-            pass.set_pipeline(&self.pipeline[demodulate as usize]);
+            pass.set_pipeline(pipeline);
             pass.set_group(0, &group, &[]);
             pass.dispatch_workgroups(
                 self.width.div_ceil(crate::passes::TILE),
