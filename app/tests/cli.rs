@@ -262,7 +262,7 @@ fn buffers_lists_registered_names_and_bench_prints_every_pass() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("bench --json prints JSON");
     let passes: Vec<&str> = v["passes"].as_array().expect("passes").iter().filter_map(|p| p["pass"].as_str()).collect();
-    for p in ["vpl.sample", "ism.splat", "interleave.gather", "interleave.filter", "temporal"] {
+    for p in ["vpl.sample", "ism.splat", "interleave.gather", "temporal.filter_merge"] {
         assert!(passes.contains(&p), "the default technique's pass {p} is missing from {passes:?}");
     }
     // Issue #38's per-frame counters, and the window's frame: one submit, no GPU object made
