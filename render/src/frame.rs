@@ -27,6 +27,7 @@ impl Renderer {
         // Whether `gbuffer.position` lags the linear depth (issue #53): this frame fills it
         // or leaves it to be filled when read, never before its camera is written below.
         let position_stale = self.gbuffer.position.as_ref().is_some_and(|p| p.take_stale());
+        let emission_stale = self.gbuffer.no_emission.as_ref().is_some_and(|p| p.take_stale());
         // What the read-backs recorded in this frame copy (a buffer filled only when read is
         // then filled in the frame).
         let read_back = self
@@ -83,6 +84,16 @@ impl Renderer {
                 position_stale = false;
             }
         }
+        // The same for the emission a scene without emitters leaves out, read back in this frame.
+        let mut emission_stale = emission_stale || gbuffer_ran;
+        if let Some(fill) = self.gbuffer.no_emission.clone().filter(|_| emission_stale) {
+            if read_back.reads("gbuffer.emission") {
+                self.timer.scope(&ctx, &mut enc, "gbuffer.no_emission", |e, slot| {
+                    fill.record(e, slot.and_then(|s| s.compute(true, true)))
+                });
+                emission_stale = false;
+            }
+        }
 
         // Stage 2: shadow maps, the emitters' VPLs, direct light.
         let direct_view = self.direct_light(&mut enc, &state, (view_proj, gbuffer_key));
@@ -131,7 +142,7 @@ impl Renderer {
         // The compose tone maps with the previous frame's exposure; a separate tone-mapping
         // pass runs only when there is none yet (the first frame of automatic exposure).
         let inputs = crate::passes::compose::ComposeInputs {
-            emission: &self.gbuffer.targets.views.emission,
+            emission: self.gbuffer.writes().emission.then_some(&self.gbuffer.targets.views.emission),
             direct: &direct_view,
             indirect: indirect.as_ref(),
             near_field: near_field.as_ref(),
@@ -157,6 +168,9 @@ impl Renderer {
         ctx.submit([enc.finish()]);
         if let Some(position) = self.gbuffer.position.as_ref() {
             position.set_stale(position_stale);
+        }
+        if let Some(no_emission) = self.gbuffer.no_emission.as_ref() {
+            no_emission.set_stale(emission_stale);
         }
         readbacks.start_maps();
         let timings = self.timer.collect(&ctx, !self.interactive).to_vec();

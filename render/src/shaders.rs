@@ -17,6 +17,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("common/fullscreen.wgsl", include_str!("../../shaders/common/fullscreen.wgsl")),
     ("gbuffer/gbuffer.wgsl", include_str!("../../shaders/gbuffer/gbuffer.wgsl")),
     ("gbuffer/position.wgsl", include_str!("../../shaders/gbuffer/position.wgsl")),
+    ("gbuffer/no_emission.wgsl", include_str!("../../shaders/gbuffer/no_emission.wgsl")),
     ("shadow/shadow.wgsl", include_str!("../../shaders/shadow/shadow.wgsl")),
     ("direct/direct.wgsl", include_str!("../../shaders/direct/direct.wgsl")),
     ("direct/sky_history.wgsl", include_str!("../../shaders/direct/sky_history.wgsl")),
@@ -100,6 +101,7 @@ pub const SOURCES: &[(&str, &str)] = &[
 pub const ENTRY_MODULES: &[&str] = &[
     "gbuffer/gbuffer.wgsl",
     "gbuffer/position.wgsl",
+    "gbuffer/no_emission.wgsl",
     "shadow/shadow.wgsl",
     "direct/direct.wgsl",
     "direct/sky_history.wgsl",

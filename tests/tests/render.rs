@@ -37,6 +37,13 @@ fn gbuffer_matches_cpu_ray_cast() {
     // the position, which is rebuilt from the depth when it is read below.
     let passes: Vec<String> = r.render_frame().into_iter().map(|t| t.name).collect();
     assert!(!passes.iter().any(|p| p == "gbuffer.position"), "{passes:?}");
+    // What the G-buffer pass binds: the linear depth (4 bytes), normal (8), albedo (4),
+    // material (8), movement buffer (8) and depth (4) a pixel, and the camera, instance and
+    // material buffers (a few KB); no emission target (8 bytes a pixel, 128 KB here), since no
+    // material of the default box emits (issue #53).
+    let bound = r.traffic().iter().find(|(p, _)| p == "gbuffer").map_or(0, |(_, b)| *b);
+    let targets = 36 * (N * N) as u64;
+    assert!((targets..targets + 16 * 1024).contains(&bound), "{bound} bytes: {:?}", r.traffic());
     let pos = r.readback("gbuffer.position").expect("position");
     let depth = r.readback("gbuffer.linear_depth").expect("linear depth");
     let (eye, forward) = (r.camera.position, r.camera.forward());

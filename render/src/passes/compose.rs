@@ -57,7 +57,8 @@ pub struct ComposePass {
 /// image, the camera uniform for the rays, the G-buffer's linear depth for its coverage).
 #[derive(Clone, Copy)]
 pub struct ComposeInputs<'a> {
-    pub emission: &'a wgpu::TextureView,
+    /// None: no material emits (the G-buffer left the target out, issue #53).
+    pub emission: Option<&'a wgpu::TextureView>,
     pub direct: &'a wgpu::TextureView,
     pub indirect: Option<&'a wgpu::TextureView>,
     pub near_field: Option<&'a wgpu::TextureView>,
@@ -255,7 +256,7 @@ impl ComposePass {
                 tv(indirect.unwrap_or(&self.black)),
                 tv(&hdr_view),
                 tv(near_field.unwrap_or(&self.black)),
-                tv(emission),
+                tv(emission.unwrap_or(&self.black)),
                 sky.params.as_entire_binding(),
                 tv(&sky_view),
                 camera.as_entire_binding(),

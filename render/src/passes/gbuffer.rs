@@ -83,16 +83,24 @@ pub struct GBufferPass {
     /// Name prefix of every label and registered buffer: `gbuffer` for the camera,
     /// `vpl.light_gbuffer` for the light's view (Knecht 002 §4.3).
     name: String,
-    single_sided: wgpu::RenderPipeline,
-    double_sided: wgpu::RenderPipeline,
-    /// The same for materials without textures (`TEXTURED` false in the shader, issue #53).
-    plain_single_sided: wgpu::RenderPipeline,
-    plain_double_sided: wgpu::RenderPipeline,
+    device: wgpu::Device,
+    module: wgpu::ShaderModule,
+    layout: wgpu::PipelineLayout,
+    /// Target 0 is the linear depth (the camera's G-buffer, issue #53).
+    linear: bool,
+    /// The pipelines by the targets they write ([`Writes`]), made on first use: with the
+    /// emission, then without it (issue #53).
+    pipelines: [std::sync::OnceLock<Pipelines>; 2],
     /// Whether single-sided materials cull their back faces (the camera's G-buffer, as glTF
     /// asks); light views draw every face (see [`Self::light_view`]).
     cull_single_sided: bool,
     /// The camera's position rebuilt from its linear depth, when something reads it.
     pub position: Option<std::sync::Arc<super::gbuffer_position::PositionPass>>,
+    /// Whether a material emits or has an occlusion texture (`GpuScene::emits`, fixed for a
+    /// renderer): otherwise the camera's G-buffer leaves the emission target out, and
+    /// `no_emission` fills it when it is read (issue #53).
+    emits: bool,
+    pub no_emission: Option<std::sync::Arc<super::gbuffer_position::NoEmissionPass>>,
     pub camera_layout: wgpu::BindGroupLayout,
     pub targets: GBuffer,
     /// What the targets were last rendered for: the camera's G-buffer is kept while the
@@ -119,23 +127,21 @@ impl GBufferPass {
         });
         // The camera's G-buffer writes the linear depth to target 0 (issue #53).
         let linear = name == "gbuffer";
-        let make = |cull_mode, textured| {
-            let entries = ("vs_main", "fs_main", wgpu::FrontFace::Ccw);
-            Self::pipeline_with(device, &layout, &module, entries, (cull_mode, textured, linear), &name)
-        };
-        let [single_sided, double_sided] = [Some(wgpu::Face::Back), None].map(|c| make(c, true));
-        let [plain_single_sided, plain_double_sided] = [Some(wgpu::Face::Back), None].map(|c| make(c, false));
         let targets = create_targets_with(ctx, width, height, &name, linear);
         let position = linear.then(|| position_pass(ctx, &targets));
+        let no_emission = (linear && !scene.emits).then(|| no_emission_pass(ctx, &targets));
         let last = Default::default();
         Self {
             name,
-            single_sided,
-            double_sided,
-            plain_single_sided,
-            plain_double_sided,
+            device: device.clone(),
+            module,
+            layout,
+            linear,
+            pipelines: Default::default(),
             cull_single_sided: true,
             position,
+            emits: scene.emits,
+            no_emission,
             camera_layout,
             targets,
             last,
@@ -164,22 +170,30 @@ impl GBufferPass {
         (cull_mode, textured): (Option<wgpu::Face>, bool),
         name: &str,
     ) -> wgpu::RenderPipeline {
-        Self::pipeline_with(device, layout, module, entries, (cull_mode, textured, false), name)
+        let all = Writes { linear_depth: false, motion: true, emission: true };
+        Self::pipeline_with(device, layout, module, entries, (cull_mode, textured, all), name)
     }
 
-    /// [`Self::pipeline`], with target 0 the linear depth when `linear` (the camera's
-    /// G-buffer, issue #53).
+    /// [`Self::pipeline`] for the targets `writes` names (issue #53).
     fn pipeline_with(
         device: &wgpu::Device,
         layout: &wgpu::PipelineLayout,
         module: &wgpu::ShaderModule,
         (vs_entry, fs_entry, front_face): (&str, &str, wgpu::FrontFace),
-        (cull_mode, textured, linear): (Option<wgpu::Face>, bool, bool),
+        (cull_mode, textured, writes): (Option<wgpu::Face>, bool, Writes),
         name: &str,
     ) -> wgpu::RenderPipeline {
+        let linear = writes.linear_depth;
         let constants =
             [("TEXTURED", if textured { 1.0 } else { 0.0 }), ("LINEAR_DEPTH", if linear { 1.0 } else { 0.0 })];
-        let kind = if textured { "" } else { "_plain" };
+        let kind = match (textured, writes.emission, writes.motion) {
+            (true, true, _) => "",
+            (false, true, _) => "_plain",
+            (true, false, true) => "_no_emission",
+            (false, false, true) => "_plain_no_emission",
+            (true, false, false) => "_light",
+            (false, false, false) => "_plain_light",
+        };
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(&if cull_mode.is_some() {
                 format!("{name}.pipeline_single_sided{kind}")
@@ -213,7 +227,7 @@ impl GBufferPass {
                 module,
                 entry_point: Some(fs_entry),
                 compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
-                targets: &color_targets_with(if linear { LINEAR_DEPTH_FORMAT } else { POSITION_FORMAT }),
+                targets: &writes.color_targets(),
             }),
             multiview_mask: None,
             cache: None,
@@ -227,6 +241,9 @@ impl GBufferPass {
         self.targets = create_targets_with(ctx, width, height, &self.name, linear);
         if linear {
             self.position = Some(position_pass(ctx, &self.targets));
+        }
+        if self.no_emission.is_some() {
+            self.no_emission = Some(no_emission_pass(ctx, &self.targets));
         }
     }
 
@@ -286,12 +303,16 @@ impl GBufferPass {
             "movement buffer: xy the offset in pixels from each pixel to its position in the previous frame (Knecht §3.5.1), z its linear depth in the previous frame",
             &t.motion,
         );
-        reg.register(
+        let emission = (
             "gbuffer.emission",
             BufferKind::Hdr,
-            "rgb: emitted radiance L_e of the surface (glTF emissive factor × strength × texture); a: the material's occlusion texture (R; 1 without one), shown only, never applied to computed light",
+            "rgb: emitted radiance L_e of the surface (glTF emissive factor × strength × texture); a: the material's occlusion texture (R; 1 without one), shown only, never applied to computed light. Left out of the raster and filled when read while no material emits nor has an occlusion texture (issue #53)",
             &t.emission,
         );
+        match &self.no_emission {
+            Some(pass) => reg.register_derived(emission.0, emission.1, emission.2, emission.3, pass.clone()),
+            None => reg.register(emission.0, emission.1, emission.2, emission.3),
+        }
         reg.register("gbuffer.depth", BufferKind::Depth, "hardware depth in [0, 1]", &t.depth);
     }
 
@@ -318,14 +339,68 @@ impl GBufferPass {
         state: &SceneState,
     ) {
         let label = format!("{}.pass", self.name);
-        let mut pass = self.targets.begin_clear_pass(encoder, &label, slot.and_then(|s| s.render(first, last)));
-        pass.set_pipeline(&self.double_sided);
+        let writes = self.writes();
+        let p = self.pipelines[!writes.emission as usize].get_or_init(|| {
+            let make = |cull_mode, textured| {
+                let entries = ("vs_main", "fs_main", wgpu::FrontFace::Ccw);
+                let (device, layout, module) = (&self.device, &self.layout, &self.module);
+                Self::pipeline_with(device, layout, module, entries, (cull_mode, textured, writes), &self.name)
+            };
+            let [single_sided, double_sided] = [Some(wgpu::Face::Back), None].map(|c| make(c, true));
+            let [plain_single_sided, plain_double_sided] = [Some(wgpu::Face::Back), None].map(|c| make(c, false));
+            Pipelines { single_sided, double_sided, plain_single_sided, plain_double_sided }
+        });
+        let ts = slot.and_then(|s| s.render(first, last));
+        let mut pass = self.targets.begin_pass(encoder, &label, ts, true, writes);
+        pass.set_pipeline(&p.double_sided);
         pass.set_group(0, camera_group, &[]);
         pass.set_group(1, &scene.instance_group, &[]);
-        let single = if self.cull_single_sided { &self.single_sided } else { &self.double_sided };
-        let plain = if self.cull_single_sided { &self.plain_single_sided } else { &self.plain_double_sided };
-        let pipelines = ((single, &self.double_sided), (plain, &self.plain_double_sided));
+        let single = if self.cull_single_sided { &p.single_sided } else { &p.double_sided };
+        let plain = if self.cull_single_sided { &p.plain_single_sided } else { &p.plain_double_sided };
+        let pipelines = ((single, &p.double_sided), (plain, &p.plain_double_sided));
         scene.draw_by_material(&mut pass, state, Some(2), Some(pipelines));
+    }
+
+    /// The targets this pass writes for `scene` (issue #53): the camera's all but the
+    /// emission when no material emits or has an occlusion texture to show
+    /// (`GpuScene::emits`, fixed for a renderer: its scene is uploaded once); a light view's
+    /// neither the movement buffer nor the emission, which nothing reads there.
+    pub fn writes(&self) -> Writes {
+        let camera = self.linear;
+        Writes { linear_depth: camera, motion: camera, emission: camera && self.emits }
+    }
+}
+
+/// The G-buffer pipelines of one [`Writes`]: single- and double-sided, for materials with
+/// textures and without (`TEXTURED` false in the shader, issue #53).
+struct Pipelines {
+    single_sided: wgpu::RenderPipeline,
+    double_sided: wgpu::RenderPipeline,
+    plain_single_sided: wgpu::RenderPipeline,
+    plain_double_sided: wgpu::RenderPipeline,
+}
+
+/// What a G-buffer pass writes (issue #53): target 0 as the linear depth or the position, and
+/// whether the movement buffer and the emission targets are attached.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Writes {
+    pub linear_depth: bool,
+    pub motion: bool,
+    pub emission: bool,
+}
+
+impl Writes {
+    /// The colour targets of a pipeline that writes these (None where a target is left out).
+    fn color_targets(self) -> [Option<wgpu::ColorTargetState>; 6] {
+        let position = if self.linear_depth { LINEAR_DEPTH_FORMAT } else { POSITION_FORMAT };
+        let mut t = color_targets_with(position);
+        if !self.motion {
+            t[4] = None;
+        }
+        if !self.emission {
+            t[5] = None;
+        }
+        t
     }
 }
 
@@ -337,7 +412,12 @@ impl GBuffer {
         label: &str,
         timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) -> wgpu::RenderPass<'e> {
-        self.begin_pass(encoder, label, timestamp_writes, true)
+        self.begin_pass(encoder, label, timestamp_writes, true, self.all_targets())
+    }
+
+    /// Every target (the hemisphere atlas's passes).
+    fn all_targets(&self) -> Writes {
+        Writes { linear_depth: self.linear_depth.is_some(), motion: true, emission: true }
     }
 
     /// A render pass over the targets as they are (nothing cleared): the caller clears what
@@ -348,7 +428,7 @@ impl GBuffer {
         label: &str,
         timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) -> wgpu::RenderPass<'e> {
-        self.begin_pass(encoder, label, timestamp_writes, false)
+        self.begin_pass(encoder, label, timestamp_writes, false, self.all_targets())
     }
 
     fn begin_pass<'e>(
@@ -357,6 +437,7 @@ impl GBuffer {
         label: &str,
         timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
         clear: bool,
+        writes: Writes,
     ) -> wgpu::RenderPass<'e> {
         let v = &self.views;
         let colour_load = if clear { wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT) } else { wgpu::LoadOp::Load };
@@ -376,8 +457,8 @@ impl GBuffer {
                 clear(&v.normal),
                 clear(&v.albedo),
                 clear(&v.material),
-                clear(&v.motion),
-                clear(&v.emission),
+                if writes.motion { clear(&v.motion) } else { None },
+                if writes.emission { clear(&v.emission) } else { None },
             ],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &v.depth,
@@ -389,6 +470,12 @@ impl GBuffer {
             multiview_mask: None,
         })
     }
+}
+
+/// The camera's emission when no material emits (issue #53), for these targets.
+fn no_emission_pass(ctx: &GpuContext, t: &GBuffer) -> std::sync::Arc<super::gbuffer_position::NoEmissionPass> {
+    let size = (t.emission.width(), t.emission.height());
+    super::gbuffer_position::NoEmissionPass::new(ctx, &t.views.linear_depth, &t.views.emission, size)
 }
 
 /// The camera's position from its linear depth (issue #53), for these targets.
@@ -427,7 +514,9 @@ fn create_targets_with(ctx: &GpuContext, width: u32, height: u32, name: &str, li
     let albedo = super::create_target(d, &format!("{name}.albedo"), width, height, ALBEDO_FORMAT, att);
     let material = super::create_target(d, &format!("{name}.material"), width, height, MATERIAL_FORMAT, att);
     let motion = super::create_target(d, &format!("{name}.motion"), width, height, MOTION_FORMAT, att);
-    let emission = super::create_target(d, &format!("{name}.emission"), width, height, EMISSION_FORMAT, att);
+    // The camera's may be filled in compute when no material emits (`NoEmissionPass`).
+    let emission_usage = if linear { att | wgpu::TextureUsages::STORAGE_BINDING } else { att };
+    let emission = super::create_target(d, &format!("{name}.emission"), width, height, EMISSION_FORMAT, emission_usage);
     let depth = super::create_target(d, &format!("{name}.depth"), width, height, DEPTH_FORMAT, att);
     let views = GBufferViews {
         position: super::view(&position, &format!("{name}.position")),

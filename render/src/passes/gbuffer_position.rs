@@ -119,6 +119,91 @@ impl Derived for PositionPass {
     }
 }
 
+pub const NO_EMISSION_BINDINGS: Bindings = Bindings {
+    label: "gbuffer.no_emission.inputs",
+    shader: "gbuffer/no_emission.wgsl",
+    group: 0,
+    entry: None,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "linear_depth", Kind::Texture { filterable: false }),
+        binding(1, "out_emission", Kind::StorageTexture(wgpu::TextureFormat::Rgba16Float)),
+    ],
+};
+
+/// Fills `gbuffer.emission` when it is read while the G-buffer leaves it out (no material
+/// emits nor has an occlusion texture, issue #53): rgb 0 and a 1 where geometry covers the
+/// pixel (`shaders/gbuffer/no_emission.wgsl`), what the raster would have written.
+pub struct NoEmissionPass {
+    ctx: GpuContext,
+    pipeline: wgpu::ComputePipeline,
+    group: wgpu::BindGroup,
+    size: (u32, u32),
+    /// Whether the G-buffer ran since the target was last filled.
+    stale: AtomicBool,
+}
+
+impl NoEmissionPass {
+    pub fn new(
+        ctx: &GpuContext,
+        linear_depth: &wgpu::TextureView,
+        emission: &wgpu::TextureView,
+        size: (u32, u32),
+    ) -> Arc<Self> {
+        let device = &ctx.device;
+        let layout = NO_EMISSION_BINDINGS.layout(device);
+        let module = crate::shaders::create_module(device, "gbuffer/no_emission.wgsl");
+        let pipeline =
+            crate::passes::compute_pipeline(device, "gbuffer.no_emission", &module, "cs_no_emission", &[&layout]);
+        let tv = wgpu::BindingResource::TextureView;
+        let group = NO_EMISSION_BINDINGS.group(device, &layout, [tv(linear_depth), tv(emission)]);
+        Arc::new(Self { ctx: ctx.clone(), pipeline, group, size, stale: AtomicBool::new(false) })
+    }
+
+    /// Records the fill.
+    pub fn record(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) {
+        crate::passes::dispatch_2d(
+            enc,
+            "gbuffer.no_emission",
+            &self.pipeline,
+            &self.group,
+            &[],
+            timestamp_writes,
+            self.size,
+        );
+    }
+
+    /// Takes the stale flag (see `PositionPass::take_stale`).
+    pub fn take_stale(&self) -> bool {
+        self.stale.swap(false, Ordering::SeqCst)
+    }
+
+    pub fn set_stale(&self, stale: bool) {
+        self.stale.store(stale, Ordering::SeqCst);
+    }
+}
+
+impl Derived for NoEmissionPass {
+    fn refresh(&self) {
+        if !self.take_stale() {
+            return;
+        }
+        self.ctx.make_current();
+        let mut enc = self
+            .ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("gbuffer.no_emission.on_read") });
+        crate::counters::traffic::begin_scope("gbuffer.no_emission");
+        self.record(&mut enc, None);
+        crate::counters::traffic::end_scope();
+        self.ctx.submit([enc.finish()]);
+    }
+}
+
 /// CPU twin of `world_from_linear_depth` (shaders/common/camera.wgsl): the world point of
 /// pixel `p`'s centre at linear view depth `depth`, for a camera with `view_proj` and `view`
 /// at `eye` and a `size`-pixel image.

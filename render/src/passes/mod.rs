@@ -102,6 +102,7 @@ pub const BINDINGS: &[&crate::gpu::bindings::Bindings] = &[
     &knecht::ism::PUSH_INPUTS_BINDINGS,
     &gbuffer::CAMERA_BINDINGS,
     &gbuffer_position::POSITION_BINDINGS,
+    &gbuffer_position::NO_EMISSION_BINDINGS,
     &crate::scene::upload::INSTANCES_BINDINGS,
     &crate::scene::upload::MATERIAL_BINDINGS,
     &soler::voxels::GRID_BINDINGS,

@@ -372,7 +372,7 @@ impl Renderer {
 /// belong to; None for shaders outside the frame (the viewer's).
 pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
     Some(match entry {
-        "gbuffer/gbuffer.wgsl" | "gbuffer/position.wgsl" => "gbuffer",
+        "gbuffer/gbuffer.wgsl" | "gbuffer/position.wgsl" | "gbuffer/no_emission.wgsl" => "gbuffer",
         "shadow/shadow.wgsl" => "direct.shadow",
         "direct/direct.wgsl" => "direct",
         "compose/compose.wgsl" | "compose/tonemap.wgsl" | "compose/luminance.wgsl" => "compose",

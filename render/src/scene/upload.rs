@@ -65,6 +65,10 @@ pub struct GpuScene {
     /// emissive or occlusion): the camera's G-buffer draws the others with a fragment stage
     /// without texture reads ([`Self::draw_by_material`]).
     pub textured: Vec<bool>,
+    /// Whether any material writes the G-buffer's emission target: it emits (factor or
+    /// texture) or has an occlusion texture to show. Otherwise the camera's G-buffer leaves
+    /// the target out and the compose adds no emission (issue #53).
+    pub emits: bool,
     _material_buffers: Vec<wgpu::Buffer>,
     _textures: Vec<wgpu::Texture>,
     /// What the upload changed to fit the device (textures downscaled), for the scene's
@@ -205,6 +209,7 @@ impl GpuScene {
         let mut material_buffers = Vec::new();
         let mut material_groups = Vec::new();
         let mut textured = Vec::new();
+        let mut emits = false;
         let default_material = [super::Material::default()];
         let materials: &[super::Material] =
             if scene.materials.is_empty() { &default_material } else { &scene.materials };
@@ -215,6 +220,7 @@ impl GpuScene {
             let mr_tex = m.metallic_roughness_texture.filter(|&t| t < textures.len());
             let occlusion_tex = m.occlusion_texture.filter(|&t| t < textures.len());
             textured.push([tex, emissive_tex, normal_tex, mr_tex, occlusion_tex].iter().any(Option::is_some));
+            emits |= m.emissive.max_element() > 0.0 || emissive_tex.is_some() || occlusion_tex.is_some();
             let u = MaterialUniform {
                 base_color: m.base_color.to_array(),
                 params: [
@@ -281,6 +287,7 @@ impl GpuScene {
             double_sided,
             cutout,
             textured,
+            emits,
             vertices: vertex_buffer,
             indices: index_buffer,
             primitives,
