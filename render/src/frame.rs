@@ -86,13 +86,13 @@ impl Renderer {
         }
         // The same for the emission a scene without emitters leaves out, read back in this frame.
         let mut emission_stale = emission_stale || gbuffer_ran;
-        if let Some(fill) = self.gbuffer.no_emission.clone().filter(|_| emission_stale) {
-            if read_back.reads("gbuffer.emission") {
-                self.timer.scope(&ctx, &mut enc, "gbuffer.no_emission", |e, slot| {
-                    fill.record(e, slot.and_then(|s| s.compute(true, true)))
-                });
-                emission_stale = false;
-            }
+        if let Some(fill) = self.gbuffer.no_emission.clone().filter(|_| emission_stale)
+            && read_back.reads("gbuffer.emission")
+        {
+            self.timer.scope(&ctx, &mut enc, "gbuffer.no_emission", |e, slot| {
+                fill.record(e, slot.and_then(|s| s.compute(true, true)))
+            });
+            emission_stale = false;
         }
 
         // Stage 2: shadow maps, the emitters' VPLs, direct light.
