@@ -79,7 +79,14 @@ for preset in presets/*.ron; do
   [ "$name" = exact-vpl-reference ] && continue
   row="| \`$name\` |"
   for bin in $BEFORE "$BIN"; do
-    bench "$bin" "$TMP/p.json" --preset "$preset"
+    file="$preset"
+    if [ "$bin" = "$BEFORE" ] && grep -q "temporal: HcbSampleCache" "$preset" && [ "$name" = gautron-at-hcb-samples ]; then
+      # A build from before session 11 refuses the mix with the HCB's sample cache: the
+      # preset as it was then (every sample a hemisphere every frame).
+      sed 's/temporal: HcbSampleCache/temporal: r#None/' "$preset" >"$TMP/as-it-was.ron"
+      file="$TMP/as-it-was.ron"
+    fi
+    bench "$bin" "$TMP/p.json" --preset "$file"
     row="$row $(python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); print("%.1f" % (d["traffic_bytes_per_frame"]/(d["width"]*d["height"])))' "$TMP/p.json") |"
   done
   echo "$row"

@@ -40,8 +40,10 @@ row() {
     table && $1 == "gbuffer" { g = $2 " (" $3 ")" }
     table && $1 == "direct" { d = $2 " (" $3 ")" }
     table && $1 == "interleave.gather" { ga = $2 " (" $3 ")" }
-    table && $1 == "interleave.filter" { fi = $2 " (" $3 ")" }
-    table && $1 == "temporal" { t = $2 " (" $3 ")" }
+    table && $1 == "interleave.filter" { fi = $2 " (" $3 ")"; fm += $2; fml += $3 }
+    table && $1 == "temporal" { t = $2 " (" $3 ")"; fm += $2; fml += $3 }
+    # The filter fused into the merge (issue #53): one pass for the last two columns.
+    table && $1 == "temporal.filter_merge" { fi = "fused"; t = "fused"; fm += $2; fml += $3 }
     table && ($1 == "direct.shadow" || $1 ~ /^vpl\.(light_gbuffer|importance|sample)/ || $1 ~ /^ism\./) { ls += $2 }
     /^frame wall/ { wall = $3 }
     /^window frame/ { window = $3 }
@@ -50,15 +52,15 @@ row() {
       if (g == "") g = "kept"
       if (d == "") d = "kept"
       if (kept == "") kept = "–"
-      printf "| %s | %s | %s | %s | %s | %s | %.1f | %s | %s | %s |\n", label, g, d, ga, fi, t, ls, wall, window, kept
+      printf "| %s | %s | %s | %s | %s | %s | %.3f (%.3f) | %.1f | %s | %s | %s |\n", label, g, d, ga, fi, t, fm, fml, ls, wall, window, kept
     }
   ' "$LOG"
 }
 
 echo "Commit $(git rev-parse --short HEAD 2>/dev/null || echo unknown)${BEFORE:+ against $BEFORE_LABEL}, $SIZE, $FRAMES frames after 3 warm-up frames, the default preset on the embedded default scene from its camera, $(date -u +%Y-%m-%d). Times in ms: per pass the mean (and the least) over the frames; the light-space passes summed (means); frame wall and window frame are means."
 echo
-echo "| frames | gbuffer | direct | interleave.gather | interleave.filter | temporal | light-space passes | frame wall | window frame | kept / frame: light space, G-buffer + direct |"
-echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|"
+echo "| frames | gbuffer | direct | interleave.gather | interleave.filter | temporal | filter + merge | light-space passes | frame wall | window frame | kept / frame: light space, G-buffer + direct |"
+echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"
 if [ -n "$BEFORE" ]; then
   bench "$BEFORE" >"$LOG"
   grep -q "^GI Lab bench" "$LOG" || { cat "$LOG" >&2; exit 1; }

@@ -613,3 +613,26 @@ fn the_glossy_receiver_of_the_hcb_matches_the_cpu_twin_on_the_chair() {
         }
     }
 }
+
+/// A 1920×1080 frame of the HCB's cached preset fits the device's storage bindings: a list of
+/// every pixel's sample (2.07 M × 80 bytes) is more than lavapipe binds (128 MiB), and the
+/// lists made for it panicked at this size there. The lists hold what the device allows
+/// (`hcb::list_capacity`), and the frame lights the image.
+#[test]
+fn an_hcb_frame_at_1080p_fits_the_devices_storage_bindings() {
+    let (w, h) = (1920u32, 1080u32);
+    let ctx = gpu();
+    let limits = ctx.device.limits();
+    let capacity = gi_render::passes::hcb::list_capacity(&ctx.device, w, h) as u64;
+    let bytes = capacity * std::mem::size_of::<GpuHcbSample>() as u64;
+    assert!(bytes <= limits.max_storage_buffer_binding_size, "{bytes} bytes for {capacity} samples");
+    assert!(capacity >= (w * h) as u64 / 2, "{capacity} samples");
+    let mut s = gi_render::LabSettings::default();
+    gi_render::settings::pipeline::Technique::NguyenCached.apply(&mut s);
+    let mut r = gi_render::Renderer::new(ctx, gi_lab_tests::default_scene(), s, w, h).expect("renderer");
+    r.clock.playing = false;
+    r.render_frame();
+    let indirect = r.readback("hcb.indirect").expect("hcb.indirect");
+    let lit = indirect.data.iter().filter(|p| p[0] > 0.0).count();
+    assert!(lit > indirect.data.len() / 2, "{lit} of {} pixels lit", indirect.data.len());
+}

@@ -197,8 +197,8 @@ impl HcbPass {
             wgpu::TextureFormat::R32Float,
             storage,
         );
-        // Every pixel could be a level-0 sample.
-        let capacity = width.max(1) * height.max(1);
+        // Every pixel could be a level-0 sample, as many as the device binds (`list_capacity`).
+        let capacity = super::list_capacity(device, width, height);
         let list = crate::passes::buffer(
             device,
             "hcb.sample_list",

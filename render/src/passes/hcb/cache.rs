@@ -254,11 +254,13 @@ impl HcbCachePass {
     ) -> (wgpu::Buffer, wgpu::Buffer, wgpu::Texture, wgpu::Texture, wgpu::Texture, wgpu::Texture, wgpu::Buffer) {
         let (w, h) = (width.max(1), height.max(1));
         let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
-        // The HCB's list capacity: every pixel could be a level-0 sample.
+        // The HCB's list capacity: every pixel could be a level-0 sample, as many as the
+        // device binds.
+        let capacity = super::list_capacity(device, w, h) as u64;
         let list = crate::passes::buffer(
             device,
             "hcb.sample_cache",
-            std::mem::size_of::<GpuHcbSample>() as u64 * (w * h) as u64,
+            std::mem::size_of::<GpuHcbSample>() as u64 * capacity,
             usage,
         );
         let counter = crate::passes::buffer(device, "hcb.sample_cache_count", COUNTER_BYTES, usage);

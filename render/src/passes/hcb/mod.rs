@@ -63,6 +63,20 @@ pub struct GpuHcbSample {
     pub dir: Vec4,
 }
 
+/// How many samples the HCB's lists (the frame's and the cache's) hold for a `width` ×
+/// `height` G-buffer on `device`: every pixel could be a level-0 sample, but a list is one
+/// storage binding, which the device bounds (`max_storage_buffer_binding_size`: 128 MiB on
+/// lavapipe, 1.68 M samples of 80 bytes, where 1920×1080 has 2.07 M pixels; the list of every
+/// pixel made the HCB presets panic at 1080p there). The shaders drop the samples past it
+/// (`slot < arrayLength`) and the counters still count them; a frame has far fewer samples
+/// than pixels (θmax and dmax merge most of them into coarser levels).
+pub fn list_capacity(device: &wgpu::Device, width: u32, height: u32) -> u32 {
+    let limits = device.limits();
+    let bytes = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+    let most = (bytes / std::mem::size_of::<GpuHcbSample>() as u64).min(u32::MAX as u64) as u32;
+    (width.max(1) * height.max(1)).min(most).max(1)
+}
+
 impl GpuHcbSample {
     pub fn level(&self) -> u32 {
         self.texel[2] & 0xff
