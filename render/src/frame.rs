@@ -26,7 +26,7 @@ impl Renderer {
         self.check_camera();
         // Whether `gbuffer.position` lags the linear depth (issue #53): this frame fills it
         // or leaves it to be filled when read, never before its camera is written below.
-        let position_stale = self.gbuffer.position.as_ref().is_some_and(|p| p.take_stale());
+        let position_stale = self.gbuffer.position.as_ref().is_some_and(|p| p.fill.take_stale());
         let emission_stale = self.gbuffer.no_emission.as_ref().is_some_and(|p| p.take_stale());
         // What the read-backs recorded in this frame copy (a buffer filled only when read is
         // then filled in the frame).
@@ -79,7 +79,7 @@ impl Renderer {
             let read = self.steps.needs_position(pinned) || read_back.reads("gbuffer.position");
             if position_stale && read {
                 self.timer.scope(&ctx, &mut enc, "gbuffer.position", |e, slot| {
-                    position.record(e, slot.and_then(|s| s.compute(true, true)))
+                    position.fill.record(e, slot.and_then(|s| s.compute(true, true)))
                 });
                 position_stale = false;
             }
@@ -167,7 +167,7 @@ impl Renderer {
         self.timer.resolve(&ctx, &mut enc);
         ctx.submit([enc.finish()]);
         if let Some(position) = self.gbuffer.position.as_ref() {
-            position.set_stale(position_stale);
+            position.fill.set_stale(position_stale);
         }
         if let Some(no_emission) = self.gbuffer.no_emission.as_ref() {
             no_emission.set_stale(emission_stale);

@@ -100,7 +100,7 @@ pub struct GBufferPass {
     /// renderer): otherwise the camera's G-buffer leaves the emission target out, and
     /// `no_emission` fills it when it is read (issue #53).
     emits: bool,
-    pub no_emission: Option<std::sync::Arc<super::gbuffer_position::NoEmissionPass>>,
+    pub no_emission: Option<std::sync::Arc<super::gbuffer_position::Fill>>,
     pub camera_layout: wgpu::BindGroupLayout,
     pub targets: GBuffer,
     /// What the targets were last rendered for: the camera's G-buffer is kept while the
@@ -473,9 +473,9 @@ impl GBuffer {
 }
 
 /// The camera's emission when no material emits (issue #53), for these targets.
-fn no_emission_pass(ctx: &GpuContext, t: &GBuffer) -> std::sync::Arc<super::gbuffer_position::NoEmissionPass> {
+fn no_emission_pass(ctx: &GpuContext, t: &GBuffer) -> std::sync::Arc<super::gbuffer_position::Fill> {
     let size = (t.emission.width(), t.emission.height());
-    super::gbuffer_position::NoEmissionPass::new(ctx, &t.views.linear_depth, &t.views.emission, size)
+    super::gbuffer_position::no_emission_pass(ctx, &t.views.linear_depth, &t.views.emission, size)
 }
 
 /// The camera's position from its linear depth (issue #53), for these targets.
@@ -514,7 +514,7 @@ fn create_targets_with(ctx: &GpuContext, width: u32, height: u32, name: &str, li
     let albedo = super::create_target(d, &format!("{name}.albedo"), width, height, ALBEDO_FORMAT, att);
     let material = super::create_target(d, &format!("{name}.material"), width, height, MATERIAL_FORMAT, att);
     let motion = super::create_target(d, &format!("{name}.motion"), width, height, MOTION_FORMAT, att);
-    // The camera's may be filled in compute when no material emits (`NoEmissionPass`).
+    // The camera's may be filled in compute when no material emits (`gbuffer_position::no_emission_pass`).
     let emission_usage = if linear { att | wgpu::TextureUsages::STORAGE_BINDING } else { att };
     let emission = super::create_target(d, &format!("{name}.emission"), width, height, EMISSION_FORMAT, emission_usage);
     let depth = super::create_target(d, &format!("{name}.depth"), width, height, DEPTH_FORMAT, att);

@@ -7,7 +7,9 @@
 //! the point themselves; the others, and every viewer, probe and read-back of
 //! `gbuffer.position`, read this pass's texture, which is filled in the frame when one of
 //! the frame's steps needs it, and otherwise only when it is read ([`Derived`]): a frame
-//! that no one looks at the position of never writes it.
+//! that no one looks at the position of never writes it. The same kind of pass ([`Fill`])
+//! fills `gbuffer.emission` of a scene that the G-buffer draws without its emission target
+//! (`shaders/gbuffer/no_emission.wgsl`).
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -35,18 +37,80 @@ pub const POSITION_BINDINGS: Bindings = Bindings {
     ],
 };
 
-/// The pass that fills `gbuffer.position` from `gbuffer.linear_depth`.
-pub struct PositionPass {
+/// A compute pass that fills a derived buffer of the camera G-buffer (issue #53): made once
+/// with its bind group, recorded in the frame when the frame's steps or read-backs need the
+/// buffer, otherwise run when the buffer is read ([`Derived`]); `stale` says whether the
+/// buffer lags what it is made from.
+pub struct Fill {
     ctx: GpuContext,
+    /// The pass's name: its timing scope and its objects' labels.
+    name: &'static str,
     pipeline: wgpu::ComputePipeline,
     group: wgpu::BindGroup,
+    size: (u32, u32),
+    stale: AtomicBool,
+}
+
+impl Fill {
+    /// The pass `name` running `entry` of `bindings`' shader over `size` pixels.
+    fn new<'a>(
+        ctx: &GpuContext,
+        (name, bindings, entry): (&'static str, &Bindings, &str),
+        resources: impl IntoIterator<Item = wgpu::BindingResource<'a>>,
+        size: (u32, u32),
+    ) -> Self {
+        let device = &ctx.device;
+        let layout = bindings.layout(device);
+        let module = crate::shaders::create_module(device, bindings.shader);
+        let pipeline = crate::passes::compute_pipeline(device, name, &module, entry, &[&layout]);
+        let group = bindings.group(device, &layout, resources);
+        Self { ctx: ctx.clone(), name, pipeline, group, size, stale: AtomicBool::new(false) }
+    }
+
+    /// Records the pass.
+    pub fn record(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) {
+        crate::passes::dispatch_2d(enc, self.name, &self.pipeline, &self.group, &[], timestamp_writes, self.size);
+    }
+
+    /// Takes the stale flag: whether the buffer needed filling (it is now the caller's to
+    /// fill or to mark stale again with [`Self::set_stale`]). The frame takes it before it
+    /// writes anything the pass reads, so that no read in the middle of the frame fills the
+    /// buffer from half-written sources.
+    pub fn take_stale(&self) -> bool {
+        self.stale.swap(false, Ordering::SeqCst)
+    }
+
+    pub fn set_stale(&self, stale: bool) {
+        self.stale.store(stale, Ordering::SeqCst);
+    }
+}
+
+impl Derived for Fill {
+    fn refresh(&self) {
+        if !self.take_stale() {
+            return;
+        }
+        self.ctx.make_current();
+        let label = format!("{}.on_read", self.name);
+        let mut enc = self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(&label) });
+        crate::counters::traffic::begin_scope(self.name);
+        self.record(&mut enc, None);
+        crate::counters::traffic::end_scope();
+        self.ctx.submit([enc.finish()]);
+    }
+}
+
+/// The pass that fills `gbuffer.position` from `gbuffer.linear_depth`.
+pub struct PositionPass {
+    pub fill: Fill,
     /// The camera of the frame the linear depth was drawn for (copied from the frame's
     /// camera uniform when the G-buffer runs): a later read rebuilds the positions with it
     /// even after the next frame has written its own camera.
     camera: wgpu::Buffer,
-    size: (u32, u32),
-    /// Whether the linear depth changed since the position was last filled.
-    stale: AtomicBool,
 }
 
 impl PositionPass {
@@ -57,65 +121,24 @@ impl PositionPass {
         position: &wgpu::TextureView,
         size: (u32, u32),
     ) -> Arc<Self> {
-        let device = &ctx.device;
-        let layout = POSITION_BINDINGS.layout(device);
-        let module = crate::shaders::create_module(device, "gbuffer/position.wgsl");
-        let pipeline = crate::passes::compute_pipeline(device, "gbuffer.position", &module, "cs_position", &[&layout]);
         let bytes = std::mem::size_of::<crate::passes::CameraUniform>() as u64;
-        let camera = crate::passes::uniform_buffer(device, "gbuffer.position.camera", bytes);
+        let camera = crate::passes::uniform_buffer(&ctx.device, "gbuffer.position.camera", bytes);
         let tv = wgpu::BindingResource::TextureView;
-        let group =
-            POSITION_BINDINGS.group(device, &layout, [camera.as_entire_binding(), tv(linear_depth), tv(position)]);
-        Arc::new(Self { ctx: ctx.clone(), pipeline, group, camera, size, stale: AtomicBool::new(false) })
+        let resources = [camera.as_entire_binding(), tv(linear_depth), tv(position)];
+        let fill = Fill::new(ctx, ("gbuffer.position", &POSITION_BINDINGS, "cs_position"), resources, size);
+        Arc::new(Self { fill, camera })
     }
 
-    /// Keeps the camera the G-buffer was just drawn with (`camera`: the frame's uniform).
+    /// Keeps the camera the G-buffer was just drawn with (`camera`: the frame's uniform);
+    /// the fill reads it.
     pub fn keep_camera(&self, enc: &mut wgpu::CommandEncoder, camera: &wgpu::Buffer) {
         enc.copy_buffer_to_buffer(camera, 0, &self.camera, 0, self.camera.size());
-    }
-
-    /// Records the pass (after [`Self::keep_camera`] of the same G-buffer).
-    pub fn record(
-        &self,
-        enc: &mut wgpu::CommandEncoder,
-        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
-    ) {
-        crate::passes::dispatch_2d(
-            enc,
-            "gbuffer.position",
-            &self.pipeline,
-            &self.group,
-            &[],
-            timestamp_writes,
-            self.size,
-        );
-    }
-
-    /// Takes the stale flag: whether the position needed filling (it is now the caller's to
-    /// fill or to mark stale again with [`Self::set_stale`]).
-    pub fn take_stale(&self) -> bool {
-        self.stale.swap(false, Ordering::SeqCst)
-    }
-
-    pub fn set_stale(&self, stale: bool) {
-        self.stale.store(stale, Ordering::SeqCst);
     }
 }
 
 impl Derived for PositionPass {
     fn refresh(&self) {
-        if !self.take_stale() {
-            return;
-        }
-        self.ctx.make_current();
-        let mut enc = self
-            .ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("gbuffer.position.on_read") });
-        crate::counters::traffic::begin_scope("gbuffer.position");
-        self.record(&mut enc, None);
-        crate::counters::traffic::end_scope();
-        self.ctx.submit([enc.finish()]);
+        self.fill.refresh();
     }
 }
 
@@ -134,74 +157,15 @@ pub const NO_EMISSION_BINDINGS: Bindings = Bindings {
 /// Fills `gbuffer.emission` when it is read while the G-buffer leaves it out (no material
 /// emits nor has an occlusion texture, issue #53): rgb 0 and a 1 where geometry covers the
 /// pixel (`shaders/gbuffer/no_emission.wgsl`), what the raster would have written.
-pub struct NoEmissionPass {
-    ctx: GpuContext,
-    pipeline: wgpu::ComputePipeline,
-    group: wgpu::BindGroup,
+pub fn no_emission_pass(
+    ctx: &GpuContext,
+    linear_depth: &wgpu::TextureView,
+    emission: &wgpu::TextureView,
     size: (u32, u32),
-    /// Whether the G-buffer ran since the target was last filled.
-    stale: AtomicBool,
-}
-
-impl NoEmissionPass {
-    pub fn new(
-        ctx: &GpuContext,
-        linear_depth: &wgpu::TextureView,
-        emission: &wgpu::TextureView,
-        size: (u32, u32),
-    ) -> Arc<Self> {
-        let device = &ctx.device;
-        let layout = NO_EMISSION_BINDINGS.layout(device);
-        let module = crate::shaders::create_module(device, "gbuffer/no_emission.wgsl");
-        let pipeline =
-            crate::passes::compute_pipeline(device, "gbuffer.no_emission", &module, "cs_no_emission", &[&layout]);
-        let tv = wgpu::BindingResource::TextureView;
-        let group = NO_EMISSION_BINDINGS.group(device, &layout, [tv(linear_depth), tv(emission)]);
-        Arc::new(Self { ctx: ctx.clone(), pipeline, group, size, stale: AtomicBool::new(false) })
-    }
-
-    /// Records the fill.
-    pub fn record(
-        &self,
-        enc: &mut wgpu::CommandEncoder,
-        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
-    ) {
-        crate::passes::dispatch_2d(
-            enc,
-            "gbuffer.no_emission",
-            &self.pipeline,
-            &self.group,
-            &[],
-            timestamp_writes,
-            self.size,
-        );
-    }
-
-    /// Takes the stale flag (see `PositionPass::take_stale`).
-    pub fn take_stale(&self) -> bool {
-        self.stale.swap(false, Ordering::SeqCst)
-    }
-
-    pub fn set_stale(&self, stale: bool) {
-        self.stale.store(stale, Ordering::SeqCst);
-    }
-}
-
-impl Derived for NoEmissionPass {
-    fn refresh(&self) {
-        if !self.take_stale() {
-            return;
-        }
-        self.ctx.make_current();
-        let mut enc = self
-            .ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("gbuffer.no_emission.on_read") });
-        crate::counters::traffic::begin_scope("gbuffer.no_emission");
-        self.record(&mut enc, None);
-        crate::counters::traffic::end_scope();
-        self.ctx.submit([enc.finish()]);
-    }
+) -> Arc<Fill> {
+    let tv = wgpu::BindingResource::TextureView;
+    let what = ("gbuffer.no_emission", &NO_EMISSION_BINDINGS, "cs_no_emission");
+    Arc::new(Fill::new(ctx, what, [tv(linear_depth), tv(emission)], size))
 }
 
 /// CPU twin of `world_from_linear_depth` (shaders/common/camera.wgsl): the world point of
