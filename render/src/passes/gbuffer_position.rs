@@ -45,10 +45,7 @@ pub struct Fill {
     ctx: GpuContext,
     /// The pass's name: its timing scope and its objects' labels.
     name: &'static str,
-    /// The shader and entry point, compiled on the first fill (most frames never need one).
-    shader: (&'static str, &'static str),
-    layout: wgpu::BindGroupLayout,
-    pipeline: std::sync::OnceLock<wgpu::ComputePipeline>,
+    pipeline: wgpu::ComputePipeline,
     group: wgpu::BindGroup,
     size: (u32, u32),
     stale: AtomicBool,
@@ -58,15 +55,16 @@ impl Fill {
     /// The pass `name` running `entry` of `bindings`' shader over `size` pixels.
     fn new<'a>(
         ctx: &GpuContext,
-        (name, bindings, entry): (&'static str, &Bindings, &'static str),
+        (name, bindings, entry): (&'static str, &Bindings, &str),
         resources: impl IntoIterator<Item = wgpu::BindingResource<'a>>,
         size: (u32, u32),
     ) -> Self {
         let device = &ctx.device;
         let layout = bindings.layout(device);
+        let module = crate::shaders::create_module(device, bindings.shader);
+        let pipeline = crate::passes::compute_pipeline(device, name, &module, entry, &[&layout]);
         let group = bindings.group(device, &layout, resources);
-        let (shader, pipeline, stale) = ((bindings.shader, entry), Default::default(), AtomicBool::new(false));
-        Self { ctx: ctx.clone(), name, shader, layout, pipeline, group, size, stale }
+        Self { ctx: ctx.clone(), name, pipeline, group, size, stale: AtomicBool::new(false) }
     }
 
     /// Records the pass.
@@ -75,11 +73,7 @@ impl Fill {
         enc: &mut wgpu::CommandEncoder,
         timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
     ) {
-        let pipeline = self.pipeline.get_or_init(|| {
-            let module = crate::shaders::create_module(&self.ctx.device, self.shader.0);
-            crate::passes::compute_pipeline(&self.ctx.device, self.name, &module, self.shader.1, &[&self.layout])
-        });
-        crate::passes::dispatch_2d(enc, self.name, pipeline, &self.group, &[], timestamp_writes, self.size);
+        crate::passes::dispatch_2d(enc, self.name, &self.pipeline, &self.group, &[], timestamp_writes, self.size);
     }
 
     /// Takes the stale flag: whether the buffer needed filling (it is now the caller's to
