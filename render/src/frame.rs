@@ -28,6 +28,7 @@ impl Renderer {
         // or leaves it to be filled when read, never before its camera is written below.
         let position_stale = self.gbuffer.position.as_ref().is_some_and(|p| p.fill.take_stale());
         let emission_stale = self.gbuffer.no_emission.as_ref().is_some_and(|p| p.take_stale());
+        let material_stale = self.gbuffer.material.as_ref().is_some_and(|p| p.take_stale());
         // What the read-backs recorded in this frame copy (a buffer filled only when read is
         // then filled in the frame).
         let read_back = self
@@ -84,16 +85,22 @@ impl Renderer {
                 position_stale = false;
             }
         }
-        // The same for the emission a scene without emitters leaves out, read back in this frame.
-        let mut emission_stale = emission_stale || gbuffer_ran;
-        if let Some(fill) = self.gbuffer.no_emission.clone().filter(|_| emission_stale)
-            && read_back.reads("gbuffer.emission")
-        {
-            self.timer.scope(&ctx, &mut enc, "gbuffer.no_emission", |e, slot| {
-                fill.record(e, slot.and_then(|s| s.compute(true, true)))
-            });
-            emission_stale = false;
-        }
+        // The same for the emission a scene without emitters leaves out and for the material's
+        // metallic and roughness, read back in this frame.
+        let mut fill_if_read = |fill: Option<&std::sync::Arc<crate::passes::gbuffer_position::Fill>>, stale, name| {
+            let stale = stale || gbuffer_ran;
+            match fill.filter(|_| stale && read_back.reads(name)) {
+                Some(fill) => {
+                    self.timer.scope(&ctx, &mut enc, fill.name(), |e, slot| {
+                        fill.record(e, slot.and_then(|s| s.compute(true, true)))
+                    });
+                    false
+                }
+                None => stale,
+            }
+        };
+        let emission_stale = fill_if_read(self.gbuffer.no_emission.as_ref(), emission_stale, "gbuffer.emission");
+        let material_stale = fill_if_read(self.gbuffer.material.as_ref(), material_stale, "gbuffer.material");
 
         // Stage 2: shadow maps, the emitters' VPLs, direct light.
         let direct_view = self.direct_light(&mut enc, &state, (view_proj, gbuffer_key));
@@ -171,6 +178,9 @@ impl Renderer {
         }
         if let Some(no_emission) = self.gbuffer.no_emission.as_ref() {
             no_emission.set_stale(emission_stale);
+        }
+        if let Some(material) = self.gbuffer.material.as_ref() {
+            material.set_stale(material_stale);
         }
         readbacks.start_maps();
         let timings = self.timer.collect(&ctx, !self.interactive).to_vec();

@@ -437,6 +437,68 @@ fn the_filter_fused_into_the_merge_equals_the_two_passes() {
     assert!(worst <= 4.0, "fused and separate merges differ by {worst} half-float steps");
 }
 
+/// The default preset merges demodulated: its merge keeps each pixel's normal in the split
+/// history's free word (issue #53) instead of a normals texture written and read (16 bytes a
+/// pixel), and stores the confidence only while something reads it in the frame (4 bytes a
+/// pixel). `temporal.prev_normal`, decoded from the split history when read, is the
+/// G-buffer's normal within the octahedral snorm16 rounding and one half-float step;
+/// `temporal.confidence`, computed when read, is bit for bit the one a frame stores while a
+/// read-back copies it.
+#[test]
+fn the_demodulated_merge_keeps_the_normal_in_its_split_history_and_the_confidence_when_read() {
+    use gi_render::readback::Readback;
+    let (w, h) = (64u32, 48u32);
+    let mut r = gi_lab_tests::default_renderer(w, h);
+    let mut stored = gi_lab_tests::default_renderer(w, h);
+    assert!(r.settings().temporal.demodulate, "the default merges demodulated");
+    let merge_bytes =
+        |r: &Renderer| r.traffic().iter().find(|(p, _)| p == "temporal.filter_merge").map_or(0, |(_, b)| *b);
+    let pixels = (w * h) as u64;
+    let mut means = Vec::new();
+    for frame in 0..3 {
+        if frame == 2 {
+            // The camera moves: the confidence drops where the history is rejected.
+            let step = Vec3::new(0.002, 0.0, 0.0) * r.bounds().radius();
+            r.camera.fly(step);
+            stored.camera.fly(step);
+        }
+        let image = Readback::Image { name: "temporal.confidence".into(), layer: 0, mip: 0 };
+        stored.read_later("test.confidence", image, frame);
+        r.render_frame();
+        stored.render_frame();
+        // The fused pass's bindings: the gathered light and irradiance (8 + 8), the depth
+        // (4), the normal (8), the movement buffer (8), the albedo (4), the history read and
+        // written (8 + 8), the split history read and written (16 + 16): 88 bytes a pixel,
+        // and uniforms and 1×1 stand-ins (the normals pair, the confidence); 4 more with the
+        // confidence stored.
+        let bound = merge_bytes(&r);
+        assert!((88 * pixels..88 * pixels + 4 * 1024).contains(&bound), "{bound} bytes: {:?}", r.traffic());
+        assert!((merge_bytes(&stored) - bound).abs_diff(4 * pixels) < 1024, "{:?}", stored.traffic());
+        let (later, now) = (
+            r.readback("temporal.confidence").expect("filled"),
+            stored.readback("temporal.confidence").expect("stored"),
+        );
+        assert_eq!(later.data, now.data, "frame {frame}: the confidence computed when read");
+        means.push(now.data.iter().map(|p| p[0] as f64).sum::<f64>() / pixels as f64);
+    }
+    // Frame 0 has no history; frame 1 merges a still one; the move of frame 2 rejects some.
+    assert!(means[0] == 0.0 && means[1] > 0.5 && means[2] < means[1] && means[2] > 0.0, "mean confidences {means:?}");
+    let (g, prev) =
+        (r.readback("gbuffer.normal").expect("normal"), r.readback("temporal.prev_normal").expect("decoded"));
+    let mut covered = 0;
+    for (a, b) in g.data.iter().zip(&prev.data) {
+        assert_eq!(a[3], b[3], "coverage");
+        if a[3] > 0.5 {
+            covered += 1;
+            for c in 0..3 {
+                let step = gi_render::buffers::half_step(a[c].abs().max(b[c].abs()));
+                assert!((a[c] - b[c]).abs() <= 2.0 * step + 1e-4, "normal {a:?} decoded as {b:?}");
+            }
+        }
+    }
+    assert!(covered > (w * h) as usize / 2, "{covered} covered pixels");
+}
+
 /// The default box with a checkerboard base-colour texture on every surface (8 cells across
 /// a 64-texel texture), 96², Knecht's defaults (filter, then the confidence merge). Renders
 /// four still frames, then pans the camera sideways by 0.2 % of the scene's radius a frame

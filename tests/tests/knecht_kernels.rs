@@ -525,6 +525,13 @@ fn confidence_and_merge_case(demodulated: bool) {
                         specular: half3(split_prev.specular),
                     };
                     let i_prev = if demodulated { split_prev.reflect(k(p)) } else { prev.light };
+                    // Demodulated, n_prev comes from the split history's normal word (issue #53),
+                    // octahedral snorm16: the twin rounds as the shader stores it.
+                    let normal_prev = if demodulated {
+                        knecht::unpack_normal(knecht::pack_normal(Some(prev.normal))).expect("a covered pixel")
+                    } else {
+                        prev.normal
+                    };
                     let input = knecht::ConfidenceInput {
                         motion_px: m,
                         size: Vec2::new(w as f32, h as f32),
@@ -532,7 +539,7 @@ fn confidence_and_merge_case(demodulated: bool) {
                         depth_prev: prev.depth,
                         depth_range,
                         normal: p.normal,
-                        normal_prev: prev.normal,
+                        normal_prev,
                         illumination: p.light,
                         illumination_prev: i_prev,
                     };

@@ -37,12 +37,12 @@ fn gbuffer_matches_cpu_ray_cast() {
     // the position, which is rebuilt from the depth when it is read below.
     let passes: Vec<String> = r.render_frame().into_iter().map(|t| t.name).collect();
     assert!(!passes.iter().any(|p| p == "gbuffer.position"), "{passes:?}");
-    // What the G-buffer pass binds: the linear depth (4 bytes), normal (8), albedo (4),
-    // material (8), movement buffer (8) and depth (4) a pixel, and the camera, instance and
-    // material buffers (a few KB); no emission target (8 bytes a pixel, 128 KB here), since no
-    // material of the default box emits (issue #53).
+    // What the G-buffer pass binds: the linear depth (4 bytes), normal (8), albedo (4), SI and
+    // SP (4), movement buffer (8) and depth (4) a pixel, and the camera, instance and material
+    // buffers (a few KB); no emission target (8 bytes a pixel, 128 KB here), since no material
+    // of the default box emits, and no metallic and roughness, filled when read (issue #53).
     let bound = r.traffic().iter().find(|(p, _)| p == "gbuffer").map_or(0, |(_, b)| *b);
-    let targets = 36 * (N * N) as u64;
+    let targets = 32 * (N * N) as u64;
     assert!((targets..targets + 16 * 1024).contains(&bound), "{bound} bytes: {:?}", r.traffic());
     let pos = r.readback("gbuffer.position").expect("position");
     let depth = r.readback("gbuffer.linear_depth").expect("linear depth");
@@ -98,6 +98,14 @@ fn gbuffer_matches_cpu_ray_cast() {
                         g[1],
                         m.specular_power()
                     );
+                    // Filled when read from SI, SP and DI (issue #53): metallic = 1 − DI, and
+                    // the roughness SP shades (the material's own where SP does not clamp).
+                    assert!((g[2] - m.metallic).abs() < 3.0 / 255.0, "metallic {} vs {}", g[2], m.metallic);
+                    let shaded = (2.0 / (m.specular_power() + 2.0)).powf(0.25);
+                    assert!((g[3] - shaded).abs() < 1e-3, "roughness {} vs {shaded}", g[3]);
+                    if (0.16..0.9).contains(&m.roughness) {
+                        assert!((g[3] - m.roughness).abs() < 1e-3, "roughness {} vs {}", g[3], m.roughness);
+                    }
                     compared += 1;
                 }
                 Some(_) => {}

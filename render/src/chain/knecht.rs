@@ -75,12 +75,20 @@ pub(super) fn merge(f: &FrameInputs, x: &mut StagePasses, r: &mut Recorder, flow
     // The demodulated merge (issue #51) keeps the irradiance beside the light.
     let irradiance = merge_irradiance(f, x);
     let t = x.temporal.as_mut()?;
+    (t.store_confidence, t.decode_normals) = (stores_confidence(f), f.read_back.reads("temporal.prev_normal"));
     let (ctx, s, depth_range) = (f.ctx, &f.settings.temporal, f.depth_range());
     r.timer.scope(ctx, r.enc, "temporal", |e, slot| {
         t.run(PassRec { ctx, enc: e, slot }, s, depth_range, &src, f.gbuffer, irradiance.as_ref())
     });
     flow.light = Some(crate::passes::view(t.history(), "temporal.history"));
     Some(())
+}
+
+/// Whether the frame's merge stores `temporal.confidence` (issue #53): while a pixel is
+/// explained (the replays read it) or a read-back of this frame copies it; otherwise it is
+/// computed when read, by the same pass storing it alone.
+fn stores_confidence(f: &FrameInputs) -> bool {
+    f.explain_pixel.is_some() || f.read_back.reads("temporal.confidence")
 }
 
 /// Stages 6–7 in one pass when the filter precedes the merge (issue #53): the geometry-aware
@@ -102,6 +110,7 @@ pub(super) fn filter_and_merge(f: &FrameInputs, x: &mut StagePasses, r: &mut Rec
     let irradiance = s.demodulate.then(|| crate::passes::view(&i.irradiance, "indirect.irradiance"));
     let params = i.prepare_fused(ctx, s, depth_range, &gathered, f.gbuffer, irradiance.as_ref());
     let t = x.temporal.as_mut()?;
+    (t.store_confidence, t.decode_normals) = (stores_confidence(f), f.read_back.reads("temporal.prev_normal"));
     let filter = FusedFilter { demodulate, params, irradiance: irradiance.as_ref() };
     r.timer.scope(ctx, r.enc, "temporal.filter_merge", |e, slot| {
         let rec = PassRec { ctx, enc: e, slot };

@@ -515,6 +515,46 @@ impl SplitLight {
     }
 }
 
+/// The split history's normal word (issue #53; twin of `shaders/common/split_light.wgsl`'s
+/// `pack_normal`): the unit normal's octahedral coordinates (Cigolle et al. 2014, JCGT 3(2),
+/// §3.3) as two 16-bit snorms, rounded as WGSL's `pack2x16snorm` rounds; None (no surface) is
+/// a word that no normal packs to.
+pub fn pack_normal(n: Option<Vec3>) -> u32 {
+    const NO_NORMAL: u32 = 0x8000_8000;
+    let Some(n) = n else { return NO_NORMAL };
+    let l1 = n.x.abs() + n.y.abs() + n.z.abs();
+    if l1 <= 0.0 {
+        return NO_NORMAL;
+    }
+    let mut p = Vec2::new(n.x, n.y) / l1;
+    if n.z < 0.0 {
+        p = octahedral_fold(p);
+    }
+    let snorm = |v: f32| ((0.5 + 32767.0 * v.clamp(-1.0, 1.0)).floor() as i32 as i16 as u16) as u32;
+    snorm(p.x) | (snorm(p.y) << 16)
+}
+
+/// The normal a [`pack_normal`] word holds (unit), None for the word of no surface.
+pub fn unpack_normal(w: u32) -> Option<Vec3> {
+    if w == 0x8000_8000 {
+        return None;
+    }
+    let snorm = |h: u32| ((h as u16 as i16) as f32 / 32767.0).max(-1.0);
+    let p = Vec2::new(snorm(w & 0xffff), snorm(w >> 16));
+    let mut n = Vec3::new(p.x, p.y, 1.0 - p.x.abs() - p.y.abs());
+    if n.z < 0.0 {
+        let f = octahedral_fold(Vec2::new(n.x, n.y));
+        n = Vec3::new(f.x, f.y, n.z);
+    }
+    Some(n.normalize())
+}
+
+/// The octahedral map's fold of the lower half over the square's edges.
+fn octahedral_fold(v: Vec2) -> Vec2 {
+    let s = Vec2::new(if v.x >= 0.0 { 1.0 } else { -1.0 }, if v.y >= 0.0 { 1.0 } else { -1.0 });
+    (Vec2::ONE - Vec2::new(v.y.abs(), v.x.abs())) * s
+}
+
 /// The demodulated merge (issue #51, ⚠[knecht.demodulated-merge]; twin of the demodulated path
 /// of `shaders/knecht/temporal/confidence.wgsl`): Eq. 3.6 applied to E and S apart, the result
 /// reflected with this pixel's own k. Eq. 3.3's I_prev is the history as this pixel reflects
@@ -530,6 +570,34 @@ pub fn merge_demodulated(k: Vec3, new: SplitLight, prev: SplitLight, confidence:
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_packed_normal_comes_back_within_the_snorms_step() {
+        // Both hemispheres, the axes, the octahedron's edges and its folded corners.
+        let count = 2000;
+        let mut dirs: Vec<Vec3> = (0..count)
+            .map(|i| {
+                // A Fibonacci sphere: every direction's neighbourhood.
+                let z = 1.0 - 2.0 * (i as f32 + 0.5) / count as f32;
+                let phi = i as f32 * 2.399_963;
+                let r = (1.0 - z * z).sqrt();
+                Vec3::new(r * phi.cos(), r * phi.sin(), z)
+            })
+            .collect();
+        dirs.extend([Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z]);
+        dirs.extend(
+            [Vec3::new(1.0, 1.0, 0.0), Vec3::new(-1.0, 0.0, -1.0), Vec3::new(0.3, -0.7, -0.2)].map(Vec3::normalize),
+        );
+        for n in dirs {
+            let w = pack_normal(Some(n));
+            assert_ne!(w, pack_normal(None), "{n} packs to the no-surface word");
+            let back = unpack_normal(w).expect("a normal");
+            // A few snorm16 steps (3·10⁻⁵) of the octahedron's side: under 10⁻⁴ rad.
+            assert!(back.cross(n).length() < 1e-4 && back.dot(n) > 0.0, "{n} came back as {back}");
+        }
+        assert_eq!(unpack_normal(pack_normal(None)), None);
+        assert_eq!(pack_normal(Some(Vec3::ZERO)), pack_normal(None));
+    }
 
     #[test]
     fn the_reference_sampling_set_is_stratified_and_uniform() {

@@ -29,6 +29,12 @@ pub const LINEAR_DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Flo
 pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 pub const MATERIAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// The camera G-buffer's material target (issue #53): SI and SP alone, the two values every
+/// pass reads, 4 bytes a pixel instead of 8. `gbuffer.material` (SI, SP, metallic, roughness,
+/// [`MATERIAL_FORMAT`]) is filled from it and the albedo's DI when read
+/// (`gbuffer_position::material_pass`): metallic = 1 − DI, and the roughness that SP shades
+/// (SP = 2/α² − 2, α = r², clamped to [1, 4096]: r between 0.149 and 0.904).
+pub const SHADING_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
 /// The movement buffer (Knecht 002 §3.5.1) in pixels: half floats (issue #38), a step of
 /// 1/256 px below 4 px of motion and 1/32 px at 32–64 px, far below what the histories'
 /// bilinear lookups resolve; z: the point's linear depth in the previous frame with the
@@ -59,7 +65,11 @@ pub struct GBuffer {
     pub linear_depth: Option<wgpu::Texture>,
     pub normal: wgpu::Texture,
     pub albedo: wgpu::Texture,
+    /// SI, SP, metallic and roughness ([`MATERIAL_FORMAT`]); the camera's holds SI and SP
+    /// alone ([`SHADING_FORMAT`]) and fills `material_view` when read.
     pub material: wgpu::Texture,
+    /// The camera's `gbuffer.material` with all four values (None for the other G-buffers).
+    pub material_view: Option<wgpu::Texture>,
     pub motion: wgpu::Texture,
     pub emission: wgpu::Texture,
     pub depth: wgpu::Texture,
@@ -101,6 +111,8 @@ pub struct GBufferPass {
     /// `no_emission` fills it when it is read (issue #53).
     emits: bool,
     pub no_emission: Option<std::sync::Arc<super::gbuffer_position::Fill>>,
+    /// Fills the camera's `gbuffer.material` from its SI and SP and the albedo's DI when read.
+    pub material: Option<std::sync::Arc<super::gbuffer_position::Fill>>,
     pub camera_layout: wgpu::BindGroupLayout,
     pub targets: GBuffer,
     /// What the targets were last rendered for: the camera's G-buffer is kept while the
@@ -130,6 +142,7 @@ impl GBufferPass {
         let targets = create_targets_with(ctx, width, height, &name, linear);
         let position = linear.then(|| position_pass(ctx, &targets));
         let no_emission = (linear && !scene.emits).then(|| no_emission_pass(ctx, &targets));
+        let material = linear.then(|| material_pass(ctx, &targets));
         let last = Default::default();
         Self {
             name,
@@ -142,6 +155,7 @@ impl GBufferPass {
             position,
             emits: scene.emits,
             no_emission,
+            material,
             camera_layout,
             targets,
             last,
@@ -245,6 +259,9 @@ impl GBufferPass {
         if self.no_emission.is_some() {
             self.no_emission = Some(no_emission_pass(ctx, &self.targets));
         }
+        if self.material.is_some() {
+            self.material = Some(material_pass(ctx, &self.targets));
+        }
     }
 
     pub fn register(&self, reg: &mut BufferRegistry) {
@@ -286,12 +303,21 @@ impl GBufferPass {
             "linear surface colour c (rgb) and diffuse intensity DI (a), Knecht §4.2",
             &t.albedo,
         );
-        reg.register(
-            &format!("{name}.material"),
-            BufferKind::Data,
-            "specular intensity SI (r), specular power SP (g), metallic (b), roughness (a)",
-            &t.material,
-        );
+        match (&self.material, &t.material_view) {
+            (Some(pass), Some(view)) => reg.register_derived(
+                "gbuffer.material",
+                BufferKind::Data,
+                "specular intensity SI (r), specular power SP (g), metallic (b), roughness (a): filled when read from the G-buffer's SI and SP and the albedo's DI (issue #53); metallic = 1 − DI, the roughness that SP shades (SP clamps below 0.149 and above 0.904)",
+                view,
+                pass.clone(),
+            ),
+            _ => reg.register(
+                &format!("{name}.material"),
+                BufferKind::Data,
+                "specular intensity SI (r), specular power SP (g), metallic (b), roughness (a)",
+                &t.material,
+            ),
+        }
         if !camera {
             // The light's view has no previous frame and no viewer for emission.
             reg.register(&format!("{name}.depth"), BufferKind::Depth, "hardware depth in [0, 1]", &t.depth);
@@ -394,6 +420,14 @@ impl Writes {
     fn color_targets(self) -> [Option<wgpu::ColorTargetState>; 6] {
         let position = if self.linear_depth { LINEAR_DEPTH_FORMAT } else { POSITION_FORMAT };
         let mut t = color_targets_with(position);
+        if self.linear_depth {
+            // The camera's SI and SP alone (the shader's vec4 output keeps its first two).
+            t[3] = Some(wgpu::ColorTargetState {
+                format: SHADING_FORMAT,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            });
+        }
         if !self.motion {
             t[4] = None;
         }
@@ -473,6 +507,14 @@ impl GBuffer {
 }
 
 /// The camera's emission when no material emits (issue #53), for these targets.
+/// The camera's `gbuffer.material` from its SI and SP and the albedo (issue #53).
+fn material_pass(ctx: &GpuContext, t: &GBuffer) -> std::sync::Arc<super::gbuffer_position::Fill> {
+    let size = (t.material.width(), t.material.height());
+    let view = t.material_view.as_ref().map(|m| super::view(m, "gbuffer.material"));
+    let view = view.unwrap_or_else(|| t.views.material.clone());
+    super::gbuffer_position::material_pass(ctx, (&t.views.material, &t.views.albedo), &view, size)
+}
+
 fn no_emission_pass(ctx: &GpuContext, t: &GBuffer) -> std::sync::Arc<super::gbuffer_position::Fill> {
     let size = (t.emission.width(), t.emission.height());
     super::gbuffer_position::no_emission_pass(ctx, &t.views.linear_depth, &t.views.emission, size)
@@ -512,7 +554,11 @@ fn create_targets_with(ctx: &GpuContext, width: u32, height: u32, name: &str, li
     let position = super::create_target(d, &format!("{name}.position"), width, height, POSITION_FORMAT, position_usage);
     let normal = super::create_target(d, &format!("{name}.normal"), width, height, NORMAL_FORMAT, att);
     let albedo = super::create_target(d, &format!("{name}.albedo"), width, height, ALBEDO_FORMAT, att);
-    let material = super::create_target(d, &format!("{name}.material"), width, height, MATERIAL_FORMAT, att);
+    let material_format = if linear { SHADING_FORMAT } else { MATERIAL_FORMAT };
+    let material = super::create_target(d, &format!("{name}.material"), width, height, material_format, att);
+    let storage = wgpu::TextureUsages::STORAGE_BINDING;
+    let material_view = linear
+        .then(|| super::create_target(d, &format!("{name}.material_view"), width, height, MATERIAL_FORMAT, storage));
     let motion = super::create_target(d, &format!("{name}.motion"), width, height, MOTION_FORMAT, att);
     // The camera's may be filled in compute when no material emits (`gbuffer_position::no_emission_pass`).
     let emission_usage = if linear { att | wgpu::TextureUsages::STORAGE_BINDING } else { att };
@@ -531,5 +577,5 @@ fn create_targets_with(ctx: &GpuContext, width: u32, height: u32, name: &str, li
         emission: super::view(&emission, &format!("{name}.emission")),
         depth: super::view(&depth, &format!("{name}.depth")),
     };
-    GBuffer { position, linear_depth, normal, albedo, material, motion, emission, depth, views }
+    GBuffer { position, linear_depth, normal, albedo, material, material_view, motion, emission, depth, views }
 }

@@ -84,6 +84,11 @@ impl Fill {
         self.stale.swap(false, Ordering::SeqCst)
     }
 
+    /// The pass's name (its timing scope).
+    pub fn name(&self) -> &'static str {
+        self.name
+    }
+
     pub fn set_stale(&self, stale: bool) {
         self.stale.store(stale, Ordering::SeqCst);
     }
@@ -166,6 +171,33 @@ pub fn no_emission_pass(
     let tv = wgpu::BindingResource::TextureView;
     let what = ("gbuffer.no_emission", &NO_EMISSION_BINDINGS, "cs_no_emission");
     Arc::new(Fill::new(ctx, what, [tv(linear_depth), tv(emission)], size))
+}
+
+pub const MATERIAL_BINDINGS: Bindings = Bindings {
+    label: "gbuffer.material.inputs",
+    shader: "gbuffer/material.wgsl",
+    group: 0,
+    entry: None,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "shading", Kind::Texture { filterable: false }),
+        binding(1, "albedo", Kind::Texture { filterable: false }),
+        binding(2, "out_material", Kind::StorageTexture(wgpu::TextureFormat::Rgba16Float)),
+    ],
+};
+
+/// Fills the camera's `gbuffer.material` (SI, SP, metallic, roughness) from the G-buffer's SI
+/// and SP (`passes::gbuffer::SHADING_FORMAT`) and the albedo's DI when it is read (issue #53,
+/// `shaders/gbuffer/material.wgsl`).
+pub fn material_pass(
+    ctx: &GpuContext,
+    (shading, albedo): (&wgpu::TextureView, &wgpu::TextureView),
+    material: &wgpu::TextureView,
+    size: (u32, u32),
+) -> Arc<Fill> {
+    let tv = wgpu::BindingResource::TextureView;
+    let what = ("gbuffer.material", &MATERIAL_BINDINGS, "cs_material");
+    Arc::new(Fill::new(ctx, what, [tv(shading), tv(albedo), tv(material)], size))
 }
 
 /// CPU twin of `world_from_linear_depth` (shaders/common/camera.wgsl): the world point of

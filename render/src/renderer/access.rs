@@ -372,7 +372,9 @@ impl Renderer {
 /// belong to; None for shaders outside the frame (the viewer's).
 pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
     Some(match entry {
-        "gbuffer/gbuffer.wgsl" | "gbuffer/position.wgsl" | "gbuffer/no_emission.wgsl" => "gbuffer",
+        "gbuffer/gbuffer.wgsl" | "gbuffer/position.wgsl" | "gbuffer/no_emission.wgsl" | "gbuffer/material.wgsl" => {
+            "gbuffer"
+        }
         "shadow/shadow.wgsl" => "direct.shadow",
         "direct/direct.wgsl" => "direct",
         "compose/compose.wgsl" | "compose/tonemap.wgsl" | "compose/luminance.wgsl" => "compose",
@@ -439,6 +441,10 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
 pub fn scope_output(scope: &str) -> Option<&'static str> {
     Some(match scope {
         "gbuffer" => "gbuffer.albedo",
+        // The camera G-buffer's fills (issue #53), when the frame runs them.
+        "gbuffer.position" => "gbuffer.position",
+        "gbuffer.no_emission" => "gbuffer.emission",
+        "gbuffer.material" => "gbuffer.material",
         "direct.shadow" => "direct.shadow_map",
         "direct" => "direct.radiance",
         "compose" | "compose.luminance" => "final.hdr",

@@ -12,8 +12,10 @@
 // (`indirect.filtered_irradiance`), k = c·DI/π this pixel's diffuse colour and S the specular
 // light; E and S are merged apart and reflected with this pixel's own k, so that a history
 // reprojected from a neighbouring texel brings its light but not its texture. The split
-// history (a third ping-pong pair) keeps E and S as half floats; Eq. 3.3 compares L with the
-// history as this pixel reflects it, k·E_prev + S_prev. CPU twin: cpu::knecht::merge_demodulated.
+// history (a third ping-pong pair) keeps E and S as half floats, and the normal that the
+// thesis' merge keeps in `normal_out` (issue #53, common/split_light.wgsl); Eq. 3.3 compares L
+// with the history as this pixel reflects it, k·E_prev + S_prev. CPU twin:
+// cpu::knecht::merge_demodulated.
 #import common/fullscreen.wgsl
 #import knecht/temporal/merge.wgsl
 
@@ -28,7 +30,8 @@
 @group(0) @binding(7) var confidence_out: texture_storage_2d<r32float, write>;
 // Half floats (passes::knecht::temporal::HISTORY_FORMAT).
 @group(0) @binding(8) var history_out: texture_storage_2d<rgba16float, write>;
-// This frame's normals, next frame's prev_normal (ping-pong: no copy, issue #38).
+// This frame's normals, next frame's prev_normal (ping-pong: no copy, issue #38); not written
+// by the demodulated merge, whose split history keeps the normal.
 @group(0) @binding(9) var normal_out: texture_storage_2d<rgba16float, write>;
 // The demodulated merge's inputs and split history (common/split_light.wgsl).
 @group(0) @binding(10) var g_albedo: texture_2d<f32>;
@@ -48,4 +51,17 @@ fn cs_confidence(@builtin(global_invocation_id) gid: vec3<u32>) {
         e_new = textureLoad(irradiance, p, 0).rgb;
     }
     merge_pixel(p, size, textureLoad(current, p, 0).rgb, e_new);
+}
+
+// `temporal.prev_normal` filled from the demodulated merge's split history when it is read
+// (issue #53: that merge keeps the normal in the split's free word and writes no normals
+// texture): the split history just written (bound as `split_prev`) into `normal_out`.
+@compute @workgroup_size(TILE, TILE, 1)
+fn cs_split_normal(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let size = textureDimensions(normal_out);
+    if (gid.x >= size.x || gid.y >= size.y) {
+        return;
+    }
+    let p = vec2<i32>(gid.xy);
+    textureStore(normal_out, p, unpack_normal(textureLoad(split_prev, p, 0).w));
 }

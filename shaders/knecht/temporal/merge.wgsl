@@ -13,7 +13,9 @@
 struct ConfidenceParams {
     // x: c_base, y: w_pos, z: w_normal, w: w_illumination
     weights: vec4<f32>,
-    // x: 1 when the history is valid and temporal coherence is on; y: 1 to merge demodulated
+    // x: 1 when the history is valid and temporal coherence is on; y: 1 to merge demodulated;
+    // z: what the pass stores (issue #53): 0 everything, 1 everything but the confidence (no
+    // one reads it this frame), 2 the confidence alone (its fill when it is read afterwards)
     state: vec4<u32>,
     // x: z_far − z_near of the camera (the thesis' linear depth unit, Eq. 4.2)
     range: vec4<f32>,
@@ -39,8 +41,9 @@ fn confidence(motion: vec2<f32>, size: vec2<f32>, d: f32, d_prev: f32, n: vec3<f
 }
 
 // Merges pixel p's new light `i_new` (and, merging demodulated, the irradiance `e_in` it
-// reflects) with the reprojected history and stores the confidence, the history, the normals
-// and the split history of the pixel.
+// reflects) with the reprojected history and stores the confidence, the history, and the
+// normal (in `normal_out`, or demodulated in the split history's free word, issue #53) and the
+// split history of the pixel.
 fn merge_pixel(p: vec2<i32>, size: vec2<u32>, i_new: vec3<f32>, e_in: vec3<f32>) {
     let nrm = textureLoad(g_normal, p, 0);
     // The history keeps the depth as a half float (issue #53): this frame's depth is compared
@@ -65,32 +68,44 @@ fn merge_pixel(p: vec2<i32>, size: vec2<u32>, i_new: vec3<f32>, e_in: vec3<f32>)
         let motion = textureLoad(g_motion, p, 0).xy;
         let q = previous_texel(p, motion, size);
         if (q.x >= 0) {
-            let pn = textureLoad(prev_normal, q, 0);
             let h = textureLoad(history_prev, q, 0);
-            if (pn.w > 0.5 && h.a > 0.0) {
-                if (demodulate) {
-                    let sp = textureLoad(split_prev, q, 0);
+            if (demodulate) {
+                // n_prev from the split history's normal word (issue #53).
+                let sp = textureLoad(split_prev, q, 0);
+                let pn = unpack_normal(sp.w);
+                if (pn.w > 0.5 && h.a > 0.0) {
                     let e_prev = unpack_irradiance(sp);
                     let s_prev = unpack_specular(sp);
                     c = confidence(motion, vec2<f32>(size), d, h.a, nrm.xyz, pn.xyz, i_new, k * e_prev + s_prev);
                     e_out = e_prev * c + (1.0 - c) * e_new;
                     s_out = s_prev * c + (1.0 - c) * s_new;
                     merged = k * e_out + s_out;
-                } else {
+                }
+            } else {
+                let pn = textureLoad(prev_normal, q, 0);
+                if (pn.w > 0.5 && h.a > 0.0) {
                     c = confidence(motion, vec2<f32>(size), d, h.a, nrm.xyz, pn.xyz, i_new, h.rgb);
                     merged = h.rgb * c + (1.0 - c) * i_new;
                 }
             }
         }
     }
-    textureStore(confidence_out, p, vec4<f32>(c, 0.0, 0.0, 0.0));
-    textureStore(normal_out, p, nrm);
+    if (params.state.z != 1u) {
+        textureStore(confidence_out, p, vec4<f32>(c, 0.0, 0.0, 0.0));
+    }
+    if (params.state.z == 2u) {
+        return;
+    }
+    if (!demodulate) {
+        // Demodulated, the normal goes into the split history's free word instead.
+        textureStore(normal_out, p, nrm);
+    }
     var depth = 0.0;
     if (nrm.w > 0.5) {
         depth = d;
     }
     textureStore(history_out, p, vec4<f32>(merged, depth));
     if (demodulate) {
-        textureStore(split_out, p, pack_split(e_out, s_out));
+        textureStore(split_out, p, pack_split(e_out, s_out, nrm));
     }
 }

@@ -6,10 +6,10 @@
 //! `shaders/knecht/ism/`, `shaders/knecht/interleave/`, `shaders/knecht/temporal/`.
 
 pub mod explain;
-pub mod filter_on_read;
 pub mod interleave;
 pub mod irsm;
 pub mod ism;
+pub mod on_read;
 pub mod point_cloud;
 pub mod stage;
 pub mod temporal;

@@ -88,6 +88,20 @@ pub const FILTER_MERGE_BINDINGS: Bindings = Bindings {
     ],
 };
 
+/// `temporal.prev_normal` decoded from the demodulated merge's split history when it is read
+/// (`cs_split_normal` of `knecht/temporal/confidence.wgsl`, issue #53).
+pub const SPLIT_NORMAL_BINDINGS: Bindings = Bindings {
+    label: "temporal.prev_normal.inputs",
+    shader: "knecht/temporal/confidence.wgsl",
+    group: 0,
+    entry: Some("cs_split_normal"),
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(9, "normal_out", Kind::StorageTexture(NORMAL_FORMAT)),
+        binding(12, "split_prev", Kind::UintTexture),
+    ],
+};
+
 /// The filter a merge runs first, fused (`TemporalPass::run_fused`, issue #53).
 pub struct FusedFilter<'a> {
     /// Whether the merge keeps the filter's mean irradiance apart (as [`TemporalPass::run`]
@@ -112,6 +126,8 @@ pub fn no_split_view(device: &wgpu::Device, label: &str) -> wgpu::TextureView {
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ConfidenceParams {
     pub weights: Vec4,
+    /// x: the history is valid, y: merge demodulated, z: what the pass stores (0 everything,
+    /// 1 all but the confidence, 2 the confidence alone).
     pub state: [u32; 4],
     /// x: z_far − z_near.
     pub range: Vec4,
@@ -138,6 +154,25 @@ pub struct TemporalPass {
     split_read: bool,
     /// 1×1 stand-ins for the split pair when the merge is not demodulated.
     dummy_split: [wgpu::Texture; 2],
+    /// 1×1 stand-ins for the normals pair when it is: the demodulated merge keeps the normal
+    /// in the split history (issue #53).
+    dummy_normals: [wgpu::Texture; 2],
+    /// Fills `normals[current]` from `split[current]` when `temporal.prev_normal` is read
+    /// after a demodulated merge.
+    split_normal_layout: wgpu::BindGroupLayout,
+    split_normal_pipeline: wgpu::ComputePipeline,
+    split_normal: std::sync::Arc<super::on_read::OnRead>,
+    /// Whether the next merges store `temporal.confidence` (the default); when not (issue
+    /// #53: nothing reads it in the frame, 4 bytes a pixel), the merge binds a 1×1 stand-in
+    /// and the confidence is computed again, alone, when it is read.
+    pub store_confidence: bool,
+    /// Whether a demodulated merge also decodes `temporal.prev_normal` in the frame (a
+    /// read-back of this frame copies it); otherwise it is decoded when read.
+    pub decode_normals: bool,
+    dummy_confidence: wgpu::Texture,
+    confidence_on_read: std::sync::Arc<super::on_read::OnRead>,
+    /// The uniform of that later pass (`state.z` = 2).
+    confidence_params: wgpu::Buffer,
     layout: wgpu::BindGroupLayout,
     /// The merge of the thesis, then the demodulated one.
     pipeline: [wgpu::ComputePipeline; 2],
@@ -166,13 +201,29 @@ impl TemporalPass {
             let entry = (&fused_module, "cs_filter_merge", &[("DEMODULATE", demodulate)][..]);
             crate::gpu::compute_pipeline_with(device, label, entry, &[&fused_layout])
         });
+        let split_normal_layout = SPLIT_NORMAL_BINDINGS.layout(device);
+        let split_normal_pipeline = crate::passes::compute_pipeline(
+            device,
+            "temporal.prev_normal",
+            &module,
+            "cs_split_normal",
+            &[&split_normal_layout],
+        );
+        let split_normal = super::on_read::OnRead::new(ctx, "temporal.prev_normal", (width, height));
         let params = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("temporal.params"),
             size: std::mem::size_of::<ConfidenceParams>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let confidence_params = device.counted_buffer(&wgpu::BufferDescriptor {
+            label: Some("temporal.confidence.params"),
+            size: std::mem::size_of::<ConfidenceParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         let (confidence, history, normals) = Self::targets(device, width, height);
+        let dummy_confidence = Self::targets(device, 1, 1).0;
         Self {
             width,
             height,
@@ -185,6 +236,15 @@ impl TemporalPass {
             split_written: false,
             split_read: false,
             dummy_split: Self::split_pair(device, 1, 1, "temporal.history_split.unused"),
+            dummy_normals: Self::targets(device, 1, 1).2,
+            split_normal_layout,
+            split_normal_pipeline,
+            split_normal,
+            store_confidence: true,
+            decode_normals: false,
+            dummy_confidence,
+            confidence_on_read: super::on_read::OnRead::new(ctx, "temporal.confidence", (width, height)),
+            confidence_params,
             layout,
             pipeline,
             fused_layout,
@@ -234,6 +294,8 @@ impl TemporalPass {
         }
         (self.confidence, self.history, self.normals) = Self::targets(&ctx.device, width, height);
         (self.width, self.height) = (width, height);
+        self.split_normal = super::on_read::OnRead::new(ctx, "temporal.prev_normal", (width, height));
+        self.confidence_on_read = super::on_read::OnRead::new(ctx, "temporal.confidence", (width, height));
         self.split = None;
         self.valid = false;
         true
@@ -245,11 +307,12 @@ impl TemporalPass {
     }
 
     pub fn register(&self, reg: &mut BufferRegistry) {
-        reg.register(
+        reg.register_derived(
             "temporal.confidence",
             BufferKind::Data,
             "confidence in the previous frame's indirect light (Knecht Eq. 3.4), 0 … c_base; the thesis computes it on the fly",
             &self.confidence,
+            self.confidence_on_read.clone(),
         );
         reg.register(
             "temporal.history",
@@ -257,12 +320,14 @@ impl TemporalPass {
             "indirect light after the confidence merge (Eq. 3.6) in rgb, view depth in a: what compose adds, and next frame's I_prev",
             self.history(),
         );
-        reg.register(
-            "temporal.prev_normal",
-            BufferKind::Direction,
-            "the last frame's G-buffer normals, next frame's n_prev (Eq. 3.2)",
-            &self.normals[self.current],
-        );
+        let (name, kind, normals) = ("temporal.prev_normal", BufferKind::Direction, &self.normals[self.current]);
+        let what = "the last frame's G-buffer normals, next frame's n_prev (Eq. 3.2)";
+        if self.split_written {
+            // Kept in the split history by the demodulated merge: decoded when read.
+            reg.register_derived(name, kind, what, normals, self.split_normal.clone());
+        } else {
+            reg.register(name, kind, what, normals);
+        }
     }
 
     /// Merges `current` (this frame's indirect light) with the reprojected history; the
@@ -317,20 +382,25 @@ impl TemporalPass {
         if demodulate && self.split.is_none() {
             self.split = Some(Self::split_pair(&ctx.device, self.width, self.height, "temporal.history_split"));
         }
+        let stores = if self.store_confidence { 0 } else { 1 };
         let p = ConfidenceParams {
             weights: Vec4::new(s.c_base, s.w_pos, s.w_normal, s.w_illumination),
-            state: [self.valid as u32, demodulate as u32, 0, 0],
+            state: [self.valid as u32, demodulate as u32, stores, 0],
             range: Vec4::new(depth_range, 0.0, 0.0, 0.0),
         };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        let later = ConfidenceParams { state: [self.valid as u32, demodulate as u32, 2, 0], ..p };
+        ctx.queue.write_buffer(&self.confidence_params, 0, bytemuck::bytes_of(&later));
         let v = |t: &wgpu::Texture, l: &str| crate::passes::view(t, l);
         let (read, write) = (self.current, 1 - self.current);
+        // Demodulated, the normals go into the split history's free word (issue #53).
+        let normals = if demodulate { &self.dummy_normals } else { &self.normals };
         let (prev_n, hist_prev, conf, hist, normal_out) = (
-            v(&self.normals[read], "temporal.prev_normal"),
+            v(&normals[read], "temporal.prev_normal"),
             v(&self.history[read], "temporal.history_prev"),
             v(&self.confidence, "temporal.confidence"),
             v(&self.history[write], "temporal.history"),
-            v(&self.normals[write], "temporal.normal_out"),
+            v(&normals[write], "temporal.normal_out"),
         );
         let split = match (&self.split, demodulate) {
             (Some(pair), true) => pair,
@@ -339,34 +409,46 @@ impl TemporalPass {
         let (split_prev, split_out) =
             (v(&split[read], "temporal.history_split_prev"), v(&split[write], "temporal.history_split"));
         let tv = wgpu::BindingResource::TextureView;
-        let resources = [
-            self.params.as_entire_binding(),
-            tv(current),
-            tv(&g.linear_depth),
-            tv(&g.normal),
-            tv(&g.motion),
-            tv(&prev_n),
-            tv(&hist_prev),
-            tv(&conf),
-            tv(&hist),
-            tv(&normal_out),
-            tv(&g.albedo),
-            tv(irradiance.unwrap_or(current)),
-            tv(&split_prev),
-            tv(&split_out),
-        ];
-        let (group, pipeline, label) = match filter {
-            None => (
-                CONFIDENCE_BINDINGS.group(&ctx.device, &self.layout, resources),
-                &self.pipeline[demodulate as usize],
-                "temporal.confidence",
-            ),
-            Some(params) => {
-                let all = resources.into_iter().chain([params.as_entire_binding()]);
-                let group = FILTER_MERGE_BINDINGS.group(&ctx.device, &self.fused_layout, all);
-                (group, &self.fused_pipeline[demodulate as usize], "temporal.filter_merge")
+        let stand_in = v(&self.dummy_confidence, "temporal.confidence.unused");
+        // The merge's resources: for this frame's pass (`later` false), or for the pass that
+        // computes the confidence alone when it is read.
+        let resources = |later: bool| {
+            let (params, conf) = match (later, self.store_confidence) {
+                (true, _) => (&self.confidence_params, &conf),
+                (false, store) => (&self.params, if store { &conf } else { &stand_in }),
+            };
+            [
+                params.as_entire_binding(),
+                tv(current),
+                tv(&g.linear_depth),
+                tv(&g.normal),
+                tv(&g.motion),
+                tv(&prev_n),
+                tv(&hist_prev),
+                tv(conf),
+                tv(&hist),
+                tv(&normal_out),
+                tv(&g.albedo),
+                tv(irradiance.unwrap_or(current)),
+                tv(&split_prev),
+                tv(&split_out),
+            ]
+        };
+        let group_of = |later| match filter {
+            None => CONFIDENCE_BINDINGS.group(&ctx.device, &self.layout, resources(later)),
+            Some(filter) => {
+                let all = resources(later).into_iter().chain([filter.as_entire_binding()]);
+                FILTER_MERGE_BINDINGS.group(&ctx.device, &self.fused_layout, all)
             }
         };
+        let (pipeline, label) = match filter {
+            None => (&self.pipeline[demodulate as usize], "temporal.confidence"),
+            Some(_) => (&self.fused_pipeline[demodulate as usize], "temporal.filter_merge"),
+        };
+        let group = group_of(false);
+        // Without the confidence, the same pass computes it alone when it is read.
+        let later = (!self.store_confidence).then(|| (pipeline, group_of(true)));
+        self.confidence_on_read.arm(later);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some(label),
@@ -379,6 +461,20 @@ impl TemporalPass {
                 self.height.div_ceil(crate::passes::TILE),
                 1,
             );
+        }
+        let decoded = v(&self.normals[write], "temporal.prev_normal");
+        let decode = demodulate.then(|| {
+            let views = [&decoded, &split_out].map(wgpu::BindingResource::TextureView);
+            SPLIT_NORMAL_BINDINGS.group(&ctx.device, &self.split_normal_layout, views)
+        });
+        match decode {
+            Some(group) if self.decode_normals => {
+                let size = (self.width, self.height);
+                let pipeline = &self.split_normal_pipeline;
+                crate::passes::dispatch_2d(encoder, "temporal.prev_normal", pipeline, &group, &[], None, size);
+                self.split_normal.arm(None);
+            }
+            other => self.split_normal.arm(other.map(|group| (&self.split_normal_pipeline, group))),
         }
         self.current = write;
         self.split_read = demodulate && self.valid;

@@ -1,0 +1,48 @@
+//! A pass of Knecht's chain run when its output is read, after a frame that did its work
+//! elsewhere (issue #53; docs/architecture.md "The filter fused into the merge"): the
+//! geometry-aware filter's own pass, when the frame fused the filter into the confidence merge
+//! (`indirect.filtered` and its irradiance), the normals the demodulated merge kept in its
+//! split history (`temporal.prev_normal`), and the merge's confidence, which a frame stores
+//! only while something reads it in that frame (`temporal.confidence`). The registry's derived buffers (`buffers::Derived`)
+//! call it with the inputs that frame left, so the viewer, the probe and the read-backs see
+//! what the frame would have written.
+
+use std::sync::{Arc, Mutex};
+
+use crate::buffers::Derived;
+use crate::gpu::GpuContext;
+
+pub struct OnRead {
+    ctx: GpuContext,
+    /// The pass's name: its timing and traffic scope; its objects are labelled `{name}.on_read`.
+    name: &'static str,
+    size: (u32, u32),
+    /// The pass's pipeline and bind group of the last frame that left its work undone, until
+    /// it runs (None: the outputs are up to date).
+    pending: Mutex<Option<(wgpu::ComputePipeline, wgpu::BindGroup)>>,
+}
+
+impl OnRead {
+    pub fn new(ctx: &GpuContext, name: &'static str, size: (u32, u32)) -> Arc<Self> {
+        Arc::new(Self { ctx: ctx.clone(), name, size, pending: Mutex::new(None) })
+    }
+
+    /// `Some`: this frame left the pass's work undone, to be done by this pipeline with these
+    /// inputs (its outputs are stale until read); None: the outputs were written.
+    pub fn arm(&self, pass: Option<(&wgpu::ComputePipeline, wgpu::BindGroup)>) {
+        *self.pending.lock().unwrap_or_else(|p| p.into_inner()) = pass.map(|(p, g)| (p.clone(), g));
+    }
+}
+
+impl Derived for OnRead {
+    fn refresh(&self) {
+        let Some((pipeline, group)) = self.pending.lock().unwrap_or_else(|p| p.into_inner()).take() else { return };
+        self.ctx.make_current();
+        let label = format!("{}.on_read", self.name);
+        let mut enc = self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(&label) });
+        crate::counters::traffic::begin_scope(self.name);
+        crate::passes::dispatch_2d(&mut enc, &label, &pipeline, &group, &[], None, self.size);
+        crate::counters::traffic::end_scope();
+        self.ctx.submit([enc.finish()]);
+    }
+}
