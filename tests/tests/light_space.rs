@@ -147,7 +147,10 @@ fn a_new_vpl_set_each_frame_is_made_every_frame_while_the_maps_are_kept() {
 /// third by at most the redone frames' step from the second to the third and one more for
 /// the variation between the two runs, and by one half-float step of `final.hdr` where the
 /// sums' order flips its rounding (the sample cache's still view may keep its order from
-/// frame to frame, so that the frames' own step is 0).
+/// frame to frame, so that the frames' own step is 0). The variation between runs is measured
+/// too, by a second run that redoes every pass: under load the two runs' orders may differ
+/// more than one run's frames do (a kept frame differed by two half steps where the frames'
+/// own step was a quarter of one, once in a full suite).
 #[test]
 fn every_shipped_preset_renders_the_same_image_with_the_passes_kept() {
     for path in shipped_presets() {
@@ -192,7 +195,9 @@ fn every_shipped_preset_renders_the_same_image_with_the_passes_kept() {
             // step of `final.hdr`'s half floats wherever a sum's last f32 bits flip its
             // rounding (a still view's cached samples can keep their order for a few frames,
             // so the frames' own steps may be 0 while the two runs' orders differ).
-            let bound = steps.iter().sum::<f32>() + steps.iter().copied().fold(0.0, f32::max);
+            let again = run(false).0;
+            let between_runs = max_diff(&redone_images[2], &again[2]);
+            let bound = steps.iter().sum::<f32>() + steps.iter().copied().fold(0.0, f32::max) + between_runs;
             let excess = a
                 .data
                 .iter()
@@ -202,7 +207,7 @@ fn every_shipped_preset_renders_the_same_image_with_the_passes_kept() {
                 .fold(0.0f32, f32::max);
             let d = max_diff(a, b);
             println!(
-                "{name}: redone frames step by {steps:?}; kept against redone {d} ({excess} beyond a half step), bound {bound}"
+                "{name}: redone frames step by {steps:?}, two redone runs differ by {between_runs}; kept against redone {d} ({excess} beyond a half step), bound {bound}"
             );
             assert!(
                 excess <= bound,
