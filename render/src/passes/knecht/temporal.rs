@@ -210,18 +210,9 @@ impl TemporalPass {
             &[&split_normal_layout],
         );
         let split_normal = super::on_read::OnRead::new(ctx, "temporal.prev_normal", (width, height));
-        let params = device.counted_buffer(&wgpu::BufferDescriptor {
-            label: Some("temporal.params"),
-            size: std::mem::size_of::<ConfidenceParams>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let confidence_params = device.counted_buffer(&wgpu::BufferDescriptor {
-            label: Some("temporal.confidence.params"),
-            size: std::mem::size_of::<ConfidenceParams>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let bytes = std::mem::size_of::<ConfidenceParams>() as u64;
+        let params = crate::passes::uniform_buffer(device, "temporal.params", bytes);
+        let confidence_params = crate::passes::uniform_buffer(device, "temporal.confidence.params", bytes);
         let (confidence, history, normals) = Self::targets(device, width, height);
         let dummy_confidence = Self::targets(device, 1, 1).0;
         Self {
