@@ -214,7 +214,8 @@ impl TemporalPass {
         let params = crate::passes::uniform_buffer(device, "temporal.params", bytes);
         let confidence_params = crate::passes::uniform_buffer(device, "temporal.confidence.params", bytes);
         let (confidence, history, normals) = Self::targets(device, width, height);
-        let dummy_confidence = Self::targets(device, 1, 1).0;
+        // 1×1 stand-ins for the confidence and the normals pair (one set of small targets).
+        let (dummy_confidence, _, dummy_normals) = Self::targets(device, 1, 1);
         Self {
             width,
             height,
@@ -227,7 +228,7 @@ impl TemporalPass {
             split_written: false,
             split_read: false,
             dummy_split: Self::split_pair(device, 1, 1, "temporal.history_split.unused"),
-            dummy_normals: Self::targets(device, 1, 1).2,
+            dummy_normals,
             split_normal_layout,
             split_normal_pipeline,
             split_normal,
