@@ -142,12 +142,10 @@ fn pull_push_on_the_gpu_equals_the_cpu_reference() {
             }
         })
         .collect();
-    ctx.queue.write_texture(
-        pass.atlas.as_image_copy(),
-        bytemuck::cast_slice(&atlas),
-        wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * w), rows_per_image: None },
-        wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
-    );
+    // As the splat leaves them: inverted f32 bits, 0 in holes (the resolve reads them into
+    // level 0 and pulls level 1 in the same pass).
+    let splats: Vec<u32> = atlas.iter().map(|&d| if d >= ISM_EMPTY { 0 } else { !d.to_bits() }).collect();
+    ctx.queue.write_buffer(&pass.depth, 0, bytemuck::cast_slice(&splats));
     let extent = 4.0;
     let mut cpu = Vec::new();
     let mut finest = Vec::new();
@@ -223,6 +221,16 @@ fn instant_radiosity_bleeds_the_walls_colours() {
     ] {
         r.readback(name).unwrap_or_else(|e| panic!("{name}: {e}"));
     }
+    // `ism.atlas`, resolved from the splats only when read (issue #53), holds the maps the
+    // frame pulled: pull-push only fills holes and replaces texels behind the coarser level,
+    // so level 0 of the pulled atlas is nowhere farther than the splats and has fewer holes.
+    let (raw, pulled) = (r.readback("ism.atlas").expect("raw"), r.readback("ism.atlas_pulled").expect("pulled"));
+    let holes = |img: &gi_render::ImageF32| img.data.iter().filter(|t| t[0] >= ISM_EMPTY).count();
+    println!("ism.atlas: {} holes of {} texels; pulled: {}", holes(&raw), raw.data.len(), holes(&pulled));
+    assert!(holes(&raw) < raw.data.len(), "nothing splatted");
+    assert!(holes(&pulled) < holes(&raw), "pull-push fills holes: {} of {}", holes(&pulled), holes(&raw));
+    let farther = raw.data.iter().zip(&pulled.data).filter(|(a, b)| b[0] > a[0]).count();
+    assert_eq!(farther, 0, "texels of the pulled maps farther than their splats");
 }
 
 #[test]

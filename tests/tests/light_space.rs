@@ -186,7 +186,13 @@ fn every_shipped_preset_renders_the_same_image_with_the_passes_kept() {
         };
         let steps: Vec<f32> = redone_images[1..].windows(2).map(|w| max_diff(&w[0], &w[1])).collect();
         let (a, b) = (&kept_images[2], &redone_images[2]);
-        if !kept.contains(&"hcb.build") {
+        // The HCB's samples are redone every frame where the cache keeps them (`nguyen-hcb-
+        // cached`: `hcb.build` is not kept), and the list is appended to atomically all the
+        // same: kept against redone differed there by one half step of `final.hdr` in one
+        // value of 2,304, in one run of six (two of three on a loaded machine), once the ISM's
+        // pull-push took less time (issue #53).
+        let hcb_samples = settings.pipeline.shading_points == gi_render::settings::pipeline::ShadingPoints::HcbSamples;
+        if !kept.contains(&"hcb.build") && !hcb_samples {
             assert!(bits(a) == bits(b), "{name}: keeping {kept:?} changed the image");
         } else {
             // The HCB's sample list is appended to atomically, so its order, and the order of

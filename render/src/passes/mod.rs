@@ -99,6 +99,7 @@ pub const BINDINGS: &[&crate::gpu::bindings::Bindings] = &[
     &hcb::cache::CACHE_ARGS_BINDINGS,
     &hcb::cache::CACHE_REMOVAL_INPUTS_BINDINGS,
     &knecht::ism::RESOLVE_INPUTS_BINDINGS,
+    &knecht::ism::RESOLVE_PULL_INPUTS_BINDINGS,
     &knecht::ism::PULL_INPUTS_BINDINGS,
     &knecht::ism::PUSH_INPUTS_BINDINGS,
     &gbuffer::CAMERA_BINDINGS,

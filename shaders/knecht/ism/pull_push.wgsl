@@ -52,37 +52,31 @@ fn cs_pull(@builtin(global_invocation_id) id: vec3<u32>) {
 
 @group(0) @binding(3) var fine: texture_storage_2d<r32float, read_write>;
 
-// The bilinear value of the valid coarse texels around fine texel (x, y) in its map (x; empty
-// if none), and whether all four are valid and agree within `threshold` (y: 1 or 0).
-fn coarse_at(x: u32, y: u32, threshold: f32) -> vec2<f32> {
-    let ct = lp.tile.x;
-    let px = (f32(x) + 0.5) * 0.5 - 0.5;
-    let py = (f32(y) + 0.5) * 0.5 - 0.5;
-    let x0 = floor(px);
-    let y0 = floor(py);
-    let fx = px - x0;
-    let fy = py - y0;
-    let tx = i32((x / 2u) / ct * ct);
-    let ty = i32((y / 2u) / ct * ct);
-    let offsets = array<vec2<i32>, 4>(vec2<i32>(0, 0), vec2<i32>(1, 0), vec2<i32>(0, 1), vec2<i32>(1, 1));
-    let weights = array<f32, 4>((1.0 - fx) * (1.0 - fy), fx * (1.0 - fy), (1.0 - fx) * fy, fx * fy);
+// Coarse texel (x, y) clamped into the coarse map whose first texel is t (side lp.tile.x).
+fn coarse_tap(x: i32, y: i32, t: vec2<i32>) -> f32 {
+    let last = t + vec2<i32>(i32(lp.tile.x) - 1);
+    return textureLoad(src, clamp(vec2<i32>(x, y), t, last), 0).r;
+}
+
+// The bilinear value of the valid coarse texels among a (x0, y0), b (x0 + 1, y0), c (x0, y0 + 1)
+// and d (x0 + 1, y0 + 1) at fractions (fx, fy) (x; empty if none), and whether all four are
+// valid and agree within `threshold` (y: 1 or 0). The fractions of a fine texel are 1/4 or
+// 3/4, so every weight is above 0.
+fn bilinear(a: f32, b: f32, c: f32, d: f32, fx: f32, fy: f32, threshold: f32) -> vec2<f32> {
+    let v = vec4<f32>(a, b, c, d);
+    let w = vec4<f32>((1.0 - fx) * (1.0 - fy), fx * (1.0 - fy), (1.0 - fx) * fy, fx * fy);
     var sum = 0.0;
     var wsum = 0.0;
     var lo = ISM_EMPTY;
     var hi = 0.0;
     var taps = 0u;
     for (var k = 0; k < 4; k = k + 1) {
-        let cx = clamp(i32(x0) + offsets[k].x, tx, tx + i32(ct) - 1);
-        let cy = clamp(i32(y0) + offsets[k].y, ty, ty + i32(ct) - 1);
-        let v = textureLoad(src, vec2<i32>(cx, cy), 0).r;
-        if (v < ISM_EMPTY) {
-            lo = min(lo, v);
-            hi = max(hi, v);
+        if (v[k] < ISM_EMPTY) {
+            lo = min(lo, v[k]);
+            hi = max(hi, v[k]);
             taps = taps + 1u;
-        }
-        if (v < ISM_EMPTY && weights[k] > 0.0) {
-            sum = sum + weights[k] * v;
-            wsum = wsum + weights[k];
+            sum = sum + w[k] * v[k];
+            wsum = wsum + w[k];
         }
     }
     let agree = select(0.0, 1.0, taps == 4u && hi - lo <= threshold);
@@ -92,17 +86,45 @@ fn coarse_at(x: u32, y: u32, threshold: f32) -> vec2<f32> {
     return vec2<f32>(ISM_EMPTY, 0.0);
 }
 
+// The push of fine texel p from its bilinear coarse value cv.
+fn push_texel(p: vec2<u32>, cv: vec2<f32>) {
+    let f = textureLoad(fine, p).r;
+    let may_replace = lp.threshold.y < 0.5 || cv.y > 0.5;
+    if (cv.x < ISM_EMPTY && (f >= ISM_EMPTY || (may_replace && f - cv.x > lp.threshold.x))) {
+        textureStore(fine, p, vec4<f32>(cv.x, 0.0, 0.0, 0.0));
+    }
+}
+
+// One 2×2 quad of fine texels (2i … 2i + 1, 2j … 2j + 1) per invocation (issue #53): fine texel
+// 2i + a sits at coarse x = i − 1/4 + a/2, so the quad's four bilinear lookups read the 3×3
+// coarse texels around (i, j) once, 9 loads instead of 16 (docs/architecture.md "The ISM's
+// pull-push in fewer passes"). The same values and sums, texel by texel, as the CPU twin's
+// `coarse_at`.
 @compute @workgroup_size(8, 8, 1)
 fn cs_push(@builtin(global_invocation_id) id: vec3<u32>) {
     let size = textureDimensions(fine);
-    let gid = vec2<u32>(id.x, id.y + lp.tile.y);
-    if (gid.x >= size.x || gid.y >= size.y) {
+    let q = vec2<u32>(id.x, id.y + lp.tile.y / 2u);
+    if (q.x * 2u >= size.x || q.y * 2u >= size.y) {
         return;
     }
-    let c = coarse_at(gid.x, gid.y, lp.threshold.x);
-    let f = textureLoad(fine, gid.xy).r;
-    let may_replace = lp.threshold.y < 0.5 || c.y > 0.5;
-    if (c.x < ISM_EMPTY && (f >= ISM_EMPTY || (may_replace && f - c.x > lp.threshold.x))) {
-        textureStore(fine, gid.xy, vec4<f32>(c.x, 0.0, 0.0, 0.0));
-    }
+    let ct = lp.tile.x;
+    let t = vec2<i32>(q / ct * ct);
+    let i = i32(q.x);
+    let j = i32(q.y);
+    // Rows j − 1, j, j + 1 (clamped into the coarse map), columns i − 1, i, i + 1.
+    let a0 = coarse_tap(i - 1, j - 1, t);
+    let a1 = coarse_tap(i, j - 1, t);
+    let a2 = coarse_tap(i + 1, j - 1, t);
+    let b0 = coarse_tap(i - 1, j, t);
+    let b1 = coarse_tap(i, j, t);
+    let b2 = coarse_tap(i + 1, j, t);
+    let c0 = coarse_tap(i - 1, j + 1, t);
+    let c1 = coarse_tap(i, j + 1, t);
+    let c2 = coarse_tap(i + 1, j + 1, t);
+    let th = lp.threshold.x;
+    let p = q * 2u;
+    push_texel(p, bilinear(a0, a1, b0, b1, 0.75, 0.75, th));
+    push_texel(p + vec2<u32>(1u, 0u), bilinear(a1, a2, b1, b2, 0.25, 0.75, th));
+    push_texel(p + vec2<u32>(0u, 1u), bilinear(b0, b1, c0, c1, 0.75, 0.25, th));
+    push_texel(p + vec2<u32>(1u, 1u), bilinear(b1, b2, c1, c2, 0.25, 0.25, th));
 }

@@ -73,12 +73,14 @@ pub const PUSH_INPUTS_BINDINGS: Bindings = Bindings {
     ],
 };
 
-/// Bind group `ism.resolve.inputs` of `shaders/knecht/ism/resolve.wgsl` (group 0).
+/// Bind group `ism.resolve.inputs` of `shaders/knecht/ism/resolve.wgsl` (group 0 of
+/// `cs_resolve`): the splatted distances resolved into one level (level 0 of the pulled atlas
+/// without pull-push levels, `ism.atlas` when it is read).
 pub const RESOLVE_INPUTS_BINDINGS: Bindings = Bindings {
     label: "ism.resolve.inputs",
     shader: "knecht/ism/resolve.wgsl",
     group: 0,
-    entry: None,
+    entry: Some("cs_resolve"),
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
         binding(0, "depth", Kind::Storage { read_only: true }),
@@ -87,9 +89,27 @@ pub const RESOLVE_INPUTS_BINDINGS: Bindings = Bindings {
     ],
 };
 
+/// Bind group `ism.resolve_pull.inputs` of `shaders/knecht/ism/resolve.wgsl` (group 0 of
+/// `cs_resolve_pull`): the splatted distances resolved into level 0 of the pulled atlas and
+/// pulled into its level 1 in one pass (issue #53).
+pub const RESOLVE_PULL_INPUTS_BINDINGS: Bindings = Bindings {
+    label: "ism.resolve_pull.inputs",
+    shader: "knecht/ism/resolve.wgsl",
+    group: 0,
+    entry: Some("cs_resolve_pull"),
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "depth", Kind::Storage { read_only: true }),
+        binding(1, "atlas", Kind::StorageTexture(wgpu::TextureFormat::R32Float)),
+        binding(2, "lp", Kind::UniformDynamic),
+        binding(3, "level1", Kind::StorageTexture(wgpu::TextureFormat::R32Float)),
+    ],
+};
+
 /// Bind groups of one frame's splats and resolve ([`IsmPass::begin`]).
 pub struct IsmJob {
     splat: wgpu::BindGroup,
+    /// `cs_resolve_pull`'s group when pull-push has levels, else `cs_resolve`'s into level 0.
     resolve: wgpu::BindGroup,
 }
 
@@ -192,22 +212,30 @@ pub struct IsmPass {
     pub surfaces: wgpu::Buffer,
     /// Splatted distances of the atlas (inverted f32 bits, 0 = empty), read by the bounce pass.
     pub depth: wgpu::Buffer,
+    /// `ism.atlas`, the maps as splatted: resolved from `depth` only when read (issue #53;
+    /// the frame resolves straight into level 0 of `pulled`).
     pub atlas: wgpu::Texture,
     pub pulled: wgpu::Texture,
     pub layout_info: IsmLayout,
     levels: u32,
     splat_layout: wgpu::BindGroupLayout,
     resolve_layout: wgpu::BindGroupLayout,
+    resolve_pull_layout: wgpu::BindGroupLayout,
     pull_layout: wgpu::BindGroupLayout,
     push_layout: wgpu::BindGroupLayout,
     splat_pipeline: wgpu::ComputePipeline,
     resolve_pipeline: wgpu::ComputePipeline,
+    resolve_pull_pipeline: wgpu::ComputePipeline,
     pull_pipeline: wgpu::ComputePipeline,
     push_pipeline: wgpu::ComputePipeline,
     splat_params: wgpu::Buffer,
     level_params: wgpu::Buffer,
     /// The splat shader's IRSM owner binding, unused by the ISMs.
     no_owner: wgpu::Buffer,
+    /// `ism.atlas`'s resolve when it is read: the whole atlas from row 0 (a [`LevelParams`]
+    /// of zeros), armed by every frame that splatted.
+    atlas_rows: wgpu::Buffer,
+    atlas_on_read: std::sync::Arc<super::on_read::OnRead>,
 }
 
 impl IsmPass {
@@ -215,6 +243,7 @@ impl IsmPass {
         let device = &ctx.device;
         let splat_layout = splat_layout(device, "ism.splat.inputs");
         let resolve_layout = RESOLVE_INPUTS_BINDINGS.layout(device);
+        let resolve_pull_layout = RESOLVE_PULL_INPUTS_BINDINGS.layout(device);
         let pull_layout = PULL_INPUTS_BINDINGS.layout(device);
         let push_layout = PUSH_INPUTS_BINDINGS.layout(device);
         let m_splat = crate::shaders::create_module(device, "knecht/ism/splat.wgsl");
@@ -224,6 +253,13 @@ impl IsmPass {
             crate::passes::compute_pipeline(device, "ism.splat", &m_splat, "cs_splat", &[&splat_layout]);
         let resolve_pipeline =
             crate::passes::compute_pipeline(device, "ism.resolve", &m_resolve, "cs_resolve", &[&resolve_layout]);
+        let resolve_pull_pipeline = crate::passes::compute_pipeline(
+            device,
+            "ism.resolve_pull",
+            &m_resolve,
+            "cs_resolve_pull",
+            &[&resolve_pull_layout],
+        );
         let pull_pipeline = crate::passes::compute_pipeline(device, "ism.pull", &m_pp, "cs_pull", &[&pull_layout]);
         let push_pipeline = crate::passes::compute_pipeline(device, "ism.push", &m_pp, "cs_push", &[&push_layout]);
         let splat_params = device.counted_buffer(&wgpu::BufferDescriptor {
@@ -244,8 +280,14 @@ impl IsmPass {
             usage: wgpu::BufferUsages::STORAGE,
             mapped_at_creation: false,
         });
+        let atlas_rows = device.counted_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("ism.atlas.on_read.rows"),
+            contents: bytemuck::bytes_of(&LevelParams { threshold: Vec4::ZERO, tile: [0; 4] }),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
         let layout_info = IsmLayout::new(1, 32);
         let (depth, atlas, pulled) = Self::targets(device, layout_info, 0);
+        let atlas_on_read = Self::atlas_on_read(ctx, layout_info);
         let (points, surfaces) = Self::point_buffers(device, &PointCloud::empty());
         Self {
             cloud_key: None,
@@ -259,16 +301,24 @@ impl IsmPass {
             levels: 0,
             splat_layout,
             resolve_layout,
+            resolve_pull_layout,
             pull_layout,
             push_layout,
             splat_pipeline,
             resolve_pipeline,
+            resolve_pull_pipeline,
             pull_pipeline,
             push_pipeline,
             splat_params,
             level_params,
             no_owner,
+            atlas_rows,
+            atlas_on_read,
         }
+    }
+
+    fn atlas_on_read(ctx: &GpuContext, l: IsmLayout) -> std::sync::Arc<super::on_read::OnRead> {
+        super::on_read::OnRead::new(ctx, "ism.resolve", (l.width() as u32, l.height() as u32))
     }
 
     fn point_buffers(device: &wgpu::Device, cloud: &PointCloud) -> (wgpu::Buffer, wgpu::Buffer) {
@@ -343,17 +393,19 @@ impl IsmPass {
             return false;
         }
         (self.depth, self.atlas, self.pulled) = Self::targets(&ctx.device, l, levels);
+        self.atlas_on_read = Self::atlas_on_read(ctx, l);
         self.layout_info = l;
         self.levels = levels;
         true
     }
 
     pub fn register(&self, reg: &mut BufferRegistry) {
-        reg.register(
+        reg.register_derived(
             "ism.atlas",
             BufferKind::Data,
             "imperfect shadow maps as splatted: one paraboloid map per VPL (map = VPL index), distance from the VPL in scene units, 1e30 in holes",
             &self.atlas,
+            self.atlas_on_read.clone(),
         );
         reg.register(
             "ism.atlas_pulled",
@@ -410,18 +462,51 @@ impl IsmPass {
             ],
         );
         let atlas_view = crate::passes::view(&self.atlas, "ism.atlas");
-        // The resolve reads its first row from the level-0 push slot of its call.
+        let rows = |buffer| {
+            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer,
+                offset: 0,
+                size: std::num::NonZeroU64::new(std::mem::size_of::<LevelParams>() as u64),
+            })
+        };
+        // Read later, if at all: the whole atlas as splatted (the frame resolves into level 0
+        // of the pulled atlas).
+        let on_read = RESOLVE_INPUTS_BINDINGS.group(
+            &ctx.device,
+            &self.resolve_layout,
+            [self.depth.as_entire_binding(), wgpu::BindingResource::TextureView(&atlas_view), rows(&self.atlas_rows)],
+        );
+        self.atlas_on_read.arm_with(Some((&self.resolve_pipeline, on_read)), &[0]);
+        IsmJob { splat, resolve: self.resolve_group(&ctx.device) }
+    }
+
+    /// The frame's resolve into level 0 of the pulled atlas (and its first pull into level 1
+    /// when pull-push has levels); its rows and thresholds come from the call's uniform slot.
+    fn resolve_group(&self, device: &wgpu::Device) -> wgpu::BindGroup {
         let rows = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
             buffer: &self.level_params,
             offset: 0,
             size: std::num::NonZeroU64::new(std::mem::size_of::<LevelParams>() as u64),
         });
-        let resolve = RESOLVE_INPUTS_BINDINGS.group(
-            &ctx.device,
-            &self.resolve_layout,
-            [self.depth.as_entire_binding(), wgpu::BindingResource::TextureView(&atlas_view), rows],
-        );
-        IsmJob { splat, resolve }
+        let level0 = self.level_view(0);
+        if self.levels == 0 {
+            return RESOLVE_INPUTS_BINDINGS.group(
+                device,
+                &self.resolve_layout,
+                [self.depth.as_entire_binding(), wgpu::BindingResource::TextureView(&level0), rows],
+            );
+        }
+        let level1 = self.level_view(1);
+        RESOLVE_PULL_INPUTS_BINDINGS.group(
+            device,
+            &self.resolve_pull_layout,
+            [
+                self.depth.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&level0),
+                rows,
+                wgpu::BindingResource::TextureView(&level1),
+            ],
+        )
     }
 
     /// Splats the point cloud into the maps of bounce `bounce` (point j → slot b·N + j mod N);
@@ -478,16 +563,34 @@ impl IsmPass {
         let (y0, y1) = (rows.start * l.size, rows.end * l.size);
         let w = l.width() as u32;
         self.write_levels(ctx, s, extent, y0, call);
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("ism.resolve"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(&self.resolve_pipeline);
-            pass.set_group(0, &job.resolve, &[Self::level_offset(call, 1)]);
-            pass.dispatch_workgroups(w.div_ceil(8), (y1 - y0).div_ceil(8), 1);
-        }
+        self.resolve_rows(encoder, &job.resolve, w, y0..y1, call);
         self.pull_push_rows(ctx, encoder, slot, y0..y1, call);
+    }
+
+    /// Resolves level-0 rows `rows` into level 0 of the pulled atlas and, with pull-push
+    /// levels, pulls them into level 1 in the same pass (`cs_resolve_pull`, a texel of level 1
+    /// an invocation, from the call's level-0 pull slot); without levels `cs_resolve` reads the
+    /// level-0 push slot, whose `tile.y` is the first row.
+    fn resolve_rows(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        group: &wgpu::BindGroup,
+        w: u32,
+        rows: std::ops::Range<u32>,
+        call: u32,
+    ) {
+        let mut pass = encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("ism.resolve"), timestamp_writes: None });
+        let span = rows.end - rows.start;
+        if self.levels == 0 {
+            pass.set_pipeline(&self.resolve_pipeline);
+            pass.set_group(0, group, &[Self::level_offset(call, 1)]);
+            pass.dispatch_workgroups(w.div_ceil(8), span.div_ceil(8), 1);
+        } else {
+            pass.set_pipeline(&self.resolve_pull_pipeline);
+            pass.set_group(0, group, &[Self::level_offset(call, 0)]);
+            pass.dispatch_workgroups((w / 2).div_ceil(8), (span / 2).div_ceil(8), 1);
+        }
     }
 
     fn level_view(&self, level: u32) -> wgpu::TextureView {
@@ -526,8 +629,8 @@ impl IsmPass {
         ctx.queue.write_buffer(&self.level_params, call as u64 * LEVEL_SLOTS * LEVEL_STRIDE, &data);
     }
 
-    /// Copies `ism.atlas` into level 0 of `ism.atlas_pulled` and runs pull-push on it
-    /// (thresholds are fractions of `extent`), over the whole atlas.
+    /// Resolves the splatted distances (`depth`) into level 0 of `ism.atlas_pulled` and runs
+    /// pull-push on it (thresholds are fractions of `extent`), over the whole atlas.
     pub fn pull_push(
         &self,
         ctx: &GpuContext,
@@ -536,8 +639,9 @@ impl IsmPass {
         s: &IsmSettings,
         extent: f32,
     ) {
-        let h = self.layout_info.height() as u32;
+        let (w, h) = (self.layout_info.width() as u32, self.layout_info.height() as u32);
         self.write_levels(ctx, s, extent, 0, 0);
+        self.resolve_rows(encoder, &self.resolve_group(&ctx.device), w, 0..h, 0);
         self.pull_push_rows(ctx, encoder, slot, 0..h, 0);
     }
 
@@ -552,21 +656,6 @@ impl IsmPass {
     ) {
         let l = self.layout_info;
         let w = l.width() as u32;
-        encoder.counted_copy_texture(
-            wgpu::TexelCopyTextureInfo {
-                texture: &self.atlas,
-                mip_level: 0,
-                origin: wgpu::Origin3d { x: 0, y: rows.start, z: 0 },
-                aspect: wgpu::TextureAspect::All,
-            },
-            wgpu::TexelCopyTextureInfo {
-                texture: &self.pulled,
-                mip_level: 0,
-                origin: wgpu::Origin3d { x: 0, y: rows.start, z: 0 },
-                aspect: wgpu::TextureAspect::All,
-            },
-            wgpu::Extent3d { width: w, height: rows.end - rows.start, depth_or_array_layers: 1 },
-        );
         let mut pulls = Vec::new();
         let mut pushes = Vec::new();
         let dynamic = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
@@ -577,30 +666,33 @@ impl IsmPass {
         for level in 0..self.levels {
             let (fine, coarse) = (self.level_view(level), self.level_view(level + 1));
             let tv = wgpu::BindingResource::TextureView;
-            pulls.push(PULL_INPUTS_BINDINGS.group(
-                &ctx.device,
-                &self.pull_layout,
-                [dynamic.clone(), tv(&fine), tv(&coarse)],
-            ));
+            // Level 1 is pulled by the resolve (`resolve_rows`).
+            if level > 0 {
+                pulls.push(PULL_INPUTS_BINDINGS.group(
+                    &ctx.device,
+                    &self.pull_layout,
+                    [dynamic.clone(), tv(&fine), tv(&coarse)],
+                ));
+            }
             pushes.push(PUSH_INPUTS_BINDINGS.group(
                 &ctx.device,
                 &self.push_layout,
                 [dynamic.clone(), tv(&coarse), tv(&fine)],
             ));
         }
-        // Mips 1…levels are first written (the pull, storage) and then read (the push,
-        // sampled) inside the one pass below. wgpu 30 records a pass's *last* use of a
+        // Mips 2…levels are first written (the pull, storage) and then read (the push,
+        // sampled) inside the one pass below (mip 1 was written by the resolve's pass). wgpu 30 records a pass's *last* use of a
         // subresource the encoder has not seen yet as the encoder's start state (gfx-rs/wgpu
         // #10199, fix pending in #10212), so at submission it moved these mips to
         // SHADER_READ_ONLY while the first dispatch wrote them as storage (GENERAL): the
         // validation layers' InvalidImageLayout on `ism.atlas_pulled` (issue #52 point 6).
         // Telling the encoder their first use before the pass makes its start state right.
-        if self.levels > 0 {
+        if self.levels > 1 {
             encoder.transition_resources(
                 std::iter::empty(),
                 std::iter::once(wgpu::TextureTransition {
                     texture: &self.pulled,
-                    selector: Some(wgpu::wgt::TextureSelector { mips: 1..self.levels + 1, layers: 0..1 }),
+                    selector: Some(wgpu::wgt::TextureSelector { mips: 2..self.levels + 1, layers: 0..1 }),
                     state: wgpu::TextureUses::STORAGE_WRITE_ONLY,
                 }),
             );
@@ -611,18 +703,18 @@ impl IsmPass {
         });
         let span = |level: u32| ((rows.end >> level) - (rows.start >> level)).max(1);
         pass.set_pipeline(&self.pull_pipeline);
-        for (level, g) in pulls.iter().enumerate() {
-            let level = level as u32;
+        for (level, g) in (1..).zip(&pulls) {
             let cw = (w >> (level + 1)).max(1);
             pass.set_group(0, g, &[Self::level_offset(call, 2 * level as u64)]);
             pass.dispatch_workgroups(cw.div_ceil(8), span(level + 1).div_ceil(8), 1);
         }
+        // A 2×2 quad of the finer level an invocation (`cs_push`).
         pass.set_pipeline(&self.push_pipeline);
         for (level, g) in pushes.iter().enumerate().rev() {
             let level = level as u32;
             let fw = (w >> level).max(1);
             pass.set_group(0, g, &[Self::level_offset(call, 2 * level as u64 + 1)]);
-            pass.dispatch_workgroups(fw.div_ceil(8), span(level).div_ceil(8), 1);
+            pass.dispatch_workgroups((fw / 2).div_ceil(8), (span(level) / 2).div_ceil(8), 1);
         }
     }
 

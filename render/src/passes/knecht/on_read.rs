@@ -5,7 +5,8 @@
 //! split history (`temporal.prev_normal`), and the merge's confidence, which a frame stores
 //! only while something reads it in that frame (`temporal.confidence`). The registry's derived buffers (`buffers::Derived`)
 //! call it with the inputs that frame left, so the viewer, the probe and the read-backs see
-//! what the frame would have written.
+//! what the frame would have written. The ISM atlas as splatted (`ism.atlas`) is resolved the
+//! same way: the frame resolves straight into the pulled atlas.
 
 use std::sync::{Arc, Mutex};
 
@@ -19,7 +20,7 @@ pub struct OnRead {
     size: (u32, u32),
     /// The pass's pipeline and bind group of the last frame that left its work undone, until
     /// it runs (None: the outputs are up to date).
-    pending: Mutex<Option<(wgpu::ComputePipeline, wgpu::BindGroup)>>,
+    pending: Mutex<Option<(wgpu::ComputePipeline, wgpu::BindGroup, Vec<u32>)>>,
 }
 
 impl OnRead {
@@ -30,18 +31,25 @@ impl OnRead {
     /// `Some`: this frame left the pass's work undone, to be done by this pipeline with these
     /// inputs (its outputs are stale until read); None: the outputs were written.
     pub fn arm(&self, pass: Option<(&wgpu::ComputePipeline, wgpu::BindGroup)>) {
-        *self.pending.lock().unwrap_or_else(|p| p.into_inner()) = pass.map(|(p, g)| (p.clone(), g));
+        self.arm_with(pass, &[]);
+    }
+
+    /// [`Self::arm`] for a group with dynamic offsets.
+    pub fn arm_with(&self, pass: Option<(&wgpu::ComputePipeline, wgpu::BindGroup)>, offsets: &[u32]) {
+        *self.pending.lock().unwrap_or_else(|p| p.into_inner()) = pass.map(|(p, g)| (p.clone(), g, offsets.to_vec()));
     }
 }
 
 impl Derived for OnRead {
     fn refresh(&self) {
-        let Some((pipeline, group)) = self.pending.lock().unwrap_or_else(|p| p.into_inner()).take() else { return };
+        let Some((pipeline, group, offsets)) = self.pending.lock().unwrap_or_else(|p| p.into_inner()).take() else {
+            return;
+        };
         self.ctx.make_current();
         let label = format!("{}.on_read", self.name);
         let mut enc = self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(&label) });
         crate::counters::traffic::begin_scope(self.name);
-        crate::passes::dispatch_2d(&mut enc, &label, &pipeline, &group, &[], None, self.size);
+        crate::passes::dispatch_2d(&mut enc, &label, &pipeline, &group, &offsets, None, self.size);
         crate::counters::traffic::end_scope();
         self.ctx.submit([enc.finish()]);
     }
