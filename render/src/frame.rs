@@ -36,6 +36,9 @@ impl Renderer {
             .get_mut()
             .map(|r| r.wanted())
             .unwrap_or(crate::readback::Wanted { all: true, names: vec![] });
+        // final.hdr only when this frame's read-backs copy it (issue #53; a read after the
+        // frame composes it again, `ComposePass::compose`).
+        let store_hdr = read_back.reads("final.hdr");
 
         // The scene at this instant; the sky's directions join its lights (`passes::sky`).
         let state = self.frame_state();
@@ -156,7 +159,7 @@ impl Renderer {
             sky: (&self.sky_background, &self.camera_buffer, &self.gbuffer.targets.views.linear_depth),
         };
         let (compose, ts) = (&mut self.compose, &self.settings.tonemap);
-        self.timer.pass(&ctx, &mut enc, "compose", |r| compose.compose(r, ts, &inputs));
+        self.timer.pass(&ctx, &mut enc, "compose", |r| compose.compose(r, ts, &inputs, store_hdr));
         self.timer.scope(&ctx, &mut enc, "compose.luminance", |e, slot| compose.luminance(&ctx, e, slot, ts));
         if !compose.tone_mapped() {
             self.timer.scope(&ctx, &mut enc, "compose.tonemap", |e, slot| compose.tonemap(&ctx, e, slot, ts));

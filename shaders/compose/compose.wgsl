@@ -27,9 +27,16 @@ struct SkyParams {
 @group(0) @binding(8) var<uniform> camera: Camera;
 // The camera G-buffer's linear depth (issue #53): 0 where no geometry covers the pixel.
 @group(0) @binding(9) var gbuffer_depth: texture_2d<f32>;
-// x: 2^EV, y: key a, z: L_white, w: 0 no tone mapping here (compose/tonemap.wgsl follows),
-// 1 manual exposure, 2 automatic with the previous frame's L̄w
-@group(0) @binding(10) var<uniform> tone: vec4<f32>;
+struct Tone {
+    // x: 2^EV, y: key a, z: L_white, w: 0 no tone mapping here (compose/tonemap.wgsl
+    // follows), 1 manual exposure, 2 automatic with the previous frame's L̄w
+    tone: vec4<f32>,
+    // x: 1 to store final.hdr (0: nothing reads it in this frame and a 1×1 stand-in is bound;
+    // a read of it runs this pass again, issue #53); y: 1 to store final.ldr and the tiles'
+    // log-luminance (0: final.hdr alone, for that read)
+    store: vec4<u32>,
+}
+@group(0) @binding(10) var<uniform> tp: Tone;
 @group(0) @binding(11) var<storage, read> log_average: array<f32>;
 @group(0) @binding(12) var out_ldr: texture_storage_2d<rgba8unorm, write>;
 // Per tile: Σ round(log(δ + Lw) · LOG_SCALE), then the count of pixels with Lw > 0.
@@ -67,7 +74,7 @@ fn pixel_ray(px: vec2<u32>, size: vec2<u32>) -> vec3<f32> {
 
 @compute @workgroup_size(TILE, TILE, 1)
 fn cs_compose(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let size = textureDimensions(out_hdr);
+    let size = textureDimensions(out_ldr);
     if (gid.x >= size.x || gid.y >= size.y) {
         return;
     }
@@ -76,9 +83,14 @@ fn cs_compose(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(workgroup_
     if (sky.radiance.w > 0.5 && textureLoad(gbuffer_depth, px, 0).x <= 0.0) {
         c = c + sky_radiance(pixel_ray(gid.xy, size));
     }
-    textureStore(out_hdr, px, vec4<f32>(c, 1.0));
-    if (tone.w > 0.5) {
-        let t = vec4<f32>(tone.xyz, select(0.0, 1.0, tone.w > 1.5));
+    if (tp.store.x == 1u) {
+        textureStore(out_hdr, px, vec4<f32>(c, 1.0));
+    }
+    if (tp.store.y == 0u) {
+        return;
+    }
+    if (tp.tone.w > 0.5) {
+        let t = vec4<f32>(tp.tone.xyz, select(0.0, 1.0, tp.tone.w > 1.5));
         textureStore(out_ldr, px, vec4<f32>(reinhard(c, t, log_average[0]), 1.0));
     }
     let lw = luminance_of(max(c, vec3<f32>(0.0)));

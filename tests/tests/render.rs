@@ -665,3 +665,38 @@ fn an_object_above_the_roof_does_not_move_the_light_out_of_the_room() {
     eprintln!("{note}; lit share of the inside view {lit:.3}");
     assert!(lit > 0.1, "only {lit:.3} of the inside view is lit");
 }
+
+/// `final.hdr` is stored only when a read-back of the frame copies it (issue #53): otherwise
+/// the compose binds a 1×1 stand-in (8 bytes a pixel less) and a read after the frame composes
+/// it again from the frame's inputs, bit for bit what the frame would have stored, while
+/// `final.ldr` is the frame's own. The camera moves, so every frame's inputs are new.
+#[test]
+fn final_hdr_is_composed_when_read_bit_for_bit_what_the_frame_stores() {
+    use gi_render::readback::Readback;
+    let (w, h) = (64u32, 48u32);
+    let mut lazy = default_renderer(w, h);
+    let mut stored = default_renderer(w, h);
+    for frame in 0..4u64 {
+        let step = Vec3::new(0.003, 0.001, 0.0) * lazy.bounds().radius();
+        lazy.camera.fly(step);
+        stored.camera.fly(step);
+        stored.read_later("test.hdr", Readback::Image { name: "final.hdr".into(), layer: 0, mip: 0 }, frame);
+        lazy.render_frame();
+        stored.render_frame();
+        let compose = |r: &Renderer| r.traffic().iter().find(|(p, _)| p == "compose").map_or(0, |(_, b)| *b);
+        let (l, s) = (compose(&lazy), compose(&stored));
+        // The first frame of automatic exposure tone maps in a pass of its own, which reads
+        // final.hdr: stored then.
+        let saved = if frame == 0 { 0 } else { 8 * (w * h) as u64 - 8 };
+        assert_eq!(s - l, saved, "frame {frame}: the compose bound {l} bytes, {s} storing final.hdr");
+        let (a, b) =
+            (lazy.readback("final.hdr").expect("composed when read"), stored.readback("final.hdr").expect("hdr"));
+        assert!(a.data.iter().any(|p| p[0] > 0.0), "frame {frame}: a lit image");
+        assert_eq!(a.data, b.data, "frame {frame}: final.hdr composed when read");
+        assert_eq!(
+            lazy.readback("final.ldr").expect("ldr").data,
+            stored.readback("final.ldr").expect("ldr").data,
+            "frame {frame}: final.ldr"
+        );
+    }
+}

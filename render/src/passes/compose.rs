@@ -24,6 +24,15 @@ pub struct ToneParams {
     pub tone: Vec4,
 }
 
+/// The compose's uniform; WGSL twin: `Tone` in `shaders/compose/compose.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+struct ComposeTone {
+    tone: Vec4,
+    /// x: store final.hdr; y: store final.ldr and the tiles' log-luminance.
+    store: [u32; 4],
+}
+
 /// Half floats, as `direct::RADIANCE_FORMAT` (the tone map reads the full-precision sum).
 pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const LDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
@@ -36,8 +45,15 @@ pub struct ComposePass {
     luminance: wgpu::ComputePipeline,
     /// (Σ log(δ + Lw) in fixed point, count) per compose workgroup (TILE² pixels), i32.
     tiles: wgpu::Buffer,
-    /// The compose's tone-mapping uniform (`tone` in compose.wgsl).
+    /// The compose's uniform (`Tone` in compose.wgsl): the tone mapping and what it stores.
     compose_tone: wgpu::Buffer,
+    /// `final.hdr` when a read asks for it after a frame that did not store it (issue #53):
+    /// the compose again over the frame's inputs, storing `final.hdr` alone (its own
+    /// uniform, `hdr_only`).
+    hdr_on_read: std::sync::Arc<crate::passes::on_read::OnRead>,
+    hdr_only: wgpu::Buffer,
+    /// The 1×1 `final.hdr` a frame binds when nothing reads it then.
+    no_hdr: wgpu::TextureView,
     /// Whether `log_average` holds the previous frame's L̄w (automatic exposure ran then).
     exposure_known: bool,
     /// Whether this frame's compose tone-mapped final.ldr (else `tonemap` does).
@@ -87,7 +103,7 @@ pub const COMPOSE_BINDINGS: Bindings = Bindings {
         binding(7, "sky_image", TEXTURE),
         binding(8, "camera", Kind::Uniform),
         binding(9, "gbuffer_depth", TEXTURE),
-        binding(10, "tone", Kind::Uniform),
+        binding(10, "tp", Kind::Uniform),
         binding(11, "log_average", READ),
         binding(12, "out_ldr", Kind::StorageTexture(LDR_FORMAT)),
         binding(13, "partials", READ_WRITE),
@@ -139,7 +155,7 @@ impl ComposePass {
         });
         let compose_tone = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("compose.tone"),
-            size: 16,
+            size: std::mem::size_of::<ComposeTone>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -164,6 +180,14 @@ impl ComposePass {
             wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
         );
         let black = super::view(&black_tex, "compose.no_indirect");
+        let hdr_only = device.counted_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("compose.tone.hdr_only"),
+            contents: bytemuck::bytes_of(&ComposeTone { tone: Vec4::ZERO, store: [1, 0, 0, 0] }),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let no_hdr =
+            super::create_target(device, "final.hdr.stand_in", 1, 1, HDR_FORMAT, wgpu::TextureUsages::STORAGE_BINDING);
+        let no_hdr = super::view(&no_hdr, "final.hdr.stand_in");
         let (hdr, ldr) = Self::targets(ctx, width, height);
         let tiles = Self::tile_buffer(ctx, width, height);
         Self {
@@ -172,6 +196,9 @@ impl ComposePass {
             luminance,
             tiles,
             compose_tone,
+            hdr_on_read: Self::hdr_on_read(ctx, width, height),
+            hdr_only,
+            no_hdr,
             exposure_known: false,
             tone_mapped: false,
             layout0,
@@ -212,17 +239,23 @@ impl ComposePass {
         (hdr, ldr)
     }
 
+    fn hdr_on_read(ctx: &GpuContext, width: u32, height: u32) -> std::sync::Arc<crate::passes::on_read::OnRead> {
+        crate::passes::on_read::OnRead::new(ctx, "compose.hdr", (width, height))
+    }
+
     pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) {
         (self.hdr, self.ldr) = Self::targets(ctx, width, height);
+        self.hdr_on_read = Self::hdr_on_read(ctx, width, height);
         self.tiles = Self::tile_buffer(ctx, width, height);
     }
 
     pub fn register(&self, reg: &mut BufferRegistry) {
-        reg.register(
+        reg.register_derived(
             "final.hdr",
             BufferKind::Hdr,
             "direct + indirect radiance before tone mapping (W/(m²·sr))",
             &self.hdr,
+            self.hdr_on_read.clone(),
         );
         reg.register("final.ldr", BufferKind::Ldr, "tone-mapped image (Reinhard), sRGB-encoded", &self.ldr);
     }
@@ -231,7 +264,10 @@ impl ComposePass {
     /// is empty (`sky`: its parameters and image, `camera`: the camera uniform for the rays,
     /// `normal`: the G-buffer's coverage); final.ldr tone-mapped in the same pass unless
     /// automatic exposure has no previous L̄w yet (then `tonemap` does it after `luminance`).
-    pub fn compose(&mut self, r: PassRec<'_, '_>, settings: &TonemapSettings, inputs: &ComposeInputs) {
+    /// final.hdr is stored when `store_hdr` (a read-back of this frame copies it) or the
+    /// separate tone mapping reads it; otherwise a read of it after the frame composes it
+    /// again from the same inputs (issue #53: 8 bytes a pixel a frame that nothing reads).
+    pub fn compose(&mut self, r: PassRec<'_, '_>, settings: &TonemapSettings, inputs: &ComposeInputs, store_hdr: bool) {
         let PassRec { ctx, enc: encoder, slot } = r;
         let ComposeInputs { emission, direct, indirect, near_field, sky: (sky, camera, depth) } = *inputs;
         let mode = match (settings.auto_exposure, self.exposure_known) {
@@ -240,33 +276,39 @@ impl ComposePass {
             (true, false) => 0.0,
         };
         self.tone_mapped = mode > 0.0;
+        let store_hdr = store_hdr || !self.tone_mapped;
         // Known next frame when this frame's luminance pass computes it.
         self.exposure_known = settings.auto_exposure;
         let [x, y, z, _] = tone_vector(settings).to_array();
-        ctx.queue.write_buffer(&self.compose_tone, 0, bytemuck::bytes_of(&Vec4::new(x, y, z, mode)));
+        let tone = ComposeTone { tone: Vec4::new(x, y, z, mode), store: [store_hdr as u32, 1, 0, 0] };
+        ctx.queue.write_buffer(&self.compose_tone, 0, bytemuck::bytes_of(&tone));
         let sky_view = super::view(&sky.texture, "sky.background.image");
         let hdr_view = super::view(&self.hdr, "final.hdr");
         let ldr_view = super::view(&self.ldr, "final.ldr");
-        let tv = wgpu::BindingResource::TextureView;
-        let group = COMPOSE_BINDINGS.group(
-            &ctx.device,
-            &self.layout0,
-            [
-                tv(direct),
-                tv(indirect.unwrap_or(&self.black)),
-                tv(&hdr_view),
-                tv(near_field.unwrap_or(&self.black)),
-                tv(emission.unwrap_or(&self.black)),
-                sky.params.as_entire_binding(),
-                tv(&sky_view),
-                camera.as_entire_binding(),
-                tv(depth),
-                self.compose_tone.as_entire_binding(),
-                self.log_average.as_entire_binding(),
-                tv(&ldr_view),
-                self.tiles.as_entire_binding(),
-            ],
-        );
+        let group = |hdr: &wgpu::TextureView, tone: &wgpu::Buffer| {
+            COMPOSE_BINDINGS.group(
+                &ctx.device,
+                &self.layout0,
+                [
+                    wgpu::BindingResource::TextureView(direct),
+                    wgpu::BindingResource::TextureView(indirect.unwrap_or(&self.black)),
+                    wgpu::BindingResource::TextureView(hdr),
+                    wgpu::BindingResource::TextureView(near_field.unwrap_or(&self.black)),
+                    wgpu::BindingResource::TextureView(emission.unwrap_or(&self.black)),
+                    sky.params.as_entire_binding(),
+                    wgpu::BindingResource::TextureView(&sky_view),
+                    camera.as_entire_binding(),
+                    wgpu::BindingResource::TextureView(depth),
+                    tone.as_entire_binding(),
+                    self.log_average.as_entire_binding(),
+                    wgpu::BindingResource::TextureView(&ldr_view),
+                    self.tiles.as_entire_binding(),
+                ],
+            )
+        };
+        let later = (!store_hdr).then(|| (&self.compose, group(&hdr_view, &self.hdr_only)));
+        self.hdr_on_read.arm(later);
+        let group = group(if store_hdr { &hdr_view } else { &self.no_hdr }, &self.compose_tone);
         // The tiles' sums are atomic additions: they start from zero.
         encoder.clear_buffer(&self.tiles, 0, None);
         self.dispatch(encoder, slot, "compose.compose", &self.compose, &group, self.screen_groups());

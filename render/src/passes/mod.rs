@@ -25,6 +25,7 @@ pub mod gbuffer;
 pub mod gbuffer_position;
 pub mod hcb;
 pub mod knecht;
+pub mod on_read;
 pub mod reference;
 pub mod shadow;
 pub mod sky;

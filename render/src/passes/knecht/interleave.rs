@@ -156,7 +156,7 @@ pub struct InterleavePass {
     pub frames: u32,
     /// The filter's own pass for a read of `indirect.filtered` after a frame that fused it
     /// into the merge (issue #53).
-    on_read: std::sync::Arc<super::on_read::OnRead>,
+    on_read: std::sync::Arc<crate::passes::on_read::OnRead>,
 }
 
 /// The geometry-aware filter's bindings (`knecht/interleave/filter.wgsl`, group 0).
@@ -242,7 +242,7 @@ impl InterleavePass {
             "cs_filter",
             &[&filter_layout],
         );
-        let on_read = super::on_read::OnRead::new(ctx, "interleave.filter", (width, height));
+        let on_read = crate::passes::on_read::OnRead::new(ctx, "interleave.filter", (width, height));
         let uniform = |label, size| {
             device.counted_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -350,7 +350,7 @@ impl InterleavePass {
         (self.split, [self.merged, self.irradiance, self.filtered, self.filtered_irradiance]) =
             Self::targets(&ctx.device, width, height, n, split_passes);
         (self.width, self.height, self.n, self.split_passes) = (width, height, n, split_passes);
-        self.on_read = super::on_read::OnRead::new(ctx, "interleave.filter", (width, height));
+        self.on_read = crate::passes::on_read::OnRead::new(ctx, "interleave.filter", (width, height));
         true
     }
 

@@ -235,7 +235,7 @@ pub struct IsmPass {
     /// `ism.atlas`'s resolve when it is read: the whole atlas from row 0 (a [`LevelParams`]
     /// of zeros), armed by every frame that splatted.
     atlas_rows: wgpu::Buffer,
-    atlas_on_read: std::sync::Arc<super::on_read::OnRead>,
+    atlas_on_read: std::sync::Arc<crate::passes::on_read::OnRead>,
 }
 
 impl IsmPass {
@@ -317,8 +317,8 @@ impl IsmPass {
         }
     }
 
-    fn atlas_on_read(ctx: &GpuContext, l: IsmLayout) -> std::sync::Arc<super::on_read::OnRead> {
-        super::on_read::OnRead::new(ctx, "ism.resolve", (l.width() as u32, l.height() as u32))
+    fn atlas_on_read(ctx: &GpuContext, l: IsmLayout) -> std::sync::Arc<crate::passes::on_read::OnRead> {
+        crate::passes::on_read::OnRead::new(ctx, "ism.resolve", (l.width() as u32, l.height() as u32))
     }
 
     fn point_buffers(device: &wgpu::Device, cloud: &PointCloud) -> (wgpu::Buffer, wgpu::Buffer) {

@@ -9,7 +9,6 @@ pub mod explain;
 pub mod interleave;
 pub mod irsm;
 pub mod ism;
-pub mod on_read;
 pub mod point_cloud;
 pub mod stage;
 pub mod temporal;

@@ -161,7 +161,7 @@ pub struct TemporalPass {
     /// after a demodulated merge.
     split_normal_layout: wgpu::BindGroupLayout,
     split_normal_pipeline: wgpu::ComputePipeline,
-    split_normal: std::sync::Arc<super::on_read::OnRead>,
+    split_normal: std::sync::Arc<crate::passes::on_read::OnRead>,
     /// Whether the next merges store `temporal.confidence` (the default); when not (issue
     /// #53: nothing reads it in the frame, 4 bytes a pixel), the merge binds a 1×1 stand-in
     /// and the confidence is computed again, alone, when it is read.
@@ -170,7 +170,7 @@ pub struct TemporalPass {
     /// read-back of this frame copies it); otherwise it is decoded when read.
     pub decode_normals: bool,
     dummy_confidence: wgpu::Texture,
-    confidence_on_read: std::sync::Arc<super::on_read::OnRead>,
+    confidence_on_read: std::sync::Arc<crate::passes::on_read::OnRead>,
     /// The uniform of that later pass (`state.z` = 2).
     confidence_params: wgpu::Buffer,
     layout: wgpu::BindGroupLayout,
@@ -209,7 +209,7 @@ impl TemporalPass {
             "cs_split_normal",
             &[&split_normal_layout],
         );
-        let split_normal = super::on_read::OnRead::new(ctx, "temporal.prev_normal", (width, height));
+        let split_normal = crate::passes::on_read::OnRead::new(ctx, "temporal.prev_normal", (width, height));
         let bytes = std::mem::size_of::<ConfidenceParams>() as u64;
         let params = crate::passes::uniform_buffer(device, "temporal.params", bytes);
         let confidence_params = crate::passes::uniform_buffer(device, "temporal.confidence.params", bytes);
@@ -235,7 +235,7 @@ impl TemporalPass {
             store_confidence: true,
             decode_normals: false,
             dummy_confidence,
-            confidence_on_read: super::on_read::OnRead::new(ctx, "temporal.confidence", (width, height)),
+            confidence_on_read: crate::passes::on_read::OnRead::new(ctx, "temporal.confidence", (width, height)),
             confidence_params,
             layout,
             pipeline,
@@ -286,8 +286,8 @@ impl TemporalPass {
         }
         (self.confidence, self.history, self.normals) = Self::targets(&ctx.device, width, height);
         (self.width, self.height) = (width, height);
-        self.split_normal = super::on_read::OnRead::new(ctx, "temporal.prev_normal", (width, height));
-        self.confidence_on_read = super::on_read::OnRead::new(ctx, "temporal.confidence", (width, height));
+        self.split_normal = crate::passes::on_read::OnRead::new(ctx, "temporal.prev_normal", (width, height));
+        self.confidence_on_read = crate::passes::on_read::OnRead::new(ctx, "temporal.confidence", (width, height));
         self.split = None;
         self.valid = false;
         true

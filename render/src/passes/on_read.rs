@@ -1,12 +1,13 @@
-//! A pass of Knecht's chain run when its output is read, after a frame that did its work
-//! elsewhere (issue #53; docs/architecture.md "The filter fused into the merge"): the
-//! geometry-aware filter's own pass, when the frame fused the filter into the confidence merge
+//! A pass run when its output is read, after a frame that did its work elsewhere or left it
+//! undone because nothing read it then (issue #53; docs/architecture.md "The filter fused
+//! into the merge", "The ISM's pull-push in fewer passes", "`final.hdr` only when it is
+//! read"): Knecht's geometry-aware filter when the frame fused it into the confidence merge
 //! (`indirect.filtered` and its irradiance), the normals the demodulated merge kept in its
-//! split history (`temporal.prev_normal`), and the merge's confidence, which a frame stores
-//! only while something reads it in that frame (`temporal.confidence`). The registry's derived buffers (`buffers::Derived`)
-//! call it with the inputs that frame left, so the viewer, the probe and the read-backs see
-//! what the frame would have written. The ISM atlas as splatted (`ism.atlas`) is resolved the
-//! same way: the frame resolves straight into the pulled atlas.
+//! split history (`temporal.prev_normal`), the merge's confidence (`temporal.confidence`),
+//! the ISM atlas as splatted (`ism.atlas`: the frame resolves straight into the pulled atlas)
+//! and the compose's `final.hdr`. The registry's derived buffers (`buffers::Derived`) call it
+//! with the inputs that frame left, so the viewer, the probe and the read-backs see what the
+//! frame would have written.
 
 use std::sync::{Arc, Mutex};
 
