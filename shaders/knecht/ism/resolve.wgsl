@@ -42,6 +42,14 @@ fn cs_resolve(@builtin(global_invocation_id) gid: vec3<u32>) {
     textureStore(atlas, g, vec4<f32>(distance_at(g.y * size.x + g.x), 0.0, 0.0, 0.0));
 }
 
+// (sum, count) with v added when it is a distance within t of the nearest child.
+fn pull_add(acc: vec2<f32>, v: f32, nearest: f32, t: f32) -> vec2<f32> {
+    if (v < ISM_EMPTY && v - nearest <= t) {
+        return acc + vec2<f32>(v, 1.0);
+    }
+    return acc;
+}
+
 // One texel of level 1: its four children resolved into level 0 and pulled as pull_push.wgsl's
 // `cs_pull` does (the same sums in the same order; CPU twin: cpu::knecht::pull_push).
 @compute @workgroup_size(8, 8, 1)
@@ -66,25 +74,11 @@ fn cs_resolve_pull(@builtin(global_invocation_id) gid: vec3<u32>) {
     var out = ISM_EMPTY;
     if (nearest < ISM_EMPTY) {
         let t = lp.threshold.x;
-        var sum = 0.0;
-        var n = 0.0;
-        if (v0 < ISM_EMPTY && v0 - nearest <= t) {
-            sum = sum + v0;
-            n = n + 1.0;
-        }
-        if (v1 < ISM_EMPTY && v1 - nearest <= t) {
-            sum = sum + v1;
-            n = n + 1.0;
-        }
-        if (v2 < ISM_EMPTY && v2 - nearest <= t) {
-            sum = sum + v2;
-            n = n + 1.0;
-        }
-        if (v3 < ISM_EMPTY && v3 - nearest <= t) {
-            sum = sum + v3;
-            n = n + 1.0;
-        }
-        out = sum / n;
+        var acc = pull_add(vec2<f32>(0.0), v0, nearest, t);
+        acc = pull_add(acc, v1, nearest, t);
+        acc = pull_add(acc, v2, nearest, t);
+        acc = pull_add(acc, v3, nearest, t);
+        out = acc.x / acc.y;
     }
     textureStore(level1, g, vec4<f32>(out, 0.0, 0.0, 0.0));
 }
