@@ -285,23 +285,26 @@ impl ComposePass {
         let sky_view = super::view(&sky.texture, "sky.background.image");
         let hdr_view = super::view(&self.hdr, "final.hdr");
         let ldr_view = super::view(&self.ldr, "final.ldr");
+        fn tv(v: &wgpu::TextureView) -> wgpu::BindingResource<'_> {
+            wgpu::BindingResource::TextureView(v)
+        }
         let group = |hdr: &wgpu::TextureView, tone: &wgpu::Buffer| {
             COMPOSE_BINDINGS.group(
                 &ctx.device,
                 &self.layout0,
                 [
-                    wgpu::BindingResource::TextureView(direct),
-                    wgpu::BindingResource::TextureView(indirect.unwrap_or(&self.black)),
-                    wgpu::BindingResource::TextureView(hdr),
-                    wgpu::BindingResource::TextureView(near_field.unwrap_or(&self.black)),
-                    wgpu::BindingResource::TextureView(emission.unwrap_or(&self.black)),
+                    tv(direct),
+                    tv(indirect.unwrap_or(&self.black)),
+                    tv(hdr),
+                    tv(near_field.unwrap_or(&self.black)),
+                    tv(emission.unwrap_or(&self.black)),
                     sky.params.as_entire_binding(),
-                    wgpu::BindingResource::TextureView(&sky_view),
+                    tv(&sky_view),
                     camera.as_entire_binding(),
-                    wgpu::BindingResource::TextureView(depth),
+                    tv(depth),
                     tone.as_entire_binding(),
                     self.log_average.as_entire_binding(),
-                    wgpu::BindingResource::TextureView(&ldr_view),
+                    tv(&ldr_view),
                     self.tiles.as_entire_binding(),
                 ],
             )

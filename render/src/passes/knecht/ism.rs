@@ -106,6 +106,16 @@ pub const RESOLVE_PULL_INPUTS_BINDINGS: Bindings = Bindings {
     ],
 };
 
+/// One [`LevelParams`] slot of `buffer`, bound with a dynamic offset (the pull-push's and the
+/// resolve's uniform).
+fn level_binding(buffer: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
+    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+        buffer,
+        offset: 0,
+        size: std::num::NonZeroU64::new(std::mem::size_of::<LevelParams>() as u64),
+    })
+}
+
 /// Bind groups of one frame's splats and resolve ([`IsmPass::begin`]).
 pub struct IsmJob {
     splat: wgpu::BindGroup,
@@ -462,19 +472,16 @@ impl IsmPass {
             ],
         );
         let atlas_view = crate::passes::view(&self.atlas, "ism.atlas");
-        let rows = |buffer| {
-            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                buffer,
-                offset: 0,
-                size: std::num::NonZeroU64::new(std::mem::size_of::<LevelParams>() as u64),
-            })
-        };
         // Read later, if at all: the whole atlas as splatted (the frame resolves into level 0
         // of the pulled atlas).
         let on_read = RESOLVE_INPUTS_BINDINGS.group(
             &ctx.device,
             &self.resolve_layout,
-            [self.depth.as_entire_binding(), wgpu::BindingResource::TextureView(&atlas_view), rows(&self.atlas_rows)],
+            [
+                self.depth.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&atlas_view),
+                level_binding(&self.atlas_rows),
+            ],
         );
         self.atlas_on_read.arm_with(Some((&self.resolve_pipeline, on_read)), &[0]);
         IsmJob { splat, resolve: self.resolve_group(&ctx.device) }
@@ -483,11 +490,7 @@ impl IsmPass {
     /// The frame's resolve into level 0 of the pulled atlas (and its first pull into level 1
     /// when pull-push has levels); its rows and thresholds come from the call's uniform slot.
     fn resolve_group(&self, device: &wgpu::Device) -> wgpu::BindGroup {
-        let rows = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-            buffer: &self.level_params,
-            offset: 0,
-            size: std::num::NonZeroU64::new(std::mem::size_of::<LevelParams>() as u64),
-        });
+        let rows = level_binding(&self.level_params);
         let level0 = self.level_view(0);
         if self.levels == 0 {
             return RESOLVE_INPUTS_BINDINGS.group(
@@ -658,11 +661,7 @@ impl IsmPass {
         let w = l.width() as u32;
         let mut pulls = Vec::new();
         let mut pushes = Vec::new();
-        let dynamic = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-            buffer: &self.level_params,
-            offset: 0,
-            size: std::num::NonZeroU64::new(std::mem::size_of::<LevelParams>() as u64),
-        });
+        let dynamic = level_binding(&self.level_params);
         for level in 0..self.levels {
             let (fine, coarse) = (self.level_view(level), self.level_view(level + 1));
             let tv = wgpu::BindingResource::TextureView;
