@@ -27,6 +27,7 @@ impl Renderer {
         // Whether `gbuffer.position` lags the linear depth (issue #53): this frame fills it
         // or leaves it to be filled when read, never before its camera is written below.
         let position_stale = self.gbuffer.position.as_ref().is_some_and(|p| p.fill.take_stale());
+        let normal_stale = self.gbuffer.normal.as_ref().is_some_and(|p| p.take_stale());
         let emission_stale = self.gbuffer.no_emission.as_ref().is_some_and(|p| p.take_stale());
         let material_stale = self.gbuffer.material.as_ref().is_some_and(|p| p.take_stale());
         // What the read-backs recorded in this frame copy (a buffer filled only when read is
@@ -88,11 +89,14 @@ impl Renderer {
                 position_stale = false;
             }
         }
-        // The same for the emission a scene without emitters leaves out and for the material's
-        // metallic and roughness, read back in this frame.
+        // The same for the normals unpacked from their words (read by the same steps as the
+        // position), for the emission a scene without emitters leaves out and for the
+        // material's metallic and roughness, read back in this frame.
+        let steps_unpack = self.steps.needs_position(self.stages.explain_pixel.is_some());
         let mut fill_if_read = |fill: Option<&std::sync::Arc<crate::passes::gbuffer_position::Fill>>, stale, name| {
             let stale = stale || gbuffer_ran;
-            match fill.filter(|_| stale && read_back.reads(name)) {
+            let read = read_back.reads(name) || (name == "gbuffer.normal" && steps_unpack);
+            match fill.filter(|_| stale && read) {
                 Some(fill) => {
                     self.timer.scope(&ctx, &mut enc, fill.name(), |e, slot| {
                         fill.record(e, slot.and_then(|s| s.compute(true, true)))
@@ -102,6 +106,7 @@ impl Renderer {
                 None => stale,
             }
         };
+        let normal_stale = fill_if_read(self.gbuffer.normal.as_ref(), normal_stale, "gbuffer.normal");
         let emission_stale = fill_if_read(self.gbuffer.no_emission.as_ref(), emission_stale, "gbuffer.emission");
         let material_stale = fill_if_read(self.gbuffer.material.as_ref(), material_stale, "gbuffer.material");
 
@@ -178,6 +183,9 @@ impl Renderer {
         ctx.submit([enc.finish()]);
         if let Some(position) = self.gbuffer.position.as_ref() {
             position.fill.set_stale(position_stale);
+        }
+        if let Some(normal) = self.gbuffer.normal.as_ref() {
+            normal.set_stale(normal_stale);
         }
         if let Some(no_emission) = self.gbuffer.no_emission.as_ref() {
             no_emission.set_stale(emission_stale);

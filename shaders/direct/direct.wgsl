@@ -10,6 +10,7 @@
 #import common/lights.wgsl
 #import common/fullscreen.wgsl
 #import common/ism.wgsl
+#import common/normal.wgsl
 
 struct Params {
     // x: PCF radius in texels, y: shadow map size, z: depth bias in texels (toward the
@@ -48,6 +49,9 @@ override LINEAR_DEPTH: bool = true;
 @group(1) @binding(2) var g_albedo: texture_2d<f32>;
 @group(1) @binding(3) var g_material: texture_2d<f32>;
 @group(1) @binding(4) var out_radiance: texture_storage_2d<rgba16float, write>;
+// The camera G-buffer's packed normals (LINEAR_DEPTH, common/normal.wgsl, issue #53), where
+// g_normal is a 1×1 stand-in; the atlas's normals are g_normal (this a stand-in).
+@group(1) @binding(5) var g_normal_packed: texture_2d<u32>;
 
 // Picks the cube face of a point light from the major axis of the light-to-surface vector
 // (faces ordered +X, −X, +Y, −Y, +Z, −Z as in passes/shadow.rs).
@@ -180,7 +184,10 @@ struct Shaded {
 }
 
 fn shade_texel(px: vec2<i32>, viewer: vec3<f32>) -> Shaded {
-    let nrm = textureLoad(g_normal, px, 0);
+    var nrm = textureLoad(g_normal, px, 0);
+    if (LINEAR_DEPTH) {
+        nrm = gbuffer_normal(textureLoad(g_normal_packed, px, 0).x);
+    }
     if (nrm.w < 0.5) {
         return Shaded(vec4<f32>(0.0), vec4<f32>(0.0));
     }

@@ -9,6 +9,7 @@
 // so the temporal filter compares the history's depth with this one.
 #import common/camera.wgsl
 #import common/material.wgsl
+#import common/normal.wgsl
 
 struct Instance {
     model: mat4x4<f32>,
@@ -76,6 +77,24 @@ struct FsOut {
 @fragment
 fn fs_main(i: VsOut, @builtin(front_facing) front: bool) -> FsOut {
     return gbuffer_fragment(i, front);
+}
+
+// The camera's G-buffer (issue #53): target 0 the linear depth (LINEAR_DEPTH), target 1 the
+// normal packed in one word (common/normal.wgsl, `passes::gbuffer::PACKED_NORMAL_FORMAT`), 4
+// bytes a pixel instead of 8; `gbuffer.normal` is unpacked from it (gbuffer/normal.wgsl).
+struct FsCameraOut {
+    @location(0) linear_depth: vec4<f32>,
+    @location(1) normal: u32,
+    @location(2) albedo: vec4<f32>,
+    @location(3) material: vec4<f32>,
+    @location(4) motion: vec4<f32>,
+    @location(5) emission: vec4<f32>,
+}
+
+@fragment
+fn fs_camera(i: VsOut, @builtin(front_facing) front: bool) -> FsCameraOut {
+    let o = gbuffer_fragment(i, front);
+    return FsCameraOut(o.position, pack_normal(o.normal), o.albedo, o.material, o.motion, o.emission);
 }
 
 // A data map (normal, metallic-roughness, occlusion) at the fragment, filtered as the base

@@ -446,8 +446,8 @@ fn the_filter_fused_into_the_merge_equals_the_two_passes() {
 }
 
 /// The default preset merges demodulated: its merge keeps each pixel's normal in the split
-/// history's free word (issue #53) instead of a normals texture written and read (16 bytes a
-/// pixel), and stores the confidence only while something reads it in the frame (4 bytes a
+/// history's free word (issue #53: the G-buffer's own packed word) instead of a normals texture
+/// written and read (16 bytes a pixel), and stores the confidence only while something reads it in the frame (4 bytes a
 /// pixel). `temporal.prev_normal`, decoded from the split history when read, is the
 /// G-buffer's normal within the octahedral snorm16 rounding and one half-float step;
 /// `temporal.confidence`, computed when read, is bit for bit the one a frame stores while a
@@ -475,12 +475,12 @@ fn the_demodulated_merge_keeps_the_normal_in_its_split_history_and_the_confidenc
         r.render_frame();
         stored.render_frame();
         // The fused pass's bindings: the gathered light and irradiance (8 + 8), the depth
-        // (4), the normal (8), the movement buffer (8), the albedo (4), the history read and
-        // written (8 + 8), the split history read and written (16 + 16): 88 bytes a pixel,
-        // and uniforms and 1×1 stand-ins (the normals pair, the confidence); 4 more with the
-        // confidence stored.
+        // (4), the packed normal (4), the movement buffer's offsets (4), the albedo (4), the
+        // history read and written (8 + 8), the split history read and written (16 + 16): 80
+        // bytes a pixel, and uniforms and 1×1 stand-ins (the normals pair, the confidence); 4
+        // more with the confidence stored.
         let bound = merge_bytes(&r);
-        assert!((88 * pixels..88 * pixels + 4 * 1024).contains(&bound), "{bound} bytes: {:?}", r.traffic());
+        assert!((80 * pixels..80 * pixels + 4 * 1024).contains(&bound), "{bound} bytes: {:?}", r.traffic());
         assert!((merge_bytes(&stored) - bound).abs_diff(4 * pixels) < 1024, "{:?}", stored.traffic());
         let (later, now) = (
             r.readback("temporal.confidence").expect("filled"),

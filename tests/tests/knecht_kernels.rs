@@ -28,12 +28,20 @@ fn texture(ctx: &GpuContext, label: &str, w: u32, h: u32, data: &[[f32; 4]], hal
     gi_lab_tests::texture_from_bytes(ctx, label, format, (w, h), &bytes)
 }
 
+/// The normal the passes shade with where the G-buffer's normal is `n` (issue #53): its packed
+/// word unpacked and rounded to half floats (`knecht::gbuffer_normal`).
+fn shaded(n: Vec3) -> Vec3 {
+    knecht::gbuffer_normal(knecht::pack_normal(Some(n))).expect("a normal")
+}
+
 /// Views of a synthetic G-buffer (emission and depth are not read by the passes tested). The
-/// linear depth the passes read (issue #53) is the positions' w.
+/// linear depth the passes read (issue #53) is the positions' w; the packed normals the
+/// normals' words (`knecht::pack_normal`, none where w is 0).
 struct SyntheticGBuffer {
     position: wgpu::Texture,
     linear_depth: wgpu::Texture,
     normal: wgpu::Texture,
+    packed_normal: wgpu::Texture,
     albedo: wgpu::Texture,
     material: wgpu::Texture,
     motion: wgpu::Texture,
@@ -58,6 +66,15 @@ impl SyntheticGBuffer {
                 texture(ctx, "test.linear_depth", w, h, &depth, false)
             },
             normal: texture(ctx, "test.normal", w, h, normal, true),
+            packed_normal: {
+                let words: Vec<u8> = normal
+                    .iter()
+                    .map(|n| knecht::pack_normal((n[3] > 0.5).then(|| Vec3::new(n[0], n[1], n[2]))))
+                    .flat_map(u32::to_le_bytes)
+                    .collect();
+                let format = gi_render::passes::gbuffer::PACKED_NORMAL_FORMAT;
+                gi_lab_tests::texture_from_bytes(ctx, "test.packed_normal", format, (w, h), &words)
+            },
             albedo: texture(ctx, "test.albedo", w, h, albedo, false),
             material: texture(ctx, "test.material", w, h, material, false),
             motion: texture(ctx, "test.motion", w, h, motion, false),
@@ -70,6 +87,7 @@ impl SyntheticGBuffer {
             position: v(&self.position),
             linear_depth: v(&self.linear_depth),
             normal: v(&self.normal),
+            packed_normal: v(&self.packed_normal),
             albedo: v(&self.albedo),
             material: v(&self.material),
             motion: v(&self.motion),
@@ -120,7 +138,7 @@ fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
         nrm[i] = [nq.x, nq.y, nq.z, 1.0];
         alb[i] = [c.x, c.y, c.z, di];
         mat[i] = [si, sp, 0.0, 0.0];
-        receivers[i] = Some(knecht::Receiver { position: p, normal: nq.normalize(), albedo: c, di, si, sp });
+        receivers[i] = Some(knecht::Receiver { position: p, normal: shaded(nq).normalize(), albedo: c, di, si, sp });
     }
     let vpl_count = 7u32;
     let mut cpu_vpls = Vec::new();
@@ -260,6 +278,8 @@ fn geometry_aware_filter_on_the_gpu_equals_the_cpu() {
     // colour's texture (issue #51).
     let mut texels = Vec::with_capacity(len);
     let mut albedo = Vec::with_capacity(len);
+    // The G-buffer's normals; the twin filters with those the pass shades with (`shaded`).
+    let mut normals = Vec::with_capacity(len);
     for y in 0..h {
         for x in 0..w {
             if rng.next_f32() < 0.08 {
@@ -272,6 +292,7 @@ fn geometry_aware_filter_on_the_gpu_equals_the_cpu() {
                     reflectance: zero,
                 });
                 albedo.push([0.0; 4]);
+                normals.push([0.0; 4]);
                 continue;
             }
             let floor = x + y < 24;
@@ -287,15 +308,13 @@ fn geometry_aware_filter_on_the_gpu_equals_the_cpu() {
             let specular = Vec3::splat(rng.range(0.0, 0.5));
             let v = reflectance * irradiance + specular;
             let value = Vec3::new(f16(v.x), f16(v.y), f16(v.z));
-            texels.push(knecht::FilterTexel { value, depth, normal, irradiance, reflectance });
+            texels.push(knecht::FilterTexel { value, depth, normal: shaded(normal), irradiance, reflectance });
             albedo.push([c.x, c.y, c.z, di]);
+            normals.push([normal.x, normal.y, normal.z, 1.0]);
         }
     }
     let pos: Vec<[f32; 4]> = texels.iter().map(|t| [0.0, 0.0, 0.0, t.depth]).collect();
-    let nrm: Vec<[f32; 4]> = texels
-        .iter()
-        .map(|t| if t.depth > 0.0 { [t.normal.x, t.normal.y, t.normal.z, 1.0] } else { [0.0; 4] })
-        .collect();
+    let nrm = normals;
     let src: Vec<[f32; 4]> = texels.iter().map(|t| [t.value.x, t.value.y, t.value.z, 1.0]).collect();
     let irr: Vec<[f32; 4]> = texels.iter().map(|t| t.irradiance.extend(1.0).to_array()).collect();
     let zero = vec![[0.0; 4]; len];
@@ -527,10 +546,12 @@ fn confidence_and_merge_case(demodulated: bool) {
                     let i_prev = if demodulated { split_prev.reflect(k(p)) } else { prev.light };
                     // Demodulated, n_prev comes from the split history's normal word (issue #53),
                     // octahedral snorm16: the twin rounds as the shader stores it.
+                    // Not demodulated, the thesis' normals texture keeps the normal the merge
+                    // shaded with (`shaded`, issue #53).
                     let normal_prev = if demodulated {
                         knecht::unpack_normal(knecht::pack_normal(Some(prev.normal))).expect("a covered pixel")
                     } else {
-                        prev.normal
+                        shaded(prev.normal)
                     };
                     let input = knecht::ConfidenceInput {
                         motion_px: m,
@@ -538,7 +559,7 @@ fn confidence_and_merge_case(demodulated: bool) {
                         depth: p.depth,
                         depth_prev: prev.depth,
                         depth_range,
-                        normal: p.normal,
+                        normal: shaded(p.normal),
                         normal_prev,
                         illumination: p.light,
                         illumination_prev: i_prev,

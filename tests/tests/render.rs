@@ -36,13 +36,14 @@ fn gbuffer_matches_cpu_ray_cast() {
     // The default preset's passes read the linear depth (issue #53): the frame does not fill
     // the position, which is rebuilt from the depth when it is read below.
     let passes: Vec<String> = r.render_frame().into_iter().map(|t| t.name).collect();
-    assert!(!passes.iter().any(|p| p == "gbuffer.position"), "{passes:?}");
-    // What the G-buffer pass binds: the linear depth (4 bytes), normal (8), albedo (4), SI and
-    // SP (4), movement buffer (8) and depth (4) a pixel, and the camera, instance and material
-    // buffers (a few KB); no emission target (8 bytes a pixel, 128 KB here), since no material
-    // of the default box emits, and no metallic and roughness, filled when read (issue #53).
+    assert!(!passes.iter().any(|p| p == "gbuffer.position" || p == "gbuffer.normal"), "{passes:?}");
+    // What the G-buffer pass binds: the linear depth (4 bytes), the packed normal (4), albedo
+    // (4), SI and SP (4), movement buffer (4: no step reads its z) and depth (4) a pixel, and
+    // the camera, instance and material buffers (a few KB); no emission target (8 bytes a
+    // pixel, 128 KB here), since no material of the default box emits, and no metallic and
+    // roughness nor unpacked normals, filled when read (issue #53).
     let bound = r.traffic().iter().find(|(p, _)| p == "gbuffer").map_or(0, |(_, b)| *b);
-    let targets = 32 * (N * N) as u64;
+    let targets = 24 * (N * N) as u64;
     assert!((targets..targets + 16 * 1024).contains(&bound), "{bound} bytes: {:?}", r.traffic());
     let pos = r.readback("gbuffer.position").expect("position");
     let depth = r.readback("gbuffer.linear_depth").expect("linear depth");
@@ -116,6 +117,44 @@ fn gbuffer_matches_cpu_ray_cast() {
     println!("G-buffer: {compared} pixels match the CPU ray cast, {background} background pixels agree");
 }
 
+/// The camera's movement buffer keeps z, each pixel's linear depth in the previous frame, only
+/// while Soler et al.'s temporal filter runs, the one step that reads it (issue #53): the
+/// default preset's is Δx, Δy alone (4 bytes a pixel less in the G-buffer and in Knecht's
+/// merge); choosing Soler makes it again with z, and leaving Soler drops z again.
+#[test]
+fn the_movement_buffer_keeps_the_previous_depth_only_while_a_step_reads_it() {
+    use gi_render::settings::pipeline::Technique;
+    let mut r = default_renderer(N, N);
+    let format = |r: &Renderer| r.buffers().get("gbuffer.motion").expect("motion").texture.format();
+    let gbuffer_bytes = |r: &Renderer| r.traffic().iter().find(|(p, _)| p == "gbuffer").map_or(0, |(_, b)| *b);
+    r.render_frame();
+    assert_eq!(format(&r), wgpu::TextureFormat::Rg16Float);
+    let without = gbuffer_bytes(&r);
+    let mut s = r.settings().clone();
+    Technique::Soler.apply(&mut s);
+    assert!(s.pipeline.soler_temporal(), "Soler's technique filters in time");
+    r.set_settings(s).expect("Soler");
+    r.render_frame();
+    r.render_frame();
+    assert_eq!(format(&r), wgpu::TextureFormat::Rgba16Float);
+    assert_eq!(gbuffer_bytes(&r), without + 4 * (N * N) as u64, "{:?}", r.traffic());
+    // Nothing moved: z is this frame's depth, as a half float.
+    let (motion, depth) =
+        (r.readback("gbuffer.motion").expect("motion"), r.readback("gbuffer.linear_depth").expect("depth"));
+    let mut covered = 0;
+    for (m, d) in motion.data.iter().zip(&depth.data) {
+        if d[0] > 0.0 {
+            covered += 1;
+            assert!((m[2] - d[0]).abs() <= gi_render::buffers::half_step(d[0]), "z {} vs depth {}", m[2], d[0]);
+        }
+    }
+    assert!(covered > (N * N) as usize / 2, "{covered} covered pixels");
+    r.set_settings(LabSettings::default()).expect("default");
+    r.render_frame();
+    assert_eq!(format(&r), wgpu::TextureFormat::Rg16Float);
+    assert_eq!(gbuffer_bytes(&r), without);
+}
+
 #[test]
 fn movement_buffer_reprojects_static_pixels_and_flags_moving_ones() {
     // Part 1: camera move, scene frozen. Offsets must equal the CPU reprojection.
@@ -150,8 +189,10 @@ fn movement_buffer_reprojects_static_pixels_and_flags_moving_ones() {
     assert!(max_motion > 1.0, "the camera move should displace pixels (max {max_motion} px)");
 
     // Part 2: camera still, animation playing with a large step: the moving sphere's pixels
-    // differ from the static prediction (zero), static pixels do not move.
+    // differ from the static prediction (zero), static pixels do not move. Soler's technique,
+    // whose temporal filter reads the previous depth z (kept only then, issue #53).
     let mut settings = LabSettings::default();
+    gi_render::settings::pipeline::Technique::Soler.apply(&mut settings);
     settings.animation.time_step_s = 0.1;
     let mut r = Renderer::new(gpu(), default_scene(), settings, N, N).expect("renderer");
     r.clock.playing = true;

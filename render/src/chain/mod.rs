@@ -187,10 +187,11 @@ impl StepList {
         self.indirect.iter().chain(&self.near_field).map(|s| (s.stage, s.name)).collect()
     }
 
-    /// Whether a step reads the camera G-buffer's position (`gbuffer.position`), which is then
-    /// filled in the frame (issue #53, `passes::gbuffer_position`); `pinned`: a pixel is
-    /// explained (the `explain.*` steps run). Knecht's steps read the linear depth and rebuild
-    /// the points themselves; every other step reads the position.
+    /// Whether a step reads the camera G-buffer's position and normal (`gbuffer.position`,
+    /// `gbuffer.normal`), which are then filled in the frame (issue #53,
+    /// `passes::gbuffer_position`); `pinned`: a pixel is explained (the `explain.*` steps
+    /// run). Knecht's steps read the linear depth and the packed normals and unpack them
+    /// themselves; every other step reads the position and the normal.
     pub(crate) fn needs_position(&self, pinned: bool) -> bool {
         const LINEAR_DEPTH: &[&str] = &[
             "knecht.vpls",

@@ -549,6 +549,13 @@ pub fn unpack_normal(w: u32) -> Option<Vec3> {
     Some(n.normalize())
 }
 
+/// The normal the passes shade with at a camera G-buffer pixel whose packed word is `w`
+/// (issue #53; twin of `gbuffer_normal` in `shaders/common/normal.wgsl`): the word unpacked
+/// and rounded to half floats, as `gbuffer.normal` stores it. None for no surface.
+pub fn gbuffer_normal(w: u32) -> Option<Vec3> {
+    unpack_normal(w).map(|n| n.to_array().map(crate::buffers::round_to_half).into())
+}
+
 /// The octahedral map's fold of the lower half over the square's edges.
 fn octahedral_fold(v: Vec2) -> Vec2 {
     let s = Vec2::new(if v.x >= 0.0 { 1.0 } else { -1.0 }, if v.y >= 0.0 { 1.0 } else { -1.0 });

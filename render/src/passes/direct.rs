@@ -77,6 +77,9 @@ pub const DIRECT_GBUFFER_BINDINGS: Bindings = Bindings {
         binding(2, "g_albedo", Kind::Texture { filterable: false }),
         binding(3, "g_material", Kind::Texture { filterable: false }),
         binding(4, "out_radiance", Kind::StorageTexture(wgpu::TextureFormat::Rgba16Float)),
+        // The camera G-buffer's packed normals (issue #53); `g_normal` is then a stand-in,
+        // and this one beside the atlas's normals.
+        binding(5, "g_normal_packed", Kind::UintTexture),
     ],
 };
 
@@ -131,6 +134,9 @@ pub struct DirectPass {
     no_emitters: wgpu::Buffer,
     no_ism: wgpu::TextureView,
     no_exact: wgpu::TextureView,
+    /// Stand-ins for the normals a G-buffer does not have: unpacked (the camera's are packed),
+    /// packed (the atlas's are not; issue #53).
+    no_normals: [wgpu::TextureView; 2],
 }
 
 /// What stage 2's direct light reads: the settings, the camera uniform, the G-buffer, the
@@ -195,7 +201,9 @@ impl DirectPass {
         let (radiance, radiance_view) = Self::target(ctx, "direct.radiance", width, height);
         let no_emitters = storage("direct.no_emitters", std::mem::size_of::<super::reference::vpl::GpuVpl>() as u64);
         let (no_ism, no_exact) = super::reference::vpl_visibility::no_visibility_atlases(device, "direct.emitters");
+        let no_normals = super::gbuffer::normal_stand_ins(device, "direct");
         Self {
+            no_normals,
             no_emitters,
             last: Default::default(),
             emitters: true,
@@ -344,10 +352,11 @@ impl DirectPass {
             &self.layout1,
             [
                 tv(&gbuffer.linear_depth),
-                tv(&gbuffer.normal),
+                tv(&self.no_normals[0]),
                 tv(&gbuffer.albedo),
                 tv(&gbuffer.material),
                 tv(&self.radiance_view),
+                tv(&gbuffer.packed_normal),
             ],
         );
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -392,7 +401,14 @@ impl super::stages::DirectAtlas for DirectPass {
         let group1 = DIRECT_GBUFFER_BINDINGS.group(
             device,
             &self.layout1,
-            [tv(&atlas.position), tv(&atlas.normal), tv(&atlas.albedo), tv(&atlas.material), tv(out)],
+            [
+                tv(&atlas.position),
+                tv(&atlas.normal),
+                tv(&atlas.albedo),
+                tv(&atlas.material),
+                tv(out),
+                tv(&self.no_normals[1]),
+            ],
         );
         let group2 = DIRECT_ATLAS_BINDINGS.group(
             device,

@@ -2,8 +2,9 @@
 //! Shader: `shaders/gbuffer/gbuffer.wgsl`.
 //!
 //! ⚠[knecht.gbuffer-precision] Departure from the thesis' four 32-bit targets: we keep full precision (the linear
-//! depth of Eq. 4.2 unnormalised in `R32Float`, normals in `Rgba16Float`) instead of packing
-//! normal.z into the sign of SI (Eq. 4.1), because a lab must show exact values. The camera's
+//! depth of Eq. 4.2 unnormalised in `R32Float`; normals in `Rgba16Float`, the camera's packed
+//! octahedrally in one word each, [`PACKED_NORMAL_FORMAT`]) instead of packing normal.z into
+//! the sign of SI (Eq. 4.1), because a lab must show exact values. The camera's
 //! target 0 is that depth alone (issue #53; docs/architecture.md "The camera G-buffer's
 //! position"): the passes rebuild the point from it, and `gbuffer.position` (world position,
 //! depth in w) is filled from it when read (`passes::gbuffer_position`); the light views'
@@ -27,6 +28,15 @@ pub use super::gbuffer_position::POSITION_FORMAT;
 /// (`passes::gbuffer_position`).
 pub const LINEAR_DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// The camera G-buffer's normal target (issue #53, docs/architecture.md "The camera
+/// G-buffer's normal"): the normal's octahedral coordinates as two 16-bit snorms in one word
+/// (`shaders/common/normal.wgsl`, CPU twin `cpu::knecht::pack_normal`), 4 bytes a pixel
+/// instead of 8 and under 10⁻⁴ rad from the shaded normal; [`NO_NORMAL`] where no geometry
+/// covers the pixel. `gbuffer.normal` ([`NORMAL_FORMAT`]) is unpacked from it when read
+/// (`gbuffer_position::normal_pass`).
+pub const PACKED_NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+/// The packed normal of a pixel no geometry covers (`NO_NORMAL` in `shaders/common/normal.wgsl`).
+pub const NO_NORMAL: u32 = 0x8000_8000;
 pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 pub const MATERIAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 /// The camera G-buffer's material target (issue #53): SI and SP alone, the two values every
@@ -41,6 +51,11 @@ pub const SHADING_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
 /// previous object transform (relative step 4.9e-4; Soler et al.'s temporal rejection, 004
 /// §4, issue #41), w: 1 on covered pixels.
 pub const MOTION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// The camera's movement buffer while no step reads the previous depth (issue #53): Δx and Δy
+/// alone, 4 bytes a pixel instead of [`MOTION_FORMAT`]'s 8. Only Soler et al.'s temporal
+/// filter reads z (`GBufferPass::ensure_motion_depth`); Knecht's movement buffer (§3.5.1) is
+/// the offset alone.
+pub const CAMERA_MOTION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
 pub const EMISSION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
@@ -63,7 +78,12 @@ pub struct GBuffer {
     /// The camera's target 0, the linear depth ([`LINEAR_DEPTH_FORMAT`]); None for the light
     /// views and the hemispheres, which render the position itself.
     pub linear_depth: Option<wgpu::Texture>,
+    /// Unit normal (xyz) and coverage (w): a render target of the light views and the
+    /// hemispheres; for the camera, unpacked from `packed_normal` when read (issue #53).
     pub normal: wgpu::Texture,
+    /// The camera's target 1, its normals packed ([`PACKED_NORMAL_FORMAT`]); None for the
+    /// other G-buffers.
+    pub packed_normal: Option<wgpu::Texture>,
     pub albedo: wgpu::Texture,
     /// SI, SP, metallic and roughness ([`MATERIAL_FORMAT`]); the camera's holds SI and SP
     /// alone ([`SHADING_FORMAT`]) and fills `material_view` when read.
@@ -82,6 +102,10 @@ pub struct GBufferViews {
     /// view of `position` (whose w is the linear depth: no pass reads it there as depth).
     pub linear_depth: wgpu::TextureView,
     pub normal: wgpu::TextureView,
+    /// The camera's packed normals (see [`GBuffer::packed_normal`]), which the direct light
+    /// and Knecht's passes read; for the other G-buffers a view of `normal` (no pass reads
+    /// it there).
+    pub packed_normal: wgpu::TextureView,
     pub albedo: wgpu::TextureView,
     pub material: wgpu::TextureView,
     pub motion: wgpu::TextureView,
@@ -99,13 +123,18 @@ pub struct GBufferPass {
     /// Target 0 is the linear depth (the camera's G-buffer, issue #53).
     linear: bool,
     /// The pipelines by the targets they write ([`Writes`]), made on first use: with the
-    /// emission, then without it (issue #53).
-    pipelines: [std::sync::OnceLock<Pipelines>; 2],
+    /// emission, then without it, each with the movement buffer's z and without (issue #53).
+    pipelines: [std::sync::OnceLock<Pipelines>; 4],
+    /// Whether the camera's movement buffer keeps z, the previous depth ([`MOTION_FORMAT`];
+    /// otherwise [`CAMERA_MOTION_FORMAT`]): only while a step reads it.
+    motion_depth: bool,
     /// Whether single-sided materials cull their back faces (the camera's G-buffer, as glTF
     /// asks); light views draw every face (see [`Self::light_view`]).
     cull_single_sided: bool,
     /// The camera's position rebuilt from its linear depth, when something reads it.
     pub position: Option<std::sync::Arc<super::gbuffer_position::PositionPass>>,
+    /// The camera's normals unpacked from their packed target, when something reads them.
+    pub normal: Option<std::sync::Arc<super::gbuffer_position::Fill>>,
     /// Whether a material emits or has an occlusion texture (`GpuScene::emits`, fixed for a
     /// renderer): otherwise the camera's G-buffer leaves the emission target out, and
     /// `no_emission` fills it when it is read (issue #53).
@@ -139,8 +168,9 @@ impl GBufferPass {
         });
         // The camera's G-buffer writes the linear depth to target 0 (issue #53).
         let linear = name == "gbuffer";
-        let targets = create_targets_with(ctx, width, height, &name, linear);
+        let targets = create_targets_with(ctx, width, height, &name, (linear, false));
         let position = linear.then(|| position_pass(ctx, &targets));
+        let normal = linear.then(|| normal_pass(ctx, &targets));
         let no_emission = (linear && !scene.emits).then(|| no_emission_pass(ctx, &targets));
         let material = linear.then(|| material_pass(ctx, &targets));
         let last = Default::default();
@@ -151,8 +181,10 @@ impl GBufferPass {
             layout,
             linear,
             pipelines: Default::default(),
+            motion_depth: false,
             cull_single_sided: true,
             position,
+            normal,
             emits: scene.emits,
             no_emission,
             material,
@@ -184,7 +216,7 @@ impl GBufferPass {
         (cull_mode, textured): (Option<wgpu::Face>, bool),
         name: &str,
     ) -> wgpu::RenderPipeline {
-        let all = Writes { linear_depth: false, motion: true, emission: true };
+        let all = Writes { linear_depth: false, motion: true, motion_depth: true, emission: true };
         Self::pipeline_with(device, layout, module, entries, (cull_mode, textured, all), name)
     }
 
@@ -208,6 +240,8 @@ impl GBufferPass {
             (true, false, false) => "_light",
             (false, false, false) => "_plain_light",
         };
+        // The camera's movement buffer without z (issue #53).
+        let kind = if linear && !writes.motion_depth { format!("{kind}_motion_xy") } else { kind.to_string() };
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(&if cull_mode.is_some() {
                 format!("{name}.pipeline_single_sided{kind}")
@@ -252,9 +286,10 @@ impl GBufferPass {
     pub fn resize(&mut self, ctx: &GpuContext, width: u32, height: u32) {
         self.last.invalidate();
         let linear = self.position.is_some();
-        self.targets = create_targets_with(ctx, width, height, &self.name, linear);
+        self.targets = create_targets_with(ctx, width, height, &self.name, (linear, self.motion_depth));
         if linear {
             self.position = Some(position_pass(ctx, &self.targets));
+            self.normal = Some(normal_pass(ctx, &self.targets));
         }
         if self.no_emission.is_some() {
             self.no_emission = Some(no_emission_pass(ctx, &self.targets));
@@ -262,6 +297,22 @@ impl GBufferPass {
         if self.material.is_some() {
             self.material = Some(material_pass(ctx, &self.targets));
         }
+    }
+
+    /// Makes the camera's movement buffer keep z, the previous depth, while `on` (a step reads
+    /// it: Soler et al.'s temporal filter) and drop it otherwise (issue #53): the target is
+    /// made again in its format and the next frame draws it. True when it changed (the
+    /// registry must take the new texture).
+    pub fn ensure_motion_depth(&mut self, ctx: &GpuContext, on: bool) -> bool {
+        if !self.linear || on == self.motion_depth {
+            return false;
+        }
+        self.motion_depth = on;
+        let t = &mut self.targets;
+        t.motion = motion_target(&ctx.device, &self.name, (t.motion.width(), t.motion.height()), !on);
+        t.views.motion = super::view(&t.motion, &format!("{}.motion", self.name));
+        self.last.invalidate();
+        true
     }
 
     pub fn register(&self, reg: &mut BufferRegistry) {
@@ -291,12 +342,17 @@ impl GBufferPass {
                 &t.position,
             ),
         }
-        reg.register(
-            &format!("{name}.normal"),
-            BufferKind::Direction,
-            "world-space unit normal (xyz), w = 1 where geometry covers the pixel",
-            &t.normal,
-        );
+        let normal = "world-space unit normal (xyz), w = 1 where geometry covers the pixel";
+        match &self.normal {
+            Some(pass) => reg.register_derived(
+                "gbuffer.normal",
+                BufferKind::Direction,
+                &format!("{normal}: unpacked when read from the G-buffer's normals, packed in one word each (octahedral, two 16-bit snorms; issue #53)"),
+                &t.normal,
+                pass.clone(),
+            ),
+            None => reg.register(&format!("{name}.normal"), BufferKind::Direction, normal, &t.normal),
+        }
         reg.register(
             &format!("{name}.albedo"),
             BufferKind::Albedo,
@@ -326,7 +382,11 @@ impl GBufferPass {
         reg.register(
             "gbuffer.motion",
             BufferKind::Motion,
-            "movement buffer: xy the offset in pixels from each pixel to its position in the previous frame (Knecht §3.5.1), z its linear depth in the previous frame",
+            if self.motion_depth {
+                "movement buffer: xy the offset in pixels from each pixel to its position in the previous frame (Knecht §3.5.1), z its linear depth in the previous frame (Soler's temporal filter reads it)"
+            } else {
+                "movement buffer: xy the offset in pixels from each pixel to its position in the previous frame (Knecht §3.5.1); z, the previous depth, is kept only while Soler's temporal filter runs (issue #53)"
+            },
             &t.motion,
         );
         let emission = (
@@ -366,9 +426,11 @@ impl GBufferPass {
     ) {
         let label = format!("{}.pass", self.name);
         let writes = self.writes();
-        let p = self.pipelines[!writes.emission as usize].get_or_init(|| {
+        let p = self.pipelines[!writes.emission as usize + 2 * writes.motion_depth as usize].get_or_init(|| {
             let make = |cull_mode, textured| {
-                let entries = ("vs_main", "fs_main", wgpu::FrontFace::Ccw);
+                // The camera's fragment stage packs its normals (issue #53).
+                let fs = if self.linear { "fs_camera" } else { "fs_main" };
+                let entries = ("vs_main", fs, wgpu::FrontFace::Ccw);
                 let (device, layout, module) = (&self.device, &self.layout, &self.module);
                 Self::pipeline_with(device, layout, module, entries, (cull_mode, textured, writes), &self.name)
             };
@@ -393,7 +455,12 @@ impl GBufferPass {
     /// neither the movement buffer nor the emission, which nothing reads there.
     pub fn writes(&self) -> Writes {
         let camera = self.linear;
-        Writes { linear_depth: camera, motion: camera, emission: camera && self.emits }
+        Writes {
+            linear_depth: camera,
+            motion: camera,
+            motion_depth: camera && self.motion_depth,
+            emission: camera && self.emits,
+        }
     }
 }
 
@@ -412,6 +479,9 @@ struct Pipelines {
 pub struct Writes {
     pub linear_depth: bool,
     pub motion: bool,
+    /// Whether the movement buffer keeps z (the camera's, when a step reads it; the other
+    /// G-buffers' always).
+    pub motion_depth: bool,
     pub emission: bool,
 }
 
@@ -421,12 +491,15 @@ impl Writes {
         let position = if self.linear_depth { LINEAR_DEPTH_FORMAT } else { POSITION_FORMAT };
         let mut t = color_targets_with(position);
         if self.linear_depth {
-            // The camera's SI and SP alone (the shader's vec4 output keeps its first two).
-            t[3] = Some(wgpu::ColorTargetState {
-                format: SHADING_FORMAT,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
-            });
+            // The camera's packed normals (`fs_camera`), and its SI and SP alone (the
+            // shader's vec4 output keeps its first two).
+            let target =
+                |format| Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL });
+            t[1] = target(PACKED_NORMAL_FORMAT);
+            t[3] = target(SHADING_FORMAT);
+            if !self.motion_depth {
+                t[4] = target(CAMERA_MOTION_FORMAT);
+            }
         }
         if !self.motion {
             t[4] = None;
@@ -451,7 +524,7 @@ impl GBuffer {
 
     /// Every target (the hemisphere atlas's passes).
     fn all_targets(&self) -> Writes {
-        Writes { linear_depth: self.linear_depth.is_some(), motion: true, emission: true }
+        Writes { linear_depth: self.linear_depth.is_some(), motion: true, motion_depth: true, emission: true }
     }
 
     /// A render pass over the targets as they are (nothing cleared): the caller clears what
@@ -474,21 +547,29 @@ impl GBuffer {
         writes: Writes,
     ) -> wgpu::RenderPass<'e> {
         let v = &self.views;
+        let clear_all = clear;
         let colour_load = if clear { wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT) } else { wgpu::LoadOp::Load };
         let depth_load = if clear { wgpu::LoadOp::Clear(1.0) } else { wgpu::LoadOp::Load };
-        let clear = |view| {
+        let attach = |view, load| {
             Some(wgpu::RenderPassColorAttachment {
                 view,
                 depth_slice: None,
                 resolve_target: None,
-                ops: wgpu::Operations { load: colour_load, store: wgpu::StoreOp::Store },
+                ops: wgpu::Operations { load, store: wgpu::StoreOp::Store },
             })
         };
+        let clear = |view| attach(view, colour_load);
+        // The camera's packed normals clear to the word of no normal.
+        let no_normal = wgpu::Color { r: f64::from(NO_NORMAL), g: 0.0, b: 0.0, a: 0.0 };
+        let normal_load = if clear_all { wgpu::LoadOp::Clear(no_normal) } else { wgpu::LoadOp::Load };
         encoder.begin_counted_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(label),
             color_attachments: &[
                 clear(if self.linear_depth.is_some() { &v.linear_depth } else { &v.position }),
-                clear(&v.normal),
+                match self.packed_normal {
+                    Some(_) => attach(&v.packed_normal, normal_load),
+                    None => clear(&v.normal),
+                },
                 clear(&v.albedo),
                 clear(&v.material),
                 if writes.motion { clear(&v.motion) } else { None },
@@ -513,6 +594,30 @@ fn material_pass(ctx: &GpuContext, t: &GBuffer) -> std::sync::Arc<super::gbuffer
     let view = t.material_view.as_ref().map(|m| super::view(m, "gbuffer.material"));
     let view = view.unwrap_or_else(|| t.views.material.clone());
     super::gbuffer_position::material_pass(ctx, (&t.views.material, &t.views.albedo), &view, size)
+}
+
+/// 1×1 stand-ins for a pass that binds both kinds of normals and reads one (issue #53): the
+/// unpacked ([`NORMAL_FORMAT`]) and the packed ([`PACKED_NORMAL_FORMAT`]), labelled `{prefix}.no_normal`
+/// and `{prefix}.no_packed_normal`.
+pub fn normal_stand_ins(device: &wgpu::Device, prefix: &str) -> [wgpu::TextureView; 2] {
+    [("no_normal", NORMAL_FORMAT), ("no_packed_normal", PACKED_NORMAL_FORMAT)].map(|(what, format)| {
+        let label = format!("{prefix}.{what}");
+        let t = super::create_target(device, &label, 1, 1, format, wgpu::TextureUsages::empty());
+        super::view(&t, &label)
+    })
+}
+
+/// The movement buffer: [`CAMERA_MOTION_FORMAT`] when `xy_only`, else [`MOTION_FORMAT`].
+fn motion_target(d: &wgpu::Device, name: &str, (width, height): (u32, u32), xy_only: bool) -> wgpu::Texture {
+    let format = if xy_only { CAMERA_MOTION_FORMAT } else { MOTION_FORMAT };
+    let att = wgpu::TextureUsages::RENDER_ATTACHMENT;
+    super::create_target(d, &format!("{name}.motion"), width, height, format, att)
+}
+
+/// The camera's normals unpacked from its packed target (issue #53), for these targets.
+fn normal_pass(ctx: &GpuContext, t: &GBuffer) -> std::sync::Arc<super::gbuffer_position::Fill> {
+    let size = (t.normal.width(), t.normal.height());
+    super::gbuffer_position::normal_pass(ctx, &t.views.packed_normal, &t.views.normal, size)
 }
 
 fn no_emission_pass(ctx: &GpuContext, t: &GBuffer) -> std::sync::Arc<super::gbuffer_position::Fill> {
@@ -540,26 +645,30 @@ fn color_targets_with(position: wgpu::TextureFormat) -> [Option<wgpu::ColorTarge
 
 /// The G-buffer's textures at `width`×`height` (also the atlas of Gautron's hemispheres).
 pub(crate) fn create_targets(ctx: &GpuContext, width: u32, height: u32, name: &str) -> GBuffer {
-    create_targets_with(ctx, width, height, name, false)
+    create_targets_with(ctx, width, height, name, (false, true))
 }
 
 /// [`create_targets`]; `linear`: target 0 is the linear depth and the position a storage
 /// texture filled from it (the camera's G-buffer, issue #53).
-fn create_targets_with(ctx: &GpuContext, width: u32, height: u32, name: &str, linear: bool) -> GBuffer {
+fn create_targets_with(ctx: &GpuContext, width: u32, height: u32, name: &str, targets: (bool, bool)) -> GBuffer {
+    let (linear, motion_depth) = targets;
     let d = &ctx.device;
     let att = wgpu::TextureUsages::RENDER_ATTACHMENT;
     let linear_depth = linear
         .then(|| super::create_target(d, &format!("{name}.linear_depth"), width, height, LINEAR_DEPTH_FORMAT, att));
     let position_usage = if linear { wgpu::TextureUsages::STORAGE_BINDING } else { att };
     let position = super::create_target(d, &format!("{name}.position"), width, height, POSITION_FORMAT, position_usage);
-    let normal = super::create_target(d, &format!("{name}.normal"), width, height, NORMAL_FORMAT, att);
+    let normal_usage = if linear { wgpu::TextureUsages::STORAGE_BINDING } else { att };
+    let normal = super::create_target(d, &format!("{name}.normal"), width, height, NORMAL_FORMAT, normal_usage);
+    let packed_normal = linear
+        .then(|| super::create_target(d, &format!("{name}.packed_normal"), width, height, PACKED_NORMAL_FORMAT, att));
     let albedo = super::create_target(d, &format!("{name}.albedo"), width, height, ALBEDO_FORMAT, att);
     let material_format = if linear { SHADING_FORMAT } else { MATERIAL_FORMAT };
     let material = super::create_target(d, &format!("{name}.material"), width, height, material_format, att);
     let storage = wgpu::TextureUsages::STORAGE_BINDING;
     let material_view = linear
         .then(|| super::create_target(d, &format!("{name}.material_view"), width, height, MATERIAL_FORMAT, storage));
-    let motion = super::create_target(d, &format!("{name}.motion"), width, height, MOTION_FORMAT, att);
+    let motion = motion_target(d, name, (width, height), linear && !motion_depth);
     // The camera's may be filled in compute when no material emits (`gbuffer_position::no_emission_pass`).
     let emission_usage = if linear { att | wgpu::TextureUsages::STORAGE_BINDING } else { att };
     let emission = super::create_target(d, &format!("{name}.emission"), width, height, EMISSION_FORMAT, emission_usage);
@@ -571,11 +680,27 @@ fn create_targets_with(ctx: &GpuContext, width: u32, height: u32, name: &str, li
             None => super::view(&position, &format!("{name}.position")),
         },
         normal: super::view(&normal, &format!("{name}.normal")),
+        packed_normal: match &packed_normal {
+            Some(t) => super::view(t, &format!("{name}.packed_normal")),
+            None => super::view(&normal, &format!("{name}.normal")),
+        },
         albedo: super::view(&albedo, &format!("{name}.albedo")),
         material: super::view(&material, &format!("{name}.material")),
         motion: super::view(&motion, &format!("{name}.motion")),
         emission: super::view(&emission, &format!("{name}.emission")),
         depth: super::view(&depth, &format!("{name}.depth")),
     };
-    GBuffer { position, linear_depth, normal, albedo, material, material_view, motion, emission, depth, views }
+    GBuffer {
+        position,
+        linear_depth,
+        normal,
+        packed_normal,
+        albedo,
+        material,
+        material_view,
+        motion,
+        emission,
+        depth,
+        views,
+    }
 }

@@ -8,7 +8,8 @@
 //! `gbuffer.position`, read this pass's texture, which is filled in the frame when one of
 //! the frame's steps needs it, and otherwise only when it is read ([`Derived`]): a frame
 //! that no one looks at the position of never writes it. The same kind of pass ([`Fill`])
-//! fills `gbuffer.emission` of a scene that the G-buffer draws without its emission target
+//! unpacks `gbuffer.normal` from the G-buffer's packed normals (`shaders/gbuffer/normal.wgsl`)
+//! and fills `gbuffer.emission` of a scene that the G-buffer draws without its emission target
 //! (`shaders/gbuffer/no_emission.wgsl`).
 
 use std::sync::Arc;
@@ -171,6 +172,32 @@ pub fn no_emission_pass(
     let tv = wgpu::BindingResource::TextureView;
     let what = ("gbuffer.no_emission", &NO_EMISSION_BINDINGS, "cs_no_emission");
     Arc::new(Fill::new(ctx, what, [tv(linear_depth), tv(emission)], size))
+}
+
+pub const NORMAL_BINDINGS: Bindings = Bindings {
+    label: "gbuffer.normal.inputs",
+    shader: "gbuffer/normal.wgsl",
+    group: 0,
+    entry: None,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "packed", Kind::UintTexture),
+        binding(1, "out_normal", Kind::StorageTexture(wgpu::TextureFormat::Rgba16Float)),
+    ],
+};
+
+/// Fills the camera's `gbuffer.normal` (unit normal in half floats, `gbuffer::NORMAL_FORMAT`, w =
+/// 1 where geometry covers the pixel) from the G-buffer's packed normals (`gbuffer::PACKED_NORMAL_FORMAT`,
+/// issue #53, `shaders/gbuffer/normal.wgsl`): in the frame when a step reads it, otherwise
+/// when it is read. The passes that read the packed word shade with these same values.
+pub fn normal_pass(
+    ctx: &GpuContext,
+    packed: &wgpu::TextureView,
+    normal: &wgpu::TextureView,
+    size: (u32, u32),
+) -> Arc<Fill> {
+    let tv = wgpu::BindingResource::TextureView;
+    Arc::new(Fill::new(ctx, ("gbuffer.normal", &NORMAL_BINDINGS, "cs_normal"), [tv(packed), tv(normal)], size))
 }
 
 pub const MATERIAL_BINDINGS: Bindings = Bindings {

@@ -106,6 +106,7 @@ pub const BINDINGS: &[&crate::gpu::bindings::Bindings] = &[
     &gbuffer::CAMERA_BINDINGS,
     &gbuffer_position::POSITION_BINDINGS,
     &gbuffer_position::NO_EMISSION_BINDINGS,
+    &gbuffer_position::NORMAL_BINDINGS,
     &gbuffer_position::MATERIAL_BINDINGS,
     &crate::scene::upload::INSTANCES_BINDINGS,
     &crate::scene::upload::MATERIAL_BINDINGS,

@@ -542,6 +542,7 @@ impl Renderer {
         };
         let mut fresh = self.stages.ensure(&needs);
         fresh |= self.direct.ensure_diffuse(&ctx, crate::chain::needs_direct_diffuse(&s));
+        fresh |= self.gbuffer.ensure_motion_depth(&ctx, s.pipeline.soler_temporal());
         self.steps.update(&s);
         if fresh {
             self.register_all();

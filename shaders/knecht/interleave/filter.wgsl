@@ -10,7 +10,8 @@
 @group(0) @binding(1) var src: texture_2d<f32>;
 // The camera G-buffer's linear depth (issue #53).
 @group(0) @binding(2) var g_position: texture_2d<f32>;
-@group(0) @binding(3) var g_normal: texture_2d<f32>;
+// The camera G-buffer's packed normal (common/normal.wgsl, issue #53).
+@group(0) @binding(3) var g_normal: texture_2d<u32>;
 @group(0) @binding(4) var dst: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(5) var irradiance: texture_2d<f32>;
 @group(0) @binding(6) var g_albedo: texture_2d<f32>;

@@ -11,8 +11,10 @@
 // otherwise L is averaged as the thesis does.
 //
 // The including module declares `src` (the gathered light), `g_position` (the camera
-// G-buffer's linear depth, issue #53), `g_normal`, `irradiance` and `g_albedo`.
+// G-buffer's linear depth, issue #53), `g_normal` (its packed normal, common/normal.wgsl),
+// `irradiance` and `g_albedo`.
 #import common/brdf.wgsl
+#import common/normal.wgsl
 
 struct FilterParams {
     // x: n (1 = copy); y: 1 to filter demodulated light
@@ -47,7 +49,7 @@ fn filter_irradiance_at(q: vec2<i32>, demodulate: bool) -> vec3<f32> {
 }
 
 fn filter_window(p: vec2<i32>, size: vec2<u32>, fp: FilterParams) -> Filtered {
-    let cn = textureLoad(g_normal, p, 0);
+    let cn = gbuffer_normal(textureLoad(g_normal, p, 0).x);
     if (cn.w < 0.5) {
         return Filtered(vec3<f32>(0.0), vec3<f32>(0.0), false);
     }
@@ -64,7 +66,7 @@ fn filter_window(p: vec2<i32>, size: vec2<u32>, fp: FilterParams) -> Filtered {
             if (q.x < 0 || q.y < 0 || q.x >= i32(size.x) || q.y >= i32(size.y)) {
                 continue;
             }
-            let qn = textureLoad(g_normal, q, 0);
+            let qn = gbuffer_normal(textureLoad(g_normal, q, 0).x);
             let qd = textureLoad(g_position, q, 0).x;
             if (qn.w < 0.5 || abs(qd - cd) > fp.thresholds.x || dot(qn.xyz, cn.xyz) < fp.thresholds.y) {
                 continue;

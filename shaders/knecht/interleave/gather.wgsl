@@ -11,6 +11,7 @@
 #import common/ism.wgsl
 #import common/fullscreen.wgsl
 #import knecht/interleave/params.wgsl
+#import common/normal.wgsl
 
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(0) @binding(1) var<uniform> params: GatherParams;
@@ -20,12 +21,15 @@
 // Linear depth (the camera G-buffer's or the split one, issue #53): the point is rebuilt at the
 // source pixel (common/camera.wgsl world_from_linear_depth).
 @group(0) @binding(5) var s_position: texture_2d<f32>;
-@group(0) @binding(6) var s_normal: texture_2d<f32>;
+// The camera G-buffer's packed normals (the fused gather, common/normal.wgsl, issue #53), or a
+// 1×1 stand-in beside the split G-buffer's unpacked ones (`s_normal_split`, the thesis' layout).
+@group(0) @binding(6) var s_normal: texture_2d<u32>;
 @group(0) @binding(7) var s_albedo: texture_2d<f32>;
 @group(0) @binding(8) var s_material: texture_2d<f32>;
 @group(0) @binding(9) var out_accum: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(10) var<storage, read> tile_offsets: array<u32>;
 @group(0) @binding(11) var out_irradiance: texture_storage_2d<rgba16float, write>;
+@group(0) @binding(12) var s_normal_split: texture_2d<f32>;
 
 // A split pixel's gathered light and the irradiance it came from.
 struct Gathered {
@@ -35,11 +39,10 @@ struct Gathered {
 
 // The light of split pixel `sp`'s tile's VPLs at the pixel `px` of the bound textures (the
 // split G-buffer at sp itself, or the G-buffer at sp's source pixel), whose G-buffer pixel is
-// `src`.
-fn gather_at(px: vec2<i32>, sp: vec2<u32>, src: vec2<i32>) -> Gathered {
+// `src`, and whose normal is `nrm` (w: coverage).
+fn gather_at(px: vec2<i32>, sp: vec2<u32>, src: vec2<i32>, nrm: vec4<f32>) -> Gathered {
     var sum = vec3<f32>(0.0);
     var irr = vec3<f32>(0.0);
-    let nrm = textureLoad(s_normal, px, 0);
     let n = params.split.x;
     let count = params.split.w;
     let t2 = sp / params.split.yz;
@@ -92,7 +95,7 @@ fn cs_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     // The G-buffer pixel of split pixel s: (s mod tile)·n + s / tile (split.wgsl).
     let tile = params.split.yz;
     let src = (gid.xy % tile) * params.split.x + gid.xy / tile;
-    let g = gather_at(vec2<i32>(gid.xy), gid.xy, vec2<i32>(src));
+    let g = gather_at(vec2<i32>(gid.xy), gid.xy, vec2<i32>(src), textureLoad(s_normal_split, gid.xy, 0));
     textureStore(out_accum, vec2<i32>(gid.xy), vec4<f32>(g.light, 1.0));
     textureStore(out_irradiance, vec2<i32>(gid.xy), vec4<f32>(g.irradiance, 1.0));
 }
@@ -114,7 +117,7 @@ fn cs_gather_fused(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (p.x >= size.x || p.y >= size.y) {
         return;
     }
-    let g = gather_at(vec2<i32>(p), gid.xy, vec2<i32>(p));
+    let g = gather_at(vec2<i32>(p), gid.xy, vec2<i32>(p), gbuffer_normal(textureLoad(s_normal, p, 0).x));
     textureStore(out_accum, vec2<i32>(p), vec4<f32>(g.light, 1.0));
     textureStore(out_irradiance, vec2<i32>(p), vec4<f32>(g.irradiance, 1.0));
 }

@@ -3,6 +3,7 @@
 // (a·n + i, b·n + j), so that every tile shows the whole image at 1/n resolution. Tiles are
 // ⌈W/n⌉ × ⌈H/n⌉; split pixels without a source pixel are background (normal.w = 0).
 #import common/fullscreen.wgsl
+#import common/normal.wgsl
 
 struct SplitParams {
     // x: n, y: tile width, z: tile height
@@ -13,7 +14,9 @@ struct SplitParams {
 // The camera G-buffer's linear depth (issue #53): the gather rebuilds the point from it at the
 // split pixel's source pixel.
 @group(0) @binding(1) var g_position: texture_2d<f32>;
-@group(0) @binding(2) var g_normal: texture_2d<f32>;
+// Its packed normals (common/normal.wgsl, issue #53): the split holds them unpacked, as
+// `gbuffer.normal` shows them.
+@group(0) @binding(2) var g_normal: texture_2d<u32>;
 @group(0) @binding(3) var g_albedo: texture_2d<f32>;
 @group(0) @binding(4) var g_material: texture_2d<f32>;
 @group(0) @binding(5) var s_position: texture_storage_2d<r32float, write>;
@@ -47,7 +50,7 @@ fn cs_split(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     textureStore(s_position, gid.xy, textureLoad(g_position, src, 0));
-    textureStore(s_normal, gid.xy, textureLoad(g_normal, src, 0));
+    textureStore(s_normal, gid.xy, gbuffer_normal(textureLoad(g_normal, src, 0).x));
     textureStore(s_albedo, gid.xy, textureLoad(g_albedo, src, 0));
     textureStore(s_material, gid.xy, textureLoad(g_material, src, 0));
 }

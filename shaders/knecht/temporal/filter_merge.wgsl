@@ -16,7 +16,8 @@
 @group(0) @binding(1) var src: texture_2d<f32>;
 // The camera G-buffer's linear depth (issue #53).
 @group(0) @binding(2) var g_position: texture_2d<f32>;
-@group(0) @binding(3) var g_normal: texture_2d<f32>;
+// The camera G-buffer's packed normal (common/normal.wgsl, issue #53).
+@group(0) @binding(3) var g_normal: texture_2d<u32>;
 @group(0) @binding(4) var g_motion: texture_2d<f32>;
 @group(0) @binding(5) var prev_normal: texture_2d<f32>;
 @group(0) @binding(6) var history_prev: texture_2d<f32>;

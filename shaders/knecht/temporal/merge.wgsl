@@ -4,7 +4,7 @@
 // confidence.wgsl. CPU twins: cpu::knecht::confidence, cpu::knecht::merge_demodulated.
 //
 // The including module declares `params` (ConfidenceParams), `g_position` (the camera
-// G-buffer's linear depth, issue #53), `g_normal`, `g_motion`, `prev_normal`, `history_prev`,
+// G-buffer's linear depth, issue #53), `g_normal` (its packed normal), `g_motion`, `prev_normal`, `history_prev`,
 // `confidence_out`, `history_out`, `normal_out`, `g_albedo`, `split_prev` and `split_out`.
 #import common/reproject.wgsl
 #import common/brdf.wgsl
@@ -45,7 +45,8 @@ fn confidence(motion: vec2<f32>, size: vec2<f32>, d: f32, d_prev: f32, n: vec3<f
 // normal (in `normal_out`, or demodulated in the split history's free word, issue #53) and the
 // split history of the pixel.
 fn merge_pixel(p: vec2<i32>, size: vec2<u32>, i_new: vec3<f32>, e_in: vec3<f32>) {
-    let nrm = textureLoad(g_normal, p, 0);
+    let nw = textureLoad(g_normal, p, 0).x;
+    let nrm = gbuffer_normal(nw);
     // The history keeps the depth as a half float (issue #53): this frame's depth is compared
     // as the same half, so that a still pixel compares equal (Eq. 3.2's w_pos = 300 would turn
     // a half's rounding at 5 m into a confidence drop of several percent), and stored as that
@@ -106,6 +107,6 @@ fn merge_pixel(p: vec2<i32>, size: vec2<u32>, i_new: vec3<f32>, e_in: vec3<f32>)
     }
     textureStore(history_out, p, vec4<f32>(merged, depth));
     if (demodulate) {
-        textureStore(split_out, p, pack_split(e_out, s_out, nrm));
+        textureStore(split_out, p, pack_split(e_out, s_out, nw));
     }
 }

@@ -37,12 +37,14 @@ pub const GATHER_INPUTS_BINDINGS: Bindings = Bindings {
         binding(3, "ism_atlas", Kind::Texture { filterable: false }),
         binding(4, "exact_atlas", Kind::Depth),
         binding(5, "s_position", Kind::Texture { filterable: false }),
-        binding(6, "s_normal", Kind::Texture { filterable: false }),
+        // The camera's packed normals (fused), or a stand-in beside `s_normal_split`.
+        binding(6, "s_normal", Kind::UintTexture),
         binding(7, "s_albedo", Kind::Texture { filterable: false }),
         binding(8, "s_material", Kind::Texture { filterable: false }),
         binding(9, "out_accum", Kind::StorageTexture(wgpu::TextureFormat::Rgba16Float)),
         binding(10, "tile_offsets", Kind::Storage { read_only: true }),
         binding(11, "out_irradiance", Kind::StorageTexture(wgpu::TextureFormat::Rgba16Float)),
+        binding(12, "s_normal_split", Kind::Texture { filterable: false }),
     ],
 };
 
@@ -56,7 +58,7 @@ pub const SPLIT_INPUTS_BINDINGS: Bindings = Bindings {
     list: &[
         binding(0, "params", Kind::Uniform),
         binding(1, "g_position", Kind::Texture { filterable: false }),
-        binding(2, "g_normal", Kind::Texture { filterable: false }),
+        binding(2, "g_normal", Kind::UintTexture),
         binding(3, "g_albedo", Kind::Texture { filterable: false }),
         binding(4, "g_material", Kind::Texture { filterable: false }),
         binding(5, "s_position", Kind::StorageTexture(LINEAR_DEPTH_FORMAT)),
@@ -150,6 +152,9 @@ pub struct InterleavePass {
     filter_params: wgpu::Buffer,
     dummy_ism: wgpu::TextureView,
     dummy_exact: wgpu::TextureView,
+    /// 1×1 stand-ins for the gather's normals it does not read: the split's in the fused
+    /// layout, the packed ones in the thesis' (issue #53).
+    dummy_normals: [wgpu::TextureView; 2],
     /// This frame's slot→tile offsets (`cpu::knecht::tile_offsets`), one u32 per block.
     tile_offsets: wgpu::Buffer,
     /// Gathers run so far: the seed of the per-frame slot→tile map.
@@ -170,7 +175,7 @@ pub const FILTER_BINDINGS: Bindings = Bindings {
         binding(0, "params", Kind::Uniform),
         binding(1, "src", Kind::Texture { filterable: false }),
         binding(2, "g_position", Kind::Texture { filterable: false }),
-        binding(3, "g_normal", Kind::Texture { filterable: false }),
+        binding(3, "g_normal", Kind::UintTexture),
         binding(4, "dst", Kind::StorageTexture(LIGHT_FORMAT)),
         binding(5, "irradiance", Kind::Texture { filterable: false }),
         binding(6, "g_albedo", Kind::Texture { filterable: false }),
@@ -255,6 +260,7 @@ impl InterleavePass {
         let gather_params = uniform("interleave.gather.params", std::mem::size_of::<GatherParams>() as u64);
         let filter_params = uniform("interleave.filter.params", std::mem::size_of::<FilterParams>() as u64);
         let (dummy_ism, dummy_exact) = no_visibility_atlases(device, "interleave");
+        let dummy_normals = crate::passes::gbuffer::normal_stand_ins(device, "interleave");
         let (split, [merged, irradiance, filtered, filtered_irradiance]) =
             Self::targets(device, width, height, n, split_passes);
         Self {
@@ -281,6 +287,7 @@ impl InterleavePass {
             filter_params,
             dummy_ism,
             dummy_exact,
+            dummy_normals,
             tile_offsets: Self::offsets_buffer(device, 256),
             frames: 0,
             on_read,
@@ -456,7 +463,7 @@ impl InterleavePass {
         // The gather reads the split G-buffer (three passes) or the G-buffer itself at each
         // split pixel's source pixel (fused) and writes the split accumulation buffer or the
         // merged light.
-        let gather_group = |p: [&wgpu::TextureView; 4], out: &wgpu::TextureView, irr: &wgpu::TextureView| {
+        let gather_group = |p: [&wgpu::TextureView; 5], out: &wgpu::TextureView, irr: &wgpu::TextureView| {
             let tv = wgpu::BindingResource::TextureView;
             GATHER_INPUTS_BINDINGS.group(
                 &ctx.device,
@@ -474,13 +481,16 @@ impl InterleavePass {
                     tv(out),
                     self.tile_offsets.as_entire_binding(),
                     tv(irr),
+                    tv(p[4]),
                 ],
             )
         };
         let (sw, sh) = (tw * n, th * n);
         let tile = crate::passes::TILE;
         let Some(s) = self.split.as_ref().filter(|_| self.split_passes) else {
-            let group = gather_group([&g.linear_depth, &g.normal, &g.albedo, &g.material], &merged_v, &irradiance_v);
+            let no_split = &self.dummy_normals[0];
+            let inputs = [&g.linear_depth, &g.packed_normal, &g.albedo, &g.material, no_split];
+            let group = gather_group(inputs, &merged_v, &irradiance_v);
             timer.scope(ctx, encoder, "interleave.gather", |e, slot| {
                 let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("interleave.gather_fused"),
@@ -506,7 +516,7 @@ impl InterleavePass {
             [
                 self.split_params.as_entire_binding(),
                 tv(&g.linear_depth),
-                tv(&g.normal),
+                tv(&g.packed_normal),
                 tv(&g.albedo),
                 tv(&g.material),
                 tv(&sp_v),
@@ -515,7 +525,7 @@ impl InterleavePass {
                 tv(&sm_v),
             ],
         );
-        let gather_group = gather_group([&sp_v, &sn_v, &sa_v, &sm_v], &acc_v, &acc_irr_v);
+        let gather_group = gather_group([&sp_v, &self.dummy_normals[1], &sa_v, &sm_v, &sn_v], &acc_v, &acc_irr_v);
         // The light and its irradiance are merged back alike.
         let merge_group = |src: &wgpu::TextureView, dst: &wgpu::TextureView| {
             let tv = wgpu::BindingResource::TextureView;
@@ -630,7 +640,7 @@ impl InterleavePass {
             self.filter_params.as_entire_binding(),
             tv(src),
             tv(&g.linear_depth),
-            tv(&g.normal),
+            tv(&g.packed_normal),
             tv(&dst),
             tv(irradiance),
             tv(&g.albedo),
