@@ -42,9 +42,22 @@ fn unpack_normal(w: u32) -> vec4<f32> {
     return vec4<f32>(normalize(n), 1.0);
 }
 
+// x rounded to the nearest binary16 value, ties to even (CPU twin: buffers::round_to_half),
+// for |x| ≤ 1: the mantissa's lowest 13 bits rounded off, or a multiple of 2⁻²⁴ below 2⁻¹⁴ (the
+// half floats' subnormals). quantizeToF16 means the same, but lavapipe runs it several times
+// slower (issue #53: with it the merge's filter took half again as long).
+fn round_to_half(x: f32) -> f32 {
+    if (abs(x) < 6.103515625e-05) {
+        return round(x * 16777216.0) / 16777216.0;
+    }
+    let b = bitcast<u32>(x);
+    return bitcast<f32>((b + 0xfffu + ((b >> 13u) & 1u)) & 0xffffe000u);
+}
+
 // The camera G-buffer's normal at a pixel from its packed word, as `gbuffer.normal` stores it
 // (half floats, gbuffer/normal.wgsl): every pass shades with the normal the viewer, the probe,
 // the pixel explanation and the CPU twins read back, bit for bit.
 fn gbuffer_normal(w: u32) -> vec4<f32> {
-    return quantizeToF16(unpack_normal(w));
+    let n = unpack_normal(w);
+    return vec4<f32>(round_to_half(n.x), round_to_half(n.y), round_to_half(n.z), n.w);
 }

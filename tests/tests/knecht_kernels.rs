@@ -97,6 +97,61 @@ impl SyntheticGBuffer {
     }
 }
 
+/// The camera G-buffer's packed normals unpacked on the GPU (`gbuffer.normal`'s fill, the
+/// `gbuffer_normal` every pass that reads the word shades with: common/normal.wgsl, issue #53)
+/// against the CPU twin `knecht::gbuffer_normal`: every 32-bit word is some normal's octahedral
+/// coordinates, so random words cover the whole sphere, the folded half and components far
+/// below half floats' normal range; the no-surface word gives 0. The rounding to half floats is
+/// the twin's (ties to even), bit for bit, unless the two normalisations differ in the last f32
+/// bit right at a rounding tie of the half float: then by one half-float step.
+#[test]
+fn packed_normals_unpack_on_the_gpu_as_the_cpu_twin() {
+    use gi_render::passes::gbuffer::{NO_NORMAL, NORMAL_FORMAT, PACKED_NORMAL_FORMAT};
+    let ctx = gpu();
+    let (w, h) = (64u32, 64u32);
+    let mut rng = Rng(53);
+    let mut words: Vec<u32> =
+        (0..w * h).map(|_| (rng.next_f32() * 65536.0) as u32 | ((rng.next_f32() * 65536.0) as u32) << 16).collect();
+    // The axes, the octahedron's edges and tiny components (2^-20 of the square's side).
+    words[..6].copy_from_slice(&[0, 0x7fff, 0x8001, 0x7fff_0000, 0x8001_0000, 0x0001_7ffe]);
+    words[6] = NO_NORMAL;
+    let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+    let packed = gi_lab_tests::texture_from_bytes(&ctx, "test.packed_normal", PACKED_NORMAL_FORMAT, (w, h), &bytes);
+    let out = gi_render::passes::create_target(
+        &ctx.device,
+        "test.normal",
+        w,
+        h,
+        NORMAL_FORMAT,
+        wgpu::TextureUsages::STORAGE_BINDING,
+    );
+    let v = |t: &wgpu::Texture| t.create_view(&Default::default());
+    let fill = gi_render::passes::gbuffer_position::normal_pass(&ctx, &v(&packed), &v(&out), (w, h));
+    let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("test.unpack") });
+    fill.record(&mut enc, None);
+    ctx.queue.submit([enc.finish()]);
+    let got = read(&ctx, &out);
+    let (mut equal, mut tiny) = (0, 0);
+    for (i, (&word, g)) in words.iter().zip(&got.data).enumerate() {
+        let Some(n) = knecht::gbuffer_normal(word) else {
+            assert_eq!(*g, [0.0; 4], "texel {i}: the no-surface word");
+            continue;
+        };
+        assert_eq!(g[3], 1.0, "texel {i}: coverage");
+        let bits_equal = (0..3).all(|c| g[c].to_bits() == n[c].to_bits());
+        equal += bits_equal as usize;
+        for c in 0..3 {
+            let step = gi_render::buffers::half_step(n[c]);
+            assert!((g[c] - n[c]).abs() <= step, "texel {i}: word {word:#010x} unpacked as {g:?}, the twin {n}");
+            tiny += (n[c] != 0.0 && n[c].abs() < 6.1e-5) as usize;
+        }
+    }
+    let covered = words.len() - 1;
+    println!("{equal} of {covered} normals bit for bit the twin's; {tiny} components below 2^-14");
+    assert!(equal * 1000 >= covered * 999, "{equal} of {covered} normals equal the twin's");
+    assert!(tiny > 0, "no component in the half floats' subnormal range");
+}
+
 #[test]
 fn interleaved_vpl_shading_on_the_gpu_equals_eq_4_7_to_4_9_on_the_cpu() {
     use gi_render::passes::knecht::interleave::InterleavePass;
