@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue #53's bytes-per-pixel tables (docs/performance.md): the traffic counter of
+# Issue #53's bytes-per-pixel tables (docs/performance.md; each run's page under docs/runs/): the traffic counter of
 # `gi-lab bench --json` (what each pass binds, from the formats and sizes; the same on every
 # device) divided by the pixels, at SIZE (default 1920x1080) on the embedded default scene from
 # its camera, animation playing.

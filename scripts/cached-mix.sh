@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue #53's lavapipe tables for this work (docs/performance.md), from one binary in one run:
+# Issue #53's lavapipe tables for this work (docs/performance.md; each run's page under docs/runs/), from one binary in one run:
 #
 # 1. `gautron-at-hcb-samples` (Gautron's hemispheres at the HCB's samples) on the embedded
 #    default scene from its camera at SIZE (default 320x180), its animation playing: without

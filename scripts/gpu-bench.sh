@@ -12,7 +12,7 @@
 #
 # Each run has its own time limit so that one slow row cannot eat the whole budget; a row
 # that times out says so in the log. Absolute times are only meaningful on a real GPU
-# (docs/performance.md); on lavapipe compare ratios within one run.
+# (docs/performance.md; each run's page under docs/runs/); on lavapipe compare ratios within one run.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue #53's lavapipe table (docs/performance.md): the default preset on the embedded default
+# Issue #53's lavapipe table (docs/performance.md; each run's page under docs/runs/): the default preset on the embedded default
 # scene from its camera, its animation playing and paused, each with the passes kept while
 # their inputs do not change (the default) and with every pass redone every frame
 # (`--no-reuse`), all from one binary in one run; and, when GI_LAB_BEFORE names an older

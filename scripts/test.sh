@@ -65,7 +65,7 @@ empty_null() { [ -c /dev/null ] || : >/dev/null; }
 # Lavapipe compiles each shader variant with LLVM the first time a process uses it, and keeps
 # it in Mesa's disk cache for the next: with a cold cache the sky's tests took 85 s instead of
 # 16 (65 % of the time in LLVM). One writable cache for every test binary of the run, under
-# target/, whatever $HOME is (docs/performance.md, "Build and test time, issue #52's fifth step").
+# target/, whatever $HOME is (docs/runs/2026-12-04-build-and-test-time-issue-52s-fifth-step.md).
 export MESA_SHADER_CACHE_DIR="${MESA_SHADER_CACHE_DIR:-$PWD/target/mesa-shader-cache}"
 
 # A whole-suite run from scratch gains nothing from incremental compilation, whose caches
@@ -97,7 +97,7 @@ empty_null
 
 # The suite. `cargo test` runs its test binaries one after another, each on as many threads
 # as it has tests running; most binaries hold one to three long tests, so one of the two
-# cores idled for much of the run (docs/performance.md, "Build and test time"). Here every
+# cores idled for much of the run (docs/runs/, the "Build and test time" runs). Here every
 # binary is built first, then they run as many at a time as there are cores, the longest
 # first (GNU parallel), each in its package's folder as `cargo test` runs it.
 # `--quick` leaves out the slowest binaries (the window walk, the every-widget and quality
@@ -136,7 +136,7 @@ parallel --will-cite --jobs "$(nproc)" --group --colsep ' ' --joblog "$list.log"
   'cd {1} && WGPU_VALIDATION={3} {2}' :::: "$list.run" || status=$?
 # No doc tests: the crates have none.
 # Every binary's time, kept in target/test-times.txt (the slowest first) for whoever trims
-# the suite next (docs/performance.md, "Build and test time").
+# the suite next (docs/runs/, the "Build and test time" runs).
 tail -n +2 "$list.log" | awk -F'\t' '{ n = $NF; sub(/^cd [^ ]* && /, "", n); sub(/^WGPU_VALIDATION=[0-9] /, "", n); sub(/.*\//, "", n); printf "%8.1f  %s  exit %s\n", $4, n, $7 }' |
   sort -rn >target/test-times.txt || true
 echo "scripts/test.sh: the slowest binaries (s, sharing the cores; all in target/test-times.txt):"

@@ -102,7 +102,7 @@ pub fn arrived(app: &GiLabApp, key: &str) -> bool {
 /// The settings [`cheap_frames`] applies: the passes whose cost does not follow the image
 /// (the ISM splat and pull-push, the light views, the shadow map) at their smallest useful
 /// sizes. At render scale 0.1 they took about half of a default frame (`gi-lab bench --size
-/// 140x360`: 114 → 49 ms on lavapipe, docs/performance.md "Build and test time").
+/// 140x360`: 114 → 49 ms on lavapipe, docs/runs/, the "Build and test time" runs).
 pub const CHEAP_FRAMES: &[&str] =
     &["vpl.count=32", "ism.points=16384", "ism.map_size=32", "vpl.light_gbuffer_size=64", "direct.shadow_map_size=256"];
 

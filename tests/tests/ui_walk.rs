@@ -12,8 +12,8 @@
 //! its slowest steps at the end. The suite walks 200 steps (about 40 s alone on the 2-core CI
 //! machine; 400 until issue #52 cut the suite to 20 minutes); the long walk, for a change to the
 //! window, is
-//! `GI_LAB_WALK_STEPS=2000 cargo test -p gi-lab-tests --test ui_walk` (docs/performance.md,
-//! "Build and test time").
+//! `GI_LAB_WALK_STEPS=2000 cargo test -p gi-lab-tests --test ui_walk` (docs/runs/, the
+//! "Build and test time" runs).
 
 use egui::accesskit::Role;
 use egui::{Key, Modifiers};

@@ -307,6 +307,11 @@ impl GBufferPass {
         if !self.linear || on == self.motion_depth {
             return false;
         }
+        // The pipelines of the movement buffer's other format go (made again on return).
+        let old = 2 * (!on) as usize;
+        for p in &mut self.pipelines[old..old + 2] {
+            p.take();
+        }
         self.motion_depth = on;
         let t = &mut self.targets;
         t.motion = motion_target(&ctx.device, &self.name, (t.motion.width(), t.motion.height()), !on);
