@@ -93,10 +93,10 @@ impl Renderer {
         // position), for the emission a scene without emitters leaves out and for the
         // material's metallic and roughness, read back in this frame.
         let steps_unpack = self.steps.needs_position(self.stages.explain_pixel.is_some());
-        let mut fill_if_read = |fill: Option<&std::sync::Arc<crate::passes::gbuffer_position::Fill>>, stale, name| {
+        // `steps`: whether a step of this frame reads the buffer.
+        let mut fill_if_read = |fill: Option<&std::sync::Arc<crate::passes::gbuffer_position::Fill>>, stale, name, steps| {
             let stale = stale || gbuffer_ran;
-            let read = read_back.reads(name) || (name == "gbuffer.normal" && steps_unpack);
-            match fill.filter(|_| stale && read) {
+            match fill.filter(|_| stale && (steps || read_back.reads(name))) {
                 Some(fill) => {
                     self.timer.scope(&ctx, &mut enc, fill.name(), |e, slot| {
                         fill.record(e, slot.and_then(|s| s.compute(true, true)))
@@ -106,9 +106,9 @@ impl Renderer {
                 None => stale,
             }
         };
-        let normal_stale = fill_if_read(self.gbuffer.normal.as_ref(), normal_stale, "gbuffer.normal");
-        let emission_stale = fill_if_read(self.gbuffer.no_emission.as_ref(), emission_stale, "gbuffer.emission");
-        let material_stale = fill_if_read(self.gbuffer.material.as_ref(), material_stale, "gbuffer.material");
+        let normal_stale = fill_if_read(self.gbuffer.normal.as_ref(), normal_stale, "gbuffer.normal", steps_unpack);
+        let emission_stale = fill_if_read(self.gbuffer.no_emission.as_ref(), emission_stale, "gbuffer.emission", false);
+        let material_stale = fill_if_read(self.gbuffer.material.as_ref(), material_stale, "gbuffer.material", false);
 
         // Stage 2: shadow maps, the emitters' VPLs, direct light.
         let direct_view = self.direct_light(&mut enc, &state, (view_proj, gbuffer_key));
