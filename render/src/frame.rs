@@ -94,18 +94,19 @@ impl Renderer {
         // material's metallic and roughness, read back in this frame.
         let steps_unpack = self.steps.needs_position(self.stages.explain_pixel.is_some());
         // `steps`: whether a step of this frame reads the buffer.
-        let mut fill_if_read = |fill: Option<&std::sync::Arc<crate::passes::gbuffer_position::Fill>>, stale, name, steps| {
-            let stale = stale || gbuffer_ran;
-            match fill.filter(|_| stale && (steps || read_back.reads(name))) {
-                Some(fill) => {
-                    self.timer.scope(&ctx, &mut enc, fill.name(), |e, slot| {
-                        fill.record(e, slot.and_then(|s| s.compute(true, true)))
-                    });
-                    false
+        let mut fill_if_read =
+            |fill: Option<&std::sync::Arc<crate::passes::gbuffer_position::Fill>>, stale, name, steps| {
+                let stale = stale || gbuffer_ran;
+                match fill.filter(|_| stale && (steps || read_back.reads(name))) {
+                    Some(fill) => {
+                        self.timer.scope(&ctx, &mut enc, fill.name(), |e, slot| {
+                            fill.record(e, slot.and_then(|s| s.compute(true, true)))
+                        });
+                        false
+                    }
+                    None => stale,
                 }
-                None => stale,
-            }
-        };
+            };
         let normal_stale = fill_if_read(self.gbuffer.normal.as_ref(), normal_stale, "gbuffer.normal", steps_unpack);
         let emission_stale = fill_if_read(self.gbuffer.no_emission.as_ref(), emission_stale, "gbuffer.emission", false);
         let material_stale = fill_if_read(self.gbuffer.material.as_ref(), material_stale, "gbuffer.material", false);
