@@ -19,6 +19,7 @@
 // (r depth, g normal, b no history) and the effective a. CPU twin: cpu::soler_temporal::blend.
 #import common/camera.wgsl
 #import common/reproject.wgsl
+#import common/normal.wgsl
 
 // Rust twin: passes::soler::temporal::TemporalParams.
 struct TemporalParams {
@@ -33,7 +34,8 @@ struct TemporalParams {
 @group(0) @binding(1) var<uniform> camera: Camera;
 @group(0) @binding(2) var current: texture_2d<f32>;
 @group(0) @binding(3) var g_position: texture_2d<f32>;
-@group(0) @binding(4) var g_normal: texture_2d<f32>;
+// The camera G-buffer's packed normals (common/normal.wgsl, issue #53).
+@group(0) @binding(4) var g_normal: texture_2d<u32>;
 @group(0) @binding(5) var g_motion: texture_2d<f32>;
 @group(0) @binding(6) var g_material: texture_2d<f32>;
 @group(0) @binding(7) var prev_normal: texture_2d<f32>;
@@ -77,7 +79,7 @@ fn cs_temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
     let i_new = select(vec3<f32>(0.0), max(radiance - s, vec3<f32>(0.0)) / k, k > vec3<f32>(0.0));
-    let nrm = textureLoad(g_normal, p, 0);
+    let nrm = gbuffer_normal(textureLoad(g_normal, p, 0).x);
     let pos = textureLoad(g_position, p, 0);
     var a = 0.0;
     var warped = vec4<f32>(0.0);

@@ -28,7 +28,7 @@ pub const TEMPORAL_INPUTS_BINDINGS: Bindings = Bindings {
         binding(1, "camera", Kind::Uniform),
         binding(2, "current", Kind::Texture { filterable: false }),
         binding(3, "g_position", Kind::Texture { filterable: false }),
-        binding(4, "g_normal", Kind::Texture { filterable: false }),
+        binding(4, "g_normal", Kind::UintTexture),
         binding(5, "g_motion", Kind::Texture { filterable: false }),
         binding(6, "g_material", Kind::Texture { filterable: false }),
         binding(7, "prev_normal", Kind::Texture { filterable: false }),
@@ -263,7 +263,7 @@ impl SolerTemporal {
         );
         let tv = wgpu::BindingResource::TextureView;
         let mut resources = vec![self.params.as_entire_binding(), camera.as_entire_binding()];
-        let views = [current, &g.position, &g.normal, &g.motion, &g.material, &prev_n, &hist_prev];
+        let views = [current, &g.position, &g.packed_normal, &g.motion, &g.material, &prev_n, &hist_prev];
         resources.extend(views.map(tv));
         resources.extend([&filtered, &hist, &warped, &rejection, &a, &normal_out].map(tv));
         let (spec_prev, spec_out) = (v(&self.spec_history[read]), v(&self.spec_history[write]));
