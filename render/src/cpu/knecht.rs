@@ -515,12 +515,15 @@ impl SplitLight {
     }
 }
 
+/// The word no normal packs to (pack2x16snorm never writes −32768): a pixel without a surface
+/// (`NO_NORMAL` in `shaders/common/normal.wgsl`, the camera G-buffer's clear value).
+pub const NO_NORMAL: u32 = 0x8000_8000;
+
 /// The split history's normal word (issue #53; twin of `shaders/common/split_light.wgsl`'s
 /// `pack_normal`): the unit normal's octahedral coordinates (Cigolle et al. 2014, JCGT 3(2),
 /// §3.3) as two 16-bit snorms, rounded as WGSL's `pack2x16snorm` rounds; None (no surface) is
 /// a word that no normal packs to.
 pub fn pack_normal(n: Option<Vec3>) -> u32 {
-    const NO_NORMAL: u32 = 0x8000_8000;
     let Some(n) = n else { return NO_NORMAL };
     let l1 = n.x.abs() + n.y.abs() + n.z.abs();
     if l1 <= 0.0 {
@@ -536,7 +539,7 @@ pub fn pack_normal(n: Option<Vec3>) -> u32 {
 
 /// The normal a [`pack_normal`] word holds (unit), None for the word of no surface.
 pub fn unpack_normal(w: u32) -> Option<Vec3> {
-    if w == 0x8000_8000 {
+    if w == NO_NORMAL {
         return None;
     }
     let snorm = |h: u32| ((h as u16 as i16) as f32 / 32767.0).max(-1.0);

@@ -36,7 +36,7 @@ pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 /// (`gbuffer_position::normal_pass`).
 pub const PACKED_NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 /// The packed normal of a pixel no geometry covers (`NO_NORMAL` in `shaders/common/normal.wgsl`).
-pub const NO_NORMAL: u32 = 0x8000_8000;
+pub use crate::cpu::knecht::NO_NORMAL;
 pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 pub const MATERIAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 /// The camera G-buffer's material target (issue #53): SI and SP alone, the two values every
@@ -552,7 +552,6 @@ impl GBuffer {
         writes: Writes,
     ) -> wgpu::RenderPass<'e> {
         let v = &self.views;
-        let clear_all = clear;
         let colour_load = if clear { wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT) } else { wgpu::LoadOp::Load };
         let depth_load = if clear { wgpu::LoadOp::Clear(1.0) } else { wgpu::LoadOp::Load };
         let attach = |view, load| {
@@ -563,10 +562,10 @@ impl GBuffer {
                 ops: wgpu::Operations { load, store: wgpu::StoreOp::Store },
             })
         };
-        let clear = |view| attach(view, colour_load);
         // The camera's packed normals clear to the word of no normal.
         let no_normal = wgpu::Color { r: f64::from(NO_NORMAL), g: 0.0, b: 0.0, a: 0.0 };
-        let normal_load = if clear_all { wgpu::LoadOp::Clear(no_normal) } else { wgpu::LoadOp::Load };
+        let normal_load = if clear { wgpu::LoadOp::Clear(no_normal) } else { wgpu::LoadOp::Load };
+        let clear = |view| attach(view, colour_load);
         encoder.begin_counted_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(label),
             color_attachments: &[
