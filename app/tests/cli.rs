@@ -362,7 +362,7 @@ fn export_writes_json_and_ron_that_import_to_the_preset() {
     for format in ["json", "ron"] {
         let file = out.join(format!("p.{format}"));
         let o = gi_lab()
-            .args(["export", "--format", format, "--set", "tonemap.key=0.3", "--preset"])
+            .args(["export", "--format", format, "--size", "640x360", "--set", "tonemap.key=0.3", "--preset"])
             .arg(&preset)
             .arg("--out")
             .arg(&file)
@@ -377,9 +377,16 @@ fn export_writes_json_and_ron_that_import_to_the_preset() {
         assert_eq!(e.schema, "gi-lab-preset");
         assert_eq!(e.provenance.gi_lab_version, env!("CARGO_PKG_VERSION"));
         assert!(e.provenance.date.ends_with('Z') && e.provenance.date.starts_with("20"), "{}", e.provenance.date);
+        // Where it was tuned (issue #54 point 4): the image, the unit, the bounds, the scale.
+        assert_eq!((e.provenance.resolution, e.provenance.unit.as_str()), ([640, 360], "m"));
+        let b = e.provenance.bounds.as_ref().expect("bounds");
+        assert!(b.radius > 0.5 && (0..3).all(|k| b.min[k] < b.max[k]), "{b:?}");
+        assert!(e.provenance.scale.as_ref().is_some_and(|s| s.length > 0.0), "{:?}", e.provenance.scale);
     }
     let o = gi_lab().args(["export", "--format", "xml"]).output().expect("runs");
     assert_eq!(o.status.code(), Some(2), "an unknown format is a usage error");
+    let o = gi_lab().args(["export", "--size", "0x5"]).output().expect("runs");
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--size"), "a bad size is refused");
 }
 
 #[test]

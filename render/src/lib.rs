@@ -9,6 +9,7 @@ pub mod clock;
 pub mod counters;
 pub mod cpu;
 pub mod explain;
+pub mod export;
 pub mod files;
 pub mod fingerprint;
 pub mod frame;

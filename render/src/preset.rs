@@ -5,15 +5,14 @@
 
 use std::path::Path;
 
-use serde::{Deserialize, Serialize};
-
 use crate::LabSettings;
-use crate::camera::Camera;
 use crate::settings::{FieldKind, PRESET_VERSION, PresetError, Value, check_range, clamp_value};
 
 /// One thing wrong with a loaded preset, and what was done about it: the field's dotted
 /// path (or a group name, or `version`) and the message.
 pub use crate::settings::FieldError as Problem;
+
+pub use crate::export::{Export, ExportFormat, Provenance, SCHEMA_NAME, SCHEMA_VERSION, utc_from_unix, utc_now};
 
 /// A preset as loaded: the settings with every fix applied, and the list of problems
 /// (empty for a clean file). Migrations are listed too, so that nothing changes silently.
@@ -296,128 +295,6 @@ pub fn load_file(path: &Path) -> Result<Loaded, PresetError> {
     load_lenient(&text, &path.display().to_string())
 }
 
-/// Where a preset was tuned: stamped on every engine export.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Provenance {
-    /// The GI Lab version that wrote the file.
-    pub gi_lab_version: String,
-    /// The scene file, or the name of the embedded default scene.
-    pub scene: String,
-    /// The camera at export time.
-    pub camera: Camera,
-    /// UTC date and time of the export, ISO 8601.
-    pub date: String,
-}
-
-impl Provenance {
-    pub fn now(scene: &str, camera: Camera) -> Self {
-        Self { gi_lab_version: env!("CARGO_PKG_VERSION").into(), scene: scene.into(), camera, date: utc_now() }
-    }
-}
-
-/// Name and version of the export schema (`docs/preset-schema.md`).
-pub const SCHEMA_NAME: &str = "gi-lab-preset";
-pub const SCHEMA_VERSION: u32 = 1;
-
-/// The engine export: schema id, provenance and the settings.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Export {
-    pub schema: String,
-    pub schema_version: u32,
-    pub provenance: Provenance,
-    pub settings: LabSettings,
-}
-
-/// Export file formats.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ExportFormat {
-    Json,
-    Ron,
-}
-
-impl ExportFormat {
-    pub fn extension(self) -> &'static str {
-        match self {
-            Self::Json => "json",
-            Self::Ron => "ron",
-        }
-    }
-    pub fn parse(s: &str) -> Option<Self> {
-        match s.to_ascii_lowercase().as_str() {
-            "json" => Some(Self::Json),
-            "ron" => Some(Self::Ron),
-            _ => None,
-        }
-    }
-}
-
-impl Export {
-    pub fn new(settings: LabSettings, provenance: Provenance) -> Self {
-        Self { schema: SCHEMA_NAME.into(), schema_version: SCHEMA_VERSION, provenance, settings }
-    }
-
-    pub fn to_text(&self, format: ExportFormat) -> String {
-        match format {
-            ExportFormat::Json => {
-                serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
-            }
-            ExportFormat::Ron => {
-                let cfg = ron::ser::PrettyConfig::new().struct_names(false);
-                ron::ser::to_string_pretty(self, cfg).unwrap_or_else(|e| format!("// serialisation failed: {e}"))
-            }
-        }
-    }
-
-    /// Parses an export (JSON or RON, told apart by the first non-space character) and
-    /// checks its schema and settings.
-    pub fn parse(text: &str, origin: &str) -> Result<Self, PresetError> {
-        let parse_err = |message: String| PresetError::Parse { path: origin.into(), message };
-        let e: Self = if text.trim_start().starts_with('{') {
-            serde_json::from_str(text).map_err(|e| parse_err(e.to_string()))?
-        } else {
-            ron::from_str(text).map_err(|e| parse_err(e.to_string()))?
-        };
-        if e.schema != SCHEMA_NAME {
-            return Err(parse_err(format!("schema '{}' is not '{SCHEMA_NAME}'", e.schema)));
-        }
-        if e.schema_version > SCHEMA_VERSION {
-            return Err(parse_err(format!(
-                "schema version {} is newer than this GI Lab understands ({SCHEMA_VERSION})",
-                e.schema_version
-            )));
-        }
-        let errors = e.settings.validate();
-        if !errors.is_empty() {
-            return Err(PresetError::Invalid { path: origin.into(), errors });
-        }
-        Ok(e)
-    }
-}
-
-/// The current UTC time as `YYYY-MM-DDTHH:MM:SSZ`.
-pub fn utc_now() -> String {
-    let secs = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs()).unwrap_or(0);
-    utc_from_unix(secs)
-}
-
-/// Unix seconds → ISO 8601 UTC (the civil-from-days conversion of Howard Hinnant's
-/// date algorithms).
-pub fn utc_from_unix(secs: u64) -> String {
-    let days = (secs / 86_400) as i64;
-    let rem = secs % 86_400;
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = doy - (153 * mp + 2) / 5 + 1;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 };
-    let y = yoe + era * 400 + i64::from(m <= 2);
-    format!("{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z", rem / 3600, rem % 3600 / 60, rem % 60)
-}
-
 /// `docs/preset-schema.md`: every field with its type, unit, range, default, meaning and
 /// paper reference, generated from the settings' own metadata.
 pub fn schema_markdown() -> String {
@@ -430,15 +307,26 @@ pub fn schema_markdown() -> String {
     s += "- **Preset** (`presets/*.ron`, File → Save): the settings struct below in RON, with a `version` field. \
 Missing fields take their defaults; older versions are migrated on load; unknown fields, wrong types and \
 out-of-range values are listed on load (wrong types fall back to the default, numbers are clamped).\n";
-    s += "- **Engine export** (File → Export, `gi-lab export --preset P --format json|ron`): one object with\n";
+    s += "- **Engine export** (File → Export, `gi-lab export --preset P --format json|ron [--scene S] [--size WxH] \
+[--all-groups]`): one object with\n";
     s += "  - `schema`: the string `\"gi-lab-preset\"`;\n";
-    s += "  - `schema_version`: this document's version (an importer refuses newer versions);\n";
+    s += "  - `schema_version`: this document's version (an importer refuses newer versions; version 1 files, \
+without the fields marked *(2)*, still load);\n";
     s += "  - `provenance`: `gi_lab_version`, `scene` (file path or embedded scene name), `camera` \
 (`position` [x, y, z] in scene units, `yaw` and `pitch` in radians — yaw about +Y with 0 looking toward −Z, \
 pitch above the horizon —, `yfov` in radians, `znear`, `zfar`, `orbit_distance` in scene units), `date` \
-(UTC, ISO 8601);\n";
-    s += "  - `settings`: the groups below, each an object of its fields. Choices are written as their names \
-(strings in JSON, identifiers in RON).\n\n";
+(UTC, ISO 8601), *(2)* `resolution` [width, height] in pixels (the image the pixel-relative values were tuned \
+at), `unit` (`\"m\"`: scene units are metres) with `unit_conversion` [factor, sentence] when the loader \
+converted a scene it found in millimetres or centimetres, `bounds` (`min`, `max` [x, y, z] and `radius`, half \
+the diagonal, R below), `scale` (`length` L, the length scene-relative settings are fractions of, and its \
+`source`: `room`, with `room_min`/`room_max`, or `model`);\n";
+    s += "  - `settings`: the groups the stage choices use (every group with `--all-groups`), each an object of \
+its fields; `version` is the preset format version. A group left out loads at its defaults. Choices are written \
+as their names (strings in JSON, identifiers in RON).\n";
+    s += "  - *(2)* `resolved`: every scene- or image-relative setting of those groups as set and as resolved for the \
+provenance's scene, camera and resolution: `path`, `set`, `set_unit`, `resolved`, `resolved_unit` and the \
+`formula` that resolves it again (e.g. `hcb.d_max_m` = 0 → 0.1 × L in metres; `gautron.r_min_px` → a fraction \
+of the image height).\n\n";
     s += "Units: `m` and scene units are metres for scenes authored in metres (glTF's convention); `px` are pixels \
 of the render resolution; `EV` are photographic stops (powers of two).\n\n";
     s += "## Settings\n";
@@ -531,30 +419,6 @@ mod tests {
     fn syntax_errors_are_fatal() {
         assert!(load_lenient("(direct: (pcf_radius: 2", "t").is_err());
         assert!(load_lenient("[1, 2]", "t").is_err());
-    }
-
-    #[test]
-    fn export_round_trips_in_both_formats() {
-        let mut s = LabSettings::default();
-        s.tonemap.exposure_ev = 0.1 + 0.2;
-        s.direct.depth_bias = 1.0 / 3.0;
-        crate::settings::pipeline::Technique::ExactVpl.apply(&mut s);
-        let cam = Camera {
-            position: glam::Vec3::new(0.1, 1.7, 3.3),
-            yaw: 0.3,
-            pitch: -0.1,
-            yfov: 0.9,
-            znear: 0.01,
-            zfar: 100.0,
-            orbit_distance: 2.5,
-        };
-        let e = Export::new(s, Provenance::now("default", cam));
-        for f in [ExportFormat::Json, ExportFormat::Ron] {
-            let back = Export::parse(&e.to_text(f), "t").unwrap_or_else(|err| panic!("{f:?}: {err}"));
-            assert_eq!(back, e, "{f:?}");
-        }
-        let bad = e.to_text(ExportFormat::Json).replace("gi-lab-preset", "other");
-        assert!(Export::parse(&bad, "t").is_err());
     }
 
     #[test]

@@ -309,6 +309,15 @@ fn preset_save_and_open_round_trip_through_the_ui() {
     h.run_steps(2);
     assert_eq!(h.state().settings(), Some(&edited), "opening the preset restores it");
     assert_eq!(h.state().renderer().expect("renderer").settings(), &edited);
+    // File → Export of the live settings says where they were tuned (issue #54 point 4).
+    let file = dir.join("live.json");
+    h.state_mut().state.export_to(&file, gi_render::preset::ExportFormat::Json).expect("exported");
+    let text = std::fs::read_to_string(&file).expect("export written");
+    let e = gi_render::preset::Export::parse(&text, "live.json").expect("the export loads");
+    let r = h.state().renderer().expect("renderer");
+    assert_eq!(e.provenance.resolution, [r.size().0, r.size().1], "the renderer's image");
+    assert_eq!(e.provenance.bounds.as_ref().map(|b| b.radius), Some(r.bounds().radius()));
+    assert_eq!(e.provenance.scale.as_ref().map(|s| s.length), Some(r.scale_radius()));
 }
 
 #[test]

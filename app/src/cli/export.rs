@@ -20,10 +20,18 @@ pub struct ExportArgs {
     /// Instead of exporting, write the schema documentation (docs/preset-schema.md) here.
     #[arg(long)]
     pub schema_doc: Option<PathBuf>,
+    /// The image the pixel-relative settings are resolved for (WIDTHxHEIGHT); the camera is
+    /// the scene's opening view fitted to its aspect.
+    #[arg(long, default_value = "1920x1080")]
+    pub size: String,
+    /// Write every settings group, not only those the stage choices use.
+    #[arg(long)]
+    pub all_groups: bool,
 }
 
 /// `gi-lab export`: the preset (with overrides) as an engine export.
 pub(super) fn export(a: &ExportArgs) -> Result<(), CliError> {
+    use gi_render::export::ExportView;
     use gi_render::files::write_atomic;
     use gi_render::preset::{Export, ExportFormat, Provenance, schema_markdown};
     if let Some(path) = &a.schema_doc {
@@ -33,11 +41,14 @@ pub(super) fn export(a: &ExportArgs) -> Result<(), CliError> {
     }
     let format = ExportFormat::parse(&a.format)
         .ok_or_else(|| CliError::input(format!("--format {}: expected json or ron", a.format)))?;
+    let size = super::parse_size(&a.size).map_err(|e| CliError::input(format!("--size: {e}")))?;
     let settings = load_settings(&a.scene)?;
     let scene = load_scene(&a.scene)?;
-    let camera = gi_render::renderer::default_camera(&scene, scene.bounds(0.0), 16.0 / 9.0);
+    let bounds = scene.bounds(0.0);
+    let camera = gi_render::renderer::default_camera(&scene, bounds, size.0 as f32 / size.1 as f32);
     let name = a.scene.scene.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| scene.name.clone());
-    let text = Export::new(settings, Provenance::now(&name, camera)).to_text(format);
+    let view = ExportView::of_scene(&name, &scene, bounds, camera, size, &settings);
+    let text = Export::new(settings, Provenance::now(&view)).with_all_groups(a.all_groups).to_text(format);
     match &a.out {
         None => {
             println!("{text}");

@@ -161,7 +161,16 @@ impl State {
     /// The engine export of the live settings with provenance.
     pub fn export(&self) -> Option<Export> {
         let l = self.lab.as_ref().ok()?;
-        Some(Export::new(l.settings.clone(), Provenance::now(&l.scene_name, l.renderer.camera)))
+        let r = &l.renderer;
+        let view = gi_render::export::ExportView::of_scene(
+            &l.scene_name,
+            r.scene(),
+            r.bounds(),
+            r.camera,
+            r.size(),
+            &l.settings,
+        );
+        Some(Export::new(l.settings.clone(), Provenance::now(&view)))
     }
 
     pub fn export_to(&mut self, path: &Path, format: ExportFormat) -> Result<(), String> {
