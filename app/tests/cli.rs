@@ -390,6 +390,39 @@ fn export_writes_json_and_ron_that_import_to_the_preset() {
 }
 
 #[test]
+fn export_writes_a_port_kit_and_refuses_an_existing_folder() {
+    let out = temp_dir("port-kit");
+    let kit = out.join("kit");
+    let run = |extra: &[&str]| {
+        gi_lab()
+            .args(["export", "--preset"])
+            .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/../presets/nguyen-hcb.ron"))
+            .args(["--size", "32x18", "--frames", "1", "--port-kit"])
+            .arg(&kit)
+            .args(extra)
+            .output()
+            .expect("runs")
+    };
+    let o = run(&[]);
+    assert!(o.status.success(), "port kit failed: {}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("passes"), "{}", String::from_utf8_lossy(&o.stdout));
+    for f in ["manifest.json", "preset.json", "README.md", "shaders/hcb/gather.wgsl"] {
+        assert!(kit.join(f).is_file(), "{f} missing from the kit");
+    }
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(kit.join("manifest.json")).expect("manifest")).expect("json");
+    assert_eq!((m["schema"].as_str(), m["preset"].as_str()), (Some("gi-lab-port-kit"), Some("nguyen-hcb")));
+    assert_eq!(m["size"], serde_json::json!([32, 18]));
+    let before = std::fs::read_to_string(kit.join("manifest.json")).expect("manifest");
+    let o = run(&[]);
+    assert!(!o.status.success(), "an existing folder is refused");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--force"), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read_to_string(kit.join("manifest.json")).expect("kept"), before, "nothing was touched");
+    let o = run(&["--force"]);
+    assert!(o.status.success(), "--force replaces it: {}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
 fn the_knecht_bench_suite_prints_every_table_as_json() {
     let o = gi_lab()
         .args(["bench", "--suite", "knecht", "--size", "48x32", "--frames", "1", "--json", "--preset"])

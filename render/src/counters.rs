@@ -78,6 +78,16 @@ pub(crate) fn context() -> u64 {
     CONTEXT.with(Cell::get)
 }
 
+/// A key for a GPU object of the current context (`traffic`'s sizes, `capture`'s
+/// descriptions).
+pub(crate) fn key<T: std::hash::Hash>(t: &T) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    context().hash(&mut h);
+    t.hash(&mut h);
+    h.finish()
+}
+
 /// This thread's counts so far.
 pub fn now() -> Counts {
     COUNTS.with(Cell::get)
@@ -131,21 +141,29 @@ pub trait CountedDevice {
     fn counted_bind_group(&self, desc: &wgpu::BindGroupDescriptor) -> wgpu::BindGroup;
     fn counted_sampler(&self, desc: &wgpu::SamplerDescriptor) -> wgpu::Sampler;
     fn counted_query_set(&self, desc: &wgpu::QuerySetDescriptor) -> wgpu::QuerySet;
+    fn counted_compute_pipeline(&self, desc: &wgpu::ComputePipelineDescriptor) -> wgpu::ComputePipeline;
+    fn counted_render_pipeline(&self, desc: &wgpu::RenderPipelineDescriptor) -> wgpu::RenderPipeline;
 }
 
 impl CountedDevice for wgpu::Device {
     fn counted_buffer(&self, desc: &wgpu::BufferDescriptor) -> wgpu::Buffer {
         note_created();
-        self.create_buffer(desc)
+        let b = self.create_buffer(desc);
+        capture::remember_buffer(&b, desc.label, desc.usage);
+        b
     }
     fn counted_buffer_init(&self, desc: &wgpu::util::BufferInitDescriptor) -> wgpu::Buffer {
         use wgpu::util::DeviceExt;
         note_created();
-        self.create_buffer_init(desc)
+        let b = self.create_buffer_init(desc);
+        capture::remember_buffer(&b, desc.label, desc.usage);
+        b
     }
     fn counted_texture(&self, desc: &wgpu::TextureDescriptor) -> wgpu::Texture {
         note_created();
-        self.create_texture(desc)
+        let t = self.create_texture(desc);
+        capture::remember_texture(&t, desc);
+        t
     }
     fn counted_bind_group(&self, desc: &wgpu::BindGroupDescriptor) -> wgpu::BindGroup {
         let key = reuse::group_key(desc);
@@ -155,6 +173,7 @@ impl CountedDevice for wgpu::Device {
         note_created();
         let group = self.create_bind_group(desc);
         traffic::remember_group(&group, desc);
+        capture::remember_group(&group, desc);
         if let Some(k) = key {
             reuse::keep_group(k, &group);
         }
@@ -162,11 +181,23 @@ impl CountedDevice for wgpu::Device {
     }
     fn counted_sampler(&self, desc: &wgpu::SamplerDescriptor) -> wgpu::Sampler {
         note_created();
-        self.create_sampler(desc)
+        let s = self.create_sampler(desc);
+        capture::remember_sampler(&s, desc);
+        s
     }
     fn counted_query_set(&self, desc: &wgpu::QuerySetDescriptor) -> wgpu::QuerySet {
         note_created();
         self.create_query_set(desc)
+    }
+    fn counted_compute_pipeline(&self, desc: &wgpu::ComputePipelineDescriptor) -> wgpu::ComputePipeline {
+        let p = self.create_compute_pipeline(desc);
+        capture::remember_compute(&p, desc);
+        p
+    }
+    fn counted_render_pipeline(&self, desc: &wgpu::RenderPipelineDescriptor) -> wgpu::RenderPipeline {
+        let p = self.create_render_pipeline(desc);
+        capture::remember_render(&p, desc);
+        p
     }
 }
 
@@ -184,6 +215,7 @@ impl CountedTexture for wgpu::Texture {
         note_created();
         let view = self.create_view(desc);
         traffic::remember_view(&view, self, desc);
+        capture::remember_view(&view, self, desc);
         reuse::keep_view(key, &view);
         view
     }
@@ -209,9 +241,10 @@ mod tests {
 
 /// The traits, for `use crate::counters::prelude::*`.
 pub mod prelude {
-    pub use super::traffic::{CountedEncoder, CountedPass};
+    pub use super::traffic::{CountedCompute, CountedEncoder, CountedPass, CountedRender};
     pub use super::{CountedDevice, CountedTexture};
 }
 
+pub mod capture;
 pub mod reuse;
 pub mod traffic;

@@ -283,8 +283,10 @@ fn resolve_into(
 /// Creates a shader module from a resolved entry file; the label is `<pass>.shader`.
 pub fn create_module(device: &wgpu::Device, path: &str) -> wgpu::ShaderModule {
     let code = resolve(path).unwrap_or_else(|e| panic!("embedded shader table is inconsistent: {e}"));
-    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(path),
         source: wgpu::ShaderSource::Wgsl(code.into()),
-    })
+    });
+    crate::counters::capture::remember_module(&module, path);
+    module
 }

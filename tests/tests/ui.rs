@@ -318,6 +318,26 @@ fn preset_save_and_open_round_trip_through_the_ui() {
     assert_eq!(e.provenance.resolution, [r.size().0, r.size().1], "the renderer's image");
     assert_eq!(e.provenance.bounds.as_ref().map(|b| b.radius), Some(r.bounds().radius()));
     assert_eq!(e.provenance.scale.as_ref().map(|s| s.length), Some(r.scale_radius()));
+    // File → Export port kit… writes the kit of the live scene, settings and camera in the
+    // background (issue #54), and refuses a folder that exists.
+    let (size, camera) = (r.size(), r.camera);
+    let kit = dir.join("kit");
+    h.state_mut().state.export_port_kit_to(kit.clone()).expect("the kit starts");
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(300);
+    while h.state().state.preset.port_kit_job.is_some() && std::time::Instant::now() < deadline {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        h.run_steps(1);
+    }
+    let status = h.state().state.status.as_ref().map(|s| s.0.clone()).unwrap_or_default();
+    assert!(status.starts_with("port kit written"), "{status}");
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(kit.join("manifest.json")).expect("manifest")).expect("json");
+    assert_eq!((m["size"][0].as_u64(), m["size"][1].as_u64()), (Some(size.0 as u64), Some(size.1 as u64)));
+    let text = std::fs::read_to_string(kit.join("preset.json")).expect("the kit's export");
+    let e = gi_render::preset::Export::parse(&text, "preset.json").expect("the kit's export loads");
+    assert_eq!((e.provenance.camera, e.settings), (camera, edited), "the live camera and settings");
+    let again = h.state_mut().state.export_port_kit_to(kit.clone());
+    assert!(again.is_err_and(|e| e.contains("exists")), "an existing folder is refused");
 }
 
 #[test]

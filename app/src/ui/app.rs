@@ -163,6 +163,7 @@ impl GiLabApp {
                 save_as_name: String::new(),
                 diff_with: None,
                 diff_cache: None,
+                port_kit_job: None,
             },
             viewport_px: (640, 480),
             viewport_rect: egui::Rect::NOTHING,

@@ -133,6 +133,13 @@ impl State {
                 if ui.button("Export for engines (RON)…").clicked() {
                     self.export_dialog(ExportFormat::Ron);
                 }
+                if ui
+                    .add_enabled(self.preset.port_kit_job.is_none(), egui::Button::new("Export port kit…"))
+                    .on_hover_text("A folder with the frame's passes, bindings and shaders (docs/port-kit.md)")
+                    .clicked()
+                {
+                    self.export_port_kit_dialog();
+                }
                 if ui.button("Import an export…").clicked()
                     && let Some(p) = rfd::FileDialog::new().add_filter("GI Lab export", &["json", "ron"]).pick_file()
                     && let Err(e) = self.import_export(&p)

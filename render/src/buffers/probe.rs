@@ -121,8 +121,8 @@ impl DepthProbe {
         );
         let mut pass = encoder
             .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("probe.depth"), timestamp_writes: None });
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipe(&self.pipeline);
         pass.set_group(0, &group, &[]);
-        pass.dispatch_workgroups(1, 1, 1);
+        pass.dispatch(1, 1, 1);
     }
 }

@@ -17,19 +17,13 @@
 
 use std::cell::RefCell;
 use std::collections::{HashMap, HashSet};
-use std::hash::{Hash, Hasher};
 
 /// Bind groups and views whose sizes are kept without pruning.
 const KEEP: usize = 4096;
 /// Frames after which an unused bind group's size may be forgotten.
 pub const FORGET_AFTER_FRAMES: u64 = 64;
 
-fn key<T: Hash>(t: &T) -> u64 {
-    let mut h = std::collections::hash_map::DefaultHasher::new();
-    super::context().hash(&mut h);
-    t.hash(&mut h);
-    h.finish()
-}
+use super::key;
 
 #[derive(Default)]
 struct Ledger {
@@ -130,10 +124,16 @@ fn charge(l: &mut Ledger, resource: u64, bytes: u64) {
 pub(crate) fn begin_scope(name: &str) {
     end_scope();
     LEDGER.with(|l| l.borrow_mut().scope = Some(name.to_string()));
+    super::capture::begin_scope(name);
 }
 
 /// Closes the open pass, adding its bytes to the frame's.
 pub(crate) fn end_scope() {
+    close_scope();
+    super::capture::end_scope();
+}
+
+fn close_scope() {
     let bytes = LEDGER.with(|l| {
         let mut l = l.borrow_mut();
         let name = l.scope.take().unwrap_or_else(|| "(other)".into());
@@ -152,7 +152,7 @@ pub(crate) fn end_scope() {
 
 /// Ends the frame: returns its passes' bytes (in order) and forgets long-unused sizes.
 pub(crate) fn end_frame() -> Vec<(String, u64)> {
-    end_scope();
+    close_scope();
     LEDGER.with(|l| {
         let mut l = l.borrow_mut();
         l.frame += 1;
@@ -200,23 +200,113 @@ fn charge_bytes(bytes: u64) {
     LEDGER.with(|l| l.borrow_mut().bytes += bytes);
 }
 
-/// Binding that charges the group's resources to the open pass. Import
-/// `crate::counters::prelude::*`.
+/// Binding that charges the group's resources to the open pass, and pipelines, both
+/// recorded by a capture ([`super::capture`]). Import `crate::counters::prelude::*`.
 pub trait CountedPass {
+    type Pipeline;
     fn set_group(&mut self, index: u32, group: &wgpu::BindGroup, offsets: &[wgpu::DynamicOffset]);
+    fn set_pipe(&mut self, pipeline: &Self::Pipeline);
+}
+
+fn record_group(index: u32, group: &wgpu::BindGroup, offsets: &[wgpu::DynamicOffset]) {
+    use super::capture::{Command, object_key, record};
+    record(|_| Command::Group { index, group: object_key(group), offsets: offsets.to_vec() });
 }
 
 impl CountedPass for wgpu::ComputePass<'_> {
+    type Pipeline = wgpu::ComputePipeline;
     fn set_group(&mut self, index: u32, group: &wgpu::BindGroup, offsets: &[wgpu::DynamicOffset]) {
         charge_group(group);
+        record_group(index, group, offsets);
         self.set_bind_group(index, group, offsets);
+    }
+    fn set_pipe(&mut self, pipeline: &wgpu::ComputePipeline) {
+        use super::capture::{Command, compute_key, record};
+        record(|_| Command::Pipeline { pipeline: compute_key(pipeline) });
+        self.set_pipeline(pipeline);
     }
 }
 
 impl CountedPass for wgpu::RenderPass<'_> {
+    type Pipeline = wgpu::RenderPipeline;
     fn set_group(&mut self, index: u32, group: &wgpu::BindGroup, offsets: &[wgpu::DynamicOffset]) {
         charge_group(group);
+        record_group(index, group, offsets);
         self.set_bind_group(index, group, offsets);
+    }
+    fn set_pipe(&mut self, pipeline: &wgpu::RenderPipeline) {
+        use super::capture::{Command, record, render_key};
+        record(|_| Command::Pipeline { pipeline: render_key(pipeline) });
+        self.set_pipeline(pipeline);
+    }
+}
+
+/// Dispatches a capture records.
+pub trait CountedCompute {
+    fn dispatch(&mut self, x: u32, y: u32, z: u32);
+    fn dispatch_indirect(&mut self, buffer: &wgpu::Buffer, offset: u64);
+}
+
+impl CountedCompute for wgpu::ComputePass<'_> {
+    fn dispatch(&mut self, x: u32, y: u32, z: u32) {
+        use super::capture::{Command, record};
+        record(|_| Command::Dispatch { workgroups: [x, y, z] });
+        self.dispatch_workgroups(x, y, z);
+    }
+    fn dispatch_indirect(&mut self, buffer: &wgpu::Buffer, offset: u64) {
+        use super::capture::{Command, buffer_key, record};
+        record(|_| Command::DispatchIndirect { buffer: buffer_key(buffer), offset });
+        self.dispatch_workgroups_indirect(buffer, offset);
+    }
+}
+
+/// Draws and vertex input a capture records.
+pub trait CountedRender {
+    fn draw_counted(&mut self, vertices: std::ops::Range<u32>, instances: std::ops::Range<u32>);
+    fn draw_indexed_counted(&mut self, indices: std::ops::Range<u32>, base: i32, instances: std::ops::Range<u32>);
+    fn draw_indirect_counted(&mut self, buffer: &wgpu::Buffer, offset: u64);
+    fn draw_indexed_indirect_counted(&mut self, buffer: &wgpu::Buffer, offset: u64);
+    fn vertex_buffer(&mut self, slot: u32, buffer: &wgpu::Buffer);
+    fn index_buffer(&mut self, buffer: &wgpu::Buffer, format: wgpu::IndexFormat);
+}
+
+impl CountedRender for wgpu::RenderPass<'_> {
+    fn draw_counted(&mut self, vertices: std::ops::Range<u32>, instances: std::ops::Range<u32>) {
+        use super::capture::{Command, record};
+        record(|_| Command::Draw {
+            vertices: [vertices.start, vertices.end],
+            instances: [instances.start, instances.end],
+        });
+        self.draw(vertices, instances);
+    }
+    fn draw_indexed_counted(&mut self, indices: std::ops::Range<u32>, base: i32, instances: std::ops::Range<u32>) {
+        use super::capture::{Command, record};
+        record(|_| Command::DrawIndexed {
+            indices: [indices.start, indices.end],
+            base_vertex: base,
+            instances: [instances.start, instances.end],
+        });
+        self.draw_indexed(indices, base, instances);
+    }
+    fn draw_indirect_counted(&mut self, buffer: &wgpu::Buffer, offset: u64) {
+        use super::capture::{Command, buffer_key, record};
+        record(|_| Command::DrawIndirect { buffer: buffer_key(buffer), offset, indexed: false });
+        self.draw_indirect(buffer, offset);
+    }
+    fn draw_indexed_indirect_counted(&mut self, buffer: &wgpu::Buffer, offset: u64) {
+        use super::capture::{Command, buffer_key, record};
+        record(|_| Command::DrawIndirect { buffer: buffer_key(buffer), offset, indexed: true });
+        self.draw_indexed_indirect(buffer, offset);
+    }
+    fn vertex_buffer(&mut self, slot: u32, buffer: &wgpu::Buffer) {
+        use super::capture::{Command, buffer_key, record};
+        record(|_| Command::VertexBuffer { slot, buffer: buffer_key(buffer) });
+        self.set_vertex_buffer(slot, buffer.slice(..));
+    }
+    fn index_buffer(&mut self, buffer: &wgpu::Buffer, format: wgpu::IndexFormat) {
+        use super::capture::{Command, buffer_key, record};
+        record(|_| Command::IndexBuffer { buffer: buffer_key(buffer), format: format!("{format:?}") });
+        self.set_index_buffer(buffer.slice(..), format);
     }
 }
 
@@ -237,6 +327,7 @@ pub trait CountedEncoder {
         dst_offset: u64,
         size: u64,
     );
+    fn counted_clear_buffer(&mut self, buffer: &wgpu::Buffer, offset: u64, size: Option<u64>);
 }
 
 impl CountedEncoder for wgpu::CommandEncoder {
@@ -248,6 +339,7 @@ impl CountedEncoder for wgpu::CommandEncoder {
             let load = d.depth_ops.as_ref().is_some_and(|o| matches!(o.load, wgpu::LoadOp::Load));
             charge_view(d.view, if load { 2 } else { 1 });
         }
+        super::capture::render_pass(desc);
         self.begin_render_pass(desc)
     }
 
@@ -259,6 +351,11 @@ impl CountedEncoder for wgpu::CommandEncoder {
     ) {
         let texels = size.width as u64 * size.height as u64 * size.depth_or_array_layers as u64;
         charge_bytes(texels * (texel_bytes(src.texture.format()) + texel_bytes(dst.texture.format())));
+        {
+            use super::capture::{Command, record, texture_key};
+            let size = [size.width, size.height, size.depth_or_array_layers];
+            record(|_| Command::CopyTexture { src: texture_key(src.texture), dst: texture_key(dst.texture), size });
+        }
         self.copy_texture_to_texture(src, dst, size);
     }
 
@@ -271,7 +368,22 @@ impl CountedEncoder for wgpu::CommandEncoder {
         size: u64,
     ) {
         charge_bytes(2 * size);
+        {
+            use super::capture::{Command, buffer_key, record};
+            record(|_| Command::CopyBuffer { src: buffer_key(src), dst: buffer_key(dst), size });
+        }
         self.copy_buffer_to_buffer(src, src_offset, dst, dst_offset, size);
+    }
+
+    /// A clear, recorded by a capture; not charged as traffic (the counter has never counted
+    /// clears, and its figures stay comparable across runs).
+    fn counted_clear_buffer(&mut self, buffer: &wgpu::Buffer, offset: u64, size: Option<u64>) {
+        let bytes = size.unwrap_or(buffer.size().saturating_sub(offset));
+        {
+            use super::capture::{Command, buffer_key, record};
+            record(|_| Command::ClearBuffer { buffer: buffer_key(buffer), offset, size: bytes });
+        }
+        self.clear_buffer(buffer, offset, size);
     }
 }
 

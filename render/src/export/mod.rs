@@ -12,6 +12,7 @@ use crate::maths::Aabb;
 use crate::scale::ScaleSource;
 use crate::settings::PresetError;
 
+pub mod port_kit;
 pub mod resolved;
 
 pub use resolved::Resolved;

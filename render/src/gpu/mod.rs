@@ -12,6 +12,7 @@
 pub mod bgl;
 pub mod bindings;
 
+use crate::counters::prelude::*;
 use std::sync::Arc;
 
 /// Features without which the pipeline cannot run (see the module docs).
@@ -318,7 +319,7 @@ pub fn compute_pipeline_with(
         bind_group_layouts: &layouts,
         immediate_size: 0,
     });
-    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+    device.counted_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some(label),
         layout: Some(&layout),
         module,

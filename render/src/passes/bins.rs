@@ -149,13 +149,13 @@ impl Bins {
     ) {
         let SplatJob { pipelines: (bin, accumulate), group, add, size } = *job;
         let bins = self.group(&ctx.device, add);
-        enc.clear_buffer(&self.mask, 0, None);
+        enc.counted_clear_buffer(&self.mask, 0, None);
         let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(label), timestamp_writes });
         pass.set_group(0, group, &[]);
         pass.set_group(1, &bins, &[]);
-        pass.set_pipeline(bin);
-        pass.dispatch_workgroups(self.capacity().div_ceil(64), 1, 1);
-        pass.set_pipeline(accumulate);
-        pass.dispatch_workgroups(size.0.div_ceil(GROUP), size.1.div_ceil(GROUP), 1);
+        pass.set_pipe(bin);
+        pass.dispatch(self.capacity().div_ceil(64), 1, 1);
+        pass.set_pipe(accumulate);
+        pass.dispatch(size.0.div_ceil(GROUP), size.1.div_ceil(GROUP), 1);
     }
 }

@@ -313,7 +313,7 @@ impl ComposePass {
         self.hdr_on_read.arm(later);
         let group = group(if store_hdr { &hdr_view } else { &self.no_hdr }, &self.compose_tone);
         // The tiles' sums are atomic additions: they start from zero.
-        encoder.clear_buffer(&self.tiles, 0, None);
+        encoder.counted_clear_buffer(&self.tiles, 0, None);
         self.dispatch(encoder, slot, "compose.compose", &self.compose, &group, self.screen_groups());
     }
 
@@ -334,8 +334,8 @@ impl ComposePass {
         });
         if settings.auto_exposure {
             pass.set_group(0, &group, &[]);
-            pass.set_pipeline(&self.luminance);
-            pass.dispatch_workgroups(1, 1, 1);
+            pass.set_pipe(&self.luminance);
+            pass.dispatch(1, 1, 1);
         }
     }
 
@@ -390,9 +390,9 @@ impl ComposePass {
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
         if groups.0 > 0 && groups.1 > 0 {
-            pass.set_pipeline(pipeline);
+            pass.set_pipe(pipeline);
             pass.set_group(0, group, &[]);
-            pass.dispatch_workgroups(groups.0, groups.1, 1);
+            pass.dispatch(groups.0, groups.1, 1);
         }
     }
 }

@@ -366,14 +366,14 @@ impl DirectPass {
         let diffuse =
             self.diffuse.as_ref().map(|(_, v)| DIRECT_DIFFUSE_BINDINGS.group(device, &self.diffuse_layout, [tv(v)]));
         let k = emitters.is_none() as usize;
-        pass.set_pipeline(if diffuse.is_some() { &self.diffuse_pipeline[k] } else { &self.pipeline[k] });
+        pass.set_pipe(if diffuse.is_some() { &self.diffuse_pipeline[k] } else { &self.pipeline[k] });
         pass.set_group(0, &group0, &[]);
         pass.set_group(1, &group1, &[]);
         if let Some(g) = &diffuse {
             pass.set_group(2, g, &[]);
         }
         let (w, h) = (self.radiance.width(), self.radiance.height());
-        pass.dispatch_workgroups(w.div_ceil(super::TILE), h.div_ceil(super::TILE), 1);
+        pass.dispatch(w.div_ceil(super::TILE), h.div_ceil(super::TILE), 1);
         drop(pass);
         self.group0 = Some(group0);
         self.emitters = emitters.is_some();
@@ -419,13 +419,13 @@ impl super::stages::DirectAtlas for DirectPass {
             label: Some("direct.atlas_pass"),
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
-        pass.set_pipeline(&self.atlas_pipeline[!self.emitters as usize]);
+        pass.set_pipe(&self.atlas_pipeline[!self.emitters as usize]);
         pass.set_group(0, group0, &[]);
         pass.set_group(1, &group1, &[]);
         pass.set_group(2, &group2, &[]);
         match indirect {
-            Some((args, offset)) => pass.dispatch_workgroups_indirect(args, offset),
-            None => pass.dispatch_workgroups(size.0.div_ceil(super::TILE), size.1.div_ceil(super::TILE), 1),
+            Some((args, offset)) => pass.dispatch_indirect(args, offset),
+            None => pass.dispatch(size.0.div_ceil(super::TILE), size.1.div_ceil(super::TILE), 1),
         }
     }
 }

@@ -242,7 +242,7 @@ impl GBufferPass {
         };
         // The camera's movement buffer without z (issue #53).
         let kind = if linear && !writes.motion_depth { format!("{kind}_motion_xy") } else { kind.to_string() };
-        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        device.counted_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(&if cull_mode.is_some() {
                 format!("{name}.pipeline_single_sided{kind}")
             } else {
@@ -445,7 +445,7 @@ impl GBufferPass {
         });
         let ts = slot.and_then(|s| s.render(first, last));
         let mut pass = self.targets.begin_pass(encoder, &label, ts, true, writes);
-        pass.set_pipeline(&p.double_sided);
+        pass.set_pipe(&p.double_sided);
         pass.set_group(0, camera_group, &[]);
         pass.set_group(1, &scene.instance_group, &[]);
         let single = if self.cull_single_sided { &p.single_sided } else { &p.double_sided };

@@ -18,6 +18,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use glam::{Mat4, Vec3, Vec4};
 
 use crate::buffers::Derived;
+use crate::counters::prelude::*;
 use crate::gpu::GpuContext;
 use crate::gpu::bindings::{Bindings, Kind, binding};
 
@@ -138,7 +139,7 @@ impl PositionPass {
     /// Keeps the camera the G-buffer was just drawn with (`camera`: the frame's uniform);
     /// the fill reads it.
     pub fn keep_camera(&self, enc: &mut wgpu::CommandEncoder, camera: &wgpu::Buffer) {
-        enc.copy_buffer_to_buffer(camera, 0, &self.camera, 0, self.camera.size());
+        enc.counted_copy_buffer(camera, 0, &self.camera, 0, self.camera.size());
     }
 }
 

@@ -193,7 +193,7 @@ pub fn depth_only_pipeline(
     module: &wgpu::ShaderModule,
     cutout: bool,
 ) -> wgpu::RenderPipeline {
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+    device.counted_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(label),
         layout: Some(layout),
         vertex: wgpu::VertexState {
@@ -255,7 +255,7 @@ pub fn dispatch_2d(
     size: (u32, u32),
 ) {
     let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(label), timestamp_writes });
-    pass.set_pipeline(pipeline);
+    pass.set_pipe(pipeline);
     pass.set_group(0, group, offsets);
-    pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);
+    pass.dispatch(size.0.div_ceil(8), size.1.div_ceil(8), 1);
 }

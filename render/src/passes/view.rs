@@ -132,7 +132,7 @@ impl ViewPipeline {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        let pipeline = device.counted_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("view.pipeline"),
             layout: Some(&pl),
             vertex: wgpu::VertexState {
@@ -311,11 +311,11 @@ impl BufferView {
                 .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("view.range"), timestamp_writes: None });
             pass.set_group(0, &group, &[]);
             let [clear, minmax, histogram] = &self.shared.range;
-            pass.set_pipeline(clear);
-            pass.dispatch_workgroups(((crate::maths::colormap::RANGE_STATS_BYTES / 4) as u32).div_ceil(256), 1, 1);
+            pass.set_pipe(clear);
+            pass.dispatch(((crate::maths::colormap::RANGE_STATS_BYTES / 4) as u32).div_ceil(256), 1, 1);
             for pipeline in [minmax, histogram] {
-                pass.set_pipeline(pipeline);
-                pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+                pass.set_pipe(pipeline);
+                pass.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
             }
         }
         {
@@ -335,9 +335,9 @@ impl BufferView {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&self.shared.pipeline);
+            pass.set_pipe(&self.shared.pipeline);
             pass.set_group(0, &group, &[]);
-            pass.draw(0..3, 0..1);
+            pass.draw_counted(0..3, 0..1);
         }
         ctx.submit([enc.finish()]);
         Ok(recreated)

@@ -354,12 +354,12 @@ impl GpuScene {
                 let ds = self.double_sided.get(p.material).copied().unwrap_or(true);
                 let tex = self.textured.get(p.material).copied().unwrap_or(true);
                 let (single, double) = if tex { textured } else { plain };
-                pass.set_pipeline(if ds { double } else { single });
+                pass.set_pipe(if ds { double } else { single });
             }
             if let Some(g) = material_group {
                 pass.set_group(g, &self.material_groups[p.material.min(self.material_groups.len() - 1)], &[]);
             }
-            pass.draw_indexed(p.first_index..p.first_index + p.index_count, p.base_vertex, inst..inst + 1);
+            pass.draw_indexed_counted(p.first_index..p.first_index + p.index_count, p.base_vertex, inst..inst + 1);
         }
     }
 }
@@ -371,8 +371,8 @@ pub type PipelinePairs<'a> =
 impl GpuScene {
     /// Binds the shared vertex and index buffers.
     fn bind_geometry(&self, pass: &mut wgpu::RenderPass<'_>) {
-        pass.set_vertex_buffer(0, self.vertices.slice(..));
-        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.vertex_buffer(0, &self.vertices);
+        pass.index_buffer(&self.indices, wgpu::IndexFormat::Uint32);
     }
 
     /// The non-empty primitives `state` draws, with their instance index, in draw order (the
@@ -397,9 +397,9 @@ impl GpuScene {
         for (inst, p) in self.primitives_of(state) {
             let m = p.material.min(self.material_groups.len() - 1);
             // Both pipelines share one layout, whose material group must be bound.
-            pass.set_pipeline(if self.cutout.get(m).copied().unwrap_or(false) { cutout } else { opaque });
+            pass.set_pipe(if self.cutout.get(m).copied().unwrap_or(false) { cutout } else { opaque });
             pass.set_group(material_group, &self.material_groups[m], &[]);
-            pass.draw_indexed(p.first_index..p.first_index + p.index_count, p.base_vertex, inst..inst + 1);
+            pass.draw_indexed_counted(p.first_index..p.first_index + p.index_count, p.base_vertex, inst..inst + 1);
         }
     }
 
@@ -425,9 +425,9 @@ impl GpuScene {
             let ds = self.double_sided.get(p.material).copied().unwrap_or(true);
             let tex = self.textured.get(p.material).copied().unwrap_or(true);
             let (single, double) = if tex { textured } else { plain };
-            pass.set_pipeline(if ds { double } else { single });
+            pass.set_pipe(if ds { double } else { single });
             pass.set_group(material_group, &self.material_groups[p.material.min(self.material_groups.len() - 1)], &[]);
-            pass.draw_indexed_indirect(args, k as u64 * 20);
+            pass.draw_indexed_indirect_counted(args, k as u64 * 20);
         }
     }
 }

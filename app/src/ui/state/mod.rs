@@ -167,6 +167,7 @@ impl State {
     /// Renders this frame, probes, and updates the viewers.
     pub(super) fn frame(&mut self) {
         self.hot_reload();
+        self.poll_port_kit();
         let last_ms = self.lab.as_ref().map(|l| l.frame_ms).unwrap_or(0.0);
         let factor = if self.args.adaptive_scale && self.render_size_override.is_none() {
             self.adaptive.update(self.interacting, last_ms, self.session.target_fps, Instant::now())

@@ -28,6 +28,9 @@ pub struct PresetState {
     pub diff_with: Option<PathBuf>,
     /// The compared file's settings, with the path and modification time they were read at.
     pub diff_cache: Option<(PathBuf, Option<std::time::SystemTime>, Result<LabSettings, String>)>,
+    /// A port kit being written in the background (File → Export port kit…): its folder and
+    /// the message it ends with.
+    pub port_kit_job: Option<(PathBuf, std::sync::mpsc::Receiver<Result<String, String>>)>,
 }
 
 impl State {
@@ -178,6 +181,81 @@ impl State {
         gi_render::files::write_atomic(path, &e.to_text(format)).map_err(|e| format!("{}: {e}", path.display()))?;
         self.set_status(format!("exported {}", path.display()));
         Ok(())
+    }
+
+    /// File → Export port kit…: the kit of the live settings, scene and camera at the render
+    /// size, written by a thread with its own device so that the window does not wait
+    /// (docs/port-kit.md). A folder that exists is refused.
+    pub fn export_port_kit_to(&mut self, dir: PathBuf) -> Result<(), String> {
+        use gi_render::export::port_kit::{self, KitRequest};
+        if self.preset.port_kit_job.is_some() {
+            return Err("a port kit is already being written".into());
+        }
+        if dir.exists() {
+            return Err(format!("{} exists: choose a new folder for the kit", dir.display()));
+        }
+        let l = self.lab.as_ref().map_err(|e| e.clone())?;
+        let r = &l.renderer;
+        let (scene, settings, size, camera) = (r.scene().clone(), l.settings.clone(), r.size(), r.camera);
+        let (scene_name, preset) = (l.scene_name.clone(), self.preset_label().trim_end_matches(".ron").to_string());
+        let (tx, rx) = std::sync::mpsc::channel();
+        let target = dir.clone();
+        std::thread::Builder::new()
+            .name("port-kit".into())
+            .spawn(move || {
+                let result = (|| {
+                    let ctx = gi_render::GpuContext::headless().map_err(|e| e.to_string())?;
+                    let req = KitRequest {
+                        preset: &preset,
+                        settings,
+                        scene,
+                        scene_name: &scene_name,
+                        size,
+                        warm_up_frames: 4,
+                        camera: Some(camera),
+                    };
+                    let kit = port_kit::build(ctx, req)?;
+                    port_kit::write(&kit, &target, false)?;
+                    Ok(format!(
+                        "port kit written to {}: {} passes, {} resources",
+                        target.display(),
+                        kit.manifest.passes.len(),
+                        kit.manifest.resources.len()
+                    ))
+                })();
+                let _ = tx.send(result);
+            })
+            .map_err(|e| format!("cannot start the port kit's thread: {e}"))?;
+        self.preset.port_kit_job = Some((dir.clone(), rx));
+        self.set_status(format!("writing the port kit to {} …", dir.display()));
+        Ok(())
+    }
+
+    /// Says how the background port kit ended, once it has.
+    pub fn poll_port_kit(&mut self) {
+        let Some((dir, rx)) = &self.preset.port_kit_job else { return };
+        let message = match rx.try_recv() {
+            Ok(Ok(m)) => m,
+            Ok(Err(e)) => format!("port kit {} failed: {e}", dir.display()),
+            Err(std::sync::mpsc::TryRecvError::Empty) => return,
+            Err(std::sync::mpsc::TryRecvError::Disconnected) => {
+                format!("port kit {}: its thread stopped", dir.display())
+            }
+        };
+        self.preset.port_kit_job = None;
+        self.set_status(message);
+    }
+
+    pub fn export_port_kit_dialog(&mut self) {
+        let stem = self.preset_label().trim_end_matches(".ron").to_string();
+        if let Some(p) = rfd::FileDialog::new()
+            .set_file_name(format!("{stem}-port-kit"))
+            .set_title("Export port kit (a new folder)")
+            .save_file()
+            && let Err(e) = self.export_port_kit_to(p)
+        {
+            self.set_status(format!("port kit not written: {e}"));
+        }
     }
 
     pub fn export_dialog(&mut self, format: ExportFormat) {

@@ -152,23 +152,23 @@ impl AtSamplesPass {
     /// Chunk `k`'s samples of `mode`'s set into the slots' records (and the raster's
     /// instance counts).
     pub fn begin(&self, pass: &mut wgpu::ComputePass<'_>, group: &wgpu::BindGroup, (mode, k): (u32, u32)) {
-        pass.set_pipeline(&self.begin);
+        pass.set_pipe(&self.begin);
         pass.set_group(0, group, &[self.offset(mode, k)]);
-        pass.dispatch_workgroups(1, 1, 1);
+        pass.dispatch(1, 1, 1);
     }
 
     /// The HCB splat's indirect arguments over the cached samples (between the cache's
     /// update and the build).
     pub fn cached_args(&self, pass: &mut wgpu::ComputePass<'_>, group: &wgpu::BindGroup) {
-        pass.set_pipeline(&self.cached_args);
+        pass.set_pipe(&self.cached_args);
         pass.set_group(0, group, &[0]);
-        pass.dispatch_workgroups(1, 1, 1);
+        pass.dispatch(1, 1, 1);
     }
 
     /// Chunk `k`'s records' irradiance into its samples' light.
     pub fn store(&self, pass: &mut wgpu::ComputePass<'_>, group: &wgpu::BindGroup, (mode, k): (u32, u32), slots: u32) {
-        pass.set_pipeline(&self.store);
+        pass.set_pipe(&self.store);
         pass.set_group(0, group, &[self.offset(mode, k)]);
-        pass.dispatch_workgroups(slots.div_ceil(64), 1, 1);
+        pass.dispatch(slots.div_ceil(64), 1, 1);
     }
 }

@@ -10,6 +10,7 @@
 
 use glam::{Vec3, Vec4};
 
+use crate::counters::prelude::*;
 use crate::explain::{Check, Contribution, Explanation, Rejection, luminance};
 use crate::gpu::GpuContext;
 use crate::gpu::bindings::{Bindings, Kind, binding};
@@ -217,7 +218,7 @@ impl GautronExplainPass {
         let p = ExplainParams { pixel: [info.pixel.0, info.pixel.1, taken, 0] };
         let info = GautronInfo { snapshots: taken > 0, ..info };
         ctx.queue.write_buffer(&self.explain, 0, bytemuck::bytes_of(&p));
-        enc.clear_buffer(&self.out, 0, Some(ENTRIES_OFFSET));
+        enc.counted_clear_buffer(&self.out, 0, Some(ENTRIES_OFFSET));
         let tv = wgpu::BindingResource::TextureView;
         let part = |offset, size| crate::passes::buffer_part(&self.out, offset, size);
         let (accum, irradiance) = (stage.splat.accum_view(), view(&stage.splat.irradiance, "gautron.irradiance"));
@@ -254,10 +255,10 @@ impl GautronExplainPass {
             timestamp_writes: None,
         });
         pass.set_bind_group(0, &group, &[]);
-        pass.set_pipeline(&self.pixel_pipeline);
-        pass.dispatch_workgroups(1, 1, 1);
-        pass.set_pipeline(&self.records_pipeline);
-        pass.dispatch_workgroups(records.div_ceil(64) as u32, 1, 1);
+        pass.set_pipe(&self.pixel_pipeline);
+        pass.dispatch(1, 1, 1);
+        pass.set_pipe(&self.records_pipeline);
+        pass.dispatch(records.div_ceil(64) as u32, 1, 1);
         drop(pass);
         self.info = Some(info);
     }

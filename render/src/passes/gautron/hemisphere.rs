@@ -261,8 +261,8 @@ impl HemispherePass {
         };
         pass.set_group(0, &group, &[]);
         if let Some(RoundArgs(round)) = round {
-            pass.set_pipeline(&self.tile_clear);
-            pass.draw_indirect(round, RoundArgs::CLEAR);
+            pass.set_pipe(&self.tile_clear);
+            pass.draw_indirect_counted(round, RoundArgs::CLEAR);
         }
         pass.set_group(1, &scene.instance_group, &[]);
         let pipelines =
@@ -311,11 +311,11 @@ impl HemispherePass {
             label: Some("gautron.reduce"),
             timestamp_writes: slot.and_then(|s| s.compute(false, true)),
         });
-        pass.set_pipeline(&self.reduce);
+        pass.set_pipe(&self.reduce);
         pass.set_group(0, &group, &[]);
         match round {
-            Some(RoundArgs(round)) => pass.dispatch_workgroups_indirect(round, RoundArgs::REDUCE),
-            None => pass.dispatch_workgroups(slots, 1, 1),
+            Some(RoundArgs(round)) => pass.dispatch_indirect(round, RoundArgs::REDUCE),
+            None => pass.dispatch(slots, 1, 1),
         }
     }
 
@@ -355,7 +355,7 @@ fn tile_clear_pipeline(
         bind_group_layouts: &[Some(raster_layout)],
         immediate_size: 0,
     });
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+    device.counted_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some("gautron.hemisphere.tile_clear"),
         layout: Some(&layout),
         vertex: wgpu::VertexState {

@@ -304,9 +304,9 @@ impl SplatPass {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.raster);
+        pass.set_pipe(&self.raster);
         pass.set_group(0, &group, &[]);
-        pass.draw_indirect(args, 0);
+        pass.draw_indirect_counted(args, 0);
     }
 
     /// E = RGB / A and the reflected indirect light (`params`: the stage's uniform, whose
@@ -420,7 +420,7 @@ fn raster_pipeline(
         blend: Some(wgpu::BlendState { color: additive, alpha: additive }),
         write_mask: wgpu::ColorWrites::ALL,
     });
-    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+    let pipeline = device.counted_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some("gautron.splat.blend.pipeline"),
         layout: Some(&pipeline_layout),
         vertex: wgpu::VertexState {

@@ -458,15 +458,15 @@ impl GautronStage {
                 });
                 let g1 = &self.gbuffer_group(f);
                 if let Some(cull) = cull {
-                    pass.set_pipeline(cull);
+                    pass.set_pipe(cull);
                     pass.set_group(0, g0, &[0]);
                     pass.set_group(1, g1, &[]);
-                    pass.dispatch_workgroups(1, 1, 1);
+                    pass.dispatch(1, 1, 1);
                 }
-                pass.set_pipeline(begin);
+                pass.set_pipe(begin);
                 pass.set_group(0, g0, &[0]);
                 pass.set_group(1, g1, &[]);
-                pass.dispatch_workgroups(1, 1, 1);
+                pass.dispatch(1, 1, 1);
             }
             splat.splat(
                 PassRec { ctx, enc: e, slot },
@@ -492,17 +492,17 @@ impl GautronStage {
                 });
                 pass.set_group(0, g0, &offset);
                 pass.set_group(1, g1, &[]);
-                pass.set_pipeline(&self.candidates);
-                pass.dispatch_workgroups(tiles.0, tiles.1, 1);
+                pass.set_pipe(&self.candidates);
+                pass.dispatch(tiles.0, tiles.1, 1);
                 let chunks = (tiles.0 * tiles.1).div_ceil(256);
-                pass.set_pipeline(&self.count);
-                pass.dispatch_workgroups(chunks, 1, 1);
-                pass.set_pipeline(&self.compact);
-                pass.dispatch_workgroups(1, 1, 1);
-                pass.set_pipeline(&self.scatter);
-                pass.dispatch_workgroups(chunks, 1, 1);
-                pass.set_pipeline(&self.cameras_pipeline);
-                pass.dispatch_workgroups(slots.div_ceil(64), 1, 1);
+                pass.set_pipe(&self.count);
+                pass.dispatch(chunks, 1, 1);
+                pass.set_pipe(&self.compact);
+                pass.dispatch(1, 1, 1);
+                pass.set_pipe(&self.scatter);
+                pass.dispatch(chunks, 1, 1);
+                pass.set_pipe(&self.cameras_pipeline);
+                pass.dispatch(slots.div_ceil(64), 1, 1);
             });
             let name = if light.is_some() { "gautron.vpl_records" } else { "gautron.hemispheres" };
             timer.scope(ctx, enc, name, |e, slot| {
@@ -514,12 +514,12 @@ impl GautronStage {
                     });
                     pass.set_group(0, g0, &offset);
                     pass.set_group(1, g1, &[]);
-                    pass.set_pipeline(&self.clamp_cached);
-                    pass.dispatch_workgroups(s.capacity.max(1).div_ceil(64), 1, 1);
-                    pass.set_pipeline(&self.clamp_new);
-                    pass.dispatch_workgroups(slots.div_ceil(64), 1, 1);
-                    pass.set_pipeline(&self.clamp_store);
-                    pass.dispatch_workgroups(slots.div_ceil(64), 1, 1);
+                    pass.set_pipe(&self.clamp_cached);
+                    pass.dispatch(s.capacity.max(1).div_ceil(64), 1, 1);
+                    pass.set_pipe(&self.clamp_new);
+                    pass.dispatch(slots.div_ceil(64), 1, 1);
+                    pass.set_pipe(&self.clamp_store);
+                    pass.dispatch(slots.div_ceil(64), 1, 1);
                 }
             });
             timer.scope(ctx, enc, "gautron.splat", |e, slot| {

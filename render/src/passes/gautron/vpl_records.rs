@@ -131,11 +131,11 @@ impl VplRecordPass {
         });
         pass.set_group(0, &group, &[]);
         if self.wide {
-            pass.set_pipeline(&self.wide_pipeline);
-            pass.dispatch_workgroups(slots.max(1), 1, 1);
+            pass.set_pipe(&self.wide_pipeline);
+            pass.dispatch(slots.max(1), 1, 1);
         } else {
-            pass.set_pipeline(&self.serial_pipeline);
-            pass.dispatch_workgroups(slots.div_ceil(64), 1, 1);
+            pass.set_pipe(&self.serial_pipeline);
+            pass.dispatch(slots.div_ceil(64), 1, 1);
         }
     }
 }

@@ -301,9 +301,9 @@ impl HcbPass {
             label: Some("hcb.samples.clear"),
             timestamp_writes: None,
         });
-        pass.set_pipeline(&self.clear_pipeline);
+        pass.set_pipe(&self.clear_pipeline);
         pass.set_group(0, &group, &[(slot * STRIDE) as u32]);
-        pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
+        pass.dispatch(self.width.div_ceil(8), self.height.div_ceil(8), 1);
     }
 
     /// Builds every level from the G-buffer's position and normal, the masks and the samples.
@@ -383,7 +383,7 @@ impl HcbPass {
             })
             .collect();
         if cache.is_none() {
-            encoder.clear_buffer(&self.counter, 0, None);
+            encoder.counted_clear_buffer(&self.counter, 0, None);
         }
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("hcb"),
@@ -392,28 +392,28 @@ impl HcbPass {
         let groups = |w: u32, h: u32| (w.div_ceil(8), h.div_ceil(8));
         let offset = |k: usize| [(k as u64 * STRIDE) as u32];
         for (k, l) in self.levels.iter().enumerate() {
-            pass.set_pipeline(if k == 0 { &self.base_pipeline } else { &self.build_pipeline });
+            pass.set_pipe(if k == 0 { &self.base_pipeline } else { &self.build_pipeline });
             pass.set_group(0, &io_groups[k], &offset(k));
             let (gx, gy) = groups(l.width, l.height);
-            pass.dispatch_workgroups(gx, gy, 1);
+            pass.dispatch(gx, gy, 1);
         }
-        pass.set_pipeline(&self.mask_pipeline);
+        pass.set_pipe(&self.mask_pipeline);
         for k in (1..n as usize).rev() {
             pass.set_group(0, &mask_groups[k - 1], &offset(k));
             let (gx, gy) = groups(self.levels[k - 1].width, self.levels[k - 1].height);
-            pass.dispatch_workgroups(gx, gy, 1);
+            pass.dispatch(gx, gy, 1);
         }
         if cache.is_none() {
-            pass.set_pipeline(&self.clear_pipeline);
+            pass.set_pipe(&self.clear_pipeline);
             pass.set_group(0, &level_groups[0], &offset(n as usize));
             let (gx, gy) = groups(self.width, self.height);
-            pass.dispatch_workgroups(gx, gy, 1);
+            pass.dispatch(gx, gy, 1);
         }
-        pass.set_pipeline(&self.samples_pipeline);
+        pass.set_pipe(&self.samples_pipeline);
         for (k, l) in self.levels.iter().enumerate() {
             pass.set_group(0, &level_groups[k], &offset(k));
             let (gx, gy) = groups(l.width, l.height);
-            pass.dispatch_workgroups(gx, gy, 1);
+            pass.dispatch(gx, gy, 1);
         }
     }
 }

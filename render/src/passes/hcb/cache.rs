@@ -183,7 +183,7 @@ impl HcbCachePass {
             bind_group_layouts: &[Some(&removal_layout)],
             immediate_size: 0,
         });
-        let removal_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        let removal_pipeline = device.counted_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("hcb.cache.removal"),
             layout: Some(&pl),
             vertex: wgpu::VertexState {
@@ -312,7 +312,7 @@ impl HcbCachePass {
     /// Empties the cache: the next frame identifies all its samples anew (after a change of
     /// the HCB's settings, which the cached samples do not follow).
     pub fn reset(&self, encoder: &mut wgpu::CommandEncoder) {
-        encoder.clear_buffer(&self.prev_counter, 0, None);
+        encoder.counted_clear_buffer(&self.prev_counter, 0, None);
     }
 
     /// Double buffering (§5.1): the HCB's list of the last frame becomes the cache, and the
@@ -375,7 +375,7 @@ impl HcbCachePass {
         };
         ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
         let (_, cache_view, group_view) = self.views();
-        encoder.clear_buffer(&hcb.counter, 0, None);
+        encoder.counted_clear_buffer(&hcb.counter, 0, None);
         hcb.clear_marks(ctx, encoder, &group_view);
         let samples_view = crate::passes::view(&hcb.samples, "hcb.samples");
         let tv = wgpu::BindingResource::TextureView;
@@ -408,19 +408,19 @@ impl HcbCachePass {
                 label: Some("hcb.cache.args"),
                 timestamp_writes: slot.and_then(|s| s.compute(true, false)),
             });
-            pass.set_pipeline(&self.args_pipeline);
+            pass.set_pipe(&self.args_pipeline);
             pass.set_group(0, &group, &[]);
             pass.set_group(1, &args_group, &[]);
-            pass.dispatch_workgroups(1, 1, 1);
+            pass.dispatch(1, 1, 1);
         }
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("hcb.cache.validate"),
                 timestamp_writes: None,
             });
-            pass.set_pipeline(&self.validate_pipeline);
+            pass.set_pipe(&self.validate_pipeline);
             pass.set_group(0, &group, &[]);
-            pass.dispatch_workgroups_indirect(&self.args, 16);
+            pass.dispatch_indirect(&self.args, 16);
         }
         {
             let cache = crate::passes::view(&self.cache, "hcb.cache");
@@ -445,17 +445,17 @@ impl HcbCachePass {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&self.removal_pipeline);
+            pass.set_pipe(&self.removal_pipeline);
             pass.set_group(0, &removal_group, &[]);
-            pass.draw_indirect(&self.args, 0);
+            pass.draw_indirect_counted(&self.args, 0);
         }
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("hcb.cache.compact"),
             timestamp_writes: slot.and_then(|s| s.compute(false, true)),
         });
-        pass.set_pipeline(&self.compact_pipeline);
+        pass.set_pipe(&self.compact_pipeline);
         pass.set_group(0, &group, &[]);
-        pass.dispatch_workgroups_indirect(&self.args, 16);
+        pass.dispatch_indirect(&self.args, 16);
     }
 }
 

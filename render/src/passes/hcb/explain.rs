@@ -314,12 +314,12 @@ impl HcbExplainPass {
             enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("explain.hcb"), timestamp_writes: None });
         pass.set_group(0, &group, &[]);
         pass.set_group(1, &args_group, &[]);
-        pass.set_pipeline(&self.args_pipeline);
-        pass.dispatch_workgroups(1, 1, 1);
+        pass.set_pipe(&self.args_pipeline);
+        pass.dispatch(1, 1, 1);
         // A buffer cannot be both storage and indirect arguments in one dispatch.
         pass.set_group(1, &no_args, &[]);
-        pass.set_pipeline(&self.samples_pipeline);
-        pass.dispatch_workgroups_indirect(&self.args, 0);
+        pass.set_pipe(&self.samples_pipeline);
+        pass.dispatch_indirect(&self.args, 0);
         drop(pass);
         self.info = Some(info);
     }

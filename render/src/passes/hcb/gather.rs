@@ -172,12 +172,12 @@ impl HcbGatherPass {
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
         pass.set_group(0, &args_group, &[]);
-        pass.set_pipeline(&self.args_pipeline);
-        pass.dispatch_workgroups(1, 1, 1);
+        pass.set_pipe(&self.args_pipeline);
+        pass.dispatch(1, 1, 1);
         pass.set_group(0, &gather_group, &[]);
         // The dispatch words: 12–14 (a workgroup per sample) or 4–6 (64 samples per workgroup).
         let (pipeline, offset) = if self.wide { (&self.wide_pipeline, 48) } else { (&self.serial_pipeline, 16) };
-        pass.set_pipeline(pipeline);
-        pass.dispatch_workgroups_indirect(&self.args, offset);
+        pass.set_pipe(pipeline);
+        pass.dispatch_indirect(&self.args, offset);
     }
 }

@@ -137,7 +137,7 @@ impl HcbSplatPass {
             dst_factor: wgpu::BlendFactor::One,
             operation: wgpu::BlendOperation::Add,
         };
-        let splat_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        let splat_pipeline = device.counted_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("hcb.splat"),
             layout: Some(&pl),
             vertex: wgpu::VertexState {
@@ -427,9 +427,9 @@ impl HcbSplatPass {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.splat_pipeline);
+        pass.set_pipe(&self.splat_pipeline);
         pass.set_group(0, group, &[]);
-        pass.draw_indirect(args.0, args.1);
+        pass.draw_indirect_counted(args.0, args.1);
     }
 
     /// Eq. 11 over `hcb.weight_sum`: `hcb.irradiance`, `hcb.indirect` and the uncovered count
@@ -463,13 +463,13 @@ impl HcbSplatPass {
             ],
         );
         // The count only: the list is written up to it.
-        encoder.clear_buffer(&self.uncovered, 0, Some(16));
+        encoder.counted_clear_buffer(&self.uncovered, 0, Some(16));
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("hcb.normalize"),
             timestamp_writes: slot.and_then(|s| s.compute(false, true)),
         });
-        pass.set_pipeline(&self.normalize_pipeline);
+        pass.set_pipe(&self.normalize_pipeline);
         pass.set_group(0, &ngroup, &[]);
-        pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
+        pass.dispatch(self.width.div_ceil(8), self.height.div_ceil(8), 1);
     }
 }

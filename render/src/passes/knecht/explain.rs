@@ -271,11 +271,11 @@ impl VplExplainPass {
         let mut pass =
             enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("explain.vpl"), timestamp_writes: None });
         pass.set_bind_group(0, &group, &[]);
-        pass.set_pipeline(&self.pixel_pipeline);
-        pass.dispatch_workgroups(1, 1, 1);
+        pass.set_pipe(&self.pixel_pipeline);
+        pass.dispatch(1, 1, 1);
         if count > 0 {
-            pass.set_pipeline(&self.vpl_pipeline);
-            pass.dispatch_workgroups(count.div_ceil(64), 1, 1);
+            pass.set_pipe(&self.vpl_pipeline);
+            pass.dispatch(count.div_ceil(64), 1, 1);
         }
         drop(pass);
         self.info = Some(info);

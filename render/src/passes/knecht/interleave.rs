@@ -496,9 +496,9 @@ impl InterleavePass {
                     label: Some("interleave.gather_fused"),
                     timestamp_writes: slot.and_then(|s| s.compute(true, true)),
                 });
-                pass.set_pipeline(&self.fused_pipeline[mode]);
+                pass.set_pipe(&self.fused_pipeline[mode]);
                 pass.set_group(0, &group, &[]);
-                pass.dispatch_workgroups(sw.div_ceil(tile), sh.div_ceil(tile), 1);
+                pass.dispatch(sw.div_ceil(tile), sh.div_ceil(tile), 1);
             });
             return;
         };
@@ -541,28 +541,28 @@ impl InterleavePass {
                 label: Some("interleave.split"),
                 timestamp_writes: slot.and_then(|s| s.compute(true, true)),
             });
-            pass.set_pipeline(&self.split_pipeline);
+            pass.set_pipe(&self.split_pipeline);
             pass.set_group(0, &split_group, &[]);
-            pass.dispatch_workgroups(sw.div_ceil(tile), sh.div_ceil(tile), 1);
+            pass.dispatch(sw.div_ceil(tile), sh.div_ceil(tile), 1);
         });
         timer.scope(ctx, encoder, "interleave.gather", |e, slot| {
             let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("interleave.gather"),
                 timestamp_writes: slot.and_then(|s| s.compute(true, true)),
             });
-            pass.set_pipeline(&self.gather_pipeline[mode]);
+            pass.set_pipe(&self.gather_pipeline[mode]);
             pass.set_group(0, &gather_group, &[]);
-            pass.dispatch_workgroups(sw.div_ceil(tile), sh.div_ceil(tile), 1);
+            pass.dispatch(sw.div_ceil(tile), sh.div_ceil(tile), 1);
         });
         timer.scope(ctx, encoder, "interleave.merge", |e, slot| {
             let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("interleave.merge"),
                 timestamp_writes: slot.and_then(|s| s.compute(true, true)),
             });
-            pass.set_pipeline(&self.merge_pipeline);
+            pass.set_pipe(&self.merge_pipeline);
             for group in &merge_groups {
                 pass.set_group(0, group, &[]);
-                pass.dispatch_workgroups(self.width.div_ceil(tile), self.height.div_ceil(tile), 1);
+                pass.dispatch(self.width.div_ceil(tile), self.height.div_ceil(tile), 1);
             }
         });
     }
@@ -588,13 +588,9 @@ impl InterleavePass {
             label: Some("interleave.filter"),
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
-        pass.set_pipeline(&self.filter_pipeline);
+        pass.set_pipe(&self.filter_pipeline);
         pass.set_group(0, &group, &[]);
-        pass.dispatch_workgroups(
-            self.width.div_ceil(crate::passes::TILE),
-            self.height.div_ceil(crate::passes::TILE),
-            1,
-        );
+        pass.dispatch(self.width.div_ceil(crate::passes::TILE), self.height.div_ceil(crate::passes::TILE), 1);
     }
 
     /// The filter's uniform for a merge that runs it fused (`TemporalPass::run_fused`,

@@ -273,7 +273,7 @@ impl IrsmPass {
         points: u32,
     ) {
         for b in [&self.depth, &self.owner, &self.coverage] {
-            encoder.clear_buffer(b, 0, None);
+            encoder.counted_clear_buffer(b, 0, None);
         }
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("irsm"),
@@ -282,14 +282,14 @@ impl IrsmPass {
         let offset = [((bounce.clamp(1, MAX_BOUNCES - 1) - 1) as u64 * STRIDE) as u32];
         let groups = points.div_ceil(64);
         pass.set_group(0, &job.splat, &offset);
-        pass.set_pipeline(&self.splat_pipeline);
-        pass.dispatch_workgroups(groups.min(65535), groups.div_ceil(65535), 1);
-        pass.set_pipeline(&self.owner_pipeline);
-        pass.dispatch_workgroups(groups.min(65535), groups.div_ceil(65535), 1);
+        pass.set_pipe(&self.splat_pipeline);
+        pass.dispatch(groups.min(65535), groups.div_ceil(65535), 1);
+        pass.set_pipe(&self.owner_pipeline);
+        pass.dispatch(groups.min(65535), groups.div_ceil(65535), 1);
         pass.set_group(0, &job.sample, &offset);
-        pass.set_pipeline(&self.cdf_pipeline);
-        pass.dispatch_workgroups(vpls, 1, 1);
-        pass.set_pipeline(&self.sample_pipeline);
-        pass.dispatch_workgroups(1, 1, 1);
+        pass.set_pipe(&self.cdf_pipeline);
+        pass.dispatch(vpls, 1, 1);
+        pass.set_pipe(&self.sample_pipeline);
+        pass.dispatch(1, 1, 1);
     }
 }

@@ -516,16 +516,16 @@ impl IsmPass {
     /// bounce 0 first clears the whole atlas.
     pub fn splat(&self, encoder: &mut wgpu::CommandEncoder, slot: Option<Slot<'_>>, job: &IsmJob, bounce: u32) {
         if bounce == 0 {
-            encoder.clear_buffer(&self.depth, 0, None);
+            encoder.counted_clear_buffer(&self.depth, 0, None);
         }
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("ism.splat"),
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
-        pass.set_pipeline(&self.splat_pipeline);
+        pass.set_pipe(&self.splat_pipeline);
         pass.set_group(0, &job.splat, &[(bounce.min(MAX_BOUNCES - 1) as u64 * LEVEL_STRIDE) as u32]);
         let groups = (self.cloud.gpu.len() as u32).div_ceil(64);
-        pass.dispatch_workgroups(groups.min(65535), groups.div_ceil(65535), 1);
+        pass.dispatch(groups.min(65535), groups.div_ceil(65535), 1);
     }
 
     /// Resolves the splatted distances into `ism.atlas` and runs pull-push, over the whole atlas.
@@ -586,13 +586,13 @@ impl IsmPass {
             .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("ism.resolve"), timestamp_writes: None });
         let span = rows.end - rows.start;
         if self.levels == 0 {
-            pass.set_pipeline(&self.resolve_pipeline);
+            pass.set_pipe(&self.resolve_pipeline);
             pass.set_group(0, group, &[Self::level_offset(call, 1)]);
-            pass.dispatch_workgroups(w.div_ceil(8), span.div_ceil(8), 1);
+            pass.dispatch(w.div_ceil(8), span.div_ceil(8), 1);
         } else {
-            pass.set_pipeline(&self.resolve_pull_pipeline);
+            pass.set_pipe(&self.resolve_pull_pipeline);
             pass.set_group(0, group, &[Self::level_offset(call, 0)]);
-            pass.dispatch_workgroups((w / 2).div_ceil(8), (span / 2).div_ceil(8), 1);
+            pass.dispatch((w / 2).div_ceil(8), (span / 2).div_ceil(8), 1);
         }
     }
 
@@ -701,19 +701,19 @@ impl IsmPass {
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
         let span = |level: u32| ((rows.end >> level) - (rows.start >> level)).max(1);
-        pass.set_pipeline(&self.pull_pipeline);
+        pass.set_pipe(&self.pull_pipeline);
         for (level, g) in (1..).zip(&pulls) {
             let cw = (w >> (level + 1)).max(1);
             pass.set_group(0, g, &[Self::level_offset(call, 2 * level as u64)]);
-            pass.dispatch_workgroups(cw.div_ceil(8), span(level + 1).div_ceil(8), 1);
+            pass.dispatch(cw.div_ceil(8), span(level + 1).div_ceil(8), 1);
         }
         // A 2×2 quad of the finer level an invocation (`cs_push`).
-        pass.set_pipeline(&self.push_pipeline);
+        pass.set_pipe(&self.push_pipeline);
         for (level, g) in pushes.iter().enumerate().rev() {
             let level = level as u32;
             let fw = (w >> level).max(1);
             pass.set_group(0, g, &[Self::level_offset(call, 2 * level as u64 + 1)]);
-            pass.dispatch_workgroups((fw / 2).div_ceil(8), (span(level) / 2).div_ceil(8), 1);
+            pass.dispatch((fw / 2).div_ceil(8), (span(level) / 2).div_ceil(8), 1);
         }
     }
 

@@ -6,6 +6,7 @@
 //! splatted, then bounce b + 1's VPLs are chosen from the point cloud with them), so stage 3
 //! splats the maps the bounces read and stage 4 splats what is left and pulls-pushes.
 
+use crate::counters::prelude::*;
 use crate::fingerprint::{Fingerprint, LastRun, Space};
 use crate::gpu::GpuContext;
 use crate::lab_settings::LabSettings;
@@ -243,7 +244,7 @@ impl KnechtVpls {
         }
         if f.lights.is_empty() {
             // No light: no VPL slot is written, so the list is cleared.
-            enc.clear_buffer(&self.vpl.vpls, 0, None);
+            enc.counted_clear_buffer(&self.vpl.vpls, 0, None);
         } else {
             self.vpl.albedo_mip = s.vpl.albedo_mip;
             self.vpl.importance_bias = s.vpl.importance_bias;
@@ -261,7 +262,7 @@ impl KnechtVpls {
             // Slots the emitters could not fill (more than their VPLs) stay empty.
             let (used, size) = (first + written, std::mem::size_of::<crate::passes::reference::vpl::GpuVpl>() as u64);
             if used < n_vpls {
-                enc.clear_buffer(list, used as u64 * size, Some((n_vpls - used) as u64 * size));
+                enc.counted_clear_buffer(list, used as u64 * size, Some((n_vpls - used) as u64 * size));
             }
         }
 

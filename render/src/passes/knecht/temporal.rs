@@ -446,13 +446,9 @@ impl TemporalPass {
                 label: Some(label),
                 timestamp_writes: slot.and_then(|s| s.compute(true, true)),
             });
-            pass.set_pipeline(pipeline);
+            pass.set_pipe(pipeline);
             pass.set_group(0, &group, &[]);
-            pass.dispatch_workgroups(
-                self.width.div_ceil(crate::passes::TILE),
-                self.height.div_ceil(crate::passes::TILE),
-                1,
-            );
+            pass.dispatch(self.width.div_ceil(crate::passes::TILE), self.height.div_ceil(crate::passes::TILE), 1);
         }
         let decoded = v(&self.normals[write], "temporal.prev_normal");
         let decode = demodulate.then(|| {

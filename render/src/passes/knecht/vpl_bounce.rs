@@ -162,9 +162,9 @@ impl VplBouncePass {
             label: Some("vpl.bounce"),
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipe(&self.pipeline);
         let b = bounce.clamp(1, MAX_BOUNCES - 1);
         pass.set_group(0, group, &[((b - 1) as u64 * STRIDE) as u32]);
-        pass.dispatch_workgroups(vpls, 1, 1);
+        pass.dispatch(vpls, 1, 1);
     }
 }

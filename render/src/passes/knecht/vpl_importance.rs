@@ -459,16 +459,16 @@ impl VplImportancePass {
             label: Some("vpl.importance"),
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
-        pass.set_pipeline(&self.importance_pipeline);
+        pass.set_pipe(&self.importance_pipeline);
         for (k, g) in imp_groups.iter().enumerate() {
             pass.set_group(0, g, &[(k as u64 * STRIDE) as u32]);
-            pass.dispatch_workgroups(size.div_ceil(8), size.div_ceil(8), 1);
+            pass.dispatch(size.div_ceil(8), size.div_ceil(8), 1);
         }
-        pass.set_pipeline(&self.reduce_pipeline);
+        pass.set_pipe(&self.reduce_pipeline);
         for (l, g) in reduce_groups.iter().enumerate() {
             let s = (size >> (l + 1)).max(1);
             pass.set_group(0, g, &[]);
-            pass.dispatch_workgroups(s.div_ceil(8), s.div_ceil(8), views.max(1) as u32);
+            pass.dispatch(s.div_ceil(8), s.div_ceil(8), views.max(1) as u32);
         }
     }
 
@@ -508,13 +508,13 @@ impl VplImportancePass {
             label: Some("vpl.warp"),
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
-        pass.set_pipeline(&self.warp_pipeline);
+        pass.set_pipe(&self.warp_pipeline);
         for (k, (g, job)) in groups.iter().zip(jobs).enumerate() {
             if job.count == 0 {
                 continue;
             }
             pass.set_group(0, g, &[(k as u64 * STRIDE) as u32]);
-            pass.dispatch_workgroups(job.count.div_ceil(64), 1, 1);
+            pass.dispatch(job.count.div_ceil(64), 1, 1);
         }
     }
 

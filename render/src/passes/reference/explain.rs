@@ -158,9 +158,9 @@ impl ReferenceExplainPass {
             label: Some("explain.reference"),
             timestamp_writes: None,
         });
-        pass.set_pipeline(pipeline);
+        pass.set_pipe(pipeline);
         pass.set_bind_group(0, group, &[]);
-        pass.dispatch_workgroups(n, 1, 1);
+        pass.dispatch(n, 1, 1);
     }
 
     /// Before the gather: the pixel, and the average the gather is about to fold into.

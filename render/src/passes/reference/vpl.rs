@@ -238,8 +238,8 @@ impl VplSamplePass {
             label: Some("vpl.sample"),
             timestamp_writes: slot.and_then(|s| s.compute(true, true)),
         });
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipe(&self.pipeline);
         pass.set_group(0, &group, &[]);
-        pass.dispatch_workgroups(count.div_ceil(64), 1, 1);
+        pass.dispatch(count.div_ceil(64), 1, 1);
     }
 }

@@ -163,13 +163,9 @@ impl VplGatherPass {
                 label: Some("indirect.gather"),
                 timestamp_writes: slot.and_then(|s| s.compute(true, true)),
             });
-            pass.set_pipeline(&self.pipeline);
+            pass.set_pipe(&self.pipeline);
             pass.set_group(0, &group, &[]);
-            pass.dispatch_workgroups(
-                self.width.div_ceil(crate::passes::TILE),
-                self.height.div_ceil(crate::passes::TILE),
-                1,
-            );
+            pass.dispatch(self.width.div_ceil(crate::passes::TILE), self.height.div_ceil(crate::passes::TILE), 1);
         }
         encoder.counted_copy_texture(
             self.accum.as_image_copy(),

@@ -347,9 +347,9 @@ impl SolerExplainPass {
     fn dispatch(enc: &mut wgpu::CommandEncoder, pipeline: &wgpu::ComputePipeline, group: &wgpu::BindGroup, slot: u64) {
         let mut pass = enc
             .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("explain.soler"), timestamp_writes: None });
-        pass.set_pipeline(pipeline);
+        pass.set_pipe(pipeline);
         pass.set_bind_group(0, group, &[(slot * STRIDE) as u32]);
-        pass.dispatch_workgroups(1, 1, 1);
+        pass.dispatch(1, 1, 1);
     }
 
     /// Bounce `b`, right after the stage gathered and upsampled it: its levels' texels, their
@@ -396,9 +396,9 @@ impl SolerExplainPass {
                 label: Some("explain.soler.ring"),
                 timestamp_writes: None,
             });
-            pass.set_pipeline(&self.ring_pipeline);
+            pass.set_pipe(&self.ring_pipeline);
             pass.set_bind_group(0, &group, &[(slot * STRIDE) as u32, (list * STRIDE) as u32]);
-            pass.dispatch_workgroups(1, 1, 1);
+            pass.dispatch(1, 1, 1);
         }
     }
 

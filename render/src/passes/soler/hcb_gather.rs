@@ -99,10 +99,10 @@ impl SolerHcbGather {
                 label: Some("soler.hcb_gather.args"),
                 timestamp_writes: slot.as_ref().and_then(|s| s.compute(true, false)),
             });
-            pass.set_pipeline(&self.args_pipeline);
+            pass.set_pipe(&self.args_pipeline);
             pass.set_group(0, first, &[0]);
             pass.set_group(1, &args_group, &[]);
-            pass.dispatch_workgroups(1, 1, 1);
+            pass.dispatch(1, 1, 1);
         }
         let n = groups.len();
         for (i, g) in groups.iter().enumerate() {
@@ -110,10 +110,10 @@ impl SolerHcbGather {
                 label: Some("soler.hcb_gather"),
                 timestamp_writes: slot.as_ref().and_then(|s| s.compute(false, i + 1 == n)),
             });
-            pass.set_pipeline(&self.pipeline);
+            pass.set_pipe(&self.pipeline);
             pass.set_group(0, g, &[(i as u64 * super::STRIDE) as u32]);
             // Words 4–6 of the HCB's arguments: the dispatch over every sample.
-            pass.dispatch_workgroups_indirect(args, 16);
+            pass.dispatch_indirect(args, 16);
         }
     }
 }

@@ -136,7 +136,7 @@ impl SolerVoxels {
             ],
             immediate_size: 0,
         });
-        let voxelize = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        let voxelize = device.counted_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("soler.voxelize"),
             layout: Some(&pipeline_layout),
             vertex: wgpu::VertexState {
@@ -291,7 +291,7 @@ impl SolerVoxels {
         ctx.queue.write_buffer(&self.params, 0, &crate::passes::strided_bytes(STRIDE, params.len(), params));
         let uniform = crate::passes::dynamic_slot(&self.params, std::mem::size_of::<VoxelParams>());
         for g in &self.grids {
-            encoder.clear_buffer(&g.buffer, 0, None);
+            encoder.counted_clear_buffer(&g.buffer, 0, None);
         }
         let camera_group = crate::passes::gbuffer::CAMERA_BINDINGS.group_labelled(
             device,
@@ -323,7 +323,7 @@ impl SolerVoxels {
             let scale = 1.0 / (1u64 << first.level) as f32;
             let (vw, vh) = (gbuffer_size.0 as f32 * scale, gbuffer_size.1 as f32 * scale);
             pass.set_viewport(0.0, 0.0, vw.min(first.width as f32), vh.min(first.height as f32), 0.0, 1.0);
-            pass.set_pipeline(&self.voxelize);
+            pass.set_pipe(&self.voxelize);
             pass.set_group(0, &camera_group, &[]);
             pass.set_group(1, &scene.instance_group, &[]);
             pass.set_group(3, &grid_group, &[0]);

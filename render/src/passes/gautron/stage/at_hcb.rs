@@ -76,8 +76,8 @@ impl GautronStage {
                 pass.begin(&mut c, &group, (mode, k));
                 c.set_group(0, g0, &[0]);
                 c.set_group(1, g1, &[]);
-                c.set_pipeline(&self.cameras_pipeline);
-                c.dispatch_workgroups(slots.div_ceil(64), 1, 1);
+                c.set_pipe(&self.cameras_pipeline);
+                c.dispatch(slots.div_ceil(64), 1, 1);
             });
             timer.scope(ctx, enc, "gautron.hemispheres", |e, slot| {
                 let round = Some(crate::passes::gautron::hemisphere::RoundArgs(&pass.round_args));

@@ -1,0 +1,597 @@
+//! The port kit's `manifest.json` (docs/port-kit.md): the frame as the ordered list of its
+//! passes, each pass as its steps (a dispatch, a draw or a copy with the pipeline, shader
+//! entry points and every binding in force), the resources with their formats, sizes and
+//! lifetimes, and each shader module's declarations. Built from a [`capture`] of frames the
+//! renderer really drew and from naga's reading of the modules ([`super::reflect`]).
+
+use std::collections::{BTreeMap, HashMap};
+
+use serde::Serialize;
+
+use super::reflect::{BindingDecl, ModuleDecl, reflect};
+use crate::counters::capture::{Bound, Capture, Command, PassCommands};
+
+pub const SCHEMA_NAME: &str = "gi-lab-port-kit";
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// A range of a texture's levels and layers as bound.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct ViewRange {
+    pub base_mip: u32,
+    pub mips: u32,
+    pub base_layer: u32,
+    pub layers: u32,
+    pub dimension: String,
+}
+
+/// One binding in force for a step.
+#[derive(Clone, Debug, Serialize)]
+pub struct BindingUse {
+    pub group: u32,
+    pub binding: u32,
+    /// The shader's name of the variable.
+    pub name: String,
+    pub kind: String,
+    pub access: String,
+    /// The resource's name (`resources[].name`).
+    pub resource: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub view: Option<ViewRange>,
+    /// Buffers: the bound range's offset and size in bytes (a dynamic offset added).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub offset: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub size: Option<u64>,
+}
+
+/// A render target of a raster step.
+#[derive(Clone, Debug, Serialize)]
+pub struct Target {
+    pub resource: String,
+    pub view: Option<ViewRange>,
+    /// Whether the old contents are kept (loaded) rather than cleared.
+    pub load: bool,
+}
+
+/// One dispatch, draw or copy.
+#[derive(Clone, Debug, Serialize)]
+pub struct Step {
+    /// `dispatch`, `dispatch_indirect`, `draw`, `draw_indexed`, `draw_indirect`, `copy`.
+    pub kind: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pipeline: Option<String>,
+    /// The pipeline's shader entry points: (module, entry).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub entry_points: Vec<(String, String)>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub constants: Vec<(String, f64)>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub bindings: Vec<BindingUse>,
+    /// Workgroups (dispatch) or the draw's vertex/index and instance ranges.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub workgroups: Option<[u32; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub draw: Option<serde_json::Value>,
+    /// Indirect arguments: the buffer and the byte offset.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<(String, u64)>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub targets: Vec<Target>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub depth_target: Option<Target>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub vertex_buffers: Vec<(u32, String)>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub index_buffer: Option<(String, String)>,
+    /// Copies: source, destination and the texel or byte extent.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub copy: Option<serde_json::Value>,
+    /// Clears: the buffer zeroed, its byte offset and size.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub clear: Option<(String, u64, u64)>,
+}
+
+/// A timing scope of the frame with its steps.
+#[derive(Clone, Debug, Serialize)]
+pub struct Pass {
+    pub index: usize,
+    pub name: String,
+    /// `engine`: the G-buffer and the direct light, which an engine has and feeds in;
+    /// `technique`: the preset's passes, the port; `tail`: composition and tone mapping;
+    /// `between`: copies and clears recorded between timed passes.
+    pub role: &'static str,
+    pub steps: Vec<Step>,
+}
+
+/// A texture, buffer or sampler the frame touches.
+#[derive(Clone, Debug, Serialize)]
+pub struct Resource {
+    pub name: String,
+    /// `texture`, `buffer` or `sampler`.
+    pub kind: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub format: Option<String>,
+    /// Texture: width, height, depth or layers; buffer: bytes.
+    pub size: Vec<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mips: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dimension: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub usage: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sampler: Option<serde_json::Value>,
+    /// `input`: read, never written by the frame (uploaded by the host: the scene, the
+    /// uniforms, lookup tables); `history`: read before the frame writes it, so it carries the
+    /// last frame's contents (reset: zeroed, or see the pass); `frame`: written before it is
+    /// read (transient).
+    pub lifetime: &'static str,
+    pub written_by: Vec<String>,
+    pub read_by: Vec<String>,
+}
+
+/// A shader module of the kit: its file under `shaders/` and its declarations.
+#[derive(Clone, Debug, Serialize)]
+pub struct Shader {
+    pub module: String,
+    pub file: String,
+    #[serde(flatten)]
+    pub decl: ModuleDecl,
+}
+
+/// The manifest.
+#[derive(Clone, Debug, Serialize)]
+pub struct Manifest {
+    pub schema: &'static str,
+    pub schema_version: u32,
+    pub preset: String,
+    /// The kit's image: width and height.
+    pub size: [u32; 2],
+    /// Frames drawn before the one listed (its temporal state warmed).
+    pub warm_up_frames: u32,
+    /// The engine export of the preset (`preset.json`): settings in use, provenance,
+    /// resolved values.
+    pub preset_file: &'static str,
+    /// The captured frame's passes in order.
+    pub passes: Vec<Pass>,
+    /// The frame before it: the same passes, but resources used in turns (a history read in
+    /// one frame and written in the next, `temporal.history.0` / `.1`) swap. A port alternates
+    /// the two lists, starting with this one.
+    pub previous_frame_passes: Vec<Pass>,
+    pub resources: Vec<Resource>,
+    pub shaders: Vec<Shader>,
+    /// What the kit does not hold yet (docs/port-kit.md, "Not yet in the kit").
+    pub not_yet: Vec<&'static str>,
+}
+
+/// What the kit does not hold yet; said in the manifest, the kit's README and docs/port-kit.md.
+pub const NOT_YET: &[&str] = &[
+    "sizes and dispatch counts as expressions of W, H and the settings (the kit gives them at its own size)",
+    "uniform values per step (the kit gives each uniform block's byte layout, not its contents)",
+    "shaders translated to SPIR-V, GLSL 4.50, HLSL and MSL (the kit gives WGSL with its imports resolved)",
+    "golden buffers per pass and `gi-lab verify`",
+    "a host that runs the kit (examples/port-kit-host)",
+];
+
+/// The role of a pass by its name (docs/port-kit.md, "Roles").
+pub fn role_of(name: &str) -> &'static str {
+    let first = name.split('.').next().unwrap_or(name);
+    match first {
+        "gbuffer" | "direct" | "sky" | "shadow" => "engine",
+        "compose" | "tonemap" => "tail",
+        "(between passes)" => "between",
+        _ => "technique",
+    }
+}
+
+/// Names for the captured objects: the label, with `#2`, `#3` … where labels repeat, in the
+/// order the frame first uses them.
+struct Names {
+    by_key: HashMap<(u8, u64), String>,
+    seen: HashMap<String, u32>,
+}
+
+impl Names {
+    fn name(&mut self, kind: u8, key: u64, label: &str) -> String {
+        if let Some(n) = self.by_key.get(&(kind, key)) {
+            return n.clone();
+        }
+        let count = self.seen.entry(label.to_string()).or_insert(0);
+        *count += 1;
+        let n = if *count == 1 { label.to_string() } else { format!("{label}#{count}") };
+        self.by_key.insert((kind, key), n.clone());
+        n
+    }
+}
+
+/// Builds the manifest of two consecutive captured frames (`previous`, then `last`) with the
+/// objects of `objects`.
+pub fn build(
+    preset: &str,
+    size: (u32, u32),
+    warm_up_frames: u32,
+    (previous, last): (&[PassCommands], &[PassCommands]),
+    objects: &Capture,
+) -> Result<Manifest, String> {
+    let mut b = Builder {
+        objects,
+        names: Names { by_key: HashMap::new(), seen: HashMap::new() },
+        modules: BTreeMap::new(),
+        access: BTreeMap::new(),
+        order: Vec::new(),
+        frame: 0,
+    };
+    let previous_frame_passes = b.frame_passes(previous)?;
+    b.frame = 1;
+    let out = b.frame_passes(last)?;
+    let resources = b.resources();
+    let shaders = b
+        .modules
+        .into_iter()
+        .map(|(module, decl)| Shader { file: format!("shaders/{module}"), module, decl })
+        .collect();
+    Ok(Manifest {
+        schema: SCHEMA_NAME,
+        schema_version: SCHEMA_VERSION,
+        preset: preset.into(),
+        size: [size.0, size.1],
+        warm_up_frames,
+        preset_file: "preset.json",
+        passes: out,
+        previous_frame_passes,
+        resources,
+        shaders,
+        not_yet: NOT_YET.to_vec(),
+    })
+}
+
+const TEX: u8 = 0;
+const BUF: u8 = 1;
+const SAM: u8 = 2;
+
+struct Builder<'a> {
+    objects: &'a Capture,
+    names: Names,
+    modules: BTreeMap<String, ModuleDecl>,
+    /// Resource name → its accesses in order: (frame, pass name, wrote).
+    access: BTreeMap<String, Vec<(usize, String, bool)>>,
+    /// The frame being read: 0 the previous, 1 the last.
+    frame: usize,
+    /// Resource names in order of first use, with their kind and key.
+    order: Vec<(String, u8, u64)>,
+}
+
+impl Builder<'_> {
+    fn module(&mut self, path: &str) -> Result<&ModuleDecl, String> {
+        if !self.modules.contains_key(path) {
+            let source = crate::shaders::resolve(path).map_err(|e| format!("{path}: {e}"))?;
+            let decl = reflect(&source).map_err(|e| format!("{path}: {e}"))?;
+            self.modules.insert(path.to_string(), decl);
+        }
+        Ok(&self.modules[path])
+    }
+
+    fn resource(&mut self, kind: u8, key: u64) -> String {
+        let label = match kind {
+            TEX => self.objects.textures.get(&key).map(|t| t.label.clone()),
+            BUF => self.objects.buffers.get(&key).map(|b| b.label.clone()),
+            _ => self.objects.samplers.get(&key).map(|s| s.label.clone()),
+        }
+        .unwrap_or_else(|| format!("(unknown {key:x})"));
+        let fresh = !self.names.by_key.contains_key(&(kind, key));
+        let name = self.names.name(kind, key, &label);
+        if fresh {
+            self.order.push((name.clone(), kind, key));
+        }
+        name
+    }
+
+    fn touch(&mut self, name: &str, pass: &str, wrote: bool) {
+        self.access.entry(name.to_string()).or_default().push((self.frame, pass.to_string(), wrote));
+    }
+
+    /// One frame's passes, without GI Lab's own instrumentation (the timestamp read-back).
+    fn frame_passes(&mut self, passes: &[PassCommands]) -> Result<Vec<Pass>, String> {
+        let mut out = Vec::new();
+        for p in passes.iter().filter(|p| !p.commands.is_empty()) {
+            let mut steps = self.steps(p)?;
+            steps.retain(|s| !s.copy.as_ref().is_some_and(|c| c.to_string().contains("\"timing.")));
+            if steps.is_empty() {
+                continue;
+            }
+            out.push(Pass { index: out.len(), name: p.name.clone(), role: role_of(&p.name), steps });
+        }
+        Ok(out)
+    }
+
+    /// The resource, view range, offset and size of a bound object.
+    fn bound(&mut self, b: &Bound) -> (String, Option<ViewRange>, Option<u64>, Option<u64>) {
+        match b {
+            Bound::View { texture, base_mip, mips, base_layer, layers, dimension } => (
+                self.resource(TEX, *texture),
+                Some(ViewRange {
+                    base_mip: *base_mip,
+                    mips: *mips,
+                    base_layer: *base_layer,
+                    layers: *layers,
+                    dimension: dimension.clone(),
+                }),
+                None,
+                None,
+            ),
+            Bound::Buffer { buffer, offset, size } => (self.resource(BUF, *buffer), None, Some(*offset), Some(*size)),
+            Bound::Sampler { sampler } => (self.resource(SAM, *sampler), None, None, None),
+            Bound::Unknown => ("(unknown)".into(), None, None, None),
+        }
+    }
+
+    fn steps(&mut self, p: &PassCommands) -> Result<Vec<Step>, String> {
+        let mut steps = Vec::new();
+        let mut pipeline: Option<u64> = None;
+        let mut groups: BTreeMap<u32, (u64, Vec<u32>)> = BTreeMap::new();
+        let mut targets: Vec<Target> = Vec::new();
+        let mut depth: Option<Target> = None;
+        let mut vertex: Vec<(u32, String)> = Vec::new();
+        let mut index: Option<(String, String)> = None;
+        for c in &p.commands {
+            match c {
+                Command::ComputePass => {}
+                Command::RenderPass { colors, depth: d } => {
+                    (pipeline, targets, vertex, index) = (None, Vec::new(), Vec::new(), None);
+                    groups.clear();
+                    for (b, load) in colors {
+                        let (resource, view, ..) = self.bound(b);
+                        targets.push(Target { resource, view, load: *load });
+                    }
+                    depth = d.as_ref().map(|(b, load)| {
+                        let (resource, view, ..) = self.bound(b);
+                        Target { resource, view, load: *load }
+                    });
+                }
+                Command::Pipeline { pipeline: k } => pipeline = Some(*k),
+                Command::Group { index: i, group, offsets } => {
+                    groups.insert(*i, (*group, offsets.clone()));
+                }
+                Command::VertexBuffer { slot, buffer } => {
+                    let n = self.resource(BUF, *buffer);
+                    vertex.retain(|(s, _)| s != slot);
+                    vertex.push((*slot, n));
+                }
+                Command::IndexBuffer { buffer, format } => index = Some((self.resource(BUF, *buffer), format.clone())),
+                Command::CopyTexture { src, dst, size } => {
+                    let (s, d) = (self.resource(TEX, *src), self.resource(TEX, *dst));
+                    self.touch(&s, &p.name, false);
+                    self.touch(&d, &p.name, true);
+                    steps.push(copy_step(serde_json::json!({"src": s, "dst": d, "texels": size})));
+                }
+                Command::ClearBuffer { buffer, offset, size } => {
+                    let b = self.resource(BUF, *buffer);
+                    self.touch(&b, &p.name, true);
+                    let mut step = copy_step(serde_json::json!({"offset": offset, "bytes": size}));
+                    step.kind = "clear".into();
+                    step.copy = None;
+                    step.clear = Some((b, *offset, *size));
+                    steps.push(step);
+                }
+                Command::CopyBuffer { src, dst, size } => {
+                    let (s, d) = (self.resource(BUF, *src), self.resource(BUF, *dst));
+                    self.touch(&s, &p.name, false);
+                    self.touch(&d, &p.name, true);
+                    steps.push(copy_step(serde_json::json!({"src": s, "dst": d, "bytes": size})));
+                }
+                Command::Dispatch { .. }
+                | Command::DispatchIndirect { .. }
+                | Command::Draw { .. }
+                | Command::DrawIndexed { .. }
+                | Command::DrawIndirect { .. } => {
+                    let mut step = self.work(p, c, pipeline, &groups)?;
+                    if step.kind.starts_with("draw") {
+                        for t in targets.iter().chain(depth.as_ref()) {
+                            if t.load {
+                                self.touch(&t.resource, &p.name, false);
+                            }
+                            self.touch(&t.resource, &p.name, true);
+                        }
+                        let mut inputs: Vec<String> = vertex.iter().map(|(_, v)| v.clone()).collect();
+                        inputs.extend(index.iter().map(|(n, _)| n.clone()));
+                        for v in inputs {
+                            self.touch(&v, &p.name, false);
+                        }
+                        step.targets = targets.clone();
+                        step.depth_target = depth.clone();
+                        step.vertex_buffers = vertex.clone();
+                        step.index_buffer = index.clone();
+                    }
+                    steps.push(step);
+                }
+            }
+        }
+        Ok(steps)
+    }
+
+    /// A dispatch or draw with everything in force.
+    fn work(
+        &mut self,
+        p: &PassCommands,
+        c: &Command,
+        pipeline: Option<u64>,
+        groups: &BTreeMap<u32, (u64, Vec<u32>)>,
+    ) -> Result<Step, String> {
+        let info = pipeline.and_then(|k| self.objects.pipelines.get(&k)).cloned();
+        let mut decls: Vec<BindingDecl> = Vec::new();
+        if let Some(info) = &info {
+            for s in &info.stages {
+                for d in &self.module(&s.module)?.bindings {
+                    if !decls.iter().any(|x| x.group == d.group && x.binding == d.binding) {
+                        decls.push(d.clone());
+                    }
+                }
+            }
+        }
+        let mut bindings = Vec::new();
+        for (&gi, (gk, offsets)) in groups {
+            let Some(g) = self.objects.groups.get(gk) else { continue };
+            let mut dynamic = offsets.iter();
+            for (binding, bound) in &g.entries {
+                let decl = decls.iter().find(|d| d.group == gi && d.binding == *binding);
+                let Some(decl) = decl else { continue };
+                let (resource, view, mut offset, size) = self.bound(bound);
+                if decl.kind == "uniform"
+                    && let (Some(o), Some(extra)) = (offset.as_mut(), dynamic.next())
+                {
+                    *o += *extra as u64;
+                }
+                let wrote = decl.access != "read";
+                if decl.access != "write" {
+                    self.touch(&resource, &p.name, false);
+                }
+                if wrote {
+                    self.touch(&resource, &p.name, true);
+                }
+                bindings.push(BindingUse {
+                    group: gi,
+                    binding: *binding,
+                    name: decl.name.clone(),
+                    kind: decl.kind.into(),
+                    access: decl.access.into(),
+                    resource,
+                    view,
+                    offset,
+                    size,
+                });
+            }
+        }
+        let (kind, workgroups, draw, indirect) = match c {
+            Command::Dispatch { workgroups } => ("dispatch", Some(*workgroups), None, None),
+            Command::DispatchIndirect { buffer, offset } => {
+                let b = self.resource(BUF, *buffer);
+                self.touch(&b, &p.name, false);
+                ("dispatch_indirect", None, None, Some((b, *offset)))
+            }
+            Command::Draw { vertices, instances } => {
+                ("draw", None, Some(serde_json::json!({"vertices": vertices, "instances": instances})), None)
+            }
+            Command::DrawIndexed { indices, base_vertex, instances } => (
+                "draw_indexed",
+                None,
+                Some(serde_json::json!({"indices": indices, "base_vertex": base_vertex, "instances": instances})),
+                None,
+            ),
+            Command::DrawIndirect { buffer, offset, indexed } => {
+                let b = self.resource(BUF, *buffer);
+                self.touch(&b, &p.name, false);
+                (if *indexed { "draw_indexed_indirect" } else { "draw_indirect" }, None, None, Some((b, *offset)))
+            }
+            _ => unreachable!("work() is called for dispatches and draws"),
+        };
+        Ok(Step {
+            kind: kind.into(),
+            pipeline: info.as_ref().map(|i| i.label.clone()),
+            entry_points: info
+                .as_ref()
+                .map(|i| i.stages.iter().map(|s| (s.module.clone(), s.entry.clone())).collect())
+                .unwrap_or_default(),
+            constants: info.as_ref().map(|i| i.constants.clone()).unwrap_or_default(),
+            bindings,
+            workgroups,
+            draw,
+            indirect,
+            targets: Vec::new(),
+            depth_target: None,
+            vertex_buffers: Vec::new(),
+            index_buffer: None,
+            copy: None,
+            clear: None,
+        })
+    }
+
+    fn resources(&self) -> Vec<Resource> {
+        let o = self.objects;
+        self.order
+            .iter()
+            .filter(|(name, ..)| !name.starts_with("timing."))
+            .map(|(name, kind, key)| {
+                let acc = self.access.get(name).cloned().unwrap_or_default();
+                // History: some frame reads it before that frame writes it, and it is written.
+                let written = acc.iter().any(|a| a.2);
+                let read_first = (0..2).any(|f| {
+                    let w = acc.iter().position(|a| a.0 == f && a.2);
+                    let r = acc.iter().position(|a| a.0 == f && !a.2);
+                    matches!((r, w), (Some(r), Some(w)) if r < w) || matches!((r, w), (Some(_), None))
+                });
+                let lifetime = match (written, read_first) {
+                    (false, _) => "input",
+                    (true, true) => "history",
+                    (true, false) => "frame",
+                };
+                let mut written_by: Vec<String> = Vec::new();
+                let mut read_by: Vec<String> = Vec::new();
+                for (_, pass, wrote) in acc.iter().filter(|a| a.0 == 1) {
+                    let list = if *wrote { &mut written_by } else { &mut read_by };
+                    if !list.contains(pass) {
+                        list.push(pass.clone());
+                    }
+                }
+                let mut r = Resource {
+                    name: name.clone(),
+                    kind: "sampler",
+                    format: None,
+                    size: Vec::new(),
+                    mips: None,
+                    dimension: None,
+                    usage: None,
+                    sampler: None,
+                    lifetime,
+                    written_by,
+                    read_by,
+                };
+                match *kind {
+                    TEX => {
+                        if let Some(t) = o.textures.get(key) {
+                            r.kind = "texture";
+                            r.format = Some(t.format.clone());
+                            r.size = t.size.iter().map(|&x| x as u64).collect();
+                            r.mips = Some(t.mips);
+                            r.dimension = Some(t.dimension.clone());
+                            r.usage = Some(t.usage.clone());
+                        }
+                    }
+                    BUF => {
+                        if let Some(b) = o.buffers.get(key) {
+                            r.kind = "buffer";
+                            r.size = vec![b.size];
+                            r.usage = Some(b.usage.clone());
+                        }
+                    }
+                    _ => {
+                        if let Some(s) = o.samplers.get(key) {
+                            r.sampler = Some(serde_json::json!({
+                                "address_mode": s.address_mode, "filter": s.filter, "compare": s.compare
+                            }));
+                        }
+                    }
+                }
+                r
+            })
+            .collect()
+    }
+}
+
+fn copy_step(copy: serde_json::Value) -> Step {
+    Step {
+        kind: "copy".into(),
+        pipeline: None,
+        entry_points: Vec::new(),
+        constants: Vec::new(),
+        bindings: Vec::new(),
+        workgroups: None,
+        draw: None,
+        indirect: None,
+        targets: Vec::new(),
+        depth_target: None,
+        vertex_buffers: Vec::new(),
+        index_buffer: None,
+        copy: Some(copy),
+        clear: None,
+    }
+}

@@ -1,0 +1,198 @@
+//! The port kit (issue #54; docs/port-kit.md): everything an engine team needs to port a
+//! preset, written to one folder — `manifest.json` (the frame as the ordered list of its
+//! passes, with every binding, resource and shader declaration: [`manifest`]), `preset.json`
+//! (the engine export with the resolved values), `shaders/` (each module with its imports
+//! resolved) and a `README.md` that walks the passes in order with the papers' sections.
+//!
+//! The frame is captured, not described: the renderer draws `frames` frames of the kit's scene
+//! at the kit's size, paused, under a [`crate::counters::capture`], and the last frame's
+//! commands are the manifest. What the kit does not hold yet is listed in
+//! [`manifest::NOT_YET`] and said in every kit.
+
+use std::path::{Path, PathBuf};
+
+use crate::counters::capture;
+use crate::export::{Export, ExportFormat};
+use crate::{GpuContext, LabSettings, Renderer};
+
+pub mod manifest;
+pub mod reflect;
+
+pub use manifest::Manifest;
+
+/// What to export.
+pub struct KitRequest<'a> {
+    /// The preset's name (its file stem), for the manifest and the README.
+    pub preset: &'a str,
+    pub settings: LabSettings,
+    pub scene: crate::scene::Scene,
+    /// The scene file, or the embedded scene's name (the export's provenance).
+    pub scene_name: &'a str,
+    pub size: (u32, u32),
+    /// Frames drawn before the captured one (at least 1: the first frame resets histories).
+    pub warm_up_frames: u32,
+    /// The camera (the window's live one); None: the scene's opening view.
+    pub camera: Option<crate::camera::Camera>,
+}
+
+/// A kit in memory: the manifest, the export and the files to write (relative path, text).
+pub struct Kit {
+    pub manifest: Manifest,
+    pub export: Export,
+    pub files: Vec<(PathBuf, String)>,
+}
+
+/// Draws the request's frames under a capture and builds the kit.
+pub fn build(ctx: GpuContext, req: KitRequest) -> Result<Kit, String> {
+    let (w, h) = req.size;
+    if w == 0 || h == 0 {
+        return Err(format!("the kit's size {w}×{h} has no pixels"));
+    }
+    capture::start();
+    let result = draw(ctx, &req);
+    let objects = capture::stop();
+    let ((previous, last), export) = result?;
+    let objects = objects.ok_or("the capture was stopped by someone else")?;
+    let manifest = manifest::build(req.preset, req.size, req.warm_up_frames, (&previous, &last), &objects)?;
+    let mut files = Vec::new();
+    let json = serde_json::to_string_pretty(&manifest).map_err(|e| format!("manifest: {e}"))?;
+    files.push((PathBuf::from("manifest.json"), json));
+    files.push((PathBuf::from("preset.json"), export.to_text(ExportFormat::Json)));
+    for s in &manifest.shaders {
+        let source = crate::shaders::resolve(&s.module).map_err(|e| format!("{}: {e}", s.module))?;
+        files.push((PathBuf::from(&s.file), source));
+    }
+    files.push((PathBuf::from("README.md"), readme(&manifest, &export)));
+    Ok(Kit { manifest, export, files })
+}
+
+type Frames = (Vec<capture::PassCommands>, Vec<capture::PassCommands>);
+
+/// The frames of the capture (the renderer is made inside it, so that its objects are known):
+/// the last two frames' commands, and the export of what was drawn.
+fn draw(ctx: GpuContext, req: &KitRequest) -> Result<(Frames, Export), String> {
+    let (w, h) = req.size;
+    let mut r = Renderer::new(ctx, req.scene.clone(), req.settings.clone(), w, h).map_err(|e| e.to_string())?;
+    r.clock.playing = false;
+    if let Some(c) = req.camera {
+        r.camera = c;
+    }
+    // Every pass every frame: a kit lists the whole frame, not what a still view could keep.
+    r.reuse_unchanged = false;
+    let (mut previous, mut last) = (Vec::new(), Vec::new());
+    for _ in 0..=req.warm_up_frames.max(1) {
+        capture::take_passes();
+        r.render_frame();
+        previous = std::mem::replace(&mut last, capture::take_passes());
+    }
+    let view = super::ExportView::of_scene(req.scene_name, r.scene(), r.bounds(), r.camera, r.size(), r.settings());
+    let export = Export::new(r.settings().clone(), super::Provenance::now(&view));
+    Ok(((previous, last), export))
+}
+
+/// Writes `kit` to `dir` whole or not at all: into a new folder beside it, renamed into place.
+/// An existing `dir` is refused unless `force`, and then replaced only once the new kit is
+/// complete.
+pub fn write(kit: &Kit, dir: &Path, force: bool) -> Result<(), String> {
+    if dir.exists() && !force {
+        return Err(format!("{} exists: choose another folder or pass --force to replace it", dir.display()));
+    }
+    let parent = dir.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let stem = dir.file_name().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "kit".into());
+    let tmp = parent.join(format!(".{stem}.writing-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&tmp);
+    let written = (|| -> std::io::Result<()> {
+        for (rel, text) in &kit.files {
+            let path = tmp.join(rel);
+            if let Some(p) = path.parent() {
+                std::fs::create_dir_all(p)?;
+            }
+            std::fs::write(&path, text)?;
+        }
+        Ok(())
+    })();
+    if let Err(e) = written {
+        let _ = std::fs::remove_dir_all(&tmp);
+        return Err(format!("{}: {e}", tmp.display()));
+    }
+    if dir.exists() {
+        let old = parent.join(format!(".{stem}.old-{}", std::process::id()));
+        std::fs::rename(dir, &old).map_err(|e| format!("{}: {e}", dir.display()))?;
+        if let Err(e) = std::fs::rename(&tmp, dir) {
+            let _ = std::fs::rename(&old, dir);
+            return Err(format!("{}: {e}", dir.display()));
+        }
+        let _ = std::fs::remove_dir_all(&old);
+    } else {
+        std::fs::rename(&tmp, dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    }
+    Ok(())
+}
+
+/// The first comment paragraph of a shader's own file (its header cites the paper's section
+/// and equation), joined into one line.
+fn header(module: &str) -> String {
+    let source = crate::shaders::SOURCES.iter().find(|(p, _)| *p == module).map(|(_, s)| *s).unwrap_or("");
+    source
+        .lines()
+        .take_while(|l| l.trim_start().starts_with("//"))
+        .map(|l| l.trim_start().trim_start_matches('/').trim())
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// The kit's README: the passes in order with the papers' sections, the order to bring them
+/// up, and what the kit does not hold yet.
+fn readme(m: &Manifest, e: &Export) -> String {
+    let mut s = format!("# Port kit: `{}`\n\n", m.preset);
+    let p = &e.provenance;
+    s += &format!(
+        "Exported by GI Lab {} on {} from `{}` at {}×{}, paused, after {} warm-up frame(s). \
+         Schema `{}` version {}; the manifest's fields are documented in GI Lab's `docs/port-kit.md`.\n\n",
+        p.gi_lab_version, p.date, p.scene, m.size[0], m.size[1], m.warm_up_frames, m.schema, m.schema_version
+    );
+    s += "- `manifest.json`: the frame as the ordered list of its passes; each pass's steps (dispatches, draws, \
+          copies) with the pipeline, entry points and every binding in force; the resources with formats, sizes \
+          and lifetimes (`input`, `history`, `frame`); each shader's bindings and uniform layouts.\n";
+    s += "- `preset.json`: the settings in use, where they were tuned, and every scene- or image-relative value \
+          as set and as resolved.\n";
+    s += "- `shaders/`: each module as WGSL with its imports resolved.\n\n";
+    s += "## Bring-up order\n\n";
+    s += "1. Feed the `engine` passes' outputs from your engine (the G-buffer and direct light, in the formats the \
+          manifest lists), or port them too.\n";
+    s += "2. Create every `history` resource zeroed; it holds the last frame's result from the second frame on.\n";
+    s += "3. Port the `technique` passes in the order below, one at a time, checking each against GI Lab.\n";
+    s += "4. Compose and tone-map (`tail`) as your engine does.\n\n";
+    s += "## The passes in order\n\n| # | pass | role | steps | shaders (entry points) |\n|---|---|---|---:|---|\n";
+    for pass in &m.passes {
+        let mut entries: Vec<String> = Vec::new();
+        for st in &pass.steps {
+            for (module, entry) in &st.entry_points {
+                let e = format!("`{module}` `{entry}`");
+                if !entries.contains(&e) {
+                    entries.push(e);
+                }
+            }
+        }
+        s += &format!(
+            "| {} | `{}` | {} | {} | {} |\n",
+            pass.index,
+            pass.name,
+            pass.role,
+            pass.steps.len(),
+            entries.join(", ")
+        );
+    }
+    s += "\n## What each shader does (its header, citing the paper)\n\n";
+    for sh in &m.shaders {
+        let h = header(&sh.module);
+        if !h.is_empty() {
+            s += &format!("- `{}`: {}\n", sh.module, h);
+        }
+    }
+    s += "\n## Not yet in the kit\n\n";
+    for n in &m.not_yet {
+        s += &format!("- {n}\n");
+    }
+    s
+}

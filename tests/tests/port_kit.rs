@@ -1,0 +1,167 @@
+//! The port kit (issue #54 point 1; docs/port-kit.md): its manifest lists the frame the
+//! renderer draws — every timed pass in order, each step's shader entry point, every binding's
+//! resource — and is written whole or not at all.
+
+use gi_lab_tests::{default_scene, gpu};
+use gi_render::export::port_kit::{self, Kit, KitRequest};
+use gi_render::{LabSettings, Renderer};
+
+const SIZE: (u32, u32) = (48, 27);
+
+fn settings(preset: &str) -> LabSettings {
+    let path = format!("{}/../presets/{preset}.ron", env!("CARGO_MANIFEST_DIR"));
+    LabSettings::load(std::path::Path::new(&path)).unwrap_or_else(|e| panic!("{path}: {e}"))
+}
+
+fn kit(preset: &str) -> Kit {
+    let req = KitRequest {
+        preset,
+        settings: settings(preset),
+        scene: default_scene(),
+        scene_name: "default",
+        size: SIZE,
+        warm_up_frames: 2,
+        camera: None,
+    };
+    port_kit::build(gpu(), req).unwrap_or_else(|e| panic!("{preset}: {e}"))
+}
+
+/// Names in the order they first appear.
+fn first_seen<'a>(names: impl Iterator<Item = &'a str>) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for n in names {
+        if !out.iter().any(|o| o == n) {
+            out.push(n.to_string());
+        }
+    }
+    out
+}
+
+#[test]
+fn the_manifest_lists_every_timed_pass_with_its_shaders_bindings_and_resources() {
+    // The four papers' presets and one mix.
+    for preset in
+        ["knecht-cornell-256", "nguyen-hcb", "gautron-ic-splatting", "soler-quarter-4-64", "soler-near-knecht-far"]
+    {
+        let k = kit(preset);
+        let m = &k.manifest;
+        // The same frame drawn without a capture: its timed passes.
+        let mut r = Renderer::new(gpu(), default_scene(), settings(preset), SIZE.0, SIZE.1).expect("renderer");
+        r.clock.playing = false;
+        r.reuse_unchanged = false;
+        let mut timed = Vec::new();
+        for _ in 0..3 {
+            timed = r.render_frame();
+        }
+        let timed = first_seen(timed.iter().map(|t| t.name.as_str()));
+        let listed = first_seen(m.passes.iter().map(|p| p.name.as_str()).filter(|n| *n != "(between passes)"));
+        assert_eq!(listed, timed, "{preset}: the manifest's passes are the frame's timed passes, in order");
+        assert_eq!(m.previous_frame_passes.len(), m.passes.len(), "{preset}: two frames of the same passes");
+
+        let resource = |name: &str| m.resources.iter().find(|r| r.name == name);
+        let mut dispatches = 0;
+        for pass in &m.passes {
+            assert!(!pass.steps.is_empty(), "{preset} {}: a pass without steps", pass.name);
+            for step in &pass.steps {
+                for (module, entry) in &step.entry_points {
+                    let shader = m.shaders.iter().find(|s| &s.module == module);
+                    let shader = shader.unwrap_or_else(|| panic!("{preset}: {module} is not among the kit's shaders"));
+                    assert!(
+                        shader.decl.entry_points.iter().any(|e| &e.name == entry),
+                        "{preset}: {module} has no entry point {entry}"
+                    );
+                    assert!(
+                        k.files
+                            .iter()
+                            .any(|(p, text)| p.to_string_lossy() == shader.file && text.contains(entry.as_str())),
+                        "{preset}: {} is not written with {entry}",
+                        shader.file
+                    );
+                    for b in &step.bindings {
+                        let decl = shader.decl.bindings.iter().find(|d| d.group == b.group && d.binding == b.binding);
+                        if let Some(d) = decl {
+                            assert_eq!(d.name, b.name, "{preset} {}: binding {}/{}", pass.name, b.group, b.binding);
+                            // The uniform block's reflected layout fits the buffer range bound.
+                            if d.kind == "uniform" {
+                                let (size, bound) = (d.size.unwrap_or(0) as u64, b.size.unwrap_or(0));
+                                assert!(
+                                    size > 0 && bound >= size,
+                                    "{preset} {}: {} is {size} B, bound {bound} B",
+                                    pass.name,
+                                    b.name
+                                );
+                            }
+                        }
+                    }
+                }
+                for b in &step.bindings {
+                    let r = resource(&b.resource);
+                    assert!(
+                        r.is_some(),
+                        "{preset} {}: {} binds {}, not among the resources",
+                        pass.name,
+                        b.name,
+                        b.resource
+                    );
+                }
+                if step.kind == "dispatch" {
+                    dispatches += 1;
+                    let w = step.workgroups.expect("a dispatch's workgroups");
+                    assert!(w.iter().all(|&x| x >= 1), "{preset} {}: {w:?}", pass.name);
+                    assert!(!step.bindings.is_empty(), "{preset} {}: a dispatch binds nothing", pass.name);
+                }
+                if step.kind.starts_with("draw") {
+                    assert!(
+                        !step.targets.is_empty() || step.depth_target.is_some(),
+                        "{preset} {}: a draw without targets",
+                        pass.name
+                    );
+                }
+            }
+        }
+        assert!(dispatches > 0, "{preset}: no dispatch");
+        // What the engine feeds is listed as such: the G-buffer pass and the direct light.
+        for name in ["gbuffer", "direct"] {
+            assert!(
+                m.passes.iter().any(|p| p.name == name && p.role == "engine"),
+                "{preset}: {name} as an engine pass"
+            );
+        }
+        // Temporal techniques keep histories across frames, and the kit says which.
+        let histories: Vec<&str> =
+            m.resources.iter().filter(|r| r.lifetime == "history").map(|r| r.name.as_str()).collect();
+        let expect = match preset {
+            "knecht-cornell-256" => Some("temporal.history"),
+            "soler-quarter-4-64" => Some("soler.temporal"),
+            _ => None,
+        };
+        if let Some(prefix) = expect {
+            assert!(histories.iter().any(|h| h.starts_with(prefix)), "{preset}: no {prefix}* history in {histories:?}");
+        }
+        assert!(
+            m.resources.iter().all(|r| !r.name.starts_with("timing.")),
+            "{preset}: GI Lab's instrumentation listed"
+        );
+    }
+}
+
+#[test]
+fn a_kit_is_written_whole_and_an_existing_folder_is_refused_unless_forced() {
+    let k = kit("knecht-cornell-256");
+    let base = std::env::temp_dir().join(format!("gi-lab-port-kit-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&base);
+    std::fs::create_dir_all(&base).expect("temp dir");
+    let dir = base.join("kit");
+    port_kit::write(&k, &dir, false).expect("written");
+    for (rel, text) in &k.files {
+        assert_eq!(&std::fs::read_to_string(dir.join(rel)).expect("a kit file"), text, "{}", rel.display());
+    }
+    let refused = port_kit::write(&k, &dir, false).expect_err("an existing folder is refused");
+    assert!(refused.contains("exists") && refused.contains("--force"), "{refused}");
+    std::fs::write(dir.join("stale.txt"), "from before").expect("write");
+    port_kit::write(&k, &dir, true).expect("replaced");
+    assert!(!dir.join("stale.txt").exists(), "--force replaces the folder, not merges into it");
+    let left: Vec<_> = std::fs::read_dir(&base).expect("list").flatten().map(|e| e.file_name()).collect();
+    assert_eq!(left, vec![std::ffi::OsString::from("kit")], "no temporary folders left");
+    let _ = std::fs::remove_dir_all(&base);
+}
