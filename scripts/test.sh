@@ -26,6 +26,9 @@ command -v parallel >/dev/null 2>&1 || need+=(parallel)
 # LLVM's linker: scripts/cc-lld.sh (cargo's linker here, .cargo/config.toml) links the ~60 test
 # binaries with it, a minute faster than GNU ld on 2 cores.
 command -v ld.lld >/dev/null 2>&1 || need+=(lld)
+# The port kits' shaders (tests/port_kit.rs): SPIR-V checked by spirv-val, GLSL by glslang.
+command -v spirv-val >/dev/null 2>&1 || need+=(spirv-tools)
+command -v glslangValidator >/dev/null 2>&1 || need+=(glslang-tools)
 # The Vulkan validation layer: tests/validation.rs runs every shipped preset under it.
 layer=0
 for d in /usr/share /usr/local/share /etc; do

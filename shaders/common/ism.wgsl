@@ -63,7 +63,7 @@ fn ism_depths(atlas: texture_2d<f32>, i: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f
 // others' code is left out of it; 3 (the default): the mode its caller passes at run time.
 override VISIBILITY_MODE: u32 = 3u;
 
-fn gather_visibility(mode_at_run: u32, ism: texture_2d<f32>, exact: texture_depth_2d, k: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, cols: u32, size: u32, p: vec3<f32>) -> f32 {
+fn gather_visibility(mode_at_run: u32, ism: texture_2d<f32>, exact: texture_2d<f32>, k: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, cols: u32, size: u32, p: vec3<f32>) -> f32 {
     let mode = select(mode_at_run, VISIBILITY_MODE, VISIBILITY_MODE < 3u);
     if (mode == 1u) {
         return ism_visibility(ism, k, vpl, x, nx, p.x, cols, size, p.y, p.z);
@@ -76,7 +76,7 @@ fn gather_visibility(mode_at_run: u32, ism: texture_2d<f32>, exact: texture_dept
 
 // gather_visibility's test in full: (visibility, the stored depth, the receiver's depth) in
 // the map's own unit (the ISM's distance, the exact face's [0, 1] depth; 0, 0 without a map).
-fn gather_test(mode: u32, ism: texture_2d<f32>, exact: texture_depth_2d, k: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, cols: u32, size: u32, p: vec3<f32>) -> vec3<f32> {
+fn gather_test(mode: u32, ism: texture_2d<f32>, exact: texture_2d<f32>, k: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, cols: u32, size: u32, p: vec3<f32>) -> vec3<f32> {
     var t = vec2<f32>(0.0);
     if (mode == 1u) {
         t = ism_depths(ism, k, vpl, x, nx, p.x, cols, size, p.y, p.z);

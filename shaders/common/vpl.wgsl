@@ -117,7 +117,7 @@ fn vpl_receiver_brdf(vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, eye: vec3<f32>, c: v
 // Exact visibility of x (receiver normal nx) from VPL i in a cube-face atlas (stage 4's
 // exact maps): one depth comparison in the face that sees x. Biases are world offsets of the
 // receiver in texels of that face at the receiver's distance. clip = (near, far, eye offset).
-fn vpl_exact_visibility(atlas: texture_depth_2d, i: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, clip: vec3<f32>, cols: u32, size: u32, depth_bias: f32, normal_offset: f32) -> f32 {
+fn vpl_exact_visibility(atlas: texture_2d<f32>, i: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, clip: vec3<f32>, cols: u32, size: u32, depth_bias: f32, normal_offset: f32) -> f32 {
     let t = vpl_exact_depths(atlas, i, vpl, x, nx, clip, cols, size, depth_bias, normal_offset);
     return select(0.0, 1.0, t.x >= 0.0 && t.y <= t.x);
 }
@@ -125,7 +125,7 @@ fn vpl_exact_visibility(atlas: texture_depth_2d, i: u32, vpl: Vpl, x: vec3<f32>,
 // The comparison behind vpl_exact_visibility: (the depth stored in the face's texel, the
 // receiver's biased depth), both in the face's [0, 1] depth; (−1, 1) when x lies behind the
 // face's eye. Explaining a pixel (knecht/interleave/explain.wgsl) shows both.
-fn vpl_exact_depths(atlas: texture_depth_2d, i: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, clip: vec3<f32>, cols: u32, size: u32, depth_bias: f32, normal_offset: f32) -> vec2<f32> {
+fn vpl_exact_depths(atlas: texture_2d<f32>, i: u32, vpl: Vpl, x: vec3<f32>, nx: vec3<f32>, clip: vec3<f32>, cols: u32, size: u32, depth_bias: f32, normal_offset: f32) -> vec2<f32> {
     let n = vpl.normal.xyz;
     let eye = vpl.position.xyz + n * clip.z;
     let d = distance(x, eye);
@@ -142,5 +142,5 @@ fn vpl_exact_depths(atlas: texture_depth_2d, i: u32, vpl: Vpl, x: vec3<f32>, nx:
     let origin = vpl_tile_origin(i * VPL_FACES + face, cols, size);
     let uv = clamp(vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5), vec2<f32>(0.0), vec2<f32>(1.0));
     let t = min(vec2<u32>(uv * f32(size)), vec2<u32>(size - 1u));
-    return vec2<f32>(textureLoad(atlas, origin + t, 0), ndc.z);
+    return vec2<f32>(textureLoad(atlas, origin + t, 0).x, ndc.z);
 }

@@ -41,7 +41,7 @@ override LINEAR_DEPTH: bool = true;
 @group(0) @binding(5) var shadow_sampler: sampler_comparison;
 @group(0) @binding(6) var<storage, read> emitter_vpls: array<Vpl>;
 @group(0) @binding(7) var emitter_ism: texture_2d<f32>;
-@group(0) @binding(8) var emitter_exact: texture_depth_2d;
+@group(0) @binding(8) var emitter_exact: texture_2d<f32>;
 // The camera G-buffer's linear depth (LINEAR_DEPTH: cs_main, cs_main_diffuse; issue #53), or
 // the hemisphere atlas's world positions (cs_atlas).
 @group(1) @binding(0) var g_position: texture_2d<f32>;

@@ -42,7 +42,7 @@ struct VplRecordParams {
 @group(0) @binding(4) var<storage, read_write> records: array<Record>;
 @group(0) @binding(5) var<storage, read> vpls: array<Vpl>;
 @group(0) @binding(6) var ism_atlas: texture_2d<f32>;
-@group(0) @binding(7) var exact_atlas: texture_depth_2d;
+@group(0) @binding(7) var exact_atlas: texture_2d<f32>;
 
 fn irradiance(vpl: Vpl, x: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return vpl_irradiance(vpl, x, n, vparams.shade.x, vparams.misc.x);

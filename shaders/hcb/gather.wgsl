@@ -34,7 +34,7 @@ struct HcbGatherParams {
 @group(0) @binding(0) var<uniform> params: HcbGatherParams;
 @group(0) @binding(1) var<storage, read> vpls: array<Vpl>;
 @group(0) @binding(2) var ism_atlas: texture_2d<f32>;
-@group(0) @binding(3) var exact_atlas: texture_depth_2d;
+@group(0) @binding(3) var exact_atlas: texture_2d<f32>;
 @group(0) @binding(4) var<storage, read> counter: array<u32>;
 @group(0) @binding(5) var<storage, read_write> list: array<HcbSample>;
 // draw-indirect (vertices 6, instances, 0, 0), dispatch-indirect (x, y, 1) of 64-wide

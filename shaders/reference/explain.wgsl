@@ -24,7 +24,7 @@ struct Header {
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(0) @binding(1) var<uniform> params: Params;
 @group(0) @binding(2) var<storage, read> vpls: array<Vpl>;
-@group(0) @binding(3) var atlas: texture_depth_2d;
+@group(0) @binding(3) var atlas: texture_2d<f32>;
 @group(0) @binding(4) var g_position: texture_2d<f32>;
 @group(0) @binding(5) var g_normal: texture_2d<f32>;
 @group(0) @binding(6) var g_albedo: texture_2d<f32>;

@@ -71,9 +71,8 @@ fn the_manifest_lists_every_timed_pass_with_its_shaders_bindings_and_resources()
                         "{preset}: {module} has no entry point {entry}"
                     );
                     assert!(
-                        k.files
-                            .iter()
-                            .any(|(p, text)| p.to_string_lossy() == shader.file && text.contains(entry.as_str())),
+                        k.files.iter().any(|(p, text)| p.to_string_lossy() == shader.file
+                            && String::from_utf8_lossy(text).contains(entry.as_str())),
                         "{preset}: {} is not written with {entry}",
                         shader.file
                     );
@@ -154,7 +153,7 @@ fn a_kit_is_written_whole_and_an_existing_folder_is_refused_unless_forced() {
     let dir = base.join("kit");
     port_kit::write(&k, &dir, false).expect("written");
     for (rel, text) in &k.files {
-        assert_eq!(&std::fs::read_to_string(dir.join(rel)).expect("a kit file"), text, "{}", rel.display());
+        assert_eq!(&std::fs::read(dir.join(rel)).expect("a kit file"), text, "{}", rel.display());
     }
     let refused = port_kit::write(&k, &dir, false).expect_err("an existing folder is refused");
     assert!(refused.contains("exists") && refused.contains("--force"), "{refused}");
@@ -163,5 +162,56 @@ fn a_kit_is_written_whole_and_an_existing_folder_is_refused_unless_forced() {
     assert!(!dir.join("stale.txt").exists(), "--force replaces the folder, not merges into it");
     let left: Vec<_> = std::fs::read_dir(&base).expect("list").flatten().map(|e| e.file_name()).collect();
     assert_eq!(left, vec![std::ffi::OsString::from("kit")], "no temporary folders left");
+    let _ = std::fs::remove_dir_all(&base);
+}
+
+/// `tool` on the PATH, or a failure that says how to install it.
+fn tool(name: &str, package: &str) -> String {
+    let found = std::process::Command::new(name).arg("--version").output().is_ok();
+    assert!(
+        found,
+        "{name} is missing: `sudo apt-get install -y {package}` (scripts/test.sh installs it when it runs as root)"
+    );
+    name.to_string()
+}
+
+#[test]
+fn every_entry_point_is_translated_and_the_spirv_and_glsl_validate() {
+    let (spirv_val, glslang) = (tool("spirv-val", "spirv-tools"), tool("glslangValidator", "glslang-tools"));
+    let base = std::env::temp_dir().join(format!("gi-lab-port-kit-shaders-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&base);
+    for preset in
+        ["knecht-cornell-256", "nguyen-hcb", "gautron-ic-splatting", "soler-quarter-4-64", "soler-near-knecht-far"]
+    {
+        let k = kit(preset);
+        let dir = base.join(preset);
+        port_kit::write(&k, &dir, false).expect("written");
+        let m = &k.manifest;
+        assert!(!m.translations.is_empty(), "{preset}: no translations");
+        for t in &m.translations {
+            for (lang, file) in &t.files {
+                let file =
+                    file.as_ref().unwrap_or_else(|e| panic!("{preset}: {} {} in {lang}: {e}", t.module, t.entry));
+                let path = dir.join(file);
+                assert!(path.is_file(), "{preset}: {file} not written");
+                let check = match lang.as_str() {
+                    "spirv" => Some(
+                        std::process::Command::new(&spirv_val).arg("--target-env").arg("vulkan1.1").arg(&path).output(),
+                    ),
+                    "glsl" => Some(std::process::Command::new(&glslang).arg(&path).output()),
+                    _ => None,
+                };
+                if let Some(o) = check {
+                    let o = o.expect("the validator runs");
+                    assert!(
+                        o.status.success(),
+                        "{preset}: {file} does not validate:\n{}{}",
+                        String::from_utf8_lossy(&o.stdout),
+                        String::from_utf8_lossy(&o.stderr)
+                    );
+                }
+            }
+        }
+    }
     let _ = std::fs::remove_dir_all(&base);
 }

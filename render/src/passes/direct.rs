@@ -36,7 +36,7 @@ pub const DIRECT_INPUTS_BINDINGS: Bindings = Bindings {
         binding(5, "shadow_sampler", Kind::Sampler(wgpu::SamplerBindingType::Comparison)),
         binding(6, "emitter_vpls", Kind::Storage { read_only: true }),
         binding(7, "emitter_ism", Kind::Texture { filterable: false }),
-        binding(8, "emitter_exact", Kind::Depth),
+        binding(8, "emitter_exact", Kind::Texture { filterable: false }),
     ],
 };
 

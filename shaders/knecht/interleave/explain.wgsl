@@ -55,7 +55,7 @@ const EXPLAIN_W_SURFACE: u32 = 4u;
 @group(0) @binding(1) var<uniform> params: GatherParams;
 @group(0) @binding(2) var<storage, read> vpls: array<Vpl>;
 @group(0) @binding(3) var ism_atlas: texture_2d<f32>;
-@group(0) @binding(4) var exact_atlas: texture_depth_2d;
+@group(0) @binding(4) var exact_atlas: texture_2d<f32>;
 @group(0) @binding(5) var g_position: texture_2d<f32>;
 @group(0) @binding(6) var g_normal: texture_2d<f32>;
 @group(0) @binding(7) var g_albedo: texture_2d<f32>;

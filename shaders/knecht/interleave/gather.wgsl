@@ -17,7 +17,7 @@
 @group(0) @binding(1) var<uniform> params: GatherParams;
 @group(0) @binding(2) var<storage, read> vpls: array<Vpl>;
 @group(0) @binding(3) var ism_atlas: texture_2d<f32>;
-@group(0) @binding(4) var exact_atlas: texture_depth_2d;
+@group(0) @binding(4) var exact_atlas: texture_2d<f32>;
 // Linear depth (the camera G-buffer's or the split one, issue #53): the point is rebuilt at the
 // source pixel (common/camera.wgsl world_from_linear_depth).
 @group(0) @binding(5) var s_position: texture_2d<f32>;

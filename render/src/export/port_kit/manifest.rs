@@ -160,6 +160,9 @@ pub struct Manifest {
     pub previous_frame_passes: Vec<Pass>,
     pub resources: Vec<Resource>,
     pub shaders: Vec<Shader>,
+    /// Every entry point the frame runs with its constants, translated by naga into SPIR-V,
+    /// GLSL, HLSL and MSL (files under `shaders/<language>/`, or naga's error).
+    pub translations: Vec<super::translate::Translation>,
     /// What the kit does not hold yet (docs/port-kit.md, "Not yet in the kit").
     pub not_yet: Vec<&'static str>,
 }
@@ -168,7 +171,6 @@ pub struct Manifest {
 pub const NOT_YET: &[&str] = &[
     "sizes and dispatch counts as expressions of W, H and the settings (the kit gives them at its own size)",
     "uniform values per step (the kit gives each uniform block's byte layout, not its contents)",
-    "shaders translated to SPIR-V, GLSL 4.50, HLSL and MSL (the kit gives WGSL with its imports resolved)",
     "golden buffers per pass and `gi-lab verify`",
     "a host that runs the kit (examples/port-kit-host)",
 ];
@@ -241,6 +243,7 @@ pub fn build(
         previous_frame_passes,
         resources,
         shaders,
+        translations: Vec::new(),
         not_yet: NOT_YET.to_vec(),
     })
 }

@@ -17,6 +17,7 @@ use crate::{GpuContext, LabSettings, Renderer};
 
 pub mod manifest;
 pub mod reflect;
+pub mod translate;
 
 pub use manifest::Manifest;
 
@@ -35,11 +36,11 @@ pub struct KitRequest<'a> {
     pub camera: Option<crate::camera::Camera>,
 }
 
-/// A kit in memory: the manifest, the export and the files to write (relative path, text).
+/// A kit in memory: the manifest, the export and the files to write (relative path, bytes).
 pub struct Kit {
     pub manifest: Manifest,
     pub export: Export,
-    pub files: Vec<(PathBuf, String)>,
+    pub files: Vec<(PathBuf, Vec<u8>)>,
 }
 
 /// Draws the request's frames under a capture and builds the kit.
@@ -53,18 +54,44 @@ pub fn build(ctx: GpuContext, req: KitRequest) -> Result<Kit, String> {
     let objects = capture::stop();
     let ((previous, last), export) = result?;
     let objects = objects.ok_or("the capture was stopped by someone else")?;
-    let manifest = manifest::build(req.preset, req.size, req.warm_up_frames, (&previous, &last), &objects)?;
-    let mut files = Vec::new();
-    let json = serde_json::to_string_pretty(&manifest).map_err(|e| format!("manifest: {e}"))?;
-    files.push((PathBuf::from("manifest.json"), json));
-    files.push((PathBuf::from("preset.json"), export.to_text(ExportFormat::Json)));
+    let mut manifest = manifest::build(req.preset, req.size, req.warm_up_frames, (&previous, &last), &objects)?;
+    let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
     for s in &manifest.shaders {
         let source = crate::shaders::resolve(&s.module).map_err(|e| format!("{}: {e}", s.module))?;
-        files.push((PathBuf::from(&s.file), source));
+        files.push((PathBuf::from(&s.file), source.into_bytes()));
     }
-    files.push((PathBuf::from("README.md"), readme(&manifest, &export)));
+    // Every entry point the two frames run, with its constants, in each engine's language.
+    let mut variants: Vec<Variant> = Vec::new();
+    for pass in manifest.previous_frame_passes.iter().chain(&manifest.passes) {
+        for step in &pass.steps {
+            for (module, entry) in &step.entry_points {
+                let v = (module.clone(), entry.clone(), step.constants.clone());
+                if !variants.contains(&v) {
+                    variants.push(v);
+                }
+            }
+        }
+    }
+    for (module, entry, constants) in variants {
+        let shader = manifest.shaders.iter().find(|s| s.module == module);
+        let stage = shader
+            .and_then(|s| s.decl.entry_points.iter().find(|e| e.name == entry))
+            .map(|e| e.stage.clone())
+            .unwrap_or_default();
+        let source = crate::shaders::resolve(&module).map_err(|e| format!("{module}: {e}"))?;
+        let (t, mut out) = translate::translate(&module, &source, &entry, &stage, &constants);
+        manifest.translations.push(t);
+        files.append(&mut out);
+    }
+    let json = serde_json::to_string_pretty(&manifest).map_err(|e| format!("manifest: {e}"))?;
+    files.push((PathBuf::from("manifest.json"), json.into_bytes()));
+    files.push((PathBuf::from("preset.json"), export.to_text(ExportFormat::Json).into_bytes()));
+    files.push((PathBuf::from("README.md"), readme(&manifest, &export).into_bytes()));
     Ok(Kit { manifest, export, files })
 }
+
+/// An entry point with its pipeline constants: (module, entry, constants).
+type Variant = (String, String, Vec<(String, f64)>);
 
 type Frames = (Vec<capture::PassCommands>, Vec<capture::PassCommands>);
 
@@ -189,6 +216,24 @@ fn readme(m: &Manifest, e: &Export) -> String {
         if !h.is_empty() {
             s += &format!("- `{}`: {}\n", sh.module, h);
         }
+    }
+    s += "\n## The shaders in your engine's language\n\n";
+    s += "Each entry point the frame runs, with the pipeline's constants baked in, translated by naga: \
+          `shaders/spirv/*.spv` (SPIR-V 1.3), `shaders/glsl/*.{comp,vert,frag}` (GLSL 4.50), `shaders/hlsl/*.hlsl` \
+          (shader model 6.0), `shaders/msl/*.metal` (MSL 2.4). GI Lab checks the SPIR-V with `spirv-val` and the GLSL \
+          with `glslangValidator`; the HLSL and MSL are naga's output, not compiled here (no DXC or Metal compiler on \
+          GI Lab's test machines).\n\n| module | entry | constants | spirv | glsl | hlsl | msl |\n|---|---|---|---|---|---|---|\n";
+    for t in &m.translations {
+        let constants: Vec<String> = t.constants.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+        let cells: Vec<String> = t
+            .files
+            .iter()
+            .map(|(_, r)| match r {
+                Ok(f) => format!("`{}`", f.rsplit('/').next().unwrap_or(f)),
+                Err(e) => format!("**failed**: {}", e.lines().next().unwrap_or("")),
+            })
+            .collect();
+        s += &format!("| `{}` | `{}` | {} | {} |\n", t.module, t.entry, constants.join(", "), cells.join(" | "));
     }
     s += "\n## Not yet in the kit\n\n";
     for n in &m.not_yet {

@@ -30,7 +30,7 @@ pub const VPL_RECORDS_BINDINGS: Bindings = Bindings {
         binding(4, "records", Kind::Storage { read_only: false }),
         binding(5, "vpls", Kind::Storage { read_only: true }),
         binding(6, "ism_atlas", Kind::Texture { filterable: false }),
-        binding(7, "exact_atlas", Kind::Depth),
+        binding(7, "exact_atlas", Kind::Texture { filterable: false }),
     ],
 };
 

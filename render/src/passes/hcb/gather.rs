@@ -20,7 +20,7 @@ pub const GATHER_INPUTS_BINDINGS: Bindings = Bindings {
         binding(0, "params", Kind::Uniform),
         binding(1, "vpls", Kind::Storage { read_only: true }),
         binding(2, "ism_atlas", Kind::Texture { filterable: false }),
-        binding(3, "exact_atlas", Kind::Depth),
+        binding(3, "exact_atlas", Kind::Texture { filterable: false }),
         binding(4, "counter", Kind::Storage { read_only: true }),
         binding(5, "list", Kind::Storage { read_only: false }),
         binding(6, "args", Kind::Storage { read_only: false }),

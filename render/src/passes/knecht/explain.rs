@@ -32,7 +32,7 @@ pub const VPL_INPUTS_BINDINGS: Bindings = Bindings {
         binding(1, "params", Kind::Uniform),
         binding(2, "vpls", Kind::Storage { read_only: true }),
         binding(3, "ism_atlas", Kind::Texture { filterable: false }),
-        binding(4, "exact_atlas", Kind::Depth),
+        binding(4, "exact_atlas", Kind::Texture { filterable: false }),
         binding(5, "g_position", Kind::Texture { filterable: false }),
         binding(6, "g_normal", Kind::Texture { filterable: false }),
         binding(7, "g_albedo", Kind::Texture { filterable: false }),

@@ -35,7 +35,7 @@ pub const GATHER_INPUTS_BINDINGS: Bindings = Bindings {
         binding(1, "params", Kind::Uniform),
         binding(2, "vpls", Kind::Storage { read_only: true }),
         binding(3, "ism_atlas", Kind::Texture { filterable: false }),
-        binding(4, "exact_atlas", Kind::Depth),
+        binding(4, "exact_atlas", Kind::Texture { filterable: false }),
         binding(5, "s_position", Kind::Texture { filterable: false }),
         // The camera's packed normals (fused), or a stand-in beside `s_normal_split`.
         binding(6, "s_normal", Kind::UintTexture),

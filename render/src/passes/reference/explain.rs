@@ -26,7 +26,7 @@ pub const REFERENCE_INPUTS_BINDINGS: Bindings = Bindings {
         binding(0, "camera", Kind::Uniform),
         binding(1, "params", Kind::Uniform),
         binding(2, "vpls", Kind::Storage { read_only: true }),
-        binding(3, "atlas", Kind::Depth),
+        binding(3, "atlas", Kind::Texture { filterable: false }),
         binding(4, "g_position", Kind::Texture { filterable: false }),
         binding(5, "g_normal", Kind::Texture { filterable: false }),
         binding(6, "g_albedo", Kind::Texture { filterable: false }),
