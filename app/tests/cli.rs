@@ -397,7 +397,7 @@ fn export_writes_a_port_kit_and_refuses_an_existing_folder() {
         gi_lab()
             .args(["export", "--preset"])
             .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/../presets/nguyen-hcb.ron"))
-            .args(["--size", "32x18", "--frames", "1", "--port-kit"])
+            .args(["--size", "32x18", "--frames", "2", "--port-kit"])
             .arg(&kit)
             .args(extra)
             .output()
@@ -406,7 +406,13 @@ fn export_writes_a_port_kit_and_refuses_an_existing_folder() {
     let o = run(&[]);
     assert!(o.status.success(), "port kit failed: {}", String::from_utf8_lossy(&o.stderr));
     assert!(String::from_utf8_lossy(&o.stdout).contains("passes"), "{}", String::from_utf8_lossy(&o.stdout));
-    for f in ["manifest.json", "preset.json", "README.md", "shaders/hcb/gather.wgsl"] {
+    for f in [
+        "manifest.json",
+        "preset.json",
+        "README.md",
+        "shaders/hcb/gather.wgsl",
+        "golden/frame-0/inputs/frame.camera.bin",
+    ] {
         assert!(kit.join(f).is_file(), "{f} missing from the kit");
     }
     let m: serde_json::Value =
@@ -420,6 +426,17 @@ fn export_writes_a_port_kit_and_refuses_an_existing_folder() {
     assert_eq!(std::fs::read_to_string(kit.join("manifest.json")).expect("kept"), before, "nothing was touched");
     let o = run(&["--force"]);
     assert!(o.status.success(), "--force replaces it: {}", String::from_utf8_lossy(&o.stderr));
+    // `gi-lab verify` on a port that wrote nothing names the first output it misses.
+    let o = gi_lab()
+        .args(["verify", "--port-kit"])
+        .arg(&kit)
+        .arg("--outputs")
+        .arg(out.join("no-port"))
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("frame 0, pass 00 gbuffer") && err.contains("the port's output"), "{err}");
 }
 
 #[test]

@@ -148,20 +148,23 @@ pub trait CountedDevice {
 impl CountedDevice for wgpu::Device {
     fn counted_buffer(&self, desc: &wgpu::BufferDescriptor) -> wgpu::Buffer {
         note_created();
-        let b = self.create_buffer(desc);
+        let usage = capture::buffer_usage(desc.usage);
+        let b = self.create_buffer(&wgpu::BufferDescriptor { usage, ..desc.clone() });
         capture::remember_buffer(&b, desc.label, desc.usage);
         b
     }
     fn counted_buffer_init(&self, desc: &wgpu::util::BufferInitDescriptor) -> wgpu::Buffer {
         use wgpu::util::DeviceExt;
         note_created();
-        let b = self.create_buffer_init(desc);
+        let usage = capture::buffer_usage(desc.usage);
+        let b = self.create_buffer_init(&wgpu::util::BufferInitDescriptor { usage, ..*desc });
         capture::remember_buffer(&b, desc.label, desc.usage);
         b
     }
     fn counted_texture(&self, desc: &wgpu::TextureDescriptor) -> wgpu::Texture {
         note_created();
-        let t = self.create_texture(desc);
+        let usage = capture::texture_usage(desc.usage);
+        let t = self.create_texture(&wgpu::TextureDescriptor { usage, ..desc.clone() });
         capture::remember_texture(&t, desc);
         t
     }

@@ -20,7 +20,8 @@ fn kit(preset: &str) -> Kit {
         scene: default_scene(),
         scene_name: "default",
         size: SIZE,
-        warm_up_frames: 2,
+        frames: 3,
+        goldens: false,
         camera: None,
     };
     port_kit::build(gpu(), req).unwrap_or_else(|e| panic!("{preset}: {e}"))
@@ -210,4 +211,110 @@ fn check_translations(preset: &str, k: &Kit, dir: &std::path::Path, (spirv_val, 
             }
         }
     }
+}
+
+/// Bytes a texture's levels and layers (or a buffer) hold, from the manifest's resource.
+fn resource_bytes(r: &gi_render::export::port_kit::manifest::Resource) -> u64 {
+    if r.kind == "buffer" {
+        return r.size[0];
+    }
+    let bpp = match r.format.as_deref() {
+        Some("Rgba32Float" | "Rgba32Uint") => 16,
+        Some("Rgba16Float" | "Rg32Float") => 8,
+        _ => 4,
+    };
+    let (w, h, layers) = (r.size[0], r.size[1], r.size[2]);
+    (0..r.mips.unwrap_or(1)).map(|m| (w >> m).max(1) * (h >> m).max(1) * layers * bpp).sum()
+}
+
+#[test]
+fn goldens_hold_every_pass_output_as_the_renderer_draws_it_and_verify_finds_the_first_divergence() {
+    // Instant radiosity with a small VPL budget (its ISM atlas is the kit's largest file) and
+    // four frames, so that the temporal merge's history is covered.
+    let mut s = settings("knecht-cornell-256");
+    s.vpl.count = 16;
+    let req = KitRequest {
+        preset: "knecht-16",
+        settings: s.clone(),
+        scene: default_scene(),
+        scene_name: "default",
+        size: SIZE,
+        frames: 4,
+        goldens: true,
+        camera: None,
+    };
+    let k = port_kit::build(gpu(), req).expect("kit");
+    let m = &k.manifest;
+    assert_eq!(m.golden.len(), 4, "a golden frame per frame drawn");
+    for f in &m.golden {
+        assert!(!f.inputs.is_empty(), "frame {}: no inputs", f.frame);
+        assert!(!f.passes.is_empty(), "frame {}: no passes", f.frame);
+        for p in &f.passes {
+            assert!(!p.outputs.is_empty(), "frame {} pass {}: no outputs", f.frame, p.name);
+            for o in &p.outputs {
+                let r = m.resources.iter().find(|r| r.name == o.resource).expect("a listed resource");
+                assert_eq!(o.bytes, resource_bytes(r), "frame {} {}: {}", f.frame, p.name, o.resource);
+                assert!(k.files.iter().any(|(path, _)| path.to_string_lossy() == o.file), "{} not written", o.file);
+            }
+        }
+    }
+    let timed = m.passes.iter().filter(|p| p.name != "(between passes)").count();
+    assert_eq!(m.golden.last().map(|f| f.passes.len()), Some(timed), "the last frame: a golden pass per timed pass");
+    // The last frame's direct light, as the golden holds it, is what a renderer drawing the
+    // same four frames shows.
+    let mut r = Renderer::new(gpu(), default_scene(), s, SIZE.0, SIZE.1).expect("renderer");
+    r.clock.playing = false;
+    r.reuse_unchanged = false;
+    for _ in 0..4 {
+        r.render_frame();
+    }
+    let direct = gi_lab_tests::read(&r, "direct.radiance");
+    let last = m.golden.last().expect("frames");
+    let golden = last.passes.iter().flat_map(|p| &p.outputs).find(|o| o.resource == "direct.radiance").expect("direct");
+    let bytes = &k.files.iter().find(|(p, _)| p.to_string_lossy() == golden.file).expect("file").1;
+    let decoded =
+        gi_render::buffers::decode_texels(wgpu::TextureFormat::Rgba16Float, bytes, SIZE.0, SIZE.1).expect("f16");
+    assert_eq!(decoded.data, direct.data, "the golden is the renderer's own direct light");
+
+    // A port that writes the goldens back passes; one changed output fails at its pass.
+    let base = std::env::temp_dir().join(format!("gi-lab-port-kit-verify-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&base);
+    let (kit, port) = (base.join("kit"), base.join("port"));
+    port_kit::write(&k, &kit, false).expect("written");
+    for f in &m.golden {
+        for o in f.passes.iter().flat_map(|p| &p.outputs) {
+            let to = port.join(&o.path);
+            std::fs::create_dir_all(to.parent().expect("folder")).expect("mkdir");
+            std::fs::copy(kit.join(&o.file), &to).expect("copy");
+        }
+    }
+    let report = port_kit::verify::verify(&kit, &port, 0.01).expect("verifies");
+    assert!(report.first_divergence().is_none(), "{}", report.table());
+    let outputs: usize = m.golden.iter().flat_map(|f| &f.passes).map(|p| p.outputs.len()).sum();
+    assert_eq!(report.rows.len(), outputs);
+    let f2 = &m.golden[2];
+    let gather = f2.passes.iter().find(|p| p.name == "interleave.gather").expect("the gather");
+    let merged = gather.outputs.iter().find(|o| o.resource == "indirect.merged").expect("its light");
+    let path = port.join(&merged.path);
+    let mut bytes = std::fs::read(&path).expect("read");
+    for b in bytes.iter_mut().skip(1).step_by(2) {
+        *b ^= 0x08; // every half float's exponent
+    }
+    std::fs::write(&path, bytes).expect("write");
+    let report = port_kit::verify::verify(&kit, &port, 0.01).expect("verifies");
+    let first = report.first_divergence().expect("a divergence");
+    assert_eq!(
+        (first.frame, first.pass.as_str(), first.resource.as_str()),
+        (2, "interleave.gather", "indirect.merged")
+    );
+    std::fs::write(&path, b"short").expect("write");
+    let err = port_kit::verify::verify(&kit, &port, 0.01).expect_err("a wrong size is an error");
+    assert!(
+        err.contains("interleave.gather") && err.contains("indirect.merged") && err.contains("wrong size"),
+        "{err}"
+    );
+    std::fs::remove_file(&path).expect("remove");
+    let err = port_kit::verify::verify(&kit, &port, 0.01).expect_err("a missing output is an error");
+    assert!(err.contains("interleave.gather") && err.contains("indirect.merged"), "{err}");
+    let _ = std::fs::remove_dir_all(&base);
 }

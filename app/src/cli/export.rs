@@ -32,7 +32,7 @@ pub struct ExportArgs {
     /// frame's passes, the export, the shaders and a README.
     #[arg(long, value_name = "DIR")]
     pub port_kit: Option<PathBuf>,
-    /// Port kit: frames drawn before the captured one.
+    /// Port kit: frames drawn from a fresh start, each recorded in the goldens (at least 2).
     #[arg(long, default_value_t = 4)]
     pub frames: u32,
     /// Port kit: replace an existing folder (only once the new kit is complete).
@@ -106,7 +106,8 @@ fn port_kit(
         scene,
         scene_name: &name,
         size,
-        warm_up_frames: a.frames,
+        frames: a.frames,
+        goldens: true,
         camera: None,
     };
     let kit = port_kit::build(ctx, req).map_err(|e| CliError::failure(format!("port kit: {e}")))?;

@@ -19,6 +19,7 @@ pub mod study;
 pub mod sweep;
 pub mod sweep_run;
 pub mod upgrade;
+pub mod verify;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -73,6 +74,9 @@ pub enum Command {
     /// Export a preset for engines: JSON or RON with schema id and provenance (GI Lab
     /// version, scene, camera, date); see docs/preset-schema.md.
     Export(ExportArgs),
+    /// Compare a port's per-pass outputs with a port kit's goldens (docs/port-kit.md): a
+    /// table, the first pass that diverges, a non-zero exit beyond --tolerance.
+    Verify(verify::VerifyArgs),
     /// Print the hierarchical coherence buffer's samples per level as Table 1 of Nguyen et
     /// al. lays them out (the preset's technique is switched to the HCB).
     HcbStats(HcbStatsArgs),
@@ -140,6 +144,7 @@ pub fn main() -> ExitCode {
             Ok(())
         }
         Some(Command::Export(a)) => export::export(a),
+        Some(Command::Verify(a)) => verify::verify(a),
         Some(Command::Upgrade(a)) => upgrade::upgrade(a),
         Some(Command::Soak(a)) => soak::soak(a),
         Some(Command::GenAssets { out, framing_cases }) => {

@@ -431,6 +431,19 @@ fn decoder(format: wgpu::TextureFormat) -> Option<(u32, TexelDecoder)> {
     })
 }
 
+/// Texels of `format` (rows packed, `width` × `height`) decoded to f32 RGBA, for the formats
+/// the read-backs decode (None for the others); a short `bytes` leaves the rest zero.
+pub fn decode_texels(format: wgpu::TextureFormat, bytes: &[u8], width: u32, height: u32) -> Option<ImageF32> {
+    let (bpp, decode) = decoder(format)?;
+    let mut img = ImageF32::new(width, height);
+    for (i, px) in img.data.iter_mut().enumerate() {
+        if let Some(b) = bytes.get(i * bpp as usize..(i + 1) * bpp as usize) {
+            *px = decode(b);
+        }
+    }
+    Some(img)
+}
+
 /// IEEE 754 half → f32.
 pub fn half_to_f32(h: u16) -> f32 {
     let sign = if h & 0x8000 != 0 { -1.0 } else { 1.0 };

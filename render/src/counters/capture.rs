@@ -21,6 +21,8 @@ use super::key;
 pub struct TextureInfo {
     pub label: String,
     pub format: String,
+    #[serde(skip)]
+    pub texture_format: Option<wgpu::TextureFormat>,
     /// Width, height, and depth or layers.
     pub size: [u32; 3],
     pub mips: u32,
@@ -172,6 +174,20 @@ pub enum Command {
 pub struct PassCommands {
     pub name: String,
     pub commands: Vec<Command>,
+    /// With goldens on ([`start_with_goldens`]): the contents of every texture and buffer the
+    /// pass bound, targeted, copied or cleared, read back when it ended.
+    #[serde(skip)]
+    pub snapshots: Vec<Snapshot>,
+}
+
+/// The contents of a resource after a pass: a texture's every level and layer (level by
+/// level, layers in order, rows packed without padding) or a buffer's bytes.
+#[derive(Clone, Debug)]
+pub struct Snapshot {
+    /// [`Capture::textures`] or [`Capture::buffers`] key.
+    pub key: u64,
+    pub texture: bool,
+    pub bytes: Vec<u8>,
 }
 
 /// What a capture holds: the objects by key, and the passes of the frames recorded since
@@ -186,6 +202,10 @@ pub struct Capture {
     pub pipelines: HashMap<u64, PipelineInfo>,
     pub groups: HashMap<u64, GroupInfo>,
     pub passes: Vec<PassCommands>,
+    /// The objects themselves, for the goldens' read-backs.
+    texture_handles: HashMap<u64, wgpu::Texture>,
+    buffer_handles: HashMap<u64, wgpu::Buffer>,
+    goldens: bool,
 }
 
 thread_local! {
@@ -196,6 +216,28 @@ thread_local! {
 /// that its objects are known).
 pub fn start() {
     CAPTURE.with(|c| *c.borrow_mut() = Some(Capture::default()));
+}
+
+/// [`start`], reading back after every pass what it touched (the port kit's goldens). The
+/// timing scopes then submit and wait for each pass (`timing::GpuTimer::scope`).
+pub fn start_with_goldens() {
+    CAPTURE.with(|c| *c.borrow_mut() = Some(Capture { goldens: true, ..Capture::default() }));
+}
+
+/// Whether goldens are being read back (each pass is submitted and waited for).
+pub fn goldens_on() -> bool {
+    CAPTURE.with(|c| c.borrow().as_ref().is_some_and(|c| c.goldens))
+}
+
+/// The usage a new texture or buffer gets: with goldens on, COPY_SRC is added so that it can
+/// be read back (not to buffers the CPU maps, which cannot have it).
+pub(crate) fn texture_usage(u: wgpu::TextureUsages) -> wgpu::TextureUsages {
+    if goldens_on() { u | wgpu::TextureUsages::COPY_SRC } else { u }
+}
+
+pub(crate) fn buffer_usage(u: wgpu::BufferUsages) -> wgpu::BufferUsages {
+    let mapped = u.intersects(wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::MAP_WRITE);
+    if goldens_on() && !mapped { u | wgpu::BufferUsages::COPY_SRC } else { u }
 }
 
 /// Stops and returns what was captured.
@@ -225,6 +267,9 @@ pub fn objects() -> Option<Capture> {
             pipelines: c.pipelines.clone(),
             groups: c.groups.clone(),
             passes: Vec::new(),
+            texture_handles: HashMap::new(),
+            buffer_handles: HashMap::new(),
+            goldens: c.goldens,
         })
     })
 }
@@ -246,12 +291,16 @@ pub(crate) fn remember_texture(t: &wgpu::Texture, d: &wgpu::TextureDescriptor) {
         let info = TextureInfo {
             label: d.label.unwrap_or("(unlabelled texture)").to_string(),
             format: debug(&d.format),
+            texture_format: Some(d.format),
             size: [d.size.width, d.size.height, d.size.depth_or_array_layers],
             mips: d.mip_level_count,
             dimension: debug(&d.dimension),
             usage: debug(&d.usage),
         };
         c.textures.insert(key(t), info);
+        if c.goldens {
+            c.texture_handles.insert(key(t), t.clone());
+        }
     });
 }
 
@@ -263,6 +312,9 @@ pub(crate) fn remember_buffer(b: &wgpu::Buffer, label: Option<&str>, usage: wgpu
             usage: debug(&usage),
         };
         c.buffers.insert(key(b), info);
+        if c.goldens && b.usage().contains(wgpu::BufferUsages::COPY_SRC) {
+            c.buffer_handles.insert(key(b), b.clone());
+        }
     });
 }
 
@@ -379,12 +431,14 @@ pub(crate) fn remember_group(g: &wgpu::BindGroup, d: &wgpu::BindGroupDescriptor)
 
 /// Opens the pass `name` (timing scopes).
 pub(crate) fn begin_scope(name: &str) {
-    with(|c| c.passes.push(PassCommands { name: name.into(), commands: Vec::new() }));
+    with(|c| c.passes.push(PassCommands { name: name.into(), commands: Vec::new(), snapshots: Vec::new() }));
 }
 
 /// Closes the open pass: commands until the next scope go to "(between passes)".
 pub(crate) fn end_scope() {
-    with(|c| c.passes.push(PassCommands { name: "(between passes)".into(), commands: Vec::new() }));
+    with(|c| {
+        c.passes.push(PassCommands { name: "(between passes)".into(), commands: Vec::new(), snapshots: Vec::new() })
+    });
 }
 
 /// Records `command` in the open pass.
@@ -392,7 +446,11 @@ pub(crate) fn record(command: impl FnOnce(&Capture) -> Command) {
     with(|c| {
         let cmd = command(c);
         if c.passes.is_empty() {
-            c.passes.push(PassCommands { name: "(between passes)".into(), commands: Vec::new() });
+            c.passes.push(PassCommands {
+                name: "(between passes)".into(),
+                commands: Vec::new(),
+                snapshots: Vec::new(),
+            });
         }
         if let Some(p) = c.passes.last_mut() {
             p.commands.push(cmd);
@@ -432,4 +490,118 @@ pub(crate) fn texture_key(t: &wgpu::Texture) -> u64 {
 /// The key of a pipeline or bind group.
 pub(crate) fn object_key<T: std::hash::Hash>(t: &T) -> u64 {
     key(t)
+}
+
+/// With goldens on, after a pass has run and the GPU is idle: reads back every texture and
+/// buffer the open pass touched into its [`PassCommands::snapshots`].
+pub(crate) fn after_scope(ctx: &crate::GpuContext) {
+    let targets = CAPTURE.with(|c| {
+        let c = c.borrow();
+        let Some(c) = c.as_ref().filter(|c| c.goldens) else { return Vec::new() };
+        let Some(pass) = c.passes.last() else { return Vec::new() };
+        let mut keys: Vec<(bool, u64)> = Vec::new();
+        fn add(keys: &mut Vec<(bool, u64)>, b: &Bound) {
+            match b {
+                Bound::View { texture, .. } => keys.push((true, *texture)),
+                Bound::Buffer { buffer, .. } => keys.push((false, *buffer)),
+                _ => {}
+            }
+        }
+        for cmd in &pass.commands {
+            match cmd {
+                Command::Group { group, .. } => {
+                    for (_, b) in c.groups.get(group).map(|g| g.entries.as_slice()).unwrap_or(&[]) {
+                        add(&mut keys, b);
+                    }
+                }
+                Command::RenderPass { colors, depth } => {
+                    for (b, _) in colors.iter().chain(depth.as_ref()) {
+                        add(&mut keys, b);
+                    }
+                }
+                Command::CopyTexture { src, dst, .. } => keys.extend([(true, *src), (true, *dst)]),
+                Command::CopyBuffer { src, dst, .. } => keys.extend([(false, *src), (false, *dst)]),
+                Command::ClearBuffer { buffer, .. } => keys.push((false, *buffer)),
+                Command::DispatchIndirect { buffer, .. } | Command::DrawIndirect { buffer, .. } => {
+                    keys.push((false, *buffer))
+                }
+                _ => {}
+            }
+        }
+        keys.sort_unstable();
+        keys.dedup();
+        keys.into_iter()
+            .filter_map(|(texture, k)| {
+                if texture {
+                    c.texture_handles.get(&k).map(|t| (k, Some(t.clone()), None))
+                } else {
+                    c.buffer_handles.get(&k).map(|b| (k, None, Some(b.clone())))
+                }
+            })
+            .collect::<Vec<_>>()
+    });
+    let mut snapshots = Vec::new();
+    for (k, t, b) in targets {
+        let texture = t.is_some();
+        let bytes = match (t, b) {
+            (Some(t), _) => read_texture_raw(ctx, &t),
+            (_, Some(b)) => crate::buffers::read_storage(ctx, &b, b.size()),
+            _ => continue,
+        };
+        match bytes {
+            Ok(bytes) => snapshots.push(Snapshot { key: k, texture, bytes }),
+            Err(e) => log::warn!("golden read-back failed: {e}"),
+        }
+    }
+    with(|c| {
+        if let Some(p) = c.passes.last_mut() {
+            p.snapshots = snapshots;
+        }
+    });
+}
+
+/// Every level and layer of `t`, rows packed; blocks.
+fn read_texture_raw(ctx: &crate::GpuContext, t: &wgpu::Texture) -> Result<Vec<u8>, String> {
+    let format = t.format();
+    let aspect =
+        if format.is_depth_stencil_format() { wgpu::TextureAspect::DepthOnly } else { wgpu::TextureAspect::All };
+    let bpp = format.block_copy_size(Some(aspect)).ok_or_else(|| format!("{format:?} cannot be copied"))?;
+    let layers = if t.dimension() == wgpu::TextureDimension::D3 { 1 } else { t.depth_or_array_layers() };
+    let mut out = Vec::new();
+    for mip in 0..t.mip_level_count() {
+        let (w, h) = ((t.width() >> mip).max(1), (t.height() >> mip).max(1));
+        let depth = if t.dimension() == wgpu::TextureDimension::D3 {
+            (t.depth_or_array_layers() >> mip).max(1)
+        } else {
+            layers
+        };
+        let row = w * bpp;
+        let padded = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let size = padded as u64 * h as u64 * depth as u64;
+        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("capture.golden_readback"),
+            size,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut enc =
+            ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("capture.golden") });
+        enc.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo { texture: t, mip_level: mip, origin: wgpu::Origin3d::ZERO, aspect },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &staging,
+                layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(padded), rows_per_image: Some(h) },
+            },
+            wgpu::Extent3d { width: w, height: h, depth_or_array_layers: depth },
+        );
+        ctx.submit([enc.finish()]);
+        let data = crate::buffers::map_read(ctx, &staging)?;
+        for z in 0..depth {
+            for y in 0..h {
+                let o = ((z * h + y) * padded) as usize;
+                out.extend_from_slice(&data[o..o + row as usize]);
+            }
+        }
+    }
+    Ok(out)
 }

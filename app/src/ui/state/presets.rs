@@ -211,7 +211,8 @@ impl State {
                         scene,
                         scene_name: &scene_name,
                         size,
-                        warm_up_frames: 4,
+                        frames: 4,
+                        goldens: true,
                         camera: Some(camera),
                     };
                     let kit = port_kit::build(ctx, req)?;

@@ -14,6 +14,38 @@ use crate::counters::capture::{Bound, Capture, Command, PassCommands};
 pub const SCHEMA_NAME: &str = "gi-lab-port-kit";
 pub const SCHEMA_VERSION: u32 = 1;
 
+/// One golden file: a resource's contents (texture: every level, layers in order, rows
+/// packed; buffer: its bytes), with an EXR of level 0, layer 0 for float textures.
+#[derive(Clone, Debug, Serialize)]
+pub struct GoldenFile {
+    pub resource: String,
+    /// Where a port writes this output in its outputs folder for `gi-lab verify`
+    /// (`frame-K/NN-pass/resource.bin`), and where the kit keeps the golden bytes (the same
+    /// path under `golden/`, or an earlier file with the same contents).
+    pub path: String,
+    pub file: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub exr: Option<String>,
+    pub bytes: u64,
+}
+
+/// A pass's outputs in one frame.
+#[derive(Clone, Debug, Serialize)]
+pub struct GoldenPass {
+    pub index: usize,
+    pub name: String,
+    pub outputs: Vec<GoldenFile>,
+}
+
+/// One frame of the goldens.
+#[derive(Clone, Debug, Serialize)]
+pub struct GoldenFrame {
+    pub frame: u32,
+    /// The `input` resources as the frame's passes read them (uploads: uniforms, scene data).
+    pub inputs: Vec<GoldenFile>,
+    pub passes: Vec<GoldenPass>,
+}
+
 /// A range of a texture's levels and layers as bound.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct ViewRange {
@@ -147,8 +179,9 @@ pub struct Manifest {
     pub preset: String,
     /// The kit's image: width and height.
     pub size: [u32; 2],
-    /// Frames drawn before the one listed (its temporal state warmed).
-    pub warm_up_frames: u32,
+    /// Frames drawn from a fresh start (histories zero), each recorded in `golden`; `passes`
+    /// lists the last, `previous_frame_passes` the one before.
+    pub frames: u32,
     /// The engine export of the preset (`preset.json`): settings in use, provenance,
     /// resolved values.
     pub preset_file: &'static str,
@@ -163,6 +196,9 @@ pub struct Manifest {
     /// Every entry point the frame runs with its constants, translated by naga into SPIR-V,
     /// GLSL, HLSL and MSL (files under `shaders/<language>/`, or naga's error).
     pub translations: Vec<super::translate::Translation>,
+    /// Per frame from the fresh start, the files of the goldens: the inputs the host uploads and
+    /// each pass's outputs (`docs/port-kit.md`, "Goldens").
+    pub golden: Vec<GoldenFrame>,
     /// What the kit does not hold yet (docs/port-kit.md, "Not yet in the kit").
     pub not_yet: Vec<&'static str>,
 }
@@ -170,9 +206,9 @@ pub struct Manifest {
 /// What the kit does not hold yet; said in the manifest, the kit's README and docs/port-kit.md.
 pub const NOT_YET: &[&str] = &[
     "sizes and dispatch counts as expressions of W, H and the settings (the kit gives them at its own size)",
-    "uniform values per step (the kit gives each uniform block's byte layout, not its contents)",
-    "golden buffers per pass and `gi-lab verify`",
-    "a host that runs the kit (examples/port-kit-host)",
+    "uniform values decoded per step in the manifest (the goldens hold every uniform buffer's bytes per frame, the manifest each block's layout)",
+    "a host that runs the kit knowing only the kit (examples/port-kit-host), and CI running it on the four papers' kits",
+    "an order-free comparison for buffers filled by atomic appends (e.g. the HCB's sample list), whose order may differ between runs",
 ];
 
 /// The role of a pass by its name (docs/port-kit.md, "Roles").
@@ -206,15 +242,31 @@ impl Names {
     }
 }
 
-/// Builds the manifest of two consecutive captured frames (`previous`, then `last`) with the
+/// What a pass of a captured frame read and wrote (the goldens' files).
+#[derive(Clone, Debug)]
+pub struct PassAccess {
+    /// The pass's index in the frame's [`PassCommands`] (its snapshots) and in the listed frame.
+    pub source: usize,
+    pub index: usize,
+    pub name: String,
+    pub written: Vec<String>,
+    pub read: Vec<String>,
+}
+
+/// A manifest with what the goldens need: each frame's passes' accesses, and each resource's
+/// capture key (texture or not, key).
+pub struct Built {
+    pub manifest: Manifest,
+    pub frames: Vec<Vec<PassAccess>>,
+    pub keys: HashMap<String, (bool, u64)>,
+}
+
+/// Builds the manifest of the captured `frames` (at least two, from a fresh start) with the
 /// objects of `objects`.
-pub fn build(
-    preset: &str,
-    size: (u32, u32),
-    warm_up_frames: u32,
-    (previous, last): (&[PassCommands], &[PassCommands]),
-    objects: &Capture,
-) -> Result<Manifest, String> {
+pub fn build(preset: &str, size: (u32, u32), frames: &[Vec<PassCommands>], objects: &Capture) -> Result<Built, String> {
+    if frames.len() < 2 {
+        return Err(format!("a kit needs two frames or more, {} were drawn", frames.len()));
+    }
     let mut b = Builder {
         objects,
         names: Names { by_key: HashMap::new(), seen: HashMap::new() },
@@ -222,30 +274,46 @@ pub fn build(
         access: BTreeMap::new(),
         order: Vec::new(),
         frame: 0,
+        pass_access: Vec::new(),
     };
-    let previous_frame_passes = b.frame_passes(previous)?;
-    b.frame = 1;
-    let out = b.frame_passes(last)?;
+    let mut lists = Vec::new();
+    for (k, f) in frames.iter().enumerate() {
+        b.frame = k;
+        b.pass_access.push(Vec::new());
+        lists.push(b.frame_passes(f)?);
+    }
+    let out = lists.pop().unwrap_or_default();
+    let previous_frame_passes = lists.pop().unwrap_or_default();
     let resources = b.resources();
+    let keys = b
+        .names
+        .by_key
+        .iter()
+        .filter(|((kind, _), _)| *kind != SAM)
+        .map(|((kind, key), name)| (name.clone(), (*kind == TEX, *key)))
+        .collect();
+    let access = std::mem::take(&mut b.pass_access);
     let shaders = b
         .modules
         .into_iter()
         .map(|(module, decl)| Shader { file: format!("shaders/{module}"), module, decl })
         .collect();
-    Ok(Manifest {
+    let manifest = Manifest {
         schema: SCHEMA_NAME,
         schema_version: SCHEMA_VERSION,
         preset: preset.into(),
         size: [size.0, size.1],
-        warm_up_frames,
+        frames: frames.len() as u32,
         preset_file: "preset.json",
         passes: out,
         previous_frame_passes,
         resources,
         shaders,
         translations: Vec::new(),
+        golden: Vec::new(),
         not_yet: NOT_YET.to_vec(),
-    })
+    };
+    Ok(Built { manifest, frames: access, keys })
 }
 
 const TEX: u8 = 0;
@@ -258,8 +326,10 @@ struct Builder<'a> {
     modules: BTreeMap<String, ModuleDecl>,
     /// Resource name → its accesses in order: (frame, pass name, wrote).
     access: BTreeMap<String, Vec<(usize, String, bool)>>,
-    /// The frame being read: 0 the previous, 1 the last.
+    /// The frame being read.
     frame: usize,
+    /// Per frame, the accesses of its listed passes.
+    pass_access: Vec<Vec<PassAccess>>,
     /// Resource names in order of first use, with their kind and key.
     order: Vec<(String, u8, u64)>,
 }
@@ -291,15 +361,29 @@ impl Builder<'_> {
 
     fn touch(&mut self, name: &str, pass: &str, wrote: bool) {
         self.access.entry(name.to_string()).or_default().push((self.frame, pass.to_string(), wrote));
+        if let Some(a) = self.pass_access.last_mut().and_then(|f| f.last_mut()) {
+            let list = if wrote { &mut a.written } else { &mut a.read };
+            if !list.iter().any(|n| n == name) {
+                list.push(name.to_string());
+            }
+        }
     }
 
     /// One frame's passes, without GI Lab's own instrumentation (the timestamp read-back).
     fn frame_passes(&mut self, passes: &[PassCommands]) -> Result<Vec<Pass>, String> {
         let mut out = Vec::new();
-        for p in passes.iter().filter(|p| !p.commands.is_empty()) {
+        for (source, p) in passes.iter().enumerate().filter(|(_, p)| !p.commands.is_empty()) {
+            let access =
+                PassAccess { source, index: out.len(), name: p.name.clone(), written: Vec::new(), read: Vec::new() };
+            if let Some(f) = self.pass_access.last_mut() {
+                f.push(access);
+            }
             let mut steps = self.steps(p)?;
             steps.retain(|s| !s.copy.as_ref().is_some_and(|c| c.to_string().contains("\"timing.")));
             if steps.is_empty() {
+                if let Some(f) = self.pass_access.last_mut() {
+                    f.pop();
+                }
                 continue;
             }
             out.push(Pass { index: out.len(), name: p.name.clone(), role: role_of(&p.name), steps });
@@ -517,7 +601,7 @@ impl Builder<'_> {
                 let acc = self.access.get(name).cloned().unwrap_or_default();
                 // History: some frame reads it before that frame writes it, and it is written.
                 let written = acc.iter().any(|a| a.2);
-                let read_first = (0..2).any(|f| {
+                let read_first = (0..=self.frame).any(|f| {
                     let w = acc.iter().position(|a| a.0 == f && a.2);
                     let r = acc.iter().position(|a| a.0 == f && !a.2);
                     matches!((r, w), (Some(r), Some(w)) if r < w) || matches!((r, w), (Some(_), None))
@@ -529,7 +613,7 @@ impl Builder<'_> {
                 };
                 let mut written_by: Vec<String> = Vec::new();
                 let mut read_by: Vec<String> = Vec::new();
-                for (_, pass, wrote) in acc.iter().filter(|a| a.0 == 1) {
+                for (_, pass, wrote) in acc.iter().filter(|a| a.0 == self.frame) {
                     let list = if *wrote { &mut written_by } else { &mut read_by };
                     if !list.contains(pass) {
                         list.push(pass.clone());

@@ -15,9 +15,11 @@ use crate::counters::capture;
 use crate::export::{Export, ExportFormat};
 use crate::{GpuContext, LabSettings, Renderer};
 
+pub mod golden;
 pub mod manifest;
 pub mod reflect;
 pub mod translate;
+pub mod verify;
 
 pub use manifest::Manifest;
 
@@ -30,8 +32,11 @@ pub struct KitRequest<'a> {
     /// The scene file, or the embedded scene's name (the export's provenance).
     pub scene_name: &'a str,
     pub size: (u32, u32),
-    /// Frames drawn before the captured one (at least 1: the first frame resets histories).
-    pub warm_up_frames: u32,
+    /// Frames drawn from a fresh start and recorded in the goldens (at least 2).
+    pub frames: u32,
+    /// Whether to read back every pass's outputs into `golden/` (the command line and the
+    /// window do; a test of the manifest alone may not).
+    pub goldens: bool,
     /// The camera (the window's live one); None: the scene's opening view.
     pub camera: Option<crate::camera::Camera>,
 }
@@ -49,13 +54,19 @@ pub fn build(ctx: GpuContext, req: KitRequest) -> Result<Kit, String> {
     if w == 0 || h == 0 {
         return Err(format!("the kit's size {w}×{h} has no pixels"));
     }
-    capture::start();
+    if req.goldens {
+        capture::start_with_goldens();
+    } else {
+        capture::start();
+    }
     let result = draw(ctx, &req);
     let objects = capture::stop();
-    let ((previous, last), export) = result?;
+    let (frames, export) = result?;
     let objects = objects.ok_or("the capture was stopped by someone else")?;
-    let mut manifest = manifest::build(req.preset, req.size, req.warm_up_frames, (&previous, &last), &objects)?;
-    let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
+    let built = manifest::build(req.preset, req.size, &frames, &objects)?;
+    let (golden, mut files) = golden::goldens(&built, &frames, &objects);
+    let mut manifest = built.manifest;
+    manifest.golden = golden;
     for s in &manifest.shaders {
         let source = crate::shaders::resolve(&s.module).map_err(|e| format!("{}: {e}", s.module))?;
         files.push((PathBuf::from(&s.file), source.into_bytes()));
@@ -93,10 +104,10 @@ pub fn build(ctx: GpuContext, req: KitRequest) -> Result<Kit, String> {
 /// An entry point with its pipeline constants: (module, entry, constants).
 type Variant = (String, String, Vec<(String, f64)>);
 
-type Frames = (Vec<capture::PassCommands>, Vec<capture::PassCommands>);
+type Frames = Vec<Vec<capture::PassCommands>>;
 
 /// The frames of the capture (the renderer is made inside it, so that its objects are known):
-/// the last two frames' commands, and the export of what was drawn.
+/// every frame's commands with their read-backs, and the export of what was drawn.
 fn draw(ctx: GpuContext, req: &KitRequest) -> Result<(Frames, Export), String> {
     let (w, h) = req.size;
     let mut r = Renderer::new(ctx, req.scene.clone(), req.settings.clone(), w, h).map_err(|e| e.to_string())?;
@@ -106,15 +117,15 @@ fn draw(ctx: GpuContext, req: &KitRequest) -> Result<(Frames, Export), String> {
     }
     // Every pass every frame: a kit lists the whole frame, not what a still view could keep.
     r.reuse_unchanged = false;
-    let (mut previous, mut last) = (Vec::new(), Vec::new());
-    for _ in 0..=req.warm_up_frames.max(1) {
+    let mut frames = Vec::new();
+    for _ in 0..req.frames.max(2) {
         capture::take_passes();
         r.render_frame();
-        previous = std::mem::replace(&mut last, capture::take_passes());
+        frames.push(capture::take_passes());
     }
     let view = super::ExportView::of_scene(req.scene_name, r.scene(), r.bounds(), r.camera, r.size(), r.settings());
     let export = Export::new(r.settings().clone(), super::Provenance::now(&view));
-    Ok(((previous, last), export))
+    Ok((frames, export))
 }
 
 /// Writes `kit` to `dir` whole or not at all: into a new folder beside it, renamed into place.
@@ -174,9 +185,9 @@ fn readme(m: &Manifest, e: &Export) -> String {
     let mut s = format!("# Port kit: `{}`\n\n", m.preset);
     let p = &e.provenance;
     s += &format!(
-        "Exported by GI Lab {} on {} from `{}` at {}×{}, paused, after {} warm-up frame(s). \
+        "Exported by GI Lab {} on {} from `{}` at {}×{}, paused, {} frames from a fresh start. \
          Schema `{}` version {}; the manifest's fields are documented in GI Lab's `docs/port-kit.md`.\n\n",
-        p.gi_lab_version, p.date, p.scene, m.size[0], m.size[1], m.warm_up_frames, m.schema, m.schema_version
+        p.gi_lab_version, p.date, p.scene, m.size[0], m.size[1], m.frames, m.schema, m.schema_version
     );
     s += "- `manifest.json`: the frame as the ordered list of its passes; each pass's steps (dispatches, draws, \
           copies) with the pipeline, entry points and every binding in force; the resources with formats, sizes \
@@ -217,6 +228,15 @@ fn readme(m: &Manifest, e: &Export) -> String {
             s += &format!("- `{}`: {}\n", sh.module, h);
         }
     }
+    s += "\n## Checking your port\n\n";
+    s += &format!(
+        "`golden/frame-K/` holds, for each of the {} frames from a fresh start, the inputs to upload (`inputs/`) and \
+         every pass's outputs (`NN-pass/`), raw bytes in each resource's format (levels, then layers, rows packed), \
+         with an `.exr` of float images. Write your port's outputs to the `path` each golden names in `manifest.json` \
+         and run:\n\n```sh\ngi-lab verify --port-kit <this folder> --outputs <your outputs> --tolerance 0.01\n```\n\n\
+         It names the first pass that diverges and by how much.\n",
+        m.frames
+    );
     s += "\n## The shaders in your engine's language\n\n";
     s += "Each entry point the frame runs, with the pipeline's constants baked in, translated by naga: \
           `shaders/spirv/*.spv` (SPIR-V 1.3), `shaders/glsl/*.{comp,vert,frag}` (GLSL 4.50), `shaders/hlsl/*.hlsl` \
