@@ -121,28 +121,27 @@ pub fn save_atomic(
         .map_err(image::ImageError::IoError)
 }
 
-/// `img` as a 32-bit float RGBA OpenEXR file in memory.
-pub fn exr_bytes(img: &ImageF32) -> Result<Vec<u8>, image::ImageError> {
+/// `img` as an `image` crate 32-bit float RGBA image.
+fn rgba32f(img: &ImageF32) -> Result<image::DynamicImage, image::ImageError> {
     let flat: Vec<f32> = img.data.iter().flatten().copied().collect();
     let buf: image::Rgba32FImage = image::ImageBuffer::from_raw(img.width, img.height, flat).ok_or_else(|| {
         image::ImageError::Parameter(image::error::ParameterError::from_kind(
             image::error::ParameterErrorKind::DimensionMismatch,
         ))
     })?;
+    Ok(image::DynamicImage::ImageRgba32F(buf))
+}
+
+/// `img` as a 32-bit float RGBA OpenEXR file in memory.
+pub fn exr_bytes(img: &ImageF32) -> Result<Vec<u8>, image::ImageError> {
     let mut out = std::io::Cursor::new(Vec::new());
-    image::DynamicImage::ImageRgba32F(buf).write_to(&mut out, image::ImageFormat::OpenExr)?;
+    rgba32f(img)?.write_to(&mut out, image::ImageFormat::OpenExr)?;
     Ok(out.into_inner())
 }
 
 /// Writes 32-bit float RGBA OpenEXR, atomically (see [`save_atomic`]).
 pub fn save_exr(path: &Path, img: &ImageF32) -> Result<(), image::ImageError> {
-    let flat: Vec<f32> = img.data.iter().flatten().copied().collect();
-    let buf: image::Rgba32FImage = image::ImageBuffer::from_raw(img.width, img.height, flat).ok_or_else(|| {
-        image::ImageError::Parameter(image::error::ParameterError::from_kind(
-            image::error::ParameterErrorKind::DimensionMismatch,
-        ))
-    })?;
-    save_atomic(path, &image::DynamicImage::ImageRgba32F(buf), image::ImageFormat::OpenExr)
+    save_atomic(path, &rgba32f(img)?, image::ImageFormat::OpenExr)
 }
 
 /// Reads an OpenEXR (or any float image) back as f32 RGBA.
