@@ -194,7 +194,9 @@ fn readme(m: &Manifest, e: &Export) -> String {
           and lifetimes (`input`, `history`, `frame`); each shader's bindings and uniform layouts.\n";
     s += "- `preset.json`: the settings in use, where they were tuned, and every scene- or image-relative value \
           as set and as resolved.\n";
-    s += "- `shaders/`: each module as WGSL with its imports resolved.\n\n";
+    s += "- `shaders/`: each module as WGSL with its imports resolved, and each entry point the frame runs in SPIR-V, \
+          GLSL, HLSL and MSL (below).\n";
+    s += "- `golden/`: every frame's inputs and every pass's outputs as GI Lab drew them (below).\n\n";
     s += "## Bring-up order\n\n";
     s += "1. Feed the `engine` passes' outputs from your engine (the G-buffer and direct light, in the formats the \
           manifest lists), or port them too.\n";
