@@ -361,3 +361,69 @@ impl LateCount {
         self.latest.map(|(_, v)| v)
     }
 }
+
+/// The port kit's goldens (`counters::capture::start_with_goldens`): after a pass has run
+/// alone and the GPU is idle, reads back every texture and buffer it touched into its
+/// snapshots; blocks.
+pub(crate) fn read_back_open_pass(ctx: &GpuContext) {
+    use crate::counters::capture::{Snapshot, open_pass_targets, set_open_pass_snapshots};
+    let mut snapshots = Vec::new();
+    for t in open_pass_targets() {
+        let (texture, bytes) = match (&t.texture, &t.buffer) {
+            (Some(tex), _) => (true, read_texture_raw(ctx, tex)),
+            (_, Some(b)) => (false, crate::buffers::read_storage(ctx, b, b.size())),
+            _ => continue,
+        };
+        match bytes {
+            Ok(bytes) => snapshots.push(Snapshot { key: t.key, texture, bytes }),
+            Err(e) => log::warn!("golden read-back failed: {e}"),
+        }
+    }
+    set_open_pass_snapshots(snapshots);
+}
+
+/// Every level and layer of `t`, rows packed; blocks.
+fn read_texture_raw(ctx: &GpuContext, t: &wgpu::Texture) -> Result<Vec<u8>, String> {
+    let format = t.format();
+    let aspect =
+        if format.is_depth_stencil_format() { wgpu::TextureAspect::DepthOnly } else { wgpu::TextureAspect::All };
+    let bpp = format.block_copy_size(Some(aspect)).ok_or_else(|| format!("{format:?} cannot be copied"))?;
+    let layers = if t.dimension() == wgpu::TextureDimension::D3 { 1 } else { t.depth_or_array_layers() };
+    let mut out = Vec::new();
+    for mip in 0..t.mip_level_count() {
+        let (w, h) = ((t.width() >> mip).max(1), (t.height() >> mip).max(1));
+        let depth = if t.dimension() == wgpu::TextureDimension::D3 {
+            (t.depth_or_array_layers() >> mip).max(1)
+        } else {
+            layers
+        };
+        let row = w * bpp;
+        let padded = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let size = padded as u64 * h as u64 * depth as u64;
+        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("capture.golden_readback"),
+            size,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut enc =
+            ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("capture.golden") });
+        enc.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo { texture: t, mip_level: mip, origin: wgpu::Origin3d::ZERO, aspect },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &staging,
+                layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(padded), rows_per_image: Some(h) },
+            },
+            wgpu::Extent3d { width: w, height: h, depth_or_array_layers: depth },
+        );
+        ctx.submit([enc.finish()]);
+        let data = crate::buffers::map_read(ctx, &staging)?;
+        for z in 0..depth {
+            for y in 0..h {
+                let o = ((z * h + y) * padded) as usize;
+                out.extend_from_slice(&data[o..o + row as usize]);
+            }
+        }
+    }
+    Ok(out)
+}

@@ -197,7 +197,7 @@ impl GpuTimer {
             let r = f(&mut own, None);
             ctx.submit([own.finish()]);
             ctx.wait_idle();
-            crate::counters::capture::after_scope(ctx);
+            crate::readback::read_back_open_pass(ctx);
             r
         } else {
             self.scope_inner(ctx, encoder, name, index, f)

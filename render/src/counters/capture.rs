@@ -492,10 +492,17 @@ pub(crate) fn object_key<T: std::hash::Hash>(t: &T) -> u64 {
     key(t)
 }
 
-/// With goldens on, after a pass has run and the GPU is idle: reads back every texture and
-/// buffer the open pass touched into its [`PassCommands::snapshots`].
-pub(crate) fn after_scope(ctx: &crate::GpuContext) {
-    let targets = CAPTURE.with(|c| {
+/// A texture or buffer the open pass touched, to read back (its key, and the object).
+pub(crate) struct Target {
+    pub key: u64,
+    pub texture: Option<wgpu::Texture>,
+    pub buffer: Option<wgpu::Buffer>,
+}
+
+/// With goldens on: every texture and buffer the open pass bound, targeted, copied or cleared
+/// (`readback::read_back_open_pass` reads them after the pass has run).
+pub(crate) fn open_pass_targets() -> Vec<Target> {
+    CAPTURE.with(|c| {
         let c = c.borrow();
         let Some(c) = c.as_ref().filter(|c| c.goldens) else { return Vec::new() };
         let Some(pass) = c.passes.last() else { return Vec::new() };
@@ -533,75 +540,20 @@ pub(crate) fn after_scope(ctx: &crate::GpuContext) {
         keys.into_iter()
             .filter_map(|(texture, k)| {
                 if texture {
-                    c.texture_handles.get(&k).map(|t| (k, Some(t.clone()), None))
+                    c.texture_handles.get(&k).map(|t| Target { key: k, texture: Some(t.clone()), buffer: None })
                 } else {
-                    c.buffer_handles.get(&k).map(|b| (k, None, Some(b.clone())))
+                    c.buffer_handles.get(&k).map(|b| Target { key: k, texture: None, buffer: Some(b.clone()) })
                 }
             })
-            .collect::<Vec<_>>()
-    });
-    let mut snapshots = Vec::new();
-    for (k, t, b) in targets {
-        let texture = t.is_some();
-        let bytes = match (t, b) {
-            (Some(t), _) => read_texture_raw(ctx, &t),
-            (_, Some(b)) => crate::buffers::read_storage(ctx, &b, b.size()),
-            _ => continue,
-        };
-        match bytes {
-            Ok(bytes) => snapshots.push(Snapshot { key: k, texture, bytes }),
-            Err(e) => log::warn!("golden read-back failed: {e}"),
-        }
-    }
+            .collect()
+    })
+}
+
+/// Hands the open pass its read-backs.
+pub(crate) fn set_open_pass_snapshots(snapshots: Vec<Snapshot>) {
     with(|c| {
         if let Some(p) = c.passes.last_mut() {
             p.snapshots = snapshots;
         }
     });
-}
-
-/// Every level and layer of `t`, rows packed; blocks.
-fn read_texture_raw(ctx: &crate::GpuContext, t: &wgpu::Texture) -> Result<Vec<u8>, String> {
-    let format = t.format();
-    let aspect =
-        if format.is_depth_stencil_format() { wgpu::TextureAspect::DepthOnly } else { wgpu::TextureAspect::All };
-    let bpp = format.block_copy_size(Some(aspect)).ok_or_else(|| format!("{format:?} cannot be copied"))?;
-    let layers = if t.dimension() == wgpu::TextureDimension::D3 { 1 } else { t.depth_or_array_layers() };
-    let mut out = Vec::new();
-    for mip in 0..t.mip_level_count() {
-        let (w, h) = ((t.width() >> mip).max(1), (t.height() >> mip).max(1));
-        let depth = if t.dimension() == wgpu::TextureDimension::D3 {
-            (t.depth_or_array_layers() >> mip).max(1)
-        } else {
-            layers
-        };
-        let row = w * bpp;
-        let padded = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-        let size = padded as u64 * h as u64 * depth as u64;
-        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("capture.golden_readback"),
-            size,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        let mut enc =
-            ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("capture.golden") });
-        enc.copy_texture_to_buffer(
-            wgpu::TexelCopyTextureInfo { texture: t, mip_level: mip, origin: wgpu::Origin3d::ZERO, aspect },
-            wgpu::TexelCopyBufferInfo {
-                buffer: &staging,
-                layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(padded), rows_per_image: Some(h) },
-            },
-            wgpu::Extent3d { width: w, height: h, depth_or_array_layers: depth },
-        );
-        ctx.submit([enc.finish()]);
-        let data = crate::buffers::map_read(ctx, &staging)?;
-        for z in 0..depth {
-            for y in 0..h {
-                let o = ((z * h + y) * padded) as usize;
-                out.extend_from_slice(&data[o..o + row as usize]);
-            }
-        }
-    }
-    Ok(out)
 }
