@@ -60,7 +60,13 @@ fn the_manifest_lists_every_timed_pass_with_its_shaders_bindings_and_resources_a
         let timed = first_seen(timed.iter().map(|t| t.name.as_str()));
         let listed = first_seen(m.passes.iter().map(|p| p.name.as_str()).filter(|n| *n != "(between passes)"));
         assert_eq!(listed, timed, "{preset}: the manifest's passes are the frame's timed passes, in order");
-        assert_eq!(m.previous_frame_passes.len(), m.passes.len(), "{preset}: two frames of the same passes");
+        assert_eq!(m.frame_passes.len(), 3, "{preset}: every frame's passes");
+        let last = m.frame_passes.last().map(|f| f.iter().map(|p| p.name.as_str()).collect::<Vec<_>>());
+        assert_eq!(
+            last,
+            Some(m.passes.iter().map(|p| p.name.as_str()).collect()),
+            "{preset}: `passes` is the last frame"
+        );
 
         let resource = |name: &str| m.resources.iter().find(|r| r.name == name);
         let mut dispatches = 0;

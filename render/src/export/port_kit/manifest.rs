@@ -179,18 +179,19 @@ pub struct Manifest {
     pub preset: String,
     /// The kit's image: width and height.
     pub size: [u32; 2],
-    /// Frames drawn from a fresh start (histories zero), each recorded in `golden`; `passes`
-    /// lists the last, `previous_frame_passes` the one before.
+    /// Frames drawn from a fresh start (histories zero), each recorded in `golden` and listed
+    /// in `frame_passes`; `passes` is the last.
     pub frames: u32,
     /// The engine export of the preset (`preset.json`): settings in use, provenance,
     /// resolved values.
     pub preset_file: &'static str,
-    /// The captured frame's passes in order.
+    /// The last frame's passes in order (what the README lists).
     pub passes: Vec<Pass>,
-    /// The frame before it: the same passes, but resources used in turns (a history read in
-    /// one frame and written in the next, `temporal.history.0` / `.1`) swap. A port alternates
-    /// the two lists, starting with this one.
-    pub previous_frame_passes: Vec<Pass>,
+    /// Every frame's passes, frame 0 first: the first frame may run passes the later ones do
+    /// not (a tone mapping of its own before an exposure exists), and resources used in turns
+    /// (a history read in one frame and written in the next, `temporal.history.0` / `.1`) swap
+    /// between frames. A port runs frame K's list as frame K, and then alternates the last two.
+    pub frame_passes: Vec<Vec<Pass>>,
     pub resources: Vec<Resource>,
     pub shaders: Vec<Shader>,
     /// Every entry point the frame runs with its constants, translated by naga into SPIR-V,
@@ -282,8 +283,7 @@ pub fn build(preset: &str, size: (u32, u32), frames: &[Vec<PassCommands>], objec
         b.pass_access.push(Vec::new());
         lists.push(b.frame_passes(f)?);
     }
-    let out = lists.pop().unwrap_or_default();
-    let previous_frame_passes = lists.pop().unwrap_or_default();
+    let out = lists.last().cloned().unwrap_or_default();
     let resources = b.resources();
     let keys = b
         .names
@@ -306,7 +306,7 @@ pub fn build(preset: &str, size: (u32, u32), frames: &[Vec<PassCommands>], objec
         frames: frames.len() as u32,
         preset_file: "preset.json",
         passes: out,
-        previous_frame_passes,
+        frame_passes: lists,
         resources,
         shaders,
         translations: Vec::new(),

@@ -71,9 +71,9 @@ pub fn build(ctx: GpuContext, req: KitRequest) -> Result<Kit, String> {
         let source = crate::shaders::resolve(&s.module).map_err(|e| format!("{}: {e}", s.module))?;
         files.push((PathBuf::from(&s.file), source.into_bytes()));
     }
-    // Every entry point the two frames run, with its constants, in each engine's language.
+    // Every entry point the frames run, with its constants, in each engine's language.
     let mut variants: Vec<Variant> = Vec::new();
-    for pass in manifest.previous_frame_passes.iter().chain(&manifest.passes) {
+    for pass in manifest.frame_passes.iter().flatten() {
         for step in &pass.steps {
             for (module, entry) in &step.entry_points {
                 let v = (module.clone(), entry.clone(), step.constants.clone());
