@@ -129,6 +129,22 @@ fn the_manifest_lists_every_timed_pass_with_its_shaders_bindings_and_resources_a
             }
         }
         assert!(dispatches > 0, "{preset}: no dispatch");
+        // Every pipeline a step sets is described, a raster one with its targets' state.
+        for (pass, step) in m.passes.iter().flat_map(|p| p.steps.iter().map(move |s| (p, s))) {
+            let Some(label) = &step.pipeline else { continue };
+            let p = m.pipelines.iter().find(|p| &p.label == label);
+            let p = p.unwrap_or_else(|| panic!("{preset} {}: pipeline {label} not described", pass.name));
+            if step.kind.starts_with("draw") {
+                assert_eq!(p.kind, "render", "{preset} {label}");
+                assert!(!p.targets.is_empty() || p.depth.is_some(), "{preset} {label}: no targets");
+                assert!(p.primitive.is_some(), "{preset} {label}: no primitive state");
+            }
+            // The HCB's coherence-weighted splats add up (Nguyen et al. §4.2): blending is part
+            // of what a port must reproduce.
+            if pass.name == "hcb.splat" && step.kind.starts_with("draw") {
+                assert!(p.targets.iter().all(|t| t.blend.is_some()), "{preset} {label}: the splat blends");
+            }
+        }
         // What the engine feeds is listed as such: the G-buffer pass and the direct light.
         for name in ["gbuffer", "direct"] {
             assert!(

@@ -89,12 +89,30 @@ pub struct PipelineInfo {
     pub stages: Vec<Stage>,
     /// Pipeline-overridable constants by name.
     pub constants: Vec<(String, f64)>,
-    /// Render pipelines: colour target formats, depth format and test, primitive state,
-    /// vertex buffer strides.
-    pub targets: Vec<String>,
+    /// Render pipelines: each colour target's format, blend state and write mask.
+    pub targets: Vec<TargetState>,
+    /// The depth format, comparison and whether it writes depth.
     pub depth: Option<String>,
+    /// Topology, cull mode and front face.
     pub primitive: Option<String>,
-    pub vertex_strides: Vec<u64>,
+    /// Vertex buffers: stride, step mode and attributes (location, format, offset).
+    pub vertex_buffers: Vec<VertexLayout>,
+}
+
+/// A colour target of a render pipeline.
+#[derive(Clone, Debug, Serialize)]
+pub struct TargetState {
+    pub format: String,
+    pub blend: Option<String>,
+    pub write_mask: String,
+}
+
+/// A vertex buffer layout of a render pipeline.
+#[derive(Clone, Debug, Serialize)]
+pub struct VertexLayout {
+    pub stride: u64,
+    pub step_mode: String,
+    pub attributes: Vec<(u32, String, u64)>,
 }
 
 /// A bind group as created: its label and entries (binding number, what it holds).
@@ -366,7 +384,7 @@ pub(crate) fn remember_compute(p: &wgpu::ComputePipeline, d: &wgpu::ComputePipel
             targets: Vec::new(),
             depth: None,
             primitive: None,
-            vertex_strides: Vec::new(),
+            vertex_buffers: Vec::new(),
         };
         c.pipelines.insert(compute_key(p), info);
     });
@@ -391,7 +409,16 @@ pub(crate) fn remember_render(p: &wgpu::RenderPipeline, d: &wgpu::RenderPipeline
         let mut targets = Vec::new();
         if let Some(f) = &d.fragment {
             stages.push(Stage { module: module_path(c, f.module), entry: f.entry_point.unwrap_or("fs_main").into() });
-            targets = f.targets.iter().map(|t| t.as_ref().map(|t| debug(&t.format)).unwrap_or_default()).collect();
+            targets = f
+                .targets
+                .iter()
+                .flatten()
+                .map(|t| TargetState {
+                    format: debug(&t.format),
+                    blend: t.blend.as_ref().map(debug),
+                    write_mask: debug(&t.write_mask),
+                })
+                .collect();
         }
         let info = PipelineInfo {
             label: d.label.unwrap_or("(unlabelled pipeline)").to_string(),
@@ -399,9 +426,27 @@ pub(crate) fn remember_render(p: &wgpu::RenderPipeline, d: &wgpu::RenderPipeline
             stages,
             constants: d.vertex.compilation_options.constants.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
             targets,
-            depth: d.depth_stencil.as_ref().map(|s| format!("{:?} {:?}", s.format, s.depth_compare)),
-            primitive: Some(format!("{:?} cull {:?}", d.primitive.topology, d.primitive.cull_mode)),
-            vertex_strides: d.vertex.buffers.iter().map(|b| b.as_ref().map_or(0, |b| b.array_stride)).collect(),
+            depth: d.depth_stencil.as_ref().map(|s| {
+                format!(
+                    "{:?}, compare {:?}, write {:?}, bias {:?}",
+                    s.format, s.depth_compare, s.depth_write_enabled, s.bias
+                )
+            }),
+            primitive: Some(format!(
+                "{:?}, cull {:?}, front {:?}",
+                d.primitive.topology, d.primitive.cull_mode, d.primitive.front_face
+            )),
+            vertex_buffers: d
+                .vertex
+                .buffers
+                .iter()
+                .flatten()
+                .map(|b| VertexLayout {
+                    stride: b.array_stride,
+                    step_mode: debug(&b.step_mode),
+                    attributes: b.attributes.iter().map(|a| (a.shader_location, debug(&a.format), a.offset)).collect(),
+                })
+                .collect(),
         };
         c.pipelines.insert(render_key(p), info);
     });

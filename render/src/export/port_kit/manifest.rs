@@ -193,6 +193,10 @@ pub struct Manifest {
     /// between frames. A port runs frame K's list as frame K, and then alternates the last two.
     pub frame_passes: Vec<Vec<Pass>>,
     pub resources: Vec<Resource>,
+    /// Every pipeline the frames use, by the label the steps name: kind, stages, constants,
+    /// and for render pipelines the colour targets (format, blend, write mask), depth state,
+    /// primitive state and vertex buffer layouts.
+    pub pipelines: Vec<crate::counters::capture::PipelineInfo>,
     pub shaders: Vec<Shader>,
     /// Every entry point the frame runs with its constants, translated by naga into SPIR-V,
     /// GLSL, HLSL and MSL (files under `shaders/<language>/`, or naga's error).
@@ -276,6 +280,7 @@ pub fn build(preset: &str, size: (u32, u32), frames: &[Vec<PassCommands>], objec
         order: Vec::new(),
         frame: 0,
         pass_access: Vec::new(),
+        pipelines_used: Vec::new(),
     };
     let mut lists = Vec::new();
     for (k, f) in frames.iter().enumerate() {
@@ -285,6 +290,7 @@ pub fn build(preset: &str, size: (u32, u32), frames: &[Vec<PassCommands>], objec
     }
     let out = lists.last().cloned().unwrap_or_default();
     let resources = b.resources();
+    let pipelines = b.used_pipelines();
     let keys = b
         .names
         .by_key
@@ -307,6 +313,7 @@ pub fn build(preset: &str, size: (u32, u32), frames: &[Vec<PassCommands>], objec
         preset_file: "preset.json",
         passes: out,
         frame_passes: lists,
+        pipelines,
         resources,
         shaders,
         translations: Vec::new(),
@@ -330,6 +337,8 @@ struct Builder<'a> {
     frame: usize,
     /// Per frame, the accesses of its listed passes.
     pass_access: Vec<Vec<PassAccess>>,
+    /// Pipeline keys in order of first use.
+    pipelines_used: Vec<u64>,
     /// Resource names in order of first use, with their kind and key.
     order: Vec<(String, u8, u64)>,
 }
@@ -357,6 +366,19 @@ impl Builder<'_> {
             self.order.push((name.clone(), kind, key));
         }
         name
+    }
+
+    /// The pipelines the steps set, once each, in order of first use.
+    fn used_pipelines(&self) -> Vec<crate::counters::capture::PipelineInfo> {
+        let mut out: Vec<crate::counters::capture::PipelineInfo> = Vec::new();
+        for k in &self.pipelines_used {
+            if let Some(p) = self.objects.pipelines.get(k)
+                && !out.iter().any(|o| o.label == p.label)
+            {
+                out.push(p.clone());
+            }
+        }
+        out
     }
 
     fn touch(&mut self, name: &str, pass: &str, wrote: bool) {
@@ -504,6 +526,11 @@ impl Builder<'_> {
         pipeline: Option<u64>,
         groups: &BTreeMap<u32, (u64, Vec<u32>)>,
     ) -> Result<Step, String> {
+        if let Some(k) = pipeline
+            && !self.pipelines_used.contains(&k)
+        {
+            self.pipelines_used.push(k);
+        }
         let info = pipeline.and_then(|k| self.objects.pipelines.get(&k)).cloned();
         let mut decls: Vec<BindingDecl> = Vec::new();
         if let Some(info) = &info {
