@@ -263,33 +263,9 @@ pub fn stop() -> Option<Capture> {
     CAPTURE.with(|c| c.borrow_mut().take())
 }
 
-/// Whether a capture is on.
-pub fn is_on() -> bool {
-    CAPTURE.with(|c| c.borrow().is_some())
-}
-
 /// The passes recorded since the last call (a frame's, when called after each frame).
 pub fn take_passes() -> Vec<PassCommands> {
     CAPTURE.with(|c| c.borrow_mut().as_mut().map(|c| std::mem::take(&mut c.passes)).unwrap_or_default())
-}
-
-/// The objects known so far (textures, buffers, samplers, pipelines, groups), cloned.
-pub fn objects() -> Option<Capture> {
-    CAPTURE.with(|c| {
-        c.borrow().as_ref().map(|c| Capture {
-            textures: c.textures.clone(),
-            buffers: c.buffers.clone(),
-            samplers: c.samplers.clone(),
-            views: HashMap::new(),
-            modules: HashMap::new(),
-            pipelines: c.pipelines.clone(),
-            groups: c.groups.clone(),
-            passes: Vec::new(),
-            texture_handles: HashMap::new(),
-            buffer_handles: HashMap::new(),
-            goldens: c.goldens,
-        })
-    })
 }
 
 fn with(f: impl FnOnce(&mut Capture)) {

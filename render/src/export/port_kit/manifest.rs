@@ -476,11 +476,12 @@ impl Builder<'_> {
                 Command::ClearBuffer { buffer, offset, size } => {
                     let b = self.resource(BUF, *buffer);
                     self.touch(&b, &p.name, true);
-                    let mut step = copy_step(serde_json::json!({"offset": offset, "bytes": size}));
-                    step.kind = "clear".into();
-                    step.copy = None;
-                    step.clear = Some((b, *offset, *size));
-                    steps.push(step);
+                    steps.push(Step {
+                        kind: "clear".into(),
+                        copy: None,
+                        clear: Some((b, *offset, *size)),
+                        ..copy_step(serde_json::Value::Null)
+                    });
                 }
                 Command::CopyBuffer { src, dst, size } => {
                     let (s, d) = (self.resource(BUF, *src), self.resource(BUF, *dst));
