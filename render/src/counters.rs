@@ -244,7 +244,7 @@ mod tests {
 
 /// The traits, for `use crate::counters::prelude::*`.
 pub mod prelude {
-    pub use super::traffic::{CountedCompute, CountedEncoder, CountedPass, CountedRender};
+    pub use super::traffic::{CountedCompute, CountedEncoder, CountedPass, CountedQueue, CountedRender};
     pub use super::{CountedDevice, CountedTexture};
 }
 

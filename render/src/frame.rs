@@ -12,6 +12,7 @@
 //! | 7. Compose | `passes::compose`: direct + indirect + near field + emission + sky, tone mapped |
 
 use crate::chain::Recorder;
+use crate::counters::prelude::CountedQueue;
 use crate::fingerprint::{Fingerprint, Space};
 use crate::passes::stages::FrameInputs;
 use crate::renderer::{PrevFrame, Renderer, light_view_list};
@@ -45,7 +46,7 @@ impl Renderer {
         let state = self.frame_state();
         let view_proj = self.camera.view_proj(self.width as f32 / self.height as f32);
         let cam = self.camera_uniform(view_proj);
-        ctx.queue.write_buffer(&self.camera_buffer, 0, bytemuck::bytes_of(&cam));
+        ctx.queue.upload(&self.camera_buffer, 0, bytemuck::bytes_of(&cam));
         self.gpu_scene.update_instances(&ctx, &state, self.prev.as_ref().map(|p| p.models.as_slice()));
         let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
 

@@ -27,7 +27,8 @@ pub struct TextureInfo {
     pub size: [u32; 3],
     pub mips: u32,
     pub dimension: String,
-    pub usage: String,
+    /// Usage flags by name (`TEXTURE_BINDING`, `STORAGE_BINDING`, …).
+    pub usage: Vec<String>,
 }
 
 /// A buffer as created.
@@ -35,7 +36,7 @@ pub struct TextureInfo {
 pub struct BufferInfo {
     pub label: String,
     pub size: u64,
-    pub usage: String,
+    pub usage: Vec<String>,
 }
 
 /// A sampler as created.
@@ -78,6 +79,8 @@ pub struct Stage {
     /// `shaders/`-relative path of the module's entry file (its imports resolved).
     pub module: String,
     pub entry: String,
+    /// The stage's pipeline-overridable constants by name.
+    pub constants: Vec<(String, f64)>,
 }
 
 /// A pipeline as created.
@@ -91,10 +94,10 @@ pub struct PipelineInfo {
     pub constants: Vec<(String, f64)>,
     /// Render pipelines: each colour target's format, blend state and write mask.
     pub targets: Vec<TargetState>,
-    /// The depth format, comparison and whether it writes depth.
-    pub depth: Option<String>,
-    /// Topology, cull mode and front face.
-    pub primitive: Option<String>,
+    /// The depth format, comparison, whether it writes depth, and its bias.
+    pub depth: Option<serde_json::Value>,
+    /// Topology, cull mode, front face, polygon mode and whether depth is clamped.
+    pub primitive: Option<serde_json::Value>,
     /// Vertex buffers: stride, step mode and attributes (location, format, offset).
     pub vertex_buffers: Vec<VertexLayout>,
 }
@@ -103,8 +106,10 @@ pub struct PipelineInfo {
 #[derive(Clone, Debug, Serialize)]
 pub struct TargetState {
     pub format: String,
-    pub blend: Option<String>,
-    pub write_mask: String,
+    /// `{"color": {src, dst, operation}, "alpha": {…}}` by wgpu's names, or none.
+    pub blend: Option<serde_json::Value>,
+    /// Channels written: bits 1 red, 2 green, 4 blue, 8 alpha.
+    pub write_mask: u32,
 }
 
 /// A vertex buffer layout of a render pipeline.
@@ -120,6 +125,9 @@ pub struct VertexLayout {
 pub struct GroupInfo {
     pub label: String,
     pub entries: Vec<(u32, Bound)>,
+    /// The bindings its layout gives a dynamic offset, in binding order (the order of the
+    /// offsets `set_bind_group` takes).
+    pub dynamic: Vec<u32>,
 }
 
 /// One recorded command.
@@ -127,11 +135,11 @@ pub struct GroupInfo {
 #[serde(tag = "command", rename_all = "snake_case")]
 pub enum Command {
     /// A compute pass or render pass begins; a render pass with its targets (load: the old
-    /// contents kept).
+    /// contents kept; otherwise cleared to `clear`: a colour's RGBA, the depth in `[0]`).
     ComputePass,
     RenderPass {
-        colors: Vec<(Bound, bool)>,
-        depth: Option<(Bound, bool)>,
+        colors: Vec<Attachment>,
+        depth: Option<Attachment>,
     },
     Pipeline {
         pipeline: u64,
@@ -170,14 +178,21 @@ pub enum Command {
         buffer: u64,
         format: String,
     },
+    /// A texture copy: the level and texel origin of each side, and the extent.
     CopyTexture {
         src: u64,
+        src_mip: u32,
+        src_origin: [u32; 3],
         dst: u64,
+        dst_mip: u32,
+        dst_origin: [u32; 3],
         size: [u32; 3],
     },
     CopyBuffer {
         src: u64,
+        src_offset: u64,
         dst: u64,
+        dst_offset: u64,
         size: u64,
     },
     ClearBuffer {
@@ -185,6 +200,21 @@ pub enum Command {
         offset: u64,
         size: u64,
     },
+    /// Bytes the CPU wrote into a buffer (applied before the pass's commands run).
+    Upload {
+        buffer: u64,
+        offset: u64,
+        #[serde(skip)]
+        data: Vec<u8>,
+    },
+}
+
+/// A render target: what it holds, whether its contents are loaded, else the clear value.
+#[derive(Clone, Debug, Serialize)]
+pub struct Attachment {
+    pub bound: Bound,
+    pub load: bool,
+    pub clear: [f64; 4],
 }
 
 /// One timing scope's commands.
@@ -219,6 +249,10 @@ pub struct Capture {
     modules: HashMap<u64, String>,
     pub pipelines: HashMap<u64, PipelineInfo>,
     pub groups: HashMap<u64, GroupInfo>,
+    /// Bind group layouts: the bindings with a dynamic offset.
+    layouts: HashMap<u64, Vec<u32>>,
+    /// Buffers filled by atomic appends, with their record size ([`mark_unordered`]).
+    pub unordered: HashMap<u64, u64>,
     pub passes: Vec<PassCommands>,
     /// The objects themselves, for the goldens' read-backs.
     texture_handles: HashMap<u64, wgpu::Texture>,
@@ -280,6 +314,17 @@ fn debug<T: std::fmt::Debug>(t: &T) -> String {
     format!("{t:?}")
 }
 
+/// Flags by name.
+macro_rules! flag_names {
+    ($f:expr) => {
+        $f.iter_names().map(|(n, _)| n.to_string()).collect()
+    };
+}
+
+fn blend_component(c: &wgpu::BlendComponent) -> serde_json::Value {
+    serde_json::json!({"src": debug(&c.src_factor), "dst": debug(&c.dst_factor), "operation": debug(&c.operation)})
+}
+
 pub(crate) fn remember_texture(t: &wgpu::Texture, d: &wgpu::TextureDescriptor) {
     with(|c| {
         let info = TextureInfo {
@@ -289,7 +334,7 @@ pub(crate) fn remember_texture(t: &wgpu::Texture, d: &wgpu::TextureDescriptor) {
             size: [d.size.width, d.size.height, d.size.depth_or_array_layers],
             mips: d.mip_level_count,
             dimension: debug(&d.dimension),
-            usage: debug(&d.usage),
+            usage: flag_names!(d.usage),
         };
         c.textures.insert(key(t), info);
         if c.goldens {
@@ -303,7 +348,7 @@ pub(crate) fn remember_buffer(b: &wgpu::Buffer, label: Option<&str>, usage: wgpu
         let info = BufferInfo {
             label: label.unwrap_or("(unlabelled buffer)").to_string(),
             size: b.size(),
-            usage: debug(&usage),
+            usage: flag_names!(usage),
         };
         c.buffers.insert(key(b), info);
         if c.goldens && b.usage().contains(wgpu::BufferUsages::COPY_SRC) {
@@ -334,7 +379,22 @@ pub(crate) fn remember_view(v: &wgpu::TextureView, t: &wgpu::Texture, d: &wgpu::
             mips: d.mip_level_count.unwrap_or(mips.saturating_sub(d.base_mip_level)),
             base_layer: d.base_array_layer,
             layers: d.array_layer_count.unwrap_or(all_layers.saturating_sub(d.base_array_layer)),
-            dimension: d.dimension.map(|x| debug(&x)).unwrap_or_else(|| "D2".into()),
+            dimension: d.dimension.map(|x| debug(&x)).unwrap_or_else(|| {
+                // The default view: the texture's own dimension, 2D textures with several
+                // layers (and no layer count given) as arrays.
+                match t.dimension() {
+                    wgpu::TextureDimension::D1 => "D1".into(),
+                    wgpu::TextureDimension::D3 => "D3".into(),
+                    wgpu::TextureDimension::D2 => {
+                        let layers = d.array_layer_count.unwrap_or(all_layers.saturating_sub(d.base_array_layer));
+                        if layers > 1 || t.depth_or_array_layers() > 1 && d.array_layer_count.is_none() {
+                            "D2Array".into()
+                        } else {
+                            "D2".into()
+                        }
+                    }
+                }
+            }),
         };
         c.views.insert(key(v), bound);
     });
@@ -355,8 +415,12 @@ pub(crate) fn remember_compute(p: &wgpu::ComputePipeline, d: &wgpu::ComputePipel
         let info = PipelineInfo {
             label: d.label.unwrap_or("(unlabelled pipeline)").to_string(),
             kind: "compute",
-            stages: vec![Stage { module: module_path(c, d.module), entry: d.entry_point.unwrap_or("main").into() }],
-            constants: d.compilation_options.constants.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
+            stages: vec![Stage {
+                module: module_path(c, d.module),
+                entry: d.entry_point.unwrap_or("main").into(),
+                constants: constants_of(&d.compilation_options),
+            }],
+            constants: constants_of(&d.compilation_options),
             targets: Vec::new(),
             depth: None,
             primitive: None,
@@ -364,6 +428,10 @@ pub(crate) fn remember_compute(p: &wgpu::ComputePipeline, d: &wgpu::ComputePipel
         };
         c.pipelines.insert(compute_key(p), info);
     });
+}
+
+fn constants_of(o: &wgpu::PipelineCompilationOptions) -> Vec<(String, f64)> {
+    o.constants.iter().map(|(k, v)| (k.to_string(), *v)).collect()
 }
 
 /// Keys of pipelines: compute and render pipelines share [`Capture::pipelines`], and their
@@ -381,37 +449,59 @@ pub(crate) fn remember_render(p: &wgpu::RenderPipeline, d: &wgpu::RenderPipeline
         let mut stages = vec![Stage {
             module: module_path(c, d.vertex.module),
             entry: d.vertex.entry_point.unwrap_or("vs_main").into(),
+            constants: constants_of(&d.vertex.compilation_options),
         }];
         let mut targets = Vec::new();
         if let Some(f) = &d.fragment {
-            stages.push(Stage { module: module_path(c, f.module), entry: f.entry_point.unwrap_or("fs_main").into() });
+            stages.push(Stage {
+                module: module_path(c, f.module),
+                entry: f.entry_point.unwrap_or("fs_main").into(),
+                constants: constants_of(&f.compilation_options),
+            });
             targets = f
                 .targets
                 .iter()
                 .flatten()
                 .map(|t| TargetState {
                     format: debug(&t.format),
-                    blend: t.blend.as_ref().map(debug),
-                    write_mask: debug(&t.write_mask),
+                    blend: t.blend.as_ref().map(
+                        |b| serde_json::json!({"color": blend_component(&b.color), "alpha": blend_component(&b.alpha)}),
+                    ),
+                    write_mask: t.write_mask.bits(),
                 })
                 .collect();
         }
         let info = PipelineInfo {
             label: d.label.unwrap_or("(unlabelled pipeline)").to_string(),
             kind: "render",
+            constants: {
+                // Every stage's constants (the translations bake them into each entry point).
+                let mut all: Vec<(String, f64)> = Vec::new();
+                for (k, v) in stages.iter().flat_map(|s| s.constants.iter()) {
+                    if !all.iter().any(|(n, _)| n == k) {
+                        all.push((k.clone(), *v));
+                    }
+                }
+                all
+            },
             stages,
-            constants: d.vertex.compilation_options.constants.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
             targets,
             depth: d.depth_stencil.as_ref().map(|s| {
-                format!(
-                    "{:?}, compare {:?}, write {:?}, bias {:?}",
-                    s.format, s.depth_compare, s.depth_write_enabled, s.bias
-                )
+                serde_json::json!({
+                    "format": debug(&s.format),
+                    "compare": s.depth_compare.map(|c| debug(&c)),
+                    "write": s.depth_write_enabled.unwrap_or(false),
+                    "bias": {"constant": s.bias.constant, "slope_scale": s.bias.slope_scale, "clamp": s.bias.clamp},
+                })
             }),
-            primitive: Some(format!(
-                "{:?}, cull {:?}, front {:?}",
-                d.primitive.topology, d.primitive.cull_mode, d.primitive.front_face
-            )),
+            primitive: Some(serde_json::json!({
+                "topology": debug(&d.primitive.topology),
+                "strip_index_format": d.primitive.strip_index_format.map(|f| debug(&f)),
+                "cull_mode": d.primitive.cull_mode.map(|c| debug(&c)),
+                "front_face": debug(&d.primitive.front_face),
+                "polygon_mode": debug(&d.primitive.polygon_mode),
+                "unclipped_depth": d.primitive.unclipped_depth,
+            })),
             vertex_buffers: d
                 .vertex
                 .buffers
@@ -442,10 +532,33 @@ fn buffer_bound(b: &wgpu::BufferBinding) -> Bound {
     Bound::Buffer { buffer: key(b.buffer), offset: b.offset, size }
 }
 
+/// Marks `b` as a list filled by atomic appends (records of `stride` bytes, whose order
+/// depends on the GPU's scheduling): the port kit says so, and `gi-lab verify` compares it
+/// as a set of records (docs/port-kit.md, "Verifying a port").
+pub fn mark_unordered(b: &wgpu::Buffer, stride: u64) {
+    with(|c| {
+        c.unordered.insert(key(b), stride);
+    });
+}
+
+/// A bind group layout: which of its bindings take a dynamic offset.
+pub(crate) fn remember_layout(l: &wgpu::BindGroupLayout, entries: &[wgpu::BindGroupLayoutEntry]) {
+    with(|c| {
+        let mut dynamic: Vec<u32> = entries
+            .iter()
+            .filter(|e| matches!(e.ty, wgpu::BindingType::Buffer { has_dynamic_offset: true, .. }))
+            .map(|e| e.binding)
+            .collect();
+        dynamic.sort_unstable();
+        c.layouts.insert(key(l), dynamic);
+    });
+}
+
 pub(crate) fn remember_group(g: &wgpu::BindGroup, d: &wgpu::BindGroupDescriptor) {
     with(|c| {
         let entries = d.entries.iter().map(|e| (e.binding, bound_of(c, &e.resource))).collect();
-        let info = GroupInfo { label: d.label.unwrap_or("(unlabelled group)").to_string(), entries };
+        let dynamic = c.layouts.get(&key(d.layout)).cloned().unwrap_or_default();
+        let info = GroupInfo { label: d.label.unwrap_or("(unlabelled group)").to_string(), entries, dynamic };
         c.groups.insert(key(g), info);
     });
 }
@@ -488,12 +601,21 @@ pub(crate) fn render_pass(desc: &wgpu::RenderPassDescriptor) {
                 .color_attachments
                 .iter()
                 .flatten()
-                .map(|a| (view(a.view), matches!(a.ops.load, wgpu::LoadOp::Load)))
+                .map(|a| {
+                    let (load, clear) = match a.ops.load {
+                        wgpu::LoadOp::Clear(c) => (false, [c.r, c.g, c.b, c.a]),
+                        _ => (true, [0.0; 4]),
+                    };
+                    Attachment { bound: view(a.view), load, clear }
+                })
                 .collect(),
-            depth: desc
-                .depth_stencil_attachment
-                .as_ref()
-                .map(|d| (view(d.view), d.depth_ops.as_ref().is_some_and(|o| matches!(o.load, wgpu::LoadOp::Load)))),
+            depth: desc.depth_stencil_attachment.as_ref().map(|d| {
+                let (load, clear) = match d.depth_ops.as_ref().map(|o| o.load) {
+                    Some(wgpu::LoadOp::Clear(z)) => (false, [z as f64, 0.0, 0.0, 0.0]),
+                    _ => (true, [0.0; 4]),
+                };
+                Attachment { bound: view(d.view), load, clear }
+            }),
         }
     });
 }
@@ -543,16 +665,17 @@ pub(crate) fn open_pass_targets() -> Vec<Target> {
                     }
                 }
                 Command::RenderPass { colors, depth } => {
-                    for (b, _) in colors.iter().chain(depth.as_ref()) {
-                        add(&mut keys, b);
+                    for a in colors.iter().chain(depth.as_ref()) {
+                        add(&mut keys, &a.bound);
                     }
                 }
                 Command::CopyTexture { src, dst, .. } => keys.extend([(true, *src), (true, *dst)]),
                 Command::CopyBuffer { src, dst, .. } => keys.extend([(false, *src), (false, *dst)]),
                 Command::ClearBuffer { buffer, .. } => keys.push((false, *buffer)),
-                Command::DispatchIndirect { buffer, .. } | Command::DrawIndirect { buffer, .. } => {
-                    keys.push((false, *buffer))
-                }
+                Command::DispatchIndirect { buffer, .. }
+                | Command::DrawIndirect { buffer, .. }
+                | Command::VertexBuffer { buffer, .. }
+                | Command::IndexBuffer { buffer, .. } => keys.push((false, *buffer)),
                 _ => {}
             }
         }

@@ -310,6 +310,22 @@ impl CountedRender for wgpu::RenderPass<'_> {
     }
 }
 
+/// Uploads from the CPU, recorded by a capture (the port kit's `upload` steps: what a host
+/// writes into a buffer, and when).
+pub trait CountedQueue {
+    fn upload(&self, buffer: &wgpu::Buffer, offset: u64, data: &[u8]);
+}
+
+impl CountedQueue for wgpu::Queue {
+    fn upload(&self, buffer: &wgpu::Buffer, offset: u64, data: &[u8]) {
+        {
+            use super::capture::{Command, buffer_key, record};
+            record(|_| Command::Upload { buffer: buffer_key(buffer), offset, data: data.to_vec() });
+        }
+        self.write_buffer(buffer, offset, data);
+    }
+}
+
 /// Render passes and copies that charge their attachments and bytes to the open pass.
 pub trait CountedEncoder {
     fn begin_counted_render_pass<'e>(&'e mut self, desc: &wgpu::RenderPassDescriptor<'_>) -> wgpu::RenderPass<'e>;
@@ -354,7 +370,16 @@ impl CountedEncoder for wgpu::CommandEncoder {
         {
             use super::capture::{Command, record, texture_key};
             let size = [size.width, size.height, size.depth_or_array_layers];
-            record(|_| Command::CopyTexture { src: texture_key(src.texture), dst: texture_key(dst.texture), size });
+            let origin = |o: wgpu::Origin3d| [o.x, o.y, o.z];
+            record(|_| Command::CopyTexture {
+                src: texture_key(src.texture),
+                src_mip: src.mip_level,
+                src_origin: origin(src.origin),
+                dst: texture_key(dst.texture),
+                dst_mip: dst.mip_level,
+                dst_origin: origin(dst.origin),
+                size,
+            });
         }
         self.copy_texture_to_texture(src, dst, size);
     }
@@ -370,7 +395,13 @@ impl CountedEncoder for wgpu::CommandEncoder {
         charge_bytes(2 * size);
         {
             use super::capture::{Command, buffer_key, record};
-            record(|_| Command::CopyBuffer { src: buffer_key(src), dst: buffer_key(dst), size });
+            record(|_| Command::CopyBuffer {
+                src: buffer_key(src),
+                src_offset,
+                dst: buffer_key(dst),
+                dst_offset,
+                size,
+            });
         }
         self.copy_buffer_to_buffer(src, src_offset, dst, dst_offset, size);
     }

@@ -114,10 +114,11 @@ impl Bindings {
     /// G-buffer's camera in each light's G-buffer; WebGPU: groups of equal layouts are
     /// interchangeable).
     pub fn layout_labelled(&self, device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
-        device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some(label),
-            entries: &self.layout_entries(),
-        })
+        let entries = self.layout_entries();
+        let layout =
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &entries });
+        crate::counters::capture::remember_layout(&layout, &entries);
+        layout
     }
 
     /// The bind group of `layout` (made by [`Self::layout`]) with `resources` in the

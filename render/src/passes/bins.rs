@@ -113,7 +113,7 @@ impl Bins {
         self.rects = crate::passes::buffer(&ctx.device, &format!("{label}.rects"), words as u64 * 32 * 16, storage);
         for (mode, buffer) in self.params.iter().enumerate() {
             let p = BinParams { bins: [bins.0, bins.1, bins.2, BIN], mode: [mode as u32, 0, 0, 0] };
-            ctx.queue.write_buffer(buffer, 0, bytemuck::bytes_of(&p));
+            ctx.queue.upload(buffer, 0, bytemuck::bytes_of(&p));
         }
     }
 

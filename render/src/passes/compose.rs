@@ -281,7 +281,7 @@ impl ComposePass {
         self.exposure_known = settings.auto_exposure;
         let [x, y, z, _] = tone_vector(settings).to_array();
         let tone = ComposeTone { tone: Vec4::new(x, y, z, mode), store: [store_hdr as u32, 1, 0, 0] };
-        ctx.queue.write_buffer(&self.compose_tone, 0, bytemuck::bytes_of(&tone));
+        ctx.queue.upload(&self.compose_tone, 0, bytemuck::bytes_of(&tone));
         let sky_view = super::view(&sky.texture, "sky.background.image");
         let hdr_view = super::view(&self.hdr, "final.hdr");
         let ldr_view = super::view(&self.ldr, "final.ldr");
@@ -354,7 +354,7 @@ impl ComposePass {
         settings: &TonemapSettings,
     ) {
         let p = ToneParams { tone: tone_vector(settings) };
-        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        ctx.queue.upload(&self.params, 0, bytemuck::bytes_of(&p));
         let hdr_view = super::view(&self.hdr, "final.hdr");
         let ldr_view = super::view(&self.ldr, "final.ldr");
         let tv = wgpu::BindingResource::TextureView;

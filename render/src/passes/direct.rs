@@ -303,7 +303,7 @@ impl DirectPass {
             ),
             light: Vec4::new(settings.intensity_scale, settings.shadows as u32 as f32, 0.0, 0.0),
         };
-        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        ctx.queue.upload(&self.params, 0, bytemuck::bytes_of(&p));
         let light_size = std::mem::size_of::<super::shadow::GpuLight>() as u64;
         if lights.lights.len() > self.light_capacity {
             self.light_capacity = lights.lights.len().next_power_of_two();
@@ -323,9 +323,9 @@ impl DirectPass {
                 mapped_at_creation: false,
             });
         }
-        ctx.queue.write_buffer(&self.lights, 0, bytemuck::cast_slice(&lights.lights));
+        ctx.queue.upload(&self.lights, 0, bytemuck::cast_slice(&lights.lights));
         if !lights.views.is_empty() {
-            ctx.queue.write_buffer(&self.matrices, 0, bytemuck::cast_slice(&lights.views));
+            ctx.queue.upload(&self.matrices, 0, bytemuck::cast_slice(&lights.views));
         }
         let group0 = DIRECT_INPUTS_BINDINGS.group(
             device,

@@ -8,6 +8,7 @@
 //! `Renderer::reset_history` does. Shader `shaders/direct/sky_history.wgsl`.
 
 use crate::buffers::{BufferKind, BufferRegistry};
+use crate::counters::prelude::CountedQueue;
 use crate::gpu::GpuContext;
 use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::{create_target, view};
@@ -120,7 +121,7 @@ impl DirectHistory {
         }
         self.frames = self.frames.saturating_add(1);
         let w = running_weight(self.frames);
-        ctx.queue.write_buffer(&self.params, 0, bytemuck::cast_slice(&[w, 0.0, 0.0, 0.0]));
+        ctx.queue.upload(&self.params, 0, bytemuck::cast_slice(&[w, 0.0, 0.0, 0.0]));
         let (src, dst) = (self.current, 1 - self.current);
         let (prev, next) =
             (view(&self.history[src], "direct.sky_history"), view(&self.history[dst], "direct.sky_history"));

@@ -261,7 +261,7 @@ impl EmitterPass {
         let n = Self::count(ctx, s).min(self.capacity);
         let vpls: Vec<GpuVpl> = self.emitters.vpls(n, 0).iter().map(gpu_vpl).collect();
         let n = vpls.len() as u32;
-        ctx.queue.write_buffer(&self.list, 0, bytemuck::cast_slice(&vpls));
+        ctx.queue.upload(&self.list, 0, bytemuck::cast_slice(&vpls));
         self.stats.vpls = n;
         let radius = radius.max(1e-3);
         let eye_offset = s.ism.eye_offset * radius;
@@ -368,7 +368,7 @@ impl FirstBounceSource for EmitterPass {
         }
         let sources: Vec<GpuVpl> = self.emitters.vpls(k, 0).iter().map(gpu_vpl).collect();
         let k = sources.len() as u32;
-        ctx.queue.write_buffer(&self.bounce_list, 0, bytemuck::cast_slice(&sources));
+        ctx.queue.upload(&self.bounce_list, 0, bytemuck::cast_slice(&sources));
         // The shadow test reads the emitter VPLs' ISMs when they were splatted this frame.
         let test = self.splatted.then_some(s.ism.bounce_test);
         let frame = BounceFrame {

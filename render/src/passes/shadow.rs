@@ -342,7 +342,7 @@ impl ShadowPass {
             let o = i * VIEW_STRIDE as usize;
             data[o..o + 64].copy_from_slice(bytemuck::bytes_of(m));
         }
-        ctx.queue.write_buffer(&self.view_buffer, 0, &data);
+        ctx.queue.upload(&self.view_buffer, 0, &data);
         let count = views.len().max(1);
         for layer in 0..count {
             let view = self.texture.counted_view(&wgpu::TextureViewDescriptor {

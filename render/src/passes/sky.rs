@@ -113,7 +113,7 @@ impl SkyBackground {
             radiance: scale.extend(mode),
             rotation: glam::Vec4::new(sky.rotation_deg.to_radians(), 0.0, 0.0, 0.0),
         };
-        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        ctx.queue.upload(&self.params, 0, bytemuck::bytes_of(&p));
         let Some((_, map)) = sky.image.as_ref().filter(|_| mode == 2.0) else { return };
         if self.image.as_ref().is_some_and(|m| std::sync::Arc::ptr_eq(m, map)) {
             return;

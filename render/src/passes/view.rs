@@ -278,7 +278,7 @@ impl BufferView {
             }));
         }
         let Some(output) = &self.output else { return Ok(recreated) };
-        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&ViewParams::new(settings, source)));
+        ctx.queue.upload(&self.params, 0, bytemuck::bytes_of(&ViewParams::new(settings, source)));
         let aspect = if t.format().is_depth_stencil_format() {
             wgpu::TextureAspect::DepthOnly
         } else {

@@ -321,7 +321,7 @@ impl GpuScene {
         // Static scenes upload their transforms once (issue #38): only a change is written.
         let mut last = self.uploaded.lock().unwrap_or_else(|p| p.into_inner());
         if !data.is_empty() && *last != data {
-            ctx.queue.write_buffer(&self.instances, 0, bytemuck::cast_slice(&data));
+            ctx.queue.upload(&self.instances, 0, bytemuck::cast_slice(&data));
             *last = data;
         }
     }

@@ -14,7 +14,7 @@ use super::manifest::{Built, GoldenFile, GoldenFrame, GoldenPass};
 use crate::counters::capture::{Capture, PassCommands};
 
 /// A resource's name as a file name.
-fn file_name(name: &str) -> String {
+pub fn file_name(name: &str) -> String {
     name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '.' || c == '_' || c == '-' { c } else { '_' }).collect()
 }
 

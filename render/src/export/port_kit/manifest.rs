@@ -4,7 +4,8 @@
 //! lifetimes, and each shader module's declarations. Built from a [`capture`] of frames the
 //! renderer really drew and from naga's reading of the modules ([`super::reflect`]).
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, HashMap, HashSet};
+use std::hash::{Hash, Hasher};
 
 use serde::Serialize;
 
@@ -12,7 +13,7 @@ use super::reflect::{BindingDecl, ModuleDecl, reflect};
 use crate::counters::capture::{Bound, Capture, Command, PassCommands};
 
 pub const SCHEMA_NAME: &str = "gi-lab-port-kit";
-pub const SCHEMA_VERSION: u32 = 1;
+pub const SCHEMA_VERSION: u32 = 2;
 
 /// One golden file: a resource's contents (texture: every level, layers in order, rows
 /// packed; buffer: its bytes), with an EXR of level 0, layer 0 for float textures.
@@ -83,6 +84,8 @@ pub struct Target {
     pub view: Option<ViewRange>,
     /// Whether the old contents are kept (loaded) rather than cleared.
     pub load: bool,
+    /// The clear value when not loaded: a colour's RGBA, or the depth in `[0]`.
+    pub clear: [f64; 4],
 }
 
 /// One dispatch, draw or copy.
@@ -107,6 +110,10 @@ pub struct Step {
     /// Indirect arguments: the buffer and the byte offset.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub indirect: Option<(String, u64)>,
+    /// Raster steps: which render pass of this pass they were drawn in (0, 1, …): draws of
+    /// one render pass share it, so targets cleared at its start are cleared once.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub render_pass: Option<u32>,
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub targets: Vec<Target>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -121,6 +128,19 @@ pub struct Step {
     /// Clears: the buffer zeroed, its byte offset and size.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub clear: Option<(String, u64, u64)>,
+    /// Uploads: bytes the CPU writes into a buffer the frame also writes (a counter reset, an
+    /// indirect draw's constant part), applied before the pass's other steps.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub upload: Option<UploadStep>,
+}
+
+/// Bytes written by the CPU: into `buffer` at `offset`, from the kit's `file`.
+#[derive(Clone, Debug, Serialize)]
+pub struct UploadStep {
+    pub buffer: String,
+    pub offset: u64,
+    pub bytes: u64,
+    pub file: String,
 }
 
 /// A timing scope of the frame with its steps.
@@ -149,10 +169,16 @@ pub struct Resource {
     pub mips: Option<u32>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub dimension: Option<String>,
+    /// Usage flags by wgpu's names (`TEXTURE_BINDING`, `STORAGE_BINDING`, `UNIFORM`, …).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub usage: Option<String>,
+    pub usage: Option<Vec<String>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sampler: Option<serde_json::Value>,
+    /// Buffers filled by atomic appends: the record size in bytes. The records' order
+    /// depends on the GPU's scheduling, so a port's may differ; `gi-lab verify` compares
+    /// the buffer as a set of records.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unordered_records: Option<u64>,
     /// `input`: read, never written by the frame (uploaded by the host: the scene, the
     /// uniforms, lookup tables); `history`: read before the frame writes it, so it carries the
     /// last frame's contents (reset: zeroed, or see the pass); `frame`: written before it is
@@ -185,6 +211,9 @@ pub struct Manifest {
     /// The engine export of the preset (`preset.json`): settings in use, provenance,
     /// resolved values.
     pub preset_file: &'static str,
+    /// What the device must have: features beyond WebGPU's core and limits above its
+    /// defaults.
+    pub device: DeviceNeeds,
     /// The last frame's passes in order (what the README lists).
     pub passes: Vec<Pass>,
     /// Every frame's passes, frame 0 first: the first frame may run passes the later ones do
@@ -206,6 +235,32 @@ pub struct Manifest {
     pub golden: Vec<GoldenFrame>,
     /// What the kit does not hold yet (docs/port-kit.md, "Not yet in the kit").
     pub not_yet: Vec<&'static str>,
+}
+
+/// The device features and limits the kit's frame needs (`crate::gpu`'s required features; the
+/// G-buffer's colour attachment bytes).
+#[derive(Clone, Debug, Serialize)]
+pub struct DeviceNeeds {
+    /// wgpu's names: required, and used when present (read-write storage textures of more
+    /// formats).
+    pub features: Vec<String>,
+    pub optional_features: Vec<String>,
+    /// Limits above WebGPU's defaults, by wgpu's field names.
+    pub limits: BTreeMap<String, u64>,
+}
+
+impl DeviceNeeds {
+    fn of_gi_lab() -> Self {
+        let names = |f: wgpu::Features| f.iter_names().map(|(n, _)| n.to_string()).collect();
+        let mut limits = BTreeMap::new();
+        limits
+            .insert("max_color_attachment_bytes_per_sample".into(), crate::gpu::REQUIRED_COLOR_BYTES_PER_SAMPLE as u64);
+        DeviceNeeds {
+            features: names(crate::gpu::REQUIRED_FEATURES),
+            optional_features: names(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES),
+            limits,
+        }
+    }
 }
 
 /// What the kit does not hold yet; said in the manifest, the kit's README and docs/port-kit.md.
@@ -264,15 +319,42 @@ pub struct Built {
     pub manifest: Manifest,
     pub frames: Vec<Vec<PassAccess>>,
     pub keys: HashMap<String, (bool, u64)>,
+    /// The uploads' files (kit path, bytes).
+    pub uploads: Vec<(std::path::PathBuf, Vec<u8>)>,
 }
 
 /// Builds the manifest of the captured `frames` (at least two, from a fresh start) with the
 /// objects of `objects`.
+///
+/// Uploads into `input` buffers are left out (the goldens' `inputs/` hold those buffers as the
+/// passes read them); which buffers are inputs is known once every frame is read, so the
+/// manifest is built twice, the second time without them.
 pub fn build(preset: &str, size: (u32, u32), frames: &[Vec<PassCommands>], objects: &Capture) -> Result<Built, String> {
     if frames.len() < 2 {
         return Err(format!("a kit needs two frames or more, {} were drawn", frames.len()));
     }
+    let first = build_with(preset, size, frames, objects, HashSet::new())?;
+    let inputs = first
+        .manifest
+        .resources
+        .iter()
+        .filter(|r| r.lifetime == "input" && r.kind == "buffer")
+        .filter_map(|r| first.keys.get(&r.name).map(|k| k.1))
+        .collect();
+    build_with(preset, size, frames, objects, inputs)
+}
+
+fn build_with(
+    preset: &str,
+    size: (u32, u32),
+    frames: &[Vec<PassCommands>],
+    objects: &Capture,
+    skip_uploads: HashSet<u64>,
+) -> Result<Built, String> {
     let mut b = Builder {
+        skip_uploads,
+        upload_files: HashMap::new(),
+        uploads: Vec::new(),
         objects,
         names: Names { by_key: HashMap::new(), seen: HashMap::new() },
         modules: BTreeMap::new(),
@@ -311,6 +393,7 @@ pub fn build(preset: &str, size: (u32, u32), frames: &[Vec<PassCommands>], objec
         size: [size.0, size.1],
         frames: frames.len() as u32,
         preset_file: "preset.json",
+        device: DeviceNeeds::of_gi_lab(),
         passes: out,
         frame_passes: lists,
         pipelines,
@@ -320,7 +403,7 @@ pub fn build(preset: &str, size: (u32, u32), frames: &[Vec<PassCommands>], objec
         golden: Vec::new(),
         not_yet: NOT_YET.to_vec(),
     };
-    Ok(Built { manifest, frames: access, keys })
+    Ok(Built { manifest, frames: access, keys, uploads: std::mem::take(&mut b.uploads) })
 }
 
 const TEX: u8 = 0;
@@ -341,6 +424,11 @@ struct Builder<'a> {
     pipelines_used: Vec<u64>,
     /// Resource names in order of first use, with their kind and key.
     order: Vec<(String, u8, u64)>,
+    /// Buffers whose uploads are left out (inputs), by key.
+    skip_uploads: HashSet<u64>,
+    /// Upload contents already written: their file, by hash and length.
+    upload_files: HashMap<(u64, usize), String>,
+    uploads: Vec<(std::path::PathBuf, Vec<u8>)>,
 }
 
 impl Builder<'_> {
@@ -442,19 +530,21 @@ impl Builder<'_> {
         let mut depth: Option<Target> = None;
         let mut vertex: Vec<(u32, String)> = Vec::new();
         let mut index: Option<(String, String)> = None;
+        let mut render_passes = 0u32;
         for c in &p.commands {
             match c {
                 Command::ComputePass => {}
                 Command::RenderPass { colors, depth: d } => {
+                    render_passes += 1;
                     (pipeline, targets, vertex, index) = (None, Vec::new(), Vec::new(), None);
                     groups.clear();
-                    for (b, load) in colors {
-                        let (resource, view, ..) = self.bound(b);
-                        targets.push(Target { resource, view, load: *load });
+                    for a in colors {
+                        let (resource, view, ..) = self.bound(&a.bound);
+                        targets.push(Target { resource, view, load: a.load, clear: a.clear });
                     }
-                    depth = d.as_ref().map(|(b, load)| {
-                        let (resource, view, ..) = self.bound(b);
-                        Target { resource, view, load: *load }
+                    depth = d.as_ref().map(|a| {
+                        let (resource, view, ..) = self.bound(&a.bound);
+                        Target { resource, view, load: a.load, clear: a.clear }
                     });
                 }
                 Command::Pipeline { pipeline: k } => pipeline = Some(*k),
@@ -467,11 +557,14 @@ impl Builder<'_> {
                     vertex.push((*slot, n));
                 }
                 Command::IndexBuffer { buffer, format } => index = Some((self.resource(BUF, *buffer), format.clone())),
-                Command::CopyTexture { src, dst, size } => {
+                Command::CopyTexture { src, src_mip, src_origin, dst, dst_mip, dst_origin, size } => {
                     let (s, d) = (self.resource(TEX, *src), self.resource(TEX, *dst));
                     self.touch(&s, &p.name, false);
                     self.touch(&d, &p.name, true);
-                    steps.push(copy_step(serde_json::json!({"src": s, "dst": d, "texels": size})));
+                    steps.push(copy_step(serde_json::json!({
+                        "src": s, "src_mip": src_mip, "src_origin": src_origin,
+                        "dst": d, "dst_mip": dst_mip, "dst_origin": dst_origin, "texels": size
+                    })));
                 }
                 Command::ClearBuffer { buffer, offset, size } => {
                     let b = self.resource(BUF, *buffer);
@@ -483,11 +576,43 @@ impl Builder<'_> {
                         ..copy_step(serde_json::Value::Null)
                     });
                 }
-                Command::CopyBuffer { src, dst, size } => {
+                Command::Upload { buffer, offset, data } => {
+                    if self.skip_uploads.contains(buffer) {
+                        continue;
+                    }
+                    let name = self.resource(BUF, *buffer);
+                    let mut h = std::collections::hash_map::DefaultHasher::new();
+                    data.hash(&mut h);
+                    let id = (h.finish(), data.len());
+                    let file = match self.upload_files.get(&id) {
+                        Some(f) => f.clone(),
+                        None => {
+                            let f = format!(
+                                "golden/frame-{}/uploads/{}.{}.bin",
+                                self.frame,
+                                super::golden::file_name(&name),
+                                self.uploads.len()
+                            );
+                            self.uploads.push((std::path::PathBuf::from(&f), data.clone()));
+                            self.upload_files.insert(id, f.clone());
+                            f
+                        }
+                    };
+                    let upload = UploadStep { buffer: name, offset: *offset, bytes: data.len() as u64, file };
+                    steps.push(Step {
+                        kind: "upload".into(),
+                        copy: None,
+                        upload: Some(upload),
+                        ..copy_step(serde_json::Value::Null)
+                    });
+                }
+                Command::CopyBuffer { src, src_offset, dst, dst_offset, size } => {
                     let (s, d) = (self.resource(BUF, *src), self.resource(BUF, *dst));
                     self.touch(&s, &p.name, false);
                     self.touch(&d, &p.name, true);
-                    steps.push(copy_step(serde_json::json!({"src": s, "dst": d, "bytes": size})));
+                    steps.push(copy_step(serde_json::json!({
+                        "src": s, "src_offset": src_offset, "dst": d, "dst_offset": dst_offset, "bytes": size
+                    })));
                 }
                 Command::Dispatch { .. }
                 | Command::DispatchIndirect { .. }
@@ -507,6 +632,7 @@ impl Builder<'_> {
                         for v in inputs {
                             self.touch(&v, &p.name, false);
                         }
+                        step.render_pass = Some(render_passes.saturating_sub(1));
                         step.targets = targets.clone();
                         step.depth_target = depth.clone();
                         step.vertex_buffers = vertex.clone();
@@ -546,14 +672,13 @@ impl Builder<'_> {
         let mut bindings = Vec::new();
         for (&gi, (gk, offsets)) in groups {
             let Some(g) = self.objects.groups.get(gk) else { continue };
-            let mut dynamic = offsets.iter();
             for (binding, bound) in &g.entries {
                 let decl = decls.iter().find(|d| d.group == gi && d.binding == *binding);
                 let Some(decl) = decl else { continue };
                 let (resource, view, mut offset, size) = self.bound(bound);
-                if decl.kind == "uniform"
-                    && let (Some(o), Some(extra)) = (offset.as_mut(), dynamic.next())
-                {
+                // The dynamic offsets go, in order, to the bindings the layout gives one.
+                let dynamic = g.dynamic.iter().position(|b| b == binding).and_then(|i| offsets.get(i));
+                if let (Some(o), Some(extra)) = (offset.as_mut(), dynamic) {
                     *o += *extra as u64;
                 }
                 let wrote = decl.access != "read";
@@ -611,12 +736,14 @@ impl Builder<'_> {
             workgroups,
             draw,
             indirect,
+            render_pass: None,
             targets: Vec::new(),
             depth_target: None,
             vertex_buffers: Vec::new(),
             index_buffer: None,
             copy: None,
             clear: None,
+            upload: None,
         })
     }
 
@@ -656,6 +783,7 @@ impl Builder<'_> {
                     dimension: None,
                     usage: None,
                     sampler: None,
+                    unordered_records: None,
                     lifetime,
                     written_by,
                     read_by,
@@ -675,6 +803,7 @@ impl Builder<'_> {
                         if let Some(b) = o.buffers.get(key) {
                             r.kind = "buffer";
                             r.size = vec![b.size];
+                            r.unordered_records = o.unordered.get(key).copied();
                             r.usage = Some(b.usage.clone());
                         }
                     }
@@ -702,11 +831,13 @@ fn copy_step(copy: serde_json::Value) -> Step {
         workgroups: None,
         draw: None,
         indirect: None,
+        render_pass: None,
         targets: Vec::new(),
         depth_target: None,
         vertex_buffers: Vec::new(),
         index_buffer: None,
         copy: Some(copy),
         clear: None,
+        upload: None,
     }
 }

@@ -65,6 +65,7 @@ pub fn build(ctx: GpuContext, req: KitRequest) -> Result<Kit, String> {
     let objects = objects.ok_or("the capture was stopped by someone else")?;
     let built = manifest::build(req.preset, req.size, &frames, &objects)?;
     let (golden, mut files) = golden::goldens(&built, &frames, &objects);
+    files.extend(built.uploads.iter().cloned());
     let mut manifest = built.manifest;
     manifest.golden = golden;
     for s in &manifest.shaders {

@@ -30,6 +30,13 @@ pub struct BindingDecl {
     pub access: &'static str,
     #[serde(rename = "type")]
     pub ty: String,
+    /// Textures: the view dimension (`1d`, `2d`, `2d_array`, `cube`, `cube_array`, `3d`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dimension: Option<String>,
+    /// Sampled textures: `float`, `uint`, `sint` or `depth`; storage textures: the texel
+    /// format as WGSL spells it; samplers: `filtering` or `comparison`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sample: Option<String>,
     /// The block's size in bytes (uniform and storage; for a runtime-sized array, the size of
     /// everything before it plus one element).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -89,6 +96,13 @@ pub fn reflect(source: &str) -> Result<ModuleDecl, String> {
                 .collect(),
             _ => Vec::new(),
         };
+        let (dimension, sample) = match &ty.inner {
+            TypeInner::Image { dim, arrayed, class } => (Some(dim_name(*dim, *arrayed)), Some(image_sample(class))),
+            TypeInner::Sampler { comparison } => {
+                (None, Some(if *comparison { "comparison" } else { "filtering" }.to_string()))
+            }
+            _ => (None, None),
+        };
         bindings.push(BindingDecl {
             group: rb.group,
             binding: rb.binding,
@@ -96,6 +110,8 @@ pub fn reflect(source: &str) -> Result<ModuleDecl, String> {
             kind,
             access,
             ty: type_name(&module, var.ty),
+            dimension,
+            sample,
             size: block.then(|| layouter[var.ty].size),
             members,
         });
@@ -119,6 +135,36 @@ pub fn reflect(source: &str) -> Result<ModuleDecl, String> {
         })
         .collect();
     Ok(ModuleDecl { entry_points, bindings, overrides })
+}
+
+/// A texture's view dimension as the manifest writes it.
+fn dim_name(dim: naga::ImageDimension, arrayed: bool) -> String {
+    let d = match dim {
+        naga::ImageDimension::D1 => "1d",
+        naga::ImageDimension::D2 => "2d",
+        naga::ImageDimension::D3 => "3d",
+        naga::ImageDimension::Cube => "cube",
+    };
+    if arrayed { format!("{d}_array") } else { d.into() }
+}
+
+/// A sampled texture's scalar kind, or a storage texture's format as WGSL spells it.
+fn image_sample(class: &ImageClass) -> String {
+    match class {
+        ImageClass::Sampled { kind, .. } => match kind {
+            naga::ScalarKind::Uint => "uint".into(),
+            naga::ScalarKind::Sint => "sint".into(),
+            _ => "float".into(),
+        },
+        ImageClass::Depth { .. } => "depth".into(),
+        ImageClass::Storage { format, .. } => storage_format_name(*format),
+        ImageClass::External => "external".into(),
+    }
+}
+
+/// naga's storage format in WGSL's spelling (`rgba16float`, `r32uint`).
+fn storage_format_name(f: naga::StorageFormat) -> String {
+    format!("{f:?}").to_lowercase()
 }
 
 fn access_name(a: StorageAccess) -> &'static str {
@@ -155,13 +201,23 @@ fn type_name(module: &naga::Module, ty: naga::Handle<naga::Type>) -> String {
             _ => format!("array<{}>", type_name(module, *base)),
         },
         TypeInner::Image { dim, arrayed, class } => {
-            let arr = if *arrayed { "_array" } else { "" };
+            let d = dim_name(*dim, *arrayed);
             match class {
-                ImageClass::Storage { format, .. } => {
-                    format!("texture_storage_{dim:?}{arr}<{format:?}>").to_lowercase()
+                ImageClass::Storage { format, access } => {
+                    let a = access_name(*access);
+                    format!("texture_storage_{d}<{}, {a}>", storage_format_name(*format))
                 }
-                ImageClass::Depth { .. } => format!("texture_depth_{dim:?}{arr}").to_lowercase(),
-                ImageClass::Sampled { kind, .. } => format!("texture_{dim:?}{arr}<{kind:?}>").to_lowercase(),
+                ImageClass::Depth { multi: false } => format!("texture_depth_{d}"),
+                ImageClass::Depth { multi: true } => format!("texture_depth_multisampled_{d}"),
+                ImageClass::Sampled { kind, multi } => {
+                    let k = match kind {
+                        naga::ScalarKind::Uint => "u32",
+                        naga::ScalarKind::Sint => "i32",
+                        _ => "f32",
+                    };
+                    let m = if *multi { "multisampled_" } else { "" };
+                    format!("texture_{m}{d}<{k}>")
+                }
                 ImageClass::External => "texture_external".into(),
             }
         }
@@ -203,6 +259,16 @@ mod tests {
                 ("t", "texture", "read"),
                 ("o", "storage_texture", "write"),
                 ("s", "sampler", "read")
+            ]
+        );
+        let textures: Vec<(&str, Option<&str>, Option<&str>)> =
+            m.bindings[2..].iter().map(|b| (b.ty.as_str(), b.dimension.as_deref(), b.sample.as_deref())).collect();
+        assert_eq!(
+            textures,
+            [
+                ("texture_2d<f32>", Some("2d"), Some("float")),
+                ("texture_storage_2d<rgba16float, write>", Some("2d"), Some("rgba16float")),
+                ("sampler", None, Some("filtering"))
             ]
         );
         assert_eq!(m.entry_points.len(), 1);

@@ -16,7 +16,7 @@ pub struct Row {
     pub index: u64,
     pub pass: String,
     pub resource: String,
-    /// `flip`, `relative` or `words`.
+    /// `flip`, `relative`, `words` or `records` (an appended list compared as a set).
     pub metric: &'static str,
     pub value: f64,
     pub ok: bool,
@@ -128,7 +128,10 @@ pub fn verify(kit: &Path, outputs: &Path, tolerance: f64) -> Result<Report, Stri
                         let dims: Vec<u64> = dims.as_array().into_iter().flatten().filter_map(Value::as_u64).collect();
                         compare_texture(format, &dims, size, &port, &golden).map_err(|e| at(&e))?
                     }
-                    _ => ("words", differing_words(&port, &golden)),
+                    _ => match r.and_then(|r| r["unordered_records"].as_u64()).filter(|&s| s > 0) {
+                        Some(stride) => ("records", differing_records(&port, &golden, stride as usize)),
+                        None => ("words", differing_words(&port, &golden)),
+                    },
                 };
                 rows.push(Row { frame, index, pass: pass.clone(), resource, metric, value, ok: value <= tolerance });
             }
@@ -182,6 +185,17 @@ fn compare_texture(
         }
     }
     Ok(("relative", if num == 0.0 { 0.0 } else { (num / den.max(1e-30)).sqrt() }))
+}
+
+/// A list filled by atomic appends, compared as a set: both sides' records (of `stride`
+/// bytes) sorted, then the share of differing words.
+fn differing_records(port: &[u8], golden: &[u8], stride: usize) -> f64 {
+    let sorted = |b: &[u8]| {
+        let mut records: Vec<&[u8]> = b.chunks(stride).collect();
+        records.sort_unstable();
+        records.concat()
+    };
+    differing_words(&sorted(port), &sorted(golden))
 }
 
 /// The share of 32-bit words that differ (floats within 1e-4 relative count as equal).

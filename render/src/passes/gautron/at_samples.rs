@@ -107,7 +107,7 @@ impl AtSamplesPass {
             self.chunks =
                 crate::passes::uniform_buffer(&ctx.device, "gautron.at_samples.chunks", CHUNK_STRIDE * entries as u64);
             let words: Vec<[u32; 4]> = (0..MODES).flat_map(|m| (0..self.capacity).map(move |k| [k, m, 0, 0])).collect();
-            ctx.queue.write_buffer(&self.chunks, 0, &crate::passes::strided_bytes(CHUNK_STRIDE, entries, &words));
+            ctx.queue.upload(&self.chunks, 0, &crate::passes::strided_bytes(CHUNK_STRIDE, entries, &words));
         }
     }
 

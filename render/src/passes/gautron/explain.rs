@@ -217,7 +217,7 @@ impl GautronExplainPass {
         let taken = snapshots.map(|s| s.taken).unwrap_or(0);
         let p = ExplainParams { pixel: [info.pixel.0, info.pixel.1, taken, 0] };
         let info = GautronInfo { snapshots: taken > 0, ..info };
-        ctx.queue.write_buffer(&self.explain, 0, bytemuck::bytes_of(&p));
+        ctx.queue.upload(&self.explain, 0, bytemuck::bytes_of(&p));
         enc.counted_clear_buffer(&self.out, 0, Some(ENTRIES_OFFSET));
         let tv = wgpu::BindingResource::TextureView;
         let part = |offset, size| crate::passes::buffer_part(&self.out, offset, size);

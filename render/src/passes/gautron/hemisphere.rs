@@ -182,7 +182,7 @@ impl HemispherePass {
             (table.texels.len() * 64) as u64,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         );
-        ctx.queue.write_buffer(&self.table, 0, bytemuck::cast_slice(&table.texels));
+        ctx.queue.upload(&self.table, 0, bytemuck::cast_slice(&table.texels));
         self.solid_angle = crate::passes::create_target(
             device,
             "gautron.solid_angle",

@@ -341,8 +341,8 @@ impl GautronStage {
                 0.0,
             ),
         };
-        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        ctx.queue.write_buffer(&self.atlas_params, 0, bytemuck::cast_slice(&[s.hemisphere_resolution, per_row, 0, 0]));
+        ctx.queue.upload(&self.params, 0, bytemuck::bytes_of(&params));
+        ctx.queue.upload(&self.atlas_params, 0, bytemuck::cast_slice(&[s.hemisphere_resolution, per_row, 0, 0]));
         let args = HemispherePass::draw_args(f.gpu_scene, f.state, slots);
         if args.len() * 4 > self.raster_args.size() as usize || args.is_empty() {
             let usage = wgpu::BufferUsages::STORAGE
@@ -353,7 +353,7 @@ impl GautronStage {
         }
         self.raster_draws = args.len() / 5;
         if !args.is_empty() {
-            ctx.queue.write_buffer(&self.raster_args, 0, bytemuck::cast_slice(&args));
+            ctx.queue.upload(&self.raster_args, 0, bytemuck::cast_slice(&args));
         }
         slots
     }
@@ -425,11 +425,11 @@ impl GautronStage {
         let maintain = self.changes(f);
         let keep = maintain.is_some();
         if !keep {
-            ctx.queue.write_buffer(&self.state, 0, bytemuck::bytes_of(&CacheState::default()));
+            ctx.queue.upload(&self.state, 0, bytemuck::bytes_of(&CacheState::default()));
         }
         let maintain = maintain.filter(|m| m.flags[0] + m.flags[1] + m.flags[2] > 0);
         if let Some(m) = &maintain {
-            ctx.queue.write_buffer(&self.maintain_params, 0, bytemuck::bytes_of(m));
+            ctx.queue.upload(&self.maintain_params, 0, bytemuck::bytes_of(m));
         }
         let g0 = &self.create_group(f);
         // Each round's tiles (`GautronSettings::round_tile`), into the rounds' uniforms.
@@ -442,11 +442,7 @@ impl GautronStage {
         let rounds: Vec<[u32; 4]> = (0..MAX_ROUNDS as u32)
             .map(|k| [k, round_tiles[k as usize].0 * round_tiles[k as usize].1, s.round_tile(k), 0])
             .collect();
-        ctx.queue.write_buffer(
-            &self.rounds,
-            0,
-            &crate::passes::strided_bytes(ROUND_STRIDE, MAX_ROUNDS as usize, &rounds),
-        );
+        ctx.queue.upload(&self.rounds, 0, &crate::passes::strided_bytes(ROUND_STRIDE, MAX_ROUNDS as usize, &rounds));
         let (splat, records, camera) = (&self.splat, &self.records, f.camera_buffer);
         // Every cached record, once (after the reuse policy and the invalidation).
         let (begin, cull) = (&self.begin, maintain.is_some().then_some(&self.maintain));
@@ -660,7 +656,7 @@ impl GautronStage {
             m.mask[(i % 128) / 32] |= 1 << (i % 32);
         }
         if !moved.is_empty() {
-            f.ctx.queue.write_buffer(&self.moved, 0, bytemuck::cast_slice(&moved));
+            f.ctx.queue.upload(&self.moved, 0, bytemuck::cast_slice(&moved));
         }
         m.flags =
             [(s.reuse == ReusePolicy::DropOffscreen) as u32, moved.len() as u32, lights_changed as u32, refresh as u32];

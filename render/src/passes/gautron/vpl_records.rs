@@ -109,7 +109,7 @@ impl VplRecordPass {
             shade: Vec4::new(d_min * d_min, shade.y, shade.z, shade.w),
             misc: Vec4::new(vpls.near_cut * vpls.near_cut, EPS_T * radius.max(1e-6), EPS_R, 0.0),
         };
-        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        ctx.queue.upload(&self.params, 0, bytemuck::bytes_of(&p));
         let tv = wgpu::BindingResource::TextureView;
         let group = VPL_RECORDS_BINDINGS.group(
             &ctx.device,

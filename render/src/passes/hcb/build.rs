@@ -205,6 +205,8 @@ impl HcbPass {
             std::mem::size_of::<GpuHcbSample>() as u64 * capacity as u64,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
         );
+        // Samples are appended by an atomic counter (shaders/hcb/samples.wgsl): in any order.
+        crate::counters::capture::mark_unordered(&list, std::mem::size_of::<GpuHcbSample>() as u64);
         (levels_v, samples, list, capacity)
     }
 
@@ -290,7 +292,7 @@ impl HcbPass {
         let slot = 2 * MAX_LEVELS as u64;
         let mut p = HcbParams::zeroed();
         p.level[2] = 1;
-        ctx.queue.write_buffer(&self.params, slot * STRIDE, bytemuck::bytes_of(&p));
+        ctx.queue.upload(&self.params, slot * STRIDE, bytemuck::bytes_of(&p));
         let view = |t: &wgpu::Texture| crate::passes::view(t, "hcb.view");
         let (samples, mask_out, mask_in, level) =
             (view(&self.samples), view(&self.dummy_storage), view(&self.dummy_sampled), view(&self.levels[0].normal));
@@ -325,7 +327,7 @@ impl HcbPass {
         let mut params: Vec<HcbParams> = (0..n).map(|k| f.params([(k + 1 == n) as u32, k, cached, spread])).collect();
         // The clear of hcb.samples (and the recompute groups) uses the last slot.
         params.push(f.params([0, 0, cached, spread]));
-        ctx.queue.write_buffer(&self.params, 0, &crate::passes::strided_bytes(STRIDE, params.len(), &params));
+        ctx.queue.upload(&self.params, 0, &crate::passes::strided_bytes(STRIDE, params.len(), &params));
         let uniform = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
             buffer: &self.params,
             offset: 0,

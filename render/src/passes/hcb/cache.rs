@@ -263,6 +263,8 @@ impl HcbCachePass {
             std::mem::size_of::<GpuHcbSample>() as u64 * capacity,
             usage,
         );
+        // Kept samples are appended by an atomic counter (shaders/hcb/cache.wgsl).
+        crate::counters::capture::mark_unordered(&list, std::mem::size_of::<GpuHcbSample>() as u64);
         let counter = crate::passes::buffer(device, "hcb.sample_cache_count", COUNTER_BYTES, usage);
         let storage = wgpu::TextureUsages::STORAGE_BINDING;
         let incomplete = crate::passes::create_target(device, "hcb.incomplete", w, h, CACHE_FORMAT, storage);
@@ -373,7 +375,7 @@ impl HcbCachePass {
                 f.period.clamp(1, 16) as f32,
             ),
         };
-        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        ctx.queue.upload(&self.params, 0, bytemuck::bytes_of(&p));
         let (_, cache_view, group_view) = self.views();
         encoder.counted_clear_buffer(&hcb.counter, 0, None);
         hcb.clear_marks(ctx, encoder, &group_view);

@@ -251,11 +251,7 @@ impl HcbExplainPass {
         info: HcbInfo,
     ) {
         let ctx = f.ctx;
-        ctx.queue.write_buffer(
-            &self.hcb_params,
-            0,
-            bytemuck::bytes_of(&super::stage::HcbStage::frame(f).params([0; 4])),
-        );
+        ctx.queue.upload(&self.hcb_params, 0, bytemuck::bytes_of(&super::stage::HcbStage::frame(f).params([0; 4])));
         // w: 1 when the confidence merge ran, 2 when it ran demodulated (its history is split).
         let split_prev = temporal.and_then(|t| t.split_prev());
         let merge = match (temporal, split_prev) {
@@ -264,7 +260,7 @@ impl HcbExplainPass {
             (Some(_), Some(_)) => 2,
         };
         let p = ExplainParams { pixel: [info.pixel.0, info.pixel.1, info.cache as u32, merge] };
-        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        ctx.queue.upload(&self.params, 0, bytemuck::bytes_of(&p));
         let tv = wgpu::BindingResource::TextureView;
         let part = |offset, size| crate::passes::buffer_part(&self.out, offset, size);
         let g = f.gbuffer;

@@ -148,7 +148,7 @@ impl HcbGatherPass {
             near: Vec4::new(near_cut * near_cut, 0.0, 0.0, 0.0),
         };
         let params = &self.params[(mode == 1) as usize];
-        ctx.queue.write_buffer(params, 0, bytemuck::bytes_of(&p));
+        ctx.queue.upload(params, 0, bytemuck::bytes_of(&p));
         let tv = wgpu::BindingResource::TextureView;
         let group = |args: &wgpu::Buffer| {
             GATHER_INPUTS_BINDINGS.group(

@@ -349,7 +349,7 @@ impl HcbSplatPass {
     ) {
         let PassRec { ctx, enc: encoder, slot } = r;
         let params = &self.params[new_only as usize];
-        ctx.queue.write_buffer(params, 0, bytemuck::bytes_of(&f.params([new_only as u32, 0, 0, 0])));
+        ctx.queue.upload(params, 0, bytemuck::bytes_of(&f.params([new_only as u32, 0, 0, 0])));
         let tv = wgpu::BindingResource::TextureView;
         let inputs = [
             camera.as_entire_binding(),

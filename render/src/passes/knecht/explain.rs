@@ -225,7 +225,7 @@ impl VplExplainPass {
             pixel: [inp.pixel.0, inp.pixel.1, window, inp.temporal.is_some() as u32],
             thresholds: Vec4::new(alpha, beta, inp.demodulated as u32 as f32, split_prev.is_some() as u32 as f32),
         };
-        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        ctx.queue.upload(&self.params, 0, bytemuck::bytes_of(&p));
         let (_, ism, exact, _, _, _) = inp.vis.parts(&self.dummy_ism, &self.dummy_exact);
         let v = |t: &wgpu::Texture, l: &str| crate::passes::view(t, l);
         let filtered = v(&inp.interleave.filtered, "indirect.filtered");

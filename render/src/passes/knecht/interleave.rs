@@ -438,7 +438,7 @@ impl InterleavePass {
         let n = self.n.max(1);
         let (tw, th) = Self::tile(self.width, self.height, n);
         let sp = SplitParams { n: [n, tw, th, 0] };
-        ctx.queue.write_buffer(&self.split_params, 0, bytemuck::bytes_of(&sp));
+        ctx.queue.upload(&self.split_params, 0, bytemuck::bytes_of(&sp));
         let (code, atlas_ism, atlas_exact, cols, size, shade) = vis.parts(&self.dummy_ism, &self.dummy_exact);
         let mode = (code as usize).min(2);
         let gp = GatherParams {
@@ -447,14 +447,14 @@ impl InterleavePass {
             shade: Vec4::new(d_min * d_min, shade.y, shade.z, shade.w),
             near: Vec4::new(near_cut * near_cut, 0.0, 0.0, 0.0),
         };
-        ctx.queue.write_buffer(&self.gather_params, 0, bytemuck::bytes_of(&gp));
+        ctx.queue.upload(&self.gather_params, 0, bytemuck::bytes_of(&gp));
         let offsets = crate::maths::tile_offsets(vpl_count, n, self.frames);
         self.frames = self.frames.wrapping_add(1);
         if (offsets.len() as u64) * 4 > self.tile_offsets.size() {
             self.tile_offsets = Self::offsets_buffer(&ctx.device, offsets.len() as u32);
         }
         if !offsets.is_empty() {
-            ctx.queue.write_buffer(&self.tile_offsets, 0, bytemuck::cast_slice(&offsets));
+            ctx.queue.upload(&self.tile_offsets, 0, bytemuck::cast_slice(&offsets));
         }
         let v = |t: &wgpu::Texture, l: &str| crate::passes::view(t, l);
         let merged_v = v(&self.merged, "indirect.merged");
@@ -626,7 +626,7 @@ impl InterleavePass {
             n: [n, irradiance.is_some() as u32, 0, 0],
             thresholds: Vec4::new(s.alpha * depth_range, s.beta, 0.0, 0.0),
         };
-        ctx.queue.write_buffer(&self.filter_params, 0, bytemuck::bytes_of(&fp));
+        ctx.queue.upload(&self.filter_params, 0, bytemuck::bytes_of(&fp));
         let dst = crate::passes::view(&self.filtered, "indirect.filtered");
         let dst_irradiance = crate::passes::view(&self.filtered_irradiance, "indirect.filtered_irradiance");
         // Without it the shader reads no irradiance: `src` stands in for the binding.

@@ -227,8 +227,8 @@ impl IrsmPass {
             crate::passes::strided_bytes(STRIDE, MAX_BOUNCES as usize, &splat),
             crate::passes::strided_bytes(STRIDE, MAX_BOUNCES as usize, &irsm),
         );
-        ctx.queue.write_buffer(&self.splat_params, 0, &splat);
-        ctx.queue.write_buffer(&self.params, 0, &irsm);
+        ctx.queue.upload(&self.splat_params, 0, &splat);
+        ctx.queue.upload(&self.params, 0, &irsm);
         let splat = crate::passes::knecht::ism::SPLAT_INPUTS_BINDINGS.group_labelled(
             &ctx.device,
             "irsm.splat.inputs",

@@ -453,7 +453,7 @@ impl IsmPass {
             })
             .collect();
         let data = crate::passes::strided_bytes(LEVEL_STRIDE, MAX_BOUNCES as usize, &params);
-        ctx.queue.write_buffer(&self.splat_params, 0, &data);
+        ctx.queue.upload(&self.splat_params, 0, &data);
         let params = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
             buffer: &self.splat_params,
             offset: 0,
@@ -629,7 +629,7 @@ impl IsmPass {
                 data[o..o + std::mem::size_of::<LevelParams>()].copy_from_slice(bytemuck::bytes_of(&p));
             }
         }
-        ctx.queue.write_buffer(&self.level_params, call as u64 * LEVEL_SLOTS * LEVEL_STRIDE, &data);
+        ctx.queue.upload(&self.level_params, call as u64 * LEVEL_SLOTS * LEVEL_STRIDE, &data);
     }
 
     /// Resolves the splatted distances (`depth`) into level 0 of `ism.atlas_pulled` and runs

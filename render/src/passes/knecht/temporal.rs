@@ -380,9 +380,9 @@ impl TemporalPass {
             state: [self.valid as u32, demodulate as u32, stores, 0],
             range: Vec4::new(depth_range, 0.0, 0.0, 0.0),
         };
-        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        ctx.queue.upload(&self.params, 0, bytemuck::bytes_of(&p));
         let later = ConfidenceParams { state: [self.valid as u32, demodulate as u32, 2, 0], ..p };
-        ctx.queue.write_buffer(&self.confidence_params, 0, bytemuck::bytes_of(&later));
+        ctx.queue.upload(&self.confidence_params, 0, bytemuck::bytes_of(&later));
         let v = |t: &wgpu::Texture, l: &str| crate::passes::view(t, l);
         let (read, write) = (self.current, 1 - self.current);
         // Demodulated, the normals go into the split history's free word (issue #53).

@@ -126,7 +126,7 @@ impl VplBouncePass {
             })
             .collect();
         let data = crate::passes::strided_bytes(STRIDE, MAX_BOUNCES as usize, &params);
-        ctx.queue.write_buffer(&self.params, 0, &data);
+        ctx.queue.upload(&self.params, 0, &data);
         let shading = ism.shading_view();
         BOUNCE_BINDINGS.group(
             &ctx.device,

@@ -362,7 +362,7 @@ impl VplImportancePass {
             (self.lights, self.light_capacity) = Self::light_buffer(&ctx.device, lights.len().next_power_of_two());
         }
         if !lights.is_empty() {
-            ctx.queue.write_buffer(&self.lights, 0, bytemuck::cast_slice(lights));
+            ctx.queue.upload(&self.lights, 0, bytemuck::cast_slice(lights));
         }
         let mut params = vec![0u8; STRIDE as usize * jobs.len()];
         for (k, job) in jobs.iter().enumerate() {
@@ -387,10 +387,10 @@ impl VplImportancePass {
                     params: Vec4::ZERO,
                     lod: Vec4::new(self.albedo_mip, 0.0, 0.0, 0.0),
                 };
-                ctx.queue.write_buffer(&lg.camera, 0, bytemuck::bytes_of(&cam));
+                ctx.queue.upload(&lg.camera, 0, bytemuck::bytes_of(&cam));
             }
         }
-        ctx.queue.write_buffer(&self.params, 0, &params);
+        ctx.queue.upload(&self.params, 0, &params);
     }
 
     /// Bindings 0–5 shared by the importance and warp passes: the view uniform, the lights

@@ -175,7 +175,7 @@ impl ReferenceExplainPass {
             self.out = Self::out_buffer(&ctx.device, run.count.next_power_of_two());
         }
         let header = GpuHeader { pixel: [run.pixel.0, run.pixel.1, 0, 0], ..bytemuck::Zeroable::zeroed() };
-        ctx.queue.write_buffer(&self.out, 0, bytemuck::bytes_of(&header));
+        ctx.queue.upload(&self.out, 0, bytemuck::bytes_of(&header));
         let group = self.group(ctx, inp);
         Self::dispatch(enc, &self.before, &group, 1);
         self.info = Some(run);

@@ -188,7 +188,7 @@ impl VplSamplePass {
             // The reference keeps the surfaces' own colour (no §4.3 blur).
             lod: Vec4::new(-1.0, 0.0, 0.0, 0.0),
         };
-        ctx.queue.write_buffer(&self.camera_buffer, 0, bytemuck::bytes_of(&cam));
+        ctx.queue.upload(&self.camera_buffer, 0, bytemuck::bytes_of(&cam));
         self.light_gbuffer.run(encoder, slot, &self.camera_group, scene, state);
     }
 
@@ -211,14 +211,14 @@ impl VplSamplePass {
         if lights.len() > self.light_capacity {
             (self.lights, self.light_capacity) = Self::light_buffer(&ctx.device, lights.len().next_power_of_two());
         }
-        ctx.queue.write_buffer(&self.lights, 0, bytemuck::cast_slice(lights));
+        ctx.queue.upload(&self.lights, 0, bytemuck::cast_slice(lights));
         let params = SampleParams {
             eye: v.eye.extend(if v.orthographic { 1.0 } else { 0.0 }),
             forward: v.forward.extend(v.pixel_extent / size),
             scale: Vec4::new(flux_scale, count as f32, 0.0, 0.0),
             seed: [seed[0], seed[1], batch.light_index, seed[2]],
         };
-        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        ctx.queue.upload(&self.params, 0, bytemuck::bytes_of(&params));
         let t = &self.light_gbuffer.targets.views;
         let tv = wgpu::BindingResource::TextureView;
         let group = SAMPLE_BINDINGS.group(

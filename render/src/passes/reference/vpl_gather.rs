@@ -136,7 +136,7 @@ impl VplGatherPass {
         params: GatherParams,
     ) {
         let PassRec { ctx, enc: encoder, slot } = r;
-        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        ctx.queue.upload(&self.params, 0, bytemuck::bytes_of(&params));
         let raw = crate::passes::view(&self.raw, "indirect.raw");
         let accum = crate::passes::view(&self.accum, "indirect.accum");
         let prev = crate::passes::view(&self.accum_prev, "indirect.accum_prev");

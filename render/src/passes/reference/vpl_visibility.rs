@@ -152,7 +152,7 @@ impl VplVisibilityPass {
             let idx = [tile / FACES, tile % FACES, tile, 0];
             data[o..o + 16].copy_from_slice(bytemuck::cast_slice(&idx));
         }
-        ctx.queue.write_buffer(&buffer, 0, &data);
+        ctx.queue.upload(&buffer, 0, &data);
         buffer
     }
 
@@ -193,7 +193,7 @@ impl VplVisibilityPass {
         params: VisibilityParams,
     ) {
         let PassRec { ctx, enc: encoder, slot } = r;
-        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        ctx.queue.upload(&self.params, 0, bytemuck::bytes_of(&params));
         let group = SHADOW_INPUTS_BINDINGS.group(
             &ctx.device,
             &self.layout,

@@ -162,7 +162,7 @@ impl SolerBounces {
     ) {
         let spec = !self.specular.is_empty();
         let p = BounceParams { count: [self.light.len() as u32, spec as u32, 0, 0] };
-        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        ctx.queue.upload(&self.params, 0, bytemuck::bytes_of(&p));
         let view = |t: &wgpu::Texture| crate::passes::view(t, "soler.bounce.view");
         let views: Vec<wgpu::TextureView> = (0..4).map(|b| view(self.light.get(b).unwrap_or(&self.dummy))).collect();
         let spec_views: Vec<wgpu::TextureView> =

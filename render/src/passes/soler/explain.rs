@@ -288,9 +288,9 @@ impl SolerExplainPass {
                 spec: Vec4::ZERO,
             };
             let at = ENTRIES_OFFSET + (b as u64 * MAX_LEVELS * MAX_PER_LEVEL) * std::mem::size_of::<GpuEntry>() as u64;
-            ctx.queue.write_buffer(&self.out, at, bytemuck::bytes_of(&first));
+            ctx.queue.upload(&self.out, at, bytemuck::bytes_of(&first));
         }
-        ctx.queue.write_buffer(&self.out, 0, bytemuck::bytes_of(&header));
+        ctx.queue.upload(&self.out, 0, bytemuck::bytes_of(&header));
         let mut params: Vec<StepParams> = Vec::new();
         for b in 0..MAX_BOUNCES as u32 {
             params.extend((0..MAX_LEVELS as usize).map(|k| StepParams {
@@ -300,14 +300,14 @@ impl SolerExplainPass {
         }
         let spec = levels.iter().any(|l| l.spec.is_some()) as u32;
         params.extend((0..MAX_BOUNCES as u32).map(|b| StepParams { level: [0, spec, 1, b], sigma: [0.0; 4] }));
-        ctx.queue.write_buffer(&self.params, 0, &crate::passes::strided_bytes(STRIDE, params.len(), &params));
+        ctx.queue.upload(&self.params, 0, &crate::passes::strided_bytes(STRIDE, params.len(), &params));
         let rings: Vec<RingParams> = (0..(MAX_BOUNCES * MAX_LEVELS) as u32)
             .map(|list| {
                 let k = list % MAX_LEVELS as u32;
                 RingParams { list: [list, info.gathered.contains(&k) as u32, 0, 0] }
             })
             .collect();
-        ctx.queue.write_buffer(&self.ring_params, 0, &crate::passes::strided_bytes(STRIDE, rings.len(), &rings));
+        ctx.queue.upload(&self.ring_params, 0, &crate::passes::strided_bytes(STRIDE, rings.len(), &rings));
         self.info = Some(info);
     }
 

@@ -5,6 +5,7 @@
 
 use super::STRIDE;
 use crate::buffers::{BufferKind, BufferRegistry};
+use crate::counters::prelude::CountedQueue;
 use crate::gpu::GpuContext;
 use crate::gpu::bindings::{Bindings, Kind, binding};
 
@@ -178,7 +179,7 @@ impl SolerGather {
                 })
             })
             .collect();
-        ctx.queue.write_buffer(&self.params, 0, &crate::passes::strided_bytes(STRIDE, params.len(), &params));
+        ctx.queue.upload(&self.params, 0, &crate::passes::strided_bytes(STRIDE, params.len(), &params));
     }
 
     /// Gathers the level `l`, the i-th of [`Self::light`], with the parameters of `slot_index`

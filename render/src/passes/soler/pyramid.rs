@@ -4,6 +4,7 @@
 //! `cpu::soler_vote::vote_level`). Level 0 is the G-buffer itself.
 
 use crate::buffers::{BufferKind, BufferRegistry};
+use crate::counters::prelude::CountedQueue;
 use crate::gpu::GpuContext;
 use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::timing::PassRec;
@@ -205,7 +206,7 @@ impl SolerPyramid {
     ) {
         let PassRec { ctx, enc: encoder, slot } = r;
         let p = VoteParams { sigma, power };
-        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        ctx.queue.upload(&self.params, 0, bytemuck::bytes_of(&p));
         let view = |t: &wgpu::Texture| crate::passes::view(t, "soler.level.view");
         let views: Vec<[wgpu::TextureView; 5]> = self
             .levels

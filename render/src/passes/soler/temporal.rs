@@ -11,6 +11,7 @@
 
 use super::{SolerSettings, TemporalHistory, TemporalQuantity};
 use crate::buffers::{BufferKind, BufferRegistry};
+use crate::counters::prelude::CountedQueue;
 use crate::gpu::GpuContext;
 use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::passes::gbuffer::{GBufferViews, NORMAL_FORMAT};
@@ -247,7 +248,7 @@ impl SolerTemporal {
     ) {
         let PassRec { ctx, enc: encoder, slot } = r;
         let params = TemporalParams::of(s, self.valid, specular.is_some());
-        ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        ctx.queue.upload(&self.params, 0, bytemuck::bytes_of(&params));
         let no_specular = crate::passes::view(&self.no_specular, "soler.temporal.no_specular");
         let v = |t: &wgpu::Texture| crate::passes::view(t, "soler.temporal.view");
         let (read, write) = (self.current, 1 - self.current);

@@ -8,6 +8,7 @@
 
 use super::STRIDE;
 use crate::buffers::{BufferKind, BufferRegistry};
+use crate::counters::prelude::CountedQueue;
 use crate::gpu::GpuContext;
 use crate::gpu::bindings::{Bindings, Kind, binding};
 use crate::timing::PassRec;
@@ -196,9 +197,9 @@ impl SolerUpsample {
             .iter()
             .map(|s| UpsampleParams { sigma: [sigma[0], sigma[1], s.fine_light.is_some() as u32 as f32, 0.0] })
             .collect();
-        ctx.queue.write_buffer(&self.params, 0, &crate::passes::strided_bytes(STRIDE, params.len().max(1), &params));
+        ctx.queue.upload(&self.params, 0, &crate::passes::strided_bytes(STRIDE, params.len().max(1), &params));
         let flags: [u32; 4] = [(add_specular && spec.is_some()) as u32, 0, 0, 0];
-        ctx.queue.write_buffer(&self.resolve_params, 0, bytemuck::bytes_of(&flags));
+        ctx.queue.upload(&self.resolve_params, 0, bytemuck::bytes_of(&flags));
         fn tv(v: &wgpu::TextureView) -> wgpu::BindingResource<'_> {
             wgpu::BindingResource::TextureView(v)
         }

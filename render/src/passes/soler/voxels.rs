@@ -288,7 +288,7 @@ impl SolerVoxels {
         let PassRec { ctx, enc: encoder, slot } = r;
         let (Some(first), Some(target)) = (self.grids.first(), &self.target) else { return };
         let device = &ctx.device;
-        ctx.queue.write_buffer(&self.params, 0, &crate::passes::strided_bytes(STRIDE, params.len(), params));
+        ctx.queue.upload(&self.params, 0, &crate::passes::strided_bytes(STRIDE, params.len(), params));
         let uniform = crate::passes::dynamic_slot(&self.params, std::mem::size_of::<VoxelParams>());
         for g in &self.grids {
             encoder.counted_clear_buffer(&g.buffer, 0, None);

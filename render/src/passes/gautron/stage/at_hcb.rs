@@ -38,7 +38,7 @@ impl GautronStage {
         let ctx = f.ctx;
         let slots = self.prepare(f);
         self.cache_key = None;
-        ctx.queue.write_buffer(&self.state, 0, bytemuck::bytes_of(&CacheState::default()));
+        ctx.queue.upload(&self.state, 0, bytemuck::bytes_of(&CacheState::default()));
         let list_len = list.size() / crate::passes::gautron::at_samples::HCB_SAMPLE_BYTES;
         let mode = set.mode();
         let late =
