@@ -135,6 +135,7 @@ while read -r dir exe; do
 done <"$list.all" | sort -n -s -k1,1 | cut -d' ' -f2- >"$list.run"
 echo "scripts/test.sh: $(wc -l <"$list.run") test binaries, $(nproc) at a time"
 status=0
+rm -f target/tmp/port-kit-verify.md
 parallel --will-cite --jobs "$(nproc)" --group --colsep ' ' --joblog "$list.log" \
   'cd {1} && WGPU_VALIDATION={3} {2}' :::: "$list.run" || status=$?
 # No doc tests: the crates have none.
@@ -144,6 +145,10 @@ tail -n +2 "$list.log" | awk -F'\t' '{ n = $NF; sub(/^cd [^ ]* && /, "", n); sub
   sort -rn >target/test-times.txt || true
 echo "scripts/test.sh: the slowest binaries (s, sharing the cores; all in target/test-times.txt):"
 head -12 target/test-times.txt
+# The port kit host's verify tables (tests/tests/port_kit.rs, issue #54), for the CI log.
+if [ -f target/tmp/port-kit-verify.md ]; then
+  cat target/tmp/port-kit-verify.md
+fi
 if [ "$status" != 0 ]; then
   echo "scripts/test.sh: failed binaries:" >&2
   tail -n +2 "$list.log" | awk -F'\t' '$7 != 0 { print "  " $NF }' >&2

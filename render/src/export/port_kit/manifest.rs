@@ -267,8 +267,6 @@ impl DeviceNeeds {
 pub const NOT_YET: &[&str] = &[
     "sizes and dispatch counts as expressions of W, H and the settings (the kit gives them at its own size)",
     "uniform values decoded per step in the manifest (the goldens hold every uniform buffer's bytes per frame, the manifest each block's layout)",
-    "a host that runs the kit knowing only the kit (examples/port-kit-host), and CI running it on the four papers' kits",
-    "an order-free comparison for buffers filled by atomic appends (e.g. the HCB's sample list), whose order may differ between runs",
 ];
 
 /// The role of a pass by its name (docs/port-kit.md, "Roles").

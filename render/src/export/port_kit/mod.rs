@@ -237,7 +237,10 @@ fn readme(m: &Manifest, e: &Export) -> String {
          every pass's outputs (`NN-pass/`), raw bytes in each resource's format (levels, then layers, rows packed), \
          with an `.exr` of float images. Write your port's outputs to the `path` each golden names in `manifest.json` \
          and run:\n\n```sh\ngi-lab verify --port-kit <this folder> --outputs <your outputs> --tolerance 0.01\n```\n\n\
-         It names the first pass that diverges and by how much.\n",
+         It names the first pass that diverges and by how much. GI Lab's `examples/port-kit-host` is a port of \
+         this kit to plain wgpu that reads nothing but the kit (`docs/port-kit.md`, \"Bringing a kit up\"): each \
+         frame uploads `golden[K].inputs`, runs `frame_passes[K]` step by step (`upload` steps are queue writes before \
+         the pass's commands) and writes every pass's outputs for `gi-lab verify`.\n",
         m.frames
     );
     s += "\n## The shaders in your engine's language\n\n";
