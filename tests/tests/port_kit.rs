@@ -23,6 +23,7 @@ fn kit(preset: &str, frames: u32, goldens: bool) -> Kit {
         frames,
         goldens,
         camera: None,
+        expressions: false,
     };
     port_kit::build(gpu(), req).unwrap_or_else(|e| panic!("{preset}: {e}"))
 }
@@ -322,6 +323,7 @@ fn goldens_hold_every_pass_output_as_the_renderer_draws_it_and_verify_finds_the_
         frames: 4,
         goldens: true,
         camera: None,
+        expressions: false,
     };
     let k = port_kit::build(gpu(), req).expect("kit");
     let m = &k.manifest;
@@ -338,6 +340,23 @@ fn goldens_hold_every_pass_output_as_the_renderer_draws_it_and_verify_finds_the_
             }
         }
     }
+    // Every uniform block the frame uploads is decoded for the last frame, member by member:
+    // the G-buffer's first draw binds the scene's first material, whose base colour it shows.
+    for p in &m.passes {
+        for st in &p.steps {
+            for b in st.bindings.iter().filter(|b| b.kind == "uniform") {
+                let input = m.resources.iter().any(|r| r.name == b.resource && r.lifetime == "input");
+                assert!(!input || !b.values.is_empty(), "{}: {} ({}) not decoded", p.name, b.name, b.resource);
+            }
+        }
+    }
+    let draw = &m.passes.iter().find(|p| p.name == "gbuffer").expect("the G-buffer").steps[0];
+    let material = draw.bindings.iter().find(|b| b.name == "material").expect("its material");
+    let base = &material.values.iter().find(|(n, _)| n == "base_color").expect("base_color").1;
+    let want = default_scene().materials[0].base_color;
+    let got: Vec<f32> =
+        base.as_array().expect("a vec4").iter().map(|v| v.as_f64().unwrap_or(f64::NAN) as f32).collect();
+    assert_eq!(got, want.to_array(), "the first material's base colour, decoded");
     let timed = m.passes.iter().filter(|p| p.name != "(between passes)").count();
     assert_eq!(m.golden.last().map(|f| f.passes.len()), Some(timed), "the last frame: a golden pass per timed pass");
     // The last frame's direct light, as the golden holds it, is what a renderer drawing the
@@ -397,4 +416,59 @@ fn goldens_hold_every_pass_output_as_the_renderer_draws_it_and_verify_finds_the_
     let err = port_kit::verify::verify(&kit, &port, 0.01).expect_err("a missing output is an error");
     assert!(err.contains("interleave.gather") && err.contains("indirect.merged"), "{err}");
     let _ = std::fs::remove_dir_all(&base);
+}
+
+#[test]
+fn sizes_and_counts_are_expressions_of_the_image_that_give_another_sizes_values() {
+    use gi_render::export::port_kit::expressions::eval;
+    // Soler et al.'s pyramid: its levels are halvings of the image, its dispatches tile them.
+    let preset = "soler-quarter-4-64";
+    let req = KitRequest {
+        preset,
+        settings: settings(preset),
+        scene: default_scene(),
+        scene_name: "default",
+        size: SIZE,
+        frames: 2,
+        goldens: false,
+        camera: None,
+        expressions: true,
+    };
+    let k = port_kit::build(gpu(), req.clone()).expect("kit");
+    let m = &k.manifest;
+    let exprs = |e: &[Option<String>]| e.iter().map(|x| x.clone().unwrap_or_default()).collect::<Vec<_>>();
+    let res = |name: &str| m.resources.iter().find(|r| r.name == name).unwrap_or_else(|| panic!("{name}"));
+    assert_eq!(exprs(&res("gbuffer.linear_depth").size_expr), ["W", "H", "1"]);
+    let level2 = m.resources.iter().find(|r| r.name.starts_with("soler.level.2.")).expect("level 2");
+    assert!(exprs(&level2.size_expr)[0].contains("W / 4"), "{}: {:?}", level2.name, level2.size_expr);
+    let normal = m.passes.iter().find(|p| p.name == "gbuffer.normal").expect("gbuffer.normal");
+    assert_eq!(exprs(&normal.steps[0].counts_expr), ["ceil(W / 8)", "ceil(H / 8)", "1"]);
+    // The expressions give another size's values, which no probe saw.
+    let (w, h) = (70u64, 45u64);
+    let other = port_kit::build(gpu(), KitRequest { size: (w as u32, h as u32), expressions: false, ..req })
+        .expect("the kit at another size");
+    let (mut checked, mut total) = (0, 0);
+    for r in &m.resources {
+        let Some(r2) = other.manifest.resources.iter().find(|x| x.name == r.name) else { continue };
+        for (e, v) in r.size_expr.iter().zip(&r2.size) {
+            total += 1;
+            if let Some(e) = e {
+                assert_eq!(eval(e, w, h), Some(*v), "{}: {e} at {w}x{h}", r.name);
+                checked += 1;
+            }
+        }
+    }
+    for (p, p2) in m.passes.iter().zip(&other.manifest.passes) {
+        for (s, s2) in p.steps.iter().zip(&p2.steps) {
+            let Some(wg) = s2.workgroups else { continue };
+            for (e, v) in s.counts_expr.iter().zip(wg) {
+                total += 1;
+                if let Some(e) = e {
+                    assert_eq!(eval(e, w, h), Some(v as u64), "{} {:?}: {e} at {w}x{h}", p.name, s.pipeline);
+                    checked += 1;
+                }
+            }
+        }
+    }
+    assert!(checked * 10 >= total * 9, "{checked} of {total} sizes and counts have an expression");
 }

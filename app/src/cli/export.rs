@@ -109,6 +109,7 @@ fn port_kit(
         frames: a.frames,
         goldens: true,
         camera: None,
+        expressions: true,
     };
     let kit = port_kit::build(ctx, req).map_err(|e| CliError::failure(format!("port kit: {e}")))?;
     port_kit::write(&kit, dir, a.force).map_err(|e| CliError::input(format!("--port-kit: {e}")))?;

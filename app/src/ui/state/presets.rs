@@ -214,6 +214,7 @@ impl State {
                         frames: 4,
                         goldens: true,
                         camera: Some(camera),
+                        expressions: true,
                     };
                     let kit = port_kit::build(ctx, req)?;
                     port_kit::write(&kit, &target, false)?;

@@ -75,6 +75,10 @@ pub struct BindingUse {
     pub offset: Option<u64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub size: Option<u64>,
+    /// Uniform blocks in `passes` (the last frame): each member's value for this preset, by
+    /// the block's layout ([`super::uniforms`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub values: Vec<(String, serde_json::Value)>,
 }
 
 /// A render target of a raster step.
@@ -107,6 +111,11 @@ pub struct Step {
     pub workgroups: Option<[u32; 3]>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub draw: Option<serde_json::Value>,
+    /// `workgroups` (x, y, z), or a draw's vertex or index count and instance count, each as
+    /// an expression of the image's W and H where one fits ([`super::expressions`]); null:
+    /// as captured.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub counts_expr: Vec<Option<String>>,
     /// Indirect arguments: the buffer and the byte offset.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub indirect: Option<(String, u64)>,
@@ -165,6 +174,10 @@ pub struct Resource {
     pub format: Option<String>,
     /// Texture: width, height, depth or layers; buffer: bytes.
     pub size: Vec<u64>,
+    /// Each of `size` as an expression of the image's W and H, where one fits
+    /// ([`super::expressions`]); null: as captured.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub size_expr: Vec<Option<String>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mips: Option<u32>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -233,6 +246,11 @@ pub struct Manifest {
     /// Per frame from the fresh start, the files of the goldens: the inputs the host uploads and
     /// each pass's outputs (`docs/port-kit.md`, "Goldens").
     pub golden: Vec<GoldenFrame>,
+    /// How the sizes' expressions were fitted: the probe sizes, and how many values got an
+    /// expression and how many were left as captured (docs/port-kit.md, "Sizes as
+    /// expressions"); null when the kit was exported without them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub expressions: Option<serde_json::Value>,
     /// What the kit does not hold yet (docs/port-kit.md, "Not yet in the kit").
     pub not_yet: Vec<&'static str>,
 }
@@ -265,8 +283,7 @@ impl DeviceNeeds {
 
 /// What the kit does not hold yet; said in the manifest, the kit's README and docs/port-kit.md.
 pub const NOT_YET: &[&str] = &[
-    "sizes and dispatch counts as expressions of W, H and the settings (the kit gives them at its own size)",
-    "uniform values decoded per step in the manifest (the goldens hold every uniform buffer's bytes per frame, the manifest each block's layout)",
+    "sizes and counts as expressions of the settings: only W and H vary between the probes, so a size that follows a setting (a VPL count, an atlas's resolution) is given with this preset's value",
 ];
 
 /// The role of a pass by its name (docs/port-kit.md, "Roles").
@@ -399,6 +416,7 @@ fn build_with(
         shaders,
         translations: Vec::new(),
         golden: Vec::new(),
+        expressions: None,
         not_yet: NOT_YET.to_vec(),
     };
     Ok(Built { manifest, frames: access, keys, uploads: std::mem::take(&mut b.uploads) })
@@ -696,6 +714,7 @@ impl Builder<'_> {
                     view,
                     offset,
                     size,
+                    values: Vec::new(),
                 });
             }
         }
@@ -734,6 +753,7 @@ impl Builder<'_> {
             workgroups,
             draw,
             indirect,
+            counts_expr: Vec::new(),
             render_pass: None,
             targets: Vec::new(),
             depth_target: None,
@@ -777,6 +797,7 @@ impl Builder<'_> {
                     kind: "sampler",
                     format: None,
                     size: Vec::new(),
+                    size_expr: Vec::new(),
                     mips: None,
                     dimension: None,
                     usage: None,
@@ -829,6 +850,7 @@ fn copy_step(copy: serde_json::Value) -> Step {
         workgroups: None,
         draw: None,
         indirect: None,
+        counts_expr: Vec::new(),
         render_pass: None,
         targets: Vec::new(),
         depth_target: None,

@@ -15,15 +15,18 @@ use crate::counters::capture;
 use crate::export::{Export, ExportFormat};
 use crate::{GpuContext, LabSettings, Renderer};
 
+pub mod expressions;
 pub mod golden;
 pub mod manifest;
 pub mod reflect;
 pub mod translate;
+pub mod uniforms;
 pub mod verify;
 
 pub use manifest::Manifest;
 
 /// What to export.
+#[derive(Clone)]
 pub struct KitRequest<'a> {
     /// The preset's name (its file stem), for the manifest and the README.
     pub preset: &'a str,
@@ -39,6 +42,9 @@ pub struct KitRequest<'a> {
     pub goldens: bool,
     /// The camera (the window's live one); None: the scene's opening view.
     pub camera: Option<crate::camera::Camera>,
+    /// Whether to fit sizes and counts as expressions of W and H (six more captures of
+    /// two frames at the probe sizes, `expressions::PROBES`).
+    pub expressions: bool,
 }
 
 /// A kit in memory: the manifest, the export and the files to write (relative path, bytes).
@@ -59,15 +65,35 @@ pub fn build(ctx: GpuContext, req: KitRequest) -> Result<Kit, String> {
     } else {
         capture::start();
     }
-    let result = draw(ctx, &req);
+    let result = draw(ctx.clone(), &req);
     let objects = capture::stop();
     let (frames, export) = result?;
     let objects = objects.ok_or("the capture was stopped by someone else")?;
-    let built = manifest::build(req.preset, req.size, &frames, &objects)?;
+    let mut built = manifest::build(req.preset, req.size, &frames, &objects)?;
+    if req.expressions {
+        // The same frame at the probe sizes: its manifests, for the expressions.
+        let mut probes = Vec::new();
+        for size in expressions::PROBES {
+            capture::start();
+            let probe = KitRequest { size, frames: 2, goldens: false, expressions: false, ..req.clone() };
+            let result = draw(ctx.clone(), &probe);
+            let objects = capture::stop().ok_or("the capture was stopped by someone else")?;
+            let (frames, _) = result?;
+            probes.push((size, manifest::build(req.preset, size, &frames, &objects)?.manifest));
+        }
+        let (fitted, left) = expressions::annotate(&mut built.manifest, &probes);
+        built.manifest.expressions = Some(serde_json::json!({
+            "variables": {"W": "the image's width", "H": "its height"},
+            "probes": expressions::PROBES,
+            "fitted": fitted,
+            "as_captured": left,
+        }));
+    }
     let (golden, mut files) = golden::goldens(&built, &frames, &objects);
     files.extend(built.uploads.iter().cloned());
     let mut manifest = built.manifest;
     manifest.golden = golden;
+    uniforms::decode(&mut manifest, &files);
     for s in &manifest.shaders {
         let source = crate::shaders::resolve(&s.module).map_err(|e| format!("{}: {e}", s.module))?;
         files.push((PathBuf::from(&s.file), source.into_bytes()));
