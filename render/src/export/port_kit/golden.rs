@@ -10,13 +10,8 @@ use std::collections::{HashMap, HashSet};
 use std::hash::{Hash, Hasher};
 use std::path::PathBuf;
 
-use super::manifest::{Built, GoldenFile, GoldenFrame, GoldenPass};
+use super::manifest::{Built, GoldenFile, GoldenFrame, GoldenPass, file_name};
 use crate::counters::capture::{Capture, PassCommands};
-
-/// A resource's name as a file name.
-pub fn file_name(name: &str) -> String {
-    name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '.' || c == '_' || c == '-' { c } else { '_' }).collect()
-}
 
 /// The golden frames of `built` from the captured `frames`, and their files.
 pub fn goldens(
