@@ -35,6 +35,8 @@ pub struct Host {
     render: HashMap<String, wgpu::RenderPipeline>,
     /// wgpu's validation errors since the last [`Host::take_errors`].
     errors: Arc<Mutex<Vec<String>>>,
+    /// Staging buffers for read-backs, by size (`run::read_back`).
+    pub staging: Mutex<HashMap<u64, wgpu::Buffer>>,
 }
 
 /// A pipeline made for one step.
@@ -94,6 +96,7 @@ impl Host {
             compute: HashMap::new(),
             render: HashMap::new(),
             errors,
+            staging: Mutex::new(HashMap::new()),
         };
         for r in &m.resources {
             host.make(r).map_err(|e| format!("resource {}: {e}", r.name))?;

@@ -7,8 +7,6 @@ use serde::Deserialize;
 
 #[derive(Debug, Deserialize)]
 pub struct Manifest {
-    pub schema: String,
-    pub schema_version: u32,
     pub preset: String,
     pub frames: u32,
     pub device: DeviceNeeds,

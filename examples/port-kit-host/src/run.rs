@@ -23,15 +23,16 @@ pub struct Summary {
 pub fn run(kit: &Path, out: &Path) -> Result<Summary, String> {
     let path = kit.join("manifest.json");
     let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let m: Manifest = serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
-    if m.schema != "gi-lab-port-kit" || m.schema_version != 2 {
+    let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+    if value["schema"] != "gi-lab-port-kit" || value["schema_version"] != 2 {
         return Err(format!(
-            "{}: schema {} {}, this host reads gi-lab-port-kit 2",
+            "{}: schema {} version {}, this host reads gi-lab-port-kit version 2 (export the kit again)",
             path.display(),
-            m.schema,
-            m.schema_version
+            value["schema"],
+            value["schema_version"]
         ));
     }
+    let m: Manifest = serde_json::from_value(value).map_err(|e| format!("{}: {e}", path.display()))?;
     if m.frame_passes.len() != m.frames as usize || m.golden.len() != m.frames as usize {
         return Err(format!(
             "{}: {} frames, but {} frame lists and {} golden frames",
@@ -401,24 +402,57 @@ fn read_back(host: &Host, resource: &str) -> Result<Vec<u8>, String> {
     host.take_errors().map_err(|e| format!("reading back: {e}"))?;
     let mut out = Vec::new();
     for (s, (w, h, d), padded, row) in plans {
-        let data = s.slice(..).get_mapped_range().map_err(|e| e.to_string())?;
-        if padded == 0 {
-            out.extend_from_slice(&data[..w as usize]);
-        } else {
-            for r in 0..(h * d) as usize {
-                let at = r * padded as usize;
-                out.extend_from_slice(&data[at..at + row as usize]);
+        {
+            let data = s.slice(..).get_mapped_range().map_err(|e| e.to_string())?;
+            if padded == 0 {
+                out.extend_from_slice(&data[..w as usize]);
+            } else {
+                for r in 0..(h * d) as usize {
+                    let at = r * padded as usize;
+                    out.extend_from_slice(&data[at..at + row as usize]);
+                }
             }
+        }
+        s.unmap();
+        if let Ok(mut pool) = host.staging.lock() {
+            pool.insert(s.size(), s);
         }
     }
     Ok(out)
 }
 
+/// A staging buffer of `size` bytes, reused across read-backs (a kit reads the same large
+/// buffers back every frame).
 fn staging(host: &Host, size: u64) -> wgpu::Buffer {
+    let size = size.max(4);
+    if let Some(b) = host.staging.lock().ok().and_then(|mut pool| pool.remove(&size)) {
+        return b;
+    }
     host.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("port-kit-host.staging"),
-        size: size.max(4),
+        size,
         usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
         mapped_at_creation: false,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_missing_kit_or_one_of_another_schema_is_a_clear_error() {
+        let dir = std::env::temp_dir().join(format!("port-kit-host-bad-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let err = run(&dir, &dir.join("out")).expect_err("no kit");
+        assert!(err.contains("manifest.json"), "{err}");
+        std::fs::create_dir_all(&dir).expect("dir");
+        std::fs::write(dir.join("manifest.json"), r#"{"schema": "gi-lab-port-kit", "schema_version": 1}"#).expect("w");
+        let err = run(&dir, &dir.join("out")).expect_err("an old kit");
+        assert!(err.contains("version 2") && err.contains("export the kit again"), "{err}");
+        std::fs::write(dir.join("manifest.json"), r#"{"schema": "gi-lab-port-kit", "schema_version": 2}"#).expect("w");
+        let err = run(&dir, &dir.join("out")).expect_err("a manifest without its fields");
+        assert!(err.contains("missing field"), "{err}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }
