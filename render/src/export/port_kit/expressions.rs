@@ -32,6 +32,10 @@ pub enum Basis {
     Prod { s: u32, round: Round, d: u64 },
     /// `ceil(W * H / d)`.
     Area { d: u64 },
+    /// Chunks of `d` tiles of `t`×`t` pixels: `ceil(ceil(W / t) * ceil(H / t) / d)`.
+    Chunks { t: u64, d: u64 },
+    /// The tiles and `k` words per chunk: `ceil(W / t) * ceil(H / t) + k * Chunks`.
+    TilesChunks { t: u64, d: u64, k: u64 },
 }
 
 /// Level `s` of a pyramid over `x`: halved `s` times, rounded down (at least 1) or up.
@@ -61,6 +65,11 @@ impl Basis {
             Basis::One { h: axis, s, round, d } => level(if axis { h } else { w }, s, round).div_ceil(d),
             Basis::Prod { s, round, d } => level(w, s, round).div_ceil(d) * level(h, s, round).div_ceil(d),
             Basis::Area { d } => (w * h).div_ceil(d),
+            Basis::Chunks { t, d } => (w.div_ceil(t) * h.div_ceil(t)).div_ceil(d),
+            Basis::TilesChunks { t, d, k } => {
+                let tiles = w.div_ceil(t) * h.div_ceil(t);
+                tiles + k * tiles.div_ceil(d)
+            }
         }
     }
 
@@ -71,6 +80,10 @@ impl Basis {
                 format!("{} * {}", tiled_text(level_text("W", s, round), d), tiled_text(level_text("H", s, round), d))
             }
             Basis::Area { d } => tiled_text("W * H".into(), d),
+            Basis::Chunks { t, d } => format!("ceil(ceil(W / {t}) * ceil(H / {t}) / {d})"),
+            Basis::TilesChunks { t, d, k } => {
+                format!("ceil(W / {t}) * ceil(H / {t}) + {k} * ceil(ceil(W / {t}) * ceil(H / {t}) / {d})")
+            }
         }
     }
 }
@@ -106,6 +119,15 @@ fn bases() -> Vec<Basis> {
     for d in [1u64, 2, 4, 8, 16, 32, 64, 128, 256, 512, 1024] {
         out.push(Basis::Area { d });
     }
+    // Tiles gathered in chunks (a prefix sum over tiles, Gautron et al.'s record creation).
+    for t in TILES.into_iter().filter(|&t| t > 1) {
+        for d in [64u64, 128, 256, 512, 1024] {
+            out.push(Basis::Chunks { t, d });
+            for k in [1, 2] {
+                out.push(Basis::TilesChunks { t, d, k });
+            }
+        }
+    }
     out
 }
 
@@ -123,6 +145,18 @@ pub fn fit(points: &[(u64, u64, u64)], family: &[Basis]) -> Option<String> {
             return Some(b.text());
         }
     }
+    // Then `a * g` (a stride times a count), and only then `a * g + b` (a header).
+    for offset in [false, true] {
+        if let Some(t) = fit_linear(points, &q, family, offset) {
+            return Some(t);
+        }
+    }
+    None
+}
+
+/// `a * g + b` through every point for the first `g` of `family` that gives one (`b` = 0
+/// unless `offset`).
+fn fit_linear(points: &[(u64, u64, u64)], q: &[i128], family: &[Basis], offset: bool) -> Option<String> {
     for b in family {
         let g: Vec<i128> = points.iter().map(|p| b.eval(p.0, p.1) as i128).collect();
         // The two points farthest apart in g give a and b.
@@ -140,12 +174,13 @@ pub fn fit(points: &[(u64, u64, u64)], family: &[Basis]) -> Option<String> {
         }
         let a = (q[i] - q[j]) / dg;
         let c = q[i] - a * g[i];
-        if a <= 0 || (0..g.len()).any(|k| a * g[k] + c != q[k]) {
+        if a <= 0 || (c != 0 && !offset) || (0..g.len()).any(|k| a * g[k] + c != q[k]) {
             continue;
         }
         let mut t = b.text();
         if a != 1 {
-            t = format!("{a} * {}", if matches!(b, Basis::Prod { .. }) { format!("({t})") } else { t });
+            let sum = matches!(b, Basis::Prod { .. } | Basis::TilesChunks { .. });
+            t = format!("{a} * {}", if sum { format!("({t})") } else { t });
         }
         if c > 0 {
             t = format!("{t} + {c}");
@@ -388,6 +423,11 @@ mod tests {
             Some("ceil(W / 8) * ceil(H / 8)")
         );
         assert_eq!(fit(&points(|w, h| (w * h).div_ceil(64)), &fam).as_deref(), Some("ceil(W * H / 64)"));
+        // 16-pixel tiles, and a count and an offset per chunk of 256 tiles, in 4-byte words.
+        let tiles = |w: u64, h: u64| w.div_ceil(16) * h.div_ceil(16);
+        let e = fit(&points(|w, h| 4 * (tiles(w, h) + 2 * tiles(w, h).div_ceil(256))), &fam).expect("fits");
+        assert_eq!(e, "4 * (ceil(W / 16) * ceil(H / 16) + 2 * ceil(ceil(W / 16) * ceil(H / 16) / 256))");
+        assert_eq!(eval(&e, 1920, 1080), Some(4 * (120 * 68 + 2 * 32)));
         // Every expression found evaluates back to the values it was fitted to.
         for f in [|w: u64, _h: u64| (w / 8).max(1).div_ceil(8), |w: u64, h: u64| 16 * w * h + 16] {
             let pts = points(f);
