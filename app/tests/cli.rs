@@ -400,6 +400,9 @@ fn export_writes_a_port_kit_and_refuses_an_existing_folder() {
             .args(["--size", "32x18", "--frames", "2", "--port-kit"])
             .arg(&kit)
             .args(extra)
+            // Expressions have their own test (tests/tests/port_kit.rs); the probes would triple
+            // this one's time.
+            .arg("--no-expressions")
             .output()
             .expect("runs")
     };
@@ -419,6 +422,7 @@ fn export_writes_a_port_kit_and_refuses_an_existing_folder() {
         serde_json::from_str(&std::fs::read_to_string(kit.join("manifest.json")).expect("manifest")).expect("json");
     assert_eq!((m["schema"].as_str(), m["preset"].as_str()), (Some("gi-lab-port-kit"), Some("nguyen-hcb")));
     assert_eq!(m["size"], serde_json::json!([32, 18]));
+    assert!(m.get("expressions").is_none(), "--no-expressions leaves them out");
     let before = std::fs::read_to_string(kit.join("manifest.json")).expect("manifest");
     let o = run(&[]);
     assert!(!o.status.success(), "an existing folder is refused");

@@ -38,6 +38,10 @@ pub struct ExportArgs {
     /// Port kit: replace an existing folder (only once the new kit is complete).
     #[arg(long)]
     pub force: bool,
+    /// Port kit: leave out the sizes and counts as expressions of W and H (they take six more
+    /// captures at probe sizes; docs/port-kit.md, "Sizes as expressions").
+    #[arg(long)]
+    pub no_expressions: bool,
 }
 
 /// `gi-lab export`: the preset (with overrides) as an engine export.
@@ -109,7 +113,7 @@ fn port_kit(
         frames: a.frames,
         goldens: true,
         camera: None,
-        expressions: true,
+        expressions: !a.no_expressions,
     };
     let kit = port_kit::build(ctx, req).map_err(|e| CliError::failure(format!("port kit: {e}")))?;
     port_kit::write(&kit, dir, a.force).map_err(|e| CliError::input(format!("--port-kit: {e}")))?;
