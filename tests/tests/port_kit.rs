@@ -13,8 +13,9 @@ fn settings(preset: &str) -> LabSettings {
     LabSettings::load(std::path::Path::new(&path)).unwrap_or_else(|e| panic!("{path}: {e}"))
 }
 
-fn kit(preset: &str, frames: u32, goldens: bool) -> Kit {
-    let req = KitRequest {
+/// The kit of `preset` on the default scene at [`SIZE`], without expressions.
+fn request(preset: &str, frames: u32, goldens: bool) -> KitRequest<'_> {
+    KitRequest {
         preset,
         settings: settings(preset),
         scene: default_scene(),
@@ -24,8 +25,11 @@ fn kit(preset: &str, frames: u32, goldens: bool) -> Kit {
         goldens,
         camera: None,
         expressions: false,
-    };
-    port_kit::build(gpu(), req).unwrap_or_else(|e| panic!("{preset}: {e}"))
+    }
+}
+
+fn kit(preset: &str, frames: u32, goldens: bool) -> Kit {
+    port_kit::build(gpu(), request(preset, frames, goldens)).unwrap_or_else(|e| panic!("{preset}: {e}"))
 }
 
 /// Names in the order they first appear.
@@ -423,17 +427,7 @@ fn sizes_and_counts_are_expressions_of_the_image_that_give_another_sizes_values(
     use gi_render::export::port_kit::expressions::eval;
     // Soler et al.'s pyramid: its levels are halvings of the image, its dispatches tile them.
     let preset = "soler-quarter-4-64";
-    let req = KitRequest {
-        preset,
-        settings: settings(preset),
-        scene: default_scene(),
-        scene_name: "default",
-        size: SIZE,
-        frames: 2,
-        goldens: false,
-        camera: None,
-        expressions: true,
-    };
+    let req = KitRequest { expressions: true, ..request(preset, 2, false) };
     let k = port_kit::build(gpu(), req.clone()).expect("kit");
     let m = &k.manifest;
     let exprs = |e: &[Option<String>]| e.iter().map(|x| x.clone().unwrap_or_default()).collect::<Vec<_>>();

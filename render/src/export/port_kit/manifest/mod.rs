@@ -306,12 +306,7 @@ impl Builder<'_> {
                 Command::ClearBuffer { buffer, offset, size } => {
                     let b = self.resource(BUF, *buffer);
                     self.touch(&b, &p.name, true);
-                    steps.push(Step {
-                        kind: "clear".into(),
-                        copy: None,
-                        clear: Some((b, *offset, *size)),
-                        ..copy_step(serde_json::Value::Null)
-                    });
+                    steps.push(Step { clear: Some((b, *offset, *size)), ..blank_step("clear") });
                 }
                 Command::Upload { buffer, offset, data } => {
                     if self.skip_uploads.contains(buffer) {
@@ -336,12 +331,7 @@ impl Builder<'_> {
                         }
                     };
                     let upload = UploadStep { buffer: name, offset: *offset, bytes: data.len() as u64, file };
-                    steps.push(Step {
-                        kind: "upload".into(),
-                        copy: None,
-                        upload: Some(upload),
-                        ..copy_step(serde_json::Value::Null)
-                    });
+                    steps.push(Step { upload: Some(upload), ..blank_step("upload") });
                 }
                 Command::CopyBuffer { src, src_offset, dst, dst_offset, size } => {
                     let (s, d) = (self.resource(BUF, *src), self.resource(BUF, *dst));
@@ -463,7 +453,6 @@ impl Builder<'_> {
             _ => unreachable!("work() is called for dispatches and draws"),
         };
         Ok(Step {
-            kind: kind.into(),
             pipeline: info.as_ref().map(|i| i.label.clone()),
             entry_points: info
                 .as_ref()
@@ -474,15 +463,7 @@ impl Builder<'_> {
             workgroups,
             draw,
             indirect,
-            counts_expr: Vec::new(),
-            render_pass: None,
-            targets: Vec::new(),
-            depth_target: None,
-            vertex_buffers: Vec::new(),
-            index_buffer: None,
-            copy: None,
-            clear: None,
-            upload: None,
+            ..blank_step(kind)
         })
     }
 
@@ -562,8 +543,13 @@ impl Builder<'_> {
 }
 
 fn copy_step(copy: serde_json::Value) -> Step {
+    Step { copy: Some(copy), ..blank_step("copy") }
+}
+
+/// A step of `kind` with nothing else set.
+fn blank_step(kind: &str) -> Step {
     Step {
-        kind: "copy".into(),
+        kind: kind.into(),
         pipeline: None,
         entry_points: Vec::new(),
         constants: Vec::new(),
@@ -577,7 +563,7 @@ fn copy_step(copy: serde_json::Value) -> Step {
         depth_target: None,
         vertex_buffers: Vec::new(),
         index_buffer: None,
-        copy: Some(copy),
+        copy: None,
         clear: None,
         upload: None,
     }
