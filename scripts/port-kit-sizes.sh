@@ -25,7 +25,7 @@ out=docs/port-kit-sizes.md
   echo "\`gi-lab export --preset P --port-kit DIR --size $SIZE --frames $FRAMES\` on the embedded default scene from its camera."
   echo "Golden files count the distinct files (a frame that repeats an earlier one's contents names its file)."
   echo
-  echo "Expressions: the sizes and counts fitted as expressions of W and H, and those left as captured."
+  echo "Expressions: the sizes and counts fitted as expressions of W and H (and those left as captured); those that change with a setting, and how many of them got an expression of it (docs/port-kit.md)."
   echo "Host: \`port-kit-host\` ran the kit, \`gi-lab verify\` compared every output of every pass of every frame (tolerance 0.01)."
   echo
   echo "| preset | passes | steps | resources | shader modules | entry points translated | golden files | size on disk | expressions | host: outputs, worst | verify |"
@@ -39,7 +39,7 @@ steps = sum(len(p["steps"]) for p in m["passes"])
 files = {o["file"] for f in m["golden"] for o in f["inputs"] + [x for p in f["passes"] for x in p["outputs"]]}
 e = m.get("expressions") or {}
 print(f'{len(m["passes"])} | {steps} | {len(m["resources"])} | {len(m["shaders"])} | {len(m["translations"])} | {len(files)}', end="\t")
-print(f'{e.get("fitted", 0)} fitted, {e.get("as_captured", 0)} as captured')
+print(f'{e.get("fitted", 0)} of W, H ({e.get("as_captured", 0)} as captured); {e.get("following_a_setting", 0)} follow a setting, {e.get("fitted_in_a_setting", 0)} fitted in it')
 PY
 )
     size=$(du -sh "$tmp/$p" | cut -f1)

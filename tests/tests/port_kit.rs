@@ -25,6 +25,7 @@ fn request(preset: &str, frames: u32, goldens: bool) -> KitRequest<'_> {
         goldens,
         camera: None,
         expressions: false,
+        settings_probed: None,
     }
 }
 
@@ -328,6 +329,7 @@ fn goldens_hold_every_pass_output_as_the_renderer_draws_it_and_verify_finds_the_
         goldens: true,
         camera: None,
         expressions: false,
+        settings_probed: None,
     };
     let k = port_kit::build(gpu(), req).expect("kit");
     let m = &k.manifest;
@@ -427,7 +429,7 @@ fn sizes_and_counts_are_expressions_of_the_image_that_give_another_sizes_values(
     use gi_render::export::port_kit::expressions::eval;
     // Soler et al.'s pyramid: its levels are halvings of the image, its dispatches tile them.
     let preset = "soler-quarter-4-64";
-    let req = KitRequest { expressions: true, ..request(preset, 2, false) };
+    let req = KitRequest { expressions: true, settings_probed: Some(&[]), ..request(preset, 2, false) };
     let k = port_kit::build(gpu(), req.clone()).expect("kit");
     let m = &k.manifest;
     let exprs = |e: &[Option<String>]| e.iter().map(|x| x.clone().unwrap_or_default()).collect::<Vec<_>>();
@@ -465,4 +467,54 @@ fn sizes_and_counts_are_expressions_of_the_image_that_give_another_sizes_values(
         }
     }
     assert!(checked * 10 >= total * 9, "{checked} of {total} sizes and counts have an expression");
+}
+
+#[test]
+fn sizes_and_counts_that_follow_a_setting_are_expressions_of_it_that_give_other_values() {
+    use gi_render::export::port_kit::expressions::eval_with;
+    // Instant radiosity: the VPL count sets the warp's dispatch, the ISM points their buffer.
+    let preset = "knecht-cornell-256";
+    let probed: &[&str] = &["vpl.count", "ism.points"];
+    let req = KitRequest { expressions: true, settings_probed: Some(probed), ..request(preset, 2, false) };
+    let k = port_kit::build(gpu(), req.clone()).expect("kit");
+    let m = &k.manifest;
+    let points = m.resources.iter().find(|r| r.name == "ism.points").expect("the ISM points");
+    assert_eq!(points.size_expr, [Some("32 * ism.points".to_string())]);
+    assert_eq!(points.depends_on, ["ism.points"]);
+    let warp =
+        m.passes.iter().flat_map(|p| &p.steps).find(|s| s.pipeline.as_deref() == Some("vpl.warp")).expect("warp");
+    assert_eq!(warp.counts_expr.first().cloned().flatten().as_deref(), Some("ceil(vpl.count / 64)"));
+    // Other values, which no capture saw: the expressions give that kit's sizes and counts.
+    let mut s = settings(preset);
+    s.apply_override("vpl.count=200").expect("vpl.count");
+    s.apply_override("ism.points=65536").expect("ism.points");
+    let other = port_kit::build(gpu(), KitRequest { settings: s.clone(), expressions: false, ..req })
+        .expect("the kit with other settings");
+    let value = |n: &str| match s.get(n) {
+        Some(gi_render::settings::Value::U32(v)) => Some(v as f64),
+        _ => None,
+    };
+    let (w, h) = (SIZE.0 as u64, SIZE.1 as u64);
+    let mut checked = 0;
+    for r in m.resources.iter().filter(|r| !r.depends_on.is_empty()) {
+        let Some(r2) = other.manifest.resources.iter().find(|x| x.name == r.name) else { continue };
+        for (e, v) in r.size_expr.iter().zip(&r2.size) {
+            if let Some(e) = e.as_ref().filter(|e| e.contains('.')) {
+                assert_eq!(eval_with(e, w, h, &value), Some(*v), "{}: {e}", r.name);
+                checked += 1;
+            }
+        }
+    }
+    for (p, p2) in m.passes.iter().zip(&other.manifest.passes) {
+        for (st, st2) in p.steps.iter().zip(&p2.steps).filter(|(a, _)| !a.counts_depend_on.is_empty()) {
+            let Some(wg) = st2.workgroups else { continue };
+            for (e, v) in st.counts_expr.iter().zip(wg) {
+                if let Some(e) = e.as_ref().filter(|e| e.contains('.')) {
+                    assert_eq!(eval_with(e, w, h, &value), Some(v as u64), "{} {:?}: {e}", p.name, st.pipeline);
+                    checked += 1;
+                }
+            }
+        }
+    }
+    assert!(checked >= 4, "{checked} expressions of a setting checked");
 }

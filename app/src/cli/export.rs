@@ -114,6 +114,7 @@ fn port_kit(
         goldens: true,
         camera: None,
         expressions: !a.no_expressions,
+        settings_probed: None,
     };
     let kit = port_kit::build(ctx, req).map_err(|e| CliError::failure(format!("port kit: {e}")))?;
     port_kit::write(&kit, dir, a.force).map_err(|e| CliError::input(format!("--port-kit: {e}")))?;

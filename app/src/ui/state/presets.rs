@@ -187,6 +187,13 @@ impl State {
     /// size, written by a thread with its own device so that the window does not wait
     /// (docs/port-kit.md). A folder that exists is refused.
     pub fn export_port_kit_to(&mut self, dir: PathBuf) -> Result<(), String> {
+        self.export_port_kit_with(dir, true)
+    }
+
+    /// [`Self::export_port_kit_to`], with or without the sizes' expressions (their probe
+    /// captures take most of a kit's time on a software GPU; a test of the window's wiring
+    /// leaves them out).
+    pub fn export_port_kit_with(&mut self, dir: PathBuf, expressions: bool) -> Result<(), String> {
         use gi_render::export::port_kit::{self, KitRequest};
         if self.preset.port_kit_job.is_some() {
             return Err("a port kit is already being written".into());
@@ -214,7 +221,8 @@ impl State {
                         frames: 4,
                         goldens: true,
                         camera: Some(camera),
-                        expressions: true,
+                        expressions,
+                        settings_probed: None,
                     };
                     let kit = port_kit::build(ctx, req)?;
                     port_kit::write(&kit, &target, false)?;

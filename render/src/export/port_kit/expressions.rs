@@ -260,7 +260,7 @@ pub fn annotate(m: &mut Manifest, probes: &[((u32, u32), Manifest)]) -> (usize, 
 
 /// Numbers of a step that follow the image: workgroup counts, and a draw's vertex or index
 /// count and instance count.
-fn numbers(s: &Step) -> Vec<u64> {
+pub(crate) fn step_numbers(s: &Step) -> Vec<u64> {
     let mut out = Vec::new();
     if let Some(w) = s.workgroups {
         out.extend(w.iter().map(|&x| x as u64));
@@ -282,11 +282,11 @@ fn annotate_step(
     family: &[Basis],
     count: &mut impl FnMut(&Option<String>),
 ) {
-    let mine = numbers(step);
+    let mine = step_numbers(step);
     if mine.is_empty() {
         return;
     }
-    let theirs: Vec<Option<Vec<u64>>> = probe_steps.iter().map(|s| s.map(numbers)).collect();
+    let theirs: Vec<Option<Vec<u64>>> = probe_steps.iter().map(|s| s.map(step_numbers)).collect();
     let mut exprs = Vec::new();
     for (k, &v) in mine.iter().enumerate() {
         let mut points = vec![(kw, kh, v)];
@@ -307,8 +307,14 @@ fn annotate_step(
 /// not parse. What a port evaluates at its own size (docs/port-kit.md, "Sizes as
 /// expressions").
 pub fn eval(expr: &str, w: u64, h: u64) -> Option<u64> {
+    eval_with(expr, w, h, &|_| None)
+}
+
+/// [`eval`] with settings: a dotted name (`vpl.count`, docs/port-kit.md, "Sizes that follow a
+/// setting") is the value `setting` gives it.
+pub fn eval_with(expr: &str, w: u64, h: u64, setting: &dyn Fn(&str) -> Option<f64>) -> Option<u64> {
     let tokens: Vec<char> = expr.chars().filter(|c| !c.is_whitespace()).collect();
-    let mut p = Parser { t: &tokens, i: 0, w: w as f64, h: h as f64 };
+    let mut p = Parser { t: &tokens, i: 0, w: w as f64, h: h as f64, setting };
     let v = p.sum()?;
     (p.i == tokens.len() && v >= 0.0).then_some(v.round() as u64)
 }
@@ -318,6 +324,7 @@ struct Parser<'a> {
     i: usize,
     w: f64,
     h: f64,
+    setting: &'a dyn Fn(&str) -> Option<f64>,
 }
 
 impl Parser<'_> {
@@ -374,10 +381,17 @@ impl Parser<'_> {
             }
             _ => {
                 let start = self.i;
-                while self.peek().is_some_and(|c| c.is_ascii_lowercase()) {
+                while self.peek().is_some_and(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_' || c == '.')
+                {
                     self.i += 1;
                 }
                 let name: String = self.t[start..self.i].iter().collect();
+                if name.is_empty() {
+                    return None;
+                }
+                if self.peek() != Some('(') {
+                    return (self.setting)(&name);
+                }
                 self.eat('(')?;
                 let a = self.sum()?;
                 let v = match name.as_str() {
@@ -438,6 +452,9 @@ mod tests {
         }
         assert_eq!(eval("max(1, floor(W / 8)) - 1", 7, 1), Some(0));
         assert_eq!(eval("ceil(W / 8", 7, 1), None, "an unclosed call");
+        assert_eq!(eval("32 * vpl.count", 7, 1), None, "a setting without its value");
+        let count = |n: &str| (n == "vpl.count").then_some(256.0);
+        assert_eq!(eval_with("32 * vpl.count + ceil(W / 8)", 17, 1, &count), Some(32 * 256 + 3));
         // Not in the family (a square root of the pixel count): left as captured.
         assert_eq!(fit(&points(|w, h| ((w * h) as f64).sqrt() as u64), &fam), None);
     }

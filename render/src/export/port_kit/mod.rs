@@ -19,6 +19,7 @@ pub mod expressions;
 pub mod golden;
 pub mod manifest;
 pub mod reflect;
+pub mod settings_probe;
 pub mod translate;
 pub mod uniforms;
 pub mod verify;
@@ -43,8 +44,11 @@ pub struct KitRequest<'a> {
     /// The camera (the window's live one); None: the scene's opening view.
     pub camera: Option<crate::camera::Camera>,
     /// Whether to fit sizes and counts as expressions of W and H (six more captures of
-    /// two frames at the probe sizes, `expressions::PROBES`).
+    /// two frames at the probe sizes, `expressions::PROBES`) and of the settings (two more per
+    /// integer setting in use, `settings_probe`).
     pub expressions: bool,
+    /// With `expressions`: the settings to vary (None: every integer setting in use).
+    pub settings_probed: Option<&'a [&'a str]>,
 }
 
 /// A kit in memory: the manifest, the export and the files to write (relative path, bytes).
@@ -82,11 +86,41 @@ pub fn build(ctx: GpuContext, req: KitRequest) -> Result<Kit, String> {
             probes.push((size, manifest::build(req.preset, size, &frames, &objects)?.manifest));
         }
         let (fitted, left) = expressions::annotate(&mut built.manifest, &probes);
+        // Each integer setting in use at two nearby values, at the first probe size.
+        let variants = settings_probe::variants(&req.settings, req.settings_probed);
+        let mut captured = Vec::new();
+        for v in &variants {
+            let mut manifests = Vec::new();
+            for (_, settings) in &v.others {
+                capture::start();
+                let size = expressions::PROBES[0];
+                let probe = KitRequest {
+                    settings: settings.clone(),
+                    size,
+                    frames: 2,
+                    goldens: false,
+                    expressions: false,
+                    ..req.clone()
+                };
+                let result = draw(ctx.clone(), &probe);
+                let objects = capture::stop().ok_or("the capture was stopped by someone else")?;
+                let (frames, _) = result?;
+                manifests.push(manifest::build(req.preset, size, &frames, &objects)?.manifest);
+            }
+            captured.push((v, manifests));
+        }
+        let base = &probes[0].1;
+        let (following, in_settings) = settings_probe::annotate(&mut built.manifest, base, &captured);
         built.manifest.expressions = Some(serde_json::json!({
-            "variables": {"W": "the image's width", "H": "its height"},
+            "variables": {"W": "the image's width", "H": "its height", "group.field": "a setting (preset.json)"},
             "probes": expressions::PROBES,
             "fitted": fitted,
             "as_captured": left,
+            "settings_varied": variants.iter().map(|v| serde_json::json!({
+                "setting": v.path, "value": v.value, "others": v.others.iter().map(|o| o.0).collect::<Vec<_>>()
+            })).collect::<Vec<_>>(),
+            "following_a_setting": following,
+            "fitted_in_a_setting": in_settings,
         }));
     }
     let (golden, mut files) = golden::goldens(&built, &frames, &objects);

@@ -111,6 +111,9 @@ pub struct Step {
     /// as captured.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub counts_expr: Vec<Option<String>>,
+    /// The settings those counts change with ([`crate::export::port_kit::settings_probe`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub counts_depend_on: Vec<String>,
     /// Indirect arguments: the buffer and the byte offset.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub indirect: Option<(String, u64)>,
@@ -173,6 +176,9 @@ pub struct Resource {
     /// ([`crate::export::port_kit::expressions`]); null: as captured.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub size_expr: Vec<Option<String>>,
+    /// The settings its size changes with ([`crate::export::port_kit::settings_probe`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub depends_on: Vec<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mips: Option<u32>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -278,7 +284,7 @@ impl DeviceNeeds {
 
 /// What the kit does not hold yet; said in the manifest, the kit's README and docs/port-kit.md.
 pub const NOT_YET: &[&str] = &[
-    "sizes and counts as expressions of the settings: only W and H vary between the probes, so a size that follows a setting (a VPL count, an atlas's resolution) is given with this preset's value",
+    "a size or count that follows several settings, or a setting and the image, at once: it names them (depends_on) and keeps the image's expression or the captured value, without a formula in the settings",
 ];
 
 /// The role of a pass by its name (docs/port-kit.md, "Roles").
