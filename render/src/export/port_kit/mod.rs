@@ -89,9 +89,12 @@ pub fn build(ctx: GpuContext, req: KitRequest) -> Result<Kit, String> {
         // Each integer setting in use at two nearby values, at the first probe size.
         let variants = settings_probe::variants(&req.settings, req.settings_probed);
         let mut captured = Vec::new();
-        for v in &variants {
+        // A variant this device cannot draw (an ISM atlas over its limits at double the VPLs)
+        // is left out, with the renderer's reason.
+        let mut refused: Vec<serde_json::Value> = Vec::new();
+        'variants: for v in &variants {
             let mut manifests = Vec::new();
-            for (_, settings) in &v.others {
+            for (x, settings) in &v.others {
                 capture::start();
                 let size = expressions::PROBES[0];
                 let probe = KitRequest {
@@ -104,7 +107,13 @@ pub fn build(ctx: GpuContext, req: KitRequest) -> Result<Kit, String> {
                 };
                 let result = draw(ctx.clone(), &probe);
                 let objects = capture::stop().ok_or("the capture was stopped by someone else")?;
-                let (frames, _) = result?;
+                let frames = match result {
+                    Ok((frames, _)) => frames,
+                    Err(e) => {
+                        refused.push(serde_json::json!({"setting": v.path, "value": x, "reason": e}));
+                        continue 'variants;
+                    }
+                };
                 manifests.push(manifest::build(req.preset, size, &frames, &objects)?.manifest);
             }
             captured.push((v, manifests));
@@ -116,9 +125,10 @@ pub fn build(ctx: GpuContext, req: KitRequest) -> Result<Kit, String> {
             "probes": expressions::PROBES,
             "fitted": fitted,
             "as_captured": left,
-            "settings_varied": variants.iter().map(|v| serde_json::json!({
+            "settings_varied": captured.iter().map(|(v, _)| serde_json::json!({
                 "setting": v.path, "value": v.value, "others": v.others.iter().map(|o| o.0).collect::<Vec<_>>()
             })).collect::<Vec<_>>(),
+            "settings_refused": refused,
             "following_a_setting": following,
             "fitted_in_a_setting": in_settings,
         }));
