@@ -88,8 +88,8 @@ impl Basis {
     }
 }
 
-/// The family, simplest first.
-fn bases() -> Vec<Basis> {
+/// The family of [`fit`], simplest first.
+pub fn family() -> Vec<Basis> {
     // Workgroup widths first: a tiling by 8 or 16 is likelier than one by 2.
     const TILES: [u64; 9] = [1, 8, 16, 4, 32, 64, 2, 128, 256];
     let mut out = Vec::new();
@@ -157,44 +157,48 @@ pub fn fit(points: &[(u64, u64, u64)], family: &[Basis]) -> Option<String> {
 /// `a * g + b` through every point for the first `g` of `family` that gives one (`b` = 0
 /// unless `offset`).
 fn fit_linear(points: &[(u64, u64, u64)], q: &[i128], family: &[Basis], offset: bool) -> Option<String> {
-    for b in family {
+    family.iter().find_map(|b| {
         let g: Vec<i128> = points.iter().map(|p| b.eval(p.0, p.1) as i128).collect();
-        // The two points farthest apart in g give a and b.
-        let (mut i, mut j) = (0, 0);
-        for x in 0..g.len() {
-            for y in 0..g.len() {
-                if (g[x] - g[y]).abs() > (g[i] - g[j]).abs() {
-                    (i, j) = (x, y);
-                }
-            }
-        }
-        let dg = g[i] - g[j];
-        if dg == 0 || (q[i] - q[j]) % dg != 0 {
-            continue;
-        }
-        let a = (q[i] - q[j]) / dg;
-        let c = q[i] - a * g[i];
-        if a <= 0 || (c != 0 && !offset) || (0..g.len()).any(|k| a * g[k] + c != q[k]) {
-            continue;
-        }
-        let mut t = b.text();
-        if a != 1 {
-            let sum = matches!(b, Basis::Prod { .. } | Basis::TilesChunks { .. });
-            t = format!("{a} * {}", if sum { format!("({t})") } else { t });
-        }
-        if c > 0 {
-            t = format!("{t} + {c}");
-        } else if c < 0 {
-            t = format!("{t} - {}", -c);
-        }
-        return Some(t);
-    }
-    None
+        let (a, c) = solve_linear(&g, q, offset)?;
+        Some(affine_text(b.text(), matches!(b, Basis::Prod { .. } | Basis::TilesChunks { .. }), a, c))
+    })
 }
 
-/// The family of [`fit`].
-pub fn family() -> Vec<Basis> {
-    bases()
+/// `(a, b)` with `a > 0` and `a * g[k] + b = q[k]` at every point, integers (`b` = 0 unless
+/// `offset`); the two points farthest apart in `g` give them. Also the settings' fits
+/// (`super::settings_probe`).
+pub(crate) fn solve_linear(g: &[i128], q: &[i128], offset: bool) -> Option<(i128, i128)> {
+    let (mut i, mut j) = (0, 0);
+    for x in 0..g.len() {
+        for y in 0..g.len() {
+            if (g[x] - g[y]).abs() > (g[i] - g[j]).abs() {
+                (i, j) = (x, y);
+            }
+        }
+    }
+    let dg = g[i] - g[j];
+    if dg == 0 || (q[i] - q[j]) % dg != 0 {
+        return None;
+    }
+    let a = (q[i] - q[j]) / dg;
+    let c = q[i] - a * g[i];
+    (a > 0 && (c == 0 || offset) && (0..g.len()).all(|k| a * g[k] + c == q[k])).then_some((a, c))
+}
+
+/// `a * text + b` as written in a manifest (`text` in parentheses when it is a product or a
+/// sum).
+pub(crate) fn affine_text(text: String, compound: bool, a: i128, c: i128) -> String {
+    let mut t = match (a, compound) {
+        (1, _) => text,
+        (_, true) => format!("{a} * ({text})"),
+        _ => format!("{a} * {text}"),
+    };
+    if c > 0 {
+        t = format!("{t} + {c}");
+    } else if c < 0 {
+        t = format!("{t} - {}", -c);
+    }
+    t
 }
 
 /// Writes the expressions into `m` (the kit's manifest at its own size) from the manifests

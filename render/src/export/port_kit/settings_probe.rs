@@ -8,7 +8,8 @@
 //! values by `a * g(S) + b` with `g` the setting `S`, its square, a tiling `ceil(S / d)` or a
 //! floor `max(m, S)`, and that expression (`256 * ism.points`) replaces the constant.
 
-use super::manifest::{Manifest, Step};
+use super::expressions::{affine_text, solve_linear, step_numbers};
+use super::manifest::Manifest;
 use crate::LabSettings;
 use crate::settings::{FieldKind, Value};
 
@@ -69,8 +70,6 @@ type SettingBasis = Box<dyn Fn(u64) -> u64>;
 /// `a * g(S) + b` through the three points (S, value), `b` = 0 preferred; the expression in
 /// the setting's name.
 fn fit(name: &str, points: &[(u64, u64)]) -> Option<String> {
-    let mut points = points.to_vec();
-    points.sort_unstable();
     let mut bases: Vec<(String, SettingBasis)> =
         vec![(name.to_string(), Box::new(|s| s)), (format!("{name} * {name}"), Box::new(|s| s * s))];
     // A capacity with a floor.
@@ -81,40 +80,16 @@ fn fit(name: &str, points: &[(u64, u64)]) -> Option<String> {
     for d in [2u64, 4, 8, 16, 32, 64, 128, 256] {
         bases.push((format!("ceil({name} / {d})"), Box::new(move |s| s.div_ceil(d))));
     }
+    let qs: Vec<i128> = points.iter().map(|p| p.1 as i128).collect();
     for offset in [false, true] {
         for (text, g) in &bases {
             let gs: Vec<i128> = points.iter().map(|p| g(p.0) as i128).collect();
-            let qs: Vec<i128> = points.iter().map(|p| p.1 as i128).collect();
-            let (i, j) = (0, points.len() - 1);
-            let dg = gs[j] - gs[i];
-            if dg == 0 || (qs[j] - qs[i]) % dg != 0 {
-                continue;
+            if let Some((a, c)) = solve_linear(&gs, &qs, offset) {
+                return Some(affine_text(text.clone(), text.contains(" * "), a, c));
             }
-            let a = (qs[j] - qs[i]) / dg;
-            let c = qs[i] - a * gs[i];
-            if a <= 0 || (c != 0 && !offset) || (0..gs.len()).any(|k| a * gs[k] + c != qs[k]) {
-                continue;
-            }
-            let sum = text.contains(" * ");
-            let mut t = match (a, sum) {
-                (1, _) => text.clone(),
-                (_, true) => format!("{a} * ({text})"),
-                _ => format!("{a} * {text}"),
-            };
-            if c > 0 {
-                t = format!("{t} + {c}");
-            } else if c < 0 {
-                t = format!("{t} - {}", -c);
-            }
-            return Some(t);
         }
     }
     None
-}
-
-/// Numbers of a step that a setting may change: as [`super::expressions`] fits them.
-fn numbers(s: &Step) -> Vec<u64> {
-    super::expressions::step_numbers(s)
 }
 
 /// Writes `depends_on` and the settings' expressions into `m` from the manifest of the base
@@ -163,7 +138,7 @@ pub fn annotate(m: &mut Manifest, base: &Manifest, captured: &[(&Variant, Vec<Ma
                     let pass = f.get(pi).filter(|x| x.name == name)?;
                     let step = pass.steps.get(si)?;
                     let mine = &m.frame_passes[k][pi].steps[si];
-                    (step.kind == mine.kind && step.pipeline == mine.pipeline).then(|| numbers(step))
+                    (step.kind == mine.kind && step.pipeline == mine.pipeline).then(|| step_numbers(step))
                 };
                 let Some(n0) = find(base) else { continue };
                 let mut depends: Vec<(usize, String, Option<String>)> = Vec::new();
