@@ -18,6 +18,7 @@ host=target/debug/port-kit-host
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
 out=docs/port-kit-sizes.md
+: >"$tmp/several.md"
 {
   echo "# Port kit sizes"
   echo
@@ -32,7 +33,7 @@ out=docs/port-kit-sizes.md
   echo "|---|---:|---:|---:|---:|---:|---:|---:|---|---|---|"
   for p in knecht-cornell-256 nguyen-hcb gautron-ic-splatting soler-quarter-4-64 soler-near-knecht-far; do
     "$bin" export --preset "presets/$p.ron" --port-kit "$tmp/$p" --size "$SIZE" --frames "$FRAMES" >/dev/null 2>&1
-    row=$(python3 - "$tmp/$p/manifest.json" <<'PY'
+    row=$(python3 - "$tmp/$p/manifest.json" "$tmp/$p.several" <<'PY'
 import json, sys
 m = json.load(open(sys.argv[1]))
 steps = sum(len(p["steps"]) for p in m["passes"])
@@ -40,6 +41,34 @@ files = {o["file"] for f in m["golden"] for o in f["inputs"] + [x for p in f["pa
 e = m.get("expressions") or {}
 print(f'{len(m["passes"])} | {steps} | {len(m["resources"])} | {len(m["shaders"])} | {len(m["translations"])} | {len(files)}', end="\t")
 print(f'{e.get("fitted", 0)} of W, H ({e.get("as_captured", 0)} as captured); {e.get("following_a_setting", 0)} follow a setting, {e.get("fitted_in_a_setting", 0)} fitted in it')
+# The numbers that follow several settings, or a setting and the image: their expressions.
+rows = []
+def several(deps, exprs):
+    return len(deps) > 1 or any(x and ("W" in x or "H" in x) for x in exprs)
+for r in m["resources"]:
+    if r.get("depends_on") and several(r["depends_on"], r["size_expr"]):
+        rows.append((f'`{r["name"]}` size', r["depends_on"], r["size_expr"]))
+for p in m["passes"]:
+    for s in p["steps"]:
+        if s.get("counts_depend_on") and several(s["counts_depend_on"], s["counts_expr"]):
+            rows.append((f'`{p["name"]}` {s["kind"]} `{s.get("pipeline")}`', s["counts_depend_on"], s["counts_expr"]))
+seen = set()
+unrolled = set()
+with open(sys.argv[2], "w") as f:
+    for what, deps, exprs in rows:
+        key = (what, tuple(deps), tuple(str(x) for x in exprs))
+        if key in seen:
+            continue
+        seen.add(key)
+        # One setting, an expression of the image without it: a step or resource of a loop
+        # that setting unrolls (it exists at some of its values), counted, not listed.
+        if len(deps) == 1 and all(x and not any(d in x for d in deps) for x in exprs):
+            unrolled.add(what)
+            continue
+        shown = ", ".join(f"`{x}`" if x else "as captured" for x in exprs)
+        f.write(f'| `{m["preset"]}` | {what} | {", ".join(deps)} | {shown} |\n')
+    if unrolled:
+        f.write(f'| `{m["preset"]}` | {len(unrolled)} more of the image that exist at some values of a setting (a loop unrolled) | | |\n')
 PY
 )
     size=$(du -sh "$tmp/$p" | cut -f1)
@@ -55,8 +84,17 @@ print(f"{n}, {w[4].strip()}")
 PY
 )
     echo "| \`$p\` | ${row%%$'\t'*} | $size | ${row#*$'\t'} | $worst | $verdict |"
+    cat "$tmp/$p.several" >>"$tmp/several.md"
     rm -rf "${tmp:?}/$p-port"
     rm -rf "${tmp:?}/$p"
   done
+  echo
+  echo "## Sizes that follow several settings, or a setting and the image"
+  echo
+  echo "Each kit's numbers (once each, of its last frame's passes) that follow more than one setting, or a setting and the image, with the settings they follow and their expressions (docs/port-kit.md, \"Several settings at once, or a setting and the image\"); \"as captured\" where none was fitted: a loop a setting unrolls, or no expression that every capture and the range between them agree on."
+  echo
+  echo "| preset | number | follows | expressions |"
+  echo "|---|---|---|---|"
+  cat "$tmp/several.md"
 } >"$out"
 echo "wrote $out"

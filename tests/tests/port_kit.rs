@@ -470,11 +470,12 @@ fn sizes_and_counts_are_expressions_of_the_image_that_give_another_sizes_values(
 }
 
 #[test]
-fn sizes_and_counts_that_follow_a_setting_are_expressions_of_it_that_give_other_values() {
+fn sizes_and_counts_that_follow_settings_are_expressions_of_them_that_give_other_values() {
     use gi_render::export::port_kit::expressions::eval_with;
-    // Instant radiosity: the VPL count sets the warp's dispatch, the ISM points their buffer.
+    // Instant radiosity: the VPL count sets the warp's dispatch, the ISM points their buffer,
+    // and the atlas holds a map of ism.map_size² per VPL and bounce, ceil(sqrt(n)) a row.
     let preset = "knecht-cornell-256";
-    let probed: &[&str] = &["vpl.count", "ism.points"];
+    let probed: &[&str] = &["vpl.count", "vpl.bounces", "ism.map_size", "ism.points"];
     let req = KitRequest { expressions: true, settings_probed: Some(probed), ..request(preset, 2, false) };
     let k = port_kit::build(gpu(), req.clone()).expect("kit");
     let m = &k.manifest;
@@ -484,10 +485,18 @@ fn sizes_and_counts_that_follow_a_setting_are_expressions_of_it_that_give_other_
     let warp =
         m.passes.iter().flat_map(|p| &p.steps).find(|s| s.pipeline.as_deref() == Some("vpl.warp")).expect("warp");
     assert_eq!(warp.counts_expr.first().cloned().flatten().as_deref(), Some("ceil(vpl.count / 64)"));
+    let atlas = m.resources.iter().find(|r| r.name == "ism.atlas_pulled").expect("the pulled atlas");
+    assert_eq!(atlas.depends_on, ["ism.map_size", "vpl.bounces", "vpl.count"]);
+    assert_eq!(
+        atlas.size_expr[0].as_deref(),
+        Some("ceil(sqrt(vpl.bounces * vpl.count)) * ism.map_size"),
+        "the atlas's width follows three settings at once"
+    );
     // Other values, which no capture saw: the expressions give that kit's sizes and counts.
     let mut s = settings(preset);
-    s.apply_override("vpl.count=200").expect("vpl.count");
-    s.apply_override("ism.points=65536").expect("ism.points");
+    for o in ["vpl.count=200", "vpl.bounces=2", "ism.map_size=64", "ism.points=65536"] {
+        s.apply_override(o).expect(o);
+    }
     let other = port_kit::build(gpu(), KitRequest { settings: s.clone(), expressions: false, ..req })
         .expect("the kit with other settings");
     let value = |n: &str| match s.get(n) {
@@ -495,26 +504,35 @@ fn sizes_and_counts_that_follow_a_setting_are_expressions_of_it_that_give_other_
         _ => None,
     };
     let (w, h) = (SIZE.0 as u64, SIZE.1 as u64);
-    let mut checked = 0;
+    let (mut checked, mut several) = (0, 0);
     for r in m.resources.iter().filter(|r| !r.depends_on.is_empty()) {
         let Some(r2) = other.manifest.resources.iter().find(|x| x.name == r.name) else { continue };
         for (e, v) in r.size_expr.iter().zip(&r2.size) {
             if let Some(e) = e.as_ref().filter(|e| e.contains('.')) {
                 assert_eq!(eval_with(e, w, h, &value), Some(*v), "{}: {e}", r.name);
                 checked += 1;
+                several += usize::from(r.depends_on.len() > 1);
             }
         }
     }
-    for (p, p2) in m.passes.iter().zip(&other.manifest.passes) {
-        for (st, st2) in p.steps.iter().zip(&p2.steps).filter(|(a, _)| !a.counts_depend_on.is_empty()) {
-            let Some(wg) = st2.workgroups else { continue };
+    // Steps matched as the fits match them: the pass by name, the step by its pipeline and
+    // how many of that pipeline come before it (the second bounce adds steps).
+    for (pi, p) in m.passes.iter().enumerate() {
+        let nth_pass = m.passes[..pi].iter().filter(|x| x.name == p.name).count();
+        let Some(p2) = other.manifest.passes.iter().filter(|x| x.name == p.name).nth(nth_pass) else { continue };
+        for (si, st) in p.steps.iter().enumerate().filter(|(_, st)| !st.counts_depend_on.is_empty()) {
+            let same =
+                |x: &&gi_render::export::port_kit::manifest::Step| x.kind == st.kind && x.pipeline == st.pipeline;
+            let nth = p.steps[..si].iter().filter(same).count();
+            let Some(wg) = p2.steps.iter().filter(same).nth(nth).and_then(|x| x.workgroups) else { continue };
             for (e, v) in st.counts_expr.iter().zip(wg) {
                 if let Some(e) = e.as_ref().filter(|e| e.contains('.')) {
                     assert_eq!(eval_with(e, w, h, &value), Some(v as u64), "{} {:?}: {e}", p.name, st.pipeline);
                     checked += 1;
+                    several += usize::from(st.counts_depend_on.len() > 1);
                 }
             }
         }
     }
-    assert!(checked >= 4, "{checked} expressions of a setting checked");
+    assert!(checked >= 8 && several >= 4, "{checked} expressions of a setting checked, {several} of several");
 }

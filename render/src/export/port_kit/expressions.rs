@@ -307,7 +307,7 @@ fn annotate_step(
 }
 
 /// The value of an expression of [`fit`]'s grammar — integers, `W`, `H`, `+`, `-`, `*`, `/`,
-/// parentheses, `ceil(x)`, `floor(x)`, `max(x, y)` — at the image `w` × `h`; None when it does
+/// parentheses, `ceil(x)`, `floor(x)`, `sqrt(x)`, `max(x, y)` — at the image `w` × `h`; None when it does
 /// not parse. What a port evaluates at its own size (docs/port-kit.md, "Sizes as
 /// expressions").
 pub fn eval(expr: &str, w: u64, h: u64) -> Option<u64> {
@@ -401,6 +401,7 @@ impl Parser<'_> {
                 let v = match name.as_str() {
                     "ceil" => a.ceil(),
                     "floor" => a.floor(),
+                    "sqrt" => a.sqrt(),
                     "max" => {
                         self.eat(',')?;
                         a.max(self.sum()?)

@@ -17,6 +17,7 @@ use crate::{GpuContext, LabSettings, Renderer};
 
 pub mod expressions;
 pub mod golden;
+pub mod joint_fit;
 pub mod manifest;
 pub mod reflect;
 pub mod settings_probe;
@@ -75,63 +76,7 @@ pub fn build(ctx: GpuContext, req: KitRequest) -> Result<Kit, String> {
     let objects = objects.ok_or("the capture was stopped by someone else")?;
     let mut built = manifest::build(req.preset, req.size, &frames, &objects)?;
     if req.expressions {
-        // The same frame at the probe sizes: its manifests, for the expressions.
-        let mut probes = Vec::new();
-        for size in expressions::PROBES {
-            capture::start();
-            let probe = KitRequest { size, frames: 2, goldens: false, expressions: false, ..req.clone() };
-            let result = draw(ctx.clone(), &probe);
-            let objects = capture::stop().ok_or("the capture was stopped by someone else")?;
-            let (frames, _) = result?;
-            probes.push((size, manifest::build(req.preset, size, &frames, &objects)?.manifest));
-        }
-        let (fitted, left) = expressions::annotate(&mut built.manifest, &probes);
-        // Each integer setting in use at two nearby values, at the first probe size.
-        let variants = settings_probe::variants(&req.settings, req.settings_probed);
-        let mut captured = Vec::new();
-        // A variant this device cannot draw (an ISM atlas over its limits at double the VPLs)
-        // is left out, with the renderer's reason.
-        let mut refused: Vec<serde_json::Value> = Vec::new();
-        'variants: for v in &variants {
-            let mut manifests = Vec::new();
-            for (x, settings) in &v.others {
-                capture::start();
-                let size = expressions::PROBES[0];
-                let probe = KitRequest {
-                    settings: settings.clone(),
-                    size,
-                    frames: 2,
-                    goldens: false,
-                    expressions: false,
-                    ..req.clone()
-                };
-                let result = draw(ctx.clone(), &probe);
-                let objects = capture::stop().ok_or("the capture was stopped by someone else")?;
-                let frames = match result {
-                    Ok((frames, _)) => frames,
-                    Err(e) => {
-                        refused.push(serde_json::json!({"setting": v.path, "value": x, "reason": e}));
-                        continue 'variants;
-                    }
-                };
-                manifests.push(manifest::build(req.preset, size, &frames, &objects)?.manifest);
-            }
-            captured.push((v, manifests));
-        }
-        let base = &probes[0].1;
-        let (following, in_settings) = settings_probe::annotate(&mut built.manifest, base, &captured);
-        built.manifest.expressions = Some(serde_json::json!({
-            "variables": {"W": "the image's width", "H": "its height", "group.field": "a setting (preset.json)"},
-            "probes": expressions::PROBES,
-            "fitted": fitted,
-            "as_captured": left,
-            "settings_varied": captured.iter().map(|(v, _)| serde_json::json!({
-                "setting": v.path, "value": v.value, "others": v.others.iter().map(|o| o.0).collect::<Vec<_>>()
-            })).collect::<Vec<_>>(),
-            "settings_refused": refused,
-            "following_a_setting": following,
-            "fitted_in_a_setting": in_settings,
-        }));
+        fit_expressions(&ctx, &req, &mut built.manifest)?;
     }
     let (golden, mut files) = golden::goldens(&built, &frames, &objects);
     files.extend(built.uploads.iter().cloned());
@@ -197,6 +142,114 @@ fn draw(ctx: GpuContext, req: &KitRequest) -> Result<(Frames, Export), String> {
     let view = super::ExportView::of_scene(req.scene_name, r.scene(), r.bounds(), r.camera, r.size(), r.settings());
     let export = Export::new(r.settings().clone(), super::Provenance::now(&view));
     Ok((frames, export))
+}
+
+/// The frame captured again at the probe sizes and with the settings changed, and the
+/// expressions fitted to them ([`expressions`], [`settings_probe`], [`joint_fit`]).
+fn fit_expressions(ctx: &GpuContext, req: &KitRequest, m: &mut Manifest) -> Result<(), String> {
+    // Two frames of the request at `size` with `settings`: the manifest, or the renderer's
+    // refusal (an ISM atlas over this device's limits).
+    let capture_at = |settings: &LabSettings, size: (u32, u32)| -> Result<Result<Manifest, String>, String> {
+        capture::start();
+        let probe = KitRequest {
+            settings: settings.clone(),
+            size,
+            frames: 2,
+            goldens: false,
+            expressions: false,
+            ..req.clone()
+        };
+        let result = draw(ctx.clone(), &probe);
+        let objects = capture::stop().ok_or("the capture was stopped by someone else")?;
+        match result {
+            Ok((frames, _)) => Ok(Ok(manifest::build(req.preset, size, &frames, &objects)?.manifest)),
+            Err(e) => Ok(Err(e)),
+        }
+    };
+    let mut images = Vec::new();
+    for size in expressions::PROBES {
+        images.push((size, capture_at(&req.settings, size)??));
+    }
+    let (fitted, left) = expressions::annotate(m, &images);
+    // Each integer setting in use at two nearby values and a neighbour, at the first probe size; a value
+    // this device cannot draw (double the VPLs overflow the ISM atlas) is listed with the
+    // renderer's reason and the next is tried.
+    let variants = settings_probe::variants(&req.settings, req.settings_probed);
+    let mut refused: Vec<serde_json::Value> = Vec::new();
+    let mut c = settings_probe::Captured { images: &images, variants: Vec::new(), joints: Vec::new() };
+    for v in &variants {
+        let mut got = Vec::new();
+        for (x, settings) in &v.others {
+            if got.len() == 2 {
+                break;
+            }
+            match capture_at(settings, expressions::PROBES[0])? {
+                Ok(mm) => got.push((*x, mm)),
+                Err(e) => refused.push(serde_json::json!({"setting": v.path, "value": x, "reason": e})),
+            }
+        }
+        let values: Vec<u32> = got.iter().map(|g| g.0).collect();
+        if let (2, Some((x, settings))) = (got.len(), v.neighbour(&values)) {
+            match capture_at(settings, expressions::PROBES[0])? {
+                Ok(mm) => got.push((*x, mm)),
+                Err(e) => refused.push(serde_json::json!({"setting": v.path, "value": x, "reason": e})),
+            }
+        }
+        if got.len() >= 2 {
+            c.variants.push((v, got));
+        }
+    }
+    // The settings a number follows together, changed together at two other sizes: each to
+    // its first other value, each to its second, then the two mixed.
+    for names in settings_probe::joint_sets(m, &c) {
+        let values: Vec<[u32; 2]> = names
+            .iter()
+            .filter_map(|n| c.variants.iter().find(|(v, _)| &v.path == n).map(|(_, g)| [g[0].0, g[1].0]))
+            .collect();
+        let mut done = 0;
+        for pick in 0..4usize {
+            if done == 2 {
+                break;
+            }
+            let chosen: Vec<(String, u32)> = names
+                .iter()
+                .zip(&values)
+                .enumerate()
+                .map(|(i, (n, o))| (n.clone(), o[(pick + i * (pick / 2)) % 2]))
+                .collect();
+            let mut s = req.settings.clone();
+            if chosen.iter().any(|(n, x)| s.set(n, &crate::settings::Value::U32(*x)).is_err())
+                || !s.validate().is_empty()
+            {
+                continue;
+            }
+            let size = expressions::PROBES[3 + 2 * done];
+            match capture_at(&s, size)? {
+                Ok(manifest) => {
+                    c.joints.push(settings_probe::Joint { settings: chosen, size, manifest });
+                    done += 1;
+                }
+                Err(e) => refused.push(serde_json::json!({"settings": chosen, "reason": e})),
+            }
+        }
+    }
+    let (following, in_settings) = settings_probe::annotate(m, &c);
+    m.expressions = Some(serde_json::json!({
+        "variables": {"W": "the image's width", "H": "its height", "group.field": "a setting (preset.json)"},
+        "probes": expressions::PROBES,
+        "fitted": fitted,
+        "as_captured": left,
+        "settings_varied": c.variants.iter().map(|(v, got)| serde_json::json!({
+            "setting": v.path, "value": v.value, "others": got.iter().map(|o| o.0).collect::<Vec<_>>()
+        })).collect::<Vec<_>>(),
+        "settings_together": c.joints.iter().map(|j| serde_json::json!({
+            "settings": j.settings, "size": [j.size.0, j.size.1]
+        })).collect::<Vec<_>>(),
+        "settings_refused": refused,
+        "following_a_setting": following,
+        "fitted_in_a_setting": in_settings,
+    }));
+    Ok(())
 }
 
 /// Writes `kit` to `dir` whole or not at all: into a new folder beside it, renamed into place.

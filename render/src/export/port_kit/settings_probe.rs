@@ -9,34 +9,45 @@
 //! floor `max(m, S)`, and that expression (`256 * ism.points`) replaces the constant.
 
 use super::expressions::{affine_text, solve_linear, step_numbers};
+use super::joint_fit::{self, Obs};
 use super::manifest::Manifest;
 use crate::LabSettings;
 use crate::settings::{FieldKind, Value};
 
-/// An integer setting and the settings with it at two other values.
+/// An integer setting and the settings with it at other values, in the order to try them:
+/// the first two the device draws are captured, and a neighbour ([`Variant::neighbour`]).
 pub struct Variant {
     pub path: String,
     pub value: u32,
     pub others: Vec<(u32, LabSettings)>,
 }
 
-/// Two other values of an integer setting within `[min, max]`, spread so that a floor or a
-/// ceiling shows: half and double, else double and triple, else the next two, else the two
-/// below.
-fn nearby(v: u32, min: f64, max: f64) -> Vec<u32> {
-    let v = v as u64;
-    let ok = |x: u64| x >= 1 && x != v && (x as f64) >= min && (x as f64) <= max;
-    for pick in [[v / 2, 2 * v], [2 * v, 3 * v], [v + 1, v + 2], [v.saturating_sub(1), v.saturating_sub(2)]] {
-        if pick.iter().all(|&x| ok(x)) && pick[0] != pick[1] {
-            return pick.iter().map(|&x| x as u32).collect();
-        }
+impl Variant {
+    /// The setting one or two from the preset's value, not in `got`: a third capture, odd
+    /// where the others are powers of two, that tells a grid's rows from its columns and
+    /// shows a rounding.
+    pub fn neighbour(&self, got: &[u32]) -> Option<&(u32, LabSettings)> {
+        self.others.iter().find(|(x, _)| x.abs_diff(self.value) <= 2 && !got.contains(x))
     }
-    Vec::new()
 }
 
-/// Every integer setting of the groups `s`'s stage choices use, with two nearby values whose
-/// settings validate;
-/// `only`: these settings alone (a test's), None: all.
+/// Other values of an integer setting within `[min, max]`, in the order to try them, spread
+/// so that a floor or a ceiling shows: half and double, then triple and a quarter, then the
+/// next two, then the two below.
+fn nearby(v: u32, min: f64, max: f64) -> Vec<u32> {
+    let v = v as u64;
+    let ok = |x: u64| x >= 1 && x != v && (x as f64) >= min && (x as f64) <= max && x <= u32::MAX as u64;
+    let mut out: Vec<u32> = Vec::new();
+    for x in [v / 2, 2 * v, 3 * v, v / 4, v + 1, v + 2, v.saturating_sub(1), v.saturating_sub(2)] {
+        if ok(x) && !out.contains(&(x as u32)) {
+            out.push(x as u32);
+        }
+    }
+    out
+}
+
+/// Every integer setting of the groups `s`'s stage choices use, with the nearby values whose
+/// settings validate (at least two); `only`: these settings alone (a test's), None: all.
 pub fn variants(s: &LabSettings, only: Option<&[&str]>) -> Vec<Variant> {
     let mut out = Vec::new();
     for (group, fields) in LabSettings::groups() {
@@ -56,7 +67,7 @@ pub fn variants(s: &LabSettings, only: Option<&[&str]>) -> Vec<Variant> {
                     others.push((x, t));
                 }
             }
-            if others.len() == 2 {
+            if others.len() >= 2 {
                 out.push(Variant { path, value: v, others });
             }
         }
@@ -92,91 +103,203 @@ fn fit(name: &str, points: &[(u64, u64)]) -> Option<String> {
     None
 }
 
-/// Writes `depends_on` and the settings' expressions into `m` from the manifest of the base
-/// settings at the first probe size (`base`) and those of each variant (`captured`: per
-/// variant, per other value, its manifest at that size). Returns how many numbers follow a
-/// setting and how many of those got an expression of it.
-pub fn annotate(m: &mut Manifest, base: &Manifest, captured: &[(&Variant, Vec<Manifest>)]) -> (usize, usize) {
-    let (mut following, mut fitted) = (0, 0);
-    for r in &mut m.resources {
-        let Some(b) = base.resources.iter().find(|x| x.name == r.name) else { continue };
-        let mut depends: Vec<(usize, String, Option<String>)> = Vec::new();
-        for (v, manifests) in captured {
-            for (k, &q0) in b.size.iter().enumerate() {
-                let mut points = vec![(v.value as u64, q0)];
-                for ((x, _), mm) in v.others.iter().zip(manifests) {
-                    if let Some(q) = mm.resources.iter().find(|y| y.name == r.name).and_then(|y| y.size.get(k)) {
-                        points.push((*x as u64, *q));
-                    }
-                }
-                if points.len() == 3 && points.iter().any(|p| p.1 != q0) {
-                    depends.push((k, v.path.clone(), fit(&v.path, &points)));
-                }
-            }
-        }
-        for (k, path, e) in &depends {
-            following += 1;
-            if !r.depends_on.contains(path) {
-                r.depends_on.push(path.clone());
-            }
-            // One setting alone, and not the image: the setting's expression.
-            let alone = depends.iter().filter(|d| d.0 == *k).count() == 1;
-            let constant = r.size_expr.get(*k).and_then(|x| x.as_ref()).is_some_and(|x| x.parse::<u64>().is_ok());
-            if let (true, true, Some(e)) = (alone, constant, e) {
-                r.size_expr[*k] = Some(e.clone());
-                fitted += 1;
+/// Where a number is in a manifest: a resource's dimension, or a step's count.
+#[derive(Clone, Debug)]
+enum At {
+    Resource { name: String, k: usize },
+    Step { frame: usize, pass: usize, step: usize, i: usize },
+}
+
+/// Every size and count of `m`.
+fn numbers(m: &Manifest) -> Vec<(At, u64)> {
+    let mut out = Vec::new();
+    for r in m.resources.iter().filter(|r| r.kind != "sampler") {
+        out.extend(r.size.iter().enumerate().map(|(k, &v)| (At::Resource { name: r.name.clone(), k }, v)));
+    }
+    for (frame, passes) in m.frame_passes.iter().enumerate() {
+        for (pass, p) in passes.iter().enumerate() {
+            for (step, s) in p.steps.iter().enumerate() {
+                let n = step_numbers(s);
+                out.extend(n.into_iter().enumerate().map(|(i, v)| (At::Step { frame, pass, step, i }, v)));
             }
         }
     }
-    let frames = m.frame_passes.len();
-    for k in 0..frames {
-        for pi in 0..m.frame_passes[k].len() {
-            for si in 0..m.frame_passes[k][pi].steps.len() {
-                let name = m.frame_passes[k][pi].name.clone();
-                let find = |mm: &Manifest| -> Option<Vec<u64>> {
-                    let f = mm.frame_passes.get(k.min(mm.frame_passes.len().saturating_sub(1)))?;
-                    let pass = f.get(pi).filter(|x| x.name == name)?;
-                    let step = pass.steps.get(si)?;
-                    let mine = &m.frame_passes[k][pi].steps[si];
-                    (step.kind == mine.kind && step.pipeline == mine.pipeline).then(|| step_numbers(step))
-                };
-                let Some(n0) = find(base) else { continue };
-                let mut depends: Vec<(usize, String, Option<String>)> = Vec::new();
-                for (v, manifests) in captured {
-                    let others: Vec<Option<Vec<u64>>> = manifests.iter().map(find).collect();
-                    for (i, &q0) in n0.iter().enumerate() {
-                        let mut points = vec![(v.value as u64, q0)];
-                        for ((x, _), o) in v.others.iter().zip(&others) {
-                            if let Some(q) = o.as_ref().and_then(|o| o.get(i)) {
-                                points.push((*x as u64, *q));
-                            }
-                        }
-                        if points.len() == 3 && points.iter().any(|p| p.1 != q0) {
-                            depends.push((i, v.path.clone(), fit(&v.path, &points)));
-                        }
-                    }
-                }
-                let step = &mut m.frame_passes[k][pi].steps[si];
-                for (i, path, e) in &depends {
-                    following += 1;
-                    if !step.counts_depend_on.contains(path) {
-                        step.counts_depend_on.push(path.clone());
-                    }
-                    let alone = depends.iter().filter(|d| d.0 == *i).count() == 1;
-                    let constant =
-                        step.counts_expr.get(*i).and_then(|x| x.as_ref()).is_some_and(|x| x.parse::<u64>().is_ok());
-                    if let (true, true, Some(e)) = (alone, constant, e) {
-                        step.counts_expr[*i] = Some(e.clone());
-                        fitted += 1;
-                    }
+    out
+}
+
+/// The number at `at` of `m` in `other`, a capture of the same frame at another size or
+/// settings: a resource by name; a step by frame (`other`'s last for a later one), by its
+/// pass (the same name, and as many of that name before it) and by its pipeline (the same
+/// kind and pipeline, and as many of them before it in the pass), so that steps a setting adds
+/// (another bounce's) do not shift those after them.
+fn value_in(m: &Manifest, at: &At, other: &Manifest) -> Option<u64> {
+    match at {
+        At::Resource { name, k } => other.resources.iter().find(|r| &r.name == name)?.size.get(*k).copied(),
+        At::Step { frame, pass, step, i } => {
+            let passes = m.frame_passes.get(*frame)?;
+            let mine = passes.get(*pass)?;
+            let nth_pass = passes[..*pass].iter().filter(|p| p.name == mine.name).count();
+            let f = other.frame_passes.get((*frame).min(other.frame_passes.len().checked_sub(1)?))?;
+            let p = f.iter().filter(|p| p.name == mine.name).nth(nth_pass)?;
+            let t = mine.steps.get(*step)?;
+            let same = |s: &&super::manifest::Step| s.kind == t.kind && s.pipeline == t.pipeline;
+            let nth = mine.steps[..*step].iter().filter(same).count();
+            let s = p.steps.iter().filter(same).nth(nth)?;
+            step_numbers(s).get(*i).copied()
+        }
+    }
+}
+
+/// The expression of the image of the number at `at`.
+fn expr_of(m: &Manifest, at: &At) -> Option<String> {
+    match at {
+        At::Resource { name, k } => m.resources.iter().find(|r| &r.name == name)?.size_expr.get(*k)?.clone(),
+        At::Step { frame, pass, step, i } => {
+            m.frame_passes.get(*frame)?.get(*pass)?.steps.get(*step)?.counts_expr.get(*i)?.clone()
+        }
+    }
+}
+
+/// The expression and the settings named of the number at `at`.
+fn slot<'m>(m: &'m mut Manifest, at: &At) -> Option<(&'m mut Option<String>, &'m mut Vec<String>)> {
+    match at {
+        At::Resource { name, k } => {
+            let r = m.resources.iter_mut().find(|r| &r.name == name)?;
+            Some((r.size_expr.get_mut(*k)?, &mut r.depends_on))
+        }
+        At::Step { frame, pass, step, i } => {
+            let s = m.frame_passes.get_mut(*frame)?.get_mut(*pass)?.steps.get_mut(*step)?;
+            Some((s.counts_expr.get_mut(*i)?, &mut s.counts_depend_on))
+        }
+    }
+}
+
+/// The captures of the frame the settings' fits use: the image probes at the preset's
+/// settings ([`super::expressions::PROBES`]), each setting at two other values alone at the
+/// first probe size, and the settings a number follows changed together ([`Joint`]).
+pub struct Captured<'a> {
+    pub images: &'a [((u32, u32), Manifest)],
+    pub variants: Vec<(&'a Variant, Vec<(u32, Manifest)>)>,
+    pub joints: Vec<Joint>,
+}
+
+/// The frame with several settings (and the image) changed at once.
+pub struct Joint {
+    /// The settings changed, sorted by name, with their values.
+    pub settings: Vec<(String, u32)>,
+    pub size: (u32, u32),
+    pub manifest: Manifest,
+}
+
+/// The settings each number of `m` follows: those whose variants change it or, for a step,
+/// move it (a loop over pyramid levels has more or fewer steps); and whether every variant
+/// has it (else no formula is fitted).
+fn following(m: &Manifest, c: &Captured) -> Vec<(At, u64, Vec<String>, bool)> {
+    let base = &c.images[0].1;
+    let mut out = Vec::new();
+    for (at, v) in numbers(m) {
+        let Some(q0) = value_in(m, &at, base) else { continue };
+        let (mut names, mut whole) = (Vec::new(), true);
+        for (var, manifests) in &c.variants {
+            let qs: Vec<Option<u64>> = manifests.iter().map(|(_, mm)| value_in(m, &at, mm)).collect();
+            if qs.iter().any(|q| *q != Some(q0)) {
+                names.push(var.path.clone());
+                whole &= qs.iter().all(Option::is_some);
+            }
+        }
+        if !names.is_empty() {
+            names.sort();
+            out.push((at, v, names, whole));
+        }
+    }
+    out
+}
+
+/// Whether the number's expression of the image is a constant (or there is none).
+fn constant(e: &Option<String>) -> bool {
+    e.as_ref().is_none_or(|x| x.parse::<u64>().is_ok())
+}
+
+/// The sets of settings to change together ([`Joint`]): those of each number that follows
+/// several settings, or a setting and the image.
+pub fn joint_sets(m: &Manifest, c: &Captured) -> Vec<Vec<String>> {
+    let mut out: Vec<Vec<String>> = Vec::new();
+    for (at, _, names, whole) in following(m, c) {
+        let image = expr_of(m, &at);
+        let wanted = whole && (names.len() > 1 || (image.is_some() && !constant(&image)));
+        if wanted && !out.contains(&names) {
+            out.push(names);
+        }
+    }
+    out
+}
+
+/// Writes `depends_on` and the settings' expressions into `m` (the kit's manifest, at the
+/// preset's settings, with the image's expressions). Returns how many numbers follow a
+/// setting and how many of those got an expression of the settings.
+pub fn annotate(m: &mut Manifest, c: &Captured) -> (usize, usize) {
+    let (mut follow, mut fitted) = (0, 0);
+    let (kw, kh) = (m.size[0] as u64, m.size[1] as u64);
+    for (at, v, names, whole) in following(m, c) {
+        follow += 1;
+        let image = expr_of(m, &at);
+        let value = |var: &str, x: Option<(&str, u32)>| -> u64 {
+            match x {
+                Some((n, x)) if n == var => x as u64,
+                _ => c.variants.iter().find(|(v, _)| v.path == var).map_or(0, |(v, _)| v.value as u64),
+            }
+        };
+        let at_base = |x: Option<(&str, u32)>| names.iter().map(|n| value(n, x)).collect::<Vec<u64>>();
+        // One setting alone and not the image: the three values of its variant.
+        let alone =
+            c.variants.iter().find(|(var, _)| whole && names.len() == 1 && constant(&image) && var.path == names[0]);
+        let single = alone.and_then(|(var, manifests)| {
+            let mut points = vec![(var.value as u64, value_in(m, &at, &c.images[0].1)?)];
+            points.extend(manifests.iter().filter_map(|(x, mm)| Some((*x as u64, value_in(m, &at, mm)?))));
+            fit(&names[0], &points)
+        });
+        let e = single.or_else(|| {
+            // Every capture: the kit, the image probes, each setting alone, them together.
+            let mut obs = vec![Obs { w: kw, h: kh, s: at_base(None), q: v }];
+            for ((w, h), mm) in c.images {
+                obs.extend(value_in(m, &at, mm).map(|q| Obs { w: *w as u64, h: *h as u64, s: at_base(None), q }));
+            }
+            let (w0, h0) = (c.images[0].0.0 as u64, c.images[0].0.1 as u64);
+            for (var, manifests) in c.variants.iter().filter(|(var, _)| names.contains(&var.path)) {
+                for (x, mm) in manifests {
+                    let s = at_base(Some((&var.path, *x)));
+                    obs.extend(value_in(m, &at, mm).map(|q| Obs { w: w0, h: h0, s, q }));
                 }
             }
+            let mut joints = 0;
+            for j in c.joints.iter().filter(|j| j.settings.iter().map(|s| &s.0).eq(names.iter())) {
+                let s = j.settings.iter().map(|s| s.1 as u64).collect();
+                if let Some(q) = value_in(m, &at, &j.manifest) {
+                    obs.push(Obs { w: j.size.0 as u64, h: j.size.1 as u64, s, q });
+                    joints += 1;
+                }
+            }
+            let image = image.filter(|e| !constant(&Some(e.clone())));
+            // Without a capture of them changed together, no formula of several is checked.
+            (whole && (joints > 0 || (names.len() == 1 && image.is_none())))
+                .then(|| joint_fit::fit(&names, image.as_deref(), &obs))
+                .flatten()
+        });
+        let Some((slot, depends)) = slot(m, &at) else { continue };
+        for n in &names {
+            if !depends.contains(n) {
+                depends.push(n.clone());
+            }
+        }
+        if let Some(e) = e {
+            *slot = Some(e);
+            fitted += 1;
         }
     }
     if let Some(last) = m.frame_passes.last() {
         m.passes = last.clone();
     }
-    (following, fitted)
+    (follow, fitted)
 }
 
 #[cfg(test)]
@@ -185,9 +308,9 @@ mod tests {
 
     #[test]
     fn a_count_that_follows_a_setting_is_fitted_in_its_name() {
-        assert_eq!(nearby(7, 1.0, 16.0), [3, 14]);
+        assert_eq!(nearby(7, 1.0, 16.0), [3, 14, 1, 8, 9, 6, 5]);
         assert_eq!(nearby(1, 1.0, 4.0), [2, 3], "no half: double and triple");
-        assert_eq!(nearby(12, 1.0, 16.0), [13, 14], "no double: the next two");
+        assert_eq!(nearby(12, 1.0, 16.0), [6, 3, 13, 14, 11, 10], "no double: half and a quarter");
         assert_eq!(nearby(16, 9.0, 16.0), [15, 14], "the top of the range: the two below");
         assert_eq!(nearby(1, 1.0, 1.0), Vec::<u32>::new());
         let pts = |f: fn(u64) -> u64| [1024u64, 1025, 1026].map(|s| (s, f(s)));

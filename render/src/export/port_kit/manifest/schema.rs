@@ -284,7 +284,8 @@ impl DeviceNeeds {
 
 /// What the kit does not hold yet; said in the manifest, the kit's README and docs/port-kit.md.
 pub const NOT_YET: &[&str] = &[
-    "a size or count that follows several settings, or a setting and the image, at once: it names them (depends_on) and keeps the image's expression or the captured value, without a formula in the settings",
+    "steps and resources repeated per pyramid level, bounce or round (hcb.levels, ism.pull_push_levels, gautron.rounds) are unrolled for the preset's value: they name the setting (depends_on, counts_depend_on), but the loop is not written and their sizes keep the image's expression or the captured value",
+    "a size or count that no expression of the families fits, or that two expressions fit which part between the captured settings, names its settings and keeps the image's expression or the captured value",
 ];
 
 /// The role of a pass by its name (docs/port-kit.md, "Roles").
