@@ -475,7 +475,7 @@ fn sizes_and_counts_that_follow_settings_are_expressions_of_them_that_give_other
     // Instant radiosity: the VPL count sets the warp's dispatch, the ISM points their buffer,
     // and the atlas holds a map of ism.map_size² per VPL and bounce, ceil(sqrt(n)) a row.
     let preset = "knecht-cornell-256";
-    let probed: &[&str] = &["vpl.count", "vpl.bounces", "ism.map_size", "ism.points"];
+    let probed: &[&str] = &["vpl.count", "vpl.bounces", "ism.map_size", "ism.points", "ism.pull_push_levels"];
     let req = KitRequest { expressions: true, settings_probed: Some(probed), ..request(preset, 2, false) };
     let k = port_kit::build(gpu(), req.clone()).expect("kit");
     let m = &k.manifest;
@@ -494,7 +494,7 @@ fn sizes_and_counts_that_follow_settings_are_expressions_of_them_that_give_other
     );
     // Other values, which no capture saw: the expressions give that kit's sizes and counts.
     let mut s = settings(preset);
-    for o in ["vpl.count=200", "vpl.bounces=2", "ism.map_size=64", "ism.points=65536"] {
+    for o in ["vpl.count=200", "vpl.bounces=2", "ism.map_size=64", "ism.points=65536", "ism.pull_push_levels=4"] {
         s.apply_override(o).expect(o);
     }
     let other = port_kit::build(gpu(), KitRequest { settings: s.clone(), expressions: false, ..req })
@@ -535,4 +535,16 @@ fn sizes_and_counts_that_follow_settings_are_expressions_of_them_that_give_other
         }
     }
     assert!(checked >= 8 && several >= 4, "{checked} expressions of a setting checked, {several} of several");
+    // The pull-push pyramid's loops: their counts follow ism.pull_push_levels.
+    let pull_push = |m: &gi_render::export::port_kit::Manifest| {
+        m.passes.iter().find(|p| p.name == "ism.pull_push").map(|p| p.runs.clone()).expect("the pull-push pass")
+    };
+    let (runs, runs2) = (pull_push(m), pull_push(&other.manifest));
+    let exprs: Vec<Option<&str>> = runs.iter().map(|r| r.count_expr.as_deref()).collect();
+    assert_eq!(exprs, [Some("ism.pull_push_levels - 1"), Some("ism.pull_push_levels")], "{runs:?}");
+    for r in &runs {
+        let e = r.count_expr.as_deref().expect("fitted");
+        let there = runs2.iter().find(|x| x.pipeline == r.pipeline).expect("the loop at the other settings");
+        assert_eq!(eval_with(e, w, h, &value), Some(there.count), "{:?}: {e}", r.pipeline);
+    }
 }

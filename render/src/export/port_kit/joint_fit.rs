@@ -251,6 +251,81 @@ fn substituted(names: &[String], e: &str, base: &[u64], obs: &[Obs]) -> Option<S
     None
 }
 
+/// A term of a loop's count ([`fit_count`]): its text and value.
+type Term = (String, Box<dyn Fn(&Obs) -> i64>);
+
+/// The terms of a loop's count: each setting `S`, `floor(log2(S))` (a pyramid over it) or
+/// `ceil(S / d)` (batches), and a pyramid over the image.
+fn count_terms(names: &[String]) -> (Vec<Term>, Vec<Term>) {
+    let log2 = |x: u64| x.max(1).ilog2() as i64;
+    let mut settings: Vec<Term> = Vec::new();
+    for (i, n) in names.iter().enumerate() {
+        settings.push((n.clone(), Box::new(move |o: &Obs| o.s[i] as i64)));
+        settings.push((format!("floor(log2({n}))"), Box::new(move |o: &Obs| log2(o.s[i]))));
+        for d in [2u64, 4, 8, 16, 32, 64] {
+            settings.push((format!("ceil({n} / {d})"), Box::new(move |o: &Obs| o.s[i].div_ceil(d) as i64)));
+        }
+    }
+    let image: Vec<Term> = vec![
+        ("floor(log2(W))".into(), Box::new(move |o: &Obs| log2(o.w))),
+        ("floor(log2(H))".into(), Box::new(move |o: &Obs| log2(o.h))),
+        ("floor(log2(min(W, H)))".into(), Box::new(move |o: &Obs| log2(o.w.min(o.h)))),
+        ("floor(log2(max(W, H)))".into(), Box::new(move |o: &Obs| log2(o.w.max(o.h)))),
+        (
+            "ceil(log2(max(W, H)))".into(),
+            Box::new(move |o: &Obs| o.w.max(o.h).max(1).next_power_of_two().ilog2() as i64),
+        ),
+    ];
+    (settings, image)
+}
+
+fn plus(text: &str, b: i64) -> String {
+    match b {
+        0 => text.to_string(),
+        b if b > 0 => format!("{text} + {b}"),
+        b => format!("{text} - {}", -b),
+    }
+}
+
+/// A loop's count (how many steps of one pipeline run one after another) through every
+/// capture: a constant; a term plus a constant (`hcb.levels - 1`,
+/// `floor(log2(vpl.light_gbuffer_size))`); or the smaller of two (a pyramid's levels, at
+/// most as many as the image or the map has: `min(ism.pull_push_levels,
+/// floor(log2(ism.map_size)))`). Every setting in `names` must appear.
+pub fn fit_count(names: &[String], obs: &[Obs]) -> Option<String> {
+    let first = obs.first()?.q;
+    if names.is_empty() && obs.iter().all(|o| o.q == first) {
+        return Some(first.to_string());
+    }
+    let (settings, image) = count_terms(names);
+    let uses_all = |text: &str| names.iter().all(|n| text.contains(n.as_str()));
+    let q: Vec<i64> = obs.iter().map(|o| o.q as i64).collect();
+    let terms: Vec<&Term> = settings.iter().chain(&image).collect();
+    // One term plus a constant.
+    for (text, f) in &terms {
+        let b = q[0] - f(&obs[0]);
+        if uses_all(text) && obs.iter().zip(&q).all(|(o, q)| f(o) + b == *q) {
+            return Some(plus(text, b));
+        }
+    }
+    // The smaller of two.
+    for (i, (t1, f1)) in terms.iter().enumerate() {
+        for (t2, f2) in &terms[i + 1..] {
+            if !uses_all(&format!("{t1} {t2}")) {
+                continue;
+            }
+            for b1 in -3..=3 {
+                for b2 in -3..=3 {
+                    if obs.iter().zip(&q).all(|(o, q)| (f1(o) + b1).min(f2(o) + b2) == *q) {
+                        return Some(format!("min({}, {})", plus(t1, b1), plus(t2, b2)));
+                    }
+                }
+            }
+        }
+    }
+    None
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -318,5 +393,17 @@ mod tests {
         assert_eq!(fit(&two, None, &odd), None);
         assert_eq!(fit(&tile, Some("ceil(W / 8)"), &captures(&[8], &[&[4, 16]], |w, _, _| w.div_ceil(8) + 1)), None);
         assert_eq!(constants("max(1, floor(H / 64)) * vpl.count2 + 128"), [(4, 5, 1), (17, 19, 64), (37, 40, 128)]);
+        // Loops: a pyramid's levels over a setting, and at most as many as its map has.
+        let levels = names(&["hcb.levels"]);
+        let runs = captures(&[7], &[&[3, 8, 6]], |_, _, s| s[0] - 1);
+        assert_eq!(fit_count(&levels, &runs).as_deref(), Some("hcb.levels - 1"));
+        let pp = names(&["ism.map_size", "ism.pull_push_levels"]);
+        let runs = captures(&[64, 2], &[&[32, 128], &[1, 4, 8]], |_, _, s| s[1].min(s[0].ilog2() as u64));
+        let e = fit_count(&pp, &runs).expect("the pull-push levels");
+        assert_eq!(e, "min(floor(log2(ism.map_size)), ism.pull_push_levels)");
+        for o in &runs {
+            assert_eq!(evaluate(&e, &pp, o), Some(o.q));
+        }
+        assert_eq!(fit_count(&[], &captures(&[], &[], |_, _, _| 8)).as_deref(), Some("8"));
     }
 }

@@ -10,7 +10,7 @@
 
 use super::expressions::{affine_text, solve_linear, step_numbers};
 use super::joint_fit::{self, Obs};
-use super::manifest::Manifest;
+use super::manifest::{Manifest, Run, runs_of};
 use crate::LabSettings;
 use crate::settings::{FieldKind, Value};
 
@@ -296,10 +296,79 @@ pub fn annotate(m: &mut Manifest, c: &Captured) -> (usize, usize) {
             fitted += 1;
         }
     }
+    annotate_runs(m, c);
     if let Some(last) = m.frame_passes.last() {
         m.passes = last.clone();
     }
     (follow, fitted)
+}
+
+/// The count of the run `run` of pass `pass` of frame `frame` of `m` in `other`: the pass by
+/// name and occurrence, the run by pipeline and occurrence; 0 where the pass has no such run
+/// (a loop of no levels), None where it has no such pass.
+fn run_in(m: &Manifest, (frame, pass, run): (usize, usize, usize), other: &Manifest) -> Option<u64> {
+    let passes = m.frame_passes.get(frame)?;
+    let mine = passes.get(pass)?;
+    let r = mine.runs.get(run)?;
+    let nth_pass = passes[..pass].iter().filter(|p| p.name == mine.name).count();
+    let f = other.frame_passes.get(frame.min(other.frame_passes.len().checked_sub(1)?))?;
+    let p = f.iter().filter(|p| p.name == mine.name).nth(nth_pass)?;
+    let same = |x: &Run| x.kind == r.kind && x.pipeline == r.pipeline;
+    let nth = runs_of(&mine.steps, true).into_iter().filter(same).position(|x| x.first == r.first)?;
+    Some(runs_of(&p.steps, true).into_iter().filter(same).nth(nth).map_or(0, |x| x.count))
+}
+
+/// Each loop's count as an expression of W, H and the settings it follows
+/// ([`joint_fit::fit_count`]), over the kit, the image probes and the settings' variants.
+fn annotate_runs(m: &mut Manifest, c: &Captured) {
+    let (kw, kh) = (m.size[0] as u64, m.size[1] as u64);
+    let (w0, h0) = (c.images[0].0.0 as u64, c.images[0].0.1 as u64);
+    for frame in 0..m.frame_passes.len() {
+        for pass in 0..m.frame_passes[frame].len() {
+            // Every group of dispatches, a loop of one level among them; those that are not
+            // loops (one, whatever the image and the settings) are left out after.
+            let p = &mut m.frame_passes[frame][pass];
+            p.runs = runs_of(&p.steps, true);
+            for run in 0..m.frame_passes[frame][pass].runs.len() {
+                let at = (frame, pass, run);
+                let count = m.frame_passes[frame][pass].runs[run].count;
+                let mut names = Vec::new();
+                for (var, manifests) in &c.variants {
+                    if manifests.iter().any(|(_, mm)| run_in(m, at, mm) != Some(count)) {
+                        names.push(var.path.clone());
+                    }
+                }
+                names.sort();
+                let value = |n: &str, x: Option<(&str, u32)>| match x {
+                    Some((v, x)) if v == n => x as u64,
+                    _ => c.variants.iter().find(|(v, _)| v.path == n).map_or(0, |(v, _)| v.value as u64),
+                };
+                let at_base = |x: Option<(&str, u32)>| names.iter().map(|n| value(n, x)).collect::<Vec<u64>>();
+                let mut obs = vec![Obs { w: kw, h: kh, s: at_base(None), q: count }];
+                let mut whole = true;
+                for ((w, h), mm) in c.images {
+                    match run_in(m, at, mm) {
+                        Some(q) => obs.push(Obs { w: *w as u64, h: *h as u64, s: at_base(None), q }),
+                        None => whole = false,
+                    }
+                }
+                for (var, manifests) in c.variants.iter().filter(|(v, _)| names.contains(&v.path)) {
+                    for (x, mm) in manifests {
+                        match run_in(m, at, mm) {
+                            Some(q) => obs.push(Obs { w: w0, h: h0, s: at_base(Some((&var.path, *x))), q }),
+                            None => whole = false,
+                        }
+                    }
+                }
+                let e = if whole { joint_fit::fit_count(&names, &obs) } else { None };
+                let r = &mut m.frame_passes[frame][pass].runs[run];
+                r.count_expr = e;
+                r.depends_on = names;
+            }
+            let runs = &mut m.frame_passes[frame][pass].runs;
+            runs.retain(|r| r.count > 1 || r.count_expr.as_deref() != Some("1"));
+        }
+    }
 }
 
 #[cfg(test)]

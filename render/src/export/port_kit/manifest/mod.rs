@@ -233,7 +233,8 @@ impl Builder<'_> {
                 }
                 continue;
             }
-            out.push(Pass { index: out.len(), name: p.name.clone(), role: role_of(&p.name), steps });
+            let runs = runs_of(&steps, false);
+            out.push(Pass { index: out.len(), name: p.name.clone(), role: role_of(&p.name), steps, runs });
         }
         Ok(out)
     }

@@ -160,6 +160,49 @@ pub struct Pass {
     /// `between`: copies and clears recorded between timed passes.
     pub role: &'static str,
     pub steps: Vec<Step>,
+    /// Dispatches of one pipeline repeated one after another (a loop over a pyramid's
+    /// levels): where each begins, how many, and how many as an expression; with the kit's
+    /// expressions also a single dispatch whose count follows a setting (a loop that ran
+    /// once).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub runs: Vec<Run>,
+}
+
+/// A loop of the frame: `count` steps of one pipeline from `first` on, one per level of a
+/// pyramid or per batch ([`crate::export::port_kit::settings_probe`] fits `count_expr`).
+#[derive(Clone, Debug, Serialize)]
+pub struct Run {
+    pub kind: String,
+    pub pipeline: Option<String>,
+    pub first: usize,
+    pub count: u64,
+    /// The count as an expression of W, H and the settings; null: none fits.
+    pub count_expr: Option<String>,
+    /// The settings the count changes with.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub depends_on: Vec<String>,
+}
+
+/// The runs of `steps`: every group of consecutive dispatches of one pipeline (of one or more:
+/// `all`, to find a loop's count where it ran once; of two or more otherwise).
+pub fn runs_of(steps: &[Step], all: bool) -> Vec<Run> {
+    let mut out: Vec<Run> = Vec::new();
+    for (i, s) in steps.iter().enumerate() {
+        match out.last_mut() {
+            Some(r) if r.kind == s.kind && r.pipeline == s.pipeline && r.first + r.count as usize == i => r.count += 1,
+            _ => out.push(Run {
+                kind: s.kind.clone(),
+                pipeline: s.pipeline.clone(),
+                first: i,
+                count: 1,
+                count_expr: None,
+                depends_on: Vec::new(),
+            }),
+        }
+    }
+    // Copies and clears in a row are not a loop's, nor draws (one per mesh of the scene).
+    out.retain(|r| r.kind.starts_with("dispatch") && r.pipeline.is_some() && (all || r.count > 1));
+    out
 }
 
 /// A texture, buffer or sampler the frame touches.
@@ -284,7 +327,8 @@ impl DeviceNeeds {
 
 /// What the kit does not hold yet; said in the manifest, the kit's README and docs/port-kit.md.
 pub const NOT_YET: &[&str] = &[
-    "steps and resources repeated per pyramid level, bounce or round (hcb.levels, ism.pull_push_levels, gautron.rounds) are unrolled for the preset's value: they name the setting (depends_on, counts_depend_on), but the loop is not written and their sizes keep the image's expression or the captured value",
+    "a loop's iterations are listed for the preset's count: the loop's count is an expression (a pass's runs), but the sizes of an iteration the preset does not run (a finer HCB level at a larger hcb.levels) are not written; those listed halve level by level",
+    "passes repeated per level or round (soler.gather.k, each round's gautron.create and gautron.hemispheres) are listed once per repetition at the preset's settings: their steps name the setting that adds or removes them, but how many there are is not an expression",
     "a size or count that no expression of the families fits, or that two expressions fit which part between the captured settings, names its settings and keeps the image's expression or the captured value",
 ];
 
