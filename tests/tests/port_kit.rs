@@ -475,7 +475,8 @@ fn sizes_and_counts_that_follow_settings_are_expressions_of_them_that_give_other
     // Instant radiosity: the VPL count sets the warp's dispatch, the ISM points their buffer,
     // and the atlas holds a map of ism.map_size² per VPL and bounce, ceil(sqrt(n)) a row.
     let preset = "knecht-cornell-256";
-    let probed: &[&str] = &["vpl.count", "vpl.bounces", "ism.map_size", "ism.points", "ism.pull_push_levels"];
+    let probed: &[&str] =
+        &["vpl.count", "vpl.bounces", "ism.map_size", "ism.points", "ism.pull_push_levels", "vpl.light_gbuffer_size"];
     let req = KitRequest { expressions: true, settings_probed: Some(probed), ..request(preset, 2, false) };
     let k = port_kit::build(gpu(), req.clone()).expect("kit");
     let m = &k.manifest;
@@ -494,7 +495,15 @@ fn sizes_and_counts_that_follow_settings_are_expressions_of_them_that_give_other
     );
     // Other values, which no capture saw: the expressions give that kit's sizes and counts.
     let mut s = settings(preset);
-    for o in ["vpl.count=200", "vpl.bounces=2", "ism.map_size=64", "ism.points=65536", "ism.pull_push_levels=4"] {
+    let others = [
+        "vpl.count=200",
+        "vpl.bounces=2",
+        "ism.map_size=64",
+        "ism.points=65536",
+        "ism.pull_push_levels=4",
+        "vpl.light_gbuffer_size=64",
+    ];
+    for o in others {
         s.apply_override(o).expect(o);
     }
     let other = port_kit::build(gpu(), KitRequest { settings: s.clone(), expressions: false, ..req })
@@ -546,5 +555,26 @@ fn sizes_and_counts_that_follow_settings_are_expressions_of_them_that_give_other
         let e = r.count_expr.as_deref().expect("fitted");
         let there = runs2.iter().find(|x| x.pipeline == r.pipeline).expect("the loop at the other settings");
         assert_eq!(eval_with(e, w, h, &value), Some(there.count), "{:?}: {e}", r.pipeline);
+    }
+    // The light view's importance pyramid, reduced level by level: the loop's count and each
+    // iteration's workgroups at a light G-buffer of 64², which no capture saw.
+    let reduce = |m: &gi_render::export::port_kit::Manifest| {
+        let p = m.passes.iter().find(|p| p.name == "vpl.importance").expect("the importance pass");
+        let r = p.runs.iter().find(|r| r.pipeline.as_deref() == Some("vpl.importance.reduce")).expect("the reduction");
+        (r.clone(), p.steps[r.first..r.first + r.count as usize].to_vec())
+    };
+    let ((r, _), (r2, steps2)) = (reduce(m), reduce(&other.manifest));
+    assert_eq!(r.count_expr.as_deref(), Some("floor(log2(vpl.light_gbuffer_size))"));
+    assert_eq!(eval_with(r.count_expr.as_deref().expect("count"), w, h, &value), Some(r2.count));
+    for (i, st) in steps2.iter().enumerate() {
+        let at = |k: &str| match k {
+            "i" => Some(i as f64),
+            "n" => Some(r2.count as f64),
+            _ => value(k),
+        };
+        for (e, v) in r.iteration_expr.iter().zip(st.workgroups.expect("a dispatch")) {
+            let e = e.as_deref().expect("each iteration's workgroups fitted");
+            assert_eq!(eval_with(e, w, h, &at), Some(v as u64), "iteration {i}: {e}");
+        }
     }
 }

@@ -307,7 +307,7 @@ fn annotate_step(
 }
 
 /// The value of an expression of [`fit`]'s grammar — integers, `W`, `H`, `+`, `-`, `*`, `/`,
-/// parentheses, `ceil(x)`, `floor(x)`, `sqrt(x)`, `log2(x)`, `max(x, y)`, `min(x, y)` — at the image `w` × `h`; None when it does
+/// parentheses, `ceil(x)`, `floor(x)`, `sqrt(x)`, `log2(x)`, `exp2(x)`, `max(x, y)`, `min(x, y)` — at the image `w` × `h`; None when it does
 /// not parse. What a port evaluates at its own size (docs/port-kit.md, "Sizes as
 /// expressions").
 pub fn eval(expr: &str, w: u64, h: u64) -> Option<u64> {
@@ -411,6 +411,7 @@ impl Parser<'_> {
                         a.min(self.sum()?)
                     }
                     "log2" => a.log2(),
+                    "exp2" => a.exp2(),
                     _ => return None,
                 };
                 self.eat(')')?;

@@ -326,6 +326,71 @@ pub fn fit_count(names: &[String], obs: &[Obs]) -> Option<String> {
     None
 }
 
+/// One iteration of a loop in one capture: the image, the settings' values (in the order of
+/// [`fit_iteration`]'s names), the loop's count `n`, the iteration `i` and its number.
+#[derive(Clone, Debug)]
+pub struct IterObs {
+    pub o: Obs,
+    pub n: u64,
+    pub i: u64,
+}
+
+/// `i` (ascending) or `n - 1 - i` (descending) plus `s0`, as written.
+fn exponent(desc: bool, s0: i64) -> String {
+    match (desc, s0) {
+        (false, 0) => "i".into(),
+        (false, s) => format!("i + {s}"),
+        (true, s) => plus("n - i", s - 1),
+    }
+}
+
+/// A loop's iterations' number (a dispatch's workgroups along one axis) through every
+/// iteration of every capture: a constant, or a level of a pyramid over W, H or a setting
+/// that each iteration halves or doubles — `ceil(X / exp2(i + s))` or
+/// `max(1, floor(X / exp2(i + s)))`, `i` counted from the first iteration or (`n - i - 1`)
+/// from the last — tiled by `d` (`ceil(… / 8)`).
+pub fn fit_iteration(names: &[String], obs: &[IterObs]) -> Option<String> {
+    let first = obs.first()?.o.q;
+    if obs.iter().all(|x| x.o.q == first) {
+        return Some(first.to_string());
+    }
+    let axes: Vec<String> = ["W".to_string(), "H".to_string()].into_iter().chain(names.iter().cloned()).collect();
+    let value_of = |axis: usize, x: &IterObs| match axis {
+        0 => x.o.w,
+        1 => x.o.h,
+        k => x.o.s[k - 2],
+    };
+    for d in [1u64, 8, 16, 4, 2, 32, 64, 128, 256] {
+        for (axis, axis_name) in axes.iter().enumerate() {
+            for desc in [false, true] {
+                for s0 in 0..=10i64 {
+                    for ceil in [true, false] {
+                        let fits = obs.iter().all(|x| {
+                            let s = if desc { x.n as i64 - 1 - x.i as i64 + s0 } else { x.i as i64 + s0 };
+                            if !(0..63).contains(&s) {
+                                return false;
+                            }
+                            let v = value_of(axis, x);
+                            let level = if ceil { v.div_ceil(1 << s) } else { (v >> s).max(1) };
+                            level.div_ceil(d) == x.o.q
+                        });
+                        if fits {
+                            let e = exponent(desc, s0);
+                            let level = if ceil {
+                                format!("ceil({axis_name} / exp2({e}))")
+                            } else {
+                                format!("max(1, floor({axis_name} / exp2({e})))")
+                            };
+                            return Some(if d == 1 { level } else { format!("ceil({level} / {d})") });
+                        }
+                    }
+                }
+            }
+        }
+    }
+    None
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -405,5 +470,28 @@ mod tests {
             assert_eq!(evaluate(&e, &pp, o), Some(o.q));
         }
         assert_eq!(fit_count(&[], &captures(&[], &[], |_, _, _| 8)).as_deref(), Some("8"));
+        // A loop's iterations: the HCB's levels built coarse to fine, 8×8 pixels a workgroup.
+        let iterations = |f: &dyn Fn(u64, u64, u64, u64) -> u64| -> Vec<IterObs> {
+            let mut out = Vec::new();
+            for (w, h, n) in [(64u64, 36u64, 6u64), (217, 133, 6), (160, 41, 2), (99, 57, 7)] {
+                for i in 0..n {
+                    out.push(IterObs { o: Obs { w, h, s: vec![n + 1], q: f(w, h, n, i) }, n, i });
+                }
+            }
+            out
+        };
+        let mask = iterations(&|w, _, n, i| w.div_ceil(1 << (n - i)).div_ceil(8));
+        let e = fit_iteration(&levels, &mask).expect("the mask's levels");
+        assert_eq!(e, "ceil(W / exp2(n - i + 3))", "the tiling by 8 is three more halvings");
+        for x in &mask {
+            let v = |k: &str| match k {
+                "i" => Some(x.i as f64),
+                "n" => Some(x.n as f64),
+                _ => None,
+            };
+            assert_eq!(eval_with(&e, x.o.w, x.o.h, &v), Some(x.o.q), "{x:?}");
+        }
+        let light = iterations(&|_, _, _, i| (256u64 >> (i + 4)).max(1));
+        assert_eq!(fit_iteration(&levels, &light), None, "no W, H or hcb.levels gives it");
     }
 }

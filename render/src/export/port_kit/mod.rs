@@ -305,6 +305,41 @@ fn header(module: &str) -> String {
 
 /// The kit's README: the passes in order with the papers' sections, the order to bring them
 /// up, and what the kit does not hold yet.
+/// The README's section on sizes at another size and settings, with the kit's loops.
+fn loops(m: &Manifest) -> String {
+    let mut s = String::from("\n## At your own size and settings\n\n");
+    if m.expressions.is_none() {
+        s += "This kit was exported without expressions (`--no-expressions`): its sizes and counts hold at its own \
+              size and settings only.\n";
+        return s;
+    }
+    s += "Every resource's `size_expr` and every step's `counts_expr` give its size and counts as expressions of the \
+          image's W and H and of the settings (by their names in `preset.json`), where one was fitted (`docs/port-kit.md`, \
+          \"Sizes as expressions\"). The frame's loops, with their counts and each iteration's workgroups as \
+          expressions of the iteration `i` and the count `n`:\n\n| pass | pipeline | runs | count | each iteration \
+          (x, y, z) |\n|---|---|---:|---|---|\n";
+    let text = |e: &Option<String>| e.as_deref().map_or("as listed".to_string(), |e| format!("`{e}`"));
+    let mut any = false;
+    for pass in &m.passes {
+        for r in &pass.runs {
+            any = true;
+            let each: Vec<String> = r.iteration_expr.iter().map(text).collect();
+            s += &format!(
+                "| `{}` | `{}` | {} | {} | {} |\n",
+                pass.name,
+                r.pipeline.as_deref().unwrap_or(""),
+                r.count,
+                text(&r.count_expr),
+                each.join(", ")
+            );
+        }
+    }
+    if !any {
+        s += "| (none) | | | | |\n";
+    }
+    s
+}
+
 fn readme(m: &Manifest, e: &Export) -> String {
     let mut s = format!("# Port kit: `{}`\n\n", m.preset);
     let p = &e.provenance;
@@ -347,6 +382,7 @@ fn readme(m: &Manifest, e: &Export) -> String {
             entries.join(", ")
         );
     }
+    s += &loops(m);
     s += "\n## What each shader does (its header, citing the paper)\n\n";
     for sh in &m.shaders {
         let h = header(&sh.module);

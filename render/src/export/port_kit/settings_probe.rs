@@ -303,10 +303,11 @@ pub fn annotate(m: &mut Manifest, c: &Captured) -> (usize, usize) {
     (follow, fitted)
 }
 
-/// The count of the run `run` of pass `pass` of frame `frame` of `m` in `other`: the pass by
-/// name and occurrence, the run by pipeline and occurrence; 0 where the pass has no such run
-/// (a loop of no levels), None where it has no such pass.
-fn run_in(m: &Manifest, (frame, pass, run): (usize, usize, usize), other: &Manifest) -> Option<u64> {
+/// The iterations of the run `run` of pass `pass` of frame `frame` of `m` in `other`, each
+/// as its step's numbers: the pass by name and occurrence, the run by pipeline and
+/// occurrence; none where the pass has no such run (a loop of no levels), None where it has
+/// no such pass.
+fn run_in(m: &Manifest, (frame, pass, run): (usize, usize, usize), other: &Manifest) -> Option<Vec<Vec<u64>>> {
     let passes = m.frame_passes.get(frame)?;
     let mine = passes.get(pass)?;
     let r = mine.runs.get(run)?;
@@ -315,11 +316,13 @@ fn run_in(m: &Manifest, (frame, pass, run): (usize, usize, usize), other: &Manif
     let p = f.iter().filter(|p| p.name == mine.name).nth(nth_pass)?;
     let same = |x: &Run| x.kind == r.kind && x.pipeline == r.pipeline;
     let nth = runs_of(&mine.steps, true).into_iter().filter(same).position(|x| x.first == r.first)?;
-    Some(runs_of(&p.steps, true).into_iter().filter(same).nth(nth).map_or(0, |x| x.count))
+    let Some(there) = runs_of(&p.steps, true).into_iter().filter(same).nth(nth) else { return Some(Vec::new()) };
+    Some(p.steps[there.first..there.first + there.count as usize].iter().map(step_numbers).collect())
 }
 
 /// Each loop's count as an expression of W, H and the settings it follows
-/// ([`joint_fit::fit_count`]), over the kit, the image probes and the settings' variants.
+/// ([`joint_fit::fit_count`]), and its iterations' workgroups as expressions of the iteration
+/// ([`joint_fit::fit_iteration`]), over the kit, the image probes and the settings' variants.
 fn annotate_runs(m: &mut Manifest, c: &Captured) {
     let (kw, kh) = (m.size[0] as u64, m.size[1] as u64);
     let (w0, h0) = (c.images[0].0.0 as u64, c.images[0].0.1 as u64);
@@ -331,42 +334,77 @@ fn annotate_runs(m: &mut Manifest, c: &Captured) {
             p.runs = runs_of(&p.steps, true);
             for run in 0..m.frame_passes[frame][pass].runs.len() {
                 let at = (frame, pass, run);
-                let count = m.frame_passes[frame][pass].runs[run].count;
+                let p = &m.frame_passes[frame][pass];
+                let r = &p.runs[run];
+                let mine: Vec<Vec<u64>> =
+                    p.steps[r.first..r.first + r.count as usize].iter().map(step_numbers).collect();
                 let mut names = Vec::new();
                 for (var, manifests) in &c.variants {
-                    if manifests.iter().any(|(_, mm)| run_in(m, at, mm) != Some(count)) {
+                    if manifests.iter().any(|(_, mm)| run_in(m, at, mm).is_none_or(|x| x.len() != mine.len())) {
                         names.push(var.path.clone());
                     }
                 }
                 names.sort();
+                // The iterations' numbers also follow what their steps follow.
+                let mut iter_names = names.clone();
+                for st in &p.steps[r.first..r.first + r.count as usize] {
+                    iter_names.extend(st.counts_depend_on.iter().cloned());
+                }
+                iter_names.sort();
+                iter_names.dedup();
                 let value = |n: &str, x: Option<(&str, u32)>| match x {
                     Some((v, x)) if v == n => x as u64,
                     _ => c.variants.iter().find(|(v, _)| v.path == n).map_or(0, |(v, _)| v.value as u64),
                 };
-                let at_base = |x: Option<(&str, u32)>| names.iter().map(|n| value(n, x)).collect::<Vec<u64>>();
-                let mut obs = vec![Obs { w: kw, h: kh, s: at_base(None), q: count }];
+                // Every capture of the loop: its image, the settings changed and its iterations.
+                let mut captures = vec![(kw, kh, None, mine)];
                 let mut whole = true;
                 for ((w, h), mm) in c.images {
                     match run_in(m, at, mm) {
-                        Some(q) => obs.push(Obs { w: *w as u64, h: *h as u64, s: at_base(None), q }),
+                        Some(x) => captures.push((*w as u64, *h as u64, None, x)),
                         None => whole = false,
                     }
                 }
-                for (var, manifests) in c.variants.iter().filter(|(v, _)| names.contains(&v.path)) {
+                for (var, manifests) in c.variants.iter().filter(|(v, _)| iter_names.contains(&v.path)) {
                     for (x, mm) in manifests {
                         match run_in(m, at, mm) {
-                            Some(q) => obs.push(Obs { w: w0, h: h0, s: at_base(Some((&var.path, *x))), q }),
+                            Some(its) => captures.push((w0, h0, Some((var.path.as_str(), *x)), its)),
                             None => whole = false,
                         }
                     }
                 }
-                let e = if whole { joint_fit::fit_count(&names, &obs) } else { None };
+                let count_obs: Vec<Obs> = captures
+                    .iter()
+                    .filter(|(_, _, x, _)| x.is_none_or(|(v, _)| names.iter().any(|n| n == v)))
+                    .map(|(w, h, x, its)| Obs {
+                        w: *w,
+                        h: *h,
+                        s: names.iter().map(|n| value(n, *x)).collect(),
+                        q: its.len() as u64,
+                    })
+                    .collect();
+                let count_expr = if whole { joint_fit::fit_count(&names, &count_obs) } else { None };
+                let axes = captures[0].3.first().map_or(0, Vec::len);
+                let mut iteration_expr = Vec::new();
+                for k in 0..axes {
+                    let mut obs = Vec::new();
+                    for (w, h, x, its) in &captures {
+                        let n = its.len() as u64;
+                        for (i, numbers) in its.iter().enumerate() {
+                            let s = iter_names.iter().map(|name| value(name, *x)).collect();
+                            let q = numbers.get(k).copied().unwrap_or(0);
+                            obs.push(joint_fit::IterObs { o: Obs { w: *w, h: *h, s, q }, n, i: i as u64 });
+                        }
+                    }
+                    iteration_expr.push(if whole { joint_fit::fit_iteration(&iter_names, &obs) } else { None });
+                }
                 let r = &mut m.frame_passes[frame][pass].runs[run];
-                r.count_expr = e;
+                r.count_expr = count_expr;
                 r.depends_on = names;
+                r.iteration_expr = iteration_expr;
             }
             let runs = &mut m.frame_passes[frame][pass].runs;
-            runs.retain(|r| r.count > 1 || r.count_expr.as_deref() != Some("1"));
+            runs.retain(|r| r.count > 1 || r.count_expr.as_deref().is_some_and(|e| e != "1"));
         }
     }
 }

@@ -181,6 +181,10 @@ pub struct Run {
     /// The settings the count changes with.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub depends_on: Vec<String>,
+    /// Each iteration's workgroups (x, y, z) as expressions of `i` (0 for the first), `n` (the
+    /// count), W, H and the settings, where one gives every iteration of every capture.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub iteration_expr: Vec<Option<String>>,
 }
 
 /// The runs of `steps`: every group of consecutive dispatches of one pipeline (of one or more:
@@ -197,6 +201,7 @@ pub fn runs_of(steps: &[Step], all: bool) -> Vec<Run> {
                 count: 1,
                 count_expr: None,
                 depends_on: Vec::new(),
+                iteration_expr: Vec::new(),
             }),
         }
     }
@@ -327,7 +332,7 @@ impl DeviceNeeds {
 
 /// What the kit does not hold yet; said in the manifest, the kit's README and docs/port-kit.md.
 pub const NOT_YET: &[&str] = &[
-    "a loop's iterations are listed for the preset's count: the loop's count is an expression (a pass's runs), but the sizes of an iteration the preset does not run (a finer HCB level at a larger hcb.levels) are not written; those listed halve level by level",
+    "a loop's count and its iterations' workgroups are expressions (a pass's runs), but a resource of a level the preset does not have (hcb.level.7 at a larger hcb.levels) is not written, and a loop over the ISM atlas (the pull-push levels, halving an atlas whose size follows several settings) has no expression for its iterations",
     "passes repeated per level or round (soler.gather.k, each round's gautron.create and gautron.hemispheres) are listed once per repetition at the preset's settings: their steps name the setting that adds or removes them, but how many there are is not an expression",
     "a size or count that no expression of the families fits, or that two expressions fit which part between the captured settings, names its settings and keeps the image's expression or the captured value",
 ];
