@@ -426,10 +426,12 @@ fn goldens_hold_every_pass_output_as_the_renderer_draws_it_and_verify_finds_the_
 
 #[test]
 fn sizes_and_counts_are_expressions_of_the_image_that_give_another_sizes_values() {
-    use gi_render::export::port_kit::expressions::eval;
-    // Soler et al.'s pyramid: its levels are halvings of the image, its dispatches tile them.
+    use gi_render::export::port_kit::expressions::eval_with;
+    // Soler et al.'s pyramid: its levels are halvings of the image, its dispatches tile them,
+    // and its gather runs once per level, a pass each (soler.gather.k).
     let preset = "soler-quarter-4-64";
-    let req = KitRequest { expressions: true, settings_probed: Some(&[]), ..request(preset, 2, false) };
+    let probed: &[&str] = &["soler.levels"];
+    let req = KitRequest { expressions: true, settings_probed: Some(probed), ..request(preset, 2, false) };
     let k = port_kit::build(gpu(), req.clone()).expect("kit");
     let m = &k.manifest;
     let exprs = |e: &[Option<String>]| e.iter().map(|x| x.clone().unwrap_or_default()).collect::<Vec<_>>();
@@ -439,9 +441,10 @@ fn sizes_and_counts_are_expressions_of_the_image_that_give_another_sizes_values(
     assert!(exprs(&level2.size_expr)[0].contains("W / 4"), "{}: {:?}", level2.name, level2.size_expr);
     let normal = m.passes.iter().find(|p| p.name == "gbuffer.normal").expect("gbuffer.normal");
     assert_eq!(exprs(&normal.steps[0].counts_expr), ["ceil(W / 8)", "ceil(H / 8)", "1"]);
-    // The expressions give another size's values, which no probe saw.
+    // The expressions give another size's values, which no probe saw (at the preset's levels).
     let (w, h) = (70u64, 45u64);
-    let other = port_kit::build(gpu(), KitRequest { size: (w as u32, h as u32), expressions: false, ..req })
+    let at = |levels: f64| move |n: &str| (n == "soler.levels").then_some(levels);
+    let other = port_kit::build(gpu(), KitRequest { size: (w as u32, h as u32), expressions: false, ..req.clone() })
         .expect("the kit at another size");
     let (mut checked, mut total) = (0, 0);
     for r in &m.resources {
@@ -449,7 +452,7 @@ fn sizes_and_counts_are_expressions_of_the_image_that_give_another_sizes_values(
         for (e, v) in r.size_expr.iter().zip(&r2.size) {
             total += 1;
             if let Some(e) = e {
-                assert_eq!(eval(e, w, h), Some(*v), "{}: {e} at {w}x{h}", r.name);
+                assert_eq!(eval_with(e, w, h, &at(4.0)), Some(*v), "{}: {e} at {w}x{h}", r.name);
                 checked += 1;
             }
         }
@@ -460,13 +463,25 @@ fn sizes_and_counts_are_expressions_of_the_image_that_give_another_sizes_values(
             for (e, v) in s.counts_expr.iter().zip(wg) {
                 total += 1;
                 if let Some(e) = e {
-                    assert_eq!(eval(e, w, h), Some(v as u64), "{} {:?}: {e} at {w}x{h}", p.name, s.pipeline);
+                    let got = eval_with(e, w, h, &at(4.0));
+                    assert_eq!(got, Some(v as u64), "{} {:?}: {e} at {w}x{h}", p.name, s.pipeline);
                     checked += 1;
                 }
             }
         }
     }
     assert!(checked * 10 >= total * 9, "{checked} of {total} sizes and counts have an expression");
+    // The gathers, one pass per level: how many at five levels, which no capture saw.
+    let gather = m.repeated_passes.iter().find(|r| r.name == "soler.gather.{k}").expect("the gathers");
+    assert_eq!(gather.depends_on, ["soler.levels"], "{gather:?}");
+    assert_eq!(gather.passes.len() as u64, gather.count);
+    let count = gather.count_expr.as_deref().expect("how many gathers, as an expression");
+    let mut s = settings(preset);
+    s.apply_override("soler.levels=5").expect("soler.levels");
+    let five = port_kit::build(gpu(), KitRequest { settings: s, expressions: false, ..req })
+        .expect("the kit with five levels");
+    let gathers = five.manifest.passes.iter().filter(|p| p.name.starts_with("soler.gather.")).count() as u64;
+    assert_eq!(eval_with(count, SIZE.0 as u64, SIZE.1 as u64, &at(5.0)), Some(gathers), "{count}");
 }
 
 #[test]

@@ -18,6 +18,7 @@ use crate::{GpuContext, LabSettings, Renderer};
 pub mod expressions;
 pub mod golden;
 pub mod joint_fit;
+pub mod loops;
 pub mod manifest;
 pub mod reflect;
 pub mod settings_probe;
@@ -234,6 +235,7 @@ fn fit_expressions(ctx: &GpuContext, req: &KitRequest, m: &mut Manifest) -> Resu
         }
     }
     let (following, in_settings) = settings_probe::annotate(m, &c);
+    loops::annotate(m, &c);
     m.expressions = Some(serde_json::json!({
         "variables": {"W": "the image's width", "H": "its height", "group.field": "a setting (preset.json)"},
         "probes": expressions::PROBES,
@@ -336,6 +338,13 @@ fn loops(m: &Manifest) -> String {
     }
     if !any {
         s += "| (none) | | | | |\n";
+    }
+    if !m.repeated_passes.is_empty() {
+        s += "\nPasses repeated per round or per level:\n\n| passes | count | first level |\n|---|---|---|\n";
+        for r in &m.repeated_passes {
+            let first = r.first.map_or(String::new(), |k| format!("{k}: {}", text(&r.first_expr)));
+            s += &format!("| `{}` | {}: {} | {} |\n", r.name, r.count, text(&r.count_expr), first);
+        }
     }
     s
 }

@@ -10,7 +10,7 @@
 
 use super::expressions::{affine_text, solve_linear, step_numbers};
 use super::joint_fit::{self, Obs};
-use super::manifest::{Manifest, Run, runs_of};
+use super::manifest::Manifest;
 use crate::LabSettings;
 use crate::settings::{FieldKind, Value};
 
@@ -296,117 +296,10 @@ pub fn annotate(m: &mut Manifest, c: &Captured) -> (usize, usize) {
             fitted += 1;
         }
     }
-    annotate_runs(m, c);
     if let Some(last) = m.frame_passes.last() {
         m.passes = last.clone();
     }
     (follow, fitted)
-}
-
-/// The iterations of the run `run` of pass `pass` of frame `frame` of `m` in `other`, each
-/// as its step's numbers: the pass by name and occurrence, the run by pipeline and
-/// occurrence; none where the pass has no such run (a loop of no levels), None where it has
-/// no such pass.
-fn run_in(m: &Manifest, (frame, pass, run): (usize, usize, usize), other: &Manifest) -> Option<Vec<Vec<u64>>> {
-    let passes = m.frame_passes.get(frame)?;
-    let mine = passes.get(pass)?;
-    let r = mine.runs.get(run)?;
-    let nth_pass = passes[..pass].iter().filter(|p| p.name == mine.name).count();
-    let f = other.frame_passes.get(frame.min(other.frame_passes.len().checked_sub(1)?))?;
-    let p = f.iter().filter(|p| p.name == mine.name).nth(nth_pass)?;
-    let same = |x: &Run| x.kind == r.kind && x.pipeline == r.pipeline;
-    let nth = runs_of(&mine.steps, true).into_iter().filter(same).position(|x| x.first == r.first)?;
-    let Some(there) = runs_of(&p.steps, true).into_iter().filter(same).nth(nth) else { return Some(Vec::new()) };
-    Some(p.steps[there.first..there.first + there.count as usize].iter().map(step_numbers).collect())
-}
-
-/// Each loop's count as an expression of W, H and the settings it follows
-/// ([`joint_fit::fit_count`]), and its iterations' workgroups as expressions of the iteration
-/// ([`joint_fit::fit_iteration`]), over the kit, the image probes and the settings' variants.
-fn annotate_runs(m: &mut Manifest, c: &Captured) {
-    let (kw, kh) = (m.size[0] as u64, m.size[1] as u64);
-    let (w0, h0) = (c.images[0].0.0 as u64, c.images[0].0.1 as u64);
-    for frame in 0..m.frame_passes.len() {
-        for pass in 0..m.frame_passes[frame].len() {
-            // Every group of dispatches, a loop of one level among them; those that are not
-            // loops (one, whatever the image and the settings) are left out after.
-            let p = &mut m.frame_passes[frame][pass];
-            p.runs = runs_of(&p.steps, true);
-            for run in 0..m.frame_passes[frame][pass].runs.len() {
-                let at = (frame, pass, run);
-                let p = &m.frame_passes[frame][pass];
-                let r = &p.runs[run];
-                let mine: Vec<Vec<u64>> =
-                    p.steps[r.first..r.first + r.count as usize].iter().map(step_numbers).collect();
-                let mut names = Vec::new();
-                for (var, manifests) in &c.variants {
-                    if manifests.iter().any(|(_, mm)| run_in(m, at, mm).is_none_or(|x| x.len() != mine.len())) {
-                        names.push(var.path.clone());
-                    }
-                }
-                names.sort();
-                // The iterations' numbers also follow what their steps follow.
-                let mut iter_names = names.clone();
-                for st in &p.steps[r.first..r.first + r.count as usize] {
-                    iter_names.extend(st.counts_depend_on.iter().cloned());
-                }
-                iter_names.sort();
-                iter_names.dedup();
-                let value = |n: &str, x: Option<(&str, u32)>| match x {
-                    Some((v, x)) if v == n => x as u64,
-                    _ => c.variants.iter().find(|(v, _)| v.path == n).map_or(0, |(v, _)| v.value as u64),
-                };
-                // Every capture of the loop: its image, the settings changed and its iterations.
-                let mut captures = vec![(kw, kh, None, mine)];
-                let mut whole = true;
-                for ((w, h), mm) in c.images {
-                    match run_in(m, at, mm) {
-                        Some(x) => captures.push((*w as u64, *h as u64, None, x)),
-                        None => whole = false,
-                    }
-                }
-                for (var, manifests) in c.variants.iter().filter(|(v, _)| iter_names.contains(&v.path)) {
-                    for (x, mm) in manifests {
-                        match run_in(m, at, mm) {
-                            Some(its) => captures.push((w0, h0, Some((var.path.as_str(), *x)), its)),
-                            None => whole = false,
-                        }
-                    }
-                }
-                let count_obs: Vec<Obs> = captures
-                    .iter()
-                    .filter(|(_, _, x, _)| x.is_none_or(|(v, _)| names.iter().any(|n| n == v)))
-                    .map(|(w, h, x, its)| Obs {
-                        w: *w,
-                        h: *h,
-                        s: names.iter().map(|n| value(n, *x)).collect(),
-                        q: its.len() as u64,
-                    })
-                    .collect();
-                let count_expr = if whole { joint_fit::fit_count(&names, &count_obs) } else { None };
-                let axes = captures[0].3.first().map_or(0, Vec::len);
-                let mut iteration_expr = Vec::new();
-                for k in 0..axes {
-                    let mut obs = Vec::new();
-                    for (w, h, x, its) in &captures {
-                        let n = its.len() as u64;
-                        for (i, numbers) in its.iter().enumerate() {
-                            let s = iter_names.iter().map(|name| value(name, *x)).collect();
-                            let q = numbers.get(k).copied().unwrap_or(0);
-                            obs.push(joint_fit::IterObs { o: Obs { w: *w, h: *h, s, q }, n, i: i as u64 });
-                        }
-                    }
-                    iteration_expr.push(if whole { joint_fit::fit_iteration(&iter_names, &obs) } else { None });
-                }
-                let r = &mut m.frame_passes[frame][pass].runs[run];
-                r.count_expr = count_expr;
-                r.depends_on = names;
-                r.iteration_expr = iteration_expr;
-            }
-            let runs = &mut m.frame_passes[frame][pass].runs;
-            runs.retain(|r| r.count > 1 || r.count_expr.as_deref().is_some_and(|e| e != "1"));
-        }
-    }
 }
 
 #[cfg(test)]

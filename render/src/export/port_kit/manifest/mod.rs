@@ -133,6 +133,7 @@ fn build_with(
         translations: Vec::new(),
         golden: Vec::new(),
         expressions: None,
+        repeated_passes: Vec::new(),
         not_yet: NOT_YET.to_vec(),
     };
     Ok(Built { manifest, frames: access, keys, uploads: std::mem::take(&mut b.uploads) })

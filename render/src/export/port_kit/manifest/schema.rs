@@ -168,6 +168,26 @@ pub struct Pass {
     pub runs: Vec<Run>,
 }
 
+/// Passes repeated per round (one name) or per level (`soler.gather.{k}`): which, how many,
+/// and for levels the first level's number, each with its expression.
+#[derive(Clone, Debug, Serialize)]
+pub struct PassRepeat {
+    /// The passes' name, `{k}` standing for a level's number.
+    pub name: String,
+    /// Their indices in `passes`.
+    pub passes: Vec<usize>,
+    pub count: u64,
+    /// The count as an expression of W, H and the settings; null: none fits.
+    pub count_expr: Option<String>,
+    /// The first level's number `k` (names with `{k}`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub first: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub first_expr: Option<String>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub depends_on: Vec<String>,
+}
+
 /// A loop of the frame: `count` steps of one pipeline from `first` on, one per level of a
 /// pyramid or per batch ([`crate::export::port_kit::settings_probe`] fits `count_expr`).
 #[derive(Clone, Debug, Serialize)]
@@ -300,6 +320,10 @@ pub struct Manifest {
     /// expressions"); null when the kit was exported without them.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub expressions: Option<serde_json::Value>,
+    /// Passes of `passes` repeated per round or per level, with how many as expressions
+    /// ([`crate::export::port_kit::loops`]); only with the kit's expressions.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub repeated_passes: Vec<PassRepeat>,
     /// What the kit does not hold yet (docs/port-kit.md, "Not yet in the kit").
     pub not_yet: Vec<&'static str>,
 }
@@ -333,7 +357,7 @@ impl DeviceNeeds {
 /// What the kit does not hold yet; said in the manifest, the kit's README and docs/port-kit.md.
 pub const NOT_YET: &[&str] = &[
     "a loop's count and its iterations' workgroups are expressions (a pass's runs), but a resource of a level the preset does not have (hcb.level.7 at a larger hcb.levels) is not written, and a loop over the ISM atlas (the pull-push levels, halving an atlas whose size follows several settings) has no expression for its iterations",
-    "passes repeated per level or round (soler.gather.k, each round's gautron.create and gautron.hemispheres) are listed once per repetition at the preset's settings: their steps name the setting that adds or removes them, but how many there are is not an expression",
+    "passes repeated per level or round are listed once per repetition at the preset's settings, with how many as an expression (repeated_passes), but the steps of a repetition the preset does not run (a fifth Soler level) are not written",
     "a size or count that no expression of the families fits, or that two expressions fit which part between the captured settings, names its settings and keeps the image's expression or the captured value",
 ];
 
