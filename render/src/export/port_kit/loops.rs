@@ -8,7 +8,7 @@
 use super::expressions::step_numbers;
 use super::joint_fit::{self, Obs};
 use super::manifest::{Manifest, PassRepeat, Run, runs_of};
-use super::settings_probe::Captured;
+use super::settings_probe::{self, Captured};
 
 /// The iterations of the run `run` of pass `pass` of frame `frame` of `m` in `other`, each
 /// as its step's numbers: the pass by name and occurrence, the run by pipeline and
@@ -41,7 +41,7 @@ pub fn annotate(m: &mut Manifest, c: &Captured) {
 /// ([`joint_fit::fit_iteration`]), over the kit, the image probes and the settings' variants.
 fn annotate_runs(m: &mut Manifest, c: &Captured) {
     let (kw, kh) = (m.size[0] as u64, m.size[1] as u64);
-    let (w0, h0) = (c.images[0].0.0 as u64, c.images[0].0.1 as u64);
+    let (w0, h0) = (c.images[settings_probe::AT].0.0 as u64, c.images[settings_probe::AT].0.1 as u64);
     for frame in 0..m.frame_passes.len() {
         for pass in 0..m.frame_passes[frame].len() {
             // Every group of dispatches, a loop of one level among them; those that are not
@@ -151,7 +151,7 @@ type Quantity = dyn Fn(&(u64, Option<u64>)) -> Option<u64>;
 fn repeated_passes(m: &Manifest, c: &Captured) -> Vec<PassRepeat> {
     let mut out: Vec<PassRepeat> = Vec::new();
     let (kw, kh) = (m.size[0] as u64, m.size[1] as u64);
-    let (w0, h0) = (c.images[0].0.0 as u64, c.images[0].0.1 as u64);
+    let (w0, h0) = (c.images[settings_probe::AT].0.0 as u64, c.images[settings_probe::AT].0.1 as u64);
     let last = |mm: &Manifest| mm.frame_passes.last().cloned().unwrap_or_default();
     for p in m.passes.iter().filter(|p| p.role != "between") {
         let (pat, k) = pattern(&p.name);

@@ -172,7 +172,7 @@ fn fit_expressions(ctx: &GpuContext, req: &KitRequest, m: &mut Manifest) -> Resu
         images.push((size, capture_at(&req.settings, size)??));
     }
     let (fitted, left) = expressions::annotate(m, &images);
-    // Each integer setting in use at two nearby values and a neighbour, at the first probe size; a value
+    // Each integer setting in use at two nearby values and a neighbour, at one probe size; a value
     // this device cannot draw (double the VPLs overflow the ISM atlas) is listed with the
     // renderer's reason and the next is tried.
     let variants = settings_probe::variants(&req.settings, req.settings_probed);
@@ -184,14 +184,14 @@ fn fit_expressions(ctx: &GpuContext, req: &KitRequest, m: &mut Manifest) -> Resu
             if got.len() == 2 {
                 break;
             }
-            match capture_at(settings, expressions::PROBES[0])? {
+            match capture_at(settings, expressions::PROBES[settings_probe::AT])? {
                 Ok(mm) => got.push((*x, mm)),
                 Err(e) => refused.push(serde_json::json!({"setting": v.path, "value": x, "reason": e})),
             }
         }
         let values: Vec<u32> = got.iter().map(|g| g.0).collect();
         if let (2, Some((x, settings))) = (got.len(), v.neighbour(&values)) {
-            match capture_at(settings, expressions::PROBES[0])? {
+            match capture_at(settings, expressions::PROBES[settings_probe::AT])? {
                 Ok(mm) => got.push((*x, mm)),
                 Err(e) => refused.push(serde_json::json!({"setting": v.path, "value": x, "reason": e})),
             }
@@ -224,7 +224,8 @@ fn fit_expressions(ctx: &GpuContext, req: &KitRequest, m: &mut Manifest) -> Resu
             {
                 continue;
             }
-            let size = expressions::PROBES[3 + 2 * done];
+            // Two sizes other than the variants': the first probe's and the last's.
+            let size = expressions::PROBES[[0, 5][done]];
             match capture_at(&s, size)? {
                 Ok(manifest) => {
                     c.joints.push(settings_probe::Joint { settings: chosen, size, manifest });

@@ -1,6 +1,6 @@
 //! Sizes and counts that follow a setting (issue #54 point 1; docs/port-kit.md, "Sizes that
 //! follow a setting"). After the image probes ([`super::expressions`]), the frame is captured
-//! once more at the first probe size for each integer setting of the groups the stage choices
+//! once more at one probe size ([`AT`], 160×103) for each integer setting of the groups the stage choices
 //! use, set to each of two other values (half and double, or as near as its range allows; a
 //! variant the settings' rules refuse is skipped). Every texture dimension, buffer
 //! size and dispatch or draw count that changes with the setting names it in `depends_on`;
@@ -13,6 +13,12 @@ use super::joint_fit::{self, Obs};
 use super::manifest::Manifest;
 use crate::LabSettings;
 use crate::settings::{FieldKind, Value};
+
+/// The probe size (of [`super::expressions::PROBES`]) at which each setting's variants are
+/// captured: 160×103, large enough that a count of chunks of tiles (Gautron et al.'s record
+/// creation, 256 tiles of `gautron.creation_tile_px`² a chunk) changes with the tile's size;
+/// at 67×41 it was one chunk whatever the tile, and the dependence went unseen.
+pub const AT: usize = 3;
 
 /// An integer setting and the settings with it at other values, in the order to try them:
 /// the first two the device draws are captured, and a neighbour ([`Variant::neighbour`]).
@@ -176,7 +182,7 @@ fn slot<'m>(m: &'m mut Manifest, at: &At) -> Option<(&'m mut Option<String>, &'m
 
 /// The captures of the frame the settings' fits use: the image probes at the preset's
 /// settings ([`super::expressions::PROBES`]), each setting at two other values alone at the
-/// first probe size, and the settings a number follows changed together ([`Joint`]).
+/// probe size [`AT`], and the settings a number follows changed together ([`Joint`]).
 pub struct Captured<'a> {
     pub images: &'a [((u32, u32), Manifest)],
     pub variants: Vec<(&'a Variant, Vec<(u32, Manifest)>)>,
@@ -191,25 +197,43 @@ pub struct Joint {
     pub manifest: Manifest,
 }
 
-/// The settings each number of `m` follows: those whose variants change it or, for a step,
-/// move it (a loop over pyramid levels has more or fewer steps); and whether every variant
-/// has it (else no formula is fitted).
-fn following(m: &Manifest, c: &Captured) -> Vec<(At, u64, Vec<String>, bool)> {
-    let base = &c.images[0].1;
+/// What a number of `m` follows.
+struct Following {
+    at: At,
+    /// Its value in the kit.
+    value: u64,
+    /// The settings whose variants change it, or at some of whose values it does not exist
+    /// (a step of a loop's level, of a later round): its `depends_on`.
+    depends: Vec<String>,
+    /// Those whose variants change its value where it exists: what an expression is fitted
+    /// in. A setting that only adds or removes it (the rounds, for a later round's step) is
+    /// not one.
+    names: Vec<String>,
+    /// Whether every variant of `names` has it (else no expression is fitted).
+    whole: bool,
+}
+
+/// What each number of `m` follows ([`Following`]).
+fn following(m: &Manifest, c: &Captured) -> Vec<Following> {
+    let base = &c.images[AT].1;
     let mut out = Vec::new();
-    for (at, v) in numbers(m) {
+    for (at, value) in numbers(m) {
         let Some(q0) = value_in(m, &at, base) else { continue };
-        let (mut names, mut whole) = (Vec::new(), true);
+        let (mut depends, mut names, mut whole) = (Vec::new(), Vec::new(), true);
         for (var, manifests) in &c.variants {
             let qs: Vec<Option<u64>> = manifests.iter().map(|(_, mm)| value_in(m, &at, mm)).collect();
             if qs.iter().any(|q| *q != Some(q0)) {
+                depends.push(var.path.clone());
+            }
+            if qs.iter().any(|q| q.is_some_and(|q| q != q0)) {
                 names.push(var.path.clone());
                 whole &= qs.iter().all(Option::is_some);
             }
         }
-        if !names.is_empty() {
+        if !depends.is_empty() {
+            depends.sort();
             names.sort();
-            out.push((at, v, names, whole));
+            out.push(Following { at, value, depends, names, whole });
         }
     }
     out
@@ -224,9 +248,9 @@ fn constant(e: &Option<String>) -> bool {
 /// several settings, or a setting and the image.
 pub fn joint_sets(m: &Manifest, c: &Captured) -> Vec<Vec<String>> {
     let mut out: Vec<Vec<String>> = Vec::new();
-    for (at, _, names, whole) in following(m, c) {
+    for Following { at, names, whole, .. } in following(m, c) {
         let image = expr_of(m, &at);
-        let wanted = whole && (names.len() > 1 || (image.is_some() && !constant(&image)));
+        let wanted = whole && (names.len() > 1 || (!names.is_empty() && image.is_some() && !constant(&image)));
         if wanted && !out.contains(&names) {
             out.push(names);
         }
@@ -240,7 +264,7 @@ pub fn joint_sets(m: &Manifest, c: &Captured) -> Vec<Vec<String>> {
 pub fn annotate(m: &mut Manifest, c: &Captured) -> (usize, usize) {
     let (mut follow, mut fitted) = (0, 0);
     let (kw, kh) = (m.size[0] as u64, m.size[1] as u64);
-    for (at, v, names, whole) in following(m, c) {
+    for Following { at, value: v, depends, names, whole } in following(m, c) {
         follow += 1;
         let image = expr_of(m, &at);
         let value = |var: &str, x: Option<(&str, u32)>| -> u64 {
@@ -254,17 +278,20 @@ pub fn annotate(m: &mut Manifest, c: &Captured) -> (usize, usize) {
         let alone =
             c.variants.iter().find(|(var, _)| whole && names.len() == 1 && constant(&image) && var.path == names[0]);
         let single = alone.and_then(|(var, manifests)| {
-            let mut points = vec![(var.value as u64, value_in(m, &at, &c.images[0].1)?)];
+            let mut points = vec![(var.value as u64, value_in(m, &at, &c.images[AT].1)?)];
             points.extend(manifests.iter().filter_map(|(x, mm)| Some((*x as u64, value_in(m, &at, mm)?))));
             fit(&names[0], &points)
         });
         let e = single.or_else(|| {
+            if names.is_empty() {
+                return None;
+            }
             // Every capture: the kit, the image probes, each setting alone, them together.
             let mut obs = vec![Obs { w: kw, h: kh, s: at_base(None), q: v }];
             for ((w, h), mm) in c.images {
                 obs.extend(value_in(m, &at, mm).map(|q| Obs { w: *w as u64, h: *h as u64, s: at_base(None), q }));
             }
-            let (w0, h0) = (c.images[0].0.0 as u64, c.images[0].0.1 as u64);
+            let (w0, h0) = (c.images[AT].0.0 as u64, c.images[AT].0.1 as u64);
             for (var, manifests) in c.variants.iter().filter(|(var, _)| names.contains(&var.path)) {
                 for (x, mm) in manifests {
                     let s = at_base(Some((&var.path, *x)));
@@ -285,10 +312,10 @@ pub fn annotate(m: &mut Manifest, c: &Captured) -> (usize, usize) {
                 .then(|| joint_fit::fit(&names, image.as_deref(), &obs))
                 .flatten()
         });
-        let Some((slot, depends)) = slot(m, &at) else { continue };
-        for n in &names {
-            if !depends.contains(n) {
-                depends.push(n.clone());
+        let Some((slot, named)) = slot(m, &at) else { continue };
+        for n in &depends {
+            if !named.contains(n) {
+                named.push(n.clone());
             }
         }
         if let Some(e) = e {
