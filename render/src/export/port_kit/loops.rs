@@ -15,12 +15,8 @@ use super::settings_probe::{self, Captured};
 /// occurrence; none where the pass has no such run (a loop of no levels), None where it has
 /// no such pass.
 fn run_in(m: &Manifest, (frame, pass, run): (usize, usize, usize), other: &Manifest) -> Option<Vec<Vec<u64>>> {
-    let passes = m.frame_passes.get(frame)?;
-    let mine = passes.get(pass)?;
+    let (mine, p) = settings_probe::same_pass(m, frame, pass, other)?;
     let r = mine.runs.get(run)?;
-    let nth_pass = passes[..pass].iter().filter(|p| p.name == mine.name).count();
-    let f = other.frame_passes.get(frame.min(other.frame_passes.len().checked_sub(1)?))?;
-    let p = f.iter().filter(|p| p.name == mine.name).nth(nth_pass)?;
     let same = |x: &Run| x.kind == r.kind && x.pipeline == r.pipeline;
     let nth = runs_of(&mine.steps, true).into_iter().filter(same).position(|x| x.first == r.first)?;
     let Some(there) = runs_of(&p.steps, true).into_iter().filter(same).nth(nth) else { return Some(Vec::new()) };
@@ -68,10 +64,6 @@ fn annotate_runs(m: &mut Manifest, c: &Captured) {
                 }
                 iter_names.sort();
                 iter_names.dedup();
-                let value = |n: &str, x: Option<(&str, u32)>| match x {
-                    Some((v, x)) if v == n => x as u64,
-                    _ => c.variants.iter().find(|(v, _)| v.path == n).map_or(0, |(v, _)| v.value as u64),
-                };
                 // Every capture of the loop: its image, the settings changed and its iterations.
                 let mut captures = vec![(kw, kh, None, mine)];
                 let mut whole = true;
@@ -92,12 +84,7 @@ fn annotate_runs(m: &mut Manifest, c: &Captured) {
                 let count_obs: Vec<Obs> = captures
                     .iter()
                     .filter(|(_, _, x, _)| x.is_none_or(|(v, _)| names.iter().any(|n| n == v)))
-                    .map(|(w, h, x, its)| Obs {
-                        w: *w,
-                        h: *h,
-                        s: names.iter().map(|n| value(n, *x)).collect(),
-                        q: its.len() as u64,
-                    })
+                    .map(|(w, h, x, its)| Obs { w: *w, h: *h, s: c.values(&names, *x), q: its.len() as u64 })
                     .collect();
                 let count_expr = if whole { joint_fit::fit_count(&names, &count_obs) } else { None };
                 let axes = captures[0].3.first().map_or(0, Vec::len);
@@ -107,7 +94,7 @@ fn annotate_runs(m: &mut Manifest, c: &Captured) {
                     for (w, h, x, its) in &captures {
                         let n = its.len() as u64;
                         for (i, numbers) in its.iter().enumerate() {
-                            let s = iter_names.iter().map(|name| value(name, *x)).collect();
+                            let s = c.values(&iter_names, *x);
                             let q = numbers.get(k).copied().unwrap_or(0);
                             obs.push(joint_fit::IterObs { o: Obs { w: *w, h: *h, s, q }, n, i: i as u64 });
                         }
@@ -182,16 +169,10 @@ fn repeated_passes(m: &Manifest, c: &Captured) -> Vec<PassRepeat> {
                 }
             }
             names.sort();
-            let value = |n: &str, x: Option<(&str, u32)>| match x {
-                Some((v, x)) if v == n => x as u64,
-                _ => c.variants.iter().find(|(v, _)| v.path == n).map_or(0, |(v, _)| v.value as u64),
-            };
             let obs: Option<Vec<Obs>> = seen
                 .iter()
                 .filter(|(_, _, x, _)| x.is_none_or(|(v, _)| names.iter().any(|n| n == v)))
-                .map(|(w, h, x, r)| {
-                    Some(Obs { w: *w, h: *h, s: names.iter().map(|n| value(n, *x)).collect(), q: q(r)? })
-                })
+                .map(|(w, h, x, r)| Some(Obs { w: *w, h: *h, s: c.values(&names, *x), q: q(r)? }))
                 .collect();
             (obs.and_then(|o| joint_fit::fit_count(&names, &o)), names)
         };

@@ -10,7 +10,7 @@
 
 use super::expressions::{affine_text, solve_linear, step_numbers};
 use super::joint_fit::{self, Obs};
-use super::manifest::Manifest;
+use super::manifest::{Manifest, Pass};
 use crate::LabSettings;
 use crate::settings::{FieldKind, Value};
 
@@ -142,11 +142,7 @@ fn value_in(m: &Manifest, at: &At, other: &Manifest) -> Option<u64> {
     match at {
         At::Resource { name, k } => other.resources.iter().find(|r| &r.name == name)?.size.get(*k).copied(),
         At::Step { frame, pass, step, i } => {
-            let passes = m.frame_passes.get(*frame)?;
-            let mine = passes.get(*pass)?;
-            let nth_pass = passes[..*pass].iter().filter(|p| p.name == mine.name).count();
-            let f = other.frame_passes.get((*frame).min(other.frame_passes.len().checked_sub(1)?))?;
-            let p = f.iter().filter(|p| p.name == mine.name).nth(nth_pass)?;
+            let (mine, p) = same_pass(m, *frame, *pass, other)?;
             let t = mine.steps.get(*step)?;
             let same = |s: &&super::manifest::Step| s.kind == t.kind && s.pipeline == t.pipeline;
             let nth = mine.steps[..*step].iter().filter(same).count();
@@ -187,6 +183,34 @@ pub struct Captured<'a> {
     pub images: &'a [((u32, u32), Manifest)],
     pub variants: Vec<(&'a Variant, Vec<(u32, Manifest)>)>,
     pub joints: Vec<Joint>,
+}
+
+impl Captured<'_> {
+    /// The values of the settings `names` in a capture: the preset's, but for `changed` (a
+    /// setting's variant) where given.
+    pub fn values(&self, names: &[String], changed: Option<(&str, u32)>) -> Vec<u64> {
+        let value = |n: &String| match changed {
+            Some((v, x)) if v == n => x as u64,
+            _ => self.variants.iter().find(|(v, _)| &v.path == n).map_or(0, |(v, _)| v.value as u64),
+        };
+        names.iter().map(value).collect()
+    }
+}
+
+/// Pass `pass` of frame `frame` of `m`, and the same pass in `other` (a capture at another
+/// size or settings): the one of the same name with as many of that name before it, in the
+/// frame of the same number (`other`'s last for a later one).
+pub(crate) fn same_pass<'m>(
+    m: &'m Manifest,
+    frame: usize,
+    pass: usize,
+    other: &'m Manifest,
+) -> Option<(&'m Pass, &'m Pass)> {
+    let passes = m.frame_passes.get(frame)?;
+    let mine = passes.get(pass)?;
+    let nth = passes[..pass].iter().filter(|p| p.name == mine.name).count();
+    let f = other.frame_passes.get(frame.min(other.frame_passes.len().checked_sub(1)?))?;
+    Some((mine, f.iter().filter(|p| p.name == mine.name).nth(nth)?))
 }
 
 /// The frame with several settings (and the image) changed at once.
@@ -267,13 +291,7 @@ pub fn annotate(m: &mut Manifest, c: &Captured) -> (usize, usize) {
     for Following { at, value: v, depends, names, whole } in following(m, c) {
         follow += 1;
         let image = expr_of(m, &at);
-        let value = |var: &str, x: Option<(&str, u32)>| -> u64 {
-            match x {
-                Some((n, x)) if n == var => x as u64,
-                _ => c.variants.iter().find(|(v, _)| v.path == var).map_or(0, |(v, _)| v.value as u64),
-            }
-        };
-        let at_base = |x: Option<(&str, u32)>| names.iter().map(|n| value(n, x)).collect::<Vec<u64>>();
+        let at_base = |x: Option<(&str, u32)>| c.values(&names, x);
         // One setting alone and not the image: the three values of its variant.
         let alone =
             c.variants.iter().find(|(var, _)| whole && names.len() == 1 && constant(&image) && var.path == names[0]);
