@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs GI Lab's whole test suite: `cargo fmt --check` and clippy, then every test binary, as
 # many at a time as there are cores. On a machine without a GPU it installs Mesa's software Vulkan
-# driver (lavapipe), Xvfb, Chromium and GNU parallel when it may (root with apt-get),
+# driver (lavapipe), Xvfb, Chromium, GNU parallel and Slurm when it may (root with apt-get),
 # otherwise it says how. `--quick` leaves out the slowest binaries (the inner loop); other
 # arguments go to `cargo test --workspace` as they are.
 set -euo pipefail
@@ -23,6 +23,11 @@ command -v xvfb-run >/dev/null 2>&1 || need+=(xvfb xauth)
 # `gi-lab study`'s tests: its page in a headless browser, its shards run by GNU parallel.
 command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || need+=(chromium)
 command -v parallel >/dev/null 2>&1 || need+=(parallel)
+# `--emit-jobs slurm`'s tests submit to a real one-node Slurm (scripts/slurm-local.sh).
+command -v slurmctld >/dev/null 2>&1 || need+=(slurmctld)
+command -v slurmd >/dev/null 2>&1 || need+=(slurmd)
+command -v sbatch >/dev/null 2>&1 || need+=(slurm-client)
+command -v munged >/dev/null 2>&1 || need+=(munge)
 # LLVM's linker: scripts/cc-lld.sh (cargo's linker here, .cargo/config.toml) links the ~60 test
 # binaries with it, a minute faster than GNU ld on 2 cores.
 command -v ld.lld >/dev/null 2>&1 || need+=(lld)
@@ -138,6 +143,16 @@ status=0
 rm -f target/tmp/port-kit-verify.md
 parallel --will-cite --jobs "$(nproc)" --group --colsep ' ' --joblog "$list.log" \
   'cd {1} && WGPU_VALIDATION={3} {2}' :::: "$list.run" || status=$?
+# The study tests' one-node Slurm stops itself when its test binary ends (a watchdog of
+# scripts/slurm-local.sh): nothing of it may outlive the suite.
+for _ in $(seq 60); do
+  pgrep -f 'slurm-local.sh' >/dev/null 2>&1 || pgrep -f 'gi-lab-slurm-' >/dev/null 2>&1 || break
+  sleep 0.5
+done
+if pgrep -af 'gi-lab-slurm-|slurm-local.sh' >&2; then
+  echo "scripts/test.sh: the tests' Slurm is still running 30 s after the suite (above)" >&2
+  status=1
+fi
 # No doc tests: the crates have none.
 # Every binary's time, kept in target/test-times.txt (the slowest first) for whoever trims
 # the suite next (docs/runs/, the "Build and test time" runs).

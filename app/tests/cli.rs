@@ -106,65 +106,6 @@ fn reference_path_traces_three_exr_files() {
     assert!(rmse > 0.0 && rmse < 0.05, "RMSE vs path-traced direct light {rmse}");
 }
 
-/// `sweep --shard I/N` then `sweep --merge DIR` (issue #40 point 3): the merged CSV has the
-/// unsharded run's points with the same settings, FLIP, RMSE and flicker (the times differ
-/// from run to run), and the missing-shard case says which.
-#[test]
-fn a_sweep_in_three_shards_merges_into_the_unsharded_points() {
-    let args = [
-        "sweep",
-        "--size",
-        "32x24",
-        "--frames",
-        "1",
-        "--flicker-frames",
-        "2",
-        "--reference-spp",
-        "2",
-        "--param",
-        "direct.pcf_radius=0..2:3",
-        "--param",
-        "direct.shadows=true,false",
-    ];
-    let single = temp_dir("sweep-single");
-    let o = gi_lab().args(args).arg("--out").arg(&single).output().expect("runs");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let sharded = temp_dir("sweep-sharded");
-    for i in [3, 1] {
-        let o =
-            gi_lab().args(args).arg("--out").arg(&sharded).arg("--shard").arg(format!("{i}/3")).output().expect("runs");
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    }
-    let o = gi_lab().args(["sweep", "--merge"]).arg(&sharded).output().expect("runs");
-    assert_eq!(o.status.code(), Some(2));
-    assert!(
-        String::from_utf8_lossy(&o.stderr).contains("shard(s) 2 of 3 are missing"),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    let o = gi_lab().args(args).arg("--out").arg(&sharded).arg("--shard").arg("2/3").output().expect("runs");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let o = gi_lab().args(["sweep", "--merge"]).arg(&sharded).output().expect("runs");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(sharded.join("pareto.png").is_file());
-    let rows = |dir: &std::path::Path| -> Vec<Vec<String>> {
-        let csv = std::fs::read_to_string(dir.join("sweep.csv")).expect("sweep.csv");
-        let mut lines = csv.lines();
-        let header: Vec<&str> = lines.next().expect("header").split(',').collect();
-        let keep: Vec<usize> =
-            (0..header.len()).filter(|&i| !header[i].ends_with("_ms") && header[i] != "pareto").collect();
-        lines
-            .map(|l| {
-                let c: Vec<&str> = l.split(',').collect();
-                keep.iter().map(|&i| c[i].to_string()).collect()
-            })
-            .collect()
-    };
-    let (a, b) = (rows(&sharded), rows(&single));
-    assert_eq!(a.len(), 6);
-    assert_eq!(a, b, "the merged points differ from the unsharded run's");
-}
-
 #[test]
 fn a_2x2_sweep_writes_its_csv_and_pareto_plot() {
     let out = temp_dir("sweep");

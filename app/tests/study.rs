@@ -1,12 +1,18 @@
 //! `gi-lab study` as a user runs it (issue #40 points 2 and 3): at 64² on two shipped scenes
 //! and three presets, the page and its files exist and every number and name on the page is
 //! results.json's; the page renders in headless Chromium with its images loaded; the study
-//! split in three shards by GNU parallel (and by a Slurm job array, through a stand-in
-//! `sbatch` that runs the array's tasks here) merges into the single run's rows.
+//! split in three shards by GNU parallel, and in two by a Slurm job array submitted to a real
+//! one-node Slurm (issue #55, scripts/slurm-local.sh), merges into the single run's rows; a
+//! failed array task, a refused job and a shard written twice say which.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
+use std::time::Duration;
+
+#[path = "support/slurm.rs"]
+mod support_slurm;
+use support_slurm::slurm;
 
 use serde_json::Value;
 
@@ -323,41 +329,143 @@ fn three_shards_run_by_gnu_parallel_merge_into_the_single_runs_rows() {
     assert_merged_equals_single(&out);
 }
 
+/// Runs `gi-lab ARGS` and gives its output, failing with its error when it fails.
+fn run_ok(args: &[String]) -> std::process::Output {
+    let o = gi_lab().args(args).output().expect("runs");
+    assert!(o.status.success(), "gi-lab {}: {}", args.join(" "), String::from_utf8_lossy(&o.stderr));
+    o
+}
+
+/// `study.slurm` submitted with the real `sbatch` to a one-node Slurm (issue #55): the array's
+/// tasks and the merge complete, with the partition, time limit and account asked for, each
+/// task's output in OUT/logs/, and the merged report equals the single run.
 #[test]
-fn a_slurm_job_array_script_submits_its_shards_and_the_merge() {
+fn a_slurm_job_array_on_a_real_slurm_merges_into_the_single_runs_rows() {
+    let cluster = slurm();
     let out = temp_dir("slurm");
-    let o = gi_lab()
-        .arg("study")
-        .args(study_args())
-        .arg("--out")
-        .arg(&out)
-        .args(["--emit-jobs", "slurm", "--shards", "2"])
-        .output()
-        .expect("runs");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let script = out.join("study.slurm");
-    let text = std::fs::read_to_string(&script).expect("study.slurm");
-    assert!(text.contains("#SBATCH --array=1-2"), "{text}");
-    // A stand-in sbatch: `--parsable SCRIPT` runs the array's tasks one after the other (as
-    // Slurm would, with SLURM_ARRAY_TASK_ID set), `--wrap CMD` runs the dependent merge.
-    let bin = temp_dir("slurm-bin");
-    let sbatch = bin.join("sbatch");
-    std::fs::write(
-        &sbatch,
-        "#!/usr/bin/env bash\nset -e\nif [ \"$1\" = --parsable ]; then\n  n=$(sed -n 's/^#SBATCH --array=1-//p' \"$2\")\n  for i in $(seq 1 \"$n\"); do SLURM_ARRAY_TASK_ID=$i bash \"$2\" >&2; done\n  echo 4242\nelse\n  for a in \"$@\"; do case \"$a\" in --dependency=afterok:4242) dep=1;; esac; done\n  [ \"${dep:-}\" = 1 ] || { echo 'the merge must depend on the array' >&2; exit 3; }\n  while [ \"$1\" != --wrap ]; do shift; done\n  bash -c \"$2\"\nfi\n",
-    )
-    .expect("write sbatch");
-    Command::new("chmod").arg("+x").arg(&sbatch).status().expect("chmod");
-    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
-    let o = Command::new("bash").arg(&script).env("PATH", path).output().expect("bash runs");
-    assert!(
-        o.status.success(),
-        "the Slurm script failed: {}\n{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    assert!(String::from_utf8_lossy(&o.stdout).contains("submitted the job array 4242"));
+    let mut args: Vec<String> = vec!["study".into()];
+    args.extend(study_args());
+    args.extend(["--out".into(), out.display().to_string()]);
+    for a in ["--emit-jobs", "slurm", "--shards", "2", "--slurm-gpus", "0", "--slurm-partition", "lab"] {
+        args.push(a.into());
+    }
+    args.extend(["--slurm-time", "20", "--slurm-account", "gi_lab_tests"].map(String::from));
+    run_ok(&args);
+    let text = std::fs::read_to_string(out.join("study.slurm")).expect("study.slurm");
+    assert!(!text.contains("gpus-per-task"), "--slurm-gpus 0 asks for no GPU:\n{text}");
+    let (array, merge) = cluster.submit(&out.join("study.slurm"));
+    let took = cluster.wait(&[&array, &merge], Duration::from_secs(400), &out.join("logs"));
+    let tasks = cluster.jobs(&array);
+    assert_eq!(tasks.len(), 2, "two array tasks");
+    for t in tasks.iter().chain(&cluster.jobs(&merge)) {
+        let what = format!("job {} (task {})", t.get("JobId"), t.get("ArrayTaskId"));
+        assert_eq!(t.get("JobState"), "COMPLETED", "{what}");
+        assert_eq!(t.get("Partition"), "lab", "{what}");
+        assert_eq!(t.get("TimeLimit"), "00:20:00", "{what}");
+        assert_eq!(t.get("Account"), "gi_lab_tests", "{what}");
+        assert_eq!(t.get("WorkDir"), out.display().to_string(), "{what}");
+    }
+    for log in ["shard-1.log", "shard-2.log", "merge.log"] {
+        assert!(out.join("logs").join(log).is_file(), "logs/{log}");
+    }
+    let merge_log = std::fs::read_to_string(out.join("logs/merge.log")).expect("merge.log");
+    assert!(merge_log.contains("wrote") && merge_log.contains("index.html"), "{merge_log}");
+    eprintln!("Slurm: array {array} (2 tasks) and merge {merge} done in {took:.1?}");
     assert_merged_equals_single(&out);
+}
+
+/// A task of the array fails (its scene removed after the script was written): the merge job
+/// never runs, and `--merge` by hand names the failed shard, its job and why.
+#[test]
+fn a_failed_array_task_cancels_the_merge_and_the_merge_by_hand_names_it() {
+    let cluster = slurm();
+    let out = temp_dir("slurm-fail");
+    let scenes = temp_dir("slurm-fail-scenes");
+    let mut args: Vec<String> = vec!["study".into()];
+    for s in ["a.glb", "b.glb"] {
+        std::fs::copy(repo("assets/cornell_box.glb"), scenes.join(s)).expect("copy the scene");
+        args.extend(["--scene".into(), scenes.join(s).display().to_string()]);
+    }
+    args.extend(["--preset".into(), repo("presets/soler-quarter-4-64.ron")]);
+    for a in ["--size", "32x32", "--frames", "1", "--flicker-frames", "0", "--spp", "2"] {
+        args.push(a.into());
+    }
+    args.extend(["--out".into(), out.display().to_string()]);
+    args.extend(["--emit-jobs", "slurm", "--shards", "2", "--slurm-gpus", "0"].map(String::from));
+    run_ok(&args);
+    std::fs::remove_file(scenes.join("b.glb")).expect("remove b.glb");
+    let (array, merge) = cluster.submit(&out.join("study.slurm"));
+    cluster.wait(&[&array, &merge], Duration::from_secs(300), &out.join("logs"));
+    let state = |task: &str| {
+        cluster.jobs(&array).iter().find(|t| t.get("ArrayTaskId") == task).map(|t| t.get("JobState").to_string())
+    };
+    assert_eq!(state("1").as_deref(), Some("COMPLETED"));
+    assert_eq!(state("2").as_deref(), Some("FAILED"));
+    // --kill-on-invalid-dep: the merge is cancelled, not left pending forever.
+    let m = cluster.jobs(&merge);
+    assert_eq!((m[0].get("JobState"), m[0].get("Reason")), ("CANCELLED", "DependencyNeverSatisfied"));
+    assert!(!out.join("logs/merge.log").exists() && !out.join("index.html").exists(), "no merge, no report");
+    let o = gi_lab().arg("study").arg("--merge").arg(&out).output().expect("runs");
+    assert_eq!(o.status.code(), Some(2), "a missing shard is the user's input");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains(&format!("shard 2/2 failed (Slurm job {array}_2 on host")), "{err}");
+    assert!(err.contains("b.glb") && err.contains("logs/shard-2.log"), "{err}");
+    assert!(!out.join("index.html").exists() && !out.join("results.csv").exists(), "no partial report");
+}
+
+/// A Slurm that refuses the job (a partition it lacks), no `sbatch` on the PATH, a shard
+/// another live run writes: each a clear message naming the job and shard, nothing submitted.
+#[test]
+fn slurm_refusals_and_a_shard_written_twice_say_which() {
+    let cluster = slurm();
+    let out = temp_dir("slurm-refused");
+    let mut args: Vec<String> = vec!["study".into()];
+    args.extend(study_args());
+    args.extend(["--out".into(), out.display().to_string()]);
+    let script = out.join("study.slurm");
+    // A GPU per task (the default) where the node has no GPU resource, then a partition the
+    // cluster lacks: Slurm refuses both, the script says so with Slurm's reason.
+    for (extra, reason) in
+        [(&[][..], "gres"), (&["--slurm-gpus", "0", "--slurm-partition", "nowhere"][..], "partition")]
+    {
+        let mut a = args.clone();
+        a.extend(["--emit-jobs", "slurm", "--shards", "2"].map(String::from));
+        a.extend(extra.iter().map(|s| s.to_string()));
+        run_ok(&a);
+        let o = cluster.command("bash").arg(&script).output().expect("bash runs");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "Slurm must refuse ({reason})");
+        assert!(err.contains("Slurm refused the job array gi-lab-study (2 shards of the study into"), "{err}");
+        assert!(err.to_lowercase().contains(reason), "Slurm's reason: {err}");
+        if reason == "gres" {
+            assert!(err.contains("write the script again with --slurm-gpus 0"), "{err}");
+        }
+        assert!(!String::from_utf8_lossy(&o.stdout).contains("submitted"), "nothing submitted");
+    }
+    let o = Command::new("/bin/bash").arg(&script).env("PATH", "/nonexistent").output().expect("bash runs");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("no sbatch on the PATH: submit the job array gi-lab-study"), "{err}");
+    // Shard 1 written by a live Slurm job of this host: a second run of it is refused.
+    let mut holder = Command::new("sleep").arg("60").spawn().expect("sleep");
+    let shard = out.join("shard-1");
+    std::fs::create_dir_all(&shard).expect("shard-1");
+    let host = std::fs::read_to_string("/proc/sys/kernel/hostname").expect("hostname").trim().to_string();
+    let status = serde_json::json!({
+        "state": "running", "shard": { "index": 1, "count": 2 },
+        "writer": { "job": "77_1", "host": host, "pid": holder.id() },
+        "started": 0, "ended": null, "error": null
+    });
+    std::fs::write(shard.join("status.json"), status.to_string()).expect("status.json");
+    let mut again: Vec<String> = vec!["study".into()];
+    again.extend(study_args());
+    again.extend(["--out".into(), out.display().to_string(), "--shard".into(), "1/2".into()]);
+    let o = gi_lab().args(&again).output().expect("runs");
+    let _ = holder.kill();
+    let _ = holder.wait();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("shard 1/2 of") && err.contains("already being written by Slurm job 77_1"), "{err}");
+    assert!(!shard.join("shard.json").exists());
 }
 
 #[test]
@@ -375,6 +483,71 @@ fn a_merge_with_a_missing_shard_says_which_and_writes_nothing() {
     let o = gi_lab().arg("study").arg("--merge").arg(&out).output().expect("runs");
     assert_eq!(o.status.code(), Some(2), "a missing shard is the user's input");
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("shard(s) 1, 3 of 3 are missing"), "{err}");
+    assert!(err.contains("2 of 3 shards are not there, so nothing was written"), "{err}");
+    assert!(err.contains("shard 1/3 has not run") && err.contains("shard 3/3 has not run"), "{err}");
     assert!(!out.join("index.html").exists() && !out.join("results.csv").exists());
+}
+
+/// The columns of a sweep.csv that do not depend on the machine's speed, row by row.
+fn sweep_rows(dir: &Path) -> Vec<Vec<String>> {
+    let csv = std::fs::read_to_string(dir.join("sweep.csv")).expect("sweep.csv");
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let keep: Vec<usize> =
+        (0..header.len()).filter(|&i| !header[i].ends_with("_ms") && header[i] != "pareto").collect();
+    lines
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            keep.iter().map(|&i| c[i].to_string()).collect()
+        })
+        .collect()
+}
+
+/// `sweep … --emit-jobs slurm` takes the same path as the study (issues #40 point 3 and #55):
+/// its three shards as a job array on the one-node Slurm, the merge as the dependent job, the
+/// merged CSV the unsharded run's points (settings, FLIP, RMSE and flicker; times differ); a
+/// merge that lacks a shard's results names it.
+#[test]
+fn a_sweep_as_a_slurm_job_array_merges_into_the_unsharded_points() {
+    let cluster = slurm();
+    let args: Vec<String> = [
+        "sweep",
+        "--size",
+        "32x24",
+        "--frames",
+        "1",
+        "--flicker-frames",
+        "2",
+        "--reference-spp",
+        "2",
+        "--param",
+        "direct.pcf_radius=0..2:3",
+        "--param",
+        "direct.shadows=true,false",
+    ]
+    .map(String::from)
+    .to_vec();
+    let single = temp_dir("sweep-single");
+    let mut a = args.clone();
+    a.extend(["--out".into(), single.display().to_string()]);
+    run_ok(&a);
+    let sharded = temp_dir("sweep-slurm");
+    let mut a = args.clone();
+    a.extend(["--out".into(), sharded.display().to_string()]);
+    a.extend(["--emit-jobs", "slurm", "--shards", "3", "--slurm-gpus", "0"].map(String::from));
+    run_ok(&a);
+    let (array, merge) = cluster.submit(&sharded.join("sweep.slurm"));
+    cluster.wait(&[&array, &merge], Duration::from_secs(300), &sharded.join("logs"));
+    for t in cluster.jobs(&array).iter().chain(&cluster.jobs(&merge)) {
+        assert_eq!(t.get("JobState"), "COMPLETED", "job {} (task {})", t.get("JobId"), t.get("ArrayTaskId"));
+    }
+    assert!(sharded.join("pareto.png").is_file());
+    let (a, b) = (sweep_rows(&sharded), sweep_rows(&single));
+    assert_eq!(a.len(), 6);
+    assert_eq!(a, b, "the merged points differ from the unsharded run's");
+    std::fs::remove_file(sharded.join("shard-2/sweep.json")).expect("shard 2's results");
+    let o = gi_lab().args(["sweep", "--merge"]).arg(&sharded).output().expect("runs");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains(&format!("shard 2/3 ended (Slurm job {array}_2 on host")), "{err}");
 }

@@ -5,6 +5,7 @@
 pub mod bench;
 pub mod buffers;
 pub mod compare;
+pub mod emit;
 pub mod export;
 pub mod gen_assets;
 pub mod hcb_stats;
@@ -12,6 +13,7 @@ pub mod reference;
 pub mod render;
 pub mod settings;
 pub mod shard;
+pub mod shard_status;
 pub mod soak;
 pub mod soak_memory;
 pub mod soak_walk;
@@ -63,7 +65,9 @@ pub enum Command {
     /// and a PNG preview).
     Reference(ReferenceArgs),
     /// Render every combination of swept settings; write sweep.csv (settings, per-pass ms,
-    /// FLIP, RMSE, flicker) and pareto.png (quality against time).
+    /// FLIP, RMSE, flicker) and pareto.png (quality against time). `--shard I/N` renders a
+    /// share, `--merge DIR` joins the shards, `--emit-jobs slurm|parallel` writes the script
+    /// that runs them.
     Sweep(sweep::SweepArgs),
     /// Scenes × presets (× swept settings) against a path-traced truth per scene: writes
     /// DIR/index.html (image grids with FLIP maps, tables, time per pass, error against time,

@@ -45,8 +45,10 @@ pub struct SweepArgs {
     #[arg(long, value_parser = super::shard::parse_shard, value_name = "I/N")]
     pub shard: Option<super::shard::Shard>,
     /// Join OUT/shard-*/ into OUT's sweep.csv and pareto.png (as an unsharded run writes them).
-    #[arg(long, value_name = "DIR", conflicts_with = "shard")]
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["shard", "emit_jobs"])]
     pub merge: Option<PathBuf>,
+    #[command(flatten)]
+    pub emit: super::emit::EmitArgs,
 }
 
 /// One swept setting and its values.

@@ -7,7 +7,8 @@ use std::path::Path;
 use gi_render::{GpuContext, LabSettings, Renderer};
 use serde::{Deserialize, Serialize};
 
-use super::shard::{Shard, check_complete, shard_dirs};
+use super::shard::{Shard, shard_dirs};
+use super::shard_status::check_complete;
 use super::sweep::{Param, PointResult, SweepArgs, csv, grid, mark_pareto, pareto_plot, parse_param, settings_at};
 use crate::error::CliError;
 
@@ -30,6 +31,7 @@ fn spec_of(args: &SweepArgs) -> String {
     a.out = None;
     a.shard = None;
     a.merge = None;
+    a.emit = super::emit::EmitArgs::default();
     format!("{a:?}")
 }
 
@@ -46,11 +48,69 @@ fn write(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
         .map_err(|e| CliError::failure(format!("{}: {e}", path.display())))
 }
 
+/// `path` made absolute (the shards of `--emit-jobs` may start in any folder).
+fn absolute(path: &Path, flag: &str) -> Result<String, CliError> {
+    std::fs::canonicalize(path)
+        .map(|a| a.display().to_string())
+        .map_err(|e| CliError::input(format!("{flag} {}: {e}", path.display())))
+}
+
+/// The sweep's arguments but `--out`, `--shard`, `--merge` and `--emit-jobs`, its files as
+/// absolute paths: what each shard of `--emit-jobs` runs.
+fn shard_args(args: &SweepArgs) -> Result<Vec<String>, CliError> {
+    let mut v: Vec<String> = Vec::new();
+    let mut push = |flag: &str, value: String| v.extend([flag.to_string(), value]);
+    let s = &args.scene;
+    if let Some(p) = &s.scene {
+        push("--scene", absolute(p, "--scene")?);
+    }
+    push("--unit-scale", s.unit_scale.to_string());
+    if let Some(p) = &s.preset {
+        push("--preset", absolute(p, "--preset")?);
+    }
+    for o in &s.overrides {
+        push("--set", o.clone());
+    }
+    if let Some(sky) = &s.sky {
+        // A colour or `off` as it is; an image by its absolute path.
+        let image = Path::new(sky);
+        push("--sky", if image.is_file() { absolute(image, "--sky")? } else { sky.clone() });
+    }
+    push("--sky-intensity", s.sky_intensity.to_string());
+    push("--sky-rotation", s.sky_rotation.to_string());
+    for p in &args.params {
+        push("--param", p.clone());
+    }
+    push("--size", format!("{}x{}", args.size.0, args.size.1));
+    push("--frames", args.frames.to_string());
+    push("--flicker-frames", args.flicker_frames.to_string());
+    if let Some(r) = &args.reference {
+        push("--reference", absolute(r, "--reference")?);
+    }
+    push("--reference-spp", args.reference_spp.to_string());
+    Ok(v)
+}
+
 pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
     if let Some(dir) = &args.merge {
         return merge(dir);
     }
     let Some(out) = args.out.clone() else { return Err(CliError::input("--out DIR is required (or --merge DIR)")) };
+    args.emit.check()?;
+    match args.shard {
+        // A shard claims its folder first, so that even its bad input is recorded there for
+        // the merge to name (crate::cli::shard_status).
+        Some(shard) => {
+            let claim = super::shard_status::claim(&out, shard, "sweep.json")?;
+            claim.finish(run(args, &out))
+        }
+        None => run(args, &out),
+    }
+}
+
+/// The sweep (or its shard) into `out`, or the script of `--emit-jobs`.
+fn run(args: &SweepArgs, out: &Path) -> Result<(), CliError> {
+    let out = out.to_path_buf();
     if args.frames == 0 {
         return Err(CliError::input("--frames must be at least 1"));
     }
@@ -63,6 +123,11 @@ pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
     let points = grid(&params);
     // Every point is checked before anything renders.
     let settings = settings_at(&base, &points).map_err(CliError::input)?;
+    if args.emit.emit_jobs.is_some() {
+        let path = super::emit::write_script("sweep", &shard_args(args)?, &out, &args.emit)?;
+        println!("wrote {} ({} points in {} shards)", path.display(), points.len(), args.emit.shards);
+        return Ok(());
+    }
     let shard = args.shard.unwrap_or(Shard { index: 1, count: 1 });
     let dir = if args.shard.is_some() { shard.dir(&out) } else { out.clone() };
     std::fs::create_dir_all(&dir).map_err(|e| CliError::input(format!("--out {}: {e}", dir.display())))?;
@@ -213,14 +278,15 @@ fn finish(out: &Path, parts: Vec<SweepShard>) -> Result<(), CliError> {
 fn merge(dir: &Path) -> Result<(), CliError> {
     let found = shard_dirs(dir, "sweep.json").map_err(CliError::input)?;
     let mut parts = Vec::new();
+    let mut shards = Vec::new();
     for (_, d) in &found {
         let path = d.join("sweep.json");
         let text = std::fs::read_to_string(&path).map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
         let part: SweepShard = serde_json::from_str(&text)
             .map_err(|e| CliError::input(format!("{}: not a sweep shard: {e}", path.display())))?;
+        shards.push((d.clone(), part.shard));
         parts.push(part);
     }
-    let shards: Vec<(u32, Shard)> = parts.iter().map(|p| (p.shard.index, p.shard)).collect();
-    check_complete(dir, &shards).map_err(CliError::input)?;
+    check_complete(dir, &shards, "sweep.json").map_err(CliError::input)?;
     finish(dir, parts)
 }

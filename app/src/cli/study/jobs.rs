@@ -1,13 +1,13 @@
 //! A study's canonical spec (what every shard must agree on), its job list (scenes ×
 //! presets × sweep points, the scene varying slowest) and the scripts of `--emit-jobs`.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use gi_render::LabSettings;
 use gi_render::settings::Value;
 use serde::{Deserialize, Serialize};
 
-use super::{JobEngine, StudyArgs};
+use super::StudyArgs;
 use crate::cli::shard::shell_word;
 use crate::cli::sweep::{Param, grid, parse_param, settings_at};
 use crate::error::CliError;
@@ -62,7 +62,16 @@ impl Spec {
             return Err(CliError::input(format!("--unit-scale {} must be 0 or a positive number", a.unit_scale)));
         }
         Ok(Self {
-            scenes: a.scenes.iter().map(|p| absolute(p, "scene")).collect::<Result<_, _>>()?,
+            // An absolute path that is missing is kept: a shard loads only the scenes of its
+            // own jobs (`measure::run`; `--emit-jobs` checks them all), so that one missing scene fails only the
+            // shards that render it.
+            scenes: a
+                .scenes
+                .iter()
+                .map(
+                    |p| if p.is_absolute() && !p.exists() { Ok(p.display().to_string()) } else { absolute(p, "scene") },
+                )
+                .collect::<Result<_, _>>()?,
             unit_scale: a.unit_scale,
             presets: a.presets.iter().map(|p| absolute(p, "preset")).collect::<Result<_, _>>()?,
             overrides: a.overrides.clone(),
@@ -255,6 +264,18 @@ impl Plan {
         Ok(Self { scenes, presets, preset_settings, params, points, jobs })
     }
 
+    /// Checks that the scene files of `jobs` exist (before anything renders).
+    pub fn check_scenes(&self, jobs: &[Job]) -> Result<(), CliError> {
+        for j in jobs {
+            if let Some(f) = &self.scenes[j.scene].file
+                && !Path::new(f).is_file()
+            {
+                return Err(CliError::input(format!("--scene {f}: no such file")));
+            }
+        }
+        Ok(())
+    }
+
     /// The settings of a job: its preset with its sweep point.
     pub fn settings(&self, job: Job) -> LabSettings {
         let mut s = self.preset_settings[job.preset].clone();
@@ -270,58 +291,6 @@ impl Plan {
         let p = &self.presets[job.preset].slug;
         if self.points.len() > 1 { format!("{p}-p{}", job.point) } else { p.clone() }
     }
-}
-
-/// The script that runs the study's `shards` shards on `engine` and then the merge:
-/// (its path below `out`, its text).
-pub fn emit(spec: &Spec, out: &Path, engine: JobEngine, shards: u32) -> Result<(PathBuf, String), CliError> {
-    let exe = std::env::current_exe()
-        .map(|p| p.display().to_string())
-        .map_err(|e| CliError::failure(format!("the path of gi-lab itself: {e}")))?;
-    let out_abs = if out.is_absolute() {
-        out.to_path_buf()
-    } else {
-        std::env::current_dir().map_err(|e| CliError::failure(e.to_string()))?.join(out)
-    };
-    let dir = shell_word(&out_abs.display().to_string());
-    let mut shard_cmd = vec![shell_word(&exe), "study".into()];
-    shard_cmd.extend(spec.args().iter().map(|a| shell_word(a)));
-    shard_cmd.extend(["--out".into(), dir.clone()]);
-    let shard_cmd = shard_cmd.join(" ");
-    let merge = format!("{} study --merge {dir}", shell_word(&exe));
-    let text = match engine {
-        JobEngine::Parallel => format!(
-            "#!/usr/bin/env bash\n\
-             # GI Lab study: {shards} shards run by GNU parallel, then the merge into {dir}.\n\
-             # Run: bash {dir}/study.parallel   (add e.g. -S host1,host2 after `parallel` to spread the\n\
-             # shards over machines that share {dir}).\n\
-             set -euo pipefail\n\
-             parallel --will-cite --halt now,fail=1 --line-buffer -q {shard_cmd} --shard '{{}}/{shards}' ::: $(seq 1 {shards})\n\
-             {merge}\n"
-        ),
-        JobEngine::Slurm => format!(
-            "#!/usr/bin/env bash\n\
-             # GI Lab study: {shards} shards as a Slurm job array, then the merge into {dir} as a\n\
-             # dependent job. Run `bash {dir}/study.slurm` on the login node: it submits both.\n\
-             #SBATCH --job-name=gi-lab-study\n\
-             #SBATCH --array=1-{shards}\n\
-             #SBATCH --output={dir}/shard-%a.log\n\
-             #SBATCH --gres=gpu:1\n\
-             set -euo pipefail\n\
-             if [ -z \"${{SLURM_ARRAY_TASK_ID:-}}\" ]; then\n\
-             \x20 jid=$(sbatch --parsable \"$0\")\n\
-             \x20 sbatch --dependency=afterok:\"$jid\" --job-name=gi-lab-study-merge --output={dir}/merge.log --wrap \"{merge}\"\n\
-             \x20 echo \"submitted the job array $jid ({shards} shards) and its merge\"\n\
-             \x20 exit 0\n\
-             fi\n\
-             {shard_cmd} --shard \"$SLURM_ARRAY_TASK_ID/{shards}\"\n"
-        ),
-    };
-    let name = match engine {
-        JobEngine::Parallel => "study.parallel",
-        JobEngine::Slurm => "study.slurm",
-    };
-    Ok((out.join(name), text))
 }
 
 #[cfg(test)]

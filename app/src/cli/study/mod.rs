@@ -18,22 +18,13 @@ pub mod report;
 pub mod results;
 pub mod svg;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use clap::Args;
 
 use super::parse_size;
 use super::shard::{Shard, parse_shard};
 use crate::error::CliError;
-
-/// Where `--emit-jobs` runs the shards.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum JobEngine {
-    /// A Slurm job array (`sbatch`), one array task per shard, and the merge as a dependent job.
-    Slurm,
-    /// A GNU parallel command line: the shards as parallel jobs, then the merge.
-    Parallel,
-}
 
 #[derive(Args, Debug, Clone)]
 pub struct StudyArgs {
@@ -88,13 +79,8 @@ pub struct StudyArgs {
     /// Join DIR/shard-*/ into DIR's report, CSV and JSON (as an unsharded run writes them).
     #[arg(long, value_name = "DIR", conflicts_with_all = ["shard", "emit_jobs"])]
     pub merge: Option<PathBuf>,
-    /// Write the script that runs this study's shards and then the merge (DIR/study.slurm or
-    /// DIR/study.parallel) instead of running it; see docs/cli.md.
-    #[arg(long, value_enum, conflicts_with = "shard")]
-    pub emit_jobs: Option<JobEngine>,
-    /// The number of shards of --emit-jobs.
-    #[arg(long, default_value_t = 4)]
-    pub shards: u32,
+    #[command(flatten)]
+    pub emit: crate::cli::emit::EmitArgs,
 }
 
 pub fn study(args: &StudyArgs) -> Result<(), CliError> {
@@ -104,25 +90,34 @@ pub fn study(args: &StudyArgs) -> Result<(), CliError> {
     let Some(out) = args.out.clone() else {
         return Err(CliError::input("--out DIR is required (or --merge DIR)"));
     };
+    args.emit.check()?;
+    match args.shard {
+        // A shard claims its folder before anything else, so that even its bad input is
+        // recorded there for the merge to name (crate::cli::shard_status).
+        Some(shard) => {
+            let claim = crate::cli::shard_status::claim(&out, shard, "shard.json")?;
+            claim.finish(run(args, &out, Some(shard)))
+        }
+        None => run(args, &out, None),
+    }
+}
+
+/// The study (or its `shard`) into `out`, or the script of `--emit-jobs`.
+fn run(args: &StudyArgs, out: &Path, sharded: Option<Shard>) -> Result<(), CliError> {
     let spec = jobs::Spec::from_args(args)?;
     // Everything is checked before anything renders or is written.
     let plan = jobs::Plan::new(&spec)?;
-    if let Some(engine) = args.emit_jobs {
-        if args.shards == 0 {
-            return Err(CliError::input("--shards must be at least 1"));
-        }
-        let (path, text) = jobs::emit(&spec, &out, engine, args.shards)?;
-        std::fs::create_dir_all(&out).map_err(|e| CliError::input(format!("--out {}: {e}", out.display())))?;
-        gi_render::files::write_atomic_bytes(&path, text.as_bytes(), gi_render::files::Backup::Skip)
-            .map_err(|e| CliError::failure(format!("{}: {e}", path.display())))?;
-        println!("wrote {} ({} jobs in {} shards)", path.display(), plan.jobs.len(), args.shards);
+    if args.emit.emit_jobs.is_some() {
+        plan.check_scenes(&plan.jobs)?;
+        let path = crate::cli::emit::write_script("study", &spec.args(), out, &args.emit)?;
+        println!("wrote {} ({} jobs in {} shards)", path.display(), plan.jobs.len(), args.emit.shards);
         return Ok(());
     }
-    let shard = args.shard.unwrap_or(Shard { index: 1, count: 1 });
-    let dir = if args.shard.is_some() { shard.dir(&out) } else { out.clone() };
+    let shard = sharded.unwrap_or(Shard { index: 1, count: 1 });
+    let dir = if sharded.is_some() { shard.dir(out) } else { out.to_path_buf() };
     std::fs::create_dir_all(&dir).map_err(|e| CliError::input(format!("--out {}: {e}", dir.display())))?;
-    let part = measure::run(&spec, &plan, shard, &out, &dir)?;
-    if args.shard.is_some() {
+    let part = measure::run(&spec, &plan, shard, out, &dir)?;
+    if sharded.is_some() {
         results::write_shard(&dir, &part)?;
         println!(
             "shard {}/{}: {} of {} jobs in {}; join the shards with: gi-lab study --merge {}",
@@ -136,6 +131,6 @@ pub fn study(args: &StudyArgs) -> Result<(), CliError> {
         return Ok(());
     }
     let study = results::Study::assemble(vec![part])?;
-    report::write_report(&out, &study)?;
+    report::write_report(out, &study)?;
     Ok(())
 }

@@ -5,7 +5,8 @@ use std::path::Path;
 
 use super::results::{Part, Study, Winner, json, write};
 use super::{page, svg};
-use crate::cli::shard::{Shard, check_complete, shard_dirs};
+use crate::cli::shard::shard_dirs;
+use crate::cli::shard_status::check_complete;
 use crate::error::CliError;
 
 /// Writes the report of `study` into `out`: results.json, results.csv, plots/ and index.html
@@ -47,8 +48,8 @@ pub fn merge(dir: &Path) -> Result<(), CliError> {
             .map_err(|e| CliError::input(format!("{}: not a study shard: {e}", path.display())))?;
         parts.push((d.clone(), part));
     }
-    let shards: Vec<(u32, Shard)> = parts.iter().map(|(_, p)| (p.shard.index, p.shard)).collect();
-    check_complete(dir, &shards).map_err(CliError::input)?;
+    let shards: Vec<_> = parts.iter().map(|(d, p)| (d.clone(), p.shard)).collect();
+    check_complete(dir, &shards, "shard.json").map_err(CliError::input)?;
     // The images, at the same relative paths as an unsharded run writes them.
     for (d, p) in &parts {
         let files = p.rows.iter().flat_map(|r| [&r.image, &r.flip_map]).chain(p.truths.iter().map(|(_, t)| &t.image));
