@@ -354,6 +354,12 @@ fn a_slurm_job_array_on_a_real_slurm_merges_into_the_single_runs_rows() {
     let text = std::fs::read_to_string(out.join("study.slurm")).expect("study.slurm");
     assert!(!text.contains("gpus-per-task"), "--slurm-gpus 0 asks for no GPU:\n{text}");
     let (array, merge) = cluster.submit(&out.join("study.slurm"));
+    // A merge by hand before the array has ended writes nothing and says which shards lack.
+    let o = gi_lab().arg("study").arg("--merge").arg(&out).output().expect("runs");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("shards are not there, so nothing was written") && err.contains("shard 2/2"), "{err}");
+    assert!(!out.join("index.html").exists(), "no partial report");
     let took = cluster.wait(&[&array, &merge], Duration::from_secs(400), &out.join("logs"));
     let tasks = cluster.jobs(&array);
     assert_eq!(tasks.len(), 2, "two array tasks");

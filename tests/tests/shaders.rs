@@ -192,6 +192,7 @@ fn declared_as(module: &naga::Module, v: &naga::GlobalVariable, kind: Kind) -> b
     use naga::{AddressSpace, ImageClass, ImageDimension, ScalarKind, StorageAccess, TypeInner};
     match (kind, v.space, &module.types[v.ty].inner) {
         (Kind::Uniform | Kind::UniformDynamic, AddressSpace::Uniform, _) => true,
+        (Kind::StorageDynamic, AddressSpace::Storage { access }, _) => !access.contains(StorageAccess::STORE),
         (Kind::Storage { read_only }, AddressSpace::Storage { access }, _) => {
             read_only != access.contains(StorageAccess::STORE)
         }

@@ -24,6 +24,19 @@ pub fn uniform_dynamic(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::Bi
         count: None,
     }
 }
+/// A read-only storage buffer bound at a dynamic offset.
+pub fn storage_dynamic(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: true,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
 pub fn storage(binding: u32, visibility: wgpu::ShaderStages, read_only: bool) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,

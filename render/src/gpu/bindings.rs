@@ -18,6 +18,10 @@ pub enum Kind {
     Uniform,
     /// A uniform read at a dynamic offset (one slot of a strided buffer per dispatch).
     UniformDynamic,
+    /// A read-only storage buffer read at a dynamic offset: per-dispatch parameters that
+    /// change from frame to frame, which lavapipe would otherwise inline into a new shader
+    /// variant for each new value (docs/performance.md, "Shader variants on lavapipe").
+    StorageDynamic,
     Storage {
         read_only: bool,
     },
@@ -84,6 +88,7 @@ impl Bindings {
             .map(|b| match b.kind {
                 Kind::Uniform => bgl::uniform(b.binding, vis),
                 Kind::UniformDynamic => bgl::uniform_dynamic(b.binding, vis),
+                Kind::StorageDynamic => bgl::storage_dynamic(b.binding, vis),
                 Kind::Storage { read_only } => bgl::storage(b.binding, vis, read_only),
                 Kind::Texture { filterable } => bgl::texture(b.binding, vis, filterable),
                 Kind::TextureArray { filterable } => bgl::texture_array(b.binding, vis, filterable),

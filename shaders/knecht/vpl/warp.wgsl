@@ -11,7 +11,7 @@
 #import common/vpl.wgsl
 #import common/random.wgsl
 
-@group(0) @binding(0) var<uniform> vp: ViewParams;
+@group(0) @binding(0) var<storage, read> vp: ViewParams;
 @group(0) @binding(1) var<storage, read> lights: array<Light>;
 @group(0) @binding(2) var lg_position: texture_2d<f32>;
 @group(0) @binding(3) var lg_normal: texture_2d<f32>;

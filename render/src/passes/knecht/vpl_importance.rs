@@ -32,7 +32,7 @@ pub const IMPORTANCE_INPUTS_BINDINGS: Bindings = Bindings {
     entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
-        binding(0, "vp", Kind::UniformDynamic),
+        binding(0, "vp", Kind::StorageDynamic),
         binding(1, "lights", Kind::Storage { read_only: true }),
         binding(2, "lg_position", Kind::Texture { filterable: false }),
         binding(3, "lg_normal", Kind::Texture { filterable: false }),
@@ -63,7 +63,7 @@ pub const WARP_INPUTS_BINDINGS: Bindings = Bindings {
     entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
-        binding(0, "vp", Kind::UniformDynamic),
+        binding(0, "vp", Kind::StorageDynamic),
         binding(1, "lights", Kind::Storage { read_only: true }),
         binding(2, "lg_position", Kind::Texture { filterable: false }),
         binding(3, "lg_normal", Kind::Texture { filterable: false }),
@@ -200,7 +200,7 @@ impl VplImportancePass {
         let b = device.counted_buffer(&wgpu::BufferDescriptor {
             label: Some("vpl.importance.params"),
             size: STRIDE * views as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         (b, views)
