@@ -174,6 +174,10 @@ pub fn script(command: &str, args: &[String], out: &Path, emit: &EmitArgs) -> Re
 pub fn write_script(command: &str, args: &[String], out: &Path, emit: &EmitArgs) -> Result<PathBuf, CliError> {
     let (path, text) = script(command, args, out, emit)?;
     std::fs::create_dir_all(out).map_err(|e| CliError::input(format!("--out {}: {e}", out.display())))?;
+    // The number of shards, for a merge that runs before any of them has started.
+    let planned = out.join(super::shard_status::PLANNED_FILE);
+    gi_render::files::write_atomic_bytes(&planned, emit.shards.to_string().as_bytes(), gi_render::files::Backup::Skip)
+        .map_err(|e| CliError::failure(format!("{}: {e}", planned.display())))?;
     gi_render::files::write_atomic_bytes(&path, text.as_bytes(), gi_render::files::Backup::Skip)
         .map_err(|e| CliError::failure(format!("{}: {e}", path.display())))?;
     #[cfg(unix)]

@@ -17,6 +17,10 @@ use crate::error::CliError;
 /// The status file of a shard's folder.
 pub const STATUS_FILE: &str = "status.json";
 
+/// The number of shards `--emit-jobs` planned (`OUT/shards.planned`): how many a merge expects
+/// before any has started.
+pub const PLANNED_FILE: &str = "shards.planned";
+
 /// Who writes a shard.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Writer {
@@ -205,7 +209,10 @@ pub fn check_complete(out: &Path, found: &[(PathBuf, Shard)], result: &str) -> R
             }
         }
     }
-    let Some(n) = found.first().map(|(_, s)| s.count).or_else(|| statuses.first().map(|s| s.shard.count)) else {
+    let planned: Option<u32> =
+        std::fs::read_to_string(out.join(PLANNED_FILE)).ok().and_then(|t| t.trim().parse().ok()).filter(|n| *n > 0);
+    let first = found.first().map(|(_, s)| s.count).or_else(|| statuses.first().map(|s| s.shard.count));
+    let Some(n) = first.or(planned) else {
         return Err(format!(
             "--merge {}: no shard-I/{result} below it (run the shards with --out {0} --shard I/N first)",
             out.display()
@@ -313,5 +320,11 @@ mod tests {
         let _ = std::fs::remove_dir_all(&out);
         let e = check_complete(&out, &[], "shard.json").unwrap_err();
         assert!(e.contains("no shard-I/shard.json below it"), "{e}");
+        // Written by --emit-jobs: the shards a merge expects before any has started.
+        std::fs::create_dir_all(&out).unwrap();
+        std::fs::write(out.join(PLANNED_FILE), "2").unwrap();
+        let e = check_complete(&out, &[], "shard.json").unwrap_err();
+        assert!(e.contains("2 of 2 shards are not there") && e.contains("shard 2/2 has not run"), "{e}");
+        let _ = std::fs::remove_dir_all(&out);
     }
 }
