@@ -329,6 +329,14 @@ fn three_shards_run_by_gnu_parallel_merge_into_the_single_runs_rows() {
     assert_merged_equals_single(&out);
 }
 
+/// `study` with the study's arguments (`study_args`) into `out`: a command line to extend.
+fn study_into(out: &Path) -> Vec<String> {
+    let mut v: Vec<String> = vec!["study".into()];
+    v.extend(study_args());
+    v.extend(["--out".into(), out.display().to_string()]);
+    v
+}
+
 /// Runs `gi-lab ARGS` and gives its output, failing with its error when it fails.
 fn run_ok(args: &[String]) -> std::process::Output {
     let o = gi_lab().args(args).output().expect("runs");
@@ -343,9 +351,7 @@ fn run_ok(args: &[String]) -> std::process::Output {
 fn a_slurm_job_array_on_a_real_slurm_merges_into_the_single_runs_rows() {
     let cluster = slurm();
     let out = temp_dir("slurm");
-    let mut args: Vec<String> = vec!["study".into()];
-    args.extend(study_args());
-    args.extend(["--out".into(), out.display().to_string()]);
+    let mut args = study_into(&out);
     for a in ["--emit-jobs", "slurm", "--shards", "2", "--slurm-gpus", "0", "--slurm-partition", "lab"] {
         args.push(a.into());
     }
@@ -425,9 +431,7 @@ fn a_failed_array_task_cancels_the_merge_and_the_merge_by_hand_names_it() {
 fn slurm_refusals_and_a_shard_written_twice_say_which() {
     let cluster = slurm();
     let out = temp_dir("slurm-refused");
-    let mut args: Vec<String> = vec!["study".into()];
-    args.extend(study_args());
-    args.extend(["--out".into(), out.display().to_string()]);
+    let args = study_into(&out);
     let script = out.join("study.slurm");
     // A GPU per task (the default) where the node has no GPU resource, then a partition the
     // cluster lacks: Slurm refuses both, the script says so with Slurm's reason.
@@ -462,9 +466,8 @@ fn slurm_refusals_and_a_shard_written_twice_say_which() {
         "started": 0, "ended": null, "error": null
     });
     std::fs::write(shard.join("status.json"), status.to_string()).expect("status.json");
-    let mut again: Vec<String> = vec!["study".into()];
-    again.extend(study_args());
-    again.extend(["--out".into(), out.display().to_string(), "--shard".into(), "1/2".into()]);
+    let mut again = study_into(&out);
+    again.extend(["--shard".into(), "1/2".into()]);
     let o = gi_lab().args(&again).output().expect("runs");
     let _ = holder.kill();
     let _ = holder.wait();
