@@ -98,6 +98,8 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("gautron/explain.wgsl", include_str!("../../shaders/gautron/explain.wgsl")),
     ("view/view.wgsl", include_str!("../../shaders/view/view.wgsl")),
     ("view/probe.wgsl", include_str!("../../shaders/view/probe.wgsl")),
+    ("rays/scene.wgsl", include_str!("../../shaders/rays/scene.wgsl")),
+    ("rays/cast.wgsl", include_str!("../../shaders/rays/cast.wgsl")),
 ];
 
 /// Files that are entry modules (not only imported).
@@ -163,6 +165,7 @@ pub const ENTRY_MODULES: &[&str] = &[
     "soler/hcb_gather.wgsl",
     "view/view.wgsl",
     "view/probe.wgsl",
+    "rays/cast.wgsl",
 ];
 
 #[derive(Debug, thiserror::Error, PartialEq)]

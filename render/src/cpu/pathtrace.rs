@@ -240,13 +240,7 @@ impl PathTracer {
     /// `pixel`: a camera ray's neighbours one pixel to the right and below, whose
     /// texture coordinates on the hit's plane choose the mip level (None: level 0).
     fn intersect(&self, o: Vec3, d: Vec3, tmin: f32, tmax: f32, pixel: Option<&Footprint>) -> Option<Hit> {
-        let h = self.bvh.intersect_where(o, d, tmin, tmax, |tri, _, bary| {
-            let m = &self.materials[tri.material.min(self.materials.len() - 1)];
-            let Some(cutoff) = m.alpha_cutoff else { return true };
-            let uv = tri.uv[0] * (1.0 - bary.x - bary.y) + tri.uv[1] * bary.x + tri.uv[2] * bary.y;
-            let a = m.base_color.w * self.read(m.base_color_texture, uv, None, true).map_or(1.0, |t| t.w);
-            a >= cutoff
-        })?;
+        let h = self.closest_hit(o, d, tmin, tmax)?;
         let m = &self.materials[h.material.min(self.materials.len() - 1)];
         let tri = &self.bvh.tris[h.tri];
         let duv = pixel.and_then(|f| f.uv_derivatives(tri, h.uv));
@@ -273,6 +267,28 @@ impl PathTracer {
             }
         }
         Some(Hit { p: h.p, n, uv: h.uv, duv, material: h.material, c, di, si, sp })
+    }
+
+    /// Whether a hit at barycentrics `bary` of `tri` survives its material's alpha cutout
+    /// (base colour alpha, factor × texture at level 0, at least the cutoff).
+    pub fn alpha_passes(&self, tri: &crate::scene::bvh::BvhTri, bary: Vec2) -> bool {
+        let m = &self.materials[tri.material.min(self.materials.len() - 1)];
+        let Some(cutoff) = m.alpha_cutoff else { return true };
+        let uv = tri.uv[0] * (1.0 - bary.x - bary.y) + tri.uv[1] * bary.x + tri.uv[2] * bary.y;
+        let a = m.base_color.w * self.read(m.base_color_texture, uv, None, true).map_or(1.0, |t| t.w);
+        a >= cutoff
+    }
+
+    /// The closest hit in (tmin, tmax) on every face, cutouts passed through: the walk every
+    /// path vertex and shadow ray makes, and the twin of the GPU ray caster (issue #56,
+    /// `shaders/rays/scene.wgsl`).
+    pub fn closest_hit(&self, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Option<crate::scene::bvh::BvhHit> {
+        self.bvh.intersect_where(o, d, tmin, tmax, |tri, _, bary| self.alpha_passes(tri, bary))
+    }
+
+    /// The scene's triangles as the path tracer holds them.
+    pub fn bvh(&self) -> &SceneBvh {
+        &self.bvh
     }
 
     fn occluded(&self, a: Vec3, b: Vec3) -> bool {

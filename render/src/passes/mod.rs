@@ -10,6 +10,7 @@
 //! | `hcb/` | Nguyen et al. 000 | shading points HCB samples, coherence splatting, HCB sample cache | `hcb/` |
 //! | `reference/` | Knecht 002 §5.2 (the baseline) | VPL source uniform batches, visibility exact, running average | `reference/` (`{sample,shadow,gather,explain}`) |
 //! | `soler/` | Soler et al. 004 | shading points mip levels, screen-space ring gather, joint bilateral upsampling | `soler/` |
+//! | `rays/` | issue #56 (no paper: the tools under the GPU truth and DDGI) | rays through a two-level BVH in compute | `rays/` |
 
 use crate::counters::prelude::*;
 
@@ -26,6 +27,7 @@ pub mod gbuffer_position;
 pub mod hcb;
 pub mod knecht;
 pub mod on_read;
+pub mod rays;
 pub mod reference;
 pub mod shadow;
 pub mod sky;
@@ -158,6 +160,8 @@ pub const BINDINGS: &[&crate::gpu::bindings::Bindings] = &[
     &soler::gather::GATHER_INPUTS_BINDINGS,
     &soler::upsample::RESOLVE_INPUTS_BINDINGS,
     &direct_history::SKY_HISTORY_INPUTS_BINDINGS,
+    &rays::RAY_SCENE_BINDINGS,
+    &rays::CAST_BINDINGS,
 ];
 
 /// A 2D render/storage target with the usages every registered buffer needs (sampling,

@@ -26,6 +26,10 @@ pub struct BvhTri {
     pub material: usize,
     /// glTF `doubleSided` of the material (back faces are seen).
     pub double_sided: bool,
+    /// The draw of the scene state it comes from, and its index in that draw's primitive
+    /// (indices 3k … 3k + 2): how the GPU ray caster names it (`two_level::TwoLevelHit`).
+    pub draw: u32,
+    pub index: u32,
 }
 
 /// A ray's closest hit.
@@ -55,12 +59,12 @@ impl SceneBvh {
     /// The triangles of every draw of `state`.
     pub fn new(scene: &Scene, state: &SceneState) -> Self {
         let mut tris = Vec::new();
-        for d in &state.draws {
+        for (draw, d) in state.draws.iter().enumerate() {
             let p = &scene.meshes[d.mesh].primitives[d.primitive];
             let nm: Mat4 = d.world.inverse().transpose();
             let double_sided = scene.materials.get(p.material).is_none_or(|m| m.double_sided);
             let flip = if d.world.determinant() < 0.0 { -1.0 } else { 1.0 };
-            for t in p.indices.chunks_exact(3) {
+            for (index, t) in p.indices.chunks_exact(3).enumerate() {
                 let vert = |k: usize| &p.vertices[t[k] as usize];
                 // A triangle with a vertex that is not a finite number (a broken file) cannot
                 // be hit; the BVH builder refuses its box.
@@ -85,6 +89,8 @@ impl SceneBvh {
                     uv: [0, 1, 2].map(|k| Vec2::from(vert(k).uv)),
                     material: p.material,
                     double_sided,
+                    draw: draw as u32,
+                    index: index as u32,
                 });
             }
         }

@@ -16,8 +16,10 @@ pub mod framing;
 pub mod framing_cases;
 mod gltf_load;
 pub mod raycast;
+pub mod sah;
 pub mod sky;
 mod texture;
+pub mod two_level;
 pub mod upload;
 
 pub use crate::camera::{CameraDef, Projection};
