@@ -100,6 +100,8 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("view/probe.wgsl", include_str!("../../shaders/view/probe.wgsl")),
     ("rays/scene.wgsl", include_str!("../../shaders/rays/scene.wgsl")),
     ("rays/cast.wgsl", include_str!("../../shaders/rays/cast.wgsl")),
+    ("rays/lights.wgsl", include_str!("../../shaders/rays/lights.wgsl")),
+    ("rays/pathtrace.wgsl", include_str!("../../shaders/rays/pathtrace.wgsl")),
 ];
 
 /// Files that are entry modules (not only imported).
@@ -166,6 +168,7 @@ pub const ENTRY_MODULES: &[&str] = &[
     "view/view.wgsl",
     "view/probe.wgsl",
     "rays/cast.wgsl",
+    "rays/pathtrace.wgsl",
 ];
 
 #[derive(Debug, thiserror::Error, PartialEq)]

@@ -1,5 +1,5 @@
 // A batch of rays through the GPU ray caster (issue #56 point 1): one invocation per ray,
-// its hit and the surface there written out. What `tests/rays.rs` compares with the path
+// its hit and the surface there written out. What `tests/pathtrace/rays.rs` compares with the path
 // tracer's traversal and `gi-lab bench --suite rays` times; `passes::rays::RayCastPass`.
 
 #import rays/scene.wgsl

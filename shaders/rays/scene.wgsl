@@ -4,7 +4,7 @@
 // and what shading needs at a hit (position, interpolated normal, texture coordinates,
 // tangent, material). Plain compute, no ray-tracing extension: it runs on every wgpu backend.
 // CPU twin of the walk: `TwoLevel::intersect`; of the whole caster, the path tracer's own
-// traversal (`scene::bvh::SceneBvh`), checked on every shipped scene by `tests/rays.rs`.
+// traversal (`scene::bvh::SceneBvh`), checked on every shipped scene by `tests/pathtrace/rays.rs`.
 
 // WGSL twin of `scene::sah::BvhNode`: an inner node (count 0) has its children at `first`
 // and `first + 1`; a bottom-level leaf holds triangles `first … first + count − 1`; a
@@ -125,7 +125,14 @@ fn ray_slab(n: BvhNode, o: vec3<f32>, inv: vec3<f32>, t_max: f32) -> f32 {
     return select(-1.0, lo, lo <= hi);
 }
 
-// Möller & Trumbore (1997), as `scene::raycast::moller_trumbore`: (t, u, v, 1) or w = 0.
+// Barycentric slack of the triangle test: the walk transforms rays into each instance's
+// space, and where two triangles share an edge (or two quads meet at a corner) the rounding
+// of that transform could let a ray through both (a crack the world-space CPU walk does not
+// have); each triangle reaches 10⁻⁵ of its size past its edges instead.
+const RAY_EDGE_SLACK: f32 = 1e-5;
+
+// Möller & Trumbore (1997), as `scene::raycast::moller_trumbore`, its bounds widened by
+// RAY_EDGE_SLACK (`two_level::triangle_hit`): (t, u, v, 1) or w = 0.
 fn ray_triangle(o: vec3<f32>, d: vec3<f32>, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> vec4<f32> {
     let e1 = b - a;
     let e2 = c - a;
@@ -137,12 +144,12 @@ fn ray_triangle(o: vec3<f32>, d: vec3<f32>, a: vec3<f32>, b: vec3<f32>, c: vec3<
     let inv = 1.0 / det;
     let s = o - a;
     let u = dot(s, p) * inv;
-    if (u < 0.0 || u > 1.0) {
+    if (u < -RAY_EDGE_SLACK || u > 1.0 + RAY_EDGE_SLACK) {
         return vec4<f32>(0.0);
     }
     let q = cross(s, e1);
     let v = dot(d, q) * inv;
-    if (v < 0.0 || u + v > 1.0) {
+    if (v < -RAY_EDGE_SLACK || u + v > 1.0 + RAY_EDGE_SLACK) {
         return vec4<f32>(0.0);
     }
     return vec4<f32>(dot(e2, q) * inv, u, v, 1.0);
@@ -314,6 +321,8 @@ struct RaySurface {
     n: vec3<f32>,
     // The geometric normal (world, unit, counter-clockwise side).
     geometric: vec3<f32>,
+    // The interpolated vertex normal as it is (unit, or zero where the normals cancel).
+    vertex_normal: vec3<f32>,
     uv: vec2<f32>,
     // Interpolated world tangent (xyz) and the first vertex's bitangent sign (w; 0: none).
     tangent: vec4<f32>,
@@ -338,6 +347,7 @@ fn ray_surface(o: vec3<f32>, d: vec3<f32>, h: RayHit) -> RaySurface {
     }
     let geometric = ray_geometric_normal(inst, h.slot);
     n = ray_normalize_or_zero(n);
+    let vertex_normal = n;
     if (all(n == vec3<f32>(0.0))) {
         n = geometric;
     }
@@ -345,7 +355,7 @@ fn ray_surface(o: vec3<f32>, d: vec3<f32>, h: RayHit) -> RaySurface {
         n = -n;
     }
     let material = inst.material;
-    return RaySurface(o + d * h.t, n, geometric, uv, vec4<f32>(t, vs[0].tangent.w * flip), material);
+    return RaySurface(o + d * h.t, n, geometric, vertex_normal, uv, vec4<f32>(t, vs[0].tangent.w * flip), material);
 }
 
 fn ray_normalize_or_zero(v: vec3<f32>) -> vec3<f32> {

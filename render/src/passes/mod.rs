@@ -162,6 +162,7 @@ pub const BINDINGS: &[&crate::gpu::bindings::Bindings] = &[
     &direct_history::SKY_HISTORY_INPUTS_BINDINGS,
     &rays::RAY_SCENE_BINDINGS,
     &rays::CAST_BINDINGS,
+    &rays::pathtrace::PATHTRACE_BINDINGS,
 ];
 
 /// A 2D render/storage target with the usages every registered buffer needs (sampling,

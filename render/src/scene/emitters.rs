@@ -217,6 +217,12 @@ impl Emitters {
     }
 
     /// The triangle that `u` ∈ [0, 1) picks (∝ luminance power) and its probability.
+    /// The running sum of the triangles' power shares up to triangle `i` (1 at the last),
+    /// what [`Self::sample`]'s first uniform is compared with (the GPU path tracer's table).
+    pub fn cdf_at(&self, i: usize) -> f32 {
+        self.cdf.get(i).copied().unwrap_or(1.0)
+    }
+
     fn pick(&self, u: f32) -> (usize, f32) {
         let i = self.cdf.partition_point(|&c| c <= u).min(self.cdf.len() - 1);
         let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };

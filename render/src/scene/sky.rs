@@ -144,6 +144,14 @@ impl EnvMap {
     }
 }
 
+impl EnvMap {
+    /// The sampling tables as the GPU path tracer takes them (`passes::rays::pathtrace`): the
+    /// rows' running sums (row-major), the running sums of the rows, and their total.
+    pub fn tables(&self) -> (&[f32], &[f32], f32) {
+        (&self.row_cdf, &self.marginal, self.total)
+    }
+}
+
 /// The polar angle's cosine at the top of row `y` of `height` (row `height` is the bottom).
 fn row_cos(y: u32, height: u32) -> f32 {
     (std::f32::consts::PI * y as f32 / height as f32).cos()

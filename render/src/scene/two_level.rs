@@ -10,7 +10,7 @@
 //! [`TwoLevel::intersect`] walks the same nodes on the CPU, step for step as
 //! `shaders/rays/scene.wgsl` does: the twin of the kernel. The twin of the whole caster is the
 //! path tracer's own traversal ([`super::bvh::SceneBvh`], obvhs's CWBVH over world-space
-//! triangles): `tests/rays.rs` casts the same rays through both on every shipped scene.
+//! triangles): `tests/pathtrace/rays.rs` casts the same rays through both on every shipped scene.
 //!
 //! Fallbacks (no panic, no GPU error): a scene without triangles has no top level and every
 //! ray misses; an instance whose matrix is not invertible (a zero scale) or not finite has no
@@ -146,6 +146,9 @@ pub struct TwoLevel {
     pub materials: Vec<RayMaterial>,
     pub texture_table: Vec<RayTexture>,
     pub texels: Vec<u32>,
+    /// `texture_entries[t]`: the entry of the scene's texture t's level 0 in
+    /// [`Self::texture_table`].
+    pub texture_entries: Vec<u32>,
     /// The first node of the top level; its root when [`Self::tlas_nodes`] > 0.
     pub tlas_base: u32,
     /// Nodes of the top level in use (0: no instance, every ray misses).
@@ -262,6 +265,7 @@ impl TwoLevel {
                 self.texels.extend(l.rgba8.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])));
             }
         }
+        self.texture_entries = entry_of.clone();
         let tex = |t: Option<usize>| t.and_then(|i| entry_of.get(i).copied()).unwrap_or(NO_TEXTURE);
         let defaults = [super::Material::default()];
         let materials = if scene.materials.is_empty() { &defaults[..] } else { &scene.materials[..] };
@@ -396,7 +400,7 @@ impl TwoLevel {
                 for k in m.first..m.first + m.count {
                     let v = [0, 1, 2].map(|q| Vec4::from(self.tris[3 * k as usize + q]));
                     let tri = [v[0].truncate(), v[1].truncate(), v[2].truncate()];
-                    let Some((t, u, w)) = super::raycast::moller_trumbore(ol, dl, tri) else { continue };
+                    let Some((t, u, w)) = triangle_hit(ol, dl, tri) else { continue };
                     if !(t > tmin && t < t_best) {
                         continue;
                     }
@@ -419,6 +423,37 @@ impl TwoLevel {
         }
         best
     }
+}
+
+/// Barycentric slack of [`triangle_hit`]; WGSL twin: `RAY_EDGE_SLACK`.
+pub const EDGE_SLACK: f32 = 1e-5;
+
+/// Möller & Trumbore (1997) as `raycast::moller_trumbore`, each triangle reaching
+/// [`EDGE_SLACK`] of its size past its edges: the walk transforms rays into each instance's
+/// space, and that rounding could let a ray through the shared edge of two triangles (or the
+/// corner where quads meet) that the world-space walk of the path tracer closes; seen on the
+/// Cornell box's corners, where camera rays along the diagonals saw the sky. WGSL twin:
+/// `ray_triangle`.
+pub fn triangle_hit(o: Vec3, d: Vec3, v: [Vec3; 3]) -> Option<(f32, f32, f32)> {
+    let e1 = v[1] - v[0];
+    let e2 = v[2] - v[0];
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() < 1e-12 {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let s = o - v[0];
+    let u = s.dot(p) * inv;
+    if !(-EDGE_SLACK..=1.0 + EDGE_SLACK).contains(&u) {
+        return None;
+    }
+    let q = s.cross(e1);
+    let w = d.dot(q) * inv;
+    if w < -EDGE_SLACK || u + w > 1.0 + EDGE_SLACK {
+        return None;
+    }
+    Some((e2.dot(q) * inv, u, w))
 }
 
 /// 1/d with each zero component replaced by a tiny number of its sign (no 0·∞ in the slab

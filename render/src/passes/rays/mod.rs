@@ -7,6 +7,8 @@
 
 use crate::counters::prelude::*;
 
+pub mod pathtrace;
+
 use glam::{Vec3, Vec4};
 
 use crate::gpu::GpuContext;

@@ -1,5 +1,8 @@
 //! The CPU path tracer (ground truth): the white furnace, agreement with the GPU direct
-//! pass, determinism.
+//! pass, determinism; and the GPU's rays and path tracer against it (issue #56: `rays`). One
+//! test binary (one link).
+
+mod rays;
 
 use gi_lab_tests::{default_renderer, default_scene};
 use gi_render::cpu::pathtrace::{Accumulator, PathTracer, PtSettings};

@@ -1,0 +1,355 @@
+// Path-traced ground truth on the GPU (issue #56 point 2): the CPU path tracer's estimator
+// (`cpu::pathtrace`, documented there) step for step over the GPU ray caster
+// (`rays/scene.wgsl`): a ray through the pixel centre whose footprint picks the textures' mip
+// level, punctual lights, one emitter point and one sky direction by next-event estimation at
+// every vertex, the BRDF mixture sampled for each bounce. One invocation per pixel adds
+// `size.w` samples to its sums (direct, indirect). Its random numbers are its own (PCG per
+// pixel and sample), so the two tracers agree in expectation, not sample by sample:
+// `tests/pathtrace/rays.rs` compares them at equal spp by FLIP.
+
+#import common/brdf.wgsl
+#import rays/scene.wgsl
+#import rays/lights.wgsl
+
+// `passes::rays::pathtrace::PtParams`.
+struct PtParams {
+    inv_view_proj: mat4x4<f32>,
+    // Eye (xyz), ray offset ε (w).
+    eye: vec4<f32>,
+    // Width, height, index of the pass's first sample, samples this pass.
+    size: vec4<u32>,
+    // Bounces, seed, 0, flags (PT_SKY_*).
+    config: vec4<u32>,
+    // Lights, emitters, sky image width and height.
+    counts: vec4<u32>,
+    // Sky: 0, 0, 0, rotation about +Y (radians).
+    sky: vec4<f32>,
+    // Constant sky radiance (xyz), the image's intensity (w).
+    sky_more: vec4<f32>,
+    // The image's table total (x).
+    sky_total: vec4<f32>,
+}
+
+const PT_SKY_LIT: u32 = 1u;
+const PT_SKY_BACKGROUND: u32 = 2u;
+const PT_SKY_IMAGE: u32 = 4u;
+
+@group(0) @binding(0) var<storage, read> pt: PtParams;
+@group(0) @binding(1) var<storage, read> pt_lights: array<PtLight>;
+@group(0) @binding(2) var<storage, read> pt_emitters: array<PtEmitter>;
+@group(0) @binding(3) var<storage, read> pt_sky_texels: array<vec4<f32>>;
+// The sky image's rows' running sums (w·h, row-major), then the rows' (h).
+@group(0) @binding(4) var<storage, read> pt_sky_tables: array<f32>;
+// Per pixel: the sum of direct light, then of indirect light.
+@group(0) @binding(5) var<storage, read_write> pt_sums: array<vec4<f32>>;
+
+// PCG (O'Neill 2014), 32-bit state: uniform in [0, 1) with 24 bits.
+fn pt_rand(state: ptr<function, u32>) -> f32 {
+    let s = *state;
+    *state = s * 747796405u + 2891336453u;
+    let w = ((s >> ((s >> 28u) + 4u)) ^ s) * 277803737u;
+    return f32(((w >> 22u) ^ w) >> 8u) / 16777216.0;
+}
+
+fn pt_hash(v: u32) -> u32 {
+    let s = v * 747796405u + 2891336453u;
+    let w = ((s >> ((s >> 28u) + 4u)) ^ s) * 277803737u;
+    return (w >> 22u) ^ w;
+}
+
+// The primary ray through the centre of pixel (x, y) (`raycast::primary_ray`).
+struct PtRay {
+    o: vec3<f32>,
+    d: vec3<f32>,
+}
+
+fn pt_primary(x: f32, y: f32) -> PtRay {
+    let ndc = vec2<f32>((x + 0.5) / f32(pt.size.x) * 2.0 - 1.0, 1.0 - (y + 0.5) / f32(pt.size.y) * 2.0);
+    let near = pt.inv_view_proj * vec4<f32>(ndc, 0.0, 1.0);
+    let far = pt.inv_view_proj * vec4<f32>(ndc, 1.0, 1.0);
+    let a = near.xyz / near.w;
+    let b = far.xyz / far.w;
+    return PtRay(a, normalize(b - a));
+}
+
+// A surface point with its material read as the G-buffer reads it (the path tracer's `Hit`).
+struct PtSurface {
+    p: vec3<f32>,
+    n: vec3<f32>,
+    uv: vec2<f32>,
+    material: u32,
+    c: vec3<f32>,
+    di: f32,
+    si: f32,
+    sp: f32,
+    // The pixel's ∂uv/∂x (xy) and ∂uv/∂y (zw) at a camera hit, zero elsewhere (level 0).
+    duv: vec4<f32>,
+}
+
+// A texture at a hit: trilinear at the footprint's level (`duv` ≠ 0, a camera hit), else
+// bilinear at level 0 (`PathTracer::read`).
+fn pt_read(entry: u32, uv: vec2<f32>, duv: vec4<f32>, srgb: bool) -> vec4<f32> {
+    if (all(duv == vec4<f32>(0.0))) {
+        return ray_sample_level(entry, uv, srgb);
+    }
+    let e = ray_textures[entry];
+    let size = vec2<f32>(f32(e.width), f32(e.height));
+    let rho = max(length(duv.xy * size), length(duv.zw * size));
+    var lod = 0.0;
+    if (rho > 0.0 && rho < 3.4e38) {
+        lod = log2(rho);
+    }
+    return ray_sample(entry, uv, lod, srgb);
+}
+
+// ∂uv/∂x and ∂uv/∂y where the neighbours' rays meet the hit triangle's plane (the path
+// tracer's `Footprint::uv_derivatives`); zero when a ray is parallel to it.
+fn pt_uv_derivatives(h: RayHit, uv: vec2<f32>, right: PtRay, below: PtRay) -> vec4<f32> {
+    let inst = ray_instances[h.instance];
+    let a = (inst.object_to_world * vec4<f32>(ray_tris[3u * h.slot].xyz, 1.0)).xyz;
+    let b = (inst.object_to_world * vec4<f32>(ray_tris[3u * h.slot + 1u].xyz, 1.0)).xyz;
+    let c = (inst.object_to_world * vec4<f32>(ray_tris[3u * h.slot + 2u].xyz, 1.0)).xyz;
+    let i = ray_triangle_indices(inst.index_base, h.triangle);
+    let uv0 = vec2<f32>(ray_vertices[i.x].u, ray_vertices[i.x].v);
+    let uv1 = vec2<f32>(ray_vertices[i.y].u, ray_vertices[i.y].v);
+    let uv2 = vec2<f32>(ray_vertices[i.z].u, ray_vertices[i.z].v);
+    let e1 = b - a;
+    let e2 = c - a;
+    let plane = cross(e1, e2);
+    let d00 = dot(e1, e1);
+    let d01 = dot(e1, e2);
+    let d11 = dot(e2, e2);
+    let det = d00 * d11 - d01 * d01;
+    var out = vec4<f32>(0.0);
+    for (var k = 0u; k < 2u; k = k + 1u) {
+        var r = right;
+        if (k == 1u) {
+            r = below;
+        }
+        let den = dot(plane, r.d);
+        if (abs(den) <= 1e-30 || abs(det) <= 1e-30) {
+            return vec4<f32>(0.0);
+        }
+        let w = r.o + r.d * (dot(plane, a - r.o) / den) - a;
+        let d20 = dot(w, e1);
+        let d21 = dot(w, e2);
+        let b1 = (d11 * d20 - d01 * d21) / det;
+        let b2 = (d00 * d21 - d01 * d20) / det;
+        let q = uv0 * (1.0 - b1 - b2) + uv1 * b1 + uv2 * b2 - uv;
+        if (!ray_finite2(q)) {
+            return vec4<f32>(0.0);
+        }
+        if (k == 0u) {
+            out = vec4<f32>(q, out.zw);
+        } else {
+            out = vec4<f32>(out.xy, q);
+        }
+    }
+    return out;
+}
+
+// SP = 2 / α² − 2 with α = roughness², clamped to [1, 4096] (`scene::specular_power`).
+fn pt_specular_power(roughness: f32) -> f32 {
+    let a = max(pow(clamp(roughness, 0.0, 1.0), 2.0), 1e-3);
+    return clamp(2.0 / (a * a) - 2.0, 1.0, 4096.0);
+}
+
+// The surface at a hit, its material read (`PathTracer::intersect` and
+// `Material::intensities_at`).
+fn pt_surface(o: vec3<f32>, d: vec3<f32>, h: RayHit, duv: vec4<f32>) -> PtSurface {
+    let s = ray_surface(o, d, h);
+    let m = ray_materials[s.material];
+    var c = m.base_color.rgb;
+    if (m.textures.x != RAY_NO_TEXTURE) {
+        c = c * pt_read(m.textures.x, s.uv, duv, true).rgb;
+    }
+    var metallic = clamp(m.factors.x, 0.0, 1.0);
+    var roughness = clamp(m.factors.y, 0.0, 1.0);
+    var lum_of = m.base_color.rgb;
+    if (m.textures.w != RAY_NO_TEXTURE) {
+        let mr = pt_read(m.textures.w, s.uv, duv, false);
+        metallic = clamp(m.factors.x * mr.z, 0.0, 1.0);
+        roughness = clamp(m.factors.y * mr.y, 0.0, 1.0);
+        lum_of = c;
+    }
+    var si = m.factors.w;
+    if (si < 0.0) {
+        si = 0.04 * (1.0 - metallic) + pt_luminance(lum_of) * metallic;
+    }
+    var n = s.n;
+    if (m.textures.z != RAY_NO_TEXTURE) {
+        let geo = s.vertex_normal;
+        let tan = s.tangent;
+        if (any(geo != vec3<f32>(0.0)) && dot(tan.xyz, tan.xyz) > 1e-12 && tan.w != 0.0) {
+            let sign = select(1.0, -1.0, tan.w < 0.0);
+            let tx = ray_normalize_or_zero(tan.xyz - geo * dot(geo, tan.xyz));
+            let b = cross(geo, tx) * sign;
+            var t = pt_read(m.textures.z, s.uv, duv, false).xyz * 2.0 - vec3<f32>(1.0);
+            t = vec3<f32>(t.x * m.emissive.w, t.y * m.emissive.w, t.z);
+            let bent = ray_normalize_or_zero(tx * t.x + b * t.y + geo * t.z);
+            if (any(bent != vec3<f32>(0.0))) {
+                n = select(bent, -bent, dot(geo, s.n) < 0.0);
+            }
+        }
+    }
+    return PtSurface(s.p, n, s.uv, s.material, c, 1.0 - metallic, si, pt_specular_power(roughness), duv);
+}
+
+// Emitted radiance at a surface (the camera's first hit shows it).
+fn pt_emission(s: PtSurface) -> vec3<f32> {
+    let m = ray_materials[s.material];
+    var e = m.emissive.rgb;
+    if (m.textures.y != RAY_NO_TEXTURE) {
+        e = e * pt_read(m.textures.y, s.uv, s.duv, true).rgb;
+    }
+    return e;
+}
+
+// Whether the segment a → b is blocked (`PathTracer::occluded`).
+fn pt_occluded(a: vec3<f32>, b: vec3<f32>) -> bool {
+    let eps = pt.eye.w;
+    let d = b - a;
+    let len = length(d);
+    return len > 2.0 * eps && ray_occluded(a, d / len, eps, len - eps);
+}
+
+// Direct light at a surface seen from v (`PathTracer::direct`).
+fn pt_direct(s: PtSurface, v: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
+    let origin = s.p + s.n * pt.eye.w;
+    var sum = vec3<f32>(0.0);
+    for (var i = 0u; i < pt.counts.x; i = i + 1u) {
+        let r = pt_punctual(pt_lights[i], s.p, s.n, v, s.c, s.di, s.si, s.sp);
+        if (any(r.radiance != vec3<f32>(0.0)) && !pt_occluded(origin, r.target_point)) {
+            sum = sum + r.radiance;
+        }
+    }
+    if (pt.counts.y > 0u) {
+        let u = vec3<f32>(pt_rand(rng), pt_rand(rng), pt_rand(rng));
+        let e = pt_sample_emitter(u, pt.counts.y);
+        let w = e.position - s.p;
+        let d2 = dot(w, w);
+        let l = w / max(sqrt(d2), 1e-12);
+        let cos_x = dot(s.n, l);
+        let cos_y = -dot(e.normal, l);
+        if (cos_x > 0.0 && cos_y > 0.0 && d2 > 0.0 && !pt_occluded(origin, e.position)) {
+            let f = brdf_eval(s.n, l, v, s.c, s.di, s.si, s.sp);
+            sum = sum + e.radiance * f * (cos_x * cos_y / (d2 * e.pdf_area));
+        }
+    }
+    if ((pt.config.w & PT_SKY_LIT) != 0u) {
+        let u = vec2<f32>(pt_rand(rng), pt_rand(rng));
+        let k = pt_sample_sky(s.n, u);
+        let cos_x = dot(s.n, k.dir);
+        if (k.ok && cos_x > 0.0 && !ray_trace(origin, k.dir, 0.0, 3.4e38, RAY_ANY).hit) {
+            sum = sum + k.radiance * brdf_eval(s.n, k.dir, v, s.c, s.di, s.si, s.sp) * (cos_x / k.pdf);
+        }
+    }
+    return sum;
+}
+
+// A direction from the BRDF mixture and its weight f·cos/pdf (`PathTracer::sample_brdf`);
+// w = 0 when none.
+struct PtBounce {
+    l: vec3<f32>,
+    weight: vec3<f32>,
+    ok: bool,
+}
+
+fn pt_sample_brdf(s: PtSurface, v: vec3<f32>, rng: ptr<function, u32>) -> PtBounce {
+    let none = PtBounce(vec3<f32>(0.0), vec3<f32>(0.0), false);
+    let wd = s.di * pt_luminance(s.c);
+    let ws = max(s.si, 0.0);
+    if (wd + ws <= 0.0) {
+        return none;
+    }
+    let pd = wd / (wd + ws);
+    let b = pt_onb(s.n);
+    let u1 = pt_rand(rng);
+    let u2 = pt_rand(rng);
+    var l: vec3<f32>;
+    if (pt_rand(rng) < pd) {
+        let r = sqrt(u1);
+        let phi = 2.0 * PI * u2;
+        l = normalize(b[0] * (r * cos(phi)) + b[1] * (r * sin(phi)) + s.n * sqrt(max(1.0 - u1, 0.0)));
+    } else {
+        let ct = pow(u1, 1.0 / (s.sp + 1.0));
+        let st = sqrt(max(1.0 - ct * ct, 0.0));
+        let phi = 2.0 * PI * u2;
+        let hv = normalize(b[0] * (st * cos(phi)) + b[1] * (st * sin(phi)) + s.n * ct);
+        l = 2.0 * dot(v, hv) * hv - v;
+    }
+    let ndl = dot(s.n, l);
+    if (ndl <= 0.0) {
+        return none;
+    }
+    let hv = ray_normalize_or_zero(l + v);
+    let ndh = max(dot(s.n, hv), 0.0);
+    let vdh = max(abs(dot(v, hv)), 1e-6);
+    let pdf_d = ndl / PI;
+    let pdf_s = (s.sp + 1.0) / (2.0 * PI) * pow(ndh, s.sp) / (4.0 * vdh);
+    let pdf = pd * pdf_d + (1.0 - pd) * pdf_s;
+    if (pdf <= 0.0) {
+        return none;
+    }
+    return PtBounce(l, brdf_eval(s.n, l, v, s.c, s.di, s.si, s.sp) * ndl / pdf, true);
+}
+
+@compute @workgroup_size(8, 8)
+fn cs_pathtrace(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x >= pt.size.x || id.y >= pt.size.y) {
+        return;
+    }
+    let x = f32(id.x);
+    let y = f32(id.y);
+    var ray = pt_primary(x, y);
+    if (!all((bitcast<vec3<u32>>(ray.o) & vec3<u32>(0x7f800000u)) != vec3<u32>(0x7f800000u))) {
+        ray.o = pt.eye.xyz;
+    }
+    let right = pt_primary(x + 1.0, y);
+    let below = pt_primary(x, y + 1.0);
+    let pixel = id.y * pt.size.x + id.x;
+    var direct_sum = vec3<f32>(0.0);
+    var indirect_sum = vec3<f32>(0.0);
+    // The camera's hit and its material do not depend on the sample: read once.
+    let first = ray_trace(ray.o, ray.d, 0.0, 3.4e38, RAY_CLOSEST);
+    var first_surface: PtSurface;
+    var emission = vec3<f32>(0.0);
+    if (first.hit) {
+        let s0 = ray_surface(ray.o, ray.d, first);
+        first_surface = pt_surface(ray.o, ray.d, first, pt_uv_derivatives(first, s0.uv, right, below));
+        emission = pt_emission(first_surface);
+    }
+    for (var k = 0u; k < pt.size.w; k = k + 1u) {
+        var rng = pt_hash(pt.config.y ^ pt_hash(pixel * 0x9E3779B9u ^ pt_hash(pt.size.z + k)));
+        if (!first.hit) {
+            if ((pt.config.w & PT_SKY_BACKGROUND) != 0u && (pt.config.w & PT_SKY_LIT) != 0u) {
+                direct_sum = direct_sum + pt_sky_radiance(ray.d);
+            }
+            continue;
+        }
+        var h = first_surface;
+        var v = -ray.d;
+        direct_sum = direct_sum + emission + pt_direct(h, v, &rng);
+        var throughput = vec3<f32>(1.0);
+        for (var b = 0u; b < pt.config.x; b = b + 1u) {
+            let bounce = pt_sample_brdf(h, v, &rng);
+            if (!bounce.ok) {
+                break;
+            }
+            throughput = throughput * bounce.weight;
+            let o = h.p + h.n * pt.eye.w;
+            let next = ray_trace(o, bounce.l, 0.0, 3.4e38, RAY_CLOSEST);
+            if (!next.hit) {
+                break;
+            }
+            v = -bounce.l;
+            h = pt_surface(o, bounce.l, next, vec4<f32>(0.0));
+            indirect_sum = indirect_sum + throughput * pt_direct(h, v, &rng);
+            if (max(max(throughput.x, throughput.y), throughput.z) <= 0.0) {
+                break;
+            }
+        }
+    }
+    pt_sums[2u * pixel] = pt_sums[2u * pixel] + vec4<f32>(direct_sum, 0.0);
+    pt_sums[2u * pixel + 1u] = pt_sums[2u * pixel + 1u] + vec4<f32>(indirect_sum, 0.0);
+}
