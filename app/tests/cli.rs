@@ -91,6 +91,24 @@ fn reference_path_traces_three_exr_files() {
         assert_eq!(img.dimensions(), (24, 16));
         assert!(img.pixels().any(|p| p.0[0] > 0.0), "{f} is black");
     }
+    // The same truth on the GPU (issue #56): punctual light is exact in both tracers, so their
+    // direct images are the same but for a few pixels on the box's edges.
+    let gpu = out.join("gpu.exr");
+    let o = gi_lab()
+        .args(["reference", "--gpu", "--size", "24x16", "--spp", "2", "--bounces", "1", "--out"])
+        .arg(&gpu)
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("on the GPU"), "{}", String::from_utf8_lossy(&o.stdout));
+    let read = |f: &str| image::open(out.join(f)).unwrap_or_else(|e| panic!("{f}: {e}")).to_rgba32f();
+    let (a, b) = (read("ref.direct.exr"), read("gpu.direct.exr"));
+    let off = a
+        .pixels()
+        .zip(b.pixels())
+        .filter(|(p, q)| (0..3).any(|k| (p.0[k] - q.0[k]).abs() > 1e-3 * p.0[k].max(0.05)))
+        .count();
+    assert!(off <= 8, "{off} of 384 direct pixels differ between the CPU and the GPU truth");
     // bench measures the renderer against it (same scene, camera and size).
     let o = gi_lab()
         .args(["bench", "--size", "24x16", "--frames", "1", "--json", "--set", "pipeline.gather=None", "--reference"])
@@ -167,6 +185,7 @@ fn bad_arguments_exit_2_with_a_message() {
         (&["frobnicate"], "frobnicate"),
         (&["compare", "/nonexistent/a.png", "/nonexistent/b.png"], "a.png"),
         (&["reference", "--spp", "0", "--out", "OUT/r.exr"], "--spp"),
+        (&["reference", "--gpu", "--screen-visible-senders", "--out", "OUT/r.exr"], "CPU tracer's alone"),
         (&["render"], "--out"),
         (&["sweep", "--out", "OUT", "--param", "direct.nope=1..2:2"], "no setting named 'direct.nope'"),
         (&["sweep", "--out", "OUT", "--param", "direct.pcf_radius=0..9:2"], "direct.pcf_radius"),

@@ -1,6 +1,6 @@
 //! The comparison grid (View → Compare grid, issue #40 point 1): the live settings beside up
 //! to five other cells, each a preset or the live settings frozen, and an optional truth cell
-//! (the CPU path tracer refining in the background). Every cell follows the live renderer's
+//! (a path tracer refining in the background: the GPU's on a real GPU, the CPU's otherwise). Every cell follows the live renderer's
 //! scene, camera, animation time and lights (`ab::follow`), so orbiting in any cell moves all.
 //! The cells render in turn within the frame budget (View → target frame rate), so the window
 //! stays responsive however many there are; each cell's GPU memory is measured when it is
@@ -88,6 +88,8 @@ pub struct Truth {
     /// The inputs of the job running (a change restarts it).
     key: Option<String>,
     generation: u64,
+    /// Which path tracer refines it, in words.
+    pub tracer: String,
 }
 
 struct TruthJob {
@@ -105,10 +107,65 @@ struct TruthJob {
 /// The truth's spp at which refining stops.
 pub const TRUTH_MAX_SPP: u32 = 1024;
 
+/// A job's tracer and its samples so far: the CPU's, or the GPU's on a real GPU (issue #56).
+enum Refining {
+    Cpu(Box<gi_render::cpu::pathtrace::PathTracer>, gi_render::cpu::pathtrace::Accumulator),
+    Gpu(Box<gi_render::passes::rays::pathtrace::GpuPathTracer>, gi_render::passes::rays::pathtrace::GpuAccumulator),
+}
+
+impl Refining {
+    fn new(job: &TruthJob, gpu: Option<&gi_render::GpuContext>) -> Result<Self, String> {
+        use gi_render::passes::rays::pathtrace::{GpuAccumulator, GpuPathTracer};
+        Ok(match gpu {
+            Some(ctx) => {
+                let mut pt = GpuPathTracer::new(ctx, &job.scene, job.time)?;
+                pt.use_emitter_settings(&job.emitters, &job.scene, job.time);
+                pt.set_sky_background(job.sky_background);
+                Self::Gpu(Box::new(pt), GpuAccumulator::new(ctx, job.size.0, job.size.1)?)
+            }
+            None => {
+                let mut pt = gi_render::cpu::pathtrace::PathTracer::new(&job.scene, job.time);
+                pt.use_emitter_settings(&job.emitters, &job.scene, job.time);
+                pt.set_sky_background(job.sky_background);
+                Self::Cpu(Box::new(pt), gi_render::cpu::pathtrace::Accumulator::new(job.size.0, job.size.1))
+            }
+        })
+    }
+
+    /// Adds `spp` samples and returns the image so far.
+    fn add(
+        &mut self,
+        job: &TruthJob,
+        spp: u32,
+        gpu: Option<&gi_render::GpuContext>,
+        pool: &rayon::ThreadPool,
+    ) -> Result<ImageF32, String> {
+        let settings =
+            gi_render::cpu::pathtrace::PtSettings { bounces: job.bounces, spp, seed: 1, ..Default::default() };
+        match (self, gpu) {
+            (Self::Cpu(pt, acc), _) => {
+                pool.install(|| acc.add_pass(pt, job.view_proj, job.eye, settings));
+                Ok(acc.images().full)
+            }
+            (Self::Gpu(pt, acc), Some(ctx)) => {
+                acc.add_pass(ctx, pt, job.view_proj, job.eye, settings)?;
+                Ok(acc.images(ctx)?.full)
+            }
+            (Self::Gpu(..), None) => Err("the GPU tracer lost its device".into()),
+        }
+    }
+}
+
 impl Truth {
-    pub fn start(bounces: u32) -> Self {
+    /// Starts the truth's thread; with `gpu` (a real GPU's context: `TruthTracer::for_adapter`)
+    /// it traces there, else on half the CPU's cores.
+    pub fn start(bounces: u32, gpu: Option<gi_render::GpuContext>) -> Self {
         let (jobs, job_rx) = std::sync::mpsc::channel::<TruthJob>();
         let (tx, results) = std::sync::mpsc::channel();
+        let tracer = match &gpu {
+            Some(ctx) => format!("GPU path tracer ({})", ctx.adapter_info.name),
+            None => "CPU path tracer".into(),
+        };
         // Half the cores at most: the renderers (and, on a software device, the GPU itself)
         // keep the rest, so the window stays responsive while the truth refines.
         let threads = std::thread::available_parallelism().map_or(1, |n| (n.get() / 2).max(1));
@@ -118,10 +175,13 @@ impl Truth {
             let Ok(pool) = pool else { return };
             let mut next = job_rx.recv().ok();
             while let Some(job) = next.take() {
-                let mut pt = gi_render::cpu::pathtrace::PathTracer::new(&job.scene, job.time);
-                pt.use_emitter_settings(&job.emitters, &job.scene, job.time);
-                pt.set_sky_background(job.sky_background);
-                let mut acc = gi_render::cpu::pathtrace::Accumulator::new(job.size.0, job.size.1);
+                let mut refining = match Refining::new(&job, gpu.as_ref()) {
+                    Ok(r) => r,
+                    Err(_) => match Refining::new(&job, None) {
+                        Ok(r) => r,
+                        Err(_) => return,
+                    },
+                };
                 let mut spp = 0;
                 loop {
                     // A newer job (the camera moved, a light changed) replaces this one.
@@ -137,22 +197,31 @@ impl Truth {
                         next = job_rx.recv().ok();
                         break;
                     }
-                    let batch = if spp < 8 { 1 } else { 4 };
-                    let settings = gi_render::cpu::pathtrace::PtSettings {
-                        bounces: job.bounces,
-                        spp: batch,
-                        seed: 1,
-                        ..Default::default()
+                    let batch = match (&refining, spp < 8) {
+                        (_, true) => 1,
+                        (Refining::Cpu(..), false) => 4,
+                        (Refining::Gpu(..), false) => 16,
                     };
-                    pool.install(|| acc.add_pass(&pt, job.view_proj, job.eye, settings));
+                    let Ok(image) = refining.add(&job, batch, gpu.as_ref(), &pool) else { return };
                     spp += batch;
-                    if tx.send((job.generation, spp, Arc::new(acc.images().full))).is_err() {
+                    if tx.send((job.generation, spp, Arc::new(image))).is_err() {
                         return;
                     }
                 }
             }
         });
-        Self { bounces, spp: 0, image: None, texture: None, texture_spp: 0, jobs, results, key: None, generation: 0 }
+        Self {
+            bounces,
+            spp: 0,
+            image: None,
+            texture: None,
+            texture_spp: 0,
+            jobs,
+            results,
+            key: None,
+            generation: 0,
+            tracer,
+        }
     }
 
     /// Restarts the path tracer when what it traces changed, and takes its newest image.

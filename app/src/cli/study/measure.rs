@@ -61,24 +61,28 @@ fn truth_key(spec: &Spec, file: Option<&str>, r: &Renderer, lighting: &LabSettin
     Ok(format!("{:016x}", fnv(described.as_bytes(), h)))
 }
 
-/// The scene's truth at time 0 from the renderer's camera: from the cache, or traced and
-/// cached. Returns the image, the seconds spent tracing and whether it came from the cache.
+/// The scene's truth at time 0 from the renderer's camera: from the cache, or traced (by the
+/// GPU path tracer on a real GPU, the CPU's otherwise, issue #56) and cached. Returns the
+/// image, the seconds spent tracing, whether it came from the cache and the tracer in words.
 fn truth(
     spec: &Spec,
     file: Option<&str>,
     r: &Renderer,
     lighting: &LabSettings,
     cache: &Path,
-) -> Result<(ImageF32, f64, bool), CliError> {
+) -> Result<(ImageF32, f64, bool, String), CliError> {
     let path = cache.join(format!("{}.exr", truth_key(spec, file, r, lighting)?));
     if let Ok(img) = gi_render::image_io::load_float_image(&path)
         && (img.width, img.height) == spec.size
     {
-        return Ok((img, 0.0, true));
+        return Ok((img, 0.0, true, String::new()));
     }
-    use gi_render::cpu::pathtrace::{PathTracer, PtSettings};
+    use gi_render::cpu::pathtrace::PtSettings;
+    use gi_render::passes::rays::pathtrace::{TruthLighting, TruthTracer, render_truth};
+    let tracer = TruthTracer::for_adapter(&r.ctx);
+    let by = tracer.describe(&r.ctx);
     eprintln!(
-        "path-tracing the truth of {}: {}×{}, {} spp, {} bounce(s) …",
+        "path-tracing the truth of {}: {}×{}, {} spp, {} bounce(s), with {by} …",
         file.unwrap_or("the default scene"),
         spec.size.0,
         spec.size.1,
@@ -86,15 +90,14 @@ fn truth(
         spec.bounces
     );
     let started = Instant::now();
-    let mut pt = PathTracer::new(r.scene(), 0.0);
-    pt.use_emitter_settings(&lighting.emitters, r.scene(), 0.0);
-    pt.set_sky_background(lighting.sky.background);
     let settings = PtSettings { bounces: spec.bounces, spp: spec.spp, seed: 1, ..Default::default() };
-    let img = pt.render(r.view_proj(), r.camera.position, spec.size.0, spec.size.1, settings).full;
+    let lights = TruthLighting { emitters: lighting.emitters.clone(), sky_background: lighting.sky.background };
+    let view = (r.view_proj(), r.camera.position, spec.size);
+    let img = render_truth(&r.ctx, tracer, r.scene(), 0.0, &lights, view, settings).map_err(CliError::failure)?.full;
     let seconds = started.elapsed().as_secs_f64();
     std::fs::create_dir_all(cache).map_err(|e| CliError::failure(format!("{}: {e}", cache.display())))?;
     gi_render::image_io::save_exr(&path, &img).map_err(|e| CliError::failure(format!("{}: {e}", path.display())))?;
-    Ok((img, seconds, false))
+    Ok((img, seconds, false, by))
 }
 
 fn save_png(path: &Path, img: image::RgbaImage) -> Result<(), CliError> {
@@ -145,13 +148,13 @@ pub fn run(spec: &Spec, plan: &Plan, shard: Shard, out: &Path, dir: &Path) -> Re
         };
         let r = fresh(plan.settings(plan.jobs[scene_jobs[0]]))?;
         machine_seen.get_or_insert_with(|| machine(&r));
-        let (truth_img, seconds, cached) = truth(spec, info.file.as_deref(), &r, &lighting, &cache)?;
+        let (truth_img, seconds, cached, tracer) = truth(spec, info.file.as_deref(), &r, &lighting, &cache)?;
         let truth_rel = format!("img/{}/truth.png", info.slug);
         save_png(
             &dir.join(&truth_rel),
             gi_render::image_io::to_rgba8(&truth_img, gi_render::buffers::BufferKind::Hdr),
         )?;
-        truths.push((s, TruthInfo { image: truth_rel, seconds, cached }));
+        truths.push((s, TruthInfo { image: truth_rel, seconds, cached, tracer }));
         let display_truth = gi_render::image_io::hdr_display(&truth_img);
         for j in scene_jobs {
             let job = plan.jobs[j];

@@ -130,8 +130,14 @@ fn scene_section(study: &Study, si: usize) -> String {
     // The images.
     let truth_note = if s.truth.cached {
         "from the cache".to_string()
-    } else {
+    } else if s.truth.tracer.is_empty() {
         format!("traced in {} s", n(&format!("scenes.{si}.truth.seconds"), s.truth.seconds, 1))
+    } else {
+        format!(
+            "traced by {} in {} s",
+            escape(&s.truth.tracer),
+            n(&format!("scenes.{si}.truth.seconds"), s.truth.seconds, 1)
+        )
     };
     o += "<h3>Images and FLIP maps</h3>\n<div class=\"grid\">\n";
     o += &format!(

@@ -32,6 +32,10 @@ pub struct TruthInfo {
     /// Seconds spent tracing it (0 when it came from the cache).
     pub seconds: f64,
     pub cached: bool,
+    /// Which path tracer traced it, in words (issue #56: the GPU's on a real GPU); empty in
+    /// results written before.
+    #[serde(default)]
+    pub tracer: String,
 }
 
 /// One job's measurements.
@@ -353,7 +357,9 @@ mod tests {
                 pareto: false,
             })
             .collect();
-        let truth = |s: usize| (s, TruthInfo { image: format!("img/{s}/truth.png"), seconds: 1.0, cached: false });
+        let truth = |s: usize| {
+            (s, TruthInfo { image: format!("img/{s}/truth.png"), seconds: 1.0, cached: false, tracer: String::new() })
+        };
         let rows: Vec<Row> = all[range.clone()].to_vec();
         let mut truths: Vec<(usize, TruthInfo)> = rows.iter().map(|r| truth(r.scene)).collect();
         truths.dedup_by_key(|t| t.0);

@@ -41,8 +41,12 @@ fn toolbar(st: &mut State, ui: &mut egui::Ui) {
             .on_hover_text("a preset or the live settings frozen, rendered beside the live settings");
         });
         let mut truth = g.truth.is_some();
-        if ui.checkbox(&mut truth, "truth").on_hover_text("the CPU path tracer, refining in the background").changed() {
-            g.truth = truth.then(|| Truth::start(1));
+        let ctx = &l.renderer.ctx;
+        let tracer = gi_render::passes::rays::pathtrace::TruthTracer::for_adapter(ctx);
+        let hover = format!("{}, refining in the background", tracer.describe(ctx));
+        if ui.checkbox(&mut truth, "truth").on_hover_text(hover).changed() {
+            let gpu = (tracer == gi_render::passes::rays::pathtrace::TruthTracer::Gpu).then(|| ctx.clone());
+            g.truth = truth.then(|| Truth::start(1, gpu));
         }
         if let Some(t) = &mut g.truth {
             ui.add(egui::DragValue::new(&mut t.bounces).range(0..=8).prefix("bounces "));
@@ -260,7 +264,7 @@ pub(super) fn grid_ui(st: &mut State, ui: &mut egui::Ui, rect: egui::Rect) {
                 None => {
                     if let Some(t) = &g.truth {
                         ui.strong("truth");
-                        let line = format!("path tracer, {} bounce(s), {} spp", t.bounces, t.spp);
+                        let line = format!("{}, {} bounce(s), {} spp", t.tracer, t.bounces, t.spp);
                         ui.add(egui::Label::new(line).truncate());
                     }
                 }

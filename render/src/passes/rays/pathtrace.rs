@@ -370,3 +370,65 @@ impl GpuAccumulator {
         })
     }
 }
+
+/// Which path tracer renders a truth (issue #56 point 2): the GPU's on a real GPU, the CPU's
+/// where the adapter is a software rasteriser (lavapipe runs the GPU tracer 10–30 times slower
+/// than the CPU tracer runs on the same cores: docs/performance.md, "The GPU truth").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TruthTracer {
+    Cpu,
+    Gpu,
+}
+
+impl TruthTracer {
+    /// The tracer for the adapter of `ctx`.
+    pub fn for_adapter(ctx: &GpuContext) -> Self {
+        if ctx.adapter_info.device_type == wgpu::DeviceType::Cpu { Self::Cpu } else { Self::Gpu }
+    }
+
+    /// The tracer in words, with why it was chosen, for logs and the grid's truth cell.
+    pub fn describe(self, ctx: &GpuContext) -> String {
+        match self {
+            Self::Gpu => format!("the GPU path tracer on {}", ctx.adapter_info.name),
+            Self::Cpu if ctx.adapter_info.device_type == wgpu::DeviceType::Cpu => format!(
+                "the CPU path tracer ({} is a software rasteriser, slower at tracing than the CPU)",
+                ctx.adapter_info.name
+            ),
+            Self::Cpu => "the CPU path tracer".into(),
+        }
+    }
+}
+
+/// What a truth renders: the lighting settings the path tracers take besides the scene.
+#[derive(Clone, Debug)]
+pub struct TruthLighting {
+    pub emitters: crate::settings::emitters::EmitterSettings,
+    pub sky_background: bool,
+}
+
+/// A truth of `scene` at `time_s` by `tracer` seen by a camera (view-projection, eye, size in
+/// pixels): the same images either way, up to noise.
+pub fn render_truth(
+    ctx: &GpuContext,
+    tracer: TruthTracer,
+    scene: &Scene,
+    time_s: f32,
+    lighting: &TruthLighting,
+    (view_proj, eye, size): (Mat4, Vec3, (u32, u32)),
+    settings: PtSettings,
+) -> Result<PtImages, String> {
+    match tracer {
+        TruthTracer::Cpu => {
+            let mut pt = crate::cpu::pathtrace::PathTracer::new(scene, time_s);
+            pt.use_emitter_settings(&lighting.emitters, scene, time_s);
+            pt.set_sky_background(lighting.sky_background);
+            Ok(pt.render(view_proj, eye, size.0, size.1, settings))
+        }
+        TruthTracer::Gpu => {
+            let mut pt = GpuPathTracer::new(ctx, scene, time_s)?;
+            pt.use_emitter_settings(&lighting.emitters, scene, time_s);
+            pt.set_sky_background(lighting.sky_background);
+            pt.render(ctx, view_proj, eye, size, settings)
+        }
+    }
+}
