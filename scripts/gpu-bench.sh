@@ -5,7 +5,8 @@
 # (binned on a GPU), the default preset at 960x540 and 3840x2160 (how the passes scale),
 # the default paused with and without the passes kept while nothing moves (issue #53),
 # the suites (knecht and nguyen at 1920x1080, soler at 1280x720 as its Fig. 9, gautron at
-# 64x64 for its per-pixel brute force, scenes at 1920x1080 over assets/), written as text
+# 64x64 for its per-pixel brute force, scenes at 1920x1080 over assets/, rays at 512x512:
+# the GPU ray caster and path tracer against the CPU's), written as text
 # into one folder. Run it from the project root with a release build:
 #
 #   cargo build --release -p gi-lab && bash scripts/gpu-bench.sh [OUT_DIR]
@@ -101,4 +102,6 @@ row "suite nguyen" bench --suite nguyen --size "$SIZE" --frames 20
 row "suite soler" bench --suite soler --size 1280x720 --frames 20
 row "suite scenes" bench --suite scenes --size "$SIZE" --frames 20
 row "suite gautron" bench --suite gautron --size 64x64
+# The GPU ray caster and path tracer against the CPU's (issue #56): rays and paths per second.
+row "suite rays" bench --suite rays --size 512x512 --spp 16
 echo "done: $LOG and $TABLE"

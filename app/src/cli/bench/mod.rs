@@ -13,6 +13,7 @@ pub mod gautron_cpu;
 pub mod knecht;
 pub mod nguyen;
 pub mod quality;
+pub mod rays;
 pub mod run;
 pub mod scenes;
 pub mod soler;
@@ -79,6 +80,9 @@ pub struct BenchArgs {
     /// against the GPU cache at four accuracies, at equal FLIP and over a short camera walk.
     /// `scenes`: every scene below --scenes-dir (default assets/; triangles, lights, emitters, load
     /// time, the frame time of each technique preset; run it at --size 256x256).
+    /// `rays`: the default scene and every scene below --scenes-dir: the GPU ray caster against
+    /// the CPU's traversal on the same rays (the camera's at --size and a bounce from each
+    /// hit), the GPU path tracer against the CPU's (one bounce, --size, --spp).
     #[arg(long, value_enum)]
     pub suite: Option<BenchSuite>,
     /// The scenes of `--suite scenes` (every .gltf/.glb below it; by default the project's
@@ -96,6 +100,7 @@ pub enum BenchSuite {
     Soler,
     Gautron,
     Scenes,
+    Rays,
 }
 
 pub(crate) fn bench(args: &BenchArgs) -> Result<(), CliError> {
@@ -104,6 +109,16 @@ pub(crate) fn bench(args: &BenchArgs) -> Result<(), CliError> {
     }
     if let Some(BenchSuite::Quality) = args.suite {
         return quality::quality(args);
+    }
+    if let Some(BenchSuite::Rays) = args.suite {
+        let rows = rays::rays_suite(&args.scenes_dir, args.size, args.spp)?;
+        if args.json {
+            println!("{}", serde_json::to_string_pretty(&rows).map_err(|e| CliError::failure(e.to_string()))?);
+        } else {
+            let ctx = gi_render::GpuContext::headless().map_err(|e| CliError::failure(e.to_string()))?;
+            print!("{}", rays::format(&rows, &ctx.adapter_summary(), args.size, args.spp));
+        }
+        return Ok(());
     }
     if let Some(BenchSuite::Scenes) = args.suite {
         let rows = scenes::scenes(&args.scenes_dir, args.size, args.frames, &args.scene.overrides)?;

@@ -32,7 +32,7 @@ pub struct SceneRow {
 }
 
 /// The glTF files of a folder and its subfolders (sorted).
-fn scene_files(dir: &Path) -> Vec<PathBuf> {
+pub(super) fn scene_files(dir: &Path) -> Vec<PathBuf> {
     let mut out = Vec::new();
     let Ok(entries) = std::fs::read_dir(dir) else { return out };
     for e in entries.flatten() {
@@ -47,7 +47,7 @@ fn scene_files(dir: &Path) -> Vec<PathBuf> {
     out
 }
 
-fn load(path: &Path, unit_scale: f32) -> Result<gi_render::scene::Scene, CliError> {
+pub(super) fn load(path: &Path, unit_scale: f32) -> Result<gi_render::scene::Scene, CliError> {
     let args = crate::scene_args::SceneArgs { scene: Some(path.to_path_buf()), unit_scale, ..Default::default() };
     crate::scene_args::load_scene(&args)
 }
