@@ -2,6 +2,7 @@
 //! the passes' outputs with these on small inputs.
 
 pub mod brdf;
+pub mod ddgi;
 pub mod gautron;
 pub mod hcb;
 pub mod irradiance_cache;

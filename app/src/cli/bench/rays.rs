@@ -13,7 +13,6 @@ use gi_render::passes::rays::pathtrace::GpuPathTracer;
 use gi_render::passes::rays::{CastRay, RayCastPass, RayScene};
 use gi_render::scene::Scene;
 use gi_render::scene::two_level::Query;
-use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::error::CliError;
@@ -82,7 +81,7 @@ fn row(ctx: &GpuContext, name: &str, scene: &Scene, size: (u32, u32), spp: u32) 
     let cpu_hits: usize = batch
         .par_iter()
         .filter(|r| {
-            let (o, d) = (Vec3::from(r.origin.truncate()), Vec3::from(r.dir.truncate()));
+            let (o, d) = (r.origin.truncate(), r.dir.truncate());
             pt.closest_hit(o, d, 0.0, f32::INFINITY).is_some()
         })
         .count();
