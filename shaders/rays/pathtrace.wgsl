@@ -205,43 +205,72 @@ fn pt_emission(s: PtSurface) -> vec3<f32> {
     return e;
 }
 
-// Whether the segment a → b is blocked (`PathTracer::occluded`).
-fn pt_occluded(a: vec3<f32>, b: vec3<f32>) -> bool {
-    let eps = pt.eye.w;
-    let d = b - a;
-    let len = length(d);
-    return len > 2.0 * eps && ray_occluded(a, d / len, eps, len - eps);
-}
-
-// Direct light at a surface seen from v (`PathTracer::direct`).
+// Direct light at a surface seen from v (`PathTracer::direct`): every punctual light, one
+// emitter point and one sky direction, each unoccluded. The shadow rays go through one call
+// of `ray_trace` in a loop over the candidates: a GPU compiler inlines every call of the walk,
+// and lavapipe's LLVM took about 20 s for the kernel with a call per kind of light.
 fn pt_direct(s: PtSurface, v: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
-    let origin = s.p + s.n * pt.eye.w;
-    var sum = vec3<f32>(0.0);
-    for (var i = 0u; i < pt.counts.x; i = i + 1u) {
-        let r = pt_punctual(pt_lights[i], s.p, s.n, v, s.c, s.di, s.si, s.sp);
-        if (any(r.radiance != vec3<f32>(0.0)) && !pt_occluded(origin, r.target_point)) {
-            sum = sum + r.radiance;
-        }
-    }
+    let eps = pt.eye.w;
+    let origin = s.p + s.n * eps;
+    let lights = pt.counts.x;
+    var eu = vec3<f32>(0.0);
     if (pt.counts.y > 0u) {
-        let u = vec3<f32>(pt_rand(rng), pt_rand(rng), pt_rand(rng));
-        let e = pt_sample_emitter(u, pt.counts.y);
-        let w = e.position - s.p;
-        let d2 = dot(w, w);
-        let l = w / max(sqrt(d2), 1e-12);
-        let cos_x = dot(s.n, l);
-        let cos_y = -dot(e.normal, l);
-        if (cos_x > 0.0 && cos_y > 0.0 && d2 > 0.0 && !pt_occluded(origin, e.position)) {
-            let f = brdf_eval(s.n, l, v, s.c, s.di, s.si, s.sp);
-            sum = sum + e.radiance * f * (cos_x * cos_y / (d2 * e.pdf_area));
-        }
+        eu = vec3<f32>(pt_rand(rng), pt_rand(rng), pt_rand(rng));
     }
+    var su = vec2<f32>(0.0);
     if ((pt.config.w & PT_SKY_LIT) != 0u) {
-        let u = vec2<f32>(pt_rand(rng), pt_rand(rng));
-        let k = pt_sample_sky(s.n, u);
-        let cos_x = dot(s.n, k.dir);
-        if (k.ok && cos_x > 0.0 && !ray_trace(origin, k.dir, 0.0, 3.4e38, RAY_ANY).hit) {
-            sum = sum + k.radiance * brdf_eval(s.n, k.dir, v, s.c, s.di, s.si, s.sp) * (cos_x / k.pdf);
+        su = vec2<f32>(pt_rand(rng), pt_rand(rng));
+    }
+    var sum = vec3<f32>(0.0);
+    for (var k = 0u; k < lights + 2u; k = k + 1u) {
+        // The candidate's light, and the segment a shadow ray tests (tmax < 0: no test, as
+        // `PathTracer::occluded` skips segments shorter than 2ε).
+        var light = vec3<f32>(0.0);
+        var dir = vec3<f32>(0.0, 1.0, 0.0);
+        var tmin = eps;
+        var tmax = -1.0;
+        var to = vec3<f32>(0.0);
+        var has_end = false;
+        if (k < lights) {
+            let r = pt_punctual(pt_lights[k], s.p, s.n, v, s.c, s.di, s.si, s.sp);
+            light = r.radiance;
+            to = r.target_point;
+            has_end = true;
+        } else if (k == lights && pt.counts.y > 0u) {
+            let e = pt_sample_emitter(eu, pt.counts.y);
+            let w = e.position - s.p;
+            let d2 = dot(w, w);
+            let l = w / max(sqrt(d2), 1e-12);
+            let cos_x = dot(s.n, l);
+            let cos_y = -dot(e.normal, l);
+            if (cos_x > 0.0 && cos_y > 0.0 && d2 > 0.0) {
+                light = e.radiance * brdf_eval(s.n, l, v, s.c, s.di, s.si, s.sp) * (cos_x * cos_y / (d2 * e.pdf_area));
+                to = e.position;
+                has_end = true;
+            }
+        } else if (k == lights + 1u && (pt.config.w & PT_SKY_LIT) != 0u) {
+            let q = pt_sample_sky(s.n, su);
+            let cos_x = dot(s.n, q.dir);
+            if (q.ok && cos_x > 0.0) {
+                light = q.radiance * brdf_eval(s.n, q.dir, v, s.c, s.di, s.si, s.sp) * (cos_x / q.pdf);
+                dir = q.dir;
+                tmin = 0.0;
+                tmax = 3.4e38;
+            }
+        }
+        if (all(light == vec3<f32>(0.0))) {
+            continue;
+        }
+        if (has_end) {
+            let d = to - origin;
+            let len = length(d);
+            if (len > 2.0 * eps) {
+                dir = d / len;
+                tmax = len - eps;
+            }
+        }
+        if (tmax < 0.0 || !ray_trace(origin, dir, tmin, tmax, RAY_ANY).hit) {
+            sum = sum + light;
         }
     }
     return sum;
@@ -329,14 +358,27 @@ fn cs_pathtrace(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         var h = first_surface;
         var v = -ray.d;
-        direct_sum = direct_sum + emission + pt_direct(h, v, &rng);
         var throughput = vec3<f32>(1.0);
-        for (var b = 0u; b < pt.config.x; b = b + 1u) {
+        // Vertex 0 is the camera's hit (its emission and direct light), vertices 1 … bounces
+        // the path's (their direct light is the indirect light): one call of pt_direct.
+        for (var b = 0u; b <= pt.config.x; b = b + 1u) {
+            let d = pt_direct(h, v, &rng);
+            if (b == 0u) {
+                direct_sum = direct_sum + emission + d;
+            } else {
+                indirect_sum = indirect_sum + throughput * d;
+            }
+            if (b == pt.config.x) {
+                break;
+            }
             let bounce = pt_sample_brdf(h, v, &rng);
             if (!bounce.ok) {
                 break;
             }
             throughput = throughput * bounce.weight;
+            if (max(max(throughput.x, throughput.y), throughput.z) <= 0.0) {
+                break;
+            }
             let o = h.p + h.n * pt.eye.w;
             let next = ray_trace(o, bounce.l, 0.0, 3.4e38, RAY_CLOSEST);
             if (!next.hit) {
@@ -344,10 +386,6 @@ fn cs_pathtrace(@builtin(global_invocation_id) id: vec3<u32>) {
             }
             v = -bounce.l;
             h = pt_surface(o, bounce.l, next, vec4<f32>(0.0));
-            indirect_sum = indirect_sum + throughput * pt_direct(h, v, &rng);
-            if (max(max(throughput.x, throughput.y), throughput.z) <= 0.0) {
-                break;
-            }
         }
     }
     pt_sums[2u * pixel] = pt_sums[2u * pixel] + vec4<f32>(direct_sum, 0.0);

@@ -119,6 +119,12 @@ fn slab(b: &Aabb, o: Vec3, inv: Vec3, t_max: f32) -> bool {
 
 /// Ray-triangle intersection (Möller & Trumbore 1997): (t, u, v) with barycentrics u, v.
 pub fn moller_trumbore(o: Vec3, d: Vec3, v: [Vec3; 3]) -> Option<(f32, f32, f32)> {
+    moller_trumbore_within(o, d, v, 0.0)
+}
+
+/// [`moller_trumbore`] with the triangle reaching `slack` of its size past its edges (the
+/// barycentric bounds widened; the GPU ray caster's test, `two_level::triangle_hit`).
+pub fn moller_trumbore_within(o: Vec3, d: Vec3, v: [Vec3; 3], slack: f32) -> Option<(f32, f32, f32)> {
     let e1 = v[1] - v[0];
     let e2 = v[2] - v[0];
     let p = d.cross(e2);
@@ -129,12 +135,12 @@ pub fn moller_trumbore(o: Vec3, d: Vec3, v: [Vec3; 3]) -> Option<(f32, f32, f32)
     let inv = 1.0 / det;
     let s = o - v[0];
     let u = s.dot(p) * inv;
-    if !(0.0..=1.0).contains(&u) {
+    if !(-slack..=1.0 + slack).contains(&u) {
         return None;
     }
     let q = s.cross(e1);
     let w = d.dot(q) * inv;
-    if w < 0.0 || u + w > 1.0 {
+    if w < -slack || u + w > 1.0 + slack {
         return None;
     }
     Some((e2.dot(q) * inv, u, w))

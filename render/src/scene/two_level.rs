@@ -435,25 +435,7 @@ pub const EDGE_SLACK: f32 = 1e-5;
 /// Cornell box's corners, where camera rays along the diagonals saw the sky. WGSL twin:
 /// `ray_triangle`.
 pub fn triangle_hit(o: Vec3, d: Vec3, v: [Vec3; 3]) -> Option<(f32, f32, f32)> {
-    let e1 = v[1] - v[0];
-    let e2 = v[2] - v[0];
-    let p = d.cross(e2);
-    let det = e1.dot(p);
-    if det.abs() < 1e-12 {
-        return None;
-    }
-    let inv = 1.0 / det;
-    let s = o - v[0];
-    let u = s.dot(p) * inv;
-    if !(-EDGE_SLACK..=1.0 + EDGE_SLACK).contains(&u) {
-        return None;
-    }
-    let q = s.cross(e1);
-    let w = d.dot(q) * inv;
-    if w < -EDGE_SLACK || u + w > 1.0 + EDGE_SLACK {
-        return None;
-    }
-    Some((e2.dot(q) * inv, u, w))
+    super::raycast::moller_trumbore_within(o, d, v, EDGE_SLACK)
 }
 
 /// 1/d with each zero component replaced by a tiny number of its sign (no 0·∞ in the slab

@@ -135,7 +135,7 @@ fn scene_section(study: &Study, si: usize) -> String {
     } else {
         format!(
             "traced by {} in {} s",
-            escape(&s.truth.tracer),
+            t(&format!("scenes.{si}.truth.tracer"), &s.truth.tracer),
             n(&format!("scenes.{si}.truth.seconds"), s.truth.seconds, 1)
         )
     };
