@@ -96,6 +96,12 @@ fn cells_are_added_removed_share_the_camera_and_compare_with_the_truth() {
         assert!(f > 0.0 && f < 1.0, "FLIP {f}");
     }
     assert!(h.get_all_by_label_contains("spp)").next().is_some(), "the captions give the truth's spp of their FLIP");
+    // On lavapipe the truth is the CPU's, and its caption says so (issue #56).
+    assert!(grid(&h).truth.as_ref().is_some_and(|t| t.tracer == "CPU path tracer"));
+    assert!(
+        h.get_all_by_label_contains("CPU path tracer, 1 bounce(s)").next().is_some(),
+        "the truth's caption names its tracer"
+    );
 
     // A FLIP map in the first added cell, through its view menu.
     h.get_by_label("view of knecht-cornell-256").click();
@@ -122,6 +128,18 @@ fn cells_are_added_removed_share_the_camera_and_compare_with_the_truth() {
         let image = h.render().expect("the harness renders");
         image.save(path).expect("screenshot");
     }
+    // On a real GPU the truth is the GPU path tracer's, on the window's device: started here
+    // with lavapipe's device, it refines and the cells compare with it the same way.
+    let ctx = h.state().renderer().expect("renderer").ctx.clone();
+    h.state_mut().state.grid.as_mut().expect("grid").truth = Some(gi_lab::ui::grid::Truth::start(1, Some(ctx)));
+    run_until(&mut h, 600, |app| {
+        let g = app.state.grid.as_ref().expect("grid");
+        g.truth.as_ref().is_some_and(|t| t.spp >= 2 && t.image.is_some())
+    });
+    let t = grid(&h).truth.as_ref().expect("the truth");
+    assert!(t.tracer.starts_with("GPU path tracer"), "{}", t.tracer);
+    let img = t.image.as_ref().expect("an image");
+    assert!(img.data.iter().any(|p| p[0] > 0.0), "the GPU truth lights the box");
     h.get_by_label("Close grid").click();
     h.run_steps(2);
     assert!(h.state().state.grid.is_none());
