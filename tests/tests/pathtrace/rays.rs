@@ -278,6 +278,34 @@ fn bad_scenes_give_the_documented_answers() {
     empty.nodes.iter_mut().for_each(|n| n.mesh = None);
     assert!(!cast(&empty, &down)[0].hit());
     assert!(cast(&scene, &[]).is_empty(), "an empty batch");
+    // A flat scene (one quad in y = 0: a bounding box of no height) is hit where it lies.
+    let quad = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+        .map(|(x, z)| gi_render::scene::vertex(Vec3::new(x, 0.0, z), Vec3::Y, glam::Vec2::ZERO));
+    let flat = Scene {
+        name: "flat".into(),
+        meshes: vec![gi_render::scene::Mesh {
+            name: "quad".into(),
+            primitives: vec![gi_render::scene::Primitive {
+                vertices: quad.to_vec(),
+                indices: vec![0, 2, 1, 0, 3, 2],
+                material: 0,
+            }],
+        }],
+        materials: vec![gi_render::scene::Material::default()],
+        nodes: vec![gi_render::scene::Node {
+            name: "quad".into(),
+            transform: gi_render::scene::Transform::default(),
+            children: vec![],
+            mesh: Some(0),
+            light: None,
+            camera: None,
+        }],
+        roots: vec![0],
+        ..Scene::default()
+    };
+    let hits = cast(&flat, &[down[0], CastRay::new(Vec3::new(3.0, 0.5, 0.0), Vec3::NEG_Y, 0.0, f32::INFINITY)]);
+    assert!(hits[0].hit() && (hits[0].p.w - 0.5).abs() < 1e-5, "{:?}", hits[0]);
+    assert!(!hits[1].hit(), "beside the quad");
 }
 
 /// The GPU path tracer's and the CPU's images of `scene` at equal samples (their random
