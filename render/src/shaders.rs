@@ -102,6 +102,8 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("rays/cast.wgsl", include_str!("../../shaders/rays/cast.wgsl")),
     ("rays/lights.wgsl", include_str!("../../shaders/rays/lights.wgsl")),
     ("rays/pathtrace.wgsl", include_str!("../../shaders/rays/pathtrace.wgsl")),
+    ("ddgi/probes.wgsl", include_str!("../../shaders/ddgi/probes.wgsl")),
+    ("ddgi/blend.wgsl", include_str!("../../shaders/ddgi/blend.wgsl")),
 ];
 
 /// Files that are entry modules (not only imported).
@@ -169,6 +171,7 @@ pub const ENTRY_MODULES: &[&str] = &[
     "view/probe.wgsl",
     "rays/cast.wgsl",
     "rays/pathtrace.wgsl",
+    "ddgi/blend.wgsl",
 ];
 
 #[derive(Debug, thiserror::Error, PartialEq)]

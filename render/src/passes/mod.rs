@@ -10,6 +10,7 @@
 //! | `hcb/` | Nguyen et al. 000 | shading points HCB samples, coherence splatting, HCB sample cache | `hcb/` |
 //! | `reference/` | Knecht 002 §5.2 (the baseline) | VPL source uniform batches, visibility exact, running average | `reference/` (`{sample,shadow,gather,explain}`) |
 //! | `soler/` | Soler et al. 004 | shading points mip levels, screen-space ring gather, joint bilateral upsampling | `soler/` |
+//! | `ddgi/` | Majercik et al. 2019, 2021 (issue #56; so far the probes' blend) | — (not a stage choice yet) | `ddgi/` |
 //! | `rays/` | issue #56 (no paper: the tools under the GPU truth and DDGI) | rays through a two-level BVH in compute | `rays/` |
 
 use crate::counters::prelude::*;
@@ -18,6 +19,7 @@ pub use crate::gpu::compute_pipeline;
 
 pub mod bins;
 pub mod compose;
+pub mod ddgi;
 pub mod direct;
 pub mod direct_history;
 pub mod emitters;
@@ -163,6 +165,7 @@ pub const BINDINGS: &[&crate::gpu::bindings::Bindings] = &[
     &rays::RAY_SCENE_BINDINGS,
     &rays::CAST_BINDINGS,
     &rays::pathtrace::PATHTRACE_BINDINGS,
+    &ddgi::blend::BLEND_BINDINGS,
 ];
 
 /// A 2D render/storage target with the usages every registered buffer needs (sampling,

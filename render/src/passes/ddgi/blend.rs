@@ -1,0 +1,114 @@
+//! DDGI's probe update, its blend (Majercik et al. 2019 §3.3, Eq. 3–4; 2021 §5.2–5.3):
+//! `shaders/ddgi/blend.wgsl` blends each probe's rays of the frame into its octahedral tiles
+//! of irradiance and distance moments with the hysteresis, then copies the tiles' borders.
+//! CPU twins: `cpu::ddgi::{update_irradiance, update_distance}`, `Atlas::fill_borders`.
+
+use crate::counters::prelude::*;
+
+use glam::{Mat3, Vec4};
+
+use crate::gpu::GpuContext;
+use crate::gpu::bindings::{Bindings, Kind, binding};
+
+const READ: Kind = Kind::Storage { read_only: true };
+const WRITE: Kind = Kind::Storage { read_only: false };
+
+/// The blend's inputs (`ddgi/blend.wgsl`, group 0).
+pub const BLEND_BINDINGS: Bindings = Bindings {
+    label: "ddgi.blend.inputs",
+    shader: "ddgi/blend.wgsl",
+    group: 0,
+    entry: None,
+    visibility: wgpu::ShaderStages::COMPUTE,
+    list: &[
+        binding(0, "ddgi", READ),
+        binding(1, "ddgi_rays", READ),
+        binding(2, "ddgi_irradiance", WRITE),
+        binding(3, "ddgi_distance", WRITE),
+    ],
+};
+
+/// WGSL twin: `DdgiUpdate` in `shaders/ddgi/probes.wgsl` (the rotation's columns padded to
+/// vec4, as WGSL lays out a mat3x3 in a storage buffer).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct DdgiUpdateParams {
+    pub rotation: [Vec4; 3],
+    /// Probes, rays per probe, irradiance and distance interior texels.
+    pub counts: [u32; 4],
+    /// Tiles per atlas row (irradiance, distance), whether the old values count.
+    pub layout: [u32; 4],
+    /// Hysteresis α, distance sharpness, max distance.
+    pub blend: Vec4,
+}
+
+impl DdgiUpdateParams {
+    /// The parameters of one update: the frame's ray rotation, the probe and ray counts, the
+    /// two atlases' layouts, whether the old values count, the hysteresis α, the distance
+    /// sharpness and the max distance (2019 §3.3).
+    pub fn new(
+        rotation: Mat3,
+        (probes, rays): (u32, u32),
+        (irradiance, distance): (&crate::cpu::ddgi::Atlas, &crate::cpu::ddgi::Atlas),
+        keep_old: bool,
+        hysteresis: f32,
+        sharpness: f32,
+        max_distance: f32,
+    ) -> Self {
+        Self {
+            rotation: [rotation.x_axis.extend(0.0), rotation.y_axis.extend(0.0), rotation.z_axis.extend(0.0)],
+            counts: [probes, rays, irradiance.interior, distance.interior],
+            layout: [irradiance.columns, distance.columns, keep_old as u32, 0],
+            blend: Vec4::new(hysteresis, sharpness, max_distance, 0.0),
+        }
+    }
+}
+
+/// The four kernels of the blend.
+pub struct DdgiBlendPass {
+    pub layout: wgpu::BindGroupLayout,
+    irradiance: wgpu::ComputePipeline,
+    distance: wgpu::ComputePipeline,
+    irradiance_borders: wgpu::ComputePipeline,
+    distance_borders: wgpu::ComputePipeline,
+}
+
+impl DdgiBlendPass {
+    pub fn new(ctx: &GpuContext) -> Self {
+        let device = &ctx.device;
+        let layout = BLEND_BINDINGS.layout(device);
+        let module = crate::shaders::create_module(device, "ddgi/blend.wgsl");
+        let make =
+            |label: &str, entry: &str| crate::passes::compute_pipeline(device, label, &module, entry, &[&layout]);
+        Self {
+            irradiance: make("ddgi.blend.irradiance", "cs_irradiance"),
+            distance: make("ddgi.blend.distance", "cs_distance"),
+            irradiance_borders: make("ddgi.blend.irradiance_borders", "cs_irradiance_borders"),
+            distance_borders: make("ddgi.blend.distance_borders", "cs_distance_borders"),
+            layout,
+        }
+    }
+
+    /// Records the blend: the interiors, then the borders, of both atlases of sizes
+    /// `irradiance` and `distance` (texels).
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        group: &wgpu::BindGroup,
+        irradiance: (u32, u32),
+        distance: (u32, u32),
+    ) {
+        let mut pass = encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("ddgi.blend"), timestamp_writes: None });
+        pass.set_group(0, group, &[]);
+        for (pipeline, (w, h)) in [
+            (&self.irradiance, irradiance),
+            (&self.distance, distance),
+            (&self.irradiance_borders, irradiance),
+            (&self.distance_borders, distance),
+        ] {
+            pass.set_pipe(pipeline);
+            pass.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
+        }
+    }
+}

@@ -1,0 +1,137 @@
+// DDGI's probe update (Majercik et al. 2019 §3.3, Eq. 3–4; 2021 §5.2–5.3; CPU twins
+// `cpu::ddgi::{update_irradiance, update_distance}` and `Atlas::fill_borders`): each interior
+// texel of a probe's tiles blends the probe's rays of this frame about its direction into its
+// old value with the hysteresis; then the borders copy the interior as the octahedron folds.
+// `passes::ddgi::blend`.
+
+#import ddgi/probes.wgsl
+
+@group(0) @binding(0) var<storage, read> ddgi: DdgiUpdate;
+// Per probe and ray: radiance (rgb), distance (w; negative: a back face at −w; ≥ 1e30: none).
+@group(0) @binding(1) var<storage, read> ddgi_rays: array<vec4<f32>>;
+// The atlases, row-major, irradiance / π (rgb) and distance moments (mean, mean²).
+@group(0) @binding(2) var<storage, read_write> ddgi_irradiance: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read_write> ddgi_distance: array<vec4<f32>>;
+
+// The probe and tile texel of atlas texel `p` (tiles of interior + 2, `columns` a row);
+// probe ≥ the probe count: none.
+fn ddgi_tile_of(p: vec2<u32>, interior: u32, columns: u32) -> vec3<u32> {
+    let t = interior + 2u;
+    return vec3<u32>((p.y / t) * columns + p.x / t, p.x % t, p.y % t);
+}
+
+fn ddgi_ray_dir(r: u32) -> vec3<f32> {
+    return normalize(ddgi.rotation * ddgi_fibonacci(r, ddgi.counts.y));
+}
+
+@compute @workgroup_size(8, 8)
+fn cs_irradiance(@builtin(global_invocation_id) id: vec3<u32>) {
+    let n = ddgi.counts.z;
+    let columns = ddgi.tiles.x;
+    let c = ddgi_tile_of(id.xy, n, columns);
+    let width = columns * (n + 2u);
+    if (id.x >= width || c.x >= ddgi.counts.x || c.y == 0u || c.z == 0u || c.y > n || c.z > n) {
+        return;
+    }
+    let d = ddgi_texel_direction(c.y - 1u, c.z - 1u, n);
+    var sum = vec3<f32>(0.0);
+    var w = 0.0;
+    for (var r = 0u; r < ddgi.counts.y; r = r + 1u) {
+        let ray = ddgi_rays[c.x * ddgi.counts.y + r];
+        let k = max(dot(d, ddgi_ray_dir(r)), 0.0);
+        if (k > 0.0) {
+            // Back faces carry no light (they are inside geometry, 2021 §5.2).
+            sum = sum + select(ray.rgb, vec3<f32>(0.0), ray.w < 0.0) * k;
+            w = w + k;
+        }
+    }
+    let i = id.y * width + id.x;
+    if (w > 0.0) {
+        var v = sum / w;
+        if (ddgi.tiles.z != 0u) {
+            v = mix(v, ddgi_irradiance[i].rgb, clamp(ddgi.blend.x, 0.0, 1.0));
+        }
+        ddgi_irradiance[i] = vec4<f32>(v, 1.0);
+    }
+}
+
+@compute @workgroup_size(8, 8)
+fn cs_distance(@builtin(global_invocation_id) id: vec3<u32>) {
+    let n = ddgi.counts.w;
+    let columns = ddgi.tiles.y;
+    let c = ddgi_tile_of(id.xy, n, columns);
+    let width = columns * (n + 2u);
+    if (id.x >= width || c.x >= ddgi.counts.x || c.y == 0u || c.z == 0u || c.y > n || c.z > n) {
+        return;
+    }
+    let d = ddgi_texel_direction(c.y - 1u, c.z - 1u, n);
+    var sum = vec2<f32>(0.0);
+    var w = 0.0;
+    for (var r = 0u; r < ddgi.counts.y; r = r + 1u) {
+        let ray = ddgi_rays[c.x * ddgi.counts.y + r];
+        let k = pow(max(dot(d, ddgi_ray_dir(r)), 0.0), ddgi.blend.y);
+        if (k > 0.0) {
+            var t = min(abs(ray.w), ddgi.blend.z);
+            // A back face counts a fifth of its distance (2021 §5.3).
+            if (ray.w < 0.0) {
+                t = t * 0.2;
+            }
+            sum = sum + vec2<f32>(t, t * t) * k;
+            w = w + k;
+        }
+    }
+    let i = id.y * width + id.x;
+    if (w > 0.0) {
+        var v = sum / w;
+        if (ddgi.tiles.z != 0u) {
+            v = mix(v, ddgi_distance[i].xy, clamp(ddgi.blend.x, 0.0, 1.0));
+        }
+        ddgi_distance[i] = vec4<f32>(v, 0.0, 1.0);
+    }
+}
+
+// The interior texel a border texel (tx, ty) of a tile of `n` copies (`Atlas::fill_borders`);
+// (0, 0) for an interior texel.
+fn ddgi_border_source(tx: u32, ty: u32, n: u32) -> vec2<u32> {
+    let last = n + 1u;
+    let x_edge = tx == 0u || tx == last;
+    let y_edge = ty == 0u || ty == last;
+    if (x_edge && y_edge) {
+        return vec2<u32>(select(n, 1u, tx == last), select(n, 1u, ty == last));
+    }
+    if (y_edge) {
+        return vec2<u32>(n + 1u - tx, select(1u, n, ty == last));
+    }
+    if (x_edge) {
+        return vec2<u32>(select(1u, n, tx == last), n + 1u - ty);
+    }
+    return vec2<u32>(0u);
+}
+
+@compute @workgroup_size(8, 8)
+fn cs_irradiance_borders(@builtin(global_invocation_id) id: vec3<u32>) {
+    let n = ddgi.counts.z;
+    let columns = ddgi.tiles.x;
+    let c = ddgi_tile_of(id.xy, n, columns);
+    let width = columns * (n + 2u);
+    let s = ddgi_border_source(c.y, c.z, n);
+    if (id.x >= width || c.x >= ddgi.counts.x || s.x == 0u) {
+        return;
+    }
+    let src = ddgi_texel(c.x, s.x, s.y, n, columns);
+    ddgi_irradiance[id.y * width + id.x] = ddgi_irradiance[src.y * width + src.x];
+}
+
+@compute @workgroup_size(8, 8)
+fn cs_distance_borders(@builtin(global_invocation_id) id: vec3<u32>) {
+    let n = ddgi.counts.w;
+    let columns = ddgi.tiles.y;
+    let c = ddgi_tile_of(id.xy, n, columns);
+    let width = columns * (n + 2u);
+    let s = ddgi_border_source(c.y, c.z, n);
+    if (id.x >= width || c.x >= ddgi.counts.x || s.x == 0u) {
+        return;
+    }
+    let src = ddgi_texel(c.x, s.x, s.y, n, columns);
+    ddgi_distance[id.y * width + id.x] = ddgi_distance[src.y * width + src.x];
+}
