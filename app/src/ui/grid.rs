@@ -84,7 +84,8 @@ pub struct Truth {
     /// The spp of the image in `texture`.
     pub(crate) texture_spp: u32,
     jobs: Sender<TruthJob>,
-    results: Receiver<(u64, u32, Arc<ImageF32>)>,
+    /// (generation, spp, image, the tracer that made it in words).
+    results: Receiver<(u64, u32, Arc<ImageF32>, Arc<str>)>,
     /// The inputs of the job running (a change restarts it).
     key: Option<String>,
     generation: u64,
@@ -162,8 +163,8 @@ impl Truth {
     pub fn start(bounces: u32, gpu: Option<gi_render::GpuContext>) -> Self {
         let (jobs, job_rx) = std::sync::mpsc::channel::<TruthJob>();
         let (tx, results) = std::sync::mpsc::channel();
-        let tracer = match &gpu {
-            Some(ctx) => format!("GPU path tracer ({})", ctx.adapter_info.name),
+        let tracer: Arc<str> = match &gpu {
+            Some(ctx) => format!("GPU path tracer ({})", ctx.adapter_info.name).into(),
             None => "CPU path tracer".into(),
         };
         // Half the cores at most: the renderers (and, on a software device, the GPU itself)
@@ -171,14 +172,17 @@ impl Truth {
         let threads = std::thread::available_parallelism().map_or(1, |n| (n.get() / 2).max(1));
         let pool =
             rayon::ThreadPoolBuilder::new().num_threads(threads).thread_name(|i| format!("grid-truth-{i}")).build();
+        let label = tracer.to_string();
         let _ = std::thread::Builder::new().name("grid-truth".into()).spawn(move || {
             let Ok(pool) = pool else { return };
             let mut next = job_rx.recv().ok();
             while let Some(job) = next.take() {
-                let mut refining = match Refining::new(&job, gpu.as_ref()) {
-                    Ok(r) => r,
-                    Err(_) => match Refining::new(&job, None) {
-                        Ok(r) => r,
+                // The GPU's tracer, or the CPU's when there is no GPU or the GPU's cannot take
+                // the scene (past the device's buffer sizes): the cell's caption says which.
+                let (mut refining, by): (Refining, Arc<str>) = match Refining::new(&job, gpu.as_ref()) {
+                    Ok(r) => (r, tracer.clone()),
+                    Err(e) => match Refining::new(&job, None) {
+                        Ok(r) => (r, format!("CPU path tracer (the GPU's: {e})").into()),
                         Err(_) => return,
                     },
                 };
@@ -204,7 +208,7 @@ impl Truth {
                     };
                     let Ok(image) = refining.add(&job, batch, gpu.as_ref(), &pool) else { return };
                     spp += batch;
-                    if tx.send((job.generation, spp, Arc::new(image))).is_err() {
+                    if tx.send((job.generation, spp, Arc::new(image), by.clone())).is_err() {
                         return;
                     }
                 }
@@ -220,7 +224,7 @@ impl Truth {
             results,
             key: None,
             generation: 0,
-            tracer,
+            tracer: label,
         }
     }
 
@@ -263,9 +267,10 @@ impl Truth {
                 sky_background: settings.sky.background,
             });
         }
-        while let Ok((generation, spp, image)) = self.results.try_recv() {
+        while let Ok((generation, spp, image, by)) = self.results.try_recv() {
             if generation == self.generation {
                 self.spp = spp;
+                self.tracer = by.to_string();
                 self.image = Some(image);
             }
         }
