@@ -434,24 +434,25 @@ pub struct ProbeWeight {
     pub irradiance: Vec3,
 }
 
+/// The probes as a frame samples them: the grid, both atlases, and per probe its relocation
+/// offset and its state.
+#[derive(Clone, Copy)]
+pub struct Probes<'a> {
+    pub grid: &'a ProbeGrid,
+    pub irradiance: &'a Atlas,
+    pub distance: &'a Atlas,
+    pub offsets: &'a [Vec3],
+    pub states: &'a [ProbeState],
+}
+
 /// The irradiance at a surface point `p` of normal `n` seen from direction `v` (toward the
 /// eye) from the probes (2019 §3.4, Eq. 5–6; 2021 §4.2): the point moved by the normal and
 /// view bias; per probe of its cell the trilinear weight, the backface term, Chebyshev's
 /// visibility from the distance moments toward the moved point; the weighted mean of the
 /// probes' irradiance toward n, times π. `offsets` and `states` per probe (relocation and
 /// classification). Returns E and the eight probes' weights.
-#[allow(clippy::too_many_arguments)]
-pub fn sample(
-    grid: &ProbeGrid,
-    irradiance: &Atlas,
-    distance: &Atlas,
-    offsets: &[Vec3],
-    states: &[ProbeState],
-    p: Vec3,
-    n: Vec3,
-    v: Vec3,
-    params: &DdgiParams,
-) -> (Vec3, [ProbeWeight; 8]) {
+pub fn sample(probes: &Probes<'_>, p: Vec3, n: Vec3, v: Vec3, params: &DdgiParams) -> (Vec3, [ProbeWeight; 8]) {
+    let Probes { grid, irradiance, distance, offsets, states } = *probes;
     let scale = grid.spacing.min_element();
     let biased = p + (n * params.normal_bias + v * params.view_bias) * scale;
     let (base, alpha) = grid.cell(biased);
@@ -551,17 +552,8 @@ mod tests {
         }
         let states = vec![ProbeState::Active; grid.len()];
         let offsets = vec![Vec3::ZERO; grid.len()];
-        let (e, w) = sample(
-            &grid,
-            &irr,
-            &dist,
-            &offsets,
-            &states,
-            Vec3::new(0.1, -0.2, 0.3),
-            Vec3::Y,
-            Vec3::Z,
-            &DdgiParams::default(),
-        );
+        let probes = Probes { grid: &grid, irradiance: &irr, distance: &dist, offsets: &offsets, states: &states };
+        let (e, w) = sample(&probes, Vec3::new(0.1, -0.2, 0.3), Vec3::Y, Vec3::Z, &DdgiParams::default());
         assert!((e - l * std::f32::consts::PI).length() < 1e-3, "{e}");
         let tri: f32 = w.iter().map(|p| p.trilinear).sum();
         assert!((tri - 1.0).abs() < 1e-5, "trilinear weights sum to 1: {tri}");
@@ -647,15 +639,36 @@ mod tests {
         let params = DdgiParams { normal_bias: 0.0, view_bias: 0.0, ..DdgiParams::default() };
         let states = vec![ProbeState::Active; 8];
         let offsets = vec![Vec3::ZERO; 8];
-        let near = sample(&grid, &irr, &dist, &offsets, &states, Vec3::splat(0.1), Vec3::Y, Vec3::Y, &params).1;
-        let far = sample(&grid, &irr, &dist, &offsets, &states, Vec3::splat(0.55), Vec3::Y, Vec3::Y, &params).1;
+        let near = sample(
+            &Probes { grid: &grid, irradiance: &irr, distance: &dist, offsets: &offsets, states: &states },
+            Vec3::splat(0.1),
+            Vec3::Y,
+            Vec3::Y,
+            &params,
+        )
+        .1;
+        let far = sample(
+            &Probes { grid: &grid, irradiance: &irr, distance: &dist, offsets: &offsets, states: &states },
+            Vec3::splat(0.55),
+            Vec3::Y,
+            Vec3::Y,
+            &params,
+        )
+        .1;
         assert_eq!(near[0].probe, 0);
         assert!(near[0].visibility > 0.99, "{:?}", near[0]);
         assert!(far[0].visibility < 0.05, "{:?}", far[0]);
         // An inactive probe weighs nothing.
         let mut off = states.clone();
         off[0] = ProbeState::Inactive;
-        let w = sample(&grid, &irr, &dist, &offsets, &off, Vec3::splat(0.1), Vec3::Y, Vec3::Y, &params).1;
+        let w = sample(
+            &Probes { grid: &grid, irradiance: &irr, distance: &dist, offsets: &offsets, states: &off },
+            Vec3::splat(0.1),
+            Vec3::Y,
+            Vec3::Y,
+            &params,
+        )
+        .1;
         assert_eq!(w[0].weight, 0.0);
     }
 
