@@ -20,6 +20,14 @@ fn ddgi_tile_of(p: vec2<u32>, interior: u32, columns: u32) -> vec3<u32> {
     return vec3<u32>((p.y / t) * columns + p.x / t, p.x % t, p.y % t);
 }
 
+// The interior texel of atlas texel `p`: (probe, i, j, 1), or w = 0 for a border texel, a
+// texel past the atlas's width or of a tile past the probes.
+fn ddgi_interior(p: vec2<u32>, n: u32, columns: u32) -> vec4<u32> {
+    let c = ddgi_tile_of(p, n, columns);
+    let inside = p.x < columns * (n + 2u) && c.x < ddgi.counts.x && c.y >= 1u && c.z >= 1u && c.y <= n && c.z <= n;
+    return vec4<u32>(c.x, c.y - 1u, c.z - 1u, select(0u, 1u, inside));
+}
+
 fn ddgi_ray_dir(r: u32) -> vec3<f32> {
     return normalize(ddgi.rotation * ddgi_fibonacci(r, ddgi.counts.y));
 }
@@ -27,13 +35,12 @@ fn ddgi_ray_dir(r: u32) -> vec3<f32> {
 @compute @workgroup_size(8, 8)
 fn cs_irradiance(@builtin(global_invocation_id) id: vec3<u32>) {
     let n = ddgi.counts.z;
-    let columns = ddgi.tiles.x;
-    let c = ddgi_tile_of(id.xy, n, columns);
-    let width = columns * (n + 2u);
-    if (id.x >= width || c.x >= ddgi.counts.x || c.y == 0u || c.z == 0u || c.y > n || c.z > n) {
+    let width = ddgi.tiles.x * (n + 2u);
+    let c = ddgi_interior(id.xy, n, ddgi.tiles.x);
+    if (c.w == 0u) {
         return;
     }
-    let d = ddgi_texel_direction(c.y - 1u, c.z - 1u, n);
+    let d = ddgi_texel_direction(c.y, c.z, n);
     var sum = vec3<f32>(0.0);
     var w = 0.0;
     for (var r = 0u; r < ddgi.counts.y; r = r + 1u) {
@@ -58,13 +65,12 @@ fn cs_irradiance(@builtin(global_invocation_id) id: vec3<u32>) {
 @compute @workgroup_size(8, 8)
 fn cs_distance(@builtin(global_invocation_id) id: vec3<u32>) {
     let n = ddgi.counts.w;
-    let columns = ddgi.tiles.y;
-    let c = ddgi_tile_of(id.xy, n, columns);
-    let width = columns * (n + 2u);
-    if (id.x >= width || c.x >= ddgi.counts.x || c.y == 0u || c.z == 0u || c.y > n || c.z > n) {
+    let width = ddgi.tiles.y * (n + 2u);
+    let c = ddgi_interior(id.xy, n, ddgi.tiles.y);
+    if (c.w == 0u) {
         return;
     }
-    let d = ddgi_texel_direction(c.y - 1u, c.z - 1u, n);
+    let d = ddgi_texel_direction(c.y, c.z, n);
     var sum = vec2<f32>(0.0);
     var w = 0.0;
     for (var r = 0u; r < ddgi.counts.y; r = r + 1u) {
@@ -108,30 +114,29 @@ fn ddgi_border_source(tx: u32, ty: u32, n: u32) -> vec2<u32> {
     return vec2<u32>(0u);
 }
 
-@compute @workgroup_size(8, 8)
-fn cs_irradiance_borders(@builtin(global_invocation_id) id: vec3<u32>) {
-    let n = ddgi.counts.z;
-    let columns = ddgi.tiles.x;
-    let c = ddgi_tile_of(id.xy, n, columns);
+// The atlas index a border texel `p` copies to and the interior index it copies from
+// (x = y: `p` is no border texel of a probe's tile).
+fn ddgi_border_copy(p: vec2<u32>, n: u32, columns: u32) -> vec2<u32> {
+    let c = ddgi_tile_of(p, n, columns);
     let width = columns * (n + 2u);
     let s = ddgi_border_source(c.y, c.z, n);
-    if (id.x >= width || c.x >= ddgi.counts.x || s.x == 0u) {
-        return;
+    if (p.x >= width || c.x >= ddgi.counts.x || s.x == 0u) {
+        return vec2<u32>(0u);
     }
     let src = ddgi_texel(c.x, s.x, s.y, n, columns);
-    ddgi_irradiance[id.y * width + id.x] = ddgi_irradiance[src.y * width + src.x];
+    return vec2<u32>(p.y * width + p.x, src.y * width + src.x);
 }
 
+// Both atlases' borders, dispatched over the larger (the distance atlas, whose tiles are the
+// larger, is at least as wide and as tall for the same probes).
 @compute @workgroup_size(8, 8)
-fn cs_distance_borders(@builtin(global_invocation_id) id: vec3<u32>) {
-    let n = ddgi.counts.w;
-    let columns = ddgi.tiles.y;
-    let c = ddgi_tile_of(id.xy, n, columns);
-    let width = columns * (n + 2u);
-    let s = ddgi_border_source(c.y, c.z, n);
-    if (id.x >= width || c.x >= ddgi.counts.x || s.x == 0u) {
-        return;
+fn cs_borders(@builtin(global_invocation_id) id: vec3<u32>) {
+    let a = ddgi_border_copy(id.xy, ddgi.counts.z, ddgi.tiles.x);
+    if (a.x != a.y) {
+        ddgi_irradiance[a.x] = ddgi_irradiance[a.y];
     }
-    let src = ddgi_texel(c.x, s.x, s.y, n, columns);
-    ddgi_distance[id.y * width + id.x] = ddgi_distance[src.y * width + src.x];
+    let b = ddgi_border_copy(id.xy, ddgi.counts.w, ddgi.tiles.y);
+    if (b.x != b.y) {
+        ddgi_distance[b.x] = ddgi_distance[b.y];
+    }
 }

@@ -64,13 +64,12 @@ impl DdgiUpdateParams {
     }
 }
 
-/// The four kernels of the blend.
+/// The three kernels of the blend.
 pub struct DdgiBlendPass {
     pub layout: wgpu::BindGroupLayout,
     irradiance: wgpu::ComputePipeline,
     distance: wgpu::ComputePipeline,
-    irradiance_borders: wgpu::ComputePipeline,
-    distance_borders: wgpu::ComputePipeline,
+    borders: wgpu::ComputePipeline,
 }
 
 impl DdgiBlendPass {
@@ -83,8 +82,7 @@ impl DdgiBlendPass {
         Self {
             irradiance: make("ddgi.blend.irradiance", "cs_irradiance"),
             distance: make("ddgi.blend.distance", "cs_distance"),
-            irradiance_borders: make("ddgi.blend.irradiance_borders", "cs_irradiance_borders"),
-            distance_borders: make("ddgi.blend.distance_borders", "cs_distance_borders"),
+            borders: make("ddgi.blend.borders", "cs_borders"),
             layout,
         }
     }
@@ -101,12 +99,8 @@ impl DdgiBlendPass {
         let mut pass = encoder
             .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("ddgi.blend"), timestamp_writes: None });
         pass.set_group(0, group, &[]);
-        for (pipeline, (w, h)) in [
-            (&self.irradiance, irradiance),
-            (&self.distance, distance),
-            (&self.irradiance_borders, irradiance),
-            (&self.distance_borders, distance),
-        ] {
+        let both = (irradiance.0.max(distance.0), irradiance.1.max(distance.1));
+        for (pipeline, (w, h)) in [(&self.irradiance, irradiance), (&self.distance, distance), (&self.borders, both)] {
             pass.set_pipe(pipeline);
             pass.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
         }
