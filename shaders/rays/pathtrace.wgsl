@@ -154,10 +154,9 @@ fn pt_specular_power(roughness: f32) -> f32 {
     return clamp(2.0 / (a * a) - 2.0, 1.0, 4096.0);
 }
 
-// The surface at a hit, its material read (`PathTracer::intersect` and
+// The surface `s` of a hit (`ray_surface`), its material read (`PathTracer::intersect` and
 // `Material::intensities_at`).
-fn pt_surface(o: vec3<f32>, d: vec3<f32>, h: RayHit, duv: vec4<f32>) -> PtSurface {
-    let s = ray_surface(o, d, h);
+fn pt_surface(s: RaySurface, duv: vec4<f32>) -> PtSurface {
     let m = ray_materials[s.material];
     var c = m.base_color.rgb;
     if (m.textures.x != RAY_NO_TEXTURE) {
@@ -345,7 +344,7 @@ fn cs_pathtrace(@builtin(global_invocation_id) id: vec3<u32>) {
     var emission = vec3<f32>(0.0);
     if (first.hit) {
         let s0 = ray_surface(ray.o, ray.d, first);
-        first_surface = pt_surface(ray.o, ray.d, first, pt_uv_derivatives(first, s0.uv, right, below));
+        first_surface = pt_surface(s0, pt_uv_derivatives(first, s0.uv, right, below));
         emission = pt_emission(first_surface);
     }
     for (var k = 0u; k < pt.size.w; k = k + 1u) {
@@ -385,7 +384,7 @@ fn cs_pathtrace(@builtin(global_invocation_id) id: vec3<u32>) {
                 break;
             }
             v = -bounce.l;
-            h = pt_surface(o, bounce.l, next, vec4<f32>(0.0));
+            h = pt_surface(ray_surface(o, bounce.l, next), vec4<f32>(0.0));
         }
     }
     pt_sums[2u * pixel] = pt_sums[2u * pixel] + vec4<f32>(direct_sum, 0.0);

@@ -372,10 +372,12 @@ impl TwoLevel {
         }
         let mut best: Option<TwoLevelHit> = None;
         let mut t_best = tmax;
+        let inv = safe_inverse(d);
         let mut stack = vec![self.tlas_base];
+        let mut blas = Vec::new();
         while let Some(i) = stack.pop() {
             let n = self.nodes[i as usize];
-            if slab(&n, o, safe_inverse(d), t_best).is_none() {
+            if slab(&n, o, inv, t_best).is_none() {
                 continue;
             }
             if !n.is_leaf() {
@@ -385,11 +387,12 @@ impl TwoLevel {
             }
             let inst = &self.instances[n.first as usize];
             let (ol, dl) = (inst.world_to_object.transform_point3(o), inst.world_to_object.transform_vector3(d));
-            let inv = safe_inverse(dl);
-            let mut blas = vec![inst.blas_root];
+            let inv_l = safe_inverse(dl);
+            blas.clear();
+            blas.push(inst.blas_root);
             while let Some(j) = blas.pop() {
                 let m = self.nodes[j as usize];
-                if slab(&m, ol, inv, t_best).is_none() {
+                if slab(&m, ol, inv_l, t_best).is_none() {
                     continue;
                 }
                 if !m.is_leaf() {
