@@ -138,6 +138,11 @@ impl Renderer {
             lights: state.lights.iter().map(crate::passes::shadow::gpu_light).collect(),
             views: light_view_list(&state, self.bounds),
             rotating_sky: self.rotating_sky(),
+            sky_lights: self.sky_lights.count(),
+            room: match self.scale().1 {
+                crate::scale::ScaleSource::Room(b) => Some(b),
+                crate::scale::ScaleSource::Model => None,
+            },
             explain_pixel: self.stages.explain_pixel,
             unchanged: self.kept.contains(&"gbuffer") && self.kept.contains(&"direct"),
             read_back,

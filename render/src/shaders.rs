@@ -101,9 +101,14 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("rays/scene.wgsl", include_str!("../../shaders/rays/scene.wgsl")),
     ("rays/cast.wgsl", include_str!("../../shaders/rays/cast.wgsl")),
     ("rays/lights.wgsl", include_str!("../../shaders/rays/lights.wgsl")),
+    ("rays/shade.wgsl", include_str!("../../shaders/rays/shade.wgsl")),
     ("rays/pathtrace.wgsl", include_str!("../../shaders/rays/pathtrace.wgsl")),
     ("ddgi/probes.wgsl", include_str!("../../shaders/ddgi/probes.wgsl")),
     ("ddgi/blend.wgsl", include_str!("../../shaders/ddgi/blend.wgsl")),
+    ("ddgi/lookup.wgsl", include_str!("../../shaders/ddgi/lookup.wgsl")),
+    ("ddgi/trace.wgsl", include_str!("../../shaders/ddgi/trace.wgsl")),
+    ("ddgi/apply.wgsl", include_str!("../../shaders/ddgi/apply.wgsl")),
+    ("ddgi/view.wgsl", include_str!("../../shaders/ddgi/view.wgsl")),
 ];
 
 /// Files that are entry modules (not only imported).
@@ -172,6 +177,9 @@ pub const ENTRY_MODULES: &[&str] = &[
     "rays/cast.wgsl",
     "rays/pathtrace.wgsl",
     "ddgi/blend.wgsl",
+    "ddgi/trace.wgsl",
+    "ddgi/apply.wgsl",
+    "ddgi/view.wgsl",
 ];
 
 #[derive(Debug, thiserror::Error, PartialEq)]

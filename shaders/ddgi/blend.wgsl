@@ -1,8 +1,9 @@
 // DDGI's probe update (Majercik et al. 2019 §3.3, Eq. 3–4; 2021 §5.2–5.3; CPU twins
-// `cpu::ddgi::{update_irradiance, update_distance}` and `Atlas::fill_borders`): each interior
-// texel of a probe's tiles blends the probe's rays of this frame about its direction into its
-// old value with the hysteresis; then the borders copy the interior as the octahedron folds.
-// `passes::ddgi::blend`.
+// `cpu::ddgi::{update_irradiance, update_distance}`, `Atlas::fill_borders`, `classify` and
+// `relocate`): each interior texel of a probe's tiles blends the probe's rays of this frame
+// about its direction into its old value with the hysteresis; then the borders copy the
+// interior as the octahedron folds; then each probe is classified and relocated from the same
+// rays. `passes::ddgi::blend`.
 
 #import ddgi/probes.wgsl
 
@@ -12,6 +13,9 @@
 // The atlases, row-major, irradiance / π (rgb) and distance moments (mean, mean²).
 @group(0) @binding(2) var<storage, read_write> ddgi_irradiance: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read_write> ddgi_distance: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read> ddgi_grid: DdgiGrid;
+// Per probe: relocation offset (xyz), state (w: 0 active, 1 inactive).
+@group(0) @binding(5) var<storage, read_write> ddgi_probes: array<vec4<f32>>;
 
 // The probe and tile texel of atlas texel `p` (tiles of interior + 2, `columns` a row);
 // probe ≥ the probe count: none.
@@ -139,4 +143,66 @@ fn cs_borders(@builtin(global_invocation_id) id: vec3<u32>) {
     if (b.x != b.y) {
         ddgi_distance[b.x] = ddgi_distance[b.y];
     }
+}
+
+// A probe's state and place from its rays (2021 §5.2–5.3; `cpu::ddgi::classify` and
+// `relocate`): inside geometry when more than the back-face share of its rays meet back faces;
+// idle when no front face lies within its cell; moved through the nearest back face when
+// inside, away from a front face closer than the least distance otherwise, within ±0.45 of a
+// spacing.
+@compute @workgroup_size(64)
+fn cs_probe_state(@builtin(global_invocation_id) id: vec3<u32>) {
+    let probe = id.x;
+    if (probe >= ddgi.counts.x) {
+        return;
+    }
+    let n = ddgi.counts.y;
+    let spacing = ddgi_grid.spacing.xyz;
+    var back = 0u;
+    var near = false;
+    var nearest_back = 3.4e38;
+    var back_dir = vec3<f32>(0.0);
+    var nearest_front = 3.4e38;
+    var front_dir = vec3<f32>(0.0);
+    for (var r = 0u; r < n; r = r + 1u) {
+        let w = ddgi_rays[probe * n + r].w;
+        if (abs(w) >= 1e30) {
+            continue;
+        }
+        let d = ddgi_ray_dir(r);
+        let t = abs(w);
+        if (w < 0.0) {
+            back = back + 1u;
+            if (t < nearest_back) {
+                nearest_back = t;
+                back_dir = d;
+            }
+        } else {
+            if (all(abs(d * t) <= spacing)) {
+                near = true;
+            }
+            if (t < nearest_front) {
+                nearest_front = t;
+                front_dir = d;
+            }
+        }
+    }
+    let inside = f32(back) / f32(max(n, 1u)) > ddgi_grid.state.x;
+    var o = ddgi_probes[probe].xyz;
+    if ((ddgi_grid.counts.w & DDGI_RELOCATE) != 0u) {
+        let scale = min(min(spacing.x, spacing.y), spacing.z);
+        if (inside) {
+            if (nearest_back < 3.4e38) {
+                o = o + back_dir * (nearest_back + 0.05 * scale);
+            }
+        } else if (nearest_front < ddgi_grid.state.y) {
+            o = o - front_dir * (ddgi_grid.state.y - nearest_front);
+        }
+        o = clamp(o, -0.45 * spacing, 0.45 * spacing);
+    }
+    var state = 0.0;
+    if ((ddgi_grid.counts.w & DDGI_CLASSIFY) != 0u && (inside || !near)) {
+        state = DDGI_INACTIVE;
+    }
+    ddgi_probes[probe] = vec4<f32>(o, state);
 }

@@ -8,7 +8,7 @@ struct DdgiUpdate {
     // Probes, rays per probe, irradiance interior texels, distance interior texels.
     counts: vec4<u32>,
     // Tiles per atlas row (irradiance, distance), whether the old values count (0: the first
-    // update), 0.
+    // update), the frame's seed (the trace's shading samples).
     tiles: vec4<u32>,
     // Hysteresis α, distance sharpness, max distance (world units), 0.
     blend: vec4<f32>,
@@ -65,3 +65,23 @@ fn ddgi_texel_direction(i: u32, j: u32, interior: u32) -> vec3<f32> {
     let n = f32(interior);
     return ddgi_oct_decode(vec2<f32>((f32(i) + 0.5) / n * 2.0 - 1.0, (f32(j) + 0.5) / n * 2.0 - 1.0));
 }
+
+// `passes::ddgi::DdgiGridParams`: the grid and what the frame does with it.
+struct DdgiGrid {
+    // The first probe's place (xyz), the normal bias in world units (w).
+    origin: vec4<f32>,
+    // The spacing (xyz), the view bias in world units (w).
+    spacing: vec4<f32>,
+    // Probes along x, y, z; flags (DDGI_*).
+    counts: vec4<u32>,
+    // Irradiance interior texels and tiles a row, distance interior texels and tiles a row.
+    atlas: vec4<u32>,
+    // Classification's back-face share, relocation's least front-face distance (world).
+    state: vec4<f32>,
+}
+
+const DDGI_CLASSIFY: u32 = 1u;
+const DDGI_RELOCATE: u32 = 2u;
+const DDGI_BOUNCES: u32 = 4u;
+// A probe record's w: 0 active, 1 inactive (`cpu::ddgi::ProbeState`).
+const DDGI_INACTIVE: f32 = 1.0;

@@ -1,7 +1,8 @@
 // The GPU path tracer's lights (issue #56 point 2): punctual lights, emissive triangles
 // sampled by power, the sky sampled by its radiance; twins of `cpu::brdf::punctual_radiance`,
 // `scene::emitters::Emitters::sample` and `scene::sky::SkySampler`, documented there.
-// Group 0 of `rays/pathtrace.wgsl`; needs `rays/scene.wgsl` (textures) and common/brdf.wgsl.
+// Its buffers are group 0's bindings 0–4, declared in `rays/shade.wgsl` (which imports this
+// file with `rays/scene.wgsl` and common/brdf.wgsl).
 
 // `passes::rays::pathtrace::PtLight`.
 struct PtLight {
@@ -153,15 +154,15 @@ fn pt_punctual(light: PtLight, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, c: vec3
 // φ ∈ 2π[x, x+1)/w, θ ∈ π[y, y+1)/h from +Y, the centre looks along −Z, rotated about +Y) or
 // a constant colour.
 fn pt_sky_direction(u: f32, v: f32) -> vec3<f32> {
-    let phi = 2.0 * PI * u - PI + pt.sky.w;
+    let phi = 2.0 * PI * u - PI + pt_shade.sky.w;
     let theta = PI * v;
     return vec3<f32>(sin(theta) * sin(phi), cos(theta), -sin(theta) * cos(phi));
 }
 
 fn pt_sky_texel(d: vec3<f32>) -> u32 {
-    let w = pt.counts.z;
-    let h = pt.counts.w;
-    let phi = atan2(d.x, -d.z) - pt.sky.w + PI;
+    let w = pt_shade.counts.z;
+    let h = pt_shade.counts.w;
+    let phi = atan2(d.x, -d.z) - pt_shade.sky.w + PI;
     let u = phi / (2.0 * PI) - floor(phi / (2.0 * PI));
     let v = acos(clamp(d.y, -1.0, 1.0)) / PI;
     let x = min(u32(u * f32(w)), w - 1u);
@@ -170,15 +171,15 @@ fn pt_sky_texel(d: vec3<f32>) -> u32 {
 }
 
 fn pt_sky_has_image() -> bool {
-    return (pt.config.w & PT_SKY_IMAGE) != 0u;
+    return (pt_shade.config.w & PT_SKY_IMAGE) != 0u;
 }
 
 // Radiance seen along d (pointing into the sky).
 fn pt_sky_radiance(d: vec3<f32>) -> vec3<f32> {
     if (!pt_sky_has_image()) {
-        return pt.sky_more.xyz;
+        return pt_shade.sky_more.xyz;
     }
-    return pt_sky_texels[pt_sky_texel(d)].rgb * pt.sky_more.w;
+    return pt_sky_texels[pt_sky_texel(d)].rgb * pt_shade.sky_more.w;
 }
 
 fn pt_luminance(c: vec3<f32>) -> f32 {
@@ -187,7 +188,7 @@ fn pt_luminance(c: vec3<f32>) -> f32 {
 
 // Density over solid angle of the image's sampling toward d.
 fn pt_sky_pdf(d: vec3<f32>) -> f32 {
-    return pt_luminance(pt_sky_texels[pt_sky_texel(d)].rgb) / pt.sky_total.x;
+    return pt_luminance(pt_sky_texels[pt_sky_texel(d)].rgb) / pt_shade.sky_total.x;
 }
 
 // The first index of `count` running sums from `base` in the sky's tables exceeding `target_sum`.
@@ -228,12 +229,12 @@ fn pt_sample_sky(n: vec3<f32>, u: vec2<f32>) -> PtSkySample {
         let pdf = max(dot(n, d), 0.0) / PI;
         return PtSkySample(d, pt_sky_radiance(d), pdf, pdf > 0.0);
     }
-    let total = pt.sky_total.x;
+    let total = pt_shade.sky_total.x;
     if (total <= 0.0) {
         return PtSkySample(vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0), 0.0, false);
     }
-    let w = pt.counts.z;
-    let h = pt.counts.w;
+    let w = pt_shade.counts.z;
+    let h = pt_shade.counts.w;
     let marginal = w * h;
     let y = pt_sky_pick(marginal, h, u.x * total);
     var row_start = 0.0;

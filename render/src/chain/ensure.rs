@@ -5,6 +5,7 @@
 use super::StagePasses;
 use crate::gpu::GpuContext;
 use crate::lab_settings::LabSettings;
+use crate::passes::ddgi::stage::DdgiStage;
 use crate::passes::emitters::EmitterPass;
 use crate::passes::gautron::stage::GautronStage;
 use crate::passes::hcb::stage::HcbStage;
@@ -29,6 +30,10 @@ pub(crate) struct Needs<'a> {
     pub size: (u32, u32),
     /// How many light views the lights of `state` have.
     pub light_views: usize,
+    /// The scene's bounds, and the room the camera stands in when it stands in one (DDGI's
+    /// grid spans one of them).
+    pub bounds: crate::maths::Aabb,
+    pub room: Option<crate::maths::Aabb>,
 }
 
 /// Whether stage 2 keeps the direct light's diffuse part apart: Soler's first bounce gathers
@@ -112,6 +117,25 @@ impl StagePasses {
             fresh |= st.ensure(ctx, &s.gautron, w, h) | created;
         } else {
             fresh |= self.gautron.take().is_some();
+        }
+        if p.uses_ddgi() {
+            if self.ddgi.is_none() && self.ddgi_error.is_none() {
+                match DdgiStage::new(ctx, n.scene, state, (w, h)) {
+                    Ok(st) => self.ddgi = Some(st),
+                    Err(e) => {
+                        log::error!("DDGI: {e}");
+                        self.ddgi_error = Some(e);
+                    }
+                }
+                fresh = true;
+            }
+            if let Some(st) = self.ddgi.as_mut() {
+                let fit = crate::passes::ddgi::stage::fit_box(&s.ddgi, n.bounds, n.room);
+                fresh |= st.ensure(ctx, &s.ddgi, fit, (w, h));
+            }
+        } else {
+            fresh |= self.ddgi.take().is_some();
+            self.ddgi_error = None;
         }
         fresh
     }

@@ -7,6 +7,7 @@
 //! `soler`), the replays of a pinned pixel (issue #42) in `explain`; a mix of papers is a list
 //! that takes steps from several of them, composed in `build`, never a branch of the frame.
 
+mod ddgi;
 mod ensure;
 mod explain;
 mod gautron;
@@ -56,6 +57,10 @@ pub(crate) struct StagePasses {
     pub soler: Option<SolerStage>,
     /// Irradiance records, their hemispheres, the splatting and the record cache (Gautron).
     pub gautron: Option<GautronStage>,
+    /// DDGI's probes (Majercik et al.), and why they could not be made when they could not
+    /// (the scene does not fit the ray caster on this device).
+    pub ddgi: Option<crate::passes::ddgi::stage::DdgiStage>,
+    pub ddgi_error: Option<String>,
     /// The pinned pixel to explain (issue #42), and the replay of the VPL gather at tiles or
     /// pixels (created when a pixel is first explained).
     pub explain_pixel: Option<(u32, u32)>,
@@ -285,6 +290,8 @@ fn indirect_steps(s: &LabSettings) -> Vec<Step> {
             step(6, "explain.hcb", explain::hcb),
         ],
         Gather::ScreenSpace => vec![step(5, "soler.levels", soler::levels)],
+        // Majercik et al.: the probes' trace, update and reading at every pixel.
+        Gather::Probes => vec![step(6, "ddgi.probes", ddgi::probes)],
         Gather::Vpl => vpl_steps(s),
     }
 }

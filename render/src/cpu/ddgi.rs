@@ -190,10 +190,17 @@ pub struct Atlas {
 impl Atlas {
     pub fn new(interior: u32, probes: usize, fill: Vec3) -> Self {
         let interior = interior.max(2);
+        let (columns, width, height) = Self::layout(interior, probes);
+        Self { interior, probes, columns, texels: vec![fill; (width * height) as usize] }
+    }
+
+    /// The layout of an atlas of `probes` tiles of `interior` texels: (tiles a row, width,
+    /// height) in texels; a square of tiles.
+    pub fn layout(interior: u32, probes: usize) -> (u32, u32, u32) {
         let columns = (probes.max(1) as f32).sqrt().ceil() as u32;
         let rows = (probes.max(1) as u32).div_ceil(columns);
-        let tile = interior + 2;
-        Self { interior, probes, columns, texels: vec![fill; (columns * tile * rows * tile) as usize] }
+        let tile = interior.max(2) + 2;
+        (columns, columns * tile, rows * tile)
     }
 
     pub fn tile(&self) -> u32 {

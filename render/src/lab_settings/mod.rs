@@ -7,6 +7,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use crate::settings::compose::TonemapSettings;
+use crate::settings::ddgi::DdgiSettings;
 use crate::settings::direct::DirectSettings;
 use crate::settings::emitters::EmitterSettings;
 use crate::settings::gautron::GautronSettings;
@@ -74,6 +75,8 @@ pub struct LabSettings {
     pub hcb: HcbSettings,
     pub soler: SolerSettings,
     pub gautron: GautronSettings,
+    /// DDGI's probes (issue #56; Majercik et al. 2019, 2021).
+    pub ddgi: DdgiSettings,
     pub reference: ReferenceSettings,
     pub tonemap: TonemapSettings,
 }
@@ -96,6 +99,7 @@ impl Default for LabSettings {
             hcb: Default::default(),
             soler: Default::default(),
             gautron: Default::default(),
+            ddgi: Default::default(),
             reference: Default::default(),
             tonemap: Default::default(),
         }
@@ -118,6 +122,7 @@ macro_rules! for_each_group {
         $m!(hcb, HcbSettings);
         $m!(soler, SolerSettings);
         $m!(gautron, GautronSettings);
+        $m!(ddgi, DdgiSettings);
         $m!(reference, ReferenceSettings);
         $m!(tonemap, TonemapSettings);
     };

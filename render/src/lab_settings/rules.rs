@@ -16,6 +16,34 @@ pub fn combination_errors(s: &LabSettings) -> Vec<FieldError> {
     if p.gather == Gather::None {
         return errors;
     }
+    if p.gather == Gather::Probes {
+        // DDGI: the probes hold the light over time (the hysteresis) and every pixel reads
+        // them; no VPLs, no other shading points, reconstruction or history.
+        if p.shading_points != ShadingPoints::EveryPixel {
+            err(
+                "shading_points",
+                "DDGI's probes are read at every pixel: set pipeline.shading_points = EveryPixel".into(),
+            );
+        }
+        if p.reconstruction != Reconstruction::None {
+            err(
+                "reconstruction",
+                "every pixel reads DDGI's probes and needs no reconstruction: set pipeline.reconstruction = None"
+                    .into(),
+            );
+        }
+        if p.temporal != Temporal::None {
+            err(
+                "temporal",
+                "DDGI's probes keep their own history (the hysteresis ddgi.hysteresis): set pipeline.temporal = None"
+                    .into(),
+            );
+        }
+        if p.near_field != NearField::None {
+            err("near_field", "DDGI's probes already take the light from every distance; a near field splits a VPL gather: set pipeline.near_field = None".into());
+        }
+        return errors;
+    }
     if p.gather == Gather::Hemispheres {
         // Gautron et al.'s records: their own shading points, splatting and cache; no VPLs.
         // GI Lab's mix with Nguyen et al.: the hemispheres at the HCB's samples, splatted by

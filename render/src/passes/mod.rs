@@ -10,7 +10,7 @@
 //! | `hcb/` | Nguyen et al. 000 | shading points HCB samples, coherence splatting, HCB sample cache | `hcb/` |
 //! | `reference/` | Knecht 002 §5.2 (the baseline) | VPL source uniform batches, visibility exact, running average | `reference/` (`{sample,shadow,gather,explain}`) |
 //! | `soler/` | Soler et al. 004 | shading points mip levels, screen-space ring gather, joint bilateral upsampling | `soler/` |
-//! | `ddgi/` | Majercik et al. 2019, 2021 (issue #56; so far the probes' blend) | — (not a stage choice yet) | `ddgi/` |
+//! | `ddgi/` | Majercik et al. 2019, 2021 (issue #56) | gather `Probes` | `ddgi/` |
 //! | `rays/` | issue #56 (no paper: the tools under the GPU truth and DDGI) | rays through a two-level BVH in compute | `rays/` |
 
 use crate::counters::prelude::*;
@@ -166,6 +166,9 @@ pub const BINDINGS: &[&crate::gpu::bindings::Bindings] = &[
     &rays::CAST_BINDINGS,
     &rays::pathtrace::PATHTRACE_BINDINGS,
     &ddgi::blend::BLEND_BINDINGS,
+    &ddgi::trace::TRACE_BINDINGS,
+    &ddgi::apply::APPLY_BINDINGS,
+    &ddgi::apply::VIEW_BINDINGS,
 ];
 
 /// A 2D render/storage target with the usages every registered buffer needs (sampling,

@@ -53,6 +53,11 @@ pub struct FrameInputs<'a> {
     /// (`sky.rotate_each_frame`, issue #51): they change every frame by design, so the caches
     /// that restart when a light changes compare [`FrameInputs::steady_light_key`] instead.
     pub rotating_sky: usize,
+    /// How many of `lights` (the last ones) are the sky's directions, rotating or not (the
+    /// ray-traced stages sample the sky itself and take only the scene's own lights).
+    pub sky_lights: usize,
+    /// The room the camera stands in (`scale::ScaleSource::Room`), when it stands in one.
+    pub room: Option<crate::maths::Aabb>,
     /// The pixel being explained (issue #42), when one is: stages that replay inside their
     /// run (Soler's, bounce by bounce) read it here.
     pub explain_pixel: Option<(u32, u32)>,

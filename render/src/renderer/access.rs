@@ -60,6 +60,7 @@ impl Renderer {
         passes.retain(|p| *p != "instant_radiosity" || self.stages.knecht.is_some());
         passes.retain(|p| *p != "soler" || self.stages.soler.is_some());
         passes.retain(|p| *p != "gautron" || self.stages.gautron.is_some());
+        passes.retain(|p| *p != "ddgi" || self.stages.ddgi.is_some());
         // The replays of a pinned pixel exist once a pixel was explained.
         let x = &self.stages;
         let replays = x.explain_vpl.is_some()
@@ -160,6 +161,15 @@ impl Renderer {
             self.ensure_passes();
             if let Some(e) = pollster::block_on(scope.pop()) {
                 self.stages.gautron = old;
+                return Err(e.to_string());
+            }
+        }
+        if passes.contains(&"ddgi") {
+            let old = self.stages.ddgi.take();
+            let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+            self.ensure_passes();
+            if let Some(e) = pollster::block_on(scope.pop()) {
+                self.stages.ddgi = old;
                 return Err(e.to_string());
             }
         }
@@ -432,6 +442,10 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         | "gautron/vpl_records.wgsl"
         | "gautron/at_samples.wgsl"
         | "gautron/common.wgsl" => "gautron",
+        // DDGI's probes trace through the GPU ray caster and light their hits with the truth's
+        // shading.
+        "ddgi/probes.wgsl" | "ddgi/lookup.wgsl" | "ddgi/trace.wgsl" | "ddgi/blend.wgsl" | "ddgi/apply.wgsl"
+        | "ddgi/view.wgsl" | "rays/scene.wgsl" | "rays/lights.wgsl" | "rays/shade.wgsl" => "ddgi",
         _ => return None,
     })
 }
@@ -486,6 +500,9 @@ pub fn scope_output(scope: &str) -> Option<&'static str> {
         "gautron.create" => "gautron.candidates",
         "gautron.hemispheres" => "gautron.hemisphere.radiance",
         "gautron.resolve" => "gautron.irradiance",
+        "ddgi.trace" => "ddgi.rays",
+        "ddgi.update" => "ddgi.atlas.irradiance",
+        "ddgi.apply" => "ddgi.indirect",
         _ => return None,
     })
 }

@@ -221,6 +221,9 @@ impl Renderer {
         if let Some(t) = &x.gautron {
             t.register(&mut self.registry);
         }
+        if let Some(t) = &x.ddgi {
+            t.register(&mut self.registry);
+        }
         if let Some(t) = &self.flip_map {
             self.registry.register(
                 "metrics.flip",
@@ -526,7 +529,9 @@ impl Renderer {
         let state = match frame_state {
             Some(state) => state,
             None => {
-                let needed = (s.emitters.enabled && self.scene.has_emitters()) || s.pipeline.uses_knecht_vpls();
+                let needed = (s.emitters.enabled && self.scene.has_emitters())
+                    || s.pipeline.uses_knecht_vpls()
+                    || s.pipeline.uses_ddgi();
                 evaluated = if needed { self.frame_state() } else { Default::default() };
                 &evaluated
             }
@@ -539,6 +544,11 @@ impl Renderer {
             settings: &s,
             size: (self.width, self.height),
             light_views: light_view_list(state, self.bounds).len(),
+            bounds: self.bounds,
+            room: match self.scale().1 {
+                crate::scale::ScaleSource::Room(b) => Some(b),
+                crate::scale::ScaleSource::Model => None,
+            },
         };
         let mut fresh = self.stages.ensure(&needs);
         fresh |= self.direct.ensure_diffuse(&ctx, crate::chain::needs_direct_diffuse(&s));

@@ -8,6 +8,7 @@
 //! are never repeated elsewhere.
 
 pub mod compose;
+pub mod ddgi;
 pub mod direct;
 pub mod emitters;
 pub mod gautron;

@@ -72,6 +72,12 @@ settings_enum! {
         /// and its shadow maps, reduced to irradiance, gradients and the harmonic mean
         /// distance (Gautron et al. 003, "Simple plane sampling").
         Hemispheres = "hemisphere rasterization (Gautron)",
+        /// A grid of probes, each tracing rays through the scene every frame and keeping
+        /// octahedral irradiance and distance moments with a hysteresis; every pixel reads its
+        /// cell's eight probes weighted by trilinear, backface and Chebyshev visibility weights
+        /// (Majercik et al. 2019 §3, 2021 §4–5; settings in `ddgi`). Today's engines' answer,
+        /// beside the papers.
+        Probes = "DDGI probes (Majercik et al.)",
     }
     default Vpl
 }
@@ -153,7 +159,7 @@ settings_group! {
         unit "", symbol "", range 0..=4, cost "every pixel: N VPLs per pixel; tiles: N/n²; HCB: N at 2–5 % of the pixels plus the HCB build; records: one hemisphere each", history true;
         /// Stage 6, gather (Knecht §4.5's VPL gather; none: direct light only).
         gather: Gather = Gather::Vpl,
-        unit "", symbol "", range 0..=3, cost "one term per VPL and shading point", history true;
+        unit "", symbol "", range 0..=4, cost "one term per VPL and shading point; probes: rays per probe and frame, eight probe reads per pixel", history true;
         /// Stage 6, reconstruction (Knecht §3.4.1's filter; Nguyen §4's splatting).
         reconstruction: Reconstruction = Reconstruction::GeometryAwareFilter,
         unit "", symbol "", range 0..=4, cost "filter: n² reads per pixel; splatting: one quad per sample or record", history true;
@@ -204,12 +210,15 @@ settings_enum! {
         /// splatting (GI Lab's mix of Nguyen et al. and Gautron et al.); the HCB's sample
         /// cache keeps the samples and their hemispheres' light across frames (Nguyen §5).
         GautronAtHcbSamples = "hemispheres at HCB samples (Nguyen + Gautron)",
+        /// Dynamic diffuse global illumination (Majercik et al. 2019, 2021): ray-traced
+        /// probes with octahedral irradiance and visibility, read at every pixel.
+        Ddgi = "DDGI probes (Majercik et al.)",
     }
     default DirectOnly
 }
 
 impl Technique {
-    pub const ALL: [Technique; 11] = [
+    pub const ALL: [Technique; 12] = [
         Self::DirectOnly,
         Self::Knecht,
         Self::Nguyen,
@@ -221,6 +230,7 @@ impl Technique {
         Self::Gautron,
         Self::GautronVplRecords,
         Self::GautronAtHcbSamples,
+        Self::Ddgi,
     ];
 
     /// The technique's stage choices. `base` gives the choices the technique leaves open
@@ -293,6 +303,15 @@ impl Technique {
                 temporal: Temporal::HcbSampleCache,
                 ..Self::Gautron.choices(base)
             },
+            Self::Ddgi => PipelineSettings {
+                vpl_source: VplSource::None,
+                vpl_visibility: VplVisibility::None,
+                shading_points: ShadingPoints::EveryPixel,
+                gather: Gather::Probes,
+                reconstruction: Reconstruction::None,
+                temporal: Temporal::None,
+                near_field: NearField::None,
+            },
         }
     }
 
@@ -349,6 +368,11 @@ impl PipelineSettings {
             || (self.gather == Gather::Vpl && self.shading_points == ShadingPoints::IrradianceRecords)
     }
 
+    /// Whether DDGI's probes are the indirect light (Majercik et al.).
+    pub fn uses_ddgi(&self) -> bool {
+        self.gather == Gather::Probes
+    }
+
     /// Whether instant radiosity's VPLs (stages 3–4 of Knecht) are in use.
     pub fn uses_knecht_vpls(&self) -> bool {
         self.gather == Gather::Vpl && self.vpl_source == VplSource::ImportanceWarping
@@ -382,6 +406,7 @@ impl PipelineSettings {
             "reference" => self.is_reference(),
             "soler" => self.uses_soler(),
             "gautron" => self.uses_gautron(),
+            "ddgi" => self.uses_ddgi(),
             _ => true,
         }
     }

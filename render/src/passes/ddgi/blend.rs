@@ -1,7 +1,8 @@
 //! DDGI's probe update, its blend (Majercik et al. 2019 §3.3, Eq. 3–4; 2021 §5.2–5.3):
 //! `shaders/ddgi/blend.wgsl` blends each probe's rays of the frame into its octahedral tiles
-//! of irradiance and distance moments with the hysteresis, then copies the tiles' borders.
-//! CPU twins: `cpu::ddgi::{update_irradiance, update_distance}`, `Atlas::fill_borders`.
+//! of irradiance and distance moments with the hysteresis, copies the tiles' borders, then
+//! classifies and relocates each probe from the same rays. CPU twins:
+//! `cpu::ddgi::{update_irradiance, update_distance, classify, relocate}`, `Atlas::fill_borders`.
 
 use crate::counters::prelude::*;
 
@@ -25,6 +26,8 @@ pub const BLEND_BINDINGS: Bindings = Bindings {
         binding(1, "ddgi_rays", READ),
         binding(2, "ddgi_irradiance", WRITE),
         binding(3, "ddgi_distance", WRITE),
+        binding(4, "ddgi_grid", READ),
+        binding(5, "ddgi_probes", WRITE),
     ],
 };
 
@@ -36,7 +39,8 @@ pub struct DdgiUpdateParams {
     pub rotation: [Vec4; 3],
     /// Probes, rays per probe, irradiance and distance interior texels.
     pub counts: [u32; 4],
-    /// Tiles per atlas row (irradiance, distance), whether the old values count.
+    /// Tiles per atlas row (irradiance, distance), whether the old values count, the frame's
+    /// seed (the trace's shading samples).
     pub layout: [u32; 4],
     /// Hysteresis α, distance sharpness, max distance.
     pub blend: Vec4,
@@ -64,12 +68,13 @@ impl DdgiUpdateParams {
     }
 }
 
-/// The three kernels of the blend.
+/// The four kernels of the update after the trace.
 pub struct DdgiBlendPass {
     pub layout: wgpu::BindGroupLayout,
     irradiance: wgpu::ComputePipeline,
     distance: wgpu::ComputePipeline,
     borders: wgpu::ComputePipeline,
+    state: wgpu::ComputePipeline,
 }
 
 impl DdgiBlendPass {
@@ -83,26 +88,32 @@ impl DdgiBlendPass {
             irradiance: make("ddgi.blend.irradiance", "cs_irradiance"),
             distance: make("ddgi.blend.distance", "cs_distance"),
             borders: make("ddgi.blend.borders", "cs_borders"),
+            state: make("ddgi.blend.probe_state", "cs_probe_state"),
             layout,
         }
     }
 
     /// Records the blend: the interiors, then the borders, of both atlases of sizes
-    /// `irradiance` and `distance` (texels).
+    /// `irradiance` and `distance` (texels), then the state of each of `probes` probes.
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
+        timestamps: Option<wgpu::ComputePassTimestampWrites<'_>>,
         group: &wgpu::BindGroup,
-        irradiance: (u32, u32),
-        distance: (u32, u32),
+        (irradiance, distance): ((u32, u32), (u32, u32)),
+        probes: u32,
     ) {
-        let mut pass = encoder
-            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("ddgi.blend"), timestamp_writes: None });
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("ddgi.blend"),
+            timestamp_writes: timestamps,
+        });
         pass.set_group(0, group, &[]);
         let both = (irradiance.0.max(distance.0), irradiance.1.max(distance.1));
         for (pipeline, (w, h)) in [(&self.irradiance, irradiance), (&self.distance, distance), (&self.borders, both)] {
             pass.set_pipe(pipeline);
             pass.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
         }
+        pass.set_pipe(&self.state);
+        pass.dispatch(probes.div_ceil(64), 1, 1);
     }
 }

@@ -8,6 +8,7 @@
 use crate::counters::prelude::*;
 
 pub mod pathtrace;
+pub mod shade;
 
 use glam::{Vec3, Vec4};
 
@@ -70,7 +71,7 @@ pub struct RayScene {
 
 /// A storage buffer holding `data` (at least `min` zero bytes: a binding of zero bytes, or
 /// one shorter than the array's element, is a validation error).
-fn storage(ctx: &GpuContext, label: &str, data: &[u8], min: usize) -> wgpu::Buffer {
+pub(crate) fn storage(ctx: &GpuContext, label: &str, data: &[u8], min: usize) -> wgpu::Buffer {
     let mut bytes = data.to_vec();
     if bytes.len() < min {
         bytes.resize(min, 0);

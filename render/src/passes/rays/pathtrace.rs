@@ -9,15 +9,13 @@ use crate::counters::prelude::*;
 
 use glam::{Mat4, Vec3, Vec4};
 
+use super::shade::ShadeLights;
 use super::{RayScene, storage};
 use crate::buffers::ImageF32;
 use crate::cpu::pathtrace::{PtImages, PtSettings, Senders};
 use crate::gpu::GpuContext;
 use crate::gpu::bindings::{Bindings, Kind, binding};
-use crate::scene::emitters::Emitters;
-use crate::scene::sky::SkySampler;
-use crate::scene::two_level::NO_TEXTURE;
-use crate::scene::{LightKind, Scene};
+use crate::scene::Scene;
 
 const READ: Kind = Kind::Storage { read_only: true };
 
@@ -29,16 +27,18 @@ pub const PATHTRACE_BINDINGS: Bindings = Bindings {
     entry: None,
     visibility: wgpu::ShaderStages::COMPUTE,
     list: &[
-        binding(0, "pt", READ),
+        binding(0, "pt_shade", READ),
         binding(1, "pt_lights", READ),
         binding(2, "pt_emitters", READ),
         binding(3, "pt_sky_texels", READ),
         binding(4, "pt_sky_tables", READ),
-        binding(5, "pt_sums", Kind::Storage { read_only: false }),
+        binding(5, "pt", READ),
+        binding(6, "pt_sums", Kind::Storage { read_only: false }),
     ],
 };
 
-/// WGSL twin: `PtParams` in `shaders/rays/pathtrace.wgsl`.
+/// WGSL twin: `PtParams` in `shaders/rays/pathtrace.wgsl` (the camera and the run; the
+/// lights' parameters are `shade::PtShade`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 struct PtParams {
@@ -46,43 +46,7 @@ struct PtParams {
     eye: Vec4,
     size: [u32; 4],
     config: [u32; 4],
-    counts: [u32; 4],
-    sky: Vec4,
-    sky_more: Vec4,
-    sky_total: Vec4,
 }
-
-/// WGSL twin: `PtLight` in `shaders/rays/lights.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct PtLight {
-    pub position: Vec4,
-    pub direction: Vec4,
-    /// Colour (rgb) and intensity (w).
-    pub color: Vec4,
-    pub cone: Vec4,
-}
-
-/// WGSL twin: `PtEmitter` in `shaders/rays/lights.wgsl` (see there).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct PtEmitter {
-    v0: Vec4,
-    v1: Vec4,
-    v2: Vec4,
-    normal: Vec4,
-    radiance: Vec4,
-    factor: Vec4,
-    uv01: Vec4,
-    uv2_cut: Vec4,
-    cut_uv01: Vec4,
-    cut_uv2: Vec4,
-    kept: Vec4,
-}
-
-const SKY_LIT: u32 = 1;
-const SKY_BACKGROUND: u32 = 2;
-const SKY_IMAGE: u32 = 4;
 
 /// Samples per dispatch: a long dispatch can trip a desktop GPU's watchdog, so a pass is cut
 /// into dispatches of this many samples per pixel.
@@ -93,59 +57,8 @@ pub struct GpuPathTracer {
     rays: RayScene,
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::ComputePipeline,
-    lights: Vec<PtLight>,
-    emitters: Vec<PtEmitter>,
-    sky: Option<crate::scene::sky::Sky>,
-    sky_background: bool,
-    eps: f32,
-    /// The uploaded inputs (lights, emitters, sky texels, sky tables), rebuilt when they change.
-    inputs: Option<[wgpu::Buffer; 4]>,
-}
-
-/// Each emitter's texture as an entry of the rays' texture table (the emitters hold clones
-/// of the scene's textures: the same pixels, found by pointer).
-fn texture_entry(rays: &RayScene, scene: &Scene, emitters: &Emitters, i: usize) -> u32 {
-    let Some(t) = emitters.textures.get(i) else { return NO_TEXTURE };
-    scene
-        .textures
-        .iter()
-        .position(|s| std::sync::Arc::ptr_eq(&s.rgba8, &t.rgba8))
-        .and_then(|k| rays.cpu.texture_entries.get(k).copied())
-        .unwrap_or(NO_TEXTURE)
-}
-
-fn pack_emitters(rays: &RayScene, scene: &Scene, emitters: &Emitters) -> Vec<PtEmitter> {
-    let n = emitters.triangles.len();
-    // Running sums of the power shares, as `Emitters::pick` reads them.
-    let cdf: Vec<f32> = (0..n).map(|i| emitters.cdf_at(i)).collect();
-    emitters
-        .triangles
-        .iter()
-        .enumerate()
-        .map(|(i, t)| {
-            let (tex, uv, factor) = match t.texture {
-                Some((k, uv, factor)) => (texture_entry(rays, scene, emitters, k), uv, factor),
-                None => (NO_TEXTURE, [glam::Vec2::ZERO; 3], Vec3::ZERO),
-            };
-            let (cut, cuv, cf, cc, kept) = match t.cutout {
-                Some(c) => (texture_entry(rays, scene, emitters, c.texture), c.uv, c.factor, c.cutoff, c.kept),
-                None => (NO_TEXTURE, [glam::Vec2::ZERO; 3], 0.0, 0.0, Vec3::ZERO),
-            };
-            PtEmitter {
-                v0: t.v[0].extend(cdf[i]),
-                v1: t.v[1].extend(t.area),
-                v2: t.v[2].extend(t.sides as f32),
-                normal: t.normal.extend(f32::from_bits(tex)),
-                radiance: t.radiance.extend(0.0),
-                factor: factor.extend(f32::from_bits(cut)),
-                uv01: Vec4::new(uv[0].x, uv[0].y, uv[1].x, uv[1].y),
-                uv2_cut: Vec4::new(uv[2].x, uv[2].y, cf, cc),
-                cut_uv01: Vec4::new(cuv[0].x, cuv[0].y, cuv[1].x, cuv[1].y),
-                cut_uv2: Vec4::new(cuv[2].x, cuv[2].y, 0.0, 0.0),
-                kept: kept.extend(0.0),
-            }
-        })
-        .collect()
+    /// The lights, emitters and sky (`rays/shade.wgsl`).
+    shade: ShadeLights,
 }
 
 impl GpuPathTracer {
@@ -164,67 +77,23 @@ impl GpuPathTracer {
             "cs_pathtrace",
             &[&layout, &rays.layout],
         );
-        let lights = state
-            .lights
-            .iter()
-            .map(|wl| {
-                let (kind, cone) = match wl.light.kind {
-                    LightKind::Point => (0.0, Vec4::ZERO),
-                    LightKind::Spot { inner_cone, outer_cone } => (1.0, Vec4::new(inner_cone, outer_cone, 0.0, 0.0)),
-                    LightKind::Directional => (2.0, Vec4::ZERO),
-                };
-                PtLight {
-                    position: wl.position.extend(kind),
-                    direction: wl.direction.extend(wl.light.range.unwrap_or(0.0)),
-                    color: wl.light.color.extend(wl.light.intensity),
-                    cone,
-                }
-            })
-            .collect();
-        let emitters = pack_emitters(&rays, scene, &Emitters::collect(scene, &state));
-        let eps = scene.bounds(time_s).radius().max(1e-3) * 1e-4;
-        let sky = scene.sky.is_lit().then(|| scene.sky.clone());
-        Ok(Self { rays, layout, pipeline, lights, emitters, sky, sky_background: true, eps, inputs: None })
+        let shade = ShadeLights::new(&rays, scene, time_s);
+        Ok(Self { rays, layout, pipeline, shade })
     }
 
     /// The emitters as the lab's `emitters.*` settings say (`PathTracer::use_emitter_settings`).
     pub fn use_emitter_settings(&mut self, s: &crate::settings::emitters::EmitterSettings, scene: &Scene, time_s: f32) {
-        let e = if s.enabled {
-            Emitters::collect_sides(scene, &scene.evaluate(time_s), s.two_sided)
-        } else {
-            Emitters::default()
-        };
-        self.emitters = pack_emitters(&self.rays, scene, &e);
-        self.inputs = None;
+        self.shade.use_emitter_settings(&self.rays, s, scene, &scene.evaluate(time_s));
     }
 
     /// Whether camera rays that leave the scene see the sky (`PathTracer::set_sky_background`).
     pub fn set_sky_background(&mut self, on: bool) {
-        self.sky_background = on;
+        self.shade.sky_background = on;
     }
 
     /// The ray caster's scene (its hierarchy and materials on the GPU).
     pub fn rays(&self) -> &RayScene {
         &self.rays
-    }
-
-    fn inputs(&mut self, ctx: &GpuContext) -> &[wgpu::Buffer; 4] {
-        if self.inputs.is_none() {
-            let (texels, tables): (Vec<Vec4>, Vec<f32>) = match self.sky.as_ref().and_then(|s| s.image.as_ref()) {
-                Some((_, m)) => {
-                    let (rows, marginal, _) = m.tables();
-                    (m.texels.iter().map(|t| t.extend(0.0)).collect(), rows.iter().chain(marginal).copied().collect())
-                }
-                None => (Vec::new(), Vec::new()),
-            };
-            self.inputs = Some([
-                storage(ctx, "rays.pathtrace.lights", bytemuck::cast_slice(&self.lights), 64),
-                storage(ctx, "rays.pathtrace.emitters", bytemuck::cast_slice(&self.emitters), 176),
-                storage(ctx, "rays.pathtrace.sky_texels", bytemuck::cast_slice(&texels), 16),
-                storage(ctx, "rays.pathtrace.sky_tables", bytemuck::cast_slice(&tables), 4),
-            ]);
-        }
-        self.inputs.as_ref().expect("made above")
     }
 
     /// Renders `settings.spp` samples per pixel for a camera (view-projection and eye).
@@ -281,35 +150,20 @@ impl GpuAccumulator {
         if settings.senders == Senders::ScreenVisible {
             return Err("the GPU path tracer traces every sender; screen-visible senders are the CPU's".into());
         }
-        let (sky_flags, sky_more, sky_total, sky_rot, sky_size) = match &pt.sky {
-            None => (0, Vec4::ZERO, 0.0, 0.0, (0, 0)),
-            Some(s) => {
-                let background = if pt.sky_background { SKY_BACKGROUND } else { 0 };
-                let constant = SkySampler::new(s).radiance(Vec3::Y);
-                match &s.image {
-                    Some((_, m)) => (
-                        SKY_LIT | background | SKY_IMAGE,
-                        constant.extend(s.intensity),
-                        m.tables().2,
-                        s.rotation_deg.to_radians(),
-                        (m.width, m.height),
-                    ),
-                    None => (SKY_LIT | background, constant.extend(s.intensity), 0.0, 0.0, (0, 0)),
-                }
-            }
-        };
-        pt.inputs(ctx);
-        let inputs = pt.inputs.as_ref().ok_or("the path tracer's inputs were not uploaded")?;
+        let sky_flags = pt.shade.sky_flags();
+        let eps = pt.shade.eps;
+        let inputs = pt.shade.buffers(ctx);
         let params_buffer = storage(ctx, "rays.pathtrace.params", &[0u8; std::mem::size_of::<PtParams>()], 16);
         let group = PATHTRACE_BINDINGS.group(
             &ctx.device,
             &pt.layout,
             [
-                params_buffer.as_entire_binding(),
                 inputs[0].as_entire_binding(),
                 inputs[1].as_entire_binding(),
                 inputs[2].as_entire_binding(),
                 inputs[3].as_entire_binding(),
+                inputs[4].as_entire_binding(),
+                params_buffer.as_entire_binding(),
                 self.sums.as_entire_binding(),
             ],
         );
@@ -318,13 +172,9 @@ impl GpuAccumulator {
             let n = (settings.spp - done).min(SPP_PER_DISPATCH);
             let params = PtParams {
                 inv_view_proj: view_proj.inverse(),
-                eye: eye.extend(pt.eps),
+                eye: eye.extend(eps),
                 size: [self.width, self.height, self.spp + done, n],
                 config: [settings.bounces, (settings.seed ^ (settings.seed >> 32)) as u32, 0, sky_flags],
-                counts: [pt.lights.len() as u32, pt.emitters.len() as u32, sky_size.0, sky_size.1],
-                sky: Vec4::new(0.0, 0.0, 0.0, sky_rot),
-                sky_more,
-                sky_total: Vec4::new(sky_total, 0.0, 0.0, 0.0),
             };
             ctx.queue.upload(&params_buffer, 0, bytemuck::bytes_of(&params));
             let mut enc =
