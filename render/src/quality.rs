@@ -1,6 +1,7 @@
 //! The quality table of issues #15, #16 and #17: how close instant radiosity (Knecht), the
 //! exact-VPL reference, the HCB (Nguyen), Soler's screen-space gather, the near/far mix of
-//! Soler and Knecht and Gautron's irradiance cache splatting come to a path-traced ground
+//! Soler and Knecht, Gautron's irradiance cache splatting and DDGI's probes (issue #56) come
+//! to a path-traced ground
 //! truth of one indirect bounce, and how
 //! close the HCB comes to gathering at every pixel with the same VPLs. Each row
 //! renders a shipped preset on the scene, paused at animation time 0, and compares
@@ -28,6 +29,7 @@ const NGUYEN: &str = include_str!("../../presets/nguyen-hcb.ron");
 const SOLER: &str = include_str!("../../presets/soler-quarter-4-64.ron");
 const SOLER_NEAR_KNECHT_FAR: &str = include_str!("../../presets/soler-near-knecht-far.ron");
 const GAUTRON: &str = include_str!("../../presets/gautron-ic-splatting.ron");
+const DDGI: &str = include_str!("../../presets/ddgi-probes.ron");
 
 /// One row: what was rendered, after how many frames, and its mean FLIP against what.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -151,8 +153,8 @@ pub fn quality_table_with(
         })
     };
     let settings = row_settings(overrides)?;
-    let [knecht, exact, nguyen, soler, mix, gautron] = <[(LabSettings, u32); 6]>::try_from(settings.clone())
-        .map_err(|_| "the table has six ground-truth rows".to_string())?;
+    let [knecht, exact, nguyen, soler, mix, gautron, ddgi] = <[(LabSettings, u32); 7]>::try_from(settings.clone())
+        .map_err(|_| "the table has seven ground-truth rows".to_string())?;
     let knecht = render(ctx, scene, knecht.0, size, knecht.1)?;
     let knecht_flip = flip(&knecht, truth)?;
     row("knecht-cornell-256", 16, "ground truth", knecht_flip, Some(0.05));
@@ -187,6 +189,9 @@ pub fn quality_table_with(
     // speed at the brute force's FLIP).
     let gautron = render(ctx, scene, gautron.0, size, gautron.1)?;
     row("gautron-ic-splatting", 16, "ground truth", flip(&gautron, truth)?, None);
+    // DDGI's probes (issue #56: goal 0.06 on the box), one bounce as the truth (`row_settings`).
+    let ddgi = render(ctx, scene, ddgi.0, size, ddgi.1)?;
+    row("ddgi-probes (one bounce)", 16, "ground truth", flip(&ddgi, truth)?, Some(0.06));
     if timing == Timing::EqualTime {
         // The budget is the default preset's time with the same overrides.
         let mut budget = LabSettings::default();
@@ -212,13 +217,14 @@ fn thousands(n: u32) -> String {
 }
 
 /// The names of the ground-truth rows, in the table's order ([`row_settings`]).
-const GROUND_TRUTH_ROWS: [&str; 6] = [
+const GROUND_TRUTH_ROWS: [&str; 7] = [
     "knecht-cornell-256",
     "exact-vpl-reference",
     "nguyen-hcb",
     "soler-quarter-4-64",
     "soler-near-knecht-far",
     "gautron-ic-splatting",
+    "ddgi-probes",
 ];
 
 /// One ground-truth row of [`quality_table`] alone (`configuration`: a shipped preset's name
@@ -265,6 +271,8 @@ fn row_settings(overrides: &[String]) -> Result<Vec<(LabSettings, u32)>, String>
     };
     let exact = with(EXACT, "exact-vpl-reference")?;
     let batches = exact.reference.total_vpls.div_ceil(exact.reference.vpls_per_frame.max(1));
+    let mut ddgi = with(DDGI, "ddgi-probes")?;
+    ddgi.ddgi.infinite_bounces = false;
     let mut nguyen = with(NGUYEN, "nguyen-hcb")?;
     nguyen.vpl.new_set_each_frame = false;
     Ok(vec![
@@ -274,6 +282,8 @@ fn row_settings(overrides: &[String]) -> Result<Vec<(LabSettings, u32)>, String>
         (with(SOLER, "soler-quarter-4-64")?, 16),
         (with(SOLER_NEAR_KNECHT_FAR, "soler-near-knecht-far")?, 16),
         (with(GAUTRON, "gautron-ic-splatting")?, 16),
+        // The truth has one bounce: the probes' infinite bounces off (like for like).
+        (ddgi, 16),
     ])
 }
 

@@ -1,9 +1,9 @@
 // DDGI's probe rays (Majercik et al. 2019 §3.1; 2021 §5): each probe casts `counts.y` rays on a
 // spherical Fibonacci lattice under the frame's random rotation from its relocated place. A
-// hit is lit as the GPU truth lights a path's vertex (`rays/shade.wgsl`: emission, every
-// punctual light, one emitter point and one sky direction with shadow rays), plus, with
+// hit is lit as the GPU truth lights a path's vertex (`rays/shade.wgsl`: every punctual
+// light, one emitter point and one sky direction with shadow rays), plus, with
 // infinite bounces, its diffuse albedo times the probes' irradiance of the previous frame
-// (2019 §3.3); a miss sees the sky. Each ray writes vec4(radiance toward the probe, distance):
+// (2019 §3.3). Each ray writes vec4(radiance toward the probe, distance):
 // a negative distance is a back face at −w (2021 §5.2), ≥ 1e30 a miss. `passes::ddgi::trace`.
 
 #import rays/shade.wgsl
@@ -29,11 +29,9 @@ fn cs_trace(@builtin(global_invocation_id) id: vec3<u32>) {
     let d = normalize(ddgi.rotation * ddgi_fibonacci(r, rays));
     let h = ray_trace(o, d, 0.0, 3.4e38, RAY_CLOSEST);
     if (!h.hit) {
-        var sky = vec3<f32>(0.0);
-        if ((pt_shade.config.w & PT_SKY_LIT) != 0u) {
-            sky = pt_sky_radiance(d);
-        }
-        ddgi_rays[i] = vec4<f32>(sky, 1e30);
+        // The sky seen directly is stage 2's light (its directions light every pixel), as
+        // the emitters are: a miss carries none.
+        ddgi_rays[i] = vec4<f32>(0.0, 0.0, 0.0, 1e30);
         return;
     }
     let inst = ray_instances[h.instance];
@@ -44,7 +42,7 @@ fn cs_trace(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let s = pt_surface(ray_surface(o, d, h), vec4<f32>(0.0));
     var rng = pt_hash(ddgi.tiles.w ^ pt_hash(i * 0x9E3779B9u));
-    var l = pt_emission(s) + pt_direct(s, -d, &rng);
+    var l = pt_direct(s, -d, &rng);
     if ((ddgi_grid.counts.w & DDGI_BOUNCES) != 0u) {
         l = l + s.c * s.di / PI * ddgi_sample(s.p, s.n, -d);
     }

@@ -397,3 +397,55 @@ pub fn cpu_record(r: &gi_render::passes::gautron::GpuRecord) -> gi_render::cpu::
         trans: r.trans.map(|v| v.truncate()),
     }
 }
+
+/// A closed cube [−1, 1]³ whose faces look inward, all of one material of albedo `albedo`
+/// emitting `emission` (the white furnaces of the path tracers and of DDGI).
+pub fn furnace_scene(albedo: f32, emission: f32) -> gi_render::scene::Scene {
+    use gi_render::scene::{Material, Mesh, Node, Primitive, Scene, Transform, vertex};
+    use glam::{Vec2, Vec3, Vec4};
+    let mut vertices = Vec::new();
+    let mut indices = Vec::new();
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let n = -Vec3::from_array({
+                let mut a = [0.0; 3];
+                a[axis] = sign;
+                a
+            });
+            let (u, v) = {
+                let t = n.any_orthonormal_vector();
+                (t, n.cross(t))
+            };
+            let c = -n; // face centre
+            let base = vertices.len() as u32;
+            for (du, dv) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                vertices.push(vertex(c + u * du + v * dv, n, Vec2::ZERO));
+            }
+            // Counter-clockwise seen from inside (around n).
+            indices.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+        }
+    }
+    let material = Material {
+        name: "furnace".into(),
+        base_color: Vec4::new(albedo, albedo, albedo, 1.0),
+        emissive: Vec3::splat(emission),
+        specular_override: Some(0.0),
+        double_sided: true,
+        ..Material::default()
+    };
+    Scene {
+        name: "furnace".into(),
+        meshes: vec![Mesh { name: "cube".into(), primitives: vec![Primitive { vertices, indices, material: 0 }] }],
+        materials: vec![material],
+        nodes: vec![Node {
+            name: "cube".into(),
+            transform: Transform::default(),
+            children: vec![],
+            mesh: Some(0),
+            light: None,
+            camera: None,
+        }],
+        roots: vec![0],
+        ..Scene::default()
+    }
+}

@@ -43,7 +43,11 @@ fn the_quality_table_stays_within_its_measured_bounds() {
     // winner's normal only the light of the sub-pixels that face that way, and stands for the
     // winner's surface over its block): soler 0.2584 → 0.2666, for the chair's floor shadow no
     // longer lit at 300× the truth (0.594 → 0.481 below); the mix 0.0456 (unchanged).
-    within(&rows, &[0.05, 0.035, 0.06, 0.03, 0.275, 0.05, 0.06]);
+    // Issue #56's row: DDGI's probes (ddgi-probes, 8×4×8 probes, 128 rays, one bounce like the
+    // truth) measured 0.1075 on lavapipe; the goal, 0.06, is not met: the bound is the
+    // measurement plus a margin. With 12³ probes 0.086, 20³ 0.075; a diffuse receiver alone
+    // costs Knecht's row 0.048 → 0.069 (the probes keep no direction for the specular lobe).
+    within(&rows, &[0.05, 0.035, 0.06, 0.03, 0.275, 0.05, 0.06, 0.115]);
     // The exact-VPL reference is closer to the ground truth than the 256 VPLs of Knecht's
     // configuration, and the HCB closer to the per-pixel gather than to the ground truth.
     assert!(rows[1].flip < rows[0].flip, "{} vs {}", rows[1].flip, rows[0].flip);
@@ -70,7 +74,8 @@ fn the_box_under_a_white_sky_stays_within_its_measured_bounds() {
     real_scene_table_within(
         &gi_lab_tests::white_sky_box(),
         "sky_1bounce_128_2048spp.exr",
-        [0.10, 0.08, 0.10, 0.025, 0.20, 0.10, 0.10],
+        // DDGI (issue #56): measured 0.0999; bound the measurement plus a margin.
+        [0.10, 0.08, 0.10, 0.025, 0.20, 0.10, 0.10, 0.11],
     );
 }
 
@@ -107,7 +112,14 @@ fn the_chair_seen_from_behind_stays_within_its_measured_bounds() {
     // shadow, 0.5941 → 0.4808 (against the screen-visible truth 0.366 → 0.185, the box's
     // 0.178 → 0.191); the near/far mix 0.1914 → 0.1592.
     let scene = gi_lab_tests::test_scene("chair-behind.glb");
-    real_scene_table_within(&scene, "chair_1bounce_128_2048spp.exr", [0.17, 0.115, 0.20, 0.065, 0.50, 0.20, 0.20]);
+    // DDGI (issue #56) measured 0.5912: its diffuse receiver loses the wood's glint of the
+    // sunlit floor, as the HCB's and Gautron's did before their glossy receivers (0.47, 0.43);
+    // bound the measurement plus a margin.
+    real_scene_table_within(
+        &scene,
+        "chair_1bounce_128_2048spp.exr",
+        [0.17, 0.115, 0.20, 0.065, 0.50, 0.20, 0.20, 0.62],
+    );
 }
 
 /// Issue #51's second goal for Soler: against what a screen-space gather can know (the
@@ -130,7 +142,7 @@ fn soler_is_no_worse_on_the_chair_than_on_the_box_against_what_the_screen_sees()
 
 /// The table of `scene` at 128² against the stored truth `truth_file`, printed without the
 /// default scene's goals, and each row checked against its bound (issue #51's cases).
-fn real_scene_table_within(scene: &gi_render::scene::Scene, truth_file: &str, bounds: [f64; 7]) {
+fn real_scene_table_within(scene: &gi_render::scene::Scene, truth_file: &str, bounds: [f64; 8]) {
     let truth = stored_reference(truth_file);
     let mut rows =
         gi_render::quality::quality_table(&gpu(), scene, &truth, (128, 128), gi_render::quality::Timing::None)

@@ -1,5 +1,6 @@
-//! Dynamic diffuse global illumination (DDGI), the CPU twin (issue #56 point 3; not yet a stage
-//! choice: the GPU passes are the next step, docs/architecture.md "Rays on the GPU"). Majercik,
+//! Dynamic diffuse global illumination (DDGI), the CPU twin of the stage choice
+//! `pipeline.gather = Probes` (issue #56 point 3; `passes::ddgi`, docs/architecture.md "Rays on
+//! the GPU"). Majercik,
 //! Guertin, Nowrouzezahrai and McGuire, "Dynamic Diffuse Global Illumination with Ray-Traced
 //! Irradiance Fields", JCGT 8(2), 2019 (cited below as 2019 §n), and Majercik, Marrs, Spjut
 //! and McGuire, "Scaling Probe-Based Real-Time Dynamic Global Illumination for Production",

@@ -178,6 +178,11 @@ impl Renderer {
         Ok(passes)
     }
 
+    /// DDGI's probes, when they are the gather (tests read their buffers back).
+    pub fn ddgi(&self) -> Option<&crate::passes::ddgi::stage::DdgiStage> {
+        self.stages.ddgi.as_ref()
+    }
+
     /// Gautron et al.'s passes, when the hemisphere gather is on (tests and the bench read its
     /// records and counters).
     pub fn gautron(&self) -> Option<&crate::passes::gautron::stage::GautronStage> {

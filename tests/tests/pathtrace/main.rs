@@ -4,60 +4,11 @@
 
 mod rays;
 
+use gi_lab_tests::furnace_scene as furnace;
 use gi_lab_tests::{default_renderer, default_scene};
 use gi_render::cpu::pathtrace::{Accumulator, PathTracer, PtSettings};
 use gi_render::image_io::hdr_display;
-use gi_render::scene::{Material, Mesh, Node, Primitive, Scene, Transform, vertex};
-use glam::{Vec2, Vec3, Vec4};
-
-/// A closed cube [−1, 1]³ whose faces look inward, all of one material.
-fn furnace(albedo: f32, emission: f32) -> Scene {
-    let mut vertices = Vec::new();
-    let mut indices = Vec::new();
-    for axis in 0..3 {
-        for sign in [-1.0f32, 1.0] {
-            let n = -Vec3::from_array({
-                let mut a = [0.0; 3];
-                a[axis] = sign;
-                a
-            });
-            let (u, v) = {
-                let t = n.any_orthonormal_vector();
-                (t, n.cross(t))
-            };
-            let c = -n; // face centre
-            let base = vertices.len() as u32;
-            for (du, dv) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
-                vertices.push(vertex(c + u * du + v * dv, n, Vec2::ZERO));
-            }
-            // Counter-clockwise seen from inside (around n).
-            indices.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
-        }
-    }
-    let material = Material {
-        name: "furnace".into(),
-        base_color: Vec4::new(albedo, albedo, albedo, 1.0),
-        emissive: Vec3::splat(emission),
-        specular_override: Some(0.0),
-        double_sided: true,
-        ..Material::default()
-    };
-    Scene {
-        name: "furnace".into(),
-        meshes: vec![Mesh { name: "cube".into(), primitives: vec![Primitive { vertices, indices, material: 0 }] }],
-        materials: vec![material],
-        nodes: vec![Node {
-            name: "cube".into(),
-            transform: Transform::default(),
-            children: vec![],
-            mesh: Some(0),
-            light: None,
-            camera: None,
-        }],
-        roots: vec![0],
-        ..Scene::default()
-    }
-}
+use glam::Vec3;
 
 #[test]
 fn white_furnace_converges_to_le_over_one_minus_rho() {

@@ -70,8 +70,8 @@ pub struct DdgiStage {
     irradiance: wgpu::Texture,
     /// The draws' world matrices the top level was built for.
     draws: Vec<Mat4>,
-    /// The `emitters.*` settings the shading's emitters follow.
-    emitters: (bool, bool),
+    /// The `emitters.*` settings the shading's emitters follow (None: not applied yet).
+    emitters: Option<(bool, bool)>,
     /// Why the grid is smaller than asked (the device's limits), for the panel and the log.
     pub clamp: Option<GridClamp>,
 }
@@ -106,7 +106,7 @@ impl DdgiStage {
             indirect: pixel_target(ctx, "ddgi.indirect", size),
             irradiance: pixel_target(ctx, "ddgi.irradiance", size),
             draws: state.draws.iter().map(|d| d.world).collect(),
-            emitters: (false, false),
+            emitters: None,
             clamp: None,
         })
     }
@@ -275,7 +275,7 @@ impl DdgiStage {
         // shading samples itself: only the scene's own lights.
         let own = f.state.lights.len().saturating_sub(f.sky_lights);
         self.shade.set_lights(&f.state.lights[..own]);
-        let e = (f.settings.emitters.enabled, f.settings.emitters.two_sided);
+        let e = Some((f.settings.emitters.enabled, f.settings.emitters.two_sided));
         if e != self.emitters {
             self.emitters = e;
             self.shade.use_emitter_settings(&self.rays, &f.settings.emitters, f.scene, f.state);
