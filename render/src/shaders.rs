@@ -109,6 +109,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("ddgi/trace.wgsl", include_str!("../../shaders/ddgi/trace.wgsl")),
     ("ddgi/apply.wgsl", include_str!("../../shaders/ddgi/apply.wgsl")),
     ("ddgi/view.wgsl", include_str!("../../shaders/ddgi/view.wgsl")),
+    ("ddgi/explain.wgsl", include_str!("../../shaders/ddgi/explain.wgsl")),
 ];
 
 /// Files that are entry modules (not only imported).
@@ -180,6 +181,7 @@ pub const ENTRY_MODULES: &[&str] = &[
     "ddgi/trace.wgsl",
     "ddgi/apply.wgsl",
     "ddgi/view.wgsl",
+    "ddgi/explain.wgsl",
 ];
 
 #[derive(Debug, thiserror::Error, PartialEq)]

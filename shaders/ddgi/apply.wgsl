@@ -1,10 +1,9 @@
 // DDGI at every pixel (Majercik et al. 2019 §3.4, Eq. 5–6; 2021 §4.2): the probes' irradiance E
-// at the G-buffer's point (`ddgi/lookup.wgsl`, CPU twin `cpu::ddgi::sample`), reflected
-// diffusely, c·DI/π·E (the probes keep no direction: a glossy receiver gets its diffuse
-// part; common/receiver.wgsl with no direction). `passes::ddgi::apply`.
+// at the G-buffer's point (`ddgi/lookup.wgsl`, CPU twin `cpu::ddgi::sample`), reflected as
+// c·DI/π·E, plus with the glossy receiver (⚠[ddgi.glossy-receiver]) SI · E(r)/π, the probes'
+// irradiance toward the view's mirror direction r with the same weights. `passes::ddgi::apply`.
 
 #import common/camera.wgsl
-#import common/receiver.wgsl
 #import ddgi/lookup.wgsl
 
 @group(0) @binding(0) var<storage, read> ddgi_grid: DdgiGrid;
@@ -17,6 +16,17 @@
 @group(0) @binding(7) var<uniform> camera: Camera;
 @group(0) @binding(8) var out_indirect: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(9) var out_irradiance: texture_storage_2d<rgba32float, write>;
+// SI (r), SP (g).
+@group(0) @binding(10) var g_material: texture_2d<f32>;
+
+// The light a pixel reflects of the probes: c·DI/π·E(n) + SI·E(r)/π (the glossy receiver).
+fn ddgi_reflect(e: DdgiPair, albedo: vec4<f32>, si: f32) -> vec3<f32> {
+    var l = albedo.rgb * albedo.a / 3.14159265358979 * e.n;
+    if (ddgi_grid.state.z > 0.5 && si > 0.0) {
+        l = l + si * e.dir / 3.14159265358979;
+    }
+    return l;
+}
 
 @compute @workgroup_size(8, 8)
 fn cs_apply(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -32,9 +42,9 @@ fn cs_apply(@builtin(global_invocation_id) gid: vec3<u32>) {
         let p = textureLoad(g_position, px, 0).xyz;
         let n = normalize(nrm.xyz);
         let v = normalize(camera.position.xyz - p);
-        e = ddgi_sample(p, n, v);
-        let alb = textureLoad(g_albedo, px, 0);
-        radiance = receive_irradiance(e, vec3<f32>(0.0), n, v, alb.rgb, alb.a, 0.0, 1.0, false);
+        let pair = ddgi_sample_pair(p, n, v, reflect(-v, n));
+        e = pair.n;
+        radiance = ddgi_reflect(pair, textureLoad(g_albedo, px, 0), textureLoad(g_material, px, 0).x);
     }
     textureStore(out_indirect, px, vec4<f32>(radiance, 1.0));
     textureStore(out_irradiance, px, vec4<f32>(e, 1.0));

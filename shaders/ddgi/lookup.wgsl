@@ -65,47 +65,101 @@ fn ddgi_normalize_or(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
     return select(fallback, v / l, l > 0.0 && l < 3.4e38);
 }
 
-// The irradiance E at p (normal n, unit v toward the eye) from the probes (`cpu::ddgi::sample`).
-fn ddgi_sample(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
+// One of the eight probes a point reads, with its weights (`cpu::ddgi::ProbeWeight`).
+struct DdgiTerm {
+    probe: u32,
+    trilinear: f32,
+    // The smooth backface term ((dir·n + 1)/2)² + 0.2 (2019 §3.4).
+    normal: f32,
+    // Chebyshev's bound from the distance moments, cubed (2019 Eq. 6).
+    visibility: f32,
+    // The product, small weights crushed, times trilinear; 0 for an inactive probe.
+    weight: f32,
+}
+
+// The cell of a point moved by the bias: its lowest probe's coordinates and the position in it.
+struct DdgiCell {
+    biased: vec3<f32>,
+    base: vec3<u32>,
+    alpha: vec3<f32>,
+}
+
+fn ddgi_cell(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>) -> DdgiCell {
     let counts = ddgi_grid.counts.xyz;
     let biased = p + n * ddgi_grid.origin.w + v * ddgi_grid.spacing.w;
     let g = (biased - ddgi_grid.origin.xyz) / ddgi_grid.spacing.xyz;
     let hi = max(vec3<f32>(counts) - vec3<f32>(2.0), vec3<f32>(0.0));
     let base_f = clamp(floor(g), vec3<f32>(0.0), hi);
-    let alpha = clamp(g - base_f, vec3<f32>(0.0), vec3<f32>(1.0));
-    let base = vec3<u32>(base_f);
+    return DdgiCell(biased, vec3<u32>(base_f), clamp(g - base_f, vec3<f32>(0.0), vec3<f32>(1.0)));
+}
+
+// Corner k ∈ [0, 8) of the cell, read from the point p of normal n.
+fn ddgi_term(cell: DdgiCell, k: u32, p: vec3<f32>, n: vec3<f32>) -> DdgiTerm {
+    let counts = ddgi_grid.counts.xyz;
+    let corner = vec3<u32>(k & 1u, (k >> 1u) & 1u, (k >> 2u) & 1u);
+    let c = min(cell.base + corner, counts - vec3<u32>(1u));
+    let probe = c.x + counts.x * (c.y + counts.y * c.z);
+    let at = ddgi_probe_position(probe);
+    let t = select(vec3<f32>(1.0) - cell.alpha, cell.alpha, corner == vec3<u32>(1u));
+    let trilinear = t.x * t.y * t.z;
+    let to_probe = ddgi_normalize_or(at - p, vec3<f32>(0.0));
+    let nb = (dot(to_probe, n) + 1.0) * 0.5;
+    let normal = nb * nb + 0.2;
+    let from_probe = cell.biased - at;
+    let r = length(from_probe);
+    let moments = ddgi_lookup_distance(probe, ddgi_normalize_or(from_probe, vec3<f32>(0.0, 0.0, 1.0)));
+    var visibility = 1.0;
+    if (r > moments.x) {
+        let variance = abs(moments.y - moments.x * moments.x);
+        let d = r - moments.x;
+        let q = variance / max(variance + d * d, 1e-12);
+        visibility = q * q * q;
+    }
+    var w = max(normal * visibility, 1e-6);
+    if (w < 0.2) {
+        w = w * w * w / 0.04;
+    }
+    w = w * trilinear;
+    if (ddgi_probes[probe].w == DDGI_INACTIVE) {
+        w = 0.0;
+    }
+    return DdgiTerm(probe, trilinear, normal, visibility, w);
+}
+
+// The irradiance at p (normal n, unit v toward the eye) from the probes toward n and toward
+// `dir`, with the same eight weights (`cpu::ddgi::sample`, `irradiance_toward`).
+struct DdgiPair {
+    n: vec3<f32>,
+    dir: vec3<f32>,
+}
+
+fn ddgi_sample_pair(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, dir: vec3<f32>) -> DdgiPair {
+    let cell = ddgi_cell(p, n, v);
+    var sum = vec3<f32>(0.0);
+    var sum_dir = vec3<f32>(0.0);
+    var total = 0.0;
+    for (var k = 0u; k < 8u; k = k + 1u) {
+        let term = ddgi_term(cell, k, p, n);
+        sum = sum + ddgi_lookup_irradiance(term.probe, n) * term.weight;
+        sum_dir = sum_dir + ddgi_lookup_irradiance(term.probe, dir) * term.weight;
+        total = total + term.weight;
+    }
+    if (total <= 0.0) {
+        return DdgiPair(vec3<f32>(0.0), vec3<f32>(0.0));
+    }
+    let k = 3.14159265358979 / total;
+    return DdgiPair(sum * k, sum_dir * k);
+}
+
+// The irradiance E at p toward n (`cpu::ddgi::sample`).
+fn ddgi_sample(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
+    let cell = ddgi_cell(p, n, v);
     var sum = vec3<f32>(0.0);
     var total = 0.0;
     for (var k = 0u; k < 8u; k = k + 1u) {
-        let corner = vec3<u32>(k & 1u, (k >> 1u) & 1u, (k >> 2u) & 1u);
-        let c = min(base + corner, counts - vec3<u32>(1u));
-        let probe = c.x + counts.x * (c.y + counts.y * c.z);
-        let at = ddgi_probe_position(probe);
-        let t = select(vec3<f32>(1.0) - alpha, alpha, corner == vec3<u32>(1u));
-        let trilinear = t.x * t.y * t.z;
-        let to_probe = ddgi_normalize_or(at - p, vec3<f32>(0.0));
-        let nb = (dot(to_probe, n) + 1.0) * 0.5;
-        let normal = nb * nb + 0.2;
-        let from_probe = biased - at;
-        let r = length(from_probe);
-        let moments = ddgi_lookup_distance(probe, ddgi_normalize_or(from_probe, vec3<f32>(0.0, 0.0, 1.0)));
-        var visibility = 1.0;
-        if (r > moments.x) {
-            let variance = abs(moments.y - moments.x * moments.x);
-            let d = r - moments.x;
-            let q = variance / max(variance + d * d, 1e-12);
-            visibility = q * q * q;
-        }
-        var w = max(normal * visibility, 1e-6);
-        if (w < 0.2) {
-            w = w * w * w / 0.04;
-        }
-        w = w * trilinear;
-        if (ddgi_probes[probe].w == DDGI_INACTIVE) {
-            w = 0.0;
-        }
-        sum = sum + ddgi_lookup_irradiance(probe, n) * w;
-        total = total + w;
+        let term = ddgi_term(cell, k, p, n);
+        sum = sum + ddgi_lookup_irradiance(term.probe, n) * term.weight;
+        total = total + term.weight;
     }
     if (total <= 0.0) {
         return vec3<f32>(0.0);

@@ -76,7 +76,8 @@ struct DdgiGrid {
     counts: vec4<u32>,
     // Irradiance interior texels and tiles a row, distance interior texels and tiles a row.
     atlas: vec4<u32>,
-    // Classification's back-face share, relocation's least front-face distance (world).
+    // Classification's back-face share, relocation's least front-face distance (world), 1 for
+    // the glossy receiver (`ddgi.receiver`).
     state: vec4<f32>,
 }
 

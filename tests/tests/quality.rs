@@ -44,10 +44,11 @@ fn the_quality_table_stays_within_its_measured_bounds() {
     // winner's surface over its block): soler 0.2584 → 0.2666, for the chair's floor shadow no
     // longer lit at 300× the truth (0.594 → 0.481 below); the mix 0.0456 (unchanged).
     // Issue #56's row: DDGI's probes (ddgi-probes, 8×4×8 probes, 128 rays, one bounce like the
-    // truth) measured 0.1075 on lavapipe; the goal, 0.06, is not met: the bound is the
-    // measurement plus a margin. With 12³ probes 0.086, 20³ 0.075; a diffuse receiver alone
-    // costs Knecht's row 0.048 → 0.069 (the probes keep no direction for the specular lobe).
-    within(&rows, &[0.05, 0.035, 0.06, 0.03, 0.275, 0.05, 0.06, 0.115]);
+    // truth, the glossy receiver ⚠[ddgi.glossy-receiver]) measured 0.1054 on lavapipe (0.1075
+    // with the papers' diffuse receiver); the goal, 0.06, is not met: the bound is the
+    // measurement plus a margin. With 12³ probes 0.086, 20³ 0.075 (diffuse receiver); a
+    // diffuse receiver alone costs Knecht's row 0.048 → 0.069.
+    within(&rows, &[0.05, 0.035, 0.06, 0.03, 0.275, 0.05, 0.06, 0.112]);
     // The exact-VPL reference is closer to the ground truth than the 256 VPLs of Knecht's
     // configuration, and the HCB closer to the per-pixel gather than to the ground truth.
     assert!(rows[1].flip < rows[0].flip, "{} vs {}", rows[1].flip, rows[0].flip);
@@ -74,8 +75,9 @@ fn the_box_under_a_white_sky_stays_within_its_measured_bounds() {
     real_scene_table_within(
         &gi_lab_tests::white_sky_box(),
         "sky_1bounce_128_2048spp.exr",
-        // DDGI (issue #56): measured 0.0999; bound the measurement plus a margin.
-        [0.10, 0.08, 0.10, 0.025, 0.20, 0.10, 0.10, 0.11],
+        // DDGI (issue #56): measured 0.0970 (0.0999 with the diffuse receiver); bound the
+        // measurement plus a margin.
+        [0.10, 0.08, 0.10, 0.025, 0.20, 0.10, 0.10, 0.105],
     );
 }
 

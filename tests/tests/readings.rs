@@ -14,7 +14,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 const SIGN: char = '\u{26a0}';
-const PAPERS: [&str; 4] = ["nguyen", "knecht", "gautron", "soler"];
+const PAPERS: [&str; 5] = ["nguyen", "knecht", "gautron", "soler", "ddgi"];
 const SCANNED: [&str; 4] = ["render", "shaders", "app", "tests"];
 /// The columns of a row: id | the text's words | GI Lab's choice | why | setting | measured effect.
 const COLUMNS: usize = 6;

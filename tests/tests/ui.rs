@@ -753,3 +753,87 @@ fn a_value_past_the_atlas_limit_is_clamped_and_the_panel_says_so() {
     assert!(msg.starts_with(&format!("clamped: ism.map_size clamped to {size}")), "{msg}");
     h.get_by_label(&msg);
 }
+
+/// DDGI (issue #56) in the lab: with the technique picked, every DDGI setting has a widget,
+/// every DDGI buffer shows in the viewer, View → "DDGI probes overlay" draws the probes as
+/// dots, and a click on one selects that probe and draws its rays of the frame.
+#[test]
+fn ddgi_settings_buffers_and_probe_overlay_appear_in_the_lab() {
+    let dir = temp_dir("ddgi");
+    let mut h = harness_in(&dir, egui::vec2(1400.0, 2000.0));
+    pause(&mut h);
+    h.state_mut().state.session.render_scale = 0.1;
+    if let Ok(l) = &mut h.state_mut().state.lab {
+        gi_render::settings::pipeline::Technique::Ddgi.apply(&mut l.settings);
+        (l.settings.ddgi.probes_x, l.settings.ddgi.probes_y, l.settings.ddgi.probes_z) = (4, 3, 4);
+        l.settings.ddgi.rays_per_probe = 32;
+        l.apply_settings();
+    }
+    h.run_steps(4);
+    let settings = h.state().state.lab.as_ref().map(|l| l.settings.clone()).expect("lab");
+    let current = gi_lab::ui::settings_ui::TECHNIQUES.iter().find(|t| (t.is)(&settings)).map(|t| t.name);
+    assert_eq!(current, Some("DDGI probes (Majercik et al.)"));
+    let (_, fields) = LabSettings::groups().into_iter().find(|(g, _)| *g == "ddgi").expect("ddgi group");
+    for m in fields {
+        let path = format!("ddgi.{}", m.name);
+        assert!(h.query_all_by_label(&path).next().is_some(), "{path} has no widget");
+    }
+    for n in
+        ["ddgi.indirect", "ddgi.irradiance", "ddgi.atlas.irradiance", "ddgi.atlas.distance", "ddgi.rays", "ddgi.probes"]
+    {
+        show_in_viewer(&mut h, n);
+    }
+    let viewport = |h: &mut Harness<'static, GiLabApp>| {
+        let rect = h.state().state.viewport_rect;
+        let image = h.render().expect("the harness renders");
+        let mut pixels = Vec::new();
+        for y in (rect.min.y + 40.0) as u32..(rect.max.y - 40.0) as u32 {
+            for x in (rect.min.x + 10.0) as u32..(rect.max.x - 10.0) as u32 {
+                pixels.push(image.get_pixel(x, y).0);
+            }
+        }
+        (pixels, image)
+    };
+    let changed = |a: &[[u8; 4]], b: &[[u8; 4]]| {
+        a.iter().zip(b).filter(|(a, b)| a.iter().zip(b.iter()).any(|(x, y)| x.abs_diff(*y) > 40)).count()
+    };
+    let (plain, _) = viewport(&mut h);
+    h.state_mut().state.overlays.ddgi_probes = true;
+    run_until(&mut h, 30, |a| arrived(a, "ddgi.overlay"));
+    let (dots, _) = viewport(&mut h);
+    let overlay = h.state().renderer().and_then(|r| r.ddgi_overlay_later(false)).expect("the probes arrived");
+    assert!(changed(&plain, &dots) > 10 * overlay.probes.len(), "the dots of {} probes", overlay.probes.len());
+    // A probe on screen, away from the viewport's edges: click its dot.
+    let rect = h.state().state.viewport_rect;
+    let vp = h.state().renderer().expect("renderer").view_proj();
+    let at = (0..overlay.probes.len())
+        .filter_map(|i| {
+            let clip = vp * overlay.position(i).extend(1.0);
+            let ndc = clip.truncate() / clip.w;
+            let pos = rect.min + egui::vec2((ndc.x * 0.5 + 0.5) * rect.width(), (0.5 - ndc.y * 0.5) * rect.height());
+            (clip.w > 0.0 && rect.shrink(60.0).contains(pos)).then_some((i, pos))
+        })
+        .next();
+    let (probe, pos) = at.expect("a probe in view");
+    h.drag_at(pos);
+    h.run_steps(1);
+    h.drop_at(pos);
+    h.run_steps(2);
+    let selected = h.state().state.overlays.ddgi_selected.expect("the click selected a probe");
+    let o = h.state().renderer().and_then(|r| r.ddgi_overlay_later(false)).expect("probes");
+    let clip = vp * o.position(selected).extend(1.0);
+    let ndc = clip.truncate() / clip.w;
+    let got = rect.min + egui::vec2((ndc.x * 0.5 + 0.5) * rect.width(), (0.5 - ndc.y * 0.5) * rect.height());
+    assert!(
+        got.distance(pos) <= 8.0,
+        "probe {selected} (clicked near probe {probe}) lies {} from the click",
+        got.distance(pos)
+    );
+    assert!(h.state().state.probes.pinned.is_empty(), "the click selected a probe, it pinned no pixel");
+    run_until(&mut h, 30, |a| arrived(a, "ddgi.overlay.rays"));
+    let (rays, image) = viewport(&mut h);
+    let _ = image.save(std::env::temp_dir().join("gi_lab_ddgi_overlay.png"));
+    let lines = changed(&dots, &rays);
+    println!("probe {selected}'s rays changed {lines} pixels");
+    assert!(lines > 50, "the probe's rays are drawn: {lines} pixels changed");
+}

@@ -224,6 +224,12 @@ impl State {
                      at full colour), each with its influence circle of radius a·R_k; stale records \
                      (waiting to be computed again) outlined in orange; reads the records back every frame",
                 );
+                ui.checkbox(&mut self.overlays.ddgi_probes, "DDGI probes overlay").on_hover_text(
+                    "DDGI's probes as dots at their relocated places (a line from the grid's place when \
+                     moved), green while active, red when classified inactive (inside geometry or far from \
+                     every surface, 2021 §5.2); click a dot to draw that probe's rays of the frame to their \
+                     hits, coloured by the radiance they brought back; reads the probes back every frame",
+                );
                 ui.horizontal(|ui| {
                     ui.label("render scale");
                     ui.add(egui::Slider::new(&mut self.session.render_scale, super::session::RENDER_SCALE_RANGE).logarithmic(true))

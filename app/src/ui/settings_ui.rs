@@ -199,6 +199,7 @@ pub fn group_paper(group: &str) -> &'static str {
         "hcb" => "Nguyen",
         "soler" => "Soler",
         "gautron" => "Gautron",
+        "ddgi" => "Majercik",
         "tonemap" => "Reinhard",
         _ => "",
     }
@@ -270,6 +271,7 @@ pub fn section_title(group: &str) -> String {
         "reference" => "Exact-VPL reference (stages 3, 4, 6)".into(),
         "soler" => "5–6 · Screen-space mip levels (Soler)".into(),
         "gautron" => "5–7 · Irradiance cache splatting (Gautron)".into(),
+        "ddgi" => "5–7 · DDGI probes (Majercik et al. 2019, 2021)".into(),
         "tonemap" => "7 · Tone mapping".into(),
         other => other.to_string(),
     }
@@ -368,6 +370,12 @@ pub const TECHNIQUES: &[Technique] = &[
         source: "GI Lab's mix: Gautron et al. 003's rasterized hemisphere at each of Nguyen et al. 000's HCB samples, spread by coherence splatting",
         apply: |s| Choices::GautronAtHcbSamples.apply(s),
         is: |s| Choices::of(&s.pipeline) == Some(Choices::GautronAtHcbSamples),
+    },
+    Technique {
+        name: "DDGI probes (Majercik et al.)",
+        source: "Majercik et al. 2019, 2021: a probe grid tracing rays every frame through the GPU ray caster, octahedral irradiance and distance moments with hysteresis, Chebyshev visibility, classification and relocation, read at every pixel",
+        apply: |s| Choices::Ddgi.apply(s),
+        is: |s| Choices::of(&s.pipeline) == Some(Choices::Ddgi),
     },
 ];
 

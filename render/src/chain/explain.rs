@@ -246,3 +246,20 @@ fn chain_words(f: &FrameInputs) -> String {
     }
     words.join(", ")
 }
+
+/// The replay of the pinned pixel's eight probes (`passes::ddgi::explain`), after the probes
+/// lit it.
+pub(super) fn ddgi(f: &FrameInputs, x: &mut StagePasses, r: &mut Recorder, _: &mut Flow) -> Option<()> {
+    let Some(pixel) = pinned(f, x) else { return Some(()) };
+    let (Some(stage), slot) = (x.ddgi.as_ref(), &mut x.explain_ddgi) else { return Some(()) };
+    let Some((probes, indirect)) = stage.explain_parts() else { return Some(()) };
+    let pass = slot.get_or_insert_with(|| crate::passes::ddgi::explain::DdgiExplainPass::new(f.ctx));
+    let inputs = crate::passes::ddgi::explain::ExplainInputs {
+        probes,
+        g: f.gbuffer,
+        camera: f.camera_buffer,
+        indirect: &indirect,
+    };
+    pass.record(f.ctx, r.enc, &inputs, pixel);
+    Some(())
+}

@@ -61,6 +61,8 @@ pub(crate) struct StagePasses {
     /// (the scene does not fit the ray caster on this device).
     pub ddgi: Option<crate::passes::ddgi::stage::DdgiStage>,
     pub ddgi_error: Option<String>,
+    /// The replay of DDGI's eight probes at the pinned pixel.
+    pub explain_ddgi: Option<crate::passes::ddgi::explain::DdgiExplainPass>,
     /// The pinned pixel to explain (issue #42), and the replay of the VPL gather at tiles or
     /// pixels (created when a pixel is first explained).
     pub explain_pixel: Option<(u32, u32)>,
@@ -291,7 +293,7 @@ fn indirect_steps(s: &LabSettings) -> Vec<Step> {
         ],
         Gather::ScreenSpace => vec![step(5, "soler.levels", soler::levels)],
         // Majercik et al.: the probes' trace, update and reading at every pixel.
-        Gather::Probes => vec![step(6, "ddgi.probes", ddgi::probes)],
+        Gather::Probes => vec![step(6, "ddgi.probes", ddgi::probes), step(6, "explain.ddgi", explain::ddgi)],
         Gather::Vpl => vpl_steps(s),
     }
 }

@@ -505,6 +505,19 @@ pub fn sample(probes: &Probes<'_>, p: Vec3, n: Vec3, v: Vec3, params: &DdgiParam
     (e, out)
 }
 
+/// The irradiance the probes give toward `dir` at the point that `weights` ([`sample`]'s) were
+/// found for: the same eight weights, each probe's tile read toward `dir`, times π. With `dir`
+/// the mirror direction of the view, E(dir)/π is the cosine-weighted mean radiance about it,
+/// what a glossy receiver reflects (⚠[ddgi.glossy-receiver], `ddgi.receiver`).
+pub fn irradiance_toward(probes: &Probes<'_>, weights: &[ProbeWeight; 8], dir: Vec3) -> Vec3 {
+    let (mut sum, mut total) = (Vec3::ZERO, 0.0);
+    for w in weights {
+        sum += probes.irradiance.lookup(w.probe, dir) * w.weight;
+        total += w.weight;
+    }
+    if total > 0.0 { sum / total * std::f32::consts::PI } else { Vec3::ZERO }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -217,6 +217,8 @@ struct WrittenSettings<'a> {
     #[serde(skip_serializing_if = "Option::is_none", serialize_with = "group")]
     gautron: Option<&'a crate::settings::gautron::GautronSettings>,
     #[serde(skip_serializing_if = "Option::is_none", serialize_with = "group")]
+    ddgi: Option<&'a crate::settings::ddgi::DdgiSettings>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "group")]
     reference: Option<&'a crate::settings::reference::ReferenceSettings>,
     #[serde(skip_serializing_if = "Option::is_none", serialize_with = "group")]
     tonemap: Option<&'a crate::settings::compose::TonemapSettings>,
@@ -249,6 +251,7 @@ impl<'a> WrittenSettings<'a> {
             hcb: used("hcb").then_some(&s.hcb),
             soler: used("soler").then_some(&s.soler),
             gautron: used("gautron").then_some(&s.gautron),
+            ddgi: used("ddgi").then_some(&s.ddgi),
             reference: used("reference").then_some(&s.reference),
             tonemap: used("tonemap").then_some(&s.tonemap),
         }

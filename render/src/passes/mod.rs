@@ -169,6 +169,7 @@ pub const BINDINGS: &[&crate::gpu::bindings::Bindings] = &[
     &ddgi::trace::TRACE_BINDINGS,
     &ddgi::apply::APPLY_BINDINGS,
     &ddgi::apply::VIEW_BINDINGS,
+    &ddgi::explain::EXPLAIN_BINDINGS,
 ];
 
 /// A 2D render/storage target with the usages every registered buffer needs (sampling,

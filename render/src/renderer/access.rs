@@ -67,7 +67,8 @@ impl Renderer {
             || x.explain_gautron.is_some()
             || x.explain_hcb.is_some()
             || x.soler.as_ref().is_some_and(|s| s.explain.is_some())
-            || x.explain_reference.is_some();
+            || x.explain_reference.is_some()
+            || x.explain_ddgi.is_some();
         passes.retain(|p| *p != "explain" || replays);
         if passes.is_empty() {
             return Ok(passes);
@@ -90,6 +91,8 @@ impl Renderer {
             .then(|| crate::passes::reference::explain::ReferenceExplainPass::new(&ctx));
         let explain_hcb = (passes.contains(&"explain") && self.stages.explain_hcb.is_some())
             .then(|| crate::passes::hcb::explain::HcbExplainPass::new(&ctx));
+        let explain_ddgi = (passes.contains(&"explain") && self.stages.explain_ddgi.is_some())
+            .then(|| crate::passes::ddgi::explain::DdgiExplainPass::new(&ctx));
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(e.to_string());
         }
@@ -125,6 +128,9 @@ impl Renderer {
         }
         if let Some(p) = explain_hcb {
             self.stages.explain_hcb = Some(p);
+        }
+        if let Some(p) = explain_ddgi {
+            self.stages.explain_ddgi = Some(p);
         }
         if passes.contains(&"exact_vpl") {
             let old = self.stages.reference.take();
@@ -176,6 +182,18 @@ impl Renderer {
         self.register_all();
         self.reset_history();
         Ok(passes)
+    }
+
+    /// DDGI's probes of a frame or two ago for the probe overlay, with every probe's rays when
+    /// `rays`; never waits (None until they arrive, or while DDGI is not the gather).
+    pub fn ddgi_overlay_later(&self, rays: bool) -> Option<crate::passes::ddgi::stage::ProbeOverlay> {
+        let st = self.stages.ddgi.as_ref()?;
+        let key = if rays { "ddgi.overlay.rays" } else { "ddgi.overlay" };
+        let a = self.read_later(key, Readback::Storage(st.overlay_sources(rays)?), 0)?;
+        match &a.data {
+            Ok(Readout::Bytes(parts)) => st.overlay_from(parts),
+            _ => None,
+        }
     }
 
     /// DDGI's probes, when they are the gather (tests read their buffers back).
@@ -438,7 +456,8 @@ pub fn pass_of_shader(entry: &str) -> Option<&'static str> {
         | "soler/explain.wgsl"
         | "soler/explain_ring.wgsl"
         | "hcb/explain.wgsl"
-        | "reference/explain.wgsl" => "explain",
+        | "reference/explain.wgsl"
+        | "ddgi/explain.wgsl" => "explain",
         "gautron/create.wgsl"
         | "gautron/hemisphere.wgsl"
         | "gautron/reduce.wgsl"

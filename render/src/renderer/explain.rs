@@ -107,11 +107,12 @@ impl Renderer {
         let hcb = p.shading_points == ShadingPoints::HcbSamples
             && p.reconstruction == Reconstruction::CoherenceSplatting
             && p.gather != Gather::None;
-        (!vpl_gather && !gautron && !soler && !hcb && !reference).then(|| {
+        let ddgi = p.gather == Gather::Probes;
+        (!vpl_gather && !gautron && !soler && !hcb && !reference && !ddgi).then(|| {
             format!(
                 "explaining a pixel is written for the VPL gather at every pixel or interleaved tiles, \
-                 the exact-VPL reference, the HCB's samples, Gautron's records and Soler's levels (and \
-                 their mixes); not for {:?} VPLs gathered by {:?} at {:?} ({:?}, {:?})",
+                 the exact-VPL reference, the HCB's samples, Gautron's records, Soler's levels (and \
+                 their mixes) and DDGI's probes; not for {:?} VPLs gathered by {:?} at {:?} ({:?}, {:?})",
                 p.vpl_source, p.gather, p.shading_points, p.reconstruction, p.temporal
             )
         })
@@ -136,6 +137,9 @@ impl Renderer {
     /// The replay of the stage choices' (far-field) light.
     fn far_replay(&self) -> Result<&dyn Replay, String> {
         let none = || "no frame was rendered with a pinned pixel".to_string();
+        if self.settings.pipeline.gather == Gather::Probes {
+            return Ok(self.stages.explain_ddgi.as_ref().ok_or_else(none)?);
+        }
         if self.settings.pipeline.shading_points == ShadingPoints::IrradianceRecords {
             return Ok(self.stages.explain_gautron.as_ref().ok_or_else(none)?);
         }

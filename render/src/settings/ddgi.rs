@@ -4,6 +4,7 @@
 //! McGuire, "Scaling Probe-Based Real-Time Dynamic Global Illumination for Production", JCGT
 //! 10(2), 2021 (2021 §n). The passes are in `passes/ddgi/`, the CPU twin in `cpu::ddgi`.
 
+use super::splat::IrradianceReceiver;
 use crate::{settings_enum, settings_group};
 
 settings_enum! {
@@ -21,8 +22,7 @@ settings_enum! {
 settings_group! {
     /// DDGI's probes (2019 §3; 2021 §4–5): the grid, the rays each probe casts per frame, its
     /// octahedral irradiance and distance tiles, their hysteresis, the shading biases, and the
-    /// 2021 paper's classification and relocation. Irradiance only: a glossy receiver
-    /// reflects the probes' irradiance diffusely (the probes keep no direction).
+    /// 2021 paper's classification and relocation.
     pub struct DdgiSettings: "ddgi" {
         /// What the grid spans (2019 §3), inset by half a cell so that no probe sits on a wall.
         grid_fit: GridFit = GridFit::Room,
@@ -84,5 +84,12 @@ settings_group! {
         /// irradiance of the previous frame, so every frame adds a bounce. Off: one bounce.
         infinite_bounces: bool = true,
         unit "", symbol "", range 0..=1, cost "one probe lookup per ray", history true;
+        /// How each pixel reflects the probes' light. ⚠[ddgi.glossy-receiver] The papers' probes
+        /// hold irradiance for diffuse receivers (2019 §1: glossy light is left to other
+        /// means); `Glossy` adds the specular lobe lit by the probes' irradiance toward the
+        /// mirror direction of the view, SI · E(r)/π (the cosine-weighted mean radiance about r,
+        /// with the same eight weights), as the HCB's and Gautron's glossy receivers do.
+        receiver: IrradianceReceiver = IrradianceReceiver::Glossy,
+        unit "", symbol "", range 0..=1, cost "eight more tile reads per pixel", history false;
     }
 }

@@ -2,6 +2,7 @@
 //! GPU timings, probes and buffer viewers. Panels can be dragged, tabbed and resized; the
 //! layout is part of the session.
 
+mod ddgi_overlay;
 mod explain;
 mod grid;
 mod history;

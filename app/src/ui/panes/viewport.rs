@@ -34,6 +34,9 @@ pub(super) fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
     if st.overlays.gautron_records {
         records_overlay(st, ui, rect);
     }
+    if st.overlays.ddgi_probes {
+        super::ddgi_overlay::probes_overlay(st, ui, rect);
+    }
     if let (Some(v), Ok(l)) = (&st.explain, &st.lab)
         && v.overlay
     {
@@ -79,7 +82,14 @@ pub(super) fn viewport_ui(st: &mut State, ui: &mut egui::Ui) {
             (uv.y * h as f32).clamp(0.0, h as f32 - 1.0) as u32,
         ));
     }
-    if response.clicked()
+    // With the DDGI overlay on, a click on a probe's dot selects it (its rays are drawn).
+    let picked = response
+        .interact_pointer_pos()
+        .filter(|_| response.clicked() && st.overlays.ddgi_probes)
+        .and_then(|at| super::ddgi_overlay::pick(st, rect, at));
+    if picked.is_some() {
+        st.overlays.ddgi_selected = picked;
+    } else if response.clicked()
         && let Some(p) = st.probes.hover
     {
         st.pin_probe(p);

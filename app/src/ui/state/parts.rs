@@ -154,11 +154,22 @@ pub struct Overlays {
     pub gautron_records: bool,
     /// Every light, the selected one with its move and aim handles (issue #39 point 2).
     pub lights: bool,
+    /// DDGI's probes coloured by state; the selected probe's rays (issue #56).
+    pub ddgi_probes: bool,
+    pub ddgi_selected: Option<usize>,
 }
 
 impl Default for Overlays {
     fn default() -> Self {
-        Self { vpls: false, hcb_samples: false, soler_samples: false, gautron_records: false, lights: true }
+        Self {
+            vpls: false,
+            hcb_samples: false,
+            soler_samples: false,
+            gautron_records: false,
+            lights: true,
+            ddgi_probes: false,
+            ddgi_selected: None,
+        }
     }
 }
 

@@ -1,6 +1,7 @@
 //! DDGI at every pixel (Majercik et al. 2019 §3.4, Eq. 5–6; 2021 §4.2): `shaders/ddgi/apply.wgsl`
 //! reads the probes at each G-buffer point (CPU twin `cpu::ddgi::sample`) into `ddgi.irradiance`
-//! (E) and `ddgi.indirect` (c·DI/π·E, what the compose adds); `shaders/ddgi/view.wgsl` copies
+//! (E) and `ddgi.indirect` (c·DI/π·E, plus SI·E(r)/π with the glossy receiver: what the
+//! compose adds); `shaders/ddgi/view.wgsl` copies
 //! the atlases, the rays and the probes into textures for the buffer viewer.
 
 use crate::counters::prelude::*;
@@ -30,6 +31,7 @@ pub const APPLY_BINDINGS: Bindings = Bindings {
         binding(7, "camera", Kind::Uniform),
         binding(8, "out_indirect", OUT),
         binding(9, "out_irradiance", OUT),
+        binding(10, "g_material", TEX),
     ],
 };
 

@@ -7,6 +7,7 @@
 
 pub mod apply;
 pub mod blend;
+pub mod explain;
 pub mod stage;
 pub mod trace;
 
@@ -28,7 +29,8 @@ pub struct DdgiGridParams {
     pub counts: [u32; 4],
     /// Irradiance interior texels and tiles a row, distance interior texels and tiles a row.
     pub atlas: [u32; 4],
-    /// Classification's back-face share, relocation's least front-face distance (world).
+    /// Classification's back-face share, relocation's least front-face distance (world), 1 for
+    /// the glossy receiver.
     pub state: Vec4,
 }
 
@@ -61,7 +63,7 @@ impl DdgiGridParams {
             spacing: grid.spacing.extend(s.view_bias * scale),
             counts: [grid.counts.x, grid.counts.y, grid.counts.z, flags],
             atlas: [irr, columns, dist, columns],
-            state: Vec4::new(s.backface_ratio, s.min_frontface * scale, 0.0, 0.0),
+            state: Vec4::new(s.backface_ratio, s.min_frontface * scale, s.receiver.flag(), 0.0),
         }
     }
 }

@@ -74,6 +74,44 @@ pub struct DdgiStage {
     emitters: Option<(bool, bool)>,
     /// Why the grid is smaller than asked (the device's limits), for the panel and the log.
     pub clamp: Option<GridClamp>,
+    /// The rotation of the rays of the last update (tests replay its rays on the CPU).
+    pub last_rotation: Mat3,
+}
+
+/// What the probe overlay shows of a frame (`Renderer::ddgi_overlay_later`): the grid, the
+/// frame's ray rotation, each probe's offset and state, and every probe's rays when asked.
+#[derive(Clone, Debug)]
+pub struct ProbeOverlay {
+    pub grid: ProbeGrid,
+    pub rotation: Mat3,
+    pub rays_per_probe: u32,
+    /// Per probe: relocation offset (xyz), state (w: 0 active, 1 inactive).
+    pub probes: Vec<Vec4>,
+    /// Per probe and ray: radiance (rgb), ±distance (w; negative: a back face; ≥ 1e30: a miss).
+    pub rays: Option<Vec<Vec4>>,
+}
+
+impl ProbeOverlay {
+    /// Probe `i`'s place (on the grid, moved by its offset).
+    pub fn position(&self, i: usize) -> Vec3 {
+        self.grid.position(i) + self.probes.get(i).map_or(Vec3::ZERO, |p| p.truncate())
+    }
+
+    pub fn active(&self, i: usize) -> bool {
+        self.probes.get(i).is_some_and(|p| p.w < 0.5)
+    }
+
+    /// Probe `i`'s rays of the frame: (direction, radiance, distance; negative: back face).
+    pub fn rays_of(&self, i: usize) -> Vec<(Vec3, Vec3, f32)> {
+        let (Some(rays), n) = (&self.rays, self.rays_per_probe) else { return Vec::new() };
+        (0..n)
+            .filter_map(|k| {
+                let r = rays.get(i * n as usize + k as usize)?;
+                let d = (self.rotation * crate::cpu::ddgi::spherical_fibonacci(k, n)).normalize();
+                Some((d, r.truncate(), r.w))
+            })
+            .collect()
+    }
 }
 
 fn pixel_target(ctx: &GpuContext, label: &str, (w, h): (u32, u32)) -> wgpu::Texture {
@@ -108,6 +146,7 @@ impl DdgiStage {
             draws: state.draws.iter().map(|d| d.world).collect(),
             emitters: None,
             clamp: None,
+            last_rotation: Mat3::IDENTITY,
         })
     }
 
@@ -299,6 +338,7 @@ impl DdgiStage {
             (x >> 8) as f32 / 16_777_216.0
         };
         let rotation: Mat3 = random_rotation([h(0), h(1), h(2)]);
+        self.last_rotation = rotation;
         let update = DdgiUpdateParams {
             rotation: [rotation.x_axis.extend(0.0), rotation.y_axis.extend(0.0), rotation.z_axis.extend(0.0)],
             counts: [n, p.key.rays, p.key.irradiance_texels, p.key.distance_texels],
@@ -355,6 +395,7 @@ impl DdgiStage {
                 f.camera_buffer.as_entire_binding(),
                 wgpu::BindingResource::TextureView(&indirect),
                 wgpu::BindingResource::TextureView(&irradiance),
+                wgpu::BindingResource::TextureView(&g.material),
             ],
         );
         let size = f.gbuffer_size;
@@ -371,6 +412,53 @@ impl DdgiStage {
     pub fn buffers(&self) -> Option<(ProbeGrid, [&wgpu::Buffer; 4])> {
         let p = self.probes.as_ref()?;
         Some((p.key.grid, [&p.states, &p.irradiance_atlas, &p.distance_atlas, &p.records]))
+    }
+
+    /// What the pixel explanation's replay reads: the grid's parameters, the probes, both
+    /// atlases, and `ddgi.indirect`.
+    pub fn explain_parts(&self) -> Option<([&wgpu::Buffer; 4], wgpu::TextureView)> {
+        let p = self.probes.as_ref()?;
+        let indirect = crate::passes::view(&self.indirect, "ddgi.indirect");
+        Some(([&p.grid, &p.states, &p.irradiance_atlas, &p.distance_atlas], indirect))
+    }
+
+    /// The buffers the probe overlay reads back: the update's parameters (the frame's ray
+    /// rotation), the probes, and with `rays` every probe's rays of that frame.
+    pub fn overlay_sources(&self, rays: bool) -> Option<Vec<(wgpu::Buffer, u64)>> {
+        let p = self.probes.as_ref()?;
+        let mut v = vec![
+            (p.update.clone(), std::mem::size_of::<DdgiUpdateParams>() as u64),
+            (p.states.clone(), p.key.grid.len() as u64 * 16),
+        ];
+        if rays {
+            v.push((p.records.clone(), p.key.grid.len() as u64 * p.key.rays as u64 * 16));
+        }
+        Some(v)
+    }
+
+    /// The probe overlay's view of the parts [`Self::overlay_sources`] read (None when they
+    /// do not match the grid any more).
+    pub fn overlay_from(&self, parts: &[Vec<u8>]) -> Option<ProbeOverlay> {
+        let p = self.probes.as_ref()?;
+        let n = p.key.grid.len();
+        let update: DdgiUpdateParams =
+            bytemuck::pod_read_unaligned(parts.first()?.get(..std::mem::size_of::<DdgiUpdateParams>())?);
+        if update.counts[0] as usize != n || update.counts[1] != p.key.rays {
+            return None;
+        }
+        let probes: Vec<Vec4> = bytemuck::pod_collect_to_vec(parts.get(1)?.get(..n * 16)?);
+        let rays = match parts.get(2) {
+            Some(b) => Some(bytemuck::pod_collect_to_vec(b.get(..n * p.key.rays as usize * 16)?)),
+            None => None,
+        };
+        let [x, y, z] = update.rotation;
+        Some(ProbeOverlay {
+            grid: p.key.grid,
+            rotation: Mat3::from_cols(x.truncate(), y.truncate(), z.truncate()),
+            rays_per_probe: p.key.rays,
+            probes,
+            rays,
+        })
     }
 
     /// Each atlas's (interior texels, tiles a row).
