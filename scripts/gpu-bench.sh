@@ -88,6 +88,11 @@ preset_row nguyen-hcb-cached+blend presets/nguyen-hcb-cached.ron --set hcb.splat
 # The Gautron mix without the HCB's sample cache (issue #53: the preset caches its samples'
 # hemispheres; every sample a hemisphere every frame, as before).
 preset_row gautron-at-hcb-samples+no-cache presets/gautron-at-hcb-samples.ron --set pipeline.temporal=None
+# DDGI at the production grid of issue #56's goal (probe update plus sampling ≤ 1 ms at
+# 1080p with 16×8×16 probes and 256 rays a probe): the passes ddgi.trace, ddgi.update and
+# ddgi.apply of the table.
+preset_row ddgi-probes+16x8x16x256 presets/ddgi-probes.ron --set ddgi.probes_x=16 --set ddgi.probes_y=8 \
+  --set ddgi.probes_z=16 --set ddgi.rays_per_probe=256
 # The default preset with its animation paused (issue #53: the still view a lighting artist
 # tunes keeps its shadow maps, light G-buffer, G-buffer and direct light), and the same
 # redoing every pass every frame (before #53), so that the saving is read in one run.

@@ -427,3 +427,35 @@ fn the_white_furnace_converges_to_the_analytic_irradiance() {
         assert!((mean - want).abs() / want < 0.02, "infinite bounces {bounces}: mean irradiance {mean} vs {want}");
     }
 }
+
+/// Bad input (issue #56): a grid past what the device holds is clamped with its reason, and
+/// a scene with no geometry or one whose only instance has a zero scale renders with DDGI on
+/// (every ray misses), without a panic or a GPU error.
+#[test]
+fn an_oversized_grid_is_clamped_and_empty_scenes_render() {
+    let ctx = gpu();
+    let settings = ddgi_settings([64, 64, 64], &["ddgi.rays_per_probe=1024"]);
+    // The stage is made and its grid fitted before the first frame (whose 3,375 probes of
+    // 1,024 rays would take a minute on lavapipe).
+    let r = gi_render::Renderer::new(ctx.clone(), gi_lab_tests::default_scene(), settings.clone(), 16, 16)
+        .expect("renderer");
+    let stage = r.ddgi().expect("the DDGI stage");
+    let limit = gi_render::passes::ddgi::max_probes(&ctx.device.limits(), &settings.ddgi);
+    let clamp = stage.clamp.as_ref().expect("64³ probes of 1,024 rays exceed the device: clamped");
+    let grid = stage.grid().expect("a grid");
+    eprintln!("{}", clamp.reason);
+    assert!(grid.len() as u32 <= limit && grid.len() > 8, "{} probes for a limit of {limit}", grid.len());
+    assert!(clamp.reason.contains("more than the device holds"), "{}", clamp.reason);
+    let mut flat = gi_lab_tests::furnace_scene(0.5, 0.0);
+    for n in &mut flat.nodes {
+        n.transform.scale = Vec3::ZERO;
+    }
+    for (name, scene) in [("no geometry", gi_render::scene::Scene::default()), ("zero scale", flat)] {
+        let mut r = gi_render::Renderer::new(ctx.clone(), scene, ddgi_settings([3, 3, 3], &[]), 16, 16)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        r.render_frame();
+        r.render_frame();
+        let e = r.readback("ddgi.irradiance").unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(e.data.iter().all(|p| p.iter().all(|c| c.is_finite())), "{name}: finite");
+    }
+}

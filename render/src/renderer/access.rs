@@ -196,6 +196,11 @@ impl Renderer {
         }
     }
 
+    /// Why DDGI's stage could not be made on this scene (the ray caster's message), if so.
+    pub fn ddgi_error(&self) -> Option<&str> {
+        self.stages.ddgi_error.as_deref()
+    }
+
     /// DDGI's probes, when they are the gather (tests read their buffers back).
     pub fn ddgi(&self) -> Option<&crate::passes::ddgi::stage::DdgiStage> {
         self.stages.ddgi.as_ref()

@@ -56,6 +56,13 @@ pub(super) fn settings_ui(st: &mut State, ui: &mut egui::Ui) {
             .default_open(true)
             .show(ui, |ui| gautron_cache_ui(ui, &l.renderer, &l.settings));
     }
+    if l.settings.pipeline.uses_ddgi() {
+        ui.separator();
+        egui::CollapsingHeader::new("DDGI probe grid")
+            .id_salt("ddgi_grid")
+            .default_open(true)
+            .show(ui, |ui| ddgi_grid_ui(ui, &l.renderer));
+    }
     if l.settings.pipeline.uses_hcb() {
         ui.separator();
         egui::CollapsingHeader::new("HCB statistics (Nguyen Table 1)").id_salt("hcb_stats").default_open(true).show(
@@ -67,6 +74,38 @@ pub(super) fn settings_ui(st: &mut State, ui: &mut egui::Ui) {
                 }
             },
         );
+    }
+}
+
+/// DDGI's grid as fitted (issue #56): its probes, spacing and box, and why it is smaller than
+/// asked when the device holds fewer probes (a warning: the clamped grid runs).
+fn ddgi_grid_ui(ui: &mut egui::Ui, r: &gi_render::Renderer) {
+    if let Some(e) = r.ddgi_error() {
+        ui.colored_label(ERROR, format!("DDGI cannot run on this scene: {e}"));
+        return;
+    }
+    let Some(stage) = r.ddgi() else {
+        ui.small("no DDGI frame rendered yet");
+        return;
+    };
+    if let Some(g) = stage.grid() {
+        let (c, s) = (g.counts, g.spacing);
+        ui.small(format!(
+            "{}×{}×{} = {} probes, {:.2} × {:.2} × {:.2} m apart, the first at ({:.2}, {:.2}, {:.2})",
+            c.x,
+            c.y,
+            c.z,
+            g.len(),
+            s.x,
+            s.y,
+            s.z,
+            g.origin.x,
+            g.origin.y,
+            g.origin.z
+        ));
+    }
+    if let Some(c) = &stage.clamp {
+        ui.colored_label(ui.visuals().warn_fg_color, format!("clamped: {}", c.reason));
     }
 }
 
