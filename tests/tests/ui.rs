@@ -708,17 +708,7 @@ fn gautron_settings_buffers_cache_and_records_appear_in_the_lab() {
         show_in_viewer(&mut h, n);
     }
     // The records overlay changes the viewport where the records are.
-    let viewport = |h: &mut Harness<'static, GiLabApp>| {
-        let rect = h.state().state.viewport_rect;
-        let image = h.render().expect("the harness renders");
-        let mut pixels = Vec::new();
-        for y in (rect.min.y + 40.0) as u32..(rect.max.y - 40.0) as u32 {
-            for x in (rect.min.x + 10.0) as u32..(rect.max.x - 10.0) as u32 {
-                pixels.push(image.get_pixel(x, y).0);
-            }
-        }
-        (pixels, image)
-    };
+    let viewport = viewport_pixels;
     let (before, _) = viewport(&mut h);
     h.state_mut().state.overlays.gautron_records = true;
     run_until(&mut h, 30, |a| arrived(a, "gautron.records"));
@@ -783,17 +773,7 @@ fn ddgi_settings_buffers_and_probe_overlay_appear_in_the_lab() {
     {
         show_in_viewer(&mut h, n);
     }
-    let viewport = |h: &mut Harness<'static, GiLabApp>| {
-        let rect = h.state().state.viewport_rect;
-        let image = h.render().expect("the harness renders");
-        let mut pixels = Vec::new();
-        for y in (rect.min.y + 40.0) as u32..(rect.max.y - 40.0) as u32 {
-            for x in (rect.min.x + 10.0) as u32..(rect.max.x - 10.0) as u32 {
-                pixels.push(image.get_pixel(x, y).0);
-            }
-        }
-        (pixels, image)
-    };
+    let viewport = viewport_pixels;
     let changed = |a: &[[u8; 4]], b: &[[u8; 4]]| {
         a.iter().zip(b).filter(|(a, b)| a.iter().zip(b.iter()).any(|(x, y)| x.abs_diff(*y) > 40)).count()
     };
@@ -836,4 +816,18 @@ fn ddgi_settings_buffers_and_probe_overlay_appear_in_the_lab() {
     let lines = changed(&dots, &rays);
     println!("probe {selected}'s rays changed {lines} pixels");
     assert!(lines > 50, "the probe's rays are drawn: {lines} pixels changed");
+}
+
+/// The viewport's pixels (but for its caption rows and edges) as the harness renders them, and
+/// the whole image.
+fn viewport_pixels(h: &mut Harness<'static, GiLabApp>) -> (Vec<[u8; 4]>, image::RgbaImage) {
+    let rect = h.state().state.viewport_rect;
+    let image = h.render().expect("the harness renders");
+    let mut pixels = Vec::new();
+    for y in (rect.min.y + 40.0) as u32..(rect.max.y - 40.0) as u32 {
+        for x in (rect.min.x + 10.0) as u32..(rect.max.x - 10.0) as u32 {
+            pixels.push(image.get_pixel(x, y).0);
+        }
+    }
+    (pixels, image)
 }

@@ -4,6 +4,7 @@
 //! the probe and draws its rays of the frame (2019 §3.1) to their hits, coloured by the
 //! radiance they brought back (magenta: a back face; grey and short: a miss).
 
+use super::viewport::caption;
 use crate::ui::state::State;
 
 /// How far from a dot a click selects its probe (points).
@@ -33,16 +34,7 @@ pub(super) fn pick(st: &State, rect: egui::Rect, click: egui::Pos2) -> Option<us
 pub(super) fn probes_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
     let Ok(l) = &st.lab else { return };
     let painter = ui.painter_at(rect);
-    let text = |s: String| {
-        let galley = painter.layout_no_wrap(s, egui::FontId::proportional(14.0), egui::Color32::WHITE);
-        let pos = rect.left_bottom() + egui::vec2(8.0, -8.0 - galley.size().y);
-        painter.rect_filled(
-            egui::Rect::from_min_size(pos, galley.size()).expand(4.0),
-            3.0,
-            egui::Color32::from_black_alpha(200),
-        );
-        painter.galley(pos, galley, egui::Color32::WHITE);
-    };
+    let text = |s: String| caption(&painter, rect, s);
     let Some(o) = l.renderer.ddgi_overlay_later(st.overlays.ddgi_selected.is_some()) else {
         text("DDGI probes: pick the DDGI technique (gather: DDGI probes) to see its probes".into());
         return;

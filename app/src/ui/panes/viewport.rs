@@ -185,13 +185,7 @@ fn hcb_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
     let Ok(l) = &st.lab else { return };
     let painter = ui.painter_at(rect);
     // On a dark plate, so that it stays readable over the dots.
-    let text = |s: String| {
-        let galley = painter.layout_no_wrap(s, egui::FontId::proportional(14.0), egui::Color32::WHITE);
-        let pos = rect.left_top() + egui::vec2(8.0, 8.0);
-        let plate = egui::Rect::from_min_size(pos, galley.size()).expand(4.0);
-        painter.rect_filled(plate, 3.0, egui::Color32::from_black_alpha(200));
-        painter.galley(pos, galley, egui::Color32::WHITE);
-    };
+    let text = |s: String| caption(&painter, rect, s);
     let Some(stats) = l.renderer.hcb_stats_later() else {
         text("HCB samples: pick the hierarchical coherence buffer (Nguyen) to see its samples".into());
         return;
@@ -217,13 +211,7 @@ fn hcb_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
 fn records_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
     let Ok(l) = &st.lab else { return };
     let painter = ui.painter_at(rect);
-    let text = |s: String| {
-        let galley = painter.layout_no_wrap(s, egui::FontId::proportional(14.0), egui::Color32::WHITE);
-        let pos = rect.left_bottom() + egui::vec2(8.0, -8.0 - galley.size().y);
-        let plate = egui::Rect::from_min_size(pos, galley.size()).expand(4.0);
-        painter.rect_filled(plate, 3.0, egui::Color32::from_black_alpha(200));
-        painter.galley(pos, galley, egui::Color32::WHITE);
-    };
+    let text = |s: String| caption(&painter, rect, s);
     let r = &l.renderer;
     let records = r.gautron_state_later(true).and_then(|(_, records)| records);
     let Some(records) = records.filter(|_| {
@@ -261,6 +249,18 @@ fn records_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
     ));
 }
 
+/// A line of text on a dark plate at the viewport's bottom left (the overlays' captions).
+pub(super) fn caption(painter: &egui::Painter, rect: egui::Rect, s: String) {
+    let galley = painter.layout_no_wrap(s, egui::FontId::proportional(14.0), egui::Color32::WHITE);
+    let pos = rect.left_bottom() + egui::vec2(8.0, -8.0 - galley.size().y);
+    painter.rect_filled(
+        egui::Rect::from_min_size(pos, galley.size()).expand(4.0),
+        3.0,
+        egui::Color32::from_black_alpha(200),
+    );
+    painter.galley(pos, galley, egui::Color32::WHITE);
+}
+
 /// Level colours of the Soler samples overlay (level k: `LEVEL_COLOURS[k % 6]`).
 const LEVEL_COLOURS: [egui::Color32; 6] = [
     egui::Color32::from_rgb(255, 255, 255),
@@ -277,16 +277,7 @@ const LEVEL_COLOURS: [egui::Color32; 6] = [
 fn soler_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
     let Ok(l) = &st.lab else { return };
     let painter = ui.painter_at(rect);
-    let text = |s: String| {
-        let galley = painter.layout_no_wrap(s, egui::FontId::proportional(14.0), egui::Color32::WHITE);
-        let pos = rect.left_bottom() + egui::vec2(8.0, -8.0 - galley.size().y);
-        painter.rect_filled(
-            egui::Rect::from_min_size(pos, galley.size()).expand(4.0),
-            3.0,
-            egui::Color32::from_black_alpha(200),
-        );
-        painter.galley(pos, galley, egui::Color32::WHITE);
-    };
+    let text = |s: String| caption(&painter, rect, s);
     let Some(pixel) = st.probes.pinned.first().map(|p| p.pixel).or(st.probes.hover) else {
         text("Soler samples: hover the image (or pin a probe) to see the samples behind a pixel".into());
         return;
