@@ -4,7 +4,7 @@
 //! the probe and draws its rays of the frame (2019 §3.1) to their hits, coloured by the
 //! radiance they brought back (magenta: a back face; grey and short: a miss).
 
-use super::viewport::caption;
+use super::caption;
 use crate::ui::state::State;
 
 /// How far from a dot a click selects its probe (points).

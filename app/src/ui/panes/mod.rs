@@ -154,3 +154,15 @@ fn navigate(l: &mut crate::ui::lab::Lab, ui: &egui::Ui, response: &egui::Respons
         }
     }
 }
+
+/// A line of text on a dark plate at the viewport's bottom left (the overlays' captions).
+fn caption(painter: &egui::Painter, rect: egui::Rect, s: String) {
+    let galley = painter.layout_no_wrap(s, egui::FontId::proportional(14.0), egui::Color32::WHITE);
+    let pos = rect.left_bottom() + egui::vec2(8.0, -8.0 - galley.size().y);
+    painter.rect_filled(
+        egui::Rect::from_min_size(pos, galley.size()).expand(4.0),
+        3.0,
+        egui::Color32::from_black_alpha(200),
+    );
+    painter.galley(pos, galley, egui::Color32::WHITE);
+}

@@ -1,6 +1,7 @@
 //! The viewport pane: the rendered image, camera navigation, probes and the VPL, HCB and A/B
 //! overlays.
 
+use super::caption;
 use crate::ui::ERROR;
 use crate::ui::state::State;
 
@@ -247,18 +248,6 @@ fn records_overlay(st: &State, ui: &mut egui::Ui, rect: egui::Rect) {
         "{} irradiance records ({stale} stale, orange), dots coloured by E_k (brightest {brightest:.3e} W/m² at full colour), circles a·R_k with a = {a}",
         records.len()
     ));
-}
-
-/// A line of text on a dark plate at the viewport's bottom left (the overlays' captions).
-pub(super) fn caption(painter: &egui::Painter, rect: egui::Rect, s: String) {
-    let galley = painter.layout_no_wrap(s, egui::FontId::proportional(14.0), egui::Color32::WHITE);
-    let pos = rect.left_bottom() + egui::vec2(8.0, -8.0 - galley.size().y);
-    painter.rect_filled(
-        egui::Rect::from_min_size(pos, galley.size()).expand(4.0),
-        3.0,
-        egui::Color32::from_black_alpha(200),
-    );
-    painter.galley(pos, galley, egui::Color32::WHITE);
 }
 
 /// Level colours of the Soler samples overlay (level k: `LEVEL_COLOURS[k % 6]`).
