@@ -116,6 +116,7 @@ impl Renderer {
         let direct_view = self.direct_light(&mut enc, &state, (view_proj, gbuffer_key));
 
         // Stages 3–7: the indirect light of the stage choices' steps, then the near field's.
+        let scale = self.scale();
         let f = FrameInputs {
             ctx: &ctx,
             scene: &self.scene,
@@ -127,7 +128,7 @@ impl Renderer {
             view_proj,
             gbuffer: &self.gbuffer.targets.views,
             radius: self.bounds.radius(),
-            scale: self.scale_radius(),
+            scale: scale.0,
             center: self.bounds.center(),
             height: self.height,
             gbuffer_size: (self.width, self.height),
@@ -139,7 +140,7 @@ impl Renderer {
             views: light_view_list(&state, self.bounds),
             rotating_sky: self.rotating_sky(),
             sky_lights: self.sky_lights.count(),
-            room: match self.scale().1 {
+            room: match scale.1 {
                 crate::scale::ScaleSource::Room(b) => Some(b),
                 crate::scale::ScaleSource::Model => None,
             },

@@ -326,8 +326,8 @@ impl DdgiStage {
         let ctx = f.ctx;
         let s = &f.settings.ddgi;
         self.follow(f);
-        let stale = self.shade.stale();
-        let shade = self.shade.buffers(ctx).clone();
+        // The lights' buffers are made again when they changed: the trace's group with them.
+        let remake = self.shade.stale() || self.trace_group.is_none();
         let Some(p) = self.probes.as_mut() else {
             return crate::passes::view(&self.indirect, "ddgi.indirect");
         };
@@ -353,7 +353,8 @@ impl DdgiStage {
         ctx.queue.upload(&p.update, 0, bytemuck::bytes_of(&update));
         let grid = DdgiGridParams::new(&p.key.grid, s, p.irradiance.0);
         ctx.queue.upload(&p.grid, 0, bytemuck::bytes_of(&grid));
-        if stale || self.trace_group.is_none() {
+        if remake {
+            let shade = self.shade.buffers(ctx);
             self.trace_group = Some(TRACE_BINDINGS.group(
                 &ctx.device,
                 &self.trace.layout,
@@ -465,11 +466,5 @@ impl DdgiStage {
     pub fn atlas_layout(&self) -> Option<((u32, u32), (u32, u32))> {
         let p = self.probes.as_ref()?;
         Some(((p.key.irradiance_texels, p.irradiance.0), (p.key.distance_texels, p.distance.0)))
-    }
-
-    /// The probes' place on the grid with its offset, for the overlay: read back by the
-    /// caller; here the grid's own place of probe `i`.
-    pub fn probe_position(&self, i: usize) -> Option<Vec3> {
-        Some(self.grid()?.position(i))
     }
 }

@@ -208,7 +208,9 @@ impl ShadeLights {
         PtShade {
             eps: Vec4::new(self.eps, 0.0, 0.0, 0.0),
             counts: [lights, emitters, sky_size.0, sky_size.1],
-            config: [0, 0, 0, self.sky_flags()],
+            // Whether the sky is drawn behind the scene is the camera's (`PtParams`), not the
+            // shading's: left out, so that `sky_background` never makes these buffers stale.
+            config: [0, 0, 0, self.sky_flags() & !SKY_BACKGROUND],
             sky: Vec4::new(0.0, 0.0, 0.0, sky_rot),
             sky_more,
             sky_total: Vec4::new(sky_total, 0.0, 0.0, 0.0),
