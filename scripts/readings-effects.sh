@@ -44,7 +44,8 @@ knecht.merge-order           knecht-cornell-256             temporal.order      
 gautron.border-cosine        gautron-ic-splatting           gautron.border_compensation CosineWeighted  Paper
 gautron.weight-clamp         gautron-ic-splatting           gautron.weight_clamp        100             1000000
 gautron.glossy-receiver      gautron-ic-splatting           gautron.receiver            Glossy          DiffuseOnly
-ddgi.glossy-receiver         ddgi-probes                    ddgi.receiver               Glossy          DiffuseOnly
+ddgi.glossy-receiver         ddgi-probes                    ddgi.receiver               Glossy          DiffuseOnly     ddgi.infinite_bounces=false
+ddgi.cold-start              ddgi-probes                    ddgi.running_mean_start     true            false           ddgi.infinite_bounces=false
 gautron.r-clamps             gautron-ic-splatting           gautron.r_clamps            true            false
 gautron.in-front-tolerance   gautron-ic-splatting           gautron.in_front_tolerance  0.05            0
 gautron.neighbour-clamping   gautron-ic-splatting           gautron.neighbour_clamping  true            false

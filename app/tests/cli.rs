@@ -567,6 +567,8 @@ fn bench_scenes_lists_every_scene_with_each_technique() {
         .args(["bench", "--suite", "scenes", "--size", "32x32", "--frames", "1", "--json"])
         // Every technique from few VPLs and points: the suite's rows, not its figures, are tested.
         .args(["--set", "vpl.count=16", "--set", "ism.points=16384", "--set", "direct.shadow_map_size=256"])
+        .args(["--set", "ddgi.probes_x=4", "--set", "ddgi.probes_y=2", "--set", "ddgi.probes_z=4"])
+        .args(["--set", "ddgi.rays_per_probe=32"])
         .output()
         .expect("runs");
     assert!(o.status.success(), "bench failed: {}", String::from_utf8_lossy(&o.stderr));
@@ -578,7 +580,8 @@ fn bench_scenes_lists_every_scene_with_each_technique() {
     }
     for r in rows {
         let times = r["frame_ms"].as_array().expect("frame times");
-        assert_eq!(times.len(), 4, "{r}");
+        // The four papers' presets and DDGI's.
+        assert_eq!(times.len(), 5, "{r}");
         for t in times {
             let ms = t[1]["Ok"].as_f64().unwrap_or_else(|| panic!("{}: {}", r["scene"], t));
             assert!(ms > 0.0, "{r}");

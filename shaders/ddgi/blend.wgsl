@@ -36,28 +36,47 @@ fn ddgi_ray_dir(r: u32) -> vec3<f32> {
     return normalize(ddgi.rotation * ddgi_fibonacci(r, ddgi.counts.y));
 }
 
+// The frame's ray directions, a chunk at a time: every invocation of a workgroup reads the
+// same rays, so each direction is computed once per workgroup rather than once per texel.
+var<workgroup> ddgi_dirs: array<vec3<f32>, 64>;
+
+// Loads rays `base`.. `base + 63` of the frame's lattice into `ddgi_dirs` (`lane`: the
+// invocation's index in its workgroup) and returns how many of them exist.
+fn ddgi_load_dirs(base: u32, lane: u32) -> u32 {
+    workgroupBarrier();
+    if (base + lane < ddgi.counts.y) {
+        ddgi_dirs[lane] = ddgi_ray_dir(base + lane);
+    }
+    workgroupBarrier();
+    return min(64u, ddgi.counts.y - base);
+}
+
 @compute @workgroup_size(8, 8)
-fn cs_irradiance(@builtin(global_invocation_id) id: vec3<u32>) {
+fn cs_irradiance(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
     let n = ddgi.counts.z;
     let width = ddgi.tiles.x * (n + 2u);
     let c = ddgi_interior(id.xy, n, ddgi.tiles.x);
-    if (c.w == 0u) {
-        return;
-    }
+    // Every invocation takes part in loading the directions (barriers in uniform control
+    // flow); a border texel or one past the atlas writes nothing.
     let d = ddgi_texel_direction(c.y, c.z, n);
     var sum = vec3<f32>(0.0);
     var w = 0.0;
-    for (var r = 0u; r < ddgi.counts.y; r = r + 1u) {
-        let ray = ddgi_rays[c.x * ddgi.counts.y + r];
-        let k = max(dot(d, ddgi_ray_dir(r)), 0.0);
-        if (k > 0.0) {
-            // Back faces carry no light (they are inside geometry, 2021 §5.2).
-            sum = sum + select(ray.rgb, vec3<f32>(0.0), ray.w < 0.0) * k;
-            w = w + k;
+    for (var base = 0u; base < ddgi.counts.y; base = base + 64u) {
+        let m = ddgi_load_dirs(base, lane);
+        if (c.w != 0u) {
+            for (var k = 0u; k < m; k = k + 1u) {
+                let c_k = max(dot(d, ddgi_dirs[k]), 0.0);
+                if (c_k > 0.0) {
+                    let ray = ddgi_rays[c.x * ddgi.counts.y + base + k];
+                    // Back faces carry no light (they are inside geometry, 2021 §5.2).
+                    sum = sum + select(ray.rgb, vec3<f32>(0.0), ray.w < 0.0) * c_k;
+                    w = w + c_k;
+                }
+            }
         }
     }
     let i = id.y * width + id.x;
-    if (w > 0.0) {
+    if (c.w != 0u && w > 0.0) {
         var v = sum / w;
         if (ddgi.tiles.z != 0u) {
             v = mix(v, ddgi_irradiance[i].rgb, clamp(ddgi.blend.x, 0.0, 1.0));
@@ -67,31 +86,34 @@ fn cs_irradiance(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 @compute @workgroup_size(8, 8)
-fn cs_distance(@builtin(global_invocation_id) id: vec3<u32>) {
+fn cs_distance(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
     let n = ddgi.counts.w;
     let width = ddgi.tiles.y * (n + 2u);
     let c = ddgi_interior(id.xy, n, ddgi.tiles.y);
-    if (c.w == 0u) {
-        return;
-    }
     let d = ddgi_texel_direction(c.y, c.z, n);
     var sum = vec2<f32>(0.0);
     var w = 0.0;
-    for (var r = 0u; r < ddgi.counts.y; r = r + 1u) {
-        let ray = ddgi_rays[c.x * ddgi.counts.y + r];
-        let k = pow(max(dot(d, ddgi_ray_dir(r)), 0.0), ddgi.blend.y);
-        if (k > 0.0) {
-            var t = min(abs(ray.w), ddgi.blend.z);
-            // A back face counts a fifth of its distance (2021 §5.3).
-            if (ray.w < 0.0) {
-                t = t * 0.2;
+    for (var base = 0u; base < ddgi.counts.y; base = base + 64u) {
+        let m = ddgi_load_dirs(base, lane);
+        if (c.w != 0u) {
+            for (var k = 0u; k < m; k = k + 1u) {
+                let cosine = dot(d, ddgi_dirs[k]);
+                if (cosine > 0.0) {
+                    let weight = pow(cosine, ddgi.blend.y);
+                    let ray = ddgi_rays[c.x * ddgi.counts.y + base + k];
+                    var t = min(abs(ray.w), ddgi.blend.z);
+                    // A back face counts a fifth of its distance (2021 §5.3).
+                    if (ray.w < 0.0) {
+                        t = t * 0.2;
+                    }
+                    sum = sum + vec2<f32>(t, t * t) * weight;
+                    w = w + weight;
+                }
             }
-            sum = sum + vec2<f32>(t, t * t) * k;
-            w = w + k;
         }
     }
     let i = id.y * width + id.x;
-    if (w > 0.0) {
+    if (c.w != 0u && w > 0.0) {
         var v = sum / w;
         if (ddgi.tiles.z != 0u) {
             v = mix(v, ddgi_distance[i].xy, clamp(ddgi.blend.x, 0.0, 1.0));

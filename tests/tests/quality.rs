@@ -43,12 +43,13 @@ fn the_quality_table_stays_within_its_measured_bounds() {
     // winner's normal only the light of the sub-pixels that face that way, and stands for the
     // winner's surface over its block): soler 0.2584 → 0.2666, for the chair's floor shadow no
     // longer lit at 300× the truth (0.594 → 0.481 below); the mix 0.0456 (unchanged).
-    // Issue #56's row: DDGI's probes (ddgi-probes, 8×4×8 probes, 128 rays, one bounce like the
-    // truth, the glossy receiver ⚠[ddgi.glossy-receiver]) measured 0.1054 on lavapipe (0.1075
-    // with the papers' diffuse receiver); the goal, 0.06, is not met: the bound is the
-    // measurement plus a margin. With 12³ probes 0.086, 20³ 0.075 (diffuse receiver); a
-    // diffuse receiver alone costs Knecht's row 0.048 → 0.069.
-    within(&rows, &[0.05, 0.035, 0.06, 0.03, 0.275, 0.05, 0.06, 0.112]);
+    // Issue #56's row: DDGI's probes (ddgi-probes, one bounce like the truth, the glossy
+    // receiver ⚠[ddgi.glossy-receiver]) measured 0.1054 with 8×4×8 probes; of that, 0.105 →
+    // 0.089 was the first frame's noise kept at weight α^15 (⚠[ddgi.cold-start]: the running
+    // mean from a cold start), the rest the grid's spacing (converged: 8×4×8 0.083, 8×8×8
+    // 0.067, 12³ 0.050, 16³ 0.044). With 12×12×12 probes and the running mean: 0.0566 after 16
+    // frames (11³ 0.0580, 12×8×12 0.0594, 10³ at 192 rays 0.0589): the goal, 0.06, is the bound.
+    within(&rows, &[0.05, 0.035, 0.06, 0.03, 0.275, 0.05, 0.06, 0.06]);
     // The exact-VPL reference is closer to the ground truth than the 256 VPLs of Knecht's
     // configuration, and the HCB closer to the per-pixel gather than to the ground truth.
     assert!(rows[1].flip < rows[0].flip, "{} vs {}", rows[1].flip, rows[0].flip);
@@ -75,9 +76,9 @@ fn the_box_under_a_white_sky_stays_within_its_measured_bounds() {
     real_scene_table_within(
         &gi_lab_tests::white_sky_box(),
         "sky_1bounce_128_2048spp.exr",
-        // DDGI (issue #56): measured 0.0970 (0.0999 with the diffuse receiver); bound the
-        // measurement plus a margin.
-        [0.10, 0.08, 0.10, 0.025, 0.20, 0.10, 0.10, 0.105],
+        // DDGI (issue #56): measured 0.0708 with 12³ probes and the running mean from a cold
+        // start (8×4×8 as printed: 0.0970); bound the measurement plus a margin.
+        [0.10, 0.08, 0.10, 0.025, 0.20, 0.10, 0.10, 0.075],
     );
 }
 
@@ -114,13 +115,16 @@ fn the_chair_seen_from_behind_stays_within_its_measured_bounds() {
     // shadow, 0.5941 → 0.4808 (against the screen-visible truth 0.366 → 0.185, the box's
     // 0.178 → 0.191); the near/far mix 0.1914 → 0.1592.
     let scene = gi_lab_tests::test_scene("chair-behind.glb");
-    // DDGI (issue #56) measured 0.5912: its diffuse receiver loses the wood's glint of the
-    // sunlit floor, as the HCB's and Gautron's did before their glossy receivers (0.47, 0.43);
-    // bound the measurement plus a margin.
+    // DDGI (issue #56) measured 0.5912 with the papers' diffuse receiver, which loses the
+    // wood's glint of the sunlit floor as the HCB's and Gautron's did before their glossy
+    // receivers (0.47, 0.43); with its glossy receiver (⚠[ddgi.glossy-receiver]) 0.336, and
+    // with 12³ probes and the running mean 0.3336: the probes' cosine lobe about the mirror
+    // direction is far wider than the wood's, and lights the floor's shadow (about 2 against
+    // the truth's 0.1). Bound the measurement plus a margin.
     real_scene_table_within(
         &scene,
         "chair_1bounce_128_2048spp.exr",
-        [0.17, 0.115, 0.20, 0.065, 0.50, 0.20, 0.20, 0.62],
+        [0.17, 0.115, 0.20, 0.065, 0.50, 0.20, 0.20, 0.35],
     );
 }
 

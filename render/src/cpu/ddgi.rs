@@ -314,6 +314,14 @@ impl Default for DdgiParams {
     }
 }
 
+/// The share of a texel's old value kept at the `updates`-th update of a probe grid (0 on
+/// the first, whose old values count for nothing): α as printed (2019 §3.3), or with
+/// `running_mean` min(α, k/(k+1)), which makes the first 1/(1 − α) updates an even mean of
+/// their frames (⚠[ddgi.cold-start], `ddgi.running_mean_start`).
+pub fn blend_share(hysteresis: f32, running_mean: bool, updates: u32) -> f32 {
+    if running_mean { hysteresis.min(updates as f32 / (updates as f32 + 1.0)) } else { hysteresis }
+}
+
 /// A probe's irradiance tile updated from its rays (2019 §3.3, Eq. 3): each interior texel
 /// of direction d becomes lerp(Σ max(0, d·ω) L / Σ max(0, d·ω), old, α); back-face hits
 /// carry no light (they are inside geometry, 2021 §5.2). Borders refilled.
@@ -607,6 +615,43 @@ mod tests {
         update_irradiance(&mut slow, 0, &rays, 0.9);
         let v = slow.lookup(0, Vec3::Y);
         assert!((v.x - (0.1 * up.x + 0.9 * 2.0)).abs() < 0.02, "{v}");
+    }
+
+    #[test]
+    fn a_cold_start_averages_its_frames_evenly_then_keeps_alpha() {
+        // Frame k's rays all carry radiance k + 1: with the running mean each texel holds the
+        // mean of the frames so far until k/(k+1) reaches α; as printed, the first frame's
+        // value keeps weight α^k.
+        let frame = |k: u32| -> Vec<ProbeRay> {
+            (0..64)
+                .map(|i| ProbeRay {
+                    dir: spherical_fibonacci(i, 64),
+                    radiance: Vec3::splat(k as f32 + 1.0),
+                    distance: 1.0,
+                    backface: false,
+                })
+                .collect()
+        };
+        let alpha = 0.9;
+        let (mut even, mut printed) = (Atlas::new(4, 1, Vec3::ZERO), Atlas::new(4, 1, Vec3::ZERO));
+        for k in 0..9 {
+            update_irradiance(&mut even, 0, &frame(k), blend_share(alpha, true, k));
+            update_irradiance(
+                &mut printed,
+                0,
+                &frame(k),
+                blend_share(alpha, false, k).min(if k == 0 { 0.0 } else { 1.0 }),
+            );
+            let mean = (1..=k + 1).sum::<u32>() as f32 / (k + 1) as f32;
+            let got = even.lookup(0, Vec3::Y).x;
+            assert!((got - mean).abs() < 1e-4, "frame {k}: {got} vs the mean {mean}");
+        }
+        // Nine frames as printed: 1·0.9^8 + Σ 0.1·0.9^(8−k)(k+1) is well below the mean, 5.
+        let p = printed.lookup(0, Vec3::Y).x;
+        assert!(p < 4.0, "as printed the first frames keep their weight: {p}");
+        assert_eq!(blend_share(alpha, true, 9), alpha, "from k/(k+1) ≥ α on, α");
+        assert_eq!(blend_share(alpha, true, 1000), alpha);
+        assert_eq!(blend_share(alpha, true, 0), 0.0);
     }
 
     #[test]

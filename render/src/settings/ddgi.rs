@@ -27,14 +27,15 @@ settings_group! {
         /// What the grid spans (2019 §3), inset by half a cell so that no probe sits on a wall.
         grid_fit: GridFit = GridFit::Room,
         unit "", symbol "", range 0..=1, cost "free", history true;
-        /// Probes along x (2019 §3; the bench's production grid is 16×8×16).
-        probes_x: u32 = 8,
+        /// Probes along x (2019 §3; the bench's production grid is 16×8×16; 12 a side meets
+        /// the box's goal, `docs/quality-real-scenes.md`).
+        probes_x: u32 = 12,
         unit "probes", symbol "", range 2..=64, cost "every probe traces its rays each frame", history true;
         /// Probes along y (up).
-        probes_y: u32 = 4,
+        probes_y: u32 = 12,
         unit "probes", symbol "", range 2..=64, cost "every probe traces its rays each frame", history true;
         /// Probes along z.
-        probes_z: u32 = 8,
+        probes_z: u32 = 12,
         unit "probes", symbol "", range 2..=64, cost "every probe traces its rays each frame", history true;
         /// Rays each probe casts per frame, on a spherical Fibonacci lattice under a new random
         /// rotation every frame (2019 §3.1; the paper's 256 at production, 144 in its figures).
@@ -52,6 +53,13 @@ settings_group! {
         /// lower follows changes sooner and shows more noise).
         hysteresis: f32 = 0.97,
         unit "", symbol "α", range 0.0..=0.999, cost "free", history false;
+        /// A cold grid converges as a running mean. ⚠[ddgi.cold-start] The papers blend with α
+        /// from a probe's first frame on (2019 §3.3, Eq. 3–4), so the first frame's rays keep
+        /// weight α^k after k frames (0.63 after 16 at α = 0.97) and a new grid shows their
+        /// noise for about 1/(1 − α) frames; on, the k-th update keeps min(α, k/(k+1)) of the
+        /// old value, an even mean of every frame until that reaches α. Off: as printed.
+        running_mean_start: bool = true,
+        unit "", symbol "", range 0..=1, cost "free", history false;
         /// The exponent of the distance blend's cosine weight (2019 §3.3, "depth sharpness" 50).
         distance_sharpness: f32 = 50.0,
         unit "", symbol "", range 1.0..=200.0, cost "free", history true;

@@ -10,13 +10,14 @@ use gi_render::Renderer;
 use crate::cli::compare::load_image;
 use crate::error::CliError;
 
-/// The shipped technique presets, one per paper, that `bench --suite scenes` and `gi-lab
-/// study` compare when no preset is named: (name, RON text).
-pub const TECHNIQUE_PRESETS: [(&str, &str); 4] = [
+/// The shipped technique presets, one per paper and DDGI's probes (issue #56), that `bench
+/// --suite scenes` and `gi-lab study` compare when no preset is named: (name, RON text).
+pub const TECHNIQUE_PRESETS: [(&str, &str); 5] = [
     ("knecht", include_str!("../../../../presets/knecht-cornell-256.ron")),
     ("nguyen", include_str!("../../../../presets/nguyen-hcb.ron")),
     ("soler", include_str!("../../../../presets/soler-quarter-4-64.ron")),
     ("gautron", include_str!("../../../../presets/gautron-ic-splatting.ron")),
+    ("ddgi", include_str!("../../../../presets/ddgi-probes.ron")),
 ];
 
 /// Per-pass statistics of a benchmark run.

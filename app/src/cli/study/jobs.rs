@@ -238,6 +238,12 @@ impl Plan {
         let mut presets = Vec::new();
         let mut preset_settings = Vec::new();
         for (name, file, mut s) in loaded {
+            // Like for like (issue #56): DDGI's probes add a bounce every frame; against a
+            // one-bounce truth they take one, as the quality table's row does. The page lists
+            // it among the preset's changes; `--set ddgi.infinite_bounces=true` keeps them.
+            if spec.bounces == 1 && s.pipeline.gather == gi_render::settings::pipeline::Gather::Probes {
+                s.ddgi.infinite_bounces = false;
+            }
             for o in &spec.overrides {
                 s.apply_override(o).map_err(|e| CliError::input(format!("--set {o}: {e}")))?;
             }
@@ -302,5 +308,36 @@ mod tests {
         assert_eq!(slug("Hotel Room (v2)", &[]), "hotel-room-v2");
         assert_eq!(slug("a", &["a".into(), "a-2".into()]), "a-3");
         assert_eq!(slug("%%", &[]), "x");
+    }
+
+    #[test]
+    fn ddgi_takes_one_bounce_against_a_one_bounce_truth_unless_told_otherwise() {
+        let spec = |bounces: u32, overrides: &[&str]| Spec {
+            scenes: Vec::new(),
+            unit_scale: 0.0,
+            presets: Vec::new(),
+            overrides: overrides.iter().map(|o| o.to_string()).collect(),
+            params: Vec::new(),
+            size: (32, 32),
+            frames: 1,
+            flicker_frames: 0,
+            bounces,
+            spp: 1,
+            budget_ms: None,
+            target_flip: None,
+        };
+        let bounces = |spec: &Spec| {
+            let plan = Plan::new(spec).expect("the plan");
+            let i = plan.presets.iter().position(|p| p.name == "ddgi").expect("the shipped presets hold DDGI's");
+            let knecht = plan.presets.iter().position(|p| p.name == "knecht").expect("and Knecht's");
+            assert_eq!(plan.preset_settings[knecht], {
+                let t = crate::cli::bench::run::TECHNIQUE_PRESETS[0].1;
+                gi_render::preset::load_lenient(t, "knecht").expect("loads").settings
+            });
+            plan.preset_settings[i].ddgi.infinite_bounces
+        };
+        assert!(!bounces(&spec(1, &[])), "one bounce against a one-bounce truth");
+        assert!(bounces(&spec(3, &[])), "infinite bounces against a truth of three");
+        assert!(bounces(&spec(1, &["ddgi.infinite_bounces=true"])), "--set wins");
     }
 }

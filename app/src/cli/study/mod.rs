@@ -35,7 +35,7 @@ pub struct StudyArgs {
     #[arg(long, default_value_t = 0.0)]
     pub unit_scale: f32,
     /// A RON preset (repeatable); the shipped technique presets (knecht, nguyen, soler,
-    /// gautron) when none is given.
+    /// gautron, ddgi) when none is given.
     #[arg(long = "preset")]
     pub presets: Vec<PathBuf>,
     /// Override a setting in every preset, e.g. --set direct.pcf_radius=2 (repeatable).

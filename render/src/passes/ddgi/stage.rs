@@ -344,7 +344,7 @@ impl DdgiStage {
             counts: [n, p.key.rays, p.key.irradiance_texels, p.key.distance_texels],
             layout: [p.irradiance.0, p.distance.0, (p.updates > 0) as u32, f.frame.wrapping_mul(0x9E37_79B9)],
             blend: Vec4::new(
-                s.hysteresis,
+                crate::cpu::ddgi::blend_share(s.hysteresis, s.running_mean_start, p.updates),
                 s.distance_sharpness,
                 s.max_distance * p.key.grid.spacing.max_element(),
                 0.0,
@@ -378,7 +378,7 @@ impl DdgiStage {
         timer.scope(ctx, enc, "ddgi.update", |e, slot| {
             blend.record(e, slot.and_then(|s| s.compute(true, true)), &p.blend_group, sizes, n)
         });
-        p.updates += 1;
+        p.updates = p.updates.saturating_add(1);
         let g = &f.gbuffer;
         let indirect = crate::passes::view(&self.indirect, "ddgi.indirect");
         let irradiance = crate::passes::view(&self.irradiance, "ddgi.irradiance");
