@@ -152,7 +152,7 @@ pub fn words(path: &str) -> Option<&'static str> {
         "ddgi.irradiance_texels" => "irradiance texels",
         "ddgi.distance_texels" => "distance texels",
         "ddgi.hysteresis" => "hysteresis",
-        "ddgi.running_mean_start" => "running mean from a cold start",
+        "ddgi.running_mean_start" => "cold-start mean",
         "ddgi.distance_sharpness" => "depth sharpness",
         "ddgi.max_distance" => "max ray distance",
         "ddgi.normal_bias" => "normal bias",
