@@ -35,6 +35,7 @@ COMMIT="$(git rev-parse --short HEAD)$(git diff --quiet HEAD -- render shaders a
 TABLE="$OUT/table.md"
 VIEWS="$OUT/views.md"
 : > "$VIEWS"
+: > "$TABLE"
 first=1
 while IFS='|' read -r name args light; do
   [ -z "$name" ] && continue
