@@ -46,6 +46,7 @@ gautron.weight-clamp         gautron-ic-splatting           gautron.weight_clamp
 gautron.glossy-receiver      gautron-ic-splatting           gautron.receiver            Glossy          DiffuseOnly
 ddgi.glossy-receiver         ddgi-probes                    ddgi.receiver               Glossy          DiffuseOnly     ddgi.infinite_bounces=false
 ddgi.cold-start              ddgi-probes                    ddgi.running_mean_start     true            false           ddgi.infinite_bounces=false
+ddgi.idle-probes             ddgi-probes                    ddgi.skip_inactive          true            false           ddgi.infinite_bounces=false
 gautron.r-clamps             gautron-ic-splatting           gautron.r_clamps            true            false
 gautron.in-front-tolerance   gautron-ic-splatting           gautron.in_front_tolerance  0.05            0
 gautron.neighbour-clamping   gautron-ic-splatting           gautron.neighbour_clamping  true            false

@@ -36,6 +36,14 @@ fn ddgi_ray_dir(r: u32) -> vec3<f32> {
     return normalize(ddgi.rotation * ddgi_fibonacci(r, ddgi.counts.y));
 }
 
+// Whether probe `p` traced only an inactive probe's few rays this frame (its state is still
+// the one the trace read; the state kernel runs last) with `ddgi.skip_inactive`: its tiles
+// are not blended, since it shades nothing (2021 §5.2).
+fn ddgi_skipped(p: u32) -> bool {
+    let skip = DDGI_CLASSIFY | DDGI_SKIP_INACTIVE;
+    return (ddgi_grid.counts.w & skip) == skip && ddgi_probes[p].w == DDGI_INACTIVE;
+}
+
 // The frame's ray directions, a chunk at a time: every invocation of a workgroup reads the
 // same rays, so each direction is computed once per workgroup rather than once per texel.
 var<workgroup> ddgi_dirs: array<vec3<f32>, 64>;
@@ -57,13 +65,14 @@ fn cs_irradiance(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_in
     let width = ddgi.tiles.x * (n + 2u);
     let c = ddgi_interior(id.xy, n, ddgi.tiles.x);
     // Every invocation takes part in loading the directions (barriers in uniform control
-    // flow); a border texel or one past the atlas writes nothing.
+    // flow); a border texel, one past the atlas or one of a skipped probe writes nothing.
+    let updated = c.w != 0u && !ddgi_skipped(c.x);
     let d = ddgi_texel_direction(c.y, c.z, n);
     var sum = vec3<f32>(0.0);
     var w = 0.0;
     for (var base = 0u; base < ddgi.counts.y; base = base + 64u) {
         let m = ddgi_load_dirs(base, lane);
-        if (c.w != 0u) {
+        if (updated) {
             for (var k = 0u; k < m; k = k + 1u) {
                 let c_k = max(dot(d, ddgi_dirs[k]), 0.0);
                 if (c_k > 0.0) {
@@ -76,7 +85,7 @@ fn cs_irradiance(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_in
         }
     }
     let i = id.y * width + id.x;
-    if (c.w != 0u && w > 0.0) {
+    if (updated && w > 0.0) {
         var v = sum / w;
         if (ddgi.tiles.z != 0u) {
             v = mix(v, ddgi_irradiance[i].rgb, clamp(ddgi.blend.x, 0.0, 1.0));
@@ -90,12 +99,13 @@ fn cs_distance(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invo
     let n = ddgi.counts.w;
     let width = ddgi.tiles.y * (n + 2u);
     let c = ddgi_interior(id.xy, n, ddgi.tiles.y);
+    let updated = c.w != 0u && !ddgi_skipped(c.x);
     let d = ddgi_texel_direction(c.y, c.z, n);
     var sum = vec2<f32>(0.0);
     var w = 0.0;
     for (var base = 0u; base < ddgi.counts.y; base = base + 64u) {
         let m = ddgi_load_dirs(base, lane);
-        if (c.w != 0u) {
+        if (updated) {
             for (var k = 0u; k < m; k = k + 1u) {
                 let cosine = dot(d, ddgi_dirs[k]);
                 if (cosine > 0.0) {
@@ -113,7 +123,7 @@ fn cs_distance(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invo
         }
     }
     let i = id.y * width + id.x;
-    if (c.w != 0u && w > 0.0) {
+    if (updated && w > 0.0) {
         var v = sum / w;
         if (ddgi.tiles.z != 0u) {
             v = mix(v, ddgi_distance[i].xy, clamp(ddgi.blend.x, 0.0, 1.0));
@@ -178,7 +188,10 @@ fn cs_probe_state(@builtin(global_invocation_id) id: vec3<u32>) {
     if (probe >= ddgi.counts.x) {
         return;
     }
-    let n = ddgi.counts.y;
+    // An inactive probe's rays of the frame: the first DDGI_INACTIVE_RAYS, on their own
+    // lattice (`cpu::ddgi::lattice`).
+    let stride = ddgi.counts.y;
+    let n = select(stride, min(stride, DDGI_INACTIVE_RAYS), ddgi_skipped(probe));
     let spacing = ddgi_grid.spacing.xyz;
     var back = 0u;
     var near = false;
@@ -187,11 +200,11 @@ fn cs_probe_state(@builtin(global_invocation_id) id: vec3<u32>) {
     var nearest_front = 3.4e38;
     var front_dir = vec3<f32>(0.0);
     for (var r = 0u; r < n; r = r + 1u) {
-        let w = ddgi_rays[probe * n + r].w;
+        let w = ddgi_rays[probe * stride + r].w;
         if (abs(w) >= 1e30) {
             continue;
         }
-        let d = ddgi_ray_dir(r);
+        let d = normalize(ddgi.rotation * ddgi_fibonacci(r, n));
         let t = abs(w);
         if (w < 0.0) {
             back = back + 1u;

@@ -84,5 +84,10 @@ struct DdgiGrid {
 const DDGI_CLASSIFY: u32 = 1u;
 const DDGI_RELOCATE: u32 = 2u;
 const DDGI_BOUNCES: u32 = 4u;
+const DDGI_SKIP_INACTIVE: u32 = 8u;
 // A probe record's w: 0 active, 1 inactive (`cpu::ddgi::ProbeState`).
 const DDGI_INACTIVE: f32 = 1.0;
+// The rays an inactive probe still casts a frame, on a lattice of their own, and the distance
+// its other rays record (`cpu::ddgi::{INACTIVE_RAYS, UNTRACED}`; 2021 §5.2).
+const DDGI_INACTIVE_RAYS: u32 = 32u;
+const DDGI_UNTRACED: f32 = 3.0e38;

@@ -4,7 +4,8 @@
 // light, one emitter point and one sky direction with shadow rays), plus, with
 // infinite bounces, its diffuse albedo times the probes' irradiance of the previous frame
 // (2019 §3.3). Each ray writes vec4(radiance toward the probe, distance):
-// a negative distance is a back face at −w (2021 §5.2), ≥ 1e30 a miss. `passes::ddgi::trace`.
+// a negative distance is a back face at −w (2021 §5.2), 1e30 a miss, DDGI_UNTRACED a ray an
+// inactive probe did not cast. `passes::ddgi::trace`.
 
 #import rays/shade.wgsl
 #import ddgi/lookup.wgsl
@@ -25,8 +26,20 @@ fn cs_trace(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let probe = i / rays;
     let r = i % rays;
+    // An inactive probe shades nothing (2021 §5.2): with `ddgi.skip_inactive` it casts only the first
+    // DDGI_INACTIVE_RAYS rays, on a lattice of that many, enough to see a surface come near
+    // and wake it; its other records say they were not traced (`cpu::ddgi::lattice`).
+    var lattice = rays;
+    let skip = DDGI_CLASSIFY | DDGI_SKIP_INACTIVE;
+    if ((ddgi_grid.counts.w & skip) == skip && ddgi_probes[probe].w == DDGI_INACTIVE) {
+        lattice = min(rays, DDGI_INACTIVE_RAYS);
+        if (r >= lattice) {
+            ddgi_rays[i] = vec4<f32>(0.0, 0.0, 0.0, DDGI_UNTRACED);
+            return;
+        }
+    }
     let o = ddgi_probe_position(probe);
-    let d = normalize(ddgi.rotation * ddgi_fibonacci(r, rays));
+    let d = normalize(ddgi.rotation * ddgi_fibonacci(r, lattice));
     let h = ray_trace(o, d, 0.0, 3.4e38, RAY_CLOSEST);
     if (!h.hit) {
         // The sky seen directly is stage 2's light (its directions light every pixel), as

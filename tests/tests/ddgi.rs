@@ -322,6 +322,50 @@ fn the_pixel_explanation_lists_the_eight_probes_of_the_twin() {
     assert!((shares - 1.0).abs() < 1e-5, "the shares sum to {shares}");
 }
 
+/// Probe rays against `PathTracer::reflected_direct` along the same ray: how many were
+/// compared, the worst relative difference of their light, and those that differ.
+#[derive(Default)]
+struct RayCheck {
+    compared: usize,
+    worst: f32,
+    bad: Vec<String>,
+}
+
+impl RayCheck {
+    /// Ray `k` of `probe` from `o` along `d`, as the GPU recorded it (`g`: radiance, distance).
+    fn check(
+        &mut self,
+        pt: &gi_render::cpu::pathtrace::PathTracer,
+        (probe, k): (usize, u32),
+        o: Vec3,
+        d: Vec3,
+        g: Vec4,
+    ) {
+        if g.w < 0.0 {
+            return;
+        }
+        match pt.reflected_direct(o, d, 1, 1) {
+            None => {
+                if g.w < 1e30 {
+                    self.bad.push(format!("probe {probe} ray {k}: GPU hit at {} where the CPU misses", g.w));
+                }
+            }
+            Some((t, l)) => {
+                if (g.w - t).abs() > 1e-3 * t.max(1.0) {
+                    // A different surface (an edge or a coincident face): not comparable.
+                    return;
+                }
+                self.compared += 1;
+                let e = ((g.truncate() - l).abs() / l.abs().max(Vec3::splat(0.01))).max_element();
+                self.worst = self.worst.max(e);
+                if e > 2e-3 {
+                    self.bad.push(format!("probe {probe} ray {k} at t {t}: GPU {} vs CPU {l}", g.truncate()));
+                }
+            }
+        }
+    }
+}
+
 /// The trace (2019 §3.1): every probe's ray of the first frame against the CPU path tracer's
 /// `reflected_direct` along the same ray from the same place (its closest hit and the light the
 /// hit sends back, lit by the scene's punctual lights with shadow rays: no random numbers
@@ -345,37 +389,15 @@ fn the_probe_rays_see_what_the_cpu_path_tracer_sees() {
         let records = read_vec4(&ctx, rays_buf);
         let pt = gi_render::cpu::pathtrace::PathTracer::new(&scene, 0.0);
         let n = 64u32;
-        let (mut compared, mut worst, mut bad) = (0, 0f32, Vec::new());
+        let mut rays = RayCheck::default();
         for probe in 0..grid.len() {
             let o = grid.position(probe);
             for k in 0..n {
-                let g = records[probe * n as usize + k as usize];
-                if g.w < 0.0 {
-                    continue;
-                }
                 let d = (stage.last_rotation * spherical_fibonacci(k, n)).normalize();
-                let cpu = pt.reflected_direct(o, d, 1, 1);
-                match cpu {
-                    None => {
-                        if g.w < 1e30 {
-                            bad.push(format!("probe {probe} ray {k}: GPU hit at {} where the CPU misses", g.w));
-                        }
-                    }
-                    Some((t, l)) => {
-                        if (g.w - t).abs() > 1e-3 * t.max(1.0) {
-                            // A different surface (an edge or a coincident face): not comparable.
-                            continue;
-                        }
-                        compared += 1;
-                        let e = ((g.truncate() - l).abs() / l.abs().max(Vec3::splat(0.01))).max_element();
-                        worst = worst.max(e);
-                        if e > 2e-3 {
-                            bad.push(format!("probe {probe} ray {k} at t {t}: GPU {} vs CPU {l}", g.truncate()));
-                        }
-                    }
-                }
+                rays.check(&pt, (probe, k), o, d, records[probe * n as usize + k as usize]);
             }
         }
+        let RayCheck { compared, worst, bad } = rays;
         eprintln!("{name}: {compared} rays compared, worst relative difference {worst:e}, {} off", bad.len());
         assert!(compared > grid.len() * 20, "{name}: only {compared} rays compared");
         assert!(
@@ -385,6 +407,95 @@ fn the_probe_rays_see_what_the_cpu_path_tracer_sees() {
             &bad[..bad.len().min(8)]
         );
     }
+}
+
+/// 2021 §5.2: an inactive probe shades nothing, so the next frame it is not updated. It casts
+/// only `INACTIVE_RAYS` rays, on a lattice of their own under the frame's rotation (the CPU
+/// path tracer sees the same along them), records its other rays as untraced, keeps both
+/// tiles as they were, and is classified again from its few rays as the twin classifies them;
+/// an active probe casts all its rays and is blended.
+#[test]
+fn inactive_probes_cast_a_few_rays_and_keep_their_tiles() {
+    use gi_render::cpu::ddgi::{INACTIVE_RAYS, UNTRACED, lattice};
+    let ctx = gpu();
+    let scene = gi_lab_tests::default_scene();
+    let settings =
+        ddgi_settings([6, 6, 6], &["ddgi.rays_per_probe=64", "ddgi.infinite_bounces=false", "ddgi.relocation=false"]);
+    let backface_ratio = settings.ddgi.backface_ratio;
+    let mut r = gi_render::Renderer::new(ctx.clone(), scene.clone(), settings, 32, 32).expect("renderer");
+    r.clock.playing = false;
+    r.render_frame();
+    let read_all = |r: &gi_render::Renderer| {
+        let (grid, [states, irr, dist, rays]) = r.ddgi().expect("the DDGI stage").buffers().expect("buffers");
+        (grid, [states, irr, dist, rays].map(|b| read_vec4(&ctx, b)))
+    };
+    let (grid, [states, irr, dist, _]) = read_all(&r);
+    let inactive: Vec<bool> = states.iter().map(|s| s.w > 0.5).collect();
+    let idle = inactive.iter().filter(|i| **i).count();
+    assert!(idle > 0 && idle < grid.len(), "{idle} of {} probes inactive after the first frame", grid.len());
+    r.render_frame();
+    let rotation = r.ddgi().expect("the DDGI stage").last_rotation;
+    let (_, [states_after, irr_after, dist_after, records]) = read_all(&r);
+    let ((irr_n, _), (dist_n, _)) = r.ddgi().and_then(|s| s.atlas_layout()).expect("layout");
+    let tiles = |n: u32| Atlas::new(n, grid.len(), Vec3::ZERO);
+    let (irr_tiles, dist_tiles) = (tiles(irr_n), tiles(dist_n));
+    let tile_changed = |a: &Atlas, before: &[Vec4], after: &[Vec4], p: usize| {
+        (0..a.tile()).any(|ty| {
+            (0..a.tile()).any(|tx| {
+                let (x, y) = a.texel(p, tx, ty);
+                let i = (y * a.width() + x) as usize;
+                before[i] != after[i]
+            })
+        })
+    };
+    let pt = gi_render::cpu::pathtrace::PathTracer::new(&scene, 0.0);
+    let n = 64u32;
+    let mut rays = RayCheck::default();
+    for p in 0..grid.len() {
+        let record = |k: u32| records[p * n as usize + k as usize];
+        let m = lattice(n, |k| Some(record(k).w));
+        let changed = tile_changed(&irr_tiles, &irr, &irr_after, p) || tile_changed(&dist_tiles, &dist, &dist_after, p);
+        if !inactive[p] {
+            assert_eq!(m, n, "active probe {p} casts every ray");
+            assert!(changed, "active probe {p}'s tiles were blended");
+            continue;
+        }
+        assert_eq!(m, INACTIVE_RAYS, "inactive probe {p}");
+        assert!((m..n).all(|k| record(k).w >= UNTRACED), "inactive probe {p}'s other rays are untraced");
+        assert!((0..m).all(|k| record(k).w < UNTRACED), "inactive probe {p}'s few rays are cast");
+        assert!(!changed, "inactive probe {p}'s tiles keep their values");
+        let mut few = Vec::new();
+        for k in 0..m {
+            let d = (rotation * spherical_fibonacci(k, m)).normalize();
+            let g = record(k);
+            rays.check(&pt, (p, k), grid.position(p), d, g);
+            let hit = g.w.abs() < 1e30;
+            few.push(ProbeRay {
+                dir: d,
+                radiance: g.truncate(),
+                distance: if hit { g.w.abs() } else { f32::INFINITY },
+                backface: g.w < 0.0,
+            });
+        }
+        let state = if states_after[p].w > 0.5 { ProbeState::Inactive } else { ProbeState::Active };
+        assert_eq!(state, classify(&few, grid.spacing, backface_ratio), "probe {p} classified from its few rays");
+    }
+    let RayCheck { compared, worst, bad } = rays;
+    eprintln!("{idle} inactive probes: {compared} of their rays compared, worst {worst:e}, {} off", bad.len());
+    assert!(compared > idle * 8, "only {compared} rays compared");
+    assert!(bad.len() * 200 <= compared, "{} of {compared} rays differ: {:?}", bad.len(), &bad[..bad.len().min(8)]);
+    // With `ddgi.skip_inactive` off every probe casts every ray, idle or not.
+    let settings = ddgi_settings(
+        [6, 6, 6],
+        &["ddgi.rays_per_probe=64", "ddgi.infinite_bounces=false", "ddgi.skip_inactive=false"],
+    );
+    let mut r = gi_render::Renderer::new(ctx.clone(), scene, settings, 32, 32).expect("renderer");
+    r.clock.playing = false;
+    r.render_frame();
+    r.render_frame();
+    let (_, [states, _, _, records]) = read_all(&r);
+    assert!(states.iter().any(|s| s.w > 0.5), "some probes are idle");
+    assert!(records.iter().all(|g| g.w < UNTRACED), "every ray is cast");
 }
 
 /// The white furnace (issue #56 point 4): a closed cube whose walls have albedo ρ and emit Le

@@ -160,6 +160,7 @@ pub fn words(path: &str) -> Option<&'static str> {
         "ddgi.backface_ratio" => "back-face share",
         "ddgi.min_frontface" => "least front-face distance",
         "ddgi.classification" => "classification",
+        "ddgi.skip_inactive" => "idle probes skipped",
         "ddgi.relocation" => "relocation",
         "ddgi.infinite_bounces" => "infinite bounces",
         "ddgi.receiver" => "receiver BRDF",

@@ -85,6 +85,13 @@ settings_group! {
         /// Turn probes inside walls or far from any surface off (2021 §5.2).
         classification: bool = true,
         unit "", symbol "", range 0..=1, cost "one pass over each probe's rays", history true;
+        /// Inactive probes do no work but watch. ⚠[ddgi.idle-probes] 2021 §5.2: a probe that
+        /// shades nothing is not updated; here each frame an inactive probe casts only 32 rays, on a lattice
+        /// of that many, to be classified again, and its tiles are not blended (a probe that
+        /// wakes blends into the values it had when it went idle). Off: every probe casts
+        /// every ray and is blended, used or not. With classification only.
+        skip_inactive: bool = true,
+        unit "", symbol "", range 0..=1, cost "saves the idle probes' rays and blends", history true;
         /// Move probes out of walls and away from surfaces (2021 §5.3).
         relocation: bool = true,
         unit "", symbol "", range 0..=1, cost "one pass over each probe's rays", history true;

@@ -25,7 +25,7 @@ pub struct DdgiGridParams {
     pub origin: Vec4,
     /// The spacing (xyz), the view bias in world units (w).
     pub spacing: Vec4,
-    /// Probes along x, y, z; flags ([`CLASSIFY`], [`RELOCATE`], [`BOUNCES`]).
+    /// Probes along x, y, z; flags ([`CLASSIFY`], [`RELOCATE`], [`BOUNCES`], [`SKIP_INACTIVE`]).
     pub counts: [u32; 4],
     /// Irradiance interior texels and tiles a row, distance interior texels and tiles a row.
     pub atlas: [u32; 4],
@@ -37,6 +37,8 @@ pub struct DdgiGridParams {
 pub const CLASSIFY: u32 = 1;
 pub const RELOCATE: u32 = 2;
 pub const BOUNCES: u32 = 4;
+/// Inactive probes cast `cpu::ddgi::INACTIVE_RAYS` rays and are not blended (with [`CLASSIFY`]).
+pub const SKIP_INACTIVE: u32 = 8;
 
 /// The twin's parameters of the settings (`cpu::ddgi::DdgiParams`).
 pub fn twin_params(s: &DdgiSettings) -> DdgiParams {
@@ -56,7 +58,8 @@ impl DdgiGridParams {
         let scale = grid.spacing.min_element();
         let flags = (s.classification as u32 * CLASSIFY)
             | (s.relocation as u32 * RELOCATE)
-            | (s.infinite_bounces as u32 * BOUNCES);
+            | (s.infinite_bounces as u32 * BOUNCES)
+            | (s.skip_inactive as u32 * SKIP_INACTIVE);
         let (irr, dist) = (s.irradiance_texels.max(2), s.distance_texels.max(2));
         Self {
             origin: grid.origin.extend(s.normal_bias * scale),

@@ -87,7 +87,8 @@ pub struct ProbeOverlay {
     pub rays_per_probe: u32,
     /// Per probe: relocation offset (xyz), state (w: 0 active, 1 inactive).
     pub probes: Vec<Vec4>,
-    /// Per probe and ray: radiance (rgb), ±distance (w; negative: a back face; ≥ 1e30: a miss).
+    /// Per probe and ray: radiance (rgb), ±distance (w; negative: a back face; 1e30: a miss;
+    /// `cpu::ddgi::UNTRACED`: a ray an inactive probe did not cast).
     pub rays: Option<Vec<Vec4>>,
 }
 
@@ -101,13 +102,16 @@ impl ProbeOverlay {
         self.probes.get(i).is_some_and(|p| p.w < 0.5)
     }
 
-    /// Probe `i`'s rays of the frame: (direction, radiance, distance; negative: back face).
+    /// Probe `i`'s rays of the frame: (direction, radiance, distance; negative: back face),
+    /// an inactive probe's few (`cpu::ddgi::lattice`).
     pub fn rays_of(&self, i: usize) -> Vec<(Vec3, Vec3, f32)> {
         let (Some(rays), n) = (&self.rays, self.rays_per_probe) else { return Vec::new() };
-        (0..n)
+        let record = |k: u32| rays.get(i * n as usize + k as usize);
+        let m = crate::cpu::ddgi::lattice(n, |k| record(k).map(|r| r.w));
+        (0..m)
             .filter_map(|k| {
-                let r = rays.get(i * n as usize + k as usize)?;
-                let d = (self.rotation * crate::cpu::ddgi::spherical_fibonacci(k, n)).normalize();
+                let r = record(k)?;
+                let d = (self.rotation * crate::cpu::ddgi::spherical_fibonacci(k, m)).normalize();
                 Some((d, r.truncate(), r.w))
             })
             .collect()
@@ -291,7 +295,7 @@ impl DdgiStage {
         reg.register(
             "ddgi.rays",
             BufferKind::Data,
-            "this frame's rays, a row per probe: radiance toward the probe (rgb), distance (a; negative: a back face, 1e30: a miss)",
+            "this frame's rays, a row per probe: radiance toward the probe (rgb), distance (a; negative: a back face, 1e30: a miss, 3e38: not cast by an inactive probe)",
             rays,
         );
         reg.register(
